@@ -1,1 +1,16 @@
+//! twinloop-model: the robot description layer.
+//!
+//! A [`Robot`] holds links (mass, CoM, full inertia in a possibly rotated frame,
+//! geometry), joints (revolute, continuous, prismatic, fixed, floating, planar,
+//! mimic), limits and named frames, as the file said them. Readers: URDF (lossless
+//! round trip) and the MJCF subset of the MuJoCo Menagerie humanoids. [`lint`]
+//! checks the physical plausibility of the numbers.
 
+pub mod builder;
+pub mod error;
+pub mod robot;
+pub mod tree;
+
+pub use builder::{JointBuilder, LinkBuilder, RobotBuilder};
+pub use error::{Location, ModelError};
+pub use robot::*;
