@@ -1,1 +1,44 @@
+//! twinloop-dynamics: floating-base rigid-body dynamics with Pinocchio's conventions.
+//!
+//! A [`Model`] is compiled once from a description; a [`Data`] holds every buffer
+//! the algorithms write. After `Data::new`, none of the algorithms allocates.
+//!
+//! Conventions (DESIGN.md section 3): q = [x, y, z, qx, qy, qz, qw, joints], v = [base
+//! linear, base angular (base frame), joints]; gravity (0, 0, -9.81); spatial vectors
+//! linear part first.
+//!
+//! | algorithm | function |
+//! |---|---|
+//! | forward kinematics | [`forward_kinematics`], [`frames_forward_kinematics`] |
+//! | CoM, CoM Jacobian, ground-projected CoM | [`center_of_mass`], [`jacobian_center_of_mass`], [`ground_projected_com`] |
+//! | joint and frame Jacobians | [`compute_joint_jacobians`], [`frame_jacobian`] |
+//! | inverse dynamics (RNEA) | [`rnea`], [`nonlinear_effects`], [`generalized_gravity`] |
+//! | mass matrix (CRBA) | [`crba`] |
+//! | forward dynamics (ABA) | [`aba`] |
+//! | regressors | [`joint_torque_regressor`], [`static_com_regressor`] |
 
+pub mod aba;
+pub mod center_of_mass;
+pub mod configuration;
+pub mod crba;
+pub mod data;
+mod joint;
+pub mod kinematics;
+pub mod model;
+pub mod regressor;
+pub mod rnea;
+
+pub use aba::aba;
+pub use center_of_mass::{center_of_mass, ground_projected_com, jacobian_center_of_mass};
+pub use crba::crba;
+pub use data::Data;
+pub use kinematics::{
+    ReferenceFrame, compute_joint_jacobians, forward_kinematics, frame_jacobian,
+    frames_forward_kinematics, update_frame_placements,
+};
+pub use model::{BASE, BaseKind, FrameInfo, JointType, LinkInfo, Model};
+pub use regressor::{
+    body_parameters, joint_torque_regressor, link_parameters, link_static_parameters,
+    link_to_body_parameter_map, parameter_block_of_link, static_com_regressor,
+};
+pub use rnea::{generalized_gravity, nonlinear_effects, rnea};

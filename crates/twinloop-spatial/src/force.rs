@@ -102,6 +102,9 @@ impl Neg for Force {
     type Output = Force;
     #[inline(always)]
     fn neg(self) -> Force {
-        Force { f: -self.f, n: -self.n }
+        Force {
+            f: -self.f,
+            n: -self.n,
+        }
     }
 }

@@ -109,7 +109,8 @@ impl Inertia {
             Vector3::zeros()
         };
         let io = Matrix3::new(p[4], p[5], p[7], p[5], p[6], p[8], p[7], p[8], p[9]);
-        let inertia = io - (Matrix3::from_diagonal_element(com.dot(&com)) - com * com.transpose()) * mass;
+        let inertia =
+            io - (Matrix3::from_diagonal_element(com.dot(&com)) - com * com.transpose()) * mass;
         Inertia { mass, com, inertia }
     }
 }
@@ -129,7 +130,9 @@ impl Add for Inertia {
         let com = (self.com * self.mass + o.com * o.mass) / mass;
         let d1 = self.com - com;
         let d2 = o.com - com;
-        let shift = |d: Vector3<f64>, m: f64| (Matrix3::from_diagonal_element(d.dot(&d)) - d * d.transpose()) * m;
+        let shift = |d: Vector3<f64>, m: f64| {
+            (Matrix3::from_diagonal_element(d.dot(&d)) - d * d.transpose()) * m
+        };
         Inertia {
             mass,
             com,

@@ -126,6 +126,9 @@ impl Neg for Motion {
     type Output = Motion;
     #[inline(always)]
     fn neg(self) -> Motion {
-        Motion { v: -self.v, w: -self.w }
+        Motion {
+            v: -self.v,
+            w: -self.w,
+        }
     }
 }

@@ -24,7 +24,10 @@ impl Se3 {
 
     #[inline(always)]
     pub fn new(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Self {
-        Se3 { rotation, translation }
+        Se3 {
+            rotation,
+            translation,
+        }
     }
 
     #[inline]
@@ -91,7 +94,9 @@ impl Se3 {
     pub fn inv_mul(&self, other: &Se3) -> Se3 {
         Se3 {
             rotation: self.rotation.tr_mul(&other.rotation),
-            translation: self.rotation.tr_mul(&(other.translation - self.translation)),
+            translation: self
+                .rotation
+                .tr_mul(&(other.translation - self.translation)),
         }
     }
 }

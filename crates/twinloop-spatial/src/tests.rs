@@ -3,7 +3,9 @@
 use super::*;
 
 fn lcg(seed: &mut u64) -> f64 {
-    *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *seed = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
 }
 
@@ -20,7 +22,8 @@ fn random_se3(s: &mut u64) -> Se3 {
 fn action_matrix(x: &Se3) -> Matrix6<f64> {
     let mut m = Matrix6::zeros();
     m.fixed_view_mut::<3, 3>(0, 0).copy_from(&x.rotation);
-    m.fixed_view_mut::<3, 3>(0, 3).copy_from(&(skew(&x.translation) * x.rotation));
+    m.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&(skew(&x.translation) * x.rotation));
     m.fixed_view_mut::<3, 3>(3, 3).copy_from(&x.rotation);
     m
 }
@@ -38,7 +41,10 @@ fn transforms_match_matrix_forms() {
         assert!((x.act_inv_motion(&x.act_motion(&m)).to_vector6() - mv).norm() < 1e-12);
         // Forces transform with X^-T: power is invariant.
         let fa = x.act_force(&f);
-        assert!((fa.to_vector6() - ax.try_inverse().unwrap().transpose() * f.to_vector6()).norm() < 1e-11);
+        assert!(
+            (fa.to_vector6() - ax.try_inverse().unwrap().transpose() * f.to_vector6()).norm()
+                < 1e-11
+        );
         assert!((x.act_motion(&m).dot(&fa) - m.dot(&f)).abs() < 1e-12);
         assert!((x.act_inv_force(&fa).to_vector6() - f.to_vector6()).norm() < 1e-12);
     }

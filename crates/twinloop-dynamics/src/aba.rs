@@ -1,0 +1,113 @@
+//! Articulated-body algorithm: forward dynamics in O(n) (Featherstone, RBDA table
+//! 7.1), in base coordinates: articulated inertias then add up without transforms.
+
+use crate::data::Data;
+use crate::joint::{joint_placement, subspace_in};
+use crate::kinematics::{base_placement, check_q, check_v};
+use crate::model::{BASE, Model};
+use nalgebra::{DVector, Vector3};
+use twinloop_spatial::{Force, Motion, Symmetric6};
+
+/// Accelerations `ddq = M^-1 (tau - C v - g)` (`data.ddq`). For a floating base,
+/// `tau[0..6]` is an external wrench on the base (base frame); zero for a free robot.
+pub fn aba<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+) -> &'a DVector<f64> {
+    check_q(model, q);
+    check_v(model, v, "v");
+    check_v(model, tau, "tau");
+    let floating = model.is_floating();
+    let base = base_placement(model, q);
+    data.base_placement = base;
+    let off = model.v_offset;
+    let qj = &q[model.q_offset..];
+    let vj = &v[off..];
+
+    // Pass 1: placements, velocities, bias terms, body inertias (all in base coordinates).
+    let v0 = if floating {
+        Motion::from_slice(&v[0..6])
+    } else {
+        Motion::ZERO
+    };
+    let (mut ia0, mut pa0) = if floating {
+        let i0 = &model.base_inertia;
+        (i0.to_symmetric6(), v0.cross_force(&i0.mul_motion(&v0)))
+    } else {
+        (Symmetric6::ZERO, Force::ZERO)
+    };
+    for i in 0..model.nbodies {
+        let li = joint_placement(model, i, qj[i]);
+        let p = model.parents[i];
+        let (b, vp) = if p == BASE {
+            (li, v0)
+        } else {
+            (data.b_m_i[p] * li, data.v[p])
+        };
+        data.b_m_i[i] = b;
+        let s = subspace_in(model, i, &b);
+        data.s[i] = s;
+        let sv = s * vj[i];
+        let vi = vp + sv;
+        data.v[i] = vi;
+        data.c[i] = vi.cross(&sv);
+        let yb = model.inertias[i].transformed(&b);
+        data.ia[i] = yb.to_symmetric6();
+        data.pa[i] = vi.cross_force(&yb.mul_motion(&vi));
+    }
+
+    // Pass 2: articulated inertias and bias forces, leaves to root.
+    let tj = &tau[off..];
+    for i in (0..model.nbodies).rev() {
+        let s = data.s[i];
+        let ia = data.ia[i];
+        let ucol = ia.mul_motion(&s);
+        let d_inv = 1.0 / (s.dot(&ucol) + model.armature[i]);
+        let u = tj[i] - s.dot(&data.pa[i]);
+        data.u_col[i] = ucol;
+        data.d_inv[i] = d_inv;
+        data.u[i] = u;
+        let mut ia_a = ia;
+        ia_a.sub_rank1(&ucol, d_inv);
+        let pa_a = data.pa[i] + ia_a.mul_motion(&data.c[i]) + ucol * (d_inv * u);
+        let p = model.parents[i];
+        if p == BASE {
+            ia0 += ia_a;
+            pa0 += pa_a;
+        } else {
+            data.ia[p] += ia_a;
+            data.pa[p] += pa_a;
+        }
+    }
+
+    // Pass 3: accelerations, root to leaves. Gravity is an upward base acceleration.
+    let up = Motion::new(base.rotation.tr_mul(&(-model.gravity)), Vector3::zeros());
+    let a0 = if floating {
+        // The base: ia0 a0 + pa0 = applied base wrench.
+        let rhs = Force::from_slice(&tau[0..6]) - pa0;
+        let a0 = match ia0.to_matrix6().cholesky() {
+            Some(ch) => Motion::from_vector6(&ch.solve(&rhs.to_vector6())),
+            // Singular only for a massless robot; report NaN rather than panic.
+            None => Motion::new(Vector3::repeat(f64::NAN), Vector3::repeat(f64::NAN)),
+        };
+        let qdd0 = a0 - up;
+        let d = data.ddq.as_mut_slice();
+        d[0..3].copy_from_slice(qdd0.v.as_slice());
+        d[3..6].copy_from_slice(qdd0.w.as_slice());
+        a0
+    } else {
+        up
+    };
+    for i in 0..model.nbodies {
+        let p = model.parents[i];
+        let ap = if p == BASE { a0 } else { data.a[p] };
+        let ai = ap + data.c[i];
+        let qdd = data.d_inv[i] * (data.u[i] - ai.dot(&data.u_col[i]));
+        data.ddq[off + i] = qdd;
+        data.a[i] = ai + data.s[i] * qdd;
+    }
+    &data.ddq
+}

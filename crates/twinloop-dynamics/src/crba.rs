@@ -1,0 +1,122 @@
+//! Composite rigid-body algorithm: the joint-space inertia matrix (Featherstone,
+//! RBDA table 6.2), with all bodies in base coordinates so each entry is a dot product.
+
+use crate::data::Data;
+use crate::kinematics::{base_frame_pass, base_placement, check_q};
+use crate::model::{BASE, Model};
+use nalgebra::{DMatrix, Matrix3, Vector3};
+use twinloop_spatial::{Force, Inertia, Motion};
+
+/// A rigid inertia in the linear form (m, h = m c, I about the origin): sums of
+/// bodies are plain sums, which is what the composite pass needs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct LinearInertia {
+    pub m: f64,
+    pub h: Vector3<f64>,
+    pub i: Matrix3<f64>,
+}
+
+impl LinearInertia {
+    pub const ZERO: LinearInertia = LinearInertia {
+        m: 0.0,
+        h: Vector3::new(0.0, 0.0, 0.0),
+        i: Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+    };
+
+    #[inline(always)]
+    pub fn from_inertia(y: &Inertia) -> Self {
+        let c = y.com;
+        let h = c * y.mass;
+        let cc = c.dot(&c);
+        let mut i = y.inertia;
+        // Parallel-axis theorem: I_O = I_c + m (|c|^2 1 - c c^T).
+        i[(0, 0)] += y.mass * cc - h.x * c.x;
+        i[(1, 1)] += y.mass * cc - h.y * c.y;
+        i[(2, 2)] += y.mass * cc - h.z * c.z;
+        let (xy, xz, yz) = (h.x * c.y, h.x * c.z, h.y * c.z);
+        i[(0, 1)] -= xy;
+        i[(1, 0)] -= xy;
+        i[(0, 2)] -= xz;
+        i[(2, 0)] -= xz;
+        i[(1, 2)] -= yz;
+        i[(2, 1)] -= yz;
+        LinearInertia { m: y.mass, h, i }
+    }
+
+    #[inline(always)]
+    pub fn add(&mut self, o: &LinearInertia) {
+        self.m += o.m;
+        self.h += o.h;
+        self.i += o.i;
+    }
+
+    #[inline(always)]
+    pub fn mul_motion(&self, s: &Motion) -> Force {
+        Force {
+            f: s.v * self.m - self.h.cross(&s.w),
+            n: self.h.cross(&s.v) + self.i * s.w,
+        }
+    }
+}
+
+/// The mass matrix M(q) (`data.mass_matrix`, upper triangle as Pinocchio fills it;
+/// [`Data::symmetrize_mass_matrix`] completes it). For a floating base the first six
+/// rows and columns belong to the base velocity in the base frame.
+pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64> {
+    check_q(model, q);
+    data.base_placement = base_placement(model, q);
+    base_frame_pass(model, data, q);
+    let nb = model.nbodies;
+    for i in 0..nb {
+        data.ycrb[i] = LinearInertia::from_inertia(&model.inertias[i].transformed(&data.b_m_i[i]));
+    }
+    let off = model.v_offset;
+    let mut base = LinearInertia::from_inertia(&model.base_inertia);
+    let m = &mut data.mass_matrix;
+    for i in (0..nb).rev() {
+        let yi = data.ycrb[i];
+        let p = model.parents[i];
+        if p == BASE {
+            base.add(&yi);
+        } else {
+            data.ycrb[p].add(&yi);
+        }
+        let col = off + i;
+        let f = yi.mul_motion(&data.s[i]);
+        m[(col, col)] = data.s[i].dot(&f) + model.armature[i];
+        let mut j = p;
+        while j != BASE {
+            m[(off + j, col)] = data.s[j].dot(&f);
+            j = model.parents[j];
+        }
+        if off == 6 {
+            // Base rows: the base's subspace is the identity in base coordinates.
+            m[(0, col)] = f.f.x;
+            m[(1, col)] = f.f.y;
+            m[(2, col)] = f.f.z;
+            m[(3, col)] = f.n.x;
+            m[(4, col)] = f.n.y;
+            m[(5, col)] = f.n.z;
+        }
+    }
+    if off == 6 {
+        // The locked robot's inertia seen from the base frame.
+        let mut sub = m.fixed_view_mut::<6, 6>(0, 0);
+        for k in 0..6 {
+            let mut e = Motion::ZERO;
+            if k < 3 {
+                e.v[k] = 1.0;
+            } else {
+                e.w[k - 3] = 1.0;
+            }
+            let f = base.mul_motion(&e);
+            sub[(0, k)] = f.f.x;
+            sub[(1, k)] = f.f.y;
+            sub[(2, k)] = f.f.z;
+            sub[(3, k)] = f.n.x;
+            sub[(4, k)] = f.n.y;
+            sub[(5, k)] = f.n.z;
+        }
+    }
+    &data.mass_matrix
+}

@@ -1,0 +1,190 @@
+//! Forward kinematics: body and frame placements, joint and frame Jacobians.
+
+use crate::data::Data;
+use crate::joint::{joint_placement, subspace_in};
+use crate::model::{BASE, Model};
+use nalgebra::{DMatrix, Vector3};
+use twinloop_spatial::{Motion, Se3, quaternion_xyzw_to_matrix};
+
+/// World placement of the base from q (identity for a fixed base).
+#[inline(always)]
+pub(crate) fn base_placement(model: &Model, q: &[f64]) -> Se3 {
+    if model.is_floating() {
+        Se3::new(
+            quaternion_xyzw_to_matrix(q[3], q[4], q[5], q[6]),
+            Vector3::new(q[0], q[1], q[2]),
+        )
+    } else {
+        Se3::IDENTITY
+    }
+}
+
+#[inline(always)]
+pub(crate) fn check_q(model: &Model, q: &[f64]) {
+    assert_eq!(
+        q.len(),
+        model.nq,
+        "q has {} entries, the model needs nq = {}",
+        q.len(),
+        model.nq
+    );
+}
+
+#[inline(always)]
+pub(crate) fn check_v(model: &Model, v: &[f64], what: &str) {
+    assert_eq!(
+        v.len(),
+        model.nv,
+        "{what} has {} entries, the model needs nv = {}",
+        v.len(),
+        model.nv
+    );
+}
+
+/// World placement of every body (`data.o_m_i`) and joint placements (`data.li_m_i`).
+pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) {
+    check_q(model, q);
+    let base = base_placement(model, q);
+    data.base_placement = base;
+    let qj = &q[model.q_offset..];
+    for i in 0..model.nbodies {
+        let li = joint_placement(model, i, qj[i]);
+        data.li_m_i[i] = li;
+        let p = model.parents[i];
+        data.o_m_i[i] = if p == BASE {
+            base * li
+        } else {
+            data.o_m_i[p] * li
+        };
+    }
+}
+
+/// Placements in base coordinates (`data.b_m_i`) and joint subspaces there (`data.s`):
+/// the common first pass of CRBA, ABA and the regressors. Working in the base frame
+/// rather than the world saves transforming the free-flyer's quantities.
+#[inline]
+pub(crate) fn base_frame_pass(model: &Model, data: &mut Data, q: &[f64]) {
+    let qj = &q[model.q_offset..];
+    for i in 0..model.nbodies {
+        let li = joint_placement(model, i, qj[i]);
+        data.li_m_i[i] = li;
+        let p = model.parents[i];
+        let b = if p == BASE { li } else { data.b_m_i[p] * li };
+        data.b_m_i[i] = b;
+        data.s[i] = subspace_in(model, i, &b);
+    }
+}
+
+/// World placement of every frame (`data.o_m_f`); call after [`forward_kinematics`].
+pub fn update_frame_placements(model: &Model, data: &mut Data) {
+    for (k, f) in model.frames.iter().enumerate() {
+        let parent = if f.body == BASE {
+            data.base_placement
+        } else {
+            data.o_m_i[f.body]
+        };
+        data.o_m_f[k] = parent * f.placement;
+    }
+}
+
+/// Forward kinematics and every frame's placement.
+pub fn frames_forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) {
+    forward_kinematics(model, data, q);
+    update_frame_placements(model, data);
+}
+
+/// World-frame Jacobians of all joints (`data.joint_jacobians`, 6 x nv): column k is
+/// the spatial velocity (at the world origin, world axes) that a unit velocity of
+/// coordinate k gives its body. Also runs forward kinematics.
+pub fn compute_joint_jacobians(model: &Model, data: &mut Data, q: &[f64]) {
+    forward_kinematics(model, data, q);
+    let j = &mut data.joint_jacobians;
+    if model.is_floating() {
+        write_base_columns(&data.base_placement, j);
+    }
+    for i in 0..model.nbodies {
+        let s = subspace_in(model, i, &data.o_m_i[i]);
+        let col = model.v_offset + i;
+        write_motion(j, col, &s);
+    }
+}
+
+#[inline(always)]
+fn write_motion(j: &mut DMatrix<f64>, col: usize, m: &Motion) {
+    let mut c = j.column_mut(col);
+    c[0] = m.v.x;
+    c[1] = m.v.y;
+    c[2] = m.v.z;
+    c[3] = m.w.x;
+    c[4] = m.w.y;
+    c[5] = m.w.z;
+}
+
+/// The free flyer's six world-frame columns: the base frame's unit twists mapped to the world.
+fn write_base_columns(base: &Se3, j: &mut DMatrix<f64>) {
+    for k in 0..6 {
+        let mut e = Motion::ZERO;
+        if k < 3 {
+            e.v[k] = 1.0;
+        } else {
+            e.w[k - 3] = 1.0;
+        }
+        write_motion(j, k, &base.act_motion(&e));
+    }
+}
+
+/// In which frame a Jacobian's twists are expressed (Pinocchio's `ReferenceFrame`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReferenceFrame {
+    /// The frame's own axes, velocity of its origin.
+    Local,
+    /// World axes, velocity of the point at the world origin (spatial velocity).
+    World,
+    /// World axes, velocity of the frame's origin.
+    LocalWorldAligned,
+}
+
+/// Jacobian (6 x nv, linear rows first) of frame `frame`, written into `out`.
+/// Requires [`compute_joint_jacobians`] (or [`forward_kinematics`] and the same q) first:
+/// it reads `data.o_m_i` and `data.joint_jacobians`.
+pub fn frame_jacobian(
+    model: &Model,
+    data: &Data,
+    frame: usize,
+    reference: ReferenceFrame,
+    out: &mut DMatrix<f64>,
+) {
+    assert_eq!(
+        out.shape(),
+        (6, model.nv),
+        "frame_jacobian: out must be 6 x nv"
+    );
+    out.fill(0.0);
+    let f = &model.frames[frame];
+    let o_m_f = if f.body == BASE {
+        data.base_placement
+    } else {
+        data.o_m_i[f.body]
+    } * f.placement;
+    let mut put = |col: usize| {
+        let m = Motion::from_slice(data.joint_jacobians.column(col).as_slice());
+        let m = match reference {
+            ReferenceFrame::World => m,
+            ReferenceFrame::Local => o_m_f.act_inv_motion(&m),
+            ReferenceFrame::LocalWorldAligned => {
+                Motion::new(m.v + m.w.cross(&o_m_f.translation), m.w)
+            }
+        };
+        write_motion(out, col, &m);
+    };
+    if model.is_floating() {
+        for k in 0..6 {
+            put(k);
+        }
+    }
+    if f.body != BASE {
+        for b in model.ancestors(f.body) {
+            put(model.v_offset + b);
+        }
+    }
+}

@@ -1,0 +1,408 @@
+//! The dynamics `Model`: constant, compiled once from a robot description.
+//!
+//! Bodies are the rigid groups between movable joints: links joined by fixed
+//! joints are merged into one body (their inertias summed in the body frame), as
+//! Pinocchio does, while every link keeps a frame so results can be reported and
+//! written back per link. Bodies are numbered depth-first with children in file
+//! order, so a parent always precedes its children.
+
+use nalgebra::{Matrix3, Vector3};
+use twinloop_model::{JointKind, ModelError, Robot};
+use twinloop_spatial::{Inertia, Se3};
+
+/// Marks a body attached directly to the base (or to the world for a fixed base).
+pub const BASE: usize = usize::MAX;
+
+/// One-DoF joint types. Axis-aligned revolute joints get their own variants so the
+/// hot loops can skip the general Rodrigues rotation (most humanoid joints are).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointType {
+    RevoluteX,
+    RevoluteY,
+    RevoluteZ,
+    /// Revolute about a general unit axis (`Model::axes`).
+    Revolute,
+    /// Prismatic along a unit axis (`Model::axes`).
+    Prismatic,
+}
+
+impl JointType {
+    pub fn is_revolute(self) -> bool {
+        !matches!(self, JointType::Prismatic)
+    }
+}
+
+/// Where a named frame sits: on a body (or the base) at a fixed placement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameInfo {
+    pub name: String,
+    /// Body index, or [`BASE`].
+    pub body: usize,
+    /// Placement of the frame in the body frame.
+    pub placement: Se3,
+    /// Index of the description link this frame is, if it is a link frame.
+    pub link: Option<usize>,
+}
+
+/// Per description link: where its frame and its own inertia are, so per-link
+/// parameters can be mapped to body parameters and back.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkInfo {
+    pub name: String,
+    /// Body index, or [`BASE`] (for a fixed base: the world; its mass is then inert).
+    pub body: usize,
+    /// Placement of the link frame in the body frame.
+    pub placement: Se3,
+    /// The link's own inertia in the link frame (zero without `<inertial>`).
+    pub inertia: Inertia,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BaseKind {
+    /// A 6-DoF free-flyer root (Pinocchio's JointModelFreeFlyer): q has 7 base
+    /// entries (x, y, z, qx, qy, qz, qw), v has 6 (linear, angular, base frame).
+    Floating,
+    /// The root link is welded to the world.
+    Fixed,
+}
+
+/// The constant part of the dynamics.
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub name: String,
+    pub base: BaseKind,
+    /// Name of the base link (the root link, or the child of a URDF floating root joint).
+    pub base_link: String,
+    pub nq: usize,
+    pub nv: usize,
+    /// Number of 1-DoF bodies (the floating base is not counted).
+    pub nbodies: usize,
+    /// Offsets of the first joint coordinate in q and in v (7 and 6 for a floating base).
+    pub q_offset: usize,
+    pub v_offset: usize,
+    pub parents: Vec<usize>,
+    pub joint_types: Vec<JointType>,
+    /// Unit axis of each joint in its own frame.
+    pub axes: Vec<Vector3<f64>>,
+    /// Placement of each joint frame in its parent body frame (fixed chains folded in).
+    pub joint_placements: Vec<Se3>,
+    /// Inertia of each body in its frame (links fixed to it included).
+    pub inertias: Vec<Inertia>,
+    /// Inertia of the floating base body (zero and unused for a fixed base).
+    pub base_inertia: Inertia,
+    pub joint_names: Vec<String>,
+    /// Name of the link each body starts with (the joint's child link).
+    pub body_names: Vec<String>,
+    /// Index one past the last body of each body's subtree (depth-first numbering).
+    pub subtree_end: Vec<usize>,
+    pub lower_limits: Vec<f64>,
+    pub upper_limits: Vec<f64>,
+    pub effort_limits: Vec<f64>,
+    pub velocity_limits: Vec<f64>,
+    /// Rotor inertia reflected to each joint (added to the mass-matrix diagonal). Zero by default.
+    pub armature: Vec<f64>,
+    pub gravity: Vector3<f64>,
+    pub frames: Vec<FrameInfo>,
+    pub links: Vec<LinkInfo>,
+    /// Sum of body masses (the base included for a floating base).
+    pub total_mass: f64,
+}
+
+pub(crate) fn pose_to_se3(p: &twinloop_model::Pose) -> Se3 {
+    let r = p.rotation();
+    Se3::new(
+        Matrix3::new(
+            r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
+        ),
+        Vector3::new(p.xyz[0], p.xyz[1], p.xyz[2]),
+    )
+}
+
+fn link_inertia(link: &twinloop_model::Link) -> Inertia {
+    match &link.inertial {
+        None => Inertia::ZERO,
+        Some(i) => {
+            let local = Inertia::new(
+                i.mass,
+                Vector3::zeros(),
+                Matrix3::from_fn(|r, c| i.inertia.matrix()[r][c]),
+            );
+            local.transformed(&pose_to_se3(&i.origin))
+        }
+    }
+}
+
+impl Model {
+    /// Compile with a floating base (the usual case for a humanoid).
+    pub fn from_robot(robot: &Robot) -> Result<Model, ModelError> {
+        Model::from_robot_with_base(robot, BaseKind::Floating)
+    }
+
+    /// Compile a description. A URDF whose root link has a `floating` joint (COMAN's
+    /// `world` link) uses that joint as the free flyer and drops the root link.
+    pub fn from_robot_with_base(robot: &Robot, base: BaseKind) -> Result<Model, ModelError> {
+        robot.validate()?;
+        let root = robot
+            .root_link()
+            .ok_or_else(|| ModelError::new("no single root link"))?;
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
+        let link_ix = |name: &str| robot.link_index(name).expect("validated");
+        for (j, joint) in robot.joints.iter().enumerate() {
+            children[link_ix(&joint.parent)].push(j);
+        }
+        let mut base_link = link_ix(root);
+        let root_children = &children[base_link];
+        let mut dropped_root = None;
+        if root_children.len() == 1 && robot.joints[root_children[0]].kind == JointKind::Floating {
+            // URDF "world -> floating -> base": the floating joint is the free flyer.
+            dropped_root = Some(base_link);
+            base_link = link_ix(&robot.joints[root_children[0]].child);
+        }
+        let floating = base == BaseKind::Floating;
+        let (q_offset, v_offset) = if floating { (7, 6) } else { (0, 0) };
+
+        let mut m = Model {
+            name: robot.name.clone(),
+            base,
+            base_link: robot.links[base_link].name.clone(),
+            nq: q_offset,
+            nv: v_offset,
+            nbodies: 0,
+            q_offset,
+            v_offset,
+            parents: Vec::new(),
+            joint_types: Vec::new(),
+            axes: Vec::new(),
+            joint_placements: Vec::new(),
+            inertias: Vec::new(),
+            base_inertia: Inertia::ZERO,
+            joint_names: Vec::new(),
+            body_names: Vec::new(),
+            subtree_end: Vec::new(),
+            lower_limits: Vec::new(),
+            upper_limits: Vec::new(),
+            effort_limits: Vec::new(),
+            velocity_limits: Vec::new(),
+            armature: Vec::new(),
+            gravity: Vector3::new(0.0, 0.0, -9.81),
+            frames: Vec::new(),
+            links: Vec::new(),
+            total_mass: 0.0,
+        };
+        let mut link_info: Vec<Option<LinkInfo>> = vec![None; robot.links.len()];
+        if let Some(r) = dropped_root {
+            // The world link of a "world -> floating" URDF is not part of the robot.
+            link_info[r] = Some(LinkInfo {
+                name: robot.links[r].name.clone(),
+                body: BASE,
+                placement: Se3::IDENTITY,
+                inertia: Inertia::ZERO,
+            });
+        }
+
+        // Depth-first walk: (link, body it belongs to, placement of link in that body).
+        let mut stack: Vec<(usize, usize, Se3)> = vec![(base_link, BASE, Se3::IDENTITY)];
+        while let Some((link, body, placement)) = stack.pop() {
+            let own = link_inertia(&robot.links[link]);
+            link_info[link] = Some(LinkInfo {
+                name: robot.links[link].name.clone(),
+                body,
+                placement,
+                inertia: own,
+            });
+            let in_body = own.transformed(&placement);
+            if body == BASE {
+                m.base_inertia += in_body;
+            } else {
+                m.inertias[body] += in_body;
+            }
+            // Push in reverse so children are visited in file order.
+            for &j in children[link].iter().rev() {
+                let joint = &robot.joints[j];
+                let child = link_ix(&joint.child);
+                let origin = placement * pose_to_se3(&joint.origin);
+                let here = || format!("<joint name=\"{}\">", joint.name);
+                match joint.kind {
+                    JointKind::Fixed => stack.push((child, body, origin)),
+                    JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic => {
+                        let a = joint.axis_or_default();
+                        let axis = Vector3::new(a[0], a[1], a[2]);
+                        let n = axis.norm();
+                        if !(n > 1e-12) {
+                            return Err(ModelError::new("a moving joint needs a non-zero axis")
+                                .at_element(here()));
+                        }
+                        let axis = axis / n;
+                        let jt = if joint.kind == JointKind::Prismatic {
+                            JointType::Prismatic
+                        } else if axis == Vector3::x() {
+                            JointType::RevoluteX
+                        } else if axis == Vector3::y() {
+                            JointType::RevoluteY
+                        } else if axis == Vector3::z() {
+                            JointType::RevoluteZ
+                        } else {
+                            JointType::Revolute
+                        };
+                        let lim = joint.limit.unwrap_or_default();
+                        let new_body = m.parents.len();
+                        m.parents.push(body);
+                        m.joint_types.push(jt);
+                        m.axes.push(axis);
+                        m.joint_placements.push(origin);
+                        m.inertias.push(Inertia::ZERO);
+                        m.joint_names.push(joint.name.clone());
+                        m.body_names.push(joint.child.clone());
+                        let continuous = joint.kind == JointKind::Continuous;
+                        m.lower_limits.push(if continuous {
+                            f64::NEG_INFINITY
+                        } else {
+                            lim.lower.unwrap_or(f64::NEG_INFINITY)
+                        });
+                        m.upper_limits.push(if continuous {
+                            f64::INFINITY
+                        } else {
+                            lim.upper.unwrap_or(f64::INFINITY)
+                        });
+                        m.effort_limits.push(lim.effort.unwrap_or(f64::INFINITY));
+                        m.velocity_limits
+                            .push(lim.velocity.unwrap_or(f64::INFINITY));
+                        m.armature.push(0.0);
+                        stack.push((child, new_body, Se3::IDENTITY));
+                    }
+                    JointKind::Floating => {
+                        return Err(ModelError::new(
+                            "a floating joint is only supported as the root joint (world -> base)",
+                        )
+                        .at_element(here()));
+                    }
+                    JointKind::Planar => {
+                        return Err(ModelError::new(
+                            "planar joints are not supported by the dynamics",
+                        )
+                        .at_element(here()));
+                    }
+                }
+            }
+        }
+        m.nbodies = m.parents.len();
+        m.nq += m.nbodies;
+        m.nv += m.nbodies;
+        // Depth-first numbering: a subtree is a contiguous range.
+        m.subtree_end = (0..m.nbodies).map(|i| i + 1).collect();
+        for i in (0..m.nbodies).rev() {
+            let p = m.parents[i];
+            if p != BASE {
+                m.subtree_end[p] = m.subtree_end[p].max(m.subtree_end[i]);
+            }
+        }
+        for (l, info) in link_info.into_iter().enumerate() {
+            let info = info.ok_or_else(|| {
+                ModelError::new("link is not reachable from the root")
+                    .at_element(format!("<link name=\"{}\">", robot.links[l].name))
+            })?;
+            m.frames.push(FrameInfo {
+                name: info.name.clone(),
+                body: info.body,
+                placement: info.placement,
+                link: Some(l),
+            });
+            m.links.push(info);
+        }
+        for f in &robot.frames {
+            let l = robot.link_index(&f.link).ok_or_else(|| {
+                ModelError::new(format!(
+                    "frame \"{}\" is on unknown link \"{}\"",
+                    f.name, f.link
+                ))
+            })?;
+            let li = &m.links[l];
+            m.frames.push(FrameInfo {
+                name: f.name.clone(),
+                body: li.body,
+                placement: li.placement * pose_to_se3(&f.origin),
+                link: None,
+            });
+        }
+        if !floating {
+            m.base_inertia = Inertia::ZERO;
+        }
+        m.total_mass = m.base_inertia.mass + m.inertias.iter().map(|i| i.mass).sum::<f64>();
+        Ok(m)
+    }
+
+    pub fn is_floating(&self) -> bool {
+        self.base == BaseKind::Floating
+    }
+
+    /// Index of a joint by name (into bodies; its v index is `v_offset + i`).
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joint_names.iter().position(|n| n == name)
+    }
+
+    pub fn frame_index(&self, name: &str) -> Option<usize> {
+        self.frames.iter().position(|f| f.name == name)
+    }
+
+    /// Bodies from `i` up to the root, `i` first.
+    pub fn ancestors(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        std::iter::successors(Some(i), move |&j| {
+            let p = self.parents[j];
+            (p != BASE).then_some(p)
+        })
+    }
+
+    /// The neutral configuration: base at the origin with identity orientation, joints at zero.
+    pub fn neutral_configuration(&self) -> Vec<f64> {
+        let mut q = vec![0.0; self.nq];
+        if self.is_floating() {
+            q[6] = 1.0;
+        }
+        q
+    }
+
+    /// Names of the configuration coordinates, in the CSV convention (`base.x`, ..., joint names).
+    pub fn q_names(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::with_capacity(self.nq);
+        if self.is_floating() {
+            out.extend(
+                [
+                    "base.x", "base.y", "base.z", "base.qx", "base.qy", "base.qz", "base.qw",
+                ]
+                .map(String::from),
+            );
+        }
+        out.extend(self.joint_names.iter().cloned());
+        out
+    }
+
+    /// Names of the velocity coordinates (`base.vx`, ..., `base.wz`, joint names).
+    pub fn v_names(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::with_capacity(self.nv);
+        if self.is_floating() {
+            out.extend(
+                [
+                    "base.vx", "base.vy", "base.vz", "base.wx", "base.wy", "base.wz",
+                ]
+                .map(String::from),
+            );
+        }
+        out.extend(self.joint_names.iter().cloned());
+        out
+    }
+
+    /// Names of the generalised forces (`base.fx`, ..., `base.tz`, joint names).
+    pub fn tau_names(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::with_capacity(self.nv);
+        if self.is_floating() {
+            out.extend(
+                [
+                    "base.fx", "base.fy", "base.fz", "base.tx", "base.ty", "base.tz",
+                ]
+                .map(String::from),
+            );
+        }
+        out.extend(self.joint_names.iter().cloned());
+        out
+    }
+}

@@ -1,0 +1,126 @@
+//! Recursive Newton-Euler: inverse dynamics (Featherstone, RBDA table 5.1), in body
+//! frames as Pinocchio does.
+
+use crate::data::Data;
+use crate::joint::{joint_placement, subspace_dot, subspace_times};
+use crate::kinematics::{base_placement, check_q, check_v};
+use crate::model::{BASE, Model};
+use nalgebra::DVector;
+use twinloop_spatial::{Force, Motion};
+
+/// Generalised forces `tau = M(q) a + C(q, v) v + g(q)` (`data.tau`). For a floating
+/// base, `tau[0..6]` is the wrench on the base in the base frame (force, then torque):
+/// zero exactly when the motion needs no external force on the base.
+pub fn rnea<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+) -> &'a DVector<f64> {
+    check_q(model, q);
+    check_v(model, v, "v");
+    check_v(model, a, "a");
+    rnea_impl(model, data, q, v, Some(a), true);
+    &data.tau
+}
+
+/// `C(q, v) v + g(q)`: RNEA with zero acceleration.
+pub fn nonlinear_effects<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> &'a DVector<f64> {
+    check_q(model, q);
+    check_v(model, v, "v");
+    rnea_impl(model, data, q, v, None, true);
+    &data.tau
+}
+
+/// `g(q)`: the generalised gravity forces.
+pub fn generalized_gravity<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DVector<f64> {
+    check_q(model, q);
+    rnea_impl(model, data, q, &[], None, false);
+    &data.tau
+}
+
+/// The passes; `v` is ignored when `with_velocity` is false, `a` when it is `None`.
+#[inline(always)]
+pub(crate) fn rnea_impl(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: Option<&[f64]>,
+    with_velocity: bool,
+) {
+    let floating = model.is_floating();
+    let base = base_placement(model, q);
+    data.base_placement = base;
+    // Gravity enters as an upward acceleration of the base (the usual trick).
+    let up = base.rotation.tr_mul(&(-model.gravity));
+    let (v0, a0) = if floating {
+        let v0 = if with_velocity {
+            Motion::from_slice(&v[0..6])
+        } else {
+            Motion::ZERO
+        };
+        let mut a0 = a.map_or(Motion::ZERO, |a| Motion::from_slice(&a[0..6]));
+        a0.v += up;
+        (v0, a0)
+    } else {
+        (Motion::ZERO, Motion::new(up, nalgebra::Vector3::zeros()))
+    };
+    let mut f0 = if floating {
+        let i0 = &model.base_inertia;
+        i0.mul_motion(&a0) + v0.cross_force(&i0.mul_motion(&v0))
+    } else {
+        Force::ZERO
+    };
+    let off = model.v_offset;
+    let qj = &q[model.q_offset..];
+    for i in 0..model.nbodies {
+        let li = joint_placement(model, i, qj[i]);
+        data.li_m_i[i] = li;
+        let p = model.parents[i];
+        let (vp, ap) = if p == BASE {
+            (v0, a0)
+        } else {
+            (data.v[p], data.a[p])
+        };
+        let qdd = a.map_or(0.0, |a| a[off + i]);
+        let mut ai = li.act_inv_motion(&ap) + subspace_times(model, i, qdd);
+        let vi = if with_velocity {
+            let vj = subspace_times(model, i, v[off + i]);
+            let vi = li.act_inv_motion(&vp) + vj;
+            ai += vi.cross(&vj);
+            vi
+        } else {
+            Motion::ZERO
+        };
+        data.v[i] = vi;
+        data.a[i] = ai;
+        let inertia = &model.inertias[i];
+        let mut fi = inertia.mul_motion(&ai);
+        if with_velocity {
+            fi += vi.cross_force(&inertia.mul_motion(&vi));
+        }
+        data.f[i] = fi;
+    }
+    for i in (0..model.nbodies).rev() {
+        let fi = data.f[i];
+        data.tau[off + i] =
+            subspace_dot(model, i, &fi) + model.armature[i] * a.map_or(0.0, |a| a[off + i]);
+        let fp = data.li_m_i[i].act_force(&fi);
+        let p = model.parents[i];
+        if p == BASE {
+            f0 += fp;
+        } else {
+            data.f[p] += fp;
+        }
+    }
+    if floating {
+        f0.write_to(&mut data.tau.as_mut_slice()[0..6]);
+    }
+}
