@@ -1,0 +1,102 @@
+//! After `Data::new`, no algorithm allocates: counted by a global allocator wrapper.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use twinloop_dynamics::configuration::{SplitMix64, random_configuration, random_tangent};
+use twinloop_dynamics::*;
+use twinloop_model::{Inertia, JointKind, Pose, RobotBuilder};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn algorithms_do_not_allocate() {
+    // A two-legged tree with every joint type, plus a fixed link.
+    let mut b = RobotBuilder::new("biped")
+        .link("pelvis")
+        .mass(3.0, [0.0, 0.0, 0.05], Inertia::solid_box(3.0, [0.2, 0.3, 0.1]))
+        .done();
+    for side in ["l", "r"] {
+        let mut parent = "pelvis".to_string();
+        for (k, axis) in [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.6, 0.8]].iter().enumerate() {
+            let name = format!("{side}{k}");
+            b = b
+                .link(&name)
+                .mass(0.5, [0.0, 0.01, -0.1], Inertia::solid_cylinder(0.5, 0.03, 0.2))
+                .done()
+                .revolute(format!("{name}_joint"), &parent, &name, *axis)
+                .origin(Pose::new([0.0, 0.1, -0.1], [0.1, 0.0, 0.2]))
+                .done();
+            parent = name;
+        }
+        let slider = format!("{side}_slider");
+        b = b
+            .link(&slider)
+            .mass(0.2, [0.0, 0.0, 0.0], Inertia::solid_sphere(0.2, 0.03))
+            .done()
+            .joint(format!("{slider}_joint"), JointKind::Prismatic, &parent, &slider)
+            .axis([0.0, 0.0, 1.0])
+            .done();
+        let foot = format!("{side}_foot");
+        b = b
+            .link(&foot)
+            .mass(0.3, [0.02, 0.0, -0.02], Inertia::solid_box(0.3, [0.1, 0.05, 0.02]))
+            .done()
+            .fixed(format!("{foot}_fixed"), &slider, &foot)
+            .done();
+    }
+    let robot = b.build().unwrap();
+    let model = Model::from_robot(&robot).unwrap();
+    let mut data = Data::new(&model);
+    let mut rng = SplitMix64(1);
+    let q = random_configuration(&model, &mut rng);
+    let v = random_tangent(&model, &mut rng);
+    let a = random_tangent(&model, &mut rng);
+    let mut jac = nalgebra::DMatrix::zeros(6, model.nv);
+    let foot = model.frame_index("l_foot").unwrap();
+
+    let run = |data: &mut Data, jac: &mut nalgebra::DMatrix<f64>| {
+        frames_forward_kinematics(&model, data, &q);
+        center_of_mass(&model, data, &q);
+        ground_projected_com(&model, data, &q);
+        jacobian_center_of_mass(&model, data, &q);
+        compute_joint_jacobians(&model, data, &q);
+        for rf in [ReferenceFrame::Local, ReferenceFrame::World, ReferenceFrame::LocalWorldAligned] {
+            frame_jacobian(&model, data, foot, rf, jac);
+        }
+        rnea(&model, data, &q, &v, &a);
+        nonlinear_effects(&model, data, &q, &v);
+        generalized_gravity(&model, data, &q);
+        crba(&model, data, &q);
+        data.symmetrize_mass_matrix();
+        aba(&model, data, &q, &v, &a);
+        joint_torque_regressor(&model, data, &q, &v, &a);
+        static_com_regressor(&model, data, &q);
+    };
+    run(&mut data, &mut jac); // warm-up
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    assert!(before > 0, "the counting allocator is installed");
+    for _ in 0..10 {
+        run(&mut data, &mut jac);
+    }
+    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    assert_eq!(after - before, 0, "the algorithms allocated {} times", after - before);
+}
