@@ -8,9 +8,13 @@
 
 pub mod builder;
 pub mod error;
+mod load;
+pub mod mjcf;
 pub mod robot;
 pub mod tree;
+pub mod urdf;
 
 pub use builder::{JointBuilder, LinkBuilder, RobotBuilder};
 pub use error::{Location, ModelError};
+pub use load::load;
 pub use robot::*;
