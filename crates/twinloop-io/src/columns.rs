@@ -1,0 +1,86 @@
+use crate::table::{IoError, Table};
+use twinloop_dynamics::Model;
+
+/// Which vector a column group fills.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    /// `q:` configuration (nq).
+    Q,
+    /// `v:` velocity (nv).
+    V,
+    /// `a:` acceleration (nv).
+    A,
+    /// `tau:` generalised force (nv).
+    Tau,
+}
+
+impl Quantity {
+    pub fn prefix(self) -> &'static str {
+        match self {
+            Quantity::Q => "q:",
+            Quantity::V => "v:",
+            Quantity::A => "a:",
+            Quantity::Tau => "tau:",
+        }
+    }
+
+    /// Column names for a model, in the model's coordinate order.
+    pub fn column_names(self, model: &Model) -> Vec<String> {
+        let names = match self {
+            Quantity::Q => model.q_names(),
+            Quantity::V | Quantity::A => model.v_names(),
+            Quantity::Tau => model.tau_names(),
+        };
+        names
+            .into_iter()
+            .map(|n| format!("{}{n}", self.prefix()))
+            .collect()
+    }
+}
+
+/// Column indices of one quantity in a table, in model order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateColumns {
+    pub quantity: Quantity,
+    pub indices: Vec<usize>,
+}
+
+impl StateColumns {
+    /// Find every column the model needs; the error lists those missing.
+    pub fn find(table: &Table, model: &Model, quantity: Quantity) -> Result<StateColumns, IoError> {
+        let names = quantity.column_names(model);
+        let mut indices = Vec::with_capacity(names.len());
+        let mut missing = Vec::new();
+        for n in &names {
+            match table.column_index(n) {
+                Some(i) => indices.push(i),
+                None => missing.push(n.as_str()),
+            }
+        }
+        if !missing.is_empty() {
+            let shown: Vec<&str> = missing.iter().take(8).copied().collect();
+            let more = if missing.len() > 8 {
+                format!(" and {} more", missing.len() - 8)
+            } else {
+                String::new()
+            };
+            let mut e = IoError::new(format!(
+                "{} of the model's {} columns are missing: {}{more}",
+                missing.len(),
+                names.len(),
+                shown.join(", ")
+            ));
+            e.file = table.path.clone();
+            return Err(e);
+        }
+        Ok(StateColumns { quantity, indices })
+    }
+
+    /// Gather row `r` into `out` (model order).
+    #[inline]
+    pub fn gather(&self, row: &[f64], out: &mut [f64]) {
+        for (o, &i) in out.iter_mut().zip(&self.indices) {
+            *o = row[i];
+        }
+    }
+}

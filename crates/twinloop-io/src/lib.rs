@@ -1,0 +1,14 @@
+//! twinloop-io: the data files of DESIGN.md section 4.
+//!
+//! A [`Table`] is a CSV file with a header row and numeric cells. Columns are
+//! named `t`, `q:<joint>`, `v:<joint>`, `a:<joint>`, `tau:<joint>`, with the floating
+//! base as `q:base.x ... q:base.qw`, `v:base.vx ... v:base.wz`, `tau:base.fx ...
+//! tau:base.tz`. [`StateColumns`] maps a table's columns onto a model's vectors.
+//! Numbers are written with Rust's shortest round-trip formatting, so a value read
+//! back is bit-for-bit the value computed.
+
+mod columns;
+mod table;
+
+pub use columns::{Quantity, StateColumns};
+pub use table::{CsvWriter, IoError, Table, format_f64};

@@ -1,0 +1,235 @@
+use std::fmt;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// An error in a data file: names the file, the line and the column at fault.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IoError {
+    pub file: Option<PathBuf>,
+    pub line: Option<usize>,
+    pub column: Option<String>,
+    pub message: String,
+}
+
+impl IoError {
+    pub fn new(message: impl Into<String>) -> Self {
+        IoError {
+            file: None,
+            line: None,
+            column: None,
+            message: message.into(),
+        }
+    }
+
+    pub fn in_file(mut self, file: impl Into<PathBuf>) -> Self {
+        self.file = Some(file.into());
+        self
+    }
+}
+
+impl fmt::Display for IoError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(p) = &self.file {
+            write!(f, "{}", p.display())?;
+            if let Some(l) = self.line {
+                write!(f, ":{l}")?;
+            }
+            write!(f, ": ")?;
+        } else if let Some(l) = self.line {
+            write!(f, "line {l}: ")?;
+        }
+        if let Some(c) = &self.column {
+            write!(f, "column \"{c}\": ")?;
+        }
+        write!(f, "{}", self.message)
+    }
+}
+
+impl std::error::Error for IoError {}
+
+/// A numeric table with named columns.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Table {
+    pub path: Option<PathBuf>,
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl Table {
+    pub fn new(columns: Vec<String>) -> Self {
+        Table {
+            path: None,
+            columns,
+            rows: Vec::new(),
+        }
+    }
+
+    pub fn read(path: impl AsRef<Path>) -> Result<Table, IoError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| IoError::new(format!("cannot read: {e}")).in_file(path))?;
+        let mut t = Table::parse(&text).map_err(|e| e.in_file(path))?;
+        t.path = Some(path.to_path_buf());
+        Ok(t)
+    }
+
+    /// Parse CSV text: a header row, then rows of numbers (empty lines and lines
+    /// starting with `#` are skipped). Every row must have as many cells as the header.
+    pub fn parse(text: &str) -> Result<Table, IoError> {
+        let mut lines = text.lines().enumerate().filter(|(_, l)| {
+            let l = l.trim();
+            !l.is_empty() && !l.starts_with('#')
+        });
+        let Some((hl, header)) = lines.next() else {
+            return Err(IoError::new("the file is empty: a header row is needed"));
+        };
+        let columns: Vec<String> = header
+            .split(',')
+            .map(|c| c.trim().trim_matches('"').to_string())
+            .collect();
+        for (i, c) in columns.iter().enumerate() {
+            if c.is_empty() {
+                return Err(IoError {
+                    line: Some(hl + 1),
+                    ..IoError::new(format!("header cell {} is empty", i + 1))
+                });
+            }
+            if columns[..i].contains(c) {
+                return Err(IoError {
+                    line: Some(hl + 1),
+                    column: Some(c.clone()),
+                    ..IoError::new("column name appears twice")
+                });
+            }
+        }
+        let mut rows = Vec::new();
+        for (ln, line) in lines {
+            let mut row = Vec::with_capacity(columns.len());
+            for (k, cell) in line.split(',').enumerate() {
+                let Some(name) = columns.get(k) else {
+                    return Err(IoError {
+                        line: Some(ln + 1),
+                        ..IoError::new(format!(
+                            "{} cells or more, but the header has {}",
+                            k + 1,
+                            columns.len()
+                        ))
+                    });
+                };
+                let cell = cell.trim();
+                let x: f64 = cell.parse().map_err(|_| IoError {
+                    line: Some(ln + 1),
+                    column: Some(name.clone()),
+                    ..IoError::new(format!("\"{cell}\" is not a number"))
+                })?;
+                row.push(x);
+            }
+            if row.len() != columns.len() {
+                return Err(IoError {
+                    line: Some(ln + 1),
+                    ..IoError::new(format!(
+                        "{} cells, but the header has {}",
+                        row.len(),
+                        columns.len()
+                    ))
+                });
+            }
+            rows.push(row);
+        }
+        Ok(Table {
+            path: None,
+            columns,
+            rows,
+        })
+    }
+
+    pub fn column_index(&self, name: &str) -> Option<usize> {
+        self.columns.iter().position(|c| c == name)
+    }
+
+    /// The 1-based line of data row `r` is not tracked after parsing; errors about a
+    /// row name it by its index (row 1 = first data row).
+    pub fn row_error(&self, row: usize, message: impl Into<String>) -> IoError {
+        IoError {
+            file: self.path.clone(),
+            line: None,
+            column: None,
+            message: format!("data row {}: {}", row + 1, message.into()),
+        }
+    }
+
+    pub fn write(&self, path: impl AsRef<Path>) -> Result<(), IoError> {
+        let mut w = CsvWriter::create(path.as_ref(), &self.columns)?;
+        for r in &self.rows {
+            w.write_row(r)?;
+        }
+        w.finish()
+    }
+}
+
+/// Format a float so that parsing the text gives the same bits back.
+pub fn format_f64(x: f64) -> String {
+    // Debug formatting is Rust's shortest round-trip representation.
+    format!("{x:?}")
+}
+
+/// A CSV writer that writes rows as they come; `flush_each_row` makes every row
+/// durable at once (recordings must survive an interrupted run).
+pub struct CsvWriter {
+    path: PathBuf,
+    out: BufWriter<File>,
+    ncols: usize,
+    pub flush_each_row: bool,
+    line: String,
+}
+
+impl CsvWriter {
+    pub fn create(path: &Path, columns: &[String]) -> Result<CsvWriter, IoError> {
+        let file = File::create(path)
+            .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(path))?;
+        let mut w = CsvWriter {
+            path: path.to_path_buf(),
+            out: BufWriter::new(file),
+            ncols: columns.len(),
+            flush_each_row: false,
+            line: String::new(),
+        };
+        let header = columns.join(",");
+        w.write_line(&header)?;
+        Ok(w)
+    }
+
+    fn write_line(&mut self, s: &str) -> Result<(), IoError> {
+        let r = writeln!(self.out, "{s}").and_then(|_| {
+            if self.flush_each_row {
+                self.out.flush()
+            } else {
+                Ok(())
+            }
+        });
+        r.map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))
+    }
+
+    pub fn write_row(&mut self, row: &[f64]) -> Result<(), IoError> {
+        assert_eq!(row.len(), self.ncols, "row length must match the header");
+        let mut line = std::mem::take(&mut self.line);
+        line.clear();
+        for (k, x) in row.iter().enumerate() {
+            if k > 0 {
+                line.push(',');
+            }
+            use std::fmt::Write as _;
+            let _ = write!(line, "{x:?}");
+        }
+        let r = self.write_line(&line);
+        self.line = line;
+        r
+    }
+
+    pub fn finish(mut self) -> Result<(), IoError> {
+        self.out
+            .flush()
+            .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))
+    }
+}
