@@ -1,0 +1,44 @@
+use twinloop_io::{Table, format_f64};
+
+#[test]
+fn floats_round_trip_bit_for_bit() {
+    let mut x = 0.1f64;
+    for k in 0..2000 {
+        x = (x * 1.618_033_988_7 + k as f64 * 1e-7).sin() * 10f64.powi((k % 40) - 20);
+        let s = format_f64(x);
+        assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{s}");
+    }
+    for x in [0.0, -0.0, f64::MIN_POSITIVE, f64::MAX, 1e-300, 5e-324] {
+        assert_eq!(format_f64(x).parse::<f64>().unwrap().to_bits(), x.to_bits());
+    }
+}
+
+#[test]
+fn write_then_read_is_identical() {
+    let mut t = Table::new(vec!["t".into(), "q:a/b".into(), "v:c".into()]);
+    t.rows.push(vec![0.0, 1.0 / 3.0, -2.5e-17]);
+    t.rows.push(vec![0.001, std::f64::consts::PI, 1e300]);
+    let dir = std::env::temp_dir().join(format!("twinloop-io-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("t.csv");
+    t.write(&p).unwrap();
+    let back = Table::read(&p).unwrap();
+    assert_eq!(back.columns, t.columns);
+    assert_eq!(back.rows, t.rows);
+}
+
+#[test]
+fn errors_name_line_and_column() {
+    let e = Table::parse("t,q:knee\n0,1\n0.1,abc\n").unwrap_err();
+    assert_eq!(e.line, Some(3));
+    assert_eq!(e.column.as_deref(), Some("q:knee"));
+    assert!(e.to_string().contains("\"abc\" is not a number"), "{e}");
+    let e = Table::parse("t,q:knee\n0,1,2\n").unwrap_err();
+    assert_eq!(e.line, Some(2));
+    let e = Table::parse("t,q:knee\n0\n").unwrap_err();
+    assert!(e.to_string().contains("1 cells, but the header has 2"), "{e}");
+    let e = Table::parse("").unwrap_err();
+    assert!(e.to_string().contains("empty"));
+    let e = Table::parse("t,t\n").unwrap_err();
+    assert!(e.to_string().contains("twice"));
+}
