@@ -1,0 +1,172 @@
+//! The batch commands against Pinocchio's numbers (tests/data/pinocchio of the
+//! dynamics crate): a trajectory built from the reference states goes in, and the
+//! CSV that comes out must match Pinocchio's RNEA, ABA and CoM.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("twinloop-cli-dyn-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+fn nums(v: &Value) -> Vec<f64> {
+    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+}
+
+fn read_csv(p: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(p).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines.map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    (header, rows)
+}
+
+/// OP3's reference states as a trajectory CSV with twinloop's column names.
+fn write_trajectory(refd: &Value, path: &Path) {
+    let mut header = vec!["t".to_string()];
+    let mut rows: Vec<Vec<f64>> = vec![];
+    let joints = refd["joints"].as_array().unwrap();
+    for (si, st) in refd["states"].as_array().unwrap().iter().enumerate() {
+        let (q, v, a, tau) = (nums(&st["q"]), nums(&st["v"]), nums(&st["a"]), nums(&st["tau"]));
+        let mut row = vec![si as f64 * 0.01];
+        for j in joints {
+            let (iq, iv) = (j["idx_q"].as_u64().unwrap() as usize, j["idx_v"].as_u64().unwrap() as usize);
+            if j["type"] == "JointModelFreeFlyer" {
+                if si == 0 {
+                    for s in ["x", "y", "z", "qx", "qy", "qz", "qw"] {
+                        header.push(format!("q:base.{s}"));
+                    }
+                    for p in ["v", "a"] {
+                        for s in ["vx", "vy", "vz", "wx", "wy", "wz"] {
+                            header.push(format!("{p}:base.{s}"));
+                        }
+                    }
+                    for s in ["fx", "fy", "fz", "tx", "ty", "tz"] {
+                        header.push(format!("tau:base.{s}"));
+                    }
+                }
+                row.extend(&q[iq..iq + 7]);
+                row.extend(&v[iv..iv + 6]);
+                row.extend(&a[iv..iv + 6]);
+                row.extend(&tau[iv..iv + 6]);
+            } else {
+                let n = j["name"].as_str().unwrap();
+                if si == 0 {
+                    for p in ["q", "v", "a", "tau"] {
+                        header.push(format!("{p}:{n}"));
+                    }
+                }
+                row.extend([q[iq], v[iv], a[iv], tau[iv]]);
+            }
+        }
+        rows.push(row);
+    }
+    let mut s = header.join(",") + "\n";
+    for r in rows {
+        s += &r.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(",");
+        s += "\n";
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+fn col(header: &[String], name: &str) -> usize {
+    header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"))
+}
+
+#[test]
+fn batch_commands_match_pinocchio() {
+    let refd: Value = serde_json::from_str(
+        &std::fs::read_to_string(repo().join("crates/twinloop-dynamics/tests/data/pinocchio/op3.json")).unwrap(),
+    )
+    .unwrap();
+    let urdf = repo().join("models/op3/robotis_op3.nomesh.urdf");
+    let traj = tmp("op3_traj.csv");
+    write_trajectory(&refd, &traj);
+    let bin = env!("CARGO_BIN_EXE_twinloop");
+    let run = |cmd: &str, out: &Path| {
+        let o = Command::new(bin)
+            .args([cmd, "--urdf"])
+            .arg(&urdf)
+            .arg("--trajectory")
+            .arg(&traj)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{cmd}: {}", String::from_utf8_lossy(&o.stderr));
+        read_csv(out)
+    };
+    let close = |a: f64, b: f64, what: &str| assert!((a - b).abs() <= 1e-9 * b.abs().max(1.0), "{what}: {a} vs {b}");
+    let joints = refd["joints"].as_array().unwrap();
+    let states = refd["states"].as_array().unwrap();
+
+    let (h, rows) = run("inverse-dynamics", &tmp("tau.csv"));
+    let (ha, rows_a) = run("forward-dynamics", &tmp("acc.csv"));
+    let (hk, rows_k) = run("kinematics", &tmp("kin.csv"));
+    assert_eq!(rows.len(), states.len());
+    for (si, st) in states.iter().enumerate() {
+        assert_eq!(rows[si][col(&h, "t")], si as f64 * 0.01);
+        let (rnea, aba) = (nums(&st["rnea"]), nums(&st["aba"]));
+        for j in joints {
+            let iv = j["idx_v"].as_u64().unwrap() as usize;
+            if j["type"] == "JointModelFreeFlyer" {
+                for (k, s) in ["fx", "fy", "fz", "tx", "ty", "tz"].iter().enumerate() {
+                    close(rows[si][col(&h, &format!("tau:base.{s}"))], rnea[iv + k], s);
+                }
+                for (k, s) in ["vx", "vy", "vz", "wx", "wy", "wz"].iter().enumerate() {
+                    close(rows_a[si][col(&ha, &format!("a:base.{s}"))], aba[iv + k], s);
+                }
+            } else {
+                let n = j["name"].as_str().unwrap();
+                close(rows[si][col(&h, &format!("tau:{n}"))], rnea[iv], n);
+                close(rows_a[si][col(&ha, &format!("a:{n}"))], aba[iv], n);
+            }
+        }
+        let com = nums(&st["com"]);
+        for (k, s) in ["com.x", "com.y", "com.z"].iter().enumerate() {
+            close(rows_k[si][col(&hk, s)], com[k], s);
+        }
+        let foot = &st["body_placements"]["r_ank_roll_link"]["translation"];
+        let t = nums(foot);
+        close(rows_k[si][col(&hk, "pose:r_ank_roll_link.x")], t[0], "foot x");
+        close(rows_k[si][col(&hk, "pose:r_ank_roll_link.z")], t[2], "foot z");
+    }
+}
+
+#[test]
+fn missing_columns_and_bad_cells_are_named() {
+    let urdf = repo().join("models/op3/robotis_op3.nomesh.urdf");
+    let bad = tmp("bad.csv");
+    std::fs::write(&bad, "t,q:base.x\n0,1\n").unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["inverse-dynamics", "--urdf"])
+        .arg(&urdf)
+        .arg("--trajectory")
+        .arg(&bad)
+        .arg("--out")
+        .arg(tmp("never.csv"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.csv") && err.contains("missing") && err.contains("q:base.y"), "{err}");
+    std::fs::write(&bad, "t,q:base.x\n0,1\nx,2\n").unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["kinematics", "--urdf"])
+        .arg(&urdf)
+        .arg("--trajectory")
+        .arg(&bad)
+        .arg("--out")
+        .arg(tmp("never.csv"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.csv:3") && err.contains("\"t\""), "{err}");
+}
