@@ -108,7 +108,8 @@ pub(crate) fn describe(node: Node) -> String {
 }
 
 /// The element and its ancestors up to the first one with a name, below the
-/// document's root element: `<origin> in <visual> in <link name="base">`.
+/// document's root element: `<origin> in <visual> in <link name="base">`
+/// (at most four ancestors).
 pub(crate) fn element_path(node: Node) -> String {
     let mut parts = vec![describe(node)];
     if node.attribute("name").is_none() {
@@ -116,6 +117,10 @@ pub(crate) fn element_path(node: Node) -> String {
         while let Some(p) = at {
             if p.parent_element().is_none() {
                 break; // the document's root element
+            }
+            if parts.len() > 4 {
+                parts.push("...".to_string());
+                break;
             }
             parts.push(describe(p));
             if p.attribute("name").is_some() {
@@ -256,4 +261,68 @@ pub(crate) fn opt_array<const N: usize>(
     node.attribute(attr)
         .map(|v| parse_array::<N>(node, attr, v))
         .transpose()
+}
+
+/// Byte offsets of the elements a robot's links and joints were read from, to
+/// place the errors found after parsing by [`Robot::validate`].
+pub(crate) struct Places {
+    /// The document's root element (for errors about the whole robot).
+    pub robot: usize,
+    pub links: Vec<usize>,
+    pub joints: Vec<usize>,
+}
+
+/// [`Robot::validate`], with the error given the line of the element it names
+/// (for a duplicate name: the second element that has it).
+pub(crate) fn validate_placed(
+    doc: &Document,
+    robot: &Robot,
+    places: &Places,
+) -> Result<(), ModelError> {
+    let Err(mut e) = robot.validate() else {
+        return Ok(());
+    };
+    let element = e.location.element.clone().unwrap_or_default();
+    let name_in = |prefix: &str| {
+        element
+            .strip_prefix(prefix)
+            .and_then(|s| s.strip_suffix("\">"))
+            .map(str::to_string)
+    };
+    let duplicate = e.message.starts_with("duplicate");
+    let pick = |names: Vec<&str>, name: &str| -> Option<usize> {
+        let mut hits = names
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| **n == name)
+            .map(|(i, _)| i);
+        let first = hits.next();
+        if duplicate {
+            hits.next().or(first)
+        } else {
+            first
+        }
+    };
+    let byte = if let Some(name) = name_in("<joint name=\"") {
+        let names = robot.joints.iter().map(|j| j.name.as_str()).collect();
+        pick(names, &name).and_then(|i| places.joints.get(i).copied())
+    } else if let Some(name) = name_in("<link name=\"") {
+        let names = robot.links.iter().map(|l| l.name.as_str()).collect();
+        pick(names, &name).and_then(|i| places.links.get(i).copied())
+    } else if let Some(n) = element
+        .strip_prefix("link #")
+        .and_then(|s| s.parse::<usize>().ok())
+    {
+        n.checked_sub(1).and_then(|i| places.links.get(i).copied())
+    } else {
+        None
+    };
+    let byte = byte.unwrap_or_else(|| {
+        if e.location.element.is_none() {
+            e.location.element = Some(describe(doc.root_element()));
+        }
+        places.robot
+    });
+    let (line, column) = position(doc, byte);
+    Err(e.at_line(line, column))
 }

@@ -9,6 +9,11 @@
 //! go to their `extra`. Writing gives back a file that reads as an equal
 //! [`Robot`](crate::Robot).
 //!
+//! Writing also covers what only code or MJCF produce: a
+//! [`Frame`](crate::Frame) is written as a massless `<link>` plus a fixed
+//! `<joint name="<frame>_frame_joint">` (so it reads back as a link), and a
+//! capsule as a cylinder with a comment (see [`to_string`]).
+//!
 //! What is not kept: XML comments, the interleaving of `<visual>` and
 //! `<collision>` inside a link (visuals are written first), unknown attributes
 //! (e.g. `dont_collapse` on a joint, `scale` on a `<box>`, `name` on a

@@ -2,8 +2,8 @@
 
 use crate::error::ModelError;
 use crate::load::{
-    error_at, error_at_attr, opt_array, opt_number, parse_array, parse_number, position,
-    qualified_name, read_text, required, source_text,
+    Places, error_at, error_at_attr, opt_array, opt_number, parse_array, parse_number,
+    qualified_name, read_text, required, source_text, validate_placed,
 };
 use crate::robot::*;
 use roxmltree::{Document, Node};
@@ -20,14 +20,6 @@ pub fn read_file(path: impl AsRef<Path>) -> Result<Robot, ModelError> {
     let path = path.as_ref();
     let text = read_text(path)?;
     from_str(&text).map_err(|e| e.in_file(path))
-}
-
-/// Byte offsets of the elements things were read from, to place errors found
-/// after parsing (by [`Robot::validate`]).
-struct Places {
-    robot: usize,
-    links: Vec<usize>,
-    joints: Vec<usize>,
 }
 
 pub(crate) fn from_document(doc: &Document) -> Result<Robot, ModelError> {
@@ -103,66 +95,8 @@ pub(crate) fn from_document(doc: &Document) -> Result<Robot, ModelError> {
             }
         }
     }
-    if let Err(e) = robot.validate() {
-        return Err(place_validation_error(doc, &robot, &places, e));
-    }
+    validate_placed(doc, &robot, &places)?;
     Ok(robot)
-}
-
-/// Give an error from [`Robot::validate`] the line of the element it names.
-fn place_validation_error(
-    doc: &Document,
-    robot: &Robot,
-    places: &Places,
-    mut e: ModelError,
-) -> ModelError {
-    let element = e.location.element.clone().unwrap_or_default();
-    let name_in = |prefix: &str| {
-        element
-            .strip_prefix(prefix)
-            .and_then(|s| s.strip_suffix("\">"))
-            .map(str::to_string)
-    };
-    // For a duplicate name, point at the second element that has it.
-    let pick = |names: Vec<&str>, name: &str, duplicate: bool| -> Option<usize> {
-        let mut hits = names
-            .iter()
-            .enumerate()
-            .filter(|(_, n)| **n == name)
-            .map(|(i, _)| i);
-        let first = hits.next();
-        if duplicate {
-            hits.next().or(first)
-        } else {
-            first
-        }
-    };
-    let duplicate = e.message.starts_with("duplicate");
-    let byte = if let Some(name) = name_in("<joint name=\"") {
-        let names = robot.joints.iter().map(|j| j.name.as_str()).collect();
-        pick(names, &name, duplicate).and_then(|i| places.joints.get(i).copied())
-    } else if let Some(name) = name_in("<link name=\"") {
-        let names = robot.links.iter().map(|l| l.name.as_str()).collect();
-        pick(names, &name, duplicate).and_then(|i| places.links.get(i).copied())
-    } else if let Some(n) = element
-        .strip_prefix("link #")
-        .and_then(|s| s.parse::<usize>().ok())
-    {
-        n.checked_sub(1).and_then(|i| places.links.get(i).copied())
-    } else {
-        None
-    };
-    let byte = match byte {
-        Some(b) => b,
-        None => {
-            if e.location.element.is_none() {
-                e.location.element = Some(crate::load::describe(doc.root_element()));
-            }
-            places.robot
-        }
-    };
-    let (line, column) = position(doc, byte);
-    e.at_line(line, column)
 }
 
 /// The element's URDF tag: its name, or "" for a prefixed (foreign) element.
