@@ -8,6 +8,7 @@
 
 pub mod builder;
 pub mod error;
+pub mod lint;
 mod load;
 pub mod mjcf;
 pub mod robot;

@@ -1,0 +1,245 @@
+//! `twinloop model ...` run as a user runs it: the built binary on bundled models.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn model(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models")
+        .join(rel)
+}
+
+fn twinloop(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(args)
+        .output()
+        .expect("the twinloop binary runs")
+}
+
+fn run_on(args: &[&str], file: &Path) -> Output {
+    let mut all: Vec<&str> = args.to_vec();
+    all.push(file.to_str().unwrap());
+    twinloop(&all)
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8(o.stdout.clone()).unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8(o.stderr.clone()).unwrap()
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("not JSON ({e}): {}", stdout(o)))
+}
+
+/// A file in this test target's scratch directory.
+fn scratch(name: &str, text: &str) -> PathBuf {
+    let p = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn info_json_of_op3() {
+    let o = run_on(&["model", "info", "--json"], &model("op3/robotis_op3.urdf"));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = json(&o);
+    assert_eq!(v["robot"], "robotis_op3");
+    assert_eq!(v["format"], "URDF");
+    assert_eq!(v["root_link"], "body_link");
+    assert_eq!(v["links"], 23);
+    assert_eq!(v["joints"], 22);
+    assert_eq!(v["joints_by_kind"]["revolute"], 20);
+    assert_eq!(v["joints_by_kind"]["fixed"], 2);
+    assert_eq!(v["joints_by_kind"]["continuous"], 0);
+    assert_eq!(v["dof"], 20);
+    assert_eq!(v["actuated_dof"], 20);
+    assert_eq!(v["mimic_joints"], serde_json::json!([]));
+    assert_eq!(
+        v["links_without_inertial"],
+        serde_json::json!(["cam_link", "cam_gazebo_link"])
+    );
+    let mass = v["total_mass"].as_f64().unwrap();
+    assert!((mass - 3.14747).abs() < 1e-9, "{mass}");
+    let heaviest = v["heaviest_links"].as_array().unwrap();
+    assert_eq!(heaviest.len(), 5);
+    assert_eq!(heaviest[0]["name"], "body_link");
+    assert!((heaviest[0]["mass"].as_f64().unwrap() - 1.34928).abs() < 1e-12);
+}
+
+#[test]
+fn info_text_of_nao_names_the_mimic_joints() {
+    let o = run_on(&["model", "info"], &model("nao/nao_V50.nomesh.urdf"));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s = stdout(&o);
+    assert!(s.contains("robot         NaoH25V50"), "{s}");
+    assert!(
+        s.contains("joints        78: 26 revolute, 16 continuous, 36 fixed"),
+        "{s}"
+    );
+    assert!(s.contains("dof           42 (25 actuated)"), "{s}");
+    assert!(s.contains("mimic joints  17: RHipYawPitch"), "{s}");
+    assert!(s.contains("total mass    5.3054 kg"), "{s}");
+}
+
+#[test]
+fn info_counts_a_floating_joint_as_six_dof() {
+    let o = run_on(
+        &["model", "info", "--json"],
+        &model("coman/coman.nomesh.urdf"),
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = json(&o);
+    assert_eq!(v["root_link"], "world");
+    assert_eq!(v["joints_by_kind"]["floating"], 1);
+    assert_eq!(v["dof"], 35);
+    assert_eq!(v["actuated_dof"], 29);
+}
+
+#[test]
+fn lint_fails_on_op2_and_coman_and_passes_op3() {
+    for (rel, code) in [
+        ("op2/robotis_op2.urdf", 1),
+        ("coman/coman.urdf", 1),
+        ("op3/robotis_op3.urdf", 0),
+        ("sigmaban/sigmaban.urdf", 0),
+    ] {
+        let o = run_on(&["model", "lint"], &model(rel));
+        assert_eq!(
+            o.status.code(),
+            Some(code),
+            "{rel}: {}{}",
+            stdout(&o),
+            stderr(&o)
+        );
+        assert!(stderr(&o).is_empty(), "{rel}: {}", stderr(&o));
+    }
+    let o = run_on(&["model", "lint"], &model("coman/coman.urdf"));
+    let s = stdout(&o);
+    assert!(s.starts_with("SEVERITY  CODE"), "{s}");
+    let line = s.lines().find(|l| l.contains("Xtion_body")).unwrap();
+    assert!(
+        line.starts_with("error     triangle-inequality  link Xtion_body"),
+        "{line}"
+    );
+    assert!(s.contains("1 error, 0 warnings, 1 info"), "{s}");
+}
+
+#[test]
+fn lint_json_has_stable_fields() {
+    let o = run_on(
+        &["model", "lint", "--json"],
+        &model("op2/robotis_op2.nomesh.urdf"),
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let v = json(&o);
+    assert_eq!(v["robot"], "robotis_op2");
+    assert_eq!(v["format"], "URDF");
+    assert_eq!(v["errors"], 21);
+    assert_eq!(v["warnings"], 0);
+    for key in [
+        "file",
+        "total_mass",
+        "links",
+        "links_without_inertial",
+        "joints",
+        "moving_joints",
+        "dof",
+        "mimic_joints",
+        "infos",
+    ] {
+        assert!(v.get(key).is_some(), "{key} missing");
+    }
+    let findings = v["findings"].as_array().unwrap();
+    assert_eq!(findings.len(), 22);
+    let first = &findings[0];
+    assert_eq!(first["severity"], "error");
+    assert_eq!(first["code"], "inertia-not-positive-definite");
+    assert_eq!(first["subject"], "link");
+    assert_eq!(first["name"], "body_link");
+    assert!(first["message"].as_str().unwrap().contains("semi-definite"));
+    assert_eq!(findings[21]["code"], "total-mass");
+    assert_eq!(findings[21]["subject"], "robot");
+}
+
+#[test]
+fn malformed_file_exits_2_naming_the_line() {
+    let bad = scratch(
+        "malformed.urdf",
+        "<?xml version=\"1.0\"?>\n<robot name=\"bad\">\n  <link name=\"a\">\n  </lnk>\n</robot>\n",
+    );
+    for cmd in ["info", "lint"] {
+        let o = run_on(&["model", cmd], &bad);
+        assert_eq!(o.status.code(), Some(2), "{cmd}: {}", stderr(&o));
+        let err = stderr(&o);
+        let expected_start = format!("error: {}:4:", bad.display());
+        assert!(err.starts_with(&expected_start), "{cmd}: {err}");
+        assert!(stdout(&o).is_empty());
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
+fn invalid_description_exits_2_naming_the_element() {
+    let bad = scratch(
+        "dangling.urdf",
+        "<robot name=\"bad\">\n  <link name=\"a\"/>\n  <joint name=\"j\" type=\"fixed\">\n    <parent link=\"a\"/>\n    <child link=\"nowhere\"/>\n  </joint>\n</robot>\n",
+    );
+    let o = run_on(&["model", "lint"], &bad);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with(&format!("error: {}", bad.display())),
+        "{err}"
+    );
+    assert!(err.contains("nowhere"), "{err}");
+}
+
+#[test]
+fn missing_file_and_foreign_xml_exit_2() {
+    let o = run_on(&["model", "info"], Path::new("/nonexistent/robot.urdf"));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).starts_with("error: /nonexistent/robot.urdf"),
+        "{}",
+        stderr(&o)
+    );
+
+    let sdf = scratch(
+        "model.sdf",
+        "<sdf version=\"1.7\"><model name=\"m\"/></sdf>\n",
+    );
+    let o = run_on(&["model", "lint"], &sdf);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).starts_with("error: "), "{}", stderr(&o));
+}
+
+#[test]
+fn bad_usage_exits_2() {
+    assert_eq!(twinloop(&["model", "lint"]).status.code(), Some(2));
+    assert_eq!(twinloop(&["model", "frobnicate"]).status.code(), Some(2));
+}
+
+#[test]
+fn help_teaches_what_each_command_does() {
+    let o = twinloop(&["--help"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(stdout(&o).contains("model"));
+
+    let o = twinloop(&["model", "info", "--help"]);
+    let s = stdout(&o);
+    assert!(s.contains("Example:"), "{s}");
+    assert!(
+        s.contains("twinloop model info models/op3/robotis_op3.urdf"),
+        "{s}"
+    );
+    assert!(s.contains("total mass"), "{s}");
+
+    let o = twinloop(&["model", "lint", "--help"]);
+    let s = stdout(&o);
+    assert!(s.contains("Example:"), "{s}");
+    assert!(s.contains("triangle-inequality"), "{s}");
+    assert!(s.contains("Exit code 1 if any finding is an error"), "{s}");
+}
