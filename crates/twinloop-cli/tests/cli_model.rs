@@ -128,6 +128,31 @@ fn lint_fails_on_op2_and_coman_and_passes_op3() {
 }
 
 #[test]
+fn mjcf_models_are_read_by_their_root_element() {
+    let o = run_on(&["model", "info", "--json"], &model("talos/mjcf/talos.xml"));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = json(&o);
+    assert_eq!(v["format"], "MJCF");
+    assert_eq!(v["robot"], "talos");
+    assert_eq!(v["joints_by_kind"]["revolute"], 44);
+    assert!((v["total_mass"].as_f64().unwrap() - 94.0032).abs() < 1e-3);
+    for rel in [
+        "op3/mjcf/op3.xml",
+        "talos/mjcf/talos.xml",
+        "unitree_h1/mjcf/h1_menagerie.xml",
+    ] {
+        let o = run_on(&["model", "lint"], &model(rel));
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{rel}: {}{}",
+            stdout(&o),
+            stderr(&o)
+        );
+    }
+}
+
+#[test]
 fn lint_json_has_stable_fields() {
     let o = run_on(
         &["model", "lint", "--json"],

@@ -492,7 +492,10 @@ fn inverted_empty_and_zero_limits() {
 }
 
 #[test]
-#[allow(clippy::approx_constant, reason = "NAO's axis is a truncated 1/sqrt(2), on purpose")]
+#[allow(
+    clippy::approx_constant,
+    reason = "NAO's axis is a truncated 1/sqrt(2), on purpose"
+)]
 fn non_unit_axis_is_a_warning_on_moving_joints_only() {
     // NAO's hip yaw-pitch axis as written: |a| = 0.99999887...
     let mut robot = base().build().unwrap();

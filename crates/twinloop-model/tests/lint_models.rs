@@ -169,8 +169,18 @@ const URDFS: &[&str] = &[
     "unitree_h1/variants/h1_2025-12_c4519eb.urdf",
 ];
 
+/// Every MJCF robot in models/ (`op3/mjcf/scene.xml` is a scene that includes op3.xml).
+const MJCFS: &[&str] = &[
+    "op3/mjcf/op3.xml",
+    "talos/mjcf/talos.xml",
+    "unitree_g1/mjcf/g1_29dof_rev_1_0_unitree.xml",
+    "unitree_g1/mjcf/g1_menagerie.xml",
+    "unitree_h1/mjcf/h1_menagerie.xml",
+    "unitree_h1/mjcf/h1_unitree.xml",
+];
+
 #[test]
-fn the_list_covers_every_bundled_urdf() {
+fn the_lists_cover_every_bundled_model() {
     let mut found = Vec::new();
     let mut stack = vec![models_dir()];
     while let Some(d) = stack.pop() {
@@ -399,4 +409,37 @@ fn sigmaban_dummy_frames_and_missing_ranges_are_warnings() {
             assert!(f.message.contains("1e-9 kg"), "{}", f.message);
         }
     }
+}
+
+#[test]
+fn every_mjcf_agrees_with_its_source_summary() {
+    for rel in MJCFS {
+        agrees_with_source(rel, &lint_file(rel));
+    }
+}
+
+#[test]
+fn mjcf_models_have_no_errors_or_warnings() {
+    for rel in MJCFS {
+        let r = lint_file(rel);
+        assert_eq!((r.errors, r.warnings), (0, 0), "{rel}: {:#?}", r.findings);
+        // MJCF joints carry no effort or velocity limit (actuators do): one info
+        // per ranged joint. OP3's hinges have no range, so they are continuous.
+        let ranged = r.moving_joints;
+        let want = if rel.starts_with("op3/") { 0 } else { ranged };
+        assert_eq!(
+            r.with_code(codes::MISSING_EFFORT_VELOCITY).count(),
+            want,
+            "{rel}"
+        );
+        assert_eq!(r.infos, want + 1, "{rel}");
+    }
+}
+
+#[test]
+fn op3_mjcf_and_urdf_weigh_the_same() {
+    let urdf = lint_file("op3/robotis_op3.urdf");
+    let mjcf = lint_file("op3/mjcf/op3.xml");
+    assert!((urdf.total_mass - mjcf.total_mass).abs() < 1e-12);
+    assert_eq!(urdf.dof, mjcf.dof);
 }
