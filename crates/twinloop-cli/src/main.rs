@@ -2,8 +2,11 @@
 //! group lives in its own module (`cmd_model`, ...). To add a group: a module,
 //! a variant in [`Command`], and an arm in `main`.
 
+mod cmd_bench;
+mod cmd_dynamics;
 mod cmd_model;
 mod common;
+mod progress;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -30,11 +33,41 @@ enum Command {
     /// Inspect and check robot descriptions (URDF, MJCF)
     #[command(subcommand)]
     Model(cmd_model::ModelCommand),
+    /// Forward kinematics over a trajectory: CoM and frame poses per row
+    ///
+    /// Reads the q: columns of each row and writes com.x, com.y, com.z and, for each
+    /// frame (every link by default), pose:<frame>.x .y .z .qx .qy .qz .qw in the world.
+    ///
+    /// Example: twinloop kinematics --urdf robot.urdf --trajectory walk.csv --out poses.csv
+    Kinematics(cmd_dynamics::KinematicsArgs),
+    /// Inverse dynamics (RNEA) over a trajectory: the torques that produce it
+    ///
+    /// Reads q:, v: and a: columns and writes tau:<joint> per joint and, for a floating
+    /// base, tau:base.fx .. tau:base.tz: the wrench the base would need (base frame).
+    /// For a robot moving freely under gravity the base wrench should be zero; what is
+    /// left is what the model cannot explain.
+    ///
+    /// Example: twinloop inverse-dynamics --urdf robot.urdf --trajectory squat.csv --out tau.csv
+    InverseDynamics(cmd_dynamics::BatchArgs),
+    /// Forward dynamics (ABA) over a trajectory: the accelerations torques produce
+    ///
+    /// Reads q:, v: and tau: columns (tau:base.* is an external wrench on the base,
+    /// usually zero) and writes a:<joint> and a:base.vx .. a:base.wz.
+    ///
+    /// Example: twinloop forward-dynamics --urdf robot.urdf --trajectory cmd.csv --out acc.csv
+    ForwardDynamics(cmd_dynamics::BatchArgs),
+    /// Benchmarks (median time per call), to compare with peers such as Pinocchio
+    #[command(subcommand)]
+    Bench(cmd_bench::BenchCommand),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Model(cmd) => cmd_model::run(cmd),
+        Command::Kinematics(args) => cmd_dynamics::kinematics(args),
+        Command::InverseDynamics(args) => cmd_dynamics::inverse_dynamics(args),
+        Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
+        Command::Bench(cmd) => cmd_bench::run(cmd),
     }
 }

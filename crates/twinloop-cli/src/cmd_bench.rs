@@ -1,0 +1,228 @@
+//! `twinloop bench dynamics`: median nanoseconds per call of each algorithm over
+//! random (or given) states, like MuJoCo's `testspeed`. The peer bench in
+//! bench/pinocchio runs Pinocchio on the same model and the same states file.
+
+use crate::cmd_dynamics::load_model;
+use crate::progress;
+use clap::{Args, Subcommand};
+use serde::Serialize;
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+use twinloop_dynamics::configuration::{SplitMix64, random_configuration, random_tangent};
+use twinloop_dynamics::{Data, Model};
+use twinloop_io::{Quantity, StateColumns, Table};
+
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// Time the dynamics algorithms on a model.
+    ///
+    /// Runs forward kinematics (fk), centre of mass (com), RNEA, CRBA, ABA, the
+    /// world-frame joint Jacobians (jacobians) and the joint-torque regressor over a
+    /// set of states, repeating rounds until each algorithm has run for about
+    /// --seconds, and reports the median over rounds of the time per call.
+    ///
+    /// Example:
+    ///   twinloop bench dynamics --urdf models/op3/robotis_op3.urdf
+    ///   twinloop bench dynamics --urdf models/talos/mjcf/talos.xml --states states.csv --json
+    ///
+    /// With --states, the states come from a trajectory CSV (q:, v:, a:, tau: columns);
+    /// bench/pinocchio/make_states.py writes one, and bench/pinocchio runs Pinocchio on
+    /// the same file, so the two are compared on identical inputs.
+    Dynamics(DynamicsBenchArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct DynamicsBenchArgs {
+    /// Robot description (URDF or MJCF).
+    #[arg(long, value_name = "FILE")]
+    pub urdf: PathBuf,
+    /// States to use (trajectory CSV with q:, v:, a:, tau: columns).
+    #[arg(long, value_name = "CSV")]
+    pub states: Option<PathBuf>,
+    /// Number of random states when --states is not given.
+    #[arg(long, default_value_t = 1000)]
+    pub count: usize,
+    /// Minimum time spent on each algorithm, in seconds.
+    #[arg(long, default_value_t = 0.3)]
+    pub seconds: f64,
+    /// Print JSON: {"model", "nv", "ns_per_call": {"fk", "com", "rnea", "crba", "aba", "jacobians", "regressor"}}.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Serialize)]
+struct NsPerCall {
+    fk: f64,
+    com: f64,
+    rnea: f64,
+    crba: f64,
+    aba: f64,
+    jacobians: f64,
+    regressor: f64,
+}
+
+#[derive(Serialize)]
+struct Report {
+    model: String,
+    nv: usize,
+    states: usize,
+    ns_per_call: NsPerCall,
+}
+
+struct States {
+    q: Vec<Vec<f64>>,
+    v: Vec<Vec<f64>>,
+    a: Vec<Vec<f64>>,
+    tau: Vec<Vec<f64>>,
+}
+
+fn load_states(model: &Model, args: &DynamicsBenchArgs) -> Result<States, String> {
+    if let Some(path) = &args.states {
+        let t = Table::read(path).map_err(|e| e.to_string())?;
+        let find = |qty| StateColumns::find(&t, model, qty).map_err(|e| e.to_string());
+        let cols = [find(Quantity::Q)?, find(Quantity::V)?, find(Quantity::A)?, find(Quantity::Tau)?];
+        let mut s = States { q: vec![], v: vec![], a: vec![], tau: vec![] };
+        for row in &t.rows {
+            let g = |c: &StateColumns, n| {
+                let mut x = vec![0.0; n];
+                c.gather(row, &mut x);
+                x
+            };
+            s.q.push(g(&cols[0], model.nq));
+            s.v.push(g(&cols[1], model.nv));
+            s.a.push(g(&cols[2], model.nv));
+            s.tau.push(g(&cols[3], model.nv));
+        }
+        if s.q.is_empty() {
+            return Err(format!("{}: no states in the file", path.display()));
+        }
+        Ok(s)
+    } else {
+        let mut rng = SplitMix64(0x7417_1009);
+        let n = args.count.max(1);
+        let mut s = States { q: vec![], v: vec![], a: vec![], tau: vec![] };
+        for _ in 0..n {
+            s.q.push(random_configuration(model, &mut rng));
+            s.v.push(random_tangent(model, &mut rng));
+            s.a.push(random_tangent(model, &mut rng));
+            s.tau.push(random_tangent(model, &mut rng));
+        }
+        Ok(s)
+    }
+}
+
+/// Median over rounds of ns per call; each round runs `f` once per state.
+fn time(n_states: usize, seconds: f64, mut round: impl FnMut()) -> f64 {
+    round(); // warm-up
+    let mut samples = Vec::new();
+    let start = Instant::now();
+    while samples.len() < 11 || (start.elapsed().as_secs_f64() < seconds && samples.len() < 100_000) {
+        let t = Instant::now();
+        round();
+        samples.push(t.elapsed().as_nanos() as f64 / n_states as f64);
+    }
+    samples.sort_by(f64::total_cmp);
+    samples[samples.len() / 2]
+}
+
+pub fn run(cmd: BenchCommand) -> ExitCode {
+    match cmd {
+        BenchCommand::Dynamics(args) => match dynamics(&args) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(crate::common::EXIT_BAD_INPUT)
+            }
+        },
+    }
+}
+
+fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
+    let model = load_model(&args.urdf, false)?;
+    let s = load_states(&model, args)?;
+    let n = s.q.len();
+    let mut d = Data::new(&model);
+    let secs = args.seconds;
+    let bar = if args.json { indicatif::ProgressBar::hidden() } else { progress::steps(7) };
+    let step = |name: &str| {
+        bar.set_message(name.to_string());
+        bar.inc(1);
+    };
+    use twinloop_dynamics as dy;
+    step("fk");
+    let fk = time(n, secs, || {
+        for q in &s.q {
+            dy::forward_kinematics(&model, &mut d, black_box(q));
+        }
+        black_box(&d.o_m_i);
+    });
+    step("com");
+    let com = time(n, secs, || {
+        for q in &s.q {
+            black_box(dy::center_of_mass(&model, &mut d, black_box(q)));
+        }
+    });
+    step("rnea");
+    let rnea = time(n, secs, || {
+        for i in 0..n {
+            black_box(dy::rnea(&model, &mut d, black_box(&s.q[i]), &s.v[i], &s.a[i]));
+        }
+    });
+    step("crba");
+    let crba = time(n, secs, || {
+        for q in &s.q {
+            black_box(dy::crba(&model, &mut d, black_box(q)));
+        }
+    });
+    step("aba");
+    let aba = time(n, secs, || {
+        for i in 0..n {
+            black_box(dy::aba(&model, &mut d, black_box(&s.q[i]), &s.v[i], &s.tau[i]));
+        }
+    });
+    step("jacobians");
+    let jacobians = time(n, secs, || {
+        for q in &s.q {
+            dy::compute_joint_jacobians(&model, &mut d, black_box(q));
+            black_box(&d.joint_jacobians);
+        }
+    });
+    step("regressor");
+    let regressor = time(n, secs, || {
+        for i in 0..n {
+            black_box(dy::joint_torque_regressor(&model, &mut d, black_box(&s.q[i]), &s.v[i], &s.a[i]));
+        }
+    });
+    bar.finish_and_clear();
+    let model_name = args
+        .urdf
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let report = Report {
+        model: model_name,
+        nv: model.nv,
+        states: n,
+        ns_per_call: NsPerCall { fk, com, rnea, crba, aba, jacobians, regressor },
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?);
+    } else {
+        println!("{} (nv = {}, {} states): median ns per call", report.model, report.nv, n);
+        let p = &report.ns_per_call;
+        for (k, v) in [
+            ("fk", p.fk),
+            ("com", p.com),
+            ("rnea", p.rnea),
+            ("crba", p.crba),
+            ("aba", p.aba),
+            ("jacobians", p.jacobians),
+            ("regressor", p.regressor),
+        ] {
+            println!("  {k:<10} {v:>10.1}");
+        }
+    }
+    Ok(())
+}
