@@ -82,8 +82,18 @@ fn load_states(model: &Model, args: &DynamicsBenchArgs) -> Result<States, String
     if let Some(path) = &args.states {
         let t = Table::read(path).map_err(|e| e.to_string())?;
         let find = |qty| StateColumns::find(&t, model, qty).map_err(|e| e.to_string());
-        let cols = [find(Quantity::Q)?, find(Quantity::V)?, find(Quantity::A)?, find(Quantity::Tau)?];
-        let mut s = States { q: vec![], v: vec![], a: vec![], tau: vec![] };
+        let cols = [
+            find(Quantity::Q)?,
+            find(Quantity::V)?,
+            find(Quantity::A)?,
+            find(Quantity::Tau)?,
+        ];
+        let mut s = States {
+            q: vec![],
+            v: vec![],
+            a: vec![],
+            tau: vec![],
+        };
         for row in &t.rows {
             let g = |c: &StateColumns, n| {
                 let mut x = vec![0.0; n];
@@ -102,7 +112,12 @@ fn load_states(model: &Model, args: &DynamicsBenchArgs) -> Result<States, String
     } else {
         let mut rng = SplitMix64(0x7417_1009);
         let n = args.count.max(1);
-        let mut s = States { q: vec![], v: vec![], a: vec![], tau: vec![] };
+        let mut s = States {
+            q: vec![],
+            v: vec![],
+            a: vec![],
+            tau: vec![],
+        };
         for _ in 0..n {
             s.q.push(random_configuration(model, &mut rng));
             s.v.push(random_tangent(model, &mut rng));
@@ -118,7 +133,8 @@ fn time(n_states: usize, seconds: f64, mut round: impl FnMut()) -> f64 {
     round(); // warm-up
     let mut samples = Vec::new();
     let start = Instant::now();
-    while samples.len() < 11 || (start.elapsed().as_secs_f64() < seconds && samples.len() < 100_000) {
+    while samples.len() < 11 || (start.elapsed().as_secs_f64() < seconds && samples.len() < 100_000)
+    {
         let t = Instant::now();
         round();
         samples.push(t.elapsed().as_nanos() as f64 / n_states as f64);
@@ -145,7 +161,11 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
     let n = s.q.len();
     let mut d = Data::new(&model);
     let secs = args.seconds;
-    let bar = if args.json { indicatif::ProgressBar::hidden() } else { progress::steps(7) };
+    let bar = if args.json {
+        indicatif::ProgressBar::hidden()
+    } else {
+        progress::steps(7)
+    };
     let step = |name: &str| {
         bar.set_message(name.to_string());
         bar.inc(1);
@@ -167,7 +187,13 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
     step("rnea");
     let rnea = time(n, secs, || {
         for i in 0..n {
-            black_box(dy::rnea(&model, &mut d, black_box(&s.q[i]), &s.v[i], &s.a[i]));
+            black_box(dy::rnea(
+                &model,
+                &mut d,
+                black_box(&s.q[i]),
+                &s.v[i],
+                &s.a[i],
+            ));
         }
     });
     step("crba");
@@ -179,7 +205,13 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
     step("aba");
     let aba = time(n, secs, || {
         for i in 0..n {
-            black_box(dy::aba(&model, &mut d, black_box(&s.q[i]), &s.v[i], &s.tau[i]));
+            black_box(dy::aba(
+                &model,
+                &mut d,
+                black_box(&s.q[i]),
+                &s.v[i],
+                &s.tau[i],
+            ));
         }
     });
     step("jacobians");
@@ -192,7 +224,13 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
     step("regressor");
     let regressor = time(n, secs, || {
         for i in 0..n {
-            black_box(dy::joint_torque_regressor(&model, &mut d, black_box(&s.q[i]), &s.v[i], &s.a[i]));
+            black_box(dy::joint_torque_regressor(
+                &model,
+                &mut d,
+                black_box(&s.q[i]),
+                &s.v[i],
+                &s.a[i],
+            ));
         }
     });
     bar.finish_and_clear();
@@ -205,12 +243,26 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
         model: model_name,
         nv: model.nv,
         states: n,
-        ns_per_call: NsPerCall { fk, com, rnea, crba, aba, jacobians, regressor },
+        ns_per_call: NsPerCall {
+            fk,
+            com,
+            rnea,
+            crba,
+            aba,
+            jacobians,
+            regressor,
+        },
     };
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
+        );
     } else {
-        println!("{} (nv = {}, {} states): median ns per call", report.model, report.nv, n);
+        println!(
+            "{} (nv = {}, {} states): median ns per call",
+            report.model, report.nv, n
+        );
         let p = &report.ns_per_call;
         for (k, v) in [
             ("fk", p.fk),

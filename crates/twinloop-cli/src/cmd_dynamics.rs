@@ -36,7 +36,11 @@ pub struct KinematicsArgs {
 
 pub fn load_model(path: &Path, fixed_base: bool) -> Result<Model, String> {
     let robot = twinloop_model::load(path).map_err(|e| e.to_string())?;
-    let base = if fixed_base { BaseKind::Fixed } else { BaseKind::Floating };
+    let base = if fixed_base {
+        BaseKind::Fixed
+    } else {
+        BaseKind::Floating
+    };
     Model::from_robot_with_base(&robot, base).map_err(|e| format!("{}: {e}", path.display()))
 }
 
@@ -79,11 +83,17 @@ fn kinematics_impl(args: &KinematicsArgs) -> Result<(), String> {
     let table = Table::read(&a.trajectory).map_err(|e| e.to_string())?;
     let qc = StateColumns::find(&table, &model, Quantity::Q).map_err(|e| e.to_string())?;
     let frames: Vec<usize> = if args.frames.is_empty() {
-        (0..model.frames.len()).filter(|&k| model.frames[k].link.is_some()).collect()
+        (0..model.frames.len())
+            .filter(|&k| model.frames[k].link.is_some())
+            .collect()
     } else {
         args.frames
             .iter()
-            .map(|n| model.frame_index(n).ok_or_else(|| format!("{}: no frame named \"{n}\"", a.urdf.display())))
+            .map(|n| {
+                model
+                    .frame_index(n)
+                    .ok_or_else(|| format!("{}: no frame named \"{n}\"", a.urdf.display()))
+            })
             .collect::<Result<_, _>>()?
     };
     let mut names = vec!["com.x".into(), "com.y".into(), "com.z".into()];
@@ -136,7 +146,11 @@ fn inverse_impl(a: &BatchArgs) -> Result<(), String> {
     let (tcol, cols) = with_time(&table, Quantity::Tau.column_names(&model));
     let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;
     let mut data = Data::new(&model);
-    let (mut q, mut v, mut acc) = (vec![0.0; model.nq], vec![0.0; model.nv], vec![0.0; model.nv]);
+    let (mut q, mut v, mut acc) = (
+        vec![0.0; model.nq],
+        vec![0.0; model.nv],
+        vec![0.0; model.nv],
+    );
     let mut row = Vec::with_capacity(cols.len());
     let bar = progress::rows(table.rows.len());
     for (r, input) in table.rows.iter().enumerate() {
@@ -171,7 +185,11 @@ fn forward_impl(a: &BatchArgs) -> Result<(), String> {
     let (tcol, cols) = with_time(&table, Quantity::A.column_names(&model));
     let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;
     let mut data = Data::new(&model);
-    let (mut q, mut v, mut tau) = (vec![0.0; model.nq], vec![0.0; model.nv], vec![0.0; model.nv]);
+    let (mut q, mut v, mut tau) = (
+        vec![0.0; model.nq],
+        vec![0.0; model.nv],
+        vec![0.0; model.nv],
+    );
     let mut row = Vec::with_capacity(cols.len());
     let bar = progress::rows(table.rows.len());
     for (r, input) in table.rows.iter().enumerate() {

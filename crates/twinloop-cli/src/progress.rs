@@ -8,7 +8,9 @@ pub fn rows(n: usize) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new(n as u64);
-    if let Ok(style) = ProgressStyle::with_template("{spinner} {bar:40} {pos}/{len} rows ({eta} left)") {
+    if let Ok(style) =
+        ProgressStyle::with_template("{spinner} {bar:40} {pos}/{len} rows ({eta} left)")
+    {
         bar.set_style(style);
     }
     bar

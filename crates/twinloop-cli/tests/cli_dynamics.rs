@@ -17,14 +17,20 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn nums(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 fn read_csv(p: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(p).unwrap();
     let mut lines = text.lines();
     let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines.map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
     (header, rows)
 }
 
@@ -34,10 +40,18 @@ fn write_trajectory(refd: &Value, path: &Path) {
     let mut rows: Vec<Vec<f64>> = vec![];
     let joints = refd["joints"].as_array().unwrap();
     for (si, st) in refd["states"].as_array().unwrap().iter().enumerate() {
-        let (q, v, a, tau) = (nums(&st["q"]), nums(&st["v"]), nums(&st["a"]), nums(&st["tau"]));
+        let (q, v, a, tau) = (
+            nums(&st["q"]),
+            nums(&st["v"]),
+            nums(&st["a"]),
+            nums(&st["tau"]),
+        );
         let mut row = vec![si as f64 * 0.01];
         for j in joints {
-            let (iq, iv) = (j["idx_q"].as_u64().unwrap() as usize, j["idx_v"].as_u64().unwrap() as usize);
+            let (iq, iv) = (
+                j["idx_q"].as_u64().unwrap() as usize,
+                j["idx_v"].as_u64().unwrap() as usize,
+            );
             if j["type"] == "JointModelFreeFlyer" {
                 if si == 0 {
                     for s in ["x", "y", "z", "qx", "qy", "qz", "qw"] {
@@ -70,20 +84,30 @@ fn write_trajectory(refd: &Value, path: &Path) {
     }
     let mut s = header.join(",") + "\n";
     for r in rows {
-        s += &r.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(",");
+        s += &r
+            .iter()
+            .map(|x| format!("{x:?}"))
+            .collect::<Vec<_>>()
+            .join(",");
         s += "\n";
     }
     std::fs::write(path, s).unwrap();
 }
 
 fn col(header: &[String], name: &str) -> usize {
-    header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"))
+    header
+        .iter()
+        .position(|h| h == name)
+        .unwrap_or_else(|| panic!("no column {name}"))
 }
 
 #[test]
 fn batch_commands_match_pinocchio() {
     let refd: Value = serde_json::from_str(
-        &std::fs::read_to_string(repo().join("crates/twinloop-dynamics/tests/data/pinocchio/op3.json")).unwrap(),
+        &std::fs::read_to_string(
+            repo().join("crates/twinloop-dynamics/tests/data/pinocchio/op3.json"),
+        )
+        .unwrap(),
     )
     .unwrap();
     let urdf = repo().join("models/op3/robotis_op3.nomesh.urdf");
@@ -100,10 +124,19 @@ fn batch_commands_match_pinocchio() {
             .arg(out)
             .output()
             .unwrap();
-        assert!(o.status.success(), "{cmd}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            o.status.success(),
+            "{cmd}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
         read_csv(out)
     };
-    let close = |a: f64, b: f64, what: &str| assert!((a - b).abs() <= 1e-9 * b.abs().max(1.0), "{what}: {a} vs {b}");
+    let close = |a: f64, b: f64, what: &str| {
+        assert!(
+            (a - b).abs() <= 1e-9 * b.abs().max(1.0),
+            "{what}: {a} vs {b}"
+        )
+    };
     let joints = refd["joints"].as_array().unwrap();
     let states = refd["states"].as_array().unwrap();
 
@@ -135,8 +168,16 @@ fn batch_commands_match_pinocchio() {
         }
         let foot = &st["body_placements"]["r_ank_roll_link"]["translation"];
         let t = nums(foot);
-        close(rows_k[si][col(&hk, "pose:r_ank_roll_link.x")], t[0], "foot x");
-        close(rows_k[si][col(&hk, "pose:r_ank_roll_link.z")], t[2], "foot z");
+        close(
+            rows_k[si][col(&hk, "pose:r_ank_roll_link.x")],
+            t[0],
+            "foot x",
+        );
+        close(
+            rows_k[si][col(&hk, "pose:r_ank_roll_link.z")],
+            t[2],
+            "foot z",
+        );
     }
 }
 
@@ -156,7 +197,10 @@ fn missing_columns_and_bad_cells_are_named() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("bad.csv") && err.contains("missing") && err.contains("q:base.y"), "{err}");
+    assert!(
+        err.contains("bad.csv") && err.contains("missing") && err.contains("q:base.y"),
+        "{err}"
+    );
     std::fs::write(&bad, "t,q:base.x\n0,1\nx,2\n").unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
         .args(["kinematics", "--urdf"])

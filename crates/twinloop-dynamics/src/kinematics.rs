@@ -47,8 +47,8 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) {
     let base = base_placement(model, q);
     data.base_placement = base;
     let qj = &q[model.q_offset..];
-    for i in 0..model.nbodies {
-        let li = joint_placement(model, i, qj[i]);
+    for (i, &qi) in qj.iter().enumerate().take(model.nbodies) {
+        let li = joint_placement(model, i, qi);
         data.li_m_i[i] = li;
         let p = model.parents[i];
         data.o_m_i[i] = if p == BASE {
@@ -65,8 +65,8 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) {
 #[inline]
 pub(crate) fn base_frame_pass(model: &Model, data: &mut Data, q: &[f64]) {
     let qj = &q[model.q_offset..];
-    for i in 0..model.nbodies {
-        let li = joint_placement(model, i, qj[i]);
+    for (i, &qi) in qj.iter().enumerate().take(model.nbodies) {
+        let li = joint_placement(model, i, qi);
         data.li_m_i[i] = li;
         let p = model.parents[i];
         let b = if p == BASE { li } else { data.b_m_i[p] * li };

@@ -228,7 +228,7 @@ impl Model {
                         let a = joint.axis_or_default();
                         let axis = Vector3::new(a[0], a[1], a[2]);
                         let n = axis.norm();
-                        if !(n > 1e-12) {
+                        if n.is_nan() || n <= 1e-12 {
                             return Err(ModelError::new("a moving joint needs a non-zero axis")
                                 .at_element(here()));
                         }

@@ -32,15 +32,31 @@ fn algorithms_do_not_allocate() {
     // A two-legged tree with every joint type, plus a fixed link.
     let mut b = RobotBuilder::new("biped")
         .link("pelvis")
-        .mass(3.0, [0.0, 0.0, 0.05], Inertia::solid_box(3.0, [0.2, 0.3, 0.1]))
+        .mass(
+            3.0,
+            [0.0, 0.0, 0.05],
+            Inertia::solid_box(3.0, [0.2, 0.3, 0.1]),
+        )
         .done();
     for side in ["l", "r"] {
         let mut parent = "pelvis".to_string();
-        for (k, axis) in [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.6, 0.8]].iter().enumerate() {
+        for (k, axis) in [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.6, 0.8],
+        ]
+        .iter()
+        .enumerate()
+        {
             let name = format!("{side}{k}");
             b = b
                 .link(&name)
-                .mass(0.5, [0.0, 0.01, -0.1], Inertia::solid_cylinder(0.5, 0.03, 0.2))
+                .mass(
+                    0.5,
+                    [0.0, 0.01, -0.1],
+                    Inertia::solid_cylinder(0.5, 0.03, 0.2),
+                )
                 .done()
                 .revolute(format!("{name}_joint"), &parent, &name, *axis)
                 .origin(Pose::new([0.0, 0.1, -0.1], [0.1, 0.0, 0.2]))
@@ -52,13 +68,22 @@ fn algorithms_do_not_allocate() {
             .link(&slider)
             .mass(0.2, [0.0, 0.0, 0.0], Inertia::solid_sphere(0.2, 0.03))
             .done()
-            .joint(format!("{slider}_joint"), JointKind::Prismatic, &parent, &slider)
+            .joint(
+                format!("{slider}_joint"),
+                JointKind::Prismatic,
+                &parent,
+                &slider,
+            )
             .axis([0.0, 0.0, 1.0])
             .done();
         let foot = format!("{side}_foot");
         b = b
             .link(&foot)
-            .mass(0.3, [0.02, 0.0, -0.02], Inertia::solid_box(0.3, [0.1, 0.05, 0.02]))
+            .mass(
+                0.3,
+                [0.02, 0.0, -0.02],
+                Inertia::solid_box(0.3, [0.1, 0.05, 0.02]),
+            )
             .done()
             .fixed(format!("{foot}_fixed"), &slider, &foot)
             .done();
@@ -79,7 +104,11 @@ fn algorithms_do_not_allocate() {
         ground_projected_com(&model, data, &q);
         jacobian_center_of_mass(&model, data, &q);
         compute_joint_jacobians(&model, data, &q);
-        for rf in [ReferenceFrame::Local, ReferenceFrame::World, ReferenceFrame::LocalWorldAligned] {
+        for rf in [
+            ReferenceFrame::Local,
+            ReferenceFrame::World,
+            ReferenceFrame::LocalWorldAligned,
+        ] {
             frame_jacobian(&model, data, foot, rf, jac);
         }
         rnea(&model, data, &q, &v, &a);
@@ -98,5 +127,10 @@ fn algorithms_do_not_allocate() {
         run(&mut data, &mut jac);
     }
     let after = ALLOCATIONS.load(Ordering::SeqCst);
-    assert_eq!(after - before, 0, "the algorithms allocated {} times", after - before);
+    assert_eq!(
+        after - before,
+        0,
+        "the algorithms allocated {} times",
+        after - before
+    );
 }

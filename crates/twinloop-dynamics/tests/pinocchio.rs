@@ -55,8 +55,8 @@ fn maps(model: &Model, refd: &Value) -> Maps {
         let idx_v = j["idx_v"].as_u64().unwrap() as usize;
         if j["type"] == "JointModelFreeFlyer" {
             assert_eq!(k, 0, "the free flyer is Pinocchio's first joint");
-            for d in 0..6 {
-                v_pin[d] = idx_v + d;
+            for (d, slot) in v_pin.iter_mut().take(6).enumerate() {
+                *slot = idx_v + d;
             }
             block_of_pin_joint.push(0);
             continue;
@@ -68,8 +68,14 @@ fn maps(model: &Model, refd: &Value) -> Maps {
         v_pin[model.v_offset + b] = idx_v;
         block_of_pin_joint.push(b + usize::from(model.is_floating()));
     }
-    assert!(v_pin.iter().all(|&x| x != usize::MAX), "every twinloop coordinate maps");
-    Maps { v_pin, block_of_pin_joint }
+    assert!(
+        v_pin.iter().all(|&x| x != usize::MAX),
+        "every twinloop coordinate maps"
+    );
+    Maps {
+        v_pin,
+        block_of_pin_joint,
+    }
 }
 
 fn our_q(model: &Model, refd: &Value, q_pin: &[f64]) -> Vec<f64> {
@@ -82,19 +88,32 @@ fn our_q(model: &Model, refd: &Value, q_pin: &[f64]) -> Vec<f64> {
         }
         let b = model.joint_index(j["name"].as_str().unwrap()).unwrap();
         let nq = j["nq"].as_u64().unwrap();
-        q[model.q_offset + b] =
-            if nq == 2 { q_pin[idx_q + 1].atan2(q_pin[idx_q]) } else { q_pin[idx_q] };
+        q[model.q_offset + b] = if nq == 2 {
+            q_pin[idx_q + 1].atan2(q_pin[idx_q])
+        } else {
+            q_pin[idx_q]
+        };
     }
     q
 }
 
 fn check_model(name: &str, file: &str) {
-    let path = repo().join("crates/twinloop-dynamics/tests/data/pinocchio").join(format!("{name}.json"));
+    let path = repo()
+        .join("crates/twinloop-dynamics/tests/data/pinocchio")
+        .join(format!("{name}.json"));
     let refd: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     let robot = twinloop_model::load(repo().join(file)).unwrap_or_else(|e| panic!("{e}"));
     let model = Model::from_robot(&robot).unwrap();
-    assert_eq!(model.nv, refd["nv"].as_u64().unwrap() as usize, "{name}: nv");
-    close(&format!("{name} total mass"), model.total_mass, f(&refd["total_mass"]));
+    assert_eq!(
+        model.nv,
+        refd["nv"].as_u64().unwrap() as usize,
+        "{name}: nv"
+    );
+    close(
+        &format!("{name} total mass"),
+        model.total_mass,
+        f(&refd["total_mass"]),
+    );
     let mp = maps(&model, &refd);
     let nv = model.nv;
     let to_ours = |x_pin: &[f64]| -> Vec<f64> { (0..nv).map(|i| x_pin[mp.v_pin[i]]).collect() };
@@ -104,7 +123,11 @@ fn check_model(name: &str, file: &str) {
     for (k, j) in refd["joints"].as_array().unwrap().iter().enumerate() {
         let b = mp.block_of_pin_joint[k];
         for (p, x) in vecf(&j["dynamic_parameters"]).iter().enumerate() {
-            close(&format!("{name} params of {} [{p}]", j["name"]), ours_params[10 * b + p], *x);
+            close(
+                &format!("{name} params of {} [{p}]", j["name"]),
+                ours_params[10 * b + p],
+                *x,
+            );
         }
     }
 
@@ -130,15 +153,25 @@ fn check_model(name: &str, file: &str) {
                 continue; // COMAN's world link: on Pinocchio's universe, not on the robot
             }
             let fname = fr["name"].as_str().unwrap();
-            let k = model.frame_index(fname).unwrap_or_else(|| panic!("{tag}: no frame {fname}"));
+            let k = model
+                .frame_index(fname)
+                .unwrap_or_else(|| panic!("{tag}: no frame {fname}"));
             let pl = &st["body_placements"][fname];
             let t = vecf(&pl["translation"]);
             let r = mat(&pl["rotation"]);
             let x = data.o_m_f[k];
             for d in 0..3 {
-                close(&format!("{tag} {fname} translation"), x.translation[d], t[d]);
+                close(
+                    &format!("{tag} {fname} translation"),
+                    x.translation[d],
+                    t[d],
+                );
                 for e in 0..3 {
-                    close(&format!("{tag} {fname} rotation"), x.rotation[(d, e)], r[(d, e)]);
+                    close(
+                        &format!("{tag} {fname} rotation"),
+                        x.rotation[(d, e)],
+                        r[(d, e)],
+                    );
                 }
             }
         }
@@ -153,7 +186,11 @@ fn check_model(name: &str, file: &str) {
         let pjc = mat(&st["com_jacobian"]);
         for d in 0..3 {
             for i in 0..nv {
-                close(&format!("{tag} com jacobian"), jc[(d, i)], pjc[(d, mp.v_pin[i])]);
+                close(
+                    &format!("{tag} com jacobian"),
+                    jc[(d, i)],
+                    pjc[(d, mp.v_pin[i])],
+                );
             }
         }
 
@@ -172,7 +209,11 @@ fn check_model(name: &str, file: &str) {
                 let pj = mat(&st["frame_jacobians"][fname][key]);
                 for d in 0..6 {
                     for i in 0..nv {
-                        close(&format!("{tag} J {fname} {key}"), j[(d, i)], pj[(d, mp.v_pin[i])]);
+                        close(
+                            &format!("{tag} J {fname} {key}"),
+                            j[(d, i)],
+                            pj[(d, mp.v_pin[i])],
+                        );
                     }
                 }
             }
@@ -192,7 +233,11 @@ fn check_model(name: &str, file: &str) {
         let pm = mat(&st["mass_matrix"]);
         for i in 0..nv {
             for k in 0..nv {
-                close(&format!("{tag} M[{i},{k}]"), data.mass_matrix[(i, k)], pm[(mp.v_pin[i], mp.v_pin[k])]);
+                close(
+                    &format!("{tag} M[{i},{k}]"),
+                    data.mass_matrix[(i, k)],
+                    pm[(mp.v_pin[i], mp.v_pin[k])],
+                );
             }
         }
 
@@ -201,7 +246,11 @@ fn check_model(name: &str, file: &str) {
         for (k, &b) in mp.block_of_pin_joint.iter().enumerate() {
             for p in 0..10 {
                 for i in 0..nv {
-                    close(&format!("{tag} regressor[{i}, block {b}.{p}]"), y[(i, 10 * b + p)], py[(mp.v_pin[i], 10 * k + p)]);
+                    close(
+                        &format!("{tag} regressor[{i}, block {b}.{p}]"),
+                        y[(i, 10 * b + p)],
+                        py[(mp.v_pin[i], 10 * k + p)],
+                    );
                 }
             }
         }
@@ -219,7 +268,11 @@ fn check_model(name: &str, file: &str) {
             let l = model.links.iter().position(|x| x.name == link).unwrap();
             for d in 0..3 {
                 for c in 0..4 {
-                    close(&format!("{tag} static regressor {link}"), g[(d, 4 * l + c)] / model.total_mass, pg[(d, 4 * k + c)]);
+                    close(
+                        &format!("{tag} static regressor {link}"),
+                        g[(d, 4 * l + c)] / model.total_mass,
+                        pg[(d, 4 * k + c)],
+                    );
                 }
             }
         }

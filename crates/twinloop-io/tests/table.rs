@@ -36,7 +36,10 @@ fn errors_name_line_and_column() {
     let e = Table::parse("t,q:knee\n0,1,2\n").unwrap_err();
     assert_eq!(e.line, Some(2));
     let e = Table::parse("t,q:knee\n0\n").unwrap_err();
-    assert!(e.to_string().contains("1 cells, but the header has 2"), "{e}");
+    assert!(
+        e.to_string().contains("1 cells, but the header has 2"),
+        "{e}"
+    );
     let e = Table::parse("").unwrap_err();
     assert!(e.to_string().contains("empty"));
     let e = Table::parse("t,t\n").unwrap_err();

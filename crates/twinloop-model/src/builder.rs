@@ -78,7 +78,12 @@ impl RobotBuilder {
         b
     }
 
-    pub fn fixed(self, name: impl Into<String>, parent: impl Into<String>, child: impl Into<String>) -> JointBuilder {
+    pub fn fixed(
+        self,
+        name: impl Into<String>,
+        parent: impl Into<String>,
+        child: impl Into<String>,
+    ) -> JointBuilder {
         self.joint(name, JointKind::Fixed, parent, child)
     }
 
@@ -97,7 +102,10 @@ impl RobotBuilder {
         self.robot.validate()?;
         for f in &self.robot.frames {
             if self.robot.link(&f.link).is_none() {
-                return Err(ModelError::new(format!("frame \"{}\" is on unknown link \"{}\"", f.name, f.link)));
+                return Err(ModelError::new(format!(
+                    "frame \"{}\" is on unknown link \"{}\"",
+                    f.name, f.link
+                )));
             }
         }
         Ok(self.robot)
@@ -148,7 +156,8 @@ impl LinkBuilder {
     /// A box used for both visual and collision, centred on the link frame.
     pub fn box_shape(self, size: [f64; 3]) -> Self {
         let g = Geometry::Box { size };
-        self.visual(Pose::IDENTITY, g.clone()).collision(Pose::IDENTITY, g)
+        self.visual(Pose::IDENTITY, g.clone())
+            .collision(Pose::IDENTITY, g)
     }
 
     pub fn done(self) -> RobotBuilder {

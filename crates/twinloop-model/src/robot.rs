@@ -153,7 +153,11 @@ impl Inertia {
     pub fn solid_box(mass: f64, size: [f64; 3]) -> Self {
         let [x, y, z] = size;
         let k = mass / 12.0;
-        Inertia::diagonal(k * (y * y + z * z), k * (x * x + z * z), k * (x * x + y * y))
+        Inertia::diagonal(
+            k * (y * y + z * z),
+            k * (x * x + z * z),
+            k * (x * x + y * y),
+        )
     }
 
     /// Solid cylinder along z.
@@ -482,11 +486,31 @@ impl Robot {
                 out.push(it);
             }
         }
-        out.extend((0..self.materials.len()).filter(|&i| !seen_m[i]).map(Item::Material));
-        out.extend((0..self.links.len()).filter(|&i| !seen_l[i]).map(Item::Link));
-        out.extend((0..self.joints.len()).filter(|&i| !seen_j[i]).map(Item::Joint));
-        out.extend((0..self.frames.len()).filter(|&i| !seen_f[i]).map(Item::Frame));
-        out.extend((0..self.extensions.len()).filter(|&i| !seen_e[i]).map(Item::Extension));
+        out.extend(
+            (0..self.materials.len())
+                .filter(|&i| !seen_m[i])
+                .map(Item::Material),
+        );
+        out.extend(
+            (0..self.links.len())
+                .filter(|&i| !seen_l[i])
+                .map(Item::Link),
+        );
+        out.extend(
+            (0..self.joints.len())
+                .filter(|&i| !seen_j[i])
+                .map(Item::Joint),
+        );
+        out.extend(
+            (0..self.frames.len())
+                .filter(|&i| !seen_f[i])
+                .map(Item::Frame),
+        );
+        out.extend(
+            (0..self.extensions.len())
+                .filter(|&i| !seen_e[i])
+                .map(Item::Extension),
+        );
         out
     }
 }

@@ -12,7 +12,9 @@ impl Robot {
         let mut link_ix: HashMap<&str, usize> = HashMap::with_capacity(self.links.len());
         for (i, l) in self.links.iter().enumerate() {
             if l.name.is_empty() {
-                return Err(ModelError::new("link without a name").at_element(format!("link #{}", i + 1)));
+                return Err(
+                    ModelError::new("link without a name").at_element(format!("link #{}", i + 1))
+                );
             }
             if link_ix.insert(l.name.as_str(), i).is_some() {
                 return Err(ModelError::new("duplicate link name")
@@ -30,15 +32,22 @@ impl Robot {
                 return Err(ModelError::new("duplicate joint name").at_element(here()));
             }
             let Some(&p) = link_ix.get(j.parent.as_str()) else {
-                return Err(ModelError::new(format!("parent link \"{}\" does not exist", j.parent))
-                    .at_element(here()));
+                return Err(ModelError::new(format!(
+                    "parent link \"{}\" does not exist",
+                    j.parent
+                ))
+                .at_element(here()));
             };
             let Some(&c) = link_ix.get(j.child.as_str()) else {
-                return Err(ModelError::new(format!("child link \"{}\" does not exist", j.child))
-                    .at_element(here()));
+                return Err(
+                    ModelError::new(format!("child link \"{}\" does not exist", j.child))
+                        .at_element(here()),
+                );
             };
             if p == c {
-                return Err(ModelError::new("a joint cannot join a link to itself").at_element(here()));
+                return Err(
+                    ModelError::new("a joint cannot join a link to itself").at_element(here())
+                );
             }
             if parent_of[c].is_some() {
                 return Err(ModelError::new(format!(
@@ -59,38 +68,65 @@ impl Robot {
                 }
                 let moves = matches!(
                     j.kind,
-                    crate::JointKind::Revolute | crate::JointKind::Continuous | crate::JointKind::Prismatic
+                    crate::JointKind::Revolute
+                        | crate::JointKind::Continuous
+                        | crate::JointKind::Prismatic
                 );
                 if moves && a.iter().all(|v| *v == 0.0) {
-                    return Err(ModelError::new("a moving joint has a zero axis").at_element(here()));
+                    return Err(
+                        ModelError::new("a moving joint has a zero axis").at_element(here())
+                    );
                 }
             }
             if let Some(m) = &j.mimic
                 && !self.joints.iter().any(|o| o.name == m.joint)
             {
-                return Err(ModelError::new(format!("mimic refers to unknown joint \"{}\"", m.joint))
-                    .at_element(here()));
+                return Err(ModelError::new(format!(
+                    "mimic refers to unknown joint \"{}\"",
+                    m.joint
+                ))
+                .at_element(here()));
             }
         }
         for l in &self.links {
             if let Some(i) = l.inertial {
                 let vals = [
-                    i.mass, i.inertia.ixx, i.inertia.ixy, i.inertia.ixz, i.inertia.iyy, i.inertia.iyz,
+                    i.mass,
+                    i.inertia.ixx,
+                    i.inertia.ixy,
+                    i.inertia.ixz,
+                    i.inertia.iyy,
+                    i.inertia.iyz,
                     i.inertia.izz,
                 ];
-                if vals.iter().chain(i.origin.xyz.iter()).chain(i.origin.rpy.iter()).any(|v| !v.is_finite()) {
+                if vals
+                    .iter()
+                    .chain(i.origin.xyz.iter())
+                    .chain(i.origin.rpy.iter())
+                    .any(|v| !v.is_finite())
+                {
                     return Err(ModelError::new("inertial is not finite")
                         .at_element(format!("<link name=\"{}\">", l.name)));
                 }
             }
         }
-        let roots: Vec<usize> = (0..self.links.len()).filter(|&i| parent_of[i].is_none()).collect();
+        let roots: Vec<usize> = (0..self.links.len())
+            .filter(|&i| parent_of[i].is_none())
+            .collect();
         if roots.len() != 1 {
-            let names: Vec<&str> = roots.iter().take(5).map(|&i| self.links[i].name.as_str()).collect();
+            let names: Vec<&str> = roots
+                .iter()
+                .take(5)
+                .map(|&i| self.links[i].name.as_str())
+                .collect();
             return Err(ModelError::new(if roots.is_empty() {
                 "no root link: the joints form a cycle".to_string()
             } else {
-                format!("{} root links (a robot is one tree): {}", roots.len(), names.join(", "))
+                format!(
+                    "{} root links (a robot is one tree): {}",
+                    roots.len(),
+                    names.join(", ")
+                )
             }));
         }
         // Every link must reach the root: otherwise it sits on a cycle.
@@ -123,8 +159,13 @@ impl Robot {
             children.entry(j.parent.as_str()).or_default().push(i);
         }
         let mut out = Vec::with_capacity(self.joints.len());
-        let Some(root) = self.root_link() else { return out };
-        let mut stack: Vec<usize> = children.get(root).map(|v| v.iter().rev().copied().collect()).unwrap_or_default();
+        let Some(root) = self.root_link() else {
+            return out;
+        };
+        let mut stack: Vec<usize> = children
+            .get(root)
+            .map(|v| v.iter().rev().copied().collect())
+            .unwrap_or_default();
         while let Some(j) = stack.pop() {
             out.push(j);
             if out.len() > self.joints.len() {
