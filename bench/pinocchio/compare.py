@@ -6,7 +6,7 @@
 
 For each model: writes DIR/<stem>.csv with make_states.py (unless it exists), runs
 build/bench_pinocchio and build/bench_pinocchio_native (those that were built) and
-`twinloop bench dynamics --urdf FILE --states CSV --json` (MJCF: `--mjcf FILE`), then prints the
+`twinloop bench dynamics --urdf FILE --states CSV --json` (--urdf takes MJCF files too), then prints the
 median ns per call of each and the ratio twinloop / Pinocchio. The twinloop JSON is expected to
 carry an `ns_per_call` object with the same algorithm keys (fk, com, rnea, crba, aba, jacobians,
 regressor); keys it lacks are shown as "-". PATH defaults to target/release/twinloop.
@@ -31,11 +31,14 @@ def run_json(cmd):
     if res.returncode != 0:
         print(res.stderr, file=sys.stderr)
         return None
-    for line in reversed(res.stdout.strip().splitlines()):
-        line = line.strip()
-        if line.startswith("{"):
-            return json.loads(line)
-    print(f"no JSON in output of {cmd[0]}:\n{res.stdout}", file=sys.stderr)
+    text = res.stdout
+    start = text.find("{")
+    while start != -1:  # first JSON object in the output (one line or pretty-printed)
+        try:
+            return json.JSONDecoder().raw_decode(text[start:])[0]
+        except json.JSONDecodeError:
+            start = text.find("{", start + 1)
+    print(f"no JSON in output of {cmd[0]}:\n{text}", file=sys.stderr)
     return None
 
 
@@ -71,9 +74,8 @@ def main(argv=None) -> int:
             results[name] = run_json([path, model, states] + extra)
         if not args.no_twinloop:
             if os.path.exists(args.twinloop):
-                flag = "--mjcf" if model.lower().endswith(".xml") else "--urdf"
-                results["twinloop"] = run_json([args.twinloop, "bench", "dynamics", flag, model,
-                                                "--states", states, "--json"] + extra)
+                results["twinloop"] = run_json([args.twinloop, "bench", "dynamics", "--urdf", model,
+                                                "--states", states, "--json"])
             else:
                 print(f"compare: {args.twinloop} not found (cargo build --release); "
                       "twinloop column skipped", file=sys.stderr)

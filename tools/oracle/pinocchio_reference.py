@@ -3,7 +3,7 @@
 
 Run from the repository root:
 
-    python3 tools/oracle/pinocchio_reference.py [--only NAME ...] [--check]
+    python3 tools/oracle/pinocchio_reference.py [--only NAME ...] [--out-dir DIR]
 
 For every model listed in MODELS this loads the robot description with
 Pinocchio, draws STATES_PER_MODEL seeded random states and writes
