@@ -155,6 +155,15 @@ impl Model {
         let mut dropped_root = None;
         if root_children.len() == 1 && robot.joints[root_children[0]].kind == JointKind::Floating {
             // URDF "world -> floating -> base": the floating joint is the free flyer.
+            let fj = &robot.joints[root_children[0]];
+            if !fj.origin.is_identity() {
+                // q would then not be the base link's pose; refuse rather than mislead.
+                return Err(ModelError::new(
+                    "the floating root joint has a non-identity <origin>: twinloop's base pose q is the base \
+                     link's world pose, so move the offset into the robot (or remove it)",
+                )
+                .at_element(format!("<joint name=\"{}\">", fj.name)));
+            }
             dropped_root = Some(base_link);
             base_link = link_ix(&robot.joints[root_children[0]].child);
         }

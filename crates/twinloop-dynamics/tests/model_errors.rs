@@ -1,0 +1,57 @@
+//! Descriptions the dynamics cannot compile give an error naming the joint.
+
+use twinloop_dynamics::Model;
+use twinloop_model::{Inertia, JointKind, Pose, RobotBuilder};
+
+fn two_links(kind: JointKind, origin: Pose) -> twinloop_model::Robot {
+    RobotBuilder::new("r")
+        .link("a")
+        .mass(1.0, [0.0; 3], Inertia::solid_sphere(1.0, 0.1))
+        .done()
+        .link("b")
+        .mass(1.0, [0.0; 3], Inertia::solid_sphere(1.0, 0.1))
+        .done()
+        .link("c")
+        .mass(1.0, [0.0; 3], Inertia::solid_sphere(1.0, 0.1))
+        .done()
+        .revolute("hinge", "a", "b", [0.0, 0.0, 1.0])
+        .done()
+        .joint("odd", kind, "b", "c")
+        .origin(origin)
+        .axis([1.0, 0.0, 0.0])
+        .done()
+        .build()
+        .unwrap()
+}
+
+#[test]
+fn planar_and_inner_floating_joints_are_refused_by_name() {
+    for kind in [JointKind::Planar, JointKind::Floating] {
+        let e = Model::from_robot(&two_links(kind, Pose::IDENTITY))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("<joint name=\"odd\">"), "{e}");
+    }
+}
+
+#[test]
+fn floating_root_with_offset_is_refused() {
+    let robot = RobotBuilder::new("r")
+        .link("world")
+        .done()
+        .link("base")
+        .mass(1.0, [0.0; 3], Inertia::solid_sphere(1.0, 0.1))
+        .done()
+        .joint("root", JointKind::Floating, "world", "base")
+        .origin(Pose::from_xyz([0.0, 0.0, 1.0]))
+        .done()
+        .build()
+        .unwrap();
+    let e = Model::from_robot(&robot).unwrap_err().to_string();
+    assert!(e.contains("root") && e.contains("origin"), "{e}");
+    // Without the offset the floating joint is the free flyer and `world` is dropped.
+    let mut ok = robot.clone();
+    ok.joints[0].origin = Pose::IDENTITY;
+    let m = Model::from_robot(&ok).unwrap();
+    assert_eq!((m.nq, m.nv, m.base_link.as_str()), (7, 6, "base"));
+}
