@@ -108,7 +108,8 @@ pub struct Model {
     pub total_mass: f64,
 }
 
-pub(crate) fn pose_to_se3(p: &twinloop_model::Pose) -> Se3 {
+/// A description pose (xyz, rpy) as a rigid placement.
+pub fn pose_to_se3(p: &twinloop_model::Pose) -> Se3 {
     let r = p.rotation();
     Se3::new(
         Matrix3::new(
