@@ -19,6 +19,7 @@ pub mod ltdl;
 mod robot_impl;
 pub mod sensors;
 pub mod simulator;
+pub mod statics;
 
 pub use actuator::{Actuator, DynamixelServo, SeriesElastic, TwoLoopServo};
 pub use contact::{ContactParams, ContactPoint, ContactState};

@@ -138,8 +138,9 @@ impl Simulator {
         let nb = model.nbodies;
         let off = model.v_offset;
         let mut dof_parent = vec![ltdl::NONE; model.nv];
-        for k in 1..off {
-            dof_parent[k] = k - 1;
+        // The free flyer's six DOFs form a chain (its 6x6 block is dense).
+        for (k, p) in dof_parent.iter_mut().enumerate().take(off).skip(1) {
+            *p = k - 1;
         }
         for i in 0..nb {
             let p = model.parents[i];
@@ -206,6 +207,11 @@ impl Simulator {
             model,
             config,
         })
+    }
+
+    /// Index of a joint by name.
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.model.joint_index(name)
     }
 
     pub fn dt(&self) -> f64 {
