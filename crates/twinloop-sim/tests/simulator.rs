@@ -42,7 +42,7 @@ fn pendulum() -> twinloop_model::Robot {
 fn passive_pendulum_keeps_its_energy() {
     let robot = pendulum();
     let model = Model::from_robot_with_base(&robot, BaseKind::Fixed).unwrap();
-    let mut sim = Simulator::from_model(
+    let sim = Simulator::from_model(
         &robot,
         model,
         SimConfig {
