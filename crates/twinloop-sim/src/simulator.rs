@@ -72,6 +72,18 @@ impl From<ModelError> for SimError {
     }
 }
 
+/// Per-body sums of its contact points for one step.
+#[derive(Debug, Clone, Default)]
+struct ContactBody {
+    active: bool,
+    /// World twist of the body (spatial velocity at the world origin).
+    twist: nalgebra::Vector6<f64>,
+    /// Sum of A_p^T W_p A_p over its points.
+    matrix: nalgebra::Matrix6<f64>,
+    /// Sum of the points' step forces as a wrench about the world origin.
+    wrench: nalgebra::Vector6<f64>,
+}
+
 /// A robot simulated over the reduced-coordinate dynamics.
 pub struct Simulator {
     pub model: Model,
@@ -105,7 +117,9 @@ pub struct Simulator {
     h: DMatrix<f64>,
     rhs: Vec<f64>,
     q_next: Vec<f64>,
-    jx: Vec<Vector3<f64>>,
+    contact_bodies: Vec<ContactBody>,
+    js: Vec<nalgebra::Vector6<f64>>,
+    su: Vec<nalgebra::Vector6<f64>>,
     pub(crate) sensors: crate::sensors::SensorState,
 }
 
@@ -202,7 +216,9 @@ impl Simulator {
             chains,
             h: DMatrix::zeros(model.nv, model.nv),
             rhs: vec![0.0; model.nv],
-            jx: vec![Vector3::zeros(); max_chain],
+            contact_bodies: vec![ContactBody::default(); nb + 1],
+            js: vec![nalgebra::Vector6::zeros(); max_chain],
+            su: vec![nalgebra::Vector6::zeros(); max_chain],
             sensors,
             model,
             config,
@@ -425,15 +441,22 @@ impl Simulator {
 
     /// Contact forces at the current state, and their stiffness and damping in the step
     /// matrix (see the module docs of `contact`).
+    ///
+    /// Points are gathered per body first: a point's Jacobian is `A_p J_body` with
+    /// `A_p = [I, -[x_p]x]`, so the body's points add up to one 6x6 matrix and one wrench,
+    /// and the joint-space terms are formed once per body instead of once per point.
     fn add_contacts(&mut self, dt: f64) {
         let cp = self.contact_params;
         let nb = self.model.nbodies;
+        for acc in self.contact_bodies.iter_mut() {
+            acc.active = false;
+        }
         for k in 0..self.points.len() {
             let p = &self.points[k];
             let x =
                 self.body_placement(p.body).act_point(&p.local) - Vector3::new(0.0, 0.0, p.radius);
+            let bi = if p.body == BASE { nb } else { p.body };
             let state = &mut self.contacts[k];
-            state.position = x;
             let pen = -x.z;
             if pen <= 0.0 {
                 *state = ContactState {
@@ -442,17 +465,25 @@ impl Simulator {
                 };
                 continue;
             }
-            // Point Jacobian columns along the body's chain, and the point's velocity.
-            let chain = &self.chains[if p.body == BASE { nb } else { p.body }];
-            let mut vp = Vector3::zeros();
-            for (c, &dof) in chain.iter().enumerate() {
-                let col = self.data.joint_jacobians.column(dof);
-                let lin = Vector3::new(col[0], col[1], col[2]);
-                let ang = Vector3::new(col[3], col[4], col[5]);
-                let j = lin + ang.cross(&x);
-                self.jx[c] = j;
-                vp += j * self.v[dof];
+            state.position = x;
+            // The body's world twist, once per body and step.
+            let acc = &mut self.contact_bodies[bi];
+            if !acc.active {
+                acc.active = true;
+                acc.matrix = nalgebra::Matrix6::zeros();
+                acc.wrench = nalgebra::Vector6::zeros();
+                let mut tw = nalgebra::Vector6::zeros();
+                for &dof in &self.chains[bi] {
+                    let col = self.data.joint_jacobians.column(dof);
+                    tw += nalgebra::Vector6::from_column_slice(col.as_slice()) * self.v[dof];
+                }
+                acc.twist = tw;
             }
+            let (lin, ang) = (
+                acc.twist.fixed_rows::<3>(0).into_owned(),
+                acc.twist.fixed_rows::<3>(3).into_owned(),
+            );
+            let vp = lin + ang.cross(&x);
             let fn_ = cp.stiffness * pen - cp.damping * vp.z;
             if fn_ <= 0.0 {
                 *state = ContactState {
@@ -487,19 +518,49 @@ impl Simulator {
             };
             let f = Vector3::new(ft[0], ft[1], fn_);
             state.force = f;
+            // Force for the step, less the part the implicit stiffness will add back.
             let g = f - Vector3::new(dt * kt * vp.x, dt * kt * vp.y, dt * cp.stiffness * vp.z);
             let w = Vector3::new(
                 dt * dtan + dt * dt * kt,
                 dt * dtan + dt * dt * kt,
                 dt * cp.damping + dt * dt * cp.stiffness,
             );
+            // Wrench about the world origin, and A_p^T W A_p.
+            let m = x.cross(&g);
+            acc.wrench += nalgebra::Vector6::new(g.x, g.y, g.z, m.x, m.y, m.z);
+            let wm = nalgebra::Matrix3::from_diagonal(&w);
+            let sx = twinloop_spatial::skew(&x);
+            let wsx = wm * sx;
+            let mut blk = nalgebra::Matrix6::zeros();
+            blk.fixed_view_mut::<3, 3>(0, 0).copy_from(&wm);
+            blk.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-wsx));
+            blk.fixed_view_mut::<3, 3>(3, 0)
+                .copy_from(&(-wsx.transpose()));
+            blk.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-(sx * wsx)));
+            acc.matrix += blk;
+        }
+        // Joint-space terms per body: h[a][b] += j_b . (S j_a), rhs[a] += j_a . wrench.
+        let n = self.h.nrows();
+        for bi in 0..=nb {
+            if !self.contact_bodies[bi].active {
+                continue;
+            }
+            let acc = &self.contact_bodies[bi];
+            let chain = &self.chains[bi];
+            for (c, &dof) in chain.iter().enumerate() {
+                let j = nalgebra::Vector6::from_column_slice(
+                    self.data.joint_jacobians.column(dof).as_slice(),
+                );
+                self.js[c] = j;
+                self.su[c] = acc.matrix * j;
+                self.rhs[dof] += j.dot(&acc.wrench);
+            }
+            let h = self.h.as_mut_slice();
             for (a, &da) in chain.iter().enumerate() {
-                let ja = self.jx[a];
-                self.rhs[da] += ja.dot(&g);
-                let wa = ja.component_mul(&w);
+                let u = self.su[a];
                 for (b, &db) in chain.iter().enumerate().skip(a) {
-                    // db is an ancestor of da (or da itself): the lower triangle.
-                    self.h[(da, db)] += wa.dot(&self.jx[b]);
+                    // db is an ancestor of da (or da): the lower triangle, column-major.
+                    h[db * n + da] += self.js[b].dot(&u);
                 }
             }
         }
