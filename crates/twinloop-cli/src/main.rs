@@ -5,6 +5,7 @@
 mod cmd_bench;
 mod cmd_dynamics;
 mod cmd_model;
+mod cmd_robot;
 mod common;
 mod progress;
 
@@ -59,6 +60,13 @@ enum Command {
     /// Benchmarks (median time per call), to compare with peers such as Pinocchio
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
+    /// The built-in seed robots (km20, lab17): list them, export them as URDF
+    ///
+    /// Built from primitives in code; any --robot option takes them as builtin:NAME.
+    ///
+    /// Example: twinloop robot export km20 --out km20.urdf
+    #[command(subcommand)]
+    Robot(cmd_robot::RobotCommand),
 }
 
 fn main() -> ExitCode {
@@ -69,5 +77,6 @@ fn main() -> ExitCode {
         Command::InverseDynamics(args) => cmd_dynamics::inverse_dynamics(args),
         Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
+        Command::Robot(cmd) => cmd_robot::run(cmd),
     }
 }
