@@ -579,3 +579,98 @@ pub fn build() -> Result<Robot, ModelError> {
     );
     b.build()
 }
+
+/// A mass added to a link, at `xyz` in the link frame (m), as in the tip-over
+/// experiment's `--add-mass KG@LINK:X,Y,Z`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AddedMass {
+    pub link: &'static str,
+    pub mass: f64,
+    pub xyz: [f64; 3],
+}
+
+/// One of seed 000's battery placements (its Figure 7, Tables II-V).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BatteryScenario {
+    /// The seed's row label, `a` to `f`.
+    pub label: &'static str,
+    /// Where the battery goes, in the seed's words.
+    pub name: &'static str,
+    pub masses: &'static [AddedMass],
+}
+
+/// Seed 000's six battery scenarios on km20. The battery weighs 0.2 kg: Table III's hip
+/// mass grows from 1.82 to 2.02 kg with it, and in scenario a each leg mass grows by
+/// 0.1 kg (0.740 -> 0.840, 0.743 -> 0.843), so there it is split over the two legs. The
+/// seed's Figure 7 (the placements) is not in its text; the points below are ours: on the
+/// front of each thigh halfway down (a), none (b), on the front of the pelvis (c), on
+/// the outside of the left (d) and right (e) upper arm, on the back at shoulder height
+/// (f).
+pub const BATTERY_SCENARIOS: [BatteryScenario; 6] = [
+    BatteryScenario {
+        label: "a",
+        name: "legs",
+        masses: &[
+            AddedMass {
+                link: "l_thigh",
+                mass: 0.1,
+                xyz: [0.03, 0.0, -0.05],
+            },
+            AddedMass {
+                link: "r_thigh",
+                mass: 0.1,
+                xyz: [0.03, 0.0, -0.05],
+            },
+        ],
+    },
+    BatteryScenario {
+        label: "b",
+        name: "no battery",
+        masses: &[],
+    },
+    BatteryScenario {
+        label: "c",
+        name: "front hip",
+        masses: &[AddedMass {
+            link: "torso",
+            mass: 0.2,
+            xyz: [0.06, 0.0, 0.03],
+        }],
+    },
+    BatteryScenario {
+        label: "d",
+        name: "left arm",
+        masses: &[AddedMass {
+            link: "l_upper_arm",
+            mass: 0.2,
+            xyz: [0.0, 0.03, -0.03],
+        }],
+    },
+    BatteryScenario {
+        label: "e",
+        name: "right arm",
+        masses: &[AddedMass {
+            link: "r_upper_arm",
+            mass: 0.2,
+            xyz: [0.0, -0.03, -0.03],
+        }],
+    },
+    BatteryScenario {
+        label: "f",
+        name: "shoulders",
+        masses: &[AddedMass {
+            link: "torso",
+            mass: 0.2,
+            xyz: [-0.06, 0.0, 0.15],
+        }],
+    },
+];
+
+/// km20 with the masses of a battery scenario added.
+pub fn with_battery(scenario: &BatteryScenario) -> Result<Robot, ModelError> {
+    let mut r = build()?;
+    for m in scenario.masses {
+        crate::add_point_mass(&mut r, m.link, m.mass, m.xyz)?;
+    }
+    Ok(r)
+}

@@ -151,3 +151,58 @@ pub fn foot_geometry(robot_name: &str) -> Option<FootGeometry> {
         _ => None,
     }
 }
+
+/// Add a point mass of `mass` kg at `xyz` (m, link frame) to `link`: its inertial
+/// becomes the rigid sum of what it had and the point (parallel-axis theorem), written
+/// in the link's axes. Errors name the link or the bad number.
+pub fn add_point_mass(
+    robot: &mut Robot,
+    link: &str,
+    mass: f64,
+    xyz: [f64; 3],
+) -> Result<(), ModelError> {
+    use twinloop_spatial::{Inertia as Rigid, Matrix3, Vector3};
+    if !(mass.is_finite() && mass > 0.0) {
+        return Err(ModelError::new(format!(
+            "added mass: must be a finite number > 0 kg, got {mass}"
+        )));
+    }
+    if xyz.iter().any(|v| !v.is_finite()) {
+        return Err(ModelError::new(format!(
+            "added mass position: must be finite, got {xyz:?}"
+        )));
+    }
+    let known: Vec<String> = robot.links.iter().map(|l| l.name.clone()).collect();
+    let l = robot.link_mut(link).ok_or_else(|| {
+        ModelError::new(format!(
+            "added mass: no link \"{link}\" (links: {})",
+            known.join(", ")
+        ))
+    })?;
+    let own = match &l.inertial {
+        None => Rigid::ZERO,
+        Some(i) => {
+            let r = i.origin.rotation();
+            let rot = Matrix3::from_fn(|a, b| r[a][b]);
+            let m = i.inertia.matrix();
+            Rigid::new(
+                i.mass,
+                Vector3::new(i.origin.xyz[0], i.origin.xyz[1], i.origin.xyz[2]),
+                rot * Matrix3::from_fn(|a, b| m[a][b]) * rot.transpose(),
+            )
+        }
+    };
+    let point = Rigid::new(mass, Vector3::new(xyz[0], xyz[1], xyz[2]), Matrix3::zeros());
+    let sum = own + point;
+    let i = sum.inertia;
+    l.inertial = Some(twinloop_model::Inertial {
+        origin: twinloop_model::Pose::from_xyz([sum.com.x, sum.com.y, sum.com.z]),
+        mass: sum.mass,
+        inertia: twinloop_model::Inertia::from_matrix([
+            [i[(0, 0)], i[(0, 1)], i[(0, 2)]],
+            [i[(1, 0)], i[(1, 1)], i[(1, 2)]],
+            [i[(2, 0)], i[(2, 1)], i[(2, 2)]],
+        ]),
+    });
+    Ok(())
+}

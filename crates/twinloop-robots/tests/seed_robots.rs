@@ -6,7 +6,7 @@ use twinloop_dynamics::{Data, Model, frames_forward_kinematics};
 use twinloop_model::lint::{Severity, lint};
 use twinloop_model::{Geometry, JointKind, Robot, urdf};
 use twinloop_robots::{
-    FootGeometry, LD2015, RX28, RX64, builtin, foot_geometry, lab17, resolve, servo_of_joint,
+    FootGeometry, LD2015, RX28, RX64, builtin, foot_geometry, km20, lab17, resolve, servo_of_joint,
     servo_table,
 };
 use twinloop_spatial::{Matrix3, Se3, Vector3};
@@ -545,4 +545,42 @@ fn lab17_trims_turn_the_seed_gait_offsets_into_steps() {
     let y0 = foot0.act_inv_point(&trunk).y;
     let y1 = foot1.act_inv_point(&trunk).y;
     assert!(y1 > y0, "{y0} -> {y1}");
+}
+
+#[test]
+fn battery_scenarios_add_0_2_kg_where_they_say() {
+    use twinloop_dynamics::center_of_mass;
+    let base = builtin("km20").unwrap();
+    let model0 = Model::from_robot(&base).unwrap();
+    let mut d0 = Data::new(&model0);
+    let q0 = model0.neutral_configuration();
+    let c0 = center_of_mass(&model0, &mut d0, &q0);
+    for s in km20::BATTERY_SCENARIOS {
+        let r = km20::with_battery(&s).unwrap();
+        let added: f64 = s.masses.iter().map(|m| m.mass).sum();
+        assert!((r.total_mass() - 3.336 - added).abs() < 1e-12);
+        assert!(added == 0.0 || (added - 0.2).abs() < 1e-15, "{}", s.label);
+        // The new CoM is the mass-weighted mean of the old one and the added points
+        // (placed by the unchanged robot's link frames).
+        let model = Model::from_robot(&r).unwrap();
+        let mut data = Data::new(&model);
+        let c = center_of_mass(&model, &mut data, &model.neutral_configuration());
+        let mut want = c0 * 3.336;
+        for m in s.masses {
+            let p = placement(&base, m.link).act_point(&Vector3::new(m.xyz[0], m.xyz[1], m.xyz[2]));
+            want += p * m.mass;
+        }
+        want /= 3.336 + added;
+        assert!((c - want).norm() < 1e-12, "{}: {c} vs {want}", s.label);
+        assert_eq!(lint(&r).errors, 0);
+    }
+    let mut r = builtin("km20").unwrap();
+    let e = twinloop_robots::add_point_mass(&mut r, "l_tigh", 0.1, [0.0; 3]).unwrap_err();
+    assert!(
+        e.to_string().contains("l_tigh") && e.to_string().contains("l_thigh"),
+        "{e}"
+    );
+    let e = twinloop_robots::add_point_mass(&mut r, "l_thigh", -0.1, [0.0; 3]).unwrap_err();
+    assert!(e.to_string().contains("-0.1"), "{e}");
+    assert!(twinloop_robots::add_point_mass(&mut r, "l_thigh", 0.1, [f64::NAN, 0.0, 0.0]).is_err());
 }
