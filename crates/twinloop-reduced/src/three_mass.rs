@@ -349,7 +349,7 @@ impl ThreeMassLipm {
     /// Integrate eq. 7 (sagittal, with the ankle torque of eq. 5) or eq. 6 (frontal,
     /// eq. 4) for the hip coordinate, classical Runge-Kutta 4 at step `dt`, for
     /// `duration` s. The hip starts at its position in [`ThreeMassLipm::masses`] with
-    /// `hip_velocity`; each leg moves per its [`LegMotion`]; `torque(t)` is the ankle
+    /// `hip_velocity`; the legs `(left, right)` move per their [`LegMotion`]; `torque(t)` is the ankle
     /// moment (`tau_y` of eq. 5 or `tau_x` of eq. 4; 0 gives eq. 7 / 6 exactly).
     ///
     /// The hip equation: with support-line legs `u_i = k_i u + c_i` and prescribed legs
@@ -359,8 +359,7 @@ impl ThreeMassLipm {
     pub fn simulate(
         &self,
         plane: Plane,
-        left: LegMotion<'_>,
-        right: LegMotion<'_>,
+        (left, right): (LegMotion<'_>, LegMotion<'_>),
         hip_velocity: f64,
         torque: impl Fn(f64) -> f64,
         dt: f64,

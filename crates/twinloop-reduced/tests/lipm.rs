@@ -172,8 +172,7 @@ fn three_masses_at_one_point_are_a_lipm() {
     let a = three
         .simulate(
             Plane::Sagittal,
-            LegMotion::SupportLine,
-            LegMotion::SupportLine,
+            (LegMotion::SupportLine, LegMotion::SupportLine),
             0.01,
             torque,
             1e-3,
@@ -211,8 +210,7 @@ fn three_masses_at_one_point_are_a_lipm() {
         .unwrap()
         .simulate(
             Plane::Frontal,
-            LegMotion::SupportLine,
-            LegMotion::SupportLine,
+            (LegMotion::SupportLine, LegMotion::SupportLine),
             0.0,
             |_| 0.0,
             1e-3,
@@ -248,8 +246,7 @@ fn three_mass_fall_is_a_pendulum_of_the_effective_length() {
     let run = three
         .simulate(
             Plane::Sagittal,
-            LegMotion::SupportLine,
-            LegMotion::SupportLine,
+            (LegMotion::SupportLine, LegMotion::SupportLine),
             0.0,
             |_| 0.0,
             1e-3,
@@ -281,8 +278,7 @@ fn three_mass_with_a_swing_leg_satisfies_eq_7() {
         .unwrap()
         .simulate(
             Plane::Sagittal,
-            LegMotion::Prescribed(&swing),
-            LegMotion::SupportLine,
+            (LegMotion::Prescribed(&swing), LegMotion::SupportLine),
             -0.05,
             |_| 0.0,
             1e-3,

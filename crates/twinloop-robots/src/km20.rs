@@ -483,15 +483,14 @@ fn add_link(b: RobotBuilder, l: &LinkParts) -> RobotBuilder {
     b.add_link(l.to_link())
 }
 
+/// A revolute joint: `placement` is (axis, origin xyz), `drive` is (limit kind, servo).
 fn joint(
     b: RobotBuilder,
     name: &str,
     parent: &str,
     child: &str,
-    axis: [f64; 3],
-    xyz: [f64; 3],
-    kind: &str,
-    servo: &ServoSpec,
+    (axis, xyz): ([f64; 3], [f64; 3]),
+    (kind, servo): (&str, &ServoSpec),
 ) -> RobotBuilder {
     let (lo, hi) = limits(kind);
     b.revolute(name, parent, child, axis)
@@ -532,7 +531,14 @@ pub fn build() -> Result<Robot, ModelError> {
             ("ank_roll", n("ankle"), X, [0.0, 0.0, 0.0], &RX28),
         ];
         for ((kind, parent, axis, xyz, servo), child) in chain.into_iter().zip(&links) {
-            b = joint(b, &n(kind), &parent, &child.name, axis, xyz, kind, servo);
+            b = joint(
+                b,
+                &n(kind),
+                &parent,
+                &child.name,
+                (axis, xyz),
+                (kind, servo),
+            );
         }
     }
     for (p, s, arm_mass) in [("l", 1.0, TABLE_I_LEFT_ARM), ("r", -1.0, TABLE_I_RIGHT_ARM)] {
@@ -552,7 +558,14 @@ pub fn build() -> Result<Robot, ModelError> {
             ("elbow", n("upper_arm"), Y, [0.0, 0.0, -0.060]),
         ];
         for ((kind, parent, axis, xyz), child) in chain.into_iter().zip(&links) {
-            b = joint(b, &n(kind), &parent, &child.name, axis, xyz, kind, &RX28);
+            b = joint(
+                b,
+                &n(kind),
+                &parent,
+                &child.name,
+                (axis, xyz),
+                (kind, &RX28),
+            );
         }
     }
     b = add_link(b, &neck);
@@ -562,20 +575,16 @@ pub fn build() -> Result<Robot, ModelError> {
         "head_pan",
         "torso",
         "neck",
-        Z,
-        [0.0, 0.0, NECK_HEIGHT],
-        "head",
-        &RX28,
+        (Z, [0.0, 0.0, NECK_HEIGHT]),
+        ("head", &RX28),
     );
     b = joint(
         b,
         "head_tilt",
         "neck",
         "head",
-        Y,
-        [0.0, 0.0, TILT_ABOVE_PAN],
-        "head",
-        &RX28,
+        (Y, [0.0, 0.0, TILT_ABOVE_PAN]),
+        ("head", &RX28),
     );
     b.build()
 }
