@@ -6,6 +6,7 @@ mod cmd_bench;
 mod cmd_dynamics;
 mod cmd_model;
 mod cmd_sim;
+mod cmd_robot;
 mod common;
 mod progress;
 
@@ -70,6 +71,13 @@ enum Command {
     /// Benchmarks (median time per call), to compare with peers such as Pinocchio
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
+    /// The built-in seed robots (km20, lab17): list them, export them as URDF
+    ///
+    /// Built from primitives in code; any --robot option takes them as builtin:NAME.
+    ///
+    /// Example: twinloop robot export km20 --out km20.urdf
+    #[command(subcommand)]
+    Robot(cmd_robot::RobotCommand),
 }
 
 fn main() -> ExitCode {
@@ -81,5 +89,6 @@ fn main() -> ExitCode {
         Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
         Command::Simulate(args) => cmd_sim::simulate(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
+        Command::Robot(cmd) => cmd_robot::run(cmd),
     }
 }
