@@ -81,34 +81,17 @@ pub fn load_robot(spec: &str) -> Result<twinloop_model::Robot, String> {
 /// The servo for one joint under a choice.
 fn servo_for(choice: ServoChoice, effort: f64, velocity: f64, robot_mass: f64) -> DynamixelServo {
     let rpm = |x: f64| x * std::f64::consts::TAU / 60.0;
-    let mut s = match choice {
+    match choice {
         ServoChoice::Rx28 => DynamixelServo::rx28(),
         ServoChoice::Rx64 => DynamixelServo::rx64(),
-        ServoChoice::Xm430 => DynamixelServo::with_rating(4.1, rpm(46.0)),
-        ServoChoice::Auto => {
-            // Placeholder limits (OP3's 1000 N m / 100 rad/s) are not ratings.
-            let real = |x: f64, max: f64| x.is_finite() && x > 0.0 && x < max;
-            let scale = (robot_mass / 3.2).max(1.0);
-            let stall = if real(effort, 999.0) {
-                effort
-            } else {
-                4.1 * scale
-            };
-            let speed = if real(velocity, 99.0) {
-                velocity
-            } else {
-                rpm(46.0)
-            };
-            DynamixelServo::with_rating(stall, speed)
+        ServoChoice::Xm430 => {
+            let mut s = DynamixelServo::with_rating(4.1, rpm(46.0));
+            s.compliance_slope = 0.19;
+            s.compliance_margin = 0.0;
+            s
         }
-    };
-    if choice != ServoChoice::Rx28 && choice != ServoChoice::Rx64 {
-        // X-series position PID: no dead band, full duty at 0.19 rad (kp = 5.1 stall/rad,
-        // the gain of the Menagerie OP3).
-        s.compliance_slope = 0.19;
-        s.compliance_margin = 0.0;
+        ServoChoice::Auto => twinloop_sim::servo_from_limits(effort, velocity, robot_mass),
     }
-    s
 }
 
 /// A simulator of `robot` standing on the ground on its servos.

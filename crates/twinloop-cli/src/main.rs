@@ -5,8 +5,8 @@
 mod cmd_bench;
 mod cmd_dynamics;
 mod cmd_model;
-mod cmd_sim;
 mod cmd_robot;
+mod cmd_sim;
 mod common;
 mod progress;
 

@@ -337,7 +337,7 @@ fn aba_with_external_forces_matches_jacobian_transpose() {
         let q = random_configuration(&model, &mut rng);
         let v = random_tangent(&model, &mut rng);
         let tau = random_tangent(&model, &mut rng);
-        let mut f3 = |rng: &mut SplitMix64| Vector3::new(rng.normal(), rng.normal(), rng.normal());
+        let f3 = |rng: &mut SplitMix64| Vector3::new(rng.normal(), rng.normal(), rng.normal());
         let fext: Vec<Force> = (0..model.nbodies)
             .map(|_| Force::new(f3(&mut rng), f3(&mut rng)))
             .collect();
@@ -356,9 +356,9 @@ fn aba_with_external_forces_matches_jacobian_transpose() {
             frame_jacobian(&model, &data, frame, ReferenceFrame::World, &mut j);
             *rhs += j.transpose() * f.to_vector6();
         };
-        for i in 0..model.nbodies {
+        for (i, f) in fext.iter().enumerate() {
             let k = model.frame_index(&model.body_names[i]).unwrap();
-            add(k, &fext[i], &mut rhs);
+            add(k, f, &mut rhs);
         }
         if model.is_floating() {
             let k = model.frame_index(&model.base_link).unwrap();

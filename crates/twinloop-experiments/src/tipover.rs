@@ -92,7 +92,7 @@ impl TipoverConfig {
             settle_s: 1.0,
             period_s: 0.005,
             fall_deg: 5.0,
-            onset_ratio: 1.0,
+            onset_ratio: 1.5,
             onset_window_s: 0.1,
             max_deg: 45.0,
         }

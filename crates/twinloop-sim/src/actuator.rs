@@ -201,6 +201,31 @@ impl SeriesElastic {
     }
 }
 
+/// A servo for a joint from its description limits: the effort limit as the stall
+/// torque and the velocity limit as the no-load speed where they look like ratings;
+/// placeholders (OP3's 1000 N m and 100 rad/s) and missing limits fall back to an
+/// XM430-class servo (4.1 N m, 46 rpm) scaled to the robot's mass (per 3.2 kg, OP3's).
+/// Position loop: full duty at 0.19 rad, no dead band (X-series PID; 5.1 stall/rad is
+/// the gain of the Menagerie OP3).
+pub fn servo_from_limits(effort: f64, velocity: f64, robot_mass: f64) -> DynamixelServo {
+    let real = |x: f64, max: f64| x.is_finite() && x > 0.0 && x < max;
+    let scale = (robot_mass / 3.2).max(1.0);
+    let stall = if real(effort, 999.0) {
+        effort
+    } else {
+        4.1 * scale
+    };
+    let speed = if real(velocity, 99.0) {
+        velocity
+    } else {
+        46.0 * std::f64::consts::TAU / 60.0
+    };
+    let mut s = DynamixelServo::with_rating(stall, speed);
+    s.compliance_slope = 0.19;
+    s.compliance_margin = 0.0;
+    s
+}
+
 /// What drives a joint.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Actuator {

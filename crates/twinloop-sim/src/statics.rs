@@ -10,9 +10,10 @@ use twinloop_spatial::Se3;
 /// Feet flat on the ground: the geometry a static analysis needs.
 pub struct FlatFeet<'a> {
     pub model: &'a Model,
-    /// Description links of the two feet (left, right).
+    /// Description links of the two feet (left, right); every contact point on the same
+    /// rigid body as a foot link counts as that foot's.
     pub feet: [usize; 2],
-    /// Contact points of the feet (only those on the feet are used).
+    /// Contact points of the robot (only those on the feet are used).
     pub points: &'a [ContactPoint],
     /// World placements of the two feet when standing.
     pub foot_world: [Se3; 2],
@@ -58,7 +59,7 @@ impl FlatFeet<'_> {
         for &foot in &self.feet {
             let info = &m.links[foot];
             let on_foot: Vec<&ContactPoint> =
-                self.points.iter().filter(|p| p.link == foot).collect();
+                self.points.iter().filter(|p| p.body == info.body).collect();
             let local_z = |p: &ContactPoint| info.placement.act_inv_point(&p.local).z - p.radius;
             let zmin = on_foot
                 .iter()

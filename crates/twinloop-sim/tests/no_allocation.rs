@@ -46,5 +46,10 @@ fn stepping_and_reading_do_not_allocate() {
     }
     let after = ALLOCATIONS.load(Ordering::SeqCst);
     assert!(before > 0);
-    assert_eq!(after - before, 0, "{} allocations in 200 steps", after - before);
+    assert_eq!(
+        after - before,
+        0,
+        "{} allocations in 200 steps",
+        after - before
+    );
 }
