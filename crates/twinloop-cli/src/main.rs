@@ -4,6 +4,7 @@
 
 mod cmd_bench;
 mod cmd_dynamics;
+mod cmd_experiment;
 mod cmd_model;
 mod cmd_robot;
 mod cmd_sim;
@@ -68,6 +69,9 @@ enum Command {
     ///
     /// Example: twinloop simulate --robot models/op3/mjcf/op3.xml --duration 5 --hold --out stand.csv
     Simulate(cmd_sim::SimulateArgs),
+    /// Experiments on a robot (simulated for now): the tip-over of seeds 000/001
+    #[command(subcommand)]
+    Experiment(ExperimentCommand),
     /// Benchmarks (median time per call), to compare with peers such as Pinocchio
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
@@ -80,6 +84,23 @@ enum Command {
     Robot(cmd_robot::RobotCommand),
 }
 
+#[derive(Subcommand)]
+enum ExperimentCommand {
+    /// Ramp both ankles forward, backward, left and right until the robot tips over
+    ///
+    /// The robot stands on its servos in the simulator; each direction ramps both ankle
+    /// joints (--ramp deg/s) until the trunk tilts beyond what the joints explain, and
+    /// records the ankle angle commanded and measured at the onset and the time taken
+    /// (seed 000 Table IV). Beside each, the model's static tipping angle (CoM over the
+    /// support edge). From the four angles, the CoM by the seed's geometric method
+    /// (seed 000 eq 8-13) and by the exact method, next to the model's true CoM, all
+    /// relative to the midpoint of the ankle axes (x forward, y left, z up).
+    ///
+    /// Example:
+    ///   twinloop experiment tipover --robot builtin:km20 --add-mass 0.2@torso:0.05,0,0 --json tip.json
+    Tipover(cmd_experiment::TipoverArgs),
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
@@ -89,6 +110,7 @@ fn main() -> ExitCode {
         Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
         Command::Simulate(args) => cmd_sim::simulate(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
+        Command::Experiment(ExperimentCommand::Tipover(args)) => cmd_experiment::tipover(args),
         Command::Robot(cmd) => cmd_robot::run(cmd),
     }
 }
