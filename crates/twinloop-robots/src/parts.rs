@@ -63,10 +63,13 @@ impl Part {
                 Inertia::solid_cylinder(self.mass, radius, length)
             }
             Geometry::Sphere { radius } => Inertia::solid_sphere(self.mass, radius),
-            // Parts are only made of the three seed primitives.
-            Geometry::Capsule { .. } | Geometry::Mesh { .. } => {
-                unreachable!("parts are boxes, cylinders or spheres")
+            // The seed robots use only the three primitives above. A capsule is counted
+            // as the cylinder URDF writes it as; a mesh has no known shape, so it counts
+            // as a point mass.
+            Geometry::Capsule { radius, length } => {
+                Inertia::solid_cylinder(self.mass, radius, length)
             }
+            Geometry::Mesh { .. } => Inertia::default(),
         }
     }
 
