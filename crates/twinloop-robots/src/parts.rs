@@ -127,7 +127,8 @@ pub fn frame(xyz: [f64; 3], x: [f64; 3], z: [f64; 3]) -> Pose {
 fn clean(v: f64) -> f64 {
     let q = v / std::f64::consts::FRAC_PI_2;
     if (q - q.round()).abs() < 1e-12 {
-        q.round() * std::f64::consts::FRAC_PI_2
+        // `+ 0.0` turns -0 into 0, so the URDF reads "0", not "-0".
+        q.round() * std::f64::consts::FRAC_PI_2 + 0.0
     } else {
         v
     }
