@@ -35,3 +35,4 @@ pub use tipover::{
     ExactEstimate, SEED_000_CONSTANTS, SeedAngles, SeedConstants, SeedEstimate, TipAngles,
     exact_method, seed_method, seed_method_sagittal_angles, tip_angles,
 };
+pub use twinloop_robots::FootGeometry;

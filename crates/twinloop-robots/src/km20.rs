@@ -274,13 +274,15 @@ fn leg_links(s: f64, leg_mass: f64) -> Vec<LinkParts> {
         ))
         .collision_box([0.036, 0.051, SHIN], [0.0, 0.0, -0.5 * SHIN]);
     // Between the two ankle axes: the cross bracket.
-    let ankle = LinkParts::new(&format!("{p}_ankle")).with(Part::boxed(
-        &format!("{p}_ankle_cross"),
-        PartKind::Structure,
-        ANKLE_CROSS,
-        [0.030, 0.040, 0.020],
-        [0.0, 0.0, 0.0],
-    ));
+    let ankle = LinkParts::new(&format!("{p}_ankle"))
+        .with(Part::boxed(
+            &format!("{p}_ankle_cross"),
+            PartKind::Structure,
+            ANKLE_CROSS,
+            [0.030, 0.040, 0.020],
+            [0.0, 0.0, 0.0],
+        ))
+        .collision_box([0.030, 0.040, 0.020], [0.0, 0.0, 0.0]);
     // Foot: the ankle-roll servo standing on the sole plate behind the ankle, its
     // output axis on the roll axis (the cross bracket reaches back to its horn), and
     // the sole plate, which takes what the leg budget leaves.
@@ -461,6 +463,7 @@ fn neck_link() -> LinkParts {
             "head_tilt_servo",
             frame([0.0, 0.0, TILT_ABOVE_PAN], FORWARD, LEFT),
         ))
+        .collision_box([0.051, 0.036, 0.036], [-0.0075, 0.0, TILT_ABOVE_PAN])
 }
 
 fn head_link() -> LinkParts {

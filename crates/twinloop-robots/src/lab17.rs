@@ -327,13 +327,15 @@ fn leg_links(s: f64) -> Vec<LinkParts> {
         ))
         .collision_box([0.025, 0.048, SHIN], [0.0, 0.0, -0.5 * SHIN]);
     // Ankle pitch child: the cross bracket down to the roll servo's shaft.
-    let ankle = LinkParts::new(&format!("{p}_ankle")).with(Part::boxed(
-        &format!("{p}_ankle_cross"),
-        PartKind::Structure,
-        ANKLE_CROSS,
-        [0.025, 0.045, 0.003],
-        [0.0, 0.0, -0.010],
-    ));
+    let ankle = LinkParts::new(&format!("{p}_ankle"))
+        .with(Part::boxed(
+            &format!("{p}_ankle_cross"),
+            PartKind::Structure,
+            ANKLE_CROSS,
+            [0.025, 0.045, 0.003],
+            [0.0, 0.0, -0.010],
+        ))
+        .collision_box([0.025, 0.045, 0.003], [0.0, 0.0, -0.010]);
     // Foot: the roll servo standing on the plate (shaft along x, 10 mm below the case
     // top), the plate and the gyroscope board.
     let sole_z = -ANKLE_ROLL_HEIGHT + 0.5 * FOOT_THICKNESS;

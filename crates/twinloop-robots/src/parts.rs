@@ -63,10 +63,13 @@ impl Part {
                 Inertia::solid_cylinder(self.mass, radius, length)
             }
             Geometry::Sphere { radius } => Inertia::solid_sphere(self.mass, radius),
-            // Parts are only made of the three seed primitives.
-            Geometry::Capsule { .. } | Geometry::Mesh { .. } => {
-                unreachable!("parts are boxes, cylinders or spheres")
+            // The seed robots use only the three primitives above. A capsule is counted
+            // as the cylinder URDF writes it as; a mesh has no known shape, so it counts
+            // as a point mass.
+            Geometry::Capsule { radius, length } => {
+                Inertia::solid_cylinder(self.mass, radius, length)
             }
+            Geometry::Mesh { .. } => Inertia::default(),
         }
     }
 
@@ -124,7 +127,8 @@ pub fn frame(xyz: [f64; 3], x: [f64; 3], z: [f64; 3]) -> Pose {
 fn clean(v: f64) -> f64 {
     let q = v / std::f64::consts::FRAC_PI_2;
     if (q - q.round()).abs() < 1e-12 {
-        q.round() * std::f64::consts::FRAC_PI_2
+        // `+ 0.0` turns -0 into 0, so the URDF reads "0", not "-0".
+        q.round() * std::f64::consts::FRAC_PI_2 + 0.0
     } else {
         v
     }

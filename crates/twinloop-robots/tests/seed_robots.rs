@@ -380,7 +380,7 @@ fn urdf_export_reads_back_equal() {
         let r = builtin(name).unwrap();
         let text = urdf::to_string(&r);
         assert_eq!(urdf::from_str(&text).unwrap(), r, "{name}");
-        let path = std::env::temp_dir().join(format!("twinloop_robots_{name}.urdf"));
+        let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.urdf"));
         urdf::write_file(&r, &path).unwrap();
         assert_eq!(resolve(path.to_str().unwrap()).unwrap(), r);
         std::fs::remove_file(&path).unwrap();
