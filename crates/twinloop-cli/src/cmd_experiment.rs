@@ -22,10 +22,11 @@ pub struct TipoverArgs {
     /// Ankle ramp speed, deg/s.
     #[arg(long, default_value_t = 0.5)]
     pub ramp: f64,
-    /// Servo compliance slope during the experiment, Dynamixel RX units (2 = stiffest).
-    /// The CoM methods assume a rigid robot; stiffer servos bend less.
-    #[arg(long, default_value_t = 2.0)]
-    pub compliance_slope: f64,
+    /// Servo compliance slope during the experiment, Dynamixel RX units (2 = stiffest;
+    /// default 2, or 8 for km20, whose locked hips block the sideways lean at 2). The CoM
+    /// methods assume a rigid robot; stiffer servos bend less.
+    #[arg(long)]
+    pub compliance_slope: Option<f64>,
     /// Quantise the ankle readings like Dynamixel RX encoders (1024 counts over 300 deg).
     #[arg(long)]
     pub encoders: bool,
@@ -72,7 +73,15 @@ fn tipover_impl(a: &TipoverArgs) -> Result<(), String> {
     let opts = StudyOptions {
         ramp_deg_per_s: a.ramp,
         dynamixel_encoders: a.encoders,
-        compliance_units: Some((a.compliance_slope, 0.0)),
+        compliance_units: Some((
+            a.compliance_slope
+                .unwrap_or(if robot.name == twinloop_robots::km20::NAME {
+                    8.0
+                } else {
+                    2.0
+                }),
+            0.0,
+        )),
         ..Default::default()
     };
     eprintln!("running the four tip-overs in the simulator ...");
