@@ -4,6 +4,7 @@
 
 mod cmd_bench;
 mod cmd_dynamics;
+mod cmd_ident;
 mod cmd_model;
 mod common;
 mod progress;
@@ -59,6 +60,9 @@ enum Command {
     /// Benchmarks (median time per call), to compare with peers such as Pinocchio
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
+    /// Identification experiments: the virtual force plate's static poses (seed 004)
+    #[command(subcommand)]
+    Experiment(cmd_ident::ExperimentCommand),
 }
 
 fn main() -> ExitCode {
@@ -69,5 +73,6 @@ fn main() -> ExitCode {
         Command::InverseDynamics(args) => cmd_dynamics::inverse_dynamics(args),
         Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
+        Command::Experiment(cmd) => cmd_ident::experiment(cmd),
     }
 }

@@ -7,8 +7,13 @@
 //! | static-pose data (configuration + measured CoP per pose) | [`poses`] |
 //! | errors naming file, row and field | [`error`] |
 
+pub mod anatomy;
 pub mod error;
+pub mod ik;
+pub mod plate;
 pub mod poses;
 
 pub use error::IdentError;
-pub use poses::{PoseCategory, StaticPose, parse_static_poses, read_static_poses, write_static_poses};
+pub use poses::{
+    PoseCategory, StaticPose, parse_static_poses, read_static_poses, write_static_poses,
+};

@@ -52,7 +52,9 @@ impl PoseCategory {
     }
 
     pub fn from_number(n: f64) -> Option<PoseCategory> {
-        PoseCategory::ALL.into_iter().find(|c| *c as i32 as f64 == n)
+        PoseCategory::ALL
+            .into_iter()
+            .find(|c| *c as i32 as f64 == n)
     }
 
     /// Standing on both feet?
@@ -105,13 +107,11 @@ pub fn write_static_poses(
 /// that is not of unit norm, a category outside 1-6.
 pub fn read_static_poses(path: &Path, model: &Model) -> Result<Vec<StaticPose>, IdentError> {
     let table = Table::read(path)?;
-    parse_static_poses(&table, model).map_err(|e| {
-        if e.file.is_none() {
-            e.in_file(path)
-        } else {
-            e
-        }
-    })
+    parse_static_poses(&table, model).map_err(
+        |e| {
+            if e.file.is_none() { e.in_file(path) } else { e }
+        },
+    )
 }
 
 /// [`read_static_poses`] on a table already read.
@@ -136,7 +136,11 @@ pub fn parse_static_poses(table: &Table, model: &Model) -> Result<Vec<StaticPose
                     .cloned()
                     .collect::<Vec<_>>()
                     .join(", "),
-                if model.joint_names.len() > 6 { ", ..." } else { "" }
+                if model.joint_names.len() > 6 {
+                    ", ..."
+                } else {
+                    ""
+                }
             ))
             .field(c.clone()));
         }

@@ -112,7 +112,10 @@ fn missing_cop_and_bad_quaternion_and_category() {
     let e = err(&m, &write_text("nocop.csv", &text));
     assert!(e.contains("cop.y"), "{e}");
 
-    let e = err(&m, &write_text("quat.csv", &edited(&m, 0, "q:base.qw", "0.5")));
+    let e = err(
+        &m,
+        &write_text("quat.csv", &edited(&m, 0, "q:base.qw", "0.5")),
+    );
     assert!(e.contains("data row 1") && e.contains("norm"), "{e}");
 
     let e = err(&m, &write_text("cat.csv", &edited(&m, 1, "category", "9")));
