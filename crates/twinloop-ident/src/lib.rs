@@ -9,9 +9,12 @@
 
 pub mod anatomy;
 pub mod error;
+pub mod filter;
 pub mod ik;
 pub mod plate;
 pub mod poses;
+pub mod qp;
+pub mod static_ident;
 
 pub use error::IdentError;
 pub use poses::{

@@ -198,3 +198,9 @@ pub fn parse_static_poses(table: &Table, model: &Model) -> Result<Vec<StaticPose
     }
     Ok(out)
 }
+
+impl serde::Serialize for PoseCategory {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
