@@ -24,12 +24,15 @@ pub enum Task {
         target: Vector3<f64>,
         weight: Vector3<f64>,
     },
-    /// Direction `axis` (unit, in the frame) along world direction `target` (unit).
+    /// Direction `axis` (unit, in the frame) along world direction `target` (unit);
+    /// `weight` per world component of the difference. Weight only the components
+    /// that matter (2 for a direction, 1 for a heading): a third, redundant row would
+    /// make the least-norm projection erratic.
     Axis {
         frame: usize,
         axis: Vector3<f64>,
         target: Vector3<f64>,
-        weight: f64,
+        weight: Vector3<f64>,
     },
     /// Centre of mass at `target`; `weight` per world axis.
     Com {
@@ -104,6 +107,8 @@ pub struct Ik {
     delta: DVector<f64>,
     q_trial: Vec<f64>,
     frozen: Vec<bool>,
+    jjt: DMatrix<f64>,
+    y: DVector<f64>,
 }
 
 /// World placement of a frame after forward kinematics.
@@ -173,6 +178,8 @@ impl Ik {
             delta: DVector::zeros(nv),
             q_trial: vec![0.0; model.nq],
             frozen: vec![false; nv],
+            jjt: DMatrix::zeros(nres, nres),
+            y: DVector::zeros(nres),
         }
     }
 
@@ -240,7 +247,7 @@ impl Ik {
                     let x = frame_placement(model, data, *frame);
                     let a = x.rotation * axis;
                     for k in 0..3 {
-                        self.r[row + k] = weight * (a[k] - target[k]);
+                        self.r[row + k] = weight[k] * (a[k] - target[k]);
                     }
                     if jacobian {
                         frame_jacobian(
@@ -251,12 +258,12 @@ impl Ik {
                             &mut self.jf,
                         );
                         // d(R a) = w x (R a) = -[R a]x w.
-                        let s = -skew(&a) * *weight;
+                        let s = -skew(&a);
                         for c in 0..self.jf.ncols() {
                             let w = Vector3::new(self.jf[(3, c)], self.jf[(4, c)], self.jf[(5, c)]);
                             let d = s * w;
                             for k in 0..3 {
-                                self.jac[(row + k, c)] = d[k];
+                                self.jac[(row + k, c)] = weight[k] * d[k];
                             }
                         }
                     }
@@ -386,6 +393,51 @@ impl Ik {
     fn normal_equations(&mut self) {
         self.g.gemv_tr(1.0, &self.jac, &self.r, 0.0);
         self.jtj.gemm_tr(1.0, &self.jac, &self.jac, 0.0);
+    }
+
+    /// Project `q` onto the zero set of the tasks by Gauss-Newton steps of least norm,
+    /// `d = -J^T (J J^T + eps I)^-1 r` over the free coordinates, every step taken. Unlike
+    /// the adaptive damping of [`solve`](Self::solve), nothing here depends on discrete
+    /// accept/reject decisions, so the result is a smooth function of the start: what a
+    /// motion differentiated afterwards needs. Joint limits are not enforced.
+    pub fn project(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &mut [f64],
+        max_iterations: usize,
+        tolerance: f64,
+    ) -> IkReport {
+        let nv = model.nv;
+        let mut it = 0;
+        let mut cost = self.evaluate(model, data, q, true);
+        while it < max_iterations && self.r.amax() > tolerance {
+            it += 1;
+            for c in 0..nv {
+                if !self.free[c] {
+                    self.jac.column_mut(c).fill(0.0);
+                }
+            }
+            self.jjt.gemm(1.0, &self.jac, &self.jac.transpose(), 0.0);
+            let tr = (0..self.nres).map(|i| self.jjt[(i, i)]).sum::<f64>();
+            let eps = 1e-14 * tr.max(1e-300);
+            for i in 0..self.nres {
+                self.jjt[(i, i)] += eps;
+            }
+            self.y.copy_from(&self.r);
+            if !cholesky_solve_in_place(&mut self.jjt, &mut self.y) {
+                break;
+            }
+            self.delta.gemv_tr(-1.0, &self.jac, &self.y, 0.0);
+            integrate(model, q, self.delta.as_slice(), 1.0, &mut self.q_trial);
+            q.copy_from_slice(&self.q_trial);
+            cost = self.evaluate(model, data, q, true);
+        }
+        IkReport {
+            iterations: it,
+            cost,
+            max_residual: self.r.amax(),
+        }
     }
 
     /// `(J^T J + mu I) d = -g` over the coordinates not frozen (frozen ones get d = 0).

@@ -164,7 +164,7 @@ fn foot_tasks(foot: &crate::anatomy::Foot, y: f64, weight_xy: f64) -> [Task; 3] 
             frame: foot.frame,
             axis: foot.down,
             target: Vector3::new(0.0, 0.0, -1.0),
-            weight: 10.0,
+            weight: Vector3::new(10.0, 10.0, 0.0),
         },
         Task::Point {
             frame: foot.frame,
@@ -176,7 +176,7 @@ fn foot_tasks(foot: &crate::anatomy::Foot, y: f64, weight_xy: f64) -> [Task; 3] 
             frame: foot.frame,
             axis: foot.forward,
             target: Vector3::new(1.0, 0.0, 0.0),
-            weight: weight_xy,
+            weight: Vector3::new(0.0, weight_xy, 0.0),
         },
     ]
 }
@@ -237,7 +237,7 @@ impl<'a> PlateGenerator<'a> {
                     frame: foot.frame,
                     axis: foot.down,
                     target: Vector3::new(0.0, 0.0, -1.0),
-                    weight: 1.0,
+                    weight: Vector3::new(1.0, 1.0, 0.0),
                 },
                 Task::Point {
                     frame: foot.frame,
