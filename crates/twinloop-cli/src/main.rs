@@ -60,9 +60,28 @@ enum Command {
     /// Benchmarks (median time per call), to compare with peers such as Pinocchio
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
-    /// Identification experiments: the virtual force plate's static poses (seed 004)
+    /// Identification experiments: virtual force plate poses, squat motion (seed 004)
     #[command(subcommand)]
     Experiment(cmd_ident::ExperimentCommand),
+    /// Identify model parameters from experiments (static masses and CoMs, seed 004)
+    #[command(subcommand)]
+    Identify(cmd_ident::IdentifyCommand),
+    /// IK marker fitting: joint angles and base pose from motion capture (seed 004, eq 7)
+    ///
+    /// Fits the configuration of each frame, floating base included, to the measured
+    /// marker positions by Levenberg-Marquardt (least squares over the markers seen in
+    /// that frame), joint limits kept. The first frame starts from the base pose fitted
+    /// to the base link's markers alone (3 or more needed), each later frame from the
+    /// previous one.
+    ///
+    /// Example: twinloop ik --urdf robot.urdf --markers markers.toml --frames mocap.csv --out traj.csv
+    ///
+    /// Output: TRAJ.csv with `t`, `q:*` and the fit quality per frame, `ik.rms` and
+    /// `ik.max` (marker distances, m); stdout summarises them.
+    Ik(cmd_ident::IkArgs),
+    /// Validate a model against measurements (inverse-dynamics residual, seed 004)
+    #[command(subcommand)]
+    Validate(cmd_ident::ValidateCommand),
 }
 
 fn main() -> ExitCode {
@@ -74,5 +93,8 @@ fn main() -> ExitCode {
         Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
         Command::Experiment(cmd) => cmd_ident::experiment(cmd),
+        Command::Identify(cmd) => cmd_ident::identify(cmd),
+        Command::Ik(args) => cmd_ident::ik(args),
+        Command::Validate(cmd) => cmd_ident::validate(cmd),
     }
 }
