@@ -132,9 +132,9 @@ pub struct SquatArgs {
     /// Output CSV (configuration and plate).
     #[arg(long, value_name = "squat.csv")]
     pub out: PathBuf,
-    /// How far the pelvis goes down, m.
-    #[arg(long, default_value_t = 0.12, value_name = "M")]
-    pub depth: f64,
+    /// How far the pelvis goes down, m (default: 12 % of its standing height).
+    #[arg(long, value_name = "M")]
+    pub depth: Option<f64>,
     /// Duration of the down-and-up motion, s.
     #[arg(long, default_value_t = 5.0, value_name = "S")]
     pub duration: f64,

@@ -371,8 +371,8 @@ pub struct SquatOptions {
     pub duration: f64,
     /// Sampling rate of the recording, Hz (seed 004's motion capture: 150 Hz).
     pub rate: f64,
-    /// How far the pelvis goes down, m.
-    pub depth: f64,
+    /// How far the pelvis goes down, m (`None`: 12 % of its standing height).
+    pub depth: Option<f64>,
     /// How far the arms swing forward at the bottom, as a fraction of their range.
     pub arm_swing: f64,
     pub feet: Option<(String, String)>,
@@ -384,7 +384,7 @@ impl Default for SquatOptions {
             rest: 1.0,
             duration: 5.0,
             rate: 150.0,
-            depth: 0.12,
+            depth: None,
             arm_swing: 0.35,
             feet: None,
         }
@@ -423,13 +423,24 @@ pub fn squat_motion(
     let (sl, sr) = (sole(lf, &data), sole(rf, &data));
     let ground = sl.z.min(sr.z);
     q0[2] = -ground;
-    let stand = q0[2];
+    let depth = options.depth.unwrap_or(0.12 * q0[2]);
+    // Stand with the knees a little bent (4 % lower than straight legs): straight
+    // knees are a singular point of the leg's kinematics.
+    let stand = 0.96 * q0[2];
     let sl = Vector3::new(sl.x, sl.y, 0.0);
     let sr = Vector3::new(sr.x, sr.y, 0.0);
     let mid = (sl + sr) * 0.5;
-    // Knees slightly bent to start (a straight knee is a singular start for IK).
+    // Joints at zero, or 5 % inside their range where zero is a limit; knees slightly
+    // bent to start (a straight knee is a singular start for IK).
     let mut reference: Vec<f64> = (0..nj)
-        .map(|i| 0.0f64.clamp(model.lower_limits[i], model.upper_limits[i]))
+        .map(|i| {
+            let (lo, hi) = (model.lower_limits[i], model.upper_limits[i]);
+            if lo.is_finite() && hi.is_finite() && lo < hi {
+                0.0f64.clamp(lo + 0.05 * (hi - lo), hi - 0.05 * (hi - lo))
+            } else {
+                0.0
+            }
+        })
         .collect();
     for leg in [&anatomy.left_leg, &anatomy.right_leg] {
         if let Some((k, sign)) = crate::plate::knee_of(model, leg) {
@@ -507,7 +518,26 @@ pub fn squat_motion(
         weight: Vector3::new(0.0, 0.0, 1.0),
     });
     let base_task = tasks.len() - 1;
+    // The pelvis does not pitch: its forward axis stays horizontal.
+    let q_neutral = model.neutral_configuration();
+    twinloop_dynamics::forward_kinematics(model, &mut data, &q_neutral);
+    let base_forward = data.base_placement.rotation.tr_mul(&Vector3::x());
+    tasks.push(Task::Axis {
+        frame: base_frame,
+        axis: base_forward,
+        target: Vector3::x(),
+        weight: Vector3::new(0.0, 0.0, 1.0),
+    });
     let mut ik = Ik::new(model, tasks);
+    // Arms and torso follow their prescribed motion; base and legs keep the balance.
+    let balance: Vec<usize> = anatomy
+        .left_leg
+        .iter()
+        .chain(&anatomy.right_leg)
+        .copied()
+        .collect();
+    let vo = model.v_offset;
+    ik.set_free(|k| k < vo || balance.contains(&(k - vo)));
     let total = options.rest * 2.0 + options.duration;
     let frames = (total * options.rate).round() as usize + 1;
     // Step of the central differences of the exact motion (1 ms).
@@ -518,28 +548,51 @@ pub fn squat_motion(
         let x = if s < 0.5 { 2.0 * s } else { 2.0 - 2.0 * s };
         x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
     };
+    // Continuation: every frame starts from the same standing solution and moves to
+    // its depth in a fixed number of projections, so the result depends on t alone.
+    const STEPS: usize = 4;
+    let mut stand_q: Option<Vec<f64>> = None;
     let mut solve_at = |t: f64, q: &mut Vec<f64>| -> Result<(), IdentError> {
-        let s = profile(t);
-        let z = stand - options.depth * s;
-        q.copy_from_slice(&q0);
-        q[0] = mid.x;
-        q[1] = mid.y;
-        q[2] = z;
-        q[model.q_offset..].copy_from_slice(&reference);
-        for &(j, ext) in &swings {
-            q[model.q_offset + j] = ext * options.arm_swing * s;
-        }
-        if let Task::Point { target, .. } = &mut ik.tasks[base_task] {
-            target.z = z;
-        }
-        let rep = ik.project(model, &mut data, q, 60, 1e-13);
-        if rep.max_residual > 1e-9 {
-            return Err(IdentError::new(format!(
+        let s_end = profile(t);
+        let fail = |rep: crate::ik::IkReport| {
+            IdentError::new(format!(
                 "the squat at t = {t:.3} s cannot keep the feet flat where they stand with the CoM \
                  over them (residual {:.2e}): try a smaller --depth",
                 rep.max_residual
             ))
-            .field("--depth"));
+            .field("--depth")
+        };
+        let start = stand_q.is_none();
+        if start {
+            q.copy_from_slice(&q0);
+            q[0] = mid.x;
+            q[1] = mid.y;
+            q[2] = stand;
+            q[model.q_offset..].copy_from_slice(&reference);
+        } else if let Some(sq) = &stand_q {
+            q.copy_from_slice(sq);
+        }
+        let steps = if start { 0 } else { STEPS };
+        for j in 0..=steps {
+            let s = if steps == 0 {
+                0.0
+            } else {
+                s_end * j as f64 / steps as f64
+            };
+            for &(a, ext) in &swings {
+                q[model.q_offset + a] = ext * options.arm_swing * s;
+            }
+            if let Task::Point { target, .. } = &mut ik.tasks[base_task] {
+                target.z = stand - depth * s;
+            }
+            let rep = ik.project(model, &mut data, q, 60, 1e-13);
+            if rep.max_residual > 1e-9 {
+                return Err(fail(rep));
+            }
+        }
+        if start {
+            stand_q = Some(q.clone());
+            return Ok(());
         }
         for i in 0..nj {
             let x = q[model.q_offset + i];
@@ -558,6 +611,7 @@ pub fn squat_motion(
     let mut plate = Vec::with_capacity(frames);
     let mut truth_data = Data::new(model);
     let mut q = q0.clone();
+    solve_at(0.0, &mut q)?; // the standing solution every frame starts from
     let (mut qm, mut qp) = (q.clone(), q.clone());
     for k in 0..frames {
         let t = k as f64 / options.rate;
