@@ -54,7 +54,7 @@ struct MarkerFile {
 struct MarkerEntry {
     name: String,
     link: String,
-    position: [f64; 3],
+    position: Vec<f64>,
 }
 
 /// Parse a marker set for `model` from TOML text. Errors name the marker and field.
@@ -90,13 +90,17 @@ pub fn parse_markers(text: &str, model: &Model) -> Result<Vec<Marker>, IdentErro
                 ))
                 .field(at("link"))
             })?;
-        if !m.position.iter().all(|x| x.is_finite()) {
-            return Err(IdentError::new("not a finite position").field(at("position")));
+        if m.position.len() != 3 || !m.position.iter().all(|x| x.is_finite()) {
+            return Err(IdentError::new(format!(
+                "{:?} is not a position: three finite numbers (x, y, z in the link frame, m)",
+                m.position
+            ))
+            .field(at("position")));
         }
         out.push(Marker {
             name: m.name,
             link,
-            position: Vector3::from(m.position),
+            position: Vector3::new(m.position[0], m.position[1], m.position[2]),
         });
     }
     if out.len() < 3 {
