@@ -340,7 +340,7 @@ fn squat(a: &SquatArgs) -> Result<(), String> {
         }
         w.finish().map_err(|e| e.to_string())?;
     }
-    let plate = motion.plate.as_ref().map(Vec::as_slice).unwrap_or(&[]);
+    let plate = motion.plate.as_deref().unwrap_or(&[]);
     let fz: Vec<f64> = plate.iter().map(|p| p.force[2]).collect();
     let (lo, hi) = fz
         .iter()

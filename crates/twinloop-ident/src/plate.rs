@@ -381,11 +381,11 @@ impl<'a> PlateGenerator<'a> {
             weight[i] = 0.05;
         }
         // Small jitter of the upper body so that even "neutral" joints vary a little.
-        for i in 0..nj {
+        for (i, r) in reference.iter_mut().enumerate() {
             if !legs.contains(&i) && !self.hold[i] {
                 let (lo, hi) = range(model, i);
                 let j = self.rng.uniform(-0.05, 0.05) * (hi - lo);
-                reference[i] = (reference[i] + j).clamp(lo, hi);
+                *r = (*r + j).clamp(lo, hi);
             }
         }
         match plan {
@@ -446,9 +446,9 @@ impl<'a> PlateGenerator<'a> {
             }
             _ => {}
         }
-        for i in 0..nj {
+        for (i, r) in reference.iter_mut().enumerate() {
             if self.hold[i] {
-                reference[i] = neutral(model, i);
+                *r = neutral(model, i);
             }
         }
         (reference, weight)

@@ -660,7 +660,7 @@ fn complement(v: &DMatrix<f64>, q: &DMatrix<f64>) -> DMatrix<f64> {
 /// (random base orientation and joints), so only the tree's regrouping is left.
 pub fn structural_null_space(model: &Model, problem: &StaticProblem) -> DMatrix<f64> {
     let n = problem.unknowns();
-    let mut rng = twinloop_dynamics::configuration::SplitMix64(0x57A7_1C);
+    let mut rng = twinloop_dynamics::configuration::SplitMix64(0x0057_A71C);
     let configs: Vec<StaticPose> = (0..(2 * n).max(8))
         .map(|_| StaticPose {
             q: twinloop_dynamics::configuration::random_configuration(model, &mut rng),
@@ -1031,8 +1031,8 @@ pub fn suggest_poses(
         }
         let minv = mf.cholesky().map(|c| c.inverse());
         let mut best: Option<(usize, f64, f64)> = None;
-        for c in 0..candidates.len() {
-            if taken[c] {
+        for (c, &done) in taken.iter().enumerate() {
+            if done {
                 continue;
             }
             let rows = b.rows(2 * c, 2);
@@ -1040,7 +1040,7 @@ pub fn suggest_poses(
             let s = smallest(&trial);
             let gain = match &minv {
                 Some(mi) => {
-                    let k = DMatrix::identity(2, 2) + &rows * mi * rows.transpose();
+                    let k = DMatrix::identity(2, 2) + rows * mi * rows.transpose();
                     k.determinant().max(1e-300).ln()
                 }
                 None => rows.norm_squared(),

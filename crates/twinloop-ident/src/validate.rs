@@ -181,6 +181,9 @@ impl Default for Smoothing {
     }
 }
 
+/// Configurations, velocities and accelerations, one vector per frame.
+pub type States = (Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>);
+
 /// Smoothed configuration, velocities and accelerations: every configuration
 /// coordinate (joints, base position, base quaternion made sign-continuous) filtered
 /// by a zero-phase Butterworth low-pass, the quaternion renormalised, then central
@@ -192,7 +195,7 @@ pub fn smooth_differentiate(
     t: &[f64],
     q: &[Vec<f64>],
     smoothing: Option<Smoothing>,
-) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>), IdentError> {
+) -> Result<States, IdentError> {
     let n = t.len();
     if n < 3 {
         return Err(IdentError::new(format!(
@@ -216,8 +219,8 @@ pub fn smooth_differentiate(
         for k in 1..n {
             let dot: f64 = (3..7).map(|i| qs[k][i] * qs[k - 1][i]).sum();
             if dot < 0.0 {
-                for i in 3..7 {
-                    qs[k][i] = -qs[k][i];
+                for x in &mut qs[k][3..7] {
+                    *x = -*x;
                 }
             }
         }
@@ -226,12 +229,12 @@ pub fn smooth_differentiate(
         let f = butter_lowpass(s.order, s.cutoff_hz, 1.0 / dt)?;
         let mut col = vec![0.0; n];
         for i in 0..model.nq {
-            for k in 0..n {
-                col[k] = qs[k][i];
+            for (c, qk) in col.iter_mut().zip(&qs) {
+                *c = qk[i];
             }
             let y = f.filtfilt(&col).map_err(|e| e.field("t"))?;
-            for k in 0..n {
-                qs[k][i] = y[k];
+            for (qk, yk) in qs.iter_mut().zip(&y) {
+                qk[i] = *yk;
             }
         }
         if model.is_floating() {
@@ -274,11 +277,11 @@ pub fn smooth_differentiate(
         }
     }
     let mut a = vec![vec![0.0; nv]; n];
-    for k in 0..n {
+    for (k, ak) in a.iter_mut().enumerate() {
         let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
         let h = t[hi] - t[lo];
-        for i in 0..nv {
-            a[k][i] = (v[hi][i] - v[lo][i]) / h;
+        for (i, x) in ak.iter_mut().enumerate() {
+            *x = (v[hi][i] - v[lo][i]) / h;
         }
     }
     Ok((qs, v, a))

@@ -210,7 +210,7 @@ fn marker_file_errors() {
     let mut fitter = MarkerIk::new(&model, markers.clone()).unwrap();
     let seen: Vec<Option<Vector3<f64>>> = markers
         .iter()
-        .map(|m| (model.links[m.link].name != "pelvis").then(|| Vector3::zeros()))
+        .map(|m| (model.links[m.link].name != "pelvis").then(Vector3::zeros))
         .collect();
     let e = fitter.fit(&seen, 0).unwrap_err().to_string();
     assert!(e.contains("data row 1") && e.contains("base body"), "{e}");

@@ -196,9 +196,8 @@ fn coman_with_hidden_mass(prior: &Robot) -> Robot {
         let inertial = truth.link_mut(name).unwrap().inertial.as_mut().unwrap();
         // The added mass sits at the old CoM + dc: new CoM is the weighted mean.
         let m = inertial.mass;
-        for k in 0..3 {
-            let c = inertial.origin.xyz[k];
-            inertial.origin.xyz[k] = (m * c + dm * (c + dc[k])) / (m + dm);
+        for (c, d) in inertial.origin.xyz.iter_mut().zip(dc) {
+            *c = (m * *c + dm * (*c + d)) / (m + dm);
         }
         inertial.mass = m + dm;
     }
