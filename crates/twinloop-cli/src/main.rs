@@ -5,6 +5,7 @@
 mod cmd_bench;
 mod cmd_dynamics;
 mod cmd_experiment;
+mod cmd_ident;
 mod cmd_model;
 mod cmd_robot;
 mod cmd_sim;
@@ -69,9 +70,6 @@ enum Command {
     ///
     /// Example: twinloop simulate --robot models/op3/mjcf/op3.xml --duration 5 --hold --out stand.csv
     Simulate(cmd_sim::SimulateArgs),
-    /// Experiments on a robot (simulated for now): the tip-over of seeds 000/001
-    #[command(subcommand)]
-    Experiment(ExperimentCommand),
     /// Benchmarks (median time per call), to compare with peers such as Pinocchio
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
@@ -82,23 +80,28 @@ enum Command {
     /// Example: twinloop robot export km20 --out km20.urdf
     #[command(subcommand)]
     Robot(cmd_robot::RobotCommand),
-}
-
-#[derive(Subcommand)]
-enum ExperimentCommand {
-    /// Ramp both ankles forward, backward, left and right until the robot tips over
+    /// Experiments: tip-over (seeds 000/001), virtual force plate poses and squat (seed 004)
+    #[command(subcommand)]
+    Experiment(cmd_ident::ExperimentCommand),
+    /// Identify model parameters from experiments (static masses and CoMs, seed 004)
+    #[command(subcommand)]
+    Identify(cmd_ident::IdentifyCommand),
+    /// IK marker fitting: joint angles and base pose from motion capture (seed 004, eq 7)
     ///
-    /// The robot stands on its servos in the simulator; each direction ramps both ankle
-    /// joints (--ramp deg/s) until the trunk tilts beyond what the joints explain, and
-    /// records the ankle angle commanded and measured at the onset and the time taken
-    /// (seed 000 Table IV). Beside each, the model's static tipping angle (CoM over the
-    /// support edge). From the four angles, the CoM by the seed's geometric method
-    /// (seed 000 eq 8-13) and by the exact method, next to the model's true CoM, all
-    /// relative to the midpoint of the ankle axes (x forward, y left, z up).
+    /// Fits the configuration of each frame, floating base included, to the measured
+    /// marker positions by Levenberg-Marquardt (least squares over the markers seen in
+    /// that frame), joint limits kept. The first frame starts from the base pose fitted
+    /// to the base link's markers alone (3 or more needed), each later frame from the
+    /// previous one.
     ///
-    /// Example:
-    ///   twinloop experiment tipover --robot builtin:km20 --add-mass 0.2@torso:0.05,0,0 --json tip.json
-    Tipover(cmd_experiment::TipoverArgs),
+    /// Example: twinloop ik --urdf robot.urdf --markers markers.toml --frames mocap.csv --out traj.csv
+    ///
+    /// Output: TRAJ.csv with `t`, `q:*` and the fit quality per frame, `ik.rms` and
+    /// `ik.max` (marker distances, m); stdout summarises them.
+    Ik(cmd_ident::IkArgs),
+    /// Validate a model against measurements (inverse-dynamics residual, seed 004)
+    #[command(subcommand)]
+    Validate(cmd_ident::ValidateCommand),
 }
 
 fn main() -> ExitCode {
@@ -110,7 +113,10 @@ fn main() -> ExitCode {
         Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
         Command::Simulate(args) => cmd_sim::simulate(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
-        Command::Experiment(ExperimentCommand::Tipover(args)) => cmd_experiment::tipover(args),
         Command::Robot(cmd) => cmd_robot::run(cmd),
+        Command::Experiment(cmd) => cmd_ident::experiment(cmd),
+        Command::Identify(cmd) => cmd_ident::identify(cmd),
+        Command::Ik(args) => cmd_ident::ik(args),
+        Command::Validate(cmd) => cmd_ident::validate(cmd),
     }
 }

@@ -1,0 +1,82 @@
+//! Errors that name what is at fault: the file, the data row, the field (column,
+//! command-line option or link) and what is wrong with it.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// An identification input or computation error. `Display` gives
+/// `<file>: data row <n>: field "<f>": <message>` with the parts that are known.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentError {
+    pub file: Option<PathBuf>,
+    /// 1-based data row (the header is not counted), where a row is at fault.
+    pub row: Option<usize>,
+    /// Column, option (`--total-mass`) or parameter name at fault.
+    pub field: Option<String>,
+    pub message: String,
+}
+
+impl IdentError {
+    pub fn new(message: impl Into<String>) -> Self {
+        IdentError {
+            file: None,
+            row: None,
+            field: None,
+            message: message.into(),
+        }
+    }
+
+    pub fn in_file(mut self, file: impl Into<PathBuf>) -> Self {
+        self.file = Some(file.into());
+        self
+    }
+
+    /// `row` is 0-based here (index into the data rows); it is shown 1-based.
+    pub fn at_row(mut self, row: usize) -> Self {
+        self.row = Some(row + 1);
+        self
+    }
+
+    pub fn field(mut self, field: impl Into<String>) -> Self {
+        self.field = Some(field.into());
+        self
+    }
+}
+
+impl fmt::Display for IdentError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(p) = &self.file {
+            write!(f, "{}: ", p.display())?;
+        }
+        if let Some(r) = self.row {
+            write!(f, "data row {r}: ")?;
+        }
+        if let Some(c) = &self.field {
+            write!(f, "field \"{c}\": ")?;
+        }
+        write!(f, "{}", self.message)
+    }
+}
+
+impl std::error::Error for IdentError {}
+
+impl From<twinloop_io::IoError> for IdentError {
+    fn from(e: twinloop_io::IoError) -> Self {
+        // Keep the reader's own line/column wording in the message.
+        let file = e.file.clone();
+        let mut inner = e;
+        inner.file = None;
+        IdentError {
+            file,
+            row: None,
+            field: None,
+            message: inner.to_string(),
+        }
+    }
+}
+
+impl From<twinloop_model::ModelError> for IdentError {
+    fn from(e: twinloop_model::ModelError) -> Self {
+        IdentError::new(e.to_string())
+    }
+}

@@ -1,0 +1,367 @@
+//! IK marker fitting (seed 004, section 3.2, eq 7): the configuration of each
+//! motion-capture frame, floating base included, that brings the model's virtual
+//! markers closest to the measured ones,
+//!
+//! ```text
+//! min_q  sum_m | r_m^V(q) - r_m^C |^2
+//! ```
+//!
+//! by Levenberg-Marquardt ([`crate::ik`]) with frame Jacobians, the base moving on
+//! SE(3) and joints kept in their limits. As the seed does, the first frame starts
+//! from the pelvis pose estimated from the pelvis markers alone (a rigid fit by SVD,
+//! Kabsch's method), so the solver does not wander into joint angles beyond a full
+//! turn; every later frame starts from the previous solution.
+//!
+//! Marker sets are TOML:
+//!
+//! ```toml
+//! [[marker]]
+//! name = "pelvis_front_left"
+//! link = "pelvis"
+//! position = [0.10, 0.08, 0.00]   # in the link frame, m
+//! ```
+//!
+//! and marker frames are CSV with `t` and `marker:<name>.x .y .z` (world, m); a NaN
+//! cell means the marker was not seen in that frame.
+
+use crate::anatomy::link_placement;
+use crate::error::IdentError;
+use crate::ik::{Ik, IkOptions, Task};
+use nalgebra::{Matrix3, Vector3};
+use serde::Deserialize;
+use std::path::Path;
+use twinloop_dynamics::{BASE, Data, Model};
+use twinloop_io::Table;
+
+/// A virtual marker: a point fixed in a link.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Marker {
+    pub name: String,
+    /// Description link index.
+    pub link: usize,
+    /// Position in the link frame, m.
+    pub position: Vector3<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MarkerFile {
+    marker: Vec<MarkerEntry>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MarkerEntry {
+    name: String,
+    link: String,
+    position: Vec<f64>,
+}
+
+/// Parse a marker set for `model` from TOML text. Errors name the marker and field.
+pub fn parse_markers(text: &str, model: &Model) -> Result<Vec<Marker>, IdentError> {
+    let file: MarkerFile = toml::from_str(text).map_err(|e| {
+        let mut msg = e.message().to_string();
+        if let Some(span) = e.span() {
+            let line = text[..span.start.min(text.len())].lines().count().max(1);
+            msg = format!("line {line}: {msg}");
+        }
+        IdentError::new(msg)
+    })?;
+    let mut out: Vec<Marker> = Vec::new();
+    for (i, m) in file.marker.into_iter().enumerate() {
+        let at = |f: &str| format!("marker[{i}] \"{}\".{f}", m.name);
+        if m.name.is_empty() || m.name.contains(',') {
+            return Err(
+                IdentError::new("a marker name must be non-empty and without commas")
+                    .field(at("name")),
+            );
+        }
+        if out.iter().any(|o| o.name == m.name) {
+            return Err(IdentError::new("two markers have this name").field(at("name")));
+        }
+        let link = model
+            .links
+            .iter()
+            .position(|l| l.name == m.link)
+            .ok_or_else(|| {
+                IdentError::new(format!(
+                    "no link \"{}\" in the model \"{}\"",
+                    m.link, model.name
+                ))
+                .field(at("link"))
+            })?;
+        if m.position.len() != 3 || !m.position.iter().all(|x| x.is_finite()) {
+            return Err(IdentError::new(format!(
+                "{:?} is not a position: three finite numbers (x, y, z in the link frame, m)",
+                m.position
+            ))
+            .field(at("position")));
+        }
+        out.push(Marker {
+            name: m.name,
+            link,
+            position: Vector3::new(m.position[0], m.position[1], m.position[2]),
+        });
+    }
+    if out.len() < 3 {
+        return Err(IdentError::new(format!(
+            "{} markers: at least 3 are needed",
+            out.len()
+        )));
+    }
+    Ok(out)
+}
+
+/// Read a marker set file.
+pub fn read_markers(path: &Path, model: &Model) -> Result<Vec<Marker>, IdentError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| IdentError::new(format!("cannot read: {e}")).in_file(path))?;
+    parse_markers(&text, model).map_err(|e| e.in_file(path))
+}
+
+/// Write a marker set as TOML.
+pub fn markers_to_toml(model: &Model, markers: &[Marker]) -> String {
+    let mut s = String::from(
+        "# Virtual markers: a point fixed in a link, position in the link frame (m).\n",
+    );
+    for m in markers {
+        s.push_str(&format!(
+            "\n[[marker]]\nname = \"{}\"\nlink = \"{}\"\nposition = [{:?}, {:?}, {:?}]\n",
+            m.name, model.links[m.link].name, m.position.x, m.position.y, m.position.z
+        ));
+    }
+    s
+}
+
+/// World positions of the markers at the last forward kinematics in `data`.
+pub fn marker_positions(model: &Model, data: &Data, markers: &[Marker]) -> Vec<Vector3<f64>> {
+    markers
+        .iter()
+        .map(|m| link_placement(model, data, m.link).act_point(&m.position))
+        .collect()
+}
+
+/// Marker frames: time and per marker a world position, `None` where not seen.
+#[derive(Debug, Clone, Default)]
+pub struct MarkerFrames {
+    pub t: Vec<f64>,
+    pub positions: Vec<Vec<Option<Vector3<f64>>>>,
+}
+
+/// Column names of marker frames.
+pub fn frame_columns(markers: &[Marker]) -> Vec<String> {
+    let mut cols = vec!["t".to_string()];
+    for m in markers {
+        for a in ["x", "y", "z"] {
+            cols.push(format!("marker:{}.{a}", m.name));
+        }
+    }
+    cols
+}
+
+/// Read marker frames; every marker of the set needs its three columns.
+pub fn read_frames(path: &Path, markers: &[Marker]) -> Result<MarkerFrames, IdentError> {
+    let table = Table::read(path)?;
+    let at = |e: IdentError| e.in_file(path);
+    let tc = table
+        .column_index("t")
+        .ok_or_else(|| at(IdentError::new("a time column is needed (seconds)").field("t")))?;
+    let mut idx = Vec::with_capacity(markers.len());
+    for m in markers {
+        let mut c = [0usize; 3];
+        for (k, a) in ["x", "y", "z"].iter().enumerate() {
+            let name = format!("marker:{}.{a}", m.name);
+            c[k] = table.column_index(&name).ok_or_else(|| {
+                at(
+                    IdentError::new("the marker set has this marker but the frames do not")
+                        .field(name),
+                )
+            })?;
+        }
+        idx.push(c);
+    }
+    let mut f = MarkerFrames::default();
+    for (r, row) in table.rows.iter().enumerate() {
+        let t = row[tc];
+        if !t.is_finite() || f.t.last().is_some_and(|&p| t <= p) {
+            return Err(at(IdentError::new(format!(
+                "time {t} is not finite and increasing"
+            ))
+            .at_row(r)
+            .field("t")));
+        }
+        f.t.push(t);
+        f.positions.push(
+            idx.iter()
+                .map(|c| {
+                    let p = Vector3::new(row[c[0]], row[c[1]], row[c[2]]);
+                    p.iter().all(|x| x.is_finite()).then_some(p)
+                })
+                .collect(),
+        );
+    }
+    if f.t.is_empty() {
+        return Err(at(IdentError::new("no frames")));
+    }
+    Ok(f)
+}
+
+/// Rigid transform (rotation, translation) that best maps points `a` onto `b` in the
+/// least-squares sense (Kabsch: SVD of the cross-covariance, reflection removed).
+pub fn kabsch(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> Option<(Matrix3<f64>, Vector3<f64>)> {
+    if a.len() < 3 || a.len() != b.len() {
+        return None;
+    }
+    let n = a.len() as f64;
+    let ca = a.iter().sum::<Vector3<f64>>() / n;
+    let cb = b.iter().sum::<Vector3<f64>>() / n;
+    let mut h = Matrix3::zeros();
+    for (p, q) in a.iter().zip(b) {
+        h += (p - ca) * (q - cb).transpose();
+    }
+    let svd = h.svd(true, true);
+    let (u, vt) = (svd.u?, svd.v_t?);
+    // Non-collinear points give a cross-covariance of rank 2 at least.
+    let mut sv = svd.singular_values;
+    sv.as_mut_slice().sort_by(|x, y| y.total_cmp(x));
+    if sv[1] <= 1e-12 * sv[0].max(1e-300) {
+        return None;
+    }
+    let v = vt.transpose();
+    let d = (v * u.transpose()).determinant().signum();
+    let r = v * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * u.transpose();
+    Some((r, cb - r * ca))
+}
+
+/// The fit of one frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameFit {
+    /// Root-mean-square marker distance after the fit, m.
+    pub rms: f64,
+    pub max: f64,
+    pub iterations: usize,
+}
+
+/// Fits marker frames to a model, frame by frame.
+pub struct MarkerIk<'a> {
+    model: &'a Model,
+    markers: Vec<Marker>,
+    ik: Ik,
+    data: Data,
+    options: IkOptions,
+    /// Previous solution (warm start).
+    q: Option<Vec<f64>>,
+}
+
+impl<'a> MarkerIk<'a> {
+    pub fn new(model: &'a Model, markers: Vec<Marker>) -> Result<Self, IdentError> {
+        if !model.is_floating() {
+            return Err(IdentError::new(
+                "marker fitting needs a floating-base model",
+            ));
+        }
+        let frame_of = |l: usize| crate::anatomy::link_frame(model, l);
+        let tasks = markers
+            .iter()
+            .map(|m| Task::Point {
+                frame: frame_of(m.link),
+                point: m.position,
+                target: Vector3::zeros(),
+                weight: Vector3::repeat(1.0),
+            })
+            .collect();
+        Ok(MarkerIk {
+            model,
+            ik: Ik::new(model, tasks),
+            markers,
+            data: Data::new(model),
+            options: IkOptions {
+                max_iterations: 100,
+                cost_tolerance: 1e-20,
+                ..IkOptions::default()
+            },
+            q: None,
+        })
+    }
+
+    /// The pelvis (base body) pose from its visible markers (Kabsch), joints neutral.
+    fn initial_guess(&self, seen: &[Option<Vector3<f64>>]) -> Result<Vec<f64>, IdentError> {
+        let model = self.model;
+        let mut local = Vec::new();
+        let mut world = Vec::new();
+        for (m, p) in self.markers.iter().zip(seen) {
+            let info = &model.links[m.link];
+            if let (BASE, Some(p)) = (info.body, p) {
+                local.push(info.placement.act_point(&m.position));
+                world.push(*p);
+            }
+        }
+        let (r, p) = kabsch(&local, &world).ok_or_else(|| {
+            IdentError::new(format!(
+                "the first frame shows {} markers on the base body ({}): 3 non-collinear ones are \
+                 needed to estimate its pose (seed 004, section 3.2)",
+                local.len(),
+                model.base_link
+            ))
+            .at_row(0)
+        })?;
+        let mut q = model.neutral_configuration();
+        q[0..3].copy_from_slice(p.as_slice());
+        let quat = twinloop_spatial::matrix_to_quaternion_xyzw(&r);
+        q[3..7].copy_from_slice(&quat);
+        crate::ik::clamp_to_limits(model, &mut q);
+        Ok(q)
+    }
+
+    /// Fit one frame (seed 004, eq 7); `row` names the frame in errors.
+    pub fn fit(
+        &mut self,
+        seen: &[Option<Vector3<f64>>],
+        row: usize,
+    ) -> Result<(Vec<f64>, FrameFit), IdentError> {
+        let visible = seen.iter().filter(|p| p.is_some()).count();
+        if visible < 3 {
+            return Err(
+                IdentError::new(format!("{visible} markers seen: at least 3 are needed"))
+                    .at_row(row),
+            );
+        }
+        let mut q = match &self.q {
+            Some(q) => q.clone(),
+            None => self.initial_guess(seen)?,
+        };
+        for (t, p) in self.ik.tasks.iter_mut().zip(seen) {
+            if let Task::Point { target, weight, .. } = t {
+                match p {
+                    Some(p) => {
+                        *target = *p;
+                        *weight = Vector3::repeat(1.0);
+                    }
+                    None => *weight = Vector3::zeros(),
+                }
+            }
+        }
+        let rep = self
+            .ik
+            .solve(self.model, &mut self.data, &mut q, &self.options);
+        let r = self.ik.residual();
+        let mut max: f64 = 0.0;
+        let mut sum = 0.0;
+        for (k, p) in seen.iter().enumerate() {
+            if p.is_some() {
+                let d = Vector3::new(r[3 * k], r[3 * k + 1], r[3 * k + 2]).norm();
+                max = max.max(d);
+                sum += d * d;
+            }
+        }
+        self.q = Some(q.clone());
+        Ok((
+            q,
+            FrameFit {
+                rms: (sum / visible as f64).sqrt(),
+                max,
+                iterations: rep.iterations,
+            },
+        ))
+    }
+}
