@@ -26,7 +26,7 @@ pub enum ServoChoice {
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
-    /// Robot: a URDF or MJCF file (or builtin:NAME once built-in robots are available).
+    /// Robot: builtin:km20, builtin:lab17, or a URDF or MJCF file.
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     /// Simulated time, s.
@@ -54,7 +54,7 @@ pub struct SimulateArgs {
 
 #[derive(Args, Debug)]
 pub struct SimBenchArgs {
-    /// Robot: a URDF or MJCF file.
+    /// Robot: builtin:NAME or a URDF or MJCF file.
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     /// Time step, s.
@@ -73,9 +73,9 @@ pub struct SimBenchArgs {
     pub json: bool,
 }
 
-/// Load a robot description named on the command line.
+/// Load a robot named on the command line: `builtin:NAME` or a URDF/MJCF file.
 pub fn load_robot(spec: &str) -> Result<twinloop_model::Robot, String> {
-    twinloop_model::load(Path::new(spec)).map_err(|e| e.to_string())
+    twinloop_robots::resolve(spec).map_err(|e| e.to_string())
 }
 
 /// The servo for one joint under a choice.
