@@ -1,0 +1,14 @@
+//! twinloop-sysid: black-box identification of a robot's input/output behaviour
+//! (seed 003).
+
+pub mod arx;
+pub mod data;
+pub mod error;
+pub mod linalg;
+pub mod metrics;
+pub mod ss;
+
+pub use arx::{ArxModel, ArxOrders, arx_regressor, estimate_arx};
+pub use data::IoData;
+pub use error::{ErrorKind, Result, SysidError};
+pub use ss::StateSpace;

@@ -1,0 +1,67 @@
+//! Shared test helpers: the committed fixtures of tools/oracle/sysid_reference.py.
+#![allow(dead_code)]
+
+use nalgebra::DMatrix;
+use serde_json::Value;
+use std::path::PathBuf;
+use twinloop_sysid::{IoData, StateSpace};
+
+pub fn data_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data")
+}
+
+/// A fixture CSV as a record: columns u1..u10 are inputs, y1..y6 outputs.
+pub fn record(name: &str) -> IoData {
+    let text = std::fs::read_to_string(data_dir().join(name)).unwrap();
+    let mut lines = text.lines();
+    let columns: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let inputs: Vec<String> = (1..=10).map(|i| format!("u{i}")).collect();
+    let outputs: Vec<String> = (1..=6).map(|i| format!("y{i}")).collect();
+    IoData::from_table(&columns, &rows, &inputs, &outputs).unwrap()
+}
+
+pub fn reference() -> Value {
+    let text = std::fs::read_to_string(data_dir().join("reference.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+pub fn matrix(v: &Value) -> DMatrix<f64> {
+    let rows = v.as_array().unwrap();
+    let nr = rows.len();
+    let nc = rows.first().map_or(0, |r| r.as_array().unwrap().len());
+    DMatrix::from_fn(nr, nc, |i, j| rows[i][j].as_f64().unwrap())
+}
+
+pub fn vector(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+pub fn true_system(r: &Value) -> StateSpace {
+    let s = &r["system"];
+    let ny = 6;
+    StateSpace {
+        a: matrix(&s["A"]),
+        b: matrix(&s["B"]),
+        c: matrix(&s["C"]),
+        d: matrix(&s["D"]),
+        k: matrix(&s["K"]),
+        noise_covariance: DMatrix::identity(ny, ny) * r["noise_std"].as_f64().unwrap().powi(2),
+        sample_time: r["sample_time"].as_f64(),
+    }
+}
+
+/// Largest |a - b| / max(1, |b|).
+pub fn max_rel_err(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    assert_eq!(a.shape(), b.shape());
+    a.iter()
+        .zip(b.iter())
+        .map(|(x, y)| (x - y).abs() / y.abs().max(1.0))
+        .fold(0.0, f64::max)
+}
