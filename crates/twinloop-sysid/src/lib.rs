@@ -4,6 +4,8 @@
 pub mod arx;
 pub mod data;
 pub mod error;
+pub mod freq;
+pub mod gramian;
 pub mod linalg;
 pub mod metrics;
 pub mod ss;
