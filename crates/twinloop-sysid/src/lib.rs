@@ -8,7 +8,9 @@ pub mod freq;
 pub mod gramian;
 pub mod linalg;
 pub mod metrics;
+pub mod pem;
 pub mod ss;
+pub mod subspace;
 
 pub use arx::{ArxModel, ArxOrders, arx_regressor, estimate_arx};
 pub use data::IoData;
