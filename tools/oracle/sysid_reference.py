@@ -219,7 +219,10 @@ def arx_predict(a, b, nk, u, y, h):
 
 
 def correlation(x, z, maxlag):
-    """Normalised sample cross-correlation r(tau) = sum_t x(t+tau) z(t) / sqrt(sum x^2 sum z^2), tau = -M..M."""
+    """Normalised sample cross-correlation of the mean-removed sequences,
+    r(tau) = sum_t x(t+tau) z(t) / sqrt(sum x^2 sum z^2), tau = -M..M."""
+    x = x - x.mean()
+    z = z - z.mean()
     n = len(x)
     den = np.sqrt(np.dot(x, x) * np.dot(z, z))
     out = []

@@ -11,9 +11,13 @@ pub trait TransferMatrix {
     fn response(&mut self, w: f64) -> Option<DMatrix<Complex<f64>>>;
 }
 
-impl TransferMatrix for &ArxModel {
+/// An ARX model's response from its polynomials: `A(z)^-1 B(z)`, an `ny x ny`
+/// solve per frequency however high the orders.
+pub struct ArxResponse<'a>(pub &'a ArxModel);
+
+impl TransferMatrix for ArxResponse<'_> {
     fn response(&mut self, w: f64) -> Option<DMatrix<Complex<f64>>> {
-        self.frequency_response(w)
+        self.0.frequency_response(w)
     }
 }
 
@@ -147,8 +151,8 @@ fn db(x: f64) -> f64 {
 /// (seed 003, Figs 52 and 55: "singular values of the model transfer matrix ...
 /// bandwidth ... maximal gain"), the peak refined by golden-section search and the
 /// bandwidth by bisection between grid points.
-pub fn sigma_response<T: TransferMatrix>(
-    g: &mut T,
+pub fn sigma_response(
+    g: &mut dyn TransferMatrix,
     sample_time: Option<f64>,
     points: usize,
 ) -> SigmaResponse {
@@ -158,7 +162,7 @@ pub fn sigma_response<T: TransferMatrix>(
         (std::f64::consts::PI * 1e-3).ln(),
         std::f64::consts::PI.ln(),
     );
-    let sigma1 = |w: f64, g: &mut T| -> f64 {
+    let sigma1 = |w: f64, g: &mut dyn TransferMatrix| -> f64 {
         g.response(w)
             .map(|m| singular_values(&m).first().copied().unwrap_or(0.0))
             .unwrap_or(f64::INFINITY)

@@ -621,3 +621,106 @@ fn damped_step(
     let step = -chol.solve(g);
     step.iter().all(|x| x.is_finite()).then_some(step)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn toy() -> (StateSpace, IoData) {
+        let a = DMatrix::from_row_slice(3, 3, &[0.6, 0.3, 0.0, -0.3, 0.6, 0.1, 0.0, 0.2, -0.4]);
+        let b = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.5, -1.0, 0.0, 0.7]);
+        let c = DMatrix::from_row_slice(2, 3, &[1.0, 0.5, 0.0, 0.0, -0.3, 1.0]);
+        let k = DMatrix::from_row_slice(3, 2, &[0.2, 0.0, 0.1, 0.1, 0.0, -0.2]);
+        let d = DMatrix::from_row_slice(2, 2, &[0.1, 0.0, -0.2, 0.3]);
+        let m = StateSpace {
+            a,
+            b,
+            c,
+            d,
+            k,
+            noise_covariance: DMatrix::identity(2, 2),
+            sample_time: None,
+        };
+        let n = 80;
+        let u = DMatrix::from_fn(2, n, |i, t| ((t * (i + 2)) as f64 * 0.71).sin());
+        let y = DMatrix::from_fn(2, n, |i, t| ((t + 3 * i) as f64 * 0.37).cos());
+        let data = IoData::new(
+            vec!["u1".into(), "u2".into()],
+            vec!["y1".into(), "y2".into()],
+            u,
+            y,
+            None,
+        )
+        .unwrap();
+        (m, data)
+    }
+
+    /// The sensitivity Jacobian equals central differences of the residuals along
+    /// every free direction, with D, x0 and a non-identity weight all active.
+    #[test]
+    fn jacobian_equals_finite_differences() {
+        let (model, data) = toy();
+        let l = Layout {
+            n: 3,
+            nu: 2,
+            ny: 2,
+            nd: 2,
+            x0: true,
+        };
+        let x0 = DVector::from_vec(vec![0.3, -0.2, 0.5]);
+        let lt = DMatrix::from_row_slice(2, 2, &[1.5, 0.4, 0.0, 0.8]);
+        let basis = HouseholderQr::new(l.basis_change_directions(&model, &x0)).complement_basis();
+        let m = basis.ncols();
+        assert_eq!(m, l.len() - 9);
+        let mut ws = Workspace::new(&l, data.len(), m);
+        predict(&model, &x0, &data, &lt, &mut ws);
+        jacobian(&model, &l, &basis, &data, &lt, &mut ws);
+        let th = l.pack(&model, &x0);
+        let h = 1e-6;
+        let mut worst = 0.0f64;
+        for j in 0..m {
+            let mut rs = Vec::new();
+            for sgn in [1.0, -1.0] {
+                let mut x = x0.clone();
+                let t = &th + basis.column(j) * (sgn * h);
+                let mm = l.unpack(&t, &model, &mut x);
+                let mut w2 = Workspace::new(&l, data.len(), 0);
+                predict(&mm, &x, &data, &lt, &mut w2);
+                rs.push(w2.r.clone());
+            }
+            let fd = (&rs[0] - &rs[1]) / (2.0 * h);
+            worst = worst.max((fd - ws.j.column(j)).amax());
+        }
+        assert!(worst < 1e-7, "Jacobian vs finite differences: {worst}");
+        // Basis changes leave the residuals alone: T is in the null space of the full Jacobian.
+        let t = l.basis_change_directions(&model, &x0);
+        for s in 0..9 {
+            let mut x = x0.clone();
+            let mm = l.unpack(&(&th + t.column(s) * 1e-6), &model, &mut x);
+            let mut w2 = Workspace::new(&l, data.len(), 0);
+            predict(&mm, &x, &data, &lt, &mut w2);
+            assert!(
+                (&w2.r - &ws.r).amax() < 1e-10,
+                "basis change moved the residuals"
+            );
+        }
+    }
+
+    #[test]
+    fn pack_unpack_round_trip() {
+        let (model, _) = toy();
+        let l = Layout {
+            n: 3,
+            nu: 2,
+            ny: 2,
+            nd: 2,
+            x0: true,
+        };
+        let x0 = DVector::from_vec(vec![1.0, 2.0, 3.0]);
+        let th = l.pack(&model, &x0);
+        let mut x = DVector::zeros(3);
+        let m2 = l.unpack(&th, &model, &mut x);
+        assert_eq!(m2, model);
+        assert_eq!(x, x0);
+    }
+}

@@ -36,7 +36,6 @@ pub struct SubspaceOptions {
     pub feedthrough: bool,
 }
 
-
 #[derive(Debug, Clone, PartialEq)]
 pub struct SubspaceResult {
     pub model: StateSpace,
