@@ -5,6 +5,7 @@
 mod cmd_bench;
 mod cmd_dynamics;
 mod cmd_model;
+mod cmd_sysid;
 mod common;
 mod progress;
 
@@ -59,6 +60,16 @@ enum Command {
     /// Benchmarks (median time per call), to compare with peers such as Pinocchio
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
+    /// Black-box identification from recorded inputs and outputs: MIMO ARX and state-space models
+    ///
+    /// `sysid arx` fits a MIMO ARX model by least squares; `sysid ss` a state-space model by
+    /// subspace identification and the prediction-error method (or the seed 003 route: ARX,
+    /// balanced reduction, prediction error). Both evaluate the model as seed 003 does: FIT per
+    /// output, Hankel singular values, singular values of the frequency response, residual tests.
+    ///
+    /// Example: twinloop sysid ss --data walk.csv --inputs 'u:*' --outputs 'gyro:*' --order 6 --json ss.json
+    #[command(subcommand)]
+    Sysid(cmd_sysid::SysidCommand),
 }
 
 fn main() -> ExitCode {
@@ -69,5 +80,6 @@ fn main() -> ExitCode {
         Command::InverseDynamics(args) => cmd_dynamics::inverse_dynamics(args),
         Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
+        Command::Sysid(cmd) => cmd_sysid::run(cmd),
     }
 }

@@ -202,6 +202,8 @@ pub fn evaluate_with_response(
 #[derive(Debug, Clone, PartialEq)]
 pub struct ArxIdentification {
     pub model: ArxModel,
+    /// Wall time of the least-squares estimation alone, seconds.
+    pub estimation_seconds: f64,
     /// On the validation record when one was given, else on the estimation record.
     pub evaluation: Evaluation,
     /// FIT on the estimation record (equal to `evaluation.fit_percent` without validation data).
@@ -225,7 +227,9 @@ pub fn identify_arx(
     opts: &EvaluationOptions,
 ) -> Result<ArxIdentification> {
     check_records(est, val)?;
+    let t0 = std::time::Instant::now();
     let model = estimate_arx(est, orders)?;
+    let estimation_seconds = t0.elapsed().as_secs_f64();
     let ss = model.to_state_space();
     let which = if val.is_some() {
         "validation"
@@ -248,6 +252,7 @@ pub fn identify_arx(
     };
     Ok(ArxIdentification {
         model,
+        estimation_seconds,
         estimation_fit,
         estimation_prediction_cost,
         evaluation,
@@ -331,6 +336,8 @@ pub struct PemSummary {
 #[derive(Debug, Clone, PartialEq)]
 pub struct StateSpaceIdentification {
     pub model: StateSpace,
+    /// Wall time of the estimation (all stages of the route), seconds.
+    pub estimation_seconds: f64,
     /// Initial state of the estimation record (zero unless estimated).
     pub x0: DVector<f64>,
     pub method: SsMethod,
@@ -420,6 +427,7 @@ pub fn identify_state_space(
     let mut warnings = Vec::new();
     let mut subspace_sv = None;
     let mut arx_hsv = None;
+    let t0 = std::time::Instant::now();
     let initial = match opts.method {
         SsMethod::N4sid | SsMethod::Pem => {
             let s = n4sid(
@@ -481,6 +489,7 @@ pub fn identify_state_space(
         };
         (r.model, r.x0, Some(summary))
     };
+    let estimation_seconds = t0.elapsed().as_secs_f64();
     let mut evaluation = evaluate(&model, ev_data, which, eopts);
     let (estimation_fit, estimation_prediction_cost) = match val {
         Some(_) => (
@@ -493,6 +502,7 @@ pub fn identify_state_space(
     evaluation.warnings = warnings.clone();
     Ok(StateSpaceIdentification {
         model,
+        estimation_seconds,
         x0,
         method: opts.method,
         estimation_fit,

@@ -10,6 +10,7 @@ pub mod identify;
 pub mod linalg;
 pub mod metrics;
 pub mod pem;
+pub mod report;
 pub mod resid;
 pub mod ss;
 pub mod stats;
