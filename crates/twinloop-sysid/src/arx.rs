@@ -131,8 +131,8 @@ pub fn estimate_arx(data: &IoData, orders: ArxOrders) -> Result<ArxModel> {
     let (ny, nu) = (data.ny(), data.nu());
     let (phi, target, _) = arx_regressor(data, orders)?;
     let rows = phi.nrows();
-    let qr = HouseholderQr::new(phi.clone());
-    let theta = qr.solve(&target).map_err(|e| {
+    let qr = HouseholderQr::new(phi);
+    let (theta, ete) = qr.solve_with_residual(&target).map_err(|e| {
         let tol = (rows as f64) * f64::EPSILON;
         match qr.first_dependent_column(tol) {
             Some(c) => SysidError::numerical(format!(
@@ -145,8 +145,7 @@ pub fn estimate_arx(data: &IoData, orders: ArxOrders) -> Result<ArxModel> {
             None => e,
         }
     })?;
-    let resid = &target - &phi * &theta;
-    let noise_covariance = resid.transpose() * &resid / rows as f64;
+    let noise_covariance = ete / rows as f64;
     let a = (0..orders.na)
         .map(|i| theta.rows(i * ny, ny).transpose())
         .collect();
