@@ -1,7 +1,6 @@
 //! ARX estimation, simulation and prediction against numpy (tools/oracle/sysid_reference.py).
 
-mod common;
-use common::*;
+use crate::common::*;
 use twinloop_sysid::metrics::fit_percent;
 use twinloop_sysid::{ArxOrders, estimate_arx};
 

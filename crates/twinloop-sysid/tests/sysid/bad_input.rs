@@ -1,7 +1,6 @@
 //! Bad input gives a clear error or a warning in the result, never a panic.
 
-mod common;
-use common::*;
+use crate::common::*;
 use nalgebra::DMatrix;
 use twinloop_sysid::pem::{PemOptions, pem};
 use twinloop_sysid::subspace::{SubspaceOptions, n4sid};

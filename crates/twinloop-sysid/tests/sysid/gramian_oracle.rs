@@ -1,8 +1,7 @@
 //! Gramians, Hankel singular values, balanced truncation and frequency response
 //! against python-control / slycot / scipy (tools/oracle/sysid_reference.py).
 
-mod common;
-use common::*;
+use crate::common::*;
 use twinloop_sysid::freq::{StateSpaceResponse, TransferMatrix, sigma_response, singular_values};
 use twinloop_sysid::gramian::{
     balanced_truncation, controllability_gramian, hankel_singular_values, observability_gramian,

@@ -2,8 +2,7 @@
 //! (tools/oracle/sysid_reference.py): predictions and metrics of the true system
 //! against the oracle, then n4sid + PEM and the seed's ARX-reduce-PEM route.
 
-mod common;
-use common::*;
+use crate::common::*;
 use twinloop_sysid::gramian::hankel_singular_values;
 use twinloop_sysid::metrics::{fit_percent, seed_eq10_percent};
 use twinloop_sysid::pem::{PemOptions, pem};

@@ -1,5 +1,4 @@
 //! Shared test helpers: the committed fixtures of tools/oracle/sysid_reference.py.
-#![allow(dead_code)]
 
 use nalgebra::DMatrix;
 use serde_json::Value;
