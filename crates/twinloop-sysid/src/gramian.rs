@@ -112,35 +112,98 @@ fn block(t: &DMatrix<f64>, (s, n): (usize, usize)) -> [[f64; 2]; 2] {
     b
 }
 
-/// Solve the discrete Lyapunov equation `A X A^T - X + Q = 0` (Bartels-Stewart,
-/// see the module notes). Requires that no two eigenvalues of `A` multiply to 1,
-/// which holds for every stable `A`; the error says which pair fails otherwise.
-pub fn solve_discrete_lyapunov(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<DMatrix<f64>> {
-    let n = a.nrows();
-    if a.ncols() != n || q.shape() != (n, n) {
+/// A real Schur form `A = U T U^T` kept for solving several Lyapunov equations
+/// with the same `A` (both Gramians need `A` and `A^T`).
+pub struct LyapunovSolver {
+    u: DMatrix<f64>,
+    t: DMatrix<f64>,
+    blocks: Vec<(usize, usize)>,
+    /// `J T^T J` (`J` reverses the index order): upper quasi-triangular again, for `A^T`.
+    t_rev: DMatrix<f64>,
+    blocks_rev: Vec<(usize, usize)>,
+}
+
+impl LyapunovSolver {
+    pub fn new(a: &DMatrix<f64>) -> Result<LyapunovSolver> {
+        let n = a.nrows();
+        if a.ncols() != n {
+            return Err(SysidError::order("Lyapunov equation: A must be square"));
+        }
+        if !a.iter().all(|x| x.is_finite()) {
+            return Err(SysidError::numerical(
+                "Lyapunov equation: A holds a non-finite number",
+            ));
+        }
+        let (u, mut t) = if n == 0 {
+            (DMatrix::zeros(0, 0), DMatrix::zeros(0, 0))
+        } else {
+            Schur::try_new(a.clone(), f64::EPSILON, 10_000 * n)
+                .ok_or_else(|| SysidError::numerical("real Schur decomposition did not converge"))?
+                .unpack()
+        };
+        let blocks = schur_blocks(&mut t);
+        let t_rev = DMatrix::from_fn(n, n, |i, j| t[(n - 1 - j, n - 1 - i)]);
+        let blocks_rev = blocks.iter().rev().map(|&(s, k)| (n - s - k, k)).collect();
+        Ok(LyapunovSolver {
+            u,
+            t,
+            blocks,
+            t_rev,
+            blocks_rev,
+        })
+    }
+
+    /// `X` with `A X A^T - X + Q = 0`.
+    pub fn solve(&self, q: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+        let n = self.t.nrows();
+        check_q(q, n)?;
+        let qt = self.u.transpose() * q * &self.u;
+        let x = solve_quasi_triangular(&self.t, &self.blocks, &qt)?;
+        let full = &self.u * x * self.u.transpose();
+        Ok((&full + full.transpose()) * 0.5)
+    }
+
+    /// `X` with `A^T X A - X + Q = 0`: with `A^T = U T^T U^T` and the index order
+    /// reversed, `T^T` is upper quasi-triangular, so the same block solver applies.
+    pub fn solve_transposed(&self, q: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+        let n = self.t.nrows();
+        check_q(q, n)?;
+        let qt = self.u.transpose() * q * &self.u;
+        let qr = DMatrix::from_fn(n, n, |i, j| qt[(n - 1 - i, n - 1 - j)]);
+        let xr = solve_quasi_triangular(&self.t_rev, &self.blocks_rev, &qr)?;
+        let x = DMatrix::from_fn(n, n, |i, j| xr[(n - 1 - i, n - 1 - j)]);
+        let full = &self.u * x * self.u.transpose();
+        Ok((&full + full.transpose()) * 0.5)
+    }
+}
+
+fn check_q(q: &DMatrix<f64>, n: usize) -> Result<()> {
+    if q.shape() != (n, n) {
         return Err(SysidError::order(
             "Lyapunov equation: A and Q must be square and of equal size",
         ));
     }
-    if n == 0 {
-        return Ok(DMatrix::zeros(0, 0));
-    }
-    if !a.iter().chain(q.iter()).all(|x| x.is_finite()) {
+    if !q.iter().all(|x| x.is_finite()) {
         return Err(SysidError::numerical(
-            "Lyapunov equation: A or Q holds a non-finite number",
+            "Lyapunov equation: Q holds a non-finite number",
         ));
     }
-    let schur = Schur::try_new(a.clone(), f64::EPSILON, 10_000 * n)
-        .ok_or_else(|| SysidError::numerical("real Schur decomposition did not converge"))?;
-    let (u, mut t) = schur.unpack();
-    let blocks = schur_blocks(&mut t);
-    let qt = u.transpose() * q * &u;
+    Ok(())
+}
+
+/// Solve `T X T^T - X + Q = 0` for upper quasi-triangular `T` with diagonal blocks `blocks`.
+fn solve_quasi_triangular(
+    t: &DMatrix<f64>,
+    blocks: &[(usize, usize)],
+    qt: &DMatrix<f64>,
+) -> Result<DMatrix<f64>> {
+    let n = t.nrows();
     let mut x = DMatrix::<f64>::zeros(n, n);
     let mut rhs = DMatrix::<f64>::zeros(n, 2);
     let mut z = DMatrix::<f64>::zeros(n, 2);
     for &(cj, sj) in blocks.iter().rev() {
         let tail = cj + sj;
-        let tjj = block(&t, (cj, sj));
+        let tjj = block(t, (cj, sj));
         // Z = sum_{l > j} X[:, l] T[j, l]^T over the columns already solved.
         let mut zv = z.view_mut((0, 0), (n, sj));
         if tail < n {
@@ -156,7 +219,7 @@ pub fn solve_discrete_lyapunov(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<DMa
         // RHS = -Q~[:, j] - T Z.
         let mut rv = rhs.view_mut((0, 0), (n, sj));
         rv.copy_from(&(-qt.view((0, cj), (n, sj))));
-        rv.gemm(-1.0, &t, &z.view((0, 0), (n, sj)), 1.0);
+        rv.gemm(-1.0, t, &z.view((0, 0), (n, sj)), 1.0);
         // Row blocks from the last: T_ii Y T_jj^T - Y = RHS_i - (sum_{k>i} T_ik X_kj) T_jj^T.
         for &(ci, si) in blocks.iter().rev() {
             let itail = ci + si;
@@ -180,7 +243,7 @@ pub fn solve_discrete_lyapunov(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<DMa
                     r[a_ + si * b_] = rhs[(ci + a_, b_)] - st;
                 }
             }
-            let tii = block(&t, (ci, si));
+            let tii = block(t, (ci, si));
             if small_stein(&tii, si, &tjj, sj, &mut r).is_none() {
                 let ev = |bl: &[[f64; 2]; 2], sz: usize| {
                     if sz == 1 {
@@ -208,8 +271,19 @@ pub fn solve_discrete_lyapunov(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<DMa
             }
         }
     }
-    let full = &u * x * u.transpose();
-    Ok((&full + full.transpose()) * 0.5)
+    Ok(x)
+}
+
+/// Solve the discrete Lyapunov equation `A X A^T - X + Q = 0` (Bartels-Stewart,
+/// see the module notes). Requires that no two eigenvalues of `A` multiply to 1,
+/// which holds for every stable `A`; the error says which pair fails otherwise.
+pub fn solve_discrete_lyapunov(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+    if q.shape() != a.shape() {
+        return Err(SysidError::order(
+            "Lyapunov equation: A and Q must be square and of equal size",
+        ));
+    }
+    LyapunovSolver::new(a)?.solve(q)
 }
 
 /// Stability check with a message fit for a user: the spectral radius and how
@@ -243,7 +317,17 @@ pub fn controllability_gramian(a: &DMatrix<f64>, b: &DMatrix<f64>) -> Result<DMa
 
 /// Observability Gramian `Q`: `A^T Q A - Q + C^T C = 0`.
 pub fn observability_gramian(a: &DMatrix<f64>, c: &DMatrix<f64>) -> Result<DMatrix<f64>> {
-    solve_discrete_lyapunov(&a.transpose(), &(c.transpose() * c))
+    LyapunovSolver::new(a)?.solve_transposed(&(c.transpose() * c))
+}
+
+/// A square-root factor `L L^T = S` of a Gramian: Cholesky when `S` is positive
+/// definite (cheap), else the eigendecomposition (semi-definite: uncontrollable or
+/// unobservable parts).
+fn gramian_factor(s: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+    match s.clone().cholesky() {
+        Some(c) => Ok(c.unpack()),
+        None => psd_sqrt(s),
+    }
 }
 
 /// Square-root factors of both Gramians and the SVD of `Lo^T Lc`, shared by the
@@ -267,10 +351,11 @@ fn balancing(a: &DMatrix<f64>, b: &DMatrix<f64>, c: &DMatrix<f64>) -> Result<Bal
             v: DMatrix::zeros(n, 0),
         });
     }
-    let p = controllability_gramian(a, b)?;
-    let q = observability_gramian(a, c)?;
-    let lc = psd_sqrt(&p)?;
-    let lo = psd_sqrt(&q)?;
+    let solver = LyapunovSolver::new(a)?;
+    let p = solver.solve(&(b * b.transpose()))?;
+    let q = solver.solve_transposed(&(c.transpose() * c))?;
+    let lc = gramian_factor(&p)?;
+    let lo = gramian_factor(&q)?;
     let m = lo.transpose() * &lc;
     let svd = nalgebra::SVD::try_new(m, true, true, f64::EPSILON, 10_000)
         .ok_or_else(|| SysidError::numerical("SVD of the Gramian factors did not converge"))?;
@@ -304,6 +389,12 @@ fn balancing(a: &DMatrix<f64>, b: &DMatrix<f64>, c: &DMatrix<f64>) -> Result<Bal
 /// An unstable model has no Gramians: the error says so.
 pub fn hankel_singular_values(model: &StateSpace) -> Result<Vec<f64>> {
     check_stable(model, "the model")?;
+    hankel_singular_values_of_stable(model)
+}
+
+/// [`hankel_singular_values`] for a model already known to be stable (no second
+/// eigenvalue computation); an unstable one gives an error from the Lyapunov solver.
+pub fn hankel_singular_values_of_stable(model: &StateSpace) -> Result<Vec<f64>> {
     Ok(balancing(&model.a, &model.b, &model.c)?.sigma)
 }
 

@@ -6,7 +6,9 @@ use crate::arx::{ArxModel, ArxOrders, estimate_arx};
 use crate::data::IoData;
 use crate::error::{Result, SysidError};
 use crate::freq::{ArxResponse, SigmaResponse, StateSpaceResponse, TransferMatrix, sigma_response};
-use crate::gramian::{OrderSuggestion, balanced_truncation, hankel_singular_values, suggest_order};
+use crate::gramian::{
+    OrderSuggestion, balanced_truncation, hankel_singular_values_of_stable, suggest_order,
+};
 use crate::metrics::{fit_percent, seed_eq10_percent};
 use crate::pem::{PemOptions, PemProgress, pem};
 use crate::resid::{ResidualTests, residual_tests};
@@ -103,8 +105,11 @@ pub fn evaluate_with_response(
     opts: &EvaluationOptions,
 ) -> Evaluation {
     let mut warnings = Vec::new();
-    let rho = model.spectral_radius();
-    let poles = model.poles().unwrap_or_default();
+    let poles = model.poles();
+    let rho = poles
+        .as_ref()
+        .map(|p| p.iter().fold(0.0f64, |m, z| m.max(z.norm())));
+    let poles = poles.unwrap_or_default();
     let outside = poles.iter().filter(|p| p.norm() >= 1.0).count();
     let stable = rho.is_some_and(|r| r < 1.0);
     let prho = model.predictor_spectral_radius();
@@ -143,7 +148,7 @@ pub fn evaluate_with_response(
         );
     }
     let hsv = if stable {
-        match hankel_singular_values(model) {
+        match hankel_singular_values_of_stable(model) {
             Ok(h) => Some(h),
             Err(err) => {
                 warnings.push(format!("Hankel singular values: {err}"));
