@@ -54,6 +54,9 @@ pub struct PemOptions {
     /// Stop when the Gauss-Newton step is expected to lower the cost by less than
     /// this fraction.
     pub tolerance: f64,
+    /// Stop when an accepted step lowered the cost by less than this fraction (the
+    /// search crawls along a flat valley, as in over-parameterised models).
+    pub min_decrease: f64,
     /// Estimate a feedthrough `D` (else it stays as in the initial model).
     pub feedthrough: bool,
     /// Estimate the initial state (else it stays at the given one, zero by default).
@@ -66,6 +69,7 @@ impl Default for PemOptions {
         PemOptions {
             max_iterations: 100,
             tolerance: 1e-7,
+            min_decrease: 1e-8,
             feedthrough: false,
             estimate_x0: false,
             weight: OutputWeight::Identity,
@@ -500,6 +504,7 @@ pub fn pem(
     let mut termination = format!("reached the iteration limit ({})", opts.max_iterations);
     let mut trial_x0 = x0v.clone();
     let mut ws_trial = Workspace::new(&l, data.len(), 0);
+    let mut crawled = false;
     'outer: while iterations < opts.max_iterations {
         // Local coordinates: complement of the basis-change directions at the model.
         let t = l.basis_change_directions(&model, &x0v);
@@ -567,6 +572,7 @@ pub fn pem(
                 nu_fac = 2.0;
                 model = trial;
                 x0v.copy_from(&trial_x0);
+                crawled = cost - new_cost <= opts.min_decrease * cost;
                 cost = new_cost;
                 break;
             }
@@ -585,6 +591,13 @@ pub fn pem(
             cost: cost / nf,
             lambda,
         });
+        if crawled {
+            termination = format!(
+                "converged: the last step lowered the cost by less than {:.0e}",
+                opts.min_decrease
+            );
+            break;
+        }
     }
     let final_cost = cost / nf;
     let (_, e) = model.predictor_states(data, Some(&x0v));
