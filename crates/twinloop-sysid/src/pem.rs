@@ -504,7 +504,6 @@ pub fn pem(
     let mut termination = format!("reached the iteration limit ({})", opts.max_iterations);
     let mut trial_x0 = x0v.clone();
     let mut ws_trial = Workspace::new(&l, data.len(), 0);
-    let mut crawled = false;
     'outer: while iterations < opts.max_iterations {
         // Local coordinates: complement of the basis-change directions at the model.
         let t = l.basis_change_directions(&model, &x0v);
@@ -541,7 +540,7 @@ pub fn pem(
                 break;
             }
         }
-        loop {
+        let crawled = loop {
             let Some(step) = damped_step(&h, &g, &diag, lambda, dfloor) else {
                 lambda *= nu_fac;
                 nu_fac *= 2.0;
@@ -572,9 +571,9 @@ pub fn pem(
                 nu_fac = 2.0;
                 model = trial;
                 x0v.copy_from(&trial_x0);
-                crawled = cost - new_cost <= opts.min_decrease * cost;
+                let small = cost - new_cost <= opts.min_decrease * cost;
                 cost = new_cost;
-                break;
+                break small;
             }
             lambda *= nu_fac;
             nu_fac *= 2.0;
@@ -582,7 +581,7 @@ pub fn pem(
                 termination = "no step lowers the cost (damping exhausted)".to_string();
                 break 'outer;
             }
-        }
+        };
         iterations += 1;
         history.push(cost / nf);
         progress(&PemProgress {
