@@ -178,9 +178,25 @@ impl ArxModel {
         }
     }
 
+    /// Error unless the data have this model's channel counts.
+    fn check_shapes(&self, u: &DMatrix<f64>, y: Option<&DMatrix<f64>>) -> Result<()> {
+        let yrows = y.map_or(self.ny(), |y| y.nrows());
+        if (u.nrows() != self.nu() && !self.b.is_empty()) || yrows != self.ny() {
+            return Err(SysidError::data(format!(
+                "the model has {} inputs and {} outputs, the data {} and {}",
+                self.nu(),
+                self.ny(),
+                u.nrows(),
+                yrows
+            )));
+        }
+        Ok(())
+    }
+
     /// Simulated outputs (`ny x N`) for inputs `u` (`nu x N`), zero before the record:
     /// `y(k) = -sum A_i y(k-i) + sum B_j u(k-nk-j+1)`.
-    pub fn simulate(&self, u: &DMatrix<f64>) -> DMatrix<f64> {
+    pub fn simulate(&self, u: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+        self.check_shapes(u, None)?;
         let n = u.ncols();
         let ny = self.ny();
         let mut y = DMatrix::zeros(ny, n);
@@ -194,7 +210,7 @@ impl ArxModel {
             }
             y.set_column(k, &acc);
         }
-        y
+        Ok(y)
     }
 
     /// `acc <- sum_j B_j u(k - nk - j + 1)` (terms before the record are zero).
@@ -210,7 +226,8 @@ impl ArxModel {
     /// `horizon`-step-ahead predictions `yhat(k | k - horizon)` (`ny x N`): measured
     /// outputs up to `k - horizon`, predicted ones after, zero before the record.
     /// `horizon = 1` is the one-step predictor the model was fitted for.
-    pub fn predict(&self, data: &IoData, horizon: usize) -> DMatrix<f64> {
+    pub fn predict(&self, data: &IoData, horizon: usize) -> Result<DMatrix<f64>> {
+        self.check_shapes(&data.u, Some(&data.y))?;
         let horizon = horizon.max(1);
         let (n, ny) = (data.len(), self.ny());
         let mut out = DMatrix::zeros(ny, n);
@@ -241,13 +258,13 @@ impl ArxModel {
             }
             out.set_column(k, &pred.column(horizon - 1));
         }
-        out
+        Ok(out)
     }
 
     /// One-step prediction errors `e(k) = y(k) - yhat(k | k-1)` over the whole
     /// record (`ny x N`).
-    pub fn residuals(&self, data: &IoData) -> DMatrix<f64> {
-        &data.y - self.predict(data, 1)
+    pub fn residuals(&self, data: &IoData) -> Result<DMatrix<f64>> {
+        Ok(&data.y - self.predict(data, 1)?)
     }
 
     /// The model in innovations state-space form (observer canonical blocks):

@@ -90,7 +90,7 @@ pub fn evaluate(
     data: &IoData,
     which: &str,
     opts: &EvaluationOptions,
-) -> Evaluation {
+) -> Result<Evaluation> {
     let mut ev = StateSpaceResponse::new(model);
     evaluate_with_response(model, &mut ev, data, which, opts)
 }
@@ -103,7 +103,8 @@ pub fn evaluate_with_response(
     data: &IoData,
     which: &str,
     opts: &EvaluationOptions,
-) -> Evaluation {
+) -> Result<Evaluation> {
+    model.check_shapes(&data.u, Some(&data.y), None)?;
     let mut warnings = Vec::new();
     let poles = model.poles();
     let rho = poles
@@ -130,10 +131,10 @@ pub fn evaluate_with_response(
             prho.map_or("unknown".to_string(), |r| format!("{r:.6}"))
         ));
     }
-    let simulated = model.simulate(&data.u, None);
+    let simulated = model.simulate(&data.u, None)?;
     let horizon = opts.prediction_horizon.max(1);
-    let predicted = model.predict(data, horizon);
-    let e = model.residuals(data);
+    let predicted = model.predict(data, horizon)?;
+    let e = model.residuals(data)?;
     let prediction_cost = e.norm_squared() / data.len().max(1) as f64;
     let fit = Fit {
         simulation: fit_percent(&data.y, &simulated),
@@ -182,7 +183,7 @@ pub fn evaluate_with_response(
             opts.max_lag,
         )
     };
-    Evaluation {
+    Ok(Evaluation {
         data: which.to_string(),
         samples: data.len(),
         fit_percent: fit,
@@ -200,7 +201,7 @@ pub fn evaluate_with_response(
         warnings,
         simulated,
         predicted,
-    }
+    })
 }
 
 /// An ARX model and its evaluation.
@@ -247,11 +248,11 @@ pub fn identify_arx(
         val.unwrap_or(est),
         which,
         opts,
-    );
+    )?;
     let (estimation_fit, estimation_prediction_cost) = match val {
         Some(_) => (
-            evaluate_fit(&ss, est, opts.prediction_horizon),
-            ss.prediction_cost(est),
+            evaluate_fit(&ss, est, opts.prediction_horizon)?,
+            ss.prediction_cost(est)?,
         ),
         None => (evaluation.fit_percent.clone(), evaluation.prediction_cost),
     };
@@ -422,11 +423,13 @@ pub fn identify_state_space(
         "estimation"
     };
     let eopts = &opts.evaluation;
-    let stage = |name: &str, m: &StateSpace| Stage {
-        name: name.to_string(),
-        order: m.n(),
-        estimation_prediction_cost: m.prediction_cost(est),
-        fit_percent: evaluate_fit(m, ev_data, eopts.prediction_horizon),
+    let stage = |name: &str, m: &StateSpace| -> Result<Stage> {
+        Ok(Stage {
+            name: name.to_string(),
+            order: m.n(),
+            estimation_prediction_cost: m.prediction_cost(est)?,
+            fit_percent: evaluate_fit(m, ev_data, eopts.prediction_horizon)?,
+        })
     };
     let mut stages = Vec::new();
     let mut warnings = Vec::new();
@@ -456,7 +459,7 @@ pub fn identify_state_space(
                     opts.arx_orders.na, opts.arx_orders.nb, opts.arx_orders.nk
                 ),
                 &full,
-            ));
+            )?);
             if opts.order > full.n() {
                 return Err(SysidError::order(format!(
                     "order {} is above the ARX realisation's {} states: raise na/nb or lower --order",
@@ -468,12 +471,19 @@ pub fn identify_state_space(
             warnings.extend(w);
             arx_hsv = Some(hsv);
             if !opts.pem.feedthrough {
+                if red.d.amax() > 0.0 {
+                    warnings.push(format!(
+                        "the ARX model with nk = {} has a direct feedthrough; it is dropped because D is \
+                         not estimated (ask for a feedthrough to keep it)",
+                        opts.arx_orders.nk
+                    ));
+                }
                 red.d.fill(0.0);
             }
             stages.push(stage(
                 &format!("balanced truncation to order {}", opts.order),
                 &red,
-            ));
+            )?);
             red
         }
     };
@@ -481,7 +491,7 @@ pub fn identify_state_space(
         (initial, DVector::zeros(opts.order), None)
     } else {
         if opts.method == SsMethod::Pem {
-            stages.push(stage("n4sid", &initial));
+            stages.push(stage("n4sid", &initial)?);
         }
         let r = pem(est, &initial, None, &opts.pem, progress)?;
         let summary = PemSummary {
@@ -495,11 +505,11 @@ pub fn identify_state_space(
         (r.model, r.x0, Some(summary))
     };
     let estimation_seconds = t0.elapsed().as_secs_f64();
-    let mut evaluation = evaluate(&model, ev_data, which, eopts);
+    let mut evaluation = evaluate(&model, ev_data, which, eopts)?;
     let (estimation_fit, estimation_prediction_cost) = match val {
         Some(_) => (
-            evaluate_fit(&model, est, eopts.prediction_horizon),
-            model.prediction_cost(est),
+            evaluate_fit(&model, est, eopts.prediction_horizon)?,
+            model.prediction_cost(est)?,
         ),
         None => (evaluation.fit_percent.clone(), evaluation.prediction_cost),
     };
@@ -521,14 +531,14 @@ pub fn identify_state_space(
     })
 }
 
-fn evaluate_fit(model: &StateSpace, data: &IoData, horizon: usize) -> Fit {
-    let sim = model.simulate(&data.u, None);
-    let pred = model.predict(data, horizon);
-    Fit {
+fn evaluate_fit(model: &StateSpace, data: &IoData, horizon: usize) -> Result<Fit> {
+    let sim = model.simulate(&data.u, None)?;
+    let pred = model.predict(data, horizon)?;
+    Ok(Fit {
         simulation: fit_percent(&data.y, &sim),
         prediction: fit_percent(&data.y, &pred),
         prediction_horizon: horizon,
         seed_eq10_simulation: seed_eq10_percent(&data.y, &sim),
         seed_eq10_prediction: seed_eq10_percent(&data.y, &pred),
-    }
+    })
 }

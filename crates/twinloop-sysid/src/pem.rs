@@ -599,10 +599,10 @@ pub fn pem(
         }
     }
     let final_cost = cost / nf;
-    let (_, e) = model.predictor_states(data, Some(&x0v));
+    let (_, e) = model.predictor_states(data, Some(&x0v))?;
     model.noise_covariance = &e * e.transpose() / nf;
     let final_prediction_cost = e.norm_squared() / nf;
-    let (_, e0) = initial.predictor_states(data, x0);
+    let (_, e0) = initial.predictor_states(data, x0)?;
     Ok(PemResult {
         model,
         x0: x0v,

@@ -7,6 +7,7 @@
 //! ```
 
 use crate::data::IoData;
+use crate::error::{Result, SysidError};
 use nalgebra::{Complex, DMatrix, DVector, Schur};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -34,10 +35,47 @@ impl StateSpace {
         self.c.nrows()
     }
 
+    /// Error unless `u` has `nu` rows, `y` (when given) `ny` rows and `x0` `n` entries.
+    pub fn check_shapes(
+        &self,
+        u: &DMatrix<f64>,
+        y: Option<&DMatrix<f64>>,
+        x0: Option<&DVector<f64>>,
+    ) -> Result<()> {
+        let yrows = y.map_or(self.ny(), |y| y.nrows());
+        if u.nrows() != self.nu() || yrows != self.ny() {
+            return Err(SysidError::data(format!(
+                "the model has {} inputs and {} outputs, the data {} and {}",
+                self.nu(),
+                self.ny(),
+                u.nrows(),
+                yrows
+            )));
+        }
+        if let Some(y) = y
+            && y.ncols() != u.ncols()
+        {
+            return Err(SysidError::data(
+                "inputs and outputs have different lengths",
+            ));
+        }
+        if let Some(x0) = x0
+            && x0.len() != self.n()
+        {
+            return Err(SysidError::data(format!(
+                "initial state of length {} for a model with {} states",
+                x0.len(),
+                self.n()
+            )));
+        }
+        Ok(())
+    }
+
     /// Simulated outputs (`ny x N`) for inputs `u` (`nu x N`) from `x(0) = x0`
     /// (zero when `None`), innovations set to zero. An unstable model's outputs may
     /// overflow to infinity; they are returned as computed.
-    pub fn simulate(&self, u: &DMatrix<f64>, x0: Option<&DVector<f64>>) -> DMatrix<f64> {
+    pub fn simulate(&self, u: &DMatrix<f64>, x0: Option<&DVector<f64>>) -> Result<DMatrix<f64>> {
+        self.check_shapes(u, None, x0)?;
         let n = u.ncols();
         let mut y = DMatrix::zeros(self.ny(), n);
         let mut x = x0.cloned().unwrap_or_else(|| DVector::zeros(self.n()));
@@ -51,7 +89,7 @@ impl StateSpace {
             xn.gemv(1.0, &self.b, &uk, 1.0);
             std::mem::swap(&mut x, &mut xn);
         }
-        y
+        Ok(y)
     }
 
     /// Predicted states `x(k | k-1)` for `k = 0..=N` (`n x (N+1)`) of the Kalman
@@ -61,7 +99,8 @@ impl StateSpace {
         &self,
         data: &IoData,
         x0: Option<&DVector<f64>>,
-    ) -> (DMatrix<f64>, DMatrix<f64>) {
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+        self.check_shapes(&data.u, Some(&data.y), x0)?;
         let n = data.len();
         let mut xs = DMatrix::zeros(self.n(), n + 1);
         let mut err = DMatrix::zeros(self.ny(), n);
@@ -82,29 +121,29 @@ impl StateSpace {
             xs.set_column(k + 1, &xn);
             err.set_column(k, &e);
         }
-        (xs, err)
+        Ok((xs, err))
     }
 
     /// One-step prediction errors `e(k) = y(k) - yhat(k | k-1)` (`ny x N`), predictor
     /// started at zero.
-    pub fn residuals(&self, data: &IoData) -> DMatrix<f64> {
-        self.predictor_states(data, None).1
+    pub fn residuals(&self, data: &IoData) -> Result<DMatrix<f64>> {
+        Ok(self.predictor_states(data, None)?.1)
     }
 
     /// Prediction cost `V = (1/N) sum_k |e(k)|^2` of the one-step predictor.
-    pub fn prediction_cost(&self, data: &IoData) -> f64 {
-        let e = self.residuals(data);
-        e.norm_squared() / data.len().max(1) as f64
+    pub fn prediction_cost(&self, data: &IoData) -> Result<f64> {
+        let e = self.residuals(data)?;
+        Ok(e.norm_squared() / data.len().max(1) as f64)
     }
 
     /// `horizon`-step-ahead predictions `yhat(k | k - horizon)` (`ny x N`): the Kalman
     /// predictor runs on measured data up to `k - horizon`, then the model runs
     /// `horizon - 1` steps on the inputs alone. `horizon = 1` is the one-step predictor.
-    pub fn predict(&self, data: &IoData, horizon: usize) -> DMatrix<f64> {
+    pub fn predict(&self, data: &IoData, horizon: usize) -> Result<DMatrix<f64>> {
         let horizon = horizon.max(1);
-        let (xs, err) = self.predictor_states(data, None);
+        let (xs, err) = self.predictor_states(data, None)?;
         if horizon == 1 {
-            return &data.y - err;
+            return Ok(&data.y - err);
         }
         let n = data.len();
         let mut out = DMatrix::zeros(self.ny(), n);
@@ -128,7 +167,7 @@ impl StateSpace {
             yk.gemv(1.0, &self.c, &x, 0.0);
             yk.gemv(1.0, &self.d, &data.u.column(k), 1.0);
         }
-        out
+        Ok(out)
     }
 
     /// Eigenvalues of `A` (the model's poles), or `None` if the eigenvalue

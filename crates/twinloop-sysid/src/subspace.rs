@@ -246,7 +246,7 @@ pub fn n4sid(data: &IoData, opts: &SubspaceOptions) -> Result<SubspaceResult> {
         noise_covariance: rn,
         sample_time: data.sample_time,
     };
-    let (_, e) = model.predictor_states(data, Some(&x0));
+    let (_, e) = model.predictor_states(data, Some(&x0))?;
     model.noise_covariance = &e * e.transpose() / n_samples as f64;
     Ok(SubspaceResult {
         model,

@@ -54,14 +54,14 @@ fn arx_simulation_and_prediction_equal_reference_loops() {
             continue;
         }
         let m = estimate_arx(&est, orders).unwrap();
-        let sim = m.simulate(&val.u);
+        let sim = m.simulate(&val.u).unwrap();
         let want = matrix(&case["val_simulation_first_50"]);
         let got = sim.columns(0, 50).transpose();
         assert!(max_rel_err(&got, &want) < 1e-9, "{orders:?} simulation");
         for h in [1usize, 2, 3] {
             let key = format!("val_prediction_{h}_first_50");
             if let Some(p) = case.get(&key) {
-                let got = m.predict(&val, h).columns(0, 50).transpose();
+                let got = m.predict(&val, h).unwrap().columns(0, 50).transpose();
                 let err = max_rel_err(&got, &matrix(p));
                 assert!(err < 1e-9, "{orders:?} {h}-step prediction: {err:e}");
             }
@@ -71,7 +71,7 @@ fn arx_simulation_and_prediction_equal_reference_loops() {
             for (a, b) in fit.iter().zip(vector(f)) {
                 assert!((a.unwrap() - b).abs() < 1e-9);
             }
-            let fitp = fit_percent(&val.y, &m.predict(&val, 1));
+            let fitp = fit_percent(&val.y, &m.predict(&val, 1).unwrap());
             for (a, b) in fitp.iter().zip(vector(&case["val_fit_prediction_1"])) {
                 assert!((a.unwrap() - b).abs() < 1e-9);
             }
@@ -103,15 +103,15 @@ fn arx_state_space_realisation_has_the_same_predictor_and_simulation() {
         let m = estimate_arx(&est, orders).unwrap();
         let ss = m.to_state_space();
         assert_eq!(ss.n(), 6 * orders.na.max(orders.nb + orders.nk - 1));
-        let e1 = m.residuals(&val);
-        let e2 = ss.residuals(&val);
+        let e1 = m.residuals(&val).unwrap();
+        let e2 = ss.residuals(&val).unwrap();
         assert!((e1 - e2).amax() < 1e-9, "{orders:?}: predictors differ");
-        let s1 = m.simulate(&val.u);
-        let s2 = ss.simulate(&val.u, None);
+        let s1 = m.simulate(&val.u).unwrap();
+        let s2 = ss.simulate(&val.u, None).unwrap();
         assert!((s1 - s2).amax() < 1e-9, "{orders:?}: simulations differ");
         for h in [2, 4] {
-            let p1 = m.predict(&val, h);
-            let p2 = ss.predict(&val, h);
+            let p1 = m.predict(&val, h).unwrap();
+            let p2 = ss.predict(&val, h).unwrap();
             assert!(
                 (p1 - p2).amax() < 1e-9,
                 "{orders:?}: {h}-step predictions differ"

@@ -279,3 +279,51 @@ fn pem_refuses_an_unstable_predictor() {
     let e = pem(&est, &m, None, &PemOptions::default(), &mut |_| {}).unwrap_err();
     assert!(e.message.contains("predictor A - KC is unstable"), "{e}");
 }
+
+#[test]
+fn data_of_another_shape_is_an_error_not_a_panic() {
+    let r = reference();
+    let truth = true_system(&r);
+    let est = record("synthetic_est.csv");
+    let fewer = IoData::new(
+        names("u", 9),
+        est.output_names.clone(),
+        est.u.rows(0, 9).into_owned(),
+        est.y.clone(),
+        None,
+    )
+    .unwrap();
+    for e in [
+        truth.simulate(&fewer.u, None).unwrap_err(),
+        truth.predict(&fewer, 3).unwrap_err(),
+        truth.residuals(&fewer).unwrap_err(),
+        evaluate(&truth, &fewer, "validation", &EvaluationOptions::default()).unwrap_err(),
+        pem(&fewer, &truth, None, &PemOptions::default(), &mut |_| {}).unwrap_err(),
+    ] {
+        assert!(e.message.contains("10 inputs"), "{e}");
+    }
+    let arx = estimate_arx(
+        &est,
+        ArxOrders {
+            na: 1,
+            nb: 1,
+            nk: 1,
+        },
+    )
+    .unwrap();
+    assert!(
+        arx.simulate(&fewer.u)
+            .unwrap_err()
+            .message
+            .contains("10 inputs")
+    );
+    assert!(arx.predict(&fewer, 2).is_err());
+    let x0 = nalgebra::DVector::zeros(4);
+    assert!(
+        truth
+            .simulate(&est.u, Some(&x0))
+            .unwrap_err()
+            .message
+            .contains("initial state")
+    );
+}

@@ -32,9 +32,9 @@ fn true_model_predictions_and_fit_equal_reference() {
     for name in ["est", "val"] {
         let d = record(&format!("synthetic_{name}.csv"));
         let t = &r["true_model"][name];
-        let sim = sys.simulate(&d.u, None);
-        let p1 = sys.predict(&d, 1);
-        let p5 = sys.predict(&d, 5);
+        let sim = sys.simulate(&d.u, None).unwrap();
+        let p1 = sys.predict(&d, 1).unwrap();
+        let p5 = sys.predict(&d, 5).unwrap();
         assert!(
             max_rel_err(
                 &sim.columns(0, 50).transpose(),
@@ -47,7 +47,7 @@ fn true_model_predictions_and_fit_equal_reference() {
                 &matrix(&t["prediction_5_first_50"])
             ) < 1e-9
         );
-        let cost = sys.prediction_cost(&d);
+        let cost = sys.prediction_cost(&d).unwrap();
         let want = t["prediction_cost"].as_f64().unwrap();
         assert!(
             (cost - want).abs() < 1e-9 * want,
@@ -84,7 +84,7 @@ fn true_model_predictions_and_fit_equal_reference() {
             "eq10 pred",
         );
         // Residual correlations (mean-removed), lags -25..25.
-        let e = sys.residuals(&d);
+        let e = sys.residuals(&d).unwrap();
         let row = |m: &nalgebra::DMatrix<f64>, i: usize| -> Vec<f64> {
             m.row(i).iter().copied().collect()
         };
@@ -133,7 +133,7 @@ fn true_model_passes_residual_tests_and_underfit_fails() {
     for name in ["est", "val"] {
         let d = record(&format!("synthetic_{name}.csv"));
         let t = residual_tests(
-            &sys.residuals(&d),
+            &sys.residuals(&d).unwrap(),
             &d.u,
             &d.output_names,
             &d.input_names,
@@ -163,7 +163,7 @@ fn true_model_passes_residual_tests_and_underfit_fails() {
 fn pem_reaches_the_true_cost_and_never_ends_worse() {
     let r = reference();
     let est = record("synthetic_est.csv");
-    let truth = true_system(&r).prediction_cost(&est);
+    let truth = true_system(&r).prediction_cost(&est).unwrap();
     let init = n4sid(
         &est,
         &SubspaceOptions {
@@ -257,7 +257,7 @@ fn identified_model_matches_truth_within_the_noise() {
         let v = draw_record(&truth, 1000, noise, &mut rng);
         let m = identify_state_space(&e, Some(&v), &opts, &mut |_| {}).unwrap();
         let h = hankel_singular_values(&m.model).unwrap();
-        let ft = fit_percent(&v.y, &truth.simulate(&v.u, None));
+        let ft = fit_percent(&v.y, &truth.simulate(&v.u, None).unwrap());
         for i in 0..6 {
             hsv_err[i].push(h[i] - hsv_true[i]);
             fit_err[i].push(m.evaluation.fit_percent.simulation[i].unwrap() - ft[i].unwrap());
