@@ -120,8 +120,8 @@ fn describe_column(data: &IoData, orders: ArxOrders, c: usize) -> String {
     }
 }
 
-/// Estimate a MIMO ARX model by least squares (seed 003, section 7.1: the initial
-/// model, "estimated with the standard least squares method").
+/// Estimate a MIMO ARX model by least squares (seed 003, eq 8 and section 7.1: the
+/// initial model, "estimated with the standard least squares method").
 ///
 /// The regressor rows are `k = max(na, nb + nk - 1) .. N - 1` (0-based), as MATLAB's
 /// `arx` uses: no data before the record is invented. The problem is solved by

@@ -419,8 +419,8 @@ fn jacobian(
     }
 }
 
-/// Refine a state-space model by the prediction-error method (see the module
-/// notes). `x0` is the initial state of the record (zero when `None`); it is
+/// Refine a state-space model (seed 003, eq 9) by the prediction-error method of
+/// its section 7.2 (see the module notes). `x0` is the initial state of the record (zero when `None`); it is
 /// estimated only with `estimate_x0`. `progress` is called after every iteration.
 pub fn pem(
     data: &IoData,

@@ -10,6 +10,7 @@ use crate::data::IoData;
 use crate::error::{Result, SysidError};
 use nalgebra::{Complex, DMatrix, DVector, Schur};
 
+/// A discrete state-space model in innovations form (seed 003, eq 9, with `G = K`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct StateSpace {
     pub a: DMatrix<f64>,
