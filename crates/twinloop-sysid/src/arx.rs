@@ -68,6 +68,12 @@ pub fn arx_regressor(
             "nb > 0 but the record has no input channel",
         ));
     }
+    if nb == 0 && nu > 0 {
+        return Err(SysidError::order(format!(
+            "nb = 0 would ignore all {nu} inputs: use nb >= 1 (a model without inputs is a \
+             time-series model, which this command does not fit)"
+        )));
+    }
     let k0 = orders.first_row();
     let d = orders.parameters_per_output(ny, nu);
     let rows = n.saturating_sub(k0);

@@ -208,6 +208,48 @@ fn impossible_orders_are_errors() {
     )
     .unwrap_err();
     assert!(e.message.contains("no parameters"), "{e}");
+    let e = estimate_arx(
+        &est,
+        ArxOrders {
+            na: 2,
+            nb: 0,
+            nk: 1,
+        },
+    )
+    .unwrap_err();
+    assert!(e.message.contains("nb = 0"), "{e}");
+    // A pure FIR model (na = 0) and a static one (no states) still evaluate.
+    let fir = identify_arx(
+        &est,
+        None,
+        ArxOrders {
+            na: 0,
+            nb: 2,
+            nk: 1,
+        },
+        &EvaluationOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(fir.model.to_state_space().n(), 6 * 2);
+    let stat = identify_arx(
+        &est,
+        None,
+        ArxOrders {
+            na: 0,
+            nb: 1,
+            nk: 0,
+        },
+        &EvaluationOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(stat.model.to_state_space().n(), 0);
+    assert!(
+        stat.evaluation
+            .fit_percent
+            .simulation
+            .iter()
+            .all(|f| f.is_some())
+    );
     let e = n4sid(
         &est,
         &SubspaceOptions {
