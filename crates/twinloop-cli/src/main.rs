@@ -9,6 +9,7 @@ mod cmd_ident;
 mod cmd_model;
 mod cmd_robot;
 mod cmd_sim;
+mod cmd_sysid;
 mod common;
 mod progress;
 
@@ -102,6 +103,16 @@ enum Command {
     /// Validate a model against measurements (inverse-dynamics residual, seed 004)
     #[command(subcommand)]
     Validate(cmd_ident::ValidateCommand),
+    /// Black-box identification from recorded inputs and outputs: MIMO ARX and state-space models
+    ///
+    /// `sysid arx` fits a MIMO ARX model by least squares; `sysid ss` a state-space model by
+    /// subspace identification and the prediction-error method (or the seed 003 route: ARX,
+    /// balanced reduction, prediction error). Both evaluate the model as seed 003 does: FIT per
+    /// output, Hankel singular values, singular values of the frequency response, residual tests.
+    ///
+    /// Example: twinloop sysid ss --data walk.csv --inputs 'u:*' --outputs 'gyro:*' --order 6 --json ss.json
+    #[command(subcommand)]
+    Sysid(cmd_sysid::SysidCommand),
 }
 
 fn main() -> ExitCode {
@@ -118,5 +129,6 @@ fn main() -> ExitCode {
         Command::Identify(cmd) => cmd_ident::identify(cmd),
         Command::Ik(args) => cmd_ident::ik(args),
         Command::Validate(cmd) => cmd_ident::validate(cmd),
+        Command::Sysid(cmd) => cmd_sysid::run(cmd),
     }
 }

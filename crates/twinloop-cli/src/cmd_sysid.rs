@@ -1,0 +1,632 @@
+//! `twinloop sysid arx|ss`: black-box identification of a recorded input/output
+//! data set (seed 003): MIMO ARX, or a state-space model by subspace
+//! identification, the prediction-error method, or the seed's ARX-reduce-PEM route.
+
+use crate::common::{EXIT_BAD_INPUT, num, print};
+use crate::progress;
+use clap::{Args, Subcommand, ValueEnum};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+use twinloop_io::Table;
+use twinloop_sysid::identify::{Evaluation, Fit};
+use twinloop_sysid::pem::{OutputWeight, PemOptions};
+use twinloop_sysid::report::{arx_report, seed_reference_fits, state_space_report};
+use twinloop_sysid::{
+    ArxOrders, EvaluationOptions, IoData, SsMethod, SsOptions, identify_arx, identify_state_space,
+};
+
+/// What the output means, shared by both commands' `--help`.
+macro_rules! output_help {
+    () => {
+        "\
+The JSON (--json) holds the model and its evaluation, on the --val record when given, else on
+the estimation record:
+  A, B (arx)            lists of na matrices ny x ny and nb matrices ny x nu, nested row lists:
+                        y(k) + A1 y(k-1) + .. = B1 u(k-nk) + .. + e(k)
+  A, B, C, D, K (ss)    x(k+1) = A x + B u + K e, y = C x + D u + e
+  noise_covariance      covariance of e
+  fit_percent           simulation, prediction: FIT per output, 100 (1 - |y-yhat|/|y-mean y|)
+                        as MATLAB's compare (100 perfect, 0 no better than the mean);
+                        seed_eq10_simulation, seed_eq10_prediction: the seed's eq 10,
+                        100 |y-yhat|/|y| (an error: lower is better); prediction_horizon
+  estimation_fit_percent  the same on the estimation record
+  prediction_cost       mean squared one-step prediction error
+  stability             stable, spectral_radius, poles_outside_unit_circle, predictor_spectral_radius
+  hankel_singular_values  of (A, B, C), largest first; null for an unstable model
+  order_suggestion      order (largest HSV gap), gap_ratio, truncation_error_bound per order
+  frequency_response    peak_gain_db, peak_frequency, dc_gain_db, bandwidth (3 dB below the
+                        zero-frequency gain), frequency_unit, frequency[], sigma_db[][]
+  residual_tests        pass, whiteness_pass, independence_pass, summary, band_99, and per test
+                        (autocorrelation, cross_correlation, input_correlation): correlation
+                        per lag, statistic, degrees_of_freedom, p_value, pass
+  stages, pem (ss)      earlier models of the route with their FIT; iterations, costs, termination
+  warnings              e.g. an unstable model
+  timing_seconds        estimation, evaluation
+
+Numbers in the JSON are full precision. The text printed on stdout is a summary: FIT per
+output, Hankel singular values, peak gain and bandwidth, and the residual-test verdict.
+Exit code 0 on success, 2 on unreadable data or impossible orders (the message names the
+file, line, row or column at fault)."
+    };
+}
+
+#[derive(Subcommand, Debug)]
+pub enum SysidCommand {
+    /// Estimate a MIMO ARX model by least squares (MATLAB's arx structure)
+    #[command(
+        long_about = "Estimate a MIMO ARX model y(k) + A1 y(k-1) + ... + Ana y(k-na) = B1 u(k-nk) + ... + \
+Bnb u(k-nk-nb+1) + e(k) with full ny x ny matrices A_i, by least squares (Householder QR) over the samples \
+k = max(na, nb+nk-1) .. N-1, as MATLAB's arx; then simulate it and predict with it, and evaluate it as \
+seed 003 did: FIT per output, Hankel singular values, singular values of the frequency response, \
+residual tests. The seed's initial model was na = nb = 24, nk = 1 on 10 inputs and 6 outputs.",
+        after_long_help = concat!(
+            "Example:\n  twinloop sysid arx --data walk.csv --val walk_val.csv --inputs 'u:*' --outputs 'gyro:*' \\\n",
+            "      --na 24 --nb 24 --nk 1 --json arx.json --report arx.html\n\n",
+            output_help!()
+        )
+    )]
+    Arx(ArxArgs),
+    /// Estimate a state-space model (n4sid, PEM as MATLAB's ssest, or the seed's ARX-reduce-PEM route)
+    #[command(
+        long_about = "Estimate a state-space model in innovations form x(k+1) = A x + B u + K e, y = C x + \
+D u + e of the given order. --method n4sid: subspace identification alone; pem (default): the subspace \
+estimate refined by the prediction-error method (Levenberg-Marquardt on the one-step prediction errors, \
+as MATLAB's ssest); arx-reduce-pem: the route of seed 003, a high-order ARX model (--na --nb --nk), \
+realised in state space, reduced to --order by balanced truncation, then refined by the prediction-error \
+method. The prediction error never ends above the initial model's. The model is then evaluated as for arx.",
+        after_long_help = concat!(
+            "Examples:\n  twinloop sysid ss --data walk.csv --val walk_val.csv --inputs 'u:*' --outputs 'gyro:*' \\\n",
+            "      --order 6 --method pem --json ss.json --report ss.html\n",
+            "  twinloop sysid ss --data walk.csv --inputs 'u:*' --outputs 'gyro:*' --order 24 \\\n",
+            "      --method arx-reduce-pem --na 24 --nb 24 --nk 1 --json seed.json\n\n",
+            output_help!()
+        )
+    )]
+    Ss(SsArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct DataArgs {
+    /// Estimation data: CSV with a header row (a `t` column gives the sample time).
+    #[arg(long, value_name = "FILE.csv")]
+    pub data: PathBuf,
+    /// Validation data with the same columns: the evaluation uses it when given.
+    #[arg(long, value_name = "FILE.csv")]
+    pub val: Option<PathBuf>,
+    /// Input columns, comma-separated; `prefix*` selects every column starting with prefix.
+    #[arg(long, value_name = "NAMES", value_delimiter = ',', required = true)]
+    pub inputs: Vec<String>,
+    /// Output columns, comma-separated; `prefix*` as for --inputs.
+    #[arg(long, value_name = "NAMES", value_delimiter = ',', required = true)]
+    pub outputs: Vec<String>,
+    /// Sample time in seconds (default: from a uniform `t` column; frequencies are then
+    /// in rad/s, else in rad/sample).
+    #[arg(long, value_name = "SECONDS")]
+    pub ts: Option<f64>,
+    /// Subtract the estimation data's mean from every input and output (the same
+    /// offsets are removed from the validation data and written to the JSON).
+    #[arg(long)]
+    pub detrend: bool,
+    /// Horizon of the `prediction` FIT (1 = one step ahead).
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    pub kstep: usize,
+    /// Largest lag of the residual tests.
+    #[arg(long, value_name = "M", default_value_t = 25)]
+    pub lags: usize,
+    /// Write the model and its evaluation as JSON.
+    #[arg(long, value_name = "OUT.json")]
+    pub json: Option<PathBuf>,
+    /// Write an HTML report with the seed's figures.
+    #[arg(long, value_name = "OUT.html")]
+    pub report: Option<PathBuf>,
+    /// Show seed 003's FIT figures beside the model's (outputs ordered left roll, pitch,
+    /// yaw rate, then right roll, pitch, yaw rate).
+    #[arg(long)]
+    pub compare_seed: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct ArxArgs {
+    #[command(flatten)]
+    pub data: DataArgs,
+    /// Output lags (each A_i is ny x ny).
+    #[arg(long, default_value_t = 2)]
+    pub na: usize,
+    /// Input lags (each B_j is ny x nu).
+    #[arg(long, default_value_t = 2)]
+    pub nb: usize,
+    /// Input delay in samples.
+    #[arg(long, default_value_t = 1)]
+    pub nk: usize,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MethodArg {
+    /// Subspace identification alone.
+    N4sid,
+    /// Subspace estimate refined by the prediction-error method (as MATLAB's ssest).
+    Pem,
+    /// Seed 003's route: ARX (--na --nb --nk), balanced truncation to --order, prediction error.
+    ArxReducePem,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum WeightArg {
+    /// Sum of squared prediction errors.
+    Identity,
+    /// Errors weighted by the inverse of the initial model's noise covariance.
+    Noise,
+}
+
+#[derive(Args, Debug)]
+pub struct SsArgs {
+    #[command(flatten)]
+    pub data: DataArgs,
+    /// Number of states.
+    #[arg(long)]
+    pub order: usize,
+    /// How to estimate the model.
+    #[arg(long, value_enum, default_value = "pem")]
+    pub method: MethodArg,
+    /// ARX output lags for arx-reduce-pem.
+    #[arg(long, default_value_t = 10)]
+    pub na: usize,
+    /// ARX input lags for arx-reduce-pem.
+    #[arg(long, default_value_t = 10)]
+    pub nb: usize,
+    /// ARX input delay for arx-reduce-pem.
+    #[arg(long, default_value_t = 1)]
+    pub nk: usize,
+    /// Estimate a direct feedthrough D (default: D = 0, as ssest and the seed's eq 9).
+    #[arg(long)]
+    pub feedthrough: bool,
+    /// Estimate the initial state in the prediction-error search (default: zero).
+    #[arg(long)]
+    pub estimate_x0: bool,
+    /// Iteration limit of the prediction-error search.
+    #[arg(long, default_value_t = 100)]
+    pub max_iter: usize,
+    /// Output weighting of the prediction-error cost.
+    #[arg(long, value_enum, default_value = "identity")]
+    pub weight: WeightArg,
+    /// Block rows of the subspace method (default: max(10, order/ny + 2), within what the data allow).
+    #[arg(long, value_name = "I")]
+    pub n4sid_horizon: Option<usize>,
+}
+
+pub fn run(cmd: SysidCommand) -> ExitCode {
+    let result = match cmd {
+        SysidCommand::Arx(a) => arx(&a),
+        SysidCommand::Ss(a) => ss(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_BAD_INPUT)
+        }
+    }
+}
+
+/// The 1-based file line of data row `row` (0-based), counting as `Table::parse`
+/// does (blank and `#` lines skipped, the header first).
+fn line_of_row(path: &Path, row: usize) -> Option<usize> {
+    let text = std::fs::read_to_string(path).ok()?;
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            let l = l.trim();
+            !l.is_empty() && !l.starts_with('#')
+        })
+        .nth(row + 1)
+        .map(|(i, _)| i + 1)
+}
+
+fn load(path: &Path, a: &DataArgs) -> Result<IoData, String> {
+    let table = Table::read(path).map_err(|e| e.to_string())?;
+    let mut d =
+        IoData::from_table(&table.columns, &table.rows, &a.inputs, &a.outputs).map_err(|e| {
+            // "data row 42, ..." -> "file:43: data row 42, ..."
+            let line = e
+                .message
+                .strip_prefix("data row ")
+                .and_then(|r| r.split(|c: char| !c.is_ascii_digit()).next())
+                .and_then(|n| n.parse::<usize>().ok())
+                .and_then(|r| line_of_row(path, r - 1));
+            match line {
+                Some(l) => format!("{}:{l}: {}", path.display(), e.message),
+                None => format!("{}: {}", path.display(), e.message),
+            }
+        })?;
+    if let Some(ts) = a.ts {
+        if !(ts.is_finite() && ts > 0.0) {
+            return Err(format!(
+                "--ts {ts}: the sample time must be a positive number of seconds"
+            ));
+        }
+        d.sample_time = Some(ts);
+    }
+    if d.len() < 2 {
+        return Err(format!(
+            "{}: {} data rows: identification needs a record",
+            path.display(),
+            d.len()
+        ));
+    }
+    Ok(d)
+}
+
+struct Records {
+    est: IoData,
+    val: Option<IoData>,
+    offsets: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+fn load_records(a: &DataArgs) -> Result<Records, String> {
+    let mut est = load(&a.data, a)?;
+    let mut val = a.val.as_ref().map(|p| load(p, a)).transpose()?;
+    if let Some(v) = &val {
+        est.check_same_channels(v).map_err(|e| {
+            format!(
+                "{}: {e}",
+                a.val
+                    .as_ref()
+                    .map_or(String::new(), |p| p.display().to_string())
+            )
+        })?;
+    }
+    let offsets = if a.detrend {
+        let (u0, y0) = est.means();
+        est.remove_offsets(&u0, &y0);
+        if let Some(v) = &mut val {
+            v.remove_offsets(&u0, &y0);
+        }
+        Some((u0, y0))
+    } else {
+        None
+    };
+    est.check_excitation()
+        .map_err(|e| format!("{}: {e}", a.data.display()))?;
+    Ok(Records { est, val, offsets })
+}
+
+fn rows(m: &nalgebra::DMatrix<f64>) -> Value {
+    json!(
+        (0..m.nrows())
+            .map(|i| m.row(i).iter().copied().collect::<Vec<f64>>())
+            .collect::<Vec<_>>()
+    )
+}
+
+fn to_value<T: serde::Serialize>(x: &T) -> Value {
+    serde_json::to_value(x).unwrap_or(Value::Null)
+}
+
+fn data_json(a: &DataArgs, r: &Records) -> Value {
+    json!({
+        "estimation": a.data.display().to_string(),
+        "validation": a.val.as_ref().map(|p| p.display().to_string()),
+        "samples": r.est.len(),
+        "validation_samples": r.val.as_ref().map(|v| v.len()),
+        "sample_time": r.est.sample_time,
+        "inputs": r.est.input_names,
+        "outputs": r.est.output_names,
+        "offsets": r.offsets.as_ref().map(|(u, y)| json!({"inputs": u, "outputs": y})),
+    })
+}
+
+fn evaluation_json(
+    obj: &mut serde_json::Map<String, Value>,
+    ev: &Evaluation,
+    est_fit: &Fit,
+    est_cost: f64,
+) {
+    let mut fit = to_value(&ev.fit_percent);
+    if let Value::Object(m) = &mut fit {
+        m.insert("data".to_string(), json!(ev.data));
+    }
+    obj.insert("fit_percent".into(), fit);
+    obj.insert("estimation_fit_percent".into(), to_value(est_fit));
+    obj.insert("prediction_cost".into(), json!(ev.prediction_cost));
+    obj.insert("estimation_prediction_cost".into(), json!(est_cost));
+    obj.insert("stability".into(), to_value(&ev.stability));
+    obj.insert(
+        "hankel_singular_values".into(),
+        to_value(&ev.hankel_singular_values),
+    );
+    obj.insert("order_suggestion".into(), to_value(&ev.order_suggestion));
+    obj.insert(
+        "frequency_response".into(),
+        to_value(&ev.frequency_response),
+    );
+    obj.insert("residual_tests".into(), to_value(&ev.residual_tests));
+}
+
+fn write_json(path: &Path, v: &Value) -> Result<(), String> {
+    let text = serde_json::to_string_pretty(v).map_err(|e| format!("cannot write JSON: {e}"))?;
+    std::fs::write(path, text + "\n").map_err(|e| format!("{}: cannot write: {e}", path.display()))
+}
+
+fn command_line() -> String {
+    std::env::args()
+        .map(|a| if a.contains(' ') { format!("'{a}'") } else { a })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn summary(names: &[String], ev: &Evaluation, warnings: &[String]) -> String {
+    use std::fmt::Write as _;
+    let f = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.1}"));
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "FIT on the {} data ({} samples), percent (MATLAB compare; eq 10 = seed's error measure):",
+        ev.data, ev.samples
+    );
+    let _ = writeln!(
+        s,
+        "  {:<20} {:>9} {:>9} {:>10} {:>10}",
+        "output",
+        "sim",
+        format!("{}-step", ev.fit_percent.prediction_horizon),
+        "eq10 sim",
+        "eq10 pred"
+    );
+    for (i, n) in names.iter().enumerate() {
+        let fp = &ev.fit_percent;
+        let _ = writeln!(
+            s,
+            "  {:<20} {:>9} {:>9} {:>10} {:>10}",
+            n,
+            f(fp.simulation[i]),
+            f(fp.prediction[i]),
+            f(fp.seed_eq10_simulation[i]),
+            f(fp.seed_eq10_prediction[i])
+        );
+    }
+    let _ = writeln!(
+        s,
+        "prediction cost (mean squared one-step error): {}",
+        num(ev.prediction_cost)
+    );
+    match &ev.hankel_singular_values {
+        Some(h) => {
+            let shown: Vec<String> = h.iter().take(12).map(|x| num(*x)).collect();
+            let more = if h.len() > 12 {
+                format!(" ... ({} in all)", h.len())
+            } else {
+                String::new()
+            };
+            let _ = writeln!(s, "Hankel singular values: {}{more}", shown.join(" "));
+            if let Some(o) = &ev.order_suggestion {
+                let _ = writeln!(
+                    s,
+                    "  largest gap after state {} (ratio {})",
+                    o.order,
+                    num(o.gap_ratio)
+                );
+            }
+        }
+        None => {
+            let _ = writeln!(s, "Hankel singular values: none (the model is unstable)");
+        }
+    }
+    let fr = &ev.frequency_response;
+    let _ = writeln!(
+        s,
+        "frequency response: peak gain {:.2} dB at {} {}, bandwidth {}",
+        fr.peak_gain_db,
+        num(fr.peak_frequency),
+        fr.frequency_unit,
+        fr.bandwidth
+            .map_or("not reached below Nyquist".to_string(), |b| format!(
+                "{} {}",
+                num(b),
+                fr.frequency_unit
+            ))
+    );
+    let _ = writeln!(s, "residual tests: {}", ev.residual_tests.summary);
+    for w in warnings {
+        let _ = writeln!(s, "warning: {w}");
+    }
+    s
+}
+
+fn eval_options(a: &DataArgs) -> EvaluationOptions {
+    EvaluationOptions {
+        prediction_horizon: a.kstep.max(1),
+        max_lag: a.lags.max(1),
+        ..EvaluationOptions::default()
+    }
+}
+
+fn arx(a: &ArxArgs) -> Result<(), String> {
+    let d = &a.data;
+    let recs = load_records(d)?;
+    let orders = ArxOrders {
+        na: a.na,
+        nb: a.nb,
+        nk: a.nk,
+    };
+    let t0 = Instant::now();
+    let id = identify_arx(&recs.est, recs.val.as_ref(), orders, &eval_options(d))
+        .map_err(|e| format!("{}: {e}", d.data.display()))?;
+    let elapsed = t0.elapsed().as_secs_f64();
+    let estimation = id.estimation_seconds;
+    let mut obj = serde_json::Map::new();
+    obj.insert("kind".into(), json!("arx"));
+    obj.insert("method".into(), json!("arx"));
+    obj.insert("data".into(), data_json(d, &recs));
+    obj.insert("orders".into(), json!({"na": a.na, "nb": a.nb, "nk": a.nk}));
+    obj.insert(
+        "A".into(),
+        json!(id.model.a.iter().map(rows).collect::<Vec<_>>()),
+    );
+    obj.insert(
+        "B".into(),
+        json!(id.model.b.iter().map(rows).collect::<Vec<_>>()),
+    );
+    obj.insert("noise_covariance".into(), rows(&id.model.noise_covariance));
+    evaluation_json(
+        &mut obj,
+        &id.evaluation,
+        &id.estimation_fit,
+        id.estimation_prediction_cost,
+    );
+    obj.insert("warnings".into(), json!(id.evaluation.warnings));
+    obj.insert(
+        "timing_seconds".into(),
+        json!({"estimation": estimation, "estimation_and_evaluation": elapsed}),
+    );
+    if let Some(p) = &d.json {
+        write_json(p, &Value::Object(obj))?;
+    }
+    let ev_data = recs.val.as_ref().unwrap_or(&recs.est);
+    if let Some(p) = &d.report {
+        let refs = if d.compare_seed {
+            seed_reference_fits()[..1].to_vec()
+        } else {
+            Vec::new()
+        };
+        arx_report(&id, ev_data, &command_line(), &refs).write(p)?;
+    }
+    print(&format!(
+        "ARX na={} nb={} nk={}: {} inputs, {} outputs, {} parameters per output, estimated in {:.3} s\n{}",
+        a.na,
+        a.nb,
+        a.nk,
+        recs.est.nu(),
+        recs.est.ny(),
+        orders.parameters_per_output(recs.est.ny(), recs.est.nu()),
+        estimation,
+        summary(
+            &recs.est.output_names,
+            &id.evaluation,
+            &id.evaluation.warnings
+        )
+    ));
+    Ok(())
+}
+
+fn ss(a: &SsArgs) -> Result<(), String> {
+    let d = &a.data;
+    let recs = load_records(d)?;
+    let method = match a.method {
+        MethodArg::N4sid => SsMethod::N4sid,
+        MethodArg::Pem => SsMethod::Pem,
+        MethodArg::ArxReducePem => SsMethod::ArxReducePem,
+    };
+    let opts = SsOptions {
+        order: a.order,
+        method,
+        arx_orders: ArxOrders {
+            na: a.na,
+            nb: a.nb,
+            nk: a.nk,
+        },
+        horizon: a.n4sid_horizon,
+        pem: PemOptions {
+            max_iterations: a.max_iter,
+            feedthrough: a.feedthrough,
+            estimate_x0: a.estimate_x0,
+            weight: match a.weight {
+                WeightArg::Identity => OutputWeight::Identity,
+                WeightArg::Noise => OutputWeight::InverseNoise,
+            },
+            ..PemOptions::default()
+        },
+        evaluation: eval_options(d),
+    };
+    let bar = progress::steps(a.max_iter);
+    bar.set_message("prediction-error search");
+    let t0 = Instant::now();
+    let id = identify_state_space(&recs.est, recs.val.as_ref(), &opts, &mut |p| {
+        bar.set_position(p.iteration as u64);
+        bar.set_message(format!("cost {}", num(p.cost)));
+    })
+    .map_err(|e| format!("{}: {e}", d.data.display()));
+    bar.finish_and_clear();
+    let id = id?;
+    let elapsed = t0.elapsed().as_secs_f64();
+    let m = &id.model;
+    let mut obj = serde_json::Map::new();
+    obj.insert("kind".into(), json!("state-space"));
+    obj.insert("method".into(), json!(method.name()));
+    obj.insert("data".into(), data_json(d, &recs));
+    obj.insert(
+        "orders".into(),
+        json!({
+            "order": a.order,
+            "arx": (method == SsMethod::ArxReducePem).then(|| json!({"na": a.na, "nb": a.nb, "nk": a.nk})),
+        }),
+    );
+    for (k, v) in [
+        ("A", &m.a),
+        ("B", &m.b),
+        ("C", &m.c),
+        ("D", &m.d),
+        ("K", &m.k),
+    ] {
+        obj.insert(k.into(), rows(v));
+    }
+    obj.insert("noise_covariance".into(), rows(&m.noise_covariance));
+    obj.insert(
+        "x0".into(),
+        json!(id.x0.iter().copied().collect::<Vec<f64>>()),
+    );
+    evaluation_json(
+        &mut obj,
+        &id.evaluation,
+        &id.estimation_fit,
+        id.estimation_prediction_cost,
+    );
+    obj.insert("stages".into(), to_value(&id.stages));
+    obj.insert("pem".into(), to_value(&id.pem));
+    obj.insert(
+        "subspace_singular_values".into(),
+        to_value(&id.subspace_singular_values),
+    );
+    obj.insert(
+        "arx_hankel_singular_values".into(),
+        to_value(&id.arx_hankel_singular_values),
+    );
+    obj.insert("warnings".into(), json!(id.warnings));
+    obj.insert(
+        "timing_seconds".into(),
+        json!({"estimation": id.estimation_seconds, "estimation_and_evaluation": elapsed}),
+    );
+    if let Some(p) = &d.json {
+        write_json(p, &Value::Object(obj))?;
+    }
+    let ev_data = recs.val.as_ref().unwrap_or(&recs.est);
+    if let Some(p) = &d.report {
+        let refs = if d.compare_seed {
+            seed_reference_fits()
+        } else {
+            Vec::new()
+        };
+        state_space_report(&id, ev_data, &command_line(), &refs).write(p)?;
+    }
+    let mut head = format!(
+        "state-space model, order {}, method {}: {} inputs, {} outputs, estimated in {:.3} s\n",
+        m.n(),
+        method.name(),
+        m.nu(),
+        m.ny(),
+        id.estimation_seconds
+    );
+    if let Some(p) = &id.pem {
+        head.push_str(&format!(
+            "prediction-error search: {} iterations, {} free parameters, cost {} -> {} ({})\n",
+            p.iterations,
+            p.free_parameters,
+            num(p.initial_cost),
+            num(p.final_cost),
+            p.termination
+        ));
+    }
+    print(&(head + &summary(&recs.est.output_names, &id.evaluation, &id.warnings)));
+    Ok(())
+}
