@@ -139,35 +139,9 @@ pub fn inverse_dynamics(args: BatchArgs) -> ExitCode {
 }
 
 fn inverse_impl(a: &BatchArgs) -> Result<(), String> {
-    let model = load_model(&a.urdf, a.fixed_base)?;
-    let table = Table::read(&a.trajectory).map_err(|e| e.to_string())?;
-    let find = |qty| StateColumns::find(&table, &model, qty).map_err(|e| e.to_string());
-    let (qc, vc, ac) = (find(Quantity::Q)?, find(Quantity::V)?, find(Quantity::A)?);
-    let (tcol, cols) = with_time(&table, Quantity::Tau.column_names(&model));
-    let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;
-    let mut data = Data::new(&model);
-    let (mut q, mut v, mut acc) = (
-        vec![0.0; model.nq],
-        vec![0.0; model.nv],
-        vec![0.0; model.nv],
-    );
-    let mut row = Vec::with_capacity(cols.len());
-    let bar = progress::rows(table.rows.len());
-    for (r, input) in table.rows.iter().enumerate() {
-        qc.gather(input, &mut q);
-        vc.gather(input, &mut v);
-        ac.gather(input, &mut acc);
-        check_quaternion(&model, &table, r, &q).map_err(|e| e.to_string())?;
-        row.clear();
-        if let Some(t) = tcol {
-            row.push(input[t]);
-        }
-        row.extend(twinloop_dynamics::rnea(&model, &mut data, &q, &v, &acc).iter());
-        w.write_row(&row).map_err(|e| e.to_string())?;
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    w.finish().map_err(|e| e.to_string())
+    per_row(a, Quantity::A, Quantity::Tau, |m, d, q, v, x| {
+        twinloop_dynamics::rnea(m, d, q, v, x)
+    })
 }
 
 pub fn forward_dynamics(args: BatchArgs) -> ExitCode {
@@ -178,30 +152,48 @@ pub fn forward_dynamics(args: BatchArgs) -> ExitCode {
 }
 
 fn forward_impl(a: &BatchArgs) -> Result<(), String> {
+    per_row(a, Quantity::Tau, Quantity::A, |m, d, q, v, x| {
+        twinloop_dynamics::aba(m, d, q, v, x)
+    })
+}
+
+/// Read q, v and one more quantity from each row, write what `f` computes from them.
+fn per_row(
+    a: &BatchArgs,
+    input: Quantity,
+    output: Quantity,
+    mut f: impl for<'d> FnMut(
+        &Model,
+        &'d mut Data,
+        &[f64],
+        &[f64],
+        &[f64],
+    ) -> &'d nalgebra::DVector<f64>,
+) -> Result<(), String> {
     let model = load_model(&a.urdf, a.fixed_base)?;
     let table = Table::read(&a.trajectory).map_err(|e| e.to_string())?;
     let find = |qty| StateColumns::find(&table, &model, qty).map_err(|e| e.to_string());
-    let (qc, vc, tc) = (find(Quantity::Q)?, find(Quantity::V)?, find(Quantity::Tau)?);
-    let (tcol, cols) = with_time(&table, Quantity::A.column_names(&model));
+    let (qc, vc, xc) = (find(Quantity::Q)?, find(Quantity::V)?, find(input)?);
+    let (tcol, cols) = with_time(&table, output.column_names(&model));
     let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;
     let mut data = Data::new(&model);
-    let (mut q, mut v, mut tau) = (
+    let (mut q, mut v, mut x) = (
         vec![0.0; model.nq],
         vec![0.0; model.nv],
         vec![0.0; model.nv],
     );
     let mut row = Vec::with_capacity(cols.len());
     let bar = progress::rows(table.rows.len());
-    for (r, input) in table.rows.iter().enumerate() {
-        qc.gather(input, &mut q);
-        vc.gather(input, &mut v);
-        tc.gather(input, &mut tau);
+    for (r, values) in table.rows.iter().enumerate() {
+        qc.gather(values, &mut q);
+        vc.gather(values, &mut v);
+        xc.gather(values, &mut x);
         check_quaternion(&model, &table, r, &q).map_err(|e| e.to_string())?;
         row.clear();
         if let Some(t) = tcol {
-            row.push(input[t]);
+            row.push(values[t]);
         }
-        row.extend(twinloop_dynamics::aba(&model, &mut data, &q, &v, &tau).iter());
+        row.extend(f(&model, &mut data, &q, &v, &x).iter());
         w.write_row(&row).map_err(|e| e.to_string())?;
         bar.inc(1);
     }
