@@ -709,7 +709,7 @@ fn ik_impl(a: &IkArgs) -> Result<(), String> {
             .map_err(|e| e.in_file(&a.frames).to_string())?;
         row.clear();
         row.push(frames.t[k]);
-        row.extend_from_slice(&q);
+        row.extend_from_slice(q);
         row.push(fit.rms);
         row.push(fit.max);
         w.write_row(&row).map_err(|e| e.to_string())?;
