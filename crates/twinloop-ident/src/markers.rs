@@ -256,7 +256,6 @@ pub struct MarkerIk<'a> {
     /// fit is fitted again from its own pelvis pose (frames far apart, e.g. separate
     /// static poses, can leave the previous solution in the wrong basin).
     pub restart_distance: f64,
-    spare: Vec<f64>,
 }
 
 impl<'a> MarkerIk<'a> {
@@ -289,7 +288,6 @@ impl<'a> MarkerIk<'a> {
             q: model.neutral_configuration(),
             started: false,
             restart_distance: 0.02,
-            spare: model.neutral_configuration(),
         })
     }
 
