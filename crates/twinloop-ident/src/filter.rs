@@ -125,7 +125,8 @@ impl TransferFunction {
         3 * self.a.len().max(self.b.len())
     }
 
-    /// Zero-phase forward-backward filtering (SciPy `filtfilt` defaults). The signal
+    /// Zero-phase forward-backward filtering (SciPy `filtfilt` defaults): seed 004's
+    /// bi-directional Butterworth (section 3.1). The signal
     /// must be longer than [`pad_length`](Self::pad_length).
     pub fn filtfilt(&self, x: &[f64]) -> Result<Vec<f64>, IdentError> {
         let pad = self.pad_length();

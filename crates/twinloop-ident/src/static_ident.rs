@@ -754,7 +754,8 @@ pub fn identifiability(
     }
 }
 
-/// The GCOM (x, y) of a model with parameters `phi` (per description link) at `q`.
+/// The GCOM (x, y) of a model with parameters `phi` (per description link) at `q`:
+/// the CoM of seed 004, eq 6, `r = sum m_b r_b / M`, projected on the ground.
 pub fn gcom(model: &Model, data: &mut Data, phi: &[f64], q: &[f64]) -> [f64; 2] {
     let g = static_com_regressor(model, data, q);
     let mut out = [0.0; 2];
