@@ -6,3 +6,4 @@ mod markers;
 mod oracle;
 mod poses_format;
 mod recovery;
+mod units;
