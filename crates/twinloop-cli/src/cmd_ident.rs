@@ -601,6 +601,12 @@ fn identify_static_cmd(a: &IdentifyStaticArgs) -> Result<(), String> {
         id.condition_number,
         id.structural_null,
     );
+    for g in &id.welded {
+        t.push_str(&format!(
+            "  welded to one body (only their sum is seen): {}\n",
+            g.join(", ")
+        ));
+    }
     for g in &id.unidentifiable {
         t.push_str(&format!(
             "  not excited by these poses ({} directions): {}\n",
