@@ -31,6 +31,14 @@ pub enum BenchCommand {
     /// bench/pinocchio/make_states.py writes one, and bench/pinocchio runs Pinocchio on
     /// the same file, so the two are compared on identical inputs.
     Dynamics(DynamicsBenchArgs),
+    /// Time the simulator: microseconds per step of a robot standing on its servos.
+    ///
+    /// The robot is placed on the ground, settles for 0.5 s, then --rounds rounds of
+    /// --steps steps are timed; the median is reported. bench/mujoco/bench_sim.py times
+    /// MuJoCo on the same robot for the comparison in BENCHMARKS.md.
+    ///
+    /// Example: twinloop bench sim --robot models/op3/mjcf/op3.xml --dt 0.002 --json
+    Sim(crate::cmd_sim::SimBenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -145,6 +153,7 @@ fn time(n_states: usize, seconds: f64, mut round: impl FnMut()) -> f64 {
 
 pub fn run(cmd: BenchCommand) -> ExitCode {
     match cmd {
+        BenchCommand::Sim(args) => crate::cmd_sim::bench(args),
         BenchCommand::Dynamics(args) => match dynamics(&args) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {

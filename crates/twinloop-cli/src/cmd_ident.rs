@@ -68,6 +68,19 @@ fn joint_indices(model: &Model, names: &[String], option: &str) -> Result<Vec<us
 
 #[derive(Subcommand, Debug)]
 pub enum ExperimentCommand {
+    /// Ramp both ankles forward, backward, left and right until the robot tips over
+    ///
+    /// The robot stands on its servos in the simulator; each direction ramps both ankle
+    /// joints (--ramp deg/s) until the trunk tilts beyond what the joints explain, and
+    /// records the ankle angle commanded and measured at the onset and the time taken
+    /// (seed 000 Table IV). Beside each, the model's static tipping angle (CoM over the
+    /// support edge). From the four angles, the CoM by the seed's geometric method
+    /// (seed 000 eq 8-13) and by the exact method, next to the model's true CoM, all
+    /// relative to the midpoint of the ankle axes (x forward, y left, z up).
+    ///
+    /// Example:
+    ///   twinloop experiment tipover --robot builtin:km20 --add-mass 0.2@torso:0.05,0,0 --json tip.json
+    Tipover(crate::cmd_experiment::TipoverArgs),
     /// Virtual force plate: statically stable poses and the CoP each would give
     ///
     /// Stands the robot (the TRUTH description: the robot as it really is) in
@@ -211,6 +224,7 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
     match cmd {
         ExperimentCommand::StaticPoses(a) => finish(static_poses(&a)),
         ExperimentCommand::Squat(a) => finish(squat(&a)),
+        ExperimentCommand::Tipover(a) => crate::cmd_experiment::tipover(a),
     }
 }
 

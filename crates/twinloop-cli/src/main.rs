@@ -4,8 +4,11 @@
 
 mod cmd_bench;
 mod cmd_dynamics;
+mod cmd_experiment;
 mod cmd_ident;
 mod cmd_model;
+mod cmd_robot;
+mod cmd_sim;
 mod common;
 mod progress;
 
@@ -57,10 +60,27 @@ enum Command {
     ///
     /// Example: twinloop forward-dynamics --urdf robot.urdf --trajectory cmd.csv --out acc.csv
     ForwardDynamics(cmd_dynamics::BatchArgs),
+    /// Simulate a robot standing on its servos, holding a pose or following joint goals
+    ///
+    /// The robot is placed upright on the ground at its neutral pose with a Dynamixel-type
+    /// position servo on every joint (--servo), then simulated for --duration seconds at
+    /// --dt (1 ms default). Each output row holds t, q:*, v:*, tau:<joint> (the servo
+    /// torques), com.x/y/z, imu:<link>.gx..az (rad/s, m/s^2) and foot:<link>.fz, .cop.x,
+    /// .cop.y (N, m) for each foot.
+    ///
+    /// Example: twinloop simulate --robot models/op3/mjcf/op3.xml --duration 5 --hold --out stand.csv
+    Simulate(cmd_sim::SimulateArgs),
     /// Benchmarks (median time per call), to compare with peers such as Pinocchio
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
-    /// Identification experiments: virtual force plate poses, squat motion (seed 004)
+    /// The built-in seed robots (km20, lab17): list them, export them as URDF
+    ///
+    /// Built from primitives in code; any --robot option takes them as builtin:NAME.
+    ///
+    /// Example: twinloop robot export km20 --out km20.urdf
+    #[command(subcommand)]
+    Robot(cmd_robot::RobotCommand),
+    /// Experiments: tip-over (seeds 000/001), virtual force plate poses and squat (seed 004)
     #[command(subcommand)]
     Experiment(cmd_ident::ExperimentCommand),
     /// Identify model parameters from experiments (static masses and CoMs, seed 004)
@@ -92,7 +112,9 @@ fn main() -> ExitCode {
         Command::Kinematics(args) => cmd_dynamics::kinematics(args),
         Command::InverseDynamics(args) => cmd_dynamics::inverse_dynamics(args),
         Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
+        Command::Simulate(args) => cmd_sim::simulate(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
+        Command::Robot(cmd) => cmd_robot::run(cmd),
         Command::Experiment(cmd) => cmd_ident::experiment(cmd),
         Command::Identify(cmd) => cmd_ident::identify(cmd),
         Command::Ik(args) => cmd_ident::ik(args),

@@ -17,6 +17,33 @@ pub fn aba<'a>(
     v: &[f64],
     tau: &[f64],
 ) -> &'a DVector<f64> {
+    aba_impl(model, data, q, v, tau, None)
+}
+
+/// ABA with external spatial forces on the bodies: `fext[i]` acts on body `i`, given in
+/// the world frame at the world origin (a force `f` at world point `p` is `(f, p x f)`).
+/// `fext_base` acts on the floating base (ignored for a fixed base).
+pub fn aba_with_forces<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: &[Force],
+    fext_base: Force,
+) -> &'a DVector<f64> {
+    assert_eq!(fext.len(), model.nbodies, "fext needs one force per body");
+    aba_impl(model, data, q, v, tau, Some((fext, fext_base)))
+}
+
+fn aba_impl<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<(&[Force], Force)>,
+) -> &'a DVector<f64> {
     check_q(model, q);
     check_v(model, v, "v");
     check_v(model, tau, "tau");
@@ -35,7 +62,11 @@ pub fn aba<'a>(
     };
     let (mut ia0, mut pa0) = if floating {
         let i0 = &model.base_inertia;
-        (i0.to_symmetric6(), v0.cross_force(&i0.mul_motion(&v0)))
+        let mut pa0 = v0.cross_force(&i0.mul_motion(&v0));
+        if let Some((_, fb)) = fext {
+            pa0 -= base.act_inv_force(&fb);
+        }
+        (i0.to_symmetric6(), pa0)
     } else {
         (Symmetric6::ZERO, Force::ZERO)
     };
@@ -57,6 +88,10 @@ pub fn aba<'a>(
         let yb = model.inertias[i].transformed(&b);
         data.ia[i] = yb.to_symmetric6();
         data.pa[i] = vi.cross_force(&yb.mul_motion(&vi));
+        if let Some((f, _)) = fext {
+            // World forces into base coordinates, where this ABA works.
+            data.pa[i] -= base.act_inv_force(&f[i]);
+        }
     }
 
     // Pass 2: articulated inertias and bias forces, leaves to root.

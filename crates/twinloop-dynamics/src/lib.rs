@@ -28,7 +28,7 @@ pub mod model;
 pub mod regressor;
 pub mod rnea;
 
-pub use aba::aba;
+pub use aba::{aba, aba_with_forces};
 pub use center_of_mass::{center_of_mass, ground_projected_com, jacobian_center_of_mass};
 pub use crba::crba;
 pub use data::Data;

@@ -108,7 +108,8 @@ pub struct Model {
     pub total_mass: f64,
 }
 
-pub(crate) fn pose_to_se3(p: &twinloop_model::Pose) -> Se3 {
+/// A description pose (xyz, rpy) as a rigid placement.
+pub fn pose_to_se3(p: &twinloop_model::Pose) -> Se3 {
     let r = p.rotation();
     Se3::new(
         Matrix3::new(
@@ -209,9 +210,66 @@ impl Model {
             });
         }
 
-        // Depth-first walk: (link, body it belongs to, placement of link in that body).
-        let mut stack: Vec<(usize, usize, Se3)> = vec![(base_link, BASE, Se3::IDENTITY)];
-        while let Some((link, body, placement)) = stack.pop() {
+        // Depth-first walk: (link, body it belongs to, placement of link in that body,
+        // the moving joint that leads to it if its body is still to be made). A body is
+        // numbered when its link is reached, not when its parent is, so that bodies come
+        // in depth-first pre-order with children in file order, and every subtree is a
+        // contiguous range.
+        let mut stack: Vec<(usize, usize, Se3, Option<usize>)> =
+            vec![(base_link, BASE, Se3::IDENTITY, None)];
+        while let Some((link, parent_body, placement, via)) = stack.pop() {
+            let (body, placement) = match via {
+                None => (parent_body, placement),
+                Some(j) => {
+                    let joint = &robot.joints[j];
+                    let here = || format!("<joint name=\"{}\">", joint.name);
+                    let a = joint.axis_or_default();
+                    let axis = Vector3::new(a[0], a[1], a[2]);
+                    let n = axis.norm();
+                    if n.is_nan() || n <= 1e-12 {
+                        return Err(ModelError::new("a moving joint needs a non-zero axis")
+                            .at_element(here()));
+                    }
+                    let axis = axis / n;
+                    let jt = if joint.kind == JointKind::Prismatic {
+                        JointType::Prismatic
+                    } else if axis == Vector3::x() {
+                        JointType::RevoluteX
+                    } else if axis == Vector3::y() {
+                        JointType::RevoluteY
+                    } else if axis == Vector3::z() {
+                        JointType::RevoluteZ
+                    } else {
+                        JointType::Revolute
+                    };
+                    let lim = joint.limit.unwrap_or_default();
+                    let new_body = m.parents.len();
+                    m.parents.push(parent_body);
+                    m.joint_types.push(jt);
+                    m.axes.push(axis);
+                    // `placement` is the joint frame in the parent body.
+                    m.joint_placements.push(placement);
+                    m.inertias.push(Inertia::ZERO);
+                    m.joint_names.push(joint.name.clone());
+                    m.body_names.push(joint.child.clone());
+                    let continuous = joint.kind == JointKind::Continuous;
+                    m.lower_limits.push(if continuous {
+                        f64::NEG_INFINITY
+                    } else {
+                        lim.lower.unwrap_or(f64::NEG_INFINITY)
+                    });
+                    m.upper_limits.push(if continuous {
+                        f64::INFINITY
+                    } else {
+                        lim.upper.unwrap_or(f64::INFINITY)
+                    });
+                    m.effort_limits.push(lim.effort.unwrap_or(f64::INFINITY));
+                    m.velocity_limits
+                        .push(lim.velocity.unwrap_or(f64::INFINITY));
+                    m.armature.push(0.0);
+                    (new_body, Se3::IDENTITY)
+                }
+            };
             let own = link_inertia(&robot.links[link]);
             link_info[link] = Some(LinkInfo {
                 name: robot.links[link].name.clone(),
@@ -232,52 +290,9 @@ impl Model {
                 let origin = placement * pose_to_se3(&joint.origin);
                 let here = || format!("<joint name=\"{}\">", joint.name);
                 match joint.kind {
-                    JointKind::Fixed => stack.push((child, body, origin)),
+                    JointKind::Fixed => stack.push((child, body, origin, None)),
                     JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic => {
-                        let a = joint.axis_or_default();
-                        let axis = Vector3::new(a[0], a[1], a[2]);
-                        let n = axis.norm();
-                        if n.is_nan() || n <= 1e-12 {
-                            return Err(ModelError::new("a moving joint needs a non-zero axis")
-                                .at_element(here()));
-                        }
-                        let axis = axis / n;
-                        let jt = if joint.kind == JointKind::Prismatic {
-                            JointType::Prismatic
-                        } else if axis == Vector3::x() {
-                            JointType::RevoluteX
-                        } else if axis == Vector3::y() {
-                            JointType::RevoluteY
-                        } else if axis == Vector3::z() {
-                            JointType::RevoluteZ
-                        } else {
-                            JointType::Revolute
-                        };
-                        let lim = joint.limit.unwrap_or_default();
-                        let new_body = m.parents.len();
-                        m.parents.push(body);
-                        m.joint_types.push(jt);
-                        m.axes.push(axis);
-                        m.joint_placements.push(origin);
-                        m.inertias.push(Inertia::ZERO);
-                        m.joint_names.push(joint.name.clone());
-                        m.body_names.push(joint.child.clone());
-                        let continuous = joint.kind == JointKind::Continuous;
-                        m.lower_limits.push(if continuous {
-                            f64::NEG_INFINITY
-                        } else {
-                            lim.lower.unwrap_or(f64::NEG_INFINITY)
-                        });
-                        m.upper_limits.push(if continuous {
-                            f64::INFINITY
-                        } else {
-                            lim.upper.unwrap_or(f64::INFINITY)
-                        });
-                        m.effort_limits.push(lim.effort.unwrap_or(f64::INFINITY));
-                        m.velocity_limits
-                            .push(lim.velocity.unwrap_or(f64::INFINITY));
-                        m.armature.push(0.0);
-                        stack.push((child, new_body, Se3::IDENTITY));
+                        stack.push((child, body, origin, Some(j)));
                     }
                     JointKind::Floating => {
                         return Err(ModelError::new(

@@ -327,3 +327,48 @@ fn kinetic_energy_matches_bodies() {
         );
     }
 }
+
+#[test]
+fn aba_with_external_forces_matches_jacobian_transpose() {
+    use twinloop_spatial::Force;
+    for model in models() {
+        let mut data = Data::new(&model);
+        let mut rng = SplitMix64(17);
+        let q = random_configuration(&model, &mut rng);
+        let v = random_tangent(&model, &mut rng);
+        let tau = random_tangent(&model, &mut rng);
+        let f3 = |rng: &mut SplitMix64| Vector3::new(rng.normal(), rng.normal(), rng.normal());
+        let fext: Vec<Force> = (0..model.nbodies)
+            .map(|_| Force::new(f3(&mut rng), f3(&mut rng)))
+            .collect();
+        let fb = Force::new(f3(&mut rng), f3(&mut rng));
+        let ddq = aba_with_forces(&model, &mut data, &q, &v, &tau, &fext, fb).clone();
+        // M ddq + nle - tau must equal sum_i J_i^T f_i (world Jacobians, world forces).
+        crba(&model, &mut data, &q);
+        data.symmetrize_mass_matrix();
+        let m = data.mass_matrix.clone();
+        let nle = nonlinear_effects(&model, &mut data, &q, &v).clone();
+        let lhs = &m * &ddq + nle - DVector::from_vec(tau.clone());
+        compute_joint_jacobians(&model, &mut data, &q);
+        let mut rhs = DVector::zeros(model.nv);
+        let mut j = DMatrix::zeros(6, model.nv);
+        let mut add = |frame: usize, f: &Force, rhs: &mut DVector<f64>| {
+            frame_jacobian(&model, &data, frame, ReferenceFrame::World, &mut j);
+            *rhs += j.transpose() * f.to_vector6();
+        };
+        for (i, f) in fext.iter().enumerate() {
+            let k = model.frame_index(&model.body_names[i]).unwrap();
+            add(k, f, &mut rhs);
+        }
+        if model.is_floating() {
+            let k = model.frame_index(&model.base_link).unwrap();
+            add(k, &fb, &mut rhs);
+        }
+        assert!(
+            rel_err(&lhs, &rhs) < 1e-10,
+            "{}: {}",
+            model.name,
+            rel_err(&lhs, &rhs)
+        );
+    }
+}

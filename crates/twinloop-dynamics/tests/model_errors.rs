@@ -55,3 +55,31 @@ fn floating_root_with_offset_is_refused() {
     let m = Model::from_robot(&ok).unwrap();
     assert_eq!((m.nq, m.nv, m.base_link.as_str()), (7, 6, "base"));
 }
+
+#[test]
+fn bodies_are_numbered_depth_first_in_file_order() {
+    // base -> a1 -> a2, base -> b1, a1 -> a3: pre-order a1, a2, a3, b1.
+    let m = |n: &str| (n.to_string(), Inertia::solid_sphere(1.0, 0.1));
+    let mut b = RobotBuilder::new("tree")
+        .link("base")
+        .mass(1.0, [0.0; 3], m("base").1)
+        .done();
+    for (name, parent) in [("a1", "base"), ("b1", "base"), ("a2", "a1"), ("a3", "a1")] {
+        b = b
+            .link(name)
+            .mass(1.0, [0.0; 3], m(name).1)
+            .done()
+            .revolute(format!("j_{name}"), parent, name, [0.0, 0.0, 1.0])
+            .done();
+    }
+    let model = Model::from_robot(&b.build().unwrap()).unwrap();
+    assert_eq!(model.joint_names, ["j_a1", "j_a2", "j_a3", "j_b1"]);
+    assert_eq!(model.subtree_end, [3, 2, 3, 4]);
+    assert!(
+        model
+            .parents
+            .iter()
+            .enumerate()
+            .all(|(i, &p)| p == twinloop_dynamics::BASE || p < i)
+    );
+}

@@ -163,7 +163,8 @@ fn h1_prior_to_truth() {
     let o = recover("Unitree H1", &truth, &prior, 7);
     // The prior is clearly wrong; the identified model's GCOM matches the truth's to the
     // seed's 0.6 mm.
-    assert!(o.gcom_before.mean > 3e-3, "{:?}", o.gcom_before);
+    // The hidden mass must show before the fit (about 3 mm with these poses).
+    assert!(o.gcom_before.mean > 2e-3, "{:?}", o.gcom_before);
     assert!(o.gcom_after.mean <= 0.6e-3, "{:?}", o.gcom_after);
     // Against the noisy CoP the distance cannot fall below the plate noise
     // (1 mm per axis: mean distance about 1.25 mm).
@@ -210,7 +211,8 @@ fn coman_hidden_ten_kilograms() {
     let truth = coman_with_hidden_mass(&prior);
     assert!((truth.total_mass() - prior.total_mass() - 10.0).abs() < 1e-9);
     let o = recover("COMAN + 10 kg", &truth, &prior, 11);
-    assert!(o.gcom_before.mean > 3e-3, "{:?}", o.gcom_before);
+    // The hidden mass must show before the fit (about 3 mm with these poses).
+    assert!(o.gcom_before.mean > 2e-3, "{:?}", o.gcom_before);
     assert!(o.gcom_after.mean <= 0.6e-3, "{:?}", o.gcom_after);
     assert!(o.cop_after.mean < 1.4e-3, "{:?}", o.cop_after);
     // 10 kg missing: about 98 N before (the seed's 103 N for REEM-C's 10.05 kg).

@@ -1,0 +1,38 @@
+#!/usr/bin/env python3
+"""twinloop's simulator vs MuJoCo on the same robot, alternating runs so machine load
+hits both alike; prints the median us per step of each and the ratio.
+
+    python3 bench/mujoco/compare_sim.py [--model models/op3/mjcf/op3.xml] [--dt 0.002] [--runs 5]
+"""
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--model", default="models/op3/mjcf/op3.xml")
+    ap.add_argument("--dt", type=float, default=0.002)
+    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--twinloop", default=os.path.join(ROOT, "target/release/twinloop"))
+    args = ap.parse_args()
+    ours, theirs = [], []
+    for _ in range(args.runs):
+        m = subprocess.run([sys.executable, os.path.join(ROOT, "bench/mujoco/bench_sim.py"), "--model", args.model,
+                            "--dt", str(args.dt), "--json"], check=True, capture_output=True, text=True, cwd=ROOT)
+        theirs.append(json.loads(m.stdout)["us_per_step"])
+        t = subprocess.run([args.twinloop, "bench", "sim", "--robot", args.model, "--dt", str(args.dt), "--json"],
+                           check=True, capture_output=True, text=True, cwd=ROOT)
+        ours.append(json.loads(t.stdout)["us_per_step"])
+    o, p = statistics.median(ours), statistics.median(theirs)
+    print(f"{args.model} dt={args.dt}: twinloop {o:.2f} us/step, MuJoCo {p:.2f} us/step, "
+          f"twinloop steps/s = {p / o:.2f} x MuJoCo's (runs: {args.runs})")
+
+
+if __name__ == "__main__":
+    main()

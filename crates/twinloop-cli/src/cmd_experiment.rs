@@ -1,0 +1,124 @@
+//! `twinloop experiment tipover`: the tip-over experiment of seeds 000 and 001 on the
+//! simulator, with the CoM from the tip angles beside the model's.
+
+use clap::Args;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use twinloop_experiments::{StudyOptions, run_study};
+
+#[derive(Args, Debug)]
+pub struct TipoverArgs {
+    /// Robot: builtin:km20, builtin:lab17, or a URDF/MJCF file whose ankle joints are
+    /// named like l_ank_pitch / r_ank_roll and whose feet have collision boxes.
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: String,
+    /// Add a point mass before the experiment (seed 000's batteries), repeatable:
+    /// KG@LINK:X,Y,Z with X,Y,Z in metres in the link frame, e.g. 0.2@torso:0.05,0,0.
+    #[arg(long = "add-mass", value_name = "KG@LINK:X,Y,Z")]
+    pub add_mass: Vec<String>,
+    /// Write the results as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Ankle ramp speed, deg/s.
+    #[arg(long, default_value_t = 0.5)]
+    pub ramp: f64,
+    /// Servo compliance slope during the experiment, Dynamixel RX units (2 = stiffest;
+    /// default 2, or 8 for km20, whose locked hips block the sideways lean at 2). The CoM
+    /// methods assume a rigid robot; stiffer servos bend less.
+    #[arg(long)]
+    pub compliance_slope: Option<f64>,
+    /// Quantise the ankle readings like Dynamixel RX encoders (1024 counts over 300 deg).
+    #[arg(long)]
+    pub encoders: bool,
+}
+
+/// Parse `KG@LINK:X,Y,Z`.
+fn parse_mass(s: &str) -> Result<(f64, String, [f64; 3]), String> {
+    let bad = |why: &str| format!("--add-mass \"{s}\": {why} (expected KG@LINK:X,Y,Z)");
+    let (kg, rest) = s.split_once('@').ok_or_else(|| bad("no '@'"))?;
+    let (link, xyz) = rest
+        .rsplit_once(':')
+        .ok_or_else(|| bad("no ':' before the position"))?;
+    let kg: f64 = kg
+        .trim()
+        .parse()
+        .map_err(|_| bad("the mass is not a number"))?;
+    let v: Vec<f64> = xyz
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad("the position is not three numbers"))?;
+    if v.len() != 3 {
+        return Err(bad("the position needs three numbers"));
+    }
+    Ok((kg, link.to_string(), [v[0], v[1], v[2]]))
+}
+
+pub fn tipover(a: TipoverArgs) -> ExitCode {
+    match tipover_impl(&a) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(crate::common::EXIT_BAD_INPUT)
+        }
+    }
+}
+
+fn tipover_impl(a: &TipoverArgs) -> Result<(), String> {
+    let mut robot = twinloop_robots::resolve(&a.robot).map_err(|e| e.to_string())?;
+    for m in &a.add_mass {
+        let (kg, link, xyz) = parse_mass(m)?;
+        twinloop_robots::add_point_mass(&mut robot, &link, kg, xyz).map_err(|e| e.to_string())?;
+    }
+    let opts = StudyOptions {
+        ramp_deg_per_s: a.ramp,
+        dynamixel_encoders: a.encoders,
+        compliance_units: Some((
+            a.compliance_slope
+                .unwrap_or(if robot.name == twinloop_robots::km20::NAME {
+                    8.0
+                } else {
+                    2.0
+                }),
+            0.0,
+        )),
+        ..Default::default()
+    };
+    eprintln!("running the four tip-overs in the simulator ...");
+    let r = run_study(&robot, &opts)?;
+    println!(
+        "{}: tip-over (ankle angles from the standing pose, deg)",
+        r.robot
+    );
+    println!("  direction  commanded  measured  static(model)  time(s)");
+    for (name, d) in [
+        ("forward", &r.forward),
+        ("backward", &r.backward),
+        ("left", &r.left),
+        ("right", &r.right),
+    ] {
+        println!(
+            "  {name:<9}  {:>9.3}  {:>8.3}  {:>13.3}  {:>7.2}",
+            d.commanded_deg, d.measured_deg, d.static_deg, d.time_s
+        );
+    }
+    let f = |c: [f64; 3]| format!("[{:+.4}, {:+.4}, {:+.4}]", c[0], c[1], c[2]);
+    println!("CoM relative to the ankle midpoint (m; x forward, y left, z up):");
+    println!("  true          {}", f(r.com.truth));
+    println!(
+        "  exact method  {}  (off by {:.1} mm)",
+        f(r.com.exact_method),
+        r.com.exact_error * 1e3
+    );
+    println!(
+        "  seed method   {}  (off by {:.1} mm; constants: {})",
+        f(r.com.seed_method),
+        r.com.seed_error * 1e3,
+        r.seed_constants
+    );
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?;
+        std::fs::write(p, text).map_err(|e| format!("{}: cannot write: {e}", p.display()))?;
+    }
+    Ok(())
+}

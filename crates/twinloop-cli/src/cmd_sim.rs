@@ -1,0 +1,333 @@
+//! `twinloop simulate` and `twinloop bench sim`.
+
+use crate::progress;
+use clap::{Args, ValueEnum};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+use twinloop_io::{CsvWriter, Table};
+use twinloop_robot::{Robot, RobotState};
+use twinloop_sim::{Actuator, DynamixelServo, SimConfig, Simulator};
+
+/// Which servo model drives every joint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ServoChoice {
+    /// From the description: effort limit as stall torque and velocity limit as no-load
+    /// speed where they look real, else an XM430-class servo scaled to the robot's mass.
+    Auto,
+    /// Dynamixel RX-28 (3.7 N m, 85 rpm).
+    Rx28,
+    /// Dynamixel RX-64 (5.3 N m, 64 rpm).
+    Rx64,
+    /// Dynamixel XM430-W350 (4.1 N m, 46 rpm at 12 V).
+    Xm430,
+}
+
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// Robot: builtin:km20, builtin:lab17, or a URDF or MJCF file.
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: String,
+    /// Simulated time, s.
+    #[arg(long, default_value_t = 2.0)]
+    pub duration: f64,
+    /// Hold the initial standing pose (the default when no --trajectory is given).
+    #[arg(long)]
+    pub hold: bool,
+    /// Joint goals over time: a CSV with `t` and `q:<joint>` columns, linearly
+    /// interpolated; joints without a column hold their initial position.
+    #[arg(long, value_name = "FILE")]
+    pub trajectory: Option<PathBuf>,
+    /// Output CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: PathBuf,
+    /// Time step, s.
+    #[arg(long, default_value_t = 1e-3)]
+    pub dt: f64,
+    /// Write one row every N steps.
+    #[arg(long, default_value_t = 1)]
+    pub every: usize,
+    #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
+    pub servo: ServoChoice,
+}
+
+#[derive(Args, Debug)]
+pub struct SimBenchArgs {
+    /// Robot: builtin:NAME or a URDF or MJCF file.
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: String,
+    /// Time step, s.
+    #[arg(long, default_value_t = 1e-3)]
+    pub dt: f64,
+    /// Steps per timed round.
+    #[arg(long, default_value_t = 2000)]
+    pub steps: usize,
+    /// Timed rounds (the median is reported).
+    #[arg(long, default_value_t = 11)]
+    pub rounds: usize,
+    #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
+    pub servo: ServoChoice,
+    /// Print JSON: {"robot", "dt", "nv", "contact_points", "us_per_step", "steps_per_second"}.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Load a robot named on the command line: `builtin:NAME` or a URDF/MJCF file.
+pub fn load_robot(spec: &str) -> Result<twinloop_model::Robot, String> {
+    twinloop_robots::resolve(spec).map_err(|e| e.to_string())
+}
+
+/// The servo for one joint under a choice.
+fn servo_for(choice: ServoChoice, effort: f64, velocity: f64, robot_mass: f64) -> DynamixelServo {
+    let rpm = |x: f64| x * std::f64::consts::TAU / 60.0;
+    match choice {
+        ServoChoice::Rx28 => DynamixelServo::rx28(),
+        ServoChoice::Rx64 => DynamixelServo::rx64(),
+        ServoChoice::Xm430 => {
+            let mut s = DynamixelServo::with_rating(4.1, rpm(46.0));
+            s.compliance_slope = 0.19;
+            s.compliance_margin = 0.0;
+            s
+        }
+        ServoChoice::Auto => twinloop_sim::servo_from_limits(effort, velocity, robot_mass),
+    }
+}
+
+/// A simulator of `robot` standing on the ground on its servos.
+pub fn standing_simulator(
+    robot: &twinloop_model::Robot,
+    dt: f64,
+    servo: ServoChoice,
+) -> Result<Simulator, String> {
+    let cfg = SimConfig {
+        dt,
+        ..Default::default()
+    };
+    let mut sim = Simulator::new(robot, cfg).map_err(|e| e.to_string())?;
+    let mass = sim.model.total_mass;
+    for i in 0..sim.model.nbodies {
+        let s = servo_for(
+            servo,
+            sim.model.effort_limits[i],
+            sim.model.velocity_limits[i],
+            mass,
+        );
+        sim.actuators[i] = Actuator::Dynamixel(s);
+    }
+    let n = sim.model.nbodies;
+    // Neutral pose, clamped into the joint ranges.
+    let q0: Vec<f64> = (0..n)
+        .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
+        .collect();
+    sim.place_on_ground(&q0).map_err(|e| e.to_string())?;
+    if sim.contact_points().is_empty() {
+        return Err(format!(
+            "the robot has no collision primitives to stand on (mesh-only links: {}); \
+             add <collision> boxes to the feet",
+            sim.mesh_only_links.join(", ")
+        ));
+    }
+    Ok(sim)
+}
+
+fn fail(msg: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {msg}");
+    ExitCode::from(crate::common::EXIT_BAD_INPUT)
+}
+
+/// Goal trajectory: times and, per joint, goal positions (NaN: hold).
+struct Goals {
+    t: Vec<f64>,
+    cols: Vec<Option<usize>>,
+    table: Table,
+}
+
+impl Goals {
+    fn load(path: &Path, joints: &[String]) -> Result<Goals, String> {
+        let table = Table::read(path).map_err(|e| e.to_string())?;
+        let tc = table
+            .column_index("t")
+            .ok_or_else(|| format!("{}: a `t` column is needed", path.display()))?;
+        let t: Vec<f64> = table.rows.iter().map(|r| r[tc]).collect();
+        if let Some(k) = t.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(format!(
+                "{}: data row {}: time does not increase",
+                path.display(),
+                k + 2
+            ));
+        }
+        let cols: Vec<Option<usize>> = joints
+            .iter()
+            .map(|j| table.column_index(&format!("q:{j}")))
+            .collect();
+        if cols.iter().all(Option::is_none) {
+            return Err(format!(
+                "{}: no q:<joint> column names a joint of the robot",
+                path.display()
+            ));
+        }
+        Ok(Goals { t, cols, table })
+    }
+
+    fn at(&self, time: f64, hold: &[f64], out: &mut [f64]) {
+        let k = self.t.partition_point(|&x| x <= time);
+        let (i0, i1, w) = if k == 0 {
+            (0, 0, 0.0)
+        } else if k >= self.t.len() {
+            (self.t.len() - 1, self.t.len() - 1, 0.0)
+        } else {
+            let (a, b) = (self.t[k - 1], self.t[k]);
+            (k - 1, k, (time - a) / (b - a))
+        };
+        for (j, c) in self.cols.iter().enumerate() {
+            out[j] = match c {
+                Some(c) => self.table.rows[i0][*c] * (1.0 - w) + self.table.rows[i1][*c] * w,
+                None => hold[j],
+            };
+        }
+    }
+}
+
+pub fn simulate(args: SimulateArgs) -> ExitCode {
+    match simulate_impl(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => fail(e),
+    }
+}
+
+fn simulate_impl(a: &SimulateArgs) -> Result<(), String> {
+    if a.hold && a.trajectory.is_some() {
+        return Err("--hold and --trajectory exclude each other".into());
+    }
+    if !(a.duration >= 0.0 && a.duration.is_finite()) {
+        return Err(format!(
+            "--duration must be a non-negative time, not {}",
+            a.duration
+        ));
+    }
+    let robot = load_robot(&a.robot)?;
+    let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
+    let names = sim.model.joint_names.clone();
+    let goals = a
+        .trajectory
+        .as_ref()
+        .map(|p| Goals::load(p, &names))
+        .transpose()?;
+    let hold: Vec<f64> = sim.goals.clone();
+    let mut cols = vec!["t".to_string()];
+    cols.extend(sim.model.q_names().iter().map(|n| format!("q:{n}")));
+    cols.extend(sim.model.v_names().iter().map(|n| format!("v:{n}")));
+    cols.extend(names.iter().map(|n| format!("tau:{n}")));
+    cols.extend(["com.x", "com.y", "com.z"].map(String::from));
+    let imu_name = sim.model.links[sim.sensors().imu_link].name.clone();
+    for s in ["gx", "gy", "gz", "ax", "ay", "az"] {
+        cols.push(format!("imu:{imu_name}.{s}"));
+    }
+    let feet: Vec<String> = sim
+        .sensors()
+        .feet
+        .iter()
+        .map(|&l| sim.model.links[l].name.clone())
+        .collect();
+    for f in &feet {
+        for s in ["fz", "cop.x", "cop.y"] {
+            cols.push(format!("foot:{f}.{s}"));
+        }
+    }
+    let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;
+    let steps = (a.duration / a.dt).round() as usize;
+    let bar = progress::rows(if steps > 20_000 { steps } else { 0 });
+    let mut st = RobotState::default();
+    let mut g = vec![0.0; names.len()];
+    let mut row = Vec::with_capacity(cols.len());
+    for k in 0..=steps {
+        if k % a.every.max(1) == 0 || k == steps {
+            sim.read(&mut st).map_err(|e| e.to_string())?;
+            row.clear();
+            row.push(sim.time);
+            row.extend_from_slice(&sim.q);
+            row.extend_from_slice(&sim.v);
+            row.extend_from_slice(&sim.applied);
+            row.extend(sim.center_of_mass().iter());
+            let imu = st.imu.unwrap_or_default();
+            row.extend(imu.gyro);
+            row.extend(imu.accel);
+            for f in &st.feet {
+                let cop = f.cop.unwrap_or([f64::NAN, f64::NAN]);
+                row.extend([f.force, cop[0], cop[1]]);
+            }
+            w.write_row(&row).map_err(|e| e.to_string())?;
+        }
+        if k == steps {
+            break;
+        }
+        if let Some(goals) = &goals {
+            goals.at(sim.time, &hold, &mut g);
+            sim.command_positions(&g).map_err(|e| e.to_string())?;
+        }
+        sim.step().map_err(|e| e.to_string())?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    w.finish().map_err(|e| e.to_string())
+}
+
+#[derive(Serialize)]
+struct SimBenchReport {
+    robot: String,
+    dt: f64,
+    nv: usize,
+    contact_points: usize,
+    us_per_step: f64,
+    steps_per_second: f64,
+}
+
+pub fn bench(args: SimBenchArgs) -> ExitCode {
+    match bench_impl(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => fail(e),
+    }
+}
+
+fn bench_impl(a: &SimBenchArgs) -> Result<(), String> {
+    let robot = load_robot(&a.robot)?;
+    let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
+    // Settle first, so the timed steps are steady standing with feet in contact.
+    sim.run(0.5).map_err(|e| e.to_string())?;
+    let mut samples = Vec::with_capacity(a.rounds);
+    for _ in 0..a.rounds.max(1) {
+        let t = Instant::now();
+        for _ in 0..a.steps.max(1) {
+            sim.step().map_err(|e| e.to_string())?;
+        }
+        samples.push(t.elapsed().as_secs_f64() * 1e6 / a.steps.max(1) as f64);
+    }
+    samples.sort_by(f64::total_cmp);
+    let us = samples[samples.len() / 2];
+    let report = SimBenchReport {
+        robot: a.robot.clone(),
+        dt: a.dt,
+        nv: sim.model.nv,
+        contact_points: sim.contact_points().len(),
+        us_per_step: us,
+        steps_per_second: 1e6 / us,
+    };
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
+        );
+    } else {
+        println!(
+            "{}: {:.2} us per step ({:.0} steps/s), nv = {}, {} contact points, dt = {} s",
+            report.robot,
+            report.us_per_step,
+            report.steps_per_second,
+            report.nv,
+            report.contact_points,
+            report.dt
+        );
+    }
+    Ok(())
+}

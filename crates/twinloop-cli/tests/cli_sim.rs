@@ -1,0 +1,107 @@
+//! `simulate` and `experiment tipover` through the binary: files written, fields present,
+//! bad input named.
+
+use std::process::Command;
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("twinloop-cli-sim-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+#[test]
+fn simulate_holds_km20_and_writes_every_column() {
+    let out = tmp("hold.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args([
+            "simulate",
+            "--robot",
+            "builtin:km20",
+            "--duration",
+            "0.2",
+            "--hold",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    for c in [
+        "t",
+        "q:base.qw",
+        "q:l_knee",
+        "v:l_knee",
+        "tau:l_knee",
+        "com.z",
+    ] {
+        assert!(header.contains(&c), "missing {c}");
+    }
+    assert!(
+        header
+            .iter()
+            .any(|h| h.starts_with("foot:") && h.ends_with(".fz"))
+    );
+    assert_eq!(
+        text.lines().count(),
+        1 + 201,
+        "a row per 1 ms step, both ends"
+    );
+}
+
+#[test]
+fn tipover_json_has_the_issue_fields() {
+    let json = tmp("tip.json");
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args([
+            "experiment",
+            "tipover",
+            "--robot",
+            "builtin:km20",
+            "--ramp",
+            "2",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    for d in ["forward", "backward", "left", "right"] {
+        for f in ["commanded_deg", "measured_deg", "time_s"] {
+            assert!(v[d][f].as_f64().is_some_and(|x| x > 0.0), "{d}.{f}");
+        }
+    }
+    for m in ["true", "seed_method", "exact_method"] {
+        assert_eq!(v["com"][m].as_array().map(|a| a.len()), Some(3), "com.{m}");
+    }
+}
+
+#[test]
+fn bad_mass_and_unknown_robot_are_named() {
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args([
+            "experiment",
+            "tipover",
+            "--robot",
+            "builtin:km20",
+            "--add-mass",
+            "0.2@nolink:0,0,0",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nolink"));
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["simulate", "--robot", "builtin:nosuch", "--out"])
+        .arg(tmp("x.csv"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("km20"),
+        "lists the known robots"
+    );
+}

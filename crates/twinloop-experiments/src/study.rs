@@ -1,0 +1,407 @@
+//! The tip-over study on the simulator (seeds 000 and 001): run the experiment in all
+//! four directions on a simulated robot and put its results beside what the model says:
+//! the static tipping angle at each onset (CoM over the support edge, from the model
+//! with the feet flat) and the CoM from the angles by the seed's method and the exact
+//! method, next to the model's true CoM.
+
+use crate::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
+use nalgebra::Vector3;
+use serde::Serialize;
+use twinloop_dynamics::{BASE, Data};
+use twinloop_model::Robot;
+use twinloop_reduced::{
+    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, seed_method,
+};
+use twinloop_robot::RobotError;
+use twinloop_robots::FootGeometry;
+use twinloop_sim::statics::{FlatFeet, lean_signs};
+use twinloop_sim::{
+    Actuator, ContactParams, DynamixelServo, SimConfig, Simulator, servo_from_limits,
+};
+
+/// Settings of the study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyOptions {
+    /// Ankle ramp speed, deg/s.
+    pub ramp_deg_per_s: f64,
+    /// How far the robot's weight sinks into the ground, m (the ground's stiffness):
+    /// small, because the static reference assumes rigid soles on a rigid floor.
+    pub ground_sink: f64,
+    /// Time step, s.
+    pub dt: f64,
+    /// Quantise joint readings like the robot's Dynamixel encoders (1024 over 300 deg).
+    pub dynamixel_encoders: bool,
+    /// The servos' compliance slope and margin during the experiment, in Dynamixel RX
+    /// position units (0.29 deg). The CoM methods treat the robot as rigid, so the
+    /// protocol stiffens the servos first, as one would on the real robot: slope 2 (the
+    /// stiffest RX setting) and margin 0. `None` keeps each servo's own setting.
+    pub compliance_units: Option<(f64, f64)>,
+}
+
+impl Default for StudyOptions {
+    fn default() -> Self {
+        StudyOptions {
+            ramp_deg_per_s: 0.5,
+            ground_sink: 1e-5,
+            dt: 1e-3,
+            dynamixel_encoders: false,
+            compliance_units: Some((2.0, 0.0)),
+        }
+    }
+}
+
+/// One direction's outcome with its static reference.
+#[derive(Debug, Clone, Serialize)]
+pub struct DirectionReport {
+    pub commanded_deg: f64,
+    pub measured_deg: f64,
+    pub time_s: f64,
+    /// The model's static tipping angle for the joints as they were at the onset, deg.
+    pub static_deg: f64,
+}
+
+/// CoM estimates, m, relative to the midpoint of the ankle pitch joints in the
+/// standing pose (x forward, y left, z up).
+#[derive(Debug, Clone, Serialize)]
+pub struct ComReport {
+    #[serde(rename = "true")]
+    pub truth: [f64; 3],
+    pub seed_method: [f64; 3],
+    pub exact_method: [f64; 3],
+    /// Distance of each estimate from the true CoM, m.
+    pub seed_error: f64,
+    pub exact_error: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct StudyReport {
+    pub robot: String,
+    pub forward: DirectionReport,
+    pub backward: DirectionReport,
+    pub left: DirectionReport,
+    pub right: DirectionReport,
+    pub com: ComReport,
+    /// Which constants the seed method used: the seed's own (km20) or the robot's feet.
+    pub seed_constants: String,
+    /// The foot geometry the estimators used.
+    pub foot: FootReport,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct FootReport {
+    pub front: f64,
+    pub back: f64,
+    pub ankle_height: f64,
+    pub roll_axis_height: f64,
+    pub ankle_half_spacing: f64,
+    pub outer: f64,
+    pub inner: f64,
+}
+
+fn err(e: impl std::fmt::Display) -> String {
+    e.to_string()
+}
+
+/// Ankle and foot names: the built-in robot's, or found by name in a description
+/// (`*ank*pitch*` and `*ank*roll*` joints with a left/right prefix; the feet are the
+/// roll joints' child links).
+fn ankle_names(robot: &Robot) -> Result<[String; 6], String> {
+    if let Some(f) = twinloop_robots::foot_geometry(&robot.name) {
+        return Ok([
+            f.left_ankle_pitch,
+            f.right_ankle_pitch,
+            f.left_ankle_roll,
+            f.right_ankle_roll,
+            f.left_foot,
+            f.right_foot,
+        ]);
+    }
+    let find = |kind: &str, left: bool| -> Result<String, String> {
+        let hits: Vec<&str> = robot
+            .joints
+            .iter()
+            .map(|j| j.name.as_str())
+            .filter(|n| {
+                let l = n.to_lowercase();
+                let side = if left {
+                    l.starts_with('l') || l.contains("left")
+                } else {
+                    l.starts_with('r') || l.contains("right")
+                };
+                (l.contains("ank") || l.contains("ankle")) && l.contains(kind) && side
+            })
+            .collect();
+        match hits.as_slice() {
+            [one] => Ok(one.to_string()),
+            _ => Err(format!(
+                "cannot tell the {} ankle {kind} joint of \"{}\" by name (candidates: {:?})",
+                if left { "left" } else { "right" },
+                robot.name,
+                hits
+            )),
+        }
+    };
+    let (lp, rp, lr, rr) = (
+        find("pitch", true)?,
+        find("pitch", false)?,
+        find("roll", true)?,
+        find("roll", false)?,
+    );
+    let child = |j: &str| robot.joint(j).map(|j| j.child.clone()).unwrap_or_default();
+    let (lf, rf) = (child(&lr), child(&rr));
+    Ok([lp, rp, lr, rr, lf, rf])
+}
+
+/// The foot geometry measured on the model in the standing pose: sole points of the feet
+/// and ankle joint origins.
+fn measure_feet(sim: &mut Simulator, names: &[String; 6], feet: [usize; 2]) -> FootGeometry {
+    let model = sim.model.clone();
+    let mut data = Data::new(&model);
+    let q = sim.q.clone();
+    twinloop_dynamics::frames_forward_kinematics(&model, &mut data, &q);
+    let joint_pos = |n: &str| data.o_m_i[model.joint_index(n).unwrap_or(0)].translation;
+    let (lp, rp, lr, rr) = (
+        joint_pos(&names[0]),
+        joint_pos(&names[1]),
+        joint_pos(&names[2]),
+        joint_pos(&names[3]),
+    );
+    let sole = |foot: usize| -> Vec<Vector3<f64>> {
+        let body = model.links[foot].body;
+        let pts: Vec<Vector3<f64>> = sim
+            .contact_points()
+            .iter()
+            .filter(|p| p.body == body)
+            .map(|p| {
+                (if p.body == BASE {
+                    data.base_placement
+                } else {
+                    data.o_m_i[p.body]
+                })
+                .act_point(&p.local)
+                    - Vector3::new(0.0, 0.0, p.radius)
+            })
+            .collect();
+        let zmin = pts.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+        pts.into_iter().filter(|p| p.z < zmin + 1e-6).collect()
+    };
+    // The left sole gives the geometry; the feet are mirror images.
+    let ls = sole(feet[0]);
+    let max = |v: &[Vector3<f64>], f: fn(&Vector3<f64>) -> f64| {
+        v.iter().map(f).fold(f64::NEG_INFINITY, f64::max)
+    };
+    let min = |v: &[Vector3<f64>], f: fn(&Vector3<f64>) -> f64| {
+        v.iter().map(f).fold(f64::INFINITY, f64::min)
+    };
+    let mid = (lp + rp) * 0.5;
+    let sole_z = min(&ls, |p| p.z);
+    FootGeometry {
+        front: max(&ls, |p| p.x) - mid.x,
+        back: mid.x - min(&ls, |p| p.x),
+        ankle_height: mid.z - sole_z,
+        roll_axis_height: 0.5 * (lr.z + rr.z) - sole_z,
+        ankle_half_spacing: 0.5 * (lr.y - rr.y),
+        outer: max(&ls, |p| p.y) - lr.y,
+        inner: lr.y - min(&ls, |p| p.y),
+        left_foot: model.links[feet[0]].name.clone(),
+        right_foot: model.links[feet[1]].name.clone(),
+        left_ankle_pitch: names[0].clone(),
+        right_ankle_pitch: names[1].clone(),
+        left_ankle_roll: names[2].clone(),
+        right_ankle_roll: names[3].clone(),
+        forward_lean_sign: 0.0,
+        left_lean_sign: 0.0,
+    }
+}
+
+/// Run the study on `robot` (a built-in robot gets its own servos and foot data).
+pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, String> {
+    let mass = twinloop_dynamics::Model::from_robot(robot)
+        .map_err(err)?
+        .total_mass;
+    let cfg = SimConfig {
+        dt: opts.dt,
+        contact: Some(ContactParams::for_robot(mass, 8, opts.ground_sink)),
+        ..Default::default()
+    };
+    let mut sim = Simulator::new(robot, cfg).map_err(err)?;
+    for i in 0..sim.model.nbodies {
+        let joint = sim.model.joint_names[i].clone();
+        let mut servo = match twinloop_robots::servo_of_joint(&robot.name, &joint) {
+            Some(spec) => DynamixelServo::with_rating(spec.stall_torque, spec.no_load_speed),
+            None => servo_from_limits(
+                sim.model.effort_limits[i],
+                sim.model.velocity_limits[i],
+                mass,
+            ),
+        };
+        if let Some((slope, margin)) = opts.compliance_units {
+            servo.compliance_slope = slope * twinloop_sim::actuator::RX_POSITION_UNIT;
+            servo.compliance_margin = margin * twinloop_sim::actuator::RX_POSITION_UNIT;
+        }
+        sim.actuators[i] = Actuator::Dynamixel(servo);
+    }
+    if opts.dynamixel_encoders {
+        sim.use_dynamixel_encoders();
+    }
+    let n = sim.model.nbodies;
+    let standing: Vec<f64> = (0..n)
+        .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
+        .collect();
+    sim.place_on_ground(&standing).map_err(err)?;
+    let names = ankle_names(robot)?;
+    let joint = |n: &str| {
+        sim.joint_index(n)
+            .ok_or_else(|| format!("no joint \"{n}\" in \"{}\"", robot.name))
+    };
+    let (lp, rp, lr, rr) = (
+        joint(&names[0])?,
+        joint(&names[1])?,
+        joint(&names[2])?,
+        joint(&names[3])?,
+    );
+    let link = |n: &str| {
+        sim.model
+            .links
+            .iter()
+            .position(|l| l.name == n)
+            .ok_or_else(|| format!("no foot link \"{n}\" in \"{}\"", robot.name))
+    };
+    let feet = [link(&names[4])?, link(&names[5])?];
+    let sim_feet: Vec<&str> = vec![names[4].as_str(), names[5].as_str()];
+    sim.set_feet(&sim_feet).map_err(err)?;
+    let (foot, seed_constants, label) = match twinloop_robots::foot_geometry(&robot.name) {
+        Some(f) if robot.name == twinloop_robots::km20::NAME => (
+            f,
+            SEED_000_CONSTANTS,
+            "seed 000 (F1 3.5 cm, F2 9.5 cm, L0 3.1 cm)",
+        ),
+        Some(f) => {
+            let c = SeedConstants::from_foot(&f);
+            (f, c, "the robot's own feet")
+        }
+        None => {
+            let f = measure_feet(&mut sim, &names, feet);
+            let c = SeedConstants::from_foot(&f);
+            (f, c, "the robot's own feet (measured)")
+        }
+    };
+    let model = sim.model.clone();
+    let points = sim.contact_points().to_vec();
+    let place = |s: &mut Simulator, l: &str| {
+        s.link_placement(l)
+            .ok_or_else(|| format!("no link \"{l}\""))
+    };
+    let foot_world = [place(&mut sim, &names[4])?, place(&mut sim, &names[5])?];
+    let mut flat = FlatFeet {
+        model: &model,
+        feet,
+        points: &points,
+        foot_world,
+        held: 0,
+    };
+    let mut data = Data::new(&model);
+    let mut q0 = model.neutral_configuration();
+    q0[model.q_offset..].copy_from_slice(&standing);
+    let fs = lean_signs(&model, &mut data, &q0, [lp, rp], Vector3::x());
+    let ls = lean_signs(&model, &mut data, &q0, [lr, rr], Vector3::y());
+    let mut cfg = TipoverConfig::new([lp, rp], [lr, rr], fs, ls);
+    cfg.ramp_deg_per_s = opts.ramp_deg_per_s;
+    let imu_link = sim.sensors().imu_link;
+    let mut results: Vec<(TipoverResult, f64)> = Vec::new();
+    let mut pdata = Data::new(&model);
+    for d in Direction::ALL {
+        flat.held = usize::from(d == Direction::Right);
+        sim.place_on_ground(&standing).map_err(err)?;
+        let r = {
+            let mut predict = |j: &[f64]| flat.link_tilt(&mut pdata, j, imu_link);
+            run_direction(&mut sim, &standing, d, &cfg, Some(&mut predict))
+                .map_err(|e: RobotError| e.to_string())?
+        };
+        let (ankles, signs, dir) = match d {
+            Direction::Forward => ([lp, rp], fs, Vector3::x()),
+            Direction::Backward => ([lp, rp], [-fs[0], -fs[1]], -Vector3::x()),
+            Direction::Left => ([lr, rr], ls, Vector3::y()),
+            Direction::Right => ([lr, rr], [-ls[0], -ls[1]], -Vector3::y()),
+        };
+        let offset = flat
+            .tipping_angle(
+                &mut data,
+                &r.positions_at_onset,
+                ankles,
+                signs,
+                dir,
+                -0.2,
+                0.2,
+            )
+            .map(f64::to_degrees)
+            .unwrap_or(f64::NAN);
+        results.push((r.clone(), r.measured_deg + offset));
+    }
+    // The CoM by the two estimators from the measured angles, and the truth.
+    let deg = |d: Direction| {
+        results
+            .iter()
+            .find(|r| r.0.direction == d)
+            .map(|r| r.0.measured_deg)
+            .unwrap_or(f64::NAN)
+    };
+    let (f, b, l, r) = (
+        deg(Direction::Forward),
+        deg(Direction::Backward),
+        deg(Direction::Left),
+        deg(Direction::Right),
+    );
+    let seed = seed_method(
+        &SeedAngles {
+            alpha1: f,
+            beta1: b,
+            alpha2: l,
+            beta2: r,
+        },
+        &seed_constants,
+    )
+    .map_err(err)?;
+    let exact = exact_method(&TipAngles::from_degrees(f, b, l, r), &foot).map_err(err)?;
+    let truth =
+        twinloop_reduced::com_relative_to_ankles(&model, &q0, &names[0], &names[1]).map_err(err)?;
+    let dist = |a: [f64; 3]| {
+        ((a[0] - truth[0]).powi(2) + (a[1] - truth[1]).powi(2) + (a[2] - truth[2]).powi(2)).sqrt()
+    };
+    let rep = |d: Direction| {
+        let (r, s) = results
+            .iter()
+            .find(|r| r.0.direction == d)
+            .expect("all four ran");
+        DirectionReport {
+            commanded_deg: r.commanded_deg,
+            measured_deg: r.measured_deg,
+            time_s: r.time_s,
+            static_deg: *s,
+        }
+    };
+    Ok(StudyReport {
+        robot: robot.name.clone(),
+        forward: rep(Direction::Forward),
+        backward: rep(Direction::Backward),
+        left: rep(Direction::Left),
+        right: rep(Direction::Right),
+        com: ComReport {
+            truth,
+            seed_method: seed.com,
+            exact_method: exact.com,
+            seed_error: dist(seed.com),
+            exact_error: dist(exact.com),
+        },
+        seed_constants: label.to_string(),
+        foot: FootReport {
+            front: foot.front,
+            back: foot.back,
+            ankle_height: foot.ankle_height,
+            roll_axis_height: foot.roll_axis_height,
+            ankle_half_spacing: foot.ankle_half_spacing,
+            outer: foot.outer,
+            inner: foot.inner,
+        },
+    })
+}

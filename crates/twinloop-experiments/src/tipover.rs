@@ -1,0 +1,263 @@
+//! The tip-over experiment (seed 000 section V.A, Table IV; seed 001): from a standing
+//! pose, ramp both ankles (pitch forward, then backward, then roll left and right) until
+//! the robot tips over, and record the commanded and measured ankle angle at the
+//! moment it started to tip, and the time from the start of the ramp.
+//!
+//! Tipping is seen in the trunk's tilt: while the feet stay flat, the trunk is where
+//! the measured joint angles put it; once the centre of mass passes the edge of the
+//! foot, the whole robot rotates about that edge and the IMU tilts beyond that. The
+//! prediction comes from the caller (`predict`: forward kinematics of the robot's model
+//! with the feet flat), because every joint deflects under the changing load, not only
+//! the ankles; without a model the ankle angle alone is the prediction. The onset is the
+//! last moment before the fall at which the excess tilt grew slower than the ankles
+//! turned (times `onset_ratio`): before the tip it only creeps (the ground and the soles
+//! give a little as the load moves to the edge), after it the robot falls away
+//! exponentially. Comparing with the ankle's own rate makes the test independent of the
+//! ramp speed and the robot's size.
+
+use serde::Serialize;
+use twinloop_robot::{Robot, RobotError, RobotState};
+
+/// A ramp direction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Direction {
+    Forward,
+    Backward,
+    Left,
+    Right,
+}
+
+impl Direction {
+    pub const ALL: [Direction; 4] = [
+        Direction::Forward,
+        Direction::Backward,
+        Direction::Left,
+        Direction::Right,
+    ];
+
+    pub fn is_pitch(self) -> bool {
+        matches!(self, Direction::Forward | Direction::Backward)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Direction::Forward => "forward",
+            Direction::Backward => "backward",
+            Direction::Left => "left",
+            Direction::Right => "right",
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct TipoverConfig {
+    /// Ankle joints: left and right pitch, left and right roll (indices in the robot's
+    /// joint order).
+    pub ankle_pitch: [usize; 2],
+    pub ankle_roll: [usize; 2],
+    /// Sign of the ankle command that leans the robot forward (pitch) and left (roll),
+    /// per ankle joint; depends on the robot's joint axes.
+    pub forward_sign: [f64; 2],
+    pub left_sign: [f64; 2],
+    /// Ramp speed of the ankle command, deg/s (seed 000's falls took 5-15 s over 7-24 deg).
+    pub ramp_deg_per_s: f64,
+    /// Time to stand still before the ramp, s.
+    pub settle_s: f64,
+    /// Control period, s.
+    pub period_s: f64,
+    /// Excess tilt that confirms a fall, deg.
+    pub fall_deg: f64,
+    /// The robot is tipping once its excess tilt grows faster than `onset_ratio` times
+    /// the measured ankle rate, both over `onset_window_s`.
+    pub onset_ratio: f64,
+    pub onset_window_s: f64,
+    /// Give up beyond this ankle command, deg.
+    pub max_deg: f64,
+}
+
+impl TipoverConfig {
+    pub fn new(
+        ankle_pitch: [usize; 2],
+        ankle_roll: [usize; 2],
+        forward_sign: [f64; 2],
+        left_sign: [f64; 2],
+    ) -> Self {
+        TipoverConfig {
+            ankle_pitch,
+            ankle_roll,
+            forward_sign,
+            left_sign,
+            ramp_deg_per_s: 1.5,
+            settle_s: 1.0,
+            period_s: 0.005,
+            fall_deg: 5.0,
+            onset_ratio: 1.5,
+            onset_window_s: 0.1,
+            max_deg: 45.0,
+        }
+    }
+}
+
+/// What one direction gave.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TipoverResult {
+    pub direction: Direction,
+    /// Ankle command (offset from the standing pose) at the onset of tipping, deg.
+    pub commanded_deg: f64,
+    /// Measured ankle angle (offset from the standing pose, mean of both ankles), deg.
+    pub measured_deg: f64,
+    /// Time from the start of the ramp to the onset, s.
+    pub time_s: f64,
+    /// Time from the start of the ramp until the fall was confirmed, s.
+    pub fall_confirmed_s: f64,
+    /// Every joint's measured position at the onset (rad), for analysis.
+    #[serde(skip)]
+    pub positions_at_onset: Vec<f64>,
+}
+
+/// Trunk pitch and roll (rad) from an IMU orientation (x, y, z, w).
+fn tilt(q: [f64; 4]) -> (f64, f64) {
+    let [x, y, z, w] = q;
+    // Third column of the rotation matrix: where the trunk's up axis points.
+    let r02 = 2.0 * (x * z + w * y);
+    let r12 = 2.0 * (y * z - w * x);
+    let r22 = 1.0 - 2.0 * (x * x + y * y);
+    (r02.atan2(r22), (-r12).atan2(r22))
+}
+
+/// Run one direction from `standing` (joint positions). The robot must be standing
+/// still in that pose when called.
+/// Trunk pitch and roll (rad; forward and left positive) predicted from joint positions
+/// with the feet flat on the ground.
+pub type TiltPredictor<'a> = &'a mut dyn FnMut(&[f64]) -> [f64; 2];
+
+pub fn run_direction<R: Robot + ?Sized>(
+    robot: &mut R,
+    standing: &[f64],
+    direction: Direction,
+    cfg: &TipoverConfig,
+    mut predict: Option<TiltPredictor<'_>>,
+) -> Result<TipoverResult, RobotError> {
+    let mut st = RobotState::default();
+    let mut goals = standing.to_vec();
+    robot.command_positions(&goals)?;
+    robot.advance(cfg.settle_s)?;
+    robot.read(&mut st)?;
+    let (joints, signs, dir_sign) = match direction {
+        Direction::Forward => (cfg.ankle_pitch, cfg.forward_sign, 1.0),
+        Direction::Backward => (cfg.ankle_pitch, cfg.forward_sign, -1.0),
+        Direction::Left => (cfg.ankle_roll, cfg.left_sign, 1.0),
+        Direction::Right => (cfg.ankle_roll, cfg.left_sign, -1.0),
+    };
+    let ankle_now = |st: &RobotState| {
+        0.5 * ((st.positions[joints[0]] - standing[joints[0]]) * signs[0]
+            + (st.positions[joints[1]] - standing[joints[1]]) * signs[1])
+            * dir_sign
+    };
+    // Tilt from the IMU orientation if the robot gives one, else the integrated gyro.
+    let mut gyro_tilt = 0.0;
+    let tilt_now = |st: &RobotState, gyro_tilt: f64| -> Result<f64, RobotError> {
+        let imu = st
+            .imu
+            .ok_or_else(|| RobotError::new("the tip-over experiment needs a trunk IMU"))?;
+        Ok(match imu.orientation {
+            Some(q) => {
+                let (p, r) = tilt(q);
+                if direction.is_pitch() { p } else { -r }
+            }
+            None => gyro_tilt,
+        })
+    };
+    let a0 = ankle_now(&st);
+    let t0_tilt = tilt_now(&st, 0.0)?;
+    let lean_sign = match direction {
+        Direction::Forward | Direction::Left => 1.0,
+        Direction::Backward | Direction::Right => -1.0,
+    };
+    let mut predicted = |st: &RobotState, ankle: f64| -> f64 {
+        match predict.as_mut() {
+            Some(p) => {
+                let t = p(&st.positions);
+                if direction.is_pitch() { t[0] } else { t[1] }
+            }
+            None => ankle * lean_sign,
+        }
+    };
+    let p0 = predicted(&st, 0.0);
+    let t_start = robot.time();
+    // History of (command, measured, time, excess) to find the onset afterwards, and
+    // the joint positions of the recent past.
+    let mut history: Vec<(f64, f64, f64, f64)> = Vec::new();
+    let mut positions: Vec<Vec<f64>> = Vec::new();
+    let rate = cfg.ramp_deg_per_s.to_radians();
+    loop {
+        let t = robot.time() - t_start;
+        let cmd = rate * t;
+        if cmd > cfg.max_deg.to_radians() {
+            return Err(RobotError::new(format!(
+                "no fall {} within {} deg of ankle command",
+                direction.name(),
+                cfg.max_deg
+            )));
+        }
+        for k in 0..2 {
+            goals[joints[k]] = standing[joints[k]] + signs[k] * dir_sign * cmd;
+        }
+        robot.command_positions(&goals)?;
+        robot.advance(cfg.period_s)?;
+        robot.read(&mut st)?;
+        if st.imu.is_some_and(|i| i.orientation.is_none()) {
+            let g = st.imu.map(|i| i.gyro).unwrap_or_default();
+            gyro_tilt += cfg.period_s * if direction.is_pitch() { g[1] } else { -g[0] };
+        }
+        let ankle = ankle_now(&st) - a0;
+        // Tilt beyond what the joints explain, in the lean direction.
+        let body = tilt_now(&st, gyro_tilt)? - t0_tilt;
+        let expect = predicted(&st, ankle) - p0;
+        let excess = (body - expect) * lean_sign;
+        history.push((cmd, ankle, robot.time() - t_start, excess));
+        positions.push(st.positions.clone());
+        if excess > cfg.fall_deg.to_radians() {
+            let w = ((cfg.onset_window_s / cfg.period_s).round() as usize).max(1);
+            let onset = (w..history.len())
+                .rev()
+                .find(|&k| {
+                    let excess_rate = history[k].3 - history[k - w].3;
+                    let ankle_rate = history[k].1.abs() - history[k - w].1.abs();
+                    excess_rate <= cfg.onset_ratio * ankle_rate.max(0.0)
+                })
+                .unwrap_or(0);
+            let (c, m, t, _) = history[onset];
+            return Ok(TipoverResult {
+                direction,
+                commanded_deg: c.to_degrees(),
+                measured_deg: m.abs().to_degrees(),
+                time_s: t,
+                fall_confirmed_s: robot.time() - t_start,
+                positions_at_onset: std::mem::take(&mut positions[onset]),
+            });
+        }
+    }
+}
+
+/// Run the four directions; `reset` puts the robot back standing in `standing` before
+/// each (the simulator re-places itself; a real robot waits for a person).
+pub fn run_tipover<R: Robot + ?Sized>(
+    robot: &mut R,
+    standing: &[f64],
+    cfg: &TipoverConfig,
+    reset: &mut dyn FnMut(&mut R) -> Result<(), RobotError>,
+    mut predict: Option<TiltPredictor<'_>>,
+) -> Result<Vec<TipoverResult>, RobotError> {
+    let mut out = Vec::with_capacity(4);
+    for d in Direction::ALL {
+        reset(robot)?;
+        let p: Option<TiltPredictor<'_>> = match predict.as_mut() {
+            Some(p) => Some(&mut **p),
+            None => None,
+        };
+        out.push(run_direction(robot, standing, d, cfg, p)?);
+    }
+    Ok(out)
+}

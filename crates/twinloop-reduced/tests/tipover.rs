@@ -1,0 +1,222 @@
+//! Tip-over CoM estimators against analytic truth, hand-computed seed formulas, and
+//! seed 001's three-mass check.
+
+use nalgebra::{Rotation3, Vector3};
+use twinloop_reduced::tipover::{
+    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, seed_method,
+    seed_method_sagittal_angles, tip_angles,
+};
+use twinloop_robots::{FootGeometry, foot_geometry};
+
+fn km20_foot() -> FootGeometry {
+    foot_geometry("km20").unwrap()
+}
+
+/// Rotate the CoM as the tipping robot does and check it is exactly above each edge:
+/// an independent check of the angles (rotation matrices, not the tip equation).
+fn check_above_edges(com: [f64; 3], a: &TipAngles, foot: &FootGeometry) {
+    let c = Vector3::new(com[0], com[1], com[2]);
+    // Leaning forward by t turns the body about +y by +t (up tilts towards +x).
+    let fwd = Rotation3::from_axis_angle(&Vector3::y_axis(), a.forward) * c;
+    assert!((fwd.x - foot.front).abs() < 1e-12, "forward {}", fwd.x);
+    let bwd = Rotation3::from_axis_angle(&Vector3::y_axis(), -a.backward) * c;
+    assert!((bwd.x + foot.back).abs() < 1e-12, "backward {}", bwd.x);
+    // Leaning left by t turns the body about +x by -t around the left roll axis.
+    let zr = foot.roll_axis_height - foot.ankle_height;
+    let d = foot.ankle_half_spacing;
+    let pl = Vector3::new(0.0, d, zr);
+    let left = pl + Rotation3::from_axis_angle(&Vector3::x_axis(), -a.left) * (c - pl);
+    assert!((left.y - (d + foot.outer)).abs() < 1e-12, "left {}", left.y);
+    let pr = Vector3::new(0.0, -d, zr);
+    let right = pr + Rotation3::from_axis_angle(&Vector3::x_axis(), a.right) * (c - pr);
+    assert!(
+        (right.y + d + foot.outer).abs() < 1e-12,
+        "right {}",
+        right.y
+    );
+}
+
+#[test]
+fn exact_method_recovers_a_known_com() {
+    for (foot, com) in [
+        (km20_foot(), [0.012, -0.004, 0.21]),
+        (km20_foot(), [-0.02, 0.006, 0.25]),
+        (foot_geometry("lab17").unwrap(), [0.005, 0.003, 0.14]),
+        (foot_geometry("lab17").unwrap(), [-0.01, -0.004, 0.12]),
+    ] {
+        let a = tip_angles(com, &foot).unwrap();
+        check_above_edges(com, &a, &foot);
+        let e = exact_method(&a, &foot).unwrap();
+        for k in 0..3 {
+            assert!((e.com[k] - com[k]).abs() < 1e-9, "{:?} vs {com:?}", e.com);
+        }
+        assert!((e.z_frontal - com[2]).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn a_com_above_the_ankle_tips_at_asin_f_over_h() {
+    let mut foot = km20_foot();
+    foot.front = 0.05;
+    foot.back = 0.05;
+    let h = 0.2;
+    let a = tip_angles([0.0, 0.0, h], &foot).unwrap();
+    // The CoM swings on a circle of radius h about the ankle axis and is above the
+    // edge when h sin(theta) = F.
+    assert!((a.forward - (0.05f64 / h).asin()).abs() < 1e-14);
+    assert!((a.backward - (0.05f64 / h).asin()).abs() < 1e-14);
+    // Sideways: the CoM is d = 0.04 inside the pivot, the edge 0.035 outside it:
+    // the body must turn until (y - d) cos + z sin = outer, i.e. by
+    // atan2(h, -d) - acos(0.035 / hypot(d, h)).
+    let d = foot.ankle_half_spacing;
+    let want = h.atan2(-d) - (0.035 / d.hypot(h)).acos();
+    assert!((a.left - want).abs() < 1e-15 && (a.right - want).abs() < 1e-15);
+    let e = exact_method(&a, &foot).unwrap();
+    assert!(e.com[0].abs() < 1e-12 && e.com[1].abs() < 1e-12);
+    assert!((e.com[2] - h).abs() < 1e-12);
+}
+
+#[test]
+fn seed_method_is_eq_8_to_13_as_printed() {
+    // Hand values (computed separately, F1 3.5 cm, F2 9.5 cm, L0 3.1 cm):
+    // gamma1 = (9 + 16.8)/2 - 9 = 3.9; L1 = tan(73.2 deg) 0.095 = 0.314655...;
+    // theta1 = atan((L1 + 0.031)/0.095) = 74.632...; L3 = 0.095 / cos(theta1);
+    // D1 = L3 tan(3.9 deg); gamma2 = 7 - 5 = 2; alpha2 < beta2 so W1 = +L3 tan(2 deg).
+    let a = SeedAngles {
+        alpha1: 9.0,
+        beta1: 16.8,
+        alpha2: 5.0,
+        beta2: 7.0,
+    };
+    let e = seed_method(&a, &SEED_000_CONSTANTS).unwrap();
+    assert!((e.gamma1 - 3.9).abs() < 1e-12);
+    assert!((e.l1 - 0.31465518059599057).abs() < 1e-12);
+    assert!((e.theta1 - 74.63225182777434).abs() < 1e-9);
+    assert!((e.l3 - 0.3584724590158172).abs() < 1e-12);
+    assert!((e.d1 - 0.024438200553688973).abs() < 1e-12);
+    assert!((e.gamma2 - 2.0).abs() < 1e-12);
+    assert!((e.w1 - 0.012518134110431338).abs() < 1e-12);
+    assert_eq!(e.com, [e.d1, e.w1, e.l3]);
+    // alpha2 >= beta2 flips the sign of W1 (eq. 13's first case).
+    let b = seed_method(
+        &SeedAngles {
+            alpha2: 7.0,
+            beta2: 5.0,
+            ..a
+        },
+        &SEED_000_CONSTANTS,
+    )
+    .unwrap();
+    assert!((b.w1 + e.w1).abs() < 1e-15);
+    // phi is in none of the formulas.
+    let c = seed_method(
+        &a,
+        &SeedConstants {
+            phi: 99.0,
+            ..SEED_000_CONSTANTS
+        },
+    )
+    .unwrap();
+    assert_eq!(c, e);
+    // Eq. 8: raw positions, 300 degrees over 1024 steps. 30 steps forward of centre and
+    // 57 behind: alpha1 = 30 * 300/1024 = 8.7890625, beta1 = 57 * 300/1024 = 16.69921875.
+    let p = SeedAngles::from_positions(512.0, 482.0, 569.0, 497.0, 530.0).unwrap();
+    assert_eq!(p.alpha1, 8.7890625);
+    assert_eq!(p.beta1, 16.69921875);
+    assert_eq!(p.alpha2, 15.0 * 300.0 / 1024.0);
+    assert_eq!(p.beta2, 18.0 * 300.0 / 1024.0);
+    // The inverse used for seed 001's check gives the angles back.
+    let (a1, b1) = seed_method_sagittal_angles(e.d1, e.l3, &SEED_000_CONSTANTS).unwrap();
+    assert!(
+        (a1 - 9.0).abs() < 1e-9 && (b1 - 16.8).abs() < 1e-9,
+        "{a1} {b1}"
+    );
+}
+
+/// Seed 001 section F: masses (kg) and positions (cm) "measured from the origin of the
+/// virtual frame": left leg 0.740 at (15.23, 4.17, 8.81), right leg 0.738 at (15.23,
+/// -3.92, 8.81), hip 2.02 at (38.8, -1.2, -4.7); the robot fell at 9 degrees forward
+/// and (in simulation) 16.8 degrees backward.
+const SEED_001: [(f64, [f64; 3]); 3] = [
+    (0.740, [15.23, 4.17, 8.81]),
+    (0.738, [15.23, -3.92, 8.81]),
+    (2.02, [38.8, -1.2, -4.7]),
+];
+
+#[test]
+fn seed_001_masses_fall_near_9_and_16_8_degrees() {
+    // The seed's x is the height (its eq. 4 adds g to x''), y lateral; with x up and y
+    // left a right-handed frame's z points backwards, so our forward x is -z_seed.
+    let m: f64 = SEED_001.iter().map(|(m, _)| m).sum();
+    let c = |k: usize| SEED_001.iter().map(|(mi, p)| mi * p[k]).sum::<f64>() / m / 100.0;
+    let com = [-c(2), c(1), c(0)];
+    let a = tip_angles(com, &km20_foot()).unwrap().to_degrees();
+    assert!((a[0] - 9.0).abs() < 0.1, "forward {}", a[0]);
+    assert!((a[1] - 16.8).abs() < 0.5, "backward {}", a[1]);
+    // And the exact method turns those angles back into the three masses' CoM.
+    let e = exact_method(&tip_angles(com, &km20_foot()).unwrap(), &km20_foot()).unwrap();
+    assert!((e.com[0] - com[0]).abs() < 1e-12 && (e.com[2] - com[2]).abs() < 1e-12);
+}
+
+#[test]
+fn bad_input_names_the_field() {
+    let foot = km20_foot();
+    // CoM beyond the front edge: the robot cannot stand.
+    assert_eq!(
+        tip_angles([0.05, 0.0, 0.2], &foot).unwrap_err().field,
+        "forward"
+    );
+    assert_eq!(
+        tip_angles([0.0, 0.0, -0.1], &foot).unwrap_err().field,
+        "forward"
+    );
+    assert_eq!(
+        tip_angles([0.0, f64::NAN, 0.2], &foot).unwrap_err().field,
+        "com.y"
+    );
+    let good = tip_angles([0.0, 0.0, 0.2], &foot).unwrap();
+    let e = exact_method(
+        &TipAngles {
+            backward: 0.0,
+            ..good
+        },
+        &foot,
+    )
+    .unwrap_err();
+    assert_eq!(e.field, "angles.backward");
+    let e = exact_method(
+        &TipAngles {
+            left: f64::NAN,
+            ..good
+        },
+        &foot,
+    )
+    .unwrap_err();
+    assert_eq!(e.field, "angles.left");
+    let mut flat = foot.clone();
+    flat.front = 0.0;
+    assert_eq!(exact_method(&good, &flat).unwrap_err().field, "foot.front");
+    let e = seed_method(
+        &SeedAngles {
+            alpha1: 9.0,
+            beta1: 0.0,
+            alpha2: 1.0,
+            beta2: 1.0,
+        },
+        &SEED_000_CONSTANTS,
+    )
+    .unwrap_err();
+    assert_eq!(e.field, "angles.beta1");
+    assert_eq!(
+        seed_method_sagittal_angles(0.0, 0.05, &SEED_000_CONSTANTS)
+            .unwrap_err()
+            .field,
+        "z"
+    );
+    assert_eq!(
+        SeedAngles::from_positions(512.0, f64::NAN, 0.0, 0.0, 0.0)
+            .unwrap_err()
+            .field,
+        "max_forward"
+    );
+}

@@ -1,0 +1,251 @@
+//! Sensors: joint encoders with quantisation, a trunk IMU (MPU-6050 scales), joint
+//! load, and foot force with centre of pressure.
+
+use crate::simulator::Simulator;
+use nalgebra::Vector3;
+use twinloop_dynamics::{BASE, Data, Model, compute_joint_jacobians};
+use twinloop_model::Robot;
+use twinloop_robot::{FootSensor, Imu, RobotState};
+
+/// MPU-6050 gyro scale at +-250 deg/s: 131 LSB per deg/s.
+pub const MPU6050_GYRO_LSB_PER_DEG_S: f64 = 131.0;
+/// MPU-6050 accelerometer scale at +-2 g: 16384 LSB per g.
+pub const MPU6050_ACCEL_LSB_PER_G: f64 = 16384.0;
+/// Dynamixel AX/RX/MX(1.0) encoder: 1024 counts over 300 degrees.
+pub const DYNAMIXEL_RX_COUNTS_PER_300_DEG: f64 = 1024.0;
+
+/// Sensor settings and state.
+#[derive(Debug, Clone)]
+pub struct SensorState {
+    /// Per joint: encoder resolution in rad per count (`None`: exact).
+    pub encoder_resolution: Vec<Option<f64>>,
+    /// Description link carrying the IMU (default: the base link).
+    pub imu_link: usize,
+    /// Quantise the IMU like an MPU-6050 (131 LSB per deg/s, 16384 LSB per g).
+    pub imu_quantize: bool,
+    /// Gaussian noise standard deviations, rad/s and m/s^2.
+    pub gyro_noise: f64,
+    pub accel_noise: f64,
+    /// Links whose contact forces are reported as feet.
+    pub feet: Vec<usize>,
+    rng: u64,
+    imu_velocity: Vector3<f64>,
+    imu_velocity_time: Option<f64>,
+    g: Vector3<f64>,
+}
+
+fn imu_world_velocity(
+    model: &Model,
+    data: &Data,
+    v: &[f64],
+    link: usize,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let info = &model.links[link];
+    let x = if info.body == BASE {
+        data.base_placement
+    } else {
+        data.o_m_i[info.body]
+    } * info.placement;
+    let mut lin = Vector3::zeros();
+    let mut ang = Vector3::zeros();
+    let mut add = |dof: usize| {
+        let c = data.joint_jacobians.column(dof);
+        let l = Vector3::new(c[0], c[1], c[2]);
+        let a = Vector3::new(c[3], c[4], c[5]);
+        lin += (l + a.cross(&x.translation)) * v[dof];
+        ang += a * v[dof];
+    };
+    for d in 0..model.v_offset {
+        add(d);
+    }
+    if info.body != BASE {
+        for b in model.ancestors(info.body) {
+            add(model.v_offset + b);
+        }
+    }
+    (lin, ang)
+}
+
+impl SensorState {
+    pub fn new(model: &Model, robot: &Robot) -> Self {
+        let imu_link = model
+            .links
+            .iter()
+            .position(|l| l.name == model.base_link)
+            .unwrap_or(0);
+        // Feet by default: the two links owning the lowest collision boxes of the legs,
+        // found by name first (common conventions), else none until set.
+        let mut feet = Vec::new();
+        for (i, l) in robot.links.iter().enumerate() {
+            let n = l.name.to_lowercase();
+            let has_box = l
+                .collisions
+                .iter()
+                .any(|c| matches!(c.geometry, twinloop_model::Geometry::Box { .. }));
+            if has_box
+                && (n.contains("foot")
+                    || n.contains("sole")
+                    || n.contains("ank_roll")
+                    || n.contains("ankle_roll"))
+            {
+                feet.push(i);
+            }
+        }
+        SensorState {
+            encoder_resolution: vec![None; model.nbodies],
+            imu_link,
+            imu_quantize: false,
+            gyro_noise: 0.0,
+            accel_noise: 0.0,
+            feet,
+            rng: 0x5EED_1234_ABCD_0001,
+            imu_velocity: Vector3::zeros(),
+            imu_velocity_time: None,
+            g: model.gravity,
+        }
+    }
+
+    pub(crate) fn reset(&mut self) {
+        self.imu_velocity_time = None;
+    }
+
+    /// Record the IMU point's world velocity at the start of a step.
+    pub(crate) fn observe(&mut self, model: &Model, data: &Data, v: &[f64]) {
+        self.imu_velocity = imu_world_velocity(model, data, v, self.imu_link).0;
+        self.imu_velocity_time = Some(0.0);
+    }
+
+    fn normal(&mut self) -> f64 {
+        let mut u = || {
+            self.rng = self.rng.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.rng;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (a, b) = (u().max(f64::MIN_POSITIVE), u());
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+
+    pub fn set_noise_seed(&mut self, seed: u64) {
+        self.rng = seed;
+    }
+}
+
+/// Quantise to a step.
+#[inline]
+pub fn quantize(x: f64, step: f64) -> f64 {
+    (x / step).round() * step
+}
+
+impl Simulator {
+    /// Give every joint a Dynamixel RX encoder (1024 counts over 300 degrees).
+    pub fn use_dynamixel_encoders(&mut self) {
+        let res = 300f64.to_radians() / DYNAMIXEL_RX_COUNTS_PER_300_DEG;
+        self.sensors
+            .encoder_resolution
+            .iter_mut()
+            .for_each(|r| *r = Some(res));
+    }
+
+    pub fn sensors_mut(&mut self) -> &mut SensorState {
+        &mut self.sensors
+    }
+
+    pub fn sensors(&self) -> &SensorState {
+        &self.sensors
+    }
+
+    /// Set the feet by link name.
+    pub fn set_feet(&mut self, names: &[&str]) -> Result<(), crate::SimError> {
+        let mut feet = Vec::new();
+        for n in names {
+            let i = self
+                .model
+                .links
+                .iter()
+                .position(|l| l.name == *n)
+                .ok_or_else(|| {
+                    crate::SimError::Input(format!("no link named \"{n}\" for a foot"))
+                })?;
+            feet.push(i);
+        }
+        self.sensors.feet = feet;
+        Ok(())
+    }
+
+    /// Read every sensor into `state` (the `Robot` interface's measurement).
+    pub fn read_sensors(&mut self, state: &mut RobotState) {
+        let nb = self.model.nbodies;
+        let (qo, vo) = (self.model.q_offset, self.model.v_offset);
+        state.time = self.time;
+        state.positions.resize(nb, 0.0);
+        for i in 0..nb {
+            let q = self.q[qo + i];
+            state.positions[i] = match self.sensors.encoder_resolution[i] {
+                Some(r) => quantize(q, r),
+                None => q,
+            };
+        }
+        let vel = state.velocities.get_or_insert_with(Vec::new);
+        vel.clear();
+        vel.extend_from_slice(&self.v[vo..]);
+        let eff = state.efforts.get_or_insert_with(Vec::new);
+        eff.clear();
+        eff.extend_from_slice(&self.applied);
+        // IMU: angular velocity and specific force in the IMU frame.
+        compute_joint_jacobians(&self.model, &mut self.data, &self.q);
+        let link = self.sensors.imu_link;
+        let (lin, ang) = imu_world_velocity(&self.model, &self.data, &self.v, link);
+        let info = &self.model.links[link];
+        let x = if info.body == BASE {
+            self.data.base_placement
+        } else {
+            self.data.o_m_i[info.body]
+        } * info.placement;
+        let accel_world = match self.sensors.imu_velocity_time {
+            Some(_) => (lin - self.sensors.imu_velocity) / self.config.dt,
+            None => Vector3::zeros(),
+        };
+        let rt = x.rotation.transpose();
+        let mut gyro = rt * ang;
+        let mut accel = rt * (accel_world - self.sensors.g);
+        if self.sensors.gyro_noise > 0.0 || self.sensors.accel_noise > 0.0 {
+            for k in 0..3 {
+                gyro[k] += self.sensors.gyro_noise * self.sensors.normal();
+                accel[k] += self.sensors.accel_noise * self.sensors.normal();
+            }
+        }
+        if self.sensors.imu_quantize {
+            let gstep = (1.0 / MPU6050_GYRO_LSB_PER_DEG_S).to_radians();
+            let astep = 9.81 / MPU6050_ACCEL_LSB_PER_G;
+            gyro = gyro.map(|w| quantize(w, gstep));
+            accel = accel.map(|a| quantize(a, astep));
+        }
+        state.imu = Some(Imu {
+            gyro: [gyro.x, gyro.y, gyro.z],
+            accel: [accel.x, accel.y, accel.z],
+            orientation: Some(twinloop_spatial::matrix_to_quaternion_xyzw(&x.rotation)),
+        });
+        // Feet: total normal force and centre of pressure of each foot link's points.
+        state
+            .feet
+            .resize_with(self.sensors.feet.len(), FootSensor::default);
+        for (k, &link) in self.sensors.feet.iter().enumerate() {
+            let (mut f, mut mx, mut my) = (0.0, 0.0, 0.0);
+            for (p, c) in self.points.iter().zip(&self.contacts) {
+                if p.link == link && c.active {
+                    f += c.force.z;
+                    mx += c.force.z * c.position.x;
+                    my += c.force.z * c.position.y;
+                }
+            }
+            let s = &mut state.feet[k];
+            if s.name != self.model.links[link].name {
+                s.name = self.model.links[link].name.clone();
+            }
+            s.force = f;
+            s.cop = (f > 0.0).then(|| [mx / f, my / f]);
+        }
+    }
+}

@@ -1,0 +1,599 @@
+//! The simulator: state, configuration and the time step.
+
+use crate::actuator::{Actuator, Drive};
+use crate::contact::{ContactParams, ContactPoint, ContactState, contact_points};
+use crate::ltdl;
+use nalgebra::{DMatrix, Vector3};
+use std::fmt;
+use twinloop_dynamics::configuration::integrate;
+use twinloop_dynamics::{BASE, Data, Model, compute_joint_jacobians, crba, nonlinear_effects};
+use twinloop_model::{ModelError, Robot};
+use twinloop_spatial::Se3;
+
+/// Simulation settings. `Default` gives a 1 ms step, gravity 9.81, a ground plane,
+/// contact parameters scaled to the robot's mass and stiff joint-limit springs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimConfig {
+    /// Time step, s.
+    pub dt: f64,
+    /// Gravity acceleration (world), m/s^2.
+    pub gravity: Vector3<f64>,
+    /// Whether there is a ground plane at z = 0.
+    pub ground: bool,
+    /// Contact parameters; `None`: derived from the robot's mass (1 mm sink on 8 points).
+    pub contact: Option<ContactParams>,
+    /// Joint-limit spring and damper beyond a limit, N m/rad and N m s/rad; `None`:
+    /// scaled to the robot (its weight times 1 m per radian).
+    pub joint_limit_stiffness: Option<f64>,
+    pub joint_limit_damping: Option<f64>,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            dt: 1e-3,
+            gravity: Vector3::new(0.0, 0.0, -9.81),
+            ground: true,
+            contact: None,
+            joint_limit_stiffness: None,
+            joint_limit_damping: None,
+        }
+    }
+}
+
+/// Why a simulation could not go on.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SimError {
+    /// The description cannot be compiled.
+    Model(ModelError),
+    /// The state became non-finite or the step matrix lost positive definiteness.
+    Diverged { time: f64, message: String },
+    /// A name or size given by the caller does not fit the robot.
+    Input(String),
+}
+
+impl fmt::Display for SimError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SimError::Model(e) => write!(f, "{e}"),
+            SimError::Diverged { time, message } => {
+                write!(f, "the simulation diverged at t = {time} s: {message}")
+            }
+            SimError::Input(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for SimError {}
+
+impl From<ModelError> for SimError {
+    fn from(e: ModelError) -> Self {
+        SimError::Model(e)
+    }
+}
+
+/// Per-body sums of its contact points for one step.
+#[derive(Debug, Clone, Default)]
+struct ContactBody {
+    active: bool,
+    /// World twist of the body (spatial velocity at the world origin).
+    twist: nalgebra::Vector6<f64>,
+    /// Sum of A_p^T W_p A_p over its points.
+    matrix: nalgebra::Matrix6<f64>,
+    /// Sum of the points' step forces as a wrench about the world origin.
+    wrench: nalgebra::Vector6<f64>,
+}
+
+/// A robot simulated over the reduced-coordinate dynamics.
+pub struct Simulator {
+    pub model: Model,
+    pub(crate) data: Data,
+    pub config: SimConfig,
+    pub contact_params: ContactParams,
+    pub joint_limit_stiffness: f64,
+    pub joint_limit_damping: f64,
+    /// Configuration and velocity (Pinocchio's conventions, see `twinloop_dynamics`).
+    pub q: Vec<f64>,
+    pub v: Vec<f64>,
+    /// Simulated time, s.
+    pub time: f64,
+    /// One actuator per joint (model joint order).
+    pub actuators: Vec<Actuator>,
+    /// Per joint: the position goal (servos) or the torque (torque actuators).
+    pub goals: Vec<f64>,
+    /// Viscous damping and Coulomb friction per joint from the description.
+    pub joint_damping: Vec<f64>,
+    pub joint_friction: Vec<f64>,
+    friction_anchor: Vec<f64>,
+    /// Torque each actuator applied in the last step.
+    pub applied: Vec<f64>,
+    pub(crate) points: Vec<ContactPoint>,
+    pub(crate) contacts: Vec<ContactState>,
+    /// Links with mesh collisions only (no contact points).
+    pub mesh_only_links: Vec<String>,
+    dof_parent: Vec<usize>,
+    /// Per body (index nbodies = the base): its DOFs and all ancestors', deepest first.
+    chains: Vec<Vec<usize>>,
+    h: DMatrix<f64>,
+    rhs: Vec<f64>,
+    q_next: Vec<f64>,
+    contact_bodies: Vec<ContactBody>,
+    js: Vec<nalgebra::Vector6<f64>>,
+    su: Vec<nalgebra::Vector6<f64>>,
+    pub(crate) sensors: crate::sensors::SensorState,
+}
+
+impl Simulator {
+    /// A simulator of `robot` with a floating base, every joint passive, standing at the
+    /// neutral configuration (call [`Simulator::place_on_ground`] to put it on the floor).
+    pub fn new(robot: &Robot, config: SimConfig) -> Result<Simulator, SimError> {
+        let model = Model::from_robot(robot)?;
+        Simulator::from_model(robot, model, config)
+    }
+
+    /// As [`Simulator::new`] with a model compiled by the caller (e.g. a fixed base).
+    pub fn from_model(
+        robot: &Robot,
+        mut model: Model,
+        config: SimConfig,
+    ) -> Result<Simulator, SimError> {
+        if !(config.dt > 0.0 && config.dt.is_finite()) {
+            return Err(SimError::Input(format!(
+                "the time step must be positive, not {}",
+                config.dt
+            )));
+        }
+        model.gravity = config.gravity;
+        let data = Data::new(&model);
+        let (points, mesh_only_links) = contact_points(robot, &model);
+        let contact_params = config
+            .contact
+            .unwrap_or_else(|| ContactParams::for_robot(model.total_mass, 8, 1e-3));
+        let nb = model.nbodies;
+        let off = model.v_offset;
+        let mut dof_parent = vec![ltdl::NONE; model.nv];
+        // The free flyer's six DOFs form a chain (its 6x6 block is dense).
+        for (k, p) in dof_parent.iter_mut().enumerate().take(off).skip(1) {
+            *p = k - 1;
+        }
+        for i in 0..nb {
+            let p = model.parents[i];
+            dof_parent[off + i] = if p == BASE {
+                if off > 0 { off - 1 } else { ltdl::NONE }
+            } else {
+                off + p
+            };
+        }
+        let mut chains = Vec::with_capacity(nb + 1);
+        for i in 0..=nb {
+            let mut c = Vec::new();
+            let mut d = if i == nb {
+                if off > 0 { off - 1 } else { ltdl::NONE }
+            } else {
+                off + i
+            };
+            while d != ltdl::NONE {
+                c.push(d);
+                d = dof_parent[d];
+            }
+            chains.push(c);
+        }
+        let max_chain = chains.iter().map(Vec::len).max().unwrap_or(0);
+        let mut joint_damping = vec![0.0; nb];
+        let mut joint_friction = vec![0.0; nb];
+        for (i, name) in model.joint_names.iter().enumerate() {
+            if let Some(dy) = robot.joint(name).and_then(|j| j.dynamics) {
+                joint_damping[i] = dy.damping.unwrap_or(0.0).max(0.0);
+                joint_friction[i] = dy.friction.unwrap_or(0.0).max(0.0);
+            }
+        }
+        let weight = model.total_mass * config.gravity.norm();
+        let limit_k = config
+            .joint_limit_stiffness
+            .unwrap_or(weight.max(1.0) * 1.0);
+        let limit_d = config.joint_limit_damping.unwrap_or(0.1 * limit_k.sqrt());
+        let q = model.neutral_configuration();
+        let sensors = crate::sensors::SensorState::new(&model, robot);
+        Ok(Simulator {
+            data,
+            contact_params,
+            joint_limit_stiffness: limit_k,
+            joint_limit_damping: limit_d,
+            v: vec![0.0; model.nv],
+            q_next: q.clone(),
+            q,
+            time: 0.0,
+            actuators: vec![Actuator::Passive; nb],
+            goals: vec![0.0; nb],
+            joint_damping,
+            joint_friction,
+            friction_anchor: vec![0.0; nb],
+            applied: vec![0.0; nb],
+            contacts: vec![ContactState::default(); points.len()],
+            points,
+            mesh_only_links,
+            dof_parent,
+            chains,
+            h: DMatrix::zeros(model.nv, model.nv),
+            rhs: vec![0.0; model.nv],
+            contact_bodies: vec![ContactBody::default(); nb + 1],
+            js: vec![nalgebra::Vector6::zeros(); max_chain],
+            su: vec![nalgebra::Vector6::zeros(); max_chain],
+            sensors,
+            model,
+            config,
+        })
+    }
+
+    /// Index of a joint by name.
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.model.joint_index(name)
+    }
+
+    pub fn dt(&self) -> f64 {
+        self.config.dt
+    }
+
+    /// Contact points (for inspection and tests).
+    pub fn contact_points(&self) -> &[ContactPoint] {
+        &self.points
+    }
+
+    pub fn contact_states(&self) -> &[ContactState] {
+        &self.contacts
+    }
+
+    /// Set every joint's actuator.
+    pub fn set_all_actuators(&mut self, a: Actuator) {
+        self.actuators.iter_mut().for_each(|x| *x = a);
+    }
+
+    /// Set joint positions (model order), keep the base where it is, zero velocities.
+    pub fn set_joint_positions(&mut self, joints: &[f64]) -> Result<(), SimError> {
+        if joints.len() != self.model.nbodies {
+            return Err(SimError::Input(format!(
+                "{} joint positions given, the robot has {} joints",
+                joints.len(),
+                self.model.nbodies
+            )));
+        }
+        let o = self.model.q_offset;
+        self.q[o..].copy_from_slice(joints);
+        self.friction_anchor.copy_from_slice(joints);
+        self.v.iter_mut().for_each(|x| *x = 0.0);
+        for (i, a) in self.actuators.iter_mut().enumerate() {
+            if let Actuator::SeriesElastic(s) = a {
+                s.theta = joints[i];
+                s.theta_dot = 0.0;
+            }
+        }
+        self.contacts
+            .iter_mut()
+            .for_each(|c| *c = ContactState::default());
+        Ok(())
+    }
+
+    /// Put the robot upright on the ground: joints at `joints`, base orientation
+    /// identity, the lowest contact point just touching z = 0, all at rest. Servo
+    /// goals are set to the joint positions so it holds the pose.
+    pub fn place_on_ground(&mut self, joints: &[f64]) -> Result<(), SimError> {
+        self.set_joint_positions(joints)?;
+        if self.model.is_floating() {
+            self.q[0..3].copy_from_slice(&[0.0, 0.0, 0.0]);
+            self.q[3..7].copy_from_slice(&[0.0, 0.0, 0.0, 1.0]);
+            twinloop_dynamics::forward_kinematics(&self.model, &mut self.data, &self.q);
+            let mut lowest = f64::INFINITY;
+            for p in &self.points {
+                lowest = lowest.min(self.body_placement(p.body).act_point(&p.local).z - p.radius);
+            }
+            if lowest.is_finite() {
+                self.q[2] = -lowest;
+            }
+        }
+        for (i, a) in self.actuators.iter().enumerate() {
+            if !matches!(a, Actuator::Torque | Actuator::Passive) {
+                self.goals[i] = joints[i];
+            }
+        }
+        self.sensors.reset();
+        Ok(())
+    }
+
+    /// World placement of a body after the last kinematics pass.
+    pub(crate) fn body_placement(&self, body: usize) -> Se3 {
+        if body == BASE {
+            self.data.base_placement
+        } else {
+            self.data.o_m_i[body]
+        }
+    }
+
+    fn joint_drive(&mut self, i: usize) -> Drive {
+        let dof = self.model.v_offset + i;
+        let (q, v) = (self.q[self.model.q_offset + i], self.v[dof]);
+        let mut d = match &self.actuators[i] {
+            Actuator::Passive => Drive::default(),
+            Actuator::Torque => Drive {
+                tau: self.goals[i],
+                k: 0.0,
+                d: 0.0,
+            },
+            Actuator::Dynamixel(s) => s.drive(self.goals[i], q, v),
+            Actuator::TwoLoop(s) => s.drive(self.goals[i], q, v),
+            Actuator::SeriesElastic(s) => s.drive(q, v),
+        };
+        self.applied[i] = d.tau;
+        // Description damping (viscous) and dry friction. Dry friction is a stick spring
+        // to an anchor angle, capped at the friction torque (the anchor follows when it
+        // slips), like the contacts' tangential model: a joint under a load below its
+        // friction holds still instead of creeping, which velocity-smoothed Coulomb
+        // friction cannot do.
+        d.tau -= self.joint_damping[i] * v;
+        d.d += self.joint_damping[i];
+        let fr = self.joint_friction[i];
+        if fr > 0.0 {
+            // Full friction torque at 0.1 mrad of deflection; damping for a crisp stick.
+            let kf = fr / 1e-4;
+            let df = 2.0 * fr / 1e-2;
+            let anchor = &mut self.friction_anchor[i];
+            let mut t = -kf * (q - *anchor) - df * v;
+            if t.abs() > fr {
+                t = fr * t.signum();
+                *anchor = q + t / kf;
+            } else {
+                d.k += kf;
+                d.d += df;
+            }
+            d.tau += t;
+        }
+        // Joint limits: a stiff spring-damper beyond the range.
+        let (lo, hi) = (self.model.lower_limits[i], self.model.upper_limits[i]);
+        let over = if q < lo {
+            q - lo
+        } else if q > hi {
+            q - hi
+        } else {
+            0.0
+        };
+        if over != 0.0 {
+            d.tau -= self.joint_limit_stiffness * over + self.joint_limit_damping * v;
+            d.k += self.joint_limit_stiffness;
+            d.d += self.joint_limit_damping;
+        }
+        d
+    }
+
+    /// Advance one time step.
+    ///
+    /// Linearly implicit Euler: with M the mass matrix (CRBA), b = C v + g (RNEA), and
+    /// every spring-damper (servos, joint limits, contacts) linearised as stiffness K and
+    /// damping D in joint space,
+    /// `(M + dt D + dt^2 K) dv = dt (tau + J^T f - b - dt K v)`, then `v += dv`,
+    /// `q = q (+) v dt`. Without springs this is semi-implicit Euler on ABA's
+    /// accelerations; with them it stays stable for stiffness that an explicit step would
+    /// need a far smaller dt for (MuJoCo's "implicitfast" idea, here including the
+    /// contact springs). The matrix keeps the tree's sparsity, so it is factorised in
+    /// O(n d^2) (`ltdl`).
+    pub fn step(&mut self) -> Result<(), SimError> {
+        let dt = self.config.dt;
+        let nv = self.model.nv;
+        let off = self.model.v_offset;
+        // Kinematics and world Jacobians, mass matrix, bias forces.
+        compute_joint_jacobians(&self.model, &mut self.data, &self.q);
+        self.sensors.observe(&self.model, &self.data, &self.v);
+        crba(&self.model, &mut self.data, &self.q);
+        for i in 0..nv {
+            self.h[(i, i)] = self.data.mass_matrix[(i, i)];
+            let mut j = self.dof_parent[i];
+            while j != ltdl::NONE {
+                self.h[(i, j)] = self.data.mass_matrix[(j, i)];
+                j = self.dof_parent[j];
+            }
+        }
+        let nle = nonlinear_effects(&self.model, &mut self.data, &self.q, &self.v);
+        for i in 0..nv {
+            self.rhs[i] = -nle[i];
+        }
+        // Joint actuators, damping, limits.
+        for i in 0..self.model.nbodies {
+            let d = self.joint_drive(i);
+            let dof = off + i;
+            self.rhs[dof] += d.tau - dt * d.k * self.v[dof];
+            self.h[(dof, dof)] += dt * d.d + dt * dt * d.k + self.model.armature[i];
+        }
+        if self.config.ground {
+            self.add_contacts(dt);
+        }
+        // Solve for the velocity change.
+        if let Err(k) = ltdl::factor(&mut self.h, &self.dof_parent) {
+            return Err(SimError::Diverged {
+                time: self.time,
+                message: format!(
+                    "the step matrix is not positive definite at velocity coordinate {k}"
+                ),
+            });
+        }
+        for x in self.rhs.iter_mut() {
+            *x *= dt;
+        }
+        ltdl::solve(&self.h, &self.dof_parent, &mut self.rhs);
+        for i in 0..nv {
+            self.v[i] += self.rhs[i];
+        }
+        integrate(&self.model, &self.q, &self.v, dt, &mut self.q_next);
+        std::mem::swap(&mut self.q, &mut self.q_next);
+        // Series-elastic motors follow their goals with the link at its new state.
+        let qo = self.model.q_offset;
+        for i in 0..self.model.nbodies {
+            if let Actuator::SeriesElastic(s) = &mut self.actuators[i] {
+                s.advance_motor(self.goals[i], self.q[qo + i], self.v[off + i], dt);
+            }
+        }
+        self.time += dt;
+        if self.q.iter().chain(self.v.iter()).any(|x| !x.is_finite()) {
+            return Err(SimError::Diverged {
+                time: self.time,
+                message: "the state is no longer finite".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Contact forces at the current state, and their stiffness and damping in the step
+    /// matrix (see the module docs of `contact`).
+    ///
+    /// Points are gathered per body first: a point's Jacobian is `A_p J_body` with
+    /// `A_p = [I, -[x_p]x]`, so the body's points add up to one 6x6 matrix and one wrench,
+    /// and the joint-space terms are formed once per body instead of once per point.
+    fn add_contacts(&mut self, dt: f64) {
+        let cp = self.contact_params;
+        let nb = self.model.nbodies;
+        for acc in self.contact_bodies.iter_mut() {
+            acc.active = false;
+        }
+        for k in 0..self.points.len() {
+            let p = &self.points[k];
+            let x =
+                self.body_placement(p.body).act_point(&p.local) - Vector3::new(0.0, 0.0, p.radius);
+            let bi = if p.body == BASE { nb } else { p.body };
+            let state = &mut self.contacts[k];
+            let pen = -x.z;
+            if pen <= 0.0 {
+                *state = ContactState {
+                    position: x,
+                    ..Default::default()
+                };
+                continue;
+            }
+            state.position = x;
+            // The body's world twist, once per body and step.
+            let acc = &mut self.contact_bodies[bi];
+            if !acc.active {
+                acc.active = true;
+                acc.matrix = nalgebra::Matrix6::zeros();
+                acc.wrench = nalgebra::Vector6::zeros();
+                let mut tw = nalgebra::Vector6::zeros();
+                for &dof in &self.chains[bi] {
+                    let col = self.data.joint_jacobians.column(dof);
+                    tw += nalgebra::Vector6::from_column_slice(col.as_slice()) * self.v[dof];
+                }
+                acc.twist = tw;
+            }
+            let (lin, ang) = (
+                acc.twist.fixed_rows::<3>(0).into_owned(),
+                acc.twist.fixed_rows::<3>(3).into_owned(),
+            );
+            let vp = lin + ang.cross(&x);
+            let fn_ = cp.stiffness * pen - cp.damping * vp.z;
+            if fn_ <= 0.0 {
+                *state = ContactState {
+                    position: x,
+                    ..Default::default()
+                };
+                continue;
+            }
+            if !state.active {
+                state.anchor = [x.x, x.y];
+                state.active = true;
+            }
+            let mut ft = [
+                -cp.tangential_stiffness * (x.x - state.anchor[0]) - cp.tangential_damping * vp.x,
+                -cp.tangential_stiffness * (x.y - state.anchor[1]) - cp.tangential_damping * vp.y,
+            ];
+            let norm = (ft[0] * ft[0] + ft[1] * ft[1]).sqrt();
+            let limit = cp.friction * fn_;
+            let (kt, dtan) = if norm > limit {
+                // Sliding: the force sits on the cone, the anchor follows the point.
+                let s = limit / norm;
+                ft = [ft[0] * s, ft[1] * s];
+                state.anchor = [
+                    x.x + ft[0] / cp.tangential_stiffness,
+                    x.y + ft[1] / cp.tangential_stiffness,
+                ];
+                state.sliding = true;
+                (0.0, 0.0)
+            } else {
+                state.sliding = false;
+                (cp.tangential_stiffness, cp.tangential_damping)
+            };
+            let f = Vector3::new(ft[0], ft[1], fn_);
+            state.force = f;
+            // Force for the step, less the part the implicit stiffness will add back.
+            let g = f - Vector3::new(dt * kt * vp.x, dt * kt * vp.y, dt * cp.stiffness * vp.z);
+            let w = Vector3::new(
+                dt * dtan + dt * dt * kt,
+                dt * dtan + dt * dt * kt,
+                dt * cp.damping + dt * dt * cp.stiffness,
+            );
+            // Wrench about the world origin, and A_p^T W A_p.
+            let m = x.cross(&g);
+            acc.wrench += nalgebra::Vector6::new(g.x, g.y, g.z, m.x, m.y, m.z);
+            let wm = nalgebra::Matrix3::from_diagonal(&w);
+            let sx = twinloop_spatial::skew(&x);
+            let wsx = wm * sx;
+            let mut blk = nalgebra::Matrix6::zeros();
+            blk.fixed_view_mut::<3, 3>(0, 0).copy_from(&wm);
+            blk.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-wsx));
+            blk.fixed_view_mut::<3, 3>(3, 0)
+                .copy_from(&(-wsx.transpose()));
+            blk.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-(sx * wsx)));
+            acc.matrix += blk;
+        }
+        // Joint-space terms per body: h[a][b] += j_b . (S j_a), rhs[a] += j_a . wrench.
+        let n = self.h.nrows();
+        for bi in 0..=nb {
+            if !self.contact_bodies[bi].active {
+                continue;
+            }
+            let acc = &self.contact_bodies[bi];
+            let chain = &self.chains[bi];
+            for (c, &dof) in chain.iter().enumerate() {
+                let j = nalgebra::Vector6::from_column_slice(
+                    self.data.joint_jacobians.column(dof).as_slice(),
+                );
+                self.js[c] = j;
+                self.su[c] = acc.matrix * j;
+                self.rhs[dof] += j.dot(&acc.wrench);
+            }
+            let h = self.h.as_mut_slice();
+            for (a, &da) in chain.iter().enumerate() {
+                let u = self.su[a];
+                for (b, &db) in chain.iter().enumerate().skip(a) {
+                    // db is an ancestor of da (or da): the lower triangle, column-major.
+                    h[db * n + da] += self.js[b].dot(&u);
+                }
+            }
+        }
+    }
+
+    /// Run for `duration` seconds of simulated time.
+    pub fn run(&mut self, duration: f64) -> Result<(), SimError> {
+        let n = (duration / self.config.dt).round() as u64;
+        for _ in 0..n {
+            self.step()?;
+        }
+        Ok(())
+    }
+
+    /// Total mechanical energy: kinetic (from the mass matrix) plus gravitational.
+    pub fn energy(&mut self) -> f64 {
+        crba(&self.model, &mut self.data, &self.q);
+        self.data.symmetrize_mass_matrix();
+        let v = nalgebra::DVector::from_column_slice(&self.v);
+        let kinetic = 0.5 * v.dot(&(&self.data.mass_matrix * &v));
+        let com = twinloop_dynamics::center_of_mass(&self.model, &mut self.data, &self.q);
+        kinetic - self.model.total_mass * self.config.gravity.dot(&com)
+    }
+
+    /// World placement of a description link at the current state.
+    pub fn link_placement(&mut self, link: &str) -> Option<Se3> {
+        let k = self.model.frame_index(link)?;
+        twinloop_dynamics::frames_forward_kinematics(&self.model, &mut self.data, &self.q);
+        Some(self.data.o_m_f[k])
+    }
+
+    /// Whole-body CoM at the current state.
+    pub fn center_of_mass(&mut self) -> Vector3<f64> {
+        twinloop_dynamics::center_of_mass(&self.model, &mut self.data, &self.q)
+    }
+}

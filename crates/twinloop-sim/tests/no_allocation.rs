@@ -1,0 +1,55 @@
+//! A simulation step allocates nothing once the simulator is built.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use twinloop_robot::{Robot, RobotState};
+use twinloop_sim::{Actuator, DynamixelServo, SimConfig, Simulator};
+
+struct Counting;
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn stepping_and_reading_do_not_allocate() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/op3/mjcf/op3.xml");
+    let robot = twinloop_model::load(path).unwrap();
+    let mut sim = Simulator::new(&robot, SimConfig::default()).unwrap();
+    sim.set_all_actuators(Actuator::Dynamixel(DynamixelServo::rx28()));
+    let n = sim.model.nbodies;
+    sim.place_on_ground(&vec![0.0; n]).unwrap();
+    let mut st = RobotState::default();
+    let goals = vec![0.01; n];
+    sim.run(0.05).unwrap();
+    sim.read(&mut st).unwrap();
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    for _ in 0..200 {
+        sim.command_positions(&goals).unwrap();
+        sim.step().unwrap();
+        sim.read(&mut st).unwrap();
+    }
+    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    assert!(before > 0);
+    assert_eq!(
+        after - before,
+        0,
+        "{} allocations in 200 steps",
+        after - before
+    );
+}
