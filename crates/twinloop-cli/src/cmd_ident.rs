@@ -115,6 +115,7 @@ pub enum ExperimentCommand {
     /// the joints) and the plate's centre of pressure `cop.x`, `cop.y` (the truth's
     /// GCOM plus --cop-noise), world frame, metres. stdout gets a summary: poses per
     /// category and how far inside the support polygon the GCOMs lie.
+    #[command(verbatim_doc_comment)]
     StaticPoses(StaticPosesArgs),
     /// Squat-like validation motion with force-plate readings (seed 004, Fig. 4)
     ///
@@ -134,6 +135,7 @@ pub enum ExperimentCommand {
     /// grf.fz` (ground reaction on the robot, world, N), `cop.x cop.y` (m) and `grf.tz`
     /// (free moment, N m). With --markers, --frames-out gets the markers' world positions
     /// `marker:<name>.x .y .z` per frame (plus --marker-noise), input for `twinloop ik`.
+    #[command(verbatim_doc_comment)]
     Squat(SquatArgs),
 }
 
@@ -388,8 +390,8 @@ fn squat(a: &SquatArgs) -> Result<(), String> {
 pub enum IdentifyCommand {
     /// Link masses and CoMs from static poses on a force plate (seed 004, eq 8-9)
     ///
-    /// In a static pose the force plate's centre of pressure (CoP) is the ground-
-    /// projected centre of mass (GCOM). The CoM is linear in each link's mass m and
+    /// In a static pose the force plate's centre of pressure (CoP) is the
+    /// ground-projected centre of mass (GCOM). The CoM is linear in each link's mass m and
     /// first moment m c, so the masses and CoMs that bring the model's GCOM closest
     /// to the measured CoPs, with the masses adding up to --total-mass (the robot on
     /// a scale), are the solution of a linear least-squares problem. It is solved
@@ -419,6 +421,7 @@ pub enum IdentifyCommand {
     /// residual base wrench of the prior and adapted models on that motion (seed 004,
     /// Table 1) is added. --report writes an HTML page with the seed's Fig. 5 (and
     /// Fig. 6 with --squat).
+    #[command(verbatim_doc_comment)]
     Static(IdentifyStaticArgs),
 }
 
@@ -612,6 +615,12 @@ fn identify_static_cmd(a: &IdentifyStaticArgs) -> Result<(), String> {
         id.condition_number,
         id.structural_null,
     );
+    for g in &id.welded {
+        t.push_str(&format!(
+            "  welded to one body (only their sum is seen): {}\n",
+            g.join(", ")
+        ));
+    }
     for g in &id.unidentifiable {
         t.push_str(&format!(
             "  not excited by these poses ({} directions): {}\n",
@@ -723,7 +732,7 @@ fn ik_impl(a: &IkArgs) -> Result<(), String> {
             .map_err(|e| e.in_file(&a.frames).to_string())?;
         row.clear();
         row.push(frames.t[k]);
-        row.extend_from_slice(&q);
+        row.extend_from_slice(q);
         row.push(fit.rms);
         row.push(fit.max);
         w.write_row(&row).map_err(|e| e.to_string())?;
@@ -767,6 +776,7 @@ pub enum ValidateCommand {
     /// Output: RES.csv with `t` and `res.fx res.fy res.fz` (N), `res.tx res.ty res.tz`
     /// (N m) per frame (with --compare, `cmp.*` for the second model), and on stdout
     /// the mean and standard deviation of |Fx| .. |Tz| (the seed's Table 1).
+    #[command(verbatim_doc_comment)]
     Residual(ResidualArgs),
 }
 

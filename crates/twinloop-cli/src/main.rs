@@ -99,6 +99,7 @@ enum Command {
     ///
     /// Output: TRAJ.csv with `t`, `q:*` and the fit quality per frame, `ik.rms` and
     /// `ik.max` (marker distances, m); stdout summarises them.
+    #[command(verbatim_doc_comment)]
     Ik(cmd_ident::IkArgs),
     /// Validate a model against measurements (inverse-dynamics residual, seed 004)
     #[command(subcommand)]

@@ -461,29 +461,3 @@ pub fn support_polygon(soles: &[Vec<Vector2<f64>>]) -> Vec<Vector2<f64>> {
     let all: Vec<Vector2<f64>> = soles.iter().flatten().copied().collect();
     convex_hull(&all).into_iter().map(|i| all[i]).collect()
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn hull_and_margin() {
-        let pts: Vec<Vector2<f64>> = [
-            (0.0, 0.0),
-            (1.0, 0.0),
-            (1.0, 1.0),
-            (0.0, 1.0),
-            (0.5, 0.5),
-            (0.5, 0.0),
-        ]
-        .iter()
-        .map(|&(x, y)| Vector2::new(x, y))
-        .collect();
-        let h = convex_hull(&pts);
-        assert_eq!(h.len(), 4, "{h:?}");
-        let poly: Vec<_> = h.iter().map(|&i| pts[i]).collect();
-        assert!((polygon_margin(&poly, &Vector2::new(0.5, 0.5)) - 0.5).abs() < 1e-12);
-        assert!((polygon_margin(&poly, &Vector2::new(0.9, 0.5)) - 0.1).abs() < 1e-12);
-        assert!((polygon_margin(&poly, &Vector2::new(2.0, 0.5)) + 1.0).abs() < 1e-12);
-    }
-}

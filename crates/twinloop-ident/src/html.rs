@@ -105,6 +105,15 @@ pub fn static_sections(r: &mut Report, res: &StaticResult, suggestions: &[Sugges
         .hline(id.noise_level, "noise level")
         .log_y(),
     );
+    if !id.welded.is_empty() {
+        r.subheading(
+            "Links welded to one body (only their sum is seen; the split stays at the prior)",
+        );
+        r.table(
+            vec!["links".into()],
+            id.welded.iter().map(|g| vec![g.join(", ")]).collect(),
+        );
+    }
     for (title, groups) in [
         (
             "Not excited by these poses (kept at the prior)",

@@ -487,18 +487,3 @@ pub fn clamp_to_limits(model: &Model, q: &mut [f64]) {
         }
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cholesky_solves() {
-        let m = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]);
-        let x = DVector::from_vec(vec![1.0, -2.0, 0.5]);
-        let mut b = &m * &x;
-        let mut a = m.clone();
-        assert!(cholesky_solve_in_place(&mut a, &mut b));
-        assert!((b - x).amax() < 1e-14);
-    }
-}

@@ -249,8 +249,13 @@ pub struct MarkerIk<'a> {
     ik: Ik,
     data: Data,
     options: IkOptions,
-    /// Previous solution (warm start).
-    q: Option<Vec<f64>>,
+    /// The last solution (the next frame's start once `started`).
+    q: Vec<f64>,
+    started: bool,
+    /// A frame whose worst marker stays farther than this (m) after the warm-started
+    /// fit is fitted again from its own pelvis pose (frames far apart, e.g. separate
+    /// static poses, can leave the previous solution in the wrong basin).
+    pub restart_distance: f64,
 }
 
 impl<'a> MarkerIk<'a> {
@@ -280,7 +285,9 @@ impl<'a> MarkerIk<'a> {
                 cost_tolerance: 1e-20,
                 ..IkOptions::default()
             },
-            q: None,
+            q: model.neutral_configuration(),
+            started: false,
+            restart_distance: 0.02,
         })
     }
 
@@ -313,12 +320,69 @@ impl<'a> MarkerIk<'a> {
         Ok(q)
     }
 
-    /// Fit one frame (seed 004, eq 7); `row` names the frame in errors.
+    /// Turn each joint, parents first, to best align the visible markers of its subtree
+    /// with their targets (a closed-form rotation about the joint axis), from `self.q`.
+    fn align_chain(&mut self, seen: &[Option<Vector3<f64>>]) {
+        let model = self.model;
+        for b in 0..model.nbodies {
+            twinloop_dynamics::forward_kinematics(model, &mut self.data, &self.q);
+            let x = self.data.o_m_i[b];
+            let u = x.rotation * model.axes[b];
+            let o = x.translation;
+            let (mut s, mut c, mut shift, mut count) = (0.0, 0.0, 0.0, 0usize);
+            for (m, target) in self.markers.iter().zip(seen) {
+                let Some(t) = target else { continue };
+                let mb = model.links[m.link].body;
+                if mb == BASE || !model.ancestors(mb).any(|a| a == b) {
+                    continue;
+                }
+                let p = link_placement(model, &self.data, m.link).act_point(&m.position);
+                let (pr, tr) = (p - o, t - o);
+                let pp = pr - u * u.dot(&pr);
+                let tp = tr - u * u.dot(&tr);
+                s += u.dot(&pp.cross(&tp));
+                c += pp.dot(&tp);
+                shift += u.dot(&(t - p));
+                count += 1;
+            }
+            if count == 0 {
+                continue;
+            }
+            let i = model.q_offset + b;
+            if model.joint_types[b].is_revolute() {
+                if s.abs() + c.abs() > 1e-12 {
+                    self.q[i] += s.atan2(c);
+                }
+            } else {
+                self.q[i] += shift / count as f64;
+            }
+            let (lo, hi) = (model.lower_limits[b], model.upper_limits[b]);
+            if lo <= hi {
+                self.q[i] = self.q[i].clamp(lo, hi);
+            }
+        }
+    }
+
+    /// Largest marker distance of the last evaluation.
+    fn worst(&self, seen: &[Option<Vector3<f64>>]) -> f64 {
+        let r = self.ik.residual();
+        let mut max: f64 = 0.0;
+        for (k, p) in seen.iter().enumerate() {
+            if p.is_some() {
+                max = max.max(Vector3::new(r[3 * k], r[3 * k + 1], r[3 * k + 2]).norm());
+            }
+        }
+        max
+    }
+
+    /// Fit one frame (seed 004, eq 7); `row` names the frame in errors. Returns the
+    /// configuration (valid until the next call). After the first frame nothing is
+    /// allocated.
     pub fn fit(
         &mut self,
         seen: &[Option<Vector3<f64>>],
         row: usize,
-    ) -> Result<(Vec<f64>, FrameFit), IdentError> {
+    ) -> Result<(&[f64], FrameFit), IdentError> {
         let visible = seen.iter().filter(|p| p.is_some()).count();
         if visible < 3 {
             return Err(
@@ -326,10 +390,18 @@ impl<'a> MarkerIk<'a> {
                     .at_row(row),
             );
         }
-        let mut q = match &self.q {
-            Some(q) => q.clone(),
-            None => self.initial_guess(seen)?,
-        };
+        if seen.len() != self.markers.len() {
+            return Err(IdentError::new(format!(
+                "{} marker positions for {} markers",
+                seen.len(),
+                self.markers.len()
+            ))
+            .at_row(row));
+        }
+        if !self.started {
+            self.q = self.initial_guess(seen)?;
+            self.started = true;
+        }
         for (t, p) in self.ik.tasks.iter_mut().zip(seen) {
             if let Task::Point { target, weight, .. } = t {
                 match p {
@@ -341,9 +413,37 @@ impl<'a> MarkerIk<'a> {
                 }
             }
         }
-        let rep = self
+        let mut rep = self
             .ik
-            .solve(self.model, &mut self.data, &mut q, &self.options);
+            .solve(self.model, &mut self.data, &mut self.q, &self.options);
+        if self.worst(seen) > self.restart_distance
+            && let Ok(q0) = self.initial_guess(seen)
+        {
+            // Other starts: joint by joint from the pelvis outwards, each turned to best
+            // align the markers below it; then the pelvis pose with the joints at zero.
+            let mut best = std::mem::take(&mut self.q);
+            let mut best_cost = rep.cost;
+            for chain in [true, false] {
+                self.q = q0.clone();
+                if chain {
+                    self.align_chain(seen);
+                }
+                let again = self
+                    .ik
+                    .solve(self.model, &mut self.data, &mut self.q, &self.options);
+                if again.cost < best_cost {
+                    best_cost = again.cost;
+                    std::mem::swap(&mut best, &mut self.q);
+                }
+                if self.worst(seen) <= self.restart_distance {
+                    break;
+                }
+            }
+            self.q = best;
+            rep = self
+                .ik
+                .solve(self.model, &mut self.data, &mut self.q, &self.options);
+        }
         let r = self.ik.residual();
         let mut max: f64 = 0.0;
         let mut sum = 0.0;
@@ -354,9 +454,8 @@ impl<'a> MarkerIk<'a> {
                 sum += d * d;
             }
         }
-        self.q = Some(q.clone());
         Ok((
-            q,
+            &self.q,
             FrameFit {
                 rms: (sum / visible as f64).sqrt(),
                 max,

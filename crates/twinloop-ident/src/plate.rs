@@ -686,7 +686,9 @@ pub struct Generated {
     pub skipped: Vec<(PoseCategory, String)>,
 }
 
-/// Generate `options.count` poses on the virtual force plate with the truth model;
+/// Generate `options.count` poses on the virtual force plate with the truth model
+/// (seed 004, section 3.1: six categories, joints below 10 % and above 90 % of their
+/// range plus random poses, each statically stable);
 /// `progress` is called after each pose. A category in which the robot cannot stand
 /// (H1's 3 cm wide sole bar cannot carry its CoM on one foot) is skipped and its
 /// share given to the others; if no category works, that is an error.

@@ -132,6 +132,9 @@ pub struct Identifiability {
     /// parent; links welded to one body act as one): kept at the prior.
     pub structural_null: usize,
     pub structural_explanation: String,
+    /// Identified links welded to one body (fixed joints): from CoM data only their
+    /// combined mass and first moment are seen; how they split stays at the prior.
+    pub welded: Vec<Vec<String>>,
     /// Further combinations these poses do not determine but other poses would:
     /// kept at the prior; see the suggested poses.
     pub unidentifiable: Vec<ParameterGroup>,
@@ -741,6 +744,21 @@ pub fn identifiability(
         },
         noise_level: lambda,
         structural_null: structural.ncols(),
+        welded: {
+            let mut groups: Vec<(usize, Vec<String>)> = Vec::new();
+            for (k, &b) in problem.bodies.iter().enumerate() {
+                let name = problem.link_names[problem.links[k]].clone();
+                match groups.iter_mut().find(|(gb, _)| *gb == b) {
+                    Some((_, g)) => g.push(name),
+                    None => groups.push((b, vec![name])),
+                }
+            }
+            groups
+                .into_iter()
+                .filter(|(_, g)| g.len() > 1)
+                .map(|(_, g)| g)
+                .collect()
+        },
         structural_explanation: format!(
             "{} of the {n} parameters' directions cannot be determined by any static pose: from the \
              centre of pressure, a link's mass and its first moment along its joint axis move the CoM \
@@ -754,7 +772,8 @@ pub fn identifiability(
     }
 }
 
-/// The GCOM (x, y) of a model with parameters `phi` (per description link) at `q`.
+/// The GCOM (x, y) of a model with parameters `phi` (per description link) at `q`:
+/// the CoM of seed 004, eq 6, `r = sum m_b r_b / M`, projected on the ground.
 pub fn gcom(model: &Model, data: &mut Data, phi: &[f64], q: &[f64]) -> [f64; 2] {
     let g = static_com_regressor(model, data, q);
     let mut out = [0.0; 2];

@@ -616,13 +616,14 @@ pub fn squat_motion(
     let mut q = q0.clone();
     solve_at(0.0, &mut q)?; // the standing solution every frame starts from
     let (mut qm, mut qp) = (q.clone(), q.clone());
+    let (mut v, mut a) = (vec![0.0; model.nv], vec![0.0; model.nv]);
     for k in 0..frames {
         let t = k as f64 / options.rate;
         solve_at(t, &mut q)?;
         solve_at(t - h, &mut qm)?;
         solve_at(t + h, &mut qp)?;
         // v, a by central differences on the manifold (base twist in the base frame).
-        let (v, a) = central_state(model, &qm, &q, &qp, h);
+        central_state(model, &qm, &q, &qp, h, &mut v, &mut a);
         let need = Force::from_slice(&rnea(model, &mut truth_data, &q, &v, &a).as_slice()[0..6]);
         let base: Se3 = truth_data.base_placement;
         let w = base.act_force(&need);
@@ -636,10 +637,15 @@ pub fn squat_motion(
 }
 
 /// Velocity and acceleration at `q` from its neighbours `h` before and after.
-fn central_state(model: &Model, qm: &[f64], q: &[f64], qp: &[f64], h: f64) -> (Vec<f64>, Vec<f64>) {
-    let nv = model.nv;
-    let mut v = vec![0.0; nv];
-    let mut a = vec![0.0; nv];
+fn central_state(
+    model: &Model,
+    qm: &[f64],
+    q: &[f64],
+    qp: &[f64],
+    h: f64,
+    v: &mut [f64],
+    a: &mut [f64],
+) {
     let (qo, vo) = (model.q_offset, model.v_offset);
     for i in 0..model.nbodies {
         v[vo + i] = (qp[qo + i] - qm[qo + i]) / (2.0 * h);
@@ -675,7 +681,6 @@ fn central_state(model: &Model, qm: &[f64], q: &[f64], qp: &[f64], h: f64) -> (V
         a[0..3].copy_from_slice(al.as_slice());
         a[3..6].copy_from_slice(wd.as_slice());
     }
-    (v, a)
 }
 
 /// Write a motion as CSV: `t`, the `q:` columns and the plate columns.

@@ -14,7 +14,7 @@ fn nums(v: &Value) -> Vec<f64> {
 
 #[test]
 fn matches_scipy() {
-    let text = include_str!("data/butterworth.json");
+    let text = include_str!("../data/butterworth.json");
     let refd: Value = serde_json::from_str(text).unwrap();
     for case in refd["cases"].as_array().unwrap() {
         let order = case["order"].as_u64().unwrap() as usize;

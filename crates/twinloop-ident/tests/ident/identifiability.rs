@@ -236,3 +236,29 @@ fn bad_inputs_name_the_field() {
     );
     assert!(e.contains("--cop-sigma"), "{e}");
 }
+
+/// COMAN's camera and hands are welded to the trunk and wrists, its IMU to the pelvis:
+/// reported as groups whose split the poses cannot see, and kept at the prior split.
+#[test]
+fn welded_links_are_reported_and_keep_their_split() {
+    let prior = load("coman/coman.urdf");
+    let pm = Model::from_robot(&prior).unwrap();
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/coman10_poses.csv");
+    let poses = twinloop_ident::read_static_poses(&data, &pm).unwrap();
+    let r = identify_static(&prior, &pm, &poses, 42.05386, &StaticOptions::default()).unwrap();
+    let welded = &r.identifiability.welded;
+    let has = |names: &[&str]| {
+        welded
+            .iter()
+            .any(|g| names.iter().all(|n| g.iter().any(|x| x == n)))
+    };
+    assert!(
+        has(&["DWYTorso", "Xtion_body", "Xtion_cam_body"]),
+        "{welded:?}"
+    );
+    assert!(has(&["Waist", "imu_link"]), "{welded:?}");
+    assert!(has(&["LWrMot3", "LSoftHand"]), "{welded:?}");
+    // The tiny IMU (10 g) keeps its prior: nothing in the data can move it apart.
+    let imu = r.links.iter().find(|l| l.name == "imu_link").unwrap();
+    assert!(imu.mass_determined < 0.05, "{}", imu.mass_determined);
+}
