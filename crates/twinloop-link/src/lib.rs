@@ -1,0 +1,23 @@
+//! twinloop-link: the robot link. Dynamixel Protocol 1.0 and 2.0 packets, control
+//! tables, transports, a host client, virtual servos answering the servo side of the
+//! protocol, a robot mapping file and the real-robot backend of
+//! [`twinloop_robot::Robot`].
+//!
+//! Protocol facts come from the ROBOTIS e-manual (EM-P1, EM-P2: the Protocol 1.0 and
+//! 2.0 pages) and the official DynamixelSDK; the tests hold the e-manual's example
+//! packets and packets built by the SDK byte for byte. Nothing here knows dynamics:
+//! a simulator plugs into the virtual robot through [`VirtualServoBackend`].
+
+pub mod crc16;
+pub mod decoder;
+pub mod instruction;
+pub mod packet;
+pub mod protocol;
+pub mod status_error;
+
+pub use crc16::{checksum_v1, crc16, crc16_update};
+pub use decoder::{Accept, Decoder, DecoderStats, Frame};
+pub use instruction::Instruction;
+pub use packet::{EncodeError, PacketWriter};
+pub use protocol::{BROADCAST_ID, Protocol};
+pub use status_error::{ErrorBitV1, ErrorNumberV2, StatusError};
