@@ -8,16 +8,22 @@
 //! packets and packets built by the SDK byte for byte. Nothing here knows dynamics:
 //! a simulator plugs into the virtual robot through [`VirtualServoBackend`].
 
+pub mod control_table;
 pub mod crc16;
 pub mod decoder;
 pub mod instruction;
+pub mod model;
 pub mod packet;
 pub mod protocol;
+pub mod register;
 pub mod status_error;
 
+pub use control_table::ControlTable;
 pub use crc16::{checksum_v1, crc16, crc16_update};
 pub use decoder::{Accept, Decoder, DecoderStats, Frame};
 pub use instruction::Instruction;
+pub use model::{Model, ServoSpec, baud_from_register};
 pub use packet::{EncodeError, PacketWriter};
 pub use protocol::{BROADCAST_ID, Protocol};
+pub use register::{Access, Area, Encoding, Item, Register, Unit};
 pub use status_error::{ErrorBitV1, ErrorNumberV2, StatusError};
