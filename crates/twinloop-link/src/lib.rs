@@ -17,6 +17,7 @@ pub mod packet;
 pub mod protocol;
 pub mod register;
 pub mod status_error;
+pub mod transport;
 
 pub use control_table::ControlTable;
 pub use crc16::{checksum_v1, crc16, crc16_update};
@@ -27,3 +28,4 @@ pub use packet::{EncodeError, PacketWriter};
 pub use protocol::{BROADCAST_ID, Protocol};
 pub use register::{Access, Area, Encoding, Item, Register, Unit};
 pub use status_error::{ErrorBitV1, ErrorNumberV2, StatusError};
+pub use transport::Transport;
