@@ -30,13 +30,12 @@ fn wait_readable(fd: RawFd, timeout: Duration) -> io::Result<bool> {
     // poll counts milliseconds: round up so a short timeout still waits.
     let ms = timeout.as_micros().div_ceil(1000).min(i32::MAX as u128) as i32;
     let mut fds = [PollFd::new(fd, PollFlags::POLLIN)];
-    loop {
-        match poll(&mut fds, ms) {
-            Ok(0) => return Ok(false),
-            Ok(_) => return Ok(true),
-            Err(nix::Error::EINTR) => return Ok(false),
-            Err(e) => return Err(nix_err(e, "poll")),
-        }
+    match poll(&mut fds, ms) {
+        Ok(0) => Ok(false),
+        Ok(_) => Ok(true),
+        // A signal (Ctrl-C) ends the wait early: report "nothing yet".
+        Err(nix::Error::EINTR) => Ok(false),
+        Err(e) => Err(nix_err(e, "poll")),
     }
 }
 
