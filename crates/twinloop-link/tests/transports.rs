@@ -65,12 +65,7 @@ fn tcp_passes_every_byte_both_ways() {
         server.write_all(&got).unwrap();
         // Wait for the client to close.
         let mut buf = [0u8; 4];
-        loop {
-            match server.read(&mut buf, Duration::from_millis(100)) {
-                Ok(_) => continue,
-                Err(_) => break,
-            }
-        }
+        while server.read(&mut buf, Duration::from_millis(100)).is_ok() {}
     });
     let mut client =
         transport::open(&format!("tcp:{addr}"), 1_000_000, &SerialOptions::default()).unwrap();
