@@ -8,10 +8,13 @@
 //! packets and packets built by the SDK byte for byte. Nothing here knows dynamics:
 //! a simulator plugs into the virtual robot through [`VirtualServoBackend`].
 
+pub mod client;
+pub mod control_cycle;
 pub mod control_table;
 pub mod crc16;
 pub mod decoder;
 pub mod instruction;
+pub mod link_error;
 pub mod model;
 pub mod packet;
 pub mod protocol;
@@ -19,10 +22,13 @@ pub mod register;
 pub mod status_error;
 pub mod transport;
 
+pub use client::{BulkRead, Client, ClientConfig, ClientStats, FoundServo};
+pub use control_cycle::{ControlCycle, CycleServo, CycleSummary, ReadMethod, ServoReading};
 pub use control_table::ControlTable;
 pub use crc16::{checksum_v1, crc16, crc16_update};
 pub use decoder::{Accept, Decoder, DecoderStats, Frame};
 pub use instruction::Instruction;
+pub use link_error::{LinkError, Outcome};
 pub use model::{Model, ServoSpec, baud_from_register};
 pub use packet::{EncodeError, PacketWriter};
 pub use protocol::{BROADCAST_ID, Protocol};
