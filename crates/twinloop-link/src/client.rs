@@ -200,6 +200,11 @@ impl<T: Transport> Client<T> {
                     wrong = Some(LinkError::Corrupt { id });
                     continue;
                 }
+                let status = StatusError::new(protocol, error);
+                if status.rejected_instruction() && matches!(expect, Expect::Status { .. }) {
+                    // A refusal carries no data, whatever length was asked.
+                    return Err(LinkError::Rejected { id, error: status });
+                }
                 match expect {
                     Expect::Status { len, .. } => {
                         if data.len() != len {
@@ -225,10 +230,6 @@ impl<T: Transport> Client<T> {
                         self.rx.clear();
                         self.rx.extend_from_slice(f.raw);
                     }
-                }
-                let status = StatusError::new(protocol, error);
-                if status.rejected_instruction() && matches!(expect, Expect::Status { .. }) {
-                    return Err(LinkError::Rejected { id, error: status });
                 }
                 return Ok(status);
             }

@@ -57,6 +57,18 @@ pub struct Frame<'a> {
     pub raw: &'a [u8],
 }
 
+/// What the decoder found next: a checked frame, or a candidate packet whose
+/// checksum failed (a servo answers that with a checksum/CRC error status).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DecodeEvent<'a> {
+    Frame(Frame<'a>),
+    BadChecksum {
+        protocol: Protocol,
+        id: u8,
+        instruction: u8,
+    },
+}
+
 /// Counters of what the decoder saw besides good frames.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct DecoderStats {
@@ -169,7 +181,17 @@ impl Decoder {
 
     /// The next complete, checked frame, or `None` until more bytes arrive.
     pub fn next_frame(&mut self) -> Option<Frame<'_>> {
-        self.scan(false)
+        match self.scan(false, false)? {
+            DecodeEvent::Frame(f) => Some(f),
+            DecodeEvent::BadChecksum { .. } => None,
+        }
+    }
+
+    /// Like [`Decoder::next_frame`], but also stops at each candidate whose
+    /// checksum failed, reporting its header fields (scanning then resumes one byte
+    /// after its start).
+    pub fn next_event(&mut self) -> Option<DecodeEvent<'_>> {
+        self.scan(false, true)
     }
 
     /// Like [`Decoder::next_frame`], but for when the line has gone quiet: a packet
@@ -177,7 +199,10 @@ impl Decoder {
     /// after its first byte (a complete packet may start inside it). Repeat until
     /// `None`; the buffer is then empty.
     pub fn next_frame_flushing(&mut self) -> Option<Frame<'_>> {
-        self.scan(true)
+        match self.scan(true, false)? {
+            DecodeEvent::Frame(f) => Some(f),
+            DecodeEvent::BadChecksum { .. } => None,
+        }
     }
 
     fn classify(&mut self, s: &[u8]) -> Candidate {
@@ -236,7 +261,7 @@ impl Decoder {
         Candidate::Invalid
     }
 
-    fn scan(&mut self, flushing: bool) -> Option<Frame<'_>> {
+    fn scan(&mut self, flushing: bool, report_bad: bool) -> Option<DecodeEvent<'_>> {
         self.drop_consumed();
         loop {
             let avail = self.end - self.start;
@@ -300,14 +325,25 @@ impl Decoder {
             };
             if !ok {
                 self.stats.bad_checksums += 1;
+                let (id, instruction) = match protocol {
+                    Protocol::V1 => (packet[2], packet[4]),
+                    Protocol::V2 => (packet[4], packet[7]),
+                };
                 self.skip(i + 1);
+                if report_bad {
+                    return Some(DecodeEvent::BadChecksum {
+                        protocol,
+                        id,
+                        instruction,
+                    });
+                }
                 continue;
             }
             self.stats.skipped_bytes += i as u64;
             self.stats.frames += 1;
             self.start = p;
             self.consumed = total;
-            return Some(self.frame_at(p, total, protocol));
+            return Some(DecodeEvent::Frame(self.frame_at(p, total, protocol)));
         }
     }
 
