@@ -201,7 +201,7 @@ fn damaged_instruction_gets_checksum_and_crc_errors() {
 fn minus_131073_is_stuffed_and_read_back_every_way() {
     let mut c = client(&[(1, Model::Xm430W350), (2, Model::Xm430W350)]);
     // Present Position = actual + Homing Offset (EM-XM): the servo sits at 2048.
-    let offset = -131073 - 2048;
+    let offset: i32 = -131073 - 2048;
     c.write(Protocol::V2, 1, 20, &offset.to_le_bytes()).unwrap();
     let mut b = [0u8; 4];
     c.read(Protocol::V2, 1, 132, &mut b).unwrap();
