@@ -290,30 +290,51 @@ impl ControlCycle {
         goals: Option<&[i32]>,
         readings: &mut [ServoReading],
     ) -> Result<CycleSummary, LinkError> {
-        assert_eq!(readings.len(), self.servos.len());
         if let Some(goals) = goals {
-            assert_eq!(goals.len(), self.servos.len());
-            for g in &self.groups {
-                self.goal_buf.clear();
-                for &i in &g.members {
-                    let reg = self.servos[i]
-                        .model
-                        .table()
-                        .item(Item::GoalPosition)
-                        .expect("checked in new");
-                    let mut b = [0u8; 4];
-                    reg.encode(goals[i].clamp(reg.min, reg.max), &mut b);
-                    self.goal_buf.extend_from_slice(&b[..g.goal_size as usize]);
-                }
-                client.sync_write(
-                    g.protocol,
-                    g.goal_address,
-                    g.goal_size,
-                    &g.ids,
-                    &self.goal_buf,
-                )?;
-            }
+            self.write_goals(client, goals)?;
         }
+        self.read(client, readings)
+    }
+
+    /// SYNC_WRITE raw goal positions (servo order), one packet per protocol; each
+    /// value is clamped to its register's range.
+    pub fn write_goals<T: Transport>(
+        &mut self,
+        client: &mut Client<T>,
+        goals: &[i32],
+    ) -> Result<(), LinkError> {
+        assert_eq!(goals.len(), self.servos.len());
+        for g in &self.groups {
+            self.goal_buf.clear();
+            for &i in &g.members {
+                let reg = self.servos[i]
+                    .model
+                    .table()
+                    .item(Item::GoalPosition)
+                    .expect("checked in new");
+                let mut b = [0u8; 4];
+                reg.encode(goals[i].clamp(reg.min, reg.max), &mut b);
+                self.goal_buf.extend_from_slice(&b[..g.goal_size as usize]);
+            }
+            client.sync_write(
+                g.protocol,
+                g.goal_address,
+                g.goal_size,
+                &g.ids,
+                &self.goal_buf,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Read every servo's position, velocity and load or current into `readings`
+    /// (servo order).
+    pub fn read<T: Transport>(
+        &mut self,
+        client: &mut Client<T>,
+        readings: &mut [ServoReading],
+    ) -> Result<CycleSummary, LinkError> {
+        assert_eq!(readings.len(), self.servos.len());
         let mut summary = CycleSummary::default();
         for g in &self.groups {
             let l = g.block_len as usize;
