@@ -24,6 +24,7 @@ pub mod register;
 pub mod servo;
 pub mod status_error;
 pub mod transport;
+pub mod wire_time;
 
 pub use client::{BulkRead, Client, ClientConfig, ClientStats, FoundServo};
 pub use control_cycle::{ControlCycle, CycleServo, CycleSummary, ReadMethod, ServoReading};
@@ -41,3 +42,4 @@ pub use register::{Access, Area, Encoding, Item, Register, Unit};
 pub use servo::{BusServo, TrackingServoModel, VirtualBus, VirtualServoBackend};
 pub use status_error::{ErrorBitV1, ErrorNumberV2, StatusError};
 pub use transport::Transport;
+pub use wire_time::{CyclePlan, plan_cycle};

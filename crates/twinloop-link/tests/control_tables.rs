@@ -226,3 +226,137 @@ fn baud_registers() {
     assert_eq!(baud_from_register(Protocol::V2, 3), Some(1_000_000));
     assert_eq!(baud_from_register(Protocol::V2, 8), None);
 }
+
+#[test]
+fn wire_time_matches_wiretime_md() {
+    use std::time::Duration;
+    use twinloop_link::{ReadMethod, plan_cycle};
+    // Rows of WIRETIME.md (20 servos): (protocol, method, read len, baud, RDT us,
+    // write B, read B, wire ms, round trips).
+    let rows = [
+        (
+            Protocol::V1,
+            ReadMethod::Read,
+            2,
+            57_600,
+            0,
+            68,
+            320,
+            67.361,
+            21,
+        ),
+        (
+            Protocol::V1,
+            ReadMethod::Read,
+            6,
+            1_000_000,
+            0,
+            68,
+            400,
+            4.680,
+            21,
+        ),
+        (
+            Protocol::V1,
+            ReadMethod::Read,
+            2,
+            1_000_000,
+            500,
+            68,
+            320,
+            13.880,
+            21,
+        ),
+        (
+            Protocol::V2,
+            ReadMethod::SyncRead,
+            4,
+            1_000_000,
+            0,
+            114,
+            334,
+            4.480,
+            2,
+        ),
+        (
+            Protocol::V2,
+            ReadMethod::FastSyncRead,
+            4,
+            1_000_000,
+            0,
+            114,
+            202,
+            3.160,
+            2,
+        ),
+        (
+            Protocol::V2,
+            ReadMethod::SyncRead,
+            10,
+            1_000_000,
+            0,
+            114,
+            454,
+            5.680,
+            2,
+        ),
+        (
+            Protocol::V2,
+            ReadMethod::FastSyncRead,
+            10,
+            1_000_000,
+            0,
+            114,
+            322,
+            4.360,
+            2,
+        ),
+        (
+            Protocol::V2,
+            ReadMethod::SyncRead,
+            4,
+            1_000_000,
+            500,
+            114,
+            334,
+            14.480,
+            2,
+        ),
+        (
+            Protocol::V2,
+            ReadMethod::FastSyncRead,
+            10,
+            1_000_000,
+            500,
+            114,
+            322,
+            4.860,
+            2,
+        ),
+        (
+            Protocol::V2,
+            ReadMethod::FastSyncRead,
+            4,
+            4_500_000,
+            0,
+            114,
+            202,
+            0.702,
+            2,
+        ),
+    ];
+    for (p, m, l, baud, rdt, wb, rb, ms, rt) in rows {
+        let goal = if p == Protocol::V1 { 2 } else { 4 };
+        let plan = plan_cycle(p, m, 20, l, goal, baud, Duration::from_micros(rdt));
+        assert_eq!(
+            (plan.write_bytes, plan.read_bytes, plan.round_trips),
+            (wb, rb, rt),
+            "{p} {m:?} {l}"
+        );
+        let got = plan.wire.as_secs_f64() * 1e3;
+        assert!(
+            (got - ms).abs() < 0.0006,
+            "{p} {m:?} {l} @{baud}: {got} ms vs {ms}"
+        );
+    }
+}
