@@ -454,6 +454,15 @@ impl<T: Transport> Client<T> {
         self.finish_command(protocol, id)
     }
 
+    /// CLEAR (Protocol 2.0): reset the multi-turn count of Present Position to within
+    /// one turn; refused with Result Fail while the servo moves (EM-P2 "Clear").
+    pub fn clear_multi_turn(&mut self, id: u8) -> Outcome {
+        let mut w = self.begin(Protocol::V2, id, Instruction::Clear);
+        w.bytes(&[0x01, 0x44, 0x58, 0x4C, 0x22]);
+        w.finish()?;
+        self.finish_command(Protocol::V2, id)
+    }
+
     /// FACTORY_RESET. `option` (2.0 only): 0xFF all, 0x01 all but id, 0x02 all but
     /// id and baud rate.
     pub fn factory_reset(&mut self, protocol: Protocol, id: u8, option: u8) -> Outcome {

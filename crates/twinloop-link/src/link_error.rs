@@ -38,13 +38,15 @@ impl LinkError {
     /// Whether trying again may help (lost or damaged bytes), as opposed to a refusal
     /// or a dead link.
     pub fn is_transient(&self) -> bool {
-        matches!(
-            self,
+        match self {
             LinkError::Timeout { .. }
-                | LinkError::Corrupt { .. }
-                | LinkError::WrongReply { .. }
-                | LinkError::Implausible { .. }
-        )
+            | LinkError::Corrupt { .. }
+            | LinkError::WrongReply { .. }
+            | LinkError::Implausible { .. } => true,
+            // The servo saw our request damaged (checksum / CRC error): send it again.
+            LinkError::Rejected { error, .. } => error.instruction_damaged(),
+            LinkError::Io(_) | LinkError::Encode(_) => false,
+        }
     }
 
     /// The servo id the error concerns, if one.

@@ -184,6 +184,15 @@ impl StatusError {
         }
     }
 
+    /// The servo received the instruction damaged (1.0 checksum bit, 2.0 CRC
+    /// error): nothing was executed and sending it again may work.
+    pub const fn instruction_damaged(self) -> bool {
+        match self.protocol {
+            Protocol::V1 => self.raw & ErrorBitV1::Checksum.mask() != 0,
+            Protocol::V2 => self.raw & 0x7F == 3,
+        }
+    }
+
     /// A hardware condition is reported (1.0 voltage/overheating/overload, 2.0 Alert).
     pub const fn hardware_fault(self) -> bool {
         match self.protocol {

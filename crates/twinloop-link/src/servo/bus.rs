@@ -128,6 +128,40 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
         }
     }
 
+    /// The line went quiet: a packet still waiting for bytes was truncated (or its
+    /// LENGTH damaged). Servos drop it after an inter-byte gap (EM-P1 "Byte to Byte
+    /// Time": 100 ms) and look for the next header; complete packets found after
+    /// its first byte are still served. Without this a damaged LENGTH would make
+    /// the servos swallow the requests that follow.
+    pub fn line_idle(&mut self, reply: &mut Vec<u8>) {
+        if self.decoder.buffered() == 0 {
+            return;
+        }
+        let VirtualBus {
+            servos,
+            backend,
+            decoder,
+            time,
+            stats,
+            marks,
+            ..
+        } = self;
+        let mut ctx = Ctx {
+            servos,
+            backend,
+            marks,
+            time: *time,
+            out: reply,
+        };
+        while let Some(f) = decoder.next_frame_flushing() {
+            if f.protocol == Protocol::V2 && f.instruction == Instruction::Status.code() {
+                continue;
+            }
+            stats.instructions += 1;
+            ctx.process(&f);
+        }
+    }
+
     /// Take bytes from the line; append every reply to `reply` (and its marks to
     /// [`VirtualBus::marks`]).
     pub fn handle(&mut self, input: &[u8], reply: &mut Vec<u8>) {
@@ -188,8 +222,12 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
 }
 
 impl<B: VirtualServoBackend> Responder for VirtualBus<B> {
+    /// One write of the host is one burst on the line; after it the line is idle
+    /// while the host waits, so an incomplete packet is given up (see
+    /// [`VirtualBus::line_idle`]).
     fn respond(&mut self, input: &[u8], reply: &mut Vec<u8>) {
         self.handle(input, reply);
+        self.line_idle(reply);
     }
 }
 
@@ -345,7 +383,8 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         if fx.torque_enable {
             self.backend.set_torque_enabled(k, s.torque_enabled());
         }
-        if fx.goal_position {
+        // Torque on drives the servo to the Goal Position register, written or not.
+        if fx.goal_position || (fx.torque_enable && s.torque_enabled()) {
             let r = s
                 .table()
                 .item(Item::GoalPosition)

@@ -62,7 +62,8 @@ pub fn serve<T: Transport, B: VirtualServoBackend>(
     let mut input = vec![0u8; 4096];
     let mut reply = Vec::with_capacity(8192);
     while !stop.load(Ordering::Relaxed) {
-        let n = match transport.read(&mut input, Duration::from_millis(100)) {
+        // A short wait: silence on the line ends a truncated packet (line_idle).
+        let n = match transport.read(&mut input, Duration::from_millis(20)) {
             Ok(n) => n,
             Err(e) if e.kind() == io::ErrorKind::UnexpectedEof && !options.stop_on_eof => {
                 std::thread::sleep(Duration::from_millis(20));
@@ -71,12 +72,14 @@ pub fn serve<T: Transport, B: VirtualServoBackend>(
             Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => return Ok(()),
             Err(e) => return Err(e),
         };
-        if n == 0 {
-            continue;
-        }
         let arrived = Instant::now();
         reply.clear();
-        bus.handle(&input[..n], &mut reply);
+        if n == 0 {
+            bus.marks.clear();
+            bus.line_idle(&mut reply);
+        } else {
+            bus.handle(&input[..n], &mut reply);
+        }
         if reply.is_empty() {
             continue;
         }
