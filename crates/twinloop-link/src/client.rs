@@ -6,7 +6,7 @@
 //! transport straight into the decoder's fixed buffer, and data is copied into
 //! slices the caller owns: no exchange allocates once the client is warm.
 
-use crate::crc16::crc16;
+use crate::crc16::crc16_update;
 use crate::decoder::{Accept, Decoder};
 use crate::instruction::Instruction;
 use crate::link_error::{LinkError, Outcome};
@@ -557,12 +557,17 @@ impl<T: Transport> Client<T> {
                 let raw = &self.rx;
                 let mut pos = 8;
                 let mut broken = false;
+                // Each block's CRC covers the packet up to it: one running CRC.
+                let mut running = 0u16;
+                let mut covered = 0;
                 for (k, &id) in ids.iter().enumerate() {
                     let err = raw[pos];
                     let block_id = raw[pos + 1];
                     let crc_at = pos + 2 + l;
                     let crc = u16::from_le_bytes([raw[crc_at], raw[crc_at + 1]]);
-                    broken = broken || block_id != id || crc16(&raw[..crc_at]) != crc;
+                    running = crc16_update(running, &raw[covered..crc_at]);
+                    covered = crc_at;
+                    broken = broken || block_id != id || running != crc;
                     outcomes[k] = if broken {
                         Err(LinkError::Corrupt { id })
                     } else {

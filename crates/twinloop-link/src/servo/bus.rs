@@ -11,7 +11,7 @@
 
 use super::backend::{TrackingServoModel, VirtualServoBackend};
 use super::virtual_servo::{Fault, VirtualServo, WriteEffects};
-use crate::crc16::crc16;
+use crate::crc16::crc16_update;
 use crate::decoder::{Accept, DecodeEvent, Decoder, Frame};
 use crate::instruction::Instruction;
 use crate::model::Model;
@@ -657,9 +657,12 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         let length = self.out.len() - (start + 7);
         self.out[start + 5..start + 7].copy_from_slice(&(length as u16).to_le_bytes());
         // Front to back: each CRC covers every byte before it, earlier CRCs included.
+        let mut running = 0u16;
+        let mut covered = start;
         for &crc_at in &crc_slots[..blocks] {
-            let crc = crc16(&self.out[start..crc_at]);
-            self.out[crc_at..crc_at + 2].copy_from_slice(&crc.to_le_bytes());
+            running = crc16_update(running, &self.out[covered..crc_at]);
+            covered = crc_at;
+            self.out[crc_at..crc_at + 2].copy_from_slice(&running.to_le_bytes());
         }
         self.marks.push(ReplyMark {
             end: self.out.len(),
