@@ -211,8 +211,11 @@ pub struct ServeArgs {
     #[arg(long, default_value = "pty")]
     pub port: String,
     /// With a pty: also make this path a symbolic link to it (a stable name for scripts)
-    #[arg(long, value_name = "PATH")]
+    #[arg(long, alias = "pty", value_name = "PATH")]
     pub link: Option<PathBuf>,
+    /// Serve on TCP instead of a pty (same as --port tcp:ADDR)
+    #[arg(long, value_name = "ADDR", conflicts_with = "link")]
+    pub tcp: Option<String>,
     /// Bit rate whose wire time (and each servo's Return Delay Time) is emulated
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
@@ -781,6 +784,10 @@ pub fn serve(a: ServeArgs) -> ExitCode {
         stop_on_eof: true,
     };
     let stop = interrupt_flag();
+    let port = match &a.tcp {
+        Some(addr) => format!("tcp:{addr}"),
+        None => a.port.clone(),
+    };
     let describe = |place: &str| {
         let mut models: Vec<String> = Vec::new();
         for j in &mapping.joints {
@@ -805,7 +812,7 @@ pub fn serve(a: ServeArgs) -> ExitCode {
             }
         )
     };
-    if a.port == "pty" {
+    if port == "pty" {
         let mut pty = match PtyTransport::open() {
             Ok(p) => p,
             Err(e) => return fail(format!("cannot open a pseudo-terminal: {e}")),
@@ -837,8 +844,8 @@ pub fn serve(a: ServeArgs) -> ExitCode {
             Err(e) => fail(e),
         };
     }
-    let Some(addr) = a.port.strip_prefix("tcp:") else {
-        return fail(format!("--port {:?}: use pty or tcp:ADDR", a.port));
+    let Some(addr) = port.strip_prefix("tcp:") else {
+        return fail(format!("--port {port:?}: use pty or tcp:ADDR"));
     };
     let listener = match std::net::TcpListener::bind(addr) {
         Ok(l) => l,

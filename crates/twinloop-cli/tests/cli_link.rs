@@ -231,3 +231,27 @@ fn bad_mapping_is_located() {
     assert_eq!(o.status.code(), Some(2));
     assert!(text(&o.stderr).contains("/nonexistent/ttyUSB9"));
 }
+
+#[test]
+fn serve_on_tcp() {
+    let (mut server, addr) = serve("builtin:op3", &["--tcp", "127.0.0.1:0", "--no-timing"]);
+    assert!(addr.starts_with("tcp:127.0.0.1:"), "{addr}");
+    let o = twinloop(&[
+        "link",
+        "scan",
+        "--port",
+        &addr,
+        "--protocol",
+        "2",
+        "--ids",
+        "1-5",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("5 servo(s) found"),
+        "{}",
+        text(&o.stdout)
+    );
+    server.kill().unwrap();
+    server.wait().unwrap();
+}
