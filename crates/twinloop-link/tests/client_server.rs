@@ -453,3 +453,55 @@ fn missing_servo_is_reported_per_servo_and_others_still_read() {
     assert_eq!(readings[0].position, 2048);
     let _ = Item::PresentPosition;
 }
+
+#[test]
+fn malformed_instructions_get_errors_not_panics() {
+    use twinloop_link::Instruction;
+    // 300 servos with duplicate ids on one protocol: a broadcast must not overflow.
+    let mut servos = Vec::new();
+    for k in 0..300u32 {
+        servos.push(BusServo {
+            id: (k % 200) as u8,
+            model: Model::Xm430W350,
+        });
+    }
+    let mut bus = VirtualBus::with_tracking_model(&servos);
+    let mut reply = Vec::new();
+    let cases: Vec<(u8, u8, Vec<u8>)> = vec![
+        (1, Instruction::Read.code(), vec![0x84]), // READ missing its length
+        (1, Instruction::Read.code(), vec![0, 0, 0, 0]), // READ of 0 bytes
+        (1, Instruction::Write.code(), vec![]),    // WRITE without address
+        (1, 0x77, vec![1, 2, 3]),                  // undefined instruction
+        (
+            0xFE,
+            Instruction::SyncWrite.code(),
+            vec![116, 0, 4, 0, 1, 2],
+        ), // truncated block
+        (0xFE, Instruction::BulkRead.code(), vec![1, 0]), // truncated item
+        (0xFE, Instruction::Ping.code(), vec![]),
+        (
+            0xFE,
+            Instruction::FastSyncRead.code(),
+            vec![132, 0, 4, 0, 1, 2, 250],
+        ),
+    ];
+    for (id, code, params) in cases {
+        let mut p = Vec::new();
+        let mut w = PacketWriter::raw(&mut p, Protocol::V2, id, code);
+        w.bytes(&params);
+        w.finish().unwrap();
+        reply.clear();
+        twinloop_link::transport::Responder::respond(&mut bus, &p, &mut reply);
+    }
+    // The unicast ones were answered with error statuses.
+    let mut d = twinloop_link::Decoder::new(twinloop_link::Accept::V2);
+    let mut p = Vec::new();
+    let mut w = PacketWriter::raw(&mut p, Protocol::V2, 1, Instruction::Read.code());
+    w.bytes(&[0x84]);
+    w.finish().unwrap();
+    reply.clear();
+    twinloop_link::transport::Responder::respond(&mut bus, &p, &mut reply);
+    d.push(&reply);
+    let f = d.next_frame().unwrap();
+    assert_eq!(f.params[0], 0x02, "instruction error");
+}

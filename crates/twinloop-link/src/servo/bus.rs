@@ -405,6 +405,9 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
     fn targets(&self, protocol: Protocol, id: u8, out: &mut [usize; 256]) -> usize {
         let mut n = 0;
         for (k, s) in self.servos.iter().enumerate() {
+            if n == out.len() {
+                break; // more servos than ids exist: duplicates, ignored
+            }
             if s.protocol() == protocol && (id == BROADCAST_ID || s.id() == id) {
                 out[n] = k;
                 n += 1;
