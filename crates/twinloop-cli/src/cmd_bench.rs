@@ -39,6 +39,24 @@ pub enum BenchCommand {
     ///
     /// Example: twinloop bench sim --robot models/op3/mjcf/op3.xml --dt 0.002 --json
     Sim(crate::cmd_sim::SimBenchArgs),
+    /// Time the Dynamixel link: software overhead of a control cycle, and
+    /// transactions per second against a served robot.
+    ///
+    /// Without --port: the client's own work per 20-servo control cycle (encode,
+    /// decode, CRC, checks; the replies are replayed from memory, so neither a wire nor
+    /// a servo costs anything), against that cycle's wire time at 1 Mbps
+    /// (`twinloop link plan`).
+    /// With --port (a robot from `twinloop serve --robot builtin:op3 --no-timing`):
+    /// also READ, SYNC_READ, FAST_SYNC_READ and a whole cycle over that port, timed the
+    /// same way bench/dynamixel_sdk/bench_sdk.py times the official Python SDK.
+    ///
+    /// Example:
+    ///   twinloop bench link
+    ///   twinloop bench link --port /dev/pts/5 --json
+    ///
+    /// Output: per case the median time (us), the rate, and for cycles the wire time
+    /// and overhead / wire ratio.
+    Link(crate::cmd_link::LinkBenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -161,6 +179,7 @@ pub fn run(cmd: BenchCommand) -> ExitCode {
                 ExitCode::from(crate::common::EXIT_BAD_INPUT)
             }
         },
+        BenchCommand::Link(args) => crate::cmd_link::bench(&args),
     }
 }
 

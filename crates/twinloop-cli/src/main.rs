@@ -6,6 +6,7 @@ mod cmd_bench;
 mod cmd_dynamics;
 mod cmd_experiment;
 mod cmd_ident;
+mod cmd_link;
 mod cmd_model;
 mod cmd_robot;
 mod cmd_sim;
@@ -114,6 +115,29 @@ enum Command {
     /// Example: twinloop sysid ss --data walk.csv --inputs 'u:*' --outputs 'gyro:*' --order 6 --json ss.json
     #[command(subcommand)]
     Sysid(cmd_sysid::SysidCommand),
+    /// Talk to a robot's Dynamixel servos: scan, read, record, plan a control cycle
+    ///
+    /// Protocol 1.0 (RX, MX) and 2.0 (X, MX(2.0)) over a serial adapter, a pty from
+    /// `twinloop serve`, or TCP. Run `twinloop link <command> --help` for each.
+    ///
+    /// Example: twinloop link scan --port /dev/ttyUSB0 --baud 1000000
+    #[command(subcommand)]
+    Link(cmd_link::LinkCommand),
+    /// Put a virtual robot on a pseudo-terminal (or TCP) that any Dynamixel program can drive
+    ///
+    /// Each servo of the robot answers with its own control table in its own protocol
+    /// (1.0 and 2.0 on one line), goal positions move the servo, present position,
+    /// velocity, load, voltage and temperature come from the servo model, and the
+    /// wire time at --baud plus each servo's Return Delay Time are emulated. The
+    /// servo model is a stand-in until the simulator plugs in: each servo tracks its
+    /// goal as a first-order lag (50 ms) at most at its no-load speed.
+    ///
+    /// The first line printed on stdout is the device path (or tcp:ADDR) to hand to
+    /// clients: twinloop link, the ROBOTIS SDK, Dynamixel Wizard via a pty bridge.
+    ///
+    /// Example: twinloop serve --robot builtin:km20 --link /tmp/km20
+    ///          twinloop link scan --port /tmp/km20
+    Serve(cmd_link::ServeArgs),
 }
 
 fn main() -> ExitCode {
@@ -131,5 +155,7 @@ fn main() -> ExitCode {
         Command::Ik(args) => cmd_ident::ik(args),
         Command::Validate(cmd) => cmd_ident::validate(cmd),
         Command::Sysid(cmd) => cmd_sysid::run(cmd),
+        Command::Link(cmd) => cmd_link::run(cmd),
+        Command::Serve(args) => cmd_link::serve(args),
     }
 }

@@ -1,0 +1,257 @@
+//! `twinloop link ...` and `twinloop serve` as a user runs them: a virtual robot on
+//! a pty, scanned, read and recorded by the CLI; interrupted and unplugged
+//! recordings keep every row.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_twinloop")
+}
+
+fn twinloop(args: &[&str]) -> Output {
+    Command::new(bin())
+        .args(args)
+        .output()
+        .expect("the twinloop binary runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join(name)
+}
+
+/// `twinloop serve` in the background; returns the child and the pty path.
+fn serve(robot: &str, extra: &[&str]) -> (Child, String) {
+    let mut child = Command::new(bin())
+        .args(["serve", "--robot", robot])
+        .args(extra)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.as_mut().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    (child, line.trim().to_string())
+}
+
+fn signal(child: &Child, sig: &str) {
+    let ok = Command::new("kill")
+        .args([sig, &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok);
+}
+
+#[test]
+fn plan_prints_the_wiretime_budget() {
+    let o = twinloop(&[
+        "link",
+        "plan",
+        "--servos",
+        "20",
+        "--protocol",
+        "2",
+        "--baud",
+        "1000000",
+    ]);
+    assert!(o.status.success());
+    let s = text(&o.stdout);
+    assert!(
+        s.contains("SYNC_READ") && s.contains("4.480") && s.contains("3.160"),
+        "{s}"
+    );
+    let o = twinloop(&[
+        "link",
+        "plan",
+        "--protocol",
+        "1",
+        "--return-delay-us",
+        "500",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v[0]["read_bytes"], 320);
+    assert!((v[0]["wire_ms"].as_f64().unwrap() - 13.88).abs() < 1e-9);
+}
+
+#[test]
+fn scan_read_and_record_a_served_robot() {
+    let (mut server, pty) = serve("builtin:op3", &["--no-timing"]);
+    let o = twinloop(&["link", "scan", "--port", &pty, "--protocol", "2", "--json"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v.as_array().unwrap().len(), 20);
+    assert_eq!(v[0]["model"], "XM430-W350");
+    let o = twinloop(&[
+        "link",
+        "read",
+        "--port",
+        &pty,
+        "--protocol",
+        "2",
+        "--id",
+        "13",
+        "present position",
+        "model number",
+    ]);
+    let s = text(&o.stdout);
+    assert!(
+        s.contains("Present Position") && s.contains("2048") && s.contains("1020"),
+        "{s}"
+    );
+    let o = twinloop(&[
+        "link",
+        "read",
+        "--port",
+        &pty,
+        "--protocol",
+        "2",
+        "--id",
+        "13",
+        "goal speed",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("XM430-W350 has no register \"goal speed\""));
+
+    let out = scratch("op3.csv");
+    let o = twinloop(&[
+        "link",
+        "record",
+        "--port",
+        &pty,
+        "--robot",
+        "builtin:op3",
+        "--duration",
+        "0.5",
+        "--out",
+        out.to_str().unwrap(),
+        "--rate",
+        "50",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let table = twinloop_io::Table::read(&out).unwrap();
+    assert_eq!(table.columns.len(), 1 + 3 * 20);
+    assert_eq!(table.columns[1], "q:r_sho_pitch");
+    assert!(table.columns.contains(&"tau:head_tilt".to_string()));
+    assert!(
+        (20..=27).contains(&table.rows.len()),
+        "{} rows at 50 Hz over 0.5 s",
+        table.rows.len()
+    );
+    assert!(text(&o.stderr).contains(&format!("{} rows", table.rows.len())));
+    server.kill().unwrap();
+    server.wait().unwrap();
+}
+
+#[test]
+fn interrupted_and_unplugged_recordings_keep_every_row() {
+    let (mut server, pty) = serve("builtin:km20", &[]);
+    // Ctrl-C: the recording stops cleanly, exit 0, every row in the file.
+    let out = scratch("interrupted.csv");
+    let rec = Command::new(bin())
+        .args([
+            "link",
+            "record",
+            "--port",
+            &pty,
+            "--robot",
+            "builtin:km20",
+            "--duration",
+            "60",
+            "--out",
+        ])
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    signal(&rec, "-INT");
+    let o = rec.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(err.contains("(interrupted)"), "{err}");
+    let table = twinloop_io::Table::read(&out).unwrap();
+    assert!(table.rows.len() >= 5, "{} rows", table.rows.len());
+    assert!(err.contains(&format!("{} rows", table.rows.len())), "{err}");
+
+    // The robot goes away mid-recording (an unplugged adapter): exit 2, the rows
+    // read before are all there and the file parses.
+    let out = scratch("unplugged.csv");
+    let rec = Command::new(bin())
+        .args([
+            "link",
+            "record",
+            "--port",
+            &pty,
+            "--robot",
+            "builtin:km20",
+            "--duration",
+            "60",
+            "--out",
+        ])
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    server.kill().unwrap();
+    server.wait().unwrap();
+    let t0 = Instant::now();
+    let o = rec.wait_with_output().unwrap();
+    assert!(t0.elapsed() < Duration::from_secs(10));
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(err.contains("recording stopped"), "{err}");
+    let table = twinloop_io::Table::read(&out).unwrap();
+    assert!(table.rows.len() >= 5);
+    assert!(err.contains(&format!("{} rows", table.rows.len())), "{err}");
+}
+
+#[test]
+fn bad_mapping_is_located() {
+    let m = scratch("bad.toml");
+    std::fs::write(&m, "[[joint]]\nname = \"a\"\nid = 1\nmodel = \"RX-99\"\n").unwrap();
+    let o = twinloop(&["serve", "--robot", m.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = text(&o.stderr);
+    assert!(
+        e.contains("bad.toml:4:9: joint \"a\": model: unknown model \"RX-99\""),
+        "{e}"
+    );
+    let o = twinloop(&["link", "scan", "--port", "/nonexistent/ttyUSB9"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("/nonexistent/ttyUSB9"));
+}
+
+#[test]
+fn serve_on_tcp() {
+    let (mut server, addr) = serve("builtin:op3", &["--tcp", "127.0.0.1:0", "--no-timing"]);
+    assert!(addr.starts_with("tcp:127.0.0.1:"), "{addr}");
+    let o = twinloop(&[
+        "link",
+        "scan",
+        "--port",
+        &addr,
+        "--protocol",
+        "2",
+        "--ids",
+        "1-5",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("5 servo(s) found"),
+        "{}",
+        text(&o.stdout)
+    );
+    server.kill().unwrap();
+    server.wait().unwrap();
+}

@@ -1,0 +1,689 @@
+//! The host side: ping and scan, read and write registers, the group instructions,
+//! reboot; every exchange checked (checksum, id, length, plausibility) and retried
+//! within a bound when bytes were lost or damaged.
+//!
+//! One request is encoded into a reusable buffer, replies are decoded from the
+//! transport straight into the decoder's fixed buffer, and data is copied into
+//! slices the caller owns: no exchange allocates once the client is warm.
+
+use crate::crc16::crc16_update;
+use crate::decoder::{Accept, Decoder};
+use crate::instruction::Instruction;
+use crate::link_error::{LinkError, Outcome};
+use crate::model::Model;
+use crate::packet::PacketWriter;
+use crate::protocol::{BROADCAST_ID, Protocol};
+use crate::status_error::StatusError;
+use crate::transport::Transport;
+use std::ops::RangeInclusive;
+use std::time::{Duration, Instant};
+
+/// How patient and how persistent the client is.
+#[derive(Debug, Clone)]
+pub struct ClientConfig {
+    /// Allowance per reply on top of its wire time: USB adapter latency, the
+    /// servo's Return Delay Time (500 us by default) and processing.
+    pub latency: Duration,
+    /// Extra attempts after a lost or damaged reply (0 = no retry).
+    pub retries: u32,
+    /// Bit rate used for wire-time allowances when the transport has none.
+    pub baud: u32,
+    /// Whether servos answer WRITE / REG_WRITE / ACTION / REBOOT (Status Return
+    /// Level 2, the factory setting). With level 0 or 1 set this to false.
+    pub write_replies: bool,
+}
+
+impl Default for ClientConfig {
+    fn default() -> ClientConfig {
+        ClientConfig {
+            latency: Duration::from_millis(10),
+            retries: 2,
+            baud: 1_000_000,
+            write_replies: true,
+        }
+    }
+}
+
+/// Counters over the client's life.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ClientStats {
+    /// Requests sent (retries included).
+    pub requests: u64,
+    pub retries: u64,
+    pub timeouts: u64,
+    pub corrupt: u64,
+    pub wrong_replies: u64,
+    pub implausible: u64,
+    pub rejected: u64,
+}
+
+/// A servo found by ping or scan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FoundServo {
+    pub protocol: Protocol,
+    pub id: u8,
+    pub model_number: u16,
+    pub firmware: u8,
+    /// The model, when twinloop knows the number.
+    pub model: Option<Model>,
+}
+
+/// One servo's part of a BULK_READ.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BulkRead {
+    pub id: u8,
+    pub address: u16,
+    pub len: u16,
+}
+
+/// What a reply must look like to be accepted.
+#[derive(Clone, Copy)]
+enum Expect {
+    /// A normal status packet from `id` with exactly `len` data bytes.
+    Status { id: u8, len: usize },
+    /// A FAST_SYNC_READ reply (id 0xFE) of `total` bytes on the wire.
+    Fast { total: usize },
+}
+
+/// The host-side client over any [`Transport`].
+pub struct Client<T: Transport> {
+    transport: T,
+    tx: Vec<u8>,
+    /// Data of the last accepted reply (or the raw packet of a fast reply).
+    rx: Vec<u8>,
+    decoder: Decoder,
+    pub config: ClientConfig,
+    pub stats: ClientStats,
+}
+
+impl<T: Transport> Client<T> {
+    pub fn new(transport: T) -> Client<T> {
+        Client::with_config(transport, ClientConfig::default())
+    }
+
+    pub fn with_config(transport: T, config: ClientConfig) -> Client<T> {
+        Client {
+            transport,
+            tx: Vec::with_capacity(1024),
+            rx: Vec::with_capacity(8192),
+            decoder: Decoder::new(Accept::Both),
+            config,
+            stats: ClientStats::default(),
+        }
+    }
+
+    pub fn transport(&self) -> &T {
+        &self.transport
+    }
+
+    pub fn transport_mut(&mut self) -> &mut T {
+        &mut self.transport
+    }
+
+    pub fn into_transport(self) -> T {
+        self.transport
+    }
+
+    fn baud(&self) -> u32 {
+        self.transport.baud().unwrap_or(self.config.baud).max(1)
+    }
+
+    /// Time `bytes` take on the wire (8N1: 10 bits per byte).
+    pub fn wire_time(&self, bytes: usize) -> Duration {
+        Duration::from_nanos((bytes as u64 * 10 * 1_000_000_000) / self.baud() as u64)
+    }
+
+    fn reply_timeout(&self, reply_bytes: usize) -> Duration {
+        self.config.latency + self.wire_time(self.tx.len() + reply_bytes)
+    }
+
+    fn send(&mut self) -> Result<(), LinkError> {
+        self.stats.requests += 1;
+        self.transport.write_all(&self.tx)?;
+        Ok(())
+    }
+
+    /// After a failed exchange late bytes may still arrive: drop what is buffered so
+    /// they cannot be taken for the next reply.
+    fn recover(&mut self) -> Result<(), LinkError> {
+        self.decoder.clear();
+        self.transport.discard_input()?;
+        Ok(())
+    }
+
+    fn count(&mut self, e: &LinkError) {
+        match e {
+            LinkError::Timeout { .. } => self.stats.timeouts += 1,
+            LinkError::Corrupt { .. } => self.stats.corrupt += 1,
+            LinkError::WrongReply { .. } => self.stats.wrong_replies += 1,
+            LinkError::Implausible { .. } => self.stats.implausible += 1,
+            LinkError::Rejected { .. } => self.stats.rejected += 1,
+            _ => {}
+        }
+    }
+
+    /// Wait for the reply `expect` describes; its data (or raw packet, for a fast
+    /// reply) lands in `self.rx`.
+    fn receive(&mut self, protocol: Protocol, expect: Expect, timeout: Duration) -> Outcome {
+        let id = match expect {
+            Expect::Status { id, .. } => id,
+            Expect::Fast { .. } => BROADCAST_ID,
+        };
+        let deadline = Instant::now() + timeout;
+        let damage_before = self.damage_seen();
+        let mut wrong: Option<LinkError> = None;
+        let mut flushing = false;
+        loop {
+            loop {
+                let frame = if flushing {
+                    self.decoder.next_frame_flushing()
+                } else {
+                    self.decoder.next_frame()
+                };
+                let Some(f) = frame else { break };
+                if f.protocol != protocol || f.id != id || f.raw == &self.tx[..] {
+                    // Another protocol's traffic, another servo's late reply, or our
+                    // own request echoed by the adapter.
+                    continue;
+                }
+                let (error, data): (u8, &[u8]) = match protocol {
+                    Protocol::V1 => (f.instruction, f.params),
+                    Protocol::V2 => {
+                        if f.instruction != Instruction::Status.code() || f.params.is_empty() {
+                            continue;
+                        }
+                        (f.params[0], &f.params[1..])
+                    }
+                };
+                if protocol == Protocol::V1 && error & 0x80 != 0 {
+                    // Bit 7 is always 0 in a real 1.0 status (EM-P1).
+                    wrong = Some(LinkError::Corrupt { id });
+                    continue;
+                }
+                let status = StatusError::new(protocol, error);
+                if status.rejected_instruction() && matches!(expect, Expect::Status { .. }) {
+                    // A refusal carries no data, whatever length was asked.
+                    return Err(LinkError::Rejected { id, error: status });
+                }
+                match expect {
+                    Expect::Status { len, .. } => {
+                        if data.len() != len {
+                            wrong = Some(LinkError::WrongReply {
+                                id,
+                                expected_len: len,
+                                got_len: data.len(),
+                            });
+                            continue;
+                        }
+                        self.rx.clear();
+                        self.rx.extend_from_slice(data);
+                    }
+                    Expect::Fast { total } => {
+                        if f.raw.len() != total {
+                            wrong = Some(LinkError::WrongReply {
+                                id,
+                                expected_len: total,
+                                got_len: f.raw.len(),
+                            });
+                            continue;
+                        }
+                        self.rx.clear();
+                        self.rx.extend_from_slice(f.raw);
+                    }
+                }
+                return Ok(status);
+            }
+            if flushing {
+                let err = wrong.unwrap_or(if self.damage_seen() != damage_before {
+                    LinkError::Corrupt { id }
+                } else {
+                    LinkError::Timeout { id }
+                });
+                return Err(err);
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                flushing = true;
+                continue;
+            }
+            let spare = self.decoder.spare();
+            let n = self.transport.read(spare, deadline - now)?;
+            self.decoder.commit(n);
+            if n == 0 {
+                // Transports return 0 only when the wait ran out.
+                flushing = true;
+            }
+        }
+    }
+
+    fn damage_seen(&self) -> u64 {
+        let s = self.decoder.stats();
+        s.bad_checksums + s.skipped_bytes
+    }
+
+    /// Send `self.tx` and wait for one status packet, retrying transient failures.
+    fn exchange(&mut self, protocol: Protocol, id: u8, len: usize) -> Outcome {
+        let mut attempt = 0;
+        loop {
+            self.send()?;
+            let timeout = self.reply_timeout(protocol.status_overhead() + len);
+            let r = self.receive(protocol, Expect::Status { id, len }, timeout);
+            match &r {
+                Err(e) => {
+                    self.count(e);
+                    if e.is_transient() && attempt < self.config.retries {
+                        attempt += 1;
+                        self.stats.retries += 1;
+                        self.recover()?;
+                        continue;
+                    }
+                    if e.is_transient() {
+                        self.recover()?;
+                    }
+                    return r;
+                }
+                Ok(_) => return r,
+            }
+        }
+    }
+
+    fn begin(&mut self, protocol: Protocol, id: u8, instruction: Instruction) -> PacketWriter<'_> {
+        self.tx.clear();
+        PacketWriter::instruction(&mut self.tx, protocol, id, instruction)
+    }
+
+    /// PING one servo; 1.0 servos then get a READ of model number and firmware
+    /// (a 1.0 ping reply carries no data).
+    pub fn ping(&mut self, protocol: Protocol, id: u8) -> Result<FoundServo, LinkError> {
+        self.begin(protocol, id, Instruction::Ping).finish()?;
+        let (model_number, firmware) = match protocol {
+            Protocol::V2 => {
+                self.exchange(protocol, id, 3)?;
+                (u16::from_le_bytes([self.rx[0], self.rx[1]]), self.rx[2])
+            }
+            Protocol::V1 => {
+                self.exchange(protocol, id, 0)?;
+                let mut b = [0u8; 3];
+                self.read(protocol, id, 0, &mut b)?;
+                (u16::from_le_bytes([b[0], b[1]]), b[2])
+            }
+        };
+        Ok(FoundServo {
+            protocol,
+            id,
+            model_number,
+            firmware,
+            model: Model::from_model_number(model_number),
+        })
+    }
+
+    /// Protocol 2.0 broadcast PING: every servo answers in turn; listen for
+    /// `listen` and return who answered, in id order.
+    pub fn broadcast_ping(&mut self, listen: Duration) -> Result<Vec<FoundServo>, LinkError> {
+        self.begin(Protocol::V2, BROADCAST_ID, Instruction::Ping)
+            .finish()?;
+        self.send()?;
+        let deadline = Instant::now() + listen;
+        let mut found = Vec::new();
+        loop {
+            while let Some(f) = self.decoder.next_frame() {
+                if f.protocol == Protocol::V2
+                    && f.instruction == Instruction::Status.code()
+                    && f.params.len() == 4
+                    && f.id <= Protocol::V2.max_id()
+                {
+                    let model_number = u16::from_le_bytes([f.params[1], f.params[2]]);
+                    found.push(FoundServo {
+                        protocol: Protocol::V2,
+                        id: f.id,
+                        model_number,
+                        firmware: f.params[3],
+                        model: Model::from_model_number(model_number),
+                    });
+                }
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                break;
+            }
+            let spare = self.decoder.spare();
+            let n = self.transport.read(spare, deadline - now)?;
+            self.decoder.commit(n);
+            if n == 0 {
+                break;
+            }
+        }
+        while let Some(f) = self.decoder.next_frame_flushing() {
+            let _ = f;
+        }
+        found.sort_by_key(|s| s.id);
+        found.dedup_by_key(|s| s.id);
+        Ok(found)
+    }
+
+    /// Find the servos on the bus: for 2.0 a broadcast ping (then single pings of
+    /// the ids in range if nobody answered it), for 1.0 a ping per id. Returns
+    /// what answered, in id order.
+    pub fn scan(
+        &mut self,
+        protocol: Protocol,
+        ids: RangeInclusive<u8>,
+    ) -> Result<Vec<FoundServo>, LinkError> {
+        let ids = *ids.start()..=(*ids.end()).min(protocol.max_id());
+        if protocol == Protocol::V2 {
+            // The SDK's window: 14 bytes per possible servo plus 3 ms each, + 16 ms.
+            let listen = self.wire_time(14 * 253)
+                + Duration::from_millis(3 * 253 + 16).min(self.config.latency * 80);
+            let found = self.broadcast_ping(listen)?;
+            let found: Vec<FoundServo> =
+                found.into_iter().filter(|s| ids.contains(&s.id)).collect();
+            if !found.is_empty() {
+                return Ok(found);
+            }
+        }
+        let retries = std::mem::replace(&mut self.config.retries, 0);
+        let mut found = Vec::new();
+        let mut result = Ok(());
+        for id in ids {
+            match self.ping(protocol, id) {
+                Ok(s) => found.push(s),
+                Err(LinkError::Io(e)) => {
+                    result = Err(LinkError::Io(e));
+                    break;
+                }
+                Err(_) => {}
+            }
+        }
+        self.config.retries = retries;
+        result.map(|_| found)
+    }
+
+    /// READ `out.len()` bytes from `address`.
+    pub fn read(&mut self, protocol: Protocol, id: u8, address: u16, out: &mut [u8]) -> Outcome {
+        let mut w = self.begin(protocol, id, Instruction::Read);
+        w.address(address).address(out.len() as u16);
+        w.finish()?;
+        let status = self.exchange(protocol, id, out.len())?;
+        out.copy_from_slice(&self.rx);
+        Ok(status)
+    }
+
+    fn write_like(
+        &mut self,
+        protocol: Protocol,
+        instruction: Instruction,
+        id: u8,
+        address: u16,
+        data: &[u8],
+    ) -> Outcome {
+        let mut w = self.begin(protocol, id, instruction);
+        w.address(address).bytes(data);
+        w.finish()?;
+        self.finish_command(protocol, id)
+    }
+
+    /// Send the encoded command; wait for its status unless broadcast or the
+    /// servos are set not to answer.
+    fn finish_command(&mut self, protocol: Protocol, id: u8) -> Outcome {
+        if id == BROADCAST_ID || !self.config.write_replies {
+            self.send()?;
+            return Ok(StatusError::new(protocol, 0));
+        }
+        self.exchange(protocol, id, 0)
+    }
+
+    /// WRITE `data` at `address`.
+    pub fn write(&mut self, protocol: Protocol, id: u8, address: u16, data: &[u8]) -> Outcome {
+        self.write_like(protocol, Instruction::Write, id, address, data)
+    }
+
+    /// REG_WRITE: stage a write, executed at the next ACTION.
+    pub fn reg_write(&mut self, protocol: Protocol, id: u8, address: u16, data: &[u8]) -> Outcome {
+        self.write_like(protocol, Instruction::RegWrite, id, address, data)
+    }
+
+    /// ACTION: execute staged REG_WRITEs (usually broadcast).
+    pub fn action(&mut self, protocol: Protocol, id: u8) -> Outcome {
+        self.begin(protocol, id, Instruction::Action).finish()?;
+        self.finish_command(protocol, id)
+    }
+
+    /// REBOOT (Protocol 2.0 only; 1.0 servos have no such instruction).
+    pub fn reboot(&mut self, protocol: Protocol, id: u8) -> Outcome {
+        self.begin(protocol, id, Instruction::Reboot).finish()?;
+        self.finish_command(protocol, id)
+    }
+
+    /// CLEAR (Protocol 2.0): reset the multi-turn count of Present Position to within
+    /// one turn; refused with Result Fail while the servo moves (EM-P2 "Clear").
+    pub fn clear_multi_turn(&mut self, id: u8) -> Outcome {
+        let mut w = self.begin(Protocol::V2, id, Instruction::Clear);
+        w.bytes(&[0x01, 0x44, 0x58, 0x4C, 0x22]);
+        w.finish()?;
+        self.finish_command(Protocol::V2, id)
+    }
+
+    /// FACTORY_RESET. `option` (2.0 only): 0xFF all, 0x01 all but id, 0x02 all but
+    /// id and baud rate.
+    pub fn factory_reset(&mut self, protocol: Protocol, id: u8, option: u8) -> Outcome {
+        let mut w = self.begin(protocol, id, Instruction::FactoryReset);
+        if protocol == Protocol::V2 {
+            w.u8(option);
+        }
+        w.finish()?;
+        self.finish_command(protocol, id)
+    }
+
+    /// SYNC_WRITE `len` bytes at `address` to each of `ids`; `data` holds
+    /// `ids.len() * len` bytes in id order. No servo answers.
+    pub fn sync_write(
+        &mut self,
+        protocol: Protocol,
+        address: u16,
+        len: u16,
+        ids: &[u8],
+        data: &[u8],
+    ) -> Result<(), LinkError> {
+        debug_assert_eq!(data.len(), ids.len() * len as usize);
+        let mut w = self.begin(protocol, BROADCAST_ID, Instruction::SyncWrite);
+        w.address(address).address(len);
+        for (k, &id) in ids.iter().enumerate() {
+            w.u8(id)
+                .bytes(&data[k * len as usize..(k + 1) * len as usize]);
+        }
+        w.finish()?;
+        self.send()
+    }
+
+    /// BULK_WRITE (Protocol 2.0): each item its own address and data.
+    pub fn bulk_write(&mut self, items: &[(u8, u16, &[u8])]) -> Result<(), LinkError> {
+        let mut w = self.begin(Protocol::V2, BROADCAST_ID, Instruction::BulkWrite);
+        for (id, address, data) in items {
+            w.u8(*id).u16(*address).u16(data.len() as u16).bytes(data);
+        }
+        w.finish()?;
+        self.send()
+    }
+
+    /// SYNC_READ (Protocol 2.0): `len` bytes at `address` from each of `ids`, into
+    /// `out` (`ids.len() * len` bytes, id order); one outcome per id. Servos whose
+    /// reply was lost are re-read one by one (bounded retries).
+    pub fn sync_read(
+        &mut self,
+        address: u16,
+        len: u16,
+        ids: &[u8],
+        out: &mut [u8],
+        outcomes: &mut [Outcome],
+    ) -> Result<(), LinkError> {
+        let mut w = self.begin(Protocol::V2, BROADCAST_ID, Instruction::SyncRead);
+        w.u16(address).u16(len).bytes(ids);
+        w.finish()?;
+        self.send()?;
+        let l = len as usize;
+        for (k, &id) in ids.iter().enumerate() {
+            let timeout = self.reply_timeout(Protocol::V2.status_overhead() + l);
+            let r = self.receive(Protocol::V2, Expect::Status { id, len: l }, timeout);
+            if let Err(e) = &r {
+                self.count(e);
+            } else {
+                out[k * l..(k + 1) * l].copy_from_slice(&self.rx);
+            }
+            outcomes[k] = r;
+        }
+        self.reread_failed(Protocol::V2, address, len, ids, out, outcomes)
+    }
+
+    /// FAST_SYNC_READ (Protocol 2.0): like [`Client::sync_read`] but all servos
+    /// answer in one packet (`[ERR ID DATA CRC]` per servo, PROTOCOL.md 2.6). Each
+    /// block's CRC is checked (cumulative from the packet's start), then its id.
+    pub fn fast_sync_read(
+        &mut self,
+        address: u16,
+        len: u16,
+        ids: &[u8],
+        out: &mut [u8],
+        outcomes: &mut [Outcome],
+    ) -> Result<(), LinkError> {
+        let mut w = self.begin(Protocol::V2, BROADCAST_ID, Instruction::FastSyncRead);
+        w.u16(address).u16(len).bytes(ids);
+        w.finish()?;
+        self.send()?;
+        let l = len as usize;
+        let total = 8 + ids.len() * (l + 4);
+        let timeout = self.reply_timeout(total);
+        match self.receive(Protocol::V2, Expect::Fast { total }, timeout) {
+            Ok(_) => {
+                let raw = &self.rx;
+                let mut pos = 8;
+                let mut broken = false;
+                // Each block's CRC covers the packet up to it: one running CRC.
+                let mut running = 0u16;
+                let mut covered = 0;
+                for (k, &id) in ids.iter().enumerate() {
+                    let err = raw[pos];
+                    let block_id = raw[pos + 1];
+                    let crc_at = pos + 2 + l;
+                    let crc = u16::from_le_bytes([raw[crc_at], raw[crc_at + 1]]);
+                    running = crc16_update(running, &raw[covered..crc_at]);
+                    covered = crc_at;
+                    broken = broken || block_id != id || running != crc;
+                    outcomes[k] = if broken {
+                        Err(LinkError::Corrupt { id })
+                    } else {
+                        let status = StatusError::new(Protocol::V2, err);
+                        if status.rejected_instruction() {
+                            Err(LinkError::Rejected { id, error: status })
+                        } else {
+                            out[k * l..(k + 1) * l].copy_from_slice(&raw[pos + 2..crc_at]);
+                            Ok(status)
+                        }
+                    };
+                    pos = crc_at + 2;
+                }
+                for o in outcomes.iter() {
+                    if let Err(e) = o {
+                        let e = e.clone();
+                        self.count(&e);
+                    }
+                }
+            }
+            Err(e) => {
+                self.count(&e);
+                if let LinkError::Io(_) = e {
+                    return Err(e);
+                }
+                for (k, &id) in ids.iter().enumerate() {
+                    outcomes[k] = Err(match &e {
+                        LinkError::Corrupt { .. } => LinkError::Corrupt { id },
+                        LinkError::WrongReply { .. } => LinkError::Corrupt { id },
+                        _ => LinkError::Timeout { id },
+                    });
+                }
+            }
+        }
+        self.reread_failed(Protocol::V2, address, len, ids, out, outcomes)
+    }
+
+    /// BULK_READ: each item its own address and length; `out` holds the items'
+    /// data back to back. In 1.0 only MX servos have it.
+    pub fn bulk_read(
+        &mut self,
+        protocol: Protocol,
+        items: &[BulkRead],
+        out: &mut [u8],
+        outcomes: &mut [Outcome],
+    ) -> Result<(), LinkError> {
+        let mut w = self.begin(protocol, BROADCAST_ID, Instruction::BulkRead);
+        match protocol {
+            Protocol::V1 => {
+                w.u8(0x00);
+                for it in items {
+                    w.u8(it.len as u8).u8(it.id).u8(it.address as u8);
+                }
+            }
+            Protocol::V2 => {
+                for it in items {
+                    w.u8(it.id).u16(it.address).u16(it.len);
+                }
+            }
+        }
+        w.finish()?;
+        self.send()?;
+        let mut offset = 0;
+        for (k, it) in items.iter().enumerate() {
+            let l = it.len as usize;
+            let timeout = self.reply_timeout(protocol.status_overhead() + l);
+            let r = self.receive(protocol, Expect::Status { id: it.id, len: l }, timeout);
+            match &r {
+                Err(e) => self.count(e),
+                Ok(_) => out[offset..offset + l].copy_from_slice(&self.rx),
+            }
+            outcomes[k] = r;
+            offset += l;
+        }
+        // Lost replies: one READ each.
+        let mut offset = 0;
+        let mut first_failure = true;
+        for (k, it) in items.iter().enumerate() {
+            let l = it.len as usize;
+            if outcomes[k].as_ref().is_err_and(|e| e.is_transient()) {
+                if first_failure {
+                    self.recover()?;
+                    first_failure = false;
+                }
+                self.stats.retries += 1;
+                outcomes[k] = self.read(protocol, it.id, it.address, &mut out[offset..offset + l]);
+            }
+            offset += l;
+        }
+        Ok(())
+    }
+
+    fn reread_failed(
+        &mut self,
+        protocol: Protocol,
+        address: u16,
+        len: u16,
+        ids: &[u8],
+        out: &mut [u8],
+        outcomes: &mut [Outcome],
+    ) -> Result<(), LinkError> {
+        let l = len as usize;
+        let mut recovered = false;
+        for (k, &id) in ids.iter().enumerate() {
+            if outcomes[k].as_ref().is_err_and(|e| e.is_transient()) && self.config.retries > 0 {
+                if !recovered {
+                    self.recover()?;
+                    recovered = true;
+                }
+                self.stats.retries += 1;
+                outcomes[k] = self.read(protocol, id, address, &mut out[k * l..(k + 1) * l]);
+                if let Err(LinkError::Io(e)) = &outcomes[k] {
+                    return Err(LinkError::Io(e.clone()));
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,431 @@
+//! The control cycle a humanoid runs: write every joint's goal position with one
+//! SYNC_WRITE per protocol, then read every joint's present position, velocity and
+//! load (or current) with the cheapest read its servos have: FAST_SYNC_READ or
+//! SYNC_READ on Protocol 2.0, BULK_READ on MX with 1.0 firmware, and one READ per
+//! servo on RX, which has nothing else (PROTOCOL.md 1.3).
+//!
+//! Everything is laid out when the cycle is built; running it allocates nothing.
+
+use crate::client::{BulkRead, Client};
+use crate::link_error::{LinkError, Outcome};
+use crate::model::Model;
+use crate::protocol::Protocol;
+use crate::register::{Item, Register};
+use crate::status_error::StatusError;
+use crate::transport::Transport;
+use std::fmt;
+
+/// A servo in the cycle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CycleServo {
+    pub id: u8,
+    pub model: Model,
+}
+
+/// How a group of servos is read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReadMethod {
+    /// The cheapest the servos support.
+    Auto,
+    /// One READ per servo.
+    Read,
+    BulkRead,
+    SyncRead,
+    FastSyncRead,
+}
+
+impl ReadMethod {
+    pub fn name(self) -> &'static str {
+        match self {
+            ReadMethod::Auto => "auto",
+            ReadMethod::Read => "READ per servo",
+            ReadMethod::BulkRead => "BULK_READ",
+            ReadMethod::SyncRead => "SYNC_READ",
+            ReadMethod::FastSyncRead => "FAST_SYNC_READ",
+        }
+    }
+
+    pub fn parse(text: &str) -> Option<ReadMethod> {
+        Some(match text.to_ascii_lowercase().replace('-', "_").as_str() {
+            "auto" => ReadMethod::Auto,
+            "read" => ReadMethod::Read,
+            "bulk" | "bulk_read" => ReadMethod::BulkRead,
+            "sync" | "sync_read" => ReadMethod::SyncRead,
+            "fast" | "fast_sync_read" => ReadMethod::FastSyncRead,
+            _ => return None,
+        })
+    }
+}
+
+/// What one cycle measured for one servo, raw (decoded) register values.
+#[derive(Debug, Clone)]
+pub struct ServoReading {
+    pub position: i32,
+    pub velocity: i32,
+    /// Present Load (1.0, XL430, MX-28(2.0)) or Present Current (XM430, MX-64/106
+    /// (2.0)); [`ControlCycle::effort_register`] says which.
+    pub effort: i32,
+    /// Whether this cycle's values are valid, and any condition the servo reported.
+    pub outcome: Outcome,
+}
+
+impl Default for ServoReading {
+    fn default() -> ServoReading {
+        ServoReading {
+            position: 0,
+            velocity: 0,
+            effort: 0,
+            outcome: Err(LinkError::Timeout { id: 0 }),
+        }
+    }
+}
+
+/// Counts of one cycle.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CycleSummary {
+    pub ok: usize,
+    pub failed: usize,
+}
+
+/// A cycle that cannot be built.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CycleError(pub String);
+
+impl fmt::Display for CycleError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for CycleError {}
+
+struct Group {
+    protocol: Protocol,
+    method: ReadMethod,
+    /// Indices into the cycle's servo list.
+    members: Vec<usize>,
+    ids: Vec<u8>,
+    goal_address: u16,
+    goal_size: u16,
+    block_address: u16,
+    block_len: u16,
+}
+
+/// Per-servo registers within the read block.
+struct Layout {
+    position: Register,
+    velocity: Register,
+    effort: Register,
+}
+
+pub struct ControlCycle {
+    servos: Vec<CycleServo>,
+    layouts: Vec<Layout>,
+    groups: Vec<Group>,
+    goal_buf: Vec<u8>,
+    read_buf: Vec<u8>,
+    outcomes: Vec<Outcome>,
+    bulk: Vec<BulkRead>,
+}
+
+/// The register block every cycle reads: 1.0 Present Position..Present Load
+/// (36..42), 2.0 Present Current/Load..Present Position (126..136).
+fn block(protocol: Protocol) -> (u16, u16) {
+    match protocol {
+        Protocol::V1 => (36, 6),
+        Protocol::V2 => (126, 10),
+    }
+}
+
+impl ControlCycle {
+    /// Lay out the cycle for `servos` (in joint order). `method` applies to every
+    /// group it suits; an explicit method a servo lacks is an error naming it.
+    pub fn new(servos: &[CycleServo], method: ReadMethod) -> Result<ControlCycle, CycleError> {
+        let mut layouts = Vec::with_capacity(servos.len());
+        for s in servos {
+            let t = s.model.table();
+            let get = |item| {
+                t.item(item).copied().ok_or_else(|| {
+                    CycleError(format!("servo id {}: {} has no {item:?}", s.id, s.model))
+                })
+            };
+            let effort = t
+                .item(Item::PresentLoad)
+                .filter(|r| r.address >= block(s.model.protocol()).0)
+                .or_else(|| t.item(Item::PresentCurrent))
+                .copied()
+                .ok_or_else(|| CycleError(format!("servo id {}: no load register", s.id)))?;
+            layouts.push(Layout {
+                position: get(Item::PresentPosition)?,
+                velocity: get(Item::PresentVelocity)?,
+                effort,
+            });
+        }
+        for (k, a) in servos.iter().enumerate() {
+            if let Some(b) = servos[..k]
+                .iter()
+                .find(|b| b.id == a.id && b.model.protocol() == a.model.protocol())
+            {
+                return Err(CycleError(format!(
+                    "servo id {} appears twice ({} and {}) on {}",
+                    a.id,
+                    b.model,
+                    a.model,
+                    a.model.protocol()
+                )));
+            }
+        }
+        let mut groups = Vec::new();
+        for protocol in [Protocol::V1, Protocol::V2] {
+            let members: Vec<usize> = (0..servos.len())
+                .filter(|&i| servos[i].model.protocol() == protocol)
+                .collect();
+            if members.is_empty() {
+                continue;
+            }
+            let models: Vec<&CycleServo> = members.iter().map(|&i| &servos[i]).collect();
+            let lacking = |has: fn(Model) -> bool| models.iter().find(|s| !has(s.model)).copied();
+            let chosen = match method {
+                ReadMethod::Auto => match protocol {
+                    Protocol::V2 if lacking(Model::has_fast_sync_read).is_none() => {
+                        ReadMethod::FastSyncRead
+                    }
+                    Protocol::V2 => ReadMethod::SyncRead,
+                    Protocol::V1 if lacking(Model::has_bulk_read).is_none() && models.len() > 1 => {
+                        ReadMethod::BulkRead
+                    }
+                    Protocol::V1 => ReadMethod::Read,
+                },
+                m => {
+                    let check: Option<fn(Model) -> bool> = match m {
+                        ReadMethod::BulkRead => Some(Model::has_bulk_read),
+                        ReadMethod::SyncRead => Some(Model::has_sync_read),
+                        ReadMethod::FastSyncRead => Some(Model::has_fast_sync_read),
+                        _ => None,
+                    };
+                    if let Some(has) = check
+                        && let Some(s) = lacking(has)
+                    {
+                        return Err(CycleError(format!(
+                            "servo id {} ({}, {}) has no {}",
+                            s.id,
+                            s.model,
+                            protocol,
+                            m.name()
+                        )));
+                    }
+                    m
+                }
+            };
+            let goal = servos[members[0]]
+                .model
+                .table()
+                .item(Item::GoalPosition)
+                .copied()
+                .ok_or_else(|| CycleError("no goal position register".into()))?;
+            let (block_address, block_len) = block(protocol);
+            groups.push(Group {
+                protocol,
+                method: chosen,
+                ids: members.iter().map(|&i| servos[i].id).collect(),
+                members,
+                goal_address: goal.address,
+                goal_size: goal.size as u16,
+                block_address,
+                block_len,
+            });
+        }
+        let n = servos.len();
+        Ok(ControlCycle {
+            servos: servos.to_vec(),
+            layouts,
+            groups,
+            goal_buf: Vec::with_capacity(n * 4),
+            read_buf: vec![0; n * 10],
+            outcomes: vec![Err(LinkError::Timeout { id: 0 }); n],
+            bulk: Vec::with_capacity(n),
+        })
+    }
+
+    pub fn servos(&self) -> &[CycleServo] {
+        &self.servos
+    }
+
+    /// The read method chosen for the servos of `protocol`, if any are present.
+    pub fn method(&self, protocol: Protocol) -> Option<ReadMethod> {
+        self.groups
+            .iter()
+            .find(|g| g.protocol == protocol)
+            .map(|g| g.method)
+    }
+
+    /// The registers the readings of servo `index` decode with (for SI units).
+    pub fn position_register(&self, index: usize) -> &Register {
+        &self.layouts[index].position
+    }
+
+    pub fn velocity_register(&self, index: usize) -> &Register {
+        &self.layouts[index].velocity
+    }
+
+    pub fn effort_register(&self, index: usize) -> &Register {
+        &self.layouts[index].effort
+    }
+
+    /// The goal position register of servo `index`.
+    pub fn goal_register(&self, index: usize) -> Register {
+        *self.servos[index]
+            .model
+            .table()
+            .item(Item::GoalPosition)
+            .expect("checked in new")
+    }
+
+    /// One cycle: SYNC_WRITE `goals` (raw, servo order; `None` writes nothing), then
+    /// read every servo into `readings`. Only a dead link is an `Err`; each servo's
+    /// own trouble is in its reading's outcome.
+    pub fn run<T: Transport>(
+        &mut self,
+        client: &mut Client<T>,
+        goals: Option<&[i32]>,
+        readings: &mut [ServoReading],
+    ) -> Result<CycleSummary, LinkError> {
+        if let Some(goals) = goals {
+            self.write_goals(client, goals)?;
+        }
+        self.read(client, readings)
+    }
+
+    /// SYNC_WRITE raw goal positions (servo order), one packet per protocol; each
+    /// value is clamped to its register's range.
+    pub fn write_goals<T: Transport>(
+        &mut self,
+        client: &mut Client<T>,
+        goals: &[i32],
+    ) -> Result<(), LinkError> {
+        assert_eq!(goals.len(), self.servos.len());
+        for g in &self.groups {
+            self.goal_buf.clear();
+            for &i in &g.members {
+                let reg = self.servos[i]
+                    .model
+                    .table()
+                    .item(Item::GoalPosition)
+                    .expect("checked in new");
+                let mut b = [0u8; 4];
+                reg.encode(goals[i].clamp(reg.min, reg.max), &mut b);
+                self.goal_buf.extend_from_slice(&b[..g.goal_size as usize]);
+            }
+            client.sync_write(
+                g.protocol,
+                g.goal_address,
+                g.goal_size,
+                &g.ids,
+                &self.goal_buf,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Read every servo's position, velocity and load or current into `readings`
+    /// (servo order).
+    pub fn read<T: Transport>(
+        &mut self,
+        client: &mut Client<T>,
+        readings: &mut [ServoReading],
+    ) -> Result<CycleSummary, LinkError> {
+        assert_eq!(readings.len(), self.servos.len());
+        let mut summary = CycleSummary::default();
+        for g in &self.groups {
+            let l = g.block_len as usize;
+            let n = g.members.len();
+            let buf = &mut self.read_buf[..n * l];
+            let outcomes = &mut self.outcomes[..n];
+            match g.method {
+                ReadMethod::FastSyncRead => {
+                    client.fast_sync_read(g.block_address, g.block_len, &g.ids, buf, outcomes)?
+                }
+                ReadMethod::SyncRead => {
+                    client.sync_read(g.block_address, g.block_len, &g.ids, buf, outcomes)?
+                }
+                ReadMethod::BulkRead => {
+                    self.bulk.clear();
+                    self.bulk.extend(g.ids.iter().map(|&id| BulkRead {
+                        id,
+                        address: g.block_address,
+                        len: g.block_len,
+                    }));
+                    client.bulk_read(g.protocol, &self.bulk, buf, outcomes)?
+                }
+                ReadMethod::Read | ReadMethod::Auto => {
+                    for (k, &id) in g.ids.iter().enumerate() {
+                        outcomes[k] = client.read(
+                            g.protocol,
+                            id,
+                            g.block_address,
+                            &mut buf[k * l..(k + 1) * l],
+                        );
+                        if let Err(LinkError::Io(e)) = &outcomes[k] {
+                            return Err(LinkError::Io(e.clone()));
+                        }
+                    }
+                }
+            }
+            for (k, &i) in g.members.iter().enumerate() {
+                let id = g.ids[k];
+                let lay = &self.layouts[i];
+                let mut outcome =
+                    std::mem::replace(&mut self.outcomes[k], Ok(StatusError::new(g.protocol, 0)));
+                // Plausibility: a value outside its register's range passed the
+                // checksum by chance; re-read it once rather than accept it.
+                for attempt in 0..2 {
+                    if outcome.is_err() {
+                        break;
+                    }
+                    let data = &self.read_buf[k * l..(k + 1) * l];
+                    let Some(bad) = implausible(lay, g.block_address, data) else {
+                        break;
+                    };
+                    outcome = Err(LinkError::Implausible { id, register: bad });
+                    client.stats.implausible += 1;
+                    if attempt == 0 && client.config.retries > 0 {
+                        outcome = client.read(
+                            g.protocol,
+                            id,
+                            g.block_address,
+                            &mut self.read_buf[k * l..(k + 1) * l],
+                        );
+                    }
+                }
+                let data = &self.read_buf[k * l..(k + 1) * l];
+                let r = &mut readings[i];
+                if outcome.is_ok() {
+                    let field = |reg: &Register| {
+                        let o = (reg.address - g.block_address) as usize;
+                        reg.decode(&data[o..o + reg.size as usize])
+                    };
+                    r.position = field(&lay.position);
+                    r.velocity = field(&lay.velocity);
+                    r.effort = field(&lay.effort);
+                    summary.ok += 1;
+                } else {
+                    summary.failed += 1;
+                }
+                r.outcome = outcome;
+            }
+        }
+        Ok(summary)
+    }
+}
+
+/// The name of the first register in `data` (the read block at `base`) whose value
+/// no healthy servo reports.
+fn implausible(lay: &Layout, base: u16, data: &[u8]) -> Option<&'static str> {
+    [&lay.position, &lay.velocity, &lay.effort]
+        .into_iter()
+        .find(|r| {
+            let o = (r.address - base) as usize;
+            !r.plausible(&data[o..o + r.size as usize])
+        })
+        .map(|r| r.name)
+}

@@ -1,0 +1,45 @@
+//! twinloop-link: the robot link. Dynamixel Protocol 1.0 and 2.0 packets, control
+//! tables, transports, a host client, virtual servos answering the servo side of the
+//! protocol, a robot mapping file and the real-robot backend of
+//! [`twinloop_robot::Robot`].
+//!
+//! Protocol facts come from the ROBOTIS e-manual (EM-P1, EM-P2: the Protocol 1.0 and
+//! 2.0 pages) and the official DynamixelSDK; the tests hold the e-manual's example
+//! packets and packets built by the SDK byte for byte. Nothing here knows dynamics:
+//! a simulator plugs into the virtual robot through [`VirtualServoBackend`].
+
+pub mod client;
+pub mod control_cycle;
+pub mod control_table;
+pub mod crc16;
+pub mod decoder;
+pub mod instruction;
+pub mod link_error;
+pub mod mapping;
+pub mod model;
+pub mod packet;
+pub mod protocol;
+pub mod real_robot;
+pub mod register;
+pub mod servo;
+pub mod status_error;
+pub mod transport;
+pub mod wire_time;
+
+pub use client::{BulkRead, Client, ClientConfig, ClientStats, FoundServo};
+pub use control_cycle::{ControlCycle, CycleServo, CycleSummary, ReadMethod, ServoReading};
+pub use control_table::ControlTable;
+pub use crc16::{checksum_v1, crc16, crc16_update};
+pub use decoder::{Accept, DecodeEvent, Decoder, DecoderStats, Frame};
+pub use instruction::Instruction;
+pub use link_error::{LinkError, Outcome};
+pub use mapping::{JointMapping, MappingError, RobotMapping};
+pub use model::{Model, ServoSpec, baud_from_register};
+pub use packet::{EncodeError, PacketWriter};
+pub use protocol::{BROADCAST_ID, Protocol};
+pub use real_robot::DynamixelRobot;
+pub use register::{Access, Area, Encoding, Item, Register, Unit};
+pub use servo::{BusServo, TrackingServoModel, VirtualBus, VirtualServoBackend};
+pub use status_error::{ErrorBitV1, ErrorNumberV2, StatusError};
+pub use transport::Transport;
+pub use wire_time::{CyclePlan, plan_cycle};

@@ -1,0 +1,447 @@
+//! The robot mapping file: which servo moves which URDF joint, and how a joint
+//! angle becomes a servo angle. It is the per-robot calibration users keep across
+//! tools.
+//!
+//! ```toml
+//! [robot]
+//! name = "op3"
+//! urdf = "models/op3/robotis_op3.urdf"   # optional
+//! port = "/dev/ttyUSB0"                  # optional defaults for the CLI
+//! baud = 1000000
+//!
+//! [[joint]]
+//! name = "r_sho_pitch"     # URDF joint name
+//! id = 1                   # servo id
+//! model = "XM430-W350"     # protocol follows from the model; `protocol = 2` checks it
+//! zero = 0.0               # servo angle (rad from the servo's centre) at joint angle 0
+//! direction = 1            # +1: joint and servo turn the same way, -1: opposite
+//! min = -1.5               # joint limits, rad (default: the servo's range)
+//! max = 1.5
+//! ```
+//!
+//! servo angle = zero + direction * joint angle. Joint order is file order.
+
+use crate::model::Model;
+use crate::protocol::Protocol;
+use crate::register::{Item, Register};
+use serde::Deserialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// A mapping error, located: `file:line:column: message`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MappingError {
+    pub file: String,
+    pub line: usize,
+    pub column: usize,
+    pub message: String,
+}
+
+impl fmt::Display for MappingError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line > 0 {
+            write!(
+                f,
+                "{}:{}:{}: {}",
+                self.file, self.line, self.column, self.message
+            )
+        } else {
+            write!(f, "{}: {}", self.file, self.message)
+        }
+    }
+}
+
+impl std::error::Error for MappingError {}
+
+/// One joint's servo.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointMapping {
+    pub name: String,
+    pub id: u8,
+    pub protocol: Protocol,
+    pub model: Model,
+    /// Servo angle (rad from its centre) at joint angle 0.
+    pub zero: f64,
+    /// +1 or -1.
+    pub direction: f64,
+    /// Joint limits, rad.
+    pub min: f64,
+    pub max: f64,
+    /// Line of the `[[joint]]` entry (0 for built-ins made in code).
+    pub line: usize,
+}
+
+impl JointMapping {
+    fn goal_register(&self) -> &'static Register {
+        self.model
+            .table()
+            .item(Item::GoalPosition)
+            .expect("every table has a goal position")
+    }
+
+    /// Servo angle for a joint angle.
+    pub fn servo_angle(&self, joint: f64) -> f64 {
+        self.zero + self.direction * joint
+    }
+
+    /// Joint angle for a servo angle.
+    pub fn joint_angle(&self, servo: f64) -> f64 {
+        self.direction * (servo - self.zero)
+    }
+
+    /// Raw Goal Position for a joint angle, clamped to the joint limits first.
+    pub fn goal_raw(&self, joint: f64) -> i32 {
+        let q = if joint.is_nan() {
+            0.0
+        } else {
+            joint.clamp(self.min, self.max)
+        };
+        self.goal_register().from_si(self.servo_angle(q))
+    }
+
+    /// Joint angle of a raw Present Position.
+    pub fn position(&self, raw: i32) -> f64 {
+        let r = self
+            .model
+            .table()
+            .item(Item::PresentPosition)
+            .expect("every table has a present position");
+        self.joint_angle(r.to_si(raw))
+    }
+
+    /// The servo angles the servo's position limit registers allow (its range).
+    pub fn servo_range(model: Model) -> (f64, f64) {
+        let t = model.table();
+        let r = t
+            .item(Item::MaxPositionLimit)
+            .expect("every table has limits");
+        (r.to_si(r.min), r.to_si(r.max))
+    }
+}
+
+/// A robot's mapping: joints in order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotMapping {
+    pub name: String,
+    pub urdf: Option<PathBuf>,
+    pub port: Option<String>,
+    pub baud: Option<u32>,
+    pub joints: Vec<JointMapping>,
+    /// Where it came from (file path or `builtin:NAME`), for messages.
+    pub source: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFile {
+    robot: Option<Spanned<RawRobot>>,
+    #[serde(default)]
+    joint: Vec<Spanned<RawJoint>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRobot {
+    name: Option<String>,
+    urdf: Option<String>,
+    port: Option<String>,
+    baud: Option<Spanned<i64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RawProtocol {
+    Int(i64),
+    Float(f64),
+    Text(String),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawJoint {
+    name: Spanned<String>,
+    id: Spanned<i64>,
+    model: Spanned<String>,
+    protocol: Option<Spanned<RawProtocol>>,
+    zero: Option<Spanned<f64>>,
+    direction: Option<Spanned<i64>>,
+    min: Option<Spanned<f64>>,
+    max: Option<Spanned<f64>>,
+}
+
+/// 1-based line and column of byte `offset` in `text`.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+    (line, col)
+}
+
+const BUILTIN_KM20: &str = include_str!("mappings/km20.toml");
+const BUILTIN_OP3: &str = include_str!("mappings/op3.toml");
+
+impl RobotMapping {
+    /// Names after `builtin:`.
+    pub const BUILTINS: [&'static str; 2] = ["km20", "op3"];
+
+    /// A mapping from `builtin:NAME` or a TOML file path.
+    pub fn resolve(spec: &str) -> Result<RobotMapping, MappingError> {
+        match spec.strip_prefix("builtin:") {
+            Some(name) => RobotMapping::builtin(name).ok_or_else(|| MappingError {
+                file: spec.to_string(),
+                line: 0,
+                column: 0,
+                message: format!(
+                    "no built-in robot {name:?}; built-in: {}",
+                    RobotMapping::BUILTINS.join(", ")
+                ),
+            }),
+            None => RobotMapping::load(spec),
+        }
+    }
+
+    /// A built-in mapping: `km20` (the FIBO KM kid-size robot of the seed papers: 20
+    /// joints, RX-64 legs and RX-28 arms and head on Protocol 1.0) or `op3` (ROBOTIS
+    /// OP3: 20 XM430-W350 on Protocol 2.0). Both use the OP3 URDF's joint names.
+    pub fn builtin(name: &str) -> Option<RobotMapping> {
+        let text = match name {
+            "km20" => BUILTIN_KM20,
+            "op3" => BUILTIN_OP3,
+            _ => return None,
+        };
+        Some(RobotMapping::parse(text, &format!("builtin:{name}")).expect("built-ins are valid"))
+    }
+
+    pub fn load(path: impl AsRef<Path>) -> Result<RobotMapping, MappingError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| MappingError {
+            file: path.display().to_string(),
+            line: 0,
+            column: 0,
+            message: format!("cannot read: {e}"),
+        })?;
+        RobotMapping::parse(&text, &path.display().to_string())
+    }
+
+    /// Parse mapping text; `source` names it in errors.
+    pub fn parse(text: &str, source: &str) -> Result<RobotMapping, MappingError> {
+        let err_at = |offset: usize, message: String| {
+            let (line, column) = line_col(text, offset);
+            MappingError {
+                file: source.to_string(),
+                line,
+                column,
+                message,
+            }
+        };
+        let raw: RawFile = toml::from_str(text).map_err(|e| {
+            let offset = e.span().map(|s| s.start).unwrap_or(0);
+            let message = e.message().trim().to_string();
+            err_at(offset, message)
+        })?;
+        let mut mapping = RobotMapping {
+            name: String::new(),
+            urdf: None,
+            port: None,
+            baud: None,
+            joints: Vec::with_capacity(raw.joint.len()),
+            source: source.to_string(),
+        };
+        if let Some(robot) = raw.robot {
+            let robot = robot.into_inner();
+            mapping.name = robot.name.unwrap_or_default();
+            mapping.urdf = robot.urdf.map(PathBuf::from);
+            mapping.port = robot.port;
+            if let Some(b) = robot.baud {
+                let v = *b.get_ref();
+                if !(1..=10_000_000).contains(&v) {
+                    return Err(err_at(
+                        b.span().start,
+                        format!("robot.baud: {v} is not a bit rate"),
+                    ));
+                }
+                mapping.baud = Some(v as u32);
+            }
+        }
+        if raw.joint.is_empty() {
+            return Err(err_at(0, "no [[joint]] entries".into()));
+        }
+        for entry in raw.joint {
+            let entry_start = entry.span().start;
+            let j = entry.into_inner();
+            let name = j.name.get_ref().trim().to_string();
+            let at = |s: std::ops::Range<usize>, field: &str, msg: String| {
+                err_at(s.start, format!("joint {name:?}: {field}: {msg}"))
+            };
+            if name.is_empty() {
+                return Err(at(j.name.span(), "name", "empty".into()));
+            }
+            let model = Model::parse(j.model.get_ref()).ok_or_else(|| {
+                at(
+                    j.model.span(),
+                    "model",
+                    format!(
+                        "unknown model {:?}; known: {}",
+                        j.model.get_ref(),
+                        Model::known_names()
+                    ),
+                )
+            })?;
+            let protocol = match &j.protocol {
+                None => model.protocol(),
+                Some(p) => {
+                    let parsed = match p.get_ref() {
+                        RawProtocol::Int(1) => Some(Protocol::V1),
+                        RawProtocol::Int(2) => Some(Protocol::V2),
+                        RawProtocol::Float(v) if *v == 1.0 => Some(Protocol::V1),
+                        RawProtocol::Float(v) if *v == 2.0 => Some(Protocol::V2),
+                        RawProtocol::Text(t) => Protocol::parse(t),
+                        _ => None,
+                    };
+                    let parsed =
+                        parsed.ok_or_else(|| at(p.span(), "protocol", "must be 1 or 2".into()))?;
+                    if parsed != model.protocol() {
+                        return Err(at(
+                            p.span(),
+                            "protocol",
+                            format!(
+                                "{model} runs {}; for the other firmware name the model so (e.g. MX-28(2.0))",
+                                model.protocol()
+                            ),
+                        ));
+                    }
+                    parsed
+                }
+            };
+            let id = *j.id.get_ref();
+            if id < 0 || id > protocol.max_id() as i64 {
+                return Err(at(
+                    j.id.span(),
+                    "id",
+                    format!(
+                        "servo id {id} outside 0..={} ({protocol})",
+                        protocol.max_id()
+                    ),
+                ));
+            }
+            let id = id as u8;
+            let direction = match &j.direction {
+                None => 1.0,
+                Some(d) => match *d.get_ref() {
+                    1 => 1.0,
+                    -1 => -1.0,
+                    v => return Err(at(d.span(), "direction", format!("{v} is not 1 or -1"))),
+                },
+            };
+            let zero = j.zero.as_ref().map(|z| *z.get_ref()).unwrap_or(0.0);
+            if !zero.is_finite() {
+                return Err(at(
+                    j.zero.as_ref().unwrap().span(),
+                    "zero",
+                    "not a finite number".into(),
+                ));
+            }
+            let (smin, smax) = JointMapping::servo_range(model);
+            // The joint angles the servo can reach.
+            let (a, b) = (direction * (smin - zero), direction * (smax - zero));
+            let (reach_min, reach_max) = (a.min(b), a.max(b));
+            let min = j.min.as_ref().map(|v| (*v.get_ref(), v.span()));
+            let max = j.max.as_ref().map(|v| (*v.get_ref(), v.span()));
+            let lo = min.clone().map(|v| v.0).unwrap_or(reach_min);
+            let hi = max.clone().map(|v| v.0).unwrap_or(reach_max);
+            if let Some((v, span)) = &min
+                && (!v.is_finite() || *v < reach_min - 1e-9)
+            {
+                return Err(at(
+                    span.clone(),
+                    "min",
+                    format!(
+                        "{v} rad is outside what servo id {id} ({model}) reaches: {reach_min:.4}..{reach_max:.4} rad"
+                    ),
+                ));
+            }
+            if let Some((v, span)) = &max
+                && (!v.is_finite() || *v > reach_max + 1e-9)
+            {
+                return Err(at(
+                    span.clone(),
+                    "max",
+                    format!(
+                        "{v} rad is outside what servo id {id} ({model}) reaches: {reach_min:.4}..{reach_max:.4} rad"
+                    ),
+                ));
+            }
+            if lo >= hi {
+                let span = max.map(|m| m.1).unwrap_or(j.name.span());
+                return Err(at(span, "max", format!("limits {lo} .. {hi} are empty")));
+            }
+            if let Some(other) = mapping.joints.iter().find(|o| o.name == name) {
+                return Err(at(
+                    j.name.span(),
+                    "name",
+                    format!("joint listed twice (first on line {})", other.line),
+                ));
+            }
+            if let Some(other) = mapping
+                .joints
+                .iter()
+                .find(|o| o.id == id && o.protocol == protocol)
+            {
+                return Err(at(
+                    j.id.span(),
+                    "id",
+                    format!(
+                        "servo id {id} ({protocol}) already drives joint {:?} (line {})",
+                        other.name, other.line
+                    ),
+                ));
+            }
+            mapping.joints.push(JointMapping {
+                name,
+                id,
+                protocol,
+                model,
+                zero,
+                direction,
+                min: lo,
+                max: hi,
+                line: line_col(text, entry_start).0,
+            });
+        }
+        Ok(mapping)
+    }
+
+    pub fn joint_names(&self) -> Vec<String> {
+        self.joints.iter().map(|j| j.name.clone()).collect()
+    }
+
+    /// The mapping as TOML that [`RobotMapping::parse`] reads back.
+    pub fn to_toml(&self) -> String {
+        let mut s = String::from("[robot]\n");
+        s += &format!("name = {:?}\n", self.name);
+        if let Some(u) = &self.urdf {
+            s += &format!("urdf = {:?}\n", u.display().to_string());
+        }
+        if let Some(p) = &self.port {
+            s += &format!("port = {p:?}\n");
+        }
+        if let Some(b) = self.baud {
+            s += &format!("baud = {b}\n");
+        }
+        for j in &self.joints {
+            s += &format!(
+                "\n[[joint]]\nname = {:?}\nid = {}\nmodel = {:?}\nprotocol = {}\nzero = {:?}\ndirection = {}\nmin = {:?}\nmax = {:?}\n",
+                j.name,
+                j.id,
+                j.model.name(),
+                j.protocol.number(),
+                j.zero,
+                j.direction as i32,
+                j.min,
+                j.max
+            );
+        }
+        s
+    }
+}

@@ -1,0 +1,210 @@
+//! The servo models twinloop knows: model numbers, protocol, datasheet figures.
+
+use crate::control_table::ControlTable;
+use crate::protocol::Protocol;
+use crate::register::RPM;
+use std::fmt;
+
+/// A servo model with the firmware protocol it runs. MX servos exist with either
+/// firmware (different control tables, different model numbers: EM-COMPAT).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Model {
+    Rx28,
+    Rx64,
+    Mx28,
+    Mx64,
+    Mx106,
+    Mx28V2,
+    Mx64V2,
+    Mx106V2,
+    Xm430W350,
+    Xl430W250,
+}
+
+/// Datasheet figures of a model, used to turn load or current into torque and by
+/// the virtual servo. Approximate: stall torque at the voltage in `voltage`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServoSpec {
+    /// Stall torque, N m.
+    pub stall_torque: f64,
+    /// Stall current, A (None where the e-manual gives none).
+    pub stall_current: Option<f64>,
+    /// No-load speed, rad/s.
+    pub no_load_speed: f64,
+    /// Supply voltage the figures hold at, V.
+    pub voltage: f64,
+    pub gear_ratio: f64,
+}
+
+impl ServoSpec {
+    /// N m per ampere at stall (the slope used to turn a current into a torque).
+    pub fn torque_per_amp(&self) -> Option<f64> {
+        self.stall_current.map(|i| self.stall_torque / i)
+    }
+}
+
+impl Model {
+    pub const ALL: [Model; 10] = [
+        Model::Rx28,
+        Model::Rx64,
+        Model::Mx28,
+        Model::Mx64,
+        Model::Mx106,
+        Model::Mx28V2,
+        Model::Mx64V2,
+        Model::Mx106V2,
+        Model::Xm430W350,
+        Model::Xl430W250,
+    ];
+
+    /// The e-manual's name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Model::Rx28 => "RX-28",
+            Model::Rx64 => "RX-64",
+            Model::Mx28 => "MX-28",
+            Model::Mx64 => "MX-64",
+            Model::Mx106 => "MX-106",
+            Model::Mx28V2 => "MX-28(2.0)",
+            Model::Mx64V2 => "MX-64(2.0)",
+            Model::Mx106V2 => "MX-106(2.0)",
+            Model::Xm430W350 => "XM430-W350",
+            Model::Xl430W250 => "XL430-W250",
+        }
+    }
+
+    /// Parse a model name, forgiving case, spaces and the e-manual's URL spelling
+    /// (`rx-28`, `MX-28(2.0)`, `mx-28-2`, `xm430-w350`).
+    pub fn parse(text: &str) -> Option<Model> {
+        let norm: String = text
+            .chars()
+            .filter(|c| c.is_ascii_alphanumeric() || *c == '.')
+            .map(|c| c.to_ascii_lowercase())
+            .collect();
+        let norm = norm.replace("2.0", "v2");
+        Some(match norm.as_str() {
+            "rx28" => Model::Rx28,
+            "rx64" => Model::Rx64,
+            "mx28" | "mx28v1" => Model::Mx28,
+            "mx64" | "mx64v1" => Model::Mx64,
+            "mx106" | "mx106v1" => Model::Mx106,
+            "mx28v2" | "mx282" => Model::Mx28V2,
+            "mx64v2" | "mx642" => Model::Mx64V2,
+            "mx106v2" | "mx1062" => Model::Mx106V2,
+            "xm430w350" | "xm430w350t" | "xm430w350r" => Model::Xm430W350,
+            "xl430w250" | "xl430w250t" => Model::Xl430W250,
+            _ => return None,
+        })
+    }
+
+    /// Names accepted by [`Model::parse`], for error messages.
+    pub fn known_names() -> String {
+        Model::ALL
+            .iter()
+            .map(|m| m.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    pub const fn protocol(self) -> Protocol {
+        match self {
+            Model::Rx28 | Model::Rx64 | Model::Mx28 | Model::Mx64 | Model::Mx106 => Protocol::V1,
+            _ => Protocol::V2,
+        }
+    }
+
+    /// Model Number (address 0) as the servo reports it (e-manual control tables).
+    pub const fn model_number(self) -> u16 {
+        match self {
+            Model::Rx28 => 28,
+            Model::Rx64 => 64,
+            Model::Mx28 => 29,
+            Model::Mx64 => 310,
+            Model::Mx106 => 320,
+            Model::Mx28V2 => 30,
+            Model::Mx64V2 => 311,
+            Model::Mx106V2 => 321,
+            Model::Xm430W350 => 1020,
+            Model::Xl430W250 => 1060,
+        }
+    }
+
+    pub fn from_model_number(number: u16) -> Option<Model> {
+        Model::ALL.into_iter().find(|m| m.model_number() == number)
+    }
+
+    pub fn table(self) -> &'static ControlTable {
+        ControlTable::of(self)
+    }
+
+    /// Whether the servo answers BULK_READ. In 1.0 only MX does (RX-UM lists no
+    /// BULK_READ; PROTOCOL.md 1.3); every 2.0 model does.
+    pub const fn has_bulk_read(self) -> bool {
+        !matches!(self, Model::Rx28 | Model::Rx64)
+    }
+
+    /// Whether the servo answers SYNC_READ (Protocol 2.0 only).
+    pub const fn has_sync_read(self) -> bool {
+        matches!(self.protocol(), Protocol::V2)
+    }
+
+    /// Whether the servo answers FAST_SYNC_READ. The SDK offers it for 2.0; the
+    /// firmware needed is not in the e-manual copy read, so it is assumed for the X
+    /// series only (MX(2.0) falls back to SYNC_READ).
+    pub const fn has_fast_sync_read(self) -> bool {
+        matches!(self, Model::Xm430W350 | Model::Xl430W250)
+    }
+
+    /// Datasheet figures (e-manual specification tables).
+    pub fn spec(self) -> ServoSpec {
+        let s = |stall_torque, stall_current, rpm: f64, voltage, gear_ratio| ServoSpec {
+            stall_torque,
+            stall_current,
+            no_load_speed: rpm * RPM,
+            voltage,
+            gear_ratio,
+        };
+        match self {
+            Model::Rx28 => s(3.7, Some(1.9), 85.0, 18.5, 193.0),
+            Model::Rx64 => s(5.3, Some(2.6), 64.0, 18.5, 200.0),
+            Model::Mx28 | Model::Mx28V2 => s(2.5, Some(1.4), 55.0, 12.0, 193.0),
+            Model::Mx64 | Model::Mx64V2 => s(6.0, Some(4.1), 63.0, 12.0, 200.0),
+            Model::Mx106 | Model::Mx106V2 => s(8.4, Some(5.2), 45.0, 12.0, 225.0),
+            Model::Xm430W350 => s(4.1, Some(2.3), 46.0, 12.0, 353.5),
+            Model::Xl430W250 => s(1.5, Some(1.4), 61.0, 12.0, 258.5),
+        }
+    }
+}
+
+impl fmt::Display for Model {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The bit rate a Baud Rate register value selects. 1.0: 2 000 000 / (value + 1)
+/// (EM-RX28: 1 -> 1 M, 34 -> 57 143 listed as 57 600), and for MX 250 -> 2.25 M,
+/// 251 -> 2.5 M, 252 -> 3 M. 2.0 (EM-XM): 0 -> 9600, 1 -> 57 600, 2 -> 115 200,
+/// 3 -> 1 M, 4 -> 2 M, 5 -> 3 M, 6 -> 4 M, 7 -> 4.5 M.
+pub fn baud_from_register(protocol: Protocol, value: u8) -> Option<u32> {
+    match protocol {
+        Protocol::V1 => match value {
+            250 => Some(2_250_000),
+            251 => Some(2_500_000),
+            252 => Some(3_000_000),
+            253..=255 => None,
+            v => Some(2_000_000 / (v as u32 + 1)),
+        },
+        Protocol::V2 => match value {
+            0 => Some(9_600),
+            1 => Some(57_600),
+            2 => Some(115_200),
+            3 => Some(1_000_000),
+            4 => Some(2_000_000),
+            5 => Some(3_000_000),
+            6 => Some(4_000_000),
+            7 => Some(4_500_000),
+            _ => None,
+        },
+    }
+}

@@ -1,0 +1,231 @@
+//! The real-robot backend of [`twinloop_robot::Robot`]: joints are servos on a
+//! Dynamixel bus, tied to URDF joints by a [`RobotMapping`]. Reading runs one
+//! control-cycle read (positions, velocities, loads of every joint), commanding
+//! sends one SYNC_WRITE per protocol, and time is the wall clock.
+
+use crate::client::Client;
+use crate::control_cycle::{ControlCycle, CycleServo, ReadMethod, ServoReading};
+use crate::link_error::{LinkError, Outcome};
+use crate::mapping::RobotMapping;
+use crate::protocol::Protocol;
+use crate::register::{Item, Unit};
+use crate::transport::Transport;
+use std::time::{Duration, Instant};
+use twinloop_robot::{Robot, RobotError, RobotState};
+
+/// A physical robot on a Dynamixel bus.
+pub struct DynamixelRobot<T: Transport> {
+    pub client: Client<T>,
+    mapping: RobotMapping,
+    cycle: ControlCycle,
+    names: Vec<String>,
+    readings: Vec<ServoReading>,
+    goals: Vec<i32>,
+    /// N m per raw unit of each joint's load/current register, joint direction
+    /// included.
+    effort_scale: Vec<f64>,
+    start: Instant,
+    next_tick: Option<Instant>,
+}
+
+fn link_to_robot(e: &LinkError, joint: &str) -> RobotError {
+    match e.id() {
+        Some(_) => RobotError::at_joint(joint, e.to_string()),
+        None => RobotError::new(e.to_string()),
+    }
+}
+
+impl<T: Transport> DynamixelRobot<T> {
+    /// Build the backend; `method` picks how servos are read (`Auto`: the cheapest
+    /// each protocol's servos support).
+    pub fn new(
+        client: Client<T>,
+        mapping: RobotMapping,
+        method: ReadMethod,
+    ) -> Result<DynamixelRobot<T>, RobotError> {
+        let servos: Vec<CycleServo> = mapping
+            .joints
+            .iter()
+            .map(|j| CycleServo {
+                id: j.id,
+                model: j.model,
+            })
+            .collect();
+        let cycle = ControlCycle::new(&servos, method)
+            .map_err(|e| RobotError::new(format!("{}: {e}", mapping.source)))?;
+        let effort_scale = mapping
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(k, j)| {
+                let reg = cycle.effort_register(k);
+                let spec = j.model.spec();
+                let per_unit = match reg.unit {
+                    Unit::LoadRatio { per_unit } => per_unit * spec.stall_torque,
+                    Unit::Current { amps_per_unit, .. } => {
+                        amps_per_unit * spec.torque_per_amp().unwrap_or(0.0)
+                    }
+                    _ => 0.0,
+                };
+                per_unit * j.direction
+            })
+            .collect();
+        let n = mapping.joints.len();
+        Ok(DynamixelRobot {
+            client,
+            names: mapping.joint_names(),
+            mapping,
+            cycle,
+            readings: vec![ServoReading::default(); n],
+            goals: vec![0; n],
+            effort_scale,
+            start: Instant::now(),
+            next_tick: None,
+        })
+    }
+
+    pub fn mapping(&self) -> &RobotMapping {
+        &self.mapping
+    }
+
+    pub fn cycle(&self) -> &ControlCycle {
+        &self.cycle
+    }
+
+    /// Each joint's outcome in the last read (joint order).
+    pub fn outcomes(&self) -> impl Iterator<Item = (&str, &Outcome)> {
+        self.names
+            .iter()
+            .map(|s| s.as_str())
+            .zip(self.readings.iter().map(|r| &r.outcome))
+    }
+
+    /// Torque on or off for every joint (one SYNC_WRITE per protocol).
+    pub fn set_torque(&mut self, on: bool) -> Result<(), RobotError> {
+        for protocol in [Protocol::V1, Protocol::V2] {
+            let ids: Vec<u8> = self
+                .mapping
+                .joints
+                .iter()
+                .filter(|j| j.protocol == protocol)
+                .map(|j| j.id)
+                .collect();
+            if ids.is_empty() {
+                continue;
+            }
+            let address = self
+                .mapping
+                .joints
+                .iter()
+                .find(|j| j.protocol == protocol)
+                .expect("non-empty")
+                .model
+                .table()
+                .item(Item::TorqueEnable)
+                .expect("every table has Torque Enable")
+                .address;
+            let data = vec![on as u8; ids.len()];
+            self.client
+                .sync_write(protocol, address, 1, &ids, &data)
+                .map_err(|e| RobotError::new(e.to_string()))?;
+        }
+        Ok(())
+    }
+}
+
+impl<T: Transport> Robot for DynamixelRobot<T> {
+    fn joint_names(&self) -> &[String] {
+        &self.names
+    }
+
+    fn time(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    /// One read of every joint. Joints whose servo failed read NaN; the first such
+    /// joint is named in the error (the others are in [`DynamixelRobot::outcomes`]),
+    /// and the state is filled either way.
+    fn read(&mut self, state: &mut RobotState) -> Result<(), RobotError> {
+        let n = self.names.len();
+        let summary = self
+            .cycle
+            .read(&mut self.client, &mut self.readings)
+            .map_err(|e| RobotError::new(e.to_string()))?;
+        state.time = self.time();
+        state.positions.resize(n, f64::NAN);
+        let velocities = state.velocities.get_or_insert_with(Vec::new);
+        velocities.resize(n, f64::NAN);
+        let efforts = state.efforts.get_or_insert_with(Vec::new);
+        efforts.resize(n, f64::NAN);
+        let mut first_error = None;
+        for (k, (j, r)) in self.mapping.joints.iter().zip(&self.readings).enumerate() {
+            match &r.outcome {
+                Ok(_) => {
+                    state.positions[k] = j.position(r.position);
+                    velocities[k] = j.direction * self.cycle.velocity_register(k).to_si(r.velocity);
+                    efforts[k] = self.effort_scale[k]
+                        * (r.effort
+                            - match self.cycle.effort_register(k).unit {
+                                Unit::Current { zero, .. } => zero,
+                                _ => 0,
+                            }) as f64;
+                }
+                Err(e) => {
+                    state.positions[k] = f64::NAN;
+                    velocities[k] = f64::NAN;
+                    efforts[k] = f64::NAN;
+                    if first_error.is_none() {
+                        first_error = Some(link_to_robot(e, &j.name));
+                    }
+                }
+            }
+        }
+        match first_error {
+            None => Ok(()),
+            Some(mut e) => {
+                if summary.failed > 1 {
+                    e.message =
+                        format!("{} ({} joints failed this read)", e.message, summary.failed);
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// Goal positions (rad, clamped to each joint's limits) to every servo.
+    fn command_positions(&mut self, goals: &[f64]) -> Result<(), RobotError> {
+        if goals.len() != self.names.len() {
+            return Err(RobotError::new(format!(
+                "{} goals for {} joints",
+                goals.len(),
+                self.names.len()
+            )));
+        }
+        for (k, j) in self.mapping.joints.iter().enumerate() {
+            self.goals[k] = j.goal_raw(goals[k]);
+        }
+        self.cycle
+            .write_goals(&mut self.client, &self.goals)
+            .map_err(|e| RobotError::new(e.to_string()))
+    }
+
+    /// Wait until `dt` after the previous call's target time, so a loop calling
+    /// read / command / advance(dt) runs at a steady rate; if the loop fell behind
+    /// it starts counting again from now.
+    fn advance(&mut self, dt: f64) -> Result<(), RobotError> {
+        if dt.is_nan() || dt < 0.0 {
+            return Err(RobotError::new(format!("advance by {dt} s")));
+        }
+        let now = Instant::now();
+        let step = Duration::from_secs_f64(dt);
+        let target = match self.next_tick {
+            Some(t) if t + step > now => t + step,
+            _ => now + step,
+        };
+        if target > now {
+            std::thread::sleep(target - now);
+        }
+        self.next_tick = Some(target);
+        Ok(())
+    }
+}

@@ -1,0 +1,151 @@
+//! What moves a virtual robot's servos. The virtual bus speaks the protocol and
+//! keeps the control tables; a [`VirtualServoBackend`] decides where each servo
+//! is. The simulator implements it later; until then [`TrackingServoModel`] stands
+//! in.
+
+use crate::model::ServoSpec;
+
+/// One servo's measurable state, SI units, in the servo's own angle (radians from
+/// the middle of its range, counter-clockwise positive: what the Present Position
+/// register converts to).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServoMeasurement {
+    pub position: f64,
+    /// rad/s.
+    pub velocity: f64,
+    /// Output torque, N m (the bus turns it into Present Load or Present Current).
+    pub torque: f64,
+    /// Supply voltage, V.
+    pub voltage: f64,
+    /// Degrees Celsius.
+    pub temperature: f64,
+}
+
+/// The servo side's view of whatever moves the servos. Servo indices are the bus's
+/// servo order.
+pub trait VirtualServoBackend: Send {
+    /// Torque Enable was written.
+    fn set_torque_enabled(&mut self, servo: usize, enabled: bool);
+    /// Goal Position was written (already checked against the servo's limits).
+    fn set_goal_position(&mut self, servo: usize, position: f64);
+    /// The servo's state now.
+    fn measure(&self, servo: usize) -> ServoMeasurement;
+    /// Let `dt` seconds pass.
+    fn step(&mut self, dt: f64);
+}
+
+#[derive(Debug, Clone, Copy)]
+struct TrackingState {
+    position: f64,
+    velocity: f64,
+    goal: f64,
+    enabled: bool,
+    spec: ServoSpec,
+    min: f64,
+    max: f64,
+}
+
+/// A stand-in for the simulator, good enough to exercise the protocol: with torque
+/// on, each servo's position approaches its goal as a first-order lag
+/// (`time_constant`, 50 ms by default), never faster than the datasheet's no-load
+/// speed, and stays within its position limits. Torque is a proportional estimate
+/// (stall torque at `saturation` radians of error); voltage and temperature are
+/// constant. It has no gravity, no inertia and no load: it is not a robot model.
+#[derive(Debug, Clone)]
+pub struct TrackingServoModel {
+    servos: Vec<TrackingState>,
+    /// Seconds.
+    pub time_constant: f64,
+    /// Position error (rad) at which the torque estimate reaches stall torque.
+    pub saturation: f64,
+    pub voltage: f64,
+    pub temperature: f64,
+}
+
+impl TrackingServoModel {
+    /// One servo per entry: its datasheet figures and the range it can reach (rad);
+    /// each starts at rest at 0 (the middle of its range) or the nearest reachable
+    /// angle.
+    pub fn new(servos: &[(ServoSpec, f64, f64)]) -> TrackingServoModel {
+        TrackingServoModel {
+            servos: servos
+                .iter()
+                .map(|&(spec, min, max)| {
+                    let start = 0.0f64.clamp(min, max);
+                    TrackingState {
+                        position: start,
+                        velocity: 0.0,
+                        goal: start,
+                        enabled: false,
+                        spec,
+                        min,
+                        max,
+                    }
+                })
+                .collect(),
+            time_constant: 0.05,
+            saturation: 0.2,
+            voltage: 12.0,
+            temperature: 36.0,
+        }
+    }
+
+    /// Put servo `servo` at `position` (rad), at rest: a test's starting pose.
+    pub fn place(&mut self, servo: usize, position: f64) {
+        let s = &mut self.servos[servo];
+        s.position = position.clamp(s.min, s.max);
+        s.velocity = 0.0;
+        s.goal = s.position;
+    }
+}
+
+impl VirtualServoBackend for TrackingServoModel {
+    fn set_torque_enabled(&mut self, servo: usize, enabled: bool) {
+        let s = &mut self.servos[servo];
+        if enabled && !s.enabled {
+            // Torque on holds the current position until a goal arrives.
+            s.goal = s.position;
+        }
+        s.enabled = enabled;
+    }
+
+    fn set_goal_position(&mut self, servo: usize, position: f64) {
+        let s = &mut self.servos[servo];
+        s.goal = position.clamp(s.min, s.max);
+    }
+
+    fn measure(&self, servo: usize) -> ServoMeasurement {
+        let s = &self.servos[servo];
+        let torque = if s.enabled {
+            s.spec.stall_torque * ((s.goal - s.position) / self.saturation).clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
+        ServoMeasurement {
+            position: s.position,
+            velocity: s.velocity,
+            torque,
+            voltage: self.voltage,
+            temperature: self.temperature,
+        }
+    }
+
+    fn step(&mut self, dt: f64) {
+        if dt <= 0.0 {
+            return;
+        }
+        let decay = (-dt / self.time_constant).exp();
+        for s in &mut self.servos {
+            if !s.enabled {
+                s.velocity = 0.0;
+                continue;
+            }
+            let target = s.goal + (s.position - s.goal) * decay;
+            let max_step = s.spec.no_load_speed * dt;
+            let step = (target - s.position).clamp(-max_step, max_step);
+            let next = (s.position + step).clamp(s.min, s.max);
+            s.velocity = (next - s.position) / dt;
+            s.position = next;
+        }
+    }
+}

@@ -1,0 +1,705 @@
+//! The virtual bus: servos of both protocols on one line, answering every
+//! instruction the way the e-manual describes, with a [`VirtualServoBackend`]
+//! moving them.
+//!
+//! Instructions served: PING (2.0 broadcast too), READ, WRITE, REG_WRITE, ACTION,
+//! FACTORY_RESET, REBOOT and CLEAR (2.0), SYNC_WRITE, SYNC_READ, FAST_SYNC_READ,
+//! BULK_READ (2.0 and MX 1.0), BULK_WRITE, FAST_BULK_READ. A packet whose checksum
+//! fails is answered with the checksum / CRC error by the servo it names, like a
+//! real servo. Status Return Level is honoured; broadcasts get no reply (except the
+//! read instructions, which name their responders).
+
+use super::backend::{TrackingServoModel, VirtualServoBackend};
+use super::virtual_servo::{Fault, VirtualServo, WriteEffects};
+use crate::crc16::crc16_update;
+use crate::decoder::{Accept, DecodeEvent, Decoder, Frame};
+use crate::instruction::Instruction;
+use crate::model::Model;
+use crate::packet::PacketWriter;
+use crate::protocol::{BROADCAST_ID, Protocol};
+use crate::register::{Item, Unit};
+use crate::transport::Responder;
+use std::time::{Duration, Instant};
+
+/// Where one reply packet ends in the reply buffer and how long its servo waits
+/// before sending it (Return Delay Time), for wire-time emulation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ReplyMark {
+    pub end: usize,
+    pub delay: Duration,
+}
+
+/// How the bus's time passes.
+#[derive(Debug, Clone, Copy)]
+pub enum BusClock {
+    /// Only [`VirtualBus::step`] advances time (tests).
+    Manual,
+    /// Wall-clock time passes between packets (a served robot).
+    Wall { last: Instant },
+}
+
+/// Counters over the bus's life.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BusStats {
+    pub instructions: u64,
+    pub replies: u64,
+    pub bad_checksums: u64,
+}
+
+/// A servo to put on a virtual bus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BusServo {
+    pub id: u8,
+    pub model: Model,
+}
+
+pub struct VirtualBus<B: VirtualServoBackend> {
+    pub servos: Vec<VirtualServo>,
+    pub backend: B,
+    decoder: Decoder,
+    pub clock: BusClock,
+    /// Simulated time, s.
+    pub time: f64,
+    pub stats: BusStats,
+    /// Reply packets of the last [`VirtualBus::handle`] call.
+    pub marks: Vec<ReplyMark>,
+}
+
+/// Firmware version the virtual servos report.
+pub const VIRTUAL_FIRMWARE: u8 = 45;
+
+impl VirtualBus<TrackingServoModel> {
+    /// A bus whose servos are moved by the stand-in [`TrackingServoModel`], each
+    /// able to reach its Goal Position register's whole range, starting at rest at
+    /// its centre.
+    pub fn with_tracking_model(servos: &[BusServo]) -> VirtualBus<TrackingServoModel> {
+        let ranges: Vec<_> = servos
+            .iter()
+            .map(|s| {
+                let r = s
+                    .model
+                    .table()
+                    .item(Item::GoalPosition)
+                    .expect("every table has a goal position");
+                (s.model.spec(), r.to_si(r.min), r.to_si(r.max))
+            })
+            .collect();
+        VirtualBus::new(servos, TrackingServoModel::new(&ranges))
+    }
+}
+
+impl<B: VirtualServoBackend> VirtualBus<B> {
+    /// Servos in backend order.
+    pub fn new(servos: &[BusServo], backend: B) -> VirtualBus<B> {
+        let mut bus = VirtualBus {
+            servos: servos
+                .iter()
+                .map(|s| VirtualServo::new(s.id, s.model, VIRTUAL_FIRMWARE))
+                .collect(),
+            backend,
+            decoder: Decoder::new(Accept::Both),
+            clock: BusClock::Manual,
+            time: 0.0,
+            stats: BusStats::default(),
+            marks: Vec::with_capacity(256),
+        };
+        for k in 0..bus.servos.len() {
+            refresh(&mut bus.servos[k], &bus.backend, k, bus.time);
+            // At power-on the goal is where the servo is.
+            let p = bus.servos[k].value(Item::PresentPosition);
+            bus.servos[k].set_value(Item::GoalPosition, p);
+        }
+        bus
+    }
+
+    /// Let `dt` seconds pass.
+    pub fn step(&mut self, dt: f64) {
+        self.backend.step(dt);
+        self.time += dt;
+    }
+
+    fn advance_clock(&mut self) {
+        if let BusClock::Wall { last } = &mut self.clock {
+            let now = Instant::now();
+            let dt = now.duration_since(*last).as_secs_f64();
+            *last = now;
+            self.backend.step(dt);
+            self.time += dt;
+        }
+    }
+
+    /// The line went quiet: a packet still waiting for bytes was truncated (or its
+    /// LENGTH damaged). Servos drop it after an inter-byte gap (EM-P1 "Byte to Byte
+    /// Time": 100 ms) and look for the next header; complete packets found after
+    /// its first byte are still served. Without this a damaged LENGTH would make
+    /// the servos swallow the requests that follow.
+    pub fn line_idle(&mut self, reply: &mut Vec<u8>) {
+        if self.decoder.buffered() == 0 {
+            return;
+        }
+        let VirtualBus {
+            servos,
+            backend,
+            decoder,
+            time,
+            stats,
+            marks,
+            ..
+        } = self;
+        let mut ctx = Ctx {
+            servos,
+            backend,
+            marks,
+            time: *time,
+            out: reply,
+        };
+        while let Some(f) = decoder.next_frame_flushing() {
+            if f.protocol == Protocol::V2 && f.instruction == Instruction::Status.code() {
+                continue;
+            }
+            stats.instructions += 1;
+            ctx.process(&f);
+        }
+    }
+
+    /// Take bytes from the line; append every reply to `reply` (and its marks to
+    /// [`VirtualBus::marks`]).
+    pub fn handle(&mut self, input: &[u8], reply: &mut Vec<u8>) {
+        self.marks.clear();
+        self.advance_clock();
+        let mut rest = input;
+        loop {
+            let n = self.decoder.push(rest);
+            rest = &rest[n..];
+            let VirtualBus {
+                servos,
+                backend,
+                decoder,
+                time,
+                stats,
+                marks,
+                ..
+            } = self;
+            let mut ctx = Ctx {
+                servos,
+                backend,
+                marks,
+                time: *time,
+                out: reply,
+            };
+            while let Some(ev) = decoder.next_event() {
+                match ev {
+                    DecodeEvent::Frame(f) => {
+                        // 2.0 status packets from other servos are not for us.
+                        if f.protocol == Protocol::V2 && f.instruction == Instruction::Status.code()
+                        {
+                            continue;
+                        }
+                        stats.instructions += 1;
+                        ctx.process(&f);
+                    }
+                    DecodeEvent::BadChecksum {
+                        protocol,
+                        id,
+                        instruction,
+                    } => {
+                        stats.bad_checksums += 1;
+                        if protocol == Protocol::V2 && instruction == Instruction::Status.code() {
+                            continue;
+                        }
+                        if let Some(k) = ctx.find(protocol, id) {
+                            ctx.status(k, Fault::Checksum.error_byte(protocol), &[]);
+                        }
+                    }
+                }
+            }
+            if rest.is_empty() {
+                break;
+            }
+        }
+        self.stats.replies += self.marks.len() as u64;
+    }
+}
+
+impl<B: VirtualServoBackend> Responder for VirtualBus<B> {
+    /// One write of the host is one burst on the line; after it the line is idle
+    /// while the host waits, so an incomplete packet is given up (see
+    /// [`VirtualBus::line_idle`]).
+    fn respond(&mut self, input: &[u8], reply: &mut Vec<u8>) {
+        self.handle(input, reply);
+        self.line_idle(reply);
+    }
+}
+
+fn homing_offset(s: &VirtualServo) -> i32 {
+    if s.protocol() == Protocol::V2 {
+        s.value(Item::HomingOffset)
+    } else {
+        0
+    }
+}
+
+/// Present values from the backend into the control table. 2.0 reports
+/// Present Position = actual position + Homing Offset (EM-XM).
+fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, time: f64) {
+    let m = backend.measure(k);
+    let t = s.table();
+    let spec = s.model.spec();
+    if let Some(r) = t.item(Item::PresentPosition) {
+        let raw = r.from_si(m.position) as i64 + homing_offset(s) as i64;
+        s.set_value(
+            Item::PresentPosition,
+            raw.clamp(i32::MIN as i64, i32::MAX as i64) as i32,
+        );
+    }
+    if let Some(r) = t.item(Item::PresentVelocity) {
+        s.set_value(Item::PresentVelocity, r.from_si(m.velocity));
+    }
+    if let Some(r) = t.item(Item::PresentLoad) {
+        s.set_value(Item::PresentLoad, r.from_si(m.torque / spec.stall_torque));
+    }
+    if let (Some(r), Some(kt)) = (t.item(Item::PresentCurrent), spec.torque_per_amp()) {
+        // MX(1.0) Current is a read-write register; only the servo writes it here.
+        if matches!(r.unit, Unit::Current { .. }) {
+            s.set_value(Item::PresentCurrent, r.from_si(m.torque / kt));
+        }
+    }
+    if let Some(r) = t.item(Item::PresentVoltage) {
+        s.set_value(Item::PresentVoltage, r.from_si(m.voltage));
+    }
+    s.set_value(Item::PresentTemperature, m.temperature.round() as i32);
+    s.set_value(Item::Moving, (m.velocity.abs() > 0.01) as i32);
+    s.set_value(Item::RealtimeTick, ((time * 1000.0) as i64 % 32768) as i32);
+}
+
+/// What one instruction needs to reach.
+struct Ctx<'a, B: VirtualServoBackend> {
+    servos: &'a mut Vec<VirtualServo>,
+    backend: &'a mut B,
+    marks: &'a mut Vec<ReplyMark>,
+    time: f64,
+    out: &'a mut Vec<u8>,
+}
+
+/// Status Return Level needed for a reply: PING always, READ-type from 1, the rest
+/// from 2 (EM-P2; EM-RX28 Status Return Level).
+fn level_needed(instruction: u8) -> u8 {
+    match Instruction::from_code(instruction) {
+        Some(Instruction::Ping) => 0,
+        Some(
+            Instruction::Read
+            | Instruction::SyncRead
+            | Instruction::BulkRead
+            | Instruction::FastSyncRead
+            | Instruction::FastBulkRead,
+        ) => 1,
+        _ => 2,
+    }
+}
+
+/// Little-endian parameter reader that knows 1.0 addresses are one byte.
+struct Params<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    protocol: Protocol,
+}
+
+impl<'a> Params<'a> {
+    fn new(protocol: Protocol, bytes: &'a [u8]) -> Params<'a> {
+        Params {
+            bytes,
+            pos: 0,
+            protocol,
+        }
+    }
+    fn u8(&mut self) -> Option<u8> {
+        let b = *self.bytes.get(self.pos)?;
+        self.pos += 1;
+        Some(b)
+    }
+    fn u16(&mut self) -> Option<u16> {
+        let lo = self.u8()?;
+        let hi = self.u8()?;
+        Some(u16::from_le_bytes([lo, hi]))
+    }
+    /// An address or length: 1 byte in 1.0, 2 in 2.0.
+    fn addr(&mut self) -> Option<u16> {
+        match self.protocol {
+            Protocol::V1 => self.u8().map(u16::from),
+            Protocol::V2 => self.u16(),
+        }
+    }
+    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+        let s = self.bytes.get(self.pos..self.pos + n)?;
+        self.pos += n;
+        Some(s)
+    }
+    fn rest(&self) -> &'a [u8] {
+        &self.bytes[self.pos..]
+    }
+    fn done(&self) -> bool {
+        self.pos == self.bytes.len()
+    }
+}
+
+impl<B: VirtualServoBackend> Ctx<'_, B> {
+    fn find(&self, protocol: Protocol, id: u8) -> Option<usize> {
+        self.servos
+            .iter()
+            .position(|s| s.protocol() == protocol && s.id() == id)
+    }
+
+    /// Append a status packet from servo `k`.
+    fn status(&mut self, k: usize, error: u8, data: &[u8]) {
+        let s = &self.servos[k];
+        let mut w = PacketWriter::status(self.out, s.protocol(), s.id(), error);
+        w.bytes(data);
+        // A status packet of at most 4 + 1 + 65535 bytes always encodes.
+        let _ = w.finish();
+        self.marks.push(ReplyMark {
+            end: self.out.len(),
+            delay: s.return_delay(),
+        });
+    }
+
+    /// Reply to a unicast instruction if the Status Return Level allows.
+    fn reply(&mut self, k: usize, id: u8, instruction: u8, result: Result<(), Fault>, data: &[u8]) {
+        if id == BROADCAST_ID || self.servos[k].status_return_level() < level_needed(instruction) {
+            return;
+        }
+        let protocol = self.servos[k].protocol();
+        match result {
+            Ok(()) => self.status(k, 0, data),
+            Err(f) => self.status(k, f.error_byte(protocol), &[]),
+        }
+    }
+
+    fn refresh(&mut self, k: usize) {
+        refresh(&mut self.servos[k], self.backend, k, self.time);
+    }
+
+    fn apply_effects(&mut self, k: usize, fx: WriteEffects) {
+        let s = &self.servos[k];
+        if fx.torque_enable {
+            self.backend.set_torque_enabled(k, s.torque_enabled());
+        }
+        // Torque on drives the servo to the Goal Position register, written or not.
+        if fx.goal_position || (fx.torque_enable && s.torque_enabled()) {
+            let r = s
+                .table()
+                .item(Item::GoalPosition)
+                .expect("every table has one");
+            let goal = r.to_si(s.value(Item::GoalPosition) - homing_offset(s));
+            self.backend.set_goal_position(k, goal);
+        }
+    }
+
+    fn write(&mut self, k: usize, address: u16, data: &[u8]) -> Result<(), Fault> {
+        self.servos[k].check_write(address, data)?;
+        let fx = self.servos[k].apply_write(address, data);
+        self.apply_effects(k, fx);
+        Ok(())
+    }
+
+    /// Servo indices an instruction to (`protocol`, `id`) reaches.
+    fn targets(&self, protocol: Protocol, id: u8, out: &mut [usize; 256]) -> usize {
+        let mut n = 0;
+        for (k, s) in self.servos.iter().enumerate() {
+            if n == out.len() {
+                break; // more servos than ids exist: duplicates, ignored
+            }
+            if s.protocol() == protocol && (id == BROADCAST_ID || s.id() == id) {
+                out[n] = k;
+                n += 1;
+            }
+        }
+        n
+    }
+
+    fn process(&mut self, f: &Frame<'_>) {
+        let protocol = f.protocol;
+        let code = f.instruction;
+        let mut targets = [0usize; 256];
+        let n = self.targets(protocol, f.id, &mut targets);
+        let instruction = Instruction::from_code(code).filter(|i| i.in_protocol(protocol));
+        let Some(instruction) = instruction else {
+            // Undefined here (e.g. SYNC_READ or REBOOT sent to a 1.0 servo).
+            for &k in &targets[..n] {
+                self.reply(k, f.id, code, Err(Fault::Instruction), &[]);
+            }
+            return;
+        };
+        match instruction {
+            Instruction::Ping => {
+                if protocol == Protocol::V1 && f.id == BROADCAST_ID {
+                    return; // EM-P1: no status for broadcast.
+                }
+                for &k in &targets[..n] {
+                    let s = &self.servos[k];
+                    let model = s.model.model_number().to_le_bytes();
+                    let fw = s.firmware;
+                    match protocol {
+                        Protocol::V1 => self.status(k, 0, &[]),
+                        Protocol::V2 => self.status(k, 0, &[model[0], model[1], fw]),
+                    }
+                }
+            }
+            Instruction::Read => {
+                let mut p = Params::new(protocol, f.params);
+                let (Some(address), Some(len)) = (p.addr(), p.addr()) else {
+                    for &k in &targets[..n] {
+                        self.reply(k, f.id, code, Err(Fault::Instruction), &[]);
+                    }
+                    return;
+                };
+                if f.id != BROADCAST_ID {
+                    for &k in &targets[..n] {
+                        self.read_reply(k, address, len);
+                    }
+                }
+            }
+            Instruction::Write | Instruction::RegWrite => {
+                let mut p = Params::new(protocol, f.params);
+                let address = p.addr();
+                let data = p.rest();
+                for &k in &targets[..n] {
+                    let r = match address {
+                        None => Err(Fault::Instruction),
+                        Some(a) if instruction == Instruction::Write => self.write(k, a, data),
+                        Some(a) => self.servos[k].check_write(a, data).map(|()| {
+                            self.servos[k].stage(a, data);
+                        }),
+                    };
+                    self.reply(k, f.id, code, r, &[]);
+                }
+            }
+            Instruction::Action => {
+                for &k in &targets[..n] {
+                    let r = match self.servos[k].take_staged() {
+                        Some(fx) => {
+                            self.apply_effects(k, fx);
+                            Ok(())
+                        }
+                        None => Err(Fault::Instruction),
+                    };
+                    self.reply(k, f.id, code, r, &[]);
+                }
+            }
+            Instruction::FactoryReset => {
+                let option = f.params.first().copied().unwrap_or(0xFF);
+                if protocol == Protocol::V2 && f.id == BROADCAST_ID && option == 0xFF {
+                    return; // Ignored since firmware 42 (EM-P2).
+                }
+                for &k in &targets[..n] {
+                    // Answer first, under the old id.
+                    self.reply(k, f.id, code, Ok(()), &[]);
+                    self.servos[k].factory_reset(option);
+                    self.backend.set_torque_enabled(k, false);
+                    self.refresh(k);
+                }
+            }
+            Instruction::Reboot => {
+                for &k in &targets[..n] {
+                    self.reply(k, f.id, code, Ok(()), &[]);
+                    self.servos[k].reboot();
+                    self.backend.set_torque_enabled(k, false);
+                    self.refresh(k);
+                    let s = &mut self.servos[k];
+                    let p = s.value(Item::PresentPosition);
+                    s.set_value(Item::GoalPosition, p);
+                }
+            }
+            Instruction::Clear => {
+                let valid = f.params == [0x01, 0x44, 0x58, 0x4C, 0x22];
+                for &k in &targets[..n] {
+                    let r = if !valid {
+                        Err(Fault::Instruction)
+                    } else if self.backend.measure(k).velocity.abs() > 0.01 {
+                        Err(Fault::ResultFail)
+                    } else {
+                        Ok(())
+                    };
+                    self.reply(k, f.id, code, r, &[]);
+                }
+            }
+            Instruction::SyncWrite => self.sync_write(protocol, f.params),
+            Instruction::BulkWrite => self.bulk_write(f.params),
+            Instruction::SyncRead | Instruction::FastSyncRead => {
+                let mut p = Params::new(protocol, f.params);
+                let (Some(address), Some(len)) = (p.u16(), p.u16()) else {
+                    return;
+                };
+                let ids = p.rest();
+                if instruction == Instruction::SyncRead {
+                    for &id in ids {
+                        if let Some(k) = self.find(protocol, id) {
+                            self.read_reply(k, address, len);
+                        }
+                    }
+                } else {
+                    self.fast_reply(ids.iter().map(|&id| (id, address, len)));
+                }
+            }
+            Instruction::BulkRead | Instruction::FastBulkRead => {
+                let mut items = [(0u8, 0u16, 0u16); 256];
+                let mut count = 0;
+                let mut p = Params::new(protocol, f.params);
+                if protocol == Protocol::V1 && p.u8() != Some(0x00) {
+                    return;
+                }
+                while !p.done() && count < items.len() {
+                    let item = match protocol {
+                        Protocol::V1 => (|| {
+                            let len = p.u8()?;
+                            let id = p.u8()?;
+                            let address = p.u8()?;
+                            Some((id, address as u16, len as u16))
+                        })(),
+                        Protocol::V2 => (|| Some((p.u8()?, p.u16()?, p.u16()?)))(),
+                    };
+                    let Some(item) = item else { return };
+                    // A repeated id is read once (EM-P1).
+                    if items[..count].iter().all(|i| i.0 != item.0) {
+                        items[count] = item;
+                        count += 1;
+                    }
+                }
+                if instruction == Instruction::FastBulkRead {
+                    self.fast_reply(items[..count].iter().copied());
+                    return;
+                }
+                for &(id, address, len) in &items[..count] {
+                    let Some(k) = self.find(protocol, id) else {
+                        continue;
+                    };
+                    if !self.servos[k].model.has_bulk_read() {
+                        continue; // RX: no BULK_READ.
+                    }
+                    self.read_reply(k, address, len);
+                }
+            }
+            Instruction::Status => {}
+        }
+    }
+
+    /// Answer a READ-type request naming servo `k`.
+    fn read_reply(&mut self, k: usize, address: u16, len: u16) {
+        if self.servos[k].status_return_level() < 1 {
+            return;
+        }
+        let protocol = self.servos[k].protocol();
+        match self.servos[k].check_read(address, len) {
+            Ok(()) => {
+                self.refresh(k);
+                let s = &self.servos[k];
+                let mut w = PacketWriter::status(self.out, protocol, s.id(), 0);
+                w.bytes(s.read(address, len));
+                let _ = w.finish();
+                self.marks.push(ReplyMark {
+                    end: self.out.len(),
+                    delay: s.return_delay(),
+                });
+            }
+            Err(fault) => self.status(k, fault.error_byte(protocol), &[]),
+        }
+    }
+
+    /// One FAST_SYNC_READ / FAST_BULK_READ reply (PROTOCOL.md 2.6): id 0xFE, then
+    /// `[ERR ID DATA CRC]` per servo present, each CRC over the packet from its
+    /// first byte, the last being the packet's CRC. Not byte-stuffed: the SDK
+    /// parses these replies with a fixed stride and removes no stuffing.
+    fn fast_reply(&mut self, items: impl Iterator<Item = (u8, u16, u16)>) {
+        let start = self.out.len();
+        self.out
+            .extend_from_slice(&[0xFF, 0xFF, 0xFD, 0x00, BROADCAST_ID, 0, 0, 0x55]);
+        let mut any = false;
+        let mut delay = Duration::ZERO;
+        // Where each block's CRC goes, filled once LENGTH is known.
+        let mut crc_slots = [0usize; 256];
+        let mut blocks = 0;
+        for (id, address, len) in items {
+            if blocks == crc_slots.len() {
+                break;
+            }
+            let Some(k) = self.find(Protocol::V2, id) else {
+                continue;
+            };
+            if self.servos[k].status_return_level() < 1 {
+                continue;
+            }
+            if !any {
+                delay = self.servos[k].return_delay();
+            }
+            any = true;
+            let check = self.servos[k].check_read(address, len);
+            if check.is_ok() {
+                self.refresh(k);
+            }
+            let s = &self.servos[k];
+            match check {
+                Ok(()) => {
+                    self.out.push(0);
+                    self.out.push(id);
+                    self.out.extend_from_slice(s.read(address, len));
+                }
+                Err(fault) => {
+                    self.out.push(fault.error_byte(Protocol::V2));
+                    self.out.push(id);
+                    self.out.extend(std::iter::repeat_n(0u8, len as usize));
+                }
+            }
+            // Each block's CRC covers LENGTH, which is known only at the end.
+            crc_slots[blocks] = self.out.len();
+            blocks += 1;
+            self.out.extend_from_slice(&[0, 0]);
+        }
+        if !any {
+            self.out.truncate(start);
+            return;
+        }
+        let length = self.out.len() - (start + 7);
+        self.out[start + 5..start + 7].copy_from_slice(&(length as u16).to_le_bytes());
+        // Front to back: each CRC covers every byte before it, earlier CRCs included.
+        let mut running = 0u16;
+        let mut covered = start;
+        for &crc_at in &crc_slots[..blocks] {
+            running = crc16_update(running, &self.out[covered..crc_at]);
+            covered = crc_at;
+            self.out[crc_at..crc_at + 2].copy_from_slice(&running.to_le_bytes());
+        }
+        self.marks.push(ReplyMark {
+            end: self.out.len(),
+            delay,
+        });
+    }
+
+    fn sync_write(&mut self, protocol: Protocol, params: &[u8]) {
+        let mut p = Params::new(protocol, params);
+        let (Some(address), Some(len)) = (p.addr(), p.addr()) else {
+            return;
+        };
+        while !p.done() {
+            let (Some(id), Some(data)) = (p.u8(), p.take(len as usize)) else {
+                return;
+            };
+            if let Some(k) = self.find(protocol, id) {
+                let _ = self.write(k, address, data);
+            }
+        }
+    }
+
+    fn bulk_write(&mut self, params: &[u8]) {
+        let mut p = Params::new(Protocol::V2, params);
+        while !p.done() {
+            let (Some(id), Some(address), Some(len)) = (p.u8(), p.u16(), p.u16()) else {
+                return;
+            };
+            let Some(data) = p.take(len as usize) else {
+                return;
+            };
+            if let Some(k) = self.find(Protocol::V2, id) {
+                let _ = self.write(k, address, data);
+            }
+        }
+    }
+}

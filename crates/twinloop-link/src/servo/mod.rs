@@ -1,0 +1,13 @@
+//! The servo side of the protocol: virtual servos on a virtual bus, a backend trait
+//! the simulator will implement, a stand-in servo model, and serving a bus on a
+//! transport (pty, TCP) with the wire time and return delay emulated.
+
+mod backend;
+mod bus;
+mod serve;
+mod virtual_servo;
+
+pub use backend::{ServoMeasurement, TrackingServoModel, VirtualServoBackend};
+pub use bus::{BusClock, BusServo, BusStats, ReplyMark, VIRTUAL_FIRMWARE, VirtualBus};
+pub use serve::{ServeOptions, serve};
+pub use virtual_servo::{Fault, VirtualServo, WriteEffects};

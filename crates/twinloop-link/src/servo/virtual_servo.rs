@@ -1,0 +1,284 @@
+//! One virtual servo: its control-table memory and the rules a real servo applies
+//! to reads and writes (ranges, read-only registers, EEPROM lock, position limits),
+//! with each violation answered by the error the e-manual names.
+
+use crate::control_table::ControlTable;
+use crate::model::Model;
+use crate::protocol::Protocol;
+use crate::register::{Access, Area, Item, Register};
+use std::time::Duration;
+
+/// Why a servo refuses an instruction, before it is turned into the protocol's
+/// error byte.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fault {
+    /// Undefined instruction, malformed parameters, ACTION without REG_WRITE.
+    Instruction,
+    /// The instruction's checksum / CRC did not match.
+    Checksum,
+    /// A value outside the register's range.
+    DataRange,
+    /// A write covering only part of a register (2.0).
+    DataLength,
+    /// A goal position outside the position limits.
+    DataLimit,
+    /// A read-only or undefined register written, EEPROM written with torque on
+    /// (2.0) or locked (1.0), an address past the table.
+    Access,
+    /// Could not execute (e.g. CLEAR while moving).
+    ResultFail,
+}
+
+impl Fault {
+    /// The error byte of a status packet for this fault. Protocol 1.0 has only
+    /// bits: range-type faults become the Range bit, a position outside the limits
+    /// the Angle Limit bit (EM-P1); 2.0 has a number for each (EM-P2).
+    pub fn error_byte(self, protocol: Protocol) -> u8 {
+        match protocol {
+            Protocol::V1 => match self {
+                Fault::Instruction => 0x40,
+                Fault::Checksum => 0x10,
+                Fault::DataLimit => 0x02,
+                Fault::DataRange | Fault::DataLength | Fault::Access | Fault::ResultFail => 0x08,
+            },
+            Protocol::V2 => match self {
+                Fault::ResultFail => 0x01,
+                Fault::Instruction => 0x02,
+                Fault::Checksum => 0x03,
+                Fault::DataRange => 0x04,
+                Fault::DataLength => 0x05,
+                Fault::DataLimit => 0x06,
+                Fault::Access => 0x07,
+            },
+        }
+    }
+}
+
+/// Which registers a write touched, so the bus can tell the backend.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WriteEffects {
+    pub goal_position: bool,
+    pub torque_enable: bool,
+}
+
+/// A servo's memory and identity.
+#[derive(Debug, Clone)]
+pub struct VirtualServo {
+    pub model: Model,
+    pub firmware: u8,
+    pub memory: Vec<u8>,
+    /// REG_WRITE staged for the next ACTION: address and data.
+    staged_address: u16,
+    staged: Vec<u8>,
+    has_staged: bool,
+}
+
+impl VirtualServo {
+    pub fn new(id: u8, model: Model, firmware: u8) -> VirtualServo {
+        VirtualServo {
+            model,
+            firmware,
+            memory: model.table().factory_memory(id, firmware),
+            staged_address: 0,
+            staged: Vec::with_capacity(64),
+            has_staged: false,
+        }
+    }
+
+    pub fn table(&self) -> &'static ControlTable {
+        self.model.table()
+    }
+
+    pub fn protocol(&self) -> Protocol {
+        self.model.protocol()
+    }
+
+    fn register(&self, item: Item) -> Option<&'static Register> {
+        self.table().item(item)
+    }
+
+    /// The decoded value of `item` (0 if the model lacks it).
+    pub fn value(&self, item: Item) -> i32 {
+        self.register(item)
+            .map(|r| r.decode(&self.memory[r.address as usize..r.end() as usize]))
+            .unwrap_or(0)
+    }
+
+    /// Store `value` in `item` (clamped to its range), bypassing access rules: how
+    /// the servo itself updates its present values.
+    pub fn set_value(&mut self, item: Item, value: i32) {
+        if let Some(r) = self.register(item) {
+            let v = value.clamp(r.min, r.max);
+            r.encode(v, &mut self.memory[r.address as usize..r.end() as usize]);
+        }
+    }
+
+    pub fn id(&self) -> u8 {
+        self.value(Item::Id) as u8
+    }
+
+    pub fn status_return_level(&self) -> u8 {
+        self.value(Item::StatusReturnLevel) as u8
+    }
+
+    /// Return Delay Time: 2 us per unit.
+    pub fn return_delay(&self) -> Duration {
+        Duration::from_micros(2 * self.value(Item::ReturnDelayTime).max(0) as u64)
+    }
+
+    pub fn torque_enabled(&self) -> bool {
+        self.value(Item::TorqueEnable) != 0
+    }
+
+    /// Check a READ of `len` bytes at `address`.
+    pub fn check_read(&self, address: u16, len: u16) -> Result<(), Fault> {
+        if len == 0 {
+            return Err(Fault::DataLength);
+        }
+        if address as usize + len as usize > self.memory.len() {
+            return Err(Fault::Access);
+        }
+        Ok(())
+    }
+
+    /// The bytes a READ returns.
+    pub fn read(&self, address: u16, len: u16) -> &[u8] {
+        &self.memory[address as usize..address as usize + len as usize]
+    }
+
+    /// Check a WRITE of `data` at `address` against the servo's rules, without
+    /// changing anything.
+    pub fn check_write(&self, address: u16, data: &[u8]) -> Result<(), Fault> {
+        let protocol = self.protocol();
+        let start = address as usize;
+        let end = start + data.len();
+        if data.is_empty() {
+            return Err(Fault::DataLength);
+        }
+        if end > self.memory.len() {
+            return Err(Fault::Access);
+        }
+        let eeprom_locked = match protocol {
+            Protocol::V2 => self.torque_enabled(),
+            Protocol::V1 => self.value(Item::Lock) != 0,
+        };
+        let table = self.table();
+        let mut a = start;
+        while a < end {
+            let Some(r) = table.containing(a as u16) else {
+                // A byte no register owns.
+                return Err(Fault::Access);
+            };
+            let (rs, re) = (r.address as usize, r.end() as usize);
+            if protocol == Protocol::V2 && (rs < start || re > end) {
+                return Err(Fault::DataLength);
+            }
+            if r.access == Access::Read {
+                return Err(Fault::Access);
+            }
+            if r.area == Area::Eeprom && eeprom_locked {
+                return Err(Fault::Access);
+            }
+            // The register's value after the write (1.0 may write part of one).
+            let mut bytes = [0u8; 4];
+            for (k, b) in bytes.iter_mut().take(r.size as usize).enumerate() {
+                let addr = rs + k;
+                *b = if addr >= start && addr < end {
+                    data[addr - start]
+                } else {
+                    self.memory[addr]
+                };
+            }
+            let v = r.decode(&bytes[..r.size as usize]);
+            if v < r.min || v > r.max {
+                return Err(Fault::DataRange);
+            }
+            if r.item == Some(Item::GoalPosition) && !self.goal_within_limits(v) {
+                return Err(Fault::DataLimit);
+            }
+            a = re;
+        }
+        Ok(())
+    }
+
+    /// Whether a goal position is inside the limits that apply: CW..CCW Angle Limit
+    /// in 1.0 joint mode (both 0 is wheel mode: no limit), Min..Max Position Limit
+    /// in 2.0 position control mode (3); extended modes have none.
+    fn goal_within_limits(&self, goal: i32) -> bool {
+        let lo = self.value(Item::MinPositionLimit);
+        let hi = self.value(Item::MaxPositionLimit);
+        match self.protocol() {
+            Protocol::V1 => (lo == 0 && hi == 0) || (lo <= goal && goal <= hi),
+            Protocol::V2 => self.value(Item::OperatingMode) != 3 || (lo <= goal && goal <= hi),
+        }
+    }
+
+    /// Apply a write already checked with [`VirtualServo::check_write`].
+    pub fn apply_write(&mut self, address: u16, data: &[u8]) -> WriteEffects {
+        let start = address as usize;
+        self.memory[start..start + data.len()].copy_from_slice(data);
+        let end = (start + data.len()) as u16;
+        let touches =
+            |r: Option<&Register>| r.is_some_and(|r| r.address < end && r.end() > address);
+        WriteEffects {
+            goal_position: touches(self.register(Item::GoalPosition)),
+            torque_enable: touches(self.register(Item::TorqueEnable)),
+        }
+    }
+
+    /// Stage a REG_WRITE.
+    pub fn stage(&mut self, address: u16, data: &[u8]) {
+        self.staged_address = address;
+        self.staged.clear();
+        self.staged.extend_from_slice(data);
+        self.has_staged = true;
+        self.set_value(Item::Registered, 1);
+    }
+
+    /// Apply the staged REG_WRITE (ACTION); `None` if nothing was staged.
+    pub fn take_staged(&mut self) -> Option<WriteEffects> {
+        if !self.has_staged {
+            return None;
+        }
+        self.has_staged = false;
+        self.set_value(Item::Registered, 0);
+        let data = std::mem::take(&mut self.staged);
+        // Limits may have changed since staging: check again.
+        let effects = if self.check_write(self.staged_address, &data).is_ok() {
+            self.apply_write(self.staged_address, &data)
+        } else {
+            WriteEffects::default()
+        };
+        self.staged = data;
+        Some(effects)
+    }
+
+    /// FACTORY_RESET: 1.0 resets everything, id included; 2.0 `option` 0xFF all,
+    /// 0x01 all but id, 0x02 all but id and baud rate.
+    pub fn factory_reset(&mut self, option: u8) {
+        let id = self.id();
+        let baud = self.value(Item::BaudRate);
+        self.memory = self.table().factory_memory(1, self.firmware);
+        if self.protocol() == Protocol::V2 {
+            if option == 0x01 || option == 0x02 {
+                self.set_value(Item::Id, id as i32);
+            }
+            if option == 0x02 {
+                self.set_value(Item::BaudRate, baud);
+            }
+        }
+        self.has_staged = false;
+    }
+
+    /// REBOOT: RAM back to its initial values, EEPROM kept.
+    pub fn reboot(&mut self) {
+        let fresh = self.table().factory_memory(self.id(), self.firmware);
+        for r in &self.table().registers {
+            if r.area == Area::Ram {
+                let (s, e) = (r.address as usize, r.end() as usize);
+                self.memory[s..e].copy_from_slice(&fresh[s..e]);
+            }
+        }
+        self.has_staged = false;
+    }
+}

@@ -1,0 +1,112 @@
+//! The real-robot backend (Robot trait) over a virtual bus: commands in joint
+//! radians reach the servos through zero offsets and directions, reads come back in
+//! joint radians, failures name the joint.
+
+use twinloop_link::transport::LoopbackTransport;
+use twinloop_link::{
+    BusServo, Client, DynamixelRobot, ReadMethod, RobotMapping, TrackingServoModel, VirtualBus,
+};
+use twinloop_robot::{Robot, RobotState};
+
+fn robot_on_virtual_bus(
+    mapping: &RobotMapping,
+    bus_servos: &[BusServo],
+) -> DynamixelRobot<LoopbackTransport<VirtualBus<TrackingServoModel>>> {
+    let bus = VirtualBus::with_tracking_model(bus_servos);
+    DynamixelRobot::new(
+        Client::new(LoopbackTransport::new(bus)),
+        mapping.clone(),
+        ReadMethod::Auto,
+    )
+    .unwrap()
+}
+
+fn servos_of(m: &RobotMapping) -> Vec<BusServo> {
+    m.joints
+        .iter()
+        .map(|j| BusServo {
+            id: j.id,
+            model: j.model,
+        })
+        .collect()
+}
+
+#[test]
+fn builtin_robots_follow_joint_commands() {
+    for name in ["km20", "op3"] {
+        let m = RobotMapping::builtin(name).unwrap();
+        let mut robot = robot_on_virtual_bus(&m, &servos_of(&m));
+        assert_eq!(robot.joint_names().len(), 20);
+        assert_eq!(robot.joint_index("r_knee"), Some(12));
+        robot.set_torque(true).unwrap();
+        let goals: Vec<f64> = (0..20).map(|k| -0.5 + 0.05 * k as f64).collect();
+        robot.command_positions(&goals).unwrap();
+        for _ in 0..200 {
+            robot.client.transport_mut().responder.step(0.01);
+        }
+        let mut state = RobotState::default();
+        robot.read(&mut state).unwrap();
+        for (k, (&q, &g)) in state.positions.iter().zip(&goals).enumerate() {
+            // One raw unit: 0.29 deg (RX) or 0.088 deg (XM).
+            assert!((q - g).abs() < 0.006, "{name} joint {k}: {q} vs {g}");
+        }
+        let v = state.velocities.as_ref().unwrap();
+        assert!(v.iter().all(|v| v.abs() < 0.05), "at rest: {v:?}");
+        assert!(state.efforts.is_some());
+    }
+}
+
+#[test]
+fn zero_offset_and_direction_are_applied() {
+    let text = r#"
+[[joint]]
+name = "a"
+id = 1
+model = "XM430-W350"
+zero = 0.3
+direction = -1
+
+[[joint]]
+name = "b"
+id = 2
+model = "RX-28"
+zero = -0.2
+"#;
+    let m = RobotMapping::parse(text, "t.toml").unwrap();
+    let mut robot = robot_on_virtual_bus(&m, &servos_of(&m));
+    robot.set_torque(true).unwrap();
+    robot.command_positions(&[0.1, 0.4]).unwrap();
+    robot.client.transport_mut().responder.step(2.0);
+    // The servos themselves sit at zero + direction * q.
+    use twinloop_link::VirtualServoBackend;
+    let bus = &robot.client.transport().responder;
+    let xm_angle = bus.backend.measure(0).position;
+    let rx_angle = bus.backend.measure(1).position;
+    assert!((xm_angle - (0.3 - 0.1)).abs() < 0.002, "{xm_angle}");
+    assert!((rx_angle - (-0.2 + 0.4)).abs() < 0.006, "{rx_angle}");
+    let mut state = RobotState::default();
+    robot.read(&mut state).unwrap();
+    assert!((state.positions[0] - 0.1).abs() < 0.002);
+    assert!((state.positions[1] - 0.4).abs() < 0.006);
+}
+
+#[test]
+fn a_missing_servo_is_named_and_the_rest_still_read() {
+    let m = RobotMapping::builtin("op3").unwrap();
+    let mut servos = servos_of(&m);
+    servos.retain(|s| s.id != 13); // r_knee unplugged
+    let mut robot = robot_on_virtual_bus(&m, &servos);
+    let mut state = RobotState::default();
+    let e = robot.read(&mut state).unwrap_err();
+    assert_eq!(e.joint.as_deref(), Some("r_knee"));
+    assert!(e.message.contains("servo id 13"), "{e}");
+    assert!(state.positions[12].is_nan());
+    assert!(
+        state
+            .positions
+            .iter()
+            .enumerate()
+            .all(|(k, p)| k == 12 || p.abs() < 1e-9)
+    );
+    assert!(robot.command_positions(&[0.0; 3]).is_err());
+}
