@@ -5,6 +5,7 @@
 mod cmd_bench;
 mod cmd_dynamics;
 mod cmd_experiment;
+mod cmd_gait;
 mod cmd_ident;
 mod cmd_model;
 mod cmd_robot;
@@ -113,6 +114,14 @@ enum Command {
     /// Example: twinloop sysid ss --data walk.csv --inputs 'u:*' --outputs 'gyro:*' --order 6 --json ss.json
     #[command(subcommand)]
     Sysid(cmd_sysid::SysidCommand),
+    /// Seed 003's walking sequence as joint goals, and its identification dataset on lab17
+    ///
+    /// `gait sequence` writes the 13-stage walk as joint goals; `gait dataset` walks it on
+    /// lab17 in the simulator and records the ten joint offsets and the six foot gyro rates.
+    ///
+    /// Example: twinloop gait dataset --robot builtin:lab17 --amplitude 0.7 --out lab17_walk.csv
+    #[command(subcommand)]
+    Gait(cmd_gait::GaitCommand),
 }
 
 fn main() -> ExitCode {
@@ -130,5 +139,6 @@ fn main() -> ExitCode {
         Command::Ik(args) => cmd_ident::ik(args),
         Command::Validate(cmd) => cmd_ident::validate(cmd),
         Command::Sysid(cmd) => cmd_sysid::run(cmd),
+        Command::Gait(cmd) => cmd_gait::run(cmd),
     }
 }

@@ -416,7 +416,8 @@ pub(crate) fn generate(o: &SequenceOptions, samples: usize) -> Result<JointGoals
             debug_assert_eq!(trim.joint, OFFSET_JOINTS[n]);
             // eq 6 backwards: the servo angle theta_C = trim + offset, then the joint angle.
             g[j] = lab17::joint_angle(trim.joint, trim.servo_deg + held[n])
-                .expect("Table 2 joint has a trim");
+                .expect("Table 2 joint has a trim")
+                + 0.0; // no -0.0 in the output
         }
         out.times.push(t);
         out.goals.push(g);

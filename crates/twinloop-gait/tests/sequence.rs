@@ -10,7 +10,8 @@ fn offset(name: &str, o: &[f64; 10]) -> f64 {
 #[test]
 fn printed_windows_and_offsets_are_the_seeds() {
     // (stage, lower, upper, [(joint, servo degrees)]) as printed in Figs. 33-44.
-    let printed: [(&str, f64, f64, &[(&str, f64)]); 9] = [
+    type Printed = (&'static str, f64, f64, &'static [(&'static str, f64)]);
+    let printed: [Printed; 9] = [
         (
             "C",
             7.08,
