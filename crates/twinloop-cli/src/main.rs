@@ -5,6 +5,7 @@
 mod cmd_bench;
 mod cmd_dynamics;
 mod cmd_experiment;
+mod cmd_gait;
 mod cmd_ident;
 mod cmd_link;
 mod cmd_model;
@@ -138,6 +139,14 @@ enum Command {
     /// Example: twinloop serve --robot builtin:km20 --link /tmp/km20
     ///          twinloop link scan --port /tmp/km20
     Serve(cmd_link::ServeArgs),
+    /// Seed 003's walking sequence as joint goals, and its identification dataset on lab17
+    ///
+    /// `gait sequence` writes the 13-stage walk as joint goals; `gait dataset` walks it on
+    /// lab17 in the simulator and records the ten joint offsets and the six foot gyro rates.
+    ///
+    /// Example: twinloop gait dataset --robot builtin:lab17 --amplitude 0.7 --out lab17_walk.csv
+    #[command(subcommand)]
+    Gait(cmd_gait::GaitCommand),
 }
 
 fn main() -> ExitCode {
@@ -157,5 +166,6 @@ fn main() -> ExitCode {
         Command::Sysid(cmd) => cmd_sysid::run(cmd),
         Command::Link(cmd) => cmd_link::run(cmd),
         Command::Serve(args) => cmd_link::serve(args),
+        Command::Gait(cmd) => cmd_gait::run(cmd),
     }
 }

@@ -174,6 +174,22 @@ impl Simulator {
         Ok(())
     }
 
+    /// The exact angular velocity of a link in its own frame, rad/s: what a perfect gyro
+    /// fixed to the link reads. For a second gyroscope (seed 003 has one MPU-6050 on each
+    /// foot); the configured IMU applies quantisation and noise, this does not.
+    pub fn link_angular_velocity(&mut self, link: &str) -> Option<Vector3<f64>> {
+        let i = self.model.links.iter().position(|l| l.name == link)?;
+        compute_joint_jacobians(&self.model, &mut self.data, &self.q);
+        let (_, ang) = imu_world_velocity(&self.model, &self.data, &self.v, i);
+        let info = &self.model.links[i];
+        let x = if info.body == BASE {
+            self.data.base_placement
+        } else {
+            self.data.o_m_i[info.body]
+        } * info.placement;
+        Some(x.rotation.transpose() * ang)
+    }
+
     /// Read every sensor into `state` (the `Robot` interface's measurement).
     pub fn read_sensors(&mut self, state: &mut RobotState) {
         let nb = self.model.nbodies;

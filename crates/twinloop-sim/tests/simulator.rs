@@ -279,3 +279,36 @@ fn op3_stands_still_on_its_servos() {
     assert!((got - expect).norm() < 1e-3, "{got:?} vs {expect:?}");
     assert!(imu.gyro.iter().all(|w| w.abs() < 1e-4), "{imu:?}");
 }
+
+#[test]
+fn link_angular_velocity_is_what_an_exact_gyro_on_that_link_reads() {
+    let robot = pendulum();
+    let model = Model::from_robot_with_base(&robot, BaseKind::Floating).unwrap();
+    let mut sim = Simulator::from_model(
+        &robot,
+        model,
+        SimConfig {
+            ground: false,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    // A tumbling, swinging chain: every joint and the base move.
+    for (i, v) in sim.v.iter_mut().enumerate() {
+        *v = 0.3 + 0.17 * i as f64;
+    }
+    sim.run(0.05).unwrap();
+    let link = sim.model.links.iter().position(|l| l.name == "l2").unwrap();
+    sim.sensors_mut().imu_link = link;
+    let mut st = RobotState::default();
+    sim.read_sensors(&mut st);
+    let g = st.imu.unwrap().gyro;
+    let w = sim.link_angular_velocity("l2").unwrap();
+    assert!(w.norm() > 0.1, "the link moves: {w}");
+    for k in 0..3 {
+        assert!((g[k] - w[k]).abs() < 1e-12, "{k}: {} vs {}", g[k], w[k]);
+    }
+    // A different link turns differently; an unknown link is None.
+    assert!((sim.link_angular_velocity("l0").unwrap() - w).norm() > 1e-3);
+    assert!(sim.link_angular_velocity("nope").is_none());
+}

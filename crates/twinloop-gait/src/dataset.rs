@@ -1,0 +1,267 @@
+//! Seed 003 section 7's identification experiment, run on `lab17` in the simulator.
+//!
+//! The robot stands on the ground on seed 003's two-loop servos (a speed loop inside a
+//! position loop, section 3 and Fig. 20), settles at its trims, then walks the
+//! sequence of [`crate::sequence`]. Each tick, as the seed's Arduino loop does, it
+//! first reads both gyroscopes, then sets the servo goals of that tick:
+//! - inputs: the ten offsets of eq 6, Delta theta = theta_C - theta_TRIM, servo
+//!   degrees (`u:<joint>`);
+//! - outputs: the roll, pitch and yaw rates of the left and right foot
+//!   (`gyro:l_foot.roll` .. `gyro:r_foot.yaw`), deg/s, each from an MPU-6050 on the
+//!   foot: quantised at 131 LSB per deg/s (eq 7) with white noise of the chip's
+//!   datasheet level (0.05 deg/s rms). The left gyro is the simulator's IMU; the right
+//!   one is read from the simulator state (`Simulator::link_angular_velocity`) and
+//!   quantised and disturbed the same way.
+
+use crate::sequence::{GaitError, JointGoals, OFFSET_JOINTS, SequenceOptions, generate};
+use twinloop_model::Robot;
+use twinloop_robot::RobotState;
+use twinloop_robots::servo::LD2015;
+use twinloop_sim::sensors::MPU6050_GYRO_LSB_PER_DEG_S;
+use twinloop_sim::{Actuator, SimConfig, Simulator, TwoLoopServo, quantize};
+
+/// The feet carrying the gyroscopes: left (address 0x68) and right (0x69), seed 003.
+pub const FEET: [&str; 2] = ["l_foot", "r_foot"];
+/// Roll, pitch, yaw: the foot frame's x (forward), y (left), z (up) rates.
+pub const AXES: [&str; 3] = ["roll", "pitch", "yaw"];
+
+/// MPU-6050 datasheet (PS-MPU-6000A rev 3.4, gyroscope "total RMS noise", DLPF at
+/// 100 Hz): 0.05 deg/s rms.
+pub const MPU6050_GYRO_NOISE_DEG_S: f64 = 0.05;
+
+/// How to record the walk.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DatasetOptions {
+    pub sequence: SequenceOptions,
+    /// Samples to record (seed 003: 1000).
+    pub samples: usize,
+    /// Gyro noise, deg/s rms (0 = none).
+    pub gyro_noise_deg_s: f64,
+    /// Seed of the noise.
+    pub noise_seed: u64,
+    /// Time standing at the trims before the first sample, s.
+    pub settle: f64,
+    /// Simulator step, s.
+    pub dt: f64,
+    /// Two-loop servo position gain, 1/s.
+    pub kp_position: f64,
+}
+
+impl Default for DatasetOptions {
+    fn default() -> Self {
+        DatasetOptions {
+            sequence: SequenceOptions::default(),
+            samples: crate::sequence::SEED_SAMPLES,
+            gyro_noise_deg_s: MPU6050_GYRO_NOISE_DEG_S,
+            noise_seed: 1,
+            settle: 1.0,
+            dt: 1e-3,
+            kp_position: 20.0,
+        }
+    }
+}
+
+/// The two-loop servo of seed 003 (section 3, Fig. 20) with LD-2015 ratings: the
+/// speed loop's gain is the motor's own stall torque over no-load speed (the slope of
+/// its torque-speed line, so full speed error is full torque), the position gain
+/// `kp_position` (20 1/s settles in about 200 ms without overshoot, section 4).
+pub fn ld2015_two_loop(kp_position: f64) -> TwoLoopServo {
+    TwoLoopServo {
+        kp_position,
+        kv: LD2015.stall_torque / LD2015.no_load_speed,
+        max_speed: LD2015.no_load_speed,
+        max_torque: LD2015.stall_torque,
+    }
+}
+
+/// A recorded walk.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WalkDataset {
+    /// `t`, `u:<joint>` (10), `gyro:<foot>.<axis>` (6).
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+    /// Largest trunk tilt from upright over the record, degrees.
+    pub max_tilt_deg: f64,
+    /// Time (s from the first sample) the trunk first tilted past 45 degrees.
+    pub fell_at: Option<f64>,
+    /// Forward (x) and sideways (y) travel of the trunk over the record, m.
+    pub travel: [f64; 2],
+    /// Trunk yaw change over the record, degrees.
+    pub yaw_deg: f64,
+}
+
+/// White Gaussian noise from a seed (splitmix64 and Box-Muller).
+struct Noise(u64);
+
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn normal(&mut self) -> f64 {
+        let a = self.uniform().max(f64::MIN_POSITIVE);
+        let b = self.uniform();
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+}
+
+fn trunk_pose(sim: &mut Simulator) -> Result<([f64; 3], f64, f64), GaitError> {
+    let base = sim.model.base_link.clone();
+    let x = sim
+        .link_placement(&base)
+        .ok_or_else(|| GaitError(format!("robot: no base link \"{base}\"")))?;
+    let r = x.rotation;
+    let tilt = r[(2, 2)].clamp(-1.0, 1.0).acos().to_degrees();
+    let yaw = r[(1, 0)].atan2(r[(0, 0)]).to_degrees();
+    Ok((
+        [x.translation.x, x.translation.y, x.translation.z],
+        tilt,
+        yaw,
+    ))
+}
+
+/// Seed 003 section 7: walk `robot` (lab17) through the sequence in the simulator and
+/// record the identification data.
+pub fn record_walk(robot: &Robot, o: &DatasetOptions) -> Result<WalkDataset, GaitError> {
+    if o.samples == 0 {
+        return Err(GaitError("samples must be at least 1".into()));
+    }
+    if !(o.gyro_noise_deg_s.is_finite() && o.gyro_noise_deg_s >= 0.0) {
+        return Err(GaitError(format!(
+            "gyro_noise must be a non-negative number of deg/s, got {}",
+            o.gyro_noise_deg_s
+        )));
+    }
+    if !(o.settle.is_finite() && o.settle >= 0.0) {
+        return Err(GaitError(format!(
+            "settle must be a non-negative number of seconds, got {}",
+            o.settle
+        )));
+    }
+    if !(o.dt.is_finite() && o.dt > 0.0 && o.dt <= o.sequence.sample_time) {
+        return Err(GaitError(format!(
+            "dt must be positive and at most the sample time {} s, got {}",
+            o.sequence.sample_time, o.dt
+        )));
+    }
+    if !(o.kp_position.is_finite() && o.kp_position > 0.0) {
+        return Err(GaitError(format!(
+            "kp_position must be positive, got {}",
+            o.kp_position
+        )));
+    }
+    let goals: JointGoals = generate(&o.sequence, o.samples)?;
+    let sim_err = |e: twinloop_sim::SimError| GaitError(format!("simulator: {e}"));
+    let mut sim = Simulator::new(
+        robot,
+        SimConfig {
+            dt: o.dt,
+            ..Default::default()
+        },
+    )
+    .map_err(sim_err)?;
+    // Map the sequence's joints onto the simulator's.
+    let mut map = Vec::with_capacity(goals.joints.len());
+    for j in &goals.joints {
+        map.push(sim.joint_index(j).ok_or_else(|| {
+            GaitError(format!(
+                "robot: \"{}\" has no joint \"{j}\"; the walking sequence of seed 003 is defined \
+                 for builtin:lab17",
+                robot.name
+            ))
+        })?);
+    }
+    for f in FEET {
+        if !sim.model.links.iter().any(|l| l.name == f) {
+            return Err(GaitError(format!(
+                "robot: \"{}\" has no link \"{f}\" to carry a foot gyroscope",
+                robot.name
+            )));
+        }
+    }
+    let servo = ld2015_two_loop(o.kp_position);
+    for a in sim.actuators.iter_mut() {
+        *a = Actuator::TwoLoop(servo);
+    }
+    let n = sim.model.nbodies;
+    let mut q0 = vec![0.0; n];
+    for (k, &i) in map.iter().enumerate() {
+        q0[i] = goals.goals[0][k];
+    }
+    sim.place_on_ground(&q0).map_err(sim_err)?;
+    let left = sim
+        .model
+        .links
+        .iter()
+        .position(|l| l.name == FEET[0])
+        .expect("checked");
+    let noise_rad = o.gyro_noise_deg_s.to_radians();
+    {
+        let s = sim.sensors_mut();
+        s.imu_link = left;
+        s.imu_quantize = true;
+        s.gyro_noise = noise_rad;
+        s.set_noise_seed(o.noise_seed ^ 0x0068);
+    }
+    let mut right_noise = Noise(o.noise_seed ^ 0x0069_0000_0000_0069);
+    let lsb = (1.0 / MPU6050_GYRO_LSB_PER_DEG_S).to_radians();
+    sim.run(o.settle).map_err(sim_err)?;
+
+    let mut columns = vec!["t".to_string()];
+    columns.extend(OFFSET_JOINTS.iter().map(|j| format!("u:{j}")));
+    for f in FEET {
+        columns.extend(AXES.iter().map(|a| format!("gyro:{f}.{a}")));
+    }
+    let steps = (o.sequence.sample_time / o.dt).round().max(1.0) as usize;
+    let (p0, _, yaw0) = trunk_pose(&mut sim)?;
+    let mut max_tilt: f64 = 0.0;
+    let mut fell_at = None;
+    let mut state = RobotState::default();
+    let mut rows = Vec::with_capacity(o.samples);
+    for k in 0..o.samples {
+        // Read both gyros (the state after the previous tick's goals) ...
+        sim.read_sensors(&mut state);
+        let gl = state.imu.as_ref().expect("the simulator has an IMU").gyro;
+        let wr = sim.link_angular_velocity(FEET[1]).expect("checked");
+        let mut row = Vec::with_capacity(columns.len());
+        row.push(goals.times[k]);
+        row.extend_from_slice(&goals.offsets_deg[k]);
+        row.extend(gl.iter().map(|w| w.to_degrees()));
+        for a in 0..3 {
+            let w = wr[a] + noise_rad * right_noise.normal();
+            row.push(quantize(w, lsb).to_degrees());
+        }
+        rows.push(row);
+        // ... then command this tick's goals and let the servos work for one tick.
+        for (j, &i) in map.iter().enumerate() {
+            sim.goals[i] = goals.goals[k][j];
+        }
+        for _ in 0..steps {
+            sim.step().map_err(sim_err)?;
+        }
+        let (_, tilt, _) = trunk_pose(&mut sim)?;
+        max_tilt = max_tilt.max(tilt);
+        if tilt > 45.0 && fell_at.is_none() {
+            fell_at = Some(goals.times[k]);
+        }
+    }
+    let (p1, _, yaw1) = trunk_pose(&mut sim)?;
+    let mut dyaw = yaw1 - yaw0;
+    if dyaw > 180.0 {
+        dyaw -= 360.0;
+    } else if dyaw < -180.0 {
+        dyaw += 360.0;
+    }
+    Ok(WalkDataset {
+        columns,
+        rows,
+        max_tilt_deg: max_tilt,
+        fell_at,
+        travel: [p1[0] - p0[0], p1[1] - p0[1]],
+        yaw_deg: dyaw,
+    })
+}
