@@ -5,8 +5,12 @@ use clap::{Args, Subcommand, ValueEnum};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use twinloop_compliant::{JointCompliance, SupportLeg, cartesian_compliance, coman_crouch};
+use twinloop_compliant::{
+    CompactModel, Corrections, JointCompliance, SagittalCompliance, SagittalReference, SupportLeg,
+    cartesian_compliance, coman_crouch,
+};
 use twinloop_dynamics::{Data, Model};
+use twinloop_io::{CsvWriter, Table};
 
 #[derive(Subcommand, Debug)]
 pub enum CompliantCommand {
@@ -23,6 +27,14 @@ pub enum CompliantCommand {
     ///
     /// Example: twinloop compliant stiffness --urdf models/coman/coman.urdf --support left --json kc.json
     Stiffness(StiffnessArgs),
+    /// Roll the compact CoM model (seed 002, eq 9-11, 14-17) along a reference
+    ///
+    /// x'' = eta1 (-a1 Kxx/m (x - xr) - b1 Kxz/m (z - zr) - g1 Dxx/m x' - e1 Dxz/m z'),
+    /// z'' = -g + eta2 (-a2 Kzx/m (x - xr) - b2 Kzz/m (z - zr) - g2 Dzx/m x' - e2 Dzz/m z'),
+    /// eta = 1 in single support; RK4 at the reference's sample times.
+    ///
+    /// Example: twinloop compliant simulate --reference ref.csv --model kc.json --table1 --out sim.csv
+    Simulate(SimulateArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
@@ -113,6 +125,7 @@ fn rows(m: &nalgebra::Matrix6<f64>) -> Vec<Vec<f64>> {
 pub fn run(cmd: CompliantCommand) -> ExitCode {
     match cmd {
         CompliantCommand::Stiffness(args) => stiffness(args),
+        CompliantCommand::Simulate(args) => simulate(args),
     }
 }
 
@@ -224,5 +237,160 @@ fn stiffness(args: StiffnessArgs) -> ExitCode {
         }
         print(&text);
     }
+    ExitCode::SUCCESS
+}
+
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// Reference CSV with columns t, xr, zr, phase (from `twinloop zmp`); optional x, z
+    /// columns give the initial CoM, else the model starts at rest at its static
+    /// equilibrium under the first row's reference.
+    #[arg(long, value_name = "FILE.csv")]
+    pub reference: PathBuf,
+    /// The JSON written by `compliant stiffness --json` (mass, gravity, sagittal entries).
+    #[arg(long, value_name = "FILE.json")]
+    pub model: PathBuf,
+    /// The ten corrections alpha1,beta1,gamma1,epsilon1,alpha2,beta2,gamma2,epsilon2,eta1,eta2
+    /// (default all ones: eq 11 uncorrected).
+    #[arg(long, value_name = "P1,..,P10", conflicts_with = "table1")]
+    pub params: Option<String>,
+    /// Use seed 002's Table 1 corrections (eta1 = eta2 = 1).
+    #[arg(long)]
+    pub table1: bool,
+    /// Output CSV: t, xr, zr, x, z, phase.
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: PathBuf,
+}
+
+fn read_plant(path: &std::path::Path) -> Result<SagittalCompliance, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let get = |key: &str, v: &serde_json::Value| {
+        v.get(key)
+            .and_then(|x| x.as_f64())
+            .ok_or_else(|| format!("{}: missing number `{key}`", path.display()))
+    };
+    let s = v
+        .get("sagittal")
+        .ok_or_else(|| format!("{}: missing object `sagittal`", path.display()))?;
+    Ok(SagittalCompliance {
+        m: get("mass", &v)?,
+        g: get("gravity", &v)?,
+        Kxx: get("Kxx", s)?,
+        Kxz: get("Kxz", s)?,
+        Kzx: get("Kzx", s)?,
+        Kzz: get("Kzz", s)?,
+        Dxx: get("Dxx", s)?,
+        Dxz: get("Dxz", s)?,
+        Dzx: get("Dzx", s)?,
+        Dzz: get("Dzz", s)?,
+    })
+}
+
+fn simulate(args: SimulateArgs) -> ExitCode {
+    let plant = match read_plant(&args.model) {
+        Ok(p) => p,
+        Err(e) => return fail(e),
+    };
+    let corrections = if args.table1 {
+        Corrections::seed_table1()
+    } else if let Some(text) = &args.params {
+        let values: Result<Vec<f64>, _> =
+            text.split(',').map(|s| s.trim().parse::<f64>()).collect();
+        match values {
+            Ok(v) if v.len() == 10 => {
+                let mut a = [0.0; 10];
+                a.copy_from_slice(&v);
+                Corrections::from_slice(&a)
+            }
+            _ => {
+                return fail(format!(
+                    "--params {text}: expected 10 comma-separated numbers"
+                ));
+            }
+        }
+    } else {
+        Corrections::default()
+    };
+    let table = match Table::read(&args.reference) {
+        Ok(t) => t,
+        Err(e) => return fail(e),
+    };
+    let col = |name: &str| table.column_index(name);
+    let (Some(it), Some(ix), Some(iz), Some(ip)) = (col("t"), col("xr"), col("zr"), col("phase"))
+    else {
+        return fail(format!(
+            "{}: needs columns t, xr, zr, phase",
+            args.reference.display()
+        ));
+    };
+    let reference = SagittalReference {
+        t: table.rows.iter().map(|r| r[it]).collect(),
+        xr: table.rows.iter().map(|r| r[ix]).collect(),
+        zr: table.rows.iter().map(|r| r[iz]).collect(),
+        double_support: table.rows.iter().map(|r| r[ip] >= 0.5).collect(),
+    };
+    if let Err(e) = reference.validate() {
+        return fail(format!("{}: {e}", args.reference.display()));
+    }
+    let model = CompactModel { plant, corrections };
+    let (x0, z0) = match (col("x"), col("z")) {
+        (Some(a), Some(b)) => (table.rows[0][a], table.rows[0][b]),
+        _ => match model.equilibrium(
+            reference.xr[0],
+            reference.zr[0],
+            reference.double_support[0],
+        ) {
+            Some(e) => (e[0], e[1]),
+            None => return fail("the model's stiffness block is singular: no static equilibrium"),
+        },
+    };
+    let (mut x, mut z) = (Vec::new(), Vec::new());
+    let start = std::time::Instant::now();
+    if let Err(e) = model.rollout(&reference, x0, z0, &mut x, &mut z) {
+        return fail(e);
+    }
+    let elapsed = start.elapsed();
+    let columns: Vec<String> = ["t", "xr", "zr", "x", "z", "phase"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let mut writer = match CsvWriter::create(&args.out, &columns) {
+        Ok(w) => w,
+        Err(e) => return fail(e),
+    };
+    for i in 0..reference.t.len() {
+        let row = [
+            reference.t[i],
+            reference.xr[i],
+            reference.zr[i],
+            x[i],
+            z[i],
+            if reference.double_support[i] {
+                1.0
+            } else {
+                0.0
+            },
+        ];
+        if let Err(e) = writer.write_row(&row) {
+            return fail(e);
+        }
+    }
+    if let Err(e) = writer.finish() {
+        return fail(e);
+    }
+    let n = reference.t.len();
+    let rms = |a: &[f64], b: &[f64]| {
+        (a.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>() / a.len() as f64).sqrt()
+    };
+    print(&format!(
+        "{n} samples in {} ms ({} us per 1000 samples) -> {}\nrms deviation from the reference: x {} m, z {} m\n",
+        num(elapsed.as_secs_f64() * 1e3),
+        num(elapsed.as_secs_f64() * 1e6 * 1000.0 / n as f64),
+        args.out.display(),
+        num(rms(&x, &reference.xr)),
+        num(rms(&z, &reference.zr)),
+    ));
     ExitCode::SUCCESS
 }

@@ -101,3 +101,54 @@ fn compliant_stiffness_names_a_stretched_knee_and_bad_stiffness() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("NoSuchJoint"));
 }
+
+#[test]
+fn compliant_simulate_rolls_the_compact_model_along_a_zmp_reference() {
+    let (reference, kc, sim) = (tmp("sim_ref.csv"), tmp("sim_kc.json"), tmp("sim.csv"));
+    let bin = env!("CARGO_BIN_EXE_twinloop");
+    let ok = |o: std::process::Output| {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        o
+    };
+    ok(Command::new(bin)
+        .args(["zmp", "--steps", "3", "--out"])
+        .arg(&reference)
+        .output()
+        .unwrap());
+    ok(Command::new(bin)
+        .args(["compliant", "stiffness", "--urdf", &coman_urdf(), "--json"])
+        .arg(&kc)
+        .output()
+        .unwrap());
+    ok(Command::new(bin)
+        .args(["compliant", "simulate", "--table1", "--reference"])
+        .arg(&reference)
+        .arg("--model")
+        .arg(&kc)
+        .arg("--out")
+        .arg(&sim)
+        .output()
+        .unwrap());
+    let text = std::fs::read_to_string(&sim).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "t,xr,zr,x,z,phase");
+    let last: Vec<f64> = lines
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    // at rest at the end: the CoM sits below the reference, carried by the spring
+    assert!(last[4] < last[2] && last.iter().all(|v| v.is_finite()));
+    let o = Command::new(bin)
+        .args(["compliant", "simulate", "--params", "1,2", "--reference"])
+        .arg(&reference)
+        .arg("--model")
+        .arg(&kc)
+        .arg("--out")
+        .arg(tmp("bad.csv"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("10 comma-separated"));
+}

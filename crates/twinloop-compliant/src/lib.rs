@@ -4,10 +4,13 @@
 //! |---|---|
 //! | eq 12-13: ZMP reference and LIPM CoM reference | [`zmp`] |
 //! | eq 7-8: Cartesian stiffness and damping at the CoM | [`stiffness`] |
+//! | eq 9-11, 14-17: compact CoM model with corrections | [`compact`] |
 
+pub mod compact;
 pub mod stiffness;
 pub mod zmp;
 
+pub use compact::{CompactModel, Corrections, SagittalCompliance, SagittalReference};
 pub use stiffness::{
     CartesianCompliance, JointCompliance, SupportLeg, cartesian_compliance, coman_crouch,
     support_leg_com_jacobian,
