@@ -1,0 +1,396 @@
+//! `twinloop compliant ...`: the compliant humanoid of seed 002 (COMAN).
+
+use crate::common::{EXIT_BAD_INPUT, load_robot, num, print};
+use clap::{Args, Subcommand, ValueEnum};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use twinloop_compliant::{
+    CompactModel, Corrections, JointCompliance, SagittalCompliance, SagittalReference, SupportLeg,
+    cartesian_compliance, coman_crouch,
+};
+use twinloop_dynamics::{Data, Model};
+use twinloop_io::{CsvWriter, Table};
+
+#[derive(Subcommand, Debug)]
+pub enum CompliantCommand {
+    /// Cartesian stiffness K_C and damping D_C at the CoM (seed 002, eq 7-8)
+    ///
+    /// K_C = J^-T K_j J^-1 and D_C = J^-T D_j J^-1, with J the support-leg Jacobian from
+    /// the sole frame to the CoM (linear rows) and the pelvis (angular rows), foot held,
+    /// in the foot frame, and K_j = diag(k_j): k_j = K_h K_s/(K_h + K_s) on the knee and
+    /// ankle pitch joints, K_h on the others. The pose is a flat-footed crouch
+    /// (KneeSag = --knee-bend, HipSag = AnkSag = -bend/2 on both legs), then --q overrides.
+    /// A stretched knee makes J singular: that is an error.
+    ///
+    /// Prints the x-z blocks (eq 11) and the 6x6 matrices; --json writes them with J and K_j.
+    ///
+    /// Example: twinloop compliant stiffness --urdf models/coman/coman.urdf --support left --json kc.json
+    Stiffness(StiffnessArgs),
+    /// Roll the compact CoM model (seed 002, eq 9-11, 14-17) along a reference
+    ///
+    /// x'' = eta1 (-a1 Kxx/m (x - xr) - b1 Kxz/m (z - zr) - g1 Dxx/m x' - e1 Dxz/m z'),
+    /// z'' = -g + eta2 (-a2 Kzx/m (x - xr) - b2 Kzz/m (z - zr) - g2 Dzx/m x' - e2 Dzz/m z'),
+    /// eta = 1 in single support; RK4 at the reference's sample times.
+    ///
+    /// Example: twinloop compliant simulate --reference ref.csv --model kc.json --table1 --out sim.csv
+    Simulate(SimulateArgs),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    Left,
+    Right,
+}
+
+#[derive(Args, Debug)]
+pub struct StiffnessArgs {
+    /// COMAN URDF.
+    #[arg(long, value_name = "FILE")]
+    pub urdf: PathBuf,
+    /// Support leg.
+    #[arg(long, value_enum, default_value_t = Side::Left)]
+    pub support: Side,
+    /// Knee bend of the crouched pose, rad.
+    #[arg(long, default_value_t = 0.5)]
+    pub knee_bend: f64,
+    /// Joint value override, NAME=RAD (repeatable).
+    #[arg(long = "q", value_name = "NAME=RAD")]
+    pub q: Vec<String>,
+    /// Harmonic-drive stiffness K_h, N m/rad.
+    #[arg(long, default_value_t = 8000.0)]
+    pub k_harmonic: f64,
+    /// Series spring stiffness K_s, N m/rad.
+    #[arg(long, default_value_t = 100.0)]
+    pub k_series: f64,
+    /// Damping of the stiff joints, N m s/rad (the seed gives no value).
+    #[arg(long, default_value_t = 1.0)]
+    pub d_stiff: f64,
+    /// Damping of the compliant joints, N m s/rad (the seed gives no value).
+    #[arg(long, default_value_t = 1.0)]
+    pub d_compliant: f64,
+    /// Write the result as JSON here.
+    #[arg(long, value_name = "OUT.json")]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct StiffnessReport {
+    urdf: String,
+    support: Side,
+    foot_frame: String,
+    mass: f64,
+    gravity: f64,
+    joints: Vec<String>,
+    joint_positions: Vec<f64>,
+    k_joint: Vec<f64>,
+    d_joint: Vec<f64>,
+    com_in_foot: [f64; 3],
+    inverse_condition: f64,
+    /// Rows x, y, z, wx, wy, wz; columns the leg joints.
+    jacobian: Vec<Vec<f64>>,
+    stiffness: Vec<Vec<f64>>,
+    damping: Vec<Vec<f64>>,
+    /// The entries of eq 11: Kxx, Kxz, Kzx, Kzz, Dxx, Dxz, Dzx, Dzz.
+    sagittal: Sagittal,
+    /// x-z stiffness under forces alone (pelvis free to turn), for comparison.
+    stiffness_xz_force_only: Option<[[f64; 2]; 2]>,
+}
+
+#[derive(Serialize)]
+#[allow(non_snake_case)]
+struct Sagittal {
+    Kxx: f64,
+    Kxz: f64,
+    Kzx: f64,
+    Kzz: f64,
+    Dxx: f64,
+    Dxz: f64,
+    Dzx: f64,
+    Dzz: f64,
+}
+
+fn fail(msg: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {msg}");
+    ExitCode::from(EXIT_BAD_INPUT)
+}
+
+fn rows(m: &nalgebra::Matrix6<f64>) -> Vec<Vec<f64>> {
+    (0..6)
+        .map(|r| (0..6).map(|c| m[(r, c)]).collect())
+        .collect()
+}
+
+pub fn run(cmd: CompliantCommand) -> ExitCode {
+    match cmd {
+        CompliantCommand::Stiffness(args) => stiffness(args),
+        CompliantCommand::Simulate(args) => simulate(args),
+    }
+}
+
+fn stiffness(args: StiffnessArgs) -> ExitCode {
+    let (robot, _) = match load_robot(&args.urdf) {
+        Ok(r) => r,
+        Err(code) => return code,
+    };
+    let model = match Model::from_robot(&robot) {
+        Ok(m) => m,
+        Err(e) => return fail(format!("{}: {e}", args.urdf.display())),
+    };
+    let mut q = match coman_crouch(&model, args.knee_bend) {
+        Ok(q) => q,
+        Err(e) => return fail(format!("{}: {e}", args.urdf.display())),
+    };
+    for item in &args.q {
+        let Some((name, value)) = item.split_once('=') else {
+            return fail(format!("--q {item}: expected NAME=RAD"));
+        };
+        let Some(i) = model.joint_index(name.trim()) else {
+            return fail(format!("--q {item}: the model has no joint named {name}"));
+        };
+        match value.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => q[model.q_offset + i] = v,
+            _ => return fail(format!("--q {item}: {value} is not a finite number")),
+        }
+    }
+    let leg = SupportLeg::coman(args.support == Side::Left);
+    let joints = JointCompliance {
+        k_harmonic: args.k_harmonic,
+        k_series: args.k_series,
+        d_stiff: args.d_stiff,
+        d_compliant: args.d_compliant,
+        ..JointCompliance::default()
+    };
+    let mut data = Data::new(&model);
+    let cc = match cartesian_compliance(&model, &mut data, &q, &leg, &joints) {
+        Ok(c) => c,
+        Err(e) => return fail(e),
+    };
+    let (k, d) = (cc.stiffness_xz(), cc.damping_xz());
+    let soft = cc.stiffness_xz_force_only();
+    let report = StiffnessReport {
+        urdf: args.urdf.display().to_string(),
+        support: args.support,
+        foot_frame: leg.foot_frame.clone(),
+        mass: model.total_mass,
+        gravity: 9.81,
+        joint_positions: leg
+            .joints
+            .iter()
+            .map(|j| q[model.q_offset + model.joint_index(j).unwrap_or(0)])
+            .collect(),
+        joints: leg.joints.to_vec(),
+        k_joint: cc.k_joint.iter().copied().collect(),
+        d_joint: cc.d_joint.iter().copied().collect(),
+        com_in_foot: cc.com_in_foot,
+        inverse_condition: cc.inverse_condition,
+        jacobian: rows(&cc.jacobian),
+        stiffness: rows(&cc.stiffness),
+        damping: rows(&cc.damping),
+        stiffness_xz_force_only: soft.map(|m| [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]]),
+        sagittal: Sagittal {
+            Kxx: k[(0, 0)],
+            Kxz: k[(0, 1)],
+            Kzx: k[(1, 0)],
+            Kzz: k[(1, 1)],
+            Dxx: d[(0, 0)],
+            Dxz: d[(0, 1)],
+            Dzx: d[(1, 0)],
+            Dzz: d[(1, 1)],
+        },
+    };
+    print(&format!(
+        "support {:?} ({}), mass {} kg, CoM in foot frame ({}, {}, {}) m\n\
+         K_C x-z [N/m]:   [[{}, {}], [{}, {}]]\n\
+         D_C x-z [N s/m]: [[{}, {}], [{}, {}]]\n",
+        args.support,
+        leg.foot_frame,
+        num(model.total_mass),
+        num(cc.com_in_foot[0]),
+        num(cc.com_in_foot[1]),
+        num(cc.com_in_foot[2]),
+        num(k[(0, 0)]),
+        num(k[(0, 1)]),
+        num(k[(1, 0)]),
+        num(k[(1, 1)]),
+        num(d[(0, 0)]),
+        num(d[(0, 1)]),
+        num(d[(1, 0)]),
+        num(d[(1, 1)]),
+    ));
+    if let Some(path) = &args.json {
+        let text = match serde_json::to_string_pretty(&report) {
+            Ok(t) => t,
+            Err(e) => return fail(format!("could not write JSON: {e}")),
+        };
+        if let Err(e) = std::fs::write(path, text + "\n") {
+            return fail(format!("{}: {e}", path.display()));
+        }
+    }
+    for (name, m) in [("K_C (6x6)", &cc.stiffness), ("D_C (6x6)", &cc.damping)] {
+        let mut text = format!("{name}, rows/columns x, y, z, wx, wy, wz:\n");
+        for r in 0..6 {
+            let row: Vec<String> = (0..6).map(|c| format!("{:>13}", num(m[(r, c)]))).collect();
+            text += &row.join(" ");
+            text += "\n";
+        }
+        print(&text);
+    }
+    ExitCode::SUCCESS
+}
+
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// Reference CSV with columns t, xr, zr, phase (from `twinloop zmp`); optional x, z
+    /// columns give the initial CoM, else the model starts at rest at its static
+    /// equilibrium under the first row's reference.
+    #[arg(long, value_name = "FILE.csv")]
+    pub reference: PathBuf,
+    /// The JSON written by `compliant stiffness --json` (mass, gravity, sagittal entries).
+    #[arg(long, value_name = "FILE.json")]
+    pub model: PathBuf,
+    /// The ten corrections alpha1,beta1,gamma1,epsilon1,alpha2,beta2,gamma2,epsilon2,eta1,eta2
+    /// (default all ones: eq 11 uncorrected).
+    #[arg(long, value_name = "P1,..,P10", conflicts_with = "table1")]
+    pub params: Option<String>,
+    /// Use seed 002's Table 1 corrections (eta1 = eta2 = 1).
+    #[arg(long)]
+    pub table1: bool,
+    /// Output CSV: t, xr, zr, x, z, phase.
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: PathBuf,
+}
+
+fn read_plant(path: &std::path::Path) -> Result<SagittalCompliance, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let get = |key: &str, v: &serde_json::Value| {
+        v.get(key)
+            .and_then(|x| x.as_f64())
+            .ok_or_else(|| format!("{}: missing number `{key}`", path.display()))
+    };
+    let s = v
+        .get("sagittal")
+        .ok_or_else(|| format!("{}: missing object `sagittal`", path.display()))?;
+    Ok(SagittalCompliance {
+        m: get("mass", &v)?,
+        g: get("gravity", &v)?,
+        Kxx: get("Kxx", s)?,
+        Kxz: get("Kxz", s)?,
+        Kzx: get("Kzx", s)?,
+        Kzz: get("Kzz", s)?,
+        Dxx: get("Dxx", s)?,
+        Dxz: get("Dxz", s)?,
+        Dzx: get("Dzx", s)?,
+        Dzz: get("Dzz", s)?,
+    })
+}
+
+fn simulate(args: SimulateArgs) -> ExitCode {
+    let plant = match read_plant(&args.model) {
+        Ok(p) => p,
+        Err(e) => return fail(e),
+    };
+    let corrections = if args.table1 {
+        Corrections::seed_table1()
+    } else if let Some(text) = &args.params {
+        let values: Result<Vec<f64>, _> =
+            text.split(',').map(|s| s.trim().parse::<f64>()).collect();
+        match values {
+            Ok(v) if v.len() == 10 => {
+                let mut a = [0.0; 10];
+                a.copy_from_slice(&v);
+                Corrections::from_slice(&a)
+            }
+            _ => {
+                return fail(format!(
+                    "--params {text}: expected 10 comma-separated numbers"
+                ));
+            }
+        }
+    } else {
+        Corrections::default()
+    };
+    let table = match Table::read(&args.reference) {
+        Ok(t) => t,
+        Err(e) => return fail(e),
+    };
+    let col = |name: &str| table.column_index(name);
+    let (Some(it), Some(ix), Some(iz), Some(ip)) = (col("t"), col("xr"), col("zr"), col("phase"))
+    else {
+        return fail(format!(
+            "{}: needs columns t, xr, zr, phase",
+            args.reference.display()
+        ));
+    };
+    let reference = SagittalReference {
+        t: table.rows.iter().map(|r| r[it]).collect(),
+        xr: table.rows.iter().map(|r| r[ix]).collect(),
+        zr: table.rows.iter().map(|r| r[iz]).collect(),
+        double_support: table.rows.iter().map(|r| r[ip] >= 0.5).collect(),
+    };
+    if let Err(e) = reference.validate() {
+        return fail(format!("{}: {e}", args.reference.display()));
+    }
+    let model = CompactModel { plant, corrections };
+    let (x0, z0) = match (col("x"), col("z")) {
+        (Some(a), Some(b)) => (table.rows[0][a], table.rows[0][b]),
+        _ => match model.equilibrium(
+            reference.xr[0],
+            reference.zr[0],
+            reference.double_support[0],
+        ) {
+            Some(e) => (e[0], e[1]),
+            None => return fail("the model's stiffness block is singular: no static equilibrium"),
+        },
+    };
+    let (mut x, mut z) = (Vec::new(), Vec::new());
+    let start = std::time::Instant::now();
+    if let Err(e) = model.rollout(&reference, x0, z0, &mut x, &mut z) {
+        return fail(e);
+    }
+    let elapsed = start.elapsed();
+    let columns: Vec<String> = ["t", "xr", "zr", "x", "z", "phase"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let mut writer = match CsvWriter::create(&args.out, &columns) {
+        Ok(w) => w,
+        Err(e) => return fail(e),
+    };
+    for i in 0..reference.t.len() {
+        let row = [
+            reference.t[i],
+            reference.xr[i],
+            reference.zr[i],
+            x[i],
+            z[i],
+            if reference.double_support[i] {
+                1.0
+            } else {
+                0.0
+            },
+        ];
+        if let Err(e) = writer.write_row(&row) {
+            return fail(e);
+        }
+    }
+    if let Err(e) = writer.finish() {
+        return fail(e);
+    }
+    let n = reference.t.len();
+    let rms = |a: &[f64], b: &[f64]| {
+        (a.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>() / a.len() as f64).sqrt()
+    };
+    print(&format!(
+        "{n} samples in {} ms ({} us per 1000 samples) -> {}\nrms deviation from the reference: x {} m, z {} m\n",
+        num(elapsed.as_secs_f64() * 1e3),
+        num(elapsed.as_secs_f64() * 1e6 * 1000.0 / n as f64),
+        args.out.display(),
+        num(rms(&x, &reference.xr)),
+        num(rms(&z, &reference.zr)),
+    ));
+    ExitCode::SUCCESS
+}
