@@ -242,7 +242,7 @@ fn stiffness(args: StiffnessArgs) -> ExitCode {
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
-    /// Reference CSV with columns t, xr, zr, phase (from `twinloop zmp`); optional x, z
+    /// Reference CSV with columns t, xr, zr, phase (from `twinloop gait zmp`); optional x, z
     /// columns give the initial CoM, else the model starts at rest at its static
     /// equilibrium under the first row's reference.
     #[arg(long, value_name = "FILE.csv")]

@@ -13,6 +13,16 @@ use twinloop_io::Table;
 
 #[derive(Subcommand)]
 pub enum GaitCommand {
+    /// ZMP walking reference and the LIPM CoM reference from a footstep plan (seed 002, eq 12-13)
+    ///
+    /// Feet alternate at y = -w/2 and +w/2, step j landing at x = j * sl; the ZMP holds the
+    /// support foot in single support and moves linearly between feet in double support.
+    /// The CoM solves x'' = (g/Zc)(x - p) exactly per phase (the bounded solution: the CoM
+    /// comes to rest over the final ZMP). Columns: t, zmp.x, zmp.y, xr, yr, zr, vxr, vyr,
+    /// axr, ayr, phase (0 single support, 1 double support).
+    ///
+    /// Example: twinloop gait zmp --step-length 0.03 --tss 0.5 --tdb 0.2 --steps 40 --com-height 0.5 --out ref.csv
+    Zmp(crate::cmd_zmp::ZmpArgs),
     /// Seed 003's 13-stage walking sequence (stages A..N) as joint goals over time
     ///
     /// The stages set the offsets of the ten Table 2 servos (ankle roll and pitch, knee,
@@ -22,7 +32,7 @@ pub enum GaitCommand {
     /// Example: twinloop gait sequence --robot builtin:lab17 --cycles 3 --out walk.csv
     ///
     /// Output: a CSV with `t` (s) and `q:<joint>` (goal joint angle, rad, lab17's joint
-    /// zero being the Table 2 trim) for all 17 joints; feed it to `twinloop simulate --goals`.
+    /// zero being the Table 2 trim) for all 17 joints; feed it to `twinloop simulate --trajectory`.
     Sequence(SequenceArgs),
     /// Record seed 003's identification dataset: the walk on lab17 in the simulator
     ///
@@ -189,6 +199,7 @@ fn dataset(a: &DatasetArgs) -> Result<(), String> {
 
 pub fn run(cmd: GaitCommand) -> ExitCode {
     let r = match cmd {
+        GaitCommand::Zmp(a) => return crate::cmd_zmp::run(a),
         GaitCommand::Sequence(a) => sequence(&a),
         GaitCommand::Dataset(a) => dataset(&a),
     };

@@ -1,4 +1,4 @@
-//! `twinloop zmp`: ZMP walking references and the LIPM CoM reference (seed 002, eq 12-13).
+//! `twinloop gait zmp`: ZMP walking references and the LIPM CoM reference (seed 002, eq 12-13).
 //!
 //! A top-level command (not `gait zmp`) so it does not clash with the `gait` group
 //! being added on another branch; it can move under `gait` when both merge.

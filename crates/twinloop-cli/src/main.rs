@@ -149,16 +149,6 @@ enum Command {
     /// Example: twinloop gait dataset --robot builtin:lab17 --amplitude 0.7 --out lab17_walk.csv
     #[command(subcommand)]
     Gait(cmd_gait::GaitCommand),
-    /// ZMP walking reference and the LIPM CoM reference from a footstep plan (seed 002, eq 12-13)
-    ///
-    /// Feet alternate at y = -w/2 and +w/2, step j landing at x = j * sl; the ZMP holds the
-    /// support foot in single support and moves linearly between feet in double support.
-    /// The CoM solves x'' = (g/Zc)(x - p) exactly per phase (the bounded solution: the CoM
-    /// comes to rest over the final ZMP). Columns: t, zmp.x, zmp.y, xr, yr, zr, vxr, vyr,
-    /// axr, ayr, phase (0 single support, 1 double support).
-    ///
-    /// Example: twinloop zmp --step-length 0.03 --tss 0.5 --tdb 0.2 --steps 40 --com-height 0.5 --out ref.csv
-    Zmp(cmd_zmp::ZmpArgs),
     /// The compliant humanoid of seed 002 (COMAN): Cartesian stiffness and damping at the CoM
     #[command(subcommand)]
     Compliant(cmd_compliant::CompliantCommand),
@@ -182,7 +172,6 @@ fn main() -> ExitCode {
         Command::Link(cmd) => cmd_link::run(cmd),
         Command::Serve(args) => cmd_link::serve(args),
         Command::Gait(cmd) => cmd_gait::run(cmd),
-        Command::Zmp(args) => cmd_zmp::run(args),
         Command::Compliant(cmd) => cmd_compliant::run(cmd),
     }
 }

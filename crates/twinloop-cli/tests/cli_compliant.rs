@@ -13,6 +13,7 @@ fn zmp_writes_the_seed_gait() {
     let out = tmp("ref.csv");
     let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
         .args([
+            "gait",
             "zmp",
             "--step-length",
             "0.03",
@@ -43,7 +44,7 @@ fn zmp_writes_the_seed_gait() {
 #[test]
 fn zmp_names_bad_input() {
     let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
-        .args(["zmp", "--com-height=-1", "--out"])
+        .args(["gait", "zmp", "--com-height=-1", "--out"])
         .arg(tmp("bad.csv"))
         .output()
         .unwrap();
@@ -111,7 +112,7 @@ fn compliant_simulate_rolls_the_compact_model_along_a_zmp_reference() {
         o
     };
     ok(Command::new(bin)
-        .args(["zmp", "--steps", "3", "--out"])
+        .args(["gait", "zmp", "--steps", "3", "--out"])
         .arg(&reference)
         .output()
         .unwrap());
