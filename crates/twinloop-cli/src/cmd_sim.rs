@@ -78,19 +78,20 @@ pub fn load_robot(spec: &str) -> Result<twinloop_model::Robot, String> {
     twinloop_robots::resolve(spec).map_err(|e| e.to_string())
 }
 
-/// The servo for one joint under a choice.
-fn servo_for(choice: ServoChoice, effort: f64, velocity: f64, robot_mass: f64) -> DynamixelServo {
-    let rpm = |x: f64| x * std::f64::consts::TAU / 60.0;
+/// The servo for joint `i` under a choice (`Auto`: the built-in robot's own, or one
+/// derived from the description's limits).
+fn servo_for(
+    choice: ServoChoice,
+    robot_name: &str,
+    model: &twinloop_dynamics::Model,
+    i: usize,
+) -> DynamixelServo {
     match choice {
         ServoChoice::Rx28 => DynamixelServo::rx28(),
         ServoChoice::Rx64 => DynamixelServo::rx64(),
-        ServoChoice::Xm430 => {
-            let mut s = DynamixelServo::with_rating(4.1, rpm(46.0));
-            s.compliance_slope = 0.19;
-            s.compliance_margin = 0.0;
-            s
-        }
-        ServoChoice::Auto => twinloop_sim::servo_from_limits(effort, velocity, robot_mass),
+        // An XM430 is what `servo_from_limits` assumes when the limits say nothing.
+        ServoChoice::Xm430 => twinloop_sim::servo_from_limits(f64::NAN, f64::NAN, 0.0),
+        ServoChoice::Auto => twinloop_experiments::servo_for_joint(robot_name, model, i),
     }
 }
 
@@ -105,14 +106,8 @@ pub fn standing_simulator(
         ..Default::default()
     };
     let mut sim = Simulator::new(robot, cfg).map_err(|e| e.to_string())?;
-    let mass = sim.model.total_mass;
     for i in 0..sim.model.nbodies {
-        let s = servo_for(
-            servo,
-            sim.model.effort_limits[i],
-            sim.model.velocity_limits[i],
-            mass,
-        );
+        let s = servo_for(servo, &robot.name, &sim.model, i);
         sim.actuators[i] = Actuator::Dynamixel(s);
     }
     let n = sim.model.nbodies;

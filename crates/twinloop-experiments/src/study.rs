@@ -154,7 +154,7 @@ fn ankle_names(robot: &Robot) -> Result<[String; 6], String> {
 
 /// The foot geometry measured on the model in the standing pose: sole points of the feet
 /// and ankle joint origins.
-fn measure_feet(sim: &mut Simulator, names: &[String; 6], feet: [usize; 2]) -> FootGeometry {
+fn measure_feet(sim: &Simulator, names: &[String; 6], feet: [usize; 2]) -> FootGeometry {
     let model = sim.model.clone();
     let mut data = Data::new(&model);
     let q = sim.q.clone();
@@ -214,6 +214,24 @@ fn measure_feet(sim: &mut Simulator, names: &[String; 6], feet: [usize; 2]) -> F
     }
 }
 
+/// The servo of joint `i`: a built-in robot's own (its datasheet rating, RX defaults
+/// otherwise), else one derived from the description's limits
+/// ([`twinloop_sim::servo_from_limits`]).
+pub fn servo_for_joint(
+    robot_name: &str,
+    model: &twinloop_dynamics::Model,
+    i: usize,
+) -> DynamixelServo {
+    match twinloop_robots::servo_of_joint(robot_name, &model.joint_names[i]) {
+        Some(spec) => DynamixelServo::with_rating(spec.stall_torque, spec.no_load_speed),
+        None => servo_from_limits(
+            model.effort_limits[i],
+            model.velocity_limits[i],
+            model.total_mass,
+        ),
+    }
+}
+
 /// Run the study on `robot` (a built-in robot gets its own servos and foot data).
 pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, String> {
     let mass = twinloop_dynamics::Model::from_robot(robot)
@@ -226,15 +244,7 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
     };
     let mut sim = Simulator::new(robot, cfg).map_err(err)?;
     for i in 0..sim.model.nbodies {
-        let joint = sim.model.joint_names[i].clone();
-        let mut servo = match twinloop_robots::servo_of_joint(&robot.name, &joint) {
-            Some(spec) => DynamixelServo::with_rating(spec.stall_torque, spec.no_load_speed),
-            None => servo_from_limits(
-                sim.model.effort_limits[i],
-                sim.model.velocity_limits[i],
-                mass,
-            ),
-        };
+        let mut servo = servo_for_joint(&robot.name, &sim.model, i);
         if let Some((slope, margin)) = opts.compliance_units {
             servo.compliance_slope = slope * twinloop_sim::actuator::RX_POSITION_UNIT;
             servo.compliance_margin = margin * twinloop_sim::actuator::RX_POSITION_UNIT;
@@ -281,7 +291,7 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
             (f, c, "the robot's own feet")
         }
         None => {
-            let f = measure_feet(&mut sim, &names, feet);
+            let f = measure_feet(&sim, &names, feet);
             let c = SeedConstants::from_foot(&f);
             (f, c, "the robot's own feet (measured)")
         }

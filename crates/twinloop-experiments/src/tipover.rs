@@ -139,6 +139,13 @@ pub fn run_direction<R: Robot + ?Sized>(
     cfg: &TipoverConfig,
     mut predict: Option<TiltPredictor<'_>>,
 ) -> Result<TipoverResult, RobotError> {
+    if standing.len() != robot.joint_names().len() {
+        return Err(RobotError::new(format!(
+            "the standing pose has {} joints, the robot {}",
+            standing.len(),
+            robot.joint_names().len()
+        )));
+    }
     let mut st = RobotState::default();
     let mut goals = standing.to_vec();
     robot.command_positions(&goals)?;
@@ -189,7 +196,9 @@ pub fn run_direction<R: Robot + ?Sized>(
     // History of (command, measured, time, excess) to find the onset afterwards, and
     // the joint positions of the recent past.
     let mut history: Vec<(f64, f64, f64, f64)> = Vec::new();
-    let mut positions: Vec<Vec<f64>> = Vec::new();
+    // Joint positions of every sample, flat (one row of `n` per sample).
+    let n = standing.len();
+    let mut positions: Vec<f64> = Vec::with_capacity(n * 4096);
     let rate = cfg.ramp_deg_per_s.to_radians();
     loop {
         let t = robot.time() - t_start;
@@ -217,7 +226,7 @@ pub fn run_direction<R: Robot + ?Sized>(
         let expect = predicted(&st, ankle) - p0;
         let excess = (body - expect) * lean_sign;
         history.push((cmd, ankle, robot.time() - t_start, excess));
-        positions.push(st.positions.clone());
+        positions.extend_from_slice(&st.positions[..n]);
         if excess > cfg.fall_deg.to_radians() {
             let w = ((cfg.onset_window_s / cfg.period_s).round() as usize).max(1);
             let onset = (w..history.len())
@@ -235,7 +244,7 @@ pub fn run_direction<R: Robot + ?Sized>(
                 measured_deg: m.abs().to_degrees(),
                 time_s: t,
                 fall_confirmed_s: robot.time() - t_start,
-                positions_at_onset: std::mem::take(&mut positions[onset]),
+                positions_at_onset: positions[onset * n..(onset + 1) * n].to_vec(),
             });
         }
     }
