@@ -22,11 +22,15 @@ pub struct TipoverArgs {
     /// Ankle ramp speed, deg/s.
     #[arg(long, default_value_t = 0.5)]
     pub ramp: f64,
-    /// Servo compliance slope during the experiment, Dynamixel RX units (2 = stiffest;
-    /// default 2, or 8 for km20, whose locked hips block the sideways lean at 2). The CoM
-    /// methods assume a rigid robot; stiffer servos bend less.
-    #[arg(long)]
-    pub compliance_slope: Option<f64>,
+    /// Servo compliance slope during the experiment, Dynamixel RX units (2 = stiffest,
+    /// the default). The CoM methods assume a rigid robot; stiffer servos bend less.
+    #[arg(long, default_value_t = 2.0)]
+    pub compliance_slope: f64,
+    /// Ramp speed of the second run's slow final approach, deg/s: each direction is run
+    /// twice, the second time up to half a degree before the first tip and then at this
+    /// speed, so the tip is seen with less lag.
+    #[arg(long, default_value_t = 0.05)]
+    pub slow_ramp: f64,
     /// Quantise the ankle readings like Dynamixel RX encoders (1024 counts over 300 deg).
     #[arg(long)]
     pub encoders: bool,
@@ -73,15 +77,8 @@ fn tipover_impl(a: &TipoverArgs) -> Result<(), String> {
     let opts = StudyOptions {
         ramp_deg_per_s: a.ramp,
         dynamixel_encoders: a.encoders,
-        compliance_units: Some((
-            a.compliance_slope
-                .unwrap_or(if robot.name == twinloop_robots::km20::NAME {
-                    8.0
-                } else {
-                    2.0
-                }),
-            0.0,
-        )),
+        slow_ramp_deg_per_s: a.slow_ramp,
+        compliance_units: Some((a.compliance_slope, 0.0)),
         ..Default::default()
     };
     eprintln!("running the four tip-overs in the simulator ...");
@@ -90,7 +87,7 @@ fn tipover_impl(a: &TipoverArgs) -> Result<(), String> {
         "{}: tip-over (ankle angles from the standing pose, deg)",
         r.robot
     );
-    println!("  direction  commanded  measured  static(model)  time(s)");
+    println!("  direction  commanded  measured  static(model)  feet-roll  time(s)");
     for (name, d) in [
         ("forward", &r.forward),
         ("backward", &r.backward),
@@ -98,8 +95,8 @@ fn tipover_impl(a: &TipoverArgs) -> Result<(), String> {
         ("right", &r.right),
     ] {
         println!(
-            "  {name:<9}  {:>9.3}  {:>8.3}  {:>13.3}  {:>7.2}",
-            d.commanded_deg, d.measured_deg, d.static_deg, d.time_s
+            "  {name:<9}  {:>9.3}  {:>8.3}  {:>13.3}  {:>9.3}  {:>7.2}",
+            d.commanded_deg, d.measured_deg, d.static_deg, d.excess_deg, d.time_s
         );
     }
     let f = |c: [f64; 3]| format!("[{:+.4}, {:+.4}, {:+.4}]", c[0], c[1], c[2]);
@@ -115,6 +112,10 @@ fn tipover_impl(a: &TipoverArgs) -> Result<(), String> {
         f(r.com.seed_method),
         r.com.seed_error * 1e3,
         r.seed_constants
+    );
+    println!(
+        "  sideways lever  {:.4} m (model {:.4} m)",
+        r.com.frontal_lever_exact, r.com.frontal_lever_true
     );
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?;

@@ -10,11 +10,12 @@ use serde::Serialize;
 use twinloop_dynamics::{BASE, Data};
 use twinloop_model::Robot;
 use twinloop_reduced::{
-    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, seed_method,
+    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, frontal_lever,
+    seed_method,
 };
 use twinloop_robot::RobotError;
 use twinloop_robots::FootGeometry;
-use twinloop_sim::statics::{FlatFeet, lean_signs};
+use twinloop_sim::statics::{FlatFeet, hip_lean_signs, lean_signs};
 use twinloop_sim::{
     Actuator, ContactParams, DynamixelServo, SimConfig, Simulator, servo_from_limits,
 };
@@ -27,6 +28,9 @@ pub struct StudyOptions {
     /// How far the robot's weight sinks into the ground, m (the ground's stiffness):
     /// small, because the static reference assumes rigid soles on a rigid floor.
     pub ground_sink: f64,
+    /// Ramp speed of the slow final approach, deg/s (see
+    /// [`TipoverConfig::slow_from_deg`]).
+    pub slow_ramp_deg_per_s: f64,
     /// Time step, s.
     pub dt: f64,
     /// Quantise joint readings like the robot's Dynamixel encoders (1024 over 300 deg).
@@ -42,6 +46,7 @@ impl Default for StudyOptions {
     fn default() -> Self {
         StudyOptions {
             ramp_deg_per_s: 0.5,
+            slow_ramp_deg_per_s: 0.05,
             ground_sink: 1e-5,
             dt: 1e-3,
             dynamixel_encoders: false,
@@ -58,6 +63,9 @@ pub struct DirectionReport {
     pub time_s: f64,
     /// The model's static tipping angle for the joints as they were at the onset, deg.
     pub static_deg: f64,
+    /// The robot's lean beyond what its joints explain at the onset (feet rolled onto
+    /// their edges), deg; the static angle accounts for it.
+    pub excess_deg: f64,
 }
 
 /// CoM estimates, m, relative to the midpoint of the ankle pitch joints in the
@@ -71,6 +79,10 @@ pub struct ComReport {
     /// Distance of each estimate from the true CoM, m.
     pub seed_error: f64,
     pub exact_error: f64,
+    /// The sideways lean's lever S (m; see `twinloop_reduced::FrontalLever`): the
+    /// model's, and what the exact method found beside the CoM.
+    pub frontal_lever_true: f64,
+    pub frontal_lever_exact: f64,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -150,6 +162,38 @@ fn ankle_names(robot: &Robot) -> Result<[String; 6], String> {
     let child = |j: &str| robot.joint(j).map(|j| j.child.clone()).unwrap_or_default();
     let (lf, rf) = (child(&lr), child(&rr));
     Ok([lp, rp, lr, rr, lf, rf])
+}
+
+/// The hip roll joints (left, right), found by name: `*hip*roll*` with a left/right
+/// prefix.
+fn hip_roll_names(robot: &Robot) -> Result<[String; 2], String> {
+    let find = |left: bool| -> Result<String, String> {
+        let hits: Vec<&str> = robot
+            .joints
+            .iter()
+            .map(|j| j.name.as_str())
+            .filter(|n| {
+                let l = n.to_lowercase();
+                let side = if left {
+                    l.starts_with('l') || l.contains("left")
+                } else {
+                    l.starts_with('r') || l.contains("right")
+                };
+                l.contains("hip") && l.contains("roll") && side
+            })
+            .collect();
+        match hits.as_slice() {
+            [one] => Ok(one.to_string()),
+            _ => Err(format!(
+                "cannot tell the {} hip roll joint of \"{}\" by name (candidates: {:?}); \
+                 the sideways lean turns the hip rolls with the ankle rolls",
+                if left { "left" } else { "right" },
+                robot.name,
+                hits
+            )),
+        }
+    };
+    Ok([find(true)?, find(false)?])
 }
 
 /// The foot geometry measured on the model in the standing pose: sole points of the feet
@@ -278,6 +322,8 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
             .ok_or_else(|| format!("no foot link \"{n}\" in \"{}\"", robot.name))
     };
     let feet = [link(&names[4])?, link(&names[5])?];
+    let hip_names = hip_roll_names(robot)?;
+    let (lh, rh) = (joint(&hip_names[0])?, joint(&hip_names[1])?);
     let sim_feet: Vec<&str> = vec![names[4].as_str(), names[5].as_str()];
     sim.set_feet(&sim_feet).map_err(err)?;
     let (foot, seed_constants, label) = match twinloop_robots::foot_geometry(&robot.name) {
@@ -309,53 +355,68 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
         points: &points,
         foot_world,
         held: 0,
+        tilt: 0.0,
     };
     let mut data = Data::new(&model);
     let mut q0 = model.neutral_configuration();
     q0[model.q_offset..].copy_from_slice(&standing);
     let fs = lean_signs(&model, &mut data, &q0, [lp, rp], Vector3::x());
     let ls = lean_signs(&model, &mut data, &q0, [lr, rr], Vector3::y());
+    let hs = hip_lean_signs(&model, &mut data, &q0, [lh, rh], Vector3::y());
     let mut cfg = TipoverConfig::new([lp, rp], [lr, rr], fs, ls);
+    cfg.hip_roll = Some([lh, rh]);
+    cfg.hip_left_sign = hs;
     cfg.ramp_deg_per_s = opts.ramp_deg_per_s;
     let imu_link = sim.sensors().imu_link;
     let mut results: Vec<(TipoverResult, f64)> = Vec::new();
     let mut pdata = Data::new(&model);
     for d in Direction::ALL {
         flat.held = usize::from(d == Direction::Right);
-        sim.place_on_ground(&standing).map_err(err)?;
-        let r = {
+        // A first run at the constant ramp (its time to fall is seed 000's Table IV
+        // quantity), then a second that comes up to half a degree before that tip and
+        // creeps (see `TipoverConfig::slow_from_deg`).
+        let mut run = |cfg: &TipoverConfig, sim: &mut Simulator| {
+            sim.place_on_ground(&standing).map_err(err)?;
             let mut predict = |j: &[f64]| flat.link_tilt(&mut pdata, j, imu_link);
-            run_direction(&mut sim, &standing, d, &cfg, Some(&mut predict))
-                .map_err(|e: RobotError| e.to_string())?
+            run_direction(sim, &standing, d, cfg, Some(&mut predict))
+                .map_err(|e: RobotError| e.to_string())
         };
-        let (ankles, signs, dir) = match d {
-            Direction::Forward => ([lp, rp], fs, Vector3::x()),
-            Direction::Backward => ([lp, rp], [-fs[0], -fs[1]], -Vector3::x()),
-            Direction::Left => ([lr, rr], ls, Vector3::y()),
-            Direction::Right => ([lr, rr], [-ls[0], -ls[1]], -Vector3::y()),
+        let first = run(&cfg, &mut sim)?;
+        let mut slow = cfg.clone();
+        slow.slow_from_deg = Some((first.commanded_deg - 0.5).max(0.0));
+        slow.slow_ramp_deg_per_s = opts.slow_ramp_deg_per_s;
+        let mut r = run(&slow, &mut sim)?;
+        r.time_s = first.time_s;
+        // The joints the protocol turns, with the sign that leans the robot the way of
+        // `d`: the static reference sweeps the same joints from the onset.
+        let (turned, dir): (Vec<(usize, f64)>, _) = match d {
+            Direction::Forward => (vec![(lp, fs[0]), (rp, fs[1])], Vector3::x()),
+            Direction::Backward => (vec![(lp, -fs[0]), (rp, -fs[1])], -Vector3::x()),
+            Direction::Left => (
+                vec![(lr, ls[0]), (rr, ls[1]), (lh, hs[0]), (rh, hs[1])],
+                Vector3::y(),
+            ),
+            Direction::Right => (
+                vec![(lr, -ls[0]), (rr, -ls[1]), (lh, -hs[0]), (rh, -hs[1])],
+                -Vector3::y(),
+            ),
         };
+        flat.tilt = r.excess_deg.to_radians();
         let offset = flat
-            .tipping_angle(
-                &mut data,
-                &r.positions_at_onset,
-                ankles,
-                signs,
-                dir,
-                -0.2,
-                0.2,
-            )
+            .tipping_angle(&mut data, &r.positions_at_onset, &turned, dir, -0.2, 0.2)
             .map(f64::to_degrees)
             .unwrap_or(f64::NAN);
         results.push((r.clone(), r.measured_deg + offset));
     }
     // The CoM by the two estimators from the measured angles, and the truth.
-    let deg = |d: Direction| {
+    let pick = |d: Direction, f: fn(&TipoverResult) -> f64| {
         results
             .iter()
             .find(|r| r.0.direction == d)
-            .map(|r| r.0.measured_deg)
+            .map(|r| f(&r.0))
             .unwrap_or(f64::NAN)
     };
+    let deg = |d: Direction| pick(d, |r| r.measured_deg);
     let (f, b, l, r) = (
         deg(Direction::Forward),
         deg(Direction::Backward),
@@ -372,7 +433,27 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
         &seed_constants,
     )
     .map_err(err)?;
-    let exact = exact_method(&TipAngles::from_degrees(f, b, l, r), &foot).map_err(err)?;
+    // The exact method takes what the robot's own sensors give of its lean: forward
+    // and backward the trunk's lean (the IMU: the ankle angle plus what the other
+    // joints and the feet gave under the load), sideways the legs' angle (the ankle
+    // rolls) and the feet's roll onto their edges (the IMU's tilt beyond the joints).
+    let rad = std::f64::consts::PI / 180.0;
+    let angles = TipAngles {
+        forward: pick(Direction::Forward, |r| r.lean_deg) * rad,
+        backward: pick(Direction::Backward, |r| r.lean_deg) * rad,
+        left: l * rad,
+        right: r * rad,
+        left_roll: pick(Direction::Left, |r| r.excess_deg) * rad,
+        right_roll: pick(Direction::Right, |r| r.excess_deg) * rad,
+    };
+    let exact = exact_method(&angles, &foot).map_err(err)?;
+    let lever = frontal_lever(
+        &model,
+        &q0,
+        [&hip_names[0], &hip_names[1]],
+        [&names[2], &names[3]],
+    )
+    .map_err(err)?;
     let truth =
         twinloop_reduced::com_relative_to_ankles(&model, &q0, &names[0], &names[1]).map_err(err)?;
     let dist = |a: [f64; 3]| {
@@ -388,6 +469,7 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
             measured_deg: r.measured_deg,
             time_s: r.time_s,
             static_deg: *s,
+            excess_deg: r.excess_deg,
         }
     };
     Ok(StudyReport {
@@ -402,6 +484,8 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
             exact_method: exact.com,
             seed_error: dist(seed.com),
             exact_error: dist(exact.com),
+            frontal_lever_true: lever.sin,
+            frontal_lever_exact: exact.frontal_lever,
         },
         seed_constants: label.to_string(),
         foot: FootReport {

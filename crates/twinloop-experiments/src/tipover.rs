@@ -60,8 +60,26 @@ pub struct TipoverConfig {
     /// per ankle joint; depends on the robot's joint axes.
     pub forward_sign: [f64; 2],
     pub left_sign: [f64; 2],
+    /// Hip roll joints (left, right) turned with the ankle rolls in the sideways lean,
+    /// and the sign of each hip command that leans its leg to the left, so the legs move
+    /// as a parallelogram: both feet stay flat and the pelvis stays level while it moves
+    /// sideways. `None` turns the ankle rolls alone (then, with the hips held, the two
+    /// legs, the pelvis and the ground form a closed chain that cannot lean: two
+    /// parallel ankle axes at different places cannot both be the axis the rigid upper
+    /// body turns about, and the robot rocks onto its sole edges instead).
+    pub hip_roll: Option<[usize; 2]>,
+    pub hip_left_sign: [f64; 2],
     /// Ramp speed of the ankle command, deg/s (seed 000's falls took 5-15 s over 7-24 deg).
     pub ramp_deg_per_s: f64,
+    /// Slow final approach: beyond this ankle command (deg) the ramp continues at
+    /// `slow_ramp_deg_per_s`. A tip is seen only once the robot has started to fall
+    /// away, about 1.6 fall time constants (`sqrt(I/(m g r))`, 0.15-0.2 s on a
+    /// kid-size robot) after the CoM passed the edge, and the ankle keeps turning
+    /// meanwhile: 0.15 deg at 0.5 deg/s, enough to move the exact method's CoM by a
+    /// millimetre. A second run that comes up to just before the first run's tip and
+    /// then creeps makes that lag ten times smaller.
+    pub slow_from_deg: Option<f64>,
+    pub slow_ramp_deg_per_s: f64,
     /// Time to stand still before the ramp, s.
     pub settle_s: f64,
     /// Control period, s.
@@ -88,7 +106,11 @@ impl TipoverConfig {
             ankle_roll,
             forward_sign,
             left_sign,
+            hip_roll: None,
+            hip_left_sign: [0.0; 2],
             ramp_deg_per_s: 1.5,
+            slow_from_deg: None,
+            slow_ramp_deg_per_s: 0.05,
             settle_s: 1.0,
             period_s: 0.005,
             fall_deg: 5.0,
@@ -111,6 +133,13 @@ pub struct TipoverResult {
     pub time_s: f64,
     /// Time from the start of the ramp until the fall was confirmed, s.
     pub fall_confirmed_s: f64,
+    /// How far the robot leaned beyond what its joints explain at the onset, deg: the
+    /// feet rolled onto their edges (servo deflection; the IMU tilt minus the tilt the
+    /// joints give with the feet flat).
+    pub excess_deg: f64,
+    /// The trunk's lean from the standing pose at the onset (IMU), deg, in the lean
+    /// direction: the ankle angle plus the give of the feet and of every other joint.
+    pub lean_deg: f64,
     /// Every joint's measured position at the onset (rad), for analysis.
     #[serde(skip)]
     pub positions_at_onset: Vec<f64>,
@@ -195,14 +224,17 @@ pub fn run_direction<R: Robot + ?Sized>(
     let t_start = robot.time();
     // History of (command, measured, time, excess) to find the onset afterwards, and
     // the joint positions of the recent past.
-    let mut history: Vec<(f64, f64, f64, f64)> = Vec::new();
+    let mut history: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
     // Joint positions of every sample, flat (one row of `n` per sample).
     let n = standing.len();
     let mut positions: Vec<f64> = Vec::with_capacity(n * 4096);
     let rate = cfg.ramp_deg_per_s.to_radians();
     loop {
         let t = robot.time() - t_start;
-        let cmd = rate * t;
+        let cmd = match cfg.slow_from_deg.map(f64::to_radians) {
+            Some(a) if rate * t > a => a + cfg.slow_ramp_deg_per_s.to_radians() * (t - a / rate),
+            _ => rate * t,
+        };
         if cmd > cfg.max_deg.to_radians() {
             return Err(RobotError::new(format!(
                 "no fall {} within {} deg of ankle command",
@@ -212,6 +244,11 @@ pub fn run_direction<R: Robot + ?Sized>(
         }
         for k in 0..2 {
             goals[joints[k]] = standing[joints[k]] + signs[k] * dir_sign * cmd;
+        }
+        if let (false, Some(hips)) = (direction.is_pitch(), cfg.hip_roll) {
+            for k in 0..2 {
+                goals[hips[k]] = standing[hips[k]] + cfg.hip_left_sign[k] * dir_sign * cmd;
+            }
         }
         robot.command_positions(&goals)?;
         robot.advance(cfg.period_s)?;
@@ -225,7 +262,7 @@ pub fn run_direction<R: Robot + ?Sized>(
         let body = tilt_now(&st, gyro_tilt)? - t0_tilt;
         let expect = predicted(&st, ankle) - p0;
         let excess = (body - expect) * lean_sign;
-        history.push((cmd, ankle, robot.time() - t_start, excess));
+        history.push((cmd, ankle, robot.time() - t_start, excess, body * lean_sign));
         positions.extend_from_slice(&st.positions[..n]);
         if excess > cfg.fall_deg.to_radians() {
             let w = ((cfg.onset_window_s / cfg.period_s).round() as usize).max(1);
@@ -237,12 +274,14 @@ pub fn run_direction<R: Robot + ?Sized>(
                     excess_rate <= cfg.onset_ratio * ankle_rate.max(0.0)
                 })
                 .unwrap_or(0);
-            let (c, m, t, _) = history[onset];
+            let (c, m, t, e, lean) = history[onset];
             return Ok(TipoverResult {
                 direction,
                 commanded_deg: c.to_degrees(),
                 measured_deg: m.abs().to_degrees(),
                 time_s: t,
+                excess_deg: e.to_degrees(),
+                lean_deg: lean.to_degrees(),
                 fall_confirmed_s: robot.time() - t_start,
                 positions_at_onset: positions[onset * n..(onset + 1) * n].to_vec(),
             });

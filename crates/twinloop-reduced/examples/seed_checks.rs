@@ -6,8 +6,8 @@
 use nalgebra::{Rotation3, Vector3};
 use twinloop_dynamics::Model;
 use twinloop_reduced::tipover::{
-    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, seed_method,
-    seed_method_sagittal_angles, tip_angles,
+    FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method,
+    frontal_lever, sagittal_tip_angles, seed_method, seed_method_sagittal_angles, tip_angles,
 };
 use twinloop_reduced::{
     LegMotion, Lipm, Plane, PointMass, ThreeMassLipm, ThreeMasses, com_relative_to_ankles,
@@ -42,6 +42,18 @@ fn err_mm(a: [f64; 3], b: [f64; 3]) -> String {
     )
 }
 
+/// The frontal lever of the parallelogram sideways lean (hip rolls turned with the
+/// ankle rolls), from the model.
+fn model_lever(model: &Model, q: &[f64]) -> FrontalLever {
+    frontal_lever(
+        model,
+        q,
+        ["l_hip_roll", "r_hip_roll"],
+        ["l_ank_roll", "r_ank_roll"],
+    )
+    .unwrap()
+}
+
 /// Standing model: CoM relative to the ankles, three masses, tip angles, both estimators.
 fn robot_report(robot: &twinloop_model::Robot, foot: &FootGeometry, hips: (&str, &str)) {
     let model = Model::from_robot(robot).unwrap();
@@ -58,7 +70,8 @@ fn robot_report(robot: &twinloop_model::Robot, foot: &FootGeometry, hips: (&str,
     let three = ThreeMasses::from_model(&model, &q, hips.0, hips.1)
         .unwrap()
         .relative_to(mid);
-    let a = tip_angles(com, foot).unwrap();
+    let lever = model_lever(&model, &q);
+    let a = tip_angles(com, &lever, foot).unwrap();
     let d = a.to_degrees();
     let exact = exact_method(&a, foot).unwrap();
     let seed = seed_method(&seed_angles(&a), &SeedConstants::from_foot(foot)).unwrap();
@@ -80,10 +93,12 @@ fn robot_report(robot: &twinloop_model::Robot, foot: &FootGeometry, hips: (&str,
         d[0], d[1], d[2], d[3]
     );
     println!(
-        "  exact method {} (error mm {}), z from left/right {:.2} cm",
+        "  exact method {} (error mm {}), frontal lever {:.2} cm (model {:.2} cm, C {:.3} cm)",
         cm(exact.com),
         err_mm(exact.com, com),
-        exact.z_frontal * 100.0
+        exact.frontal_lever * 100.0,
+        lever.sin * 100.0,
+        lever.cos * 100.0
     );
     println!(
         "  seed method  {} (error mm {}); L1 {:.2} cm, gamma1 {:.2} deg",
@@ -126,7 +141,8 @@ fn seed_001() {
         ),
     ];
     for (name, com) in readings {
-        let a = tip_angles(com, &foot).unwrap().to_degrees();
+        let (f, b) = sagittal_tip_angles(com[0], com[2], &foot).unwrap();
+        let a = [f.to_degrees(), b.to_degrees()];
         let s = seed_method_sagittal_angles(com[0], com[2], &SEED_000_CONSTANTS);
         let s = match s {
             Ok((f, b)) => format!("forward {f:.2}, backward {b:.2}"),
@@ -148,7 +164,7 @@ fn seed_001() {
             &SEED_000_CONSTANTS,
         )
         .unwrap();
-        let e = exact_method(&TipAngles::from_degrees(f, b, 10.0, 10.0), &foot).unwrap();
+        let e = exact_method(&TipAngles::from_degrees(f, b, 28.0, 28.0), &foot).unwrap();
         println!(
             "angles {f}/{b} ({name}): seed method x {:.2} z {:.2} cm; exact method x {:.2} z {:.2} cm",
             s.com[0] * 100.0,
@@ -214,11 +230,8 @@ fn seed_000_table_v() {
     for (label, t2, t3, v3, vl) in rows {
         let angles = |p: [f64; 3], sign: f64| {
             let com = [sign * p[2] / 100.0, p[1] / 100.0, p[0] / 100.0];
-            match tip_angles(com, &foot) {
-                Ok(a) => {
-                    let d = a.to_degrees();
-                    format!("{:.2}/{:.2}", d[0], d[1])
-                }
+            match sagittal_tip_angles(com[0], com[2], &foot) {
+                Ok((f, b)) => format!("{:.2}/{:.2}", f.to_degrees(), b.to_degrees()),
                 Err(e) => format!("- ({})", e.field),
             }
         };
@@ -291,7 +304,7 @@ fn km20_batteries() {
         let three = ThreeMasses::from_model(&model, &q, "l_hip_yaw", "r_hip_yaw")
             .unwrap()
             .relative_to(mid);
-        let a = tip_angles(com, &foot).unwrap();
+        let a = tip_angles(com, &model_lever(&model, &q), &foot).unwrap();
         let d = a.to_degrees();
         let seed = seed_method(&seed_angles(&a), &SEED_000_CONSTANTS).unwrap();
         let exact = exact_method(&a, &foot).unwrap();

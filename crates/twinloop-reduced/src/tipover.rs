@@ -17,14 +17,29 @@
 //! Geometry (see [`twinloop_robots::FootGeometry`]): leaning forward or backward, the
 //! body turns about the common line of the ankle pitch axes (x = 0, z = 0 here) with
 //! both feet flat, and tips over the sole's front edge at x = +F1 or back edge at
-//! x = -F2. Leaning left, the body turns about the left ankle roll axis (y = +d, at the
-//! roll axis height) standing on the flat left foot (the right foot has lifted, as it
-//! must: two feet turned by the same ankle roll angle cannot both lie flat), and tips
-//! over its outer edge at y = d + outer; leaning right likewise about the right ankle.
-//! A lean angle is the angle between the body and the foot it stands on, which is the
-//! ankle joint angle measured from the standing pose.
+//! x = -F2.
+//!
+//! Leaning sideways cannot work that way. The two ankle roll axes are parallel but at
+//! different places, and a rigid upper body cannot turn about both at once: with the
+//! hips held, two flat feet, two legs, the pelvis and the ground form a closed chain
+//! that does not move, and a robot whose ankle rolls alone are turned rocks onto its
+//! sole edges instead of leaning. The sideways protocol therefore turns each hip roll
+//! with its ankle roll by the same angle (what a robot's compliant hips do on their
+//! own): the legs move as a parallelogram, both feet stay flat, the pelvis stays level
+//! and slides sideways and down. The feet do not move, each leg link turns about its
+//! ankle roll axis, everything above the hip rolls translates by the leg's length:
+//! `y(theta) = y0 + S sin(theta) - C (1 - cos(theta))`, where S (the frontal lever,
+//! [`frontal_lever`]) is the mass-weighted height of the leg links above their ankle
+//! roll axes plus the leg length for the mass above the hips, and C the mass-weighted
+//! lateral offset of the leg links from their own ankle axes (zero for mirror-image
+//! legs). The robot tips over the outer edge of the leading foot, at
+//! `y = +-(d + outer)` from the mid-plane, so the left and right leg angles give two
+//! equations for `y0` and `S`. Sideways the experiment measures the CoM's lateral
+//! offset and the lever, not a second height: the height does not enter a
+//! parallelogram lean except through S.
 
 use crate::error::{ReducedError, finite, positive};
+use twinloop_dynamics::{BASE, Data, Model, forward_kinematics};
 use twinloop_robots::FootGeometry;
 
 /// Seed 000 eq. 8: the four tip angles in degrees, from raw Dynamixel positions (1024
@@ -213,17 +228,29 @@ pub fn seed_method_sagittal_angles(
     Ok((beta1 - 2.0 * gamma1, beta1))
 }
 
-/// The four tip angles of the exact method, in radians: the lean of the body relative
-/// to the foot it stands on at the moment of tipping, each a positive magnitude.
+/// The four tip angles of the exact method, in radians, each a positive magnitude:
+/// forward and backward, the lean of the body relative to the flat feet (the ankle
+/// pitch angle for a rigid robot); left and right, the legs' lean in the parallelogram
+/// (the ankle roll angle).
+///
+/// A real robot is not rigid: its other joints give a little under the leaning load
+/// and its feet roll onto the sole edge before the tip. `left_roll` and `right_roll`
+/// are the feet's roll onto their outer edges at the sideways tips (rad, zero for
+/// flat feet), which turns the whole robot about that edge; forward and backward, the
+/// body's lean as the trunk's inclinometer sees it already includes the feet's and
+/// the joints' give.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TipAngles {
     pub forward: f64,
     pub backward: f64,
     pub left: f64,
     pub right: f64,
+    pub left_roll: f64,
+    pub right_roll: f64,
 }
 
 impl TipAngles {
+    /// From degrees, feet flat (no roll).
     pub fn from_degrees(forward: f64, backward: f64, left: f64, right: f64) -> TipAngles {
         let r = std::f64::consts::PI / 180.0;
         TipAngles {
@@ -231,9 +258,12 @@ impl TipAngles {
             backward: backward * r,
             left: left * r,
             right: right * r,
+            left_roll: 0.0,
+            right_roll: 0.0,
         }
     }
 
+    /// `[forward, backward, left, right]` in degrees.
     pub fn to_degrees(&self) -> [f64; 4] {
         let d = 180.0 / std::f64::consts::PI;
         [
@@ -245,181 +275,310 @@ impl TipAngles {
     }
 }
 
+/// How the CoM moves in the parallelogram sideways lean (see the module
+/// documentation): `y(theta) = y0 + sin * sin(theta) - cos * (1 - cos(theta))`, m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrontalLever {
+    /// S: mass-weighted height of the leg links above their ankle roll axes, the mass
+    /// above the hip rolls counted at the leg length, over the total mass.
+    pub sin: f64,
+    /// C: mass-weighted lateral offset of the leg links from their ankle roll axes
+    /// (towards +y), over the total mass; zero for mirror-image legs.
+    pub cos: f64,
+}
+
+/// The frontal lever of a model in configuration `q` (straight legs, the hip and ankle
+/// roll axes parallel): each link's mass and CoM placed by forward kinematics; the
+/// links below an ankle roll joint (the feet) stay, the links between a hip roll and
+/// its ankle roll turn about the ankle roll axis, all the rest translates with the
+/// pelvis by the leg length (hip roll axis above ankle roll axis).
+pub fn frontal_lever(
+    model: &Model,
+    q: &[f64],
+    hip_roll: [&str; 2],
+    ankle_roll: [&str; 2],
+) -> Result<FrontalLever, ReducedError> {
+    if q.len() != model.nq {
+        return Err(ReducedError::new(
+            "q",
+            format!("has {} entries, the model {}", q.len(), model.nq),
+        ));
+    }
+    let joint = |field: &str, name: &str| {
+        model.joint_index(name).ok_or_else(|| {
+            ReducedError::new(
+                field,
+                format!("the model \"{}\" has no joint \"{name}\"", model.name),
+            )
+        })
+    };
+    let hips = [
+        joint("hip_roll", hip_roll[0])?,
+        joint("hip_roll", hip_roll[1])?,
+    ];
+    let ankles = [
+        joint("ankle_roll", ankle_roll[0])?,
+        joint("ankle_roll", ankle_roll[1])?,
+    ];
+    let inside = |root: usize, i: usize| i != BASE && model.ancestors(i).any(|a| a == root);
+    for k in 0..2 {
+        if !inside(hips[k], ankles[k]) {
+            return Err(ReducedError::new(
+                "ankle_roll",
+                format!(
+                    "\"{}\" is not below \"{}\" in the model",
+                    ankle_roll[k], hip_roll[k]
+                ),
+            ));
+        }
+    }
+    let mut data = Data::new(model);
+    forward_kinematics(model, &mut data, q);
+    let origin = |j: usize| data.o_m_i[j].translation;
+    let legs = [
+        origin(hips[0]).z - origin(ankles[0]).z,
+        origin(hips[1]).z - origin(ankles[1]).z,
+    ];
+    if (legs[0] - legs[1]).abs() > 1e-3 {
+        return Err(ReducedError::new(
+            "hip_roll",
+            format!(
+                "the legs are {:.4} and {:.4} m long: unequal legs cannot lean as a parallelogram",
+                legs[0], legs[1]
+            ),
+        ));
+    }
+    let leg = 0.5 * (legs[0] + legs[1]);
+    let (mut mass, mut s, mut c) = (0.0, 0.0, 0.0);
+    for link in &model.links {
+        if link.body == BASE && !model.is_floating() {
+            continue;
+        }
+        let body = if link.body == BASE {
+            data.base_placement
+        } else {
+            data.o_m_i[link.body]
+        };
+        let p = (body * link.placement).act_point(&link.inertia.com);
+        let m = link.inertia.mass;
+        mass += m;
+        let side = (0..2).find(|&k| inside(hips[k], link.body));
+        match side {
+            Some(k) if inside(ankles[k], link.body) => {}
+            Some(k) => {
+                let a = origin(ankles[k]);
+                s += m * (p.z - a.z);
+                c += m * (p.y - a.y);
+            }
+            None => s += m * leg,
+        }
+    }
+    positive("model.total_mass", mass)?;
+    Ok(FrontalLever {
+        sin: s / mass,
+        cos: c / mass,
+    })
+}
+
 /// The CoM from the exact method.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ExactEstimate {
     /// `[x, y, z]`, m, relative to the midpoint of the ankle pitch axes: x and z from the
     /// forward/backward pair, y from the left/right pair.
     pub com: [f64; 3],
-    /// The height the left/right pair gives (a second estimate of `com[2]`).
-    pub z_frontal: f64,
+    /// The frontal lever S the left/right pair gives (see [`FrontalLever`]).
+    pub frontal_lever: f64,
 }
 
-/// One tipping direction in a plane: the body turns about a pivot axis at horizontal
-/// `pivot` and height `pivot_height` (relative to the reference), and tips when the
-/// CoM passes above the sole edge at horizontal `edge`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Tip {
-    pivot: f64,
-    pivot_height: f64,
-    edge: f64,
-}
-
-impl Tip {
-    /// +1 if the edge is on the + side of the pivot.
-    fn side(&self) -> f64 {
-        (self.edge - self.pivot).signum()
-    }
-}
-
-/// The four tipping directions of a foot geometry: forward, backward, left, right.
-fn tips(foot: &FootGeometry) -> Result<[Tip; 4], ReducedError> {
+fn check_foot(foot: &FootGeometry) -> Result<(), ReducedError> {
     positive("foot.front", foot.front)?;
     positive("foot.back", foot.back)?;
     positive("foot.outer", foot.outer)?;
     finite("foot.ankle_half_spacing", foot.ankle_half_spacing)?;
     finite("foot.ankle_height", foot.ankle_height)?;
-    finite("foot.roll_axis_height", foot.roll_axis_height)?;
-    let d = foot.ankle_half_spacing;
-    let zr = foot.roll_axis_height - foot.ankle_height;
-    Ok([
-        Tip {
-            pivot: 0.0,
-            pivot_height: 0.0,
-            edge: foot.front,
-        },
-        Tip {
-            pivot: 0.0,
-            pivot_height: 0.0,
-            edge: -foot.back,
-        },
-        Tip {
-            pivot: d,
-            pivot_height: zr,
-            edge: d + foot.outer,
-        },
-        Tip {
-            pivot: -d,
-            pivot_height: zr,
-            edge: -d - foot.outer,
-        },
-    ])
+    Ok(())
 }
 
-/// The lean (rad) at which a CoM at horizontal `s`, height `z` tips over `tip`'s edge:
-/// turning the body by theta about the pivot towards the edge moves the CoM to
-/// `pivot + (s - pivot) cos(theta) + side (z - pivot_height) sin(theta)`; it tips when
-/// that reaches the edge. With `A = side (s - pivot)` (offset towards the edge),
-/// `B = z - pivot_height`, `C = |edge - pivot|`: `A cos + B sin = C`, i.e.
-/// `theta = atan2(B, A) - acos(C / hypot(A, B))`.
-fn tip_angle(s: f64, z: f64, tip: &Tip, field: &str) -> Result<f64, ReducedError> {
-    let side = tip.side();
-    let a = side * (s - tip.pivot);
-    let b = z - tip.pivot_height;
-    let c = (tip.edge - tip.pivot).abs();
+/// The lean (rad) at which a CoM at forward offset `s` and height `z` above the ankle
+/// pitch axis tips over the sole edge at `edge` (+F1 or -F2): turning the body by theta
+/// about the axis towards the edge moves the CoM to `s cos(theta) + side z sin(theta)`;
+/// with `A = side s`, `C = |edge|`: `A cos + z sin = C`,
+/// `theta = atan2(z, A) - acos(C / hypot(A, z))`.
+fn sagittal_tip(s: f64, z: f64, edge: f64, field: &str) -> Result<f64, ReducedError> {
+    let a = edge.signum() * s;
+    let c = edge.abs();
     if a > c {
         return Err(ReducedError::new(
             field,
             "the CoM is already beyond this sole edge: the robot cannot stand",
         ));
     }
-    if b <= 0.0 {
+    if z <= 0.0 {
         return Err(ReducedError::new(
             field,
             "the CoM is not above the pivot axis: leaning never tips it this way",
         ));
     }
-    let r = a.hypot(b);
+    let r = a.hypot(z);
     if r < c {
         return Err(ReducedError::new(
             field,
             "the CoM is too close to the pivot axis to ever pass above this sole edge",
         ));
     }
-    Ok(b.atan2(a) - (c / r).acos())
+    Ok(z.atan2(a) - (c / r).acos())
 }
 
-/// The static tip angles (rad) of a rigid robot with CoM `com` (m, relative to the
-/// midpoint of the ankle pitch axes, x forward, y left, z up) standing on `foot`: the
-/// forward problem of [`exact_method`].
-pub fn tip_angles(com: [f64; 3], foot: &FootGeometry) -> Result<TipAngles, ReducedError> {
-    for (k, axis) in ["com.x", "com.y", "com.z"].iter().enumerate() {
-        finite(axis, com[k])?;
-    }
-    let [f, b, l, r] = tips(foot)?;
+/// The static forward and backward tip angles (rad) of a rigid robot with its CoM at
+/// forward offset `x` and height `z` above the ankle pitch axes.
+pub fn sagittal_tip_angles(
+    x: f64,
+    z: f64,
+    foot: &FootGeometry,
+) -> Result<(f64, f64), ReducedError> {
+    finite("com.x", x)?;
+    finite("com.z", z)?;
+    check_foot(foot)?;
+    Ok((
+        sagittal_tip(x, z, foot.front, "forward")?,
+        sagittal_tip(x, z, -foot.back, "backward")?,
+    ))
+}
+
+/// The static left and right leg angles (rad) at which the parallelogram lean tips a
+/// robot whose CoM is `y` to the left of the mid-plane: `y(theta)` reaches the outer
+/// edge `E = d + outer`. Left: `S sin + C cos = E - y + C`; right (theta turned the
+/// other way): `S sin - C cos = E + y - C`; with `R = hypot(S, C)`, `phi = atan2(C, S)`:
+/// `theta = asin((E - y + C) / R) - phi` and `asin((E + y - C) / R) + phi`.
+pub fn frontal_tip_angles(
+    y: f64,
+    lever: &FrontalLever,
+    foot: &FootGeometry,
+) -> Result<(f64, f64), ReducedError> {
+    finite("com.y", y)?;
+    positive("lever.sin", lever.sin)?;
+    finite("lever.cos", lever.cos)?;
+    check_foot(foot)?;
+    let e = foot.ankle_half_spacing + foot.outer;
+    let r = lever.sin.hypot(lever.cos);
+    let phi = lever.cos.atan2(lever.sin);
+    let angle = |u: f64, field: &str| {
+        if u < 0.0 {
+            return Err(ReducedError::new(
+                field,
+                "the CoM is already beyond this sole edge: the robot cannot stand",
+            ));
+        }
+        if u > r {
+            return Err(ReducedError::new(
+                field,
+                "the lever is too short for the CoM ever to reach this sole edge",
+            ));
+        }
+        Ok((u / r).asin())
+    };
+    Ok((
+        angle(e - y + lever.cos, "left")? - phi,
+        angle(e + y - lever.cos, "right")? + phi,
+    ))
+}
+
+/// The static tip angles (rad) of a robot with CoM `com` (m, relative to the midpoint of
+/// the ankle pitch axes, x forward, y left, z up) and frontal lever `lever`, standing on
+/// `foot`, feet flat: the forward problem of [`exact_method`].
+pub fn tip_angles(
+    com: [f64; 3],
+    lever: &FrontalLever,
+    foot: &FootGeometry,
+) -> Result<TipAngles, ReducedError> {
+    let (forward, backward) = sagittal_tip_angles(com[0], com[2], foot)?;
+    let (left, right) = frontal_tip_angles(com[1], lever, foot)?;
     Ok(TipAngles {
-        forward: tip_angle(com[0], com[2], &f, "forward")?,
-        backward: tip_angle(com[0], com[2], &b, "backward")?,
-        left: tip_angle(com[1], com[2], &l, "left")?,
-        right: tip_angle(com[1], com[2], &r, "right")?,
+        forward,
+        backward,
+        left,
+        right,
+        left_roll: 0.0,
+        right_roll: 0.0,
     })
 }
 
-/// Solve the two tipping equations of opposite directions `p` (angle `tp`) and `n`
-/// (angle `tn`) for the CoM's horizontal coordinate and height:
-/// `(s - pivot) cos + side (z - pivot_height) sin = edge - pivot` for each.
-fn solve_pair(
-    tp: f64,
-    tn: f64,
-    p: &Tip,
-    n: &Tip,
-    fields: (&str, &str),
-) -> Result<(f64, f64), ReducedError> {
-    for (f, v) in [(fields.0, tp), (fields.1, tn)] {
-        if !(v.is_finite() && v > 0.0 && v < std::f64::consts::FRAC_PI_2) {
-            return Err(ReducedError::new(
-                f,
-                format!("a tip angle must be in (0, 90) degrees, got {} rad", v),
-            ));
-        }
-    }
-    // Rows: [cos, side sin] [s; z] = edge - pivot + pivot cos + side pivot_height sin.
-    let row = |t: f64, tip: &Tip| {
-        let (sn, cs) = t.sin_cos();
-        let k = tip.side();
-        (
-            cs,
-            k * sn,
-            tip.edge - tip.pivot + tip.pivot * cs + k * tip.pivot_height * sn,
-        )
-    };
-    let (a11, a12, b1) = row(tp, p);
-    let (a21, a22, b2) = row(tn, n);
-    let det = a11 * a22 - a12 * a21;
+fn solve2(a: [[f64; 2]; 2], b: [f64; 2], field: &str) -> Result<(f64, f64), ReducedError> {
+    let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
     if det.abs() < 1e-12 {
         return Err(ReducedError::new(
-            fields.1,
-            "the two tip angles give no height (their equations are parallel)",
+            field,
+            "the two tip angles give no solution (their equations are parallel)",
         ));
     }
-    Ok(((b1 * a22 - a12 * b2) / det, (a11 * b2 - a21 * b1) / det))
+    Ok((
+        (b[0] * a[1][1] - a[0][1] * b[1]) / det,
+        (a[0][0] * b[1] - a[1][0] * b[0]) / det,
+    ))
 }
 
 /// The exact method: the CoM from the four tip angles on `foot` (see the module
-/// documentation for the geometry). x and z solve the forward/backward pair,
-/// `x cos(tf) + z sin(tf) = F1`, `x cos(tb) - z sin(tb) = -F2`; y and a second height
-/// solve the left/right pair about the ankle roll axes.
+/// documentation for the geometry).
+///
+/// Forward and backward, x and z solve `x cos(tf) + z sin(tf) = F1`,
+/// `x cos(tb) - z sin(tb) = -F2`. Sideways, y and the lever S solve, for the left tip
+/// with leg angle `tl` and foot roll `el` (the whole robot turned about the outer edge
+/// by `el`, the CoM then above it):
+/// `(y + S sin(tl) - E) cos(el) + (h - S (1 - cos(tl))) sin(el) = 0`, and the mirror
+/// image for the right, where `E = d + outer` and `h = z + L0` is the CoM's height
+/// above the sole in the standing pose (the parallelogram lowers it by
+/// `S (1 - cos)`; the lateral offset C of the leg links is taken as zero, i.e. mirror
+/// legs). With flat feet this is `y + S sin(tl) = E`, `y - S sin(tr) = -E`.
 pub fn exact_method(
     angles: &TipAngles,
     foot: &FootGeometry,
 ) -> Result<ExactEstimate, ReducedError> {
-    let [f, b, l, r] = tips(foot)?;
-    let (x, z) = solve_pair(
-        angles.forward,
-        angles.backward,
-        &f,
-        &b,
-        ("angles.forward", "angles.backward"),
+    check_foot(foot)?;
+    for (f, v) in [
+        ("angles.forward", angles.forward),
+        ("angles.backward", angles.backward),
+        ("angles.left", angles.left),
+        ("angles.right", angles.right),
+    ] {
+        if !(v.is_finite() && v > 0.0 && v < std::f64::consts::FRAC_PI_2) {
+            return Err(ReducedError::new(
+                f,
+                format!("a tip angle must be in (0, 90) degrees, got {v} rad"),
+            ));
+        }
+    }
+    for (f, v) in [
+        ("angles.left_roll", angles.left_roll),
+        ("angles.right_roll", angles.right_roll),
+    ] {
+        if !(v.is_finite() && v.abs() < 0.2) {
+            return Err(ReducedError::new(
+                f,
+                format!("a foot roll must be small (under 0.2 rad), got {v} rad"),
+            ));
+        }
+    }
+    let (sf, cf) = angles.forward.sin_cos();
+    let (sb, cb) = angles.backward.sin_cos();
+    let (x, z) = solve2(
+        [[cf, sf], [cb, -sb]],
+        [foot.front, -foot.back],
+        "angles.backward",
     )?;
-    let (y, z_frontal) = solve_pair(
-        angles.left,
-        angles.right,
-        &l,
-        &r,
-        ("angles.left", "angles.right"),
-    )?;
+    let e = foot.ankle_half_spacing + foot.outer;
+    let h = z + foot.ankle_height;
+    // Rows [y coefficient, S coefficient] = rhs; the right tip is the left one mirrored
+    // (y -> -y).
+    let row = |t: f64, roll: f64, side: f64| {
+        let (st, ct) = t.sin_cos();
+        let (sr, cr) = roll.sin_cos();
+        ([side * cr, st * cr - (1.0 - ct) * sr], e * cr - h * sr)
+    };
+    let (l, bl) = row(angles.left, angles.left_roll, 1.0);
+    let (r, br) = row(angles.right, angles.right_roll, -1.0);
+    let (y, s) = solve2([l, r], [bl, br], "angles.right")?;
     Ok(ExactEstimate {
         com: [x, y, z],
-        z_frontal,
+        frontal_lever: s,
     })
 }

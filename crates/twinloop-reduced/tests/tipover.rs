@@ -2,9 +2,10 @@
 //! seed 001's three-mass check.
 
 use nalgebra::{Rotation3, Vector3};
+use twinloop_dynamics::{Data, Model, center_of_mass, forward_kinematics};
 use twinloop_reduced::tipover::{
-    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, seed_method,
-    seed_method_sagittal_angles, tip_angles,
+    FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method,
+    frontal_lever, sagittal_tip_angles, seed_method, seed_method_sagittal_angles, tip_angles,
 };
 use twinloop_robots::{FootGeometry, foot_geometry};
 
@@ -21,20 +22,19 @@ fn check_above_edges(com: [f64; 3], a: &TipAngles, foot: &FootGeometry) {
     assert!((fwd.x - foot.front).abs() < 1e-12, "forward {}", fwd.x);
     let bwd = Rotation3::from_axis_angle(&Vector3::y_axis(), -a.backward) * c;
     assert!((bwd.x + foot.back).abs() < 1e-12, "backward {}", bwd.x);
-    // Leaning left by t turns the body about +x by -t around the left roll axis.
-    let zr = foot.roll_axis_height - foot.ankle_height;
-    let d = foot.ankle_half_spacing;
-    let pl = Vector3::new(0.0, d, zr);
-    let left = pl + Rotation3::from_axis_angle(&Vector3::x_axis(), -a.left) * (c - pl);
-    assert!((left.y - (d + foot.outer)).abs() < 1e-12, "left {}", left.y);
-    let pr = Vector3::new(0.0, -d, zr);
-    let right = pr + Rotation3::from_axis_angle(&Vector3::x_axis(), a.right) * (c - pr);
-    assert!(
-        (right.y + d + foot.outer).abs() < 1e-12,
-        "right {}",
-        right.y
-    );
+    // Sideways the parallelogram carries the CoM to y + S sin - C (1 - cos): at the
+    // outer sole edges.
+    let e = foot.ankle_half_spacing + foot.outer;
+    let y = |t: f64| c.y + LEVER.sin * t.sin() - LEVER.cos * (1.0 - t.cos());
+    assert!((y(a.left) - e).abs() < 1e-12, "left {}", y(a.left));
+    assert!((y(-a.right) + e).abs() < 1e-12, "right {}", y(-a.right));
 }
+
+/// A lever like km20's (S 0.154 m) with a small lateral offset of the leg links.
+const LEVER: FrontalLever = FrontalLever {
+    sin: 0.154,
+    cos: 0.002,
+};
 
 #[test]
 fn exact_method_recovers_a_known_com() {
@@ -44,13 +44,135 @@ fn exact_method_recovers_a_known_com() {
         (foot_geometry("lab17").unwrap(), [0.005, 0.003, 0.14]),
         (foot_geometry("lab17").unwrap(), [-0.01, -0.004, 0.12]),
     ] {
-        let a = tip_angles(com, &foot).unwrap();
+        let a = tip_angles(com, &LEVER, &foot).unwrap();
         check_above_edges(com, &a, &foot);
-        let e = exact_method(&a, &foot).unwrap();
+        // The exact method takes the leg links' lateral offset C as zero: with C = 0 it
+        // is exact, with C = 2 mm it is off by about C (1 - cos) (a quarter millimetre
+        // at km20's 28 degrees).
+        let flat = FrontalLever { cos: 0.0, ..LEVER };
+        let e = exact_method(&tip_angles(com, &flat, &foot).unwrap(), &foot).unwrap();
         for k in 0..3 {
             assert!((e.com[k] - com[k]).abs() < 1e-9, "{:?} vs {com:?}", e.com);
         }
-        assert!((e.z_frontal - com[2]).abs() < 1e-9);
+        assert!((e.frontal_lever - LEVER.sin).abs() < 1e-9);
+        let e = exact_method(&a, &foot).unwrap();
+        let bound = 1.1 * LEVER.cos * (1.0 - a.left.max(a.right).cos());
+        assert!((e.com[1] - com[1]).abs() < bound, "{:?} vs {com:?}", e.com);
+    }
+}
+
+/// Feet rolled onto their outer edges: the robot at leg angle t, turned about the edge
+/// by the roll, has its CoM above the edge (rotation matrices, found by bisection on
+/// t); the exact method given the angle and the roll finds the CoM and the lever.
+#[test]
+fn exact_method_accounts_for_rolled_feet() {
+    let foot = km20_foot();
+    let com = [-0.004, 0.007, 0.24];
+    let lever = FrontalLever { cos: 0.0, ..LEVER };
+    let (tf, tb) = sagittal_tip_angles(com[0], com[2], &foot).unwrap();
+    let e = foot.ankle_half_spacing + foot.outer;
+    let h = com[2] + foot.ankle_height;
+    // Side +1 left, -1 right: mirror the y axis for the right.
+    let tip = |side: f64, roll: f64| {
+        let beyond = |t: f64| {
+            let y = side * com[1] + lever.sin * t.sin();
+            let p = Vector3::new(0.0, y - e, h - lever.sin * (1.0 - t.cos()));
+            // Leaning towards +y about the edge line (the x axis through it).
+            (Rotation3::from_axis_angle(&Vector3::x_axis(), -roll) * p).y
+        };
+        let (mut lo, mut hi) = (0.0, 1.2);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if beyond(mid) < 0.0 {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    let (rl, rr) = (0.6f64.to_radians(), 0.4f64.to_radians());
+    let a = TipAngles {
+        forward: tf,
+        backward: tb,
+        left: tip(1.0, rl),
+        right: tip(-1.0, rr),
+        left_roll: rl,
+        right_roll: rr,
+    };
+    // Rolled feet tip earlier than flat ones.
+    let flat = tip_angles(com, &lever, &foot).unwrap();
+    assert!(a.left < flat.left - 0.01 && a.right < flat.right - 0.005);
+    let est = exact_method(&a, &foot).unwrap();
+    for k in 0..3 {
+        assert!(
+            (est.com[k] - com[k]).abs() < 1e-9,
+            "{:?} vs {com:?}",
+            est.com
+        );
+    }
+    assert!((est.frontal_lever - lever.sin).abs() < 1e-9);
+    // Ignoring the roll would put the CoM millimetres off.
+    let naive = exact_method(
+        &TipAngles {
+            left_roll: 0.0,
+            right_roll: 0.0,
+            ..a
+        },
+        &foot,
+    )
+    .unwrap();
+    assert!((naive.com[1] - com[1]).abs() > 5e-4, "{:?}", naive.com);
+}
+
+/// The frontal lever from a full model, checked by moving km20's legs as a
+/// parallelogram (forward kinematics) and measuring its CoM against the left foot.
+#[test]
+fn km20_frontal_lever_moves_the_com_as_the_model_does() {
+    let model = Model::from_robot(&twinloop_robots::resolve("builtin:km20").unwrap()).unwrap();
+    let q0 = model.neutral_configuration();
+    let lever = frontal_lever(
+        &model,
+        &q0,
+        ["l_hip_roll", "r_hip_roll"],
+        ["l_ank_roll", "r_ank_roll"],
+    )
+    .unwrap();
+    assert!(lever.sin > 0.1 && lever.sin < 0.25, "{lever:?}");
+    let mut data = Data::new(&model);
+    let foot = model.links.iter().position(|l| l.name == "l_foot").unwrap();
+    let com_in_foot = |q: &[f64], data: &mut Data| {
+        let c = center_of_mass(&model, data, q);
+        forward_kinematics(&model, data, q);
+        let link = &model.links[foot];
+        (data.o_m_i[link.body] * link.placement).act_inv_point(&c)
+    };
+    let c0 = com_in_foot(&q0, &mut data);
+    for t in [0.1f64, 0.3, 0.5] {
+        // km20's roll axes are +x on both sides: +t on an ankle roll leans the leg left
+        // over its foot, -t on a hip roll keeps the pelvis level.
+        let mut q = q0.clone();
+        for (name, v) in [
+            ("l_ank_roll", t),
+            ("r_ank_roll", t),
+            ("l_hip_roll", -t),
+            ("r_hip_roll", -t),
+        ] {
+            q[model.q_offset + model.joint_index(name).unwrap()] = v;
+        }
+        forward_kinematics(&model, &mut data, &q);
+        let torso = data.base_placement.rotation;
+        let l = &model.links[foot];
+        let foot_rot = (data.o_m_i[l.body] * l.placement).rotation;
+        // The pelvis keeps the feet's orientation: a parallelogram.
+        assert!((torso - foot_rot).norm() < 1e-12);
+        let c = com_in_foot(&q, &mut data);
+        let want = c0.y + lever.sin * t.sin() - lever.cos * (1.0 - t.cos());
+        assert!((c.y - want).abs() < 1e-9, "t {t}: {} vs {want}", c.y);
+        // And the height drops by S (1 - cos) (+ C sin).
+        let dz = c.z - c0.z;
+        let want = -lever.sin * (1.0 - t.cos()) - lever.cos * t.sin();
+        assert!((dz - want).abs() < 1e-9, "t {t}: dz {dz} vs {want}");
     }
 }
 
@@ -60,16 +182,18 @@ fn a_com_above_the_ankle_tips_at_asin_f_over_h() {
     foot.front = 0.05;
     foot.back = 0.05;
     let h = 0.2;
-    let a = tip_angles([0.0, 0.0, h], &foot).unwrap();
+    let lever = FrontalLever {
+        sin: 0.15,
+        cos: 0.0,
+    };
+    let a = tip_angles([0.0, 0.0, h], &lever, &foot).unwrap();
     // The CoM swings on a circle of radius h about the ankle axis and is above the
     // edge when h sin(theta) = F.
     assert!((a.forward - (0.05f64 / h).asin()).abs() < 1e-14);
     assert!((a.backward - (0.05f64 / h).asin()).abs() < 1e-14);
-    // Sideways: the CoM is d = 0.04 inside the pivot, the edge 0.035 outside it:
-    // the body must turn until (y - d) cos + z sin = outer, i.e. by
-    // atan2(h, -d) - acos(0.035 / hypot(d, h)).
-    let d = foot.ankle_half_spacing;
-    let want = h.atan2(-d) - (0.035 / d.hypot(h)).acos();
+    // Sideways: the parallelogram carries the CoM by S sin(theta) to the outer edge
+    // d + outer = 0.04 + 0.035.
+    let want = (0.075f64 / 0.15).asin();
     assert!((a.left - want).abs() < 1e-15 && (a.right - want).abs() < 1e-15);
     let e = exact_method(&a, &foot).unwrap();
     assert!(e.com[0].abs() < 1e-12 && e.com[1].abs() < 1e-12);
@@ -150,11 +274,16 @@ fn seed_001_masses_fall_near_9_and_16_8_degrees() {
     let m: f64 = SEED_001.iter().map(|(m, _)| m).sum();
     let c = |k: usize| SEED_001.iter().map(|(mi, p)| mi * p[k]).sum::<f64>() / m / 100.0;
     let com = [-c(2), c(1), c(0)];
-    let a = tip_angles(com, &km20_foot()).unwrap().to_degrees();
-    assert!((a[0] - 9.0).abs() < 0.1, "forward {}", a[0]);
-    assert!((a[1] - 16.8).abs() < 0.5, "backward {}", a[1]);
+    let (f, b) = sagittal_tip_angles(com[0], com[2], &km20_foot()).unwrap();
+    let (f, b) = (f.to_degrees(), b.to_degrees());
+    assert!((f - 9.0).abs() < 0.1, "forward {f}");
+    assert!((b - 16.8).abs() < 0.5, "backward {b}");
     // And the exact method turns those angles back into the three masses' CoM.
-    let e = exact_method(&tip_angles(com, &km20_foot()).unwrap(), &km20_foot()).unwrap();
+    let e = exact_method(
+        &tip_angles(com, &LEVER, &km20_foot()).unwrap(),
+        &km20_foot(),
+    )
+    .unwrap();
     assert!((e.com[0] - com[0]).abs() < 1e-12 && (e.com[2] - com[2]).abs() < 1e-12);
 }
 
@@ -163,18 +292,24 @@ fn bad_input_names_the_field() {
     let foot = km20_foot();
     // CoM beyond the front edge: the robot cannot stand.
     assert_eq!(
-        tip_angles([0.05, 0.0, 0.2], &foot).unwrap_err().field,
+        tip_angles([0.05, 0.0, 0.2], &LEVER, &foot)
+            .unwrap_err()
+            .field,
         "forward"
     );
     assert_eq!(
-        tip_angles([0.0, 0.0, -0.1], &foot).unwrap_err().field,
+        tip_angles([0.0, 0.0, -0.1], &LEVER, &foot)
+            .unwrap_err()
+            .field,
         "forward"
     );
     assert_eq!(
-        tip_angles([0.0, f64::NAN, 0.2], &foot).unwrap_err().field,
+        tip_angles([0.0, f64::NAN, 0.2], &LEVER, &foot)
+            .unwrap_err()
+            .field,
         "com.y"
     );
-    let good = tip_angles([0.0, 0.0, 0.2], &foot).unwrap();
+    let good = tip_angles([0.0, 0.0, 0.2], &LEVER, &foot).unwrap();
     let e = exact_method(
         &TipAngles {
             backward: 0.0,

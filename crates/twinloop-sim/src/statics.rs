@@ -19,6 +19,14 @@ pub struct FlatFeet<'a> {
     pub foot_world: [Se3; 2],
     /// Which foot is held flat at its place (0 or 1): the one the robot leans onto.
     pub held: usize,
+    /// How far the whole robot already leans about its support edge beyond what the
+    /// joint angles explain, rad, towards the direction [`FlatFeet::margin`] is asked
+    /// about: the feet rolled onto their edges, as the IMU sees it. Zero for feet flat.
+    /// Servo deflection does this in the sideways lean, where the two legs and the
+    /// ground form a closed chain: a few hundredths of a degree put a foot's pressure on
+    /// its edge and, once the far foot unloads, the robot rests on one sole edge tilted
+    /// by tenths of a degree, which moves the CoM over the edge by millimetres.
+    pub tilt: f64,
 }
 
 impl FlatFeet<'_> {
@@ -96,29 +104,34 @@ impl FlatFeet<'_> {
         let (com, support) = self.com_and_support(data, joints);
         let edge = support
             .iter()
-            .map(|p| p.dot(&dir))
-            .fold(f64::NEG_INFINITY, f64::max);
-        edge - com.dot(&dir)
+            .copied()
+            .max_by(|a, b| a.dot(&dir).total_cmp(&b.dot(&dir)))
+            .unwrap_or(com);
+        // Turn the CoM about the edge line by `tilt` (towards `dir`): its offset beyond
+        // the edge becomes `u cos + h sin` (u along `dir`, h the height above the edge).
+        let u = (com - edge).dot(&dir);
+        let h = com.z - edge.z;
+        let (s, c) = self.tilt.sin_cos();
+        -(u * c + h * s)
     }
 
-    /// The ankle offset (rad, in the lean direction) at which the margin along `dir`
-    /// reaches zero, the ankle joints turned by `signs * theta` from `joints`; bisection
-    /// over [lo, hi] (the margin must be positive at `lo` and negative at `hi`).
-    #[allow(clippy::too_many_arguments)]
+    /// The lean (rad) at which the margin along `dir` reaches zero, each joint of
+    /// `turned` (index, sign) moved by `sign * theta` from `joints` (the ankles alone for
+    /// a rigid lean, ankles and hips for the parallelogram sideways lean); bisection over
+    /// [lo, hi] (the margin must be positive at `lo` and negative at `hi`).
     pub fn tipping_angle(
         &self,
         data: &mut Data,
         joints: &[f64],
-        ankles: [usize; 2],
-        signs: [f64; 2],
+        turned: &[(usize, f64)],
         dir: Vector3<f64>,
         lo: f64,
         hi: f64,
     ) -> Option<f64> {
         let mut q = joints.to_vec();
         let mut at = |theta: f64, q: &mut Vec<f64>| {
-            for k in 0..2 {
-                q[ankles[k]] = joints[ankles[k]] + signs[k] * theta;
+            for &(j, sign) in turned {
+                q[j] = joints[j] + sign * theta;
             }
             self.margin(data, q, dir)
         };
@@ -160,4 +173,21 @@ pub fn lean_signs(
         out[k] = if a.dot(&about) > 0.0 { -1.0 } else { 1.0 };
     }
     out
+}
+
+/// For each of two hip joints (parents of the legs), the sign of its angle that leans its
+/// leg towards `lean` with the pelvis held: turning the joint by `+d` about its world
+/// axis `a` turns the leg below it by `+d` about `a` (the opposite of an ankle, whose
+/// child is the held foot). With [`lean_signs`] for the ankles this moves the legs as a
+/// parallelogram: ankles and hips turned by the same angle keep the feet and the pelvis
+/// level.
+pub fn hip_lean_signs(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    hips: [usize; 2],
+    lean: Vector3<f64>,
+) -> [f64; 2] {
+    let s = lean_signs(model, data, q, hips, lean);
+    [-s[0], -s[1]]
 }
