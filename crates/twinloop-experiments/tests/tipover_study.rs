@@ -10,33 +10,28 @@
 use std::path::PathBuf;
 use twinloop_experiments::{StudyOptions, StudyReport, run_study};
 
-fn check(report: &StudyReport) {
+/// Print one case's results in one piece (the cases run on parallel threads), then
+/// assert.
+fn check(label: &str, report: &StudyReport) {
+    let mut out = String::new();
     for (name, d) in [
         ("forward", &report.forward),
         ("backward", &report.backward),
         ("left", &report.left),
         ("right", &report.right),
     ] {
-        eprintln!(
-            "{} {name}: commanded {:.3} measured {:.3} static {:.3} deg (feet rolled {:.3}), {:.2} s",
-            report.robot, d.commanded_deg, d.measured_deg, d.static_deg, d.excess_deg, d.time_s
-        );
-        assert!(
-            (d.measured_deg - d.static_deg).abs() < 0.3,
-            "{} {name}: measured {} vs static {}",
-            report.robot,
-            d.measured_deg,
-            d.static_deg
+        out += &format!(
+            "{label} {name}: commanded {:.3} measured {:.3} static {:.3} deg (feet rolled {:.3}), {:.2} s\n",
+            d.commanded_deg, d.measured_deg, d.static_deg, d.excess_deg, d.time_s
         );
     }
     let c = &report.com;
     let per_axis: Vec<String> = (0..3)
         .map(|k| format!("{:+.2}", (c.exact_method[k] - c.truth[k]) * 1e3))
         .collect();
-    eprintln!(
-        "{} CoM true {:?} exact {:?} ({:.2} mm; x, y, z {per_axis:?} mm) seed {:?} ({:.1} mm); \
+    out += &format!(
+        "{label} CoM true {:?} exact {:?} ({:.2} mm; x, y, z {per_axis:?} mm) seed {:?} ({:.1} mm); \
          frontal lever true {:.4} exact {:.4} m",
-        report.robot,
         c.truth,
         c.exact_method,
         c.exact_error * 1e3,
@@ -45,18 +40,30 @@ fn check(report: &StudyReport) {
         c.frontal_lever_true,
         c.frontal_lever_exact
     );
+    eprintln!("{out}");
+    for (name, d) in [
+        ("forward", &report.forward),
+        ("backward", &report.backward),
+        ("left", &report.left),
+        ("right", &report.right),
+    ] {
+        assert!(
+            (d.measured_deg - d.static_deg).abs() < 0.3,
+            "{label} {name}: measured {} vs static {}",
+            d.measured_deg,
+            d.static_deg
+        );
+    }
     assert!(
         c.exact_error < 3e-3,
-        "{}: exact method off by {} m",
-        report.robot,
+        "{label}: exact method off by {} m",
         c.exact_error
     );
     // The method also recovers the lever of the sideways lean (a check that the
     // protocol moved the robot the way the method's geometry says).
     assert!(
         (c.frontal_lever_exact - c.frontal_lever_true).abs() < 3e-3,
-        "{}: frontal lever {} vs {}",
-        report.robot,
+        "{label}: frontal lever {} vs {}",
         c.frontal_lever_exact,
         c.frontal_lever_true
     );
@@ -65,14 +72,17 @@ fn check(report: &StudyReport) {
 #[test]
 fn km20_tips_where_the_model_says() {
     let robot = twinloop_robots::resolve("builtin:km20").unwrap();
-    check(&run_study(&robot, &StudyOptions::default()).unwrap());
+    check(
+        "km20",
+        &run_study(&robot, &StudyOptions::default()).unwrap(),
+    );
 }
 
 #[test]
 fn op3_tips_where_the_model_says() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/op3/mjcf/op3.xml");
     let robot = twinloop_model::load(path).unwrap();
-    check(&run_study(&robot, &StudyOptions::default()).unwrap());
+    check("OP3", &run_study(&robot, &StudyOptions::default()).unwrap());
 }
 
 /// Seed 000's battery scenarios (Table III: 0.2 kg on the legs, the hip front, the left
@@ -83,8 +93,11 @@ fn battery(label: &str) {
         .find(|s| s.label == label)
         .unwrap();
     let robot = twinloop_robots::km20::with_battery(scenario).unwrap();
-    eprintln!("battery {} ({})", scenario.label, scenario.name);
-    check(&run_study(&robot, &StudyOptions::default()).unwrap());
+    let label = format!("km20 + battery {} ({})", scenario.label, scenario.name);
+    check(
+        &label,
+        &run_study(&robot, &StudyOptions::default()).unwrap(),
+    );
 }
 
 #[test]
