@@ -1,8 +1,14 @@
 //! The tip-over study on the simulator (seeds 000 and 001): run the experiment in all
 //! four directions on a simulated robot and put its results beside what the model says:
 //! the static tipping angle at each onset (CoM over the support edge, from the model
-//! with the feet flat) and the CoM from the angles by the seed's method and the exact
-//! method, next to the model's true CoM.
+//! at the joint angles measured at the onset, turned further by the joints the protocol
+//! turns: the ankle pitches, or the ankle and hip rolls; the feet as rolled as the IMU
+//! saw them) and the CoM from the angles by the seed's method and the exact method,
+//! next to the model's true CoM.
+//!
+//! Each direction runs twice: at the constant ramp (its time to fall is Table IV's),
+//! then up to half a degree before that tip and on at a creep, which cuts the lag of
+//! the onset detection tenfold (see [`TipoverConfig::slow_from_deg`]).
 
 use crate::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
 use nalgebra::Vector3;

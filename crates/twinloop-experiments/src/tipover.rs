@@ -3,6 +3,14 @@
 //! the robot tips over, and record the commanded and measured ankle angle at the
 //! moment it started to tip, and the time from the start of the ramp.
 //!
+//! Sideways, the hip rolls turn with the ankle rolls (`TipoverConfig::hip_roll`): the
+//! legs move as a parallelogram, both feet stay flat and the pelvis level. Turning the
+//! ankle rolls alone cannot lean a robot whose hips hold: two flat feet, two legs, the
+//! pelvis and the ground form a closed chain (the rigid upper body cannot turn about
+//! two parallel ankle axes at once), and the robot rocks onto its sole edges instead of
+//! tipping. A real robot's compliant hips let the legs shear into the parallelogram;
+//! commanding it makes the motion the one the CoM methods model.
+//!
 //! Tipping is seen in the trunk's tilt: while the feet stay flat, the trunk is where
 //! the measured joint angles put it; once the centre of mass passes the edge of the
 //! foot, the whole robot rotates about that edge and the IMU tilts beyond that. The
@@ -13,7 +21,9 @@
 //! turned (times `onset_ratio`): before the tip it only creeps (the ground and the soles
 //! give a little as the load moves to the edge), after it the robot falls away
 //! exponentially. Comparing with the ankle's own rate makes the test independent of the
-//! ramp speed and the robot's size.
+//! ramp speed and the robot's size. The excess at the onset (the feet rolled onto their
+//! edges) and the trunk's lean are recorded beside the ankle angle: a real robot is not
+//! rigid, and the CoM methods need what it really leaned.
 
 use serde::Serialize;
 use twinloop_robot::{Robot, RobotError, RobotState};
