@@ -8,8 +8,10 @@ use twinloop_experiments::{StudyOptions, run_study};
 
 #[derive(Args, Debug)]
 pub struct TipoverArgs {
-    /// Robot: builtin:km20, builtin:lab17, or a URDF/MJCF file whose ankle joints are
-    /// named like l_ank_pitch / r_ank_roll and whose feet have collision boxes.
+    /// Robot: builtin:km20, builtin:lab17, or a URDF/MJCF file whose ankle and hip roll
+    /// joints are named like l_ank_pitch / r_ank_roll / l_hip_roll and whose feet have
+    /// collision boxes. Sideways, the hip rolls turn with the ankle rolls (the legs lean
+    /// as a parallelogram, feet flat, pelvis level).
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     /// Add a point mass before the experiment (seed 000's batteries), repeatable:
