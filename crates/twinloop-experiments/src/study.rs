@@ -16,8 +16,8 @@ use serde::Serialize;
 use twinloop_dynamics::{BASE, Data};
 use twinloop_model::Robot;
 use twinloop_reduced::{
-    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, frontal_lever,
-    seed_method,
+    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, feet_mass,
+    frontal_lever, seed_method,
 };
 use twinloop_robot::RobotError;
 use twinloop_robots::FootGeometry;
@@ -72,6 +72,10 @@ pub struct DirectionReport {
     /// The robot's lean beyond what its joints explain at the onset (feet rolled onto
     /// their edges), deg; the static angle accounts for it.
     pub excess_deg: f64,
+    /// The static tipping angle of the rigid model (standing pose, feet flat, no joint
+    /// giving under the load), deg: what the robot would do with infinitely stiff
+    /// servos.
+    pub rigid_static_deg: f64,
 }
 
 /// CoM estimates, m, relative to the midpoint of the ankle pitch joints in the
@@ -114,6 +118,10 @@ pub struct FootReport {
     pub ankle_half_spacing: f64,
     pub outer: f64,
     pub inner: f64,
+    /// The feet (everything below the ankle pitch joints): share of the robot's mass
+    /// and CoM [x, z] relative to the ankle midpoint, m.
+    pub feet_mass_fraction: f64,
+    pub feet_com: [f64; 2],
 }
 
 fn err(e: impl std::fmt::Display) -> String {
@@ -374,7 +382,7 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
     cfg.hip_left_sign = hs;
     cfg.ramp_deg_per_s = opts.ramp_deg_per_s;
     let imu_link = sim.sensors().imu_link;
-    let mut results: Vec<(TipoverResult, f64)> = Vec::new();
+    let mut results: Vec<(TipoverResult, f64, f64)> = Vec::new();
     let mut pdata = Data::new(&model);
     for d in Direction::ALL {
         flat.held = usize::from(d == Direction::Right);
@@ -412,7 +420,13 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
             .tipping_angle(&mut data, &r.positions_at_onset, &turned, dir, -0.2, 0.2)
             .map(f64::to_degrees)
             .unwrap_or(f64::NAN);
-        results.push((r.clone(), r.measured_deg + offset));
+        // The rigid robot's: from the standing pose, feet flat, no joint giving.
+        flat.tilt = 0.0;
+        let rigid = flat
+            .tipping_angle(&mut data, &standing, &turned, dir, 0.0, 1.2)
+            .map(f64::to_degrees)
+            .unwrap_or(f64::NAN);
+        results.push((r.clone(), r.measured_deg + offset, rigid));
     }
     // The CoM by the two estimators from the measured angles, and the truth.
     let pick = |d: Direction, f: fn(&TipoverResult) -> f64| {
@@ -439,20 +453,23 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
         &seed_constants,
     )
     .map_err(err)?;
-    // The exact method takes what the robot's own sensors give of its lean: forward
-    // and backward the trunk's lean (the IMU: the ankle angle plus what the other
-    // joints and the feet gave under the load), sideways the legs' angle (the ankle
-    // rolls) and the feet's roll onto their edges (the IMU's tilt beyond the joints).
+    // The exact method takes the ankle angles and the feet's roll onto the edge at each
+    // tip (the IMU's tilt beyond the joints), and the feet's mass (they stay on the
+    // ground while the body turns; part of the robot's fixed geometry, like their
+    // outline).
     let rad = std::f64::consts::PI / 180.0;
     let angles = TipAngles {
-        forward: pick(Direction::Forward, |r| r.lean_deg) * rad,
-        backward: pick(Direction::Backward, |r| r.lean_deg) * rad,
+        forward: f * rad,
+        backward: b * rad,
         left: l * rad,
         right: r * rad,
+        forward_roll: pick(Direction::Forward, |r| r.excess_deg) * rad,
+        backward_roll: pick(Direction::Backward, |r| r.excess_deg) * rad,
         left_roll: pick(Direction::Left, |r| r.excess_deg) * rad,
         right_roll: pick(Direction::Right, |r| r.excess_deg) * rad,
     };
-    let exact = exact_method(&angles, &foot).map_err(err)?;
+    let feet = feet_mass(&model, &q0, [&names[0], &names[1]]).map_err(err)?;
+    let exact = exact_method(&angles, &feet, &foot).map_err(err)?;
     let lever = frontal_lever(
         &model,
         &q0,
@@ -466,7 +483,7 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
         ((a[0] - truth[0]).powi(2) + (a[1] - truth[1]).powi(2) + (a[2] - truth[2]).powi(2)).sqrt()
     };
     let rep = |d: Direction| {
-        let (r, s) = results
+        let (r, s, rigid) = results
             .iter()
             .find(|r| r.0.direction == d)
             .expect("all four ran");
@@ -475,6 +492,7 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
             measured_deg: r.measured_deg,
             time_s: r.time_s,
             static_deg: *s,
+            rigid_static_deg: *rigid,
             excess_deg: r.excess_deg,
         }
     };
@@ -502,6 +520,8 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
             ankle_half_spacing: foot.ankle_half_spacing,
             outer: foot.outer,
             inner: foot.inner,
+            feet_mass_fraction: feet.fraction,
+            feet_com: [feet.x, feet.z],
         },
     })
 }

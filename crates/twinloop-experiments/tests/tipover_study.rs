@@ -21,8 +21,13 @@ fn check(label: &str, report: &StudyReport) {
         ("right", &report.right),
     ] {
         out += &format!(
-            "{label} {name}: commanded {:.3} measured {:.3} static {:.3} deg (feet rolled {:.3}), {:.2} s\n",
-            d.commanded_deg, d.measured_deg, d.static_deg, d.excess_deg, d.time_s
+            "{label} {name}: commanded {:.3} measured {:.3} static {:.3} deg (feet rolled {:.3}; rigid model {:.3}), {:.2} s\n",
+            d.commanded_deg,
+            d.measured_deg,
+            d.static_deg,
+            d.excess_deg,
+            d.rigid_static_deg,
+            d.time_s
         );
     }
     let c = &report.com;

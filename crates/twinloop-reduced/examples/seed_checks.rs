@@ -6,8 +6,9 @@
 use nalgebra::{Rotation3, Vector3};
 use twinloop_dynamics::Model;
 use twinloop_reduced::tipover::{
-    FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method,
-    frontal_lever, sagittal_tip_angles, seed_method, seed_method_sagittal_angles, tip_angles,
+    FeetMass, FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method,
+    feet_mass, frontal_lever, sagittal_tip_angles, seed_method, seed_method_sagittal_angles,
+    tip_angles,
 };
 use twinloop_reduced::{
     LegMotion, Lipm, Plane, PointMass, ThreeMassLipm, ThreeMasses, com_relative_to_ankles,
@@ -71,9 +72,16 @@ fn robot_report(robot: &twinloop_model::Robot, foot: &FootGeometry, hips: (&str,
         .unwrap()
         .relative_to(mid);
     let lever = model_lever(&model, &q);
-    let a = tip_angles(com, &lever, foot).unwrap();
+    let feet = feet_mass(
+        &model,
+        &q,
+        [&foot.left_ankle_pitch, &foot.right_ankle_pitch],
+    )
+    .unwrap();
+    let a = tip_angles(com, &feet, &lever, foot).unwrap();
     let d = a.to_degrees();
-    let exact = exact_method(&a, foot).unwrap();
+    let exact = exact_method(&a, &feet, foot).unwrap();
+
     let seed = seed_method(&seed_angles(&a), &SeedConstants::from_foot(foot)).unwrap();
     println!(
         "{}: mass {:.4} kg; CoM (cm, from ankle midpoint) {}",
@@ -92,6 +100,18 @@ fn robot_report(robot: &twinloop_model::Robot, foot: &FootGeometry, hips: (&str,
         "  static tip angles (deg): forward {:.2} backward {:.2} left {:.2} right {:.2}",
         d[0], d[1], d[2], d[3]
     );
+    let light = tip_angles(com, &FeetMass::NONE, &lever, foot)
+        .unwrap()
+        .to_degrees();
+    let feet_line = format!(
+        "  feet {:.1} % of the mass at x {:.2} z {:.2} cm; with massless feet the tips would be forward {:.2} backward {:.2}",
+        feet.fraction * 100.0,
+        feet.x * 100.0,
+        feet.z * 100.0,
+        light[0],
+        light[1]
+    );
+    println!("{feet_line}");
     println!(
         "  exact method {} (error mm {}), frontal lever {:.2} cm (model {:.2} cm, C {:.3} cm)",
         cm(exact.com),
@@ -141,7 +161,8 @@ fn seed_001() {
         ),
     ];
     for (name, com) in readings {
-        let (f, b) = sagittal_tip_angles(com[0], com[2], &foot).unwrap();
+        // The seed's three point masses have no feet.
+        let (f, b) = sagittal_tip_angles(com[0], com[2], &FeetMass::NONE, &foot).unwrap();
         let a = [f.to_degrees(), b.to_degrees()];
         let s = seed_method_sagittal_angles(com[0], com[2], &SEED_000_CONSTANTS);
         let s = match s {
@@ -164,7 +185,12 @@ fn seed_001() {
             &SEED_000_CONSTANTS,
         )
         .unwrap();
-        let e = exact_method(&TipAngles::from_degrees(f, b, 28.0, 28.0), &foot).unwrap();
+        let e = exact_method(
+            &TipAngles::from_degrees(f, b, 28.0, 28.0),
+            &FeetMass::NONE,
+            &foot,
+        )
+        .unwrap();
         println!(
             "angles {f}/{b} ({name}): seed method x {:.2} z {:.2} cm; exact method x {:.2} z {:.2} cm",
             s.com[0] * 100.0,
@@ -230,7 +256,7 @@ fn seed_000_table_v() {
     for (label, t2, t3, v3, vl) in rows {
         let angles = |p: [f64; 3], sign: f64| {
             let com = [sign * p[2] / 100.0, p[1] / 100.0, p[0] / 100.0];
-            match sagittal_tip_angles(com[0], com[2], &foot) {
+            match sagittal_tip_angles(com[0], com[2], &FeetMass::NONE, &foot) {
                 Ok((f, b)) => format!("{:.2}/{:.2}", f.to_degrees(), b.to_degrees()),
                 Err(e) => format!("- ({})", e.field),
             }
@@ -304,10 +330,11 @@ fn km20_batteries() {
         let three = ThreeMasses::from_model(&model, &q, "l_hip_yaw", "r_hip_yaw")
             .unwrap()
             .relative_to(mid);
-        let a = tip_angles(com, &model_lever(&model, &q), &foot).unwrap();
+        let feet = feet_mass(&model, &q, ["l_ank_pitch", "r_ank_pitch"]).unwrap();
+        let a = tip_angles(com, &feet, &model_lever(&model, &q), &foot).unwrap();
         let d = a.to_degrees();
         let seed = seed_method(&seed_angles(&a), &SEED_000_CONSTANTS).unwrap();
-        let exact = exact_method(&a, &foot).unwrap();
+        let exact = exact_method(&a, &feet, &foot).unwrap();
         let (t1, t3) = fall_times(&three, a.forward, &foot);
         println!(
             "{} {} | {:.3} {:.3} {:.3} | {} | {:.2}/{:.2}/{:.2}/{:.2} | {} | {} | {} | {:.3} / {:.3}",

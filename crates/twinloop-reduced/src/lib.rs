@@ -12,12 +12,13 @@
 //! [`ReducedError`] naming the field, never a panic.
 //!
 //! ```
-//! use twinloop_reduced::tipover::{FrontalLever, exact_method, tip_angles};
+//! use twinloop_reduced::tipover::{FeetMass, FrontalLever, exact_method, tip_angles};
 //! let foot = twinloop_robots::foot_geometry("km20").unwrap();
 //! let com = [0.004, -0.002, 0.22];
 //! let lever = FrontalLever { sin: 0.17, cos: 0.0 };
-//! let angles = tip_angles(com, &lever, &foot).unwrap();
-//! let back = exact_method(&angles, &foot).unwrap();
+//! let feet = FeetMass { fraction: 0.11, x: -0.025, z: -0.011 };
+//! let angles = tip_angles(com, &feet, &lever, &foot).unwrap();
+//! let back = exact_method(&angles, &feet, &foot).unwrap();
 //! assert!((back.com[2] - 0.22).abs() < 1e-12);
 //! ```
 
@@ -33,8 +34,8 @@ pub use three_mass::{
     ankle_torque, com_relative_to_ankles,
 };
 pub use tipover::{
-    ExactEstimate, FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, SeedEstimate,
-    TipAngles, exact_method, frontal_lever, frontal_tip_angles, sagittal_tip_angles, seed_method,
-    seed_method_sagittal_angles, tip_angles,
+    ExactEstimate, FeetMass, FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants,
+    SeedEstimate, TipAngles, exact_method, feet_mass, frontal_lever, frontal_tip_angles,
+    sagittal_tip_angles, seed_method, seed_method_sagittal_angles, tip_angles,
 };
 pub use twinloop_robots::FootGeometry;

@@ -233,18 +233,17 @@ pub fn seed_method_sagittal_angles(
 /// pitch angle for a rigid robot); left and right, the legs' lean in the parallelogram
 /// (the ankle roll angle).
 ///
-/// A real robot is not rigid: its other joints give a little under the leaning load
-/// and its feet roll onto the sole edge before the tip. `left_roll` and `right_roll`
-/// are the feet's roll onto their outer edges at the sideways tips (rad, zero for
-/// flat feet), which turns the whole robot about that edge; forward and backward, the
-/// body's lean as the trunk's inclinometer sees it already includes the feet's and
-/// the joints' give.
+/// A real robot's feet roll onto the sole edge a little before it tips (its servos
+/// give under the moving load): the `*_roll` fields are that roll at each tip (rad,
+/// towards the tip, zero for flat feet), which turns the whole robot about the edge.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TipAngles {
     pub forward: f64,
     pub backward: f64,
     pub left: f64,
     pub right: f64,
+    pub forward_roll: f64,
+    pub backward_roll: f64,
     pub left_roll: f64,
     pub right_roll: f64,
 }
@@ -258,6 +257,8 @@ impl TipAngles {
             backward: backward * r,
             left: left * r,
             right: right * r,
+            forward_roll: 0.0,
+            backward_roll: 0.0,
             left_roll: 0.0,
             right_roll: 0.0,
         }
@@ -273,6 +274,82 @@ impl TipAngles {
             self.right * d,
         ]
     }
+}
+
+/// The part of the robot that stays on the ground in the forward and backward lean:
+/// everything below the ankle pitch joints (both feet, with whatever of the ankle turns
+/// with them). Its share of the total mass and its CoM (m, relative to the midpoint of
+/// the ankle pitch axes, x forward, z up). The body above the ankles turns, the feet do
+/// not, so the robot's CoM does not turn rigidly about the ankle axis: on km20 (feet
+/// 11 % of the mass) taking it as rigid puts the CoM 1.6 mm too high. The feet are part
+/// of the robot's fixed geometry, like their outline: weigh them once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FeetMass {
+    pub fraction: f64,
+    pub x: f64,
+    pub z: f64,
+}
+
+impl FeetMass {
+    /// Massless feet: the whole robot turns about the ankle axis.
+    pub const NONE: FeetMass = FeetMass {
+        fraction: 0.0,
+        x: 0.0,
+        z: 0.0,
+    };
+}
+
+/// The feet of a model in configuration `q`: the links below (and including the child
+/// of) the two ankle pitch joints, placed by forward kinematics, relative to the
+/// midpoint of the two ankle pitch joints.
+pub fn feet_mass(
+    model: &Model,
+    q: &[f64],
+    ankle_pitch: [&str; 2],
+) -> Result<FeetMass, ReducedError> {
+    if q.len() != model.nq {
+        return Err(ReducedError::new(
+            "q",
+            format!("has {} entries, the model {}", q.len(), model.nq),
+        ));
+    }
+    let joint = |name: &str| {
+        model.joint_index(name).ok_or_else(|| {
+            ReducedError::new(
+                "ankle_pitch",
+                format!("the model \"{}\" has no joint \"{name}\"", model.name),
+            )
+        })
+    };
+    let ankles = [joint(ankle_pitch[0])?, joint(ankle_pitch[1])?];
+    let mut data = Data::new(model);
+    forward_kinematics(model, &mut data, q);
+    let mid = (data.o_m_i[ankles[0]].translation + data.o_m_i[ankles[1]].translation) * 0.5;
+    let (mut total, mut mass, mut first) = (0.0, 0.0, nalgebra::Vector3::zeros());
+    for link in &model.links {
+        if link.body == BASE && !model.is_floating() {
+            continue;
+        }
+        total += link.inertia.mass;
+        let below = link.body != BASE
+            && model
+                .ancestors(link.body)
+                .any(|a| a == ankles[0] || a == ankles[1]);
+        if below {
+            let p = (data.o_m_i[link.body] * link.placement).act_point(&link.inertia.com);
+            mass += link.inertia.mass;
+            first += (p - mid) * link.inertia.mass;
+        }
+    }
+    positive("model.total_mass", total)?;
+    if mass <= 0.0 {
+        return Ok(FeetMass::NONE);
+    }
+    Ok(FeetMass {
+        fraction: mass / total,
+        x: first.x / mass,
+        z: first.z / mass,
+    })
 }
 
 /// How the CoM moves in the parallelogram sideways lean (see the module
@@ -429,19 +506,41 @@ fn sagittal_tip(s: f64, z: f64, edge: f64, field: &str) -> Result<f64, ReducedEr
     Ok(z.atan2(a) - (c / r).acos())
 }
 
-/// The static forward and backward tip angles (rad) of a rigid robot with its CoM at
-/// forward offset `x` and height `z` above the ankle pitch axes.
+fn check_feet(feet: &FeetMass) -> Result<(), ReducedError> {
+    if !(feet.fraction.is_finite() && (0.0..1.0).contains(&feet.fraction)) {
+        return Err(ReducedError::new(
+            "feet.fraction",
+            format!("must be in [0, 1), got {}", feet.fraction),
+        ));
+    }
+    finite("feet.x", feet.x)?;
+    finite("feet.z", feet.z)?;
+    Ok(())
+}
+
+/// The static forward and backward tip angles (rad) of a robot with its CoM at forward
+/// offset `x` and height `z` above the ankle pitch axes, whose `feet` stay on the
+/// ground while the rest turns rigidly about the axes: the turning part (CoM
+/// `(c - mu p) / (1 - mu)`) tips when `(1 - mu) c_turning . e = edge - mu p_x`.
 pub fn sagittal_tip_angles(
     x: f64,
     z: f64,
+    feet: &FeetMass,
     foot: &FootGeometry,
 ) -> Result<(f64, f64), ReducedError> {
     finite("com.x", x)?;
     finite("com.z", z)?;
     check_foot(foot)?;
+    check_feet(feet)?;
+    let k = 1.0 - feet.fraction;
+    let (tx, tz) = (
+        (x - feet.fraction * feet.x) / k,
+        (z - feet.fraction * feet.z) / k,
+    );
+    let edge = |e: f64| (e - feet.fraction * feet.x) / k;
     Ok((
-        sagittal_tip(x, z, foot.front, "forward")?,
-        sagittal_tip(x, z, -foot.back, "backward")?,
+        sagittal_tip(tx, tz, edge(foot.front), "forward")?,
+        sagittal_tip(tx, tz, edge(-foot.back), "backward")?,
     ))
 }
 
@@ -484,20 +583,23 @@ pub fn frontal_tip_angles(
 }
 
 /// The static tip angles (rad) of a robot with CoM `com` (m, relative to the midpoint of
-/// the ankle pitch axes, x forward, y left, z up) and frontal lever `lever`, standing on
-/// `foot`, feet flat: the forward problem of [`exact_method`].
+/// the ankle pitch axes, x forward, y left, z up), feet `feet` and frontal lever
+/// `lever`, standing on `foot`, feet flat: the forward problem of [`exact_method`].
 pub fn tip_angles(
     com: [f64; 3],
+    feet: &FeetMass,
     lever: &FrontalLever,
     foot: &FootGeometry,
 ) -> Result<TipAngles, ReducedError> {
-    let (forward, backward) = sagittal_tip_angles(com[0], com[2], foot)?;
+    let (forward, backward) = sagittal_tip_angles(com[0], com[2], feet, foot)?;
     let (left, right) = frontal_tip_angles(com[1], lever, foot)?;
     Ok(TipAngles {
         forward,
         backward,
         left,
         right,
+        forward_roll: 0.0,
+        backward_roll: 0.0,
         left_roll: 0.0,
         right_roll: 0.0,
     })
@@ -517,13 +619,20 @@ fn solve2(a: [[f64; 2]; 2], b: [f64; 2], field: &str) -> Result<(f64, f64), Redu
     ))
 }
 
-/// The exact method: the CoM from the four tip angles on `foot` (see the module
-/// documentation for the geometry).
+/// The exact method: the CoM from the four tip angles on `foot`, the robot's feet being
+/// `feet` (see the module documentation for the geometry).
 ///
-/// Forward and backward, x and z solve `x cos(tf) + z sin(tf) = F1`,
-/// `x cos(tb) - z sin(tb) = -F2`. Sideways, y and the lever S solve, for the left tip
-/// with leg angle `tl` and foot roll `el` (the whole robot turned about the outer edge
-/// by `el`, the CoM then above it):
+/// Forward and backward the body above the ankles turns by the tip angle about the
+/// ankle pitch axes while the feet (mass share mu, CoM p) stay; with the feet rolled
+/// onto the edge by e the whole robot then turns about the edge `(X, -L0)`
+/// (`X = F1` or `-F2`, s = +1 forward, -1 backward, `phi = s t`, `psi = s e`):
+/// `(1 - mu) (cx cos(phi + psi) + cz sin(phi + psi)) = X cos(psi) - L0 sin(psi)
+/// - mu (px cos(psi) + pz sin(psi))`, two linear equations for the turning part's CoM
+/// `(cx, cz)`; the CoM is `mu p + (1 - mu) c`. With flat, massless feet this is
+/// `x cos(tf) + z sin(tf) = F1`, `x cos(tb) - z sin(tb) = -F2`.
+///
+/// Sideways, y and the lever S solve, for the left tip with leg angle `tl` and foot roll
+/// `el` (the whole robot turned about the outer edge by `el`, the CoM then above it):
 /// `(y + S sin(tl) - E) cos(el) + (h - S (1 - cos(tl))) sin(el) = 0`, and the mirror
 /// image for the right, where `E = d + outer` and `h = z + L0` is the CoM's height
 /// above the sole in the standing pose (the parallelogram lowers it by
@@ -531,9 +640,11 @@ fn solve2(a: [[f64; 2]; 2], b: [f64; 2], field: &str) -> Result<(f64, f64), Redu
 /// legs). With flat feet this is `y + S sin(tl) = E`, `y - S sin(tr) = -E`.
 pub fn exact_method(
     angles: &TipAngles,
+    feet: &FeetMass,
     foot: &FootGeometry,
 ) -> Result<ExactEstimate, ReducedError> {
     check_foot(foot)?;
+    check_feet(feet)?;
     for (f, v) in [
         ("angles.forward", angles.forward),
         ("angles.backward", angles.backward),
@@ -548,6 +659,8 @@ pub fn exact_method(
         }
     }
     for (f, v) in [
+        ("angles.forward_roll", angles.forward_roll),
+        ("angles.backward_roll", angles.backward_roll),
         ("angles.left_roll", angles.left_roll),
         ("angles.right_roll", angles.right_roll),
     ] {
@@ -558,13 +671,20 @@ pub fn exact_method(
             ));
         }
     }
-    let (sf, cf) = angles.forward.sin_cos();
-    let (sb, cb) = angles.backward.sin_cos();
-    let (x, z) = solve2(
-        [[cf, sf], [cb, -sb]],
-        [foot.front, -foot.back],
-        "angles.backward",
-    )?;
+    let mu = feet.fraction;
+    let sagittal_row = |t: f64, roll: f64, side: f64, edge: f64| {
+        let (phi, psi) = (side * t, side * roll);
+        let (sp, cp) = (phi + psi).sin_cos();
+        let (ss, cs) = psi.sin_cos();
+        (
+            [(1.0 - mu) * cp, (1.0 - mu) * sp],
+            edge * cs - foot.ankle_height * ss - mu * (feet.x * cs + feet.z * ss),
+        )
+    };
+    let (f, bf) = sagittal_row(angles.forward, angles.forward_roll, 1.0, foot.front);
+    let (b, bb) = sagittal_row(angles.backward, angles.backward_roll, -1.0, -foot.back);
+    let (cx, cz) = solve2([f, b], [bf, bb], "angles.backward")?;
+    let (x, z) = (mu * feet.x + (1.0 - mu) * cx, mu * feet.z + (1.0 - mu) * cz);
     let e = foot.ankle_half_spacing + foot.outer;
     let h = z + foot.ankle_height;
     // Rows [y coefficient, S coefficient] = rhs; the right tip is the left one mirrored

@@ -4,8 +4,9 @@
 use nalgebra::{Rotation3, Vector3};
 use twinloop_dynamics::{Data, Model, center_of_mass, forward_kinematics};
 use twinloop_reduced::tipover::{
-    FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method,
-    frontal_lever, sagittal_tip_angles, seed_method, seed_method_sagittal_angles, tip_angles,
+    FeetMass, FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method,
+    feet_mass, frontal_lever, sagittal_tip_angles, seed_method, seed_method_sagittal_angles,
+    tip_angles,
 };
 use twinloop_robots::{FootGeometry, foot_geometry};
 
@@ -15,12 +16,18 @@ fn km20_foot() -> FootGeometry {
 
 /// Rotate the CoM as the tipping robot does and check it is exactly above each edge:
 /// an independent check of the angles (rotation matrices, not the tip equation).
-fn check_above_edges(com: [f64; 3], a: &TipAngles, foot: &FootGeometry) {
+fn check_above_edges(com: [f64; 3], a: &TipAngles, feet: &FeetMass, foot: &FootGeometry) {
     let c = Vector3::new(com[0], com[1], com[2]);
+    // The feet stay, the rest (its CoM is (c - mu p) / (1 - mu)) turns.
+    let mu = feet.fraction;
+    let p = Vector3::new(feet.x, 0.0, feet.z);
+    let turning = (c - p * mu) / (1.0 - mu);
     // Leaning forward by t turns the body about +y by +t (up tilts towards +x).
-    let fwd = Rotation3::from_axis_angle(&Vector3::y_axis(), a.forward) * c;
+    let fwd =
+        p * mu + Rotation3::from_axis_angle(&Vector3::y_axis(), a.forward) * turning * (1.0 - mu);
     assert!((fwd.x - foot.front).abs() < 1e-12, "forward {}", fwd.x);
-    let bwd = Rotation3::from_axis_angle(&Vector3::y_axis(), -a.backward) * c;
+    let bwd =
+        p * mu + Rotation3::from_axis_angle(&Vector3::y_axis(), -a.backward) * turning * (1.0 - mu);
     assert!((bwd.x + foot.back).abs() < 1e-12, "backward {}", bwd.x);
     // Sideways the parallelogram carries the CoM to y + S sin - C (1 - cos): at the
     // outer sole edges.
@@ -29,6 +36,13 @@ fn check_above_edges(com: [f64; 3], a: &TipAngles, foot: &FootGeometry) {
     assert!((y(a.left) - e).abs() < 1e-12, "left {}", y(a.left));
     assert!((y(-a.right) + e).abs() < 1e-12, "right {}", y(-a.right));
 }
+
+/// Feet like km20's: 11 % of the mass, 25 mm behind and 11 mm below the ankle axes.
+const FEET: FeetMass = FeetMass {
+    fraction: 0.114,
+    x: -0.025,
+    z: -0.011,
+};
 
 /// A lever like km20's (S 0.154 m) with a small lateral offset of the leg links.
 const LEVER: FrontalLever = FrontalLever {
@@ -44,20 +58,25 @@ fn exact_method_recovers_a_known_com() {
         (foot_geometry("lab17").unwrap(), [0.005, 0.003, 0.14]),
         (foot_geometry("lab17").unwrap(), [-0.01, -0.004, 0.12]),
     ] {
-        let a = tip_angles(com, &LEVER, &foot).unwrap();
-        check_above_edges(com, &a, &foot);
+        let a = tip_angles(com, &FEET, &LEVER, &foot).unwrap();
+        check_above_edges(com, &a, &FEET, &foot);
+        let light = tip_angles(com, &FeetMass::NONE, &LEVER, &foot).unwrap();
+        check_above_edges(com, &light, &FeetMass::NONE, &foot);
         // The exact method takes the leg links' lateral offset C as zero: with C = 0 it
         // is exact, with C = 2 mm it is off by about C (1 - cos) (a quarter millimetre
         // at km20's 28 degrees).
         let flat = FrontalLever { cos: 0.0, ..LEVER };
-        let e = exact_method(&tip_angles(com, &flat, &foot).unwrap(), &foot).unwrap();
+        let e = exact_method(&tip_angles(com, &FEET, &flat, &foot).unwrap(), &FEET, &foot).unwrap();
         for k in 0..3 {
             assert!((e.com[k] - com[k]).abs() < 1e-9, "{:?} vs {com:?}", e.com);
         }
         assert!((e.frontal_lever - LEVER.sin).abs() < 1e-9);
-        let e = exact_method(&a, &foot).unwrap();
+        let e = exact_method(&a, &FEET, &foot).unwrap();
         let bound = 1.1 * LEVER.cos * (1.0 - a.left.max(a.right).cos());
         assert!((e.com[1] - com[1]).abs() < bound, "{:?} vs {com:?}", e.com);
+        // Taking heavy feet as turning with the body puts the CoM about a millimetre off.
+        let rigid = exact_method(&a, &FeetMass::NONE, &foot).unwrap();
+        assert!((rigid.com[2] - com[2]).abs() > 5e-4, "{:?}", rigid.com);
     }
 }
 
@@ -69,7 +88,37 @@ fn exact_method_accounts_for_rolled_feet() {
     let foot = km20_foot();
     let com = [-0.004, 0.007, 0.24];
     let lever = FrontalLever { cos: 0.0, ..LEVER };
-    let (tf, tb) = sagittal_tip_angles(com[0], com[2], &foot).unwrap();
+    let mu = FEET.fraction;
+    let p = Vector3::new(FEET.x, 0.0, FEET.z);
+    let c = Vector3::new(com[0], com[1], com[2]);
+    let turning = (c - p * mu) / (1.0 - mu);
+    // Forward (side +1) and backward (-1): the body turns by side t about the ankle
+    // axis, the feet stay, then everything turns by side roll about the sole edge at
+    // (side F, -L0).
+    let sagittal = |side: f64, roll: f64| {
+        let edge = Vector3::new(
+            if side > 0.0 { foot.front } else { -foot.back },
+            0.0,
+            -foot.ankle_height,
+        );
+        let beyond = |t: f64| {
+            let q = p * mu
+                + Rotation3::from_axis_angle(&Vector3::y_axis(), side * t) * turning * (1.0 - mu);
+            side * (Rotation3::from_axis_angle(&Vector3::y_axis(), side * roll) * (q - edge)).x
+        };
+        let (mut lo, mut hi) = (0.0, 1.2);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if beyond(mid) < 0.0 {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    let (rf, rb) = (0.2f64.to_radians(), 0.3f64.to_radians());
+    let (tf, tb) = (sagittal(1.0, rf), sagittal(-1.0, rb));
     let e = foot.ankle_half_spacing + foot.outer;
     let h = com[2] + foot.ankle_height;
     // Side +1 left, -1 right: mirror the y axis for the right.
@@ -97,13 +146,16 @@ fn exact_method_accounts_for_rolled_feet() {
         backward: tb,
         left: tip(1.0, rl),
         right: tip(-1.0, rr),
+        forward_roll: rf,
+        backward_roll: rb,
         left_roll: rl,
         right_roll: rr,
     };
     // Rolled feet tip earlier than flat ones.
-    let flat = tip_angles(com, &lever, &foot).unwrap();
+    let flat = tip_angles(com, &FEET, &lever, &foot).unwrap();
     assert!(a.left < flat.left - 0.01 && a.right < flat.right - 0.005);
-    let est = exact_method(&a, &foot).unwrap();
+    assert!(a.forward < flat.forward - 0.003 && a.backward < flat.backward - 0.003);
+    let est = exact_method(&a, &FEET, &foot).unwrap();
     for k in 0..3 {
         assert!(
             (est.com[k] - com[k]).abs() < 1e-9,
@@ -119,10 +171,61 @@ fn exact_method_accounts_for_rolled_feet() {
             right_roll: 0.0,
             ..a
         },
+        &FEET,
         &foot,
     )
     .unwrap();
     assert!((naive.com[1] - com[1]).abs() > 5e-4, "{:?}", naive.com);
+    let naive = exact_method(
+        &TipAngles {
+            forward_roll: 0.0,
+            backward_roll: 0.0,
+            ..a
+        },
+        &FEET,
+        &foot,
+    )
+    .unwrap();
+    assert!((naive.com[2] - com[2]).abs() > 1e-3, "{:?}", naive.com);
+}
+
+/// The feet from a full model, checked by turning km20's ankle pitches (forward
+/// kinematics) and measuring its CoM against the left foot: the feet stay, the rest
+/// turns rigidly about the ankle axes.
+#[test]
+fn km20_feet_stay_while_the_body_turns() {
+    let model = Model::from_robot(&twinloop_robots::resolve("builtin:km20").unwrap()).unwrap();
+    let q0 = model.neutral_configuration();
+    let feet = feet_mass(&model, &q0, ["l_ank_pitch", "r_ank_pitch"]).unwrap();
+    // km20's feet: sole plate, ankle-roll servo and cross bracket, 0.19 kg each.
+    assert!((feet.fraction - 0.381 / 3.336).abs() < 1e-3, "{feet:?}");
+    let mid = twinloop_reduced::ankle_midpoint(&model, &q0, "l_ank_pitch", "r_ank_pitch").unwrap();
+    let com = twinloop_reduced::com_relative_to_ankles(&model, &q0, "l_ank_pitch", "r_ank_pitch")
+        .unwrap();
+    let mu = feet.fraction;
+    let p = Vector3::new(feet.x, 0.0, feet.z);
+    let turning = (Vector3::new(com[0], com[1], com[2]) - p * mu) / (1.0 - mu);
+    let mut data = Data::new(&model);
+    let foot = model.links.iter().position(|l| l.name == "l_foot").unwrap();
+    for t in [0.1f64, 0.3, -0.3] {
+        // Negative ankle pitch leans km20 forward (its pitch axes point left).
+        let mut q = q0.clone();
+        for name in ["l_ank_pitch", "r_ank_pitch"] {
+            q[model.q_offset + model.joint_index(name).unwrap()] = -t;
+        }
+        let c = center_of_mass(&model, &mut data, &q);
+        forward_kinematics(&model, &mut data, &q);
+        let l = &model.links[foot];
+        // Where the standing model's left foot is, relative to the ankle midpoint.
+        let foot_now = data.o_m_i[l.body] * l.placement;
+        forward_kinematics(&model, &mut data, &q0);
+        let foot_then = data.o_m_i[l.body] * l.placement;
+        let c = foot_then.act_point(&foot_now.act_inv_point(&c));
+        let c = Vector3::new(c.x - mid[0], c.y - mid[1], c.z - mid[2]);
+        let want =
+            p * mu + Rotation3::from_axis_angle(&Vector3::y_axis(), t) * turning * (1.0 - mu);
+        assert!((c - want).norm() < 1e-9, "t {t}: {c:?} vs {want:?}");
+    }
 }
 
 /// The frontal lever from a full model, checked by moving km20's legs as a
@@ -186,7 +289,7 @@ fn a_com_above_the_ankle_tips_at_asin_f_over_h() {
         sin: 0.15,
         cos: 0.0,
     };
-    let a = tip_angles([0.0, 0.0, h], &lever, &foot).unwrap();
+    let a = tip_angles([0.0, 0.0, h], &FeetMass::NONE, &lever, &foot).unwrap();
     // The CoM swings on a circle of radius h about the ankle axis and is above the
     // edge when h sin(theta) = F.
     assert!((a.forward - (0.05f64 / h).asin()).abs() < 1e-14);
@@ -195,7 +298,7 @@ fn a_com_above_the_ankle_tips_at_asin_f_over_h() {
     // d + outer = 0.04 + 0.035.
     let want = (0.075f64 / 0.15).asin();
     assert!((a.left - want).abs() < 1e-15 && (a.right - want).abs() < 1e-15);
-    let e = exact_method(&a, &foot).unwrap();
+    let e = exact_method(&a, &FeetMass::NONE, &foot).unwrap();
     assert!(e.com[0].abs() < 1e-12 && e.com[1].abs() < 1e-12);
     assert!((e.com[2] - h).abs() < 1e-12);
 }
@@ -274,16 +377,15 @@ fn seed_001_masses_fall_near_9_and_16_8_degrees() {
     let m: f64 = SEED_001.iter().map(|(m, _)| m).sum();
     let c = |k: usize| SEED_001.iter().map(|(mi, p)| mi * p[k]).sum::<f64>() / m / 100.0;
     let com = [-c(2), c(1), c(0)];
-    let (f, b) = sagittal_tip_angles(com[0], com[2], &km20_foot()).unwrap();
+    // Point masses: the seed's model has no feet.
+    let (f, b) = sagittal_tip_angles(com[0], com[2], &FeetMass::NONE, &km20_foot()).unwrap();
     let (f, b) = (f.to_degrees(), b.to_degrees());
     assert!((f - 9.0).abs() < 0.1, "forward {f}");
     assert!((b - 16.8).abs() < 0.5, "backward {b}");
     // And the exact method turns those angles back into the three masses' CoM.
-    let e = exact_method(
-        &tip_angles(com, &LEVER, &km20_foot()).unwrap(),
-        &km20_foot(),
-    )
-    .unwrap();
+    let none = FeetMass::NONE;
+    let a = tip_angles(com, &none, &LEVER, &km20_foot()).unwrap();
+    let e = exact_method(&a, &none, &km20_foot()).unwrap();
     assert!((e.com[0] - com[0]).abs() < 1e-12 && (e.com[2] - com[2]).abs() < 1e-12);
 }
 
@@ -292,29 +394,30 @@ fn bad_input_names_the_field() {
     let foot = km20_foot();
     // CoM beyond the front edge: the robot cannot stand.
     assert_eq!(
-        tip_angles([0.05, 0.0, 0.2], &LEVER, &foot)
+        tip_angles([0.05, 0.0, 0.2], &FEET, &LEVER, &foot)
             .unwrap_err()
             .field,
         "forward"
     );
     assert_eq!(
-        tip_angles([0.0, 0.0, -0.1], &LEVER, &foot)
+        tip_angles([0.0, 0.0, -0.1], &FEET, &LEVER, &foot)
             .unwrap_err()
             .field,
         "forward"
     );
     assert_eq!(
-        tip_angles([0.0, f64::NAN, 0.2], &LEVER, &foot)
+        tip_angles([0.0, f64::NAN, 0.2], &FEET, &LEVER, &foot)
             .unwrap_err()
             .field,
         "com.y"
     );
-    let good = tip_angles([0.0, 0.0, 0.2], &LEVER, &foot).unwrap();
+    let good = tip_angles([0.0, 0.0, 0.2], &FEET, &LEVER, &foot).unwrap();
     let e = exact_method(
         &TipAngles {
             backward: 0.0,
             ..good
         },
+        &FEET,
         &foot,
     )
     .unwrap_err();
@@ -324,13 +427,25 @@ fn bad_input_names_the_field() {
             left: f64::NAN,
             ..good
         },
+        &FEET,
         &foot,
     )
     .unwrap_err();
     assert_eq!(e.field, "angles.left");
+    let heavy = FeetMass {
+        fraction: 1.0,
+        ..FEET
+    };
+    assert_eq!(
+        exact_method(&good, &heavy, &foot).unwrap_err().field,
+        "feet.fraction"
+    );
     let mut flat = foot.clone();
     flat.front = 0.0;
-    assert_eq!(exact_method(&good, &flat).unwrap_err().field, "foot.front");
+    assert_eq!(
+        exact_method(&good, &FEET, &flat).unwrap_err().field,
+        "foot.front"
+    );
     let e = seed_method(
         &SeedAngles {
             alpha1: 9.0,
