@@ -76,6 +76,8 @@ pub struct DirectionReport {
     /// giving under the load), deg: what the robot would do with infinitely stiff
     /// servos.
     pub rigid_static_deg: f64,
+    /// The trunk's lean from the standing pose at the onset (IMU), deg.
+    pub lean_deg: f64,
 }
 
 /// CoM estimates, m, relative to the midpoint of the ankle pitch joints in the
@@ -493,6 +495,7 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
             time_s: r.time_s,
             static_deg: *s,
             rigid_static_deg: *rigid,
+            lean_deg: r.lean_deg,
             excess_deg: r.excess_deg,
         }
     };

@@ -22,8 +22,8 @@
 //! give a little as the load moves to the edge), after it the robot falls away
 //! exponentially. Comparing with the ankle's own rate makes the test independent of the
 //! ramp speed and the robot's size. The excess at the onset (the feet rolled onto their
-//! edges) and the trunk's lean are recorded beside the ankle angle: a real robot is not
-//! rigid, and the CoM methods need what it really leaned.
+//! edges, which the exact CoM method and the static reference take into account) and
+//! the trunk's lean are recorded beside the ankle angle: a real robot is not rigid.
 
 use serde::Serialize;
 use twinloop_robot::{Robot, RobotError, RobotState};
