@@ -387,13 +387,31 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
     let mut results: Vec<(TipoverResult, f64, f64)> = Vec::new();
     let mut pdata = Data::new(&model);
     for d in Direction::ALL {
-        flat.held = usize::from(d == Direction::Right);
+        // Which foot the kinematics hold flat: sideways the one the robot leans onto
+        // (the other unloads); forward and backward both stand, so both chains are used
+        // and averaged (the legs give by slightly different amounts when the load is
+        // off-centre, and one leg alone would read that as a tilt).
+        let helds: &[usize] = match d {
+            Direction::Left => &[0],
+            Direction::Right => &[1],
+            Direction::Forward | Direction::Backward => &[0, 1],
+        };
+        let n_held = helds.len() as f64;
         // A first run at the constant ramp (its time to fall is seed 000's Table IV
         // quantity), then a second that comes up to half a degree before that tip and
         // creeps (see `TipoverConfig::slow_from_deg`).
         let mut run = |cfg: &TipoverConfig, sim: &mut Simulator| {
             sim.place_on_ground(&standing).map_err(err)?;
-            let mut predict = |j: &[f64]| flat.link_tilt(&mut pdata, j, imu_link);
+            let mut predict = |j: &[f64]| {
+                let mut t = [0.0; 2];
+                for &h in helds {
+                    flat.held = h;
+                    let x = flat.link_tilt(&mut pdata, j, imu_link);
+                    t[0] += x[0] / n_held;
+                    t[1] += x[1] / n_held;
+                }
+                t
+            };
             run_direction(sim, &standing, d, cfg, Some(&mut predict))
                 .map_err(|e: RobotError| e.to_string())
         };
@@ -417,11 +435,16 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
                 -Vector3::y(),
             ),
         };
-        flat.tilt = r.excess_deg.to_radians();
-        let offset = flat
-            .tipping_angle(&mut data, &r.positions_at_onset, &turned, dir, -0.2, 0.2)
-            .map(f64::to_degrees)
-            .unwrap_or(f64::NAN);
+        let mut offset = 0.0;
+        for &h in helds {
+            flat.held = h;
+            flat.tilt = r.excess_deg.to_radians();
+            offset += flat
+                .tipping_angle(&mut data, &r.positions_at_onset, &turned, dir, -0.2, 0.2)
+                .map(f64::to_degrees)
+                .unwrap_or(f64::NAN)
+                / n_held;
+        }
         // The rigid robot's: from the standing pose, feet flat, no joint giving.
         flat.tilt = 0.0;
         let rigid = flat
