@@ -446,6 +446,7 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
                 / n_held;
         }
         // The rigid robot's: from the standing pose, feet flat, no joint giving.
+        flat.held = helds[0];
         flat.tilt = 0.0;
         let rigid = flat
             .tipping_angle(&mut data, &standing, &turned, dir, 0.0, 1.2)
