@@ -70,13 +70,19 @@ fn joint_indices(model: &Model, names: &[String], option: &str) -> Result<Vec<us
 pub enum ExperimentCommand {
     /// Ramp both ankles forward, backward, left and right until the robot tips over
     ///
-    /// The robot stands on its servos in the simulator; each direction ramps both ankle
-    /// joints (--ramp deg/s) until the trunk tilts beyond what the joints explain, and
-    /// records the ankle angle commanded and measured at the onset and the time taken
-    /// (seed 000 Table IV). Beside each, the model's static tipping angle (CoM over the
-    /// support edge). From the four angles, the CoM by the seed's geometric method
-    /// (seed 000 eq 8-13) and by the exact method, next to the model's true CoM, all
-    /// relative to the midpoint of the ankle axes (x forward, y left, z up).
+    /// The robot stands on its servos in the simulator (compliance slope 2: stiff). Forward
+    /// and backward, both ankle pitches ramp (--ramp deg/s); left and right, both ankle
+    /// rolls and both hip rolls turn together, so the legs lean as a parallelogram with the
+    /// feet flat and the pelvis level (with the hips held, the two ankle axes would lock the
+    /// lean into a closed chain through the ground). Each direction runs twice: a first ramp
+    /// finds the tip, a second ramps to 0.5 deg before it and creeps slowly (--slow-ramp) so
+    /// the detection lag does not inflate the angle. The tip is where the trunk tilts beyond
+    /// what the joints explain. Recorded: the angle commanded and measured at the onset and
+    /// the time taken (seed 000 Table IV), beside the model's static tipping angle (CoM over
+    /// the support edge, from the joints measured at the onset; `rigid_static_deg` from the
+    /// rigid standing pose). From the four angles, the CoM by the seed's geometric method
+    /// (seed 000 eq 8-13) and by the exact method, next to the model's true CoM, all relative
+    /// to the midpoint of the ankle axes (x forward, y left, z up).
     ///
     /// Example:
     ///   twinloop experiment tipover --robot builtin:km20 --add-mass 0.2@torso:0.05,0,0 --json tip.json
