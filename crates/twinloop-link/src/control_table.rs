@@ -218,10 +218,10 @@ fn table_rx() -> Vec<Register> {
     let load = Unit::LoadRatio { per_unit: 0.001 };
     let mut v = common_v1_head(angle, 1023, 190);
     v.extend([
-        rw("CW Compliance Margin", None, 26, 1, R, Some(1), 0, 255),
-        rw("CCW Compliance Margin", None, 27, 1, R, Some(1), 0, 255),
-        rw("CW Compliance Slope", None, 28, 1, R, Some(32), 0, 255),
-        rw("CCW Compliance Slope", None, 29, 1, R, Some(32), 0, 255),
+        rw("CW Compliance Margin", Some(Item::CwComplianceMargin), 26, 1, R, Some(1), 0, 255),
+        rw("CCW Compliance Margin", Some(Item::CcwComplianceMargin), 27, 1, R, Some(1), 0, 255),
+        rw("CW Compliance Slope", Some(Item::CwComplianceSlope), 28, 1, R, Some(32), 0, 255),
+        rw("CCW Compliance Slope", Some(Item::CcwComplianceSlope), 29, 1, R, Some(32), 0, 255),
         with(
             rw(
                 "Goal Position",
@@ -290,9 +290,9 @@ fn table_mx_v1(model: Model) -> Vec<Register> {
             Unit::Raw,
         ),
         rw("Resolution Divider", None, 22, 1, E, Some(1), 1, 4),
-        rw("D Gain", None, 26, 1, R, Some(0), 0, 254),
-        rw("I Gain", None, 27, 1, R, Some(0), 0, 254),
-        rw("P Gain", None, 28, 1, R, Some(32), 0, 254),
+        rw("D Gain", Some(Item::PositionDGain), 26, 1, R, Some(0), 0, 254),
+        rw("I Gain", Some(Item::PositionIGain), 27, 1, R, Some(0), 0, 254),
+        rw("P Gain", Some(Item::PositionPGain), 28, 1, R, Some(32), 0, 254),
         with(
             rw(
                 "Goal Position",
@@ -595,7 +595,7 @@ fn common_v1_tail(speed: Unit, load: Unit, punch: i32) -> Vec<Register> {
         ro("Registered", Some(Item::Registered), 44, 1, R),
         ro("Moving", Some(Item::Moving), 46, 1, R),
         rw("Lock", Some(Item::Lock), 47, 1, R, Some(0), 0, 1),
-        rw("Punch", None, 48, 2, R, Some(punch), 0, 1023),
+        rw("Punch", Some(Item::Punch), 48, 2, R, Some(punch), 0, 1023),
     ]
 }
 
@@ -859,11 +859,11 @@ fn table_v2(model: Model) -> Vec<Register> {
             16383,
         ),
         rw("Velocity P Gain", None, 78, 2, R, Some(100), 0, 16383),
-        rw("Position D Gain", None, 80, 2, R, Some(0), 0, 16383),
-        rw("Position I Gain", None, 82, 2, R, Some(0), 0, 16383),
+        rw("Position D Gain", Some(Item::PositionDGain), 80, 2, R, Some(0), 0, 16383),
+        rw("Position I Gain", Some(Item::PositionIGain), 82, 2, R, Some(0), 0, 16383),
         rw(
             "Position P Gain",
-            None,
+            Some(Item::PositionPGain),
             84,
             2,
             R,
