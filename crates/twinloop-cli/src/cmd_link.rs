@@ -199,14 +199,25 @@ pub struct PlanArgs {
 
 #[derive(Args)]
 pub struct ServeArgs {
-    /// The robot: builtin:km20 (RX-28/RX-64, Protocol 1.0), builtin:op3 (XM430, 2.0) or a mapping TOML
-    #[arg(
-        long,
-        alias = "map",
-        default_value = "builtin:km20",
-        value_name = "MAPPING"
-    )]
+    /// The robot: builtin:km20 (simulated, RX-28/RX-64 on Protocol 1.0), builtin:op3
+    /// (XM430 on 2.0, stand-in servos), a URDF/MJCF file (with --map) or a mapping TOML
+    #[arg(long, default_value = "builtin:km20", value_name = "ROBOT")]
     pub robot: String,
+    /// Mapping TOML: servo ids, models and protocols of the robot's joints (default:
+    /// the built-in robot's own)
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    /// What moves the servos: sim (the physics simulation of the robot standing on the
+    /// ground, in real time), ideal (each servo tracks its goal, no physics: for
+    /// protocol-only benchmarks) or auto (sim when the robot has a model)
+    #[arg(long, default_value = "auto", value_parser = ["auto", "sim", "ideal"])]
+    pub servo_model: String,
+    /// Simulated robot: servos power on limp, as real ones do (the robot falls)
+    #[arg(long)]
+    pub torque_off: bool,
+    /// Simulated robot: simulated seconds per wall-clock second
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub realtime_factor: f64,
     /// Where to serve: pty (a new pseudo-terminal) or tcp:ADDR (e.g. tcp:127.0.0.1:5555)
     #[arg(long, default_value = "pty")]
     pub port: String,
@@ -764,10 +775,64 @@ fn plan(a: &PlanArgs) -> ExitCode {
     ExitCode::from(EXIT_OK)
 }
 
+/// The robot and mapping `twinloop serve` was asked for: the mapping always, the
+/// robot's model when there is one (`None`: a mapping-only bus).
+fn serve_robot(a: &ServeArgs) -> Result<(RobotMapping, Option<twinloop_model::Robot>), String> {
+    let is_mapping = a.robot.ends_with(".toml");
+    let mapping = match (&a.map, is_mapping) {
+        (Some(m), _) => RobotMapping::load(m).map_err(|e| e.to_string())?,
+        (None, true) => RobotMapping::load(&a.robot).map_err(|e| e.to_string())?,
+        (None, false) => match a.robot.strip_prefix("builtin:") {
+            Some(name) => RobotMapping::builtin(name).ok_or_else(|| {
+                format!(
+                    "--robot {}: no built-in mapping for {name:?} (built-in: {}); give --map FILE",
+                    a.robot,
+                    RobotMapping::BUILTINS.join(", ")
+                )
+            })?,
+            None => {
+                return Err(format!(
+                    "--robot {}: a description file needs --map FILE (which servo drives which joint)",
+                    a.robot
+                ));
+            }
+        },
+    };
+    // The robot's model: --robot itself unless it is a mapping; else the mapping's
+    // `urdf`. A built-in mapping without a built-in robot (op3) has none.
+    let spec = if is_mapping {
+        // A relative path in a mapping file is relative to that file.
+        let dir = std::path::Path::new(&mapping.source).parent();
+        mapping.urdf.as_ref().map(|p| {
+            let s = p.display().to_string();
+            match dir {
+                Some(d) if !s.starts_with("builtin:") && p.is_relative() => {
+                    d.join(p).display().to_string()
+                }
+                _ => s,
+            }
+        })
+    } else {
+        Some(a.robot.clone())
+    };
+    let robot = match spec {
+        Some(s) if s.starts_with("builtin:") => {
+            twinloop_robots::builtin(&s["builtin:".len()..])
+        }
+        Some(s) => match twinloop_model::load(&s) {
+            Ok(r) => Some(r),
+            Err(e) if a.servo_model == "sim" => return Err(format!("{s}: {e}")),
+            Err(_) => None,
+        },
+        None => None,
+    };
+    Ok((mapping, robot))
+}
+
 /// `twinloop serve`.
 pub fn serve(a: ServeArgs) -> ExitCode {
-    let mapping = match RobotMapping::resolve(&a.robot) {
-        Ok(m) => m,
+    let (mapping, robot) = match serve_robot(&a) {
+        Ok(x) => x,
         Err(e) => return fail(e),
     };
     let servos: Vec<BusServo> = mapping
@@ -778,7 +843,77 @@ pub fn serve(a: ServeArgs) -> ExitCode {
             model: j.model,
         })
         .collect();
-    let mut bus = VirtualBus::with_tracking_model(&servos);
+    let simulate = match (a.servo_model.as_str(), &robot) {
+        ("ideal", _) => false,
+        ("sim", None) => {
+            return fail(format!(
+                "--servo-model sim: {} has no robot model to simulate (give --robot builtin:NAME or a URDF with --map)",
+                a.robot
+            ));
+        }
+        (_, r) => r.is_some(),
+    };
+    if simulate {
+        let robot = robot.expect("checked above");
+        let options = twinloop_virtual::VirtualRobotOptions {
+            torque_on: !a.torque_off,
+            realtime_factor: a.realtime_factor,
+            ..Default::default()
+        };
+        if !(a.realtime_factor > 0.0 && a.realtime_factor.is_finite()) {
+            return fail(format!(
+                "--realtime-factor must be positive, not {}",
+                a.realtime_factor
+            ));
+        }
+        let vr = match twinloop_virtual::VirtualRobot::new(&robot, &mapping, &options) {
+            Ok(v) => v,
+            Err(e) => return fail(e),
+        };
+        if !vr.unmapped.is_empty() {
+            eprintln!(
+                "joints without a servo on the bus (they hold their pose): {}",
+                vr.unmapped.join(", ")
+            );
+        }
+        let bus = vr.bus();
+        let sim = vr.spawn();
+        let what = format!(
+            "the physics simulation of {} standing on the ground (real time x{}, servos {})",
+            robot.name,
+            a.realtime_factor,
+            if a.torque_off { "limp" } else { "torque on" }
+        );
+        let code = serve_on(&a, &mapping, &servos, bus, &what);
+        let status = sim.status();
+        if let Some(e) = &status.error {
+            eprintln!("the simulation stopped: {e}");
+        }
+        if status.behind_s > 0.0 {
+            eprintln!(
+                "the simulation fell {:.3} s behind the wall clock in {:.1} s",
+                status.behind_s, status.time
+            );
+        }
+        return code;
+    }
+    let bus = VirtualBus::with_tracking_model(&servos);
+    serve_on(
+        &a,
+        &mapping,
+        &servos,
+        bus,
+        "stand-in servos (each tracks its goal, 50 ms lag; no physics)",
+    )
+}
+
+fn serve_on<B: twinloop_link::VirtualServoBackend>(
+    a: &ServeArgs,
+    mapping: &RobotMapping,
+    servos: &[BusServo],
+    mut bus: VirtualBus<B>,
+    what: &str,
+) -> ExitCode {
     let options = ServeOptions {
         emulate_baud: (!a.no_timing).then_some(a.baud),
         stop_on_eof: true,
@@ -797,7 +932,7 @@ pub fn serve(a: ServeArgs) -> ExitCode {
             }
         }
         format!(
-            "serving {} ({} servos: {}) on {place}\n{}\nCtrl-C stops.\n",
+            "serving {} ({} servos: {}) on {place}\nmoved by {what}\n{}\nCtrl-C stops.\n",
             if mapping.name.is_empty() {
                 &mapping.source
             } else {
