@@ -92,7 +92,6 @@ fn knee_goals_over_a_pty_move_the_simulated_knees_and_km20_stands() {
     let mut b = [0u8; 2];
     c.read(Protocol::V1, id("r_knee"), pos.address, &mut b).unwrap();
     let q_start = snap.state.positions[knee];
-    eprintln!("start: read {} sim {q_start} h0 {h0} all {:?}", pos.to_si(pos.decode(&b)), snap.state.positions);
     assert!((pos.to_si(pos.decode(&b)) - q_start).abs() < 2.0 * unit);
     let mut on = [0u8; 1];
     c.read(Protocol::V1, id("r_knee"), 24, &mut on).unwrap();
