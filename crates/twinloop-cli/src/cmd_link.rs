@@ -176,6 +176,11 @@ pub struct RecordArgs {
     /// How to read: auto (cheapest the servos have), read, bulk, sync, fast
     #[arg(long, default_value = "auto", value_parser = parse_method)]
     pub method: ReadMethod,
+    /// Protocol 1.0 servos: read each twice and keep a value only when both replies
+    /// agree byte for byte (the 8-bit checksum misses some damage; this catches it,
+    /// at one more round trip per servo)
+    #[arg(long)]
+    pub verified_reads: bool,
 }
 
 #[derive(Args)]
@@ -606,6 +611,7 @@ fn record(a: &RecordArgs) -> ExitCode {
         Ok(r) => r,
         Err(e) => return fail(e),
     };
+    robot.cycle_mut().verify_v1 = a.verified_reads;
     let mut columns = vec!["t".to_string()];
     for prefix in ["q", "v", "tau"] {
         columns.extend(names.iter().map(|n| format!("{prefix}:{n}")));
