@@ -114,6 +114,10 @@ pub struct PortArgs {
     /// Set the USB adapter's latency timer to 1 ms (FTDI, via sysfs)
     #[arg(long)]
     pub low_latency: bool,
+    /// Busy-check the port for up to this many microseconds before sleeping while
+    /// waiting for a reply: shorter round trips, one busy core meanwhile
+    #[arg(long, default_value_t = 0, value_name = "US")]
+    pub spin_us: u64,
 }
 
 #[derive(Args)]
@@ -238,6 +242,12 @@ pub struct ServeArgs {
     /// Answer at once instead of emulating wire time
     #[arg(long)]
     pub no_timing: bool,
+    /// Busy-check the line for up to this many microseconds before sleeping while
+    /// waiting for a request: requests are answered without a scheduler wake-up,
+    /// at the cost of a busy core (helps only with idle cores: on a loaded machine
+    /// the spinning steals the client's CPU and round trips get slower)
+    #[arg(long, default_value_t = 0, value_name = "US")]
+    pub spin_us: u64,
 }
 
 fn parse_protocol(s: &str) -> Result<Protocol, String> {
@@ -294,7 +304,9 @@ fn open_client(
     let options = SerialOptions {
         low_latency: p.low_latency,
     };
-    let t = transport::open(port, p.baud, &options).map_err(|e| fail(format!("{port}: {e}")))?;
+    let mut t =
+        transport::open(port, p.baud, &options).map_err(|e| fail(format!("{port}: {e}")))?;
+    t.set_spin(Duration::from_micros(p.spin_us));
     let config = ClientConfig {
         latency: Duration::from_secs_f64(p.timeout_ms.max(0.0) / 1000.0),
         retries: p.retries,
@@ -958,6 +970,7 @@ fn serve_on<B: twinloop_link::VirtualServoBackend>(
             Ok(p) => p,
             Err(e) => return fail(format!("cannot open a pseudo-terminal: {e}")),
         };
+        pty.set_spin(Duration::from_micros(a.spin_us));
         let path = pty.path().to_path_buf();
         if let Some(link) = &a.link {
             let _ = std::fs::remove_file(link);
@@ -1037,6 +1050,10 @@ pub struct LinkBenchArgs {
     /// Seconds per case
     #[arg(long, default_value_t = 1.0)]
     pub seconds: f64,
+    /// With --port: busy-check the pty for up to this many microseconds before
+    /// sleeping for a reply (0: sleep at once)
+    #[arg(long, default_value_t = 0, value_name = "US")]
+    pub spin_us: u64,
     /// Print JSON: {"cases": [{"name", "median_us", "per_second", "wire_us", "overhead_ratio"}]}
     #[arg(long)]
     pub json: bool,
@@ -1280,6 +1297,7 @@ pub fn bench(a: &LinkBenchArgs) -> ExitCode {
             timeout_ms: 50.0,
             retries: 0,
             low_latency: false,
+            spin_us: a.spin_us,
         };
         let mut c = match open_client(&p, None) {
             Ok(c) => c,
