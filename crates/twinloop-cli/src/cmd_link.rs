@@ -834,9 +834,7 @@ fn serve_robot(a: &ServeArgs) -> Result<(RobotMapping, Option<twinloop_model::Ro
         Some(a.robot.clone())
     };
     let robot = match spec {
-        Some(s) if s.starts_with("builtin:") => {
-            twinloop_robots::builtin(&s["builtin:".len()..])
-        }
+        Some(s) if s.starts_with("builtin:") => twinloop_robots::builtin(&s["builtin:".len()..]),
         Some(s) => match twinloop_model::load(&s) {
             Ok(r) => Some(r),
             Err(e) if a.servo_model == "sim" => return Err(format!("{s}: {e}")),

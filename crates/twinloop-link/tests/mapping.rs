@@ -25,7 +25,11 @@ fn builtins_parse_and_round_trip() {
     assert_eq!(km.joints[0].model, Model::Rx28);
     // The seed robot's knees are RX-64, everything else RX-28 (twinloop-robots km20).
     for j in &km.joints {
-        let want = if j.name.ends_with("knee") { Model::Rx64 } else { Model::Rx28 };
+        let want = if j.name.ends_with("knee") {
+            Model::Rx64
+        } else {
+            Model::Rx28
+        };
         assert_eq!(j.model, want, "{}", j.name);
     }
     assert!(km.joints.iter().all(|j| j.protocol == Protocol::V1));

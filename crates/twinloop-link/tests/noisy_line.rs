@@ -248,7 +248,11 @@ fn protocol_1_defences() {
     let servos: Vec<BusServo> = (1..=10)
         .map(|id| BusServo {
             id,
-            model: if id % 2 == 0 { Model::Rx64 } else { Model::Rx28 },
+            model: if id % 2 == 0 {
+                Model::Rx64
+            } else {
+                Model::Rx28
+            },
         })
         .collect();
     let cycles = 100_000;
@@ -268,7 +272,10 @@ fn protocol_1_defences() {
             "{name}: {} of {} accepted reads corrupted ({rate:.1e}); {} failed; {} requests",
             t.corrupted_accepted_v1, t.accepted_v1, t.failed, c.stats.requests
         );
-        assert!(t.accepted_v1 as f64 > 0.95 * (cycles * servos.len()) as f64, "{name}: {t:?}");
+        assert!(
+            t.accepted_v1 as f64 > 0.95 * (cycles * servos.len()) as f64,
+            "{name}: {t:?}"
+        );
         rates.push(t.corrupted_accepted_v1);
     }
     // The checksum alone lets corrupted values through at this noise level (the test

@@ -16,17 +16,29 @@ pub struct SimServoBackend {
 
 impl VirtualServoBackend for SimServoBackend {
     fn set_torque_enabled(&mut self, servo: usize, enabled: bool) {
-        let mut r = self.shared.registers.lock().unwrap_or_else(|e| e.into_inner());
+        let mut r = self
+            .shared
+            .registers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
         r[servo].torque_on = enabled;
     }
 
     fn set_goal_position(&mut self, servo: usize, position: f64) {
-        let mut r = self.shared.registers.lock().unwrap_or_else(|e| e.into_inner());
+        let mut r = self
+            .shared
+            .registers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
         r[servo].goal = position;
     }
 
     fn measure(&self, servo: usize) -> ServoMeasurement {
-        let s = self.shared.snapshot.lock().unwrap_or_else(|e| e.into_inner());
+        let s = self
+            .shared
+            .snapshot
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
         s.servos[servo]
     }
 
@@ -35,7 +47,11 @@ impl VirtualServoBackend for SimServoBackend {
 
     fn register_written(&mut self, servo: usize, item: Item, raw: i32) {
         let model = self.models[servo];
-        let mut r = self.shared.registers.lock().unwrap_or_else(|e| e.into_inner());
+        let mut r = self
+            .shared
+            .registers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
         r[servo].set(model, item, raw);
     }
 }

@@ -183,7 +183,13 @@ impl VirtualRobot {
 
     /// The latest snapshot.
     pub fn snapshot(&self, out: &mut Snapshot) {
-        out.copy_from(&self.shared.snapshot.lock().unwrap_or_else(|e| e.into_inner()));
+        out.copy_from(
+            &self
+                .shared
+                .snapshot
+                .lock()
+                .unwrap_or_else(|e| e.into_inner()),
+        );
     }
 
     /// Run the simulation on its own thread, in real time.
@@ -207,11 +213,21 @@ pub struct SimHandle {
 impl SimHandle {
     /// Copy the latest snapshot into `out` (no allocation once `out` is sized).
     pub fn snapshot(&self, out: &mut Snapshot) {
-        out.copy_from(&self.shared.snapshot.lock().unwrap_or_else(|e| e.into_inner()));
+        out.copy_from(
+            &self
+                .shared
+                .snapshot
+                .lock()
+                .unwrap_or_else(|e| e.into_inner()),
+        );
     }
 
     pub fn status(&self) -> SimStatus {
-        let s = self.shared.snapshot.lock().unwrap_or_else(|e| e.into_inner());
+        let s = self
+            .shared
+            .snapshot
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
         SimStatus {
             time: s.time,
             steps: s.steps,

@@ -90,7 +90,8 @@ fn knee_goals_over_a_pty_move_the_simulated_knees_and_km20_stands() {
     let knee = sim_joint("r_knee");
     // Standing: every joint reads 0 within a unit, torque on.
     let mut b = [0u8; 2];
-    c.read(Protocol::V1, id("r_knee"), pos.address, &mut b).unwrap();
+    c.read(Protocol::V1, id("r_knee"), pos.address, &mut b)
+        .unwrap();
     let q_start = snap.state.positions[knee];
     assert!((pos.to_si(pos.decode(&b)) - q_start).abs() < 2.0 * unit);
     let mut on = [0u8; 1];
@@ -124,13 +125,11 @@ fn knee_goals_over_a_pty_move_the_simulated_knees_and_km20_stands() {
     let mut after = Snapshot::default();
     while t0.elapsed() < Duration::from_millis(1500) {
         sim.snapshot(&mut before);
-        c.read(Protocol::V1, id("r_knee"), pos.address, &mut b).unwrap();
+        c.read(Protocol::V1, id("r_knee"), pos.address, &mut b)
+            .unwrap();
         sim.snapshot(&mut after);
         let read = pos.to_si(pos.decode(&b));
-        let (q0, q1) = (
-            before.state.positions[knee],
-            after.state.positions[knee],
-        );
+        let (q0, q1) = (before.state.positions[knee], after.state.positions[knee]);
         assert!(
             read >= q0.min(q1) - unit && read <= q0.max(q1) + unit,
             "read {read} outside the simulated {q0}..{q1}"
@@ -151,12 +150,18 @@ fn knee_goals_over_a_pty_move_the_simulated_knees_and_km20_stands() {
     // Settled: the knee is near its goal (a compliant servo under load sags a few
     // units), the load register matches the simulated torque, the robot stands.
     sim.snapshot(&mut snap);
-    c.read(Protocol::V1, id("r_knee"), pos.address, &mut b).unwrap();
+    c.read(Protocol::V1, id("r_knee"), pos.address, &mut b)
+        .unwrap();
     let read = pos.to_si(pos.decode(&b));
-    assert!((read - 2.0 * a).abs() < 0.1, "knee at {read}, goal {}", 2.0 * a);
+    assert!(
+        (read - 2.0 * a).abs() < 0.1,
+        "knee at {read}, goal {}",
+        2.0 * a
+    );
     assert!((read - snap.state.positions[knee]).abs() <= 1.5 * unit);
     let mut lb = [0u8; 2];
-    c.read(Protocol::V1, id("r_knee"), load.address, &mut lb).unwrap();
+    c.read(Protocol::V1, id("r_knee"), load.address, &mut lb)
+        .unwrap();
     sim.snapshot(&mut after);
     let ratio = load.to_si(load.decode(&lb));
     let torque = after.state.efforts.as_ref().unwrap()[knee];

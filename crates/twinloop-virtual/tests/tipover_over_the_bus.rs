@@ -84,8 +84,11 @@ fn tipover_forward_through_the_bus_matches_the_simulator() {
     // Reference: the simulator itself as the Robot, built like the virtual robot.
     let mut sim = Simulator::new(&robot, SimConfig::default()).unwrap();
     for i in 0..sim.model.nbodies {
-        sim.actuators[i] =
-            Actuator::Dynamixel(twinloop_experiments::servo_for_joint(&robot.name, &sim.model, i));
+        sim.actuators[i] = Actuator::Dynamixel(twinloop_experiments::servo_for_joint(
+            &robot.name,
+            &sim.model,
+            i,
+        ));
     }
     let standing = vec![0.0; sim.model.nbodies];
     sim.place_on_ground(&standing).unwrap();
@@ -137,7 +140,10 @@ fn tipover_forward_through_the_bus_matches_the_simulator() {
     assert!(status.error.is_none(), "{status:?}");
     // A forward fall of km20 needs several degrees of ankle (seed 000: 7-24 deg
     // for its falls); both runs find one.
-    assert!(direct.commanded_deg > 3.0 && direct.commanded_deg < 30.0, "{direct:?}");
+    assert!(
+        direct.commanded_deg > 3.0 && direct.commanded_deg < 30.0,
+        "{direct:?}"
+    );
     // The bus adds 0.29 deg encoder steps, 5 ms control periods in wall-clock time
     // and whatever lag the machine imposes: the onset must agree within 1.5 deg of
     // ankle command (0.3 s of the 5 deg/s ramp).

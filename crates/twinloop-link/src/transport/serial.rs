@@ -70,14 +70,12 @@ impl Transport for SerialTransport {
 
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
         let spun = self.spin.min(timeout);
-        let timeout = if super::pty::spin_readable(
-            std::os::fd::AsRawFd::as_raw_fd(&self.port),
-            spun,
-        )? {
-            timeout
-        } else {
-            timeout.saturating_sub(spun)
-        };
+        let timeout =
+            if super::pty::spin_readable(std::os::fd::AsRawFd::as_raw_fd(&self.port), spun)? {
+                timeout
+            } else {
+                timeout.saturating_sub(spun)
+            };
         if timeout != self.timeout {
             self.port.set_timeout(timeout)?;
             self.timeout = timeout;
