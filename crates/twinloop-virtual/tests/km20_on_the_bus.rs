@@ -10,16 +10,16 @@ use twinloop_link::transport::{self, PtyTransport, SerialOptions, Transport};
 use twinloop_link::{Client, ClientConfig, Item, Model, Protocol, RobotMapping};
 use twinloop_virtual::{SimHandle, Snapshot, VirtualRobot, VirtualRobotOptions};
 
-/// Serve `vr` on a new pty (no wire-time emulation); the client, the simulator
-/// handle and the server's stop flag.
-fn serve_on_pty(
-    vr: VirtualRobot,
-) -> (
+/// The client, the simulator handle, the server's stop flag and its thread.
+type Served = (
     Client<Box<dyn Transport>>,
     SimHandle,
     Arc<AtomicBool>,
     std::thread::JoinHandle<()>,
-) {
+);
+
+/// Serve `vr` on a new pty (no wire-time emulation).
+fn serve_on_pty(vr: VirtualRobot) -> Served {
     let mut bus = vr.bus();
     let handle = vr.spawn();
     let mut pty = PtyTransport::open().unwrap();
