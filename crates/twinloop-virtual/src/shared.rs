@@ -73,7 +73,7 @@ pub(crate) struct Shared {
 /// The constants the virtual robot uses ([`AMBIENT_C`], [`RISE_AT_STALL_K`],
 /// [`THERMAL_TAU_S`]) are assumptions, not datasheet values: ROBOTIS publishes no
 /// thermal data for RX/X servos. They are chosen so a servo held at stall reaches
-/// the factory Temperature Limit (80 C) in about 80 s, which is the order users
+/// the factory Temperature Limit (80 C) in about 80 s, the order users
 /// report of stalled RX-28s, and an idle one stays at ambient.
 pub fn thermal_step(temperature: f64, load: f64, dt: f64) -> f64 {
     let target = AMBIENT_C + RISE_AT_STALL_K * load * load;
@@ -86,3 +86,24 @@ pub const AMBIENT_C: f64 = 25.0;
 pub const RISE_AT_STALL_K: f64 = 100.0;
 /// Thermal time constant, s.
 pub const THERMAL_TAU_S: f64 = 100.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thermal_steps_compose_to_the_first_order_solution() {
+        // Held at stall from ambient for 80 s in 1 ms steps vs the closed form.
+        let mut t = AMBIENT_C;
+        for _ in 0..80_000 {
+            t = thermal_step(t, 1.0, 1e-3);
+        }
+        let exact = AMBIENT_C + RISE_AT_STALL_K * (1.0 - (-80.0 / THERMAL_TAU_S).exp());
+        assert!((t - exact).abs() < 1e-6, "{t} vs {exact}");
+        // ~80 C: the RX factory Temperature Limit.
+        assert!((t - 80.0).abs() < 0.5, "{t}");
+        // Idle stays at ambient; load sign does not matter.
+        assert_eq!(thermal_step(AMBIENT_C, 0.0, 1.0), AMBIENT_C);
+        assert_eq!(thermal_step(40.0, -0.5, 0.1), thermal_step(40.0, 0.5, 0.1));
+    }
+}
