@@ -73,8 +73,8 @@ pub(crate) struct Shared {
 /// The constants the virtual robot uses ([`AMBIENT_C`], [`RISE_AT_STALL_K`],
 /// [`THERMAL_TAU_S`]) are assumptions, not datasheet values: ROBOTIS publishes no
 /// thermal data for RX/X servos. They are chosen so a servo held at stall reaches
-/// the factory Temperature Limit (80 C) in about 80 s, the order users
-/// report of stalled RX-28s, and an idle one stays at ambient.
+/// the factory Temperature Limit (80 C) in about 80 s (a guess of the right order,
+/// not a measurement) and an idle one stays at ambient.
 pub fn thermal_step(temperature: f64, load: f64, dt: f64) -> f64 {
     let target = AMBIENT_C + RISE_AT_STALL_K * load * load;
     target + (temperature - target) * (-dt / THERMAL_TAU_S).exp()
