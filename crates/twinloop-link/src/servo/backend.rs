@@ -1,7 +1,8 @@
 //! What moves a virtual robot's servos. The virtual bus speaks the protocol and
 //! keeps the control tables; a [`VirtualServoBackend`] decides where each servo
-//! is. The simulator implements it later; until then [`TrackingServoModel`] stands
-//! in.
+//! is. The physics simulator implements it in the `twinloop-virtual` crate (kept
+//! out of here so the link needs no dynamics); [`TrackingServoModel`] is a
+//! stand-in without physics for protocol-only work.
 
 use crate::model::ServoSpec;
 use crate::register::Item;
