@@ -114,6 +114,10 @@ pub struct PortArgs {
     /// Set the USB adapter's latency timer to 1 ms (FTDI, via sysfs)
     #[arg(long)]
     pub low_latency: bool,
+    /// Busy-check the port for up to this many microseconds before sleeping while
+    /// waiting for a reply: shorter round trips, one busy core meanwhile
+    #[arg(long, default_value_t = 0, value_name = "US")]
+    pub spin_us: u64,
 }
 
 #[derive(Args)]
@@ -176,6 +180,11 @@ pub struct RecordArgs {
     /// How to read: auto (cheapest the servos have), read, bulk, sync, fast
     #[arg(long, default_value = "auto", value_parser = parse_method)]
     pub method: ReadMethod,
+    /// Protocol 1.0 servos: read each twice and keep a value only when both replies
+    /// agree byte for byte (the 8-bit checksum misses some damage; this catches it,
+    /// at one more round trip per servo)
+    #[arg(long)]
+    pub verified_reads: bool,
 }
 
 #[derive(Args)]
@@ -199,14 +208,25 @@ pub struct PlanArgs {
 
 #[derive(Args)]
 pub struct ServeArgs {
-    /// The robot: builtin:km20 (RX-28/RX-64, Protocol 1.0), builtin:op3 (XM430, 2.0) or a mapping TOML
-    #[arg(
-        long,
-        alias = "map",
-        default_value = "builtin:km20",
-        value_name = "MAPPING"
-    )]
+    /// The robot: builtin:km20 (simulated, RX-28/RX-64 on Protocol 1.0), builtin:op3
+    /// (XM430 on 2.0, stand-in servos), a URDF/MJCF file (with --map) or a mapping TOML
+    #[arg(long, default_value = "builtin:km20", value_name = "ROBOT")]
     pub robot: String,
+    /// Mapping TOML: servo ids, models and protocols of the robot's joints (default:
+    /// the built-in robot's own)
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    /// What moves the servos: sim (the physics simulation of the robot standing on the
+    /// ground, in real time), ideal (each servo tracks its goal, no physics: for
+    /// protocol-only benchmarks) or auto (sim when the robot has a model)
+    #[arg(long, default_value = "auto", value_parser = ["auto", "sim", "ideal"])]
+    pub servo_model: String,
+    /// Simulated robot: servos power on limp, as real ones do (the robot falls)
+    #[arg(long)]
+    pub torque_off: bool,
+    /// Simulated robot: simulated seconds per wall-clock second
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub realtime_factor: f64,
     /// Where to serve: pty (a new pseudo-terminal) or tcp:ADDR (e.g. tcp:127.0.0.1:5555)
     #[arg(long, default_value = "pty")]
     pub port: String,
@@ -222,6 +242,12 @@ pub struct ServeArgs {
     /// Answer at once instead of emulating wire time
     #[arg(long)]
     pub no_timing: bool,
+    /// Busy-check the line for up to this many microseconds before sleeping while
+    /// waiting for a request: requests are answered without a scheduler wake-up,
+    /// at the cost of a busy core (helps only with idle cores: on a loaded machine
+    /// the spinning steals the client's CPU and round trips get slower)
+    #[arg(long, default_value_t = 0, value_name = "US")]
+    pub spin_us: u64,
 }
 
 fn parse_protocol(s: &str) -> Result<Protocol, String> {
@@ -278,7 +304,9 @@ fn open_client(
     let options = SerialOptions {
         low_latency: p.low_latency,
     };
-    let t = transport::open(port, p.baud, &options).map_err(|e| fail(format!("{port}: {e}")))?;
+    let mut t =
+        transport::open(port, p.baud, &options).map_err(|e| fail(format!("{port}: {e}")))?;
+    t.set_spin(Duration::from_micros(p.spin_us));
     let config = ClientConfig {
         latency: Duration::from_secs_f64(p.timeout_ms.max(0.0) / 1000.0),
         retries: p.retries,
@@ -595,6 +623,7 @@ fn record(a: &RecordArgs) -> ExitCode {
         Ok(r) => r,
         Err(e) => return fail(e),
     };
+    robot.cycle_mut().verify_v1 = a.verified_reads;
     let mut columns = vec!["t".to_string()];
     for prefix in ["q", "v", "tau"] {
         columns.extend(names.iter().map(|n| format!("{prefix}:{n}")));
@@ -764,10 +793,62 @@ fn plan(a: &PlanArgs) -> ExitCode {
     ExitCode::from(EXIT_OK)
 }
 
+/// The robot and mapping `twinloop serve` was asked for: the mapping always, the
+/// robot's model when there is one (`None`: a mapping-only bus).
+fn serve_robot(a: &ServeArgs) -> Result<(RobotMapping, Option<twinloop_model::Robot>), String> {
+    let is_mapping = a.robot.ends_with(".toml");
+    let mapping = match (&a.map, is_mapping) {
+        (Some(m), _) => RobotMapping::load(m).map_err(|e| e.to_string())?,
+        (None, true) => RobotMapping::load(&a.robot).map_err(|e| e.to_string())?,
+        (None, false) => match a.robot.strip_prefix("builtin:") {
+            Some(name) => RobotMapping::builtin(name).ok_or_else(|| {
+                format!(
+                    "--robot {}: no built-in mapping for {name:?} (built-in: {}); give --map FILE",
+                    a.robot,
+                    RobotMapping::BUILTINS.join(", ")
+                )
+            })?,
+            None => {
+                return Err(format!(
+                    "--robot {}: a description file needs --map FILE (which servo drives which joint)",
+                    a.robot
+                ));
+            }
+        },
+    };
+    // The robot's model: --robot itself unless it is a mapping; else the mapping's
+    // `urdf`. A built-in mapping without a built-in robot (op3) has none.
+    let spec = if is_mapping {
+        // A relative path in a mapping file is relative to that file.
+        let dir = std::path::Path::new(&mapping.source).parent();
+        mapping.urdf.as_ref().map(|p| {
+            let s = p.display().to_string();
+            match dir {
+                Some(d) if !s.starts_with("builtin:") && p.is_relative() => {
+                    d.join(p).display().to_string()
+                }
+                _ => s,
+            }
+        })
+    } else {
+        Some(a.robot.clone())
+    };
+    let robot = match spec {
+        Some(s) if s.starts_with("builtin:") => twinloop_robots::builtin(&s["builtin:".len()..]),
+        Some(s) => match twinloop_model::load(&s) {
+            Ok(r) => Some(r),
+            Err(e) if a.servo_model == "sim" => return Err(format!("{s}: {e}")),
+            Err(_) => None,
+        },
+        None => None,
+    };
+    Ok((mapping, robot))
+}
+
 /// `twinloop serve`.
 pub fn serve(a: ServeArgs) -> ExitCode {
-    let mapping = match RobotMapping::resolve(&a.robot) {
-        Ok(m) => m,
+    let (mapping, robot) = match serve_robot(&a) {
+        Ok(x) => x,
         Err(e) => return fail(e),
     };
     let servos: Vec<BusServo> = mapping
@@ -778,7 +859,77 @@ pub fn serve(a: ServeArgs) -> ExitCode {
             model: j.model,
         })
         .collect();
-    let mut bus = VirtualBus::with_tracking_model(&servos);
+    let simulate = match (a.servo_model.as_str(), &robot) {
+        ("ideal", _) => false,
+        ("sim", None) => {
+            return fail(format!(
+                "--servo-model sim: {} has no robot model to simulate (give --robot builtin:NAME or a URDF with --map)",
+                a.robot
+            ));
+        }
+        (_, r) => r.is_some(),
+    };
+    if simulate {
+        let robot = robot.expect("checked above");
+        let options = twinloop_virtual::VirtualRobotOptions {
+            torque_on: !a.torque_off,
+            realtime_factor: a.realtime_factor,
+            ..Default::default()
+        };
+        if !(a.realtime_factor > 0.0 && a.realtime_factor.is_finite()) {
+            return fail(format!(
+                "--realtime-factor must be positive, not {}",
+                a.realtime_factor
+            ));
+        }
+        let vr = match twinloop_virtual::VirtualRobot::new(&robot, &mapping, &options) {
+            Ok(v) => v,
+            Err(e) => return fail(e),
+        };
+        if !vr.unmapped.is_empty() {
+            eprintln!(
+                "joints without a servo on the bus (they hold their pose): {}",
+                vr.unmapped.join(", ")
+            );
+        }
+        let bus = vr.bus();
+        let sim = vr.spawn();
+        let what = format!(
+            "the physics simulation of {} standing on the ground (real time x{}, servos {})",
+            robot.name,
+            a.realtime_factor,
+            if a.torque_off { "limp" } else { "torque on" }
+        );
+        let code = serve_on(&a, &mapping, &servos, bus, &what);
+        let status = sim.status();
+        if let Some(e) = &status.error {
+            eprintln!("the simulation stopped: {e}");
+        }
+        if status.behind_s > 0.0 {
+            eprintln!(
+                "the simulation fell {:.3} s behind the wall clock in {:.1} s",
+                status.behind_s, status.time
+            );
+        }
+        return code;
+    }
+    let bus = VirtualBus::with_tracking_model(&servos);
+    serve_on(
+        &a,
+        &mapping,
+        &servos,
+        bus,
+        "stand-in servos (each tracks its goal, 50 ms lag; no physics)",
+    )
+}
+
+fn serve_on<B: twinloop_link::VirtualServoBackend>(
+    a: &ServeArgs,
+    mapping: &RobotMapping,
+    servos: &[BusServo],
+    mut bus: VirtualBus<B>,
+    what: &str,
+) -> ExitCode {
     let options = ServeOptions {
         emulate_baud: (!a.no_timing).then_some(a.baud),
         stop_on_eof: true,
@@ -797,7 +948,7 @@ pub fn serve(a: ServeArgs) -> ExitCode {
             }
         }
         format!(
-            "serving {} ({} servos: {}) on {place}\n{}\nCtrl-C stops.\n",
+            "serving {} ({} servos: {}) on {place}\nmoved by {what}\n{}\nCtrl-C stops.\n",
             if mapping.name.is_empty() {
                 &mapping.source
             } else {
@@ -817,6 +968,7 @@ pub fn serve(a: ServeArgs) -> ExitCode {
             Ok(p) => p,
             Err(e) => return fail(format!("cannot open a pseudo-terminal: {e}")),
         };
+        pty.set_spin(Duration::from_micros(a.spin_us));
         let path = pty.path().to_path_buf();
         if let Some(link) = &a.link {
             let _ = std::fs::remove_file(link);
@@ -896,6 +1048,10 @@ pub struct LinkBenchArgs {
     /// Seconds per case
     #[arg(long, default_value_t = 1.0)]
     pub seconds: f64,
+    /// With --port: busy-check the pty for up to this many microseconds before
+    /// sleeping for a reply (0: sleep at once)
+    #[arg(long, default_value_t = 0, value_name = "US")]
+    pub spin_us: u64,
     /// Print JSON: {"cases": [{"name", "median_us", "per_second", "wire_us", "overhead_ratio"}]}
     #[arg(long)]
     pub json: bool,
@@ -1139,6 +1295,7 @@ pub fn bench(a: &LinkBenchArgs) -> ExitCode {
             timeout_ms: 50.0,
             retries: 0,
             low_latency: false,
+            spin_us: a.spin_us,
         };
         let mut c = match open_client(&p, None) {
             Ok(c) => c,

@@ -131,9 +131,10 @@ enum Command {
     /// Each servo of the robot answers with its own control table in its own protocol
     /// (1.0 and 2.0 on one line), goal positions move the servo, present position,
     /// velocity, load, voltage and temperature come from the servo model, and the
-    /// wire time at --baud plus each servo's Return Delay Time are emulated. The
-    /// servo model is a stand-in until the simulator plugs in: each servo tracks its
-    /// goal as a first-order lag (50 ms) at most at its no-load speed.
+    /// wire time at --baud plus each servo's Return Delay Time are emulated. With a
+    /// robot model (builtin:km20) the servos are the physics simulation of the robot
+    /// standing on the ground, in real time; --servo-model ideal puts a stand-in
+    /// (each servo tracks its goal, 50 ms lag) for protocol-only work.
     ///
     /// The first line printed on stdout is the device path (or tcp:ADDR) to hand to
     /// clients: twinloop link, the ROBOTIS SDK, Dynamixel Wizard via a pty bridge.

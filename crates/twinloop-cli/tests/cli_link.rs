@@ -255,3 +255,61 @@ fn serve_on_tcp() {
     server.kill().unwrap();
     server.wait().unwrap();
 }
+
+/// `twinloop serve --robot builtin:km20` is the physics simulation: a squat sent
+/// over TCP bends the simulated knees, `link read` reports it, and the robot
+/// stands (Present Load at the knees shows it carries its weight).
+#[test]
+fn serve_km20_simulated_on_tcp() {
+    use twinloop_link::transport::{TcpTransport, Transport};
+    use twinloop_link::{Client, Protocol};
+    let (mut server, addr) = serve("builtin:km20", &["--tcp", "127.0.0.1:0", "--no-timing"]);
+    let a = 0.25f64;
+    // RX units: 1024 over 300 degrees, centre 512; ids from the km20 mapping.
+    let raw = |q: f64| ((512.0 + q / (300f64.to_radians() / 1024.0)).round() as u16).to_le_bytes();
+    let goals = [
+        (11u8, -a),
+        (12, -a),
+        (13, 2.0 * a),
+        (14, 2.0 * a),
+        (15, -a),
+        (16, -a),
+    ];
+    {
+        let t: Box<dyn Transport> =
+            Box::new(TcpTransport::connect(addr.strip_prefix("tcp:").unwrap()).unwrap());
+        let mut c = Client::new(t);
+        let ids: Vec<u8> = goals.iter().map(|g| g.0).collect();
+        let data: Vec<u8> = goals.iter().flat_map(|g| raw(g.1)).collect();
+        c.sync_write(Protocol::V1, 30, 2, &ids, &data).unwrap();
+        // The goal landed in the table.
+        let mut b = [0u8; 2];
+        c.read(Protocol::V1, 13, 30, &mut b).unwrap();
+        assert_eq!(b, raw(2.0 * a));
+    }
+    std::thread::sleep(Duration::from_millis(1500));
+    let o = twinloop(&[
+        "link",
+        "read",
+        "--port",
+        &addr,
+        "--protocol",
+        "1",
+        "--id",
+        "13",
+        "--json",
+        "present position",
+        "present load",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let knee = v["registers"][0]["value"].as_f64().unwrap();
+    let load = v["registers"][1]["value"].as_f64().unwrap();
+    assert!((knee - 2.0 * a).abs() < 0.1, "knee at {knee}: {v}");
+    assert!(
+        load.abs() > 0.02,
+        "a bent knee under the robot's weight: {v}"
+    );
+    server.kill().unwrap();
+    server.wait().unwrap();
+}

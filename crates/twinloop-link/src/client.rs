@@ -241,16 +241,19 @@ impl<T: Transport> Client<T> {
                 });
                 return Err(err);
             }
+            // Past the deadline this is a zero wait: one last look at what already
+            // arrived. (A host descheduled past its deadline must still read the
+            // reply sitting in the buffer rather than call it lost.)
             let now = Instant::now();
-            if now >= deadline {
-                flushing = true;
-                continue;
-            }
+            let late = now >= deadline;
             let spare = self.decoder.spare();
-            let n = self.transport.read(spare, deadline - now)?;
+            let n = self
+                .transport
+                .read(spare, deadline.saturating_duration_since(now))?;
             self.decoder.commit(n);
-            if n == 0 {
-                // Transports return 0 only when the wait ran out.
+            if n == 0 || late {
+                // Transports return 0 only when the wait ran out; late, the look
+                // was the last one.
                 flushing = true;
             }
         }

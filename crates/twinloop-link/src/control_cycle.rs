@@ -124,8 +124,21 @@ pub struct ControlCycle {
     groups: Vec<Group>,
     goal_buf: Vec<u8>,
     read_buf: Vec<u8>,
+    /// The second copy of a verified read.
+    verify_buf: Vec<u8>,
     outcomes: Vec<Outcome>,
     bulk: Vec<BulkRead>,
+    /// Discard values outside their register's range (one re-read first). On by
+    /// default; off only to measure what the checksum alone lets through.
+    pub range_checks: bool,
+    /// Protocol 1.0 verified reads: read each 1.0 servo again and accept only when
+    /// two consecutive replies agree byte for byte (up to `retries` extra reads).
+    /// The 8-bit checksum passes every damage whose byte sum is a multiple of 256
+    /// (a data bit and the same checksum bit flipped the opposite way, or two
+    /// bytes' bit 7 flipped alike); two independent replies damaged identically
+    /// are what is left. It costs a second round trip per servo, and a servo moving
+    /// between the two reads fails verification until it agrees. Off by default.
+    pub verify_v1: bool,
 }
 
 /// The register block every cycle reads: 1.0 Present Position..Present Load
@@ -242,6 +255,9 @@ impl ControlCycle {
             groups,
             goal_buf: Vec::with_capacity(n * 4),
             read_buf: vec![0; n * 10],
+            verify_buf: vec![0; 10],
+            range_checks: true,
+            verify_v1: false,
             outcomes: vec![Err(LinkError::Timeout { id: 0 }); n],
             bulk: Vec::with_capacity(n),
         })
@@ -379,7 +395,7 @@ impl ControlCycle {
                 // Plausibility: a value outside its register's range passed the
                 // checksum by chance; re-read it once rather than accept it.
                 for attempt in 0..2 {
-                    if outcome.is_err() {
+                    if outcome.is_err() || !self.range_checks {
                         break;
                     }
                     let data = &self.read_buf[k * l..(k + 1) * l];
@@ -395,6 +411,24 @@ impl ControlCycle {
                             g.block_address,
                             &mut self.read_buf[k * l..(k + 1) * l],
                         );
+                    }
+                }
+                if self.verify_v1 && g.protocol == Protocol::V1 && outcome.is_ok() {
+                    outcome = verify(
+                        client,
+                        id,
+                        g.block_address,
+                        &mut self.read_buf[k * l..(k + 1) * l],
+                        &mut self.verify_buf[..l],
+                        outcome,
+                    );
+                    if self.range_checks
+                        && outcome.is_ok()
+                        && let Some(bad) =
+                            implausible(lay, g.block_address, &self.read_buf[k * l..(k + 1) * l])
+                    {
+                        client.stats.implausible += 1;
+                        outcome = Err(LinkError::Implausible { id, register: bad });
                     }
                 }
                 let data = &self.read_buf[k * l..(k + 1) * l];
@@ -415,6 +449,43 @@ impl ControlCycle {
             }
         }
         Ok(summary)
+    }
+}
+
+/// Verified read of a 1.0 servo whose block `data` was just read (`first` its
+/// outcome): read again into `spare` until two consecutive replies agree, at most
+/// 1 + `retries` more reads. The agreed copy ends in `data`.
+fn verify<T: Transport>(
+    client: &mut Client<T>,
+    id: u8,
+    address: u16,
+    data: &mut [u8],
+    spare: &mut [u8],
+    first: Outcome,
+) -> Outcome {
+    let mut last = first;
+    let mut have = true;
+    for _ in 0..=client.config.retries {
+        let r = client.read(Protocol::V1, id, address, spare);
+        if let Err(LinkError::Io(_)) = &r {
+            return r;
+        }
+        match r {
+            Ok(status) if have && spare == &*data => return Ok(status),
+            Ok(status) => {
+                data.copy_from_slice(spare);
+                last = Ok(status);
+                have = true;
+            }
+            Err(e) => {
+                last = Err(e);
+                have = false;
+            }
+        }
+    }
+    match last {
+        Err(LinkError::Io(e)) => Err(LinkError::Io(e)),
+        _ => Err(LinkError::Unverified { id }),
     }
 }
 

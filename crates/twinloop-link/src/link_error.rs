@@ -27,6 +27,9 @@ pub enum LinkError {
     /// The reply passed its checksum but holds a value no healthy servo reports
     /// (outside the register's range): discarded as corrupt.
     Implausible { id: u8, register: &'static str },
+    /// Verified reads (Protocol 1.0): no two consecutive replies agreed byte for
+    /// byte, so none is trusted.
+    Unverified { id: u8 },
     /// The servo answered with an error that means it did not execute the
     /// instruction.
     Rejected { id: u8, error: StatusError },
@@ -42,7 +45,8 @@ impl LinkError {
             LinkError::Timeout { .. }
             | LinkError::Corrupt { .. }
             | LinkError::WrongReply { .. }
-            | LinkError::Implausible { .. } => true,
+            | LinkError::Implausible { .. }
+            | LinkError::Unverified { .. } => true,
             // The servo saw our request damaged (checksum / CRC error): send it again.
             LinkError::Rejected { error, .. } => error.instruction_damaged(),
             LinkError::Io(_) | LinkError::Encode(_) => false,
@@ -56,6 +60,7 @@ impl LinkError {
             | LinkError::Corrupt { id }
             | LinkError::WrongReply { id, .. }
             | LinkError::Implausible { id, .. }
+            | LinkError::Unverified { id }
             | LinkError::Rejected { id, .. } => Some(*id),
             LinkError::Io(_) | LinkError::Encode(_) => None,
         }
@@ -69,6 +74,7 @@ impl LinkError {
             LinkError::Corrupt { .. } => "corrupt",
             LinkError::WrongReply { .. } => "wrong-reply",
             LinkError::Implausible { .. } => "implausible",
+            LinkError::Unverified { .. } => "unverified",
             LinkError::Rejected { .. } => "rejected",
             LinkError::Encode(_) => "encode",
         }
@@ -94,6 +100,10 @@ impl fmt::Display for LinkError {
             LinkError::Implausible { id, register } => {
                 write!(f, "servo id {id}: implausible {register} value, discarded")
             }
+            LinkError::Unverified { id } => write!(
+                f,
+                "servo id {id}: repeated reads disagreed (verified read), discarded"
+            ),
             LinkError::Rejected { id, error } => write!(f, "servo id {id}: {error}"),
             LinkError::Encode(e) => write!(f, "cannot encode request: {e}"),
         }

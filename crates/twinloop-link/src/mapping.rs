@@ -5,7 +5,7 @@
 //! ```toml
 //! [robot]
 //! name = "op3"
-//! urdf = "models/op3/robotis_op3.urdf"   # optional
+//! urdf = "models/op3/robotis_op3.urdf"   # optional: the robot (a URDF/MJCF path or builtin:NAME)
 //! port = "/dev/ttyUSB0"                  # optional defaults for the CLI
 //! baud = 1000000
 //!

@@ -92,6 +92,11 @@ impl<T: Transport> DynamixelRobot<T> {
         &self.cycle
     }
 
+    /// The read settings (range checks, Protocol 1.0 verified reads).
+    pub fn cycle_mut(&mut self) -> &mut ControlCycle {
+        &mut self.cycle
+    }
+
     /// Each joint's outcome in the last read (joint order).
     pub fn outcomes(&self) -> impl Iterator<Item = (&str, &Outcome)> {
         self.names

@@ -104,6 +104,17 @@ pub enum Item {
     Lock,
     HardwareErrorStatus,
     RealtimeTick,
+    /// 1.0 RX compliance: the dead band and the error of full torque, per direction.
+    CwComplianceMargin,
+    CcwComplianceMargin,
+    CwComplianceSlope,
+    CcwComplianceSlope,
+    /// Position loop gains (MX "P/I/D Gain" in 1.0, "Position P/I/D Gain" in 2.0).
+    PositionPGain,
+    PositionIGain,
+    PositionDGain,
+    /// Minimum drive current (1.0).
+    Punch,
 }
 
 /// One control-table register.

@@ -1,9 +1,11 @@
 //! What moves a virtual robot's servos. The virtual bus speaks the protocol and
 //! keeps the control tables; a [`VirtualServoBackend`] decides where each servo
-//! is. The simulator implements it later; until then [`TrackingServoModel`] stands
-//! in.
+//! is. The physics simulator implements it in the `twinloop-virtual` crate (kept
+//! out of here so the link needs no dynamics); [`TrackingServoModel`] is a
+//! stand-in without physics for protocol-only work.
 
 use crate::model::ServoSpec;
+use crate::register::Item;
 
 /// One servo's measurable state, SI units, in the servo's own angle (radians from
 /// the middle of its range, counter-clockwise positive: what the Present Position
@@ -30,8 +32,17 @@ pub trait VirtualServoBackend: Send {
     fn set_goal_position(&mut self, servo: usize, position: f64);
     /// The servo's state now.
     fn measure(&self, servo: usize) -> ServoMeasurement;
-    /// Let `dt` seconds pass.
+    /// Let `dt` seconds pass. A backend whose time runs on its own thread (the
+    /// simulator) ignores it.
     fn step(&mut self, dt: f64);
+    /// A register that shapes how the servo moves was set (compliance, gains,
+    /// moving speed, torque limit, ...): its item and raw value. Called for every
+    /// written register that has an [`Item`] other than Goal Position and Torque
+    /// Enable, and for all of them at power-on, reboot and factory reset. The
+    /// default ignores it (the stand-in model has no such behaviour).
+    fn register_written(&mut self, servo: usize, item: Item, raw: i32) {
+        let _ = (servo, item, raw);
+    }
 }
 
 #[derive(Debug, Clone, Copy)]

@@ -104,12 +104,40 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
             marks: Vec::with_capacity(256),
         };
         for k in 0..bus.servos.len() {
+            announce_registers(&bus.servos[k], &mut bus.backend, k, 0, u16::MAX);
             refresh(&mut bus.servos[k], &bus.backend, k, bus.time);
             // At power-on the goal is where the servo is.
             let p = bus.servos[k].value(Item::PresentPosition);
             bus.servos[k].set_value(Item::GoalPosition, p);
         }
         bus
+    }
+
+    /// Write `value` to `item` of servo `k` as a host's WRITE would (same checks,
+    /// same effect on the backend): how a served robot is prepared before a
+    /// client arrives (e.g. torque on, so a simulated robot stands).
+    pub fn host_write(&mut self, k: usize, item: Item, value: i32) -> Result<(), Fault> {
+        let Some(r) = self.servos[k].table().item(item) else {
+            return Err(Fault::Access);
+        };
+        let mut bytes = [0u8; 4];
+        r.encode(value, &mut bytes[..r.size as usize]);
+        let VirtualBus {
+            servos,
+            backend,
+            time,
+            marks,
+            ..
+        } = self;
+        let mut scratch = Vec::new();
+        let mut ctx = Ctx {
+            servos,
+            backend,
+            marks,
+            time: *time,
+            out: &mut scratch,
+        };
+        ctx.write(k, r.address, &bytes[..r.size as usize])
     }
 
     /// Let `dt` seconds pass.
@@ -272,6 +300,35 @@ fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, 
     s.set_value(Item::RealtimeTick, ((time * 1000.0) as i64 % 32768) as i32);
 }
 
+/// Tell the backend the value of every register with an item (other than Goal
+/// Position and Torque Enable, which have their own calls) that lies in
+/// `start..end`.
+fn announce_registers<B: VirtualServoBackend>(
+    s: &VirtualServo,
+    backend: &mut B,
+    k: usize,
+    start: u16,
+    end: u16,
+) {
+    for r in &s.table().registers {
+        if r.address >= end {
+            break; // registers are in address order
+        }
+        let Some(item) = r.item else { continue };
+        if r.end() <= start {
+            continue;
+        }
+        if matches!(
+            item,
+            Item::GoalPosition | Item::TorqueEnable | Item::PresentPosition
+        ) || r.access == crate::register::Access::Read
+        {
+            continue;
+        }
+        backend.register_written(k, item, s.value(item));
+    }
+}
+
 /// What one instruction needs to reach.
 struct Ctx<'a, B: VirtualServoBackend> {
     servos: &'a mut Vec<VirtualServo>,
@@ -380,6 +437,9 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
 
     fn apply_effects(&mut self, k: usize, fx: WriteEffects) {
         let s = &self.servos[k];
+        if fx.end > fx.start {
+            announce_registers(s, self.backend, k, fx.start, fx.end);
+        }
         if fx.torque_enable {
             self.backend.set_torque_enabled(k, s.torque_enabled());
         }
@@ -495,6 +555,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
                     self.reply(k, f.id, code, Ok(()), &[]);
                     self.servos[k].factory_reset(option);
                     self.backend.set_torque_enabled(k, false);
+                    announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
                     self.refresh(k);
                 }
             }
@@ -503,6 +564,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
                     self.reply(k, f.id, code, Ok(()), &[]);
                     self.servos[k].reboot();
                     self.backend.set_torque_enabled(k, false);
+                    announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
                     self.refresh(k);
                     let s = &mut self.servos[k];
                     let p = s.value(Item::PresentPosition);

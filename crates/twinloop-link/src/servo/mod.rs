@@ -1,6 +1,7 @@
-//! The servo side of the protocol: virtual servos on a virtual bus, a backend trait
-//! the simulator will implement, a stand-in servo model, and serving a bus on a
-//! transport (pty, TCP) with the wire time and return delay emulated.
+//! The servo side of the protocol: virtual servos on a virtual bus, a backend
+//! trait the simulator implements (crate `twinloop-virtual`), a stand-in servo
+//! model, and serving a bus on a transport (pty, TCP) with the wire time and
+//! return delay emulated.
 
 mod backend;
 mod bus;

@@ -59,6 +59,9 @@ impl Fault {
 pub struct WriteEffects {
     pub goal_position: bool,
     pub torque_enable: bool,
+    /// Bytes written: `start..end` (empty if nothing was).
+    pub start: u16,
+    pub end: u16,
 }
 
 /// A servo's memory and identity.
@@ -223,6 +226,8 @@ impl VirtualServo {
         WriteEffects {
             goal_position: touches(self.register(Item::GoalPosition)),
             torque_enable: touches(self.register(Item::TorqueEnable)),
+            start: address,
+            end,
         }
     }
 

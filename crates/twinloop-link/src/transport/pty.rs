@@ -39,8 +39,31 @@ fn wait_readable(fd: RawFd, timeout: Duration) -> io::Result<bool> {
     }
 }
 
-fn read_with_timeout(file: &mut File, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
-    if !wait_readable(file.as_raw_fd(), timeout)? {
+/// Poll without blocking until `fd` is readable or `spin` has passed.
+pub(crate) fn spin_readable(fd: RawFd, spin: Duration) -> io::Result<bool> {
+    if spin.is_zero() {
+        return Ok(false);
+    }
+    let start = std::time::Instant::now();
+    loop {
+        if wait_readable(fd, Duration::ZERO)? {
+            return Ok(true);
+        }
+        if start.elapsed() >= spin {
+            return Ok(false);
+        }
+        std::hint::spin_loop();
+    }
+}
+
+fn read_with_timeout(
+    file: &mut File,
+    buf: &mut [u8],
+    timeout: Duration,
+    spin: Duration,
+) -> io::Result<usize> {
+    let ready = spin_readable(file.as_raw_fd(), spin.min(timeout))?;
+    if !ready && !wait_readable(file.as_raw_fd(), timeout.saturating_sub(spin))? {
         return Ok(0);
     }
     match file.read(buf) {
@@ -64,6 +87,7 @@ fn drain(file: &mut File) -> io::Result<()> {
 /// The master side of a new pseudo-terminal. Programs open [`PtyTransport::path`]
 /// as if it were a USB serial adapter.
 pub struct PtyTransport {
+    spin: Duration,
     master: File,
     /// Held open so the master does not see end-of-file between clients.
     _slave: File,
@@ -83,6 +107,7 @@ impl PtyTransport {
         make_raw(slave.as_raw_fd())?;
         let path = nix::unistd::ttyname(slave.as_raw_fd()).map_err(|e| nix_err(e, "ttyname"))?;
         Ok(PtyTransport {
+            spin: Duration::ZERO,
             master,
             _slave: slave,
             path,
@@ -101,7 +126,11 @@ impl Transport for PtyTransport {
     }
 
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
-        read_with_timeout(&mut self.master, buf, timeout)
+        read_with_timeout(&mut self.master, buf, timeout, self.spin)
+    }
+
+    fn set_spin(&mut self, spin: Duration) {
+        self.spin = spin;
     }
 
     fn discard_input(&mut self) -> io::Result<()> {
@@ -116,6 +145,7 @@ impl Transport for PtyTransport {
 /// A tty opened by path in raw mode, without the serial ioctls a pseudo-terminal
 /// may refuse.
 pub struct TtyTransport {
+    spin: Duration,
     file: File,
     path: PathBuf,
 }
@@ -132,7 +162,11 @@ impl TtyTransport {
                 io::Error::new(e.kind(), format!("cannot open {}: {e}", path.display()))
             })?;
         make_raw(file.as_raw_fd())?;
-        Ok(TtyTransport { file, path })
+        Ok(TtyTransport {
+            spin: Duration::ZERO,
+            file,
+            path,
+        })
     }
 }
 
@@ -142,7 +176,11 @@ impl Transport for TtyTransport {
     }
 
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
-        read_with_timeout(&mut self.file, buf, timeout)
+        read_with_timeout(&mut self.file, buf, timeout, self.spin)
+    }
+
+    fn set_spin(&mut self, spin: Duration) {
+        self.spin = spin;
     }
 
     fn discard_input(&mut self) -> io::Result<()> {

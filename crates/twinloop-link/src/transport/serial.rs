@@ -21,6 +21,7 @@ pub struct SerialTransport {
     path: String,
     baud: u32,
     timeout: Duration,
+    spin: Duration,
     /// What the low-latency request did, for the user.
     pub low_latency_note: Option<String>,
 }
@@ -42,6 +43,7 @@ impl SerialTransport {
             path: path.to_string(),
             baud,
             timeout,
+            spin: Duration::ZERO,
             low_latency_note,
         })
     }
@@ -67,6 +69,13 @@ impl Transport for SerialTransport {
     }
 
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
+        let spun = self.spin.min(timeout);
+        let timeout =
+            if super::pty::spin_readable(std::os::fd::AsRawFd::as_raw_fd(&self.port), spun)? {
+                timeout
+            } else {
+                timeout.saturating_sub(spun)
+            };
         if timeout != self.timeout {
             self.port.set_timeout(timeout)?;
             self.timeout = timeout;
@@ -91,6 +100,10 @@ impl Transport for SerialTransport {
 
     fn baud(&self) -> Option<u32> {
         Some(self.baud)
+    }
+
+    fn set_spin(&mut self, spin: Duration) {
+        self.spin = spin;
     }
 
     fn describe(&self) -> String {

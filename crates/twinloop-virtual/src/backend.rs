@@ -1,0 +1,57 @@
+//! The bus side of the simulated robot: [`VirtualServoBackend`] over the shared
+//! registers and snapshot. Nothing here steps the simulation.
+
+use crate::shared::Shared;
+use std::sync::Arc;
+use twinloop_link::servo::ServoMeasurement;
+use twinloop_link::{Item, Model, VirtualServoBackend};
+
+/// Moves the bus's servos by handing their registers to the simulator thread and
+/// answers from the simulator's latest snapshot.
+pub struct SimServoBackend {
+    pub(crate) shared: Arc<Shared>,
+    /// Each servo's model (bus order), to read its registers' units.
+    pub(crate) models: Vec<Model>,
+}
+
+impl VirtualServoBackend for SimServoBackend {
+    fn set_torque_enabled(&mut self, servo: usize, enabled: bool) {
+        let mut r = self
+            .shared
+            .registers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        r[servo].torque_on = enabled;
+    }
+
+    fn set_goal_position(&mut self, servo: usize, position: f64) {
+        let mut r = self
+            .shared
+            .registers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        r[servo].goal = position;
+    }
+
+    fn measure(&self, servo: usize) -> ServoMeasurement {
+        let s = self
+            .shared
+            .snapshot
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        s.servos[servo]
+    }
+
+    /// Time runs on the simulator's thread.
+    fn step(&mut self, _dt: f64) {}
+
+    fn register_written(&mut self, servo: usize, item: Item, raw: i32) {
+        let model = self.models[servo];
+        let mut r = self
+            .shared
+            .registers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        r[servo].set(model, item, raw);
+    }
+}

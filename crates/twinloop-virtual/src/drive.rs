@@ -1,0 +1,178 @@
+//! What a servo's registers mean for the simulated servo: goal, torque on/off,
+//! compliance (RX), position gain (MX, X), moving speed and torque limit, turned
+//! into the parameters of the simulator's [`DynamixelServo`].
+
+use twinloop_link::{Item, Model, Unit};
+use twinloop_sim::DynamixelServo;
+
+/// The registers that shape one servo's motion, in SI units (servo angles: radians
+/// from the servo's centre, counter-clockwise positive). Written by the bus thread,
+/// read by the simulator thread.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DriveRegisters {
+    /// Goal Position, rad.
+    pub goal: f64,
+    pub torque_on: bool,
+    /// Compliance margin, clockwise and counter-clockwise, rad (RX only).
+    pub margin: Option<[f64; 2]>,
+    /// Compliance slope as the error of full torque, clockwise and counter-clockwise,
+    /// rad (RX only).
+    pub slope: Option<[f64; 2]>,
+    /// Position P gain over its factory value (MX and X; `None` on RX).
+    pub p_ratio: Option<f64>,
+    /// Speed towards the goal, rad/s; 0: as fast as the motor goes (Moving Speed 0 on
+    /// RX, Profile Velocity 0 on X).
+    pub moving_speed: f64,
+    /// Torque Limit (RX) or PWM Limit (X) as a fraction of full torque.
+    pub torque_limit: f64,
+}
+
+impl DriveRegisters {
+    /// At rest at `goal`, torque off, factory values.
+    pub fn new(goal: f64) -> DriveRegisters {
+        DriveRegisters {
+            goal,
+            torque_on: false,
+            margin: None,
+            slope: None,
+            p_ratio: None,
+            moving_speed: 0.0,
+            torque_limit: 1.0,
+        }
+    }
+
+    /// Take a register's raw value (see
+    /// [`VirtualServoBackend::register_written`](twinloop_link::VirtualServoBackend::register_written)).
+    pub fn set(&mut self, model: Model, item: Item, raw: i32) {
+        let table = model.table();
+        let Some(r) = table.item(item) else { return };
+        // Compliance is in position units of this model.
+        let unit = match table.item(Item::GoalPosition).map(|g| g.unit) {
+            Some(Unit::Angle { rad_per_unit, .. }) => rad_per_unit,
+            _ => 0.0,
+        };
+        match item {
+            Item::CwComplianceMargin | Item::CcwComplianceMargin => {
+                let m = self.margin.get_or_insert([unit; 2]);
+                m[usize::from(item == Item::CcwComplianceMargin)] = raw.max(0) as f64 * unit;
+            }
+            Item::CwComplianceSlope | Item::CcwComplianceSlope => {
+                let s = self.slope.get_or_insert([32.0 * unit; 2]);
+                s[usize::from(item == Item::CcwComplianceSlope)] = rx_slope_units(raw) * unit;
+            }
+            Item::PositionPGain => {
+                let factory = r.initial.unwrap_or(raw).max(1) as f64;
+                self.p_ratio = Some(raw.max(0) as f64 / factory);
+            }
+            Item::MovingSpeed => {
+                self.moving_speed = match r.unit {
+                    Unit::AngularVelocity { rad_s_per_unit } => raw.max(0) as f64 * rad_s_per_unit,
+                    _ => 0.0,
+                };
+            }
+            // RX has Torque Limit (RAM, starts at Max Torque); X has only PWM Limit
+            // (the MaxTorque item), which then is the limit.
+            Item::TorqueLimit => self.torque_limit = fraction(raw, r.max),
+            Item::MaxTorque if table.item(Item::TorqueLimit).is_none() => {
+                self.torque_limit = fraction(raw, r.max)
+            }
+            _ => {}
+        }
+    }
+}
+
+fn fraction(raw: i32, full: i32) -> f64 {
+    (raw.max(0) as f64 / full.max(1) as f64).clamp(0.0, 1.0)
+}
+
+/// The slope an RX applies for a Compliance Slope register value: only seven steps
+/// exist, 2, 4, ..., 128 units, each register value using the power of two at or
+/// below it (0-3 -> 2, 4-7 -> 4, ..., 128-254 -> 128; EM-RX28 "Compliance Slope").
+pub fn rx_slope_units(raw: i32) -> f64 {
+    let v = raw.clamp(2, 255) as u32;
+    let step = 1u32 << (31 - v.leading_zeros());
+    step.min(128) as f64
+}
+
+/// The simulator's servo for one moment: `base` (the joint's servo, from its
+/// datasheet) with the registers applied. `ccw` says which way the servo turns to
+/// reach its goal: RX compliance differs per direction. The simulator's servo has
+/// one proportional position loop, so a P gain scales its slope (full torque at an
+/// error `p_ratio` times smaller); I and D gains and Punch have no counterpart in
+/// it and are kept in the table only.
+pub fn servo_with_registers(
+    base: &DynamixelServo,
+    regs: &DriveRegisters,
+    ccw: bool,
+) -> DynamixelServo {
+    let mut s = *base;
+    let side = usize::from(ccw);
+    if let Some(m) = regs.margin {
+        s.compliance_margin = m[side];
+    }
+    if let Some(sl) = regs.slope {
+        s.compliance_slope = sl[side].max(1e-6);
+    }
+    if let Some(p) = regs.p_ratio {
+        // P = 0: no position control at all (full torque at an error never reached).
+        s.compliance_slope = if p > 0.0 {
+            base.compliance_slope / p
+        } else {
+            f64::MAX
+        };
+    }
+    s.torque_limit = regs.torque_limit;
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rx_slope_steps() {
+        let want = [
+            (0, 2.0),
+            (3, 2.0),
+            (4, 4.0),
+            (31, 16.0),
+            (32, 32.0),
+            (127, 64.0),
+            (128, 128.0),
+            (254, 128.0),
+        ];
+        for (raw, units) in want {
+            assert_eq!(rx_slope_units(raw), units, "raw {raw}");
+        }
+    }
+
+    #[test]
+    fn registers_become_servo_parameters() {
+        let unit = (300.0f64 / 1024.0).to_radians();
+        let mut r = DriveRegisters::new(0.0);
+        r.set(Model::Rx28, Item::CwComplianceSlope, 8);
+        r.set(Model::Rx28, Item::CcwComplianceSlope, 64);
+        r.set(Model::Rx28, Item::CwComplianceMargin, 0);
+        r.set(Model::Rx28, Item::CcwComplianceMargin, 3);
+        r.set(Model::Rx28, Item::TorqueLimit, 512);
+        r.set(Model::Rx28, Item::MovingSpeed, 100);
+        let base = DynamixelServo::rx28();
+        let cw = servo_with_registers(&base, &r, false);
+        let ccw = servo_with_registers(&base, &r, true);
+        assert!((cw.compliance_slope - 8.0 * unit).abs() < 1e-4 * unit);
+        assert!((ccw.compliance_slope - 64.0 * unit).abs() < 1e-4 * unit);
+        assert_eq!(cw.compliance_margin, 0.0);
+        assert!((ccw.compliance_margin - 3.0 * unit).abs() < 1e-4 * unit);
+        assert!((cw.torque_limit - 512.0 / 1023.0).abs() < 1e-12);
+        // 100 units of 0.111 rpm.
+        assert!((r.moving_speed - 100.0 * 0.111 * std::f64::consts::TAU / 60.0).abs() < 1e-9);
+        // X-series: P gain twice the factory value halves the slope; PWM Limit is the
+        // torque limit.
+        let mut x = DriveRegisters::new(0.0);
+        x.set(Model::Xm430W350, Item::PositionPGain, 1600);
+        x.set(Model::Xm430W350, Item::MaxTorque, 885 / 5);
+        let s = servo_with_registers(&base, &x, true);
+        assert!((s.compliance_slope - base.compliance_slope / 2.0).abs() < 1e-12);
+        assert!((s.torque_limit - 177.0 / 885.0).abs() < 1e-12);
+    }
+}

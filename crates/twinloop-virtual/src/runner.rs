@@ -1,0 +1,225 @@
+//! The simulator thread: apply the servos' registers, step, publish, and keep
+//! simulated time on the wall clock.
+
+use crate::drive::{DriveRegisters, servo_with_registers};
+use crate::shared::{Shared, Snapshot, thermal_step};
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+use twinloop_sim::{Actuator, DynamixelServo, SimError, Simulator};
+
+/// At most this many steps between two looks at the registers and two snapshots,
+/// so a host's command takes effect within a few milliseconds even when the
+/// simulator is catching up.
+const MAX_BATCH: usize = 8;
+/// Lagging more than this, the simulator stops chasing the wall clock (it runs as
+/// fast as it can from there) and counts the time it dropped.
+const MAX_LAG_S: f64 = 0.1;
+
+/// How the simulation is doing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimStatus {
+    /// Simulated time, s.
+    pub time: f64,
+    pub steps: u64,
+    /// Wall-clock time the simulation could not keep up with, s.
+    pub behind_s: f64,
+    pub error: Option<String>,
+}
+
+/// One servo of the bus tied to a joint of the simulator.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ServoJoint {
+    /// Joint index in the simulator's model.
+    pub joint: usize,
+    /// servo angle = zero + direction * joint angle (the mapping's rule).
+    pub zero: f64,
+    pub direction: f64,
+    /// The joint's servo from its datasheet (factory registers).
+    pub base: DynamixelServo,
+    /// Stall torque of the bus-side model over the simulated one: Present Load is
+    /// torque over stall torque of the simulated servo, and the bus divides by its
+    /// model's figure.
+    pub torque_scale: f64,
+    /// Supply voltage, V.
+    pub voltage: f64,
+}
+
+pub(crate) struct Runner {
+    pub sim: Simulator,
+    pub servos: Vec<ServoJoint>,
+    pub shared: Arc<Shared>,
+    pub realtime_factor: f64,
+    regs: Vec<DriveRegisters>,
+    /// Goal after the Moving Speed limit, servo angle.
+    profile: Vec<f64>,
+    temperature: Vec<f64>,
+    snap: Snapshot,
+    behind_s: f64,
+}
+
+impl Runner {
+    pub fn new(
+        sim: Simulator,
+        servos: Vec<ServoJoint>,
+        shared: Arc<Shared>,
+        realtime_factor: f64,
+    ) -> Runner {
+        let n = servos.len();
+        let regs = shared
+            .registers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone();
+        let mut r = Runner {
+            regs,
+            profile: vec![0.0; n],
+            temperature: vec![crate::shared::AMBIENT_C; n],
+            snap: Snapshot {
+                servos: vec![
+                    twinloop_link::servo::ServoMeasurement {
+                        position: 0.0,
+                        velocity: 0.0,
+                        torque: 0.0,
+                        voltage: 0.0,
+                        temperature: 0.0,
+                    };
+                    n
+                ],
+                ..Snapshot::default()
+            },
+            sim,
+            servos,
+            shared,
+            realtime_factor,
+            behind_s: 0.0,
+        };
+        for k in 0..n {
+            r.profile[k] = r.servo_angle(k);
+        }
+        r
+    }
+
+    fn servo_angle(&self, k: usize) -> f64 {
+        let s = &self.servos[k];
+        s.zero + s.direction * self.sim.q[self.sim.model.q_offset + s.joint]
+    }
+
+    /// Copy the registers the bus thread wrote.
+    pub fn take_registers(&mut self) {
+        let r = self
+            .shared
+            .registers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        self.regs.copy_from_slice(&r);
+    }
+
+    /// One time step with the registers last taken.
+    pub fn step(&mut self) -> Result<(), SimError> {
+        let dt = self.sim.dt();
+        for k in 0..self.servos.len() {
+            let s = self.servos[k];
+            let r = &self.regs[k];
+            let now = self.servo_angle(k);
+            if !r.torque_on {
+                // Limp: the joint is free; the profile waits where the servo is.
+                self.profile[k] = now;
+                self.sim.actuators[s.joint] = Actuator::Passive;
+                continue;
+            }
+            // Moving Speed: the servo heads for its goal no faster than that.
+            self.profile[k] = if r.moving_speed > 0.0 {
+                let d = r.moving_speed * dt;
+                self.profile[k] + (r.goal - self.profile[k]).clamp(-d, d)
+            } else {
+                r.goal
+            };
+            let ccw = self.profile[k] > now;
+            self.sim.actuators[s.joint] =
+                Actuator::Dynamixel(servo_with_registers(&s.base, r, ccw));
+            self.sim.goals[s.joint] = s.direction * (self.profile[k] - s.zero);
+        }
+        self.sim.step()?;
+        for (k, s) in self.servos.iter().enumerate() {
+            let load = self.sim.applied[s.joint] / s.base.stall_torque;
+            self.temperature[k] = thermal_step(self.temperature[k], load, dt);
+        }
+        Ok(())
+    }
+
+    /// Measure and hand the snapshot to the bus.
+    pub fn publish(&mut self) {
+        self.sim.read_sensors(&mut self.snap.state);
+        let (qo, vo) = (self.sim.model.q_offset, self.sim.model.v_offset);
+        for (k, s) in self.servos.iter().enumerate() {
+            let m = &mut self.snap.servos[k];
+            m.position = s.zero + s.direction * self.sim.q[qo + s.joint];
+            m.velocity = s.direction * self.sim.v[vo + s.joint];
+            m.torque = s.direction * self.sim.applied[s.joint] * s.torque_scale;
+            m.voltage = s.voltage;
+            m.temperature = self.temperature[k];
+        }
+        self.snap.time = self.sim.time;
+        self.snap.base_height = if self.sim.model.is_floating() {
+            self.sim.q[2]
+        } else {
+            0.0
+        };
+        self.snap.behind_s = self.behind_s;
+        let mut out = self
+            .shared
+            .snapshot
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        out.copy_from(&self.snap);
+    }
+
+    fn fail(&mut self, e: SimError) {
+        self.snap.error = Some(e.to_string());
+        self.publish();
+    }
+
+    /// Run until told to stop, simulated time following the wall clock (times
+    /// `realtime_factor`).
+    pub fn run(mut self) -> Simulator {
+        let dt = self.sim.dt();
+        let factor = self.realtime_factor.max(1e-6);
+        let start = Instant::now();
+        let t0 = self.sim.time;
+        // Wall-clock seconds given up after falling too far behind.
+        let mut dropped = 0.0;
+        while !self.shared.stop.load(Ordering::Relaxed) {
+            if self.snap.error.is_some() {
+                std::thread::sleep(Duration::from_millis(10));
+                continue;
+            }
+            self.take_registers();
+            let wall = start.elapsed().as_secs_f64() - dropped;
+            let target = t0 + wall * factor;
+            let mut n = 0;
+            while self.sim.time + 0.5 * dt < target && n < MAX_BATCH {
+                if let Err(e) = self.step() {
+                    self.fail(e);
+                    break;
+                }
+                self.snap.steps += 1;
+                n += 1;
+            }
+            let lag = target - self.sim.time;
+            if lag > MAX_LAG_S {
+                dropped += lag / factor;
+                self.behind_s += lag;
+            }
+            if n > 0 {
+                self.publish();
+            }
+            let due = (self.sim.time + dt - t0) / factor + dropped;
+            let left = due - start.elapsed().as_secs_f64();
+            if left > 0.0 {
+                std::thread::sleep(Duration::from_secs_f64(left));
+            }
+        }
+        self.sim
+    }
+}

@@ -1,0 +1,258 @@
+//! Building the simulated robot behind a bus: the simulator standing on the
+//! ground, one simulated Dynamixel servo per joint, the mapping from bus servos to
+//! joints, and the thread that runs it.
+
+use crate::backend::SimServoBackend;
+use crate::drive::DriveRegisters;
+use crate::runner::{Runner, ServoJoint, SimStatus};
+use crate::shared::{Shared, Snapshot};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use twinloop_link::{BusServo, Item, RobotMapping, VirtualBus};
+use twinloop_sim::{Actuator, SimConfig, Simulator};
+
+/// Settings of a virtual robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VirtualRobotOptions {
+    /// Simulation time step, s.
+    pub dt: f64,
+    /// Simulated seconds per wall-clock second (1: real time).
+    pub realtime_factor: f64,
+    /// Simulated time to stand still before the bus opens, so the robot has
+    /// settled into its contacts, s.
+    pub settle_s: f64,
+    /// Servos start with torque on (as a host would leave them before an
+    /// experiment). Off, the servos power on limp as real ones do, and a standing
+    /// robot falls.
+    pub torque_on: bool,
+}
+
+impl Default for VirtualRobotOptions {
+    fn default() -> Self {
+        VirtualRobotOptions {
+            dt: 1e-3,
+            realtime_factor: 1.0,
+            settle_s: 0.5,
+            torque_on: true,
+        }
+    }
+}
+
+/// A simulated robot ready to serve.
+pub struct VirtualRobot {
+    runner: Runner,
+    shared: Arc<Shared>,
+    servos: Vec<BusServo>,
+    torque_on: bool,
+    /// Joints the mapping leaves off the bus (they hold their standing pose).
+    pub unmapped: Vec<String>,
+}
+
+impl VirtualRobot {
+    /// `robot` standing upright on the ground with every joint at 0 (or the nearest
+    /// limit), each joint driven by its servo
+    /// ([`twinloop_experiments::servo_for_joint`]); the servos of `mapping` are the
+    /// bus's, tied to joints by name.
+    pub fn new(
+        robot: &twinloop_model::Robot,
+        mapping: &RobotMapping,
+        options: &VirtualRobotOptions,
+    ) -> Result<VirtualRobot, String> {
+        let config = SimConfig {
+            dt: options.dt,
+            ..SimConfig::default()
+        };
+        let mut sim = Simulator::new(robot, config).map_err(|e| e.to_string())?;
+        let nb = sim.model.nbodies;
+        for i in 0..nb {
+            let s = twinloop_experiments::servo_for_joint(&robot.name, &sim.model, i);
+            sim.actuators[i] = Actuator::Dynamixel(s);
+        }
+        let mut servos = Vec::with_capacity(mapping.joints.len());
+        let mut on_bus = vec![false; nb];
+        for j in &mapping.joints {
+            let at = if j.line > 0 {
+                format!("{}:{}", mapping.source, j.line)
+            } else {
+                mapping.source.clone()
+            };
+            let Some(i) = sim.joint_index(&j.name) else {
+                return Err(format!(
+                    "{at}: joint \"{}\" (id {}) is not a joint of robot \"{}\" (its joints: {})",
+                    j.name,
+                    j.id,
+                    robot.name,
+                    sim.model.joint_names.join(", ")
+                ));
+            };
+            if on_bus[i] {
+                return Err(format!(
+                    "{at}: joint \"{}\" is mapped to two servos",
+                    j.name
+                ));
+            }
+            on_bus[i] = true;
+            let Actuator::Dynamixel(base) = sim.actuators[i] else {
+                unreachable!("every joint was given a servo above")
+            };
+            let spec = j.model.spec();
+            servos.push(ServoJoint {
+                joint: i,
+                zero: j.zero,
+                direction: j.direction,
+                base,
+                torque_scale: spec.stall_torque / base.stall_torque,
+                voltage: spec.voltage,
+            });
+        }
+        let standing: Vec<f64> = (0..nb)
+            .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
+            .collect();
+        sim.place_on_ground(&standing).map_err(|e| e.to_string())?;
+        sim.run(options.settle_s.max(0.0))
+            .map_err(|e| format!("the robot does not stand: {e}"))?;
+        let unmapped = (0..nb)
+            .filter(|&i| !on_bus[i])
+            .map(|i| sim.model.joint_names[i].clone())
+            .collect();
+        let registers: Vec<DriveRegisters> = servos
+            .iter()
+            .map(|s| {
+                let q = sim.q[sim.model.q_offset + s.joint];
+                DriveRegisters::new(s.zero + s.direction * q)
+            })
+            .collect();
+        let shared = Arc::new(Shared {
+            registers: Mutex::new(registers),
+            snapshot: Mutex::new(Snapshot::default()),
+            stop: AtomicBool::new(false),
+        });
+        let mut runner = Runner::new(sim, servos, shared.clone(), options.realtime_factor);
+        runner.publish();
+        Ok(VirtualRobot {
+            runner,
+            shared,
+            servos: mapping
+                .joints
+                .iter()
+                .map(|j| BusServo {
+                    id: j.id,
+                    model: j.model,
+                })
+                .collect(),
+            torque_on: options.torque_on,
+            unmapped,
+        })
+    }
+
+    /// The bus: one virtual servo per mapped joint, answering from the simulation;
+    /// torque on if the options say so.
+    pub fn bus(&self) -> VirtualBus<SimServoBackend> {
+        let backend = SimServoBackend {
+            shared: self.shared.clone(),
+            models: self.servos.iter().map(|s| s.model).collect(),
+        };
+        let mut bus = VirtualBus::new(&self.servos, backend);
+        if self.torque_on {
+            for k in 0..self.servos.len() {
+                // Torque Enable 1 is within every table's range: cannot fail.
+                let _ = bus.host_write(k, Item::TorqueEnable, 1);
+            }
+        }
+        bus
+    }
+
+    /// The simulator itself (before it runs on its thread).
+    pub fn simulator(&mut self) -> &mut Simulator {
+        &mut self.runner.sim
+    }
+
+    /// Advance `seconds` of simulated time on the caller's thread, with the
+    /// registers as the bus left them (tests; [`VirtualRobot::spawn`] runs it in
+    /// real time).
+    pub fn step_for(&mut self, seconds: f64) -> Result<(), String> {
+        self.runner.take_registers();
+        let n = (seconds / self.runner.sim.dt()).round() as u64;
+        for _ in 0..n {
+            self.runner.step().map_err(|e| e.to_string())?;
+        }
+        self.runner.publish();
+        Ok(())
+    }
+
+    /// The latest snapshot.
+    pub fn snapshot(&self, out: &mut Snapshot) {
+        out.copy_from(
+            &self
+                .shared
+                .snapshot
+                .lock()
+                .unwrap_or_else(|e| e.into_inner()),
+        );
+    }
+
+    /// Run the simulation on its own thread, in real time.
+    pub fn spawn(self) -> SimHandle {
+        let shared = self.shared.clone();
+        let runner = self.runner;
+        let thread = std::thread::Builder::new()
+            .name("twinloop-sim".into())
+            .spawn(move || runner.run())
+            .ok();
+        SimHandle { shared, thread }
+    }
+}
+
+/// The running simulation. Dropping it stops the thread.
+pub struct SimHandle {
+    shared: Arc<Shared>,
+    thread: Option<JoinHandle<Simulator>>,
+}
+
+impl SimHandle {
+    /// Copy the latest snapshot into `out` (no allocation once `out` is sized).
+    pub fn snapshot(&self, out: &mut Snapshot) {
+        out.copy_from(
+            &self
+                .shared
+                .snapshot
+                .lock()
+                .unwrap_or_else(|e| e.into_inner()),
+        );
+    }
+
+    pub fn status(&self) -> SimStatus {
+        let s = self
+            .shared
+            .snapshot
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        SimStatus {
+            time: s.time,
+            steps: s.steps,
+            behind_s: s.behind_s,
+            error: s.error.clone(),
+        }
+    }
+
+    /// Whether the thread is running (it could not be started, or it panicked).
+    pub fn is_running(&self) -> bool {
+        self.thread.as_ref().is_some_and(|t| !t.is_finished())
+    }
+
+    /// Stop the simulation and hand back the simulator.
+    pub fn stop(mut self) -> Option<Simulator> {
+        self.shared.stop.store(true, Ordering::Relaxed);
+        self.thread.take().and_then(|t| t.join().ok())
+    }
+}
+
+impl Drop for SimHandle {
+    fn drop(&mut self) {
+        self.shared.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
