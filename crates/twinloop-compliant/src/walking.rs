@@ -29,14 +29,26 @@
 //! Footprints are foot centres (the middle of the sole box), where the ZMP reference
 //! sits in single support.
 //!
-//! # Why no gravity feed-forward
+//! # Control: what the simulated robot's controller does
 //!
-//! The motors follow the kinematic references; nothing pre-deflects them by the static
-//! torque over k_j. The robot therefore sags under its weight, and the CoM rides below
-//! and off the reference, as the seed's compact model describes: eq 11 has the gravity
-//! term `-m g` against the spring `K_zz (z - z_r)`, i.e. a static sag `m g / K_zz` that a
-//! feed-forward would have removed from the data. The swing foot is lifted enough to
-//! clear the ground despite the sag.
+//! - **Gravity feed-forward** on the compliant joints: each motor is pre-deflected by the
+//!   static torque over k_j at the reference pose (weight on the stance foot, split by
+//!   the ZMP between the feet in double support: `StaticLoad`), so the link reaches its
+//!   reference in statics. Without it the stance leg leans under the body's weight
+//!   (about 0.03 rad at the ankle for k_j = 290 N m/rad), every swing foot lands ahead of
+//!   its footprint, and the error accumulates step after step (measured: the CoM 4 cm
+//!   ahead of the reference after 30 s). With it the dataset keeps the *dynamic*
+//!   deflection (what the compact model's springs and dampers describe) and a small
+//!   static sag.
+//! - **Foot placement on the actual feet**: a stance sole is commanded where it touched
+//!   down and a swing ends on the planned footprint, so a landing error does not carry
+//!   the rest of the plan along.
+//! - **Lateral balance**: the IK's CoM target moves by `kp (y_r - y) + kd (vy_r - vy)`
+//!   (true CoM state; gains `balance_kp`, `balance_kd`, default 1 and 0.3 s laterally,
+//!   0 sagittally). The open-loop gait's lateral sway grows from step to step until the
+//!   robot falls over the stance foot's outer edge (measured: after 4 steps); the seed's
+//!   compact model treats y as stiff and records only x and z, which the feedback
+//!   leaves alone.
 //!
 //! # Stiffness choice
 //!
@@ -58,6 +70,8 @@ use twinloop_spatial::Se3;
 
 /// Sample period of the dataset (seed 002: 1 kHz), s.
 pub const SAMPLE_TIME: f64 = 1e-3;
+/// Samples per second; sample i is at `i / SAMPLE_RATE` (exactly rounded times).
+pub const SAMPLE_RATE: f64 = 1000.0;
 
 /// Everything that defines a walking run.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -107,6 +121,10 @@ pub struct WalkingConfig {
     /// gains `[x, y]`. Zero gains: open loop on the references.
     pub balance_kp: [f64; 2],
     pub balance_kd: [f64; 2],
+    /// Time constant of the first-order filter on the balance correction, s: the
+    /// position servos follow a command within milliseconds, so velocity feedback
+    /// straight into the position command closes a fast loop that rings.
+    pub balance_filter: f64,
     /// Simulator steps per 1 ms sample.
     pub substeps: usize,
     /// Time standing still before the recording starts, s (the robot settles).
@@ -138,7 +156,8 @@ impl Default for WalkingConfig {
             contact_sink: 1e-3,
             gravity_feedforward: true,
             balance_kp: [0.0, 1.0],
-            balance_kd: [0.0, 0.1],
+            balance_kd: [0.0, 0.3],
+            balance_filter: 0.02,
             substeps: 1,
             settle: 1.0,
         }
@@ -177,6 +196,7 @@ impl WalkingConfig {
             ("torque constant", self.torque_constant),
             ("back-EMF constant", self.bemf_constant),
             ("settling time", self.settle),
+            ("balance filter time constant", self.balance_filter),
         ];
         for (name, v) in non_negative {
             if !(v.is_finite() && v >= 0.0) {
@@ -517,7 +537,7 @@ impl ComanWalker {
             .map(|(k, _)| k)
             .collect();
         for i in 0..n {
-            let t = i as f64 * SAMPLE_TIME;
+            let t = i as f64 / SAMPLE_RATE;
             let r = reference.at(t);
             let targets = targets_of(&r);
             let rep = ik.solve(&model, &mut data, &mut q, &targets).map_err(|e| {
@@ -552,51 +572,8 @@ impl ComanWalker {
             }
             joint_references.push(refs);
         }
-        // Actuators.
-        let (i_m, d_m) = SeriesElastic::reflected(
-            config.gear_ratio,
-            config.rotor_inertia,
-            config.rotor_damping,
-            config.torque_constant,
-            config.bemf_constant,
-            config.winding_resistance,
-        );
-        let mut compliant = Vec::new();
-        for (k, name) in model.joint_names.iter().enumerate() {
-            let (kj, _) = compliance.joint(name)?;
-            let effort = robot
-                .joint(name)
-                .and_then(|j| j.limit.as_ref().and_then(|l| l.effort))
-                .filter(|e| e.is_finite() && *e > 0.0)
-                .unwrap_or(50.0);
-            let is_compliant = compliance
-                .compliant
-                .iter()
-                .any(|c| name.ends_with(c.as_str()));
-            sim.actuators[k] = if is_compliant {
-                compliant.push(k);
-                // Motor loop critically damped on the reflected rotor inertia (eq 5).
-                let kd = (2.0 * (config.motor_kp * i_m).sqrt() - d_m).max(0.0);
-                Actuator::SeriesElastic(SeriesElastic {
-                    stiffness: kj,
-                    spring_damping: config.spring_damping,
-                    motor_inertia: i_m,
-                    motor_damping: d_m,
-                    kp: config.motor_kp,
-                    kd,
-                    max_torque: effort,
-                    theta: 0.0,
-                    theta_dot: 0.0,
-                })
-            } else {
-                Actuator::TwoLoop(TwoLoopServo {
-                    kp_position: kj / config.servo_kv,
-                    kv: config.servo_kv,
-                    max_speed: 20.0,
-                    max_torque: effort,
-                })
-            };
-        }
+        let (actuators, compliant) = joint_actuators(robot, &model, config)?;
+        sim.actuators = actuators;
         // On the ground where the plan has the feet: the IK's first pose has the soles at
         // z = 0, where the bottoms of the foot boxes are.
         sim.place_on_ground(&joint_references[0]).map_err(sim_err)?;
@@ -639,19 +616,19 @@ impl ComanWalker {
         ];
         let mut rows = Vec::with_capacity(n);
         let mut s = Stats::default();
-        let debug = std::env::var_os("TWINLOOP_WALK_DEBUG").is_some();
         let mut q_cmd = self.q_first.clone();
         // Online, the IK is part of the controller: best effort near a stretched knee.
         self.ik.best_effort = true;
         self.ik.damping = 1e-4;
         self.ik.max_iterations = 10;
         let mut online_ik_error: f64 = 0.0;
+        let mut correction = [0.0; 2];
         // Where each stance sole was when it touched down (slip is measured from there).
         let mut anchors: [Option<[f64; 2]>; 2] = [None, None];
         let mut lift_off: [Option<[f64; 2]>; 2] = [None, None];
         let mut ik_data = Data::new(&model);
         for i in 0..n {
-            let r = self.reference.at(i as f64 * SAMPLE_TIME);
+            let r = self.reference.at(i as f64 / SAMPLE_RATE);
             // Record the state at the sample time, then command and step.
             let jc = jacobian_center_of_mass(&model, &mut data, &self.sim.q);
             let mut vel = Vector3::zeros();
@@ -701,15 +678,6 @@ impl ComanWalker {
                     }
                 }
             }
-            if debug && i % 50 == 0 {
-                let pl = WholeBodyIk::frame_placement(&model, &data, soles[0]).translation;
-                let pr = WholeBodyIk::frame_placement(&model, &data, soles[1]).translation;
-                eprintln!(
-                    "{:.2} ph {} c {:.4} {:.4} {:.4} r {:.4} {:.4} {:.4} tilt {:.3} rb02 {:.3} rb12 {:.3} L {:.4} {:.4} {:.4} R {:.4} {:.4} {:.4} Lr {:.4} {:.4} {:.4} Rr {:.4} {:.4} {:.4}",
-                    r.t, r.phase.code(), com.x, com.y, com.z, r.com[0], r.com[1], r.com[2], tilt, rb[(0,2)], rb[(1,2)],
-                    pl.x, pl.y, pl.z, pr.x, pr.y, pr.z, r.soles[0][0], r.soles[0][1], r.soles[0][2], r.soles[1][0], r.soles[1][1], r.soles[1][2]
-                );
-            }
             if tilt > FALL_TILT || com.z < 0.5 * r.com[2] {
                 return err(format!(
                     "the robot fell at t = {:.3} s (pelvis tilt {:.2} rad, CoM height {:.3} m)",
@@ -730,10 +698,13 @@ impl ComanWalker {
                     targets.soles[f].translation.y = a[1] + (end[1] - a[1]) * b;
                 }
             }
-            // Balance feedback, gains [x, y].
+            // Balance feedback, gains [x, y], low-pass filtered.
+            let alpha = SAMPLE_TIME / (SAMPLE_TIME + self.config.balance_filter);
             for axis in 0..2 {
-                targets.com[axis] += self.config.balance_kp[axis] * (r.com[axis] - com[axis])
+                let u = self.config.balance_kp[axis] * (r.com[axis] - com[axis])
                     + self.config.balance_kd[axis] * (r.com_vel[axis] - vel[axis]);
+                correction[axis] += alpha * (u - correction[axis]);
+                targets.com[axis] += correction[axis];
             }
             let rep = self
                 .ik
@@ -828,6 +799,66 @@ fn targets_of(r: &WalkingSample) -> IkTargets {
         com: Vector3::new(r.com[0], r.com[1], r.com[2]),
         pelvis: Matrix3::identity(),
     }
+}
+
+/// The joint actuators of the walking COMAN (model joint order) and the indices of the
+/// compliant joints: knee and ankle pitch are [`SeriesElastic`] (seed 002, eq 1-6:
+/// k_j = K_h K_s / (K_h + K_s), reflected motor inertia and damping of eq 5-6, motor
+/// position loop stiff and critically damped), every other joint a [`TwoLoopServo`] of
+/// stiffness K_h (the seed's k_j of a stiff joint). Torque limits: the URDF efforts.
+pub fn joint_actuators(
+    robot: &Robot,
+    model: &Model,
+    config: &WalkingConfig,
+) -> Result<(Vec<Actuator>, Vec<usize>), CompliantError> {
+    config.validate()?;
+    let compliance = config.joint_compliance();
+    let (i_m, d_m) = SeriesElastic::reflected(
+        config.gear_ratio,
+        config.rotor_inertia,
+        config.rotor_damping,
+        config.torque_constant,
+        config.bemf_constant,
+        config.winding_resistance,
+    );
+    let mut actuators = Vec::with_capacity(model.nbodies);
+    let mut compliant = Vec::new();
+    for (k, name) in model.joint_names.iter().enumerate() {
+        let (kj, _) = compliance.joint(name)?;
+        let effort = robot
+            .joint(name)
+            .and_then(|j| j.limit.as_ref().and_then(|l| l.effort))
+            .filter(|e| e.is_finite() && *e > 0.0)
+            .unwrap_or(50.0);
+        let is_compliant = compliance
+            .compliant
+            .iter()
+            .any(|c| name.ends_with(c.as_str()));
+        actuators.push(if is_compliant {
+            compliant.push(k);
+            // Motor loop critically damped on the reflected rotor inertia (eq 5).
+            let kd = (2.0 * (config.motor_kp * i_m).sqrt() - d_m).max(0.0);
+            Actuator::SeriesElastic(SeriesElastic {
+                stiffness: kj,
+                spring_damping: config.spring_damping,
+                motor_inertia: i_m,
+                motor_damping: d_m,
+                kp: config.motor_kp,
+                kd,
+                max_torque: effort,
+                theta: 0.0,
+                theta_dot: 0.0,
+            })
+        } else {
+            Actuator::TwoLoop(TwoLoopServo {
+                kp_position: kj / config.servo_kv,
+                kv: config.servo_kv,
+                max_speed: 20.0,
+                max_torque: effort,
+            })
+        });
+    }
+    Ok((actuators, compliant))
 }
 
 /// Share of the weight on the left foot: 1 or 0 in single support; in double support
@@ -945,17 +976,22 @@ fn foot_centre_offset(
     Ok([x / k, y / k])
 }
 
-/// Writes the dataset as CSV with columns `t, xr, zr, x, z, phase`.
+/// Writes the dataset as CSV with columns `t, xr, zr, x, z, phase` (phase an integer:
+/// 0 single, 1 double support; numbers in shortest round-trip form).
 pub fn write_csv(path: &std::path::Path, rows: &[DatasetRow]) -> Result<(), CompliantError> {
-    let columns: Vec<String> = ["t", "xr", "zr", "x", "z", "phase"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    let io = |e: twinloop_io::IoError| CompliantError(e.to_string());
-    let mut w = twinloop_io::CsvWriter::create(path, &columns).map_err(io)?;
+    use std::io::Write as _;
+    let fail = |e: std::io::Error| CompliantError(format!("{}: cannot write: {e}", path.display()));
+    let file = std::fs::File::create(path)
+        .map_err(|e| CompliantError(format!("{}: cannot create: {e}", path.display())))?;
+    let mut out = std::io::BufWriter::new(file);
+    writeln!(out, "t,xr,zr,x,z,phase").map_err(fail)?;
     for r in rows {
-        w.write_row(&[r.t, r.xr, r.zr, r.x, r.z, r.phase as f64])
-            .map_err(io)?;
+        writeln!(
+            out,
+            "{:?},{:?},{:?},{:?},{:?},{}",
+            r.t, r.xr, r.zr, r.x, r.z, r.phase
+        )
+        .map_err(fail)?;
     }
-    w.finish().map_err(io)
+    out.flush().map_err(fail)
 }
