@@ -203,16 +203,18 @@ impl WalkingConfig {
                 return err(format!("{name} must be non-negative and finite, got {v}"));
             }
         }
-        for (name, g) in [("balance_kp", self.balance_kp), ("balance_kd", self.balance_kd)] {
+        for (name, g) in [
+            ("balance_kp", self.balance_kp),
+            ("balance_kd", self.balance_kd),
+        ] {
             if g.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
-                return err(format!("{name} gains must be non-negative and finite, got {g:?}"));
+                return err(format!(
+                    "{name} gains must be non-negative and finite, got {g:?}"
+                ));
             }
         }
         if self.substeps == 0 || self.substeps > 100 {
-            return err(format!(
-                "substeps must be 1..=100, got {}",
-                self.substeps
-            ));
+            return err(format!("substeps must be 1..=100, got {}", self.substeps));
         }
         if self.duration > 3600.0 {
             return err(format!("duration {} s is over an hour", self.duration));
@@ -351,7 +353,11 @@ impl WalkingReference {
                 (p.steps, None)
             } else {
                 let u = (t - walk0 - k as f64 * cycle) / p.t_single;
-                if u < 1.0 { (j - 1, Some((j, u))) } else { (j, None) }
+                if u < 1.0 {
+                    (j - 1, Some((j, u)))
+                } else {
+                    (j, None)
+                }
             }
         };
         let mut soles = [[0.0; 3]; 2];
@@ -533,7 +539,12 @@ impl ComanWalker {
             .joint_names
             .iter()
             .enumerate()
-            .filter(|(_, name)| compliance.compliant.iter().any(|c| name.ends_with(c.as_str())))
+            .filter(|(_, name)| {
+                compliance
+                    .compliant
+                    .iter()
+                    .any(|c| name.ends_with(c.as_str()))
+            })
             .map(|(k, _)| k)
             .collect();
         for i in 0..n {

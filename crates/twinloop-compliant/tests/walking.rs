@@ -35,9 +35,23 @@ fn coman_walks_the_seed_gait_without_falling_or_slipping() {
     assert_eq!(s.samples, 4000);
     assert_eq!(s.steps, 3);
     assert!(s.max_foot_slip < 2e-3, "slip {}", s.max_foot_slip);
-    assert!(s.max_landing_error < 1e-2, "landing {}", s.max_landing_error);
-    assert!(s.rms_x < 6e-3 && s.max_abs_x < 2e-2, "x {} {}", s.rms_x, s.max_abs_x);
-    assert!(s.rms_z < 4e-3 && s.max_abs_z < 6e-3, "z {} {}", s.rms_z, s.max_abs_z);
+    assert!(
+        s.max_landing_error < 1e-2,
+        "landing {}",
+        s.max_landing_error
+    );
+    assert!(
+        s.rms_x < 6e-3 && s.max_abs_x < 2e-2,
+        "x {} {}",
+        s.rms_x,
+        s.max_abs_x
+    );
+    assert!(
+        s.rms_z < 4e-3 && s.max_abs_z < 6e-3,
+        "z {} {}",
+        s.rms_z,
+        s.max_abs_z
+    );
     assert!(s.rms_y < 6e-3, "y {}", s.rms_y);
     assert!(s.max_trunk_tilt < 0.08, "tilt {}", s.max_trunk_tilt);
     assert!(s.ik_max_error < 1e-9 && s.online_ik_max_error < 1e-6);
@@ -57,7 +71,12 @@ fn coman_walks_the_seed_gait_without_falling_or_slipping() {
     // reference comes to rest between them, at 2.5 sl = 0.075 m.
     let last = data.rows.last().unwrap();
     assert!((last.xr - 0.075).abs() < 2e-3, "xr {}", last.xr);
-    assert!((last.x - last.xr).abs() < 1e-2, "x {} xr {}", last.x, last.xr);
+    assert!(
+        (last.x - last.xr).abs() < 1e-2,
+        "x {} xr {}",
+        last.x,
+        last.xr
+    );
 }
 
 /// The seed's K_s = 100 N m/rad on the full 32 kg robot: k_j < m g Zc, so one ankle
@@ -92,7 +111,10 @@ fn other_gaits_walk() {
         };
         let mut walker = ComanWalker::new(&robot, &config).unwrap();
         let s = walker.run(|_, _| {}).unwrap().summary;
-        assert!(s.rms_x < 6e-3 && s.max_foot_slip < 2e-3, "sl {sl} Tss {tss}: {s:?}");
+        assert!(
+            s.rms_x < 6e-3 && s.max_foot_slip < 2e-3,
+            "sl {sl} Tss {tss}: {s:?}"
+        );
     }
 }
 
@@ -249,7 +271,10 @@ fn committed_datasets_are_30_s_at_1_khz() {
             let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
             assert_eq!(f[0], i as f64 / 1000.0, "{name} row {i}");
             assert!(f[5] == 0.0 || f[5] == 1.0);
-            assert!((f[3] - f[1]).abs() < 0.03 && (f[4] - f[2]).abs() < 0.01, "{name} row {i}");
+            assert!(
+                (f[3] - f[1]).abs() < 0.03 && (f[4] - f[2]).abs() < 0.01,
+                "{name} row {i}"
+            );
             n += 1;
         }
         assert_eq!(n, 30_000, "{name}");
@@ -264,7 +289,10 @@ fn bad_inputs_are_named() {
         k_series: 0.0,
         ..short(3.0)
     });
-    assert!(e.contains("series stiffness K_s") && e.contains("positive"), "{e}");
+    assert!(
+        e.contains("series stiffness K_s") && e.contains("positive"),
+        "{e}"
+    );
     let e = bad(WalkingConfig {
         k_harmonic: -8000.0,
         ..short(3.0)
