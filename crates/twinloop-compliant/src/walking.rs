@@ -153,7 +153,7 @@ impl Default for WalkingConfig {
             winding_resistance: 2.0,
             motor_kp: 20_000.0,
             servo_kv: 100.0,
-            contact_sink: 1e-3,
+            contact_sink: 5e-4,
             gravity_feedforward: true,
             balance_kp: [0.0, 1.0],
             balance_kd: [0.0, 0.3],
@@ -904,6 +904,7 @@ fn left_load_share(r: &WalkingSample, reference: &WalkingReference) -> f64 {
 struct StaticLoad {
     soles: [usize; 2],
     jf: nalgebra::DMatrix<f64>,
+    g: Vec<f64>,
     tau: Vec<f64>,
 }
 
@@ -912,6 +913,7 @@ impl StaticLoad {
         Ok(StaticLoad {
             soles,
             jf: nalgebra::DMatrix::zeros(6, model.nv),
+            g: vec![0.0; model.nv],
             tau: vec![0.0; model.nbodies],
         })
     }
@@ -924,7 +926,8 @@ impl StaticLoad {
         q: &[f64],
         left_share: f64,
     ) -> Result<&[f64], CompliantError> {
-        let g = twinloop_dynamics::generalized_gravity(model, data, q).clone();
+        let g = &mut self.g;
+        g.copy_from_slice(twinloop_dynamics::generalized_gravity(model, data, q).as_slice());
         twinloop_dynamics::compute_joint_jacobians(model, data, q);
         self.tau.iter_mut().for_each(|t| *t = 0.0);
         let off = model.v_offset;

@@ -99,20 +99,22 @@ fn seed_spring_on_the_full_robot_is_statically_unstable_and_falls() {
     assert!(WalkingConfig::default().ankle_stability_ratio(m, 9.81, zc) > 1.5);
 }
 
-/// Generalisation gaits (other sl and Tss) walk too.
+/// Generalisation gaits (other sl and Tss) walk too (5 s here; 30 s in the docs).
 #[test]
 fn other_gaits_walk() {
     let robot = coman();
-    for (sl, tss) in [(0.02, 0.4), (0.02, 0.6)] {
+    for (sl, tss) in [(0.02, 0.4), (0.04, 0.6), (0.04, 0.5), (0.03, 0.4), (0.03, 0.6)] {
         let config = WalkingConfig {
             step_length: sl,
             t_single: tss,
-            ..short(4.0)
+            ..short(5.0)
         };
         let mut walker = ComanWalker::new(&robot, &config).unwrap();
         let s = walker.run(|_, _| {}).unwrap().summary;
+        // The tracking error grows with the step (30 s runs: RMS 2.6 mm at sl 0.02 up to
+        // 6.6 mm at sl 0.04, Tss 0.6).
         assert!(
-            s.rms_x < 6e-3 && s.max_foot_slip < 2e-3,
+            s.rms_x < 1e-2 && s.max_abs_x < 3e-2 && s.max_foot_slip < 3e-3,
             "sl {sl} Tss {tss}: {s:?}"
         );
     }
@@ -261,7 +263,7 @@ fn committed_datasets_are_30_s_at_1_khz() {
     for name in [
         "coman_walk_sl0.03_tss0.5.csv",
         "coman_walk_sl0.02_tss0.4.csv",
-        "coman_walk_sl0.02_tss0.6.csv",
+        "coman_walk_sl0.04_tss0.6.csv",
     ] {
         let text = std::fs::read_to_string(format!("{dir}/{name}")).unwrap();
         let mut lines = text.lines();
