@@ -35,9 +35,9 @@
 //!   static torque over k_j at the reference pose (weight on the stance foot, split by
 //!   the ZMP between the feet in double support: `StaticLoad`), so the link reaches its
 //!   reference in statics. Without it the stance leg leans under the body's weight
-//!   (about 0.03 rad at the ankle for k_j = 290 N m/rad), every swing foot lands ahead of
-//!   its footprint, and the error accumulates step after step (measured: the CoM 4 cm
-//!   ahead of the reference after 30 s). With it the dataset keeps the *dynamic*
+//!   (about 0.03 rad at the ankle for k_j = 290 N m/rad) and every swing foot lands
+//!   about 1.5 cm ahead of its footprint (measured: the errors accumulate to 9 cm in
+//!   12 s, or with the foot placement below the robot falls at 2 s). With it the dataset keeps the *dynamic*
 //!   deflection (what the compact model's springs and dampers describe) and a small
 //!   static sag.
 //! - **Foot placement on the actual feet**: a stance sole is commanded where it touched
@@ -54,11 +54,11 @@
 //!
 //! The seed gives K_h about 8000 and K_s about 100 N m/rad, for the lower-body COMAN of
 //! its Fig. 1. The URDF here is the full 32 kg robot: on one foot, the ankle pitch spring
-//! alone holds an inverted pendulum of gravitational stiffness m g Zc (about 150 N m/rad
-//! at Zc = 0.48 m), more than a 100 N m/rad spring can (the static equilibrium is
-//! unstable: [`WalkingConfig::ankle_stability_ratio`]). The default K_s is therefore
-//! scaled up so that k_j exceeds m g Zc with a margin; `k_series` can be set to the
-//! seed's 100 to see the robot fall.
+//! alone holds an inverted pendulum of gravitational stiffness m g Zc (167.7 N m/rad
+//! at Zc = 0.533 m), more than a 100 N m/rad spring (k_j = 98.8) can: the static
+//! equilibrium is unstable ([`WalkingConfig::ankle_stability_ratio`] 0.59). The default
+//! K_s = 300 (k_j = 289.2, ratio 1.72) holds it with a margin; `k_series` can be set to
+//! the seed's 100 to see the robot fall (a test does).
 
 use crate::walking_ik::{IkTargets, WholeBodyIk};
 use crate::{CompliantError, GaitPlan, JointCompliance, Phase, SupportLeg, ZmpReference, err};
