@@ -328,7 +328,7 @@ impl WalkingReference {
             if completed < 2 {
                 return [0.0, -half];
             }
-            if completed % 2 == 0 {
+            if completed.is_multiple_of(2) {
                 completed
             } else {
                 completed - 1

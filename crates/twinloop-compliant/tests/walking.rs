@@ -103,7 +103,13 @@ fn seed_spring_on_the_full_robot_is_statically_unstable_and_falls() {
 #[test]
 fn other_gaits_walk() {
     let robot = coman();
-    for (sl, tss) in [(0.02, 0.4), (0.04, 0.6), (0.04, 0.5), (0.03, 0.4), (0.03, 0.6)] {
+    for (sl, tss) in [
+        (0.02, 0.4),
+        (0.04, 0.6),
+        (0.04, 0.5),
+        (0.03, 0.4),
+        (0.03, 0.6),
+    ] {
         let config = WalkingConfig {
             step_length: sl,
             t_single: tss,
