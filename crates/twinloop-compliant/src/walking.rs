@@ -626,7 +626,10 @@ impl ComanWalker {
             model.frame_index(&self.legs[1].foot_frame).unwrap_or(0),
         ];
         let mut rows = Vec::with_capacity(n);
-        let mut s = Stats::default();
+        let mut s = Stats {
+            min_z: f64::INFINITY,
+            ..Stats::default()
+        };
         let mut q_cmd = self.q_first.clone();
         // Online, the IK is part of the controller: best effort near a stretched knee.
         self.ik.best_effort = true;
@@ -790,9 +793,6 @@ struct Stats {
 impl Stats {
     fn add(&mut self, com: Vector3<f64>, r: &WalkingSample) {
         let (ex, ey, ez) = (com.x - r.com[0], com.y - r.com[1], com.z - r.com[2]);
-        if self.sx2 == 0.0 && self.sz2 == 0.0 {
-            self.min_z = com.z;
-        }
         self.sx2 += ex * ex;
         self.sy2 += ey * ey;
         self.sz2 += ez * ez;
