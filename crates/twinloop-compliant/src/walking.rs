@@ -434,6 +434,12 @@ pub struct WalkingSummary {
     pub max_landing_error: f64,
     /// Largest pelvis tilt from upright, rad.
     pub max_trunk_tilt: f64,
+    /// Smallest signed distance of the CoM's ground projection from the edge of the
+    /// support polygon (the convex hull of the soles of the feet meant to be down, at
+    /// their actual placement), m: positive inside.
+    pub min_com_support_margin: f64,
+    /// The same for the reference CoM over the planned soles (the gait's own margin).
+    pub min_reference_support_margin: f64,
     /// Smallest CoM height over the run, m.
     pub min_com_height: f64,
     /// Largest IK task error and IK iterations in total (planning pass), and the largest
@@ -462,6 +468,9 @@ pub struct ComanWalker {
     pub joint_references: Vec<Vec<f64>>,
     /// Indices of the compliant joints (model order).
     pub compliant: Vec<usize>,
+    /// The bottom contact points of each sole (left, right), sole frame: the corners of
+    /// the support polygon.
+    pub sole_points: [Vec<Vector3<f64>>; 2],
     /// Gravity feed-forward of the compliant joints' motors per sample (sample-major,
     /// compliant joints in model order), rad; empty without feed-forward.
     pub feedforward: Vec<f64>,
@@ -517,7 +526,9 @@ impl ComanWalker {
         let com_height = com0.z - ground;
         // Foot centre: the middle of the lowest contact points of the foot's body, in
         // the sole frame.
-        let sole_offset = foot_centre_offset(&sim, &model, &data, soles[0])?;
+        let (sole_offset, left_sole_points) = foot_centre_offset(&sim, &model, &data, soles[0])?;
+        let (_, right_sole_points) = foot_centre_offset(&sim, &model, &data, soles[1])?;
+        let sole_points = [left_sole_points, right_sole_points];
         let plan = config.plan(step_width, com_height)?;
         let zmp = ZmpReference::new(&plan)?;
         let reference = WalkingReference {
@@ -595,6 +606,7 @@ impl ComanWalker {
             reference,
             joint_references,
             compliant,
+            sole_points,
             feedforward,
             legs,
             ik,
@@ -628,6 +640,8 @@ impl ComanWalker {
         let mut rows = Vec::with_capacity(n);
         let mut s = Stats {
             min_z: f64::INFINITY,
+            min_support: f64::INFINITY,
+            min_support_ref: f64::INFINITY,
             ..Stats::default()
         };
         let mut q_cmd = self.q_first.clone();
@@ -640,6 +654,7 @@ impl ComanWalker {
         // Where each stance sole was when it touched down (slip is measured from there).
         let mut anchors: [Option<[f64; 2]>; 2] = [None, None];
         let mut lift_off: [Option<[f64; 2]>; 2] = [None, None];
+        let mut polygon = [[0.0f64; 2]; MAX_SUPPORT_POINTS];
         let mut ik_data = Data::new(&model);
         for i in 0..n {
             let r = self.reference.at(i as f64 / SAMPLE_RATE);
@@ -683,6 +698,39 @@ impl ComanWalker {
             let rb = data.base_placement.rotation;
             let tilt = rb[(2, 2)].clamp(-1.0, 1.0).acos();
             s.max_tilt = s.max_tilt.max(tilt);
+            // Support polygon: the soles of the feet meant to be down, where they are.
+            let mut n_pts = 0;
+            for (f, &frame) in soles.iter().enumerate() {
+                if r.stance[f] {
+                    let m = WholeBodyIk::frame_placement(&model, &data, frame);
+                    for p in &self.sole_points[f] {
+                        if n_pts < MAX_SUPPORT_POINTS {
+                            let w = m.act_point(p);
+                            polygon[n_pts] = [w.x, w.y];
+                            n_pts += 1;
+                        }
+                    }
+                }
+            }
+            if let Some(m) = support_margin(&mut polygon[..n_pts], [com.x, com.y]) {
+                s.min_support = s.min_support.min(m);
+            }
+            // The same for the reference CoM over the planned soles: the LIPM gait itself
+            // puts its CoM at the stance foot's inner edge when single support begins.
+            let mut n_pts = 0;
+            for f in 0..2 {
+                if r.stance[f] {
+                    for p in &self.sole_points[f] {
+                        if n_pts < MAX_SUPPORT_POINTS {
+                            polygon[n_pts] = [r.soles[f][0] + p.x, r.soles[f][1] + p.y];
+                            n_pts += 1;
+                        }
+                    }
+                }
+            }
+            if let Some(m) = support_margin(&mut polygon[..n_pts], [r.com[0], r.com[1]]) {
+                s.min_support_ref = s.min_support_ref.min(m);
+            }
             for &k in &self.compliant {
                 if let Actuator::SeriesElastic(a) = &self.sim.actuators[k] {
                     let d = (a.theta - self.sim.q[qo + k]).abs();
@@ -765,6 +813,8 @@ impl ComanWalker {
             max_foot_slip: s.max_slip,
             max_landing_error: s.max_landing,
             max_trunk_tilt: s.max_tilt,
+            min_com_support_margin: s.min_support,
+            min_reference_support_margin: s.min_support_ref,
             min_com_height: s.min_z,
             ik_max_error: self.ik_max_error,
             online_ik_max_error: online_ik_error,
@@ -788,6 +838,8 @@ struct Stats {
     max_landing: f64,
     max_tilt: f64,
     min_z: f64,
+    min_support: f64,
+    min_support_ref: f64,
 }
 
 impl Stats {
@@ -870,6 +922,54 @@ pub fn joint_actuators(
         });
     }
     Ok((actuators, compliant))
+}
+
+/// Most contact points a support polygon is built from (the feet have 16).
+const MAX_SUPPORT_POINTS: usize = 64;
+
+/// Signed distance (m) of `p` from the edge of the convex hull of `pts` (ground
+/// projections, reordered in place), positive inside; None for fewer than 3 points or a
+/// degenerate hull. Andrew's monotone chain on a stack buffer: no allocation per sample.
+fn support_margin(pts: &mut [[f64; 2]], p: [f64; 2]) -> Option<f64> {
+    if pts.len() < 3 || pts.len() > MAX_SUPPORT_POINTS {
+        return None;
+    }
+    pts.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut hull = [[0.0f64; 2]; 2 * MAX_SUPPORT_POINTS];
+    let mut k = 0;
+    for &q in pts.iter() {
+        while k >= 2 && cross(hull[k - 2], hull[k - 1], q) <= 0.0 {
+            k -= 1;
+        }
+        hull[k] = q;
+        k += 1;
+    }
+    let lower = k + 1;
+    for &q in pts.iter().rev().skip(1) {
+        while k >= lower && cross(hull[k - 2], hull[k - 1], q) <= 0.0 {
+            k -= 1;
+        }
+        hull[k] = q;
+        k += 1;
+    }
+    let m = k - 1; // the last point repeats the first
+    if m < 3 {
+        return None;
+    }
+    let mut margin = f64::INFINITY;
+    for i in 0..m {
+        let (a, b) = (hull[i], hull[(i + 1) % m]);
+        let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+        let len = ex.hypot(ey);
+        if len > 0.0 {
+            // counter-clockwise: inside is to the left of each edge
+            margin = margin.min((ex * (p[1] - a[1]) - ey * (p[0] - a[0])) / len);
+        }
+    }
+    Some(margin)
 }
 
 /// Share of the weight on the left foot: 1 or 0 in single support; in double support
@@ -960,13 +1060,13 @@ impl StaticLoad {
 }
 
 /// Foot centre relative to the sole frame (x, y in the sole frame): the middle of the
-/// bottom contact points of the sole's body.
+/// bottom contact points of the sole's body; and those points (sole frame).
 fn foot_centre_offset(
     sim: &Simulator,
     model: &Model,
     data: &Data,
     sole: usize,
-) -> Result<[f64; 2], CompliantError> {
+) -> Result<([f64; 2], Vec<Vector3<f64>>), CompliantError> {
     let body = model.frames[sole].body;
     let m_sole = WholeBodyIk::frame_placement(model, data, sole);
     let m_body = data.o_m_i[body];
@@ -987,7 +1087,7 @@ fn foot_centre_offset(
         y += p.y;
     }
     let k = bottom.len() as f64;
-    Ok([x / k, y / k])
+    Ok(([x / k, y / k], bottom.into_iter().copied().collect()))
 }
 
 /// Writes the dataset as CSV with columns `t, xr, zr, x, z, phase` (phase an integer:

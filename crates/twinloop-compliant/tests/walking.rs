@@ -54,6 +54,12 @@ fn coman_walks_the_seed_gait_without_falling_or_slipping() {
     );
     assert!(s.rms_y < 6e-3, "y {}", s.rms_y);
     assert!(s.max_trunk_tilt < 0.08, "tilt {}", s.max_trunk_tilt);
+    // The CoM stays over the support polygon of the feet that are down, as closely as
+    // the LIPM reference does: at the start of single support the reference CoM is at
+    // the stance foot's inner edge (it lags the ZMP), a few millimetres outside.
+    let (m, m_ref) = (s.min_com_support_margin, s.min_reference_support_margin);
+    assert!(m_ref > -5e-3 && m_ref < 0.0, "reference margin {m_ref}");
+    assert!(m > m_ref - 5e-3, "support margin {m}, reference {m_ref}");
     assert!(s.ik_max_error < 1e-9 && s.online_ik_max_error < 1e-6);
     // The springs work: the knees and ankles deflect by centiradians, not micro-radians.
     assert!(
