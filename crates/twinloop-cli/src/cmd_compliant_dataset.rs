@@ -35,6 +35,9 @@ pub struct DatasetArgs {
     /// Swing-foot lift, m.
     #[arg(long, default_value_t = 0.03)]
     pub swing_height: f64,
+    /// Standing time before the recording starts, s (the robot settles; not recorded).
+    #[arg(long, default_value_t = WalkingConfig::default().settle)]
+    pub settle: f64,
     /// Simulator steps per 1 ms sample.
     #[arg(long, default_value_t = 1)]
     pub substeps: usize,
@@ -52,7 +55,8 @@ struct DatasetReport {
     out: String,
     config: WalkingConfig,
     summary: WalkingSummary,
-    /// Wall-clock seconds: IK planning, simulation, and simulation per simulated second.
+    /// Wall-clock seconds: IK planning, simulation (settling and recording), and
+    /// simulation per simulated second (settling included).
     seconds_planning: f64,
     seconds_simulation: f64,
     seconds_per_simulated_second: f64,
@@ -72,6 +76,7 @@ pub fn dataset(args: DatasetArgs) -> ExitCode {
         k_series: args.k_series,
         swing_height: args.swing_height,
         substeps: args.substeps,
+        settle: args.settle,
         ..WalkingConfig::default()
     };
     let t0 = std::time::Instant::now();
@@ -89,6 +94,7 @@ pub fn dataset(args: DatasetArgs) -> ExitCode {
     let result = walker.run(|i, _| bar.set_position(i as u64));
     bar.finish_and_clear();
     let simulation = t1.elapsed().as_secs_f64();
+    let per_second = simulation / (config.duration + config.settle);
     let data = match result {
         Ok(d) => d,
         Err(e) => {
@@ -124,7 +130,7 @@ pub fn dataset(args: DatasetArgs) -> ExitCode {
         num(s.k_compliant),
         num(s.ankle_stability_ratio),
         num(s.com_height),
-        num(simulation / config.duration),
+        num(per_second),
     ));
     if let Some(path) = &args.json {
         let report = DatasetReport {
@@ -134,7 +140,7 @@ pub fn dataset(args: DatasetArgs) -> ExitCode {
             summary: data.summary.clone(),
             seconds_planning: planning,
             seconds_simulation: simulation,
-            seconds_per_simulated_second: simulation / config.duration,
+            seconds_per_simulated_second: per_second,
         };
         let text = match serde_json::to_string_pretty(&report) {
             Ok(t) => t,

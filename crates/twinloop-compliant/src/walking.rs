@@ -159,7 +159,7 @@ impl Default for WalkingConfig {
             balance_kd: [0.0, 0.3],
             balance_filter: 0.02,
             substeps: 1,
-            settle: 1.0,
+            settle: 5.0,
         }
     }
 }
@@ -625,12 +625,10 @@ impl ComanWalker {
         let n = self.joint_references.len();
         let substeps = self.config.substeps;
         let qo = self.sim.model.q_offset;
-        // Settle on the first pose.
+        // Settle first, under the same controller holding the first sample's references,
+        // so the recording starts at rest (the fit starts its model from the first row).
         let settle = (self.config.settle / SAMPLE_TIME).round() as usize;
         self.sim.goals.copy_from_slice(&self.joint_references[0]);
-        for _ in 0..settle * substeps {
-            self.sim.step().map_err(sim_err)?;
-        }
         let model = self.sim.model.clone();
         let mut data = Data::new(&model);
         let soles = [
@@ -656,7 +654,9 @@ impl ComanWalker {
         let mut lift_off: [Option<[f64; 2]>; 2] = [None, None];
         let mut polygon = [[0.0f64; 2]; MAX_SUPPORT_POINTS];
         let mut ik_data = Data::new(&model);
-        for i in 0..n {
+        for step in 0..settle + n {
+            let recording = step >= settle;
+            let i = step.saturating_sub(settle);
             let r = self.reference.at(i as f64 / SAMPLE_RATE);
             // Record the state at the sample time, then command and step.
             let jc = jacobian_center_of_mass(&model, &mut data, &self.sim.q);
@@ -666,27 +666,32 @@ impl ComanWalker {
             }
             let com = data.com;
             twinloop_dynamics::frames_forward_kinematics(&model, &mut data, &self.sim.q);
-            rows.push(DatasetRow {
-                t: r.t,
-                xr: r.com[0],
-                zr: r.com[2],
-                x: com.x,
-                z: com.z,
-                phase: r.phase.code(),
-            });
-            s.add(com, &r);
+            if recording {
+                rows.push(DatasetRow {
+                    t: r.t,
+                    xr: r.com[0],
+                    zr: r.com[2],
+                    x: com.x,
+                    z: com.z,
+                    phase: r.phase.code(),
+                });
+                s.add(com, &r);
+            }
             for (f, &frame) in soles.iter().enumerate() {
                 if r.stance[f] {
                     let p = WholeBodyIk::frame_placement(&model, &data, frame).translation;
                     match anchors[f] {
                         None => {
                             anchors[f] = Some([p.x, p.y]);
-                            let e = (p.x - r.soles[f][0]).hypot(p.y - r.soles[f][1]);
-                            s.max_landing = s.max_landing.max(e);
+                            if recording {
+                                let e = (p.x - r.soles[f][0]).hypot(p.y - r.soles[f][1]);
+                                s.max_landing = s.max_landing.max(e);
+                            }
                         }
-                        Some(a) => {
+                        Some(a) if recording => {
                             s.max_slip = s.max_slip.max((p.x - a[0]).hypot(p.y - a[1]));
                         }
+                        Some(_) => {}
                     }
                 } else {
                     if anchors[f].is_some() {
@@ -697,46 +702,48 @@ impl ComanWalker {
             }
             let rb = data.base_placement.rotation;
             let tilt = rb[(2, 2)].clamp(-1.0, 1.0).acos();
-            s.max_tilt = s.max_tilt.max(tilt);
-            // Support polygon: the soles of the feet meant to be down, where they are.
-            let mut n_pts = 0;
-            for (f, &frame) in soles.iter().enumerate() {
-                if r.stance[f] {
-                    let m = WholeBodyIk::frame_placement(&model, &data, frame);
-                    for p in &self.sole_points[f] {
-                        if n_pts < MAX_SUPPORT_POINTS {
-                            let w = m.act_point(p);
-                            polygon[n_pts] = [w.x, w.y];
-                            n_pts += 1;
+            if recording {
+                s.max_tilt = s.max_tilt.max(tilt);
+                // Support polygon: the soles of the feet meant to be down, where they are.
+                let mut n_pts = 0;
+                for (f, &frame) in soles.iter().enumerate() {
+                    if r.stance[f] {
+                        let m = WholeBodyIk::frame_placement(&model, &data, frame);
+                        for p in &self.sole_points[f] {
+                            if n_pts < MAX_SUPPORT_POINTS {
+                                let w = m.act_point(p);
+                                polygon[n_pts] = [w.x, w.y];
+                                n_pts += 1;
+                            }
                         }
                     }
                 }
-            }
-            if let Some(m) = support_margin(&mut polygon[..n_pts], [com.x, com.y]) {
-                s.min_support = s.min_support.min(m);
-            }
-            // The same for the reference CoM over the planned soles: the LIPM gait itself
-            // puts its CoM at the stance foot's inner edge when single support begins.
-            let mut n_pts = 0;
-            for f in 0..2 {
-                if r.stance[f] {
-                    for p in &self.sole_points[f] {
-                        if n_pts < MAX_SUPPORT_POINTS {
-                            polygon[n_pts] = [r.soles[f][0] + p.x, r.soles[f][1] + p.y];
-                            n_pts += 1;
+                if let Some(m) = support_margin(&mut polygon[..n_pts], [com.x, com.y]) {
+                    s.min_support = s.min_support.min(m);
+                }
+                // The same for the reference CoM over the planned soles: the LIPM gait itself
+                // puts its CoM at the stance foot's inner edge when single support begins.
+                let mut n_pts = 0;
+                for f in 0..2 {
+                    if r.stance[f] {
+                        for p in &self.sole_points[f] {
+                            if n_pts < MAX_SUPPORT_POINTS {
+                                polygon[n_pts] = [r.soles[f][0] + p.x, r.soles[f][1] + p.y];
+                                n_pts += 1;
+                            }
                         }
                     }
                 }
-            }
-            if let Some(m) = support_margin(&mut polygon[..n_pts], [r.com[0], r.com[1]]) {
-                s.min_support_ref = s.min_support_ref.min(m);
-            }
-            for &k in &self.compliant {
-                if let Actuator::SeriesElastic(a) = &self.sim.actuators[k] {
-                    let d = (a.theta - self.sim.q[qo + k]).abs();
-                    if d > s.max_deflection {
-                        s.max_deflection = d;
-                        s.max_deflection_joint = k;
+                if let Some(m) = support_margin(&mut polygon[..n_pts], [r.com[0], r.com[1]]) {
+                    s.min_support_ref = s.min_support_ref.min(m);
+                }
+                for &k in &self.compliant {
+                    if let Actuator::SeriesElastic(a) = &self.sim.actuators[k] {
+                        let d = (a.theta - self.sim.q[qo + k]).abs();
+                        if d > s.max_deflection {
+                            s.max_deflection = d;
+                            s.max_deflection_joint = k;
+                        }
                     }
                 }
             }
@@ -783,7 +790,7 @@ impl ComanWalker {
             for _ in 0..substeps {
                 self.sim.step().map_err(sim_err)?;
             }
-            if i % 100 == 0 {
+            if recording && i % 100 == 0 {
                 progress(i, n);
             }
         }
