@@ -35,6 +35,18 @@ pub enum CompliantCommand {
     ///
     /// Example: twinloop compliant simulate --reference ref.csv --model kc.json --table1 --out sim.csv
     Simulate(SimulateArgs),
+    /// COMAN walking the ZMP gait in the full simulator: the "real robot" dataset (seed 002, section 4)
+    ///
+    /// Series-elastic knee and ankle pitch joints (eq 1-6, k_j = K_h K_s/(K_h + K_s)),
+    /// every other joint a stiff position servo (stiffness K_h); the ZMP/LIPM CoM reference
+    /// (eq 12-13) and swing-foot trajectories go through a whole-body IK to the joints.
+    /// Writes `t, xr, zr, x, z, phase` at 1 kHz: the reference CoM (xr, zr = Zc) and the
+    /// simulated robot's true CoM (x, z), world frame (origin on the ground between the
+    /// starting feet, x forward, z up), phase 0 single / 1 double support. Input for
+    /// `twinloop fit compliant`. Exit 1 if the robot falls.
+    ///
+    /// Example: twinloop compliant dataset --urdf models/coman/coman.urdf --step-length 0.03 --tss 0.5 --tdb 0.2 --duration 30 --out coman_walk.csv --json summary.json
+    Dataset(crate::cmd_compliant_dataset::DatasetArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
@@ -126,6 +138,7 @@ pub fn run(cmd: CompliantCommand) -> ExitCode {
     match cmd {
         CompliantCommand::Stiffness(args) => stiffness(args),
         CompliantCommand::Simulate(args) => simulate(args),
+        CompliantCommand::Dataset(args) => crate::cmd_compliant_dataset::dataset(args),
     }
 }
 

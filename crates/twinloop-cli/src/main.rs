@@ -4,6 +4,7 @@
 
 mod cmd_bench;
 mod cmd_compliant;
+mod cmd_compliant_dataset;
 mod cmd_dynamics;
 mod cmd_experiment;
 mod cmd_gait;

@@ -5,9 +5,12 @@
 //! | eq 12-13: ZMP reference and LIPM CoM reference | [`zmp`] |
 //! | eq 7-8: Cartesian stiffness and damping at the CoM | [`stiffness`] |
 //! | eq 9-11, 14-17: compact CoM model with corrections | [`compact`] |
+//! | section 4: the COMAN walking dataset in the full simulator | [`walking`], [`walking_ik`] |
 
 pub mod compact;
 pub mod stiffness;
+pub mod walking;
+pub mod walking_ik;
 pub mod zmp;
 
 pub use compact::{CompactModel, Corrections, SagittalCompliance, SagittalReference};
