@@ -41,6 +41,7 @@ pub enum GaitCommand {
     /// deg/s, 0.05 deg/s rms noise) and then sets that tick's goals.
     ///
     /// Example: twinloop gait dataset --robot builtin:lab17 --out lab17_walk.csv
+    ///          twinloop gait dataset --seed 2 --skip-samples 1000 --out lab17_walk_val.csv
     ///
     /// Output: a CSV with `t` (s), `u:<joint>` (the ten offsets of seed 003 eq 6, servo
     /// degrees) and `gyro:l_foot.roll|pitch|yaw`, `gyro:r_foot.roll|pitch|yaw` (deg/s). Use
@@ -85,11 +86,15 @@ pub struct DatasetArgs {
     /// Seed of the gyro noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Ticks to walk before recording (the walk goes on seamlessly): --skip-samples 1000
+    /// records cycles 11-20, a validation run that is a different stretch of the walk.
+    #[arg(long, default_value_t = 0)]
+    pub skip_samples: usize,
     /// Gyro noise, deg/s rms.
     #[arg(long, default_value_t = twinloop_gait::dataset::MPU6050_GYRO_NOISE_DEG_S)]
     pub gyro_noise: f64,
-    /// Two-loop servo position gain, 1/s.
-    #[arg(long, default_value_t = 20.0)]
+    /// Two-loop servo position gain, 1/s (60: full speed beyond 6 degrees of error).
+    #[arg(long, default_value_t = twinloop_gait::dataset::LD2015_KP_POSITION)]
     pub kp_position: f64,
     #[arg(long)]
     pub out: PathBuf,
@@ -127,6 +132,7 @@ fn flag(msg: String) -> String {
         ("samples", "--samples"),
         ("gyro_noise", "--gyro-noise"),
         ("kp_position", "--kp-position"),
+        ("skip_samples", "--skip-samples"),
     ] {
         if m.starts_with(field) {
             m = format!("{opt}{}", &m[field.len()..]);
@@ -169,6 +175,7 @@ fn dataset(a: &DatasetArgs) -> Result<(), String> {
         samples: a.samples,
         gyro_noise_deg_s: a.gyro_noise,
         noise_seed: a.seed,
+        skip_samples: a.skip_samples,
         kp_position: a.kp_position,
         ..Default::default()
     };
@@ -191,7 +198,7 @@ fn dataset(a: &DatasetArgs) -> Result<(), String> {
         eprintln!(
             "warning: the robot fell (trunk past 45 degrees) at t = {t:.2} s; the samples after \
              that are of a robot on the ground. See docs/lab17-walking-identification.md \
-             (--amplitude 0.7 walks upright)"
+             (the defaults walk upright)"
         );
     }
     Ok(())
