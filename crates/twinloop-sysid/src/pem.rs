@@ -62,6 +62,18 @@ pub struct PemOptions {
     /// Estimate the initial state (else it stays at the given one, zero by default).
     pub estimate_x0: bool,
     pub weight: OutputWeight,
+    /// Keep `A` itself stable (MATLAB's `ssestOptions.EnforceStability`): a step that
+    /// puts an eigenvalue of `A` on or outside the unit circle is rejected like one
+    /// that destabilises the predictor. Off by default, as in MATLAB: the prediction
+    /// error only needs `A - KC` stable, and on data that barely excite some modes
+    /// the search can trade a slightly lower one-step error for an unstable `A`,
+    /// whose simulation diverges (seen on the lab17 walking record).
+    pub enforce_stability: bool,
+    /// Output-error structure (MATLAB's `ssestOptions.Focus = 'simulation'`): `K` is
+    /// fixed at zero, so the one-step predictor is the simulation and the cost is the
+    /// simulation error. The predictor's stability is then `A`'s, so the search also
+    /// keeps `A` stable. Off by default (`K` estimated, the innovations form).
+    pub output_error: bool,
 }
 
 impl Default for PemOptions {
@@ -73,6 +85,8 @@ impl Default for PemOptions {
             feedthrough: false,
             estimate_x0: false,
             weight: OutputWeight::Identity,
+            enforce_stability: false,
+            output_error: false,
         }
     }
 }
@@ -449,7 +463,8 @@ pub fn pem(
         x0: opts.estimate_x0,
     };
     let p = l.len();
-    let m = p - n * n;
+    // Output error: the n ny entries of K are held at zero as well.
+    let m = p - n * n - if opts.output_error { n * ny } else { 0 };
     let n_res = data.len() * ny;
     if n_res <= m {
         return Err(SysidError::data(format!(
@@ -462,10 +477,25 @@ pub fn pem(
     if x0v.len() != n {
         return Err(SysidError::order("the initial state has the wrong length"));
     }
+    let oe_initial;
+    let initial = if opts.output_error {
+        oe_initial = StateSpace {
+            k: DMatrix::zeros(n, ny),
+            ..initial.clone()
+        };
+        &oe_initial
+    } else {
+        initial
+    };
     if !spectral_radius(&(&initial.a - &initial.k * &initial.c)).is_some_and(|r| r < 1.0) {
         return Err(SysidError::numerical(
             "the initial model's predictor A - KC is unstable (or not finite): the prediction errors \
              grow without bound; start from a model with a stable predictor",
+        ));
+    }
+    if opts.enforce_stability && !spectral_radius(&initial.a).is_some_and(|r| r < 1.0) {
+        return Err(SysidError::numerical(
+            "enforce_stability: the initial model's A is unstable; start from a stable model",
         ));
     }
     let mut ws = Workspace::new(&l, data.len(), m);
@@ -506,7 +536,17 @@ pub fn pem(
     let mut ws_trial = Workspace::new(&l, data.len(), 0);
     'outer: while iterations < opts.max_iterations {
         // Local coordinates: complement of the basis-change directions at the model.
-        let t = l.basis_change_directions(&model, &x0v);
+        let mut t = l.basis_change_directions(&model, &x0v);
+        if opts.output_error {
+            // Hold K at zero: its coordinates join the directions the step avoids.
+            let base = t.ncols();
+            t = t.resize_horizontally(base + n * ny, 0.0);
+            for c in 0..ny {
+                for r in 0..n {
+                    t[(r + n * (n + nu + c), base + r + n * c)] = 1.0;
+                }
+            }
+        }
         let basis = HouseholderQr::new(t).complement_basis(); // p x m
         // predict() left xs, e, r at the current model.
         predict(&model, &x0v, data, &lt, &mut ws);
@@ -553,8 +593,9 @@ pub fn pem(
             let mut th = l.pack(&model, &x0v);
             th.gemv(1.0, &basis, &step, 1.0);
             let trial = l.unpack(&th, &model, &mut trial_x0);
-            let stable =
-                spectral_radius(&(&trial.a - &trial.k * &trial.c)).is_some_and(|r| r < 1.0);
+            let stable = spectral_radius(&(&trial.a - &trial.k * &trial.c))
+                .is_some_and(|r| r < 1.0)
+                && (!opts.enforce_stability || spectral_radius(&trial.a).is_some_and(|r| r < 1.0));
             let new_cost = if stable {
                 predict(&trial, &trial_x0, data, &lt, &mut ws_trial)
             } else {
