@@ -160,6 +160,10 @@ pub struct IdentifyArgs {
     /// Iteration limit of the prediction-error search.
     #[arg(long, default_value_t = 100)]
     pub max_iter: usize,
+    /// Largest pole radius the search may give A: a damping margin (0.999 at 40 ms: a 40 s
+    /// time constant, longer than the record).
+    #[arg(long, default_value_t = 0.999)]
+    pub max_pole_radius: f64,
     #[arg(long, value_name = "OUT.json")]
     pub json: Option<PathBuf>,
     /// HTML report of the final state-space model (the seed's Figs. 53-55 and residuals).
@@ -205,6 +209,7 @@ fn identify(a: &IdentifyArgs) -> Result<(), String> {
         output_error: matches!(a.focus, FocusArg::Simulation),
         detrend: !a.no_detrend,
         max_iterations: a.max_iter,
+        max_pole_radius: a.max_pole_radius,
     };
     let bar = crate::progress::steps(a.max_iter);
     bar.set_message("prediction-error search");

@@ -50,6 +50,12 @@ pub struct WalkIdOptions {
     pub detrend: bool,
     /// Iteration limit of the prediction-error search.
     pub max_iterations: usize,
+    /// Largest pole radius of the final model's `A` (a damping margin, see
+    /// [`twinloop_sysid::pem::PemOptions::max_pole_radius`]). 0.999 at a 40 ms sample
+    /// is a 40 s time constant, longer than the record, so no tighter damping can be
+    /// told from the data; without it the search parks the walk's lightly damped
+    /// 4.3 Hz servo-and-body oscillation at radius 1 - 1e-9 (a 200 dB resonance).
+    pub max_pole_radius: f64,
 }
 
 impl Default for WalkIdOptions {
@@ -65,6 +71,7 @@ impl Default for WalkIdOptions {
             output_error: true,
             detrend: true,
             max_iterations: 100,
+            max_pole_radius: 0.999,
         }
     }
 }
@@ -202,6 +209,7 @@ pub fn identify_walk(
     };
     sopts.pem.output_error = o.output_error;
     sopts.pem.max_iterations = o.max_iterations;
+    sopts.pem.max_pole_radius = o.max_pole_radius;
     let ss =
         identify_state_space(&est, val.as_ref(), &sopts, progress).map_err(sysid("state space"))?;
     Ok(WalkIdentification {

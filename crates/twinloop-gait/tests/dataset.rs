@@ -123,7 +123,7 @@ fn the_walk_dataset_identifies_end_to_end() {
     }
     // The final model: stable, far better than the truncated ARX it started from,
     // and on average as good as the 144-state ARX within 3 points of FIT.
-    assert!(id.ss.model.spectral_radius().is_some_and(|r| r < 1.0));
+    assert!(id.ss.model.spectral_radius().is_some_and(|r| r < 0.999));
     let truncated = &id.ss.stages.last().unwrap().fit_percent.simulation;
     assert!(mean(ss) > mean(truncated) + 20.0);
     assert!(

@@ -74,6 +74,11 @@ pub struct PemOptions {
     /// simulation error. The predictor's stability is then `A`'s, so the search also
     /// keeps `A` stable. Off by default (`K` estimated, the innovations form).
     pub output_error: bool,
+    /// Largest pole radius a step may leave on `A` when `A` is kept stable
+    /// (`enforce_stability` or `output_error`); 1 = plain stability. Below 1 it is a
+    /// damping margin: on periodic data the search otherwise drives a lightly damped
+    /// mode onto the unit circle, an undamped oscillator that buys a little fit.
+    pub max_pole_radius: f64,
 }
 
 impl Default for PemOptions {
@@ -87,6 +92,7 @@ impl Default for PemOptions {
             weight: OutputWeight::Identity,
             enforce_stability: false,
             output_error: false,
+            max_pole_radius: 1.0,
         }
     }
 }
@@ -487,10 +493,20 @@ pub fn pem(
     } else {
         initial
     };
-    if opts.enforce_stability && !spectral_radius(&initial.a).is_some_and(|r| r < 1.0) {
-        return Err(SysidError::numerical(
-            "enforce_stability: the initial model's A is unstable; start from a stable model",
-        ));
+    if !(opts.max_pole_radius > 0.0 && opts.max_pole_radius <= 1.0) {
+        return Err(SysidError::order(format!(
+            "max_pole_radius must be in (0, 1], got {}",
+            opts.max_pole_radius
+        )));
+    }
+    if (opts.enforce_stability || opts.output_error)
+        && !spectral_radius(&initial.a).is_some_and(|r| r < opts.max_pole_radius)
+    {
+        return Err(SysidError::numerical(format!(
+            "enforce_stability: the initial model's A has a pole radius at or above {}; start \
+             from a model inside it",
+            opts.max_pole_radius
+        )));
     }
     if !spectral_radius(&(&initial.a - &initial.k * &initial.c)).is_some_and(|r| r < 1.0) {
         return Err(SysidError::numerical(
@@ -595,7 +611,8 @@ pub fn pem(
             let trial = l.unpack(&th, &model, &mut trial_x0);
             let stable = spectral_radius(&(&trial.a - &trial.k * &trial.c))
                 .is_some_and(|r| r < 1.0)
-                && (!opts.enforce_stability || spectral_radius(&trial.a).is_some_and(|r| r < 1.0));
+                && (!(opts.enforce_stability || opts.output_error)
+                    || spectral_radius(&trial.a).is_some_and(|r| r < opts.max_pole_radius));
             let new_cost = if stable {
                 predict(&trial, &trial_x0, data, &lt, &mut ws_trial)
             } else {
