@@ -20,12 +20,12 @@
 //!   ARX's Hankel singular values: they decay slowly (the seed's Figure 51: "the
 //!   order cannot be reduced considerably"), the only sharp gap is after state 4 (too
 //!   few for a walk with two feet and three rates each), so we keep the states that
-//!   carry 90 % of their sum: 36 on our record. The PEM focus is the simulation
+//!   carry 90 % of their sum: 35 on our record. The PEM focus is the simulation
 //!   (output-error structure, K = 0, MATLAB's `ssest` with `Focus = 'simulation'`):
 //!   the seed compares its models by simulated-output FIT, and the one-step
-//!   (innovations, K free) PEM lowered the one-step error 15-fold on our record but
-//!   left a model whose simulation FIT fell 10-30 points below the ARX's, or whose A
-//!   was unstable (docs/lab17-walking-identification.md).
+//!   (innovations, K free) PEM lowered the one-step error 8-fold on our record but
+//!   left a model whose simulation FIT fell 2-24 points below the ARX's, or (at 24
+//!   states) whose A was unstable (docs/lab17-walking-identification.md).
 
 use crate::sequence::GaitError;
 use twinloop_sysid::pem::PemProgress;
