@@ -1,8 +1,11 @@
 //! Seed 003 section 7's identification experiment, run on `lab17` in the simulator.
 //!
 //! The robot stands on the ground on seed 003's two-loop servos (a speed loop inside a
-//! position loop, section 3 and Fig. 20), settles at its trims, then walks the
-//! sequence of [`crate::sequence`]. Each tick, as the seed's Arduino loop does, it
+//! position loop, section 3 and Fig. 20; LD-2015 ratings, position gain
+//! [`LD2015_KP_POSITION`], gear friction [`LD2015_GEAR_FRICTION`]), settles at its
+//! trims, then walks the sequence of [`crate::sequence`] (4 s cycles, 40 ms ticks) at
+//! the seed's full offsets. [`DatasetOptions::skip_samples`] starts the record later in
+//! the same walk, for a validation run that is a different stretch of it. Each tick, as the seed's Arduino loop does, it
 //! first reads both gyroscopes, then sets the servo goals of that tick:
 //! - inputs: the ten offsets of eq 6, Delta theta = theta_C - theta_TRIM, servo
 //!   degrees (`u:<joint>`);

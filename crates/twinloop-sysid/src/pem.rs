@@ -881,5 +881,27 @@ mod tests {
         };
         let e = pem(&data, &unstable, None, &opts, &mut |_| {}).unwrap_err();
         assert!(e.to_string().contains("enforce_stability"), "{e}");
+        // A damping margin just outside the start's pole radius: the search never
+        // crosses it, a start outside it is refused, and a radius above 1 is an error.
+        let rho0 = model.spectral_radius().unwrap();
+        let margin = PemOptions {
+            output_error: true,
+            max_pole_radius: rho0 + 0.02,
+            ..Default::default()
+        };
+        let r = pem(&data, &model, None, &margin, &mut |_| {}).unwrap();
+        assert!(r.model.spectral_radius().unwrap() < rho0 + 0.02);
+        assert!(r.final_cost <= r.initial_cost);
+        let tight = PemOptions {
+            max_pole_radius: 0.5 * rho0,
+            ..margin
+        };
+        assert!(pem(&data, &model, None, &tight, &mut |_| {}).is_err());
+        let silly = PemOptions {
+            max_pole_radius: 1.5,
+            ..margin
+        };
+        let e = pem(&data, &model, None, &silly, &mut |_| {}).unwrap_err();
+        assert!(e.to_string().contains("max_pole_radius"), "{e}");
     }
 }
