@@ -5,8 +5,9 @@
 //! [`LD2015_KP_POSITION`], gear friction [`LD2015_GEAR_FRICTION`]), settles at its
 //! trims, then walks the sequence of [`crate::sequence`] (4 s cycles, 40 ms ticks) at
 //! the seed's full offsets. [`DatasetOptions::skip_samples`] starts the record later in
-//! the same walk, for a validation run that is a different stretch of it. Each tick, as the seed's Arduino loop does, it
-//! first reads both gyroscopes, then sets the servo goals of that tick:
+//! the same walk, for a validation run that is a different stretch of it. Each tick,
+//! as the seed's Arduino loop does, it first reads both gyroscopes, then sets the
+//! servo goals of that tick:
 //! - inputs: the ten offsets of eq 6, Delta theta = theta_C - theta_TRIM, servo
 //!   degrees (`u:<joint>`);
 //! - outputs: the roll, pitch and yaw rates of the left and right foot
