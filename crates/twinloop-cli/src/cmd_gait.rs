@@ -75,10 +75,12 @@ pub struct TimingArgs {
     /// Robot: only builtin:lab17 carries seed 003's trims.
     #[arg(long, default_value = "builtin:lab17")]
     pub robot: String,
-    /// Control tick and sample time, s (the seed's servos take a 20 ms PWM frame).
+    /// Control tick and sample time, s (40 ms: two 20 ms servo PWM frames, and below the
+    /// 57 ms the seed's 54.8 rad/s model bandwidth allows).
     #[arg(long, default_value_t = SEED_SAMPLE_TIME)]
     pub sample_time: f64,
-    /// Duration of one step cycle (Step_State 0 to 100), s.
+    /// Duration of one step cycle (Step_State 0 to 100), s. Below ~3.5 s lab17 falls (seed
+    /// 003 section 5: too fast a step cycle leaves the inertial forces undamped).
     #[arg(long, default_value_t = SEED_CYCLE_PERIOD)]
     pub cycle_period: f64,
     /// Factor on every offset (1 = the seed's numbers).
