@@ -41,7 +41,8 @@ pub enum GaitCommand {
     /// deg/s, 0.05 deg/s rms noise) and then sets that tick's goals.
     ///
     /// Example: twinloop gait dataset --robot builtin:lab17 --out lab17_walk.csv
-    ///          twinloop gait dataset --seed 2 --skip-samples 1000 --out lab17_walk_val.csv
+    ///
+    /// Validation run (cycles 11-20, other noise): twinloop gait dataset --seed 2 --skip-samples 1000 --out lab17_walk_val.csv
     ///
     /// Output: a CSV with `t` (s), `u:<joint>` (the ten offsets of seed 003 eq 6, servo
     /// degrees) and `gyro:l_foot.roll|pitch|yaw`, `gyro:r_foot.roll|pitch|yaw` (deg/s). Use
@@ -58,10 +59,13 @@ pub enum GaitCommand {
     /// two ankle rolls), outputs its six `gyro:` rates; the estimation record's means are
     /// removed first (--no-detrend keeps them).
     ///
-    /// Example: twinloop gait dataset --out est.csv
-    ///          twinloop gait dataset --seed 2 --skip-samples 1000 --out val.csv
-    ///          twinloop gait identify --data est.csv --val val.csv --json walk_id.json \
-    ///              --report-arx arx.html --report ss.html
+    /// Example (estimation record, validation record = cycles 11-20, identification):
+    ///
+    /// twinloop gait dataset --out est.csv
+    ///
+    /// twinloop gait dataset --seed 2 --skip-samples 1000 --out val.csv
+    ///
+    /// twinloop gait identify --data est.csv --val val.csv --json walk_id.json --report-arx arx.html --report ss.html
     ///
     /// Output: a table of FIT per output (MATLAB compare: 100 (1 - |y - yhat| / |y - mean y|),
     /// simulation and one-step prediction, on --val when given) for both models beside the
