@@ -135,6 +135,12 @@ pub enum FocusArg {
     Prediction,
 }
 
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum WeightArg {
+    Identity,
+    Noise,
+}
+
 #[derive(Args)]
 pub struct IdentifyArgs {
     /// Estimation record from `twinloop gait dataset`.
@@ -160,6 +166,11 @@ pub struct IdentifyArgs {
     /// What the prediction-error search minimises.
     #[arg(long, value_enum, default_value = "simulation")]
     pub focus: FocusArg,
+    /// Output weighting of the prediction-error cost: `noise` (default) divides by the
+    /// initial model's error covariance (MATLAB's det criterion at the start), `identity`
+    /// sums the squared errors.
+    #[arg(long, value_enum, default_value = "noise")]
+    pub weight: WeightArg,
     /// Keep the records' means (default: remove the estimation record's).
     #[arg(long)]
     pub no_detrend: bool,
@@ -213,6 +224,10 @@ fn identify(a: &IdentifyArgs) -> Result<(), String> {
         order: a.order,
         hsv_energy: a.hsv_energy,
         output_error: matches!(a.focus, FocusArg::Simulation),
+        weight: match a.weight {
+            WeightArg::Identity => twinloop_sysid::pem::OutputWeight::Identity,
+            WeightArg::Noise => twinloop_sysid::pem::OutputWeight::InverseNoise,
+        },
         detrend: !a.no_detrend,
         max_iterations: a.max_iter,
         max_pole_radius: a.max_pole_radius,
@@ -338,6 +353,7 @@ fn identify(a: &IdentifyArgs) -> Result<(), String> {
                 "order": id.order,
                 "order_reason": id.order_reason,
                 "focus": if o.output_error { "simulation" } else { "prediction" },
+                "weight": match a.weight { WeightArg::Identity => "identity", WeightArg::Noise => "inverse_noise" },
                 "A": rows(&m.a), "B": rows(&m.b), "C": rows(&m.c), "D": rows(&m.d), "K": rows(&m.k),
                 "spectral_radius": m.spectral_radius(),
                 "fit_percent": val(&id.ss.evaluation.fit_percent),

@@ -23,12 +23,12 @@
 //!   carry 90 % of their sum: 35 on our record. The PEM focus is the simulation
 //!   (output-error structure, K = 0, MATLAB's `ssest` with `Focus = 'simulation'`):
 //!   the seed compares its models by simulated-output FIT, and the one-step
-//!   (innovations, K free) PEM lowered the one-step error 8-fold on our record but
+//!   (innovations, K free) PEM lowered the one-step error 5-8-fold on our record but
 //!   left a model whose simulation FIT fell 2-24 points below the ARX's, or (at 24
 //!   states) whose A was unstable (docs/lab17-walking-identification.md).
 
 use crate::sequence::GaitError;
-use twinloop_sysid::pem::PemProgress;
+use twinloop_sysid::pem::{OutputWeight, PemProgress};
 use twinloop_sysid::{
     ArxIdentification, ArxOrders, EvaluationOptions, IoData, SsMethod, SsOptions,
     StateSpaceIdentification, identify_arx, identify_state_space,
@@ -46,6 +46,12 @@ pub struct WalkIdOptions {
     pub hsv_energy: f64,
     /// Simulation focus (output error, K = 0) or one-step prediction (K estimated).
     pub output_error: bool,
+    /// How the outputs' errors are weighted. Default: by the inverse of the initial
+    /// model's error covariance. MATLAB's multi-output PEM minimises det(E'E), whose
+    /// gradient is that weighting at the current model; with the plain sum the large
+    /// pitch-rate impacts (~250 deg/s) outweigh the yaw rates (the yaw FITs were 2-4
+    /// points lower, docs/lab17-walking-identification.md).
+    pub weight: OutputWeight,
     /// Remove the estimation record's means (the operating point).
     pub detrend: bool,
     /// Iteration limit of the prediction-error search.
@@ -69,6 +75,7 @@ impl Default for WalkIdOptions {
             order: None,
             hsv_energy: 0.9,
             output_error: true,
+            weight: OutputWeight::InverseNoise,
             detrend: true,
             max_iterations: 100,
             max_pole_radius: 0.999,
@@ -208,6 +215,7 @@ pub fn identify_walk(
         ..Default::default()
     };
     sopts.pem.output_error = o.output_error;
+    sopts.pem.weight = o.weight;
     sopts.pem.max_iterations = o.max_iterations;
     sopts.pem.max_pole_radius = o.max_pole_radius;
     let ss =

@@ -122,12 +122,13 @@ fn the_walk_dataset_identifies_end_to_end() {
         assert!(s > 40.0, "output {k}: final validation FIT {s:.1} %");
     }
     // The final model: stable, far better than the truncated ARX it started from,
-    // and on average as good as the 144-state ARX within 3 points of FIT.
+    // and on average at least as good as the 144-state ARX (62.6 vs 62.2 % here; one
+    // point of slack for other platforms' rounding).
     assert!(id.ss.model.spectral_radius().is_some_and(|r| r < 0.999));
     let truncated = &id.ss.stages.last().unwrap().fit_percent.simulation;
     assert!(mean(ss) > mean(truncated) + 20.0);
     assert!(
-        mean(ss) > mean(arx) - 3.0,
+        mean(ss) > mean(arx) - 1.0,
         "final {:.1} vs ARX {:.1}",
         mean(ss),
         mean(arx)
