@@ -52,8 +52,8 @@
 //!    - E and M shift the CG to the right foot ("ankle's roll and shoulder's pitch";
 //!      G and N then reset `Offset_1_L, Offset_1_R` and `Offset_5_L`): the mirror of
 //!      B, ankle rolls +7 and the left shoulder -30 (the right shoulder's +30 servo
-//!      degrees is +30 degrees of joint pitch in lab17, and -30 servo degrees on the
-//!      left is the same joint pitch; `lab17::TRIMS` directions). E's text says "four
+//!      degrees is a 30 degree forward arm swing in lab17, and -30 servo degrees on
+//!      the left is the same swing; `lab17::TRIMS` directions). E's text says "four
 //!      of the joints": the fourth, the right shoulder, stays at +30 (H's text says it
 //!      is still displaced at H), so E changes three servos like M.
 //!    - K completes the return of "the ankle and knee joints of the left leg" (J left
