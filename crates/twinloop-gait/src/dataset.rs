@@ -1,9 +1,13 @@
 //! Seed 003 section 7's identification experiment, run on `lab17` in the simulator.
 //!
 //! The robot stands on the ground on seed 003's two-loop servos (a speed loop inside a
-//! position loop, section 3 and Fig. 20), settles at its trims, then walks the
-//! sequence of [`crate::sequence`]. Each tick, as the seed's Arduino loop does, it
-//! first reads both gyroscopes, then sets the servo goals of that tick:
+//! position loop, section 3 and Fig. 20; LD-2015 ratings, position gain
+//! [`LD2015_KP_POSITION`], gear friction [`LD2015_GEAR_FRICTION`]), settles at its
+//! trims, then walks the sequence of [`crate::sequence`] (4 s cycles, 40 ms ticks) at
+//! the seed's full offsets. [`DatasetOptions::skip_samples`] starts the record later in
+//! the same walk, for a validation run that is a different stretch of it. Each tick,
+//! as the seed's Arduino loop does, it first reads both gyroscopes, then sets the
+//! servo goals of that tick:
 //! - inputs: the ten offsets of eq 6, Delta theta = theta_C - theta_TRIM, servo
 //!   degrees (`u:<joint>`);
 //! - outputs: the roll, pitch and yaw rates of the left and right foot
@@ -39,6 +43,10 @@ pub struct DatasetOptions {
     pub gyro_noise_deg_s: f64,
     /// Seed of the noise.
     pub noise_seed: u64,
+    /// Ticks walked before the first recorded sample (the walk goes on seamlessly):
+    /// a validation record that is a genuinely different run of the same walk, e.g.
+    /// cycles 11-20 instead of 1-10 (other slips, other heading, other noise).
+    pub skip_samples: usize,
     /// Time standing at the trims before the first sample, s.
     pub settle: f64,
     /// Simulator step, s.
@@ -54,17 +62,34 @@ impl Default for DatasetOptions {
             samples: crate::sequence::SEED_SAMPLES,
             gyro_noise_deg_s: MPU6050_GYRO_NOISE_DEG_S,
             noise_seed: 1,
+            skip_samples: 0,
             settle: 1.0,
             dt: 1e-3,
-            kp_position: 20.0,
+            kp_position: LD2015_KP_POSITION,
         }
     }
 }
 
+/// Position-loop gain of the LD-2015, 1/s. A digital hobby servo drives its motor at
+/// full duty beyond a few degrees of error; with the no-load speed of
+/// [`LD2015`] (6.5 rad/s) a gain of 60 1/s reaches full speed at 6 degrees. A 60 degree
+/// step then runs at full speed for ~130 ms and settles on a 17 ms time constant, about
+/// 200 ms in all without overshoot: the seed's measured servo steps (section 4, Figs.
+/// 25-30). The former 20 1/s (full speed only beyond 19 degrees) made every joint so
+/// soft (5 N m/rad) that the stance leg sagged under the body and the 20 1/s tail alone
+/// took 200 ms.
+pub const LD2015_KP_POSITION: f64 = 60.0;
+
+/// Coulomb friction of the LD-2015 gear train at the output, N m: 3 % of its stall
+/// torque. A ~250:1 metal spur-gear train is barely back-drivable; this is an ASSUMED
+/// round figure (no datasheet gives it). It is what keeps the body from rocking on in
+/// the servos' dead time between weight shifts.
+pub const LD2015_GEAR_FRICTION: f64 = 0.05;
+
 /// The two-loop servo of seed 003 (section 3, Fig. 20) with LD-2015 ratings: the
 /// speed loop's gain is the motor's own stall torque over no-load speed (the slope of
 /// its torque-speed line, so full speed error is full torque), the position gain
-/// `kp_position` (20 1/s settles in about 200 ms without overshoot, section 4).
+/// `kp_position` ([`LD2015_KP_POSITION`] by default).
 pub fn ld2015_two_loop(kp_position: f64) -> TwoLoopServo {
     TwoLoopServo {
         kp_position,
@@ -82,9 +107,11 @@ pub struct WalkDataset {
     pub rows: Vec<Vec<f64>>,
     /// Largest trunk tilt from upright over the record, degrees.
     pub max_tilt_deg: f64,
-    /// Time (s from the first sample) the trunk first tilted past 45 degrees.
+    /// Time (s from the start of the walk, skipped ticks included) the trunk first
+    /// tilted past 45 degrees.
     pub fell_at: Option<f64>,
-    /// Forward (x) and sideways (y) travel of the trunk over the record, m.
+    /// Forward (x, the heading the robot starts the walk with) and sideways (y) travel
+    /// of the trunk over the record, m.
     pub travel: [f64; 2],
     /// Trunk yaw change over the record, degrees.
     pub yaw_deg: f64,
@@ -154,7 +181,13 @@ pub fn record_walk(robot: &Robot, o: &DatasetOptions) -> Result<WalkDataset, Gai
             o.kp_position
         )));
     }
-    let goals: JointGoals = generate(&o.sequence, o.samples)?;
+    let total = o.samples.checked_add(o.skip_samples).ok_or_else(|| {
+        GaitError(format!(
+            "skip_samples {} plus samples {} overflow",
+            o.skip_samples, o.samples
+        ))
+    })?;
+    let goals: JointGoals = generate(&o.sequence, total)?;
     let sim_err = |e: twinloop_sim::SimError| GaitError(format!("simulator: {e}"));
     let mut sim = Simulator::new(
         robot,
@@ -187,6 +220,10 @@ pub fn record_walk(robot: &Robot, o: &DatasetOptions) -> Result<WalkDataset, Gai
     for a in sim.actuators.iter_mut() {
         *a = Actuator::TwoLoop(servo);
     }
+    // Every joint is an LD-2015 with its gear train's friction.
+    for f in sim.joint_friction.iter_mut() {
+        *f = LD2015_GEAR_FRICTION;
+    }
     let n = sim.model.nbodies;
     let mut q0 = vec![0.0; n];
     for (k, &i) in map.iter().enumerate() {
@@ -217,25 +254,31 @@ pub fn record_walk(robot: &Robot, o: &DatasetOptions) -> Result<WalkDataset, Gai
         columns.extend(AXES.iter().map(|a| format!("gyro:{f}.{a}")));
     }
     let steps = (o.sequence.sample_time / o.dt).round().max(1.0) as usize;
-    let (p0, _, yaw0) = trunk_pose(&mut sim)?;
+    let (mut p0, _, mut yaw0) = trunk_pose(&mut sim)?;
     let mut max_tilt: f64 = 0.0;
     let mut fell_at = None;
     let mut state = RobotState::default();
     let mut rows = Vec::with_capacity(o.samples);
-    for k in 0..o.samples {
-        // Read both gyros (the state after the previous tick's goals) ...
-        sim.read_sensors(&mut state);
-        let gl = state.imu.as_ref().expect("the simulator has an IMU").gyro;
-        let wr = sim.link_angular_velocity(FEET[1]).expect("checked");
-        let mut row = Vec::with_capacity(columns.len());
-        row.push(goals.times[k]);
-        row.extend_from_slice(&goals.offsets_deg[k]);
-        row.extend(gl.iter().map(|w| w.to_degrees()));
-        for a in 0..3 {
-            let w = wr[a] + noise_rad * right_noise.normal();
-            row.push(quantize(w, lsb).to_degrees());
+    for k in 0..total {
+        let record = k >= o.skip_samples;
+        if k == o.skip_samples {
+            (p0, _, yaw0) = trunk_pose(&mut sim)?;
         }
-        rows.push(row);
+        if record {
+            // Read both gyros (the state after the previous tick's goals) ...
+            sim.read_sensors(&mut state);
+            let gl = state.imu.as_ref().expect("the simulator has an IMU").gyro;
+            let wr = sim.link_angular_velocity(FEET[1]).expect("checked");
+            let mut row = Vec::with_capacity(columns.len());
+            row.push(goals.times[k]);
+            row.extend_from_slice(&goals.offsets_deg[k]);
+            row.extend(gl.iter().map(|w| w.to_degrees()));
+            for a in 0..3 {
+                let w = wr[a] + noise_rad * right_noise.normal();
+                row.push(quantize(w, lsb).to_degrees());
+            }
+            rows.push(row);
+        }
         // ... then command this tick's goals and let the servos work for one tick.
         for (j, &i) in map.iter().enumerate() {
             sim.goals[i] = goals.goals[k][j];
@@ -244,7 +287,9 @@ pub fn record_walk(robot: &Robot, o: &DatasetOptions) -> Result<WalkDataset, Gai
             sim.step().map_err(sim_err)?;
         }
         let (_, tilt, _) = trunk_pose(&mut sim)?;
-        max_tilt = max_tilt.max(tilt);
+        if record {
+            max_tilt = max_tilt.max(tilt);
+        }
         if tilt > 45.0 && fell_at.is_none() {
             fell_at = Some(goals.times[k]);
         }

@@ -52,8 +52,8 @@
 //!    - E and M shift the CG to the right foot ("ankle's roll and shoulder's pitch";
 //!      G and N then reset `Offset_1_L, Offset_1_R` and `Offset_5_L`): the mirror of
 //!      B, ankle rolls +7 and the left shoulder -30 (the right shoulder's +30 servo
-//!      degrees is +30 degrees of joint pitch in lab17, and -30 servo degrees on the
-//!      left is the same joint pitch; `lab17::TRIMS` directions). E's text says "four
+//!      degrees is a 30 degree forward arm swing in lab17, and -30 servo degrees on
+//!      the left is the same swing; `lab17::TRIMS` directions). E's text says "four
 //!      of the joints": the fourth, the right shoulder, stays at +30 (H's text says it
 //!      is still displaced at H), so E changes three servos like M.
 //!    - K completes the return of "the ankle and knee joints of the left leg" (J left
@@ -263,14 +263,24 @@ pub struct SequenceOptions {
     pub amplitude: f64,
 }
 
-/// The seed gives no sample time. Its servos take a 0.5-2.5 ms pulse (section 2.1),
-/// i.e. the standard 20 ms (50 Hz) servo frame, so the controller cannot change a goal
-/// faster than every 20 ms: we take one control tick (and one gyro sample) per frame.
-pub const SEED_SAMPLE_TIME: f64 = 0.02;
-/// The seed gives no cycle duration either. With Step_State advanced by 1 (percent)
-/// per 20 ms tick a cycle is 100 ticks = 2 s: the shortest windows (4.17) then hold 4
-/// ticks, 80 ms, and the 1000 samples of the seed's record are 10 cycles (20 steps).
-pub const SEED_CYCLE_PERIOD: f64 = 2.0;
+/// The seed gives no sample time. Two facts bound it: its servos take a 0.5-2.5 ms
+/// pulse in the standard 20 ms (50 Hz) frame (section 2.1), so a goal cannot change
+/// faster than every 20 ms; and its initial model has a bandwidth of 54.8 rad/s
+/// (section 8.1), which a sampled model can only show below the Nyquist frequency
+/// pi / T, so T < 57 ms. We take T = 40 ms (two servo frames; one tick of the Arduino
+/// loop that writes the goals and reads both gyros, and one sample).
+pub const SEED_SAMPLE_TIME: f64 = 0.04;
+/// The seed gives no cycle duration either, but warns (section 5, "inertial forces")
+/// that "if the frequency of the step cycle is increased beyond certain limit the
+/// abundant energy from uncompensated inertial forces cannot be dampen fast enough and
+/// leads to instability". On lab17 the limit is near 3.5 s per cycle: at 2 and 3 s the
+/// weight shifts (the ankle rolls step by 7 degrees at servo speed) throw the body
+/// sideways or backwards off the supporting foot within the first two steps; from 3.5
+/// to 5 s it walks (docs/lab17-walking-identification.md). We take 4 s: with
+/// Step_State advanced by 1 (percent) per 40 ms tick a cycle is 100 ticks, the
+/// shortest windows (4.17) hold 4 ticks (160 ms, about the seed's 200 ms servo
+/// settling), and the 1000 samples of the seed's record are 10 cycles (20 steps).
+pub const SEED_CYCLE_PERIOD: f64 = 4.0;
 /// Seed 003 section 7: "The data contains 1000 points".
 pub const SEED_SAMPLES: usize = 1000;
 

@@ -142,7 +142,8 @@ fn offsets_follow_the_stages_and_close_the_cycle() {
 
 #[test]
 fn goals_are_trims_plus_offsets_over_time() {
-    let g = walking_sequence(2, 0.02).unwrap();
+    let g = walking_sequence(2, SEED_SAMPLE_TIME).unwrap();
+    // Two 4 s cycles of 40 ms ticks: Step_State advances by 1 per tick.
     assert_eq!(g.len(), 200);
     assert_eq!(g.joints.len(), 17);
     let knee = g.joints.iter().position(|j| j == "r_knee").unwrap();
@@ -162,7 +163,7 @@ fn goals_are_trims_plus_offsets_over_time() {
     }
     // The second cycle repeats the first.
     assert_eq!(g.offsets_deg[..100], g.offsets_deg[100..]);
-    // Stage C starts at the first tick past Step_State 7.08: t = 0.16 s.
+    // Stage C starts at the first tick past Step_State 7.08: tick 8, t = 0.32 s.
     let first = g.offsets_deg.iter().position(|o| o[7] != 0.0).unwrap();
     assert_eq!(first, 8);
 }
@@ -175,7 +176,7 @@ fn amplitude_scales_every_offset() {
         ..Default::default()
     };
     let half = walking_sequence_with(&o).unwrap();
-    let full = walking_sequence(1, 0.02).unwrap();
+    let full = walking_sequence(1, SEED_SAMPLE_TIME).unwrap();
     for (a, b) in half.offsets_deg.iter().zip(&full.offsets_deg) {
         for i in 0..10 {
             assert_eq!(a[i], 0.5 * b[i]);
@@ -188,9 +189,10 @@ fn bad_input_is_an_error_naming_the_field() {
     let e = |r: Result<JointGoals, GaitError>| r.unwrap_err().to_string();
     assert!(e(walking_sequence(0, 0.02)).contains("cycles"));
     assert!(e(walking_sequence(1, 0.0)).contains("sample_time"));
+    assert!(walking_sequence(1, 0.02).is_ok());
     assert!(e(walking_sequence(1, f64::NAN)).contains("sample_time"));
     // Too coarse a tick skips the 4.17 % windows: named, with the stage.
-    let msg = e(walking_sequence(1, 0.2));
+    let msg = e(walking_sequence(1, 0.4));
     assert!(
         msg.contains("sample_time") && msg.contains("stage"),
         "{msg}"

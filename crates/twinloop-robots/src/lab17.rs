@@ -70,11 +70,20 @@ pub const SHOULDER_TO_ROLL: f64 = 0.020;
 pub const UPPER_ARM: f64 = 0.055;
 /// Forearm and hand box, m; 60 mm across so the arms' outer faces are WIDTH apart.
 pub const FOREARM_SIZE: [f64; 3] = [0.030, 0.060, 0.080];
-/// Foot plate, m: 100 x 60 x 3 mm; 55 mm in front of the ankle, 45 mm behind (no foot
-/// size is in the seed: a sole the length of 2.5 servos, the ankle a little behind its
-/// middle like a human's).
-pub const FOOT_LENGTH: f64 = 0.100;
-pub const FOOT_FRONT: f64 = 0.055;
+/// Foot plate, m: 130 x 60 x 3 mm with the ankle over its middle (65 mm in front, 65
+/// behind). No foot size is in the seed; its walk fixes how far the sole must reach
+/// behind the ankle. Seed 003 section 5: "to keep the upper stance the projected
+/// location of the robot CG onto the ground surface should be kept within the
+/// supporting foot base", and its sequence (section 6) lands the left foot in stage F
+/// (knee and hip pitch +40 servo degrees, the shin parallel to the trunk) THIGH x
+/// sin 40 deg = 48 mm ahead of the hip, toe up 10 degrees, then moves the whole weight
+/// onto it in stage H before J/K straighten that leg. The CG, near the hip, is then
+/// about 50 mm behind the left ankle; a toe-up sole reaches
+/// `back cos 10 - ANKLE_ROLL_HEIGHT sin 10` behind it, so `back` must exceed ~56 mm.
+/// With the earlier 45 mm heel the robot fell backwards in stage H/J every time
+/// (docs/lab17-walking-identification.md); 65 mm leaves ~10 mm of margin.
+pub const FOOT_LENGTH: f64 = 0.130;
+pub const FOOT_FRONT: f64 = 0.065;
 pub const FOOT_WIDTH: f64 = 0.060;
 pub const FOOT_THICKNESS: f64 = 0.003;
 
@@ -116,15 +125,29 @@ pub struct Trim {
 /// The seed does not say which way each servo is mounted; the directions are inferred
 /// from its gait stages with this model's axes (a leg steps forward by hip flexion =
 /// negative hip pitch, knee flexion = positive knee, toe up = negative ankle pitch; the
-/// body leans left over a foot by positive ankle roll):
+/// body leans left over a foot by positive ankle roll; an arm swings forward by
+/// negative shoulder pitch):
 /// - stage C moves the right leg forward with ankle -10, knee -20, hip -20 (servo
 ///   degrees) and stage F the left leg with ankle -10, knee +40, hip +40: so hip pitch
-///   is +1 on the right and -1 on the left, knee -1 on the right and +1 on the left,
-///   ankle pitch +1 on both sides (the toe lifts in both stages);
-/// - stage H shifts the weight onto the left foot with left ankle roll -7: left ankle
-///   roll is -1. No right ankle roll or shoulder offset is printed with a direction we
-///   can check: right ankle roll +1 and the shoulders (-1 left, +1 right) are ASSUMED
-///   mirror images.
+///   is +1 on the right and -1 on the left, knee -1 on the right and +1 on the left
+///   (the mirror-mounted pitch servos of the two legs), ankle pitch +1 on both sides
+///   (the toe lifts in both stages, so the stepping foot lands heel first; it is
+///   flattened by the weight, which pulls the body forward over it);
+/// - stages B and H shift the weight onto the left foot with both ankle rolls at -7
+///   (H prints `Offset_1_L = -7` twice; D, G, L and "A=0" reset both ankle rolls, so
+///   the second is `Offset_1_R`). Equal offsets on both ankles can only shift the
+///   weight if both servos turn the same way (both legs lean together, a
+///   parallelogram); mirrored ankle-roll servos would splay the legs and shift
+///   nothing (our first reading, under which lab17 never unloaded a foot). So both
+///   ankle rolls are -1, and -7 leans the body left.
+/// - the shoulders: B/H set the right shoulder +30 and E/M (inferred) the left -30,
+///   and the seed says these pitches help shift the CG onto the supporting foot
+///   ("shifted to the left leg by applying ankle roll and right shoulder pitch", B;
+///   "ankle's roll and shoulder's pitch", E). Each of those weight shifts is onto the
+///   foot that stepped forward (the right after C, the left after F), so the arm
+///   must swing forward to help (backwards it would pull the CG off the heel of that
+///   foot): +30 servo degrees on the right and -30 on the left are both forward
+///   swings, so the right shoulder is -1 and the left +1.
 pub const TRIMS: [Trim; 10] = [
     Trim {
         joint: "l_ank_roll",
@@ -149,12 +172,12 @@ pub const TRIMS: [Trim; 10] = [
     Trim {
         joint: "l_sho_pitch",
         servo_deg: 155.0,
-        direction: -1.0,
+        direction: 1.0,
     },
     Trim {
         joint: "r_ank_roll",
         servo_deg: 79.0,
-        direction: 1.0,
+        direction: -1.0,
     },
     Trim {
         joint: "r_ank_pitch",
@@ -174,7 +197,7 @@ pub const TRIMS: [Trim; 10] = [
     Trim {
         joint: "r_sho_pitch",
         servo_deg: 87.0,
-        direction: 1.0,
+        direction: -1.0,
     },
 ];
 

@@ -538,13 +538,30 @@ fn lab17_trims_turn_the_seed_gait_offsets_into_steps() {
     }
     // Stage H: left ankle roll -7 servo degrees shifts the weight onto the left foot:
     // seen from the left foot, the trunk moves left.
-    let a = lab17::joint_angle("l_ank_roll", 97.0 - 7.0).unwrap();
-    let foot0 = lab17_placement(&[], "l_foot");
-    let foot1 = lab17_placement(&[("l_ank_roll", a)], "l_foot");
+    // Both ankle rolls get -7 (H prints Offset_1_L twice; the second is Offset_1_R):
+    // equal offsets must lean the body the same way over both feet (a parallelogram),
+    // or the weight never leaves a foot.
     let trunk = Vector3::new(0.0, 0.0, 0.05);
-    let y0 = foot0.act_inv_point(&trunk).y;
-    let y1 = foot1.act_inv_point(&trunk).y;
-    assert!(y1 > y0, "{y0} -> {y1}");
+    for (side, trim) in [("l", 97.0), ("r", 79.0)] {
+        let joint = format!("{side}_ank_roll");
+        let a = lab17::joint_angle(&joint, trim - 7.0).unwrap();
+        let foot = format!("{side}_foot");
+        let foot0 = lab17_placement(&[], &foot);
+        let foot1 = lab17_placement(&[(joint.as_str(), a)], &foot);
+        let y0 = foot0.act_inv_point(&trunk).y;
+        let y1 = foot1.act_inv_point(&trunk).y;
+        assert!(y1 > y0, "{side}: {y0} -> {y1}");
+    }
+    // B/H right shoulder +30, E/M left shoulder -30: both arms swing forward (they help
+    // move the CG onto the foot that stepped forward).
+    for (side, trim, d) in [("r", 87.0, 30.0), ("l", 155.0, -30.0)] {
+        let joint = format!("{side}_sho_pitch");
+        let a = lab17::joint_angle(&joint, trim + d).unwrap();
+        let hand = format!("{side}_forearm");
+        let h0 = lab17_placement(&[], &hand).translation;
+        let h1 = lab17_placement(&[(joint.as_str(), a)], &hand).translation;
+        assert!(h1.x > h0.x + 0.02, "{side}: hand x {} -> {}", h0.x, h1.x);
+    }
 }
 
 #[test]

@@ -62,6 +62,23 @@ pub struct PemOptions {
     /// Estimate the initial state (else it stays at the given one, zero by default).
     pub estimate_x0: bool,
     pub weight: OutputWeight,
+    /// Keep `A` itself stable (MATLAB's `ssestOptions.EnforceStability`): a step that
+    /// puts an eigenvalue of `A` on or outside the unit circle is rejected like one
+    /// that destabilises the predictor. Off by default, as in MATLAB: the prediction
+    /// error only needs `A - KC` stable, and on data that barely excite some modes
+    /// the search can trade a slightly lower one-step error for an unstable `A`,
+    /// whose simulation diverges (seen on the lab17 walking record).
+    pub enforce_stability: bool,
+    /// Output-error structure (MATLAB's `ssestOptions.Focus = 'simulation'`): `K` is
+    /// fixed at zero, so the one-step predictor is the simulation and the cost is the
+    /// simulation error. The predictor's stability is then `A`'s, so the search also
+    /// keeps `A` stable. Off by default (`K` estimated, the innovations form).
+    pub output_error: bool,
+    /// Largest pole radius a step may leave on `A` when `A` is kept stable
+    /// (`enforce_stability` or `output_error`); 1 = plain stability. Below 1 it is a
+    /// damping margin: on periodic data the search otherwise drives a lightly damped
+    /// mode onto the unit circle, an undamped oscillator that buys a little fit.
+    pub max_pole_radius: f64,
 }
 
 impl Default for PemOptions {
@@ -73,6 +90,9 @@ impl Default for PemOptions {
             feedthrough: false,
             estimate_x0: false,
             weight: OutputWeight::Identity,
+            enforce_stability: false,
+            output_error: false,
+            max_pole_radius: 1.0,
         }
     }
 }
@@ -449,7 +469,8 @@ pub fn pem(
         x0: opts.estimate_x0,
     };
     let p = l.len();
-    let m = p - n * n;
+    // Output error: the n ny entries of K are held at zero as well.
+    let m = p - n * n - if opts.output_error { n * ny } else { 0 };
     let n_res = data.len() * ny;
     if n_res <= m {
         return Err(SysidError::data(format!(
@@ -461,6 +482,31 @@ pub fn pem(
     let mut x0v = x0.cloned().unwrap_or_else(|| DVector::zeros(n));
     if x0v.len() != n {
         return Err(SysidError::order("the initial state has the wrong length"));
+    }
+    let oe_initial;
+    let initial = if opts.output_error {
+        oe_initial = StateSpace {
+            k: DMatrix::zeros(n, ny),
+            ..initial.clone()
+        };
+        &oe_initial
+    } else {
+        initial
+    };
+    if !(opts.max_pole_radius > 0.0 && opts.max_pole_radius <= 1.0) {
+        return Err(SysidError::order(format!(
+            "max_pole_radius must be in (0, 1], got {}",
+            opts.max_pole_radius
+        )));
+    }
+    if (opts.enforce_stability || opts.output_error)
+        && !spectral_radius(&initial.a).is_some_and(|r| r < opts.max_pole_radius)
+    {
+        return Err(SysidError::numerical(format!(
+            "enforce_stability: the initial model's A has a pole radius at or above {}; start \
+             from a model inside it",
+            opts.max_pole_radius
+        )));
     }
     if !spectral_radius(&(&initial.a - &initial.k * &initial.c)).is_some_and(|r| r < 1.0) {
         return Err(SysidError::numerical(
@@ -506,7 +552,17 @@ pub fn pem(
     let mut ws_trial = Workspace::new(&l, data.len(), 0);
     'outer: while iterations < opts.max_iterations {
         // Local coordinates: complement of the basis-change directions at the model.
-        let t = l.basis_change_directions(&model, &x0v);
+        let mut t = l.basis_change_directions(&model, &x0v);
+        if opts.output_error {
+            // Hold K at zero: its coordinates join the directions the step avoids.
+            let base = t.ncols();
+            t = t.resize_horizontally(base + n * ny, 0.0);
+            for c in 0..ny {
+                for r in 0..n {
+                    t[(r + n * (n + nu + c), base + r + n * c)] = 1.0;
+                }
+            }
+        }
         let basis = HouseholderQr::new(t).complement_basis(); // p x m
         // predict() left xs, e, r at the current model.
         predict(&model, &x0v, data, &lt, &mut ws);
@@ -553,8 +609,10 @@ pub fn pem(
             let mut th = l.pack(&model, &x0v);
             th.gemv(1.0, &basis, &step, 1.0);
             let trial = l.unpack(&th, &model, &mut trial_x0);
-            let stable =
-                spectral_radius(&(&trial.a - &trial.k * &trial.c)).is_some_and(|r| r < 1.0);
+            let stable = spectral_radius(&(&trial.a - &trial.k * &trial.c))
+                .is_some_and(|r| r < 1.0)
+                && (!(opts.enforce_stability || opts.output_error)
+                    || spectral_radius(&trial.a).is_some_and(|r| r < opts.max_pole_radius));
             let new_cost = if stable {
                 predict(&trial, &trial_x0, data, &lt, &mut ws_trial)
             } else {
@@ -734,5 +792,116 @@ mod tests {
         let m2 = l.unpack(&th, &model, &mut x);
         assert_eq!(m2, model);
         assert_eq!(x, x0);
+    }
+
+    /// Deterministic white noise (splitmix64, Box-Muller).
+    fn noise(seed: u64, rows: usize, cols: usize, sd: f64) -> DMatrix<f64> {
+        let mut st = seed;
+        let mut uni = || {
+            st = st.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = st;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            (((z ^ (z >> 31)) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        DMatrix::from_fn(rows, cols, |_, _| {
+            let (a, b) = (uni(), uni());
+            sd * (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+        })
+    }
+
+    /// An output-error system (K = 0) with white measurement noise: the
+    /// simulation-focus search, started from a perturbed model with a non-zero K,
+    /// keeps K at exactly zero, frees n^2 + n ny fewer parameters, and reaches the
+    /// true system's simulation cost (the noise variance) within 1 %.
+    #[test]
+    fn output_error_recovers_a_known_oe_system() {
+        let (mut truth, _) = toy();
+        truth.k.fill(0.0);
+        truth.d.fill(0.0);
+        let n = 600;
+        let u = noise(7, 2, n, 1.0);
+        let clean = truth.simulate(&u, None).unwrap();
+        let sd = 0.05;
+        let y = &clean + noise(11, 2, n, sd);
+        let data = IoData::new(
+            vec!["u1".into(), "u2".into()],
+            vec!["y1".into(), "y2".into()],
+            u,
+            y,
+            None,
+        )
+        .unwrap();
+        let (toy_model, _) = toy();
+        let start = StateSpace {
+            a: &truth.a * 0.85,
+            b: &truth.b * 1.1,
+            c: &truth.c * 0.9,
+            k: toy_model.k.clone(),
+            ..truth.clone()
+        };
+        let opts = PemOptions {
+            output_error: true,
+            max_iterations: 200,
+            ..Default::default()
+        };
+        let r = pem(&data, &start, None, &opts, &mut |_| {}).unwrap();
+        assert_eq!(r.model.k, DMatrix::zeros(3, 2));
+        assert_eq!(r.free_parameters, 3 * (3 + 2 + 2) + 2 * 3 - 9 - 6);
+        assert!(r.final_cost <= r.initial_cost);
+        // The true system's cost: its simulation error is the added noise.
+        let e_true = &data.y - truth.simulate(&data.u, None).unwrap();
+        let true_cost = e_true.norm_squared() / n as f64;
+        assert!(
+            r.final_cost <= 1.01 * true_cost,
+            "OE cost {} vs the true system's {true_cost}",
+            r.final_cost
+        );
+        // K = 0: the one-step predictor is the simulation.
+        let sim = r.model.simulate(&data.u, None).unwrap();
+        let sim_cost = (&data.y - sim).norm_squared() / n as f64;
+        assert!((sim_cost - r.final_cost).abs() <= 1e-9 * sim_cost);
+    }
+
+    /// With `enforce_stability` an unstable start is refused, and a stable one stays stable.
+    #[test]
+    fn enforce_stability_keeps_a_stable() {
+        let (model, data) = toy();
+        let opts = PemOptions {
+            enforce_stability: true,
+            ..Default::default()
+        };
+        let r = pem(&data, &model, None, &opts, &mut |_| {}).unwrap();
+        assert!(r.model.spectral_radius().is_some_and(|x| x < 1.0));
+        assert!(r.final_cost <= r.initial_cost);
+        let unstable = StateSpace {
+            a: &model.a * 2.0,
+            k: DMatrix::zeros(3, 2),
+            ..model.clone()
+        };
+        let e = pem(&data, &unstable, None, &opts, &mut |_| {}).unwrap_err();
+        assert!(e.to_string().contains("enforce_stability"), "{e}");
+        // A damping margin just outside the start's pole radius: the search never
+        // crosses it, a start outside it is refused, and a radius above 1 is an error.
+        let rho0 = model.spectral_radius().unwrap();
+        let margin = PemOptions {
+            output_error: true,
+            max_pole_radius: rho0 + 0.02,
+            ..Default::default()
+        };
+        let r = pem(&data, &model, None, &margin, &mut |_| {}).unwrap();
+        assert!(r.model.spectral_radius().unwrap() < rho0 + 0.02);
+        assert!(r.final_cost <= r.initial_cost);
+        let tight = PemOptions {
+            max_pole_radius: 0.5 * rho0,
+            ..margin
+        };
+        assert!(pem(&data, &model, None, &tight, &mut |_| {}).is_err());
+        let silly = PemOptions {
+            max_pole_radius: 1.5,
+            ..margin
+        };
+        let e = pem(&data, &model, None, &silly, &mut |_| {}).unwrap_err();
+        assert!(e.to_string().contains("max_pole_radius"), "{e}");
     }
 }
