@@ -399,7 +399,8 @@ impl Simulator {
             let d = self.joint_drive(i);
             let dof = off + i;
             self.rhs[dof] += d.tau - dt * d.k * self.v[dof];
-            self.h[(dof, dof)] += dt * d.d + dt * dt * d.k + self.model.armature[i];
+            // The armature is already on the diagonal: crba adds it.
+            self.h[(dof, dof)] += dt * d.d + dt * dt * d.k;
         }
         if self.config.ground {
             self.add_contacts(dt);
