@@ -194,6 +194,25 @@ pub struct SsArgs {
     /// Block rows of the subspace method (default: max(10, order/ny + 2), within what the data allow).
     #[arg(long, value_name = "I")]
     pub n4sid_horizon: Option<usize>,
+    /// What the prediction-error search minimises: `prediction` (one-step errors, K
+    /// estimated: the innovations form) or `simulation` (output error, K = 0, A kept
+    /// stable; MATLAB's ssestOptions Focus = 'simulation'). Simulation suits models
+    /// meant to be run open loop, as the seed's walking model.
+    #[arg(long, value_enum, default_value = "prediction")]
+    pub focus: FocusArg,
+    /// Keep A stable in the search even with --focus prediction (MATLAB's EnforceStability).
+    #[arg(long)]
+    pub enforce_stability: bool,
+    /// Largest pole radius the search may leave on A when it keeps A stable (below 1: a
+    /// damping margin against undamped oscillators fitted to periodic data).
+    #[arg(long, default_value_t = 1.0, value_name = "R")]
+    pub max_pole_radius: f64,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FocusArg {
+    Prediction,
+    Simulation,
 }
 
 pub fn run(cmd: SysidCommand) -> ExitCode {
@@ -535,6 +554,9 @@ fn ss(a: &SsArgs) -> Result<(), String> {
                 WeightArg::Identity => OutputWeight::Identity,
                 WeightArg::Noise => OutputWeight::InverseNoise,
             },
+            enforce_stability: a.enforce_stability,
+            output_error: a.focus == FocusArg::Simulation,
+            max_pole_radius: a.max_pole_radius,
             ..PemOptions::default()
         },
         evaluation: eval_options(d),
@@ -554,6 +576,13 @@ fn ss(a: &SsArgs) -> Result<(), String> {
     let mut obj = serde_json::Map::new();
     obj.insert("kind".into(), json!("state-space"));
     obj.insert("method".into(), json!(method.name()));
+    obj.insert(
+        "focus".into(),
+        json!(match a.focus {
+            FocusArg::Prediction => "prediction",
+            FocusArg::Simulation => "simulation",
+        }),
+    );
     obj.insert("data".into(), data_json(d, &recs));
     obj.insert(
         "orders".into(),

@@ -167,6 +167,38 @@ fn state_space_pem_json() {
 }
 
 #[test]
+fn state_space_simulation_focus_keeps_k_zero_and_a_inside_the_radius() {
+    let json = scratch("ss_oe.json");
+    let o = twinloop(&[
+        "sysid",
+        "ss",
+        "--data",
+        path(&data("synthetic_est.csv")),
+        "--inputs",
+        "u*",
+        "--outputs",
+        "y*",
+        "--order",
+        "6",
+        "--focus",
+        "simulation",
+        "--max-pole-radius",
+        "0.99",
+        "--json",
+        path(&json),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = read_json(&json);
+    assert_eq!(v["focus"], "simulation");
+    for row in matrix(&v["K"]) {
+        assert!(row.iter().all(|&k| k == 0.0), "K must stay zero: {row:?}");
+    }
+    let pem = &v["pem"];
+    assert!(pem["final_cost"].as_f64().unwrap() <= pem["initial_cost"].as_f64().unwrap());
+    assert!(v["stability"]["spectral_radius"].as_f64().unwrap() < 0.99);
+}
+
+#[test]
 fn nan_row_names_file_line_row_and_column() {
     let text = std::fs::read_to_string(data("synthetic_est.csv")).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
