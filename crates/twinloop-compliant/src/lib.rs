@@ -5,8 +5,10 @@
 //! | eq 12-13: ZMP reference and LIPM CoM reference | [`zmp`] |
 //! | eq 7-8: Cartesian stiffness and damping at the CoM | [`stiffness`] |
 //! | eq 9-11, 14-17: compact CoM model with corrections | [`compact`] |
+//! | section 4: fit of the corrections (LM, CMA-ES, PoWER), identifiability | [`fit`] |
 
 pub mod compact;
+pub mod fit;
 pub mod stiffness;
 pub mod zmp;
 

@@ -1,0 +1,294 @@
+//! The fit of the compact model's corrections to a recorded CoM (seed 002, section 4).
+//!
+//! Cost: the mean squared error of the compact model's CoM against the recorded one,
+//! `MSE = sum_i [(x_i - x^_i)^2 + (z_i - z^_i)^2] / (2N)` (m^2), the model rolled out by
+//! RK4 from the first recorded CoM at rest. Minimised over a chosen subset of the ten
+//! parameters (by default the seed's eight, eta1 = eta2 fixed) by
+//!
+//! | method | file |
+//! |---|---|
+//! | Levenberg-Marquardt on the residuals, exact sensitivities (the default) | [`lm`] |
+//! | CMA-ES, (mu/mu_w, lambda) with rank-one and rank-mu updates | [`cmaes`] |
+//! | PoWER, as the seed (Kober and Peters) | [`power`] |
+//!
+//! and [`identifiability`] reports what the data determine at the optimum.
+
+pub mod cmaes;
+pub mod dataset;
+pub mod identifiability;
+pub mod lm;
+pub mod model_file;
+pub mod power;
+pub mod sensitivity;
+pub mod synthetic;
+
+pub use dataset::Dataset;
+pub use identifiability::{Identifiability, identifiability};
+pub use model_file::{parse_model_file, read_model_file};
+
+use crate::{CompactModel, CompliantError, Corrections, SagittalCompliance, err};
+
+/// The ten parameter names, in [`Corrections::to_array`] order.
+pub const PARAMETER_NAMES: [&str; 10] = [
+    "alpha1", "beta1", "gamma1", "epsilon1", "alpha2", "beta2", "gamma2", "epsilon2", "eta1",
+    "eta2",
+];
+
+/// The seed's eight (Table 1): eta1, eta2 stay as given.
+pub const SEED_PARAMETERS: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+
+/// Indices of comma-separated parameter names ("all" = the ten).
+pub fn parse_parameter_names(text: &str) -> Result<Vec<usize>, CompliantError> {
+    if text.trim() == "all" {
+        return Ok((0..10).collect());
+    }
+    let mut out = Vec::new();
+    for name in text.split(',').map(str::trim) {
+        let Some(i) = PARAMETER_NAMES.iter().position(|n| *n == name) else {
+            return err(format!(
+                "unknown parameter `{name}` (choose from {} or `all`)",
+                PARAMETER_NAMES.join(", ")
+            ));
+        };
+        if out.contains(&i) {
+            return err(format!("parameter `{name}` is listed twice"));
+        }
+        out.push(i);
+    }
+    Ok(out)
+}
+
+/// What is fitted: a plant, the data, the starting values of all ten parameters and
+/// which of them are free.
+#[derive(Debug, Clone)]
+pub struct FitProblem<'a> {
+    pub plant: SagittalCompliance,
+    pub data: &'a Dataset,
+    pub start: [f64; 10],
+    pub free: Vec<usize>,
+}
+
+impl<'a> FitProblem<'a> {
+    /// Checks the plant, the starting values and the free set.
+    pub fn new(
+        plant: SagittalCompliance,
+        data: &'a Dataset,
+        start: Corrections,
+        free: &[usize],
+    ) -> Result<FitProblem<'a>, CompliantError> {
+        model_file::check_plant(&plant)?;
+        data.reference.validate()?;
+        let start = start.to_array();
+        for (i, v) in start.iter().enumerate() {
+            if !v.is_finite() {
+                return err(format!(
+                    "start value of {} is not finite",
+                    PARAMETER_NAMES[i]
+                ));
+            }
+        }
+        if free.is_empty() {
+            return err("no parameter to fit");
+        }
+        for (k, &i) in free.iter().enumerate() {
+            if i >= 10 || free[..k].contains(&i) {
+                return err(format!("bad free parameter index {i}"));
+            }
+        }
+        for (i, name) in [(8, "eta1"), (9, "eta2")] {
+            if start[i] == 0.0 {
+                return err(format!(
+                    "{name} must not be zero (it scales the double-support forces)"
+                ));
+            }
+        }
+        Ok(FitProblem {
+            plant,
+            data,
+            start,
+            free: free.to_vec(),
+        })
+    }
+
+    pub fn dim(&self) -> usize {
+        self.free.len()
+    }
+
+    /// The free parameters' starting values.
+    pub fn initial(&self) -> Vec<f64> {
+        self.free.iter().map(|&i| self.start[i]).collect()
+    }
+
+    /// All ten parameters with the free ones set to `p`.
+    pub fn full(&self, p: &[f64]) -> [f64; 10] {
+        let mut a = self.start;
+        for (k, &i) in self.free.iter().enumerate() {
+            a[i] = p[k];
+        }
+        a
+    }
+
+    pub fn model(&self, full: &[f64; 10]) -> CompactModel {
+        CompactModel {
+            plant: self.plant,
+            corrections: Corrections::from_slice(full),
+        }
+    }
+
+    /// The cost at free parameters `p` (infinite if the rollout diverges).
+    pub fn mse(&self, p: &[f64]) -> f64 {
+        mse(&self.model(&self.full(p)), self.data)
+    }
+}
+
+/// The mean squared error of the model's CoM against the data (both x and z, m^2), the
+/// model rolled out from the first recorded CoM at rest; infinite if it diverges.
+/// Allocates nothing.
+pub fn mse(model: &CompactModel, data: &Dataset) -> f64 {
+    let r = &data.reference;
+    let mut s = [data.x[0], data.z[0], 0.0, 0.0];
+    let mut sse = 0.0;
+    for i in 1..data.len() {
+        s = model.rk4_step(&s, r, i);
+        let (dx, dz) = (s[0] - data.x[i], s[1] - data.z[i]);
+        sse += dx * dx + dz * dz;
+    }
+    let m = sse / (2 * data.len()) as f64;
+    if m.is_finite() { m } else { f64::INFINITY }
+}
+
+/// The fit methods.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    Lm,
+    Cmaes,
+    Power,
+}
+
+/// Options shared by the methods.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitOptions {
+    /// Budget in cost evaluations (an LM Jacobian counts as 1 + free parameters, what
+    /// forward differences would cost).
+    pub max_evaluations: usize,
+    /// Stop when the MSE is below this (m^2).
+    pub target_mse: f64,
+    /// Seed of the random numbers (CMA-ES, PoWER).
+    pub seed: u64,
+    /// Initial step size (CMA-ES sigma, PoWER exploration standard deviation).
+    pub sigma: f64,
+}
+
+impl FitOptions {
+    /// Budgets that let each method converge on the seed's problem.
+    pub fn for_method(method: Method) -> FitOptions {
+        FitOptions {
+            max_evaluations: match method {
+                Method::Lm => 500,
+                Method::Cmaes => 6000,
+                Method::Power => 4000,
+            },
+            target_mse: 0.0,
+            seed: 2012,
+            sigma: 0.05,
+        }
+    }
+}
+
+/// One point of a method's progress: the best so far.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Progress {
+    pub evaluations: usize,
+    pub mse: f64,
+    pub params: [f64; 10],
+}
+
+/// The outcome of a fit.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FitResult {
+    pub method: Method,
+    pub params: Corrections,
+    pub mse_before: f64,
+    pub mse_after: f64,
+    pub evaluations: usize,
+    pub iterations: usize,
+    /// Why it stopped.
+    pub stop: String,
+    /// Best-so-far after each iteration.
+    #[serde(skip)]
+    pub history: Vec<Progress>,
+}
+
+/// Fits by `method`; `on_progress` sees the best-so-far after every iteration.
+pub fn fit(
+    problem: &FitProblem,
+    method: Method,
+    options: &FitOptions,
+    on_progress: &mut dyn FnMut(&Progress),
+) -> Result<FitResult, CompliantError> {
+    if options.max_evaluations == 0 {
+        return err("the evaluation budget must be positive");
+    }
+    if !(options.sigma.is_finite() && options.sigma > 0.0) {
+        return err(format!(
+            "the step size sigma must be positive, got {}",
+            options.sigma
+        ));
+    }
+    let mse_before = problem.mse(&problem.initial());
+    if !mse_before.is_finite() {
+        return err(
+            "the model diverges at the starting parameters: check the stiffness and damping entries",
+        );
+    }
+    let mut result = match method {
+        Method::Lm => lm::levenberg_marquardt(problem, options, on_progress),
+        Method::Cmaes => cmaes::cma_es(problem, options, on_progress),
+        Method::Power => power::power(problem, options, on_progress),
+    };
+    result.mse_before = mse_before;
+    Ok(result)
+}
+
+/// MSE of the all-start and the fitted parameters on another dataset (seed 002: "the set
+/// of parameters found has been also used to perform walking with different gaits").
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Validation {
+    pub source: String,
+    pub samples: usize,
+    pub mse_before: f64,
+    pub mse_after: f64,
+}
+
+/// Evaluates `before` and `after` corrections on each dataset.
+pub fn generalisation(
+    plant: &SagittalCompliance,
+    before: &Corrections,
+    after: &Corrections,
+    datasets: &[Dataset],
+) -> Vec<Validation> {
+    datasets
+        .iter()
+        .map(|d| {
+            let m = |c: &Corrections| {
+                mse(
+                    &CompactModel {
+                        plant: *plant,
+                        corrections: *c,
+                    },
+                    d,
+                )
+            };
+            Validation {
+                source: d.source.clone(),
+                samples: d.len(),
+                mse_before: m(before),
+                mse_after: m(after),
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests;
