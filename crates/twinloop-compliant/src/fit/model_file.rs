@@ -24,6 +24,8 @@
 //! k_series = 100.0          # N m/rad, knee and ankle pitch
 //! d_stiff = 1.0             # N m s/rad
 //! d_compliant = 1.0
+//! pelvis = "held"           # x-z block of K_C; "free": x-z stiffness under forces
+//!                           # alone (pelvis free to turn; damping stays the block)
 //! [q]                       # joint overrides, rad
 //! LKneeSag = 0.6
 //! ```
@@ -34,8 +36,9 @@ use std::path::Path;
 use twinloop_dynamics::{Data, Model};
 
 const ENTRIES: [&str; 8] = ["Kxx", "Kxz", "Kzx", "Kzz", "Dxx", "Dxz", "Dzx", "Dzz"];
-const URDF_KEYS: [&str; 8] = [
+const URDF_KEYS: [&str; 9] = [
     "urdf",
+    "pelvis",
     "support",
     "knee_bend",
     "k_harmonic",
@@ -60,7 +63,7 @@ pub fn parse_model_file(text: &str, base: &Path) -> Result<SagittalCompliance, C
         let known = key == "m" || key == "g" || ENTRIES.contains(&key.as_str());
         if !known && !URDF_KEYS.contains(&key.as_str()) {
             return err(format!(
-                "unknown key `{key}` (expected m, g, Kxx, Kxz, Kzx, Kzz, Dxx, Dxz, Dzx, Dzz, or urdf with support, knee_bend, k_harmonic, k_series, d_stiff, d_compliant, [q])"
+                "unknown key `{key}` (expected m, g, Kxx, Kxz, Kzx, Kzz, Dxx, Dxz, Dzx, Dzz, or urdf with support, pelvis, knee_bend, k_harmonic, k_series, d_stiff, d_compliant, [q])"
             ));
         }
     }
@@ -215,7 +218,20 @@ fn from_urdf(
     };
     let mut data = Data::new(&model);
     let cc = cartesian_compliance(&model, &mut data, &q, &SupportLeg::coman(left), &joints)?;
-    let (k, d) = (cc.stiffness_xz(), cc.damping_xz());
+    let k = match table.get("pelvis") {
+        None => cc.stiffness_xz(),
+        Some(toml::Value::String(s)) if s == "held" => cc.stiffness_xz(),
+        Some(toml::Value::String(s)) if s == "free" => cc.stiffness_xz_force_only().ok_or_else(|| {
+            CompliantError("the x-z stiffness under forces alone does not exist here (singular rotational block)".into())
+        })?,
+        Some(other) => {
+            return err(format!(
+                "`pelvis` must be \"held\" or \"free\", got a {}",
+                other.type_str()
+            ));
+        }
+    };
+    let d = cc.damping_xz();
     Ok(SagittalCompliance {
         m: model.total_mass,
         g: 9.81,
@@ -288,6 +304,10 @@ mod tests {
         let stretched = "urdf = \"coman.urdf\"\nknee_bend = 0.5\n[q]\nLKneeSag = 0.0\nLHipSag = 0.0\nLAnkSag = 0.0\n";
         let e = parse_model_file(stretched, &models_dir()).unwrap_err();
         assert!(e.0.contains("singular") && e.0.contains("knee"), "{e}");
+        let free =
+            parse_model_file("urdf = \"coman.urdf\"\npelvis = \"free\"\n", &models_dir()).unwrap();
+        let soft = cc.stiffness_xz_force_only().unwrap();
+        assert_eq!((free.Kxx, free.Kzz), (soft[(0, 0)], soft[(1, 1)]));
         let e = parse_model_file("urdf = \"nope.urdf\"\n", &models_dir()).unwrap_err();
         assert!(e.0.contains("nope.urdf"), "{e}");
     }
