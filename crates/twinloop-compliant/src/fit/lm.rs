@@ -48,6 +48,7 @@ pub fn levenberg_marquardt(
     let mut p = DVector::from_vec(problem.initial());
     let (mut a, mut g, mut sse) = linearise(problem, p.as_slice());
     let mut evaluations = jacobian_cost;
+    let mut jacobians = 1;
     let mut radius = INITIAL_RADIUS;
     let mut lambda = 1e-3;
     let mut nu = 2.0;
@@ -116,6 +117,7 @@ pub fn levenberg_marquardt(
             }
             (a, g, sse) = linearise(problem, p.as_slice());
             evaluations += jacobian_cost;
+            jacobians += 1;
             record(evaluations, sse, &p);
             lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
             nu = 2.0;
@@ -145,6 +147,7 @@ pub fn levenberg_marquardt(
         mse_after: sse / residuals,
         evaluations,
         iterations,
+        jacobians,
         stop,
         history,
     }

@@ -196,6 +196,16 @@ impl FitOptions {
     }
 }
 
+/// The outcome of a generic minimiser ([`cmaes::minimize`], [`power::minimize`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Minimum {
+    pub x: Vec<f64>,
+    pub f: f64,
+    pub evaluations: usize,
+    pub iterations: usize,
+    pub stop: String,
+}
+
 /// One point of a method's progress: the best so far.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Progress {
@@ -213,6 +223,9 @@ pub struct FitResult {
     pub mse_after: f64,
     pub evaluations: usize,
     pub iterations: usize,
+    /// Sensitivity rollouts (LM's Jacobians), each counted as 1 + free parameters in
+    /// `evaluations`.
+    pub jacobians: usize,
     /// Why it stopped.
     pub stop: String,
     /// Best-so-far after each iteration.

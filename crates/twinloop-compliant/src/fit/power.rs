@@ -15,7 +15,7 @@
 //!
 //! PoWER has no learning rate and a fixed exploration, as in Kober's reference code.
 
-use super::{FitOptions, FitProblem, FitResult, Method, Progress};
+use super::{FitOptions, FitProblem, FitResult, Method, Minimum, Progress};
 use twinloop_dynamics::configuration::SplitMix64;
 
 /// Rollouts reused by importance sampling (Kober's reference code uses 10).
@@ -28,15 +28,50 @@ pub fn power(
     options: &FitOptions,
     on_progress: &mut dyn FnMut(&Progress),
 ) -> FitResult {
-    let n = problem.dim();
+    let mut history = Vec::new();
+    let m = minimize(
+        &mut |p| problem.mse(p),
+        &problem.initial(),
+        options,
+        &mut |evaluations, mse, theta| {
+            let point = Progress {
+                evaluations,
+                mse,
+                params: problem.full(theta),
+            };
+            on_progress(&point);
+            history.push(point);
+        },
+    );
+    FitResult {
+        method: Method::Power,
+        params: crate::Corrections::from_slice(&problem.full(&m.x)),
+        mse_before: f64::NAN,
+        mse_after: m.f,
+        evaluations: m.evaluations,
+        iterations: m.iterations,
+        jacobians: 0,
+        stop: m.stop,
+        history,
+    }
+}
+
+/// PoWER on any cost `f` (return exp(-f / f(x0))) from `x0`;
+/// `on_iteration(evaluations, best rollout's f, policy mean)` after every rollout.
+pub fn minimize(
+    f: &mut dyn FnMut(&[f64]) -> f64,
+    x0: &[f64],
+    options: &FitOptions,
+    on_iteration: &mut dyn FnMut(usize, f64, &[f64]),
+) -> Minimum {
+    let n = x0.len();
     let mut rng = SplitMix64(options.seed);
-    let mut theta = problem.initial();
-    let mse0 = problem.mse(&theta);
+    let mut theta = x0.to_vec();
+    let mse0 = f(&theta);
     let scale = if mse0 > 0.0 { 1.0 / mse0 } else { 1.0 };
     // The best rollouts so far, highest return first: (return, mse, parameters).
     let mut best: Vec<(f64, f64, Vec<f64>)> = Vec::with_capacity(BEST + 1);
     let mut evaluations = 0;
-    let mut history = Vec::new();
     let mut candidate = vec![0.0; n];
     let mut step = vec![0.0; n];
     let stop = loop {
@@ -55,7 +90,11 @@ pub fn power(
             };
             candidate[i] = theta[i] + eps;
         }
-        let mse = problem.mse(&candidate);
+        let mse = if evaluations == 0 {
+            mse0
+        } else {
+            f(&candidate)
+        };
         evaluations += 1;
         let ret = (-scale * mse).exp();
         let at = best.partition_point(|b| b.0 >= ret);
@@ -74,29 +113,43 @@ pub fn power(
         for i in 0..n {
             theta[i] += step[i] / (total + 1e-300);
         }
-        let point = Progress {
-            evaluations,
-            mse: best[0].1,
-            params: problem.full(&theta),
-        };
-        on_progress(&point);
-        history.push(point);
+        on_iteration(evaluations, best[0].1, &theta);
     };
     // The answer is the policy mean theta, unless a rollout did better.
-    let mse_theta = problem.mse(&theta);
+    let f_theta = f(&theta);
     evaluations += 1;
-    let (params, mse_after) = match best.first() {
-        Some((_, m, p)) if *m < mse_theta => (problem.full(p), *m),
-        _ => (problem.full(&theta), mse_theta),
+    let (x, fx) = match best.first() {
+        Some((_, m, p)) if *m < f_theta => (p.clone(), *m),
+        _ => (theta, f_theta),
     };
-    FitResult {
-        method: Method::Power,
-        params: crate::Corrections::from_slice(&params),
-        mse_before: f64::NAN,
-        mse_after,
+    Minimum {
+        x,
+        f: fx,
         evaluations,
         iterations: evaluations - 1,
         stop,
-        history,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moves_to_the_optimum_of_a_sphere_and_repeats_with_its_seed() {
+        let c = [0.3, -0.2, 0.1, 0.25];
+        let mut sphere = |x: &[f64]| x.iter().zip(&c).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        let o = FitOptions {
+            max_evaluations: 2000,
+            target_mse: 0.0,
+            seed: 5,
+            sigma: 0.05,
+        };
+        let m = minimize(&mut sphere, &[0.0; 4], &o, &mut |_, _, _| {});
+        // Start: f = 0.2025; the reward-weighted mean of the best rollouts walks to c.
+        assert!(m.f < 1e-3, "f {} at {:?}", m.f, m.x);
+        assert_eq!(m.evaluations, 2000);
+        let again = minimize(&mut sphere, &[0.0; 4], &o, &mut |_, _, _| {});
+        assert_eq!(again.x, m.x);
     }
 }
