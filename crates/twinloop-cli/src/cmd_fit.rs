@@ -94,6 +94,10 @@ pub struct CompliantFitArgs {
     /// Validation data of other gaits (repeatable): MSE before and after on each.
     #[arg(long = "val", value_name = "FILE.csv")]
     pub val: Vec<PathBuf>,
+    /// Also time the rollout, the sensitivity rollout and the whole fit over this many
+    /// rounds each and report the medians (JSON `timing`; for BENCHMARKS.md).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub timing_rounds: usize,
     /// Write the result as JSON here.
     #[arg(long, value_name = "OUT.json")]
     pub json: Option<PathBuf>,
@@ -123,6 +127,53 @@ struct FitReport<'a> {
     identifiability: Option<&'a Identifiability>,
     identifiability_error: Option<String>,
     validation: &'a [Validation],
+    timing: Option<Timing>,
+}
+
+/// Medians over rounds, seconds.
+#[derive(Serialize, Clone, Copy)]
+struct Timing {
+    rounds: usize,
+    rollout: f64,
+    rollout_per_1000_samples: f64,
+    sensitivity_rollout: f64,
+    fit: f64,
+}
+
+fn median_time(rounds: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..rounds)
+        .map(|_| {
+            let start = std::time::Instant::now();
+            f();
+            start.elapsed().as_secs_f64()
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+fn timing(problem: &FitProblem, method: Method, options: &FitOptions, rounds: usize) -> Timing {
+    let p = problem.initial();
+    let model = problem.model(&problem.full(&p));
+    let mut sink = 0.0;
+    let rollout = median_time(rounds, || sink += fit::mse(&model, problem.data));
+    let sensitivity_rollout = median_time(rounds, || {
+        sink += fit::sensitivity::normal_equations(&model, problem.data).sse
+    });
+    let fit = median_time(rounds, || {
+        if let Ok(r) = fit::fit(problem, method, options, &mut |_| {}) {
+            sink += r.mse_after;
+        }
+    });
+    // keep the work observable so it is not optimised away
+    std::hint::black_box(sink);
+    Timing {
+        rounds,
+        rollout,
+        rollout_per_1000_samples: rollout * 1000.0 / problem.data.len() as f64,
+        sensitivity_rollout,
+        fit,
+    }
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
@@ -220,6 +271,18 @@ fn compliant(args: CompliantFitArgs) -> ExitCode {
         Err(e) => (None, Some(e.to_string())),
     };
     let validation = fit::generalisation(&plant, &start, &result.params, &val);
+    let timing =
+        (args.timing_rounds > 0).then(|| timing(&problem, method, &options, args.timing_rounds));
+    if let Some(t) = &timing {
+        print(&format!(
+            "timing (median of {}): rollout {} ms ({} us per 1000 samples), sensitivity rollout {} ms, whole fit {} ms\n",
+            t.rounds,
+            num(t.rollout * 1e3),
+            num(t.rollout_per_1000_samples * 1e6),
+            num(t.sensitivity_rollout * 1e3),
+            num(t.fit * 1e3)
+        ));
+    }
     print(&summary(
         &args,
         &data,
@@ -250,6 +313,7 @@ fn compliant(args: CompliantFitArgs) -> ExitCode {
             identifiability: ident.as_ref(),
             identifiability_error: ident_error.clone(),
             validation: &validation,
+            timing,
         };
         let text = match serde_json::to_string_pretty(&report) {
             Ok(t) => t,

@@ -2,15 +2,19 @@
 //! at every sample), with the exact Jacobian of the RK4 rollout from forward
 //! sensitivities ([`super::sensitivity`]).
 //!
-//! The step solves `(J^T J + lambda mu I) delta = -J^T r` (Levenberg's damping, mu the
-//! mean of diag(J^T J)): the corrections are dimensionless factors near 1, so a step is
-//! measured alike in every parameter. lambda follows the gain ratio rho = actual /
-//! predicted reduction of r^T r (Nielsen 1999), and is raised until the step fits a
-//! trust radius (0.1 at first, grown by good steps, halved by bad ones).
+//! A trust-region Levenberg-Marquardt: each iteration takes the Gauss-Newton step if it
+//! is within the trust radius, else the Levenberg step `(J^T J + lambda mu I) delta =
+//! -J^T r` (mu the mean of diag(J^T J)) with lambda just large enough to bring it inside.
+//! The radius is measured in the parameters themselves: the corrections are
+//! dimensionless factors near 1, so a step counts alike in every one. It starts at 0.1,
+//! triples after a step whose gain ratio rho (actual / predicted reduction of r^T r) is
+//! above 0.75, and halves after one below 0.25 or a rejected one (Moré 1978, Nocedal and
+//! Wright ch. 4, in the unscaled metric).
 //!
-//! Why not Marquardt's scaling D = diag(J^T J): on COMAN the damping corrections
-//! (gamma, epsilon) barely move the CoM, so their scaled damping is tiny and the first
-//! steps throw them to -90 or 1500; and why a trust radius: the x-z stiffness block is
+//! Why not Marquardt's scaling D = diag(J^T J) (MINPACK's choice): on COMAN the damping
+//! corrections (gamma, epsilon) barely move the CoM, so their scaled step is barely
+//! limited and the first steps throw them to -90 or 1500 (with the pelvis held MINPACK
+//! needs 400-700 evaluations, this 100-150); and why a trust radius at all: the x-z stiffness block is
 //! nearly singular (det K is a small difference of large products), so the static sag
 //! K^-1 m g is far from linear in alpha, beta, and an undamped Gauss-Newton step from all
 //! ones lands in a spurious minimum (alpha2 near 0). Both were seen on the seed's gait.
@@ -50,8 +54,6 @@ pub fn levenberg_marquardt(
     let mut evaluations = jacobian_cost;
     let mut jacobians = 1;
     let mut radius = INITIAL_RADIUS;
-    let mut lambda = 1e-3;
-    let mut nu = 2.0;
     let mut history = Vec::new();
     let mut iterations = 0;
     let stop;
@@ -75,30 +77,10 @@ pub fn levenberg_marquardt(
             break;
         }
         iterations += 1;
-        // Levenberg's damping lambda * mean(diag A) * I: the corrections are
-        // dimensionless factors near 1, so every parameter's step is measured alike.
-        let mean = a.trace() / n as f64;
-        // Raise lambda until the step fits the trust radius (cheap: n x n solves).
-        let mut delta = DVector::zeros(n);
-        let mut solved = false;
-        for _ in 0..200 {
-            let mut damped = a.clone();
-            for i in 0..n {
-                damped[(i, i)] += lambda * mean;
-            }
-            if let Some(chol) = damped.cholesky() {
-                delta = chol.solve(&(-&g));
-                if delta.norm() <= radius {
-                    solved = true;
-                    break;
-                }
-            }
-            lambda *= 2.0;
-        }
-        if !solved {
+        let Some(delta) = step_within(&a, &g, radius) else {
             stop = "the damped normal equations have no solution".to_string();
             break;
-        }
+        };
         let trial = &p + &delta;
         let trial_sse = problem.mse(trial.as_slice()) * residuals;
         evaluations += 1;
@@ -119,8 +101,6 @@ pub fn levenberg_marquardt(
             evaluations += jacobian_cost;
             jacobians += 1;
             record(evaluations, sse, &p);
-            lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-            nu = 2.0;
             if rho > 0.75 {
                 radius = radius.max(3.0 * delta.norm());
             } else if rho < 0.25 {
@@ -136,8 +116,6 @@ pub fn levenberg_marquardt(
                 break;
             }
             radius = 0.5 * delta.norm();
-            lambda *= nu;
-            nu *= 2.0;
         }
     }
     FitResult {
@@ -151,4 +129,27 @@ pub fn levenberg_marquardt(
         stop,
         history,
     }
+}
+
+/// The Gauss-Newton step if it fits the trust radius, else the Levenberg step
+/// `(A + lambda mu I) delta = -g` (mu = mean of diag A) with the smallest lambda of a
+/// doubling sequence that makes |delta| <= radius. n x n solves: cheap.
+fn step_within(a: &DMatrix<f64>, g: &DVector<f64>, radius: f64) -> Option<DVector<f64>> {
+    let n = a.nrows();
+    let mean = a.trace() / n as f64;
+    let mut lambda = 0.0;
+    for _ in 0..300 {
+        let mut damped = a.clone();
+        for i in 0..n {
+            damped[(i, i)] += lambda * mean;
+        }
+        if let Some(chol) = damped.cholesky() {
+            let delta = chol.solve(&(-g));
+            if delta.norm() <= radius {
+                return Some(delta);
+            }
+        }
+        lambda = if lambda == 0.0 { 1e-12 } else { 2.0 * lambda };
+    }
+    None
 }

@@ -175,11 +175,9 @@ fn lm_recovers_table_1_without_noise() {
             r.mse_before,
             r.mse_after
         );
-        assert!(
-            r.evaluations < FitOptions::for_method(Method::Lm).max_evaluations,
-            "{} evaluations",
-            r.evaluations
-        );
+        // MINPACK's LM needs 101 (pelvis free) and 686 (held) on the same data
+        // (bench/compliant): the trust radius in the parameter metric does better.
+        assert!(r.evaluations < 200, "{} evaluations", r.evaluations);
         assert_eq!((got[8], got[9]), (1.0, 1.0), "eta stays fixed");
     }
 }
