@@ -213,17 +213,15 @@ impl AffineStep {
         }
         let (mut ga, mut gb) = ([[0.0; 2]; 4], [[0.0; 2]; 4]);
         for (at, g) in [(0, &mut ga), (1, &mut gb)] {
-            for j in 0..2 {
+            // unit xr, then unit zr, at the interval's start (at = 0) or end (at = 1)
+            for (j, (ux, uz)) in [(1.0, 0.0), (0.0, 1.0)].into_iter().enumerate() {
                 r.xr = vec![0.0; 2];
                 r.zr = vec![0.0; 2];
-                if j == 0 {
-                    r.xr[at] = 1.0;
-                } else {
-                    r.zr[at] = 1.0;
-                }
+                r.xr[at] = ux;
+                r.zr[at] = uz;
                 let col = model.rk4_step(&[0.0; 4], &r, 1);
-                for k in 0..4 {
-                    g[k][j] = col[k] - c[k];
+                for (row, (v, c0)) in g.iter_mut().zip(col.iter().zip(&c)) {
+                    row[j] = v - c0;
                 }
             }
         }
