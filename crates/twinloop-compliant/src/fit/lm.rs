@@ -26,7 +26,10 @@ use nalgebra::{DMatrix, DVector};
 /// Relative parameter step below which the fit has converged.
 const X_TOL: f64 = 1e-12;
 /// Relative reduction of the cost below which an accepted step counts as converged.
-const F_TOL: f64 = 1e-15;
+const F_TOL: f64 = 1e-12;
+/// Stop when the Gauss-Newton step could gain less than this fraction of the noise
+/// variance in r^T r.
+const NOISE_FRACTION: f64 = 0.01;
 /// First trust radius on the parameter step: the corrections are factors near 1 and the
 /// rollout's response to them is far from linear beyond about 10 %.
 const INITIAL_RADIUS: f64 = 0.1;
@@ -74,6 +77,17 @@ pub fn levenberg_marquardt(
         }
         if evaluations + 1 > options.max_evaluations {
             stop = format!("evaluation budget {} spent", options.max_evaluations);
+            break;
+        }
+        // The most the linearised model can still gain is g^T A^-1 g (the full
+        // Gauss-Newton step). Below 1 % of the noise variance that is statistically
+        // insignificant (a shift of about 0.1 Cramer-Rao sigma along the flattest
+        // direction): stop instead of crawling along a flat valley at the noise floor.
+        let gain = gauss_newton_gain(&a, &g);
+        let noise_variance = sse / (residuals - n as f64).max(1.0);
+        if gain < NOISE_FRACTION * noise_variance {
+            stop =
+                "converged (what is left to gain is below 1 % of the noise variance)".to_string();
             break;
         }
         iterations += 1;
@@ -129,6 +143,22 @@ pub fn levenberg_marquardt(
         stop,
         history,
     }
+}
+
+/// g^T A^+ g, the decrease of r^T r the full Gauss-Newton step promises, computed on A
+/// scaled to unit diagonal (A's own condition can pass 1e20 here) and ignoring
+/// directions the data do not determine at all.
+fn gauss_newton_gain(a: &DMatrix<f64>, g: &DVector<f64>) -> f64 {
+    let n = a.nrows();
+    let d: Vec<f64> = (0..n).map(|i| a[(i, i)].sqrt().max(1e-300)).collect();
+    let scaled = DMatrix::from_fn(n, n, |r, c| a[(r, c)] / (d[r] * d[c]));
+    let gs = DVector::from_fn(n, |r, _| g[r] / d[r]);
+    let eig = scaled.symmetric_eigen();
+    let top = eig.eigenvalues.amax();
+    (0..n)
+        .filter(|&k| eig.eigenvalues[k] > 1e-14 * top)
+        .map(|k| eig.eigenvectors.column(k).dot(&gs).powi(2) / eig.eigenvalues[k])
+        .sum()
 }
 
 /// The Gauss-Newton step if it fits the trust radius, else the Levenberg step

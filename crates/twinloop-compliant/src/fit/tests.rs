@@ -479,6 +479,12 @@ fn method_comparison_study() {
             FitProblem::new(truth.plant, &data, Corrections::default(), &SEED_PARAMETERS).unwrap();
         let want = Corrections::seed_table1().to_array();
         let max_err = |p: &[f64; 10]| (0..8).map(|i| (p[i] - want[i]).abs()).fold(0.0, f64::max);
+        let stiff_err = |p: &[f64; 10]| {
+            [0, 1, 5]
+                .iter()
+                .map(|&i| (p[i] - want[i]).abs())
+                .fold(0.0, f64::max)
+        };
         for method in [Method::Lm, Method::Cmaes, Method::Power] {
             let seeds: &[u64] = if method == Method::Lm {
                 &[0]
@@ -503,11 +509,12 @@ fn method_comparison_study() {
                 let show =
                     |v: Option<usize>| v.map_or("not reached".to_string(), |v| v.to_string());
                 println!(
-                    "| {label} | {method:?} | {seed} | {} | {} | {} | {:.2e} | {:.2e} |",
+                    "| {label} | {method:?} | {seed} | {} | {} | {} | {:.2e} | {:.2e} | {:.2e} |",
                     show(first2),
                     show(first3),
                     r.evaluations,
                     max_err(&r.params.to_array()),
+                    stiff_err(&r.params.to_array()),
                     r.mse_after
                 );
             }
