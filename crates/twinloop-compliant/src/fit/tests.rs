@@ -467,9 +467,9 @@ fn problems_are_checked() {
 fn method_comparison_study() {
     let budget = 6000;
     println!(
-        "| plant | method | seed | evals to 1e-2 | evals to 1e-3 | evaluations | final max error | MSE after [m^2] |"
+        "| plant | method | seed | evals to 1e-2 | evals to 1e-3 | evaluations | final max error (8) | final max error (alpha1, beta1, beta2) | MSE after [m^2] |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|");
     for (label, truth) in [
         ("pelvis free", truth_force_only()),
         ("pelvis held", truth()),
