@@ -137,9 +137,13 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--rounds", type=int, default=11)
     ap.add_argument("--json", help="write the results here")
+    ap.add_argument("--held", action="store_true",
+                    help="the x-z block of K_C (pelvis held) instead of the stiffness under forces alone")
     args = ap.parse_args()
     if not os.path.exists(TWINLOOP):
         sys.exit("build first: cargo build --release -p twinloop-cli")
+    if args.held:
+        MODEL.update(Kxx=57188.06530958703, Kxz=217399.9125848724, Kzx=217399.9125848724, Kzz=916201.4610526043)
     work = tempfile.mkdtemp(prefix="bench-compliant-")
     model = os.path.join(work, "MODEL.toml")
     with open(model, "w") as fh:
@@ -203,7 +207,8 @@ def main():
                                    status=int(sol.status))
 
     r = res
-    print(f"{n} samples (30.2 s at 1 kHz), medians of {args.rounds} rounds")
+    res["plant"] = "pelvis held" if args.held else "pelvis free"
+    print(f"{n} samples (30.2 s at 1 kHz), {res['plant']}, medians of {args.rounds} rounds")
     print(f"rollout: twinloop {r['twinloop']['rollout'] * 1e3:.3f} ms "
           f"({r['twinloop']['rollout_per_1000_samples'] * 1e6:.1f} us per 1000 samples), "
           f"Python loop {r['python_loop_rollout'] * 1e3:.1f} ms"
