@@ -28,8 +28,10 @@ const X_TOL: f64 = 1e-12;
 /// Relative reduction of the cost below which an accepted step counts as converged.
 const F_TOL: f64 = 1e-12;
 /// Stop when the Gauss-Newton step could gain less than this fraction of the noise
-/// variance in r^T r.
+/// variance in r^T r, or when `INSIGNIFICANT_STEPS` accepted steps in a row each gained
+/// less (a flat valley at the noise floor, walked at the trust radius).
 const NOISE_FRACTION: f64 = 0.01;
+const INSIGNIFICANT_STEPS: usize = 3;
 /// First trust radius on the parameter step: the corrections are factors near 1 and the
 /// rollout's response to them is far from linear beyond about 10 %.
 const INITIAL_RADIUS: f64 = 0.1;
@@ -59,6 +61,9 @@ pub fn levenberg_marquardt(
     let mut radius = INITIAL_RADIUS;
     let mut history = Vec::new();
     let mut iterations = 0;
+    // Accepted steps in a row that each gained less than NOISE_FRACTION of the noise
+    // variance: progress nobody could see in the data.
+    let mut insignificant = 0;
     let stop;
     let mut record = |evaluations: usize, sse: f64, p: &DVector<f64>| {
         let point = Progress {
@@ -104,6 +109,12 @@ pub fn levenberg_marquardt(
         let small_step = (0..n).all(|i| delta[i].abs() <= X_TOL * (p[i].abs() + X_TOL));
         if trial_sse.is_finite() && trial_sse < sse && predicted > 0.0 {
             let reduction = (sse - trial_sse) / sse;
+            let noise_variance = sse / (residuals - n as f64).max(1.0);
+            if sse - trial_sse < NOISE_FRACTION * noise_variance {
+                insignificant += 1;
+            } else {
+                insignificant = 0;
+            }
             p = trial;
             if evaluations + jacobian_cost > options.max_evaluations {
                 sse = trial_sse;
@@ -122,6 +133,12 @@ pub fn levenberg_marquardt(
             }
             if small_step || reduction < F_TOL {
                 stop = "converged (step or cost reduction below tolerance)".to_string();
+                break;
+            }
+            if insignificant >= INSIGNIFICANT_STEPS {
+                stop = format!(
+                    "converged ({INSIGNIFICANT_STEPS} steps in a row gained less than 1 % of the noise variance)"
+                );
                 break;
             }
         } else {
