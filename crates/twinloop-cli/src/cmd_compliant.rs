@@ -273,7 +273,7 @@ pub struct SimulateArgs {
 }
 
 /// The JSON written by `compliant stiffness --json`.
-pub(crate) fn read_plant_json(path: &std::path::Path) -> Result<SagittalCompliance, String> {
+pub(crate) fn read_plant(path: &std::path::Path) -> Result<SagittalCompliance, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let v: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -300,7 +300,7 @@ pub(crate) fn read_plant_json(path: &std::path::Path) -> Result<SagittalComplian
 }
 
 fn simulate(args: SimulateArgs) -> ExitCode {
-    let plant = match crate::cmd_fit::read_plant(&args.model) {
+    let plant = match crate::cmd_fit::read_plant_any(&args.model) {
         Ok(p) => p,
         Err(e) => return fail(e),
     };

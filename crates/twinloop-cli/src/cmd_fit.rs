@@ -194,9 +194,9 @@ pub fn run(cmd: FitCommand) -> ExitCode {
 }
 
 /// MODEL.toml, or the JSON written by `compliant stiffness --json`.
-pub fn read_plant(path: &Path) -> Result<SagittalCompliance, String> {
+pub fn read_plant_any(path: &Path) -> Result<SagittalCompliance, String> {
     if path.extension().is_some_and(|e| e == "json") {
-        crate::cmd_compliant::read_plant_json(path)
+        crate::cmd_compliant::read_plant(path)
     } else {
         fit::read_model_file(path).map_err(|e| e.to_string())
     }
@@ -218,7 +218,7 @@ fn parse_ten(text: &str, what: &str) -> Result<Corrections, String> {
 }
 
 fn compliant(args: CompliantFitArgs) -> ExitCode {
-    let plant = match read_plant(&args.model) {
+    let plant = match read_plant_any(&args.model) {
         Ok(p) => p,
         Err(e) => return fail(e),
     };
