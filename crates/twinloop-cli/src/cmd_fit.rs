@@ -518,10 +518,13 @@ fn html_report(
     );
     if let Some(id) = ident {
         rep.paragraph(format!(
-            "Noise standard deviation estimated from the residuals: {} m (bounds use {} m). \
+            "Noise standard deviation estimated from the residuals: {} m (variance {} m^2, \
+             Cramer-Rao std of that variance {} m^2; the bounds use {} m). \
              Condition of the scaled Fisher information: {}. Least determined direction \
              (relative changes): {}.",
             num(id.noise_std_estimated),
+            num(id.noise_std_estimated.powi(2)),
+            num(id.noise_variance_std),
             num(id.noise_std),
             num(id.condition),
             id.names

@@ -27,6 +27,9 @@ pub struct Identifiability {
     pub noise_std_estimated: f64,
     /// The noise level the bounds use, m.
     pub noise_std: f64,
+    /// Cramer-Rao standard deviation of the noise variance estimate itself,
+    /// sqrt(2 / (2N - n)) sigma^2 (m^2): how well the residuals pin the noise down.
+    pub noise_variance_std: f64,
     /// RMS over the trajectory of d(CoM)/d(parameter), m per unit parameter.
     pub sensitivity_rms: Vec<f64>,
     /// Cramer-Rao standard deviations sqrt(diag F^-1).
@@ -151,6 +154,7 @@ pub fn identifiability(
         names,
         noise_std_estimated,
         noise_std: sigma,
+        noise_variance_std: (2.0 / dof as f64).sqrt() * sigma * sigma,
         std,
         relative_std,
         correlation,
