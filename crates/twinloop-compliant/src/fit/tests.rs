@@ -465,7 +465,11 @@ fn problems_are_checked() {
 #[test]
 #[ignore]
 fn method_comparison_study() {
-    let budget = 6000;
+    // STUDY_BUDGET=60000 for the longer run in the doc
+    let budget = std::env::var("STUDY_BUDGET")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(6000);
     println!(
         "| plant | method | seed | evals to 1e-2 | evals to 1e-3 | evaluations | final max error (8) | final max error (alpha1, beta1, beta2) | MSE after [m^2] |"
     );
