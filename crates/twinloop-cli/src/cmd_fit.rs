@@ -24,7 +24,7 @@ pub enum FitCommand {
     ///
     /// Methods: lm (default; Levenberg-Marquardt with the exact Jacobian from forward
     /// sensitivities: 40-130 evaluations on the seed's 30 s gait), cmaes (CMA-ES,
-    /// derivative-free, thousands of evaluations), power (PoWER, the seed's reinforcement
+    /// derivative-free, 6000-12000 evaluations to 1e-2), power (PoWER, the seed's reinforcement
     /// learning: kept for fidelity, it stalls 0.1-0.2 away on the flat directions).
     ///
     /// DATA.csv columns: t, xr, zr, x, z, phase (0 single, 1 double support), uniform
@@ -84,7 +84,7 @@ pub struct CompliantFitArgs {
     /// Starting values of all ten (alpha1,..,epsilon2,eta1,eta2); default all ones.
     #[arg(long, value_name = "P1,..,P10")]
     pub start: Option<String>,
-    /// Budget of cost evaluations (default: lm 500, cmaes 6000, power 4000).
+    /// Budget of cost evaluations (default: lm 500, cmaes 25000, power 4000).
     #[arg(long)]
     pub max_evaluations: Option<usize>,
     /// Initial step size (CMA-ES sigma, PoWER exploration std).

@@ -307,7 +307,7 @@ impl FitOptions {
         FitOptions {
             max_evaluations: match method {
                 Method::Lm => 500,
-                Method::Cmaes => 6000,
+                Method::Cmaes => 25_000,
                 Method::Power => 4000,
             },
             target_mse: 0.0,
