@@ -33,6 +33,8 @@ pub enum CompliantCommand {
     /// z'' = -g + eta2 (-a2 Kzx/m (x - xr) - b2 Kzz/m (z - zr) - g2 Dzx/m x' - e2 Dzz/m z'),
     /// eta = 1 in single support; RK4 at the reference's sample times.
     ///
+    /// --noise adds white Gaussian noise: synthetic data for `twinloop fit compliant`.
+    ///
     /// Example: twinloop compliant simulate --reference ref.csv --model kc.json --table1 --out sim.csv
     Simulate(SimulateArgs),
     /// COMAN walking the ZMP gait in the full simulator: the "real robot" dataset (seed 002, section 4)
@@ -260,8 +262,9 @@ pub struct SimulateArgs {
     /// equilibrium under the first row's reference.
     #[arg(long, value_name = "FILE.csv")]
     pub reference: PathBuf,
-    /// The JSON written by `compliant stiffness --json` (mass, gravity, sagittal entries).
-    #[arg(long, value_name = "FILE.json")]
+    /// The JSON written by `compliant stiffness --json` (mass, gravity, sagittal entries),
+    /// or a MODEL.toml as `fit compliant` reads it.
+    #[arg(long, value_name = "FILE.json|MODEL.toml")]
     pub model: PathBuf,
     /// The ten corrections alpha1,beta1,gamma1,epsilon1,alpha2,beta2,gamma2,epsilon2,eta1,eta2
     /// (default all ones: eq 11 uncorrected).
@@ -270,12 +273,20 @@ pub struct SimulateArgs {
     /// Use seed 002's Table 1 corrections (eta1 = eta2 = 1).
     #[arg(long)]
     pub table1: bool,
+    /// White Gaussian noise added to x and z after the first row, m (synthetic data for
+    /// `fit compliant`).
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Seed of the noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
     /// Output CSV: t, xr, zr, x, z, phase.
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
 }
 
-fn read_plant(path: &std::path::Path) -> Result<SagittalCompliance, String> {
+/// The JSON written by `compliant stiffness --json`.
+pub(crate) fn read_plant(path: &std::path::Path) -> Result<SagittalCompliance, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let v: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -302,7 +313,7 @@ fn read_plant(path: &std::path::Path) -> Result<SagittalCompliance, String> {
 }
 
 fn simulate(args: SimulateArgs) -> ExitCode {
-    let plant = match read_plant(&args.model) {
+    let plant = match crate::cmd_fit::read_plant_any(&args.model) {
         Ok(p) => p,
         Err(e) => return fail(e),
     };
@@ -365,6 +376,17 @@ fn simulate(args: SimulateArgs) -> ExitCode {
         return fail(e);
     }
     let elapsed = start.elapsed();
+    if !(args.noise.is_finite() && args.noise >= 0.0) {
+        return fail(format!("--noise {}: must be non-negative", args.noise));
+    }
+    if args.noise > 0.0 {
+        // The first row stays exact: the fit starts the model there at rest.
+        let mut rng = twinloop_dynamics::configuration::SplitMix64(args.seed);
+        for i in 1..x.len() {
+            x[i] += args.noise * rng.normal();
+            z[i] += args.noise * rng.normal();
+        }
+    }
     let columns: Vec<String> = ["t", "xr", "zr", "x", "z", "phase"]
         .iter()
         .map(|s| s.to_string())

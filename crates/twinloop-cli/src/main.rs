@@ -7,6 +7,7 @@ mod cmd_compliant;
 mod cmd_compliant_dataset;
 mod cmd_dynamics;
 mod cmd_experiment;
+mod cmd_fit;
 mod cmd_gait;
 mod cmd_ident;
 mod cmd_link;
@@ -154,6 +155,9 @@ enum Command {
     /// The compliant humanoid of seed 002 (COMAN): Cartesian stiffness and damping at the CoM
     #[command(subcommand)]
     Compliant(cmd_compliant::CompliantCommand),
+    /// Fit reduced models to recorded data (seed 002's compact compliant model)
+    #[command(subcommand)]
+    Fit(cmd_fit::FitCommand),
 }
 
 fn main() -> ExitCode {
@@ -175,5 +179,6 @@ fn main() -> ExitCode {
         Command::Serve(args) => cmd_link::serve(args),
         Command::Gait(cmd) => cmd_gait::run(cmd),
         Command::Compliant(cmd) => cmd_compliant::run(cmd),
+        Command::Fit(cmd) => cmd_fit::run(cmd),
     }
 }

@@ -271,24 +271,29 @@ impl CompactModel {
         x.push(s[0]);
         z.push(s[1]);
         for i in 1..n {
-            let h = r.t[i] - r.t[i - 1];
-            let ds = r.double_support[i - 1];
-            let (xa, za) = (r.xr[i - 1], r.zr[i - 1]);
-            let (xb, zb) = (r.xr[i], r.zr[i]);
-            let (xm, zm) = (0.5 * (xa + xb), 0.5 * (za + zb));
-            let k1 = self.derivative(&s, xa, za, ds);
-            let s2 = std::array::from_fn(|k| s[k] + 0.5 * h * k1[k]);
-            let k2 = self.derivative(&s2, xm, zm, ds);
-            let s3 = std::array::from_fn(|k| s[k] + 0.5 * h * k2[k]);
-            let k3 = self.derivative(&s3, xm, zm, ds);
-            let s4 = std::array::from_fn(|k| s[k] + h * k3[k]);
-            let k4 = self.derivative(&s4, xb, zb, ds);
-            for k in 0..4 {
-                s[k] += h / 6.0 * (k1[k] + 2.0 * k2[k] + 2.0 * k3[k] + k4[k]);
-            }
+            s = self.rk4_step(&s, r, i);
             x.push(s[0]);
             z.push(s[1]);
         }
+    }
+
+    /// One classical Runge-Kutta step from sample `i - 1` to sample `i` of the reference
+    /// (reference linearly interpolated, phase of sample `i - 1`).
+    #[inline]
+    pub fn rk4_step(&self, s: &State, r: &SagittalReference, i: usize) -> State {
+        let h = r.t[i] - r.t[i - 1];
+        let ds = r.double_support[i - 1];
+        let (xa, za) = (r.xr[i - 1], r.zr[i - 1]);
+        let (xb, zb) = (r.xr[i], r.zr[i]);
+        let (xm, zm) = (0.5 * (xa + xb), 0.5 * (za + zb));
+        let k1 = self.derivative(s, xa, za, ds);
+        let s2 = std::array::from_fn(|k| s[k] + 0.5 * h * k1[k]);
+        let k2 = self.derivative(&s2, xm, zm, ds);
+        let s3 = std::array::from_fn(|k| s[k] + 0.5 * h * k2[k]);
+        let k3 = self.derivative(&s3, xm, zm, ds);
+        let s4 = std::array::from_fn(|k| s[k] + h * k3[k]);
+        let k4 = self.derivative(&s4, xb, zb, ds);
+        std::array::from_fn(|k| s[k] + h / 6.0 * (k1[k] + 2.0 * k2[k] + 2.0 * k3[k] + k4[k]))
     }
 }
 

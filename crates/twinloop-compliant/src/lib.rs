@@ -6,8 +6,10 @@
 //! | eq 7-8: Cartesian stiffness and damping at the CoM | [`stiffness`] |
 //! | eq 9-11, 14-17: compact CoM model with corrections | [`compact`] |
 //! | section 4: the COMAN walking dataset in the full simulator | [`walking`], [`walking_ik`] |
+//! | section 4: fit of the corrections (LM, CMA-ES, PoWER), identifiability | [`fit`] |
 
 pub mod compact;
+pub mod fit;
 pub mod stiffness;
 pub mod walking;
 pub mod walking_ik;
