@@ -37,7 +37,7 @@ fn serve_on_pty(vr: VirtualRobot) -> Served {
     let c = Client::with_config(
         t,
         ClientConfig {
-            latency: Duration::from_millis(50),
+            latency: Duration::from_millis(200),
             ..ClientConfig::default()
         },
     );

@@ -115,7 +115,7 @@ fn tipover_forward_through_the_bus_matches_the_simulator() {
     let client = Client::with_config(
         t,
         ClientConfig {
-            latency: Duration::from_millis(50),
+            latency: Duration::from_millis(200),
             ..ClientConfig::default()
         },
     );
