@@ -3,44 +3,9 @@
 //! strategy parameters of Hansen, "The CMA Evolution Strategy: A Tutorial" (2016),
 //! positive recombination weights only. Seeded, so a run repeats exactly.
 
-use super::{FitOptions, FitProblem, FitResult, Method, Minimum, Progress};
+use super::{FitOptions, Minimum};
 use nalgebra::{DMatrix, DVector};
 use twinloop_dynamics::configuration::SplitMix64;
-
-/// Minimises the MSE over the free parameters, starting from the mean at their start
-/// values with step size `options.sigma`.
-pub fn cma_es(
-    problem: &FitProblem,
-    options: &FitOptions,
-    on_progress: &mut dyn FnMut(&Progress),
-) -> FitResult {
-    let mut history = Vec::new();
-    let m = minimize(
-        &mut |p| problem.mse(p),
-        &problem.initial(),
-        options,
-        &mut |evaluations, mse, p| {
-            let point = Progress {
-                evaluations,
-                mse,
-                params: problem.full(p),
-            };
-            on_progress(&point);
-            history.push(point);
-        },
-    );
-    FitResult {
-        method: Method::Cmaes,
-        params: crate::Corrections::from_slice(&problem.full(&m.x)),
-        mse_before: f64::NAN,
-        mse_after: m.f,
-        evaluations: m.evaluations,
-        iterations: m.iterations,
-        jacobians: 0,
-        stop: m.stop,
-        history,
-    }
-}
 
 /// CMA-ES on any cost `f` from mean `x0` with step size `options.sigma`;
 /// `on_generation(evaluations, best f, best x)` after every generation.

@@ -378,11 +378,57 @@ pub fn fit(
     }
     let mut result = match method {
         Method::Lm => lm::levenberg_marquardt(problem, options, on_progress),
-        Method::Cmaes => cmaes::cma_es(problem, options, on_progress),
-        Method::Power => power::power(problem, options, on_progress),
+        Method::Cmaes => with_minimizer(problem, method, cmaes::minimize, options, on_progress),
+        Method::Power => with_minimizer(problem, method, power::minimize, options, on_progress),
     };
     result.mse_before = mse_before;
     Ok(result)
+}
+
+/// A derivative-free minimiser: cost, start, options, progress (evaluations, best cost,
+/// best or mean point).
+type Minimizer = fn(
+    &mut dyn FnMut(&[f64]) -> f64,
+    &[f64],
+    &FitOptions,
+    &mut dyn FnMut(usize, f64, &[f64]),
+) -> Minimum;
+
+/// A generic minimiser ([`cmaes::minimize`], [`power::minimize`]) over the free
+/// parameters' MSE, from their start values, with its progress as [`Progress`].
+fn with_minimizer(
+    problem: &FitProblem,
+    method: Method,
+    minimize: Minimizer,
+    options: &FitOptions,
+    on_progress: &mut dyn FnMut(&Progress),
+) -> FitResult {
+    let mut history = Vec::new();
+    let m = minimize(
+        &mut |p| problem.mse(p),
+        &problem.initial(),
+        options,
+        &mut |evaluations, mse, p| {
+            let point = Progress {
+                evaluations,
+                mse,
+                params: problem.full(p),
+            };
+            on_progress(&point);
+            history.push(point);
+        },
+    );
+    FitResult {
+        method,
+        params: crate::Corrections::from_slice(&problem.full(&m.x)),
+        mse_before: f64::NAN,
+        mse_after: m.f,
+        evaluations: m.evaluations,
+        iterations: m.iterations,
+        jacobians: 0,
+        stop: m.stop,
+        history,
+    }
 }
 
 /// MSE of the all-start and the fitted parameters on another dataset (seed 002: "the set

@@ -15,46 +15,11 @@
 //!
 //! PoWER has no learning rate and a fixed exploration, as in Kober's reference code.
 
-use super::{FitOptions, FitProblem, FitResult, Method, Minimum, Progress};
+use super::{FitOptions, Minimum};
 use twinloop_dynamics::configuration::SplitMix64;
 
 /// Rollouts reused by importance sampling (Kober's reference code uses 10).
 pub const BEST: usize = 10;
-
-/// Minimises the MSE over the free parameters by PoWER with exploration
-/// standard deviation `options.sigma`.
-pub fn power(
-    problem: &FitProblem,
-    options: &FitOptions,
-    on_progress: &mut dyn FnMut(&Progress),
-) -> FitResult {
-    let mut history = Vec::new();
-    let m = minimize(
-        &mut |p| problem.mse(p),
-        &problem.initial(),
-        options,
-        &mut |evaluations, mse, theta| {
-            let point = Progress {
-                evaluations,
-                mse,
-                params: problem.full(theta),
-            };
-            on_progress(&point);
-            history.push(point);
-        },
-    );
-    FitResult {
-        method: Method::Power,
-        params: crate::Corrections::from_slice(&problem.full(&m.x)),
-        mse_before: f64::NAN,
-        mse_after: m.f,
-        evaluations: m.evaluations,
-        iterations: m.iterations,
-        jacobians: 0,
-        stop: m.stop,
-        history,
-    }
-}
 
 /// PoWER on any cost `f` (return exp(-f / f(x0))) from `x0`;
 /// `on_iteration(evaluations, best rollout's f, policy mean)` after every rollout.
