@@ -149,7 +149,7 @@ fn stiffness(args: StiffnessArgs) -> ExitCode {
         Ok(r) => r,
         Err(code) => return code,
     };
-    let model = match Model::from_robot(&robot) {
+    let model = match Model::from_description(&robot) {
         Ok(m) => m,
         Err(e) => return fail(format!("{}: {e}", args.urdf.display())),
     };

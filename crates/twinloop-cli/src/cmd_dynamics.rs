@@ -35,13 +35,13 @@ pub struct KinematicsArgs {
 }
 
 pub fn load_model(path: &Path, fixed_base: bool) -> Result<Model, String> {
-    let robot = twinloop_model::load(path).map_err(|e| e.to_string())?;
+    let robot = twinloop_description::load(path).map_err(|e| e.to_string())?;
     let base = if fixed_base {
         BaseKind::Fixed
     } else {
         BaseKind::Floating
     };
-    Model::from_robot_with_base(&robot, base).map_err(|e| format!("{}: {e}", path.display()))
+    Model::from_description_with_base(&robot, base).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {

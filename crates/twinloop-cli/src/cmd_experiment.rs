@@ -71,10 +71,11 @@ pub fn tipover(a: TipoverArgs) -> ExitCode {
 }
 
 fn tipover_impl(a: &TipoverArgs) -> Result<(), String> {
-    let mut robot = twinloop_robots::resolve(&a.robot).map_err(|e| e.to_string())?;
+    let mut robot = twinloop_description::builtin::resolve(&a.robot).map_err(|e| e.to_string())?;
     for m in &a.add_mass {
         let (kg, link, xyz) = parse_mass(m)?;
-        twinloop_robots::add_point_mass(&mut robot, &link, kg, xyz).map_err(|e| e.to_string())?;
+        twinloop_description::builtin::add_point_mass(&mut robot, &link, kg, xyz)
+            .map_err(|e| e.to_string())?;
     }
     let opts = StudyOptions {
         ramp_deg_per_s: a.ramp,

@@ -379,9 +379,10 @@ fn command_line() -> String {
     std::env::args().collect::<Vec<_>>().join(" ")
 }
 
-fn lab17_only(spec: &str) -> Result<twinloop_model::Robot, String> {
-    let robot = twinloop_robots::resolve(spec).map_err(|e| format!("--robot: {e}"))?;
-    if robot.name != twinloop_robots::lab17::NAME {
+fn lab17_only(spec: &str) -> Result<twinloop_description::Description, String> {
+    let robot =
+        twinloop_description::builtin::resolve(spec).map_err(|e| format!("--robot: {e}"))?;
+    if robot.name != twinloop_description::builtin::lab17::NAME {
         return Err(format!(
             "--robot: seed 003's walking sequence is defined around lab17's Table 2 trims; \
              \"{}\" is not lab17 (use builtin:lab17)",

@@ -8,6 +8,7 @@ use clap::{Args, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
+use twinloop_description::Description;
 use twinloop_dynamics::configuration::SplitMix64;
 use twinloop_dynamics::{Data, Model};
 use twinloop_ident::html::{residual_sections, static_sections};
@@ -27,7 +28,6 @@ use twinloop_ident::{
     write_static_poses,
 };
 use twinloop_io::{CsvWriter, Quantity};
-use twinloop_model::Robot;
 use twinloop_report::Report;
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
@@ -43,9 +43,9 @@ fn finish(r: Result<(), String>) -> ExitCode {
 }
 
 /// Load a description and compile it with a floating base.
-fn load(path: &std::path::Path) -> Result<(Robot, Model), String> {
-    let robot = twinloop_model::load(path).map_err(|e| e.to_string())?;
-    let model = Model::from_robot(&robot).map_err(|e| format!("{}: {e}", path.display()))?;
+fn load(path: &std::path::Path) -> Result<(Description, Model), String> {
+    let robot = twinloop_description::load(path).map_err(|e| e.to_string())?;
+    let model = Model::from_description(&robot).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok((robot, model))
 }
 
@@ -520,7 +520,7 @@ fn identify_static_cmd(a: &IdentifyStaticArgs) -> Result<(), String> {
     }
     let adapted = adapted_robot(&robot, &result);
     if let Some(p) = &a.out_urdf {
-        twinloop_model::urdf::write_file(&adapted, p).map_err(|e| e.to_string())?;
+        twinloop_description::urdf::write_file(&adapted, p).map_err(|e| e.to_string())?;
     }
     // Suggestions from the virtual force plate on the prior.
     let mut suggestions = Vec::new();
@@ -553,7 +553,7 @@ fn identify_static_cmd(a: &IdentifyStaticArgs) -> Result<(), String> {
     let mut validation = None;
     if let Some(m) = &a.squat {
         let motion = read_motion(m, &model).map_err(|e| e.to_string())?;
-        let adapted_model = Model::from_robot(&adapted).map_err(|e| e.to_string())?;
+        let adapted_model = Model::from_description(&adapted).map_err(|e| e.to_string())?;
         let prior_res = residual_wrench(&model, &motion, Some(Smoothing::default()))
             .map_err(|e| e.in_file(m).to_string())?;
         let adapted_res = residual_wrench(&adapted_model, &motion, Some(Smoothing::default()))
@@ -700,7 +700,7 @@ fn residual_table(rows: &[(&str, &ResidualSummary)]) -> String {
 
 #[derive(Args, Debug)]
 pub struct IkArgs {
-    /// Robot description with the links the markers are on.
+    /// Description description with the links the markers are on.
     #[arg(long, value_name = "FILE")]
     pub urdf: PathBuf,
     /// Marker set: [[marker]] name, link, position (link frame, m).
@@ -788,7 +788,7 @@ pub enum ValidateCommand {
 
 #[derive(Args, Debug)]
 pub struct ResidualArgs {
-    /// Robot description to validate.
+    /// Description description to validate.
     #[arg(long, value_name = "FILE")]
     pub urdf: PathBuf,
     /// A second description to compare with (e.g. the adapted one).

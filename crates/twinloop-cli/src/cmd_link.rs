@@ -795,7 +795,9 @@ fn plan(a: &PlanArgs) -> ExitCode {
 
 /// The robot and mapping `twinloop serve` was asked for: the mapping always, the
 /// robot's model when there is one (`None`: a mapping-only bus).
-fn serve_robot(a: &ServeArgs) -> Result<(RobotMapping, Option<twinloop_model::Robot>), String> {
+fn serve_robot(
+    a: &ServeArgs,
+) -> Result<(RobotMapping, Option<twinloop_description::Description>), String> {
     let is_mapping = a.robot.ends_with(".toml");
     let mapping = match (&a.map, is_mapping) {
         (Some(m), _) => RobotMapping::load(m).map_err(|e| e.to_string())?,
@@ -834,8 +836,10 @@ fn serve_robot(a: &ServeArgs) -> Result<(RobotMapping, Option<twinloop_model::Ro
         Some(a.robot.clone())
     };
     let robot = match spec {
-        Some(s) if s.starts_with("builtin:") => twinloop_robots::builtin(&s["builtin:".len()..]),
-        Some(s) => match twinloop_model::load(&s) {
+        Some(s) if s.starts_with("builtin:") => {
+            twinloop_description::builtin::builtin(&s["builtin:".len()..])
+        }
+        Some(s) => match twinloop_description::load(&s) {
             Ok(r) => Some(r),
             Err(e) if a.servo_model == "sim" => return Err(format!("{s}: {e}")),
             Err(_) => None,

@@ -5,8 +5,8 @@ use clap::{Args, Subcommand};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use twinloop_model::lint::{LintReport, Severity, lint};
-use twinloop_model::{JointKind, Robot};
+use twinloop_description::lint::{LintReport, Severity, lint};
+use twinloop_description::{Description, JointKind};
 
 #[derive(Subcommand)]
 pub enum ModelCommand {
@@ -110,7 +110,7 @@ struct Info {
     heaviest_links: Vec<LinkMass>,
 }
 
-fn summarise(robot: &Robot, args: &FileArgs, format: common::Format) -> Info {
+fn summarise(robot: &Description, args: &FileArgs, format: common::Format) -> Info {
     let mut by_kind = JointsByKind::default();
     for j in &robot.joints {
         *match j.kind {
@@ -322,7 +322,8 @@ fn lint_command(args: &FileArgs) -> ExitCode {
 }
 
 fn lint_table(report: &LintReport, file: &str) -> String {
-    let subject = |f: &twinloop_model::lint::Finding| format!("{} {}", f.subject.as_str(), f.name);
+    let subject =
+        |f: &twinloop_description::lint::Finding| format!("{} {}", f.subject.as_str(), f.name);
     let w_code = report
         .findings
         .iter()

@@ -5,8 +5,8 @@ use clap::{Args, Subcommand};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use twinloop_model::{JointKind, Robot};
-use twinloop_robots::{builtin, builtin_summaries, servo_table};
+use twinloop_description::builtin::{builtin, builtin_summaries, servo_table};
+use twinloop_description::{Description, JointKind};
 
 #[derive(Subcommand)]
 pub enum RobotCommand {
@@ -81,7 +81,7 @@ struct RobotJson {
     servos: Vec<JointServoJson>,
 }
 
-fn dof(robot: &Robot) -> usize {
+fn dof(robot: &Description) -> usize {
     robot
         .joints
         .iter()
@@ -161,11 +161,11 @@ fn export(args: &ExportArgs) -> ExitCode {
         eprintln!(
             "error: unknown built-in robot \"{}\" (built-in robots: {})",
             args.name,
-            twinloop_robots::BUILTIN_NAMES.join(", ")
+            twinloop_description::builtin::BUILTIN_NAMES.join(", ")
         );
         return ExitCode::from(EXIT_BAD_INPUT);
     };
-    if let Err(e) = twinloop_model::urdf::write_file(&robot, &args.out) {
+    if let Err(e) = twinloop_description::urdf::write_file(&robot, &args.out) {
         eprintln!("error: {e}");
         return ExitCode::from(EXIT_BAD_INPUT);
     }

@@ -74,8 +74,8 @@ pub struct SimBenchArgs {
 }
 
 /// Load a robot named on the command line: `builtin:NAME` or a URDF/MJCF file.
-pub fn load_robot(spec: &str) -> Result<twinloop_model::Robot, String> {
-    twinloop_robots::resolve(spec).map_err(|e| e.to_string())
+pub fn load_robot(spec: &str) -> Result<twinloop_description::Description, String> {
+    twinloop_description::builtin::resolve(spec).map_err(|e| e.to_string())
 }
 
 /// The servo for joint `i` under a choice (`Auto`: the built-in robot's own, or one
@@ -97,7 +97,7 @@ fn servo_for(
 
 /// A simulator of `robot` standing on the ground on its servos.
 pub fn standing_simulator(
-    robot: &twinloop_model::Robot,
+    robot: &twinloop_description::Description,
     dt: f64,
     servo: ServoChoice,
 ) -> Result<Simulator, String> {

@@ -4,7 +4,7 @@
 use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
-use twinloop_model::{ModelError, Robot};
+use twinloop_description::{Description, DescriptionError};
 
 /// The command ran and found nothing wrong.
 pub const EXIT_OK: u8 = 0;
@@ -70,7 +70,7 @@ pub fn sniff_format(text: &str) -> Format {
 
 /// Load a URDF or MJCF file. On failure prints `error: <file>:<line>:<col>: <element>: <message>`
 /// to stderr and returns the exit code to end with.
-pub fn load_robot(path: &Path) -> Result<(Robot, Format), ExitCode> {
+pub fn load_robot(path: &Path) -> Result<(Description, Format), ExitCode> {
     let format = std::fs::read_to_string(path)
         .map(|t| sniff_format(&t))
         .unwrap_or(Format::Unknown);
@@ -78,7 +78,7 @@ pub fn load_robot(path: &Path) -> Result<(Robot, Format), ExitCode> {
     // unreadable input, naming the file.
     let previous_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
-    let loaded = std::panic::catch_unwind(|| twinloop_model::load(path));
+    let loaded = std::panic::catch_unwind(|| twinloop_description::load(path));
     std::panic::set_hook(previous_hook);
     let result = match loaded {
         Ok(r) => r,
@@ -88,7 +88,7 @@ pub fn load_robot(path: &Path) -> Result<(Robot, Format), ExitCode> {
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown cause".to_string());
-            Err(ModelError::new(format!(
+            Err(DescriptionError::new(format!(
                 "the reader failed unexpectedly ({what}); please report this file"
             )))
         }

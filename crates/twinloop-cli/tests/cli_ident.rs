@@ -164,8 +164,8 @@ fn identify_static_matches_reference_and_writes_urdf() {
     assert_eq!(got["suggested_poses"].as_array().unwrap().len(), 2);
     assert!(got["result"]["identifiability"]["rank"].as_u64().unwrap() > 0);
     // The adapted description: same robot but the identified inertials' mass and xyz.
-    let prior = twinloop_model::load(root().join(H1_PRIOR)).unwrap();
-    let adapted = twinloop_model::load(&urdf).unwrap();
+    let prior = twinloop_description::load(root().join(H1_PRIOR)).unwrap();
+    let adapted = twinloop_description::load(&urdf).unwrap();
     let mut restored = adapted.clone();
     for l in links {
         let name = l["name"].as_str().unwrap();

@@ -303,8 +303,8 @@ mod tests {
 
     fn coman() -> Model {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/coman/coman.urdf");
-        let robot = twinloop_model::load(std::path::Path::new(path)).unwrap();
-        Model::from_robot(&robot).unwrap()
+        let robot = twinloop_description::load(std::path::Path::new(path)).unwrap();
+        Model::from_description(&robot).unwrap()
     }
 
     fn set_base(q: &mut [f64], m: &Se3) {

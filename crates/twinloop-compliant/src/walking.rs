@@ -63,8 +63,8 @@
 use crate::walking_ik::{IkTargets, WholeBodyIk};
 use crate::{CompliantError, GaitPlan, JointCompliance, Phase, SupportLeg, ZmpReference, err};
 use nalgebra::{Matrix3, Vector3};
+use twinloop_description::Description;
 use twinloop_dynamics::{Data, Model, center_of_mass, jacobian_center_of_mass};
-use twinloop_model::Robot;
 use twinloop_sim::{Actuator, ContactParams, SeriesElastic, SimConfig, Simulator, TwoLoopServo};
 use twinloop_spatial::Se3;
 
@@ -490,7 +490,7 @@ impl ComanWalker {
     /// Builds the robot, the plan and every joint reference (the IK pass). Errors name a
     /// bad field, a missing COMAN joint or frame, or the time at which a step is out of
     /// the legs' reach.
-    pub fn new(robot: &Robot, config: &WalkingConfig) -> Result<ComanWalker, CompliantError> {
+    pub fn new(robot: &Description, config: &WalkingConfig) -> Result<ComanWalker, CompliantError> {
         config.validate()?;
         let compliance = config.joint_compliance();
         let mass: f64 = robot
@@ -877,7 +877,7 @@ fn targets_of(r: &WalkingSample) -> IkTargets {
 /// position loop stiff and critically damped), every other joint a [`TwoLoopServo`] of
 /// stiffness K_h (the seed's k_j of a stiff joint). Torque limits: the URDF efforts.
 pub fn joint_actuators(
-    robot: &Robot,
+    robot: &Description,
     model: &Model,
     config: &WalkingConfig,
 ) -> Result<(Vec<Actuator>, Vec<usize>), CompliantError> {

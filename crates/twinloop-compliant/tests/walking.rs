@@ -11,9 +11,9 @@ use twinloop_dynamics::{BaseKind, Data, Model, center_of_mass, generalized_gravi
 use twinloop_sim::{Actuator, SimConfig, Simulator};
 use twinloop_spatial::Se3;
 
-fn coman() -> twinloop_model::Robot {
+fn coman() -> twinloop_description::Description {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/coman/coman.urdf");
-    twinloop_model::load(std::path::Path::new(path)).unwrap()
+    twinloop_description::load(std::path::Path::new(path)).unwrap()
 }
 
 fn short(duration: f64) -> WalkingConfig {
@@ -140,7 +140,7 @@ fn other_gaits_walk() {
 fn elastic_joints_deflect_as_k_j_predicts_under_static_load() {
     let robot = coman();
     let config = WalkingConfig::default();
-    let model = Model::from_robot_with_base(&robot, BaseKind::Fixed).unwrap();
+    let model = Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap();
     let sim_config = SimConfig {
         ground: false,
         ..SimConfig::default()
@@ -180,7 +180,7 @@ fn elastic_joints_deflect_as_k_j_predicts_under_static_load() {
 #[test]
 fn whole_body_ik_reaches_feet_com_and_pelvis_targets() {
     let robot = coman();
-    let model = Model::from_robot(&robot).unwrap();
+    let model = Model::from_description(&robot).unwrap();
     let legs = [SupportLeg::coman(true), SupportLeg::coman(false)];
     let mut ik = WholeBodyIk::new(
         &model,

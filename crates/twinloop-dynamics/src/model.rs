@@ -7,7 +7,7 @@
 //! order, so a parent always precedes its children.
 
 use nalgebra::{Matrix3, Vector3};
-use twinloop_model::{JointKind, ModelError, Robot};
+use twinloop_description::{Description, DescriptionError, JointKind};
 use twinloop_spatial::{Inertia, Se3};
 
 /// Marks a body attached directly to the base (or to the world for a fixed base).
@@ -109,7 +109,7 @@ pub struct Model {
 }
 
 /// A description pose (xyz, rpy) as a rigid placement.
-pub fn pose_to_se3(p: &twinloop_model::Pose) -> Se3 {
+pub fn pose_to_se3(p: &twinloop_description::Pose) -> Se3 {
     let r = p.rotation();
     Se3::new(
         Matrix3::new(
@@ -119,7 +119,7 @@ pub fn pose_to_se3(p: &twinloop_model::Pose) -> Se3 {
     )
 }
 
-fn link_inertia(link: &twinloop_model::Link) -> Inertia {
+fn link_inertia(link: &twinloop_description::Link) -> Inertia {
     match &link.inertial {
         None => Inertia::ZERO,
         Some(i) => {
@@ -135,17 +135,20 @@ fn link_inertia(link: &twinloop_model::Link) -> Inertia {
 
 impl Model {
     /// Compile with a floating base (the usual case for a humanoid).
-    pub fn from_robot(robot: &Robot) -> Result<Model, ModelError> {
-        Model::from_robot_with_base(robot, BaseKind::Floating)
+    pub fn from_description(robot: &Description) -> Result<Model, DescriptionError> {
+        Model::from_description_with_base(robot, BaseKind::Floating)
     }
 
     /// Compile a description. A URDF whose root link has a `floating` joint (COMAN's
     /// `world` link) uses that joint as the free flyer and drops the root link.
-    pub fn from_robot_with_base(robot: &Robot, base: BaseKind) -> Result<Model, ModelError> {
+    pub fn from_description_with_base(
+        robot: &Description,
+        base: BaseKind,
+    ) -> Result<Model, DescriptionError> {
         robot.validate()?;
         let root = robot
             .root_link()
-            .ok_or_else(|| ModelError::new("no single root link"))?;
+            .ok_or_else(|| DescriptionError::new("no single root link"))?;
         let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
         let link_ix = |name: &str| robot.link_index(name).expect("validated");
         for (j, joint) in robot.joints.iter().enumerate() {
@@ -159,7 +162,7 @@ impl Model {
             let fj = &robot.joints[root_children[0]];
             if !fj.origin.is_identity() {
                 // q would then not be the base link's pose; refuse rather than mislead.
-                return Err(ModelError::new(
+                return Err(DescriptionError::new(
                     "the floating root joint has a non-identity <origin>: twinloop's base pose q is the base \
                      link's world pose, so move the offset into the robot (or remove it)",
                 )
@@ -227,8 +230,10 @@ impl Model {
                     let axis = Vector3::new(a[0], a[1], a[2]);
                     let n = axis.norm();
                     if n.is_nan() || n <= 1e-12 {
-                        return Err(ModelError::new("a moving joint needs a non-zero axis")
-                            .at_element(here()));
+                        return Err(
+                            DescriptionError::new("a moving joint needs a non-zero axis")
+                                .at_element(here()),
+                        );
                     }
                     let axis = axis / n;
                     let jt = if joint.kind == JointKind::Prismatic {
@@ -295,13 +300,13 @@ impl Model {
                         stack.push((child, body, origin, Some(j)));
                     }
                     JointKind::Floating => {
-                        return Err(ModelError::new(
+                        return Err(DescriptionError::new(
                             "a floating joint is only supported as the root joint (world -> base)",
                         )
                         .at_element(here()));
                     }
                     JointKind::Planar => {
-                        return Err(ModelError::new(
+                        return Err(DescriptionError::new(
                             "planar joints are not supported by the dynamics",
                         )
                         .at_element(here()));
@@ -322,7 +327,7 @@ impl Model {
         }
         for (l, info) in link_info.into_iter().enumerate() {
             let info = info.ok_or_else(|| {
-                ModelError::new("link is not reachable from the root")
+                DescriptionError::new("link is not reachable from the root")
                     .at_element(format!("<link name=\"{}\">", robot.links[l].name))
             })?;
             m.frames.push(FrameInfo {
@@ -335,7 +340,7 @@ impl Model {
         }
         for f in &robot.frames {
             let l = robot.link_index(&f.link).ok_or_else(|| {
-                ModelError::new(format!(
+                DescriptionError::new(format!(
                     "frame \"{}\" is on unknown link \"{}\"",
                     f.name, f.link
                 ))

@@ -3,15 +3,17 @@
 //! links merged into bodies), floating and fixed base.
 
 use nalgebra::{DMatrix, DVector, Vector3};
+use twinloop_description::{
+    Description, DescriptionBuilder, Inertia, Inertial, JointKind, Link, Pose,
+};
 use twinloop_dynamics::configuration::{
     SplitMix64, integrate, random_configuration, random_tangent,
 };
 use twinloop_dynamics::*;
-use twinloop_model::{Inertia, Inertial, JointKind, Link, Pose, Robot, RobotBuilder};
 
-fn random_robot(seed: u64, nlinks: usize) -> Robot {
+fn random_robot(seed: u64, nlinks: usize) -> Description {
     let mut rng = SplitMix64(seed);
-    let mut b = RobotBuilder::new(format!("random{seed}"));
+    let mut b = DescriptionBuilder::new(format!("random{seed}"));
     let mut names = vec!["base".to_string()];
     let inertial = |rng: &mut SplitMix64| {
         let m = rng.uniform(0.2, 3.0);
@@ -100,8 +102,8 @@ fn models() -> Vec<Model> {
     let mut out = Vec::new();
     for seed in 1..6 {
         let r = random_robot(seed, 14);
-        out.push(Model::from_robot(&r).unwrap());
-        out.push(Model::from_robot_with_base(&r, BaseKind::Fixed).unwrap());
+        out.push(Model::from_description(&r).unwrap());
+        out.push(Model::from_description_with_base(&r, BaseKind::Fixed).unwrap());
     }
     out
 }

@@ -1,10 +1,10 @@
 //! Descriptions the dynamics cannot compile give an error naming the joint.
 
+use twinloop_description::{DescriptionBuilder, Inertia, JointKind, Pose};
 use twinloop_dynamics::Model;
-use twinloop_model::{Inertia, JointKind, Pose, RobotBuilder};
 
-fn two_links(kind: JointKind, origin: Pose) -> twinloop_model::Robot {
-    RobotBuilder::new("r")
+fn two_links(kind: JointKind, origin: Pose) -> twinloop_description::Description {
+    DescriptionBuilder::new("r")
         .link("a")
         .mass(1.0, [0.0; 3], Inertia::solid_sphere(1.0, 0.1))
         .done()
@@ -27,7 +27,7 @@ fn two_links(kind: JointKind, origin: Pose) -> twinloop_model::Robot {
 #[test]
 fn planar_and_inner_floating_joints_are_refused_by_name() {
     for kind in [JointKind::Planar, JointKind::Floating] {
-        let e = Model::from_robot(&two_links(kind, Pose::IDENTITY))
+        let e = Model::from_description(&two_links(kind, Pose::IDENTITY))
             .unwrap_err()
             .to_string();
         assert!(e.contains("<joint name=\"odd\">"), "{e}");
@@ -36,7 +36,7 @@ fn planar_and_inner_floating_joints_are_refused_by_name() {
 
 #[test]
 fn floating_root_with_offset_is_refused() {
-    let robot = RobotBuilder::new("r")
+    let robot = DescriptionBuilder::new("r")
         .link("world")
         .done()
         .link("base")
@@ -47,12 +47,12 @@ fn floating_root_with_offset_is_refused() {
         .done()
         .build()
         .unwrap();
-    let e = Model::from_robot(&robot).unwrap_err().to_string();
+    let e = Model::from_description(&robot).unwrap_err().to_string();
     assert!(e.contains("root") && e.contains("origin"), "{e}");
     // Without the offset the floating joint is the free flyer and `world` is dropped.
     let mut ok = robot.clone();
     ok.joints[0].origin = Pose::IDENTITY;
-    let m = Model::from_robot(&ok).unwrap();
+    let m = Model::from_description(&ok).unwrap();
     assert_eq!((m.nq, m.nv, m.base_link.as_str()), (7, 6, "base"));
 }
 
@@ -60,7 +60,7 @@ fn floating_root_with_offset_is_refused() {
 fn bodies_are_numbered_depth_first_in_file_order() {
     // base -> a1 -> a2, base -> b1, a1 -> a3: pre-order a1, a2, a3, b1.
     let m = |n: &str| (n.to_string(), Inertia::solid_sphere(1.0, 0.1));
-    let mut b = RobotBuilder::new("tree")
+    let mut b = DescriptionBuilder::new("tree")
         .link("base")
         .mass(1.0, [0.0; 3], m("base").1)
         .done();
@@ -72,7 +72,7 @@ fn bodies_are_numbered_depth_first_in_file_order() {
             .revolute(format!("j_{name}"), parent, name, [0.0, 0.0, 1.0])
             .done();
     }
-    let model = Model::from_robot(&b.build().unwrap()).unwrap();
+    let model = Model::from_description(&b.build().unwrap()).unwrap();
     assert_eq!(model.joint_names, ["j_a1", "j_a2", "j_a3", "j_b1"]);
     assert_eq!(model.subtree_end, [3, 2, 3, 4]);
     assert!(

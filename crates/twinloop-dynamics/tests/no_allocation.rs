@@ -2,9 +2,9 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use twinloop_description::{DescriptionBuilder, Inertia, JointKind, Pose};
 use twinloop_dynamics::configuration::{SplitMix64, random_configuration, random_tangent};
 use twinloop_dynamics::*;
-use twinloop_model::{Inertia, JointKind, Pose, RobotBuilder};
 
 struct Counting;
 
@@ -30,7 +30,7 @@ static GLOBAL: Counting = Counting;
 #[test]
 fn algorithms_do_not_allocate() {
     // A two-legged tree with every joint type, plus a fixed link.
-    let mut b = RobotBuilder::new("biped")
+    let mut b = DescriptionBuilder::new("biped")
         .link("pelvis")
         .mass(
             3.0,
@@ -89,7 +89,7 @@ fn algorithms_do_not_allocate() {
             .done();
     }
     let robot = b.build().unwrap();
-    let model = Model::from_robot(&robot).unwrap();
+    let model = Model::from_description(&robot).unwrap();
     let mut data = Data::new(&model);
     let mut rng = SplitMix64(1);
     let q = random_configuration(&model, &mut rng);

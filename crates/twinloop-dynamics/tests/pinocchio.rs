@@ -102,8 +102,8 @@ fn check_model(name: &str, file: &str) {
         .join("crates/twinloop-dynamics/tests/data/pinocchio")
         .join(format!("{name}.json"));
     let refd: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    let robot = twinloop_model::load(repo().join(file)).unwrap_or_else(|e| panic!("{e}"));
-    let model = Model::from_robot(&robot).unwrap();
+    let robot = twinloop_description::load(repo().join(file)).unwrap_or_else(|e| panic!("{e}"));
+    let model = Model::from_description(&robot).unwrap();
     assert_eq!(
         model.nv,
         refd["nv"].as_u64().unwrap() as usize,

@@ -13,14 +13,14 @@
 use crate::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
 use nalgebra::Vector3;
 use serde::Serialize;
+use twinloop_description::Description;
+use twinloop_description::builtin::FootGeometry;
 use twinloop_dynamics::{BASE, Data};
-use twinloop_model::Robot;
 use twinloop_reduced::{
     SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, feet_mass,
     frontal_lever, seed_method,
 };
 use twinloop_robot::RobotError;
-use twinloop_robots::FootGeometry;
 use twinloop_sim::statics::{FlatFeet, hip_lean_signs, lean_signs};
 use twinloop_sim::{
     Actuator, ContactParams, DynamixelServo, SimConfig, Simulator, servo_from_limits,
@@ -133,8 +133,8 @@ fn err(e: impl std::fmt::Display) -> String {
 /// Ankle and foot names: the built-in robot's, or found by name in a description
 /// (`*ank*pitch*` and `*ank*roll*` joints with a left/right prefix; the feet are the
 /// roll joints' child links).
-fn ankle_names(robot: &Robot) -> Result<[String; 6], String> {
-    if let Some(f) = twinloop_robots::foot_geometry(&robot.name) {
+fn ankle_names(robot: &Description) -> Result<[String; 6], String> {
+    if let Some(f) = twinloop_description::builtin::foot_geometry(&robot.name) {
         return Ok([
             f.left_ankle_pitch,
             f.right_ankle_pitch,
@@ -182,7 +182,7 @@ fn ankle_names(robot: &Robot) -> Result<[String; 6], String> {
 
 /// The hip roll joints (left, right), found by name: `*hip*roll*` with a left/right
 /// prefix.
-fn hip_roll_names(robot: &Robot) -> Result<[String; 2], String> {
+fn hip_roll_names(robot: &Description) -> Result<[String; 2], String> {
     let find = |left: bool| -> Result<String, String> {
         let hits: Vec<&str> = robot
             .joints
@@ -282,7 +282,7 @@ pub fn servo_for_joint(
     model: &twinloop_dynamics::Model,
     i: usize,
 ) -> DynamixelServo {
-    match twinloop_robots::servo_of_joint(robot_name, &model.joint_names[i]) {
+    match twinloop_description::builtin::servo_of_joint(robot_name, &model.joint_names[i]) {
         Some(spec) => DynamixelServo::with_rating(spec.stall_torque, spec.no_load_speed),
         None => servo_from_limits(
             model.effort_limits[i],
@@ -293,8 +293,8 @@ pub fn servo_for_joint(
 }
 
 /// Run the study on `robot` (a built-in robot gets its own servos and foot data).
-pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, String> {
-    let mass = twinloop_dynamics::Model::from_robot(robot)
+pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport, String> {
+    let mass = twinloop_dynamics::Model::from_description(robot)
         .map_err(err)?
         .total_mass;
     let cfg = SimConfig {
@@ -342,22 +342,23 @@ pub fn run_study(robot: &Robot, opts: &StudyOptions) -> Result<StudyReport, Stri
     let (lh, rh) = (joint(&hip_names[0])?, joint(&hip_names[1])?);
     let sim_feet: Vec<&str> = vec![names[4].as_str(), names[5].as_str()];
     sim.set_feet(&sim_feet).map_err(err)?;
-    let (foot, seed_constants, label) = match twinloop_robots::foot_geometry(&robot.name) {
-        Some(f) if robot.name == twinloop_robots::km20::NAME => (
-            f,
-            SEED_000_CONSTANTS,
-            "seed 000 (F1 3.5 cm, F2 9.5 cm, L0 3.1 cm)",
-        ),
-        Some(f) => {
-            let c = SeedConstants::from_foot(&f);
-            (f, c, "the robot's own feet")
-        }
-        None => {
-            let f = measure_feet(&sim, &names, feet);
-            let c = SeedConstants::from_foot(&f);
-            (f, c, "the robot's own feet (measured)")
-        }
-    };
+    let (foot, seed_constants, label) =
+        match twinloop_description::builtin::foot_geometry(&robot.name) {
+            Some(f) if robot.name == twinloop_description::builtin::km20::NAME => (
+                f,
+                SEED_000_CONSTANTS,
+                "seed 000 (F1 3.5 cm, F2 9.5 cm, L0 3.1 cm)",
+            ),
+            Some(f) => {
+                let c = SeedConstants::from_foot(&f);
+                (f, c, "the robot's own feet")
+            }
+            None => {
+                let f = measure_feet(&sim, &names, feet);
+                let c = SeedConstants::from_foot(&f);
+                (f, c, "the robot's own feet (measured)")
+            }
+        };
     let model = sim.model.clone();
     let points = sim.contact_points().to_vec();
     let place = |s: &mut Simulator, l: &str| {

@@ -76,7 +76,7 @@ fn check(label: &str, report: &StudyReport) {
 
 #[test]
 fn km20_tips_where_the_model_says() {
-    let robot = twinloop_robots::resolve("builtin:km20").unwrap();
+    let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
     check(
         "km20",
         &run_study(&robot, &StudyOptions::default()).unwrap(),
@@ -86,18 +86,18 @@ fn km20_tips_where_the_model_says() {
 #[test]
 fn op3_tips_where_the_model_says() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/op3/mjcf/op3.xml");
-    let robot = twinloop_model::load(path).unwrap();
+    let robot = twinloop_description::load(path).unwrap();
     check("OP3", &run_study(&robot, &StudyOptions::default()).unwrap());
 }
 
 /// Seed 000's battery scenarios (Table III: 0.2 kg on the legs, the hip front, the left
 /// arm, the right arm, the shoulders; row b is km20 itself).
 fn battery(label: &str) {
-    let scenario = twinloop_robots::km20::BATTERY_SCENARIOS
+    let scenario = twinloop_description::builtin::km20::BATTERY_SCENARIOS
         .iter()
         .find(|s| s.label == label)
         .unwrap();
-    let robot = twinloop_robots::km20::with_battery(scenario).unwrap();
+    let robot = twinloop_description::builtin::km20::with_battery(scenario).unwrap();
     let label = format!("km20 + battery {} ({})", scenario.label, scenario.name);
     check(
         &label,

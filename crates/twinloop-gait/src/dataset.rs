@@ -18,9 +18,9 @@
 //!   quantised and disturbed the same way.
 
 use crate::sequence::{GaitError, JointGoals, OFFSET_JOINTS, SequenceOptions, generate};
-use twinloop_model::Robot;
+use twinloop_description::Description;
+use twinloop_description::builtin::servo::LD2015;
 use twinloop_robot::RobotState;
-use twinloop_robots::servo::LD2015;
 use twinloop_sim::sensors::MPU6050_GYRO_LSB_PER_DEG_S;
 use twinloop_sim::{Actuator, SimConfig, Simulator, TwoLoopServo, quantize};
 
@@ -153,7 +153,7 @@ fn trunk_pose(sim: &mut Simulator) -> Result<([f64; 3], f64, f64), GaitError> {
 
 /// Seed 003 section 7: walk `robot` (lab17) through the sequence in the simulator and
 /// record the identification data.
-pub fn record_walk(robot: &Robot, o: &DatasetOptions) -> Result<WalkDataset, GaitError> {
+pub fn record_walk(robot: &Description, o: &DatasetOptions) -> Result<WalkDataset, GaitError> {
     if o.samples == 0 {
         return Err(GaitError("samples must be at least 1".into()));
     }

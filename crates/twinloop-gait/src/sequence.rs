@@ -72,7 +72,7 @@
 //!    the shoulder pitch, never a hip roll, so the ten are Table 2's. The other seven
 //!    lab17 joints hold their trims.
 
-use twinloop_robots::lab17;
+use twinloop_description::builtin::lab17;
 
 /// Errors of the gait layer; each message names the offending field.
 #[derive(Debug, Clone, PartialEq)]

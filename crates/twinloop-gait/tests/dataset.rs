@@ -5,7 +5,7 @@ use twinloop_gait::identify::{WalkIdOptions, identify_walk};
 use twinloop_gait::*;
 
 fn record(seed: u64, skip: usize) -> WalkDataset {
-    let robot = twinloop_robots::resolve("builtin:lab17").unwrap();
+    let robot = twinloop_description::builtin::resolve("builtin:lab17").unwrap();
     let o = DatasetOptions {
         noise_seed: seed,
         skip_samples: skip,

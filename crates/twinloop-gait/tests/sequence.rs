@@ -1,7 +1,7 @@
 //! The walking sequence against the numbers printed in seed 003 section 6.
 
+use twinloop_description::builtin::lab17;
 use twinloop_gait::*;
-use twinloop_robots::lab17;
 
 fn offset(name: &str, o: &[f64; 10]) -> f64 {
     o[OFFSET_JOINTS.iter().position(|j| *j == name).unwrap()]

@@ -5,8 +5,8 @@
 
 use crate::error::IdentError;
 use nalgebra::{Matrix3, Vector2, Vector3};
+use twinloop_description::{Description, Geometry, Pose};
 use twinloop_dynamics::{BASE, Data, Model};
-use twinloop_model::{Geometry, Pose, Robot};
 use twinloop_spatial::Se3;
 
 /// A rigid placement from a URDF pose.
@@ -107,9 +107,9 @@ fn primitive_points(g: &Geometry) -> Option<Vec<Vector3<f64>>> {
 
 /// Bounding points of every primitive collision shape of a link (visual shapes if it
 /// has no primitive collision shape), in the link frame.
-pub fn link_geometry_points(robot: &Robot, link: usize) -> Vec<Vector3<f64>> {
+pub fn link_geometry_points(robot: &Description, link: usize) -> Vec<Vector3<f64>> {
     let l = &robot.links[link];
-    let collect = |shapes: &[twinloop_model::Shape]| {
+    let collect = |shapes: &[twinloop_description::Shape]| {
         let mut out = Vec::new();
         for s in shapes {
             if let Some(pts) = primitive_points(&s.geometry) {
@@ -219,7 +219,7 @@ pub fn polygon_margin(poly: &[Vector2<f64>], p: &Vector2<f64>) -> f64 {
 /// with primitive geometry reaching lowest, one on each side (y > 0 left). `feet`
 /// names them explicitly instead (left, right).
 fn find_feet(
-    robot: &Robot,
+    robot: &Description,
     model: &Model,
     data: &mut Data,
     feet: Option<(&str, &str)>,
@@ -269,7 +269,12 @@ fn find_feet(
 
 /// The sole of a foot link: contact points from the primitive geometry of every link
 /// welded to the foot's body, expressed in the foot frame.
-fn make_foot(robot: &Robot, model: &Model, data: &Data, link: usize) -> Result<Foot, IdentError> {
+fn make_foot(
+    robot: &Description,
+    model: &Model,
+    data: &Data,
+    link: usize,
+) -> Result<Foot, IdentError> {
     let name = robot.links[link].name.clone();
     let body = model.links[link].body;
     if body == BASE {
@@ -350,7 +355,7 @@ impl Anatomy {
     /// Read the anatomy of a humanoid description. `feet` names the foot links
     /// (left, right) when the geometry does not make them obvious.
     pub fn detect(
-        robot: &Robot,
+        robot: &Description,
         model: &Model,
         feet: Option<(&str, &str)>,
     ) -> Result<Anatomy, IdentError> {

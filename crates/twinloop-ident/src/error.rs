@@ -75,8 +75,8 @@ impl From<twinloop_io::IoError> for IdentError {
     }
 }
 
-impl From<twinloop_model::ModelError> for IdentError {
-    fn from(e: twinloop_model::ModelError) -> Self {
+impl From<twinloop_description::DescriptionError> for IdentError {
+    fn from(e: twinloop_description::DescriptionError) -> Self {
         IdentError::new(e.to_string())
     }
 }

@@ -22,9 +22,9 @@ use crate::error::IdentError;
 use crate::ik::{Ik, IkOptions, Task};
 use crate::poses::{PoseCategory, StaticPose};
 use nalgebra::{Vector2, Vector3};
+use twinloop_description::Description;
 use twinloop_dynamics::configuration::SplitMix64;
 use twinloop_dynamics::{Data, Model};
-use twinloop_model::Robot;
 
 /// What the generator is asked for.
 #[derive(Debug, Clone)]
@@ -183,7 +183,7 @@ fn foot_tasks(foot: &crate::anatomy::Foot, y: f64, weight_xy: f64) -> [Task; 3] 
 
 impl<'a> PlateGenerator<'a> {
     pub fn new(
-        robot: &Robot,
+        robot: &Description,
         model: &'a Model,
         seed: u64,
         hold: &[usize],
@@ -693,7 +693,7 @@ pub struct Generated {
 /// (H1's 3 cm wide sole bar cannot carry its CoM on one foot) is skipped and its
 /// share given to the others; if no category works, that is an error.
 pub fn generate_static_poses(
-    robot: &Robot,
+    robot: &Description,
     model: &Model,
     options: &PlateOptions,
     mut progress: impl FnMut(usize),

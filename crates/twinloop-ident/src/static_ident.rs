@@ -46,8 +46,8 @@ use crate::poses::{PoseCategory, StaticPose};
 use crate::qp::Qp;
 use nalgebra::{DMatrix, DVector, SymmetricEigen, Vector3};
 use serde::Serialize;
+use twinloop_description::Description;
 use twinloop_dynamics::{Data, Model, static_com_regressor};
-use twinloop_model::Robot;
 
 /// Settings of the fit.
 #[derive(Debug, Clone)]
@@ -233,7 +233,7 @@ fn param_names(link: &str) -> [String; 4] {
 impl StaticProblem {
     /// Choose the links, check the total mass, and set scales and bounds.
     pub fn new(
-        robot: &Robot,
+        robot: &Description,
         model: &Model,
         total_mass: f64,
         options: &StaticOptions,
@@ -791,7 +791,7 @@ pub fn gcom(model: &Model, data: &mut Data, phi: &[f64], q: &[f64]) -> [f64; 2] 
 /// Identify the masses and CoMs of the chosen links from static poses (seed 004,
 /// section 3.3, eq 8-9), the others kept at the prior.
 pub fn identify_static(
-    robot: &Robot,
+    robot: &Description,
     model: &Model,
     poses: &[StaticPose],
     total_mass: f64,
@@ -828,7 +828,7 @@ pub fn identify_static(
 
 /// Turn a fit into the result: per-link estimates, GCOM distances, identifiability.
 pub fn report(
-    _robot: &Robot,
+    _robot: &Description,
     model: &Model,
     poses: &[StaticPose],
     problem: &StaticProblem,
@@ -939,7 +939,7 @@ pub fn report(
 
 /// The prior description with the identified links' `<inertial>` mass and origin
 /// (xyz) replaced; everything else, the inertia tensors included, untouched.
-pub fn adapted_robot(prior: &Robot, result: &StaticResult) -> Robot {
+pub fn adapted_robot(prior: &Description, result: &StaticResult) -> Description {
     let mut robot = prior.clone();
     for est in &result.links {
         if let Some(link) = robot.link_mut(&est.name)
@@ -969,7 +969,7 @@ pub struct Suggestion {
 /// the robot can stand in, from the virtual force plate on `robot` (the prior: only
 /// the kinematics matter for what a pose excites).
 pub fn candidate_poses(
-    robot: &Robot,
+    robot: &Description,
     model: &Model,
     per_category: usize,
     seed: u64,

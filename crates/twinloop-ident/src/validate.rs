@@ -21,9 +21,9 @@ use crate::ik::{Ik, Task};
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 use std::path::Path;
+use twinloop_description::Description;
 use twinloop_dynamics::{Data, Model, rnea};
 use twinloop_io::{Quantity, StateColumns, Table};
-use twinloop_model::Robot;
 use twinloop_spatial::{Force, Se3, quaternion_xyzw_to_matrix};
 
 /// One force-plate sample: the ground reaction on the robot, world frame.
@@ -401,7 +401,7 @@ impl Default for SquatOptions {
 /// inverse-kinematics solution, and the plate readings as the truth's inverse
 /// dynamics demands them.
 pub fn squat_motion(
-    robot: &Robot,
+    robot: &Description,
     model: &Model,
     options: &SquatOptions,
     mut progress: impl FnMut(usize, usize),

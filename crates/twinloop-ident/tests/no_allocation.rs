@@ -42,12 +42,12 @@ fn count(f: impl FnOnce()) -> usize {
 
 #[test]
 fn hot_loops_do_not_allocate() {
-    let robot = twinloop_model::load(
+    let robot = twinloop_description::load(
         std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
             .join("../../models/unitree_h1/h1.urdf"),
     )
     .unwrap();
-    let model = Model::from_robot(&robot).unwrap();
+    let model = Model::from_description(&robot).unwrap();
     let poses: Vec<_> = generate_static_poses(
         &robot,
         &model,

@@ -4,6 +4,7 @@
 //! cargo run --release -p twinloop-reduced --example seed_checks
 
 use nalgebra::{Rotation3, Vector3};
+use twinloop_description::builtin::{FootGeometry, foot_geometry, km20};
 use twinloop_dynamics::Model;
 use twinloop_reduced::tipover::{
     FeetMass, FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method,
@@ -13,7 +14,6 @@ use twinloop_reduced::tipover::{
 use twinloop_reduced::{
     LegMotion, Lipm, Plane, PointMass, ThreeMassLipm, ThreeMasses, com_relative_to_ankles,
 };
-use twinloop_robots::{FootGeometry, foot_geometry, km20};
 
 fn cm(v: [f64; 3]) -> String {
     format!(
@@ -56,8 +56,12 @@ fn model_lever(model: &Model, q: &[f64]) -> FrontalLever {
 }
 
 /// Standing model: CoM relative to the ankles, three masses, tip angles, both estimators.
-fn robot_report(robot: &twinloop_model::Robot, foot: &FootGeometry, hips: (&str, &str)) {
-    let model = Model::from_robot(robot).unwrap();
+fn robot_report(
+    robot: &twinloop_description::Description,
+    foot: &FootGeometry,
+    hips: (&str, &str),
+) {
+    let model = Model::from_description(robot).unwrap();
     let q = model.neutral_configuration();
     let com = com_relative_to_ankles(&model, &q, &foot.left_ankle_pitch, &foot.right_ankle_pitch)
         .unwrap();
@@ -322,7 +326,7 @@ fn km20_batteries() {
     );
     for s in km20::BATTERY_SCENARIOS {
         let r = km20::with_battery(&s).unwrap();
-        let model = Model::from_robot(&r).unwrap();
+        let model = Model::from_description(&r).unwrap();
         let q = model.neutral_configuration();
         let com = com_relative_to_ankles(&model, &q, "l_ank_pitch", "r_ank_pitch").unwrap();
         let mid =
@@ -360,12 +364,12 @@ fn km20_batteries() {
 fn main() {
     println!("== the seed robots standing (zero configuration) ==");
     robot_report(
-        &twinloop_robots::builtin("km20").unwrap(),
+        &twinloop_description::builtin::builtin("km20").unwrap(),
         &foot_geometry("km20").unwrap(),
         ("l_hip_yaw", "r_hip_yaw"),
     );
     robot_report(
-        &twinloop_robots::builtin("lab17").unwrap(),
+        &twinloop_description::builtin::builtin("lab17").unwrap(),
         &foot_geometry("lab17").unwrap(),
         ("l_hip_roll", "r_hip_roll"),
     );

@@ -13,7 +13,7 @@
 //!
 //! ```
 //! use twinloop_reduced::tipover::{FeetMass, FrontalLever, exact_method, tip_angles};
-//! let foot = twinloop_robots::foot_geometry("km20").unwrap();
+//! let foot = twinloop_description::builtin::foot_geometry("km20").unwrap();
 //! let com = [0.004, -0.002, 0.22];
 //! let lever = FrontalLever { sin: 0.17, cos: 0.0 };
 //! let feet = FeetMass { fraction: 0.11, x: -0.025, z: -0.011 };
@@ -38,4 +38,4 @@ pub use tipover::{
     SeedEstimate, TipAngles, exact_method, feet_mass, frontal_lever, frontal_tip_angles,
     sagittal_tip_angles, seed_method, seed_method_sagittal_angles, tip_angles,
 };
-pub use twinloop_robots::FootGeometry;
+pub use twinloop_description::builtin::FootGeometry;

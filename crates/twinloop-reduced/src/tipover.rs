@@ -14,7 +14,7 @@
 //!
 //! [`tip_angles`] is the forward problem: the static tip angles of a CoM on given feet.
 //!
-//! Geometry (see [`twinloop_robots::FootGeometry`]): leaning forward or backward, the
+//! Geometry (see [`twinloop_description::builtin::FootGeometry`]): leaning forward or backward, the
 //! body turns about the common line of the ankle pitch axes (x = 0, z = 0 here) with
 //! both feet flat, and tips over the sole's front edge at x = +F1 or back edge at
 //! x = -F2.
@@ -39,8 +39,8 @@
 //! parallelogram lean except through S.
 
 use crate::error::{ReducedError, finite, positive};
+use twinloop_description::builtin::FootGeometry;
 use twinloop_dynamics::{BASE, Data, Model, forward_kinematics};
-use twinloop_robots::FootGeometry;
 
 /// Seed 000 eq. 8: the four tip angles in degrees, from raw Dynamixel positions (1024
 /// steps over 300 degrees): `alpha1 = (Center - MaxFwd) 300/1024`, `beta1 = (MaxBwd -

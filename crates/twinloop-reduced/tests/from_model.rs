@@ -9,11 +9,11 @@ fn op3() -> Model {
         env!("CARGO_MANIFEST_DIR"),
         "/../../models/op3/robotis_op3.nomesh.urdf"
     );
-    Model::from_robot(&twinloop_model::load(path).unwrap()).unwrap()
+    Model::from_description(&twinloop_description::load(path).unwrap()).unwrap()
 }
 
 fn km20() -> Model {
-    Model::from_robot(&twinloop_robots::builtin("km20").unwrap()).unwrap()
+    Model::from_description(&twinloop_description::builtin::builtin("km20").unwrap()).unwrap()
 }
 
 /// A deterministic pseudo-random configuration (splitmix64), base rotated and moved.
@@ -87,7 +87,8 @@ fn op3_and_lab17_three_masses_sum_to_the_model() {
             "r_hip_yaw",
         );
     }
-    let lab = Model::from_robot(&twinloop_robots::builtin("lab17").unwrap()).unwrap();
+    let lab =
+        Model::from_description(&twinloop_description::builtin::builtin("lab17").unwrap()).unwrap();
     for seed in 0..3 {
         check(&lab, &configuration(&lab, seed), "l_hip_roll", "r_hip_roll");
     }

@@ -2,13 +2,13 @@
 //! seed 001's three-mass check.
 
 use nalgebra::{Rotation3, Vector3};
+use twinloop_description::builtin::{FootGeometry, foot_geometry};
 use twinloop_dynamics::{Data, Model, center_of_mass, forward_kinematics};
 use twinloop_reduced::tipover::{
     FeetMass, FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method,
     feet_mass, frontal_lever, sagittal_tip_angles, seed_method, seed_method_sagittal_angles,
     tip_angles,
 };
-use twinloop_robots::{FootGeometry, foot_geometry};
 
 fn km20_foot() -> FootGeometry {
     foot_geometry("km20").unwrap()
@@ -194,7 +194,9 @@ fn exact_method_accounts_for_rolled_feet() {
 /// turns rigidly about the ankle axes.
 #[test]
 fn km20_feet_stay_while_the_body_turns() {
-    let model = Model::from_robot(&twinloop_robots::resolve("builtin:km20").unwrap()).unwrap();
+    let model =
+        Model::from_description(&twinloop_description::builtin::resolve("builtin:km20").unwrap())
+            .unwrap();
     let q0 = model.neutral_configuration();
     let feet = feet_mass(&model, &q0, ["l_ank_pitch", "r_ank_pitch"]).unwrap();
     // km20's feet: sole plate, ankle-roll servo and cross bracket, 0.19 kg each.
@@ -232,7 +234,9 @@ fn km20_feet_stay_while_the_body_turns() {
 /// parallelogram (forward kinematics) and measuring its CoM against the left foot.
 #[test]
 fn km20_frontal_lever_moves_the_com_as_the_model_does() {
-    let model = Model::from_robot(&twinloop_robots::resolve("builtin:km20").unwrap()).unwrap();
+    let model =
+        Model::from_description(&twinloop_description::builtin::resolve("builtin:km20").unwrap())
+            .unwrap();
     let q0 = model.neutral_configuration();
     let lever = frontal_lever(
         &model,

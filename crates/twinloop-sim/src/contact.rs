@@ -14,8 +14,8 @@
 //! (regularised Coulomb) friction cannot do.
 
 use nalgebra::Vector3;
+use twinloop_description::{Description, Geometry};
 use twinloop_dynamics::{BASE, Model};
-use twinloop_model::{Geometry, Robot};
 
 /// A contact point fixed on a body: a corner (radius 0) or the centre of a sphere.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,7 +78,7 @@ pub struct ContactState {
 /// centre of a sphere, 8 points on each rim of a cylinder, the two end spheres of a
 /// capsule. Meshes give none (their files are not read); list such links in the
 /// returned names so the caller can say so.
-pub fn contact_points(robot: &Robot, model: &Model) -> (Vec<ContactPoint>, Vec<String>) {
+pub fn contact_points(robot: &Description, model: &Model) -> (Vec<ContactPoint>, Vec<String>) {
     let mut out = Vec::new();
     let mut mesh_only = Vec::new();
     for (li, link) in robot.links.iter().enumerate() {

@@ -3,8 +3,8 @@
 
 use crate::simulator::Simulator;
 use nalgebra::Vector3;
+use twinloop_description::Description;
 use twinloop_dynamics::{BASE, Data, Model, compute_joint_jacobians};
-use twinloop_model::Robot;
 use twinloop_robot::{FootSensor, Imu, RobotState};
 
 /// MPU-6050 gyro scale at +-250 deg/s: 131 LSB per deg/s.
@@ -67,7 +67,7 @@ fn imu_world_velocity(
 }
 
 impl SensorState {
-    pub fn new(model: &Model, robot: &Robot) -> Self {
+    pub fn new(model: &Model, robot: &Description) -> Self {
         let imu_link = model
             .links
             .iter()
@@ -81,7 +81,7 @@ impl SensorState {
             let has_box = l
                 .collisions
                 .iter()
-                .any(|c| matches!(c.geometry, twinloop_model::Geometry::Box { .. }));
+                .any(|c| matches!(c.geometry, twinloop_description::Geometry::Box { .. }));
             if has_box
                 && (n.contains("foot")
                     || n.contains("sole")

@@ -5,9 +5,9 @@ use crate::contact::{ContactParams, ContactPoint, ContactState, contact_points};
 use crate::ltdl;
 use nalgebra::{DMatrix, Vector3};
 use std::fmt;
+use twinloop_description::{Description, DescriptionError};
 use twinloop_dynamics::configuration::integrate;
 use twinloop_dynamics::{BASE, Data, Model, compute_joint_jacobians, crba, nonlinear_effects};
-use twinloop_model::{ModelError, Robot};
 use twinloop_spatial::Se3;
 
 /// Simulation settings. `Default` gives a 1 ms step, gravity 9.81, a ground plane,
@@ -45,7 +45,7 @@ impl Default for SimConfig {
 #[derive(Debug, Clone, PartialEq)]
 pub enum SimError {
     /// The description cannot be compiled.
-    Model(ModelError),
+    Model(DescriptionError),
     /// The state became non-finite or the step matrix lost positive definiteness.
     Diverged { time: f64, message: String },
     /// A name or size given by the caller does not fit the robot.
@@ -66,8 +66,8 @@ impl fmt::Display for SimError {
 
 impl std::error::Error for SimError {}
 
-impl From<ModelError> for SimError {
-    fn from(e: ModelError) -> Self {
+impl From<DescriptionError> for SimError {
+    fn from(e: DescriptionError) -> Self {
         SimError::Model(e)
     }
 }
@@ -126,14 +126,14 @@ pub struct Simulator {
 impl Simulator {
     /// A simulator of `robot` with a floating base, every joint passive, standing at the
     /// neutral configuration (call [`Simulator::place_on_ground`] to put it on the floor).
-    pub fn new(robot: &Robot, config: SimConfig) -> Result<Simulator, SimError> {
-        let model = Model::from_robot(robot)?;
+    pub fn new(robot: &Description, config: SimConfig) -> Result<Simulator, SimError> {
+        let model = Model::from_description(robot)?;
         Simulator::from_model(robot, model, config)
     }
 
     /// As [`Simulator::new`] with a model compiled by the caller (e.g. a fixed base).
     pub fn from_model(
-        robot: &Robot,
+        robot: &Description,
         mut model: Model,
         config: SimConfig,
     ) -> Result<Simulator, SimError> {

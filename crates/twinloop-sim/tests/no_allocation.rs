@@ -29,7 +29,7 @@ static GLOBAL: Counting = Counting;
 #[test]
 fn stepping_and_reading_do_not_allocate() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/op3/mjcf/op3.xml");
-    let robot = twinloop_model::load(path).unwrap();
+    let robot = twinloop_description::load(path).unwrap();
     let mut sim = Simulator::new(&robot, SimConfig::default()).unwrap();
     sim.set_all_actuators(Actuator::Dynamixel(DynamixelServo::rx28()));
     let n = sim.model.nbodies;

@@ -2,8 +2,8 @@
 
 use nalgebra::{DVector, Vector3};
 use std::path::PathBuf;
+use twinloop_description::{DescriptionBuilder, Geometry, Inertia, Pose};
 use twinloop_dynamics::{BaseKind, Data, Model, aba};
-use twinloop_model::{Geometry, Inertia, Pose, RobotBuilder};
 use twinloop_robot::{Robot, RobotState};
 use twinloop_sim::*;
 
@@ -12,10 +12,10 @@ fn repo() -> PathBuf {
 }
 
 /// A 3-link pendulum chain hanging from a fixed base, joints about skew axes.
-fn pendulum() -> twinloop_model::Robot {
+fn pendulum() -> twinloop_description::Description {
     // The root has mass: a massless floating root would make M singular (its motion
     // about the first joint's axis could be undone by that joint, moving nothing).
-    let mut b = RobotBuilder::new("chain")
+    let mut b = DescriptionBuilder::new("chain")
         .link("root")
         .mass(0.5, [0.0; 3], Inertia::solid_sphere(0.5, 0.05))
         .done();
@@ -41,7 +41,7 @@ fn pendulum() -> twinloop_model::Robot {
 #[test]
 fn passive_pendulum_keeps_its_energy() {
     let robot = pendulum();
-    let model = Model::from_robot_with_base(&robot, BaseKind::Fixed).unwrap();
+    let model = Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap();
     let sim = Simulator::from_model(
         &robot,
         model,
@@ -55,7 +55,7 @@ fn passive_pendulum_keeps_its_energy() {
     let scale = sim.model.total_mass * 9.81 * 0.9;
     let drift = |dt: f64| {
         let robot = pendulum();
-        let model = Model::from_robot_with_base(&robot, BaseKind::Fixed).unwrap();
+        let model = Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap();
         let cfg = SimConfig {
             ground: false,
             dt,
@@ -86,7 +86,7 @@ fn passive_pendulum_keeps_its_energy() {
 /// v' = v + dt * ABA(q, v, tau).
 fn assert_free_step_is_aba(armature: &[f64]) {
     let robot = pendulum();
-    let mut model = Model::from_robot(&robot).unwrap();
+    let mut model = Model::from_description(&robot).unwrap();
     model.armature = armature.to_vec();
     let mut sim = Simulator::from_model(
         &robot,
@@ -126,8 +126,8 @@ fn a_free_step_with_rotor_inertia_is_aba() {
     assert_free_step_is_aba(&[0.02, 0.05, 0.01]);
 }
 
-fn brick() -> twinloop_model::Robot {
-    RobotBuilder::new("brick")
+fn brick() -> twinloop_description::Description {
+    DescriptionBuilder::new("brick")
         .link("brick")
         .mass(2.0, [0.0; 3], Inertia::solid_box(2.0, [0.2, 0.1, 0.05]))
         .collision(
@@ -198,7 +198,7 @@ fn a_brick_slides_beyond_the_friction_cone() {
 #[test]
 fn two_loop_servo_settles_in_about_200_ms_without_overshoot() {
     // One joint, link inertia 2e-3 kg m^2 about the axis, no gravity.
-    let robot = RobotBuilder::new("arm")
+    let robot = DescriptionBuilder::new("arm")
         .link("base")
         .done()
         .link("arm")
@@ -208,7 +208,7 @@ fn two_loop_servo_settles_in_about_200_ms_without_overshoot() {
         .done()
         .build()
         .unwrap();
-    let model = Model::from_robot_with_base(&robot, BaseKind::Fixed).unwrap();
+    let model = Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap();
     let mut sim = Simulator::from_model(
         &robot,
         model,
@@ -244,7 +244,7 @@ fn two_loop_servo_settles_in_about_200_ms_without_overshoot() {
 
 #[test]
 fn op3_stands_still_on_its_servos() {
-    let robot = twinloop_model::load(repo().join("models/op3/mjcf/op3.xml")).unwrap();
+    let robot = twinloop_description::load(repo().join("models/op3/mjcf/op3.xml")).unwrap();
     let mut sim = Simulator::new(&robot, SimConfig::default()).unwrap();
     // OP3's XM430-W350: stall 4.1 N m, 46 rpm at 12 V (ROBOTIS e-manual).
     // Its position loop: kp 21.1 N m/rad (the Menagerie model), no dead band (X series PID).
@@ -295,7 +295,7 @@ fn op3_stands_still_on_its_servos() {
 #[test]
 fn link_angular_velocity_is_what_an_exact_gyro_on_that_link_reads() {
     let robot = pendulum();
-    let model = Model::from_robot_with_base(&robot, BaseKind::Floating).unwrap();
+    let model = Model::from_description_with_base(&robot, BaseKind::Floating).unwrap();
     let mut sim = Simulator::from_model(
         &robot,
         model,

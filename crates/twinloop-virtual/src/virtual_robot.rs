@@ -55,7 +55,7 @@ impl VirtualRobot {
     /// ([`twinloop_experiments::servo_for_joint`]); the servos of `mapping` are the
     /// bus's, tied to joints by name.
     pub fn new(
-        robot: &twinloop_model::Robot,
+        robot: &twinloop_description::Description,
         mapping: &RobotMapping,
         options: &VirtualRobotOptions,
     ) -> Result<VirtualRobot, String> {

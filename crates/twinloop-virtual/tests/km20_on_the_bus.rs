@@ -44,9 +44,9 @@ fn serve_on_pty(vr: VirtualRobot) -> Served {
     (c, handle, stop, server)
 }
 
-fn km20() -> (twinloop_model::Robot, RobotMapping) {
+fn km20() -> (twinloop_description::Description, RobotMapping) {
     (
-        twinloop_robots::resolve("builtin:km20").unwrap(),
+        twinloop_description::builtin::resolve("builtin:km20").unwrap(),
         RobotMapping::builtin("km20").unwrap(),
     )
 }
@@ -56,7 +56,7 @@ fn km20_mapping_names_the_robots_joints_and_servos() {
     let (robot, mapping) = km20();
     assert_eq!(mapping.joints.len(), robot.joints.len());
     for j in &mapping.joints {
-        let spec = twinloop_robots::servo_of_joint("km20", &j.name)
+        let spec = twinloop_description::builtin::servo_of_joint("km20", &j.name)
             .unwrap_or_else(|| panic!("{} is not a km20 joint", j.name));
         assert_eq!(spec.name, j.model.to_string(), "{}", j.name);
     }
@@ -165,7 +165,7 @@ fn knee_goals_over_a_pty_move_the_simulated_knees_and_km20_stands() {
     sim.snapshot(&mut after);
     let ratio = load.to_si(load.decode(&lb));
     let torque = after.state.efforts.as_ref().unwrap()[knee];
-    let stall = twinloop_robots::RX64.stall_torque;
+    let stall = twinloop_description::builtin::RX64.stall_torque;
     assert!(
         torque.abs() > 0.05 * stall,
         "a bent knee carries the robot: {torque} N m"

@@ -28,7 +28,7 @@ static GLOBAL: Counting = Counting;
 
 #[test]
 fn simulator_steps_and_bus_replies_allocate_nothing() {
-    let robot = twinloop_robots::resolve("builtin:km20").unwrap();
+    let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
     let mapping = RobotMapping::builtin("km20").unwrap();
     let mut vr = VirtualRobot::new(&robot, &mapping, &VirtualRobotOptions::default()).unwrap();
     let mut bus = vr.bus();

@@ -7,7 +7,7 @@ use twinloop_link::{Instruction, PacketWriter, Protocol, RobotMapping, VirtualBu
 use twinloop_virtual::{SimServoBackend, Snapshot, VirtualRobot, VirtualRobotOptions};
 
 fn km20() -> (VirtualRobot, VirtualBus<SimServoBackend>, RobotMapping) {
-    let robot = twinloop_robots::resolve("builtin:km20").unwrap();
+    let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
     let mapping = RobotMapping::builtin("km20").unwrap();
     let vr = VirtualRobot::new(&robot, &mapping, &VirtualRobotOptions::default()).unwrap();
     let bus = vr.bus();
@@ -123,7 +123,7 @@ fn torque_off_leaves_the_robot_limp_and_it_falls() {
 
 #[test]
 fn a_mapping_naming_other_joints_is_refused_with_the_joint_and_line() {
-    let robot = twinloop_robots::resolve("builtin:km20").unwrap();
+    let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
     let op3 = RobotMapping::builtin("op3").unwrap();
     let e = match VirtualRobot::new(&robot, &op3, &VirtualRobotOptions::default()) {
         Err(e) => e,

@@ -77,7 +77,7 @@ fn config(sim: &Simulator, index: impl Fn(&str) -> usize) -> TipoverConfig {
 
 #[test]
 fn tipover_forward_through_the_bus_matches_the_simulator() {
-    let robot = twinloop_robots::resolve("builtin:km20").unwrap();
+    let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
     let mapping = RobotMapping::builtin("km20").unwrap();
     let options = VirtualRobotOptions::default();
 

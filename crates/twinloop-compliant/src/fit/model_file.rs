@@ -165,9 +165,9 @@ fn from_urdf(
     urdf: &Path,
     number: &dyn Fn(&str) -> Result<Option<f64>, CompliantError>,
 ) -> Result<SagittalCompliance, CompliantError> {
-    let robot = twinloop_model::load(urdf)
+    let robot = twinloop_description::load(urdf)
         .map_err(|e| CompliantError(format!("urdf {}: {e}", urdf.display())))?;
-    let model = Model::from_robot(&robot)
+    let model = Model::from_description(&robot)
         .map_err(|e| CompliantError(format!("urdf {}: {e}", urdf.display())))?;
     let left = match table.get("support") {
         None => true,
@@ -285,8 +285,8 @@ mod tests {
         let text = "urdf = \"coman.urdf\"\nsupport = \"left\"\nknee_bend = 0.5\nDxx = 20.0\n";
         let p = parse_model_file(text, &models_dir()).unwrap();
         // Independent: the same numbers straight from stiffness.rs (eq 7-8).
-        let robot = twinloop_model::load(models_dir().join("coman.urdf")).unwrap();
-        let model = Model::from_robot(&robot).unwrap();
+        let robot = twinloop_description::load(models_dir().join("coman.urdf")).unwrap();
+        let model = Model::from_description(&robot).unwrap();
         let q = coman_crouch(&model, 0.5).unwrap();
         let mut data = Data::new(&model);
         let cc = cartesian_compliance(

@@ -4,16 +4,16 @@
 //! errors for a total mass below the fixed links, too few poses, unknown links.
 
 use std::path::PathBuf;
+use twinloop_description::Description;
 use twinloop_dynamics::Model;
 use twinloop_ident::plate::{PlateOptions, generate_static_poses};
 use twinloop_ident::static_ident::{
     StaticProblem, StaticWorkspace, assemble, candidate_poses, solve, suggest_poses,
 };
 use twinloop_ident::{StaticOptions, StaticPose, identify_static};
-use twinloop_model::Robot;
 
-fn load(rel: &str) -> Robot {
-    twinloop_model::load(
+fn load(rel: &str) -> Description {
+    twinloop_description::load(
         PathBuf::from(env!("CARGO_MANIFEST_DIR"))
             .join("../../models")
             .join(rel),
@@ -21,8 +21,8 @@ fn load(rel: &str) -> Robot {
     .unwrap()
 }
 
-fn poses_of(truth: &Robot, count: usize, seed: u64, hold: Vec<usize>) -> Vec<StaticPose> {
-    let tm = Model::from_robot(truth).unwrap();
+fn poses_of(truth: &Description, count: usize, seed: u64, hold: Vec<usize>) -> Vec<StaticPose> {
+    let tm = Model::from_description(truth).unwrap();
     let options = PlateOptions {
         count,
         seed,
@@ -51,7 +51,7 @@ fn noise_free_poses_recover_excited_parameters() {
         i.origin.xyz[1] -= 0.005 * k as f64;
         i.origin.xyz[2] += 0.02;
     }
-    let pm = Model::from_robot(&prior).unwrap();
+    let pm = Model::from_description(&prior).unwrap();
     let poses = poses_of(&truth, 60, 5, Vec::new());
     let options = StaticOptions {
         links: Some(changed.iter().map(|s| s.to_string()).collect()),
@@ -108,7 +108,7 @@ fn left_arm(model: &Model) -> Vec<usize> {
 #[test]
 fn an_arm_that_never_moves_is_reported() {
     let truth = load("unitree_h1/h1.urdf");
-    let tm = Model::from_robot(&truth).unwrap();
+    let tm = Model::from_description(&truth).unwrap();
     let held = left_arm(&tm);
     let left_links = [
         "left_shoulder_pitch_link",
@@ -182,7 +182,7 @@ fn an_arm_that_never_moves_is_reported() {
 #[test]
 fn bad_inputs_name_the_field() {
     let prior = load("unitree_h1/variants/h1_2025-06_a3b70ca.urdf");
-    let pm = Model::from_robot(&prior).unwrap();
+    let pm = Model::from_description(&prior).unwrap();
     let poses = poses_of(&prior, 12, 1, Vec::new());
     let err = |total: f64, options: StaticOptions, poses: &[StaticPose]| {
         identify_static(&prior, &pm, poses, total, &options)
@@ -242,7 +242,7 @@ fn bad_inputs_name_the_field() {
 #[test]
 fn welded_links_are_reported_and_keep_their_split() {
     let prior = load("coman/coman.urdf");
-    let pm = Model::from_robot(&prior).unwrap();
+    let pm = Model::from_description(&prior).unwrap();
     let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/coman10_poses.csv");
     let poses = twinloop_ident::read_static_poses(&data, &pm).unwrap();
     let r = identify_static(&prior, &pm, &poses, 42.05386, &StaticOptions::default()).unwrap();

@@ -12,12 +12,12 @@ use twinloop_ident::markers::{
 };
 use twinloop_ident::validate::{Motion, Smoothing, SquatOptions, residual_wrench, squat_motion};
 
-fn h1() -> (twinloop_model::Robot, Model) {
-    let robot = twinloop_model::load(
+fn h1() -> (twinloop_description::Description, Model) {
+    let robot = twinloop_description::load(
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/unitree_h1/h1.urdf"),
     )
     .unwrap();
-    let model = Model::from_robot(&robot).unwrap();
+    let model = Model::from_description(&robot).unwrap();
     (robot, model)
 }
 
@@ -69,7 +69,7 @@ fn kabsch_recovers_a_rotation() {
     let _ = Matrix3::<f64>::identity();
 }
 
-fn short_squat(robot: &twinloop_model::Robot, model: &Model) -> Motion {
+fn short_squat(robot: &twinloop_description::Description, model: &Model) -> Motion {
     squat_motion(
         robot,
         model,

@@ -14,8 +14,8 @@ fn root() -> PathBuf {
 }
 
 fn check(urdf: &str, poses: &str, reference: &str, mass_tol: f64, com_tol: f64) {
-    let robot = twinloop_model::load(root().join(urdf)).unwrap();
-    let model = Model::from_robot(&robot).unwrap();
+    let robot = twinloop_description::load(root().join(urdf)).unwrap();
+    let model = Model::from_description(&robot).unwrap();
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     let poses = read_static_poses(&data.join(poses), &model).unwrap();
     let refd: Value =

@@ -10,8 +10,8 @@ fn repo() -> PathBuf {
 }
 
 fn h1() -> Model {
-    let robot = twinloop_model::load(repo().join("models/unitree_h1/h1.urdf")).unwrap();
-    Model::from_robot(&robot).unwrap()
+    let robot = twinloop_description::load(repo().join("models/unitree_h1/h1.urdf")).unwrap();
+    Model::from_description(&robot).unwrap()
 }
 
 fn tmp(name: &str) -> PathBuf {

@@ -8,12 +8,12 @@
 //! Fz 103 -> 2.7 N). COMAN: 10 kg hidden over trunk, pelvis and thighs.
 
 use std::path::PathBuf;
+use twinloop_description::Description;
 use twinloop_dynamics::{Data, Model};
 use twinloop_ident::plate::{PlateOptions, generate_static_poses};
 use twinloop_ident::static_ident::{Stats, gcom};
 use twinloop_ident::validate::{Smoothing, SquatOptions, residual_wrench, squat_motion};
 use twinloop_ident::{StaticOptions, adapted_robot, identify_static};
-use twinloop_model::Robot;
 
 fn model_path(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -34,9 +34,9 @@ struct Outcome {
 }
 
 /// Generate, identify, validate; print the numbers the issue asks for.
-fn recover(name: &str, truth: &Robot, prior: &Robot, seed: u64) -> Outcome {
-    let tm = Model::from_robot(truth).unwrap();
-    let pm = Model::from_robot(prior).unwrap();
+fn recover(name: &str, truth: &Description, prior: &Description, seed: u64) -> Outcome {
+    let tm = Model::from_description(truth).unwrap();
+    let pm = Model::from_description(prior).unwrap();
     let options = PlateOptions {
         count: 172,
         cop_noise: 1e-3,
@@ -119,7 +119,7 @@ fn recover(name: &str, truth: &Robot, prior: &Robot, seed: u64) -> Outcome {
         |_, _| {},
     )
     .unwrap();
-    let adapted = Model::from_robot(&adapted_robot(prior, &result)).unwrap();
+    let adapted = Model::from_description(&adapted_robot(prior, &result)).unwrap();
     let smooth = Some(Smoothing::default());
     let r_truth = residual_wrench(&tm, &squat, smooth).unwrap();
     let r_prior = residual_wrench(&pm, &squat, smooth).unwrap();
@@ -155,9 +155,10 @@ fn recover(name: &str, truth: &Robot, prior: &Robot, seed: u64) -> Outcome {
 
 #[test]
 fn h1_prior_to_truth() {
-    let truth = twinloop_model::load(model_path("unitree_h1/h1.urdf")).unwrap();
+    let truth = twinloop_description::load(model_path("unitree_h1/h1.urdf")).unwrap();
     let prior =
-        twinloop_model::load(model_path("unitree_h1/variants/h1_2025-06_a3b70ca.urdf")).unwrap();
+        twinloop_description::load(model_path("unitree_h1/variants/h1_2025-06_a3b70ca.urdf"))
+            .unwrap();
     assert!((prior.total_mass() - 51.601).abs() < 1e-3);
     assert!((truth.total_mass() - 59.338).abs() < 1e-3);
     let o = recover("Unitree H1", &truth, &prior, 7);
@@ -183,7 +184,7 @@ fn h1_prior_to_truth() {
 
 /// COMAN with 10 kg the prior does not know of: 4 kg on the trunk, 2 kg on the pelvis,
 /// 2 kg on each thigh (upper and lower thigh links), each with its CoM moved.
-fn coman_with_hidden_mass(prior: &Robot) -> Robot {
+fn coman_with_hidden_mass(prior: &Description) -> Description {
     let mut truth = prior.clone();
     let extra: [(&str, f64, [f64; 3]); 6] = [
         ("DWYTorso", 4.0, [0.02, 0.0, 0.05]),
@@ -207,7 +208,7 @@ fn coman_with_hidden_mass(prior: &Robot) -> Robot {
 
 #[test]
 fn coman_hidden_ten_kilograms() {
-    let prior = twinloop_model::load(model_path("coman/coman.urdf")).unwrap();
+    let prior = twinloop_description::load(model_path("coman/coman.urdf")).unwrap();
     let truth = coman_with_hidden_mass(&prior);
     assert!((truth.total_mass() - prior.total_mass() - 10.0).abs() < 1e-9);
     let o = recover("COMAN + 10 kg", &truth, &prior, 11);

@@ -1,0 +1,516 @@
+//! The robot description: what a URDF says, kept per link and per joint.
+//!
+//! This is a description, not a dynamics model: links joined by fixed joints stay
+//! distinct here so that identified masses and CoMs can be written back per link.
+//! `twinloop-dynamics` compiles a description into its own `Model`.
+
+/// A rigid placement given as URDF gives it: translation, then roll-pitch-yaw
+/// (fixed-axis X, then Y, then Z; R = Rz(yaw) Ry(pitch) Rx(roll)).
+///
+/// Kept as rpy rather than a matrix so that a URDF written back carries the
+/// numbers the user wrote.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Pose {
+    pub xyz: [f64; 3],
+    pub rpy: [f64; 3],
+}
+
+impl Pose {
+    pub const IDENTITY: Pose = Pose {
+        xyz: [0.0; 3],
+        rpy: [0.0; 3],
+    };
+
+    pub fn new(xyz: [f64; 3], rpy: [f64; 3]) -> Self {
+        Pose { xyz, rpy }
+    }
+
+    pub fn from_xyz(xyz: [f64; 3]) -> Self {
+        Pose { xyz, rpy: [0.0; 3] }
+    }
+
+    pub fn is_identity(&self) -> bool {
+        self.xyz == [0.0; 3] && self.rpy == [0.0; 3]
+    }
+
+    /// Rotation matrix (row-major) R = Rz(yaw) Ry(pitch) Rx(roll), as URDF defines it.
+    pub fn rotation(&self) -> [[f64; 3]; 3] {
+        rpy_to_matrix(self.rpy)
+    }
+
+    /// Pose from a translation and a unit quaternion (w, x, y, z); the quaternion
+    /// is normalised first (MJCF files carry non-unit quaternions).
+    pub fn from_quaternion(xyz: [f64; 3], wxyz: [f64; 4]) -> Self {
+        Pose {
+            xyz,
+            rpy: matrix_to_rpy(quaternion_to_matrix(wxyz)),
+        }
+    }
+
+    /// Pose from a translation and a rotation matrix (row-major).
+    pub fn from_matrix(xyz: [f64; 3], r: [[f64; 3]; 3]) -> Self {
+        Pose {
+            xyz,
+            rpy: matrix_to_rpy(r),
+        }
+    }
+}
+
+/// R = Rz(y) Ry(p) Rx(r), row-major.
+pub fn rpy_to_matrix(rpy: [f64; 3]) -> [[f64; 3]; 3] {
+    let (sr, cr) = rpy[0].sin_cos();
+    let (sp, cp) = rpy[1].sin_cos();
+    let (sy, cy) = rpy[2].sin_cos();
+    [
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ]
+}
+
+/// Inverse of [`rpy_to_matrix`]; at the pitch singularity yaw is set to zero.
+pub fn matrix_to_rpy(r: [[f64; 3]; 3]) -> [f64; 3] {
+    let sp = (-r[2][0]).clamp(-1.0, 1.0);
+    let pitch = sp.asin();
+    if sp.abs() > 1.0 - 1e-12 {
+        // Gimbal lock: only roll - yaw (or roll + yaw) is defined.
+        let roll = if sp > 0.0 {
+            r[0][1].atan2(r[1][1])
+        } else {
+            (-r[0][1]).atan2(r[1][1])
+        };
+        [roll, pitch, 0.0]
+    } else {
+        [r[2][1].atan2(r[2][2]), pitch, r[1][0].atan2(r[0][0])]
+    }
+}
+
+/// Rotation matrix of a quaternion (w, x, y, z), normalised first.
+pub fn quaternion_to_matrix(q: [f64; 4]) -> [[f64; 3]; 3] {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+/// Symmetric 3x3 inertia tensor about the link's CoM, in the inertial frame
+/// (URDF `<inertia>` fields).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Inertia {
+    pub ixx: f64,
+    pub ixy: f64,
+    pub ixz: f64,
+    pub iyy: f64,
+    pub iyz: f64,
+    pub izz: f64,
+}
+
+impl Inertia {
+    pub fn diagonal(ixx: f64, iyy: f64, izz: f64) -> Self {
+        Inertia {
+            ixx,
+            iyy,
+            izz,
+            ..Default::default()
+        }
+    }
+
+    pub fn matrix(&self) -> [[f64; 3]; 3] {
+        [
+            [self.ixx, self.ixy, self.ixz],
+            [self.ixy, self.iyy, self.iyz],
+            [self.ixz, self.iyz, self.izz],
+        ]
+    }
+
+    pub fn from_matrix(m: [[f64; 3]; 3]) -> Self {
+        Inertia {
+            ixx: m[0][0],
+            ixy: 0.5 * (m[0][1] + m[1][0]),
+            ixz: 0.5 * (m[0][2] + m[2][0]),
+            iyy: m[1][1],
+            iyz: 0.5 * (m[1][2] + m[2][1]),
+            izz: m[2][2],
+        }
+    }
+
+    /// Solid box of the given full edge lengths.
+    pub fn solid_box(mass: f64, size: [f64; 3]) -> Self {
+        let [x, y, z] = size;
+        let k = mass / 12.0;
+        Inertia::diagonal(
+            k * (y * y + z * z),
+            k * (x * x + z * z),
+            k * (x * x + y * y),
+        )
+    }
+
+    /// Solid cylinder along z.
+    pub fn solid_cylinder(mass: f64, radius: f64, length: f64) -> Self {
+        let side = mass * (3.0 * radius * radius + length * length) / 12.0;
+        Inertia::diagonal(side, side, 0.5 * mass * radius * radius)
+    }
+
+    /// Solid sphere.
+    pub fn solid_sphere(mass: f64, radius: f64) -> Self {
+        let i = 0.4 * mass * radius * radius;
+        Inertia::diagonal(i, i, i)
+    }
+}
+
+/// URDF `<inertial>`: mass, CoM placement and inertia about the CoM in that
+/// (possibly rotated) frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Inertial {
+    pub origin: Pose,
+    pub mass: f64,
+    pub inertia: Inertia,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Geometry {
+    Box {
+        size: [f64; 3],
+    },
+    Cylinder {
+        radius: f64,
+        length: f64,
+    },
+    Sphere {
+        radius: f64,
+    },
+    /// MJCF capsule along z (URDF has none: written as a cylinder plus a note).
+    Capsule {
+        radius: f64,
+        length: f64,
+    },
+    /// A mesh by path as written (`package://...`, relative or `file://`).
+    Mesh {
+        filename: String,
+        scale: Option<[f64; 3]>,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Material {
+    pub name: String,
+    pub rgba: Option<[f64; 4]>,
+    pub texture: Option<String>,
+}
+
+/// A `<visual>` or `<collision>` element.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Shape {
+    pub name: Option<String>,
+    pub origin: Pose,
+    pub geometry: Geometry,
+    /// Visuals only: the material, by reference or inline.
+    pub material: Option<Material>,
+}
+
+/// XML that twinloop does not interpret but must write back unchanged
+/// (`<gazebo>`, `<transmission>`, `<sensor>`, vendor children of links/joints).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RawXml(pub String);
+
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Link {
+    pub name: String,
+    pub inertial: Option<Inertial>,
+    pub visuals: Vec<Shape>,
+    pub collisions: Vec<Shape>,
+    /// Children of `<link>` that are not URDF, kept verbatim.
+    pub extra: Vec<RawXml>,
+}
+
+impl Link {
+    pub fn new(name: impl Into<String>) -> Self {
+        Link {
+            name: name.into(),
+            ..Default::default()
+        }
+    }
+
+    pub fn mass(&self) -> f64 {
+        self.inertial.map_or(0.0, |i| i.mass)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum JointKind {
+    Revolute,
+    Continuous,
+    Prismatic,
+    Fixed,
+    Floating,
+    Planar,
+}
+
+impl JointKind {
+    pub fn urdf_name(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "revolute",
+            JointKind::Continuous => "continuous",
+            JointKind::Prismatic => "prismatic",
+            JointKind::Fixed => "fixed",
+            JointKind::Floating => "floating",
+            JointKind::Planar => "planar",
+        }
+    }
+
+    pub fn from_urdf_name(s: &str) -> Option<Self> {
+        Some(match s {
+            "revolute" => JointKind::Revolute,
+            "continuous" => JointKind::Continuous,
+            "prismatic" => JointKind::Prismatic,
+            "fixed" => JointKind::Fixed,
+            "floating" => JointKind::Floating,
+            "planar" => JointKind::Planar,
+            _ => return None,
+        })
+    }
+
+    /// Degrees of freedom of the velocity (floating: 6).
+    pub fn nv(self) -> usize {
+        match self {
+            JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic => 1,
+            JointKind::Fixed => 0,
+            JointKind::Floating => 6,
+            JointKind::Planar => 3,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Limit {
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+    pub effort: Option<f64>,
+    pub velocity: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct JointDynamics {
+    pub damping: Option<f64>,
+    pub friction: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mimic {
+    pub joint: String,
+    pub multiplier: f64,
+    pub offset: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SafetyController {
+    pub soft_lower_limit: Option<f64>,
+    pub soft_upper_limit: Option<f64>,
+    pub k_position: Option<f64>,
+    pub k_velocity: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Calibration {
+    pub rising: Option<f64>,
+    pub falling: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Joint {
+    pub name: String,
+    pub kind: JointKind,
+    pub parent: String,
+    pub child: String,
+    /// Placement of the joint frame (= child link frame at zero) in the parent link frame.
+    pub origin: Pose,
+    /// Axis in the joint frame as written; URDF's default is (1, 0, 0).
+    /// `None` when the file has no `<axis>` (written back the same way).
+    pub axis: Option<[f64; 3]>,
+    pub limit: Option<Limit>,
+    pub dynamics: Option<JointDynamics>,
+    pub mimic: Option<Mimic>,
+    pub safety_controller: Option<SafetyController>,
+    pub calibration: Option<Calibration>,
+    /// Children of `<joint>` that are not URDF, kept verbatim.
+    pub extra: Vec<RawXml>,
+}
+
+impl Joint {
+    pub fn new(
+        name: impl Into<String>,
+        kind: JointKind,
+        parent: impl Into<String>,
+        child: impl Into<String>,
+    ) -> Self {
+        Joint {
+            name: name.into(),
+            kind,
+            parent: parent.into(),
+            child: child.into(),
+            origin: Pose::IDENTITY,
+            axis: None,
+            limit: None,
+            dynamics: None,
+            mimic: None,
+            safety_controller: None,
+            calibration: None,
+            extra: Vec::new(),
+        }
+    }
+
+    /// The axis the dynamics uses: as written, or URDF's default (1, 0, 0).
+    pub fn axis_or_default(&self) -> [f64; 3] {
+        self.axis.unwrap_or([1.0, 0.0, 0.0])
+    }
+}
+
+/// A named frame attached to a link (sensor mounts, MJCF sites, frames made in code).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    pub name: String,
+    pub link: String,
+    pub origin: Pose,
+}
+
+/// Top-level elements kept verbatim, with their position among the links and
+/// joints so a written URDF keeps the original order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Extension {
+    /// Element name (`gazebo`, `transmission`, `sensor`, ...).
+    pub tag: String,
+    pub xml: RawXml,
+}
+
+/// One top-level item in document order, so a written URDF reads like the input.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Item {
+    Link(usize),
+    Joint(usize),
+    Material(usize),
+    Extension(usize),
+    Frame(usize),
+}
+
+/// A robot description.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Description {
+    pub name: String,
+    pub links: Vec<Link>,
+    pub joints: Vec<Joint>,
+    /// Top-level `<material>` definitions.
+    pub materials: Vec<Material>,
+    pub frames: Vec<Frame>,
+    pub extensions: Vec<Extension>,
+    /// Document order of everything above; items missing here are written after.
+    pub order: Vec<Item>,
+    /// Attributes of `<robot>` other than `name` (xmlns declarations, version), verbatim.
+    pub robot_attributes: Vec<(String, String)>,
+}
+
+impl Description {
+    pub fn link(&self, name: &str) -> Option<&Link> {
+        self.links.iter().find(|l| l.name == name)
+    }
+
+    pub fn link_mut(&mut self, name: &str) -> Option<&mut Link> {
+        self.links.iter_mut().find(|l| l.name == name)
+    }
+
+    pub fn link_index(&self, name: &str) -> Option<usize> {
+        self.links.iter().position(|l| l.name == name)
+    }
+
+    pub fn joint(&self, name: &str) -> Option<&Joint> {
+        self.joints.iter().find(|j| j.name == name)
+    }
+
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+
+    /// Sum of all link masses (dummy frame links included, as a scale would weigh them).
+    pub fn total_mass(&self) -> f64 {
+        self.links.iter().map(Link::mass).sum()
+    }
+
+    /// Links that are no joint's child. A valid tree has exactly one.
+    pub fn root_links(&self) -> Vec<&str> {
+        self.links
+            .iter()
+            .filter(|l| !self.joints.iter().any(|j| j.child == l.name))
+            .map(|l| l.name.as_str())
+            .collect()
+    }
+
+    /// The joint whose child is `link`, if any.
+    pub fn parent_joint(&self, link: &str) -> Option<&Joint> {
+        self.joints.iter().find(|j| j.child == link)
+    }
+
+    /// Items in document order: the recorded order, then anything added since.
+    pub fn items_in_order(&self) -> Vec<Item> {
+        let mut seen_l = vec![false; self.links.len()];
+        let mut seen_j = vec![false; self.joints.len()];
+        let mut seen_m = vec![false; self.materials.len()];
+        let mut seen_e = vec![false; self.extensions.len()];
+        let mut seen_f = vec![false; self.frames.len()];
+        let mut out = Vec::new();
+        for &it in &self.order {
+            let slot = match it {
+                Item::Link(i) => seen_l.get_mut(i),
+                Item::Joint(i) => seen_j.get_mut(i),
+                Item::Material(i) => seen_m.get_mut(i),
+                Item::Extension(i) => seen_e.get_mut(i),
+                Item::Frame(i) => seen_f.get_mut(i),
+            };
+            if let Some(s) = slot
+                && !*s
+            {
+                *s = true;
+                out.push(it);
+            }
+        }
+        out.extend(
+            (0..self.materials.len())
+                .filter(|&i| !seen_m[i])
+                .map(Item::Material),
+        );
+        out.extend(
+            (0..self.links.len())
+                .filter(|&i| !seen_l[i])
+                .map(Item::Link),
+        );
+        out.extend(
+            (0..self.joints.len())
+                .filter(|&i| !seen_j[i])
+                .map(Item::Joint),
+        );
+        out.extend(
+            (0..self.frames.len())
+                .filter(|&i| !seen_f[i])
+                .map(Item::Frame),
+        );
+        out.extend(
+            (0..self.extensions.len())
+                .filter(|&i| !seen_e[i])
+                .map(Item::Extension),
+        );
+        out
+    }
+}

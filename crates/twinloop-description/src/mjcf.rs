@@ -1,0 +1,1145 @@
+//! MJCF reader: the subset of MuJoCo's format that the MuJoCo Menagerie
+//! humanoids (and Unitree's own MJCF files) use.
+//!
+//! # How MJCF maps onto a [`Description`]
+//!
+//! - Every `<body>` becomes a [`Link`] of the body's name (unnamed bodies get
+//!   `body<N>`), in a tree that follows the body nesting. The link frame is the
+//!   body frame, except for a hinge joint with a non-zero `pos` (see below).
+//! - The top-level body is the root link. If it has a `<freejoint/>` (or
+//!   `<joint type="free">`) the robot is floating: there is no joint for it and no
+//!   `world` link (twinloop adds the floating base itself when it compiles the
+//!   dynamics). Without a joint it is simply the root, and its placement in the
+//!   world (`pos`, `quat`) is dropped. If it has a hinge or slide joint, a link
+//!   `world` is added as its parent. Only one top-level body is supported.
+//! - A body's joint: `hinge` becomes [`JointKind::Revolute`] when limited (the
+//!   `range`, converted from degrees unless `<compiler angle="radian">`) and
+//!   [`JointKind::Continuous`] otherwise; `slide` becomes
+//!   [`JointKind::Prismatic`]; `ball` is an error, and so is more than one joint in
+//!   a body. A body without a joint is attached by a fixed joint named
+//!   `<body>_fixed`. Joint names are MJCF's, or `<body>_joint` for an unnamed one.
+//!   "Limited" follows MuJoCo: `limited="true"`, or `"auto"`/absent with a `range`
+//!   when `autolimits` is on (its default). `actuatorfrcrange` gives the limit's
+//!   effort (the larger magnitude), `damping` and `frictionloss` the
+//!   [`JointDynamics`]. The axis is normalised; `ref` and `springref` are ignored.
+//! - A hinge `pos` (a point on the axis, in the body frame) that is not zero is
+//!   handled by putting the link frame at that point, axes unchanged: everything
+//!   placed in that body (inertial, geoms, sites, child bodies) is shifted by
+//!   `-pos`. The kinematics are exactly MuJoCo's; only the link frame differs
+//!   from the body frame. (A slide joint's `pos` does not matter and is ignored.)
+//! - `<inertial pos quat mass diaginertia|fullinertia>` becomes the link's
+//!   [`Inertial`]: origin from `pos` and the orientation, the tensor as written
+//!   (`diaginertia`: principal moments in the rotated frame; `fullinertia`: Ixx
+//!   Iyy Izz Ixy Ixz Iyz). A body without `<inertial>` gets no inertial (MuJoCo
+//!   would infer one from the geoms; that is not done here), and
+//!   `<compiler inertiafromgeom="true">` is refused.
+//! - Geoms: `box` (half sizes, written as full sizes), `sphere`, `cylinder` and
+//!   `capsule` (radius and half-length; the [`Geometry`] holds the full length),
+//!   and `mesh` by asset name (the asset's `file` with `meshdir` or `assetdir` in
+//!   front, and its `scale`). `fromto` is turned into a position and orientation.
+//!   `plane`, `hfield`, `ellipsoid` and `sdf` geoms are skipped. A geom is a
+//!   visual if its `group` is 0, 1 or 2 (the groups MuJoCo's viewer shows by
+//!   default) and a collision shape if its `contype` or `conaffinity` is not 0, so
+//!   Menagerie's `visual`/`collision` classes land where expected. A visual's
+//!   material is the geom's `material` asset (name and rgba) or, failing that, its
+//!   `rgba`.
+//! - `<site>` becomes a [`Frame`] on the body's link (unnamed: `<body>_site<N>`).
+//! - `<default>` classes (nested, `class` and `childclass`) apply to joints,
+//!   geoms, sites, meshes and materials, and orientations may be given as `quat`
+//!   (normalised), `axisangle`, `euler` (with `eulerseq`), `xyaxes` or `zaxis`.
+//! - Ignored: cameras, lights, actuators, sensors, tendons, equality constraints,
+//!   contact settings, keyframes, and geoms and sites attached to the world.
+//!   `<include>`, `<frame>`, `<replicate>`, `<attach>` and composite objects are
+//!   errors rather than silently dropped bodies.
+
+use crate::description::*;
+use crate::error::DescriptionError;
+use crate::load::{
+    Places, error_at, error_at_attr, opt_array, parse_array, parse_numbers, read_text, required,
+    validate_placed,
+};
+use roxmltree::{Document, Node};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Read an MJCF model from text. Errors name the line, column and element.
+pub fn from_str(text: &str) -> Result<Description, DescriptionError> {
+    let doc = crate::load::parse_xml(text)?;
+    from_document(&doc)
+}
+
+/// Read an MJCF file; errors carry the file path.
+pub fn read_file(path: impl AsRef<Path>) -> Result<Description, DescriptionError> {
+    let path = path.as_ref();
+    let text = read_text(path)?;
+    from_str(&text).map_err(|e| e.in_file(path))
+}
+
+type Mat = [[f64; 3]; 3];
+type Vec3 = [f64; 3];
+
+const IDENTITY: Mat = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// Longest chain of default classes followed (a guard; class chains are trees).
+const MAX_DEPTH: usize = 100_000;
+
+/// A body still to read: its parent link (name, and the offset of that link's
+/// frame from its body frame) and the `childclass` in force.
+struct Pending<'a, 'i> {
+    node: Node<'a, 'i>,
+    parent: Option<(String, Vec3)>,
+    childclass: Option<String>,
+}
+
+fn mat_mul(a: &Mat, b: &Mat) -> Mat {
+    let mut m = [[0.0; 3]; 3];
+    for (i, row) in m.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    m
+}
+
+fn mat_vec(a: &Mat, v: &Vec3) -> Vec3 {
+    [
+        a[0][0] * v[0] + a[0][1] * v[1] + a[0][2] * v[2],
+        a[1][0] * v[0] + a[1][1] * v[1] + a[1][2] * v[2],
+        a[2][0] * v[0] + a[2][1] * v[1] + a[2][2] * v[2],
+    ]
+}
+
+fn sub(a: &Vec3, b: &Vec3) -> Vec3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn add(a: &Vec3, b: &Vec3) -> Vec3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn dot(a: &Vec3, b: &Vec3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm(a: &Vec3) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// `a / |a|`, or `None` for a (near) zero vector.
+fn unit(a: &Vec3) -> Option<Vec3> {
+    let n = norm(a);
+    (n > 1e-12 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
+}
+
+/// Rotation by `angle` about the unit `axis` (Rodrigues).
+fn axis_angle(axis: &Vec3, angle: f64) -> Mat {
+    let (s, c) = angle.sin_cos();
+    let t = 1.0 - c;
+    let [x, y, z] = *axis;
+    [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
+}
+
+/// The smallest rotation taking +z to the unit vector `z` (MuJoCo's `zaxis`).
+fn z_to(z: &Vec3) -> Mat {
+    let ez = [0.0, 0.0, 1.0];
+    let c = cross(&ez, z);
+    match unit(&c) {
+        Some(axis) => axis_angle(&axis, dot(&ez, z).clamp(-1.0, 1.0).acos()),
+        None if z[2] < 0.0 => axis_angle(&[1.0, 0.0, 0.0], std::f64::consts::PI),
+        None => IDENTITY,
+    }
+}
+
+/// A pose from a translation and a rotation matrix, without negative zeros.
+fn pose(xyz: Vec3, r: &Mat) -> Pose {
+    let p = Pose::from_matrix(xyz, *r);
+    Pose {
+        xyz: p.xyz.map(|v| v + 0.0),
+        rpy: p.rpy.map(|v| v + 0.0),
+    }
+}
+
+/// `<compiler>` settings that change how numbers are read.
+struct Compiler {
+    degrees: bool,
+    /// `eulerseq`: axis per angle, lowercase = rotating axes, uppercase = fixed.
+    eulerseq: [u8; 3],
+    autolimits: bool,
+    meshdir: Option<String>,
+}
+
+/// A default class: its parent and its element templates (`<joint>`, `<geom>`, ...).
+struct Class<'a, 'i> {
+    parent: Option<String>,
+    elements: Vec<Node<'a, 'i>>,
+}
+
+#[derive(Clone)]
+struct MeshAsset {
+    file: Option<String>,
+    scale: Option<Vec3>,
+}
+
+struct Reader<'a, 'i> {
+    compiler: Compiler,
+    classes: HashMap<String, Class<'a, 'i>>,
+    meshes: HashMap<String, MeshAsset>,
+    materials: HashMap<String, [f64; 4]>,
+    robot: Description,
+    places: Places,
+    unnamed_bodies: usize,
+}
+
+/// Where an attribute's value came from: the element itself or a default class.
+type Found<'a, 'i> = (Node<'a, 'i>, &'a str);
+
+const ORIENTATIONS: [&str; 5] = ["quat", "axisangle", "euler", "xyaxes", "zaxis"];
+
+pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionError> {
+    let root = doc.root_element();
+    if root.tag_name().name() != "mujoco" {
+        return Err(error_at(
+            root,
+            format!(
+                "root element is <{}>: an MJCF model has <mujoco>",
+                crate::load::qualified_name(root)
+            ),
+        ));
+    }
+    let mut reader = Reader {
+        compiler: Compiler {
+            degrees: true,
+            eulerseq: *b"xyz",
+            autolimits: true,
+            meshdir: None,
+        },
+        classes: HashMap::new(),
+        meshes: HashMap::new(),
+        materials: HashMap::new(),
+        robot: Description {
+            name: root.attribute("model").unwrap_or_default().to_string(),
+            ..Default::default()
+        },
+        places: Places {
+            robot: root.range().start,
+            links: Vec::new(),
+            joints: Vec::new(),
+        },
+        unnamed_bodies: 0,
+    };
+    let sections: Vec<Node> = root.children().filter(Node::is_element).collect();
+    for &s in &sections {
+        match s.tag_name().name() {
+            "compiler" => reader.compiler(s)?,
+            "include" => {
+                return Err(error_at(
+                    s,
+                    "<include> is not supported: read the included file, or merge it into this one",
+                ));
+            }
+            _ => {}
+        }
+    }
+    for &s in &sections {
+        if s.tag_name().name() == "default" {
+            let name = s.attribute("class").unwrap_or("main").to_string();
+            reader.default_class(s, name)?;
+        }
+    }
+    for &s in &sections {
+        if s.tag_name().name() == "asset" {
+            reader.assets(s)?;
+        }
+    }
+    let mut top: Vec<Node> = Vec::new();
+    for &s in &sections {
+        if s.tag_name().name() != "worldbody" {
+            continue;
+        }
+        for c in s.children().filter(Node::is_element) {
+            match c.tag_name().name() {
+                "body" => top.push(c),
+                t @ ("frame" | "replicate" | "attach" | "include" | "composite" | "flexcomp") => {
+                    return Err(error_at(c, format!("<{t}> is not supported")));
+                }
+                _ => {} // world geoms, sites, lights, cameras
+            }
+        }
+    }
+    let Some(&first) = top.first() else {
+        return Err(error_at(root, "no <body> in <worldbody>"));
+    };
+    if let Some(&second) = top.get(1) {
+        return Err(error_at(
+            second,
+            "a second top-level body: only one robot (one body tree) per file is supported",
+        ));
+    }
+    // Depth first, children in file order, with an explicit stack: deep
+    // nesting must not become deep recursion.
+    let mut pending = vec![Pending {
+        node: first,
+        parent: None,
+        childclass: None,
+    }];
+    while let Some(p) = pending.pop() {
+        reader.body(p, &mut pending)?;
+    }
+    validate_placed(doc, &reader.robot, &reader.places)?;
+    Ok(reader.robot)
+}
+
+impl<'a, 'i> Reader<'a, 'i> {
+    fn compiler(&mut self, node: Node<'a, 'i>) -> Result<(), DescriptionError> {
+        if let Some(a) = node.attribute("angle") {
+            self.compiler.degrees = match a {
+                "degree" => true,
+                "radian" => false,
+                _ => {
+                    return Err(error_at_attr(
+                        node,
+                        "angle",
+                        format!("angle=\"{a}\": expected \"degree\" or \"radian\""),
+                    ));
+                }
+            };
+        }
+        if let Some(s) = node.attribute("eulerseq") {
+            let b = s.as_bytes();
+            if b.len() != 3 || !b.iter().all(|c| b"xyzXYZ".contains(c)) {
+                return Err(error_at_attr(
+                    node,
+                    "eulerseq",
+                    format!("eulerseq=\"{s}\": expected three of x, y, z, X, Y, Z"),
+                ));
+            }
+            self.compiler.eulerseq = [b[0], b[1], b[2]];
+        }
+        if let Some(v) = node.attribute("autolimits") {
+            self.compiler.autolimits = bool_attr(node, "autolimits", v)?;
+        }
+        if let Some(v) = node.attribute("inertiafromgeom")
+            && v == "true"
+        {
+            return Err(error_at_attr(
+                node,
+                "inertiafromgeom",
+                "inertiafromgeom=\"true\" is not supported: inertials are read as written",
+            ));
+        }
+        if node.attribute("coordinate") == Some("global") {
+            return Err(error_at_attr(
+                node,
+                "coordinate",
+                "coordinate=\"global\" is not supported",
+            ));
+        }
+        if let Some(d) = node.attribute("meshdir").or(node.attribute("assetdir")) {
+            self.compiler.meshdir = Some(d.to_string());
+        }
+        Ok(())
+    }
+
+    /// A `<default>` and the classes nested in it (iteratively: nesting depth
+    /// must not become stack depth).
+    fn default_class(
+        &mut self,
+        top: Node<'a, 'i>,
+        top_name: String,
+    ) -> Result<(), DescriptionError> {
+        let mut pending: Vec<(Node<'a, 'i>, String, Option<String>)> = vec![(top, top_name, None)];
+        while let Some((node, name, parent)) = pending.pop() {
+            let elements: Vec<Node> = node
+                .children()
+                .filter(|c| c.is_element() && c.tag_name().name() != "default")
+                .collect();
+            match self.classes.get_mut(&name) {
+                // Two top-level <default> sections both define "main": merge them.
+                Some(c) if parent.is_none() && name == "main" => c.elements.extend(elements),
+                Some(_) => {
+                    return Err(error_at(
+                        node,
+                        format!("default class \"{name}\" is defined twice"),
+                    ));
+                }
+                None => {
+                    self.classes
+                        .insert(name.clone(), Class { parent, elements });
+                }
+            }
+            let nested: Vec<Node> = node
+                .children()
+                .filter(|c| c.is_element() && c.tag_name().name() == "default")
+                .collect();
+            for c in nested.into_iter().rev() {
+                let child = required(c, "class")?.to_string();
+                pending.push((c, child, Some(name.clone())));
+            }
+        }
+        Ok(())
+    }
+
+    /// The class an element uses: its `class`, the nearest `childclass`, or "main".
+    fn class_of(
+        &self,
+        node: Node<'a, 'i>,
+        childclass: Option<&str>,
+    ) -> Result<String, DescriptionError> {
+        match node.attribute("class") {
+            Some(c) if self.classes.contains_key(c) => Ok(c.to_string()),
+            Some(c) => Err(error_at_attr(
+                node,
+                "class",
+                format!("unknown default class \"{c}\""),
+            )),
+            None => Ok(childclass.unwrap_or("main").to_string()),
+        }
+    }
+
+    /// An attribute of an element of kind `kind` (`geom`, `joint`, ...): its own,
+    /// else the nearest default class's.
+    fn get(
+        &self,
+        node: Node<'a, 'i>,
+        kind: &str,
+        class: &str,
+        attr: &str,
+    ) -> Option<Found<'a, 'i>> {
+        if let Some(v) = node.attribute(attr) {
+            return Some((node, v));
+        }
+        let mut at = Some(class);
+        let mut steps = 0;
+        while let Some(name) = at {
+            let c = self.classes.get(name)?;
+            for e in c.elements.iter().rev() {
+                if e.tag_name().name() == kind
+                    && let Some(v) = e.attribute(attr)
+                {
+                    return Some((*e, v));
+                }
+            }
+            at = c.parent.as_deref();
+            steps += 1;
+            if steps > MAX_DEPTH {
+                break;
+            }
+        }
+        None
+    }
+
+    /// The element's own orientation, else the one of its nearest default class.
+    fn orientation(
+        &self,
+        node: Node<'a, 'i>,
+        kind: &str,
+        class: Option<&str>,
+    ) -> Result<Mat, DescriptionError> {
+        let own: Vec<&str> = ORIENTATIONS
+            .iter()
+            .copied()
+            .filter(|a| node.attribute(*a).is_some())
+            .collect();
+        if own.len() > 1 {
+            return Err(error_at(
+                node,
+                format!("more than one orientation ({})", own.join(", ")),
+            ));
+        }
+        if let Some(attr) = own.first() {
+            return self.rotation(node, attr, node.attribute(*attr).unwrap_or_default());
+        }
+        let Some(class) = class else {
+            return Ok(IDENTITY);
+        };
+        let mut at = Some(class);
+        let mut steps = 0;
+        while let Some(name) = at {
+            let Some(c) = self.classes.get(name) else {
+                break;
+            };
+            for e in c.elements.iter().rev() {
+                if e.tag_name().name() != kind {
+                    continue;
+                }
+                if let Some(attr) = ORIENTATIONS.iter().find(|a| e.attribute(**a).is_some()) {
+                    return self.rotation(*e, attr, e.attribute(*attr).unwrap_or_default());
+                }
+            }
+            at = c.parent.as_deref();
+            steps += 1;
+            if steps > MAX_DEPTH {
+                break;
+            }
+        }
+        Ok(IDENTITY)
+    }
+
+    fn angle(&self, v: f64) -> f64 {
+        if self.compiler.degrees {
+            v.to_radians()
+        } else {
+            v
+        }
+    }
+
+    /// The rotation an orientation attribute describes.
+    fn rotation(&self, node: Node, attr: &str, value: &str) -> Result<Mat, DescriptionError> {
+        let bad = |what: &str| error_at_attr(node, attr, format!("{attr}=\"{value}\": {what}"));
+        match attr {
+            "quat" => {
+                let q = parse_array::<4>(node, attr, value)?;
+                let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if !(n > 1e-12 && n.is_finite()) {
+                    return Err(bad("zero quaternion"));
+                }
+                Ok(quaternion_to_matrix(q))
+            }
+            "axisangle" => {
+                let a = parse_array::<4>(node, attr, value)?;
+                let axis = unit(&[a[0], a[1], a[2]]).ok_or_else(|| bad("zero axis"))?;
+                Ok(axis_angle(&axis, self.angle(a[3])))
+            }
+            "euler" => {
+                let e = parse_array::<3>(node, attr, value)?;
+                let mut r = IDENTITY;
+                for (k, &c) in self.compiler.eulerseq.iter().enumerate() {
+                    let axis = match c.to_ascii_lowercase() {
+                        b'x' => [1.0, 0.0, 0.0],
+                        b'y' => [0.0, 1.0, 0.0],
+                        _ => [0.0, 0.0, 1.0],
+                    };
+                    let step = axis_angle(&axis, self.angle(e[k]));
+                    r = if c.is_ascii_lowercase() {
+                        mat_mul(&r, &step) // about the rotated (moving) axes
+                    } else {
+                        mat_mul(&step, &r) // about the fixed axes
+                    };
+                }
+                Ok(r)
+            }
+            "xyaxes" => {
+                let v = parse_array::<6>(node, attr, value)?;
+                let x = unit(&[v[0], v[1], v[2]]).ok_or_else(|| bad("zero x axis"))?;
+                let y0 = [v[3], v[4], v[5]];
+                let d = dot(&x, &y0);
+                let y = unit(&sub(&y0, &[d * x[0], d * x[1], d * x[2]]))
+                    .ok_or_else(|| bad("y axis parallel to x axis"))?;
+                let z = cross(&x, &y);
+                Ok([[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]])
+            }
+            _ => {
+                let z = parse_array::<3>(node, attr, value)?;
+                let z = unit(&z).ok_or_else(|| bad("zero axis"))?;
+                Ok(z_to(&z))
+            }
+        }
+    }
+
+    fn assets(&mut self, node: Node<'a, 'i>) -> Result<(), DescriptionError> {
+        for a in node.children().filter(Node::is_element) {
+            match a.tag_name().name() {
+                "mesh" => {
+                    let class = self.class_of(a, None)?;
+                    let file = a.attribute("file").map(|f| self.asset_path(f));
+                    let name = match a.attribute("name") {
+                        Some(n) => n.to_string(),
+                        None => {
+                            let f = required(a, "file")?;
+                            file_stem(f).to_string()
+                        }
+                    };
+                    let scale = match self.get(a, "mesh", &class, "scale") {
+                        Some((n, v)) => Some(parse_array::<3>(n, "scale", v)?),
+                        None => None,
+                    };
+                    self.meshes.insert(name, MeshAsset { file, scale });
+                }
+                "material" => {
+                    let class = self.class_of(a, None)?;
+                    let name = required(a, "name")?.to_string();
+                    let rgba = match self.get(a, "material", &class, "rgba") {
+                        Some((n, v)) => parse_array::<4>(n, "rgba", v)?,
+                        None => [1.0; 4],
+                    };
+                    self.materials.insert(name, rgba);
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// A mesh file as MuJoCo finds it: behind `meshdir` unless absolute.
+    fn asset_path(&self, file: &str) -> String {
+        match &self.compiler.meshdir {
+            Some(dir) if !dir.is_empty() && !file.starts_with('/') => {
+                format!("{}/{}", dir.trim_end_matches('/'), file)
+            }
+            _ => file.to_string(),
+        }
+    }
+
+    fn number(&self, found: Option<Found>, attr: &str) -> Result<Option<f64>, DescriptionError> {
+        match found {
+            Some((n, v)) => Ok(Some(crate::load::parse_number(n, attr, v)?)),
+            None => Ok(None),
+        }
+    }
+
+    fn integer(
+        &self,
+        found: Option<Found>,
+        attr: &str,
+        default: i64,
+    ) -> Result<i64, DescriptionError> {
+        match found {
+            Some((n, v)) => v
+                .trim()
+                .parse::<i64>()
+                .map_err(|_| error_at_attr(n, attr, format!("{attr}=\"{v}\": not an integer"))),
+            None => Ok(default),
+        }
+    }
+
+    /// One body and its contents; its child bodies go onto `pending`.
+    fn body(
+        &mut self,
+        todo: Pending<'a, 'i>,
+        pending: &mut Vec<Pending<'a, 'i>>,
+    ) -> Result<(), DescriptionError> {
+        let Pending {
+            node,
+            parent,
+            childclass,
+        } = todo;
+        let parent = parent.as_ref().map(|(l, o)| (l.as_str(), *o));
+        let childclass = childclass.as_deref();
+        let name = match node.attribute("name") {
+            Some(n) => n.to_string(),
+            None => {
+                self.unnamed_bodies += 1;
+                format!("body{}", self.unnamed_bodies)
+            }
+        };
+        let childclass: Option<String> = match node.attribute("childclass") {
+            Some(c) if self.classes.contains_key(c) => Some(c.to_string()),
+            Some(c) => {
+                return Err(error_at_attr(
+                    node,
+                    "childclass",
+                    format!("unknown default class \"{c}\""),
+                ));
+            }
+            None => childclass.map(str::to_string),
+        };
+        let cc = childclass.as_deref();
+        let pos = opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]);
+        let rot = self.orientation(node, "body", None)?;
+
+        // The joint, if any.
+        let joints: Vec<Node> = node
+            .children()
+            .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
+            .collect();
+        if joints.len() > 1 {
+            return Err(error_at(
+                node,
+                format!(
+                    "the body has {} joints: only one joint per body is supported",
+                    joints.len()
+                ),
+            ));
+        }
+        let mut joint: Option<Joint> = None;
+        let mut joint_node = node;
+        // Offset of this link's frame from the body frame (a hinge's pos).
+        let mut offset = [0.0; 3];
+        if let Some(&j) = joints.first() {
+            joint_node = j;
+            let class = self.class_of(j, cc)?;
+            let kind = if j.tag_name().name() == "freejoint" {
+                "free"
+            } else {
+                self.get(j, "joint", &class, "type")
+                    .map_or("hinge", |f| f.1)
+            };
+            match kind {
+                "free" => {
+                    if parent.is_some() {
+                        return Err(error_at(
+                            j,
+                            "a free joint is only supported on the top-level body",
+                        ));
+                    }
+                }
+                "ball" => {
+                    return Err(error_at(j, "ball joints are not supported"));
+                }
+                "hinge" | "slide" => {
+                    let hinge = kind == "hinge";
+                    if hinge && let Some((n, v)) = self.get(j, "joint", &class, "pos") {
+                        offset = parse_array::<3>(n, "pos", v)?;
+                    }
+                    let jname = match j.attribute("name") {
+                        Some(n) => n.to_string(),
+                        None => format!("{name}_joint"),
+                    };
+                    joint = Some(self.joint(j, &class, jname, hinge)?);
+                }
+                other => {
+                    let (n, _) = self.get(j, "joint", &class, "type").unwrap_or((j, other));
+                    return Err(error_at_attr(
+                        n,
+                        "type",
+                        format!(
+                            "unknown joint type \"{other}\" (expected free, ball, slide or hinge)"
+                        ),
+                    ));
+                }
+            }
+        }
+
+        // The joint to the parent link.
+        let (parent_link, parent_offset) = match parent {
+            Some((l, o)) => (Some(l.to_string()), o),
+            None if joint.is_some() => {
+                // A robot on a hinge or slide to the world.
+                self.robot.order.push(Item::Link(self.robot.links.len()));
+                self.places.links.push(node.range().start);
+                self.robot.links.push(Link::new("world"));
+                (Some("world".to_string()), [0.0; 3])
+            }
+            None => (None, [0.0; 3]),
+        };
+        let origin = pose(
+            add(&sub(&pos, &parent_offset), &mat_vec(&rot, &offset)),
+            &rot,
+        );
+
+        let link = self.link_contents(node, &name, cc, offset)?;
+        self.robot.order.push(Item::Link(self.robot.links.len()));
+        self.places.links.push(node.range().start);
+        self.robot.links.push(link.0);
+        if let Some(parent_link) = parent_link {
+            let mut j = joint.unwrap_or_else(|| {
+                Joint::new(
+                    format!("{name}_fixed"),
+                    JointKind::Fixed,
+                    String::new(),
+                    String::new(),
+                )
+            });
+            j.parent = parent_link;
+            j.child = name.clone();
+            j.origin = origin;
+            self.robot.order.push(Item::Joint(self.robot.joints.len()));
+            self.places.joints.push(joint_node.range().start);
+            self.robot.joints.push(j);
+        }
+        for f in link.1 {
+            self.robot.order.push(Item::Frame(self.robot.frames.len()));
+            self.robot.frames.push(f);
+        }
+
+        let mut children = Vec::new();
+        for c in node.children().filter(Node::is_element) {
+            match c.tag_name().name() {
+                "body" => children.push(Pending {
+                    node: c,
+                    parent: Some((name.clone(), offset)),
+                    childclass: childclass.clone(),
+                }),
+                t @ ("frame" | "replicate" | "attach" | "include" | "composite" | "flexcomp") => {
+                    return Err(error_at(c, format!("<{t}> is not supported")));
+                }
+                _ => {}
+            }
+        }
+        pending.extend(children.into_iter().rev());
+        Ok(())
+    }
+
+    /// A hinge or slide joint (name, parent, child and origin are set by the caller).
+    fn joint(
+        &self,
+        j: Node<'a, 'i>,
+        class: &str,
+        name: String,
+        hinge: bool,
+    ) -> Result<Joint, DescriptionError> {
+        let axis = match self.get(j, "joint", class, "axis") {
+            Some((n, v)) => {
+                let a = parse_array::<3>(n, "axis", v)?;
+                unit(&a).ok_or_else(|| error_at_attr(n, "axis", "zero axis"))?
+            }
+            None => [0.0, 0.0, 1.0],
+        };
+        let range = match self.get(j, "joint", class, "range") {
+            Some((n, v)) => {
+                let r = parse_array::<2>(n, "range", v)?;
+                Some(if hinge {
+                    [self.angle(r[0]), self.angle(r[1])]
+                } else {
+                    r
+                })
+            }
+            None => None,
+        };
+        let limited = self.limited(j, class, "limited", range.is_some())?;
+        let force = match self.get(j, "joint", class, "actuatorfrcrange") {
+            Some((n, v)) => Some(parse_array::<2>(n, "actuatorfrcrange", v)?),
+            None => None,
+        };
+        let force_limited = self.limited(j, class, "actuatorfrclimited", force.is_some())?;
+        let (lower, upper) = match (limited, range) {
+            (true, Some(r)) => (Some(r[0]), Some(r[1])),
+            (true, None) => {
+                return Err(error_at(j, "limited joint without a range"));
+            }
+            _ => (None, None),
+        };
+        let effort = match (force_limited, force) {
+            (true, Some(f)) => Some(f[0].abs().max(f[1].abs())),
+            _ => None,
+        };
+        let kind = match (hinge, limited) {
+            (true, true) => JointKind::Revolute,
+            (true, false) => JointKind::Continuous,
+            (false, _) => JointKind::Prismatic,
+        };
+        let mut joint = Joint::new(name, kind, String::new(), String::new());
+        joint.axis = Some(axis);
+        if lower.is_some() || effort.is_some() {
+            joint.limit = Some(Limit {
+                lower,
+                upper,
+                effort,
+                velocity: None,
+            });
+        }
+        let damping = self.number(self.get(j, "joint", class, "damping"), "damping")?;
+        let friction = self.number(self.get(j, "joint", class, "frictionloss"), "frictionloss")?;
+        if damping.is_some() || friction.is_some() {
+            joint.dynamics = Some(JointDynamics { damping, friction });
+        }
+        Ok(joint)
+    }
+
+    /// MuJoCo's "limited" logic: true, false, or auto (limited when the range is
+    /// given and autolimits is on).
+    fn limited(
+        &self,
+        j: Node<'a, 'i>,
+        class: &str,
+        attr: &str,
+        has_range: bool,
+    ) -> Result<bool, DescriptionError> {
+        match self.get(j, "joint", class, attr) {
+            Some((_, "auto")) | None => Ok(has_range && self.compiler.autolimits),
+            Some((n, v)) => bool_attr(n, attr, v),
+        }
+    }
+
+    /// Inertial, geoms and sites of a body, shifted by `-offset`.
+    fn link_contents(
+        &self,
+        node: Node<'a, 'i>,
+        name: &str,
+        childclass: Option<&str>,
+        offset: Vec3,
+    ) -> Result<(Link, Vec<Frame>), DescriptionError> {
+        let mut link = Link::new(name);
+        let mut frames = Vec::new();
+        let mut geoms = 0;
+        for c in node.children().filter(Node::is_element) {
+            match c.tag_name().name() {
+                "inertial" => {
+                    if link.inertial.is_some() {
+                        return Err(error_at(c, "a second <inertial> in the body"));
+                    }
+                    let pos = parse_array::<3>(c, "pos", required(c, "pos")?)?;
+                    let rot = self.orientation(c, "inertial", None)?;
+                    let mass = crate::load::parse_number(c, "mass", required(c, "mass")?)?;
+                    let inertia = match (c.attribute("fullinertia"), c.attribute("diaginertia")) {
+                        (Some(v), _) => {
+                            let f = parse_array::<6>(c, "fullinertia", v)?;
+                            Inertia {
+                                ixx: f[0],
+                                iyy: f[1],
+                                izz: f[2],
+                                ixy: f[3],
+                                ixz: f[4],
+                                iyz: f[5],
+                            }
+                        }
+                        (None, Some(v)) => {
+                            let d = parse_array::<3>(c, "diaginertia", v)?;
+                            Inertia::diagonal(d[0], d[1], d[2])
+                        }
+                        (None, None) => {
+                            return Err(error_at(
+                                c,
+                                "missing attribute \"diaginertia\" or \"fullinertia\"",
+                            ));
+                        }
+                    };
+                    link.inertial = Some(Inertial {
+                        origin: pose(sub(&pos, &offset), &rot),
+                        mass,
+                        inertia,
+                    });
+                }
+                "geom" => {
+                    geoms += 1;
+                    let default_name = format!("{name}_geom{geoms}");
+                    self.geom(c, childclass, offset, &default_name, &mut link)?;
+                }
+                "site" => {
+                    let class = self.class_of(c, childclass)?;
+                    let (pos, rot) = self.placement(c, "site", &class)?;
+                    frames.push(Frame {
+                        name: match c.attribute("name") {
+                            Some(n) => n.to_string(),
+                            None => format!("{name}_site{}", frames.len() + 1),
+                        },
+                        link: name.to_string(),
+                        origin: pose(sub(&pos, &offset), &rot),
+                    });
+                }
+                _ => {}
+            }
+        }
+        Ok((link, frames))
+    }
+
+    /// Position and orientation of a geom or site; `fromto` wins over both.
+    fn placement(
+        &self,
+        node: Node<'a, 'i>,
+        kind: &str,
+        class: &str,
+    ) -> Result<(Vec3, Mat), DescriptionError> {
+        if let Some((n, v)) = self.get(node, kind, class, "fromto") {
+            let (pos, rot, _) = from_to(n, v)?;
+            return Ok((pos, rot));
+        }
+        let pos = match self.get(node, kind, class, "pos") {
+            Some((n, v)) => parse_array::<3>(n, "pos", v)?,
+            None => [0.0; 3],
+        };
+        Ok((pos, self.orientation(node, kind, Some(class))?))
+    }
+
+    fn geom(
+        &self,
+        g: Node<'a, 'i>,
+        childclass: Option<&str>,
+        offset: Vec3,
+        default_name: &str,
+        link: &mut Link,
+    ) -> Result<(), DescriptionError> {
+        let class = self.class_of(g, childclass)?;
+        let mesh = self.get(g, "geom", &class, "mesh");
+        let kind = match self.get(g, "geom", &class, "type") {
+            Some((_, t)) => t,
+            None if mesh.is_some() => "mesh",
+            None => "sphere",
+        };
+        let fromto = match self.get(g, "geom", &class, "fromto") {
+            Some((n, v)) => Some(from_to(n, v)?),
+            None => None,
+        };
+        let size = match self.get(g, "geom", &class, "size") {
+            Some((n, v)) => {
+                let s = parse_numbers(n, "size", v)?;
+                if s.is_empty() || s.len() > 3 {
+                    return Err(error_at_attr(
+                        n,
+                        "size",
+                        format!("size=\"{v}\": expected 1 to 3 numbers"),
+                    ));
+                }
+                s
+            }
+            None => Vec::new(),
+        };
+        let need = |k: usize| -> Result<(), DescriptionError> {
+            if size.len() < k {
+                Err(error_at(
+                    g,
+                    format!(
+                        "a {kind} geom needs {k} size value(s), found {}",
+                        size.len()
+                    ),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        let half_length = |need_from_size: usize| -> Result<f64, DescriptionError> {
+            match &fromto {
+                Some((_, _, h)) => Ok(*h),
+                None => {
+                    need(need_from_size + 1)?;
+                    Ok(size[need_from_size])
+                }
+            }
+        };
+        let geometry = match kind {
+            "sphere" => {
+                need(1)?;
+                Geometry::Sphere { radius: size[0] }
+            }
+            "capsule" | "cylinder" => {
+                need(1)?;
+                let radius = size[0];
+                let length = 2.0 * half_length(1)?;
+                if kind == "capsule" {
+                    Geometry::Capsule { radius, length }
+                } else {
+                    Geometry::Cylinder { radius, length }
+                }
+            }
+            "box" => {
+                need(2)?;
+                let z = half_length(2)?;
+                Geometry::Box {
+                    size: [2.0 * size[0], 2.0 * size[1], 2.0 * z],
+                }
+            }
+            "mesh" => {
+                let Some((n, m)) = mesh else {
+                    return Err(error_at(g, "a mesh geom without a mesh"));
+                };
+                let asset = self
+                    .meshes
+                    .get(m)
+                    .ok_or_else(|| error_at_attr(n, "mesh", format!("unknown mesh \"{m}\"")))?;
+                let Some(file) = &asset.file else {
+                    return Err(error_at_attr(
+                        n,
+                        "mesh",
+                        format!("mesh \"{m}\" has no file (inline meshes are not supported)"),
+                    ));
+                };
+                Geometry::Mesh {
+                    filename: file.clone(),
+                    scale: asset.scale,
+                }
+            }
+            "plane" | "hfield" | "ellipsoid" | "sdf" => return Ok(()),
+            other => {
+                let (n, _) = self.get(g, "geom", &class, "type").unwrap_or((g, other));
+                return Err(error_at_attr(
+                    n,
+                    "type",
+                    format!("unknown geom type \"{other}\""),
+                ));
+            }
+        };
+        let (pos, rot) = match &fromto {
+            Some((p, r, _)) => (*p, *r),
+            None => self.placement(g, "geom", &class)?,
+        };
+        let origin = pose(sub(&pos, &offset), &rot);
+        let group = self.integer(self.get(g, "geom", &class, "group"), "group", 0)?;
+        let contype = self.integer(self.get(g, "geom", &class, "contype"), "contype", 1)?;
+        let conaffinity =
+            self.integer(self.get(g, "geom", &class, "conaffinity"), "conaffinity", 1)?;
+        let name = g.attribute("name").map(str::to_string);
+        if (0..=2).contains(&group) {
+            let material = match self.get(g, "geom", &class, "material") {
+                Some((n, m)) => {
+                    let rgba = self.materials.get(m).ok_or_else(|| {
+                        error_at_attr(n, "material", format!("unknown material \"{m}\""))
+                    })?;
+                    Some(Material {
+                        name: m.to_string(),
+                        rgba: Some(*rgba),
+                        texture: None,
+                    })
+                }
+                None => match self.get(g, "geom", &class, "rgba") {
+                    Some((n, v)) => Some(Material {
+                        name: format!("{}_material", name.as_deref().unwrap_or(default_name)),
+                        rgba: Some(parse_array::<4>(n, "rgba", v)?),
+                        texture: None,
+                    }),
+                    None => None,
+                },
+            };
+            link.visuals.push(Shape {
+                name: name.clone(),
+                origin,
+                geometry: geometry.clone(),
+                material,
+            });
+        }
+        if contype != 0 || conaffinity != 0 {
+            link.collisions.push(Shape {
+                name,
+                origin,
+                geometry,
+                material: None,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// `fromto="x1 y1 z1 x2 y2 z2"`: the midpoint, the rotation taking +z along the
+/// segment, and the half-length.
+fn from_to(node: Node, value: &str) -> Result<(Vec3, Mat, f64), DescriptionError> {
+    let v = parse_array::<6>(node, "fromto", value)?;
+    let a = [v[0], v[1], v[2]];
+    let b = [v[3], v[4], v[5]];
+    let d = sub(&b, &a);
+    let len = norm(&d);
+    let z = unit(&d).ok_or_else(|| {
+        error_at_attr(
+            node,
+            "fromto",
+            format!("fromto=\"{value}\": the two points are the same"),
+        )
+    })?;
+    let mid = [
+        0.5 * (a[0] + b[0]),
+        0.5 * (a[1] + b[1]),
+        0.5 * (a[2] + b[2]),
+    ];
+    Ok((mid, z_to(&z), 0.5 * len))
+}
+
+fn bool_attr(node: Node, attr: &str, v: &str) -> Result<bool, DescriptionError> {
+    match v {
+        "true" => Ok(true),
+        "false" => Ok(false),
+        _ => Err(error_at_attr(
+            node,
+            attr,
+            format!("{attr}=\"{v}\": expected \"true\" or \"false\""),
+        )),
+    }
+}
+
+/// `dir/name.stl` -> `name` (MuJoCo's default name of a mesh asset).
+fn file_stem(path: &str) -> &str {
+    let base = path.rsplit(['/', '\\']).next().unwrap_or(path);
+    match base.rfind('.') {
+        Some(i) if i > 0 => &base[..i],
+        _ => base,
+    }
+}

@@ -1,0 +1,445 @@
+//! Lint on every bundled model: exactly the expected findings.
+//!
+//! Two sources of truth: the `inertia_problems`, `total_mass_kg` and `mimic_joints`
+//! lines of each folder's SOURCE.md (computed independently with numpy when the
+//! models were collected), and the full expected list of findings written out below.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use twinloop_description::lint::{LintReport, Severity, codes, lint};
+
+fn models_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models")
+}
+
+fn lint_file(rel: &str) -> LintReport {
+    let path = models_dir().join(rel);
+    let robot = twinloop_description::load(&path).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    lint(&robot)
+}
+
+/// Findings as (severity, code, name), sorted, the total-mass info left out.
+fn findings(report: &LintReport) -> Vec<(Severity, &'static str, String)> {
+    let mut v: Vec<_> = report
+        .findings
+        .iter()
+        .filter(|f| f.code != codes::TOTAL_MASS)
+        .map(|f| (f.severity, f.code, f.name.clone()))
+        .collect();
+    v.sort();
+    v
+}
+
+fn expect(items: &[(Severity, &'static str, &[&str])]) -> Vec<(Severity, &'static str, String)> {
+    let mut v: Vec<_> = items
+        .iter()
+        .flat_map(|(s, c, names)| names.iter().map(move |n| (*s, *c, n.to_string())))
+        .collect();
+    v.sort();
+    v
+}
+
+/// The SOURCE.md summary of one file: `- key: value` lines under "### `file`".
+/// A `*.nomesh.urdf` shares the summary of its `*.urdf`.
+fn source_summary(rel: &str) -> BTreeMap<String, String> {
+    let (folder, file) = rel.split_once('/').unwrap();
+    let file = file.replace(".nomesh.urdf", ".urdf");
+    let text = std::fs::read_to_string(models_dir().join(folder).join("SOURCE.md")).unwrap();
+    let header = format!("### `{file}`");
+    let mut out = BTreeMap::new();
+    let mut inside = false;
+    for line in text.lines() {
+        if line.starts_with("##") {
+            inside = line.trim() == header;
+            continue;
+        }
+        if inside && let Some((k, v)) = line.strip_prefix("- ").and_then(|l| l.split_once(": ")) {
+            out.insert(k.to_string(), v.to_string());
+        }
+    }
+    assert!(!out.is_empty(), "no section {header} in {folder}/SOURCE.md");
+    out
+}
+
+/// `N — a; b; c` or `none` -> the items.
+fn listed(value: &str) -> Vec<String> {
+    match value.split_once(" — ") {
+        None => {
+            assert_eq!(value.trim(), "none", "unexpected summary value {value:?}");
+            Vec::new()
+        }
+        Some((n, rest)) => {
+            let items: Vec<String> = rest.split("; ").map(str::to_string).collect();
+            assert_eq!(n.parse::<usize>().unwrap(), items.len(), "{value}");
+            items
+        }
+    }
+}
+
+/// Lint's inertia findings must be exactly SOURCE.md's `inertia_problems`, and the
+/// total mass and mimic joints must agree with it.
+fn agrees_with_source(rel: &str, report: &LintReport) {
+    let summary = source_summary(rel);
+    let mut want: Vec<(Severity, &'static str, String)> = listed(&summary["inertia_problems"])
+        .iter()
+        .map(|item| {
+            let (name, what) = item.split_once(": ").unwrap();
+            let code = if what.starts_with("positive semi-definite only")
+                || what.starts_with("not positive definite")
+            {
+                codes::INERTIA_NOT_POSITIVE_DEFINITE
+            } else if what.starts_with("violates triangle inequality") {
+                codes::TRIANGLE_INEQUALITY
+            } else if what.starts_with("zero inertia with mass>0") {
+                codes::ZERO_INERTIA_WITH_MASS
+            } else {
+                panic!("{rel}: unknown inertia problem {what:?}")
+            };
+            let severity = if code == codes::ZERO_INERTIA_WITH_MASS {
+                Severity::Warning
+            } else {
+                Severity::Error
+            };
+            (severity, code, name.to_string())
+        })
+        .collect();
+    want.sort();
+    let inertia_codes = [
+        codes::INERTIA_NOT_POSITIVE_DEFINITE,
+        codes::TRIANGLE_INEQUALITY,
+        codes::ZERO_INERTIA_WITH_MASS,
+    ];
+    let got: Vec<_> = findings(report)
+        .into_iter()
+        .filter(|f| inertia_codes.contains(&f.1))
+        .collect();
+    assert_eq!(got, want, "{rel}: inertia findings vs SOURCE.md");
+
+    let mass_key = if rel.ends_with(".xml") {
+        "total_mass_kg_from_inertial"
+    } else {
+        "total_mass_kg"
+    };
+    let mass: f64 = summary[mass_key].parse().unwrap();
+    // SOURCE.md prints 6 significant digits.
+    assert!(
+        (report.total_mass - mass).abs() <= 5e-6 * mass,
+        "{rel}: total mass {} vs SOURCE.md {mass}",
+        report.total_mass
+    );
+
+    if let Some(mimic) = summary.get("mimic_joints") {
+        let mut want = listed(mimic);
+        want.sort();
+        let mut got: Vec<String> = report
+            .with_code(codes::MIMIC_JOINT)
+            .map(|f| f.name.clone())
+            .collect();
+        got.sort();
+        assert_eq!(got, want, "{rel}: mimic joints vs SOURCE.md");
+    }
+}
+
+/// Every URDF in models/, with and without meshes.
+const URDFS: &[&str] = &[
+    "coman/coman.urdf",
+    "coman/coman.nomesh.urdf",
+    "darwin_op/robotis_op.urdf",
+    "darwin_op/robotis_op.nomesh.urdf",
+    "icub/iCubGazeboV2_5.urdf",
+    "icub/iCubGazeboV2_5.nomesh.urdf",
+    "icub/variants/iCubErzelli02.urdf",
+    "icub/variants/iCubErzelli02.nomesh.urdf",
+    "nao/nao_V50.urdf",
+    "nao/nao_V50.nomesh.urdf",
+    "nao/variants/nao_V50_committed.urdf",
+    "op2/robotis_op2.urdf",
+    "op2/robotis_op2.nomesh.urdf",
+    "op3/robotis_op3.urdf",
+    "op3/robotis_op3.nomesh.urdf",
+    "sigmaban/sigmaban.urdf",
+    "sigmaban/sigmaban.nomesh.urdf",
+    "unitree_g1/g1_29dof_rev_1_0.urdf",
+    "unitree_g1/g1_29dof_rev_1_0.nomesh.urdf",
+    "unitree_g1/variants/g1_23dof_rev_1_0.urdf",
+    "unitree_g1/variants/g1_23dof_rev_1_0.nomesh.urdf",
+    "unitree_h1/h1.urdf",
+    "unitree_h1/h1.nomesh.urdf",
+    "unitree_h1/variants/h1_2025-06_a3b70ca.urdf",
+    "unitree_h1/variants/h1_2025-12_c4519eb.urdf",
+];
+
+/// Every MJCF robot in models/ (`op3/mjcf/scene.xml` is a scene that includes op3.xml).
+const MJCFS: &[&str] = &[
+    "op3/mjcf/op3.xml",
+    "talos/mjcf/talos.xml",
+    "unitree_g1/mjcf/g1_29dof_rev_1_0_unitree.xml",
+    "unitree_g1/mjcf/g1_menagerie.xml",
+    "unitree_h1/mjcf/h1_menagerie.xml",
+    "unitree_h1/mjcf/h1_unitree.xml",
+];
+
+#[test]
+fn the_lists_cover_every_bundled_model() {
+    let mut found = Vec::new();
+    let mut stack = vec![models_dir()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "urdf") {
+                let rel = p
+                    .strip_prefix(models_dir())
+                    .unwrap()
+                    .to_str()
+                    .unwrap()
+                    .replace('\\', "/");
+                found.push(rel);
+            }
+        }
+    }
+    found.sort();
+    let mut listed: Vec<String> = URDFS.iter().map(|s| s.to_string()).collect();
+    listed.sort();
+    assert_eq!(found, listed);
+}
+
+#[test]
+fn every_urdf_agrees_with_its_source_summary() {
+    for rel in URDFS {
+        agrees_with_source(rel, &lint_file(rel));
+    }
+}
+
+#[test]
+fn clean_urdfs_have_nothing_at_error_level() {
+    for rel in URDFS {
+        if rel.starts_with("op2/") || rel.starts_with("coman/") {
+            continue;
+        }
+        let r = lint_file(rel);
+        assert!(!r.has_errors(), "{rel}: {:#?}", r.findings);
+    }
+}
+
+#[test]
+fn op2_placeholders_are_errors_on_every_inertia() {
+    for rel in ["op2/robotis_op2.urdf", "op2/robotis_op2.nomesh.urdf"] {
+        let r = lint_file(rel);
+        let with_inertial = r.links - r.links_without_inertial;
+        assert_eq!(with_inertial, 21);
+        assert_eq!(r.errors, 21, "{rel}");
+        assert_eq!(
+            r.with_code(codes::INERTIA_NOT_POSITIVE_DEFINITE).count(),
+            21
+        );
+        for f in r.with_code(codes::INERTIA_NOT_POSITIVE_DEFINITE) {
+            assert_eq!(f.severity, Severity::Error);
+            assert!(f.message.contains("semi-definite"), "{}", f.message);
+        }
+        assert_eq!(findings(&r).len(), 21, "{rel}: {:#?}", r.findings);
+    }
+}
+
+#[test]
+fn coman_has_exactly_one_invalid_inertia() {
+    for rel in ["coman/coman.urdf", "coman/coman.nomesh.urdf"] {
+        let r = lint_file(rel);
+        assert_eq!(
+            findings(&r),
+            expect(&[(Severity::Error, codes::TRIANGLE_INEQUALITY, &["Xtion_body"])]),
+            "{rel}"
+        );
+        let f = r.with_code(codes::TRIANGLE_INEQUALITY).next().unwrap();
+        // SOURCE.md: I1+I2=0.009503 < I3=0.01001
+        assert!(
+            f.message.contains("I1+I2=0.00950255 < I3=0.01000745"),
+            "{}",
+            f.message
+        );
+        assert_eq!(
+            (r.dof, r.moving_joints),
+            (35, 30),
+            "29 revolute + one floating joint"
+        );
+    }
+}
+
+#[test]
+fn models_without_findings() {
+    for rel in [
+        "op3/robotis_op3.urdf",
+        "op3/robotis_op3.nomesh.urdf",
+        "darwin_op/robotis_op.urdf",
+        "darwin_op/robotis_op.nomesh.urdf",
+        "icub/iCubGazeboV2_5.urdf",
+        "icub/iCubGazeboV2_5.nomesh.urdf",
+        "icub/variants/iCubErzelli02.urdf",
+        "icub/variants/iCubErzelli02.nomesh.urdf",
+        "unitree_g1/g1_29dof_rev_1_0.urdf",
+        "unitree_g1/g1_29dof_rev_1_0.nomesh.urdf",
+        "unitree_g1/variants/g1_23dof_rev_1_0.urdf",
+        "unitree_g1/variants/g1_23dof_rev_1_0.nomesh.urdf",
+        "unitree_h1/h1.urdf",
+        "unitree_h1/h1.nomesh.urdf",
+        "unitree_h1/variants/h1_2025-06_a3b70ca.urdf",
+        "unitree_h1/variants/h1_2025-12_c4519eb.urdf",
+    ] {
+        let r = lint_file(rel);
+        assert_eq!(findings(&r), vec![], "{rel}");
+        assert_eq!(r.with_code(codes::TOTAL_MASS).count(), 1);
+    }
+}
+
+#[test]
+fn op3_totals() {
+    let r = lint_file("op3/robotis_op3.urdf");
+    assert!((r.total_mass - 3.14747).abs() < 1e-9, "{}", r.total_mass);
+    assert_eq!(
+        (
+            r.links,
+            r.links_without_inertial,
+            r.joints,
+            r.moving_joints,
+            r.dof
+        ),
+        (23, 2, 22, 20, 20)
+    );
+    assert_eq!((r.errors, r.warnings, r.infos), (0, 0, 1));
+    let f = r.with_code(codes::TOTAL_MASS).next().unwrap();
+    assert!(
+        f.message.starts_with("total mass 3.14747 kg over 23 links"),
+        "{}",
+        f.message
+    );
+}
+
+const NAO_MIMICS: &[&str] = &[
+    "RHipYawPitch",
+    "RFinger13",
+    "RFinger12",
+    "LFinger21",
+    "LFinger13",
+    "LFinger11",
+    "RFinger22",
+    "LFinger22",
+    "RFinger21",
+    "LFinger12",
+    "RFinger23",
+    "RFinger11",
+    "LFinger23",
+    "LThumb1",
+    "RThumb1",
+    "RThumb2",
+    "LThumb2",
+];
+
+#[test]
+fn nao_mimics_and_truncated_hip_axes_are_warnings() {
+    for rel in [
+        "nao/nao_V50.urdf",
+        "nao/nao_V50.nomesh.urdf",
+        "nao/variants/nao_V50_committed.urdf",
+    ] {
+        let r = lint_file(rel);
+        assert_eq!(
+            findings(&r),
+            expect(&[
+                (Severity::Warning, codes::MIMIC_JOINT, NAO_MIMICS),
+                (
+                    Severity::Warning,
+                    codes::NON_UNIT_AXIS,
+                    &["LHipYawPitch", "RHipYawPitch"]
+                ),
+            ]),
+            "{rel}"
+        );
+        assert_eq!(r.mimic_joints, 17);
+    }
+}
+
+const SIGMABAN_JOINTS: &[&str] = &[
+    "right_elbow",
+    "right_shoulder_roll",
+    "right_shoulder_pitch",
+    "left_elbow",
+    "left_shoulder_roll",
+    "left_shoulder_pitch",
+    "left_ankle_roll",
+    "left_ankle_pitch",
+    "left_knee",
+    "left_hip_pitch",
+    "left_hip_roll",
+    "left_hip_yaw",
+    "right_ankle_roll",
+    "right_ankle_pitch",
+    "right_knee",
+    "right_hip_pitch",
+    "right_hip_roll",
+    "right_hip_yaw",
+    "head_pitch",
+    "head_yaw",
+];
+
+#[test]
+fn sigmaban_dummy_frames_and_missing_ranges_are_warnings() {
+    for rel in ["sigmaban/sigmaban.urdf", "sigmaban/sigmaban.nomesh.urdf"] {
+        let r = lint_file(rel);
+        assert_eq!(
+            findings(&r),
+            expect(&[
+                (
+                    Severity::Warning,
+                    codes::ZERO_INERTIA_WITH_MASS,
+                    &[
+                        "head_base",
+                        "trunk",
+                        "left_foot_tip",
+                        "right_foot_tip",
+                        "vive_head",
+                        "camera"
+                    ]
+                ),
+                (Severity::Warning, codes::MISSING_LIMITS, SIGMABAN_JOINTS),
+            ]),
+            "{rel}"
+        );
+        for f in r.with_code(codes::ZERO_INERTIA_WITH_MASS) {
+            assert!(f.message.contains("1e-9 kg"), "{}", f.message);
+        }
+    }
+}
+
+#[test]
+fn every_mjcf_agrees_with_its_source_summary() {
+    for rel in MJCFS {
+        agrees_with_source(rel, &lint_file(rel));
+    }
+}
+
+#[test]
+fn mjcf_models_have_no_errors_or_warnings() {
+    for rel in MJCFS {
+        let r = lint_file(rel);
+        assert_eq!((r.errors, r.warnings), (0, 0), "{rel}: {:#?}", r.findings);
+        // MJCF joints carry no effort or velocity limit (actuators do): one info
+        // per ranged joint. OP3's hinges have no range, so they are continuous.
+        let ranged = r.moving_joints;
+        let want = if rel.starts_with("op3/") { 0 } else { ranged };
+        assert_eq!(
+            r.with_code(codes::MISSING_EFFORT_VELOCITY).count(),
+            want,
+            "{rel}"
+        );
+        assert_eq!(r.infos, want + 1, "{rel}");
+    }
+}
+
+#[test]
+fn op3_mjcf_and_urdf_weigh_the_same() {
+    let urdf = lint_file("op3/robotis_op3.urdf");
+    let mjcf = lint_file("op3/mjcf/op3.xml");
+    assert!((urdf.total_mass - mjcf.total_mass).abs() < 1e-12);
+    assert_eq!(urdf.dof, mjcf.dof);
+}

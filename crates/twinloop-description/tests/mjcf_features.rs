@@ -1,0 +1,630 @@
+//! MJCF features on small inline models, errors with their places, and
+//! mutation fuzzing of a real MJCF.
+
+use std::f64::consts::PI;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use twinloop_description::{
+    Description, DescriptionError, Geometry, JointKind, Pose, mjcf, rpy_to_matrix,
+};
+
+fn ok(text: &str) -> Description {
+    mjcf::from_str(text).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn err(text: &str) -> DescriptionError {
+    match mjcf::from_str(text) {
+        Ok(_) => panic!("expected an error for:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() < 1e-12
+}
+
+fn close3(a: [f64; 3], b: [f64; 3]) -> bool {
+    (0..3).all(|i| close(a[i], b[i]))
+}
+
+fn apply(p: &Pose, v: [f64; 3]) -> [f64; 3] {
+    let r = rpy_to_matrix(p.rpy);
+    [
+        r[0][0] * v[0] + r[0][1] * v[1] + r[0][2] * v[2] + p.xyz[0],
+        r[1][0] * v[0] + r[1][1] * v[1] + r[1][2] * v[2] + p.xyz[1],
+        r[2][0] * v[0] + r[2][1] * v[1] + r[2][2] * v[2] + p.xyz[2],
+    ]
+}
+
+#[test]
+fn angles_are_degrees_unless_said_otherwise() {
+    let text = r#"<mujoco model="m">
+  <worldbody>
+    <body name="a">
+      <body name="b" pos="1 0 0" euler="0 0 90">
+        <joint name="j" range="-90 45"/>
+      </body>
+      <body name="c" axisangle="0 0 1 180"/>
+    </body>
+  </worldbody>
+</mujoco>"#;
+    let r = ok(text);
+    let j = r.joint("j").unwrap();
+    assert_eq!(j.kind, JointKind::Revolute);
+    let l = j.limit.unwrap();
+    assert!(close(l.lower.unwrap(), -PI / 2.0) && close(l.upper.unwrap(), PI / 4.0));
+    assert!(close(j.origin.rpy[2], PI / 2.0), "{:?}", j.origin);
+    assert_eq!(j.axis, Some([0.0, 0.0, 1.0]));
+    assert!(close(r.joint("c_fixed").unwrap().origin.rpy[2].abs(), PI));
+    let radian = text.replace(
+        "<mujoco model=\"m\">",
+        "<mujoco model=\"m\">\n  <compiler angle=\"radian\"/>",
+    );
+    let r = ok(&radian);
+    let l = r.joint("j").unwrap().limit.unwrap();
+    assert_eq!((l.lower, l.upper), (Some(-90.0), Some(45.0)));
+}
+
+#[test]
+fn euler_sequences() {
+    // Intrinsic xyz (MuJoCo's default): R = Rx(a) Ry(b) Rz(c).
+    let r = ok(
+        r#"<mujoco><compiler angle="radian"/><worldbody><body name="a">
+      <body name="b" euler="0.3 0.2 0.1"/></body></worldbody></mujoco>"#,
+    );
+    let got = rpy_to_matrix(r.joints[0].origin.rpy);
+    let rx = rpy_to_matrix([0.3, 0.0, 0.0]);
+    let ry = rpy_to_matrix([0.0, 0.2, 0.0]);
+    let rz = rpy_to_matrix([0.0, 0.0, 0.1]);
+    let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| {
+        let mut m = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+            }
+        }
+        m
+    };
+    let want = mul(mul(rx, ry), rz);
+    for i in 0..3 {
+        assert!(close3(got[i], want[i]), "{got:?} vs {want:?}");
+    }
+    // Extrinsic XYZ is URDF's rpy.
+    let r = ok(
+        r#"<mujoco><compiler angle="radian" eulerseq="XYZ"/><worldbody><body name="a">
+      <body name="b" euler="0.3 0.2 0.1"/></body></worldbody></mujoco>"#,
+    );
+    assert!(
+        close3(r.joints[0].origin.rpy, [0.3, 0.2, 0.1]),
+        "{:?}",
+        r.joints[0].origin
+    );
+}
+
+#[test]
+fn quaternions_are_normalised_and_other_orientations_work() {
+    let r = ok(r#"<mujoco><worldbody><body name="a">
+      <body name="q" quat="1 1 0 0"/>
+      <body name="z" zaxis="0 0 -1"/>
+      <body name="xy" xyaxes="0 1 0 -1 0 0"/>
+    </body></worldbody></mujoco>"#);
+    assert!(close3(
+        r.joint("q_fixed").unwrap().origin.rpy,
+        [PI / 2.0, 0.0, 0.0]
+    ));
+    let z = rpy_to_matrix(r.joint("z_fixed").unwrap().origin.rpy);
+    assert!(close(z[2][2], -1.0));
+    assert!(close3(
+        r.joint("xy_fixed").unwrap().origin.rpy,
+        [0.0, 0.0, PI / 2.0]
+    ));
+}
+
+#[test]
+fn default_classes_nest_and_childclass_applies() {
+    let r = ok(r#"<mujoco>
+  <compiler angle="radian" meshdir="meshes/"/>
+  <default>
+    <joint axis="0 1 0" damping="0.5"/>
+    <mesh scale="0.001 0.001 0.001"/>
+    <geom type="box" size="0.1 0.2 0.3"/>
+    <default class="arm">
+      <joint range="-1 1" frictionloss="0.2"/>
+      <default class="hand">
+        <joint axis="1 0 0"/>
+        <geom type="sphere" size="0.05" group="3"/>
+      </default>
+    </default>
+  </default>
+  <asset>
+    <mesh file="parts/upper arm.stl"/>
+    <mesh name="m2" file="/abs/hand.stl" scale="1 1 2"/>
+  </asset>
+  <worldbody>
+    <body name="base">
+      <geom/>
+      <body name="upper" childclass="arm">
+        <joint name="shoulder"/>
+        <geom type="mesh" mesh="upper arm"/>
+        <body name="hand">
+          <joint name="wrist" class="hand" range="-2 2"/>
+          <geom class="hand"/>
+          <geom type="mesh" mesh="m2"/>
+        </body>
+      </body>
+      <body name="free_spin">
+        <joint name="spin" limited="false" range="-1 1"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>"#);
+    let s = r.joint("shoulder").unwrap();
+    assert_eq!(s.axis, Some([0.0, 1.0, 0.0]));
+    assert_eq!(s.kind, JointKind::Revolute);
+    let d = s.dynamics.unwrap();
+    assert_eq!((d.damping, d.friction), (Some(0.5), Some(0.2)));
+    let w = r.joint("wrist").unwrap();
+    assert_eq!(w.axis, Some([1.0, 0.0, 0.0]));
+    assert_eq!(w.limit.unwrap().upper, Some(2.0));
+    assert_eq!(r.joint("spin").unwrap().kind, JointKind::Continuous);
+    assert_eq!(r.joint("spin").unwrap().limit, None);
+    let base = r.link("base").unwrap();
+    assert_eq!(
+        base.visuals[0].geometry,
+        Geometry::Box {
+            size: [0.2, 0.4, 0.6]
+        }
+    );
+    assert_eq!(base.collisions.len(), 1);
+    let upper = r.link("upper").unwrap();
+    assert_eq!(
+        upper.visuals[0].geometry,
+        Geometry::Mesh {
+            filename: "meshes/parts/upper arm.stl".into(),
+            scale: Some([0.001; 3])
+        }
+    );
+    let hand = r.link("hand").unwrap();
+    // The group-3 sphere is collision only; the mesh geom is both.
+    assert_eq!(hand.visuals.len(), 1);
+    assert_eq!(hand.collisions.len(), 2);
+    assert_eq!(
+        hand.collisions[0].geometry,
+        Geometry::Sphere { radius: 0.05 }
+    );
+    assert_eq!(
+        hand.visuals[0].geometry,
+        Geometry::Mesh {
+            filename: "/abs/hand.stl".into(),
+            scale: Some([1.0, 1.0, 2.0])
+        }
+    );
+}
+
+#[test]
+fn geoms_sites_materials() {
+    let r = ok(r#"<mujoco>
+  <asset><material name="red" rgba="1 0 0 1"/></asset>
+  <worldbody>
+    <geom type="plane" size="1 1 0.1"/>
+    <body name="b">
+      <inertial pos="0 0 0.1" mass="2" diaginertia="0.1 0.2 0.3"/>
+      <geom name="cap" type="capsule" fromto="0 0 0 0 0 0.4" size="0.05" material="red"/>
+      <geom type="cylinder" size="0.1 0.2" pos="1 0 0" rgba="0 1 0 1" contype="0" conaffinity="0"/>
+      <geom type="box" fromto="0 0 0 0.2 0 0" size="0.01 0.02"/>
+      <geom type="ellipsoid" size="0.1 0.2 0.3"/>
+      <site name="tip" pos="0 0 0.4"/>
+      <site pos="0 0 0.2"/>
+    </body>
+  </worldbody>
+</mujoco>"#);
+    let b = r.link("b").unwrap();
+    assert_eq!(r.links.len(), 1);
+    assert!(r.joints.is_empty());
+    assert_eq!(b.visuals.len(), 3);
+    assert_eq!(b.collisions.len(), 2);
+    let cap = &b.visuals[0];
+    assert_eq!(cap.name.as_deref(), Some("cap"));
+    assert_eq!(
+        cap.geometry,
+        Geometry::Capsule {
+            radius: 0.05,
+            length: 0.4
+        }
+    );
+    assert!(close3(cap.origin.xyz, [0.0, 0.0, 0.2]) && close3(cap.origin.rpy, [0.0; 3]));
+    let m = cap.material.as_ref().unwrap();
+    assert_eq!(
+        (m.name.as_str(), m.rgba),
+        ("red", Some([1.0, 0.0, 0.0, 1.0]))
+    );
+    let cyl = &b.visuals[1];
+    assert_eq!(
+        cyl.geometry,
+        Geometry::Cylinder {
+            radius: 0.1,
+            length: 0.4
+        }
+    );
+    assert_eq!(
+        cyl.material.as_ref().unwrap().rgba,
+        Some([0.0, 1.0, 0.0, 1.0])
+    );
+    assert_eq!(cyl.material.as_ref().unwrap().name, "b_geom2_material");
+    // A box along x from fromto: its z axis turned onto x.
+    let bx = &b.visuals[2];
+    assert_eq!(
+        bx.geometry,
+        Geometry::Box {
+            size: [0.02, 0.04, 0.2]
+        }
+    );
+    let z = rpy_to_matrix(bx.origin.rpy);
+    assert!(close3([z[0][2], z[1][2], z[2][2]], [1.0, 0.0, 0.0]));
+    assert!(close3(bx.origin.xyz, [0.1, 0.0, 0.0]));
+    assert_eq!(r.frames.len(), 2);
+    assert_eq!(r.frames[0].name, "tip");
+    assert_eq!(r.frames[1].name, "b_site2");
+    assert_eq!(r.frames[1].origin.xyz, [0.0, 0.0, 0.2]);
+    let i = b.inertial.unwrap();
+    assert_eq!(
+        (i.mass, i.inertia.iyy, i.origin.xyz),
+        (2.0, 0.2, [0.0, 0.0, 0.1])
+    );
+}
+
+/// A hinge with `pos`: the axis passes through that point of the body. The
+/// link frame is put there, so everything in the body moves by -pos.
+#[test]
+fn hinge_pos_moves_the_link_frame_to_the_axis() {
+    let r = ok(r#"<mujoco><compiler angle="radian"/><worldbody>
+  <body name="a">
+    <body name="b" pos="1 0 0">
+      <joint name="j" pos="0 1 0" axis="0 0 1"/>
+      <inertial pos="0.5 0 0" mass="1" diaginertia="1 1 1"/>
+      <site name="origin_of_b"/>
+      <body name="c" pos="2 0 0"/>
+    </body>
+  </body>
+</worldbody></mujoco>"#);
+    let j = r.joint("j").unwrap();
+    assert_eq!(j.kind, JointKind::Continuous);
+    assert!(close3(j.origin.xyz, [1.0, 1.0, 0.0]));
+    let site = &r.frames[0];
+    assert!(close3(site.origin.xyz, [0.0, -1.0, 0.0]));
+    assert!(close3(
+        r.link("b").unwrap().inertial.unwrap().origin.xyz,
+        [0.5, -1.0, 0.0]
+    ));
+    assert!(close3(
+        r.joint("c_fixed").unwrap().origin.xyz,
+        [2.0, -1.0, 0.0]
+    ));
+    // Where body b's origin goes when the hinge turns by t, MuJoCo's way: about
+    // the vertical line through (1, 1, 0): (1 + sin t, 1 - cos t, 0).
+    for t in [0.0, 0.3, -1.2, 2.5] {
+        let joint_frame = Pose::new(j.origin.xyz, [0.0, 0.0, t]);
+        let p = apply(&joint_frame, site.origin.xyz);
+        assert!(
+            close3(p, [1.0 + t.sin(), 1.0 - t.cos(), 0.0]),
+            "t={t}: {p:?}"
+        );
+    }
+}
+
+#[test]
+fn root_body_cases() {
+    // Free joint: the body is the root, no world link, no joint.
+    let r = ok(
+        r#"<mujoco><worldbody><body name="pelvis" pos="0 0 1"><freejoint/>
+      <body name="leg"><joint type="slide" axis="0 0 2" range="-0.1 0.2"/></body></body></worldbody></mujoco>"#,
+    );
+    assert_eq!(r.root_link(), Some("pelvis"));
+    assert_eq!(r.joints.len(), 1);
+    let s = &r.joints[0];
+    assert_eq!(
+        (s.name.as_str(), s.kind),
+        ("leg_joint", JointKind::Prismatic)
+    );
+    assert_eq!(s.axis, Some([0.0, 0.0, 1.0]));
+    assert_eq!(s.limit.unwrap().upper, Some(0.2)); // no degree conversion for slides
+    let r2 = ok(
+        r#"<mujoco><worldbody><body name="pelvis"><joint type="free"/></body></worldbody></mujoco>"#,
+    );
+    assert_eq!((r2.links.len(), r2.joints.len()), (1, 0));
+    // A hinge on the top body: a world link is added.
+    let r = ok(
+        r#"<mujoco><worldbody><body name="arm" pos="0 0 1"><joint name="j"/></body></worldbody></mujoco>"#,
+    );
+    assert_eq!(r.root_link(), Some("world"));
+    assert_eq!(r.joint("j").unwrap().origin.xyz, [0.0, 0.0, 1.0]);
+    // Unnamed bodies get names.
+    let r = ok(r#"<mujoco><worldbody><body><body><joint/></body></body></worldbody></mujoco>"#);
+    assert_eq!(r.links[0].name, "body1");
+    assert_eq!(r.joints[0].name, "body2_joint");
+}
+
+#[test]
+fn autolimits_off() {
+    let r = ok(
+        r#"<mujoco><compiler autolimits="false"/><worldbody><body name="a">
+      <body name="b"><joint name="j" range="-10 10"/></body>
+      <body name="c"><joint name="k" limited="true" range="-10 10"/></body></body></worldbody></mujoco>"#,
+    );
+    assert_eq!(r.joint("j").unwrap().kind, JointKind::Continuous);
+    assert_eq!(r.joint("k").unwrap().kind, JointKind::Revolute);
+}
+
+/// The error is on `line`, names `element`, and says `says`.
+fn check(e: &DescriptionError, line: u32, element: &str, says: &str) {
+    let shown = e.to_string();
+    assert_eq!(e.location.line, Some(line), "line of: {shown}");
+    assert!(shown.starts_with(&format!("line {line}:")), "{shown}");
+    let el = e.location.element.as_deref().unwrap_or("");
+    assert!(el.contains(element), "element {element:?} in: {shown}");
+    assert!(e.message.contains(says), "{says:?} in: {shown}");
+}
+
+const GOOD: &str = r#"<mujoco model="t">
+  <compiler angle="radian"/>
+  <default>
+    <default class="c"><joint damping="1"/></default>
+  </default>
+  <worldbody>
+    <body name="base">
+      <freejoint/>
+      <inertial pos="0 0 0" mass="1" diaginertia="0.1 0.1 0.1"/>
+      <body name="thigh" pos="0 0 -0.1">
+        <joint name="hip" axis="0 1 0" range="-1 1"/>
+        <geom type="box" size="0.1 0.1 0.1"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"#;
+
+fn with(from: &str, to: &str) -> String {
+    assert_eq!(GOOD.matches(from).count(), 1, "{from}");
+    GOOD.replacen(from, to, 1)
+}
+
+#[test]
+fn errors_name_line_and_element() {
+    assert_eq!(ok(GOOD).links.len(), 2);
+    check(
+        &err(&with(
+            r#"<joint name="hip""#,
+            r#"<joint name="hip" type="ball""#,
+        )),
+        11,
+        r#"<joint name="hip">"#,
+        "ball joints are not supported",
+    );
+    check(
+        &err(&with(
+            r#"<joint name="hip""#,
+            r#"<joint name="hip" type="hinged""#,
+        )),
+        11,
+        r#"<joint name="hip">"#,
+        r#"unknown joint type "hinged""#,
+    );
+    check(
+        &err(&with("<freejoint/>", "<freejoint/><joint name=\"x\"/>")),
+        7,
+        r#"<body name="base">"#,
+        "only one joint per body",
+    );
+    check(
+        &err(&with(r#"axis="0 1 0""#, r#"axis="0 NaN 0""#)),
+        11,
+        r#"<joint name="hip">"#,
+        "not finite",
+    );
+    check(
+        &err(&with(r#"axis="0 1 0""#, r#"axis="0 0 0""#)),
+        11,
+        r#"<joint name="hip">"#,
+        "zero axis",
+    );
+    check(
+        &err(&with(r#"range="-1 1""#, r#"range="-1""#)),
+        11,
+        r#"<joint name="hip">"#,
+        "expected 2 numbers, found 1",
+    );
+    check(
+        &err(&with(
+            r#"<joint name="hip""#,
+            r#"<joint name="hip" class="nope""#,
+        )),
+        11,
+        r#"<joint name="hip">"#,
+        r#"unknown default class "nope""#,
+    );
+    check(
+        &err(&with(r#"size="0.1 0.1 0.1""#, r#"size="0.1 0.1""#)),
+        12,
+        r#"<geom> in <body name="thigh">"#,
+        "box geom needs 3 size",
+    );
+    check(
+        &err(&with(r#" mass="1""#, "")),
+        9,
+        r#"<inertial> in <body name="base">"#,
+        r#"missing attribute "mass""#,
+    );
+    check(
+        &err(&with(
+            r#"<compiler angle="radian"/>"#,
+            r#"<compiler angle="rad"/>"#,
+        )),
+        2,
+        "<compiler>",
+        "expected \"degree\" or \"radian\"",
+    );
+    check(
+        &err(&with(
+            r#"<joint name="hip" axis="0 1 0" range="-1 1"/>"#,
+            "<freejoint/>",
+        )),
+        11,
+        "<freejoint>",
+        "only supported on the top-level body",
+    );
+    check(
+        &err(&with(
+            "  </worldbody>",
+            "    <body name=\"other\"/>\n  </worldbody>",
+        )),
+        15,
+        r#"<body name="other">"#,
+        "second top-level body",
+    );
+    check(
+        &err(&with(r#"<body name="thigh""#, r#"<body name="base""#)),
+        10,
+        r#"<link name="base">"#,
+        "duplicate link name",
+    );
+    check(
+        &err(&with("<worldbody>", "<worldbody><frame/>")),
+        6,
+        "<frame>",
+        "not supported",
+    );
+    // Truncated and not XML.
+    let e = err(&GOOD[..GOOD.find("<geom").unwrap()]);
+    assert!(
+        e.message.starts_with("malformed XML") && e.location.line == Some(12),
+        "{e}"
+    );
+    check(
+        &err("<robot name=\"x\"/>"),
+        1,
+        "<robot",
+        "an MJCF model has <mujoco>",
+    );
+    check(&err("<mujoco/>"), 1, "<mujoco>", "no <body>");
+}
+
+#[test]
+fn mutated_mjcf_never_panics() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/op3/mjcf/op3.xml");
+    let original = std::fs::read(path).unwrap();
+    let mut seed: u64 = 0x6d6a_6366_0000_0001;
+    let mut next = move || {
+        seed ^= seed >> 12;
+        seed ^= seed << 25;
+        seed ^= seed >> 27;
+        seed.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    };
+    let (mut accepted, mut rejected) = (0, 0);
+    for _ in 0..600 {
+        let mut t = original.clone();
+        for _ in 0..1 + next() % 3 {
+            let n = t.len().max(1) as u64;
+            let a = (next() % n) as usize;
+            match next() % 6 {
+                0 => t.truncate(a),
+                1 => {
+                    let b = (a + 1 + (next() % 120) as usize).min(t.len());
+                    t.drain(a.min(b)..b);
+                }
+                2 => {
+                    let b = (a + 1 + (next() % 200) as usize).min(t.len());
+                    let piece = t[a.min(b)..b].to_vec();
+                    let at = (next() % (t.len() as u64 + 1)) as usize;
+                    t.splice(at..at, piece);
+                }
+                3 => {
+                    if let Some(i) = (a..t.len()).find(|&i| t[i].is_ascii_digit()) {
+                        let to: &[u8] =
+                            [&b"nan"[..], b"x", b"-", b"1e400", b""][(next() % 5) as usize];
+                        t.splice(i..i + 1, to.iter().copied());
+                    }
+                }
+                4 => {
+                    let words: [&[u8]; 6] = [
+                        b"hinge",
+                        b"ball",
+                        b"slide",
+                        b"free",
+                        b"class",
+                        b"childclass",
+                    ];
+                    let w = words[(next() % 6) as usize];
+                    if a < t.len() {
+                        t.splice(a..a, w.iter().copied());
+                    }
+                }
+                _ => {
+                    let tags: [(&[u8], &[u8]); 4] = [
+                        (b"<body", b"<geom"),
+                        (b"<joint", b"<freejoint"),
+                        (b"</body>", b""),
+                        (b"<inertial", b"<site"),
+                    ];
+                    let (from, to) = tags[(next() % 4) as usize];
+                    if let Some(i) = (a..t.len().saturating_sub(from.len()))
+                        .find(|&i| &t[i..i + from.len()] == from)
+                    {
+                        t.splice(i..i + from.len(), to.iter().copied());
+                    }
+                }
+            }
+        }
+        let text = String::from_utf8_lossy(&t).into_owned();
+        match catch_unwind(AssertUnwindSafe(|| mjcf::from_str(&text).is_ok())) {
+            Ok(true) => accepted += 1,
+            Ok(false) => rejected += 1,
+            Err(_) => {
+                let p = std::env::temp_dir().join("twinloop-mjcf-fuzz-panic.xml");
+                let _ = std::fs::write(&p, &text);
+                panic!("panic on a mutated op3.xml; saved to {}", p.display());
+            }
+        }
+    }
+    assert!(
+        accepted > 30 && rejected > 30,
+        "accepted {accepted}, rejected {rejected}"
+    );
+}
+
+/// Deep nesting is read without deep recursion.
+#[test]
+fn deeply_nested_bodies_and_classes() {
+    let (n, classes) = (3000, 300);
+    let mut s = String::from("<mujoco><default>");
+    for i in 0..classes {
+        s.push_str(&format!("<default class=\"c{i}\">"));
+    }
+    s.push_str("<joint axis=\"1 0 0\"/>");
+    for _ in 0..classes {
+        s.push_str("</default>");
+    }
+    s.push_str("</default><worldbody>");
+    for i in 0..n {
+        s.push_str(&format!(
+            "<body name=\"b{i}\" pos=\"0 0 -0.01\"><joint class=\"c{}\"/>",
+            classes - 1
+        ));
+    }
+    for _ in 0..n {
+        s.push_str("</body>");
+    }
+    s.push_str("</worldbody></mujoco>");
+    let r = mjcf::from_str(&s).unwrap();
+    assert_eq!(r.links.len(), n + 1);
+    assert_eq!(r.root_link(), Some("world"));
+    assert!(r.joints.iter().all(|j| j.axis == Some([1.0, 0.0, 0.0])));
+    // An error deep inside unnamed bodies names a short path.
+    let deep = format!(
+        "<mujoco><worldbody>{}<geom type=\"what\"/>{}</worldbody></mujoco>",
+        "<body>".repeat(n),
+        "</body>".repeat(n)
+    );
+    let e = mjcf::from_str(&deep).unwrap_err();
+    assert!(e.to_string().len() < 200, "{e}");
+    assert!(e.message.contains("unknown geom type \"what\""), "{e}");
+}
