@@ -10,9 +10,10 @@ use std::hint::black_box;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
-use twinloop_dynamics::configuration::{SplitMix64, random_configuration, random_tangent};
+use twinloop_dynamics::configuration::{random_configuration, random_tangent};
 use twinloop_dynamics::{Data, Model};
 use twinloop_io::{Quantity, StateColumns, Table};
+use twinloop_random::SplitMix64;
 
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {

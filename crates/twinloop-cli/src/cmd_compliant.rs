@@ -189,7 +189,7 @@ fn stiffness(args: StiffnessArgs) -> ExitCode {
         support: args.support,
         foot_frame: leg.foot_frame.clone(),
         mass: model.total_mass,
-        gravity: 9.81,
+        gravity: twinloop_description::GRAVITY,
         joint_positions: leg
             .joints
             .iter()
@@ -381,7 +381,7 @@ fn simulate(args: SimulateArgs) -> ExitCode {
     }
     if args.noise > 0.0 {
         // The first row stays exact: the fit starts the model there at rest.
-        let mut rng = twinloop_dynamics::configuration::SplitMix64(args.seed);
+        let mut rng = twinloop_random::SplitMix64(args.seed);
         for i in 1..x.len() {
             x[i] += args.noise * rng.normal();
             z[i] += args.noise * rng.normal();

@@ -9,7 +9,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 use twinloop_description::Description;
-use twinloop_dynamics::configuration::SplitMix64;
 use twinloop_dynamics::{Data, Model};
 use twinloop_ident::html::{residual_sections, static_sections};
 use twinloop_ident::markers::{
@@ -28,6 +27,7 @@ use twinloop_ident::{
     write_static_poses,
 };
 use twinloop_io::{CsvWriter, Quantity};
+use twinloop_random::SplitMix64;
 use twinloop_report::Report;
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
@@ -387,7 +387,7 @@ fn squat(a: &SquatArgs) -> Result<(), String> {
         zh,
         lo,
         hi,
-        model.total_mass * 9.81
+        model.total_mass * twinloop_description::GRAVITY
     ));
     Ok(())
 }

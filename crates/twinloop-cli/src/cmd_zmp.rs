@@ -34,7 +34,7 @@ pub struct ZmpArgs {
     #[arg(long, default_value_t = 1.0)]
     pub settle: f64,
     /// Gravity, m/s^2.
-    #[arg(long, default_value_t = 9.81)]
+    #[arg(long, default_value_t = twinloop_description::GRAVITY)]
     pub gravity: f64,
     /// Sample time, s.
     #[arg(long, default_value_t = 1e-3)]

@@ -306,7 +306,7 @@ mod tests {
         // COMAN-like entries (a 0.5 rad crouch, forces-only x-z stiffness)
         SagittalCompliance {
             m: 32.05,
-            g: 9.81,
+            g: twinloop_description::GRAVITY,
             Kxx: 441.0,
             Kxz: -2173.0,
             Kzx: -2173.0,

@@ -266,7 +266,7 @@ impl WalkingConfig {
             step_width,
             steps,
             com_height,
-            gravity: 9.81,
+            gravity: twinloop_description::GRAVITY,
             t_start: self.t_start,
             t_end,
             ..GaitPlan::default()
@@ -805,7 +805,7 @@ impl ComanWalker {
             k_compliant: self.config.compliant_stiffness(),
             ankle_stability_ratio: self.config.ankle_stability_ratio(
                 model.total_mass,
-                9.81,
+                twinloop_description::GRAVITY,
                 plan.com_height,
             ),
             mass: model.total_mass,

@@ -101,7 +101,7 @@ impl Default for GaitPlan {
             step_width: 0.14,
             steps: 10,
             com_height: 0.5,
-            gravity: 9.81,
+            gravity: twinloop_description::GRAVITY,
             t_start: 1.0,
             t_end: 1.0,
             foot_length: 0.2,

@@ -20,3 +20,7 @@ pub use builder::{DescriptionBuilder, JointBuilder, LinkBuilder};
 pub use description::*;
 pub use error::{DescriptionError, Location};
 pub use load::load;
+
+/// Standard gravity, m/s^2: the 9.81 of every seed paper. World z is up, so the
+/// gravity vector is (0, 0, -GRAVITY) unless a description says otherwise.
+pub const GRAVITY: f64 = 9.81;

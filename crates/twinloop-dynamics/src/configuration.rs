@@ -2,6 +2,7 @@
 
 use crate::model::Model;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use twinloop_random::SplitMix64;
 use twinloop_spatial::{matrix_to_quaternion_xyzw, quaternion_xyzw_to_matrix};
 
 /// `q (+) v dt`: joints add, the base moves along the twist `v[0..6]` (base frame)
@@ -57,33 +58,6 @@ pub fn normalize(model: &Model, q: &mut [f64]) {
         for x in &mut q[3..7] {
             *x /= n;
         }
-    }
-}
-
-/// A small deterministic generator (SplitMix64) for benchmarks and tests, so that
-/// "random states" are the same on every machine.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(pub u64);
-
-impl SplitMix64 {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [lo, hi).
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-
-    /// Standard normal (Box-Muller).
-    pub fn normal(&mut self) -> f64 {
-        let u1 = self.uniform(f64::MIN_POSITIVE, 1.0);
-        let u2 = self.uniform(0.0, 1.0);
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
     }
 }
 

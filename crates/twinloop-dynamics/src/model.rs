@@ -197,7 +197,7 @@ impl Model {
             effort_limits: Vec::new(),
             velocity_limits: Vec::new(),
             armature: Vec::new(),
-            gravity: Vector3::new(0.0, 0.0, -9.81),
+            gravity: Vector3::new(0.0, 0.0, -twinloop_description::GRAVITY),
             frames: Vec::new(),
             links: Vec::new(),
             total_mass: 0.0,

@@ -6,10 +6,9 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use twinloop_description::{
     Description, DescriptionBuilder, Inertia, Inertial, JointKind, Link, Pose,
 };
-use twinloop_dynamics::configuration::{
-    SplitMix64, integrate, random_configuration, random_tangent,
-};
+use twinloop_dynamics::configuration::{integrate, random_configuration, random_tangent};
 use twinloop_dynamics::*;
+use twinloop_random::SplitMix64;
 
 fn random_robot(seed: u64, nlinks: usize) -> Description {
     let mut rng = SplitMix64(seed);

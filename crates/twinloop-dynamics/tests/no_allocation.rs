@@ -3,8 +3,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use twinloop_description::{DescriptionBuilder, Inertia, JointKind, Pose};
-use twinloop_dynamics::configuration::{SplitMix64, random_configuration, random_tangent};
+use twinloop_dynamics::configuration::{random_configuration, random_tangent};
 use twinloop_dynamics::*;
+use twinloop_random::SplitMix64;
 
 struct Counting;
 

@@ -20,6 +20,7 @@
 use crate::sequence::{GaitError, JointGoals, OFFSET_JOINTS, SequenceOptions, generate};
 use twinloop_description::Description;
 use twinloop_description::builtin::servo::LD2015;
+use twinloop_random::SplitMix64;
 use twinloop_robot::RobotState;
 use twinloop_sim::sensors::MPU6050_GYRO_LSB_PER_DEG_S;
 use twinloop_sim::{Actuator, SimConfig, Simulator, TwoLoopServo, quantize};
@@ -115,25 +116,6 @@ pub struct WalkDataset {
     pub travel: [f64; 2],
     /// Trunk yaw change over the record, degrees.
     pub yaw_deg: f64,
-}
-
-/// White Gaussian noise from a seed (splitmix64 and Box-Muller).
-struct Noise(u64);
-
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn normal(&mut self) -> f64 {
-        let a = self.uniform().max(f64::MIN_POSITIVE);
-        let b = self.uniform();
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-    }
 }
 
 fn trunk_pose(sim: &mut Simulator) -> Result<([f64; 3], f64, f64), GaitError> {
@@ -244,7 +226,7 @@ pub fn record_walk(robot: &Description, o: &DatasetOptions) -> Result<WalkDatase
         s.gyro_noise = noise_rad;
         s.set_noise_seed(o.noise_seed ^ 0x0068);
     }
-    let mut right_noise = Noise(o.noise_seed ^ 0x0069_0000_0000_0069);
+    let mut right_noise = SplitMix64(o.noise_seed ^ 0x0069_0000_0000_0069);
     let lsb = (1.0 / MPU6050_GYRO_LSB_PER_DEG_S).to_radians();
     sim.run(o.settle).map_err(sim_err)?;
 

@@ -23,8 +23,8 @@ use crate::ik::{Ik, IkOptions, Task};
 use crate::poses::{PoseCategory, StaticPose};
 use nalgebra::{Vector2, Vector3};
 use twinloop_description::Description;
-use twinloop_dynamics::configuration::SplitMix64;
 use twinloop_dynamics::{Data, Model};
+use twinloop_random::SplitMix64;
 
 /// What the generator is asked for.
 #[derive(Debug, Clone)]

@@ -663,7 +663,7 @@ fn complement(v: &DMatrix<f64>, q: &DMatrix<f64>) -> DMatrix<f64> {
 /// (random base orientation and joints), so only the tree's regrouping is left.
 pub fn structural_null_space(model: &Model, problem: &StaticProblem) -> DMatrix<f64> {
     let n = problem.unknowns();
-    let mut rng = twinloop_dynamics::configuration::SplitMix64(0x0057_A71C);
+    let mut rng = twinloop_random::SplitMix64(0x0057_A71C);
     let configs: Vec<StaticPose> = (0..(2 * n).max(8))
         .map(|_| StaticPose {
             q: twinloop_dynamics::configuration::random_configuration(model, &mut rng),

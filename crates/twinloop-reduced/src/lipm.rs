@@ -21,8 +21,7 @@
 
 use crate::error::{ReducedError, finite, non_negative, positive};
 
-/// Standard gravity, m/s^2 (the seeds' 9.81).
-pub const GRAVITY: f64 = 9.81;
+pub use twinloop_description::GRAVITY;
 
 /// A linear inverted pendulum (seed 000 eq. 1-3).
 #[derive(Debug, Clone, Copy, PartialEq)]

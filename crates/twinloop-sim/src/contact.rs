@@ -49,7 +49,7 @@ impl ContactParams {
     /// (1 mm by default), critically damped for the mass per point.
     pub fn for_robot(total_mass: f64, points: usize, sink: f64) -> Self {
         let per_point = total_mass / points.max(1) as f64;
-        let k = per_point * 9.81 / sink;
+        let k = per_point * twinloop_description::GRAVITY / sink;
         let d = 2.0 * (k * per_point).sqrt();
         ContactParams {
             stiffness: k,

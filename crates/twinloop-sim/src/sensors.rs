@@ -5,6 +5,7 @@ use crate::simulator::Simulator;
 use nalgebra::Vector3;
 use twinloop_description::Description;
 use twinloop_dynamics::{BASE, Data, Model, compute_joint_jacobians};
+use twinloop_random::SplitMix64;
 use twinloop_robot::{FootSensor, Imu, RobotState};
 
 /// MPU-6050 gyro scale at +-250 deg/s: 131 LSB per deg/s.
@@ -28,7 +29,7 @@ pub struct SensorState {
     pub accel_noise: f64,
     /// Links whose contact forces are reported as feet.
     pub feet: Vec<usize>,
-    rng: u64,
+    rng: SplitMix64,
     imu_velocity: Vector3<f64>,
     imu_velocity_time: Option<f64>,
     g: Vector3<f64>,
@@ -98,7 +99,7 @@ impl SensorState {
             gyro_noise: 0.0,
             accel_noise: 0.0,
             feet,
-            rng: 0x5EED_1234_ABCD_0001,
+            rng: SplitMix64(0x5EED_1234_ABCD_0001),
             imu_velocity: Vector3::zeros(),
             imu_velocity_time: None,
             g: model.gravity,
@@ -116,19 +117,11 @@ impl SensorState {
     }
 
     fn normal(&mut self) -> f64 {
-        let mut u = || {
-            self.rng = self.rng.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.rng;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let (a, b) = (u().max(f64::MIN_POSITIVE), u());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+        self.rng.normal()
     }
 
     pub fn set_noise_seed(&mut self, seed: u64) {
-        self.rng = seed;
+        self.rng = SplitMix64(seed);
     }
 }
 
@@ -234,7 +227,7 @@ impl Simulator {
         }
         if self.sensors.imu_quantize {
             let gstep = (1.0 / MPU6050_GYRO_LSB_PER_DEG_S).to_radians();
-            let astep = 9.81 / MPU6050_ACCEL_LSB_PER_G;
+            let astep = twinloop_description::GRAVITY / MPU6050_ACCEL_LSB_PER_G;
             gyro = gyro.map(|w| quantize(w, gstep));
             accel = accel.map(|a| quantize(a, astep));
         }

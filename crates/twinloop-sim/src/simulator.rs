@@ -32,7 +32,7 @@ impl Default for SimConfig {
     fn default() -> Self {
         SimConfig {
             dt: 1e-3,
-            gravity: Vector3::new(0.0, 0.0, -9.81),
+            gravity: Vector3::new(0.0, 0.0, -twinloop_description::GRAVITY),
             ground: true,
             contact: None,
             joint_limit_stiffness: None,

@@ -794,20 +794,10 @@ mod tests {
         assert_eq!(x, x0);
     }
 
-    /// Deterministic white noise (splitmix64, Box-Muller).
+    /// Deterministic white noise.
     fn noise(seed: u64, rows: usize, cols: usize, sd: f64) -> DMatrix<f64> {
-        let mut st = seed;
-        let mut uni = || {
-            st = st.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = st;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            (((z ^ (z >> 31)) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        DMatrix::from_fn(rows, cols, |_, _| {
-            let (a, b) = (uni(), uni());
-            sd * (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-        })
+        let mut rng = twinloop_random::SplitMix64(seed);
+        DMatrix::from_fn(rows, cols, |_, _| sd * rng.normal())
     }
 
     /// An output-error system (K = 0) with white measurement noise: the

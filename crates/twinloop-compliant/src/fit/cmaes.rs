@@ -5,7 +5,7 @@
 
 use super::{FitOptions, Minimum};
 use nalgebra::{DMatrix, DVector};
-use twinloop_dynamics::configuration::SplitMix64;
+use twinloop_random::SplitMix64;
 
 /// CMA-ES on any cost `f` from mean `x0` with step size `options.sigma`;
 /// `on_generation(evaluations, best f, best x)` after every generation.

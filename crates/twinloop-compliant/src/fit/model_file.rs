@@ -106,7 +106,7 @@ pub fn parse_model_file(text: &str, base: &Path) -> Result<SagittalCompliance, C
             }
             SagittalCompliance {
                 m: 0.0,
-                g: 9.81,
+                g: twinloop_description::GRAVITY,
                 Kxx: 0.0,
                 Kxz: 0.0,
                 Kzx: 0.0,
@@ -234,7 +234,7 @@ fn from_urdf(
     let d = cc.damping_xz();
     Ok(SagittalCompliance {
         m: model.total_mass,
-        g: 9.81,
+        g: twinloop_description::GRAVITY,
         Kxx: k[(0, 0)],
         Kxz: k[(0, 1)],
         Kzx: k[(1, 0)],

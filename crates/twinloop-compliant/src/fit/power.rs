@@ -16,7 +16,7 @@
 //! PoWER has no learning rate and a fixed exploration, as in Kober's reference code.
 
 use super::{FitOptions, Minimum};
-use twinloop_dynamics::configuration::SplitMix64;
+use twinloop_random::SplitMix64;
 
 /// Rollouts reused by importance sampling (Kober's reference code uses 10).
 pub const BEST: usize = 10;

@@ -4,7 +4,7 @@
 
 use super::dataset::Dataset;
 use crate::{CompactModel, CompliantError, GaitPlan, SagittalReference, ZmpReference, err};
-use twinloop_dynamics::configuration::SplitMix64;
+use twinloop_random::SplitMix64;
 
 /// The CoM reference (x, z) and phase of a gait plan, sampled every `dt` for at most
 /// `duration` seconds (the whole plan if shorter).

@@ -5,12 +5,12 @@
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use std::path::PathBuf;
-use twinloop_dynamics::configuration::SplitMix64;
 use twinloop_dynamics::{Data, Model};
 use twinloop_ident::markers::{
     Marker, MarkerIk, kabsch, marker_positions, markers_to_toml, parse_markers,
 };
 use twinloop_ident::validate::{Motion, Smoothing, SquatOptions, residual_wrench, squat_motion};
+use twinloop_random::SplitMix64;
 
 fn h1() -> (twinloop_description::Description, Model) {
     let robot = twinloop_description::load(

@@ -10,7 +10,7 @@ mod serial;
 mod tcp;
 
 pub use loopback::{LoopbackTransport, Responder};
-pub use noisy::{NoiseStats, NoisyTransport, SplitMix64};
+pub use noisy::{NoiseStats, NoisyTransport};
 pub use pty::{PtyTransport, TtyTransport};
 pub use serial::{SerialOptions, SerialTransport};
 pub use tcp::TcpTransport;
