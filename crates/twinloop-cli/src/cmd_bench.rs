@@ -108,7 +108,7 @@ struct States {
 fn load_states(model: &Model, args: &DynamicsBenchArgs) -> Result<States, String> {
     if let Some(path) = &args.states {
         let t = Table::read(path).map_err(|e| e.to_string())?;
-        let find = |qty| StateColumns::find(&t, model, qty).map_err(|e| e.to_string());
+        let find = |qty| crate::common::state_columns(&t, model, qty).map_err(|e| e.to_string());
         let cols = [
             find(Quantity::Q)?,
             find(Quantity::V)?,

@@ -81,7 +81,8 @@ fn kinematics_impl(args: &KinematicsArgs) -> Result<(), String> {
     let a = &args.batch;
     let model = load_model(&a.urdf, a.fixed_base)?;
     let table = Table::read(&a.trajectory).map_err(|e| e.to_string())?;
-    let qc = StateColumns::find(&table, &model, Quantity::Q).map_err(|e| e.to_string())?;
+    let qc =
+        StateColumns::find(&table, Quantity::Q, &model.q_names()).map_err(|e| e.to_string())?;
     let frames: Vec<usize> = if args.frames.is_empty() {
         (0..model.frames.len())
             .filter(|&k| model.frames[k].link.is_some())
@@ -172,9 +173,12 @@ fn per_row(
 ) -> Result<(), String> {
     let model = load_model(&a.urdf, a.fixed_base)?;
     let table = Table::read(&a.trajectory).map_err(|e| e.to_string())?;
-    let find = |qty| StateColumns::find(&table, &model, qty).map_err(|e| e.to_string());
+    let find = |qty| crate::common::state_columns(&table, &model, qty).map_err(|e| e.to_string());
     let (qc, vc, xc) = (find(Quantity::Q)?, find(Quantity::V)?, find(input)?);
-    let (tcol, cols) = with_time(&table, output.column_names(&model));
+    let (tcol, cols) = with_time(
+        &table,
+        output.column_names(&crate::common::coordinate_names(&model, output)),
+    );
     let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;
     let mut data = Data::new(&model);
     let (mut q, mut v, mut x) = (

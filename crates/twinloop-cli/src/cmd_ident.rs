@@ -540,7 +540,7 @@ fn identify_static_cmd(a: &IdentifyStaticArgs) -> Result<(), String> {
     }
     if let Some(p) = &a.suggest_out {
         let mut cols = vec!["category".to_string()];
-        cols.extend(Quantity::Q.column_names(&model));
+        cols.extend(Quantity::Q.column_names(&model.q_names()));
         let mut w = CsvWriter::create(p, &cols).map_err(|e| e.to_string())?;
         for s in &suggestions {
             let mut row = vec![s.category as i32 as f64];
@@ -724,7 +724,7 @@ fn ik_impl(a: &IkArgs) -> Result<(), String> {
     let frames = read_frames(&a.frames, &markers).map_err(|e| e.to_string())?;
     let mut fitter = MarkerIk::new(&model, markers).map_err(|e| e.to_string())?;
     let mut cols = vec!["t".to_string()];
-    cols.extend(Quantity::Q.column_names(&model));
+    cols.extend(Quantity::Q.column_names(&model.q_names()));
     cols.push("ik.rms".into());
     cols.push("ik.max".into());
     let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;

@@ -164,3 +164,25 @@ mod tests {
         assert_eq!(num(0.0), "0");
     }
 }
+
+/// The model's coordinate names that a quantity's columns are named after.
+pub fn coordinate_names(
+    model: &twinloop_dynamics::Model,
+    quantity: twinloop_io::Quantity,
+) -> Vec<String> {
+    use twinloop_io::Quantity;
+    match quantity {
+        Quantity::Q => model.q_names(),
+        Quantity::V | Quantity::A => model.v_names(),
+        Quantity::Tau => model.tau_names(),
+    }
+}
+
+/// The columns of `table` that hold `quantity` for `model`, in model order.
+pub fn state_columns(
+    table: &twinloop_io::Table,
+    model: &twinloop_dynamics::Model,
+    quantity: twinloop_io::Quantity,
+) -> Result<twinloop_io::StateColumns, twinloop_io::IoError> {
+    twinloop_io::StateColumns::find(table, quantity, &coordinate_names(model, quantity))
+}

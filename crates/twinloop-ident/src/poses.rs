@@ -75,7 +75,7 @@ pub struct StaticPose {
 /// Column names of a static-pose file for `model`: `category`, `q:*`, `cop.x`, `cop.y`.
 pub fn pose_columns(model: &Model) -> Vec<String> {
     let mut cols = vec!["category".to_string()];
-    cols.extend(Quantity::Q.column_names(model));
+    cols.extend(Quantity::Q.column_names(&model.q_names()));
     cols.push("cop.x".into());
     cols.push("cop.y".into());
     cols
@@ -121,7 +121,7 @@ pub fn parse_static_poses(table: &Table, model: &Model) -> Result<Vec<StaticPose
             "static poses need a floating-base model (the robot stands on a force plate)",
         ));
     }
-    let known = Quantity::Q.column_names(model);
+    let known = Quantity::Q.column_names(&model.q_names());
     for c in &table.columns {
         if c.starts_with("q:") && !known.iter().any(|k| k == c) {
             let name = &c[2..];
@@ -145,7 +145,7 @@ pub fn parse_static_poses(table: &Table, model: &Model) -> Result<Vec<StaticPose
             .field(c.clone()));
         }
     }
-    let qc = StateColumns::find(table, model, Quantity::Q)?;
+    let qc = StateColumns::find(table, Quantity::Q, &model.q_names())?;
     let col = |name: &str| {
         table.column_index(name).ok_or_else(|| {
             IdentError::new("the measured centre of pressure is needed (world frame, metres)")

@@ -121,7 +121,7 @@ pub fn parse_motion(table: &Table, model: &Model) -> Result<Motion, IdentError> 
     let tc = table
         .column_index("t")
         .ok_or_else(|| IdentError::new("a time column is needed (seconds)").field("t"))?;
-    let qc = StateColumns::find(table, model, Quantity::Q)?;
+    let qc = StateColumns::find(table, Quantity::Q, &model.q_names())?;
     let mut m = Motion::default();
     for (r, row) in table.rows.iter().enumerate() {
         let t = row[tc];
@@ -686,7 +686,7 @@ fn central_state(
 /// Write a motion as CSV: `t`, the `q:` columns and the plate columns.
 pub fn write_motion(path: &Path, model: &Model, motion: &Motion) -> Result<(), IdentError> {
     let mut cols = vec!["t".to_string()];
-    cols.extend(Quantity::Q.column_names(model));
+    cols.extend(Quantity::Q.column_names(&model.q_names()));
     if motion.plate.is_some() {
         cols.extend(PLATE_COLUMNS.iter().map(|c| c.to_string()));
     }

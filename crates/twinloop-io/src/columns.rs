@@ -1,5 +1,4 @@
 use crate::table::{IoError, Table};
-use twinloop_dynamics::Model;
 
 /// Which vector a column group fills.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -24,15 +23,11 @@ impl Quantity {
         }
     }
 
-    /// Column names for a model, in the model's coordinate order.
-    pub fn column_names(self, model: &Model) -> Vec<String> {
-        let names = match self {
-            Quantity::Q => model.q_names(),
-            Quantity::V | Quantity::A => model.v_names(),
-            Quantity::Tau => model.tau_names(),
-        };
-        names
-            .into_iter()
+    /// Column names for coordinates named `coordinates` (a model's `q_names()` for
+    /// [`Quantity::Q`], its `v_names()` or `tau_names()` for the others), in that order.
+    pub fn column_names(self, coordinates: &[String]) -> Vec<String> {
+        coordinates
+            .iter()
             .map(|n| format!("{}{n}", self.prefix()))
             .collect()
     }
@@ -46,9 +41,14 @@ pub struct StateColumns {
 }
 
 impl StateColumns {
-    /// Find every column the model needs; the error lists those missing.
-    pub fn find(table: &Table, model: &Model, quantity: Quantity) -> Result<StateColumns, IoError> {
-        let names = quantity.column_names(model);
+    /// Find the column of every coordinate in `coordinates` (see
+    /// [`Quantity::column_names`]); the error lists those missing.
+    pub fn find(
+        table: &Table,
+        quantity: Quantity,
+        coordinates: &[String],
+    ) -> Result<StateColumns, IoError> {
+        let names = quantity.column_names(coordinates);
         let mut indices = Vec::with_capacity(names.len());
         let mut missing = Vec::new();
         for n in &names {

@@ -1,9 +1,10 @@
-//! twinloop-io: the data files of DESIGN.md section 4.
+//! twinloop-io: the data files (docs/architecture.md, "Data files").
 //!
 //! A [`Table`] is a CSV file with a header row and numeric cells. Columns are
 //! named `t`, `q:<joint>`, `v:<joint>`, `a:<joint>`, `tau:<joint>`, with the floating
 //! base as `q:base.x ... q:base.qw`, `v:base.vx ... v:base.wz`, `tau:base.fx ...
-//! tau:base.tz`. [`StateColumns`] maps a table's columns onto a model's vectors.
+//! tau:base.tz`. [`StateColumns`] maps a table's columns onto a model's vectors
+//! (given the model's coordinate names, so this crate needs no dynamics).
 //! Numbers are written with Rust's shortest round-trip formatting, so a value read
 //! back is bit-for-bit the value computed.
 
