@@ -91,7 +91,7 @@ fn servo_for(
         ServoChoice::Rx64 => DynamixelServo::rx64(),
         // An XM430 is what `servo_from_limits` assumes when the limits say nothing.
         ServoChoice::Xm430 => twinloop_sim::servo_from_limits(f64::NAN, f64::NAN, 0.0),
-        ServoChoice::Auto => twinloop_experiments::servo_for_joint(robot_name, model, i),
+        ServoChoice::Auto => twinloop_sim::servo_for_joint(robot_name, model, i),
     }
 }
 

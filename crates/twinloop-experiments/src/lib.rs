@@ -5,5 +5,5 @@
 pub mod study;
 pub mod tipover;
 
-pub use study::{StudyOptions, StudyReport, run_study, servo_for_joint};
+pub use study::{StudyOptions, StudyReport, run_study};
 pub use tipover::{Direction, TipoverConfig, TipoverResult, run_tipover};

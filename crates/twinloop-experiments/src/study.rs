@@ -22,9 +22,7 @@ use twinloop_reduced::{
 };
 use twinloop_robot::RobotError;
 use twinloop_sim::statics::{FlatFeet, hip_lean_signs, lean_signs};
-use twinloop_sim::{
-    Actuator, ContactParams, DynamixelServo, SimConfig, Simulator, servo_from_limits,
-};
+use twinloop_sim::{Actuator, ContactParams, SimConfig, Simulator, servo_for_joint};
 
 /// Settings of the study.
 #[derive(Debug, Clone, PartialEq)]
@@ -271,24 +269,6 @@ fn measure_feet(sim: &Simulator, names: &[String; 6], feet: [usize; 2]) -> FootG
         right_ankle_roll: names[3].clone(),
         forward_lean_sign: 0.0,
         left_lean_sign: 0.0,
-    }
-}
-
-/// The servo of joint `i`: a built-in robot's own (its datasheet rating, RX defaults
-/// otherwise), else one derived from the description's limits
-/// ([`twinloop_sim::servo_from_limits`]).
-pub fn servo_for_joint(
-    robot_name: &str,
-    model: &twinloop_dynamics::Model,
-    i: usize,
-) -> DynamixelServo {
-    match twinloop_description::builtin::servo_of_joint(robot_name, &model.joint_names[i]) {
-        Some(spec) => DynamixelServo::with_rating(spec.stall_torque, spec.no_load_speed),
-        None => servo_from_limits(
-            model.effort_limits[i],
-            model.velocity_limits[i],
-            model.total_mass,
-        ),
     }
 }
 

@@ -226,6 +226,24 @@ pub fn servo_from_limits(effort: f64, velocity: f64, robot_mass: f64) -> Dynamix
     s
 }
 
+/// The servo of joint `i`: a built-in robot's own (its datasheet rating, RX defaults
+/// otherwise), else one derived from the description's limits
+/// ([`servo_from_limits`]).
+pub fn servo_for_joint(
+    robot_name: &str,
+    model: &twinloop_dynamics::Model,
+    i: usize,
+) -> DynamixelServo {
+    match twinloop_description::builtin::servo_of_joint(robot_name, &model.joint_names[i]) {
+        Some(spec) => DynamixelServo::with_rating(spec.stall_torque, spec.no_load_speed),
+        None => servo_from_limits(
+            model.effort_limits[i],
+            model.velocity_limits[i],
+            model.total_mass,
+        ),
+    }
+}
+
 /// What drives a joint.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Actuator {

@@ -21,7 +21,9 @@ pub mod sensors;
 pub mod simulator;
 pub mod statics;
 
-pub use actuator::{Actuator, DynamixelServo, SeriesElastic, TwoLoopServo, servo_from_limits};
+pub use actuator::{
+    Actuator, DynamixelServo, SeriesElastic, TwoLoopServo, servo_for_joint, servo_from_limits,
+};
 pub use contact::{ContactParams, ContactPoint, ContactState};
 pub use sensors::{SensorState, quantize};
 pub use simulator::{SimConfig, SimError, Simulator};

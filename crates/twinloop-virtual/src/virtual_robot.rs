@@ -52,7 +52,7 @@ pub struct VirtualRobot {
 impl VirtualRobot {
     /// `robot` standing upright on the ground with every joint at 0 (or the nearest
     /// limit), each joint driven by its servo
-    /// ([`twinloop_experiments::servo_for_joint`]); the servos of `mapping` are the
+    /// ([`twinloop_sim::servo_for_joint`]); the servos of `mapping` are the
     /// bus's, tied to joints by name.
     pub fn new(
         robot: &twinloop_description::Description,
@@ -66,7 +66,7 @@ impl VirtualRobot {
         let mut sim = Simulator::new(robot, config).map_err(|e| e.to_string())?;
         let nb = sim.model.nbodies;
         for i in 0..nb {
-            let s = twinloop_experiments::servo_for_joint(&robot.name, &sim.model, i);
+            let s = twinloop_sim::servo_for_joint(&robot.name, &sim.model, i);
             sim.actuators[i] = Actuator::Dynamixel(s);
         }
         let mut servos = Vec::with_capacity(mapping.joints.len());

@@ -84,11 +84,8 @@ fn tipover_forward_through_the_bus_matches_the_simulator() {
     // Reference: the simulator itself as the Robot, built like the virtual robot.
     let mut sim = Simulator::new(&robot, SimConfig::default()).unwrap();
     for i in 0..sim.model.nbodies {
-        sim.actuators[i] = Actuator::Dynamixel(twinloop_experiments::servo_for_joint(
-            &robot.name,
-            &sim.model,
-            i,
-        ));
+        sim.actuators[i] =
+            Actuator::Dynamixel(twinloop_sim::servo_for_joint(&robot.name, &sim.model, i));
     }
     let standing = vec![0.0; sim.model.nbodies];
     sim.place_on_ground(&standing).unwrap();
