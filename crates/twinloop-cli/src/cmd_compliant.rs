@@ -5,12 +5,12 @@ use clap::{Args, Subcommand, ValueEnum};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use twinloop_compliant::{
+use twinloop_dynamics::{Data, Model};
+use twinloop_io::{CsvWriter, Table};
+use twinloop_reduced::{
     CompactModel, Corrections, JointCompliance, SagittalCompliance, SagittalReference, SupportLeg,
     cartesian_compliance, coman_crouch,
 };
-use twinloop_dynamics::{Data, Model};
-use twinloop_io::{CsvWriter, Table};
 
 #[derive(Subcommand, Debug)]
 pub enum CompliantCommand {

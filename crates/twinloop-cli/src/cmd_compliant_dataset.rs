@@ -6,7 +6,7 @@ use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use twinloop_compliant::walking::{ComanWalker, WalkingConfig, WalkingSummary, write_csv};
+use twinloop_experiments::compliant_walk::{ComanWalker, WalkingConfig, WalkingSummary, write_csv};
 
 #[derive(Args, Debug)]
 pub struct DatasetArgs {

@@ -4,7 +4,7 @@
 use clap::Args;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use twinloop_experiments::{StudyOptions, run_study};
+use twinloop_ident::tipover_study::{StudyOptions, run_study};
 
 #[derive(Args, Debug)]
 pub struct TipoverArgs {

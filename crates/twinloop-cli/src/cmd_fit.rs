@@ -6,11 +6,11 @@ use clap::{Args, Subcommand, ValueEnum};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use twinloop_compliant::fit::{
-    self, Dataset, FitOptions, FitProblem, FitResult, Identifiability, Method, PARAMETER_NAMES,
-    SEED_PARAMETERS, Validation,
+use twinloop_ident::compliant_fit::{
+    self as fit, Dataset, FitOptions, FitProblem, FitResult, Identifiability, Method,
+    PARAMETER_NAMES, SEED_PARAMETERS, Validation,
 };
-use twinloop_compliant::{CompactModel, Corrections, SagittalCompliance};
+use twinloop_reduced::{CompactModel, Corrections, SagittalCompliance};
 use twinloop_report::{Plot, Report, SeriesStyle};
 
 #[derive(Subcommand, Debug)]

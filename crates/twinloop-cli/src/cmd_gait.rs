@@ -5,9 +5,9 @@ use crate::common::EXIT_BAD_INPUT;
 use clap::{Args, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use twinloop_experiments::{DatasetOptions, record_walk};
 use twinloop_gait::{
-    DatasetOptions, SEED_CYCLE_PERIOD, SEED_SAMPLE_TIME, SEED_SAMPLES, SequenceOptions,
-    record_walk, walking_sequence_with,
+    SEED_CYCLE_PERIOD, SEED_SAMPLE_TIME, SEED_SAMPLES, SequenceOptions, walking_sequence_with,
 };
 use twinloop_io::Table;
 
@@ -118,10 +118,10 @@ pub struct DatasetArgs {
     #[arg(long, default_value_t = 0)]
     pub skip_samples: usize,
     /// Gyro noise, deg/s rms.
-    #[arg(long, default_value_t = twinloop_gait::dataset::MPU6050_GYRO_NOISE_DEG_S)]
+    #[arg(long, default_value_t = twinloop_experiments::walk::MPU6050_GYRO_NOISE_DEG_S)]
     pub gyro_noise: f64,
     /// Two-loop servo position gain, 1/s (60: full speed beyond 6 degrees of error).
-    #[arg(long, default_value_t = twinloop_gait::dataset::LD2015_KP_POSITION)]
+    #[arg(long, default_value_t = twinloop_experiments::walk::LD2015_KP_POSITION)]
     pub kp_position: f64,
     #[arg(long)]
     pub out: PathBuf,
@@ -197,7 +197,7 @@ fn read_table(p: &std::path::Path, flag: &str) -> Result<Table, String> {
 
 fn identify(a: &IdentifyArgs) -> Result<(), String> {
     use serde_json::json;
-    use twinloop_gait::identify::{WalkIdOptions, identify_walk};
+    use twinloop_ident::walk_identification::{WalkIdOptions, identify_walk};
     use twinloop_sysid::report::{arx_report, seed_reference_fits, state_space_report};
     let est = read_table(&a.data, "--data")?;
     let val = match &a.val {

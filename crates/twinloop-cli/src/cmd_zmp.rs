@@ -7,7 +7,7 @@ use crate::common::{EXIT_BAD_INPUT, num, print};
 use clap::Args;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use twinloop_compliant::{GaitPlan, ZmpReference};
+use twinloop_gait::{GaitPlan, ZmpReference};
 use twinloop_io::CsvWriter;
 
 #[derive(Args, Debug)]

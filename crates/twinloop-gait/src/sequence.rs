@@ -72,19 +72,8 @@
 //!    the shoulder pitch, never a hip roll, so the ten are Table 2's. The other seven
 //!    lab17 joints hold their trims.
 
+use crate::error::GaitError;
 use twinloop_description::builtin::lab17;
-
-/// Errors of the gait layer; each message names the offending field.
-#[derive(Debug, Clone, PartialEq)]
-pub struct GaitError(pub String);
-
-impl std::fmt::Display for GaitError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for GaitError {}
 
 /// The ten joints the sequence moves, in the order of seed 003 Table 2 and of the
 /// offsets `Offset_1_L .. Offset_5_L, Offset_1_R .. Offset_5_R`.

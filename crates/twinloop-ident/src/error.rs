@@ -60,6 +60,29 @@ impl fmt::Display for IdentError {
 
 impl std::error::Error for IdentError {}
 
+/// An error whose message says what is at fault.
+pub(crate) fn err<T>(message: impl Into<String>) -> Result<T, IdentError> {
+    Err(IdentError::new(message))
+}
+
+impl From<twinloop_gait::GaitError> for IdentError {
+    fn from(e: twinloop_gait::GaitError) -> Self {
+        IdentError::new(e.0)
+    }
+}
+
+impl From<twinloop_reduced::ReducedError> for IdentError {
+    fn from(e: twinloop_reduced::ReducedError) -> Self {
+        let field = (!e.field.is_empty()).then_some(e.field);
+        IdentError {
+            file: None,
+            row: None,
+            field,
+            message: e.message,
+        }
+    }
+}
+
 impl From<twinloop_io::IoError> for IdentError {
     fn from(e: twinloop_io::IoError) -> Self {
         // Keep the reader's own line/column wording in the message.

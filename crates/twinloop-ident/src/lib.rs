@@ -1,4 +1,11 @@
-//! twinloop-ident: identification experiments and estimators.
+//! twinloop-ident: the estimators that fit a model to what was measured.
+//!
+//! | estimator | seed | module |
+//! |---|---|---|
+//! | CoM from the tip-over angles: the seed's geometric method and the exact rigid-body method | 000 eq 8-13 | [`tipover`]; the simulated study that runs the experiment and checks them: [`tipover_study`] |
+//! | static identification of link masses and CoMs (below) | 004 | [`static_ident`] |
+//! | the compliant compact model's 8 corrections (LM, CMA-ES, PoWER), identifiability | 002 section 4 | [`compliant_fit`] |
+//! | a walk record to MIMO ARX and state-space models | 003 section 7 | [`walk_identification`] |
 //!
 //! Seed 004 (REEM-C: static identification of link masses and CoMs) end to end:
 //!
@@ -7,7 +14,6 @@
 //! | static-pose data (configuration + measured CoP per pose) | [`poses`] |
 //! | the virtual force plate: stable poses in the seed's six categories | [`plate`] |
 //! | feet, soles, legs, arms, torso read from the description | [`anatomy`] |
-//! | Levenberg-Marquardt inverse kinematics on weighted tasks | [`ik`] |
 //! | static identification of masses and CoMs (seed eq 8-9) | [`static_ident`], [`qp`] |
 //! | IK marker fitting (seed eq 7) | [`markers`] |
 //! | zero-phase Butterworth smoothing | [`filter`] |
@@ -16,19 +22,28 @@
 //! | errors naming file, row and field | [`error`] |
 
 pub mod anatomy;
+pub mod compliant_fit;
 pub mod error;
 pub mod filter;
 pub mod html;
-pub mod ik;
 pub mod markers;
 pub mod plate;
 pub mod poses;
 pub mod qp;
 pub mod static_ident;
+pub mod tipover;
+pub mod tipover_study;
 pub mod validate;
+pub mod walk_identification;
 
 pub use error::IdentError;
 pub use poses::{
     PoseCategory, StaticPose, parse_static_poses, read_static_poses, write_static_poses,
 };
 pub use static_ident::{StaticOptions, StaticResult, adapted_robot, identify_static};
+pub use tipover::{
+    ExactEstimate, FeetMass, FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants,
+    SeedEstimate, TipAngles, exact_method, feet_mass, frontal_lever, frontal_tip_angles,
+    sagittal_tip_angles, seed_method, seed_method_sagittal_angles, tip_angles,
+};
+pub use walk_identification::{WalkIdOptions, WalkIdentification, identify_walk};

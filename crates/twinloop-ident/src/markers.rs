@@ -6,7 +6,7 @@
 //! min_q  sum_m | r_m^V(q) - r_m^C |^2
 //! ```
 //!
-//! by Levenberg-Marquardt ([`crate::ik`]) with frame Jacobians, the base moving on
+//! by Levenberg-Marquardt ([`twinloop_gait::ik`]) with frame Jacobians, the base moving on
 //! SE(3) and joints kept in their limits. As the seed does, the first frame starts
 //! from the pelvis pose estimated from the pelvis markers alone (a rigid fit by SVD,
 //! Kabsch's method), so the solver does not wander into joint angles beyond a full
@@ -26,11 +26,11 @@
 
 use crate::anatomy::link_placement;
 use crate::error::IdentError;
-use crate::ik::{Ik, IkOptions, Task};
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 use std::path::Path;
 use twinloop_dynamics::{BASE, Data, Model};
+use twinloop_gait::ik::{Ik, IkOptions, Task};
 use twinloop_io::Table;
 
 /// A virtual marker: a point fixed in a link.
@@ -316,7 +316,7 @@ impl<'a> MarkerIk<'a> {
         q[0..3].copy_from_slice(p.as_slice());
         let quat = twinloop_spatial::matrix_to_quaternion_xyzw(&r);
         q[3..7].copy_from_slice(&quat);
-        crate::ik::clamp_to_limits(model, &mut q);
+        twinloop_gait::ik::clamp_to_limits(model, &mut q);
         Ok(q)
     }
 

@@ -19,11 +19,11 @@
 
 use crate::anatomy::{Anatomy, link_geometry_points, link_placement, polygon_margin, sole_polygon};
 use crate::error::IdentError;
-use crate::ik::{Ik, IkOptions, Task};
 use crate::poses::{PoseCategory, StaticPose};
 use nalgebra::{Vector2, Vector3};
 use twinloop_description::Description;
 use twinloop_dynamics::{Data, Model};
+use twinloop_gait::ik::{Ik, IkOptions, Task};
 use twinloop_random::SplitMix64;
 
 /// What the generator is asked for.

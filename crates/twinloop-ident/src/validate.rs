@@ -17,12 +17,12 @@
 use crate::anatomy::{Anatomy, link_placement};
 use crate::error::IdentError;
 use crate::filter::butter_lowpass;
-use crate::ik::{Ik, Task};
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 use std::path::Path;
 use twinloop_description::Description;
 use twinloop_dynamics::{Data, Model, rnea};
+use twinloop_gait::ik::{Ik, Task};
 use twinloop_io::{Quantity, StateColumns, Table};
 use twinloop_spatial::{Force, Se3, quaternion_xyzw_to_matrix};
 
@@ -557,7 +557,7 @@ pub fn squat_motion(
     let mut stand_q: Option<Vec<f64>> = None;
     let mut solve_at = |t: f64, q: &mut Vec<f64>| -> Result<(), IdentError> {
         let s_end = profile(t);
-        let fail = |rep: crate::ik::IkReport| {
+        let fail = |rep: twinloop_gait::ik::IkReport| {
             IdentError::new(format!(
                 "the squat at t = {t:.3} s cannot keep the feet flat where they stand with the CoM \
                  over them (residual {:.2e}): try a smaller --depth",

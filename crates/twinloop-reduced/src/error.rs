@@ -21,14 +21,23 @@ impl ReducedError {
 
 impl fmt::Display for ReducedError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.field, self.message)
+        if self.field.is_empty() {
+            f.write_str(&self.message)
+        } else {
+            write!(f, "{}: {}", self.field, self.message)
+        }
     }
 }
 
 impl std::error::Error for ReducedError {}
 
+/// An error whose message already says what is at fault (no separate field).
+pub(crate) fn err<T>(message: impl Into<String>) -> Result<T, ReducedError> {
+    Err(ReducedError::new("", message))
+}
+
 /// `value` must be finite and > 0.
-pub(crate) fn positive(field: &str, value: f64) -> Result<f64, ReducedError> {
+pub fn positive(field: &str, value: f64) -> Result<f64, ReducedError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
@@ -40,7 +49,7 @@ pub(crate) fn positive(field: &str, value: f64) -> Result<f64, ReducedError> {
 }
 
 /// `value` must be finite.
-pub(crate) fn finite(field: &str, value: f64) -> Result<f64, ReducedError> {
+pub fn finite(field: &str, value: f64) -> Result<f64, ReducedError> {
     if value.is_finite() {
         Ok(value)
     } else {
@@ -52,7 +61,7 @@ pub(crate) fn finite(field: &str, value: f64) -> Result<f64, ReducedError> {
 }
 
 /// `value` must be finite and >= 0.
-pub(crate) fn non_negative(field: &str, value: f64) -> Result<f64, ReducedError> {
+pub fn non_negative(field: &str, value: f64) -> Result<f64, ReducedError> {
     if value.is_finite() && value >= 0.0 {
         Ok(value)
     } else {

@@ -28,7 +28,7 @@ mod anatomy {
 
 mod ik {
     use nalgebra::{DMatrix, DVector};
-    use twinloop_ident::ik::cholesky_solve_in_place;
+    use twinloop_gait::ik::cholesky_solve_in_place;
 
     #[test]
     fn cholesky_solves() {

@@ -10,7 +10,7 @@
 //!    `s = 10u^3 - 15u^4 + 6u^5` and lift `h (1 - cos 2 pi u) / 2` over the single-support
 //!    phase (u in [0, 1]); both start and end with zero velocity, so the foot leaves and
 //!    lands flat and without a jerk.
-//! 2. **Whole-body IK** ([`crate::walking_ik`]) per 1 ms sample: both sole poses, the CoM
+//! 2. **Whole-body IK** ([`twinloop_gait::walking_ik`]) per 1 ms sample: both sole poses, the CoM
 //!    at the reference and the pelvis upright give the twelve leg-joint references.
 //!    Running it over the whole plan before simulating finds an unreachable step before
 //!    any simulation time is spent.
@@ -60,11 +60,13 @@
 //! K_s = 300 (k_j = 289.2, ratio 1.72) holds it with a margin; `k_series` can be set to
 //! the seed's 100 to see the robot fall (a test does).
 
-use crate::walking_ik::{IkTargets, WholeBodyIk};
-use crate::{CompliantError, GaitPlan, JointCompliance, Phase, SupportLeg, ZmpReference, err};
+use crate::error::{ExperimentError, err};
 use nalgebra::{Matrix3, Vector3};
 use twinloop_description::Description;
 use twinloop_dynamics::{Data, Model, center_of_mass, jacobian_center_of_mass};
+use twinloop_gait::walking_ik::{IkTargets, WholeBodyIk};
+use twinloop_gait::{GaitPlan, Phase, ZmpReference};
+use twinloop_reduced::{JointCompliance, SupportLeg};
 use twinloop_sim::{Actuator, ContactParams, SeriesElastic, SimConfig, Simulator, TwoLoopServo};
 use twinloop_spatial::Se3;
 
@@ -166,7 +168,7 @@ impl Default for WalkingConfig {
 
 impl WalkingConfig {
     /// Checks every field; the error names the field at fault.
-    pub fn validate(&self) -> Result<(), CompliantError> {
+    pub fn validate(&self) -> Result<(), ExperimentError> {
         let positive = [
             ("step length", self.step_length),
             ("single-support duration Tss", self.t_single),
@@ -246,7 +248,7 @@ impl WalkingConfig {
 
     /// The footstep plan filling `duration`: as many steps as fit after the start
     /// standing and before at least `t_end_min` of standing at the end.
-    pub fn plan(&self, step_width: f64, com_height: f64) -> Result<GaitPlan, CompliantError> {
+    pub fn plan(&self, step_width: f64, com_height: f64) -> Result<GaitPlan, ExperimentError> {
         self.validate()?;
         let cycle = self.t_single + self.t_double;
         let room = self.duration - self.t_start - self.t_double - self.t_end_min;
@@ -482,15 +484,18 @@ pub struct ComanWalker {
     ik_iterations: usize,
 }
 
-fn sim_err(e: twinloop_sim::SimError) -> CompliantError {
-    CompliantError(e.to_string())
+fn sim_err(e: twinloop_sim::SimError) -> ExperimentError {
+    ExperimentError(e.to_string())
 }
 
 impl ComanWalker {
     /// Builds the robot, the plan and every joint reference (the IK pass). Errors name a
     /// bad field, a missing COMAN joint or frame, or the time at which a step is out of
     /// the legs' reach.
-    pub fn new(robot: &Description, config: &WalkingConfig) -> Result<ComanWalker, CompliantError> {
+    pub fn new(
+        robot: &Description,
+        config: &WalkingConfig,
+    ) -> Result<ComanWalker, ExperimentError> {
         config.validate()?;
         let compliance = config.joint_compliance();
         let mass: f64 = robot
@@ -513,7 +518,7 @@ impl ComanWalker {
         )?;
         let mut data = Data::new(&model);
         // Initial crouch: the stance geometry and Zc come from it.
-        let mut q = crate::coman_crouch(&model, config.knee_bend)?;
+        let mut q = twinloop_reduced::coman_crouch(&model, config.knee_bend)?;
         twinloop_dynamics::frames_forward_kinematics(&model, &mut data, &q);
         let soles = ik.sole_frames();
         let ps: Vec<Se3> = soles
@@ -563,7 +568,7 @@ impl ComanWalker {
             let r = reference.at(t);
             let targets = targets_of(&r);
             let rep = ik.solve(&model, &mut data, &mut q, &targets).map_err(|e| {
-                CompliantError(format!(
+                ExperimentError(format!(
                     "at t = {t:.3} s (sl {} m, Tss {} s): {e}",
                     config.step_length, config.t_single
                 ))
@@ -621,7 +626,7 @@ impl ComanWalker {
     pub fn run(
         &mut self,
         mut progress: impl FnMut(usize, usize),
-    ) -> Result<WalkingDataset, CompliantError> {
+    ) -> Result<WalkingDataset, ExperimentError> {
         let n = self.joint_references.len();
         let substeps = self.config.substeps;
         let qo = self.sim.model.q_offset;
@@ -778,7 +783,7 @@ impl ComanWalker {
             let rep = self
                 .ik
                 .solve(&model, &mut ik_data, &mut q_cmd, &targets)
-                .map_err(|e| CompliantError(format!("at t = {:.3} s: {e}", r.t)))?;
+                .map_err(|e| ExperimentError(format!("at t = {:.3} s: {e}", r.t)))?;
             online_ik_error = online_ik_error.max(rep.error);
             self.sim.goals.copy_from_slice(&q_cmd[qo..]);
             if !self.feedforward.is_empty() {
@@ -880,7 +885,7 @@ pub fn joint_actuators(
     robot: &Description,
     model: &Model,
     config: &WalkingConfig,
-) -> Result<(Vec<Actuator>, Vec<usize>), CompliantError> {
+) -> Result<(Vec<Actuator>, Vec<usize>), ExperimentError> {
     config.validate()?;
     let compliance = config.joint_compliance();
     let (i_m, d_m) = SeriesElastic::reflected(
@@ -983,8 +988,8 @@ fn support_margin(pts: &mut [[f64; 2]], p: [f64; 2]) -> Option<f64> {
 /// the ZMP reference's position along the segment from the right to the left foot centre.
 fn left_load_share(r: &WalkingSample, reference: &WalkingReference) -> f64 {
     match r.phase {
-        Phase::Single(crate::Foot::Right) => 0.0,
-        Phase::Single(crate::Foot::Left) => 1.0,
+        Phase::Single(twinloop_gait::Foot::Right) => 0.0,
+        Phase::Single(twinloop_gait::Foot::Left) => 1.0,
         _ => {
             let z = reference.zmp.at(r.t).zmp;
             let c = |s: [f64; 3]| {
@@ -1016,7 +1021,7 @@ struct StaticLoad {
 }
 
 impl StaticLoad {
-    fn new(model: &Model, soles: [usize; 2]) -> Result<StaticLoad, CompliantError> {
+    fn new(model: &Model, soles: [usize; 2]) -> Result<StaticLoad, ExperimentError> {
         Ok(StaticLoad {
             soles,
             jf: nalgebra::DMatrix::zeros(6, model.nv),
@@ -1032,7 +1037,7 @@ impl StaticLoad {
         data: &mut Data,
         q: &[f64],
         left_share: f64,
-    ) -> Result<&[f64], CompliantError> {
+    ) -> Result<&[f64], ExperimentError> {
         let g = &mut self.g;
         g.copy_from_slice(twinloop_dynamics::generalized_gravity(model, data, q).as_slice());
         twinloop_dynamics::compute_joint_jacobians(model, data, q);
@@ -1073,7 +1078,7 @@ fn foot_centre_offset(
     model: &Model,
     data: &Data,
     sole: usize,
-) -> Result<([f64; 2], Vec<Vector3<f64>>), CompliantError> {
+) -> Result<([f64; 2], Vec<Vector3<f64>>), ExperimentError> {
     let body = model.frames[sole].body;
     let m_sole = WholeBodyIk::frame_placement(model, data, sole);
     let m_body = data.o_m_i[body];
@@ -1099,11 +1104,12 @@ fn foot_centre_offset(
 
 /// Writes the dataset as CSV with columns `t, xr, zr, x, z, phase` (phase an integer:
 /// 0 single, 1 double support; numbers in shortest round-trip form).
-pub fn write_csv(path: &std::path::Path, rows: &[DatasetRow]) -> Result<(), CompliantError> {
+pub fn write_csv(path: &std::path::Path, rows: &[DatasetRow]) -> Result<(), ExperimentError> {
     use std::io::Write as _;
-    let fail = |e: std::io::Error| CompliantError(format!("{}: cannot write: {e}", path.display()));
+    let fail =
+        |e: std::io::Error| ExperimentError(format!("{}: cannot write: {e}", path.display()));
     let file = std::fs::File::create(path)
-        .map_err(|e| CompliantError(format!("{}: cannot create: {e}", path.display())))?;
+        .map_err(|e| ExperimentError(format!("{}: cannot create: {e}", path.display())))?;
     let mut out = std::io::BufWriter::new(file);
     writeln!(out, "t,xr,zr,x,z,phase").map_err(fail)?;
     for r in rows {

@@ -3,8 +3,10 @@
 //! response from static equilibrium (eq 14-17), plus optional white Gaussian noise.
 
 use super::dataset::Dataset;
-use crate::{CompactModel, CompliantError, GaitPlan, SagittalReference, ZmpReference, err};
+use crate::error::{IdentError, err};
+use twinloop_gait::{GaitPlan, ZmpReference};
 use twinloop_random::SplitMix64;
+use twinloop_reduced::{CompactModel, SagittalReference};
 
 /// The CoM reference (x, z) and phase of a gait plan, sampled every `dt` for at most
 /// `duration` seconds (the whole plan if shorter).
@@ -12,7 +14,7 @@ pub fn gait_reference(
     plan: &GaitPlan,
     dt: f64,
     duration: f64,
-) -> Result<SagittalReference, CompliantError> {
+) -> Result<SagittalReference, IdentError> {
     let samples = ZmpReference::new(plan)?.sample(dt)?;
     let n = samples
         .iter()
@@ -38,7 +40,7 @@ pub fn simulate(
     noise_std: f64,
     seed: u64,
     source: &str,
-) -> Result<Dataset, CompliantError> {
+) -> Result<Dataset, IdentError> {
     if !(noise_std.is_finite() && noise_std >= 0.0) {
         return err(format!("noise must be non-negative, got {noise_std}"));
     }

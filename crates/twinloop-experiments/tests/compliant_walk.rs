@@ -2,12 +2,13 @@
 //! seed's gait (the 30 s dataset is made by the CLI and committed under tests/data).
 
 use nalgebra::{Matrix3, Vector3};
-use twinloop_compliant::walking::{
+use twinloop_dynamics::{BaseKind, Data, Model, center_of_mass, generalized_gravity};
+use twinloop_experiments::compliant_walk::{
     ComanWalker, DatasetRow, WalkingConfig, joint_actuators, write_csv,
 };
-use twinloop_compliant::walking_ik::{IkTargets, WholeBodyIk};
-use twinloop_compliant::{Phase, SupportLeg, coman_crouch};
-use twinloop_dynamics::{BaseKind, Data, Model, center_of_mass, generalized_gravity};
+use twinloop_gait::Phase;
+use twinloop_gait::walking_ik::{IkTargets, WholeBodyIk};
+use twinloop_reduced::{SupportLeg, coman_crouch};
 use twinloop_sim::{Actuator, SimConfig, Simulator};
 use twinloop_spatial::Se3;
 
@@ -225,8 +226,8 @@ fn swing_feet_follow_the_footstep_plan() {
     for k in 0..4000 {
         let s = r.at(k as f64 / 1000.0);
         match s.phase {
-            Phase::Single(twinloop_compliant::Foot::Right) => assert!(s.stance == [false, true]),
-            Phase::Single(twinloop_compliant::Foot::Left) => assert!(s.stance == [true, false]),
+            Phase::Single(twinloop_gait::Foot::Right) => assert!(s.stance == [false, true]),
+            Phase::Single(twinloop_gait::Foot::Left) => assert!(s.stance == [true, false]),
             _ => assert!(s.stance == [true, true] && s.soles[0][2] == 0.0 && s.soles[1][2] == 0.0),
         }
     }

@@ -9,7 +9,7 @@
 
 use super::sensitivity::normal_equations;
 use super::{FitProblem, PARAMETER_NAMES};
-use crate::{CompliantError, err};
+use crate::error::{IdentError, err};
 use nalgebra::DMatrix;
 
 /// A parameter counts as poorly determined above this relative standard deviation: the
@@ -54,7 +54,7 @@ pub fn identifiability(
     problem: &FitProblem,
     p: &[f64],
     noise_std: Option<f64>,
-) -> Result<Identifiability, CompliantError> {
+) -> Result<Identifiability, IdentError> {
     let n = problem.dim();
     let full = problem.full(p);
     let ne = normal_equations(&problem.model(&full), problem.data);

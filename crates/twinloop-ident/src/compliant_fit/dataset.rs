@@ -6,8 +6,9 @@
 //! it would be charged to the parameters). The model starts at the first row's x, z at
 //! rest.
 
-use crate::{CompliantError, SagittalReference, err};
+use crate::error::{IdentError, err};
 use std::path::Path;
+use twinloop_reduced::SagittalReference;
 
 /// The columns the fit reads, in the order of [`Dataset::parse`]'s errors.
 pub const COLUMNS: [&str; 6] = ["t", "xr", "zr", "x", "z", "phase"];
@@ -24,9 +25,9 @@ pub struct Dataset {
 
 impl Dataset {
     /// Reads a CSV file; errors name the file, line and column.
-    pub fn read(path: &Path) -> Result<Dataset, CompliantError> {
+    pub fn read(path: &Path) -> Result<Dataset, IdentError> {
         let text = std::fs::read_to_string(path)
-            .map_err(|e| CompliantError(format!("{}: cannot read: {e}", path.display())))?;
+            .map_err(|e| IdentError::new(format!("{}: cannot read: {e}", path.display())))?;
         Dataset::parse(&text, &path.display().to_string())
     }
 
@@ -34,7 +35,7 @@ impl Dataset {
     /// Errors name `source`, the 1-based line and the column: a missing column, a cell
     /// that is not a number or is NaN/infinite, a phase other than 0 or 1, time that does
     /// not increase, and a gap (a time step unlike the first one).
-    pub fn parse(text: &str, source: &str) -> Result<Dataset, CompliantError> {
+    pub fn parse(text: &str, source: &str) -> Result<Dataset, IdentError> {
         let mut lines = text.lines().enumerate().filter(|(_, l)| {
             let l = l.trim();
             !l.is_empty() && !l.starts_with('#')
@@ -51,7 +52,7 @@ impl Dataset {
         let mut index = [0usize; 6];
         for (k, want) in COLUMNS.iter().enumerate() {
             index[k] = names.iter().position(|n| n == want).ok_or_else(|| {
-                CompliantError(format!(
+                IdentError::new(format!(
                     "{source}: no column `{want}` (the fit needs t, xr, zr, x, z, phase; found {})",
                     names.join(", ")
                 ))
@@ -74,7 +75,7 @@ impl Dataset {
             for (k, col) in COLUMNS.iter().enumerate() {
                 let cell = cells[index[k]];
                 let v: f64 = cell.parse().map_err(|_| {
-                    CompliantError(format!(
+                    IdentError::new(format!(
                         "{source}, line {line_no}, column {col}: \"{cell}\" is not a number"
                     ))
                 })?;
@@ -232,7 +233,7 @@ mod tests {
         for (text, want) in cases {
             let e = Dataset::parse(&text, "walk.csv").unwrap_err();
             assert!(
-                e.0.starts_with("walk.csv") && e.0.contains(want),
+                e.message.starts_with("walk.csv") && e.message.contains(want),
                 "{e} (want {want})"
             );
         }

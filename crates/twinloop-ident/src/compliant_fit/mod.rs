@@ -26,9 +26,8 @@ pub use dataset::Dataset;
 pub use identifiability::{Identifiability, identifiability};
 pub use model_file::{parse_model_file, read_model_file};
 
-use crate::{
-    CompactModel, CompliantError, Corrections, SagittalCompliance, SagittalReference, err,
-};
+use crate::error::{IdentError, err};
+use twinloop_reduced::{CompactModel, Corrections, SagittalCompliance, SagittalReference};
 
 /// The ten parameter names, in [`Corrections::to_array`] order.
 pub const PARAMETER_NAMES: [&str; 10] = [
@@ -40,7 +39,7 @@ pub const PARAMETER_NAMES: [&str; 10] = [
 pub const SEED_PARAMETERS: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
 
 /// Indices of comma-separated parameter names ("all" = the ten).
-pub fn parse_parameter_names(text: &str) -> Result<Vec<usize>, CompliantError> {
+pub fn parse_parameter_names(text: &str) -> Result<Vec<usize>, IdentError> {
     if text.trim() == "all" {
         return Ok((0..10).collect());
     }
@@ -77,7 +76,7 @@ impl<'a> FitProblem<'a> {
         data: &'a Dataset,
         start: Corrections,
         free: &[usize],
-    ) -> Result<FitProblem<'a>, CompliantError> {
+    ) -> Result<FitProblem<'a>, IdentError> {
         model_file::check_plant(&plant)?;
         data.reference.validate()?;
         let start = start.to_array();
@@ -360,7 +359,7 @@ pub fn fit(
     method: Method,
     options: &FitOptions,
     on_progress: &mut dyn FnMut(&Progress),
-) -> Result<FitResult, CompliantError> {
+) -> Result<FitResult, IdentError> {
     if options.max_evaluations == 0 {
         return err("the evaluation budget must be positive");
     }
@@ -420,7 +419,7 @@ fn with_minimizer(
     );
     FitResult {
         method,
-        params: crate::Corrections::from_slice(&problem.full(&m.x)),
+        params: twinloop_reduced::Corrections::from_slice(&problem.full(&m.x)),
         mse_before: f64::NAN,
         mse_after: m.f,
         evaluations: m.evaluations,

@@ -9,8 +9,8 @@
 //! rollout the cost sees, not an approximation of it.
 
 use super::dataset::Dataset;
-use crate::CompactModel;
-use crate::compact::State;
+use twinloop_reduced::CompactModel;
+use twinloop_reduced::compact::State;
 
 /// J^T J, J^T r and r^T r over the trajectory, for the residuals r = model - data in x
 /// and z at every sample, and all ten parameters (alpha1 .. epsilon2, eta1, eta2).

@@ -1,8 +1,9 @@
 //! End to end: the walk recorded on lab17 in the simulator at the seed's full offsets,
 //! identified as seed 003 did.
 
-use twinloop_gait::identify::{WalkIdOptions, identify_walk};
+use twinloop_experiments::{DatasetOptions, WalkDataset, record_walk};
 use twinloop_gait::*;
+use twinloop_ident::walk_identification::{WalkIdOptions, identify_walk};
 
 fn record(seed: u64, skip: usize) -> WalkDataset {
     let robot = twinloop_description::builtin::resolve("builtin:lab17").unwrap();

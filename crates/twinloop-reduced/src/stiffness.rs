@@ -19,7 +19,7 @@
 //!
 //! with R_f the foot's and R_b the base's orientation in the world.
 
-use crate::{CompliantError, err};
+use crate::error::{ReducedError, err};
 use nalgebra::{DMatrix, Matrix2, Matrix6, Vector6};
 use twinloop_dynamics::{
     Data, Model, ReferenceFrame, compute_joint_jacobians, frame_jacobian, jacobian_center_of_mass,
@@ -77,7 +77,7 @@ impl Default for JointCompliance {
 impl JointCompliance {
     /// k_j = K_h K_s / (K_h + K_s) for a compliant joint, K_h for a stiff one
     /// (seed 002, section 2.1); the damping d_j likewise per class.
-    pub fn joint(&self, name: &str) -> Result<(f64, f64), CompliantError> {
+    pub fn joint(&self, name: &str) -> Result<(f64, f64), ReducedError> {
         for (what, v) in [
             ("harmonic-drive stiffness K_h", self.k_harmonic),
             ("series stiffness K_s", self.k_series),
@@ -139,7 +139,7 @@ fn xz(m: &Matrix6<f64>) -> Matrix2<f64> {
     Matrix2::new(m[(0, 0)], m[(0, 2)], m[(2, 0)], m[(2, 2)])
 }
 
-fn leg_columns(model: &Model, leg: &SupportLeg) -> Result<[usize; 6], CompliantError> {
+fn leg_columns(model: &Model, leg: &SupportLeg) -> Result<[usize; 6], ReducedError> {
     let mut cols = [0; 6];
     for (c, name) in cols.iter_mut().zip(&leg.joints) {
         match model.joint_index(name) {
@@ -157,7 +157,7 @@ pub fn support_leg_com_jacobian(
     data: &mut Data,
     q: &[f64],
     leg: &SupportLeg,
-) -> Result<(Matrix6<f64>, [f64; 3]), CompliantError> {
+) -> Result<(Matrix6<f64>, [f64; 3]), ReducedError> {
     if !model.is_floating() {
         return err("the model needs a floating base to hold the foot and move the body");
     }
@@ -229,7 +229,7 @@ pub fn cartesian_compliance(
     q: &[f64],
     leg: &SupportLeg,
     joints: &JointCompliance,
-) -> Result<CartesianCompliance, CompliantError> {
+) -> Result<CartesianCompliance, ReducedError> {
     let mut k_joint = Vector6::zeros();
     let mut d_joint = Vector6::zeros();
     for (i, name) in leg.joints.iter().enumerate() {
@@ -273,7 +273,7 @@ pub fn cartesian_compliance(
 
 /// A crouched COMAN pose with flat feet: for both legs KneeSag = bend and
 /// HipSag = AnkSag = -bend/2 (all pitch axes along +y), every other joint at zero.
-pub fn coman_crouch(model: &Model, bend: f64) -> Result<Vec<f64>, CompliantError> {
+pub fn coman_crouch(model: &Model, bend: f64) -> Result<Vec<f64>, ReducedError> {
     if !bend.is_finite() {
         return err(format!("knee bend must be finite, got {bend}"));
     }
@@ -421,14 +421,17 @@ mod tests {
         let q = model.neutral_configuration();
         let e = cartesian_compliance(&model, &mut data, &q, &leg, &JointCompliance::default())
             .unwrap_err();
-        assert!(e.0.contains("singular") && e.0.contains("knee"), "{e}");
+        assert!(
+            e.message.contains("singular") && e.message.contains("knee"),
+            "{e}"
+        );
         let q = coman_crouch(&model, 0.5).unwrap();
         let bad = JointCompliance {
             k_series: -1.0,
             ..JointCompliance::default()
         };
         let e = cartesian_compliance(&model, &mut data, &q, &leg, &bad).unwrap_err();
-        assert!(e.0.contains("series stiffness"), "{e}");
+        assert!(e.message.contains("series stiffness"), "{e}");
         let wrong = SupportLeg {
             joints: SupportLeg::coman(true)
                 .joints
@@ -437,7 +440,7 @@ mod tests {
         };
         let e = cartesian_compliance(&model, &mut data, &q, &wrong, &JointCompliance::default())
             .unwrap_err();
-        assert!(e.0.contains("LHopSag"), "{e}");
+        assert!(e.message.contains("LHopSag"), "{e}");
         assert!(
             cartesian_compliance(
                 &model,

@@ -1,12 +1,12 @@
 //! The numbers of docs/reduced-models.md: the seed robots' CoM and tip angles, seed
 //! 001's three-mass check, seed 000 Table V, and km20 with seed 000's batteries.
 //!
-//! cargo run --release -p twinloop-reduced --example seed_checks
+//! cargo run --release -p twinloop-ident --example seed_checks
 
 use nalgebra::{Rotation3, Vector3};
 use twinloop_description::builtin::{FootGeometry, foot_geometry, km20};
 use twinloop_dynamics::Model;
-use twinloop_reduced::tipover::{
+use twinloop_ident::tipover::{
     FeetMass, FrontalLever, SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method,
     feet_mass, frontal_lever, sagittal_tip_angles, seed_method, seed_method_sagittal_angles,
     tip_angles,
@@ -262,7 +262,7 @@ fn seed_000_table_v() {
             let com = [sign * p[2] / 100.0, p[1] / 100.0, p[0] / 100.0];
             match sagittal_tip_angles(com[0], com[2], &FeetMass::NONE, &foot) {
                 Ok((f, b)) => format!("{:.2}/{:.2}", f.to_degrees(), b.to_degrees()),
-                Err(e) => format!("- ({})", e.field),
+                Err(e) => format!("- ({})", e.field.as_deref().unwrap_or("")),
             }
         };
         println!(

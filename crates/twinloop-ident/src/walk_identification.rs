@@ -27,7 +27,7 @@
 //!   left a model whose simulation FIT fell 2-24 points below the ARX's, or (at 24
 //!   states) whose A was unstable (docs/lab17-walking-identification.md).
 
-use crate::sequence::GaitError;
+use crate::error::IdentError;
 use twinloop_sysid::pem::{OutputWeight, PemProgress};
 use twinloop_sysid::{
     ArxIdentification, ArxOrders, EvaluationOptions, IoData, SsMethod, SsOptions,
@@ -142,9 +142,9 @@ pub fn identify_walk(
     val_rows: Option<&[Vec<f64>]>,
     o: &WalkIdOptions,
     progress: &mut dyn FnMut(&PemProgress),
-) -> Result<WalkIdentification, GaitError> {
+) -> Result<WalkIdentification, IdentError> {
     if !(o.hsv_energy > 0.0 && o.hsv_energy <= 1.0) {
-        return Err(GaitError(format!(
+        return Err(IdentError::new(format!(
             "hsv_energy must be in (0, 1], got {}",
             o.hsv_energy
         )));
@@ -156,13 +156,13 @@ pub fn identify_walk(
         .cloned()
         .collect();
     if inputs.is_empty() {
-        return Err(GaitError(
-            "data: no `u:` input columns (record it with `twinloop gait dataset`)".into(),
+        return Err(IdentError::new(
+            "data: no `u:` input columns (record it with `twinloop gait dataset`)",
         ));
     }
     let outputs = vec!["gyro:*".to_string()];
-    fn sysid(what: &'static str) -> impl Fn(twinloop_sysid::SysidError) -> GaitError {
-        move |e| GaitError(format!("{what}: {e}"))
+    fn sysid(what: &'static str) -> impl Fn(twinloop_sysid::SysidError) -> IdentError {
+        move |e| IdentError::new(format!("{what}: {e}"))
     }
     let mut est =
         IoData::from_table(columns, est_rows, &inputs, &outputs).map_err(sysid("data"))?;
@@ -190,11 +190,10 @@ pub fn identify_walk(
                 .hankel_singular_values
                 .as_ref()
                 .ok_or_else(|| {
-                    GaitError(
-                    "ARX: the model is unstable, so it has no Hankel singular values to choose \
-                     the final order from; give the order"
-                        .into(),
-                )
+                    IdentError::new(
+                        "ARX: the model is unstable, so it has no Hankel singular values to choose \
+                     the final order from; give the order",
+                    )
                 })?;
             let n = order_for_energy(hsv, o.hsv_energy);
             (

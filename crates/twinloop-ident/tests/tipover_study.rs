@@ -8,7 +8,7 @@
 //! runs the cases on parallel threads.
 
 use std::path::PathBuf;
-use twinloop_experiments::{StudyOptions, StudyReport, run_study};
+use twinloop_ident::tipover_study::{StudyOptions, StudyReport, run_study};
 
 /// Print one case's results in one piece (the cases run on parallel threads), then
 /// assert.

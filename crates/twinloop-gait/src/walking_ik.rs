@@ -19,7 +19,7 @@
 //! solution: a 1 kHz reference moves the solution by a few micro-radians per sample, so
 //! one or two iterations reach 1e-10.
 
-use crate::{CompliantError, err};
+use crate::error::{GaitError, err};
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use twinloop_dynamics::{
     BASE, Data, Model, ReferenceFrame, compute_joint_jacobians, frame_jacobian,
@@ -76,7 +76,7 @@ impl WholeBodyIk {
         model: &Model,
         legs: [&[String; 6]; 2],
         sole_frames: [&str; 2],
-    ) -> Result<WholeBodyIk, CompliantError> {
+    ) -> Result<WholeBodyIk, GaitError> {
         if !model.is_floating() {
             return err("whole-body IK needs a floating-base model");
         }
@@ -136,7 +136,7 @@ impl WholeBodyIk {
         data: &mut Data,
         q: &mut [f64],
         targets: &IkTargets,
-    ) -> Result<IkReport, CompliantError> {
+    ) -> Result<IkReport, GaitError> {
         let mut jac = SMatrix::<f64, N, N>::zeros();
         let mut e = SVector::<f64, N>::zeros();
         let mut error = f64::INFINITY;

@@ -3,7 +3,7 @@
 //! The robot stands on the ground on seed 003's two-loop servos (a speed loop inside a
 //! position loop, section 3 and Fig. 20; LD-2015 ratings, position gain
 //! [`LD2015_KP_POSITION`], gear friction [`LD2015_GEAR_FRICTION`]), settles at its
-//! trims, then walks the sequence of [`crate::sequence`] (4 s cycles, 40 ms ticks) at
+//! trims, then walks the sequence of [`twinloop_gait::sequence`] (4 s cycles, 40 ms ticks) at
 //! the seed's full offsets. [`DatasetOptions::skip_samples`] starts the record later in
 //! the same walk, for a validation run that is a different stretch of it. Each tick,
 //! as the seed's Arduino loop does, it first reads both gyroscopes, then sets the
@@ -17,9 +17,12 @@
 //!   one is read from the simulator state (`Simulator::link_angular_velocity`) and
 //!   quantised and disturbed the same way.
 
-use crate::sequence::{GaitError, JointGoals, OFFSET_JOINTS, SequenceOptions, generate};
+use crate::error::ExperimentError;
 use twinloop_description::Description;
 use twinloop_description::builtin::servo::LD2015;
+use twinloop_gait::sequence::{
+    JointGoals, OFFSET_JOINTS, SequenceOptions, walking_sequence_samples,
+};
 use twinloop_random::SplitMix64;
 use twinloop_robot::RobotState;
 use twinloop_sim::sensors::MPU6050_GYRO_LSB_PER_DEG_S;
@@ -60,7 +63,7 @@ impl Default for DatasetOptions {
     fn default() -> Self {
         DatasetOptions {
             sequence: SequenceOptions::default(),
-            samples: crate::sequence::SEED_SAMPLES,
+            samples: twinloop_gait::sequence::SEED_SAMPLES,
             gyro_noise_deg_s: MPU6050_GYRO_NOISE_DEG_S,
             noise_seed: 1,
             skip_samples: 0,
@@ -118,11 +121,11 @@ pub struct WalkDataset {
     pub yaw_deg: f64,
 }
 
-fn trunk_pose(sim: &mut Simulator) -> Result<([f64; 3], f64, f64), GaitError> {
+fn trunk_pose(sim: &mut Simulator) -> Result<([f64; 3], f64, f64), ExperimentError> {
     let base = sim.model.base_link.clone();
     let x = sim
         .link_placement(&base)
-        .ok_or_else(|| GaitError(format!("robot: no base link \"{base}\"")))?;
+        .ok_or_else(|| ExperimentError(format!("robot: no base link \"{base}\"")))?;
     let r = x.rotation;
     let tilt = r[(2, 2)].clamp(-1.0, 1.0).acos().to_degrees();
     let yaw = r[(1, 0)].atan2(r[(0, 0)]).to_degrees();
@@ -135,42 +138,45 @@ fn trunk_pose(sim: &mut Simulator) -> Result<([f64; 3], f64, f64), GaitError> {
 
 /// Seed 003 section 7: walk `robot` (lab17) through the sequence in the simulator and
 /// record the identification data.
-pub fn record_walk(robot: &Description, o: &DatasetOptions) -> Result<WalkDataset, GaitError> {
+pub fn record_walk(
+    robot: &Description,
+    o: &DatasetOptions,
+) -> Result<WalkDataset, ExperimentError> {
     if o.samples == 0 {
-        return Err(GaitError("samples must be at least 1".into()));
+        return Err(ExperimentError("samples must be at least 1".into()));
     }
     if !(o.gyro_noise_deg_s.is_finite() && o.gyro_noise_deg_s >= 0.0) {
-        return Err(GaitError(format!(
+        return Err(ExperimentError(format!(
             "gyro_noise must be a non-negative number of deg/s, got {}",
             o.gyro_noise_deg_s
         )));
     }
     if !(o.settle.is_finite() && o.settle >= 0.0) {
-        return Err(GaitError(format!(
+        return Err(ExperimentError(format!(
             "settle must be a non-negative number of seconds, got {}",
             o.settle
         )));
     }
     if !(o.dt.is_finite() && o.dt > 0.0 && o.dt <= o.sequence.sample_time) {
-        return Err(GaitError(format!(
+        return Err(ExperimentError(format!(
             "dt must be positive and at most the sample time {} s, got {}",
             o.sequence.sample_time, o.dt
         )));
     }
     if !(o.kp_position.is_finite() && o.kp_position > 0.0) {
-        return Err(GaitError(format!(
+        return Err(ExperimentError(format!(
             "kp_position must be positive, got {}",
             o.kp_position
         )));
     }
     let total = o.samples.checked_add(o.skip_samples).ok_or_else(|| {
-        GaitError(format!(
+        ExperimentError(format!(
             "skip_samples {} plus samples {} overflow",
             o.skip_samples, o.samples
         ))
     })?;
-    let goals: JointGoals = generate(&o.sequence, total)?;
-    let sim_err = |e: twinloop_sim::SimError| GaitError(format!("simulator: {e}"));
+    let goals: JointGoals = walking_sequence_samples(&o.sequence, total)?;
+    let sim_err = |e: twinloop_sim::SimError| ExperimentError(format!("simulator: {e}"));
     let mut sim = Simulator::new(
         robot,
         SimConfig {
@@ -183,7 +189,7 @@ pub fn record_walk(robot: &Description, o: &DatasetOptions) -> Result<WalkDatase
     let mut map = Vec::with_capacity(goals.joints.len());
     for j in &goals.joints {
         map.push(sim.joint_index(j).ok_or_else(|| {
-            GaitError(format!(
+            ExperimentError(format!(
                 "robot: \"{}\" has no joint \"{j}\"; the walking sequence of seed 003 is defined \
                  for builtin:lab17",
                 robot.name
@@ -192,7 +198,7 @@ pub fn record_walk(robot: &Description, o: &DatasetOptions) -> Result<WalkDatase
     }
     for f in FEET {
         if !sim.model.links.iter().any(|l| l.name == f) {
-            return Err(GaitError(format!(
+            return Err(ExperimentError(format!(
                 "robot: \"{}\" has no link \"{f}\" to carry a foot gyroscope",
                 robot.name
             )));

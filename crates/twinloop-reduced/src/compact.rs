@@ -15,7 +15,7 @@
 //! inside each sample interval, the phase that of the interval's first sample), from the
 //! given initial position at rest.
 
-use crate::{CompliantError, err};
+use crate::error::{ReducedError, err};
 
 /// m, g and the sagittal entries of K_C and D_C (seed 002, eq 11).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -35,7 +35,7 @@ pub struct SagittalCompliance {
 
 impl SagittalCompliance {
     /// Checks the entries; the error names the one at fault.
-    pub fn validate(&self) -> Result<(), CompliantError> {
+    pub fn validate(&self) -> Result<(), ReducedError> {
         for (name, v) in [
             ("mass m", self.m),
             ("stiffness Kxx", self.Kxx),
@@ -139,7 +139,7 @@ pub struct SagittalReference {
 
 impl SagittalReference {
     /// Checks lengths, finiteness and strictly increasing time; the error names the row.
-    pub fn validate(&self) -> Result<(), CompliantError> {
+    pub fn validate(&self) -> Result<(), ReducedError> {
         let n = self.t.len();
         if n < 2 {
             return err(format!("the reference needs at least 2 rows, has {n}"));
@@ -238,7 +238,7 @@ impl CompactModel {
         z0: f64,
         x: &mut Vec<f64>,
         z: &mut Vec<f64>,
-    ) -> Result<(), CompliantError> {
+    ) -> Result<(), ReducedError> {
         self.plant.validate()?;
         for (i, v) in self.corrections.to_array().iter().enumerate() {
             if !v.is_finite() {
@@ -458,13 +458,16 @@ mod tests {
         let mut r = ramp(10, 1e-3, 0.0, 0.0, false);
         r.xr[4] = f64::NAN;
         let e = m.rollout(&r, 0.0, 0.5, &mut x, &mut z).unwrap_err();
-        assert!(e.0.contains("row 5") && e.0.contains("xr"), "{e}");
+        assert!(
+            e.message.contains("row 5") && e.message.contains("xr"),
+            "{e}"
+        );
         let mut r = ramp(10, 1e-3, 0.0, 0.0, false);
         r.t[6] = r.t[5];
         assert!(
             m.rollout(&r, 0.0, 0.5, &mut x, &mut z)
                 .unwrap_err()
-                .0
+                .message
                 .contains("row 7")
         );
         let mut bad = m;
@@ -473,7 +476,7 @@ mod tests {
         assert!(
             bad.rollout(&r, 0.0, 0.5, &mut x, &mut z)
                 .unwrap_err()
-                .0
+                .message
                 .contains("Kzz")
         );
     }

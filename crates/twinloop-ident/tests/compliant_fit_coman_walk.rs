@@ -11,10 +11,10 @@
 //! worse (docs/compliant-fit.md): that result is printed, not asserted.
 
 use std::path::{Path, PathBuf};
-use twinloop_compliant::compact::Corrections;
-use twinloop_compliant::fit::{
-    self, Dataset, FitOptions, FitProblem, Method, generalisation, parse_model_file,
+use twinloop_ident::compliant_fit::{
+    self as fit, Dataset, FitOptions, FitProblem, Method, generalisation, parse_model_file,
 };
+use twinloop_reduced::compact::Corrections;
 
 fn data(name: &str) -> Dataset {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -23,7 +23,7 @@ fn data(name: &str) -> Dataset {
     Dataset::read(&p).unwrap()
 }
 
-fn plant(pelvis: &str) -> twinloop_compliant::compact::SagittalCompliance {
+fn plant(pelvis: &str) -> twinloop_reduced::compact::SagittalCompliance {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let text = format!(
         "urdf = \"models/coman/coman.urdf\"\nsupport = \"left\"\nknee_bend = 0.6\n\

@@ -30,10 +30,13 @@
 //! LKneeSag = 0.6
 //! ```
 
-use crate::stiffness::{JointCompliance, SupportLeg, cartesian_compliance, coman_crouch};
-use crate::{CompliantError, SagittalCompliance, err};
+use crate::error::{IdentError, err};
 use std::path::Path;
 use twinloop_dynamics::{Data, Model};
+use twinloop_reduced::SagittalCompliance;
+use twinloop_reduced::stiffness::{
+    JointCompliance, SupportLeg, cartesian_compliance, coman_crouch,
+};
 
 const ENTRIES: [&str; 8] = ["Kxx", "Kxz", "Kzx", "Kzz", "Dxx", "Dxz", "Dzx", "Dzz"];
 const URDF_KEYS: [&str; 9] = [
@@ -49,16 +52,16 @@ const URDF_KEYS: [&str; 9] = [
 ];
 
 /// Reads MODEL.toml; errors name the file and the key.
-pub fn read_model_file(path: &Path) -> Result<SagittalCompliance, CompliantError> {
+pub fn read_model_file(path: &Path) -> Result<SagittalCompliance, IdentError> {
     let text = std::fs::read_to_string(path)
-        .map_err(|e| CompliantError(format!("{}: cannot read: {e}", path.display())))?;
+        .map_err(|e| IdentError::new(format!("{}: cannot read: {e}", path.display())))?;
     let base = path.parent().unwrap_or(Path::new("."));
-    parse_model_file(&text, base).map_err(|e| CompliantError(format!("{}: {e}", path.display())))
+    parse_model_file(&text, base).map_err(|e| IdentError::new(format!("{}: {e}", path.display())))
 }
 
 /// Parses MODEL.toml text; a relative `urdf` path is taken from `base`.
-pub fn parse_model_file(text: &str, base: &Path) -> Result<SagittalCompliance, CompliantError> {
-    let table: toml::Table = toml::from_str(text).map_err(|e| CompliantError(e.to_string()))?;
+pub fn parse_model_file(text: &str, base: &Path) -> Result<SagittalCompliance, IdentError> {
+    let table: toml::Table = toml::from_str(text).map_err(|e| IdentError::new(e.to_string()))?;
     for key in table.keys() {
         let known = key == "m" || key == "g" || ENTRIES.contains(&key.as_str());
         if !known && !URDF_KEYS.contains(&key.as_str()) {
@@ -67,7 +70,7 @@ pub fn parse_model_file(text: &str, base: &Path) -> Result<SagittalCompliance, C
             ));
         }
     }
-    let number = |key: &str| -> Result<Option<f64>, CompliantError> {
+    let number = |key: &str| -> Result<Option<f64>, IdentError> {
         match table.get(key) {
             None => Ok(None),
             Some(toml::Value::Float(v)) => Ok(Some(*v)),
@@ -142,7 +145,7 @@ pub fn parse_model_file(text: &str, base: &Path) -> Result<SagittalCompliance, C
 
 /// The checks of [`SagittalCompliance::validate`] plus the one the dynamics need: the
 /// x-z stiffness must be positive definite (else the CoM has no stable rest).
-pub fn check_plant(p: &SagittalCompliance) -> Result<(), CompliantError> {
+pub fn check_plant(p: &SagittalCompliance) -> Result<(), IdentError> {
     p.validate()?;
     if p.g.is_nan() || p.g <= 0.0 {
         return err(format!("gravity g must be positive, got {}", p.g));
@@ -163,12 +166,12 @@ pub fn check_plant(p: &SagittalCompliance) -> Result<(), CompliantError> {
 fn from_urdf(
     table: &toml::Table,
     urdf: &Path,
-    number: &dyn Fn(&str) -> Result<Option<f64>, CompliantError>,
-) -> Result<SagittalCompliance, CompliantError> {
+    number: &dyn Fn(&str) -> Result<Option<f64>, IdentError>,
+) -> Result<SagittalCompliance, IdentError> {
     let robot = twinloop_description::load(urdf)
-        .map_err(|e| CompliantError(format!("urdf {}: {e}", urdf.display())))?;
+        .map_err(|e| IdentError::new(format!("urdf {}: {e}", urdf.display())))?;
     let model = Model::from_description(&robot)
-        .map_err(|e| CompliantError(format!("urdf {}: {e}", urdf.display())))?;
+        .map_err(|e| IdentError::new(format!("urdf {}: {e}", urdf.display())))?;
     let left = match table.get("support") {
         None => true,
         Some(toml::Value::String(s)) if s == "left" => true,
@@ -222,7 +225,7 @@ fn from_urdf(
         None => cc.stiffness_xz(),
         Some(toml::Value::String(s)) if s == "held" => cc.stiffness_xz(),
         Some(toml::Value::String(s)) if s == "free" => cc.stiffness_xz_force_only().ok_or_else(|| {
-            CompliantError("the x-z stiffness under forces alone does not exist here (singular rotational block)".into())
+            IdentError::new("the x-z stiffness under forces alone does not exist here (singular rotational block)")
         })?,
         Some(other) => {
             return err(format!(
@@ -276,7 +279,7 @@ mod tests {
         ];
         for (text, want) in cases {
             let e = parse_model_file(&text, Path::new(".")).unwrap_err();
-            assert!(e.0.contains(want), "{e} (want {want})");
+            assert!(e.message.contains(want), "{e} (want {want})");
         }
     }
 
@@ -303,12 +306,15 @@ mod tests {
         assert!((p.m - model.total_mass).abs() < 1e-12);
         let stretched = "urdf = \"coman.urdf\"\nknee_bend = 0.5\n[q]\nLKneeSag = 0.0\nLHipSag = 0.0\nLAnkSag = 0.0\n";
         let e = parse_model_file(stretched, &models_dir()).unwrap_err();
-        assert!(e.0.contains("singular") && e.0.contains("knee"), "{e}");
+        assert!(
+            e.message.contains("singular") && e.message.contains("knee"),
+            "{e}"
+        );
         let free =
             parse_model_file("urdf = \"coman.urdf\"\npelvis = \"free\"\n", &models_dir()).unwrap();
         let soft = cc.stiffness_xz_force_only().unwrap();
         assert_eq!((free.Kxx, free.Kzz), (soft[(0, 0)], soft[(1, 1)]));
         let e = parse_model_file("urdf = \"nope.urdf\"\n", &models_dir()).unwrap_err();
-        assert!(e.0.contains("nope.urdf"), "{e}");
+        assert!(e.message.contains("nope.urdf"), "{e}");
     }
 }

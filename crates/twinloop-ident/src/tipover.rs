@@ -38,9 +38,10 @@
 //! offset and the lever, not a second height: the height does not enter a
 //! parallelogram lean except through S.
 
-use crate::error::{ReducedError, finite, positive};
+use crate::error::IdentError;
 use twinloop_description::builtin::FootGeometry;
 use twinloop_dynamics::{BASE, Data, Model, forward_kinematics};
+use twinloop_reduced::error::{finite, positive};
 
 /// Seed 000 eq. 8: the four tip angles in degrees, from raw Dynamixel positions (1024
 /// steps over 300 degrees): `alpha1 = (Center - MaxFwd) 300/1024`, `beta1 = (MaxBwd -
@@ -67,7 +68,7 @@ impl SeedAngles {
         max_backward: f64,
         max_left: f64,
         max_right: f64,
-    ) -> Result<SeedAngles, ReducedError> {
+    ) -> Result<SeedAngles, IdentError> {
         let k = 300.0 / 1024.0;
         for (f, v) in [
             ("center", center),
@@ -158,7 +159,7 @@ pub struct SeedEstimate {
 /// sign convention follows the printed formulas: a larger backward than forward angle
 /// gives D1 > 0, i.e. (for a symmetric foot) a CoM ahead of the ankle, reported as +x;
 /// a larger left than right angle gives W1 < 0, a CoM to the right, -y.
-pub fn seed_method(angles: &SeedAngles, c: &SeedConstants) -> Result<SeedEstimate, ReducedError> {
+pub fn seed_method(angles: &SeedAngles, c: &SeedConstants) -> Result<SeedEstimate, IdentError> {
     for (f, v) in [
         ("angles.alpha1", angles.alpha1),
         ("angles.alpha2", angles.alpha2),
@@ -167,13 +168,11 @@ pub fn seed_method(angles: &SeedAngles, c: &SeedConstants) -> Result<SeedEstimat
         finite(f, v)?;
     }
     if !(angles.beta1.is_finite() && angles.beta1 > 0.0 && angles.beta1 < 90.0) {
-        return Err(ReducedError::new(
-            "angles.beta1",
-            format!(
-                "eq. 10 needs a backward tip angle in (0, 90) degrees, got {}",
-                angles.beta1
-            ),
-        ));
+        return Err(IdentError::new(format!(
+            "eq. 10 needs a backward tip angle in (0, 90) degrees, got {}",
+            angles.beta1
+        ))
+        .field("angles.beta1"));
     }
     positive("constants.f2", c.f2)?;
     finite("constants.l0", c.l0)?;
@@ -211,14 +210,15 @@ pub fn seed_method_sagittal_angles(
     x: f64,
     z: f64,
     c: &SeedConstants,
-) -> Result<(f64, f64), ReducedError> {
+) -> Result<(f64, f64), IdentError> {
     finite("x", x)?;
     positive("constants.f2", c.f2)?;
     if !(z.is_finite() && z > c.f2) {
-        return Err(ReducedError::new(
-            "z",
-            format!("the seed's L3 is at least F2 = {} m; got {z}", c.f2),
-        ));
+        return Err(IdentError::new(format!(
+            "the seed's L3 is at least F2 = {} m; got {z}",
+            c.f2
+        ))
+        .field("z"));
     }
     let deg = 180.0 / std::f64::consts::PI;
     let theta1 = (c.f2 / z).acos();
@@ -302,23 +302,19 @@ impl FeetMass {
 /// The feet of a model in configuration `q`: the links below (and including the child
 /// of) the two ankle pitch joints, placed by forward kinematics, relative to the
 /// midpoint of the two ankle pitch joints.
-pub fn feet_mass(
-    model: &Model,
-    q: &[f64],
-    ankle_pitch: [&str; 2],
-) -> Result<FeetMass, ReducedError> {
+pub fn feet_mass(model: &Model, q: &[f64], ankle_pitch: [&str; 2]) -> Result<FeetMass, IdentError> {
     if q.len() != model.nq {
-        return Err(ReducedError::new(
-            "q",
-            format!("has {} entries, the model {}", q.len(), model.nq),
-        ));
+        return Err(
+            IdentError::new(format!("has {} entries, the model {}", q.len(), model.nq)).field("q"),
+        );
     }
     let joint = |name: &str| {
         model.joint_index(name).ok_or_else(|| {
-            ReducedError::new(
-                "ankle_pitch",
-                format!("the model \"{}\" has no joint \"{name}\"", model.name),
-            )
+            IdentError::new(format!(
+                "the model \"{}\" has no joint \"{name}\"",
+                model.name
+            ))
+            .field("ankle_pitch")
         })
     };
     let ankles = [joint(ankle_pitch[0])?, joint(ankle_pitch[1])?];
@@ -374,19 +370,19 @@ pub fn frontal_lever(
     q: &[f64],
     hip_roll: [&str; 2],
     ankle_roll: [&str; 2],
-) -> Result<FrontalLever, ReducedError> {
+) -> Result<FrontalLever, IdentError> {
     if q.len() != model.nq {
-        return Err(ReducedError::new(
-            "q",
-            format!("has {} entries, the model {}", q.len(), model.nq),
-        ));
+        return Err(
+            IdentError::new(format!("has {} entries, the model {}", q.len(), model.nq)).field("q"),
+        );
     }
     let joint = |field: &str, name: &str| {
         model.joint_index(name).ok_or_else(|| {
-            ReducedError::new(
-                field,
-                format!("the model \"{}\" has no joint \"{name}\"", model.name),
-            )
+            IdentError::new(format!(
+                "the model \"{}\" has no joint \"{name}\"",
+                model.name
+            ))
+            .field(field)
         })
     };
     let hips = [
@@ -400,13 +396,11 @@ pub fn frontal_lever(
     let inside = |root: usize, i: usize| i != BASE && model.ancestors(i).any(|a| a == root);
     for k in 0..2 {
         if !inside(hips[k], ankles[k]) {
-            return Err(ReducedError::new(
-                "ankle_roll",
-                format!(
-                    "\"{}\" is not below \"{}\" in the model",
-                    ankle_roll[k], hip_roll[k]
-                ),
-            ));
+            return Err(IdentError::new(format!(
+                "\"{}\" is not below \"{}\" in the model",
+                ankle_roll[k], hip_roll[k]
+            ))
+            .field("ankle_roll"));
         }
     }
     let mut data = Data::new(model);
@@ -417,13 +411,11 @@ pub fn frontal_lever(
         origin(hips[1]).z - origin(ankles[1]).z,
     ];
     if (legs[0] - legs[1]).abs() > 1e-3 {
-        return Err(ReducedError::new(
-            "hip_roll",
-            format!(
-                "the legs are {:.4} and {:.4} m long: unequal legs cannot lean as a parallelogram",
-                legs[0], legs[1]
-            ),
-        ));
+        return Err(IdentError::new(format!(
+            "the legs are {:.4} and {:.4} m long: unequal legs cannot lean as a parallelogram",
+            legs[0], legs[1]
+        ))
+        .field("hip_roll"));
     }
     let leg = 0.5 * (legs[0] + legs[1]);
     let (mut mass, mut s, mut c) = (0.0, 0.0, 0.0);
@@ -467,7 +459,7 @@ pub struct ExactEstimate {
     pub frontal_lever: f64,
 }
 
-fn check_foot(foot: &FootGeometry) -> Result<(), ReducedError> {
+fn check_foot(foot: &FootGeometry) -> Result<(), IdentError> {
     positive("foot.front", foot.front)?;
     positive("foot.back", foot.back)?;
     positive("foot.outer", foot.outer)?;
@@ -481,37 +473,37 @@ fn check_foot(foot: &FootGeometry) -> Result<(), ReducedError> {
 /// about the axis towards the edge moves the CoM to `s cos(theta) + side z sin(theta)`;
 /// with `A = side s`, `C = |edge|`: `A cos + z sin = C`,
 /// `theta = atan2(z, A) - acos(C / hypot(A, z))`.
-fn sagittal_tip(s: f64, z: f64, edge: f64, field: &str) -> Result<f64, ReducedError> {
+fn sagittal_tip(s: f64, z: f64, edge: f64, field: &str) -> Result<f64, IdentError> {
     let a = edge.signum() * s;
     let c = edge.abs();
     if a > c {
-        return Err(ReducedError::new(
-            field,
+        return Err(IdentError::new(
             "the CoM is already beyond this sole edge: the robot cannot stand",
-        ));
+        )
+        .field(field));
     }
     if z <= 0.0 {
-        return Err(ReducedError::new(
-            field,
+        return Err(IdentError::new(
             "the CoM is not above the pivot axis: leaning never tips it this way",
-        ));
+        )
+        .field(field));
     }
     let r = a.hypot(z);
     if r < c {
-        return Err(ReducedError::new(
-            field,
+        return Err(IdentError::new(
             "the CoM is too close to the pivot axis to ever pass above this sole edge",
-        ));
+        )
+        .field(field));
     }
     Ok(z.atan2(a) - (c / r).acos())
 }
 
-fn check_feet(feet: &FeetMass) -> Result<(), ReducedError> {
+fn check_feet(feet: &FeetMass) -> Result<(), IdentError> {
     if !(feet.fraction.is_finite() && (0.0..1.0).contains(&feet.fraction)) {
-        return Err(ReducedError::new(
-            "feet.fraction",
-            format!("must be in [0, 1), got {}", feet.fraction),
-        ));
+        return Err(
+            IdentError::new(format!("must be in [0, 1), got {}", feet.fraction))
+                .field("feet.fraction"),
+        );
     }
     finite("feet.x", feet.x)?;
     finite("feet.z", feet.z)?;
@@ -527,7 +519,7 @@ pub fn sagittal_tip_angles(
     z: f64,
     feet: &FeetMass,
     foot: &FootGeometry,
-) -> Result<(f64, f64), ReducedError> {
+) -> Result<(f64, f64), IdentError> {
     finite("com.x", x)?;
     finite("com.z", z)?;
     check_foot(foot)?;
@@ -553,7 +545,7 @@ pub fn frontal_tip_angles(
     y: f64,
     lever: &FrontalLever,
     foot: &FootGeometry,
-) -> Result<(f64, f64), ReducedError> {
+) -> Result<(f64, f64), IdentError> {
     finite("com.y", y)?;
     positive("lever.sin", lever.sin)?;
     finite("lever.cos", lever.cos)?;
@@ -563,16 +555,16 @@ pub fn frontal_tip_angles(
     let phi = lever.cos.atan2(lever.sin);
     let angle = |u: f64, field: &str| {
         if u < 0.0 {
-            return Err(ReducedError::new(
-                field,
+            return Err(IdentError::new(
                 "the CoM is already beyond this sole edge: the robot cannot stand",
-            ));
+            )
+            .field(field));
         }
         if u > r {
-            return Err(ReducedError::new(
-                field,
+            return Err(IdentError::new(
                 "the lever is too short for the CoM ever to reach this sole edge",
-            ));
+            )
+            .field(field));
         }
         Ok((u / r).asin())
     };
@@ -590,7 +582,7 @@ pub fn tip_angles(
     feet: &FeetMass,
     lever: &FrontalLever,
     foot: &FootGeometry,
-) -> Result<TipAngles, ReducedError> {
+) -> Result<TipAngles, IdentError> {
     let (forward, backward) = sagittal_tip_angles(com[0], com[2], feet, foot)?;
     let (left, right) = frontal_tip_angles(com[1], lever, foot)?;
     Ok(TipAngles {
@@ -605,13 +597,13 @@ pub fn tip_angles(
     })
 }
 
-fn solve2(a: [[f64; 2]; 2], b: [f64; 2], field: &str) -> Result<(f64, f64), ReducedError> {
+fn solve2(a: [[f64; 2]; 2], b: [f64; 2], field: &str) -> Result<(f64, f64), IdentError> {
     let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
     if det.abs() < 1e-12 {
-        return Err(ReducedError::new(
-            field,
+        return Err(IdentError::new(
             "the two tip angles give no solution (their equations are parallel)",
-        ));
+        )
+        .field(field));
     }
     Ok((
         (b[0] * a[1][1] - a[0][1] * b[1]) / det,
@@ -642,7 +634,7 @@ pub fn exact_method(
     angles: &TipAngles,
     feet: &FeetMass,
     foot: &FootGeometry,
-) -> Result<ExactEstimate, ReducedError> {
+) -> Result<ExactEstimate, IdentError> {
     check_foot(foot)?;
     check_feet(feet)?;
     for (f, v) in [
@@ -652,10 +644,10 @@ pub fn exact_method(
         ("angles.right", angles.right),
     ] {
         if !(v.is_finite() && v > 0.0 && v < std::f64::consts::FRAC_PI_2) {
-            return Err(ReducedError::new(
-                f,
-                format!("a tip angle must be in (0, 90) degrees, got {v} rad"),
-            ));
+            return Err(IdentError::new(format!(
+                "a tip angle must be in (0, 90) degrees, got {v} rad"
+            ))
+            .field(f));
         }
     }
     for (f, v) in [
@@ -665,10 +657,10 @@ pub fn exact_method(
         ("angles.right_roll", angles.right_roll),
     ] {
         if !(v.is_finite() && v.abs() < 0.2) {
-            return Err(ReducedError::new(
-                f,
-                format!("a foot roll must be small (under 0.2 rad), got {v} rad"),
-            ));
+            return Err(IdentError::new(format!(
+                "a foot roll must be small (under 0.2 rad), got {v} rad"
+            ))
+            .field(f));
         }
     }
     let mu = feet.fraction;

@@ -10,16 +10,16 @@
 //! then up to half a degree before that tip and on at a creep, which cuts the lag of
 //! the onset detection tenfold (see [`TipoverConfig::slow_from_deg`]).
 
-use crate::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
+use crate::tipover::{
+    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, feet_mass,
+    frontal_lever, seed_method,
+};
 use nalgebra::Vector3;
 use serde::Serialize;
 use twinloop_description::Description;
 use twinloop_description::builtin::FootGeometry;
 use twinloop_dynamics::{BASE, Data};
-use twinloop_reduced::{
-    SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, feet_mass,
-    frontal_lever, seed_method,
-};
+use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
 use twinloop_robot::RobotError;
 use twinloop_sim::statics::{FlatFeet, hip_lean_signs, lean_signs};
 use twinloop_sim::{Actuator, ContactParams, SimConfig, Simulator, servo_for_joint};

@@ -151,7 +151,7 @@ pub fn levenberg_marquardt(
     }
     FitResult {
         method: Method::Lm,
-        params: crate::Corrections::from_slice(&problem.full(p.as_slice())),
+        params: twinloop_reduced::Corrections::from_slice(&problem.full(p.as_slice())),
         mse_before: f64::NAN,
         mse_after: sse / residuals,
         evaluations,

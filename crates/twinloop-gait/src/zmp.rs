@@ -35,7 +35,7 @@
 //! phases, x'' = (x - p)/Tc^2 holds exactly, and the gait far from both ends is
 //! periodic: a step later the CoM is shifted by `sl` in x and mirrored in y.
 
-use crate::{CompliantError, err};
+use crate::error::{GaitError, err};
 
 /// Which foot bears the robot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -112,7 +112,7 @@ impl Default for GaitPlan {
 
 impl GaitPlan {
     /// Checks every field; the error names the field at fault.
-    pub fn validate(&self) -> Result<(), CompliantError> {
+    pub fn validate(&self) -> Result<(), GaitError> {
         let finite = [
             ("step length", self.step_length),
             ("step width", self.step_width),
@@ -208,7 +208,7 @@ pub struct ZmpSample {
 impl ZmpReference {
     /// Builds the ZMP reference of a plan and solves the LIPM exactly (seed 002, eq 12-13;
     /// the formulation is in the module documentation).
-    pub fn new(plan: &GaitPlan) -> Result<ZmpReference, CompliantError> {
+    pub fn new(plan: &GaitPlan) -> Result<ZmpReference, GaitError> {
         plan.validate()?;
         let tc = plan.time_constant();
         // (duration, phase, ZMP at start, ZMP at end, support footprints)
@@ -371,7 +371,7 @@ impl ZmpReference {
     }
 
     /// Samples every `dt` from 0 to the end of the plan.
-    pub fn sample(&self, dt: f64) -> Result<Vec<ZmpSample>, CompliantError> {
+    pub fn sample(&self, dt: f64) -> Result<Vec<ZmpSample>, GaitError> {
         if !(dt.is_finite() && dt > 0.0) {
             return err(format!(
                 "sample time dt must be positive and finite, got {dt}"

@@ -3,7 +3,8 @@
 
 use super::synthetic::{gait_reference, simulate};
 use super::*;
-use crate::{GaitPlan, SagittalReference};
+use twinloop_gait::GaitPlan;
+use twinloop_reduced::SagittalReference;
 
 /// COMAN's x-z entries from `compliant stiffness` (URDF, left support, 0.5 rad crouch,
 /// K_h 8000, K_s 100, joint damping 1 N m s/rad).
@@ -444,15 +445,15 @@ fn problems_are_checked() {
         ..Corrections::default()
     };
     let e = FitProblem::new(coman_plant(), &data, c, &SEED_PARAMETERS).unwrap_err();
-    assert!(e.0.contains("eta2"), "{e}");
+    assert!(e.message.contains("eta2"), "{e}");
     let mut p = coman_plant();
     p.Kzz = -1.0;
     let e = FitProblem::new(p, &data, Corrections::default(), &SEED_PARAMETERS).unwrap_err();
-    assert!(e.0.contains("Kzz"), "{e}");
+    assert!(e.message.contains("Kzz"), "{e}");
     assert!(
         parse_parameter_names("alpha1,zeta")
             .unwrap_err()
-            .0
+            .message
             .contains("zeta")
     );
     assert_eq!(parse_parameter_names("eta2, alpha1").unwrap(), vec![9, 0]);

@@ -9,12 +9,12 @@
 //! (6000 evaluations by default; the doc's long run used 60000.)
 
 use std::path::Path;
-use twinloop_compliant::GaitPlan;
-use twinloop_compliant::compact::{CompactModel, Corrections};
-use twinloop_compliant::fit::synthetic::{gait_reference, simulate};
-use twinloop_compliant::fit::{
+use twinloop_gait::GaitPlan;
+use twinloop_ident::compliant_fit::synthetic::{gait_reference, simulate};
+use twinloop_ident::compliant_fit::{
     FitOptions, FitProblem, Method, Progress, SEED_PARAMETERS, fit, parse_model_file,
 };
+use twinloop_reduced::compact::{CompactModel, Corrections};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let budget: usize = match std::env::args().nth(1) {
