@@ -1,7 +1,9 @@
 //! The official ROBOTIS SDK (PyPI `dynamixel-sdk`) as a client of `twinloop serve`:
 //! runs tools/oracle/dynamixel_sdk_conformance.py against a served virtual robot.
 //! Skips, with a note, when Python or the SDK is missing, so `cargo test` needs
-//! only Rust. Python is $TWINLOOP_PYTHON, else the repository's .venv, else python3.
+//! only Rust; with TWINLOOP_REQUIRE_ORACLES=1 (set by .ci/run) a missing SDK fails
+//! the test instead, so CI cannot pass without running it. Python is
+//! $TWINLOOP_PYTHON, else the repository's .venv, else python3.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -41,6 +43,10 @@ fn official_sdk_against_twinloop_serve() {
     let py = match python_with_sdk() {
         Ok(py) => py,
         Err(why) => {
+            assert!(
+                std::env::var("TWINLOOP_REQUIRE_ORACLES").as_deref() != Ok("1"),
+                "TWINLOOP_REQUIRE_ORACLES=1 but no Python with dynamixel-sdk: {why}"
+            );
             eprintln!(
                 "SKIPPED official_sdk_against_twinloop_serve: no Python with dynamixel-sdk ({why}); \
                  `pip install dynamixel-sdk==4.1.0` or set TWINLOOP_PYTHON to run it"
