@@ -414,7 +414,7 @@ pub fn identify_state_space(
 ) -> Result<StateSpaceIdentification> {
     check_records(est, val)?;
     if opts.order == 0 {
-        return Err(SysidError::order("--order must be at least 1"));
+        return Err(SysidError::order("the model order must be at least 1"));
     }
     let ev_data = val.unwrap_or(est);
     let which = if val.is_some() {
@@ -462,7 +462,7 @@ pub fn identify_state_space(
             )?);
             if opts.order > full.n() {
                 return Err(SysidError::order(format!(
-                    "order {} is above the ARX realisation's {} states: raise na/nb or lower --order",
+                    "order {} is above the ARX realisation's {} states: raise na/nb or lower the order",
                     opts.order,
                     full.n()
                 )));

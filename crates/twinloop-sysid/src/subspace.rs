@@ -82,8 +82,8 @@ fn oblique(
     let theta = HouseholderQr::new(reg).solve(target).map_err(|_| {
         SysidError::numerical(
             "the subspace regressor (past inputs and outputs, future inputs) is rank-deficient: \
-             the inputs do not excite the system enough for this horizon; lower --horizon or \
-             use richer inputs",
+             the inputs do not excite the system enough for this horizon; use a shorter horizon, \
+             drop inputs that copy others, or use richer inputs",
         )
     })?;
     Ok(keep * theta.rows(0, nk))
@@ -125,7 +125,7 @@ pub fn n4sid(data: &IoData, opts: &SubspaceOptions) -> Result<SubspaceResult> {
             n.div_ceil(ny) + 1,
             n_samples,
             if opts.horizon.is_some() {
-                " (or --horizon is set too low)"
+                " (or the horizon option is set too low)"
             } else {
                 ""
             }
