@@ -228,7 +228,7 @@ fn find_feet(
     twinloop_dynamics::forward_kinematics(model, data, &q0);
     let by_name = |n: &str| {
         robot.link_index(n).ok_or_else(|| {
-            IdentError::new(format!("no link named \"{n}\" in the description")).field("--feet")
+            IdentError::new(format!("no link named \"{n}\" in the description")).option("feet")
         })
     };
     if let Some((l, r)) = feet {
@@ -261,9 +261,9 @@ fn find_feet(
         (Some(l), Some(r)) => Ok((l, r)),
         _ => Err(IdentError::new(
             "cannot find the feet: no link with primitive (box, cylinder, sphere) geometry on each \
-             side (y > 0 left, y < 0 right) of the neutral configuration; name them with --feet LEFT,RIGHT",
+             side (y > 0 left, y < 0 right) of the neutral configuration; name them (feet: LEFT,RIGHT)",
         )
-        .field("--feet")),
+        .option("feet")),
     }
 }
 
@@ -281,7 +281,7 @@ fn make_foot(
         return Err(IdentError::new(format!(
             "\"{name}\" is welded to the base: a foot must move relative to the pelvis"
         ))
-        .field("--feet"));
+        .option("feet"));
     }
     let x_foot = link_placement(model, data, link);
     // Geometry of every link on the same body, in the foot frame.
@@ -302,7 +302,7 @@ fn make_foot(
             "foot link \"{name}\" has no primitive collision or visual geometry (box, cylinder, sphere) \
              on its body: its sole cannot be found"
         ))
-        .field("--feet"));
+        .option("feet"));
     }
     // In the neutral configuration the sole is flat: "down" is world -z.
     let r0 = x_foot.rotation;
@@ -372,7 +372,7 @@ impl Anatomy {
                 "the feet \"{}\" and \"{}\" share a joint: they are not two legs",
                 left_foot.name, right_foot.name
             ))
-            .field("--feet"));
+            .option("feet"));
         }
         let nb = model.nbodies;
         let on_leg = |b: usize| left_leg.contains(&b) || right_leg.contains(&b);

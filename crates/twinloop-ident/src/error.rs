@@ -1,5 +1,7 @@
-//! Errors that name what is at fault: the file, the data row, the field (column,
-//! command-line option or link) and what is wrong with it.
+//! Errors that name what is at fault: the file, the data row, the field (a column or a
+//! link), the option (a field of the options struct the caller filled in) and what is
+//! wrong with it. The library knows nothing of command-line flags: a front end that
+//! maps options to flags (the CLI: `total_mass` is `--total-mass`) renders `option`.
 
 use std::fmt;
 use std::path::PathBuf;
@@ -11,8 +13,10 @@ pub struct IdentError {
     pub file: Option<PathBuf>,
     /// 1-based data row (the header is not counted), where a row is at fault.
     pub row: Option<usize>,
-    /// Column, option (`--total-mass`) or parameter name at fault.
+    /// Column, link or parameter name at fault.
     pub field: Option<String>,
+    /// The option at fault, as named in the options struct (`total_mass`).
+    pub option: Option<String>,
     pub message: String,
 }
 
@@ -22,6 +26,7 @@ impl IdentError {
             file: None,
             row: None,
             field: None,
+            option: None,
             message: message.into(),
         }
     }
@@ -41,6 +46,11 @@ impl IdentError {
         self.field = Some(field.into());
         self
     }
+
+    pub fn option(mut self, option: impl Into<String>) -> Self {
+        self.option = Some(option.into());
+        self
+    }
 }
 
 impl fmt::Display for IdentError {
@@ -53,6 +63,9 @@ impl fmt::Display for IdentError {
         }
         if let Some(c) = &self.field {
             write!(f, "field \"{c}\": ")?;
+        }
+        if let Some(o) = &self.option {
+            write!(f, "option {o}: ")?;
         }
         write!(f, "{}", self.message)
     }
@@ -78,6 +91,7 @@ impl From<twinloop_reduced::ReducedError> for IdentError {
             file: None,
             row: None,
             field,
+            option: None,
             message: e.message,
         }
     }
@@ -93,6 +107,7 @@ impl From<twinloop_io::IoError> for IdentError {
             file,
             row: None,
             field: None,
+            option: None,
             message: inner.to_string(),
         }
     }

@@ -42,7 +42,7 @@ pub fn butter_lowpass(
         return Err(IdentError::new(format!(
             "Butterworth order {order}: use 1 to 8 (2 or 4 is usual)"
         ))
-        .field("--filter-order"));
+        .option("filter_order"));
     }
     let nyquist = 0.5 * sample_hz;
     if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
@@ -50,7 +50,7 @@ pub fn butter_lowpass(
             "cut-off {cutoff_hz} Hz must lie between 0 and the Nyquist frequency {nyquist} Hz \
              (sampling at {sample_hz} Hz)"
         ))
-        .field("--cutoff"));
+        .option("cutoff"));
     }
     let n = order as f64;
     // Analog prototype poles on the left half of the unit circle.

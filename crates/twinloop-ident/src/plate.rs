@@ -648,7 +648,7 @@ impl<'a> PlateGenerator<'a> {
             cat.name(),
             attempts * 4
         ))
-        .field("--categories"))
+        .option("categories"))
     }
 
     pub fn rng(&mut self) -> &mut SplitMix64 {
@@ -699,10 +699,10 @@ pub fn generate_static_poses(
     mut progress: impl FnMut(usize),
 ) -> Result<Generated, IdentError> {
     if options.count == 0 {
-        return Err(IdentError::new("at least one pose is needed").field("--count"));
+        return Err(IdentError::new("at least one pose is needed").option("count"));
     }
     if options.categories.is_empty() {
-        return Err(IdentError::new("no category chosen").field("--categories"));
+        return Err(IdentError::new("no category chosen").option("categories"));
     }
     let feet = options.feet.as_ref().map(|(l, r)| (l.as_str(), r.as_str()));
     let mut generator = PlateGenerator::new(robot, model, options.seed, &options.hold, feet)?;
@@ -728,7 +728,7 @@ pub fn generate_static_poses(
                 .collect::<Vec<_>>()
                 .join("; ")
         ))
-        .field("--categories"));
+        .option("categories"));
     }
     let plans = plan_poses(&generator, options.count, &usable);
     let mut data = Data::new(model);

@@ -247,14 +247,14 @@ impl StaticProblem {
             return Err(IdentError::new(format!(
                 "{total_mass} is not a mass: give the robot's weight on a scale, in kg"
             ))
-            .field("--total-mass"));
+            .option("total_mass"));
         }
         if !(options.cop_sigma.is_finite() && options.cop_sigma >= 0.0) {
             return Err(IdentError::new(format!(
                 "{} is not a standard deviation (finite, >= 0)",
                 options.cop_sigma
             ))
-            .field("--cop-sigma"));
+            .option("cop_sigma"));
         }
         let nl = model.links.len();
         let links: Vec<usize> = match &options.links {
@@ -269,13 +269,13 @@ impl StaticProblem {
                             "no link named \"{n}\" in the model \"{}\"",
                             model.name
                         ))
-                        .field("--links")
+                        .option("links")
                     })?;
                     if robot.links[l].inertial.is_none() {
                         return Err(IdentError::new(format!(
                             "link \"{n}\" has no <inertial> in the prior: give it one, or leave it out"
                         ))
-                        .field("--links"));
+                        .option("links"));
                     }
                     if !v.contains(&l) {
                         v.push(l);
@@ -285,7 +285,7 @@ impl StaticProblem {
             }
         };
         if links.is_empty() {
-            return Err(IdentError::new("no link to identify").field("--links"));
+            return Err(IdentError::new("no link to identify").option("links"));
         }
         let prior = twinloop_dynamics::link_static_parameters(model);
         let fixed_mass: f64 = (0..nl)
@@ -302,7 +302,7 @@ impl StaticProblem {
                 "{total_mass} kg is not more than the {fixed_mass:.6} kg of the links kept fixed \
                  (plus {floor:.6} kg of minimum masses): the identified links would have no mass"
             ))
-            .field("--total-mass"));
+            .option("total_mass"));
         }
         let n = 4 * links.len();
         let mut x0 = DVector::zeros(n);
@@ -801,14 +801,14 @@ pub fn identify_static(
     if poses.len() < problem.min_poses() {
         return Err(IdentError::new(format!(
             "{} poses give {} equations for the {} unknowns (mass and first moment) of {} links: \
-             at least {} poses are needed (or identify fewer links with --links)",
+             at least {} poses are needed (or identify fewer links)",
             poses.len(),
             2 * poses.len() + 1,
             problem.unknowns(),
             problem.links.len(),
             problem.min_poses()
         ))
-        .field("--poses"));
+        .option("poses"));
     }
     for (i, p) in poses.iter().enumerate() {
         if p.q.len() != model.nq {

@@ -343,7 +343,7 @@ pub fn residual_wrench(
             plate.len(),
             motion.t.len()
         ))
-        .field("--plate"));
+        .option("plate"));
     }
     let (qs, v, a) = smooth_differentiate(model, &motion.t, &motion.q, smoothing)?;
     let mut data = Data::new(model);
@@ -410,7 +410,7 @@ pub fn squat_motion(
         return Err(IdentError::new("the squat needs a floating-base model"));
     }
     if !(options.rate > 0.0 && options.duration > 0.0 && options.rest >= 0.0) {
-        return Err(IdentError::new("rate, duration and rest must be positive").field("--rate"));
+        return Err(IdentError::new("rate, duration and rest must be positive").option("rate"));
     }
     let feet = options.feet.as_ref().map(|(l, r)| (l.as_str(), r.as_str()));
     let anatomy = Anatomy::detect(robot, model, feet)?;
@@ -560,10 +560,10 @@ pub fn squat_motion(
         let fail = |rep: twinloop_gait::ik::IkReport| {
             IdentError::new(format!(
                 "the squat at t = {t:.3} s cannot keep the feet flat where they stand with the CoM \
-                 over them (residual {:.2e}): try a smaller --depth",
+                 over them (residual {:.2e}): try a smaller squat depth",
                 rep.max_residual
             ))
-            .field("--depth")
+            .option("depth")
         };
         let start = stand_q.is_none();
         if start {
@@ -602,10 +602,10 @@ pub fn squat_motion(
             if x < model.lower_limits[i] - 1e-9 || x > model.upper_limits[i] + 1e-9 {
                 return Err(IdentError::new(format!(
                     "the squat at t = {t:.3} s needs joint {} at {x:.3} rad, outside its limits: \
-                     try a smaller --depth",
+                     try a smaller squat depth",
                     model.joint_names[i]
                 ))
-                .field("--depth"));
+                .option("depth"));
             }
         }
         Ok(())

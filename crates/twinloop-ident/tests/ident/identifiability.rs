@@ -196,7 +196,7 @@ fn bad_inputs_name_the_field() {
     };
     let e = err(30.0, torso.clone(), &poses);
     assert!(
-        e.contains("--total-mass") && e.contains("kept fixed"),
+        e.contains("option total_mass") && e.contains("kept fixed"),
         "{e}"
     );
     let e = err(f64::NAN, torso.clone(), &poses);
