@@ -200,11 +200,11 @@ fn bad_inputs_name_the_field() {
         "{e}"
     );
     let e = err(f64::NAN, torso.clone(), &poses);
-    assert!(e.contains("--total-mass"), "{e}");
+    assert!(e.contains("option total_mass"), "{e}");
     // Too few poses for every link.
     let e = err(55.0, StaticOptions::default(), &poses[..10]);
     assert!(
-        e.contains("--poses") && e.contains("at least 40 poses"),
+        e.contains("option poses") && e.contains("at least 40 poses"),
         "{e}"
     );
     // Unknown link, link without inertial.
@@ -216,7 +216,7 @@ fn bad_inputs_name_the_field() {
         },
         &poses,
     );
-    assert!(e.contains("--links") && e.contains("waist_link"), "{e}");
+    assert!(e.contains("option links") && e.contains("waist_link"), "{e}");
     let e = err(
         55.0,
         StaticOptions {
@@ -225,7 +225,7 @@ fn bad_inputs_name_the_field() {
         },
         &poses,
     );
-    assert!(e.contains("--links") && e.contains("no <inertial>"), "{e}");
+    assert!(e.contains("option links") && e.contains("no <inertial>"), "{e}");
     let e = err(
         55.0,
         StaticOptions {
@@ -234,7 +234,7 @@ fn bad_inputs_name_the_field() {
         },
         &poses,
     );
-    assert!(e.contains("--cop-sigma"), "{e}");
+    assert!(e.contains("option cop_sigma"), "{e}");
 }
 
 /// COMAN's camera and hands are welded to the trunk and wrists, its IMU to the pelvis:
