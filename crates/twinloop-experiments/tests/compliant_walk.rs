@@ -269,33 +269,6 @@ fn csv_has_the_seed_columns_at_1_khz() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The committed 30 s datasets: 30 000 rows at 1 kHz with the seed's columns.
-#[test]
-fn committed_datasets_are_30_s_at_1_khz() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data");
-    for name in [
-        "coman_walk_sl0.03_tss0.5.csv",
-        "coman_walk_sl0.02_tss0.4.csv",
-        "coman_walk_sl0.04_tss0.6.csv",
-    ] {
-        let text = std::fs::read_to_string(format!("{dir}/{name}")).unwrap();
-        let mut lines = text.lines();
-        assert_eq!(lines.next(), Some("t,xr,zr,x,z,phase"), "{name}");
-        let mut n = 0;
-        for (i, line) in lines.enumerate() {
-            let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-            assert_eq!(f[0], i as f64 / 1000.0, "{name} row {i}");
-            assert!(f[5] == 0.0 || f[5] == 1.0);
-            assert!(
-                (f[3] - f[1]).abs() < 0.03 && (f[4] - f[2]).abs() < 0.01,
-                "{name} row {i}"
-            );
-            n += 1;
-        }
-        assert_eq!(n, 30_000, "{name}");
-    }
-}
-
 #[test]
 fn bad_inputs_are_named() {
     let robot = coman();

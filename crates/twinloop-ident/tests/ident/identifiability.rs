@@ -216,7 +216,10 @@ fn bad_inputs_name_the_field() {
         },
         &poses,
     );
-    assert!(e.contains("option links") && e.contains("waist_link"), "{e}");
+    assert!(
+        e.contains("option links") && e.contains("waist_link"),
+        "{e}"
+    );
     let e = err(
         55.0,
         StaticOptions {
@@ -225,7 +228,10 @@ fn bad_inputs_name_the_field() {
         },
         &poses,
     );
-    assert!(e.contains("option links") && e.contains("no <inertial>"), "{e}");
+    assert!(
+        e.contains("option links") && e.contains("no <inertial>"),
+        "{e}"
+    );
     let e = err(
         55.0,
         StaticOptions {
