@@ -122,7 +122,8 @@ impl fmt::Display for Severity {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Subject {
-    Description,
+    /// The whole description (URDF's `<robot>` element).
+    Robot,
     Link,
     Joint,
 }
@@ -130,7 +131,7 @@ pub enum Subject {
 impl Subject {
     pub fn as_str(self) -> &'static str {
         match self {
-            Subject::Description => "robot",
+            Subject::Robot => "robot",
             Subject::Link => "link",
             Subject::Joint => "joint",
         }
@@ -237,7 +238,7 @@ pub fn lint(robot: &Description) -> LintReport {
     out.push(Finding {
         severity: Severity::Info,
         code: codes::TOTAL_MASS,
-        subject: Subject::Description,
+        subject: Subject::Robot,
         name: robot.name.clone(),
         message,
     });

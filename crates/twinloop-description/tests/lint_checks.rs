@@ -54,7 +54,7 @@ fn clean_robot_has_only_the_total_mass() {
     let f = &r.findings[0];
     assert_eq!(
         (f.severity, f.code, f.subject),
-        (Severity::Info, codes::TOTAL_MASS, Subject::Description)
+        (Severity::Info, codes::TOTAL_MASS, Subject::Robot)
     );
     assert_eq!(f.name, "test");
     assert!(f.message.contains("2.5 kg"), "{}", f.message);
