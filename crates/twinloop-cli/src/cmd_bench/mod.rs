@@ -202,80 +202,12 @@ fn dynamics(args: &DynamicsBenchArgs) -> CliResult {
     let (_, model) = load_model(&args.robot, BaseKind::Floating)?;
     let s = load_states(&model, args)?;
     let n = s.q.len();
-    let mut d = Data::new(&model);
-    let secs = args.seconds;
     let bar = if crate::common::json_to_stdout(args.json.as_ref()) {
         indicatif::ProgressBar::hidden()
     } else {
         progress::steps(7)
     };
-    let step = |name: &str| {
-        bar.set_message(name.to_string());
-        bar.inc(1);
-    };
-    use twinloop_dynamics as dy;
-    step("fk");
-    let fk = time(n, secs, || {
-        for q in &s.q {
-            dy::forward_kinematics(&model, &mut d, black_box(q));
-        }
-        black_box(&d.o_m_i);
-    });
-    step("com");
-    let com = time(n, secs, || {
-        for q in &s.q {
-            black_box(dy::center_of_mass(&model, &mut d, black_box(q)));
-        }
-    });
-    step("rnea");
-    let rnea = time(n, secs, || {
-        for i in 0..n {
-            black_box(dy::rnea(
-                &model,
-                &mut d,
-                black_box(&s.q[i]),
-                &s.v[i],
-                &s.a[i],
-            ));
-        }
-    });
-    step("crba");
-    let crba = time(n, secs, || {
-        for q in &s.q {
-            black_box(dy::crba(&model, &mut d, black_box(q)));
-        }
-    });
-    step("aba");
-    let aba = time(n, secs, || {
-        for i in 0..n {
-            black_box(dy::aba(
-                &model,
-                &mut d,
-                black_box(&s.q[i]),
-                &s.v[i],
-                &s.tau[i],
-            ));
-        }
-    });
-    step("jacobians");
-    let jacobians = time(n, secs, || {
-        for q in &s.q {
-            dy::compute_joint_jacobians(&model, &mut d, black_box(q));
-            black_box(&d.joint_jacobians);
-        }
-    });
-    step("regressor");
-    let regressor = time(n, secs, || {
-        for i in 0..n {
-            black_box(dy::joint_torque_regressor(
-                &model,
-                &mut d,
-                black_box(&s.q[i]),
-                &s.v[i],
-                &s.a[i],
-            ));
-        }
-    });
+    let ns_per_call = time_algorithms(&model, &s, args.seconds, &bar);
     bar.finish_and_clear();
     let model_name = match args.robot.strip_prefix("builtin:") {
         Some(name) => name.to_string(),
@@ -288,15 +220,7 @@ fn dynamics(args: &DynamicsBenchArgs) -> CliResult {
         model: model_name,
         nv: model.nv,
         states: n,
-        ns_per_call: NsPerCall {
-            fk,
-            com,
-            rnea,
-            crba,
-            aba,
-            jacobians,
-            regressor,
-        },
+        ns_per_call,
     };
     let mut text = format!(
         "{} (nv = {}, {} states): median ns per call\n",
@@ -316,4 +240,91 @@ fn dynamics(args: &DynamicsBenchArgs) -> CliResult {
     }
     emit(&text, args.json.as_ref(), &report)?;
     Ok(Outcome::Ok)
+}
+
+/// Median ns per call of each algorithm over the states.
+fn time_algorithms(
+    model: &Model,
+    s: &States,
+    secs: f64,
+    bar: &indicatif::ProgressBar,
+) -> NsPerCall {
+    let n = s.q.len();
+    let mut d = Data::new(model);
+    let step = |name: &str| {
+        bar.set_message(name.to_string());
+        bar.inc(1);
+    };
+    use twinloop_dynamics as dy;
+    step("fk");
+    let fk = time(n, secs, || {
+        for q in &s.q {
+            dy::forward_kinematics(model, &mut d, black_box(q));
+        }
+        black_box(&d.o_m_i);
+    });
+    step("com");
+    let com = time(n, secs, || {
+        for q in &s.q {
+            black_box(dy::center_of_mass(model, &mut d, black_box(q)));
+        }
+    });
+    step("rnea");
+    let rnea = time(n, secs, || {
+        for i in 0..n {
+            black_box(dy::rnea(
+                model,
+                &mut d,
+                black_box(&s.q[i]),
+                &s.v[i],
+                &s.a[i],
+            ));
+        }
+    });
+    step("crba");
+    let crba = time(n, secs, || {
+        for q in &s.q {
+            black_box(dy::crba(model, &mut d, black_box(q)));
+        }
+    });
+    step("aba");
+    let aba = time(n, secs, || {
+        for i in 0..n {
+            black_box(dy::aba(
+                model,
+                &mut d,
+                black_box(&s.q[i]),
+                &s.v[i],
+                &s.tau[i],
+            ));
+        }
+    });
+    step("jacobians");
+    let jacobians = time(n, secs, || {
+        for q in &s.q {
+            dy::compute_joint_jacobians(model, &mut d, black_box(q));
+            black_box(&d.joint_jacobians);
+        }
+    });
+    step("regressor");
+    let regressor = time(n, secs, || {
+        for i in 0..n {
+            black_box(dy::joint_torque_regressor(
+                model,
+                &mut d,
+                black_box(&s.q[i]),
+                &s.v[i],
+                &s.a[i],
+            ));
+        }
+    });
+    NsPerCall {
+        fk,
+        com,
+        rnea,
+        crba,
+        aba,
+        jacobians,
+        regressor,
+    }
 }
