@@ -1,12 +1,13 @@
-//! `twinloop compliant ...`: the compliant humanoid of seed 002 (COMAN).
+//! `twinloop compliant stiffness|simulate`: the compact compliant model of seed 002
+//! (COMAN): its Cartesian stiffness and damping, and rolling it out.
 
-use crate::common::{EXIT_BAD_INPUT, load_robot, num, print};
+use crate::common::{emit, load_model, num, print, read_table};
+use crate::error::{CliError, CliResult, Outcome};
 use clap::{Args, Subcommand, ValueEnum};
 use serde::Serialize;
-use std::path::PathBuf;
-use std::process::ExitCode;
-use twinloop_dynamics::{Data, Model};
-use twinloop_io::{CsvWriter, Table};
+use std::path::{Path, PathBuf};
+use twinloop_dynamics::{BaseKind, Data, Model};
+use twinloop_io::CsvWriter;
 use twinloop_reduced::{
     CompactModel, Corrections, JointCompliance, SagittalCompliance, SagittalReference, SupportLeg,
     cartesian_compliance, coman_crouch,
@@ -23,9 +24,13 @@ pub enum CompliantCommand {
     /// (KneeSag = --knee-bend, HipSag = AnkSag = -bend/2 on both legs), then --q overrides.
     /// A stretched knee makes J singular: that is an error.
     ///
-    /// Prints the x-z blocks (eq 11) and the 6x6 matrices; --json writes them with J and K_j.
+    /// Example:
+    ///   twinloop compliant stiffness --robot models/coman/coman.urdf --support left --json kc.json
     ///
-    /// Example: twinloop compliant stiffness --urdf models/coman/coman.urdf --support left --json kc.json
+    /// Output: the x-z blocks (eq 11) and the 6x6 matrices on stdout; --json FILE (- for
+    /// stdout) writes them with J, K_j and the `sagittal` entries `compliant simulate`
+    /// and `identify compliant` read.
+    #[command(verbatim_doc_comment)]
     Stiffness(StiffnessArgs),
     /// Roll the compact CoM model (seed 002, eq 9-11, 14-17) along a reference
     ///
@@ -33,22 +38,16 @@ pub enum CompliantCommand {
     /// z'' = -g + eta2 (-a2 Kzx/m (x - xr) - b2 Kzz/m (z - zr) - g2 Dzx/m x' - e2 Dzz/m z'),
     /// eta = 1 in single support; RK4 at the reference's sample times.
     ///
-    /// --noise adds white Gaussian noise: synthetic data for `twinloop fit compliant`.
+    /// --noise adds white Gaussian noise: synthetic data for `twinloop identify compliant`.
     ///
-    /// Example: twinloop compliant simulate --reference ref.csv --model kc.json --table1 --out sim.csv
+    /// Example:
+    ///   twinloop gait zmp --footsteps 3 --out ref.csv
+    ///   twinloop compliant simulate --reference ref.csv --model kc.json --table1 --out sim.csv
+    ///
+    /// Output: SIM.csv with t, xr, zr, x, z, phase; stdout gives the time taken and the
+    /// RMS deviation from the reference.
+    #[command(verbatim_doc_comment)]
     Simulate(SimulateArgs),
-    /// COMAN walking the ZMP gait in the full simulator: the "real robot" dataset (seed 002, section 4)
-    ///
-    /// Series-elastic knee and ankle pitch joints (eq 1-6, k_j = K_h K_s/(K_h + K_s)),
-    /// every other joint a stiff position servo (stiffness K_h); the ZMP/LIPM CoM reference
-    /// (eq 12-13) and swing-foot trajectories go through a whole-body IK to the joints.
-    /// Writes `t, xr, zr, x, z, phase` at 1 kHz: the reference CoM (xr, zr = Zc) and the
-    /// simulated robot's true CoM (x, z), world frame (origin on the ground between the
-    /// starting feet, x forward, z up), phase 0 single / 1 double support. Input for
-    /// `twinloop fit compliant`. Exit 1 if the robot falls.
-    ///
-    /// Example: twinloop compliant dataset --urdf models/coman/coman.urdf --step-length 0.03 --tss 0.5 --tdb 0.2 --duration 30 --out coman_walk.csv --json summary.json
-    Dataset(crate::cmd_compliant_dataset::DatasetArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
@@ -60,9 +59,9 @@ pub enum Side {
 
 #[derive(Args, Debug)]
 pub struct StiffnessArgs {
-    /// COMAN URDF.
-    #[arg(long, value_name = "FILE")]
-    pub urdf: PathBuf,
+    /// COMAN's description: a URDF or MJCF file (models/coman/coman.urdf).
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: String,
     /// Support leg.
     #[arg(long, value_enum, default_value_t = Side::Left)]
     pub support: Side,
@@ -84,8 +83,8 @@ pub struct StiffnessArgs {
     /// Damping of the compliant joints, N m s/rad (the seed gives no value).
     #[arg(long, default_value_t = 1.0)]
     pub d_compliant: f64,
-    /// Write the result as JSON here.
-    #[arg(long, value_name = "OUT.json")]
+    /// Write the result as JSON to FILE (-: to stdout, in place of the text).
+    #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
 }
 
@@ -125,50 +124,47 @@ struct Sagittal {
     Dzz: f64,
 }
 
-fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
-    ExitCode::from(EXIT_BAD_INPUT)
-}
-
 fn rows(m: &nalgebra::Matrix6<f64>) -> Vec<Vec<f64>> {
     (0..6)
         .map(|r| (0..6).map(|c| m[(r, c)]).collect())
         .collect()
 }
 
-pub fn run(cmd: CompliantCommand) -> ExitCode {
+pub fn run(cmd: CompliantCommand) -> CliResult {
     match cmd {
-        CompliantCommand::Stiffness(args) => stiffness(args),
-        CompliantCommand::Simulate(args) => simulate(args),
-        CompliantCommand::Dataset(args) => crate::cmd_compliant_dataset::dataset(args),
+        CompliantCommand::Stiffness(args) => stiffness(&args),
+        CompliantCommand::Simulate(args) => simulate(&args),
     }
 }
 
-fn stiffness(args: StiffnessArgs) -> ExitCode {
-    let (robot, _) = match load_robot(&args.urdf) {
-        Ok(r) => r,
-        Err(code) => return code,
-    };
-    let model = match Model::from_description(&robot) {
-        Ok(m) => m,
-        Err(e) => return fail(format!("{}: {e}", args.urdf.display())),
-    };
-    let mut q = match coman_crouch(&model, args.knee_bend) {
-        Ok(q) => q,
-        Err(e) => return fail(format!("{}: {e}", args.urdf.display())),
-    };
+/// The crouched pose with the --q overrides.
+fn stiffness_pose(args: &StiffnessArgs, model: &Model) -> Result<Vec<f64>, CliError> {
+    let mut q =
+        coman_crouch(model, args.knee_bend).map_err(|e| CliError::from(e).context(&args.robot))?;
     for item in &args.q {
         let Some((name, value)) = item.split_once('=') else {
-            return fail(format!("--q {item}: expected NAME=RAD"));
+            return Err(CliError::new(format!("--q {item}: expected NAME=RAD")));
         };
         let Some(i) = model.joint_index(name.trim()) else {
-            return fail(format!("--q {item}: the model has no joint named {name}"));
+            return Err(CliError::new(format!(
+                "--q {item}: the model has no joint named {name}"
+            )));
         };
         match value.trim().parse::<f64>() {
             Ok(v) if v.is_finite() => q[model.q_offset + i] = v,
-            _ => return fail(format!("--q {item}: {value} is not a finite number")),
+            _ => {
+                return Err(CliError::new(format!(
+                    "--q {item}: {value} is not a finite number"
+                )));
+            }
         }
     }
+    Ok(q)
+}
+
+fn stiffness(args: &StiffnessArgs) -> CliResult {
+    let (_, model) = load_model(&args.robot, BaseKind::Floating)?;
+    let q = stiffness_pose(args, &model)?;
     let leg = SupportLeg::coman(args.support == Side::Left);
     let joints = JointCompliance {
         k_harmonic: args.k_harmonic,
@@ -178,14 +174,11 @@ fn stiffness(args: StiffnessArgs) -> ExitCode {
         ..JointCompliance::default()
     };
     let mut data = Data::new(&model);
-    let cc = match cartesian_compliance(&model, &mut data, &q, &leg, &joints) {
-        Ok(c) => c,
-        Err(e) => return fail(e),
-    };
+    let cc = cartesian_compliance(&model, &mut data, &q, &leg, &joints)?;
     let (k, d) = (cc.stiffness_xz(), cc.damping_xz());
     let soft = cc.stiffness_xz_force_only();
     let report = StiffnessReport {
-        urdf: args.urdf.display().to_string(),
+        urdf: args.robot.clone(),
         support: args.support,
         foot_frame: leg.foot_frame.clone(),
         mass: model.total_mass,
@@ -215,7 +208,7 @@ fn stiffness(args: StiffnessArgs) -> ExitCode {
             Dzz: d[(1, 1)],
         },
     };
-    print(&format!(
+    let mut text = format!(
         "support {:?} ({}), mass {} kg, CoM in foot frame ({}, {}, {}) m\n\
          K_C x-z [N/m]:   [[{}, {}], [{}, {}]]\n\
          D_C x-z [N s/m]: [[{}, {}], [{}, {}]]\n",
@@ -233,26 +226,17 @@ fn stiffness(args: StiffnessArgs) -> ExitCode {
         num(d[(0, 1)]),
         num(d[(1, 0)]),
         num(d[(1, 1)]),
-    ));
-    if let Some(path) = &args.json {
-        let text = match serde_json::to_string_pretty(&report) {
-            Ok(t) => t,
-            Err(e) => return fail(format!("could not write JSON: {e}")),
-        };
-        if let Err(e) = std::fs::write(path, text + "\n") {
-            return fail(format!("{}: {e}", path.display()));
-        }
-    }
+    );
     for (name, m) in [("K_C (6x6)", &cc.stiffness), ("D_C (6x6)", &cc.damping)] {
-        let mut text = format!("{name}, rows/columns x, y, z, wx, wy, wz:\n");
+        text += &format!("{name}, rows/columns x, y, z, wx, wy, wz:\n");
         for r in 0..6 {
             let row: Vec<String> = (0..6).map(|c| format!("{:>13}", num(m[(r, c)]))).collect();
             text += &row.join(" ");
             text += "\n";
         }
-        print(&text);
     }
-    ExitCode::SUCCESS
+    emit(&text, args.json.as_ref(), &report)?;
+    Ok(Outcome::Ok)
 }
 
 #[derive(Args, Debug)]
@@ -263,7 +247,7 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "FILE.csv")]
     pub reference: PathBuf,
     /// The JSON written by `compliant stiffness --json` (mass, gravity, sagittal entries),
-    /// or a MODEL.toml as `fit compliant` reads it.
+    /// or a MODEL.toml as `identify compliant` reads it.
     #[arg(long, value_name = "FILE.json|MODEL.toml")]
     pub model: PathBuf,
     /// The ten corrections alpha1,beta1,gamma1,epsilon1,alpha2,beta2,gamma2,epsilon2,eta1,eta2
@@ -274,7 +258,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub table1: bool,
     /// White Gaussian noise added to x and z after the first row, m (synthetic data for
-    /// `fit compliant`).
+    /// `identify compliant`).
     #[arg(long, default_value_t = 0.0)]
     pub noise: f64,
     /// Seed of the noise.
@@ -286,7 +270,7 @@ pub struct SimulateArgs {
 }
 
 /// The JSON written by `compliant stiffness --json`.
-pub(crate) fn read_plant(path: &std::path::Path) -> Result<SagittalCompliance, String> {
+fn read_plant_json(path: &Path) -> Result<SagittalCompliance, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let v: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -312,42 +296,46 @@ pub(crate) fn read_plant(path: &std::path::Path) -> Result<SagittalCompliance, S
     })
 }
 
-fn simulate(args: SimulateArgs) -> ExitCode {
-    let plant = match crate::cmd_fit::read_plant_any(&args.model) {
-        Ok(p) => p,
-        Err(e) => return fail(e),
-    };
-    let corrections = if args.table1 {
-        Corrections::seed_table1()
-    } else if let Some(text) = &args.params {
-        let values: Result<Vec<f64>, _> =
-            text.split(',').map(|s| s.trim().parse::<f64>()).collect();
-        match values {
-            Ok(v) if v.len() == 10 => {
-                let mut a = [0.0; 10];
-                a.copy_from_slice(&v);
-                Corrections::from_slice(&a)
-            }
-            _ => {
-                return fail(format!(
-                    "--params {text}: expected 10 comma-separated numbers"
-                ));
-            }
-        }
+/// MODEL.toml, or the JSON written by `compliant stiffness --json`.
+pub fn read_plant_any(path: &Path) -> Result<SagittalCompliance, CliError> {
+    if path.extension().is_some_and(|e| e == "json") {
+        Ok(read_plant_json(path)?)
     } else {
-        Corrections::default()
+        Ok(twinloop_ident::compliant_fit::read_model_file(path)?)
+    }
+}
+
+/// The corrections: --table1, --params, or all ones.
+fn corrections(args: &SimulateArgs) -> Result<Corrections, CliError> {
+    if args.table1 {
+        return Ok(Corrections::seed_table1());
+    }
+    let Some(text) = &args.params else {
+        return Ok(Corrections::default());
     };
-    let table = match Table::read(&args.reference) {
-        Ok(t) => t,
-        Err(e) => return fail(e),
-    };
+    let values: Result<Vec<f64>, _> = text.split(',').map(|s| s.trim().parse::<f64>()).collect();
+    match values {
+        Ok(v) if v.len() == 10 => {
+            let mut a = [0.0; 10];
+            a.copy_from_slice(&v);
+            Ok(Corrections::from_slice(&a))
+        }
+        _ => Err(CliError::new(format!(
+            "--params {text}: expected 10 comma-separated numbers"
+        ))),
+    }
+}
+
+/// The reference and, when the file has `x` and `z` columns, the initial CoM.
+fn read_reference(path: &Path) -> Result<(SagittalReference, Option<(f64, f64)>), CliError> {
+    let table = read_table(path)?;
     let col = |name: &str| table.column_index(name);
     let (Some(it), Some(ix), Some(iz), Some(ip)) = (col("t"), col("xr"), col("zr"), col("phase"))
     else {
-        return fail(format!(
+        return Err(CliError::new(format!(
             "{}: needs columns t, xr, zr, phase",
-            args.reference.display()
-        ));
+            path.display()
+        )));
     };
     let reference = SagittalReference {
         t: table.rows.iter().map(|r| r[it]).collect(),
@@ -355,30 +343,46 @@ fn simulate(args: SimulateArgs) -> ExitCode {
         zr: table.rows.iter().map(|r| r[iz]).collect(),
         double_support: table.rows.iter().map(|r| r[ip] >= 0.5).collect(),
     };
-    if let Err(e) = reference.validate() {
-        return fail(format!("{}: {e}", args.reference.display()));
+    reference
+        .validate()
+        .map_err(|e| CliError::from(e).context(path.display()))?;
+    let start = match (col("x"), col("z")) {
+        (Some(a), Some(b)) => Some((table.rows[0][a], table.rows[0][b])),
+        _ => None,
+    };
+    Ok((reference, start))
+}
+
+fn simulate(args: &SimulateArgs) -> CliResult {
+    let plant = read_plant_any(&args.model)?;
+    let corrections = corrections(args)?;
+    if !(args.noise.is_finite() && args.noise >= 0.0) {
+        return Err(CliError::new(format!(
+            "--noise {}: must be non-negative",
+            args.noise
+        )));
     }
+    let (reference, start) = read_reference(&args.reference)?;
     let model = CompactModel { plant, corrections };
-    let (x0, z0) = match (col("x"), col("z")) {
-        (Some(a), Some(b)) => (table.rows[0][a], table.rows[0][b]),
-        _ => match model.equilibrium(
-            reference.xr[0],
-            reference.zr[0],
-            reference.double_support[0],
-        ) {
-            Some(e) => (e[0], e[1]),
-            None => return fail("the model's stiffness block is singular: no static equilibrium"),
-        },
+    let (x0, z0) = match start {
+        Some(s) => s,
+        None => {
+            let e = model
+                .equilibrium(
+                    reference.xr[0],
+                    reference.zr[0],
+                    reference.double_support[0],
+                )
+                .ok_or_else(|| {
+                    CliError::new("the model's stiffness block is singular: no static equilibrium")
+                })?;
+            (e[0], e[1])
+        }
     };
     let (mut x, mut z) = (Vec::new(), Vec::new());
-    let start = std::time::Instant::now();
-    if let Err(e) = model.rollout(&reference, x0, z0, &mut x, &mut z) {
-        return fail(e);
-    }
-    let elapsed = start.elapsed();
-    if !(args.noise.is_finite() && args.noise >= 0.0) {
-        return fail(format!("--noise {}: must be non-negative", args.noise));
-    }
+    let started = std::time::Instant::now();
+    model.rollout(&reference, x0, z0, &mut x, &mut z)?;
+    let elapsed = started.elapsed();
     if args.noise > 0.0 {
         // The first row stays exact: the fit starts the model there at rest.
         let mut rng = twinloop_random::SplitMix64(args.seed);
@@ -387,34 +391,7 @@ fn simulate(args: SimulateArgs) -> ExitCode {
             z[i] += args.noise * rng.normal();
         }
     }
-    let columns: Vec<String> = ["t", "xr", "zr", "x", "z", "phase"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    let mut writer = match CsvWriter::create(&args.out, &columns) {
-        Ok(w) => w,
-        Err(e) => return fail(e),
-    };
-    for i in 0..reference.t.len() {
-        let row = [
-            reference.t[i],
-            reference.xr[i],
-            reference.zr[i],
-            x[i],
-            z[i],
-            if reference.double_support[i] {
-                1.0
-            } else {
-                0.0
-            },
-        ];
-        if let Err(e) = writer.write_row(&row) {
-            return fail(e);
-        }
-    }
-    if let Err(e) = writer.finish() {
-        return fail(e);
-    }
+    write_rollout(&args.out, &reference, &x, &z)?;
     let n = reference.t.len();
     let rms = |a: &[f64], b: &[f64]| {
         (a.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>() / a.len() as f64).sqrt()
@@ -427,5 +404,35 @@ fn simulate(args: SimulateArgs) -> ExitCode {
         num(rms(&x, &reference.xr)),
         num(rms(&z, &reference.zr)),
     ));
-    ExitCode::SUCCESS
+    Ok(Outcome::Ok)
+}
+
+/// `t, xr, zr, x, z, phase` per sample.
+fn write_rollout(
+    out: &Path,
+    reference: &SagittalReference,
+    x: &[f64],
+    z: &[f64],
+) -> Result<(), CliError> {
+    let columns: Vec<String> = ["t", "xr", "zr", "x", "z", "phase"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let mut writer = CsvWriter::create(out, &columns)?;
+    for i in 0..reference.t.len() {
+        let phase = if reference.double_support[i] {
+            1.0
+        } else {
+            0.0
+        };
+        writer.write_row(&[
+            reference.t[i],
+            reference.xr[i],
+            reference.zr[i],
+            x[i],
+            z[i],
+            phase,
+        ])?;
+    }
+    Ok(writer.finish()?)
 }

@@ -1,18 +1,57 @@
-//! Batch dynamics over trajectory files: `kinematics`, `inverse-dynamics`,
-//! `forward-dynamics`. One output row per input row; the `t` column is carried over.
+//! `twinloop dynamics kinematics|inverse|forward`: batch rigid-body dynamics over a
+//! trajectory file. One output row per input row; the `t` column is carried over.
 
+use crate::common::{ROBOT_HELP, load_model, read_table};
+use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
-use clap::Args;
-use std::path::{Path, PathBuf};
-use std::process::ExitCode;
+use clap::{Args, Subcommand};
+use std::path::PathBuf;
 use twinloop_dynamics::{BaseKind, Data, Model};
 use twinloop_io::{CsvWriter, IoError, Quantity, StateColumns, Table};
 
+#[derive(Subcommand, Debug)]
+pub enum DynamicsCommand {
+    /// Forward kinematics over a trajectory: CoM and frame poses per row
+    ///
+    /// Reads the q: columns of each row and writes com.x, com.y, com.z and, for each
+    /// frame (every link by default), pose:<frame>.x .y .z .qx .qy .qz .qw in the world.
+    ///
+    /// Example:
+    ///   twinloop dynamics kinematics --robot robot.urdf --trajectory walk.csv --out poses.csv
+    ///
+    /// Output: OUT.csv, one row per input row (t carried over); exit code 2 names the
+    /// file, row and column of bad input.
+    #[command(verbatim_doc_comment)]
+    Kinematics(KinematicsArgs),
+    /// Inverse dynamics (RNEA) over a trajectory: the torques that produce it
+    ///
+    /// Reads q:, v: and a: columns and writes tau:<joint> per joint and, for a floating
+    /// base, tau:base.fx .. tau:base.tz: the wrench the base would need (base frame).
+    ///
+    /// Example:
+    ///   twinloop dynamics inverse --robot robot.urdf --trajectory squat.csv --out tau.csv
+    ///
+    /// Output: OUT.csv. For a robot moving freely under gravity the base wrench should
+    /// be zero; what is left is what the model cannot explain.
+    #[command(verbatim_doc_comment)]
+    Inverse(BatchArgs),
+    /// Forward dynamics (ABA) over a trajectory: the accelerations torques produce
+    ///
+    /// Reads q:, v: and tau: columns (tau:base.* is an external wrench on the base,
+    /// usually zero).
+    ///
+    /// Example:
+    ///   twinloop dynamics forward --robot robot.urdf --trajectory cmd.csv --out acc.csv
+    ///
+    /// Output: OUT.csv with a:<joint> and a:base.vx .. a:base.wz per row.
+    #[command(verbatim_doc_comment)]
+    Forward(BatchArgs),
+}
+
 #[derive(Args, Debug)]
 pub struct BatchArgs {
-    /// Robot description (URDF, or MJCF by its <mujoco> root).
-    #[arg(long, value_name = "FILE")]
-    pub urdf: PathBuf,
+    #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
+    pub robot: String,
     /// Input trajectory CSV (header row; columns named as in the README).
     #[arg(long, value_name = "IN.csv")]
     pub trajectory: PathBuf,
@@ -34,19 +73,25 @@ pub struct KinematicsArgs {
     pub frames: Vec<String>,
 }
 
-pub fn load_model(path: &Path, fixed_base: bool) -> Result<Model, String> {
-    let robot = twinloop_description::load(path).map_err(|e| e.to_string())?;
-    let base = if fixed_base {
+pub fn run(cmd: DynamicsCommand) -> CliResult {
+    match cmd {
+        DynamicsCommand::Kinematics(a) => kinematics(&a),
+        DynamicsCommand::Inverse(a) => per_row(&a, Quantity::A, Quantity::Tau, |m, d, q, v, x| {
+            twinloop_dynamics::rnea(m, d, q, v, x)
+        }),
+        DynamicsCommand::Forward(a) => per_row(&a, Quantity::Tau, Quantity::A, |m, d, q, v, x| {
+            twinloop_dynamics::aba(m, d, q, v, x)
+        }),
+    }?;
+    Ok(Outcome::Ok)
+}
+
+fn base_kind(fixed: bool) -> BaseKind {
+    if fixed {
         BaseKind::Fixed
     } else {
         BaseKind::Floating
-    };
-    Model::from_description_with_base(&robot, base).map_err(|e| format!("{}: {e}", path.display()))
-}
-
-fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
-    ExitCode::from(crate::common::EXIT_BAD_INPUT)
+    }
 }
 
 fn with_time(table: &Table, names: Vec<String>) -> (Option<usize>, Vec<String>) {
@@ -70,33 +115,32 @@ fn check_quaternion(model: &Model, table: &Table, row: usize, q: &[f64]) -> Resu
     Ok(())
 }
 
-pub fn kinematics(args: KinematicsArgs) -> ExitCode {
-    match kinematics_impl(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => fail(e),
+/// Which frames `kinematics` reports: the named ones, or every link.
+fn report_frames(model: &Model, a: &KinematicsArgs) -> Result<Vec<usize>, CliError> {
+    if a.frames.is_empty() {
+        return Ok((0..model.frames.len())
+            .filter(|&k| model.frames[k].link.is_some())
+            .collect());
     }
+    a.frames
+        .iter()
+        .map(|n| {
+            model.frame_index(n).ok_or_else(|| {
+                CliError::new(format!(
+                    "--frames: {}: no frame named \"{n}\"",
+                    a.batch.robot
+                ))
+            })
+        })
+        .collect()
 }
 
-fn kinematics_impl(args: &KinematicsArgs) -> Result<(), String> {
+fn kinematics(args: &KinematicsArgs) -> Result<(), CliError> {
     let a = &args.batch;
-    let model = load_model(&a.urdf, a.fixed_base)?;
-    let table = Table::read(&a.trajectory).map_err(|e| e.to_string())?;
-    let qc =
-        StateColumns::find(&table, Quantity::Q, &model.q_names()).map_err(|e| e.to_string())?;
-    let frames: Vec<usize> = if args.frames.is_empty() {
-        (0..model.frames.len())
-            .filter(|&k| model.frames[k].link.is_some())
-            .collect()
-    } else {
-        args.frames
-            .iter()
-            .map(|n| {
-                model
-                    .frame_index(n)
-                    .ok_or_else(|| format!("{}: no frame named \"{n}\"", a.urdf.display()))
-            })
-            .collect::<Result<_, _>>()?
-    };
+    let (_, model) = load_model(&a.robot, base_kind(a.fixed_base))?;
+    let table = read_table(&a.trajectory)?;
+    let qc = StateColumns::find(&table, Quantity::Q, &model.q_names())?;
+    let frames = report_frames(&model, args)?;
     let mut names = vec!["com.x".into(), "com.y".into(), "com.z".into()];
     for &k in &frames {
         let n = &model.frames[k].name;
@@ -105,14 +149,14 @@ fn kinematics_impl(args: &KinematicsArgs) -> Result<(), String> {
         }
     }
     let (tcol, cols) = with_time(&table, names);
-    let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;
+    let mut w = CsvWriter::create(&a.out, &cols)?;
     let mut data = Data::new(&model);
     let mut q = vec![0.0; model.nq];
     let mut row = Vec::with_capacity(cols.len());
     let bar = progress::rows(table.rows.len());
     for (r, input) in table.rows.iter().enumerate() {
         qc.gather(input, &mut q);
-        check_quaternion(&model, &table, r, &q).map_err(|e| e.to_string())?;
+        check_quaternion(&model, &table, r, &q)?;
         row.clear();
         if let Some(t) = tcol {
             row.push(input[t]);
@@ -125,37 +169,11 @@ fn kinematics_impl(args: &KinematicsArgs) -> Result<(), String> {
             row.extend(x.translation.iter());
             row.extend(twinloop_spatial::matrix_to_quaternion_xyzw(&x.rotation));
         }
-        w.write_row(&row).map_err(|e| e.to_string())?;
+        w.write_row(&row)?;
         bar.inc(1);
     }
     bar.finish_and_clear();
-    w.finish().map_err(|e| e.to_string())
-}
-
-pub fn inverse_dynamics(args: BatchArgs) -> ExitCode {
-    match inverse_impl(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => fail(e),
-    }
-}
-
-fn inverse_impl(a: &BatchArgs) -> Result<(), String> {
-    per_row(a, Quantity::A, Quantity::Tau, |m, d, q, v, x| {
-        twinloop_dynamics::rnea(m, d, q, v, x)
-    })
-}
-
-pub fn forward_dynamics(args: BatchArgs) -> ExitCode {
-    match forward_impl(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => fail(e),
-    }
-}
-
-fn forward_impl(a: &BatchArgs) -> Result<(), String> {
-    per_row(a, Quantity::Tau, Quantity::A, |m, d, q, v, x| {
-        twinloop_dynamics::aba(m, d, q, v, x)
-    })
+    Ok(w.finish()?)
 }
 
 /// Read q, v and one more quantity from each row, write what `f` computes from them.
@@ -170,16 +188,16 @@ fn per_row(
         &[f64],
         &[f64],
     ) -> &'d nalgebra::DVector<f64>,
-) -> Result<(), String> {
-    let model = load_model(&a.urdf, a.fixed_base)?;
-    let table = Table::read(&a.trajectory).map_err(|e| e.to_string())?;
-    let find = |qty| crate::common::state_columns(&table, &model, qty).map_err(|e| e.to_string());
+) -> Result<(), CliError> {
+    let (_, model) = load_model(&a.robot, base_kind(a.fixed_base))?;
+    let table = read_table(&a.trajectory)?;
+    let find = |qty| crate::common::state_columns(&table, &model, qty);
     let (qc, vc, xc) = (find(Quantity::Q)?, find(Quantity::V)?, find(input)?);
     let (tcol, cols) = with_time(
         &table,
         output.column_names(&crate::common::coordinate_names(&model, output)),
     );
-    let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;
+    let mut w = CsvWriter::create(&a.out, &cols)?;
     let mut data = Data::new(&model);
     let (mut q, mut v, mut x) = (
         vec![0.0; model.nq],
@@ -192,15 +210,15 @@ fn per_row(
         qc.gather(values, &mut q);
         vc.gather(values, &mut v);
         xc.gather(values, &mut x);
-        check_quaternion(&model, &table, r, &q).map_err(|e| e.to_string())?;
+        check_quaternion(&model, &table, r, &q)?;
         row.clear();
         if let Some(t) = tcol {
             row.push(values[t]);
         }
         row.extend(f(&model, &mut data, &q, &v, &x).iter());
-        w.write_row(&row).map_err(|e| e.to_string())?;
+        w.write_row(&row)?;
         bar.inc(1);
     }
     bar.finish_and_clear();
-    w.finish().map_err(|e| e.to_string())
+    Ok(w.finish()?)
 }

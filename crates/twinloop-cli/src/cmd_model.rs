@@ -1,10 +1,12 @@
-//! `twinloop model ...`: look at a robot description and check its numbers.
+//! `twinloop model ...`: robot descriptions: read one, check one, list the built-in
+//! ones, write one as URDF.
 
-use crate::common::{self, EXIT_BAD_INPUT, EXIT_FINDINGS, EXIT_OK, num};
+use crate::common::{self, JSON_HELP, emit, num};
+use crate::error::{CliResult, Outcome};
 use clap::{Args, Subcommand};
 use serde::Serialize;
 use std::path::PathBuf;
-use std::process::ExitCode;
+use twinloop_description::builtin::{builtin, builtin_summaries, servo_table};
 use twinloop_description::lint::{LintReport, Severity, lint};
 use twinloop_description::{Description, JointKind};
 
@@ -12,10 +14,12 @@ use twinloop_description::{Description, JointKind};
 pub enum ModelCommand {
     /// Summarise a robot description: links, joints, degrees of freedom, mass
     #[command(
-        long_about = "Summarise a robot description (URDF or MJCF, told apart by the root element): \
+        long_about = "Summarise a robot description (URDF or MJCF, told apart by the root element, or \
+builtin:NAME): \
 robot name, file format, root link, links and joints counted by kind, degrees of freedom, mimic \
 joints, total mass, the heaviest links and the links without an <inertial>.",
-        after_long_help = "Example:\n  twinloop model info models/op3/robotis_op3.urdf\n\n\
+        after_long_help = "Example:\n  twinloop model info models/op3/robotis_op3.urdf\n  \
+twinloop model info builtin:km20 --json -\n\n\
 Output:\n  \
 dof           velocity degrees of freedom of the joints (a floating joint counts 6; the free\n                \
 base the dynamics adds to a URDF without one is not counted)\n  \
@@ -23,13 +27,13 @@ actuated      revolute, continuous and prismatic joints that are not <mimic>s\n 
 total mass    sum of every link's <mass> (dummy frame links included), kg: what a scale\n                \
 should read if the model is right\n  \
 heaviest      the five heaviest links, kg\n\n\
-With --json the same facts as one JSON object with stable field names: file, format, robot,\n\
+With --json FILE (- for stdout) the same facts as one JSON object with stable field names: file, format, robot,\n\
 root_link, links, links_without_inertial [names], joints, joints_by_kind {revolute, continuous,\n\
 prismatic, fixed, floating, planar}, dof, actuated_dof, mimic_joints [names], total_mass (kg,\n\
 full precision), heaviest_links [{name, mass}].\n\n\
 Exit code 0, or 2 when the file cannot be read (the message names file, line and element)."
     )]
-    Info(FileArgs),
+    Info(DescriptionArgs),
 
     /// Check the physical plausibility of a description's numbers
     #[command(
@@ -49,28 +53,77 @@ missing-effort-velocity, zero-effort-or-velocity, non-unit-axis, mimic-joint,\n 
 total-mass\n  \
 SUBJECT   the link or joint (or robot) by name\n  \
 MESSAGE   what is wrong, with the numbers (principal moments in kg m^2, masses in kg)\n\n\
-With --json the same as one JSON object: file, format, robot, total_mass, links,\n\
+With --json FILE (- for stdout) the same as one JSON object: file, format, robot, total_mass, links,\n\
 links_without_inertial, joints, moving_joints, dof, mimic_joints, errors, warnings, infos,\n\
 findings [{severity, code, subject, name, message}].\n\n\
 Exit code 1 if any finding is an error, 0 otherwise, 2 when the file cannot be read (the\n\
 message names file, line and element)."
     )]
-    Lint(FileArgs),
+    Lint(DescriptionArgs),
+
+    /// List the built-in robots
+    #[command(
+        long_about = "List the robots built into twinloop from primitives in code: the seed robots \
+of the project's papers. Every ROBOT argument and --robot option takes them as builtin:NAME.",
+        after_long_help = "Example:\n  twinloop model list\n  twinloop model list --json -\n\n\
+Output: one line per robot.\n  \
+NAME   what builtin:NAME takes\n  \
+DOF    moving joints\n  \
+MASS   total mass, kg\n  \
+SERVOS servo models and how many joints each drives\n\n\
+With --json FILE (- for stdout): a list of objects {name, description, dof, links, total_mass\n\
+(kg), servos [{joint, servo, stall_torque (N m), no_load_speed (rad/s)}]}.\n\n\
+Exit code 0."
+    )]
+    List(ListArgs),
+
+    /// Write a robot description as a URDF file
+    #[command(
+        long_about = "Write a robot description (builtin:NAME, or a URDF or MJCF file) as URDF. A \
+built-in robot gets links with the inertials of their primitive parts, one visual per part, box \
+collision soles, joint limits with the servos' stall torque as effort and no-load speed as \
+velocity. The file reads back into an identical robot.",
+        after_long_help = "Example:\n  twinloop model export builtin:km20 --out km20.urdf\n  \
+twinloop model info km20.urdf\n\n\
+ROBOT is builtin:NAME (see `twinloop model list`) or a URDF or MJCF file.\n\n\
+Output: one line saying what was written, with the robot's DoF and mass.\n\n\
+Exit code 0, or 2 for an unknown robot, an unreadable description or a file that cannot be\n\
+written."
+    )]
+    Export(ExportArgs),
 }
 
 #[derive(Args)]
-pub struct FileArgs {
-    /// The description: a URDF (<robot>) or MJCF (<mujoco>) file
-    pub file: PathBuf,
-    /// Print JSON instead of text
-    #[arg(long)]
-    pub json: bool,
+pub struct DescriptionArgs {
+    /// The description: a URDF (<robot>) or MJCF (<mujoco>) file, or builtin:NAME
+    #[arg(value_name = "ROBOT")]
+    pub robot: String,
+    #[arg(long, value_name = "FILE", help = JSON_HELP)]
+    pub json: Option<PathBuf>,
 }
 
-pub fn run(cmd: ModelCommand) -> ExitCode {
+#[derive(Args)]
+pub struct ListArgs {
+    #[arg(long, value_name = "FILE", help = JSON_HELP)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct ExportArgs {
+    /// The description: builtin:NAME, or a URDF or MJCF file
+    #[arg(value_name = "ROBOT")]
+    pub robot: String,
+    /// The URDF file to write
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+}
+
+pub fn run(cmd: ModelCommand) -> CliResult {
     match cmd {
         ModelCommand::Info(args) => info(&args),
         ModelCommand::Lint(args) => lint_command(&args),
+        ModelCommand::List(args) => list(&args),
+        ModelCommand::Export(args) => export(&args),
     }
 }
 
@@ -110,7 +163,7 @@ struct Info {
     heaviest_links: Vec<LinkMass>,
 }
 
-fn summarise(robot: &Description, args: &FileArgs, format: common::Format) -> Info {
+fn summarise(robot: &Description, args: &DescriptionArgs, format: common::Format) -> Info {
     let mut by_kind = JointsByKind::default();
     for j in &robot.joints {
         *match j.kind {
@@ -135,7 +188,7 @@ fn summarise(robot: &Description, args: &FileArgs, format: common::Format) -> In
     heaviest.sort_by(|a, b| b.mass.total_cmp(&a.mass));
     heaviest.truncate(HEAVIEST);
     Info {
-        file: args.file.display().to_string(),
+        file: args.robot.clone(),
         format: format.as_str(),
         robot: robot.name.clone(),
         root_link: robot.root_link().map(str::to_string),
@@ -196,19 +249,14 @@ fn name_list(names: &[String], max: usize) -> String {
     s
 }
 
-fn info(args: &FileArgs) -> ExitCode {
-    let (robot, format) = match common::load_robot(&args.file) {
-        Ok(r) => r,
-        Err(code) => return code,
-    };
+fn info(args: &DescriptionArgs) -> CliResult {
+    let (robot, format) = common::load_description(&args.robot)?;
     let info = summarise(&robot, args, format);
-    if args.json {
-        return ExitCode::from(if common::print_json(&info) {
-            EXIT_OK
-        } else {
-            EXIT_BAD_INPUT
-        });
-    }
+    emit(&info_text(&info), args.json.as_ref(), &info)?;
+    Ok(Outcome::Ok)
+}
+
+fn info_text(info: &Info) -> String {
     let k = &info.joints_by_kind;
     let kinds: Vec<String> = [
         ("revolute", k.revolute),
@@ -283,8 +331,7 @@ fn info(args: &FileArgs) -> ExitCode {
             heaviest.join(", ")
         },
     );
-    common::print(&out);
-    ExitCode::from(EXIT_OK)
+    out
 }
 
 #[derive(Serialize)]
@@ -295,30 +342,20 @@ struct LintOutput<'a> {
     report: &'a LintReport,
 }
 
-fn lint_command(args: &FileArgs) -> ExitCode {
-    let (robot, format) = match common::load_robot(&args.file) {
-        Ok(r) => r,
-        Err(code) => return code,
-    };
+fn lint_command(args: &DescriptionArgs) -> CliResult {
+    let (robot, format) = common::load_description(&args.robot)?;
     let report = lint(&robot);
-    let code = ExitCode::from(if report.has_errors() {
-        EXIT_FINDINGS
+    let out = LintOutput {
+        file: args.robot.clone(),
+        format: format.as_str(),
+        report: &report,
+    };
+    emit(&lint_table(&report, &args.robot), args.json.as_ref(), &out)?;
+    Ok(if report.has_errors() {
+        Outcome::Problems
     } else {
-        EXIT_OK
-    });
-    if args.json {
-        let out = LintOutput {
-            file: args.file.display().to_string(),
-            format: format.as_str(),
-            report: &report,
-        };
-        if !common::print_json(&out) {
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
-        return code;
-    }
-    common::print(&lint_table(&report, &args.file.display().to_string()));
-    code
+        Outcome::Ok
+    })
 }
 
 fn lint_table(report: &LintReport, file: &str) -> String {
@@ -366,4 +403,103 @@ fn lint_table(report: &LintReport, file: &str) -> String {
         num(report.total_mass)
     ));
     out
+}
+
+#[derive(Serialize)]
+struct JointServoJson {
+    joint: String,
+    servo: &'static str,
+    stall_torque: f64,
+    no_load_speed: f64,
+}
+
+#[derive(Serialize)]
+struct RobotJson {
+    name: &'static str,
+    description: &'static str,
+    dof: usize,
+    links: usize,
+    total_mass: f64,
+    servos: Vec<JointServoJson>,
+}
+
+fn dof(robot: &Description) -> usize {
+    robot
+        .joints
+        .iter()
+        .filter(|j| j.kind != JointKind::Fixed)
+        .map(|j| j.kind.nv())
+        .sum()
+}
+
+/// "18 RX-28, 2 RX-64": servo models by count, in table order.
+fn servo_counts(name: &str) -> String {
+    let mut counts: Vec<(&str, usize)> = Vec::new();
+    for s in servo_table(name).unwrap_or(&[]) {
+        match counts.iter_mut().find(|(n, _)| *n == s.servo.name) {
+            Some((_, c)) => *c += 1,
+            None => counts.push((s.servo.name, 1)),
+        }
+    }
+    counts
+        .iter()
+        .map(|(n, c)| format!("{c} {n}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn list(args: &ListArgs) -> CliResult {
+    let robots: Vec<RobotJson> = builtin_summaries()
+        .iter()
+        .map(|&(name, description)| {
+            let r = builtin(name).expect("a listed robot is built in");
+            RobotJson {
+                name,
+                description,
+                dof: dof(&r),
+                links: r.links.len(),
+                total_mass: r.total_mass(),
+                servos: servo_table(name)
+                    .unwrap_or(&[])
+                    .iter()
+                    .map(|s| JointServoJson {
+                        joint: s.joint.to_string(),
+                        servo: s.servo.name,
+                        stall_torque: s.servo.stall_torque,
+                        no_load_speed: s.servo.no_load_speed,
+                    })
+                    .collect(),
+            }
+        })
+        .collect();
+    let mut text = format!(
+        "{:<7} {:>4} {:>7}  {:<20} {}\n",
+        "NAME", "DOF", "MASS", "SERVOS", "DESCRIPTION"
+    );
+    for r in &robots {
+        text.push_str(&format!(
+            "{:<7} {:>4} {:>7}  {:<20} {}\n",
+            r.name,
+            r.dof,
+            num(r.total_mass),
+            servo_counts(r.name),
+            r.description
+        ));
+    }
+    emit(&text, args.json.as_ref(), &robots)?;
+    Ok(Outcome::Ok)
+}
+
+fn export(args: &ExportArgs) -> CliResult {
+    let (robot, _) = common::load_description(&args.robot)?;
+    twinloop_description::urdf::write_file(&robot, &args.out)?;
+    common::print(&format!(
+        "wrote {} ({} DoF, {} kg, {} links) to {}\n",
+        robot.name,
+        dof(&robot),
+        num(robot.total_mass()),
+        robot.links.len(),
+        args.out.display()
+    ));
+    Ok(Outcome::Ok)
 }

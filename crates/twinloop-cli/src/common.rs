@@ -1,23 +1,20 @@
-//! What every command group shares: loading a description with errors printed the
-//! same way, exit codes, and writing output without panicking on a closed pipe.
+//! What every command group shares: loading a robot description (URDF, MJCF or
+//! `builtin:NAME`) with errors that name the place at fault, writing JSON to a file
+//! or stdout, and writing output without panicking on a closed pipe.
 
+use crate::error::CliError;
 use std::io::Write;
-use std::path::Path;
-use std::process::ExitCode;
+use std::path::{Path, PathBuf};
 use twinloop_description::{Description, DescriptionError};
-
-/// The command ran and found nothing wrong.
-pub const EXIT_OK: u8 = 0;
-/// The command ran and its check failed (e.g. `model lint` found an error).
-pub const EXIT_FINDINGS: u8 = 1;
-/// The input could not be read or parsed (clap also uses 2 for bad usage).
-pub const EXIT_BAD_INPUT: u8 = 2;
+use twinloop_dynamics::{BaseKind, Model};
 
 /// Description file formats, told apart by the root element.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
     Urdf,
     Mjcf,
+    /// `builtin:NAME`: built from primitives in code.
+    Builtin,
     Unknown,
 }
 
@@ -26,6 +23,7 @@ impl Format {
         match self {
             Format::Urdf => "URDF",
             Format::Mjcf => "MJCF",
+            Format::Builtin => "built-in",
             Format::Unknown => "unknown",
         }
     }
@@ -68,9 +66,18 @@ pub fn sniff_format(text: &str) -> Format {
     }
 }
 
-/// Load a URDF or MJCF file. On failure prints `error: <file>:<line>:<col>: <element>: <message>`
-/// to stderr and returns the exit code to end with.
-pub fn load_robot(path: &Path) -> Result<(Description, Format), ExitCode> {
+/// The help text of every `--robot` option.
+pub const ROBOT_HELP: &str =
+    "Robot description: a URDF or MJCF file, or builtin:NAME (km20, lab17)";
+
+/// Load a robot description: `builtin:NAME` or a URDF or MJCF file (told apart by
+/// the root element). The error names the file, line and element at fault.
+pub fn load_description(spec: &str) -> Result<(Description, Format), CliError> {
+    if spec.starts_with("builtin:") {
+        let robot = twinloop_description::builtin::resolve(spec)?;
+        return Ok((robot, Format::Builtin));
+    }
+    let path = Path::new(spec);
     let format = std::fs::read_to_string(path)
         .map(|t| sniff_format(&t))
         .unwrap_or(Format::Unknown);
@@ -99,10 +106,22 @@ pub fn load_robot(path: &Path) -> Result<(Description, Format), ExitCode> {
             if e.location.file.is_none() {
                 e.location.file = Some(path.to_path_buf());
             }
-            eprintln!("error: {e}");
-            Err(ExitCode::from(EXIT_BAD_INPUT))
+            Err(e.into())
         }
     }
+}
+
+/// Load a description and compile it for the dynamics, with a floating base (or
+/// the root welded to the world).
+pub fn load_model(spec: &str, base: BaseKind) -> Result<(Description, Model), CliError> {
+    let (robot, _) = load_description(spec)?;
+    let model = Model::from_description_with_base(&robot, base).map_err(|mut e| {
+        if e.location.file.is_none() {
+            e.location.file = Some(PathBuf::from(spec));
+        }
+        CliError::from(e)
+    })?;
+    Ok((robot, model))
 }
 
 /// Write to stdout; a closed pipe (`twinloop ... | head`) ends quietly instead of panicking.
@@ -111,20 +130,46 @@ pub fn print(text: &str) {
     let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
 }
 
-/// JSON for machines: pretty, one trailing newline. False (after printing the
-/// error) if the value could not be serialised.
-pub fn print_json<T: serde::Serialize>(value: &T) -> bool {
-    match serde_json::to_string_pretty(value) {
-        Ok(s) => {
-            print(&s);
-            print("\n");
-            true
-        }
-        Err(e) => {
-            eprintln!("error: could not write JSON: {e}");
-            false
-        }
+/// The help text of every `--json` option.
+pub const JSON_HELP: &str =
+    "Write the machine-readable result as JSON to FILE (-: to stdout, in place of the text)";
+
+/// Whether `--json` sends the JSON to stdout (`-`), in place of the text.
+pub fn json_to_stdout(json: Option<&PathBuf>) -> bool {
+    json.is_some_and(|p| p.as_os_str() == "-")
+}
+
+/// Write JSON (pretty, one trailing newline) to `target`: a file, or stdout for `-`.
+pub fn write_json<T: serde::Serialize + ?Sized>(target: &Path, value: &T) -> Result<(), CliError> {
+    let text = serde_json::to_string_pretty(value)? + "\n";
+    if target.as_os_str() == "-" {
+        print(&text);
+        Ok(())
+    } else {
+        std::fs::write(target, text).map_err(|e| CliError::io(target, e).context("--json"))
     }
+}
+
+/// A command's two outputs: the text for people on stdout and, with `--json`, the
+/// JSON for machines in its file; `--json -` puts the JSON on stdout instead of
+/// the text.
+pub fn emit<T: serde::Serialize + ?Sized>(
+    text: &str,
+    json: Option<&PathBuf>,
+    value: &T,
+) -> Result<(), CliError> {
+    if let Some(target) = json {
+        write_json(target, value)?;
+    }
+    if !json_to_stdout(json) {
+        print(text);
+    }
+    Ok(())
+}
+
+/// Read a CSV table; the error names the file (and line).
+pub fn read_table(path: &Path) -> Result<twinloop_io::Table, CliError> {
+    Ok(twinloop_io::Table::read(path)?)
 }
 
 /// A number for people: 6 significant digits, no float noise (3.1474699999999998 -> 3.14747).
@@ -138,6 +183,28 @@ pub fn num(x: f64) -> String {
     } else {
         format!("{rounded:e}")
     }
+}
+
+/// The model's coordinate names that a quantity's columns are named after.
+pub fn coordinate_names(
+    model: &twinloop_dynamics::Model,
+    quantity: twinloop_io::Quantity,
+) -> Vec<String> {
+    use twinloop_io::Quantity;
+    match quantity {
+        Quantity::Q => model.q_names(),
+        Quantity::V | Quantity::A => model.v_names(),
+        Quantity::Tau => model.tau_names(),
+    }
+}
+
+/// The columns of `table` that hold `quantity` for `model`, in model order.
+pub fn state_columns(
+    table: &twinloop_io::Table,
+    model: &twinloop_dynamics::Model,
+    quantity: twinloop_io::Quantity,
+) -> Result<twinloop_io::StateColumns, twinloop_io::IoError> {
+    twinloop_io::StateColumns::find(table, quantity, &coordinate_names(model, quantity))
 }
 
 #[cfg(test)]
@@ -163,26 +230,4 @@ mod tests {
         assert_eq!(num(1e-9), "1e-9");
         assert_eq!(num(0.0), "0");
     }
-}
-
-/// The model's coordinate names that a quantity's columns are named after.
-pub fn coordinate_names(
-    model: &twinloop_dynamics::Model,
-    quantity: twinloop_io::Quantity,
-) -> Vec<String> {
-    use twinloop_io::Quantity;
-    match quantity {
-        Quantity::Q => model.q_names(),
-        Quantity::V | Quantity::A => model.v_names(),
-        Quantity::Tau => model.tau_names(),
-    }
-}
-
-/// The columns of `table` that hold `quantity` for `model`, in model order.
-pub fn state_columns(
-    table: &twinloop_io::Table,
-    model: &twinloop_dynamics::Model,
-    quantity: twinloop_io::Quantity,
-) -> Result<twinloop_io::StateColumns, twinloop_io::IoError> {
-    twinloop_io::StateColumns::find(table, quantity, &coordinate_names(model, quantity))
 }

@@ -1,25 +1,28 @@
 //! `twinloop`: the command-line program. This file only dispatches; each command
 //! group lives in its own module (`cmd_model`, ...). To add a group: a module,
 //! a variant in [`Command`], and an arm in `main`.
+//!
+//! Every command returns `Result<Outcome, CliError>`; `main` alone prints
+//! `error: ...` and picks the exit code (see `error.rs`).
 
 mod cmd_bench;
 mod cmd_compliant;
-mod cmd_compliant_dataset;
 mod cmd_dynamics;
 mod cmd_experiment;
-mod cmd_fit;
 mod cmd_gait;
-mod cmd_ident;
+mod cmd_identify;
+mod cmd_ik;
 mod cmd_link;
 mod cmd_model;
-mod cmd_robot;
-mod cmd_sim;
-mod cmd_sysid;
-mod cmd_zmp;
+mod cmd_serve;
+mod cmd_simulate;
+mod cmd_validate;
 mod common;
+mod error;
 mod progress;
 
 use clap::{Parser, Subcommand};
+use error::CliResult;
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -27,11 +30,21 @@ use std::process::ExitCode;
     name = "twinloop",
     version,
     about = "Keep a humanoid robot's simulation true to the physical robot",
-    long_about = "twinloop keeps a humanoid robot's simulation true to the physical robot: it reads the \
-robot description (URDF or MJCF), checks it, computes its dynamics, and fits it to measurements.\n\n\
-Run `twinloop <group> --help` and `twinloop <group> <command> --help` for what each command does, an \
-example, and what its output means.",
-    after_help = "Exit codes: 0 success, 1 the check found errors, 2 unreadable input or bad usage.",
+    long_about = "Keep a humanoid robot's simulation true to the physical robot: read the robot \
+description (URDF, MJCF or a built-in robot), check it, compute its dynamics, simulate it, run \
+experiments, identify its parameters from measurements, validate the result, and talk to the real \
+robot's servos.\n\n\
+The groups follow the loop: describe (model, dynamics) -> run (simulate, experiment) -> identify \
+-> validate -> see (ik, gait, compliant, link, serve, bench). Run `twinloop <group> --help` and \
+`twinloop <group> <command> --help` for what each command does, an example, and what its output \
+means.\n\n\
+Options mean one thing everywhere: --robot a description (URDF, MJCF or builtin:NAME), --map a \
+servo mapping TOML, --port a bus (serial device, pty, tcp:HOST:PORT), --out the main data file \
+written, --json FILE the machine-readable result (- for stdout), --report an HTML report, --dt a \
+sample period in seconds, --seed every random draw; means are removed before identification \
+unless --no-detrend.",
+    after_help = "Exit codes: 0 success, 1 a check found problems, 2 bad input or a dead link \
+(also bad usage). Errors are one line: `error: ` and the file, line, row, field or servo id at fault.",
     propagate_version = true
 )]
 struct Cli {
@@ -41,58 +54,36 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Inspect and check robot descriptions (URDF, MJCF)
+    /// Robot descriptions: read one, check one, list the built-in ones, write one as URDF
     #[command(subcommand)]
     Model(cmd_model::ModelCommand),
-    /// Forward kinematics over a trajectory: CoM and frame poses per row
-    ///
-    /// Reads the q: columns of each row and writes com.x, com.y, com.z and, for each
-    /// frame (every link by default), pose:<frame>.x .y .z .qx .qy .qz .qw in the world.
-    ///
-    /// Example: twinloop kinematics --urdf robot.urdf --trajectory walk.csv --out poses.csv
-    Kinematics(cmd_dynamics::KinematicsArgs),
-    /// Inverse dynamics (RNEA) over a trajectory: the torques that produce it
-    ///
-    /// Reads q:, v: and a: columns and writes tau:<joint> per joint and, for a floating
-    /// base, tau:base.fx .. tau:base.tz: the wrench the base would need (base frame).
-    /// For a robot moving freely under gravity the base wrench should be zero; what is
-    /// left is what the model cannot explain.
-    ///
-    /// Example: twinloop inverse-dynamics --urdf robot.urdf --trajectory squat.csv --out tau.csv
-    InverseDynamics(cmd_dynamics::BatchArgs),
-    /// Forward dynamics (ABA) over a trajectory: the accelerations torques produce
-    ///
-    /// Reads q:, v: and tau: columns (tau:base.* is an external wrench on the base,
-    /// usually zero) and writes a:<joint> and a:base.vx .. a:base.wz.
-    ///
-    /// Example: twinloop forward-dynamics --urdf robot.urdf --trajectory cmd.csv --out acc.csv
-    ForwardDynamics(cmd_dynamics::BatchArgs),
+    /// Batch rigid-body dynamics over a trajectory CSV: kinematics, inverse, forward
+    #[command(subcommand)]
+    Dynamics(cmd_dynamics::DynamicsCommand),
     /// Simulate a robot standing on its servos, holding a pose or following joint goals
     ///
     /// The robot is placed upright on the ground at its neutral pose with a Dynamixel-type
     /// position servo on every joint (--servo), then simulated for --duration seconds at
-    /// --dt (1 ms default). Each output row holds t, q:*, v:*, tau:<joint> (the servo
-    /// torques), com.x/y/z, imu:<link>.gx..az (rad/s, m/s^2) and foot:<link>.fz, .cop.x,
-    /// .cop.y (N, m) for each foot.
+    /// --dt (1 ms default).
     ///
-    /// Example: twinloop simulate --robot models/op3/mjcf/op3.xml --duration 5 --hold --out stand.csv
-    Simulate(cmd_sim::SimulateArgs),
-    /// Benchmarks (median time per call), to compare with peers such as Pinocchio
-    #[command(subcommand)]
-    Bench(cmd_bench::BenchCommand),
-    /// The built-in seed robots (km20, lab17): list them, export them as URDF
+    /// Example:
+    ///   twinloop simulate --robot models/op3/mjcf/op3.xml --duration 5 --hold --out stand.csv
+    ///   twinloop simulate --robot builtin:km20 --duration 2 --out km20.csv
     ///
-    /// Built from primitives in code; any --robot option takes them as builtin:NAME.
-    ///
-    /// Example: twinloop robot export km20 --out km20.urdf
+    /// Output: FILE.csv, each row holding t, q:*, v:*, tau:<joint> (the servo torques),
+    /// com.x/y/z, imu:<link>.gx..az (rad/s, m/s^2) and foot:<link>.fz, .cop.x, .cop.y
+    /// (N, m) for each foot.
+    #[command(verbatim_doc_comment)]
+    Simulate(cmd_simulate::SimulateArgs),
+    /// Run experiments: tip-over, force-plate poses, squat, lab17 walk, COMAN walk
     #[command(subcommand)]
-    Robot(cmd_robot::RobotCommand),
-    /// Experiments: tip-over (seeds 000/001), virtual force plate poses and squat (seed 004)
+    Experiment(cmd_experiment::ExperimentCommand),
+    /// Identify model parameters from measurements: static, ARX, state space, compliant, walk
     #[command(subcommand)]
-    Experiment(cmd_ident::ExperimentCommand),
-    /// Identify model parameters from experiments (static masses and CoMs, seed 004)
+    Identify(cmd_identify::IdentifyCommand),
+    /// Validate a model against measurements (inverse-dynamics residual, seed 004)
     #[command(subcommand)]
-    Identify(cmd_ident::IdentifyCommand),
+    Validate(cmd_validate::ValidateCommand),
     /// IK marker fitting: joint angles and base pose from motion capture (seed 004, eq 7)
     ///
     /// Fits the configuration of each frame, floating base included, to the measured
@@ -101,31 +92,23 @@ enum Command {
     /// to the base link's markers alone (3 or more needed), each later frame from the
     /// previous one.
     ///
-    /// Example: twinloop ik --urdf robot.urdf --markers markers.toml --frames mocap.csv --out traj.csv
+    /// Example:
+    ///   twinloop ik --robot robot.urdf --markers markers.toml --frames mocap.csv --out traj.csv
     ///
     /// Output: TRAJ.csv with `t`, `q:*` and the fit quality per frame, `ik.rms` and
     /// `ik.max` (marker distances, m); stdout summarises them.
     #[command(verbatim_doc_comment)]
-    Ik(cmd_ident::IkArgs),
-    /// Validate a model against measurements (inverse-dynamics residual, seed 004)
+    Ik(cmd_ik::IkArgs),
+    /// Walking references: seed 003's joint sequence, seed 002's ZMP and CoM reference
     #[command(subcommand)]
-    Validate(cmd_ident::ValidateCommand),
-    /// Black-box identification from recorded inputs and outputs: MIMO ARX and state-space models
-    ///
-    /// `sysid arx` fits a MIMO ARX model by least squares; `sysid ss` a state-space model by
-    /// subspace identification and the prediction-error method (or the seed 003 route: ARX,
-    /// balanced reduction, prediction error). Both evaluate the model as seed 003 does: FIT per
-    /// output, Hankel singular values, singular values of the frequency response, residual tests.
-    ///
-    /// Example: twinloop sysid ss --data walk.csv --inputs 'u:*' --outputs 'gyro:*' --order 6 --json ss.json
+    Gait(cmd_gait::GaitCommand),
+    /// The compact compliant model of seed 002 (COMAN): its stiffness, and rolling it out
     #[command(subcommand)]
-    Sysid(cmd_sysid::SysidCommand),
-    /// Talk to a robot's Dynamixel servos: scan, read, record, plan a control cycle
+    Compliant(cmd_compliant::CompliantCommand),
+    /// Talk to a robot's Dynamixel servos on a bus: scan, read, record, plan a control cycle
     ///
     /// Protocol 1.0 (RX, MX) and 2.0 (X, MX(2.0)) over a serial adapter, a pty from
     /// `twinloop serve`, or TCP. Run `twinloop link <command> --help` for each.
-    ///
-    /// Example: twinloop link scan --port /dev/ttyUSB0 --baud 1000000
     #[command(subcommand)]
     Link(cmd_link::LinkCommand),
     /// Put a virtual robot on a pseudo-terminal (or TCP) that any Dynamixel program can drive
@@ -134,51 +117,193 @@ enum Command {
     /// (1.0 and 2.0 on one line), goal positions move the servo, present position,
     /// velocity, load, voltage and temperature come from the servo model, and the
     /// wire time at --baud plus each servo's Return Delay Time are emulated. With a
-    /// robot model (builtin:km20) the servos are the physics simulation of the robot
-    /// standing on the ground, in real time; --servo-model ideal puts a stand-in
+    /// robot description (builtin:km20) the servos are the physics simulation of the
+    /// robot standing on the ground, in real time; --servo-model ideal puts a stand-in
     /// (each servo tracks its goal, 50 ms lag) for protocol-only work.
     ///
-    /// The first line printed on stdout is the device path (or tcp:ADDR) to hand to
-    /// clients: twinloop link, the ROBOTIS SDK, Dynamixel Wizard via a pty bridge.
+    /// Example:
+    ///   twinloop serve --robot builtin:km20 --link /tmp/km20
+    ///   twinloop link scan --port /tmp/km20
+    ///   twinloop serve --map builtin:op3 --port tcp:127.0.0.1:5555 --no-timing
     ///
-    /// Example: twinloop serve --robot builtin:km20 --link /tmp/km20
-    ///          twinloop link scan --port /tmp/km20
-    Serve(cmd_link::ServeArgs),
-    /// Seed 003's walking sequence as joint goals, and its identification dataset on lab17
-    ///
-    /// `gait sequence` writes the 13-stage walk as joint goals; `gait dataset` walks it on
-    /// lab17 in the simulator and records the ten joint offsets and the six foot gyro rates.
-    ///
-    /// Example: twinloop gait dataset --robot builtin:lab17 --amplitude 0.7 --out lab17_walk.csv
+    /// Output: the first line on stdout is the device path (or tcp:ADDR) to hand to
+    /// clients (`twinloop link`, the ROBOTIS SDK, Dynamixel Wizard via a pty bridge);
+    /// stderr describes what is served. Ctrl-C stops.
+    #[command(verbatim_doc_comment)]
+    Serve(cmd_serve::ServeArgs),
+    /// Benchmarks against peers (median time per call): dynamics, simulator, servo link
     #[command(subcommand)]
-    Gait(cmd_gait::GaitCommand),
-    /// The compliant humanoid of seed 002 (COMAN): Cartesian stiffness and damping at the CoM
-    #[command(subcommand)]
-    Compliant(cmd_compliant::CompliantCommand),
-    /// Fit reduced models to recorded data (seed 002's compact compliant model)
-    #[command(subcommand)]
-    Fit(cmd_fit::FitCommand),
+    Bench(cmd_bench::BenchCommand),
+}
+
+fn run(command: Command) -> CliResult {
+    match command {
+        Command::Model(cmd) => cmd_model::run(cmd),
+        Command::Dynamics(cmd) => cmd_dynamics::run(cmd),
+        Command::Simulate(args) => cmd_simulate::run(args),
+        Command::Experiment(cmd) => cmd_experiment::run(cmd),
+        Command::Identify(cmd) => cmd_identify::run(cmd),
+        Command::Validate(cmd) => cmd_validate::run(cmd),
+        Command::Ik(args) => cmd_ik::run(&args),
+        Command::Gait(cmd) => cmd_gait::run(cmd),
+        Command::Compliant(cmd) => cmd_compliant::run(cmd),
+        Command::Link(cmd) => cmd_link::run(cmd),
+        Command::Serve(args) => cmd_serve::run(args),
+        Command::Bench(cmd) => cmd_bench::run(cmd),
+    }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match cli.command {
-        Command::Model(cmd) => cmd_model::run(cmd),
-        Command::Kinematics(args) => cmd_dynamics::kinematics(args),
-        Command::InverseDynamics(args) => cmd_dynamics::inverse_dynamics(args),
-        Command::ForwardDynamics(args) => cmd_dynamics::forward_dynamics(args),
-        Command::Simulate(args) => cmd_sim::simulate(args),
-        Command::Bench(cmd) => cmd_bench::run(cmd),
-        Command::Robot(cmd) => cmd_robot::run(cmd),
-        Command::Experiment(cmd) => cmd_ident::experiment(cmd),
-        Command::Identify(cmd) => cmd_ident::identify(cmd),
-        Command::Ik(args) => cmd_ident::ik(args),
-        Command::Validate(cmd) => cmd_ident::validate(cmd),
-        Command::Sysid(cmd) => cmd_sysid::run(cmd),
-        Command::Link(cmd) => cmd_link::run(cmd),
-        Command::Serve(args) => cmd_link::serve(args),
-        Command::Gait(cmd) => cmd_gait::run(cmd),
-        Command::Compliant(cmd) => cmd_compliant::run(cmd),
-        Command::Fit(cmd) => cmd_fit::run(cmd),
+    match run(cli.command) {
+        Ok(outcome) => outcome.exit_code(),
+        Err(e) => {
+            eprintln!("error: {e}");
+            e.exit_code()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Cli;
+    use clap::{CommandFactory, Parser};
+
+    /// Split a command line into words as a shell would for the examples: quotes
+    /// ('..', "..") group, a backslash escapes, an unquoted `#` starts a comment.
+    fn shell_words(line: &str) -> Result<Vec<String>, String> {
+        let mut words = Vec::new();
+        let mut word = String::new();
+        let mut in_word = false;
+        let mut chars = line.chars().peekable();
+        while let Some(c) = chars.next() {
+            match c {
+                '\'' => {
+                    in_word = true;
+                    loop {
+                        match chars.next() {
+                            Some('\'') => break,
+                            Some(q) => word.push(q),
+                            None => return Err(format!("unclosed ' in {line}")),
+                        }
+                    }
+                }
+                '"' => {
+                    in_word = true;
+                    loop {
+                        match chars.next() {
+                            Some('"') => break,
+                            Some('\\') => word.extend(chars.next()),
+                            Some(q) => word.push(q),
+                            None => return Err(format!("unclosed \" in {line}")),
+                        }
+                    }
+                }
+                '\\' => {
+                    in_word = true;
+                    word.extend(chars.next());
+                }
+                '#' if !in_word => break,
+                c if c.is_whitespace() => {
+                    if in_word {
+                        words.push(std::mem::take(&mut word));
+                        in_word = false;
+                    }
+                }
+                c => {
+                    in_word = true;
+                    word.push(c);
+                }
+            }
+        }
+        if in_word {
+            words.push(word);
+        }
+        Ok(words)
+    }
+
+    /// The example command lines of a help text: every line starting with
+    /// `twinloop ` (after trimming), joined with its `\` continuation lines.
+    fn examples(help: &str) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut lines = help.lines().map(str::trim);
+        while let Some(line) = lines.next() {
+            if !line.starts_with("twinloop ") {
+                continue;
+            }
+            let mut full = line.to_string();
+            while full.ends_with('\\') {
+                full.pop();
+                match lines.next() {
+                    Some(next) => {
+                        full.push(' ');
+                        full.push_str(next);
+                    }
+                    None => break,
+                }
+            }
+            out.push(full);
+        }
+        out
+    }
+
+    /// Every command's help, with the command path (`twinloop model info`).
+    fn all_helps(cmd: &mut clap::Command, path: &str, out: &mut Vec<(String, String, bool)>) {
+        let help = cmd.render_long_help().to_string();
+        let leaf = !cmd.has_subcommands();
+        out.push((path.to_string(), help, leaf));
+        for sub in cmd.get_subcommands_mut() {
+            if sub.get_name() == "help" {
+                continue;
+            }
+            let p = format!("{path} {}", sub.get_name());
+            all_helps(sub, &p, out);
+        }
+    }
+
+    #[test]
+    fn the_command_tree_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn every_example_in_the_help_parses() {
+        // No wrapping: each example stays on its lines as written.
+        let mut cmd = Cli::command().term_width(0);
+        cmd.build();
+        let mut helps = Vec::new();
+        all_helps(&mut cmd, "twinloop", &mut helps);
+        let mut failures = Vec::new();
+        let mut checked = 0;
+        for (path, help, leaf) in &helps {
+            let found = examples(help);
+            if *leaf && (found.is_empty() || !help.contains("Example")) {
+                failures.push(format!("{path}: no `Example:` with a `twinloop ...` line"));
+            }
+            for line in found {
+                checked += 1;
+                let words = match shell_words(&line) {
+                    Ok(w) => w,
+                    Err(e) => {
+                        failures.push(format!("{path}: {e}"));
+                        continue;
+                    }
+                };
+                if let Err(e) = Cli::try_parse_from(&words) {
+                    let first = e.to_string().lines().next().unwrap_or("").to_string();
+                    failures.push(format!("{path}: `{line}` does not parse: {first}"));
+                }
+            }
+        }
+        assert!(checked > 30, "only {checked} examples found");
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
+    }
+
+    #[test]
+    fn shell_words_split_like_a_shell() {
+        assert_eq!(
+            shell_words(r#"twinloop a --x 'u:*' "b c" d\ e # note"#).unwrap(),
+            ["twinloop", "a", "--x", "u:*", "b c", "d e"]
+        );
     }
 }

@@ -21,7 +21,7 @@ fn zmp_writes_the_seed_gait() {
             "0.5",
             "--tdb",
             "0.2",
-            "--steps",
+            "--footsteps",
             "4",
             "--com-height",
             "0.5",
@@ -63,7 +63,7 @@ fn compliant_stiffness_writes_the_sagittal_entries() {
         .args([
             "compliant",
             "stiffness",
-            "--urdf",
+            "--robot",
             &coman_urdf(),
             "--support",
             "right",
@@ -87,7 +87,7 @@ fn compliant_stiffness_writes_the_sagittal_entries() {
 fn compliant_stiffness_names_a_stretched_knee_and_bad_stiffness() {
     let run = |extra: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_twinloop"))
-            .args(["compliant", "stiffness", "--urdf", &coman_urdf()])
+            .args(["compliant", "stiffness", "--robot", &coman_urdf()])
             .args(extra)
             .output()
             .unwrap()
@@ -112,12 +112,12 @@ fn compliant_simulate_rolls_the_compact_model_along_a_zmp_reference() {
         o
     };
     ok(Command::new(bin)
-        .args(["gait", "zmp", "--steps", "3", "--out"])
+        .args(["gait", "zmp", "--footsteps", "3", "--out"])
         .arg(&reference)
         .output()
         .unwrap());
     ok(Command::new(bin)
-        .args(["compliant", "stiffness", "--urdf", &coman_urdf(), "--json"])
+        .args(["compliant", "stiffness", "--robot", &coman_urdf(), "--json"])
         .arg(&kc)
         .output()
         .unwrap());

@@ -1,4 +1,4 @@
-//! `compliant dataset` (seed 002 section 4) through the binary: the CSV, the JSON summary,
+//! `experiment compliant-walk` (seed 002 section 4) through the binary: the CSV, the JSON summary,
 //! a fall and bad input.
 
 use std::process::Command;
@@ -15,7 +15,7 @@ fn coman_urdf() -> String {
 
 fn run(extra: &[&str], out: &std::path::Path) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_twinloop"))
-        .args(["compliant", "dataset", "--urdf", &coman_urdf()])
+        .args(["experiment", "compliant-walk", "--robot", &coman_urdf()])
         .args(extra)
         .arg("--out")
         .arg(out)

@@ -116,7 +116,7 @@ fn batch_commands_match_pinocchio() {
     let bin = env!("CARGO_BIN_EXE_twinloop");
     let run = |cmd: &str, out: &Path| {
         let o = Command::new(bin)
-            .args([cmd, "--urdf"])
+            .args(["dynamics", cmd, "--robot"])
             .arg(&urdf)
             .arg("--trajectory")
             .arg(&traj)
@@ -140,8 +140,8 @@ fn batch_commands_match_pinocchio() {
     let joints = refd["joints"].as_array().unwrap();
     let states = refd["states"].as_array().unwrap();
 
-    let (h, rows) = run("inverse-dynamics", &tmp("tau.csv"));
-    let (ha, rows_a) = run("forward-dynamics", &tmp("acc.csv"));
+    let (h, rows) = run("inverse", &tmp("tau.csv"));
+    let (ha, rows_a) = run("forward", &tmp("acc.csv"));
     let (hk, rows_k) = run("kinematics", &tmp("kin.csv"));
     assert_eq!(rows.len(), states.len());
     for (si, st) in states.iter().enumerate() {
@@ -187,7 +187,7 @@ fn missing_columns_and_bad_cells_are_named() {
     let bad = tmp("bad.csv");
     std::fs::write(&bad, "t,q:base.x\n0,1\n").unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
-        .args(["inverse-dynamics", "--urdf"])
+        .args(["dynamics", "inverse", "--robot"])
         .arg(&urdf)
         .arg("--trajectory")
         .arg(&bad)
@@ -203,7 +203,7 @@ fn missing_columns_and_bad_cells_are_named() {
     );
     std::fs::write(&bad, "t,q:base.x\n0,1\nx,2\n").unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
-        .args(["kinematics", "--urdf"])
+        .args(["dynamics", "kinematics", "--robot"])
         .arg(&urdf)
         .arg("--trajectory")
         .arg(&bad)

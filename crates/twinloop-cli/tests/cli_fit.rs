@@ -1,4 +1,4 @@
-//! `fit compliant` through the binary: known-truth recovery from data the compact model
+//! `identify compliant` through the binary: known-truth recovery from data the compact model
 //! makes itself (`gait zmp` -> `compliant simulate --table1`), the JSON, the report, and
 //! bad input named.
 
@@ -32,7 +32,7 @@ fn walk(name: &str, step_length: &str, tss: &str, noise: &str) -> PathBuf {
     let o = twinloop(&[
         "gait",
         "zmp",
-        "--steps",
+        "--footsteps",
         "12",
         "--step-length",
         step_length,
@@ -66,7 +66,7 @@ fn fit_recovers_table_1_and_validates_on_another_gait() {
     let val = walk("val", "0.05", "0.4", "0");
     let (json, html) = (tmp("fit.json"), tmp("fit.html"));
     let o = twinloop(&[
-        "fit",
+        "identify",
         "compliant",
         "--data",
         s(&train),
@@ -124,7 +124,14 @@ fn bad_input_is_named() {
     lines[11] = cells.join(",");
     let nan = tmp("nan.csv");
     std::fs::write(&nan, lines.join("\n")).unwrap();
-    let o = twinloop(&["fit", "compliant", "--data", s(&nan), "--model", s(&model)]);
+    let o = twinloop(&[
+        "identify",
+        "compliant",
+        "--data",
+        s(&nan),
+        "--model",
+        s(&model),
+    ]);
     assert_eq!(o.status.code(), Some(2));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -137,7 +144,7 @@ fn bad_input_is_named() {
     let gapped = tmp("gap.csv");
     std::fs::write(&gapped, gap.join("\n")).unwrap();
     let o = twinloop(&[
-        "fit",
+        "identify",
         "compliant",
         "--data",
         s(&gapped),
@@ -150,7 +157,14 @@ fn bad_input_is_named() {
     // non-positive stiffness
     let neg = tmp("neg.toml");
     std::fs::write(&neg, MODEL.replace("Kzz = 60061.10789312922", "Kzz = 0")).unwrap();
-    let o = twinloop(&["fit", "compliant", "--data", s(&nan), "--model", s(&neg)]);
+    let o = twinloop(&[
+        "identify",
+        "compliant",
+        "--data",
+        s(&nan),
+        "--model",
+        s(&neg),
+    ]);
     assert_eq!(o.status.code(), Some(2));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("neg.toml") && e.contains("Kzz"), "{e}");
@@ -158,7 +172,14 @@ fn bad_input_is_named() {
     let urdf = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/coman/coman.urdf");
     let knee = tmp("knee.toml");
     std::fs::write(&knee, format!("urdf = \"{urdf}\"\nknee_bend = 0.0\n")).unwrap();
-    let o = twinloop(&["fit", "compliant", "--data", s(&nan), "--model", s(&knee)]);
+    let o = twinloop(&[
+        "identify",
+        "compliant",
+        "--data",
+        s(&nan),
+        "--model",
+        s(&knee),
+    ]);
     assert_eq!(o.status.code(), Some(2));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -167,7 +188,7 @@ fn bad_input_is_named() {
     );
     // unknown parameter name
     let o = twinloop(&[
-        "fit",
+        "identify",
         "compliant",
         "--data",
         s(&nan),

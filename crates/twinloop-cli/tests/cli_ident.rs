@@ -75,7 +75,7 @@ fn force_plate_poses() {
     let text = ok(&[
         "experiment",
         "static-poses",
-        "--urdf",
+        "--robot",
         &m(H1),
         "--count",
         "12",
@@ -103,7 +103,7 @@ fn force_plate_poses() {
     let e = fails(&[
         "experiment",
         "static-poses",
-        "--urdf",
+        "--robot",
         &m(H1),
         "--categories",
         "arm,kneel",
@@ -114,7 +114,7 @@ fn force_plate_poses() {
     let e = fails(&[
         "experiment",
         "static-poses",
-        "--urdf",
+        "--robot",
         &m(H1),
         "--hold",
         "waist",
@@ -133,13 +133,13 @@ fn identify_static_matches_reference_and_writes_urdf() {
     let text = ok(&[
         "identify",
         "static",
-        "--urdf",
+        "--robot",
         &m(H1_PRIOR),
         "--poses",
         s(&data("h1_poses.csv")),
         "--total-mass",
         "59.338",
-        "--out-urdf",
+        "--out",
         s(&urdf),
         "--json",
         s(&json),
@@ -201,7 +201,7 @@ fn identify_static_errors_name_the_field() {
     let e = fails(&[
         "identify",
         "static",
-        "--urdf",
+        "--robot",
         &m(H1_PRIOR),
         "--poses",
         s(&poses),
@@ -229,7 +229,7 @@ fn identify_static_errors_name_the_field() {
     let e = fails(&[
         "identify",
         "static",
-        "--urdf",
+        "--robot",
         &m(H1_PRIOR),
         "--poses",
         s(&bad),
@@ -249,7 +249,7 @@ fn identify_static_errors_name_the_field() {
     let e = fails(&[
         "identify",
         "static",
-        "--urdf",
+        "--robot",
         &m(H1_PRIOR),
         "--poses",
         s(&renamed),
@@ -266,7 +266,7 @@ fn identify_static_errors_name_the_field() {
     let e = fails(&[
         "identify",
         "static",
-        "--urdf",
+        "--robot",
         &m(H1_PRIOR),
         "--poses",
         s(&few),
@@ -397,7 +397,7 @@ fn squat_markers_ik_and_residual() {
     let text = ok(&[
         "experiment",
         "squat",
-        "--urdf",
+        "--robot",
         &m(H1),
         "--out",
         s(&squat),
@@ -415,7 +415,7 @@ fn squat_markers_ik_and_residual() {
     assert!(text.contains("frames of a squat"), "{text}");
     let text = ok(&[
         "ik",
-        "--urdf",
+        "--robot",
         &m(H1),
         "--markers",
         s(&markers),
@@ -446,7 +446,7 @@ fn squat_markers_ik_and_residual() {
     let text = ok(&[
         "validate",
         "residual",
-        "--urdf",
+        "--robot",
         &m(H1_PRIOR),
         "--compare",
         &m(H1),
@@ -476,7 +476,7 @@ fn squat_markers_ik_and_residual() {
     let e = fails(&[
         "validate",
         "residual",
-        "--urdf",
+        "--robot",
         &m(H1),
         "--motion",
         s(&traj),

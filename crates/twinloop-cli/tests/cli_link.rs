@@ -27,9 +27,10 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 /// `twinloop serve` in the background; returns the child and the pty path.
-fn serve(robot: &str, extra: &[&str]) -> (Child, String) {
+fn serve(robot: &[&str], extra: &[&str]) -> (Child, String) {
     let mut child = Command::new(bin())
-        .args(["serve", "--robot", robot])
+        .arg("serve")
+        .args(robot)
         .args(extra)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
@@ -77,6 +78,7 @@ fn plan_prints_the_wiretime_budget() {
         "--return-delay-us",
         "500",
         "--json",
+        "-",
     ]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v[0]["read_bytes"], 320);
@@ -85,8 +87,17 @@ fn plan_prints_the_wiretime_budget() {
 
 #[test]
 fn scan_read_and_record_a_served_robot() {
-    let (mut server, pty) = serve("builtin:op3", &["--no-timing"]);
-    let o = twinloop(&["link", "scan", "--port", &pty, "--protocol", "2", "--json"]);
+    let (mut server, pty) = serve(&["--map", "builtin:op3"], &["--no-timing"]);
+    let o = twinloop(&[
+        "link",
+        "scan",
+        "--port",
+        &pty,
+        "--protocol",
+        "2",
+        "--json",
+        "-",
+    ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v.as_array().unwrap().len(), 20);
@@ -128,7 +139,7 @@ fn scan_read_and_record_a_served_robot() {
         "record",
         "--port",
         &pty,
-        "--robot",
+        "--map",
         "builtin:op3",
         "--duration",
         "0.5",
@@ -154,7 +165,7 @@ fn scan_read_and_record_a_served_robot() {
 
 #[test]
 fn interrupted_and_unplugged_recordings_keep_every_row() {
-    let (mut server, pty) = serve("builtin:km20", &[]);
+    let (mut server, pty) = serve(&["--robot", "builtin:km20"], &[]);
     // Ctrl-C: the recording stops cleanly, exit 0, every row in the file.
     let out = scratch("interrupted.csv");
     let rec = Command::new(bin())
@@ -163,7 +174,7 @@ fn interrupted_and_unplugged_recordings_keep_every_row() {
             "record",
             "--port",
             &pty,
-            "--robot",
+            "--map",
             "builtin:km20",
             "--duration",
             "60",
@@ -192,7 +203,7 @@ fn interrupted_and_unplugged_recordings_keep_every_row() {
             "record",
             "--port",
             &pty,
-            "--robot",
+            "--map",
             "builtin:km20",
             "--duration",
             "60",
@@ -220,7 +231,7 @@ fn interrupted_and_unplugged_recordings_keep_every_row() {
 fn bad_mapping_is_located() {
     let m = scratch("bad.toml");
     std::fs::write(&m, "[[joint]]\nname = \"a\"\nid = 1\nmodel = \"RX-99\"\n").unwrap();
-    let o = twinloop(&["serve", "--robot", m.to_str().unwrap()]);
+    let o = twinloop(&["serve", "--map", m.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     let e = text(&o.stderr);
     assert!(
@@ -234,7 +245,10 @@ fn bad_mapping_is_located() {
 
 #[test]
 fn serve_on_tcp() {
-    let (mut server, addr) = serve("builtin:op3", &["--tcp", "127.0.0.1:0", "--no-timing"]);
+    let (mut server, addr) = serve(
+        &["--map", "builtin:op3"],
+        &["--port", "tcp:127.0.0.1:0", "--no-timing"],
+    );
     assert!(addr.starts_with("tcp:127.0.0.1:"), "{addr}");
     let o = twinloop(&[
         "link",
@@ -263,7 +277,10 @@ fn serve_on_tcp() {
 fn serve_km20_simulated_on_tcp() {
     use twinloop_link::transport::{TcpTransport, Transport};
     use twinloop_link::{Client, ClientConfig, Protocol};
-    let (mut server, addr) = serve("builtin:km20", &["--tcp", "127.0.0.1:0", "--no-timing"]);
+    let (mut server, addr) = serve(
+        &["--robot", "builtin:km20"],
+        &["--port", "tcp:127.0.0.1:0", "--no-timing"],
+    );
     let a = 0.25f64;
     // RX units: 1024 over 300 degrees, centre 512; ids from the km20 mapping.
     let raw = |q: f64| ((512.0 + q / (300f64.to_radians() / 1024.0)).round() as u16).to_le_bytes();
@@ -308,6 +325,7 @@ fn serve_km20_simulated_on_tcp() {
         "--timeout-ms",
         "500",
         "--json",
+        "-",
         "present position",
         "present load",
     ]);

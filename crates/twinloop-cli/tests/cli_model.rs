@@ -43,7 +43,10 @@ fn scratch(name: &str, text: &str) -> PathBuf {
 
 #[test]
 fn info_json_of_op3() {
-    let o = run_on(&["model", "info", "--json"], &model("op3/robotis_op3.urdf"));
+    let o = run_on(
+        &["model", "info", "--json", "-"],
+        &model("op3/robotis_op3.urdf"),
+    );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let v = json(&o);
     assert_eq!(v["robot"], "robotis_op3");
@@ -87,7 +90,7 @@ fn info_text_of_nao_names_the_mimic_joints() {
 #[test]
 fn info_counts_a_floating_joint_as_six_dof() {
     let o = run_on(
-        &["model", "info", "--json"],
+        &["model", "info", "--json", "-"],
         &model("coman/coman.nomesh.urdf"),
     );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
@@ -129,7 +132,10 @@ fn lint_fails_on_op2_and_coman_and_passes_op3() {
 
 #[test]
 fn mjcf_models_are_read_by_their_root_element() {
-    let o = run_on(&["model", "info", "--json"], &model("talos/mjcf/talos.xml"));
+    let o = run_on(
+        &["model", "info", "--json", "-"],
+        &model("talos/mjcf/talos.xml"),
+    );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let v = json(&o);
     assert_eq!(v["format"], "MJCF");
@@ -155,7 +161,7 @@ fn mjcf_models_are_read_by_their_root_element() {
 #[test]
 fn lint_json_has_stable_fields() {
     let o = run_on(
-        &["model", "lint", "--json"],
+        &["model", "lint", "--json", "-"],
         &model("op2/robotis_op2.nomesh.urdf"),
     );
     assert_eq!(o.status.code(), Some(1));

@@ -1,4 +1,4 @@
-//! `twinloop robot ...` as a user runs it.
+//! `twinloop model list|export` as a user runs it.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -20,7 +20,7 @@ fn stderr(o: &Output) -> String {
 
 #[test]
 fn list_names_both_robots() {
-    let o = twinloop(&["robot", "list"]);
+    let o = twinloop(&["model", "list"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let text = stdout(&o);
     assert!(text.starts_with("NAME"), "{text}");
@@ -35,7 +35,7 @@ fn list_names_both_robots() {
         "{lab17}"
     );
 
-    let o = twinloop(&["robot", "list", "--json"]);
+    let o = twinloop(&["model", "list", "--json", "-"]);
     assert_eq!(o.status.code(), Some(0));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v[0]["name"], "km20");
@@ -55,13 +55,13 @@ fn list_names_both_robots() {
 #[test]
 fn export_writes_a_urdf_that_model_info_and_lint_accept() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"));
-    for (name, dof, mass) in [("km20", 20, 3.336), ("builtin:lab17", 17, 1.65)] {
+    for (name, dof, mass) in [("builtin:km20", 20, 3.336), ("builtin:lab17", 17, 1.65)] {
         let file = dir.join(format!("{}.urdf", name.replace(':', "_")));
         let f = file.to_str().unwrap();
-        let o = twinloop(&["robot", "export", name, "--out", f]);
+        let o = twinloop(&["model", "export", name, "--out", f]);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         assert!(stdout(&o).starts_with("wrote "), "{}", stdout(&o));
-        let o = twinloop(&["model", "info", "--json", f]);
+        let o = twinloop(&["model", "info", "--json", "-", f]);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         assert_eq!(v["dof"], dof);
@@ -74,12 +74,24 @@ fn export_writes_a_urdf_that_model_info_and_lint_accept() {
 #[test]
 fn export_refuses_an_unknown_robot() {
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("nope.urdf");
-    let o = twinloop(&["robot", "export", "km21", "--out", out.to_str().unwrap()]);
+    let o = twinloop(&[
+        "model",
+        "export",
+        "builtin:km21",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(o.status.code(), Some(2));
     let e = stderr(&o);
     assert!(e.contains("km21") && e.contains("km20, lab17"), "{e}");
     assert!(!out.exists());
-    let o = twinloop(&["robot", "export", "km20", "--out", "/no/such/dir/km20.urdf"]);
+    let o = twinloop(&[
+        "model",
+        "export",
+        "builtin:km20",
+        "--out",
+        "/no/such/dir/km20.urdf",
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
         stderr(&o).contains("/no/such/dir/km20.urdf"),
@@ -90,13 +102,13 @@ fn export_refuses_an_unknown_robot() {
 
 #[test]
 fn help_teaches() {
-    let o = twinloop(&["robot", "export", "--help"]);
+    let o = twinloop(&["model", "export", "--help"]);
     let h = stdout(&o);
     assert!(
-        h.contains("twinloop robot export km20 --out km20.urdf"),
+        h.contains("twinloop model export builtin:km20 --out km20.urdf"),
         "{h}"
     );
     assert!(h.contains("Exit code"), "{h}");
-    let o = twinloop(&["robot", "list", "--help"]);
+    let o = twinloop(&["model", "list", "--help"]);
     assert!(stdout(&o).contains("builtin:NAME"));
 }

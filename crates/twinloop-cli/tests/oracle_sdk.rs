@@ -55,7 +55,7 @@ fn official_sdk_against_twinloop_serve() {
         }
     };
     let mut server = Command::new(env!("CARGO_BIN_EXE_twinloop"))
-        .args(["serve", "--robot"])
+        .args(["serve", "--map"])
         .arg(repo().join("tools/oracle/sdk_bus.toml"))
         .stdout(Stdio::piped())
         .stderr(Stdio::null())

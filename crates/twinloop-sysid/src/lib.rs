@@ -7,6 +7,7 @@ pub mod error;
 pub mod freq;
 pub mod gramian;
 pub mod identify;
+pub mod json;
 pub mod linalg;
 pub mod metrics;
 pub mod pem;

@@ -1,18 +1,22 @@
-//! `twinloop bench dynamics`: median nanoseconds per call of each algorithm over
-//! random (or given) states, like MuJoCo's `testspeed`. The peer bench in
-//! bench/pinocchio runs Pinocchio on the same model and the same states file.
+//! `twinloop bench dynamics|sim|link`: benchmarks against peers. `dynamics` reports
+//! the median nanoseconds per call of each algorithm over random (or given) states,
+//! like MuJoCo's `testspeed`; the peer bench in bench/pinocchio runs Pinocchio on the
+//! same model and the same states file.
 
-use crate::cmd_dynamics::load_model;
+mod link;
+mod sim;
+
+use crate::common::{ROBOT_HELP, emit, load_model, read_table};
+use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::{Args, Subcommand};
 use serde::Serialize;
 use std::hint::black_box;
 use std::path::PathBuf;
-use std::process::ExitCode;
 use std::time::Instant;
 use twinloop_dynamics::configuration::{random_configuration, random_tangent};
-use twinloop_dynamics::{Data, Model};
-use twinloop_io::{Quantity, StateColumns, Table};
+use twinloop_dynamics::{BaseKind, Data, Model};
+use twinloop_io::{Quantity, StateColumns};
 use twinloop_random::SplitMix64;
 
 #[derive(Subcommand, Debug)]
@@ -25,12 +29,17 @@ pub enum BenchCommand {
     /// --seconds, and reports the median over rounds of the time per call.
     ///
     /// Example:
-    ///   twinloop bench dynamics --urdf models/op3/robotis_op3.urdf
-    ///   twinloop bench dynamics --urdf models/talos/mjcf/talos.xml --states states.csv --json
+    ///   twinloop bench dynamics --robot models/op3/robotis_op3.urdf
+    ///   twinloop bench dynamics --robot models/talos/mjcf/talos.xml --states states.csv --json -
     ///
     /// With --states, the states come from a trajectory CSV (q:, v:, a:, tau: columns);
     /// bench/pinocchio/make_states.py writes one, and bench/pinocchio runs Pinocchio on
     /// the same file, so the two are compared on identical inputs.
+    ///
+    /// Output: the median ns per call of each algorithm; --json FILE (- for stdout)
+    /// writes {"model", "nv", "states", "ns_per_call": {"fk", "com", "rnea", "crba",
+    /// "aba", "jacobians", "regressor"}}.
+    #[command(verbatim_doc_comment)]
     Dynamics(DynamicsBenchArgs),
     /// Time the simulator: microseconds per step of a robot standing on its servos.
     ///
@@ -38,8 +47,12 @@ pub enum BenchCommand {
     /// --steps steps are timed; the median is reported. bench/mujoco/bench_sim.py times
     /// MuJoCo on the same robot for the comparison in BENCHMARKS.md.
     ///
-    /// Example: twinloop bench sim --robot models/op3/mjcf/op3.xml --dt 0.002 --json
-    Sim(crate::cmd_sim::SimBenchArgs),
+    /// Example:
+    ///   twinloop bench sim --robot models/op3/mjcf/op3.xml --dt 0.002 --json -
+    ///
+    /// Output: us per step, steps per second, the robot's nv and contact points.
+    #[command(verbatim_doc_comment)]
+    Sim(sim::SimBenchArgs),
     /// Time the Dynamixel link: software overhead of a control cycle, and
     /// transactions per second against a served robot.
     ///
@@ -53,30 +66,34 @@ pub enum BenchCommand {
     ///
     /// Example:
     ///   twinloop bench link
-    ///   twinloop bench link --port /dev/pts/5 --json
+    ///   twinloop bench link --port /dev/pts/5 --json bench.json
     ///
     /// Output: per case the median time (us), the rate, and for cycles the wire time
     /// and overhead / wire ratio.
-    Link(crate::cmd_link::LinkBenchArgs),
+    #[command(verbatim_doc_comment)]
+    Link(link::LinkBenchArgs),
 }
 
 #[derive(Args, Debug)]
 pub struct DynamicsBenchArgs {
-    /// Robot description (URDF or MJCF).
-    #[arg(long, value_name = "FILE")]
-    pub urdf: PathBuf,
+    #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
+    pub robot: String,
     /// States to use (trajectory CSV with q:, v:, a:, tau: columns).
     #[arg(long, value_name = "CSV")]
     pub states: Option<PathBuf>,
     /// Number of random states when --states is not given.
     #[arg(long, default_value_t = 1000)]
     pub count: usize,
+    /// Seed of the random states.
+    #[arg(long, default_value_t = 0x7417_1009)]
+    pub seed: u64,
     /// Minimum time spent on each algorithm, in seconds.
     #[arg(long, default_value_t = 0.3)]
     pub seconds: f64,
-    /// Print JSON: {"model", "nv", "ns_per_call": {"fk", "com", "rnea", "crba", "aba", "jacobians", "regressor"}}.
-    #[arg(long)]
-    pub json: bool,
+    /// Write JSON {"model", "nv", "states", "ns_per_call": {"fk", ...}} to FILE (-: to
+    /// stdout, in place of the text).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
 }
 
 #[derive(Serialize)]
@@ -105,10 +122,10 @@ struct States {
     tau: Vec<Vec<f64>>,
 }
 
-fn load_states(model: &Model, args: &DynamicsBenchArgs) -> Result<States, String> {
+fn load_states(model: &Model, args: &DynamicsBenchArgs) -> Result<States, CliError> {
     if let Some(path) = &args.states {
-        let t = Table::read(path).map_err(|e| e.to_string())?;
-        let find = |qty| crate::common::state_columns(&t, model, qty).map_err(|e| e.to_string());
+        let t = read_table(path)?;
+        let find = |qty| crate::common::state_columns(&t, model, qty);
         let cols = [
             find(Quantity::Q)?,
             find(Quantity::V)?,
@@ -133,11 +150,14 @@ fn load_states(model: &Model, args: &DynamicsBenchArgs) -> Result<States, String
             s.tau.push(g(&cols[3], model.nv));
         }
         if s.q.is_empty() {
-            return Err(format!("{}: no states in the file", path.display()));
+            return Err(CliError::new(format!(
+                "{}: no states in the file",
+                path.display()
+            )));
         }
         Ok(s)
     } else {
-        let mut rng = SplitMix64(0x7417_1009);
+        let mut rng = SplitMix64(args.seed);
         let n = args.count.max(1);
         let mut s = States {
             q: vec![],
@@ -170,31 +190,67 @@ fn time(n_states: usize, seconds: f64, mut round: impl FnMut()) -> f64 {
     samples[samples.len() / 2]
 }
 
-pub fn run(cmd: BenchCommand) -> ExitCode {
+pub fn run(cmd: BenchCommand) -> CliResult {
     match cmd {
-        BenchCommand::Sim(args) => crate::cmd_sim::bench(args),
-        BenchCommand::Dynamics(args) => match dynamics(&args) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(crate::common::EXIT_BAD_INPUT)
-            }
-        },
-        BenchCommand::Link(args) => crate::cmd_link::bench(&args),
+        BenchCommand::Dynamics(args) => dynamics(&args),
+        BenchCommand::Sim(args) => sim::run(&args),
+        BenchCommand::Link(args) => link::run(&args),
     }
 }
 
-fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
-    let model = load_model(&args.urdf, false)?;
+fn dynamics(args: &DynamicsBenchArgs) -> CliResult {
+    let (_, model) = load_model(&args.robot, BaseKind::Floating)?;
     let s = load_states(&model, args)?;
     let n = s.q.len();
-    let mut d = Data::new(&model);
-    let secs = args.seconds;
-    let bar = if args.json {
+    let bar = if crate::common::json_to_stdout(args.json.as_ref()) {
         indicatif::ProgressBar::hidden()
     } else {
         progress::steps(7)
     };
+    let ns_per_call = time_algorithms(&model, &s, args.seconds, &bar);
+    bar.finish_and_clear();
+    let model_name = match args.robot.strip_prefix("builtin:") {
+        Some(name) => name.to_string(),
+        None => std::path::Path::new(&args.robot)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+    };
+    let report = Report {
+        model: model_name,
+        nv: model.nv,
+        states: n,
+        ns_per_call,
+    };
+    let mut text = format!(
+        "{} (nv = {}, {} states): median ns per call\n",
+        report.model, report.nv, n
+    );
+    let p = &report.ns_per_call;
+    for (k, v) in [
+        ("fk", p.fk),
+        ("com", p.com),
+        ("rnea", p.rnea),
+        ("crba", p.crba),
+        ("aba", p.aba),
+        ("jacobians", p.jacobians),
+        ("regressor", p.regressor),
+    ] {
+        text += &format!("  {k:<10} {v:>10.1}\n");
+    }
+    emit(&text, args.json.as_ref(), &report)?;
+    Ok(Outcome::Ok)
+}
+
+/// Median ns per call of each algorithm over the states.
+fn time_algorithms(
+    model: &Model,
+    s: &States,
+    secs: f64,
+    bar: &indicatif::ProgressBar,
+) -> NsPerCall {
+    let n = s.q.len();
+    let mut d = Data::new(model);
     let step = |name: &str| {
         bar.set_message(name.to_string());
         bar.inc(1);
@@ -203,21 +259,21 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
     step("fk");
     let fk = time(n, secs, || {
         for q in &s.q {
-            dy::forward_kinematics(&model, &mut d, black_box(q));
+            dy::forward_kinematics(model, &mut d, black_box(q));
         }
         black_box(&d.o_m_i);
     });
     step("com");
     let com = time(n, secs, || {
         for q in &s.q {
-            black_box(dy::center_of_mass(&model, &mut d, black_box(q)));
+            black_box(dy::center_of_mass(model, &mut d, black_box(q)));
         }
     });
     step("rnea");
     let rnea = time(n, secs, || {
         for i in 0..n {
             black_box(dy::rnea(
-                &model,
+                model,
                 &mut d,
                 black_box(&s.q[i]),
                 &s.v[i],
@@ -228,14 +284,14 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
     step("crba");
     let crba = time(n, secs, || {
         for q in &s.q {
-            black_box(dy::crba(&model, &mut d, black_box(q)));
+            black_box(dy::crba(model, &mut d, black_box(q)));
         }
     });
     step("aba");
     let aba = time(n, secs, || {
         for i in 0..n {
             black_box(dy::aba(
-                &model,
+                model,
                 &mut d,
                 black_box(&s.q[i]),
                 &s.v[i],
@@ -246,7 +302,7 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
     step("jacobians");
     let jacobians = time(n, secs, || {
         for q in &s.q {
-            dy::compute_joint_jacobians(&model, &mut d, black_box(q));
+            dy::compute_joint_jacobians(model, &mut d, black_box(q));
             black_box(&d.joint_jacobians);
         }
     });
@@ -254,7 +310,7 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
     let regressor = time(n, secs, || {
         for i in 0..n {
             black_box(dy::joint_torque_regressor(
-                &model,
+                model,
                 &mut d,
                 black_box(&s.q[i]),
                 &s.v[i],
@@ -262,48 +318,13 @@ fn dynamics(args: &DynamicsBenchArgs) -> Result<(), String> {
             ));
         }
     });
-    bar.finish_and_clear();
-    let model_name = args
-        .urdf
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let report = Report {
-        model: model_name,
-        nv: model.nv,
-        states: n,
-        ns_per_call: NsPerCall {
-            fk,
-            com,
-            rnea,
-            crba,
-            aba,
-            jacobians,
-            regressor,
-        },
-    };
-    if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
-        );
-    } else {
-        println!(
-            "{} (nv = {}, {} states): median ns per call",
-            report.model, report.nv, n
-        );
-        let p = &report.ns_per_call;
-        for (k, v) in [
-            ("fk", p.fk),
-            ("com", p.com),
-            ("rnea", p.rnea),
-            ("crba", p.crba),
-            ("aba", p.aba),
-            ("jacobians", p.jacobians),
-            ("regressor", p.regressor),
-        ] {
-            println!("  {k:<10} {v:>10.1}");
-        }
+    NsPerCall {
+        fk,
+        com,
+        rnea,
+        crba,
+        aba,
+        jacobians,
+        regressor,
     }
-    Ok(())
 }

@@ -1,54 +1,19 @@
-//! `twinloop fit ...`: fit a reduced model's parameters to recorded data.
+//! `twinloop identify compliant`: fit the compact compliant model's corrections to a
+//! recorded CoM (seed 002, section 4).
 
-use crate::common::{EXIT_BAD_INPUT, num, print};
+use crate::cmd_compliant::read_plant_any;
+use crate::common::{emit, num, print};
+use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
-use clap::{Args, Subcommand, ValueEnum};
+use clap::{Args, ValueEnum};
 use serde::Serialize;
-use std::path::{Path, PathBuf};
-use std::process::ExitCode;
+use std::path::PathBuf;
 use twinloop_ident::compliant_fit::{
     self as fit, Dataset, FitOptions, FitProblem, FitResult, Identifiability, Method,
     PARAMETER_NAMES, SEED_PARAMETERS, Validation,
 };
 use twinloop_reduced::{CompactModel, Corrections, SagittalCompliance};
 use twinloop_report::{Plot, Report, SeriesStyle};
-
-#[derive(Subcommand, Debug)]
-pub enum FitCommand {
-    /// Fit the compact compliant model's corrections to a recorded CoM (seed 002, section 4)
-    ///
-    /// Minimises the mean squared error MSE = sum[(x - x^)^2 + (z - z^)^2] / 2N of the
-    /// compact model (eq 14-17) rolled out along the recorded reference from the first
-    /// recorded CoM at rest, over the corrections alpha1..epsilon2 (eta1, eta2 too if
-    /// --params names them), from all ones (or --start).
-    ///
-    /// Methods: lm (default; Levenberg-Marquardt with the exact Jacobian from forward
-    /// sensitivities: 40-130 evaluations on the seed's 30 s gait), cmaes (CMA-ES,
-    /// derivative-free, 6000-12000 evaluations to 1e-2), power (PoWER, the seed's reinforcement
-    /// learning: kept for fidelity, it stalls 0.1-0.2 away on the flat directions).
-    ///
-    /// DATA.csv columns: t, xr, zr, x, z, phase (0 single, 1 double support), uniform
-    /// sampling. MODEL.toml: m, g, Kxx, Kxz, Kzx, Kzz, Dxx, Dxz, Dzx, Dzz, or
-    /// `urdf = "coman.urdf"` with support, knee_bend, [q] to compute them (eq 7-8); the
-    /// JSON of `compliant stiffness --json` works too.
-    ///
-    /// Output: the fitted parameters with their Cramer-Rao standard deviations at the
-    /// noise estimated from the residuals, flags for poorly determined (relative std above
-    /// 1 %) and correlated (|r| > 0.95) parameters, MSE before/after on the data and on
-    /// each --val dataset (other gaits).
-    ///
-    /// The JSON holds params (all ten), mse_before, mse_after, evaluations, the
-    /// identifiability (sensitivities, std, correlation, flags) and the validation MSEs.
-    ///
-    /// Example, on data the compact model makes itself (Table 1, 0.1 mm noise):
-    ///
-    /// twinloop gait zmp --steps 40 --out ref.csv
-    ///
-    /// twinloop compliant simulate --reference ref.csv --model MODEL.toml --table1 --noise 1e-4 --out walk.csv
-    ///
-    /// twinloop fit compliant --data walk.csv --model MODEL.toml --json fit.json --report fit.html
-    Compliant(CompliantFitArgs),
-}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum MethodArg {
@@ -104,8 +69,8 @@ pub struct CompliantFitArgs {
     /// rounds each and report the medians (JSON `timing`; for BENCHMARKS.md).
     #[arg(long, default_value_t = 0, value_name = "N")]
     pub timing_rounds: usize,
-    /// Write the result as JSON here.
-    #[arg(long, value_name = "OUT.json")]
+    /// Write the result as JSON to FILE (-: to stdout, in place of the text).
+    #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
     /// Write an HTML report (seed 002 Fig. 4: x and z before and after against the data).
     #[arg(long, value_name = "OUT.html")]
@@ -182,27 +147,7 @@ fn timing(problem: &FitProblem, method: Method, options: &FitOptions, rounds: us
     }
 }
 
-fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
-    ExitCode::from(EXIT_BAD_INPUT)
-}
-
-pub fn run(cmd: FitCommand) -> ExitCode {
-    match cmd {
-        FitCommand::Compliant(args) => compliant(args),
-    }
-}
-
-/// MODEL.toml, or the JSON written by `compliant stiffness --json`.
-pub fn read_plant_any(path: &Path) -> Result<SagittalCompliance, String> {
-    if path.extension().is_some_and(|e| e == "json") {
-        crate::cmd_compliant::read_plant(path)
-    } else {
-        fit::read_model_file(path).map_err(|e| e.to_string())
-    }
-}
-
-fn parse_ten(text: &str, what: &str) -> Result<Corrections, String> {
+fn parse_ten(text: &str, what: &str) -> Result<Corrections, CliError> {
     let values: Result<Vec<f64>, _> = text.split(',').map(|s| s.trim().parse::<f64>()).collect();
     match values {
         Ok(v) if v.len() == 10 && v.iter().all(|x| x.is_finite()) => {
@@ -210,47 +155,60 @@ fn parse_ten(text: &str, what: &str) -> Result<Corrections, String> {
             a.copy_from_slice(&v);
             Ok(Corrections::from_slice(&a))
         }
-        _ => Err(format!(
+        _ => Err(CliError::new(format!(
             "{what} {text}: expected 10 finite comma-separated numbers ({})",
             PARAMETER_NAMES.join(",")
-        )),
+        ))),
     }
 }
 
-fn compliant(args: CompliantFitArgs) -> ExitCode {
-    let plant = match read_plant_any(&args.model) {
-        Ok(p) => p,
-        Err(e) => return fail(e),
-    };
-    let data = match Dataset::read(&args.data) {
-        Ok(d) => d,
-        Err(e) => return fail(e),
-    };
-    let mut val = Vec::new();
-    for path in &args.val {
-        match Dataset::read(path) {
-            Ok(d) => val.push(d),
-            Err(e) => return fail(e),
-        }
-    }
+/// What the fit is run on: the plant, the data, the validation data, which
+/// parameters are free and where they start.
+struct Inputs {
+    plant: SagittalCompliance,
+    data: Dataset,
+    val: Vec<Dataset>,
+    free: Vec<usize>,
+    start: Corrections,
+}
+
+fn read_inputs(args: &CompliantFitArgs) -> Result<Inputs, CliError> {
+    let plant = read_plant_any(&args.model)?;
+    let data = Dataset::read(&args.data)?;
+    let val = args
+        .val
+        .iter()
+        .map(|p| Dataset::read(p))
+        .collect::<Result<Vec<_>, _>>()?;
     let free = match &args.params {
-        Some(text) => match fit::parse_parameter_names(text) {
-            Ok(f) => f,
-            Err(e) => return fail(format!("--params: {e}")),
-        },
+        Some(text) => {
+            fit::parse_parameter_names(text).map_err(|e| CliError::from(e).context("--params"))?
+        }
         None => SEED_PARAMETERS.to_vec(),
     };
     let start = match &args.start {
-        Some(text) => match parse_ten(text, "--start") {
-            Ok(c) => c,
-            Err(e) => return fail(e),
-        },
+        Some(text) => parse_ten(text, "--start")?,
         None => Corrections::default(),
     };
-    let problem = match FitProblem::new(plant, &data, start, &free) {
-        Ok(p) => p,
-        Err(e) => return fail(format!("{}: {e}", args.data.display())),
-    };
+    Ok(Inputs {
+        plant,
+        data,
+        val,
+        free,
+        start,
+    })
+}
+
+pub fn run(args: &CompliantFitArgs) -> CliResult {
+    let Inputs {
+        plant,
+        data,
+        val,
+        free,
+        start,
+    } = read_inputs(args)?;
+    let problem = FitProblem::new(plant, &data, start, &free)
+        .map_err(|e| CliError::from(e).context(args.data.display()))?;
     let method: Method = args.method.into();
     let mut options = FitOptions::for_method(method);
     if let Some(n) = args.max_evaluations {
@@ -266,10 +224,7 @@ fn compliant(args: CompliantFitArgs) -> ExitCode {
     });
     bar.finish_and_clear();
     let seconds = started.elapsed().as_secs_f64();
-    let result = match result {
-        Ok(r) => r,
-        Err(e) => return fail(format!("{}: {e}", args.data.display())),
-    };
+    let result = result.map_err(|e| CliError::from(e).context(args.data.display()))?;
     let fitted = result.params.to_array();
     let p_free: Vec<f64> = free.iter().map(|&i| fitted[i]).collect();
     let (ident, ident_error) = match fit::identifiability(&problem, &p_free, args.noise_std) {
@@ -289,49 +244,9 @@ fn compliant(args: CompliantFitArgs) -> ExitCode {
             num(t.fit * 1e3)
         ));
     }
-    print(&summary(
-        &args,
-        &data,
-        &result,
-        seconds,
-        ident.as_ref(),
-        ident_error.as_deref(),
-        &validation,
-    ));
-    if let Some(path) = &args.json {
-        let report = FitReport {
-            data: args.data.display().to_string(),
-            model: args.model.display().to_string(),
-            samples: data.len(),
-            plant,
-            method,
-            free: free.iter().map(|&i| PARAMETER_NAMES[i]).collect(),
-            start,
-            params: result.params,
-            mse_before: result.mse_before,
-            mse_after: result.mse_after,
-            rms_before: result.mse_before.sqrt(),
-            rms_after: result.mse_after.sqrt(),
-            evaluations: result.evaluations,
-            iterations: result.iterations,
-            stop: &result.stop,
-            seconds,
-            identifiability: ident.as_ref(),
-            identifiability_error: ident_error.clone(),
-            validation: &validation,
-            timing,
-        };
-        let text = match serde_json::to_string_pretty(&report) {
-            Ok(t) => t,
-            Err(e) => return fail(format!("could not write JSON: {e}")),
-        };
-        if let Err(e) = std::fs::write(path, text + "\n") {
-            return fail(format!("{}: {e}", path.display()));
-        }
-    }
     if let Some(path) = &args.report {
         let html = html_report(
-            &args,
+            args,
             &plant,
             &start,
             &data,
@@ -339,11 +254,41 @@ fn compliant(args: CompliantFitArgs) -> ExitCode {
             ident.as_ref(),
             &validation,
         );
-        if let Err(e) = html.write(path) {
-            return fail(format!("{}: {e}", path.display()));
-        }
+        html.write(path)?;
     }
-    ExitCode::SUCCESS
+    let report = FitReport {
+        data: args.data.display().to_string(),
+        model: args.model.display().to_string(),
+        samples: data.len(),
+        plant,
+        method,
+        free: free.iter().map(|&i| PARAMETER_NAMES[i]).collect(),
+        start,
+        params: result.params,
+        mse_before: result.mse_before,
+        mse_after: result.mse_after,
+        rms_before: result.mse_before.sqrt(),
+        rms_after: result.mse_after.sqrt(),
+        evaluations: result.evaluations,
+        iterations: result.iterations,
+        stop: &result.stop,
+        seconds,
+        identifiability: ident.as_ref(),
+        identifiability_error: ident_error.clone(),
+        validation: &validation,
+        timing,
+    };
+    let text = summary(
+        args,
+        &data,
+        &result,
+        seconds,
+        ident.as_ref(),
+        ident_error.as_deref(),
+        &validation,
+    );
+    emit(&text, args.json.as_ref(), &report)?;
+    Ok(Outcome::Ok)
 }
 
 fn summary(

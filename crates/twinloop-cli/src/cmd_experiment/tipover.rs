@@ -1,14 +1,15 @@
 //! `twinloop experiment tipover`: the tip-over experiment of seeds 000 and 001 on the
 //! simulator, with the CoM from the tip angles beside the model's.
 
+use crate::common::{JSON_HELP, emit, load_description};
+use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
 use std::path::PathBuf;
-use std::process::ExitCode;
-use twinloop_ident::tipover_study::{StudyOptions, run_study};
+use twinloop_ident::tipover_study::{StudyOptions, StudyReport, run_study};
 
 #[derive(Args, Debug)]
 pub struct TipoverArgs {
-    /// Robot: builtin:km20, builtin:lab17, or a URDF/MJCF file whose ankle and hip roll
+    /// Robot description: builtin:km20, builtin:lab17, or a URDF/MJCF file whose ankle and hip roll
     /// joints are named like l_ank_pitch / r_ank_roll / l_hip_roll and whose feet have
     /// collision boxes. Sideways, the hip rolls turn with the ankle rolls (the legs lean
     /// as a parallelogram, feet flat, pelvis level).
@@ -18,8 +19,7 @@ pub struct TipoverArgs {
     /// KG@LINK:X,Y,Z with X,Y,Z in metres in the link frame, e.g. 0.2@torso:0.05,0,0.
     #[arg(long = "add-mass", value_name = "KG@LINK:X,Y,Z")]
     pub add_mass: Vec<String>,
-    /// Write the results as JSON.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
     /// Ankle ramp speed, deg/s.
     #[arg(long, default_value_t = 0.5)]
@@ -60,22 +60,12 @@ fn parse_mass(s: &str) -> Result<(f64, String, [f64; 3]), String> {
     Ok((kg, link.to_string(), [v[0], v[1], v[2]]))
 }
 
-pub fn tipover(a: TipoverArgs) -> ExitCode {
-    match tipover_impl(&a) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(crate::common::EXIT_BAD_INPUT)
-        }
-    }
-}
-
-fn tipover_impl(a: &TipoverArgs) -> Result<(), String> {
-    let mut robot = twinloop_description::builtin::resolve(&a.robot).map_err(|e| e.to_string())?;
+pub fn run(a: &TipoverArgs) -> CliResult {
+    let (mut robot, _) = load_description(&a.robot)?;
     for m in &a.add_mass {
         let (kg, link, xyz) = parse_mass(m)?;
         twinloop_description::builtin::add_point_mass(&mut robot, &link, kg, xyz)
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| CliError::from(e).context(format!("--add-mass \"{m}\"")))?;
     }
     let opts = StudyOptions {
         ramp_deg_per_s: a.ramp,
@@ -86,43 +76,58 @@ fn tipover_impl(a: &TipoverArgs) -> Result<(), String> {
     };
     eprintln!("running the four tip-overs in the simulator ...");
     let r = run_study(&robot, &opts)?;
-    println!(
+    emit(&summary(&r), a.json.as_ref(), &r)?;
+    Ok(Outcome::Ok)
+}
+
+/// The table of tip angles and the CoM by each method.
+fn summary(r: &StudyReport) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
         "{}: tip-over (ankle angles from the standing pose, deg)",
         r.robot
     );
-    println!("  direction  commanded  measured  static(model)  feet-roll  time(s)");
+    let _ = writeln!(
+        s,
+        "  direction  commanded  measured  static(model)  feet-roll  time(s)"
+    );
     for (name, d) in [
         ("forward", &r.forward),
         ("backward", &r.backward),
         ("left", &r.left),
         ("right", &r.right),
     ] {
-        println!(
+        let _ = writeln!(
+            s,
             "  {name:<9}  {:>9.3}  {:>8.3}  {:>13.3}  {:>9.3}  {:>7.2}",
             d.commanded_deg, d.measured_deg, d.static_deg, d.excess_deg, d.time_s
         );
     }
     let f = |c: [f64; 3]| format!("[{:+.4}, {:+.4}, {:+.4}]", c[0], c[1], c[2]);
-    println!("CoM relative to the ankle midpoint (m; x forward, y left, z up):");
-    println!("  true          {}", f(r.com.truth));
-    println!(
+    let _ = writeln!(
+        s,
+        "CoM relative to the ankle midpoint (m; x forward, y left, z up):"
+    );
+    let _ = writeln!(s, "  true          {}", f(r.com.truth));
+    let _ = writeln!(
+        s,
         "  exact method  {}  (off by {:.1} mm)",
         f(r.com.exact_method),
         r.com.exact_error * 1e3
     );
-    println!(
+    let _ = writeln!(
+        s,
         "  seed method   {}  (off by {:.1} mm; constants: {})",
         f(r.com.seed_method),
         r.com.seed_error * 1e3,
         r.seed_constants
     );
-    println!(
+    let _ = writeln!(
+        s,
         "  sideways lever  {:.4} m (model {:.4} m)",
         r.com.frontal_lever_exact, r.com.frontal_lever_true
     );
-    if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?;
-        std::fs::write(p, text).map_err(|e| format!("{}: cannot write: {e}", p.display()))?;
-    }
-    Ok(())
+    s
 }

@@ -1,16 +1,15 @@
-//! `twinloop sysid arx|ss`: black-box identification of a recorded input/output
+//! `twinloop identify arx|ss`: black-box identification of a recorded input/output
 //! data set (seed 003): MIMO ARX, or a state-space model by subspace
 //! identification, the prediction-error method, or the seed's ARX-reduce-PEM route.
 
-use crate::common::{EXIT_BAD_INPUT, num, print};
+use crate::common::{emit, num, read_table};
+use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
-use clap::{Args, Subcommand, ValueEnum};
-use serde_json::{Value, json};
+use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 use std::time::Instant;
-use twinloop_io::Table;
-use twinloop_sysid::identify::{Evaluation, Fit};
+use twinloop_sysid::identify::Evaluation;
+use twinloop_sysid::json::{ArxJson, DataJson, SsOrdersJson, StateSpaceJson};
 use twinloop_sysid::pem::{OutputWeight, PemOptions};
 use twinloop_sysid::report::{arx_report, seed_reference_fits, state_space_report};
 use twinloop_sysid::{
@@ -18,10 +17,10 @@ use twinloop_sysid::{
 };
 
 /// What the output means, shared by both commands' `--help`.
-macro_rules! output_help {
+macro_rules! sysid_output_help {
     () => {
         "\
-The JSON (--json) holds the model and its evaluation, on the --val record when given, else on
+The JSON (--json FILE, - for stdout) holds the model and its evaluation, on the --val record when given, else on
 the estimation record:
   A, B (arx)            lists of na matrices ny x ny and nb matrices ny x nu, nested row lists:
                         y(k) + A1 y(k-1) + .. = B1 u(k-nk) + .. + e(k)
@@ -52,41 +51,6 @@ file, line, row or column at fault)."
     };
 }
 
-#[derive(Subcommand, Debug)]
-pub enum SysidCommand {
-    /// Estimate a MIMO ARX model by least squares (MATLAB's arx structure)
-    #[command(
-        long_about = "Estimate a MIMO ARX model y(k) + A1 y(k-1) + ... + Ana y(k-na) = B1 u(k-nk) + ... + \
-Bnb u(k-nk-nb+1) + e(k) with full ny x ny matrices A_i, by least squares (Householder QR) over the samples \
-k = max(na, nb+nk-1) .. N-1, as MATLAB's arx; then simulate it and predict with it, and evaluate it as \
-seed 003 did: FIT per output, Hankel singular values, singular values of the frequency response, \
-residual tests. The seed's initial model was na = nb = 24, nk = 1 on 10 inputs and 6 outputs.",
-        after_long_help = concat!(
-            "Example:\n  twinloop sysid arx --data walk.csv --val walk_val.csv --inputs 'u:*' --outputs 'gyro:*' \\\n",
-            "      --na 24 --nb 24 --nk 1 --json arx.json --report arx.html\n\n",
-            output_help!()
-        )
-    )]
-    Arx(ArxArgs),
-    /// Estimate a state-space model (n4sid, PEM as MATLAB's ssest, or the seed's ARX-reduce-PEM route)
-    #[command(
-        long_about = "Estimate a state-space model in innovations form x(k+1) = A x + B u + K e, y = C x + \
-D u + e of the given order. --method n4sid: subspace identification alone; pem (default): the subspace \
-estimate refined by the prediction-error method (Levenberg-Marquardt on the one-step prediction errors, \
-as MATLAB's ssest); arx-reduce-pem: the route of seed 003, a high-order ARX model (--na --nb --nk), \
-realised in state space, reduced to --order by balanced truncation, then refined by the prediction-error \
-method. The prediction error never ends above the initial model's. The model is then evaluated as for arx.",
-        after_long_help = concat!(
-            "Examples:\n  twinloop sysid ss --data walk.csv --val walk_val.csv --inputs 'u:*' --outputs 'gyro:*' \\\n",
-            "      --order 6 --method pem --json ss.json --report ss.html\n",
-            "  twinloop sysid ss --data walk.csv --inputs 'u:*' --outputs 'gyro:*' --order 24 \\\n",
-            "      --method arx-reduce-pem --na 24 --nb 24 --nk 1 --json seed.json\n\n",
-            output_help!()
-        )
-    )]
-    Ss(SsArgs),
-}
-
 #[derive(Args, Debug)]
 pub struct DataArgs {
     /// Estimation data: CSV with a header row (a `t` column gives the sample time).
@@ -101,22 +65,24 @@ pub struct DataArgs {
     /// Output columns, comma-separated; `prefix*` as for --inputs.
     #[arg(long, value_name = "NAMES", value_delimiter = ',', required = true)]
     pub outputs: Vec<String>,
-    /// Sample time in seconds (default: from a uniform `t` column; frequencies are then
-    /// in rad/s, else in rad/sample).
-    #[arg(long, value_name = "SECONDS")]
-    pub ts: Option<f64>,
-    /// Subtract the estimation data's mean from every input and output (the same
-    /// offsets are removed from the validation data and written to the JSON).
+    /// Sample period in seconds (default: from a uniform `t` column; frequencies are
+    /// then in rad/s, else in rad/sample).
+    #[arg(long, value_name = "S")]
+    pub dt: Option<f64>,
+    /// Keep the means. By default the estimation data's mean is subtracted from every
+    /// input and output (the same offsets from the validation data; the JSON's
+    /// data.offsets says what was removed).
     #[arg(long)]
-    pub detrend: bool,
+    pub no_detrend: bool,
     /// Horizon of the `prediction` FIT (1 = one step ahead).
     #[arg(long, value_name = "K", default_value_t = 1)]
     pub kstep: usize,
     /// Largest lag of the residual tests.
     #[arg(long, value_name = "M", default_value_t = 25)]
     pub lags: usize,
-    /// Write the model and its evaluation as JSON.
-    #[arg(long, value_name = "OUT.json")]
+    /// Write the model and its evaluation as JSON to FILE (-: to stdout, in place of
+    /// the text).
+    #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
     /// Write an HTML report with the seed's figures.
     #[arg(long, value_name = "OUT.html")]
@@ -215,20 +181,6 @@ pub enum FocusArg {
     Simulation,
 }
 
-pub fn run(cmd: SysidCommand) -> ExitCode {
-    let result = match cmd {
-        SysidCommand::Arx(a) => arx(&a),
-        SysidCommand::Ss(a) => ss(&a),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(EXIT_BAD_INPUT)
-        }
-    }
-}
-
 /// The 1-based file line of data row `row` (0-based), counting as `Table::parse`
 /// does (blank and `#` lines skipped, the header first).
 fn line_of_row(path: &Path, row: usize) -> Option<usize> {
@@ -243,8 +195,8 @@ fn line_of_row(path: &Path, row: usize) -> Option<usize> {
         .map(|(i, _)| i + 1)
 }
 
-fn load(path: &Path, a: &DataArgs) -> Result<IoData, String> {
-    let table = Table::read(path).map_err(|e| e.to_string())?;
+fn load(path: &Path, a: &DataArgs) -> Result<IoData, CliError> {
+    let table = read_table(path)?;
     let mut d =
         IoData::from_table(&table.columns, &table.rows, &a.inputs, &a.outputs).map_err(|e| {
             // "data row 42, ..." -> "file:43: data row 42, ..."
@@ -255,24 +207,24 @@ fn load(path: &Path, a: &DataArgs) -> Result<IoData, String> {
                 .and_then(|n| n.parse::<usize>().ok())
                 .and_then(|r| line_of_row(path, r - 1));
             match line {
-                Some(l) => format!("{}:{l}: {}", path.display(), e.message),
-                None => format!("{}: {}", path.display(), e.message),
+                Some(l) => CliError::new(format!("{}:{l}: {}", path.display(), e.message)),
+                None => CliError::new(format!("{}: {}", path.display(), e.message)),
             }
         })?;
-    if let Some(ts) = a.ts {
-        if !(ts.is_finite() && ts > 0.0) {
-            return Err(format!(
-                "--ts {ts}: the sample time must be a positive number of seconds"
-            ));
+    if let Some(dt) = a.dt {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(CliError::new(format!(
+                "--dt {dt}: the sample period must be a positive number of seconds"
+            )));
         }
-        d.sample_time = Some(ts);
+        d.sample_time = Some(dt);
     }
     if d.len() < 2 {
-        return Err(format!(
+        return Err(CliError::new(format!(
             "{}: {} data rows: identification needs a record",
             path.display(),
             d.len()
-        ));
+        )));
     }
     Ok(d)
 }
@@ -283,20 +235,19 @@ struct Records {
     offsets: Option<(Vec<f64>, Vec<f64>)>,
 }
 
-fn load_records(a: &DataArgs) -> Result<Records, String> {
+fn load_records(a: &DataArgs) -> Result<Records, CliError> {
     let mut est = load(&a.data, a)?;
     let mut val = a.val.as_ref().map(|p| load(p, a)).transpose()?;
     if let Some(v) = &val {
         est.check_same_channels(v).map_err(|e| {
-            format!(
-                "{}: {e}",
+            CliError::from(e).context(
                 a.val
                     .as_ref()
-                    .map_or(String::new(), |p| p.display().to_string())
+                    .map_or(String::new(), |p| p.display().to_string()),
             )
         })?;
     }
-    let offsets = if a.detrend {
+    let offsets = if !a.no_detrend {
         let (u0, y0) = est.means();
         est.remove_offsets(&u0, &y0);
         if let Some(v) = &mut val {
@@ -307,68 +258,21 @@ fn load_records(a: &DataArgs) -> Result<Records, String> {
         None
     };
     est.check_excitation()
-        .map_err(|e| format!("{}: {e}", a.data.display()))?;
+        .map_err(|e| CliError::from(e).context(a.data.display()))?;
     Ok(Records { est, val, offsets })
 }
 
-fn rows(m: &nalgebra::DMatrix<f64>) -> Value {
-    json!(
-        (0..m.nrows())
-            .map(|i| m.row(i).iter().copied().collect::<Vec<f64>>())
-            .collect::<Vec<_>>()
+fn data_json(a: &DataArgs, r: &Records) -> DataJson {
+    DataJson::new(
+        a.data.display().to_string(),
+        a.val.as_ref().map(|p| p.display().to_string()),
+        &r.est,
+        r.val.as_ref(),
+        r.offsets.as_ref(),
     )
 }
 
-fn to_value<T: serde::Serialize>(x: &T) -> Value {
-    serde_json::to_value(x).unwrap_or(Value::Null)
-}
-
-fn data_json(a: &DataArgs, r: &Records) -> Value {
-    json!({
-        "estimation": a.data.display().to_string(),
-        "validation": a.val.as_ref().map(|p| p.display().to_string()),
-        "samples": r.est.len(),
-        "validation_samples": r.val.as_ref().map(|v| v.len()),
-        "sample_time": r.est.sample_time,
-        "inputs": r.est.input_names,
-        "outputs": r.est.output_names,
-        "offsets": r.offsets.as_ref().map(|(u, y)| json!({"inputs": u, "outputs": y})),
-    })
-}
-
-fn evaluation_json(
-    obj: &mut serde_json::Map<String, Value>,
-    ev: &Evaluation,
-    est_fit: &Fit,
-    est_cost: f64,
-) {
-    let mut fit = to_value(&ev.fit_percent);
-    if let Value::Object(m) = &mut fit {
-        m.insert("data".to_string(), json!(ev.data));
-    }
-    obj.insert("fit_percent".into(), fit);
-    obj.insert("estimation_fit_percent".into(), to_value(est_fit));
-    obj.insert("prediction_cost".into(), json!(ev.prediction_cost));
-    obj.insert("estimation_prediction_cost".into(), json!(est_cost));
-    obj.insert("stability".into(), to_value(&ev.stability));
-    obj.insert(
-        "hankel_singular_values".into(),
-        to_value(&ev.hankel_singular_values),
-    );
-    obj.insert("order_suggestion".into(), to_value(&ev.order_suggestion));
-    obj.insert(
-        "frequency_response".into(),
-        to_value(&ev.frequency_response),
-    );
-    obj.insert("residual_tests".into(), to_value(&ev.residual_tests));
-}
-
-fn write_json(path: &Path, v: &Value) -> Result<(), String> {
-    let text = serde_json::to_string_pretty(v).map_err(|e| format!("cannot write JSON: {e}"))?;
-    std::fs::write(path, text + "\n").map_err(|e| format!("{}: cannot write: {e}", path.display()))
-}
-
-fn command_line() -> String {
+pub fn command_line() -> String {
     std::env::args()
         .map(|a| if a.contains(' ') { format!("'{a}'") } else { a })
         .collect::<Vec<_>>()
@@ -461,7 +365,7 @@ fn eval_options(a: &DataArgs) -> EvaluationOptions {
     }
 }
 
-fn arx(a: &ArxArgs) -> Result<(), String> {
+pub fn arx(a: &ArxArgs) -> CliResult {
     let d = &a.data;
     let recs = load_records(d)?;
     let orders = ArxOrders {
@@ -471,37 +375,9 @@ fn arx(a: &ArxArgs) -> Result<(), String> {
     };
     let t0 = Instant::now();
     let id = identify_arx(&recs.est, recs.val.as_ref(), orders, &eval_options(d))
-        .map_err(|e| format!("{}: {e}", d.data.display()))?;
+        .map_err(|e| CliError::from(e).context(d.data.display()))?;
     let elapsed = t0.elapsed().as_secs_f64();
-    let estimation = id.estimation_seconds;
-    let mut obj = serde_json::Map::new();
-    obj.insert("kind".into(), json!("arx"));
-    obj.insert("method".into(), json!("arx"));
-    obj.insert("data".into(), data_json(d, &recs));
-    obj.insert("orders".into(), json!({"na": a.na, "nb": a.nb, "nk": a.nk}));
-    obj.insert(
-        "A".into(),
-        json!(id.model.a.iter().map(rows).collect::<Vec<_>>()),
-    );
-    obj.insert(
-        "B".into(),
-        json!(id.model.b.iter().map(rows).collect::<Vec<_>>()),
-    );
-    obj.insert("noise_covariance".into(), rows(&id.model.noise_covariance));
-    evaluation_json(
-        &mut obj,
-        &id.evaluation,
-        &id.estimation_fit,
-        id.estimation_prediction_cost,
-    );
-    obj.insert("warnings".into(), json!(id.evaluation.warnings));
-    obj.insert(
-        "timing_seconds".into(),
-        json!({"estimation": estimation, "estimation_and_evaluation": elapsed}),
-    );
-    if let Some(p) = &d.json {
-        write_json(p, &Value::Object(obj))?;
-    }
+    let json = ArxJson::new(&id, data_json(d, &recs), orders, elapsed);
     let ev_data = recs.val.as_ref().unwrap_or(&recs.est);
     if let Some(p) = &d.report {
         let refs = if d.compare_seed {
@@ -511,7 +387,7 @@ fn arx(a: &ArxArgs) -> Result<(), String> {
         };
         arx_report(&id, ev_data, &command_line(), &refs).write(p)?;
     }
-    print(&format!(
+    let text = format!(
         "ARX na={} nb={} nk={}: {} inputs, {} outputs, {} parameters per output, estimated in {:.3} s\n{}",
         a.na,
         a.nb,
@@ -519,27 +395,25 @@ fn arx(a: &ArxArgs) -> Result<(), String> {
         recs.est.nu(),
         recs.est.ny(),
         orders.parameters_per_output(recs.est.ny(), recs.est.nu()),
-        estimation,
+        id.estimation_seconds,
         summary(
             &recs.est.output_names,
             &id.evaluation,
             &id.evaluation.warnings
         )
-    ));
-    Ok(())
+    );
+    emit(&text, d.json.as_ref(), &json)?;
+    Ok(Outcome::Ok)
 }
 
-fn ss(a: &SsArgs) -> Result<(), String> {
-    let d = &a.data;
-    let recs = load_records(d)?;
-    let method = match a.method {
-        MethodArg::N4sid => SsMethod::N4sid,
-        MethodArg::Pem => SsMethod::Pem,
-        MethodArg::ArxReducePem => SsMethod::ArxReducePem,
-    };
-    let opts = SsOptions {
+fn ss_options(a: &SsArgs) -> SsOptions {
+    SsOptions {
         order: a.order,
-        method,
+        method: match a.method {
+            MethodArg::N4sid => SsMethod::N4sid,
+            MethodArg::Pem => SsMethod::Pem,
+            MethodArg::ArxReducePem => SsMethod::ArxReducePem,
+        },
         arx_orders: ArxOrders {
             na: a.na,
             nb: a.nb,
@@ -559,8 +433,15 @@ fn ss(a: &SsArgs) -> Result<(), String> {
             max_pole_radius: a.max_pole_radius,
             ..PemOptions::default()
         },
-        evaluation: eval_options(d),
-    };
+        evaluation: eval_options(&a.data),
+    }
+}
+
+pub fn ss(a: &SsArgs) -> CliResult {
+    let d = &a.data;
+    let recs = load_records(d)?;
+    let opts = ss_options(a);
+    let method = opts.method;
     let bar = progress::steps(a.max_iter);
     bar.set_message("prediction-error search");
     let t0 = Instant::now();
@@ -568,67 +449,19 @@ fn ss(a: &SsArgs) -> Result<(), String> {
         bar.set_position(p.iteration as u64);
         bar.set_message(format!("cost {}", num(p.cost)));
     })
-    .map_err(|e| format!("{}: {e}", d.data.display()));
+    .map_err(|e| CliError::from(e).context(d.data.display()));
     bar.finish_and_clear();
     let id = id?;
     let elapsed = t0.elapsed().as_secs_f64();
-    let m = &id.model;
-    let mut obj = serde_json::Map::new();
-    obj.insert("kind".into(), json!("state-space"));
-    obj.insert("method".into(), json!(method.name()));
-    obj.insert(
-        "focus".into(),
-        json!(match a.focus {
-            FocusArg::Prediction => "prediction",
-            FocusArg::Simulation => "simulation",
-        }),
-    );
-    obj.insert("data".into(), data_json(d, &recs));
-    obj.insert(
-        "orders".into(),
-        json!({
-            "order": a.order,
-            "arx": (method == SsMethod::ArxReducePem).then(|| json!({"na": a.na, "nb": a.nb, "nk": a.nk})),
-        }),
-    );
-    for (k, v) in [
-        ("A", &m.a),
-        ("B", &m.b),
-        ("C", &m.c),
-        ("D", &m.d),
-        ("K", &m.k),
-    ] {
-        obj.insert(k.into(), rows(v));
-    }
-    obj.insert("noise_covariance".into(), rows(&m.noise_covariance));
-    obj.insert(
-        "x0".into(),
-        json!(id.x0.iter().copied().collect::<Vec<f64>>()),
-    );
-    evaluation_json(
-        &mut obj,
-        &id.evaluation,
-        &id.estimation_fit,
-        id.estimation_prediction_cost,
-    );
-    obj.insert("stages".into(), to_value(&id.stages));
-    obj.insert("pem".into(), to_value(&id.pem));
-    obj.insert(
-        "subspace_singular_values".into(),
-        to_value(&id.subspace_singular_values),
-    );
-    obj.insert(
-        "arx_hankel_singular_values".into(),
-        to_value(&id.arx_hankel_singular_values),
-    );
-    obj.insert("warnings".into(), json!(id.warnings));
-    obj.insert(
-        "timing_seconds".into(),
-        json!({"estimation": id.estimation_seconds, "estimation_and_evaluation": elapsed}),
-    );
-    if let Some(p) = &d.json {
-        write_json(p, &Value::Object(obj))?;
-    }
+    let orders = SsOrdersJson {
+        order: a.order,
+        arx: (method == SsMethod::ArxReducePem).then_some(opts.arx_orders),
+    };
+    let focus = match a.focus {
+        FocusArg::Prediction => "prediction",
+        FocusArg::Simulation => "simulation",
+    };
+    let json = StateSpaceJson::new(&id, data_json(d, &recs), focus, orders, elapsed);
     let ev_data = recs.val.as_ref().unwrap_or(&recs.est);
     if let Some(p) = &d.report {
         let refs = if d.compare_seed {
@@ -638,6 +471,7 @@ fn ss(a: &SsArgs) -> Result<(), String> {
         };
         state_space_report(&id, ev_data, &command_line(), &refs).write(p)?;
     }
+    let m = &id.model;
     let mut head = format!(
         "state-space model, order {}, method {}: {} inputs, {} outputs, estimated in {:.3} s\n",
         m.n(),
@@ -656,6 +490,7 @@ fn ss(a: &SsArgs) -> Result<(), String> {
             p.termination
         ));
     }
-    print(&(head + &summary(&recs.est.output_names, &id.evaluation, &id.warnings)));
-    Ok(())
+    let text = head + &summary(&recs.est.output_names, &id.evaluation, &id.warnings);
+    emit(&text, d.json.as_ref(), &json)?;
+    Ok(Outcome::Ok)
 }

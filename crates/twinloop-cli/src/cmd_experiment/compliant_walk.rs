@@ -1,18 +1,18 @@
-//! `twinloop compliant dataset`: COMAN walking the ZMP gait in the full simulator, the
-//! "real robot" data of seed 002 section 4.
+//! `twinloop experiment compliant-walk`: COMAN walking the ZMP gait in the full
+//! simulator, the "real robot" data of seed 002 section 4.
 
-use crate::common::{EXIT_BAD_INPUT, load_robot, num, print};
+use crate::common::{emit, load_description, num};
+use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
-use std::process::ExitCode;
 use twinloop_experiments::compliant_walk::{ComanWalker, WalkingConfig, WalkingSummary, write_csv};
 
 #[derive(Args, Debug)]
-pub struct DatasetArgs {
-    /// COMAN URDF (with the feet's collision boxes: models/coman/coman.urdf).
-    #[arg(long, value_name = "FILE")]
-    pub urdf: PathBuf,
+pub struct CompliantWalkArgs {
+    /// COMAN's description (with the feet's collision boxes: models/coman/coman.urdf).
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: String,
     /// Step length sl, m.
     #[arg(long, default_value_t = 0.03)]
     pub step_length: f64,
@@ -44,8 +44,9 @@ pub struct DatasetArgs {
     /// Output CSV: t, xr, zr, x, z, phase.
     #[arg(long, value_name = "OUT.csv")]
     pub out: PathBuf,
-    /// Write the summary (tracking errors, deflection, slip, timing) as JSON here.
-    #[arg(long, value_name = "OUT.json")]
+    /// Write the summary (tracking errors, deflection, slip, timing) as JSON to FILE
+    /// (-: to stdout, in place of the text).
+    #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
 }
 
@@ -62,11 +63,8 @@ struct DatasetReport {
     seconds_per_simulated_second: f64,
 }
 
-pub fn dataset(args: DatasetArgs) -> ExitCode {
-    let (robot, _) = match load_robot(&args.urdf) {
-        Ok(r) => r,
-        Err(code) => return code,
-    };
+pub fn run(args: &CompliantWalkArgs) -> CliResult {
+    let (robot, _) = load_description(&args.robot)?;
     let config = WalkingConfig {
         step_length: args.step_length,
         t_single: args.tss,
@@ -80,13 +78,8 @@ pub fn dataset(args: DatasetArgs) -> ExitCode {
         ..WalkingConfig::default()
     };
     let t0 = std::time::Instant::now();
-    let mut walker = match ComanWalker::new(&robot, &config) {
-        Ok(w) => w,
-        Err(e) => {
-            eprintln!("error: {}: {e}", args.urdf.display());
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
-    };
+    let mut walker =
+        ComanWalker::new(&robot, &config).map_err(|e| CliError::from(e).context(&args.robot))?;
     let planning = t0.elapsed().as_secs_f64();
     let n = walker.joint_references.len();
     let bar = crate::progress::rows(n);
@@ -95,19 +88,30 @@ pub fn dataset(args: DatasetArgs) -> ExitCode {
     bar.finish_and_clear();
     let simulation = t1.elapsed().as_secs_f64();
     let per_second = simulation / (config.duration + config.settle);
-    let data = match result {
-        Ok(d) => d,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(crate::common::EXIT_FINDINGS);
-        }
+    // The robot fell: the check this experiment is failed (exit 1).
+    let data = result.map_err(|e| CliError::problems(e.to_string()))?;
+    write_csv(&args.out, &data.rows)?;
+    let report = DatasetReport {
+        urdf: args.robot.clone(),
+        out: args.out.display().to_string(),
+        config: config.clone(),
+        summary: data.summary.clone(),
+        seconds_planning: planning,
+        seconds_simulation: simulation,
+        seconds_per_simulated_second: per_second,
     };
-    if let Err(e) = write_csv(&args.out, &data.rows) {
-        eprintln!("error: {e}");
-        return ExitCode::from(EXIT_BAD_INPUT);
-    }
-    let s = &data.summary;
-    print(&format!(
+    emit(
+        &summary(args, &config, &report),
+        args.json.as_ref(),
+        &report,
+    )?;
+    Ok(Outcome::Ok)
+}
+
+fn summary(args: &CompliantWalkArgs, config: &WalkingConfig, report: &DatasetReport) -> String {
+    let s = &report.summary;
+    let per_second = report.seconds_per_simulated_second;
+    format!(
         "COMAN walked {} steps (sl {} m, Tss {} s, Tdb {} s): {} samples at 1 kHz -> {}\n\
          CoM tracking: x - xr RMS {} m (max {}), z - zr RMS {} m (mean {}), y RMS {} m\n\
          max spring deflection {} rad ({}), max foot slip {} m, max trunk tilt {} rad\n\
@@ -131,28 +135,5 @@ pub fn dataset(args: DatasetArgs) -> ExitCode {
         num(s.ankle_stability_ratio),
         num(s.com_height),
         num(per_second),
-    ));
-    if let Some(path) = &args.json {
-        let report = DatasetReport {
-            urdf: args.urdf.display().to_string(),
-            out: args.out.display().to_string(),
-            config: config.clone(),
-            summary: data.summary.clone(),
-            seconds_planning: planning,
-            seconds_simulation: simulation,
-            seconds_per_simulated_second: per_second,
-        };
-        let text = match serde_json::to_string_pretty(&report) {
-            Ok(t) => t,
-            Err(e) => {
-                eprintln!("error: could not write JSON: {e}");
-                return ExitCode::from(EXIT_BAD_INPUT);
-            }
-        };
-        if let Err(e) = std::fs::write(path, text + "\n") {
-            eprintln!("error: {}: {e}", path.display());
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
-    }
-    ExitCode::SUCCESS
+    )
 }

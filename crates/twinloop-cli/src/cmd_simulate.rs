@@ -1,11 +1,11 @@
-//! `twinloop simulate` and `twinloop bench sim`.
+//! `twinloop simulate`: a robot standing on its servos in the simulator. The
+//! standing simulator is shared with `twinloop bench sim`.
 
+use crate::common::{ROBOT_HELP, load_description, read_table};
+use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::{Args, ValueEnum};
-use serde::Serialize;
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
-use std::time::Instant;
 use twinloop_io::{CsvWriter, Table};
 use twinloop_robot::{Robot, RobotState};
 use twinloop_sim::{Actuator, DynamixelServo, SimConfig, Simulator};
@@ -26,8 +26,7 @@ pub enum ServoChoice {
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
-    /// Robot: builtin:km20, builtin:lab17, or a URDF or MJCF file.
-    #[arg(long, value_name = "ROBOT")]
+    #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
     pub robot: String,
     /// Simulated time, s.
     #[arg(long, default_value_t = 2.0)]
@@ -43,39 +42,13 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
     /// Time step, s.
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, value_name = "S")]
     pub dt: f64,
     /// Write one row every N steps.
     #[arg(long, default_value_t = 1)]
     pub every: usize,
     #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
     pub servo: ServoChoice,
-}
-
-#[derive(Args, Debug)]
-pub struct SimBenchArgs {
-    /// Robot: builtin:NAME or a URDF or MJCF file.
-    #[arg(long, value_name = "ROBOT")]
-    pub robot: String,
-    /// Time step, s.
-    #[arg(long, default_value_t = 1e-3)]
-    pub dt: f64,
-    /// Steps per timed round.
-    #[arg(long, default_value_t = 2000)]
-    pub steps: usize,
-    /// Timed rounds (the median is reported).
-    #[arg(long, default_value_t = 11)]
-    pub rounds: usize,
-    #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
-    pub servo: ServoChoice,
-    /// Print JSON: {"robot", "dt", "nv", "contact_points", "us_per_step", "steps_per_second"}.
-    #[arg(long)]
-    pub json: bool,
-}
-
-/// Load a robot named on the command line: `builtin:NAME` or a URDF/MJCF file.
-pub fn load_robot(spec: &str) -> Result<twinloop_description::Description, String> {
-    twinloop_description::builtin::resolve(spec).map_err(|e| e.to_string())
 }
 
 /// The servo for joint `i` under a choice (`Auto`: the built-in robot's own, or one
@@ -100,12 +73,12 @@ pub fn standing_simulator(
     robot: &twinloop_description::Description,
     dt: f64,
     servo: ServoChoice,
-) -> Result<Simulator, String> {
+) -> Result<Simulator, CliError> {
     let cfg = SimConfig {
         dt,
         ..Default::default()
     };
-    let mut sim = Simulator::new(robot, cfg).map_err(|e| e.to_string())?;
+    let mut sim = Simulator::new(robot, cfg)?;
     for i in 0..sim.model.nbodies {
         let s = servo_for(servo, &robot.name, &sim.model, i);
         sim.actuators[i] = Actuator::Dynamixel(s);
@@ -115,20 +88,15 @@ pub fn standing_simulator(
     let q0: Vec<f64> = (0..n)
         .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
         .collect();
-    sim.place_on_ground(&q0).map_err(|e| e.to_string())?;
+    sim.place_on_ground(&q0)?;
     if sim.contact_points().is_empty() {
-        return Err(format!(
+        return Err(CliError::new(format!(
             "the robot has no collision primitives to stand on (mesh-only links: {}); \
              add <collision> boxes to the feet",
             sim.mesh_only_links.join(", ")
-        ));
+        )));
     }
     Ok(sim)
-}
-
-fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
-    ExitCode::from(crate::common::EXIT_BAD_INPUT)
 }
 
 /// Goal trajectory: times and, per joint, goal positions (NaN: hold).
@@ -139,28 +107,28 @@ struct Goals {
 }
 
 impl Goals {
-    fn load(path: &Path, joints: &[String]) -> Result<Goals, String> {
-        let table = Table::read(path).map_err(|e| e.to_string())?;
+    fn load(path: &Path, joints: &[String]) -> Result<Goals, CliError> {
+        let table = read_table(path)?;
         let tc = table
             .column_index("t")
-            .ok_or_else(|| format!("{}: a `t` column is needed", path.display()))?;
+            .ok_or_else(|| CliError::new(format!("{}: a `t` column is needed", path.display())))?;
         let t: Vec<f64> = table.rows.iter().map(|r| r[tc]).collect();
         if let Some(k) = t.windows(2).position(|w| w[1] <= w[0]) {
-            return Err(format!(
+            return Err(CliError::new(format!(
                 "{}: data row {}: time does not increase",
                 path.display(),
                 k + 2
-            ));
+            )));
         }
         let cols: Vec<Option<usize>> = joints
             .iter()
             .map(|j| table.column_index(&format!("q:{j}")))
             .collect();
         if cols.iter().all(Option::is_none) {
-            return Err(format!(
+            return Err(CliError::new(format!(
                 "{}: no q:<joint> column names a joint of the robot",
                 path.display()
-            ));
+            )));
         }
         Ok(Goals { t, cols, table })
     }
@@ -184,24 +152,17 @@ impl Goals {
     }
 }
 
-pub fn simulate(args: SimulateArgs) -> ExitCode {
-    match simulate_impl(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => fail(e),
-    }
-}
-
-fn simulate_impl(a: &SimulateArgs) -> Result<(), String> {
+pub fn run(a: SimulateArgs) -> CliResult {
     if a.hold && a.trajectory.is_some() {
-        return Err("--hold and --trajectory exclude each other".into());
+        return Err(CliError::new("--hold and --trajectory exclude each other"));
     }
     if !(a.duration >= 0.0 && a.duration.is_finite()) {
-        return Err(format!(
+        return Err(CliError::new(format!(
             "--duration must be a non-negative time, not {}",
             a.duration
-        ));
+        )));
     }
-    let robot = load_robot(&a.robot)?;
+    let (robot, _) = load_description(&a.robot)?;
     let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
     let names = sim.model.joint_names.clone();
     let goals = a
@@ -209,7 +170,15 @@ fn simulate_impl(a: &SimulateArgs) -> Result<(), String> {
         .as_ref()
         .map(|p| Goals::load(p, &names))
         .transpose()?;
-    let hold: Vec<f64> = sim.goals.clone();
+    let cols = record_columns(&sim);
+    record(&a, &mut sim, goals.as_ref(), &cols)?;
+    Ok(Outcome::Ok)
+}
+
+/// The column names of a simulation record: time, state, servo torques, CoM, IMU
+/// and feet.
+fn record_columns(sim: &Simulator) -> Vec<String> {
+    let names = &sim.model.joint_names;
     let mut cols = vec!["t".to_string()];
     cols.extend(sim.model.q_names().iter().map(|n| format!("q:{n}")));
     cols.extend(sim.model.v_names().iter().map(|n| format!("v:{n}")));
@@ -219,26 +188,32 @@ fn simulate_impl(a: &SimulateArgs) -> Result<(), String> {
     for s in ["gx", "gy", "gz", "ax", "ay", "az"] {
         cols.push(format!("imu:{imu_name}.{s}"));
     }
-    let feet: Vec<String> = sim
-        .sensors()
-        .feet
-        .iter()
-        .map(|&l| sim.model.links[l].name.clone())
-        .collect();
-    for f in &feet {
+    for &l in &sim.sensors().feet {
+        let f = &sim.model.links[l].name;
         for s in ["fz", "cop.x", "cop.y"] {
             cols.push(format!("foot:{f}.{s}"));
         }
     }
-    let mut w = CsvWriter::create(&a.out, &cols).map_err(|e| e.to_string())?;
+    cols
+}
+
+/// Step the simulator for --duration, following the goals, writing every --every'th row.
+fn record(
+    a: &SimulateArgs,
+    sim: &mut Simulator,
+    goals: Option<&Goals>,
+    cols: &[String],
+) -> Result<(), CliError> {
+    let hold: Vec<f64> = sim.goals.clone();
+    let mut w = CsvWriter::create(&a.out, cols)?;
     let steps = (a.duration / a.dt).round() as usize;
     let bar = progress::rows(if steps > 20_000 { steps } else { 0 });
     let mut st = RobotState::default();
-    let mut g = vec![0.0; names.len()];
+    let mut g = vec![0.0; sim.model.joint_names.len()];
     let mut row = Vec::with_capacity(cols.len());
     for k in 0..=steps {
         if k % a.every.max(1) == 0 || k == steps {
-            sim.read(&mut st).map_err(|e| e.to_string())?;
+            sim.read(&mut st)?;
             row.clear();
             row.push(sim.time);
             row.extend_from_slice(&sim.q);
@@ -252,77 +227,18 @@ fn simulate_impl(a: &SimulateArgs) -> Result<(), String> {
                 let cop = f.cop.unwrap_or([f64::NAN, f64::NAN]);
                 row.extend([f.force, cop[0], cop[1]]);
             }
-            w.write_row(&row).map_err(|e| e.to_string())?;
+            w.write_row(&row)?;
         }
         if k == steps {
             break;
         }
-        if let Some(goals) = &goals {
+        if let Some(goals) = goals {
             goals.at(sim.time, &hold, &mut g);
-            sim.command_positions(&g).map_err(|e| e.to_string())?;
+            sim.command_positions(&g)?;
         }
-        sim.step().map_err(|e| e.to_string())?;
+        sim.step()?;
         bar.inc(1);
     }
     bar.finish_and_clear();
-    w.finish().map_err(|e| e.to_string())
-}
-
-#[derive(Serialize)]
-struct SimBenchReport {
-    robot: String,
-    dt: f64,
-    nv: usize,
-    contact_points: usize,
-    us_per_step: f64,
-    steps_per_second: f64,
-}
-
-pub fn bench(args: SimBenchArgs) -> ExitCode {
-    match bench_impl(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => fail(e),
-    }
-}
-
-fn bench_impl(a: &SimBenchArgs) -> Result<(), String> {
-    let robot = load_robot(&a.robot)?;
-    let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
-    // Settle first, so the timed steps are steady standing with feet in contact.
-    sim.run(0.5).map_err(|e| e.to_string())?;
-    let mut samples = Vec::with_capacity(a.rounds);
-    for _ in 0..a.rounds.max(1) {
-        let t = Instant::now();
-        for _ in 0..a.steps.max(1) {
-            sim.step().map_err(|e| e.to_string())?;
-        }
-        samples.push(t.elapsed().as_secs_f64() * 1e6 / a.steps.max(1) as f64);
-    }
-    samples.sort_by(f64::total_cmp);
-    let us = samples[samples.len() / 2];
-    let report = SimBenchReport {
-        robot: a.robot.clone(),
-        dt: a.dt,
-        nv: sim.model.nv,
-        contact_points: sim.contact_points().len(),
-        us_per_step: us,
-        steps_per_second: 1e6 / us,
-    };
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
-        );
-    } else {
-        println!(
-            "{}: {:.2} us per step ({:.0} steps/s), nv = {}, {} contact points, dt = {} s",
-            report.robot,
-            report.us_per_step,
-            report.steps_per_second,
-            report.nv,
-            report.contact_points,
-            report.dt
-        );
-    }
-    Ok(())
+    Ok(w.finish()?)
 }

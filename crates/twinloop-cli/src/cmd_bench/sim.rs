@@ -1,0 +1,76 @@
+//! `twinloop bench sim`: microseconds per simulator step of a robot standing on its servos.
+
+use crate::cmd_simulate::{ServoChoice, standing_simulator};
+use crate::common::{ROBOT_HELP, emit, load_description};
+use crate::error::{CliResult, Outcome};
+use clap::Args;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Args, Debug)]
+pub struct SimBenchArgs {
+    #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
+    pub robot: String,
+    /// Time step, s.
+    #[arg(long, default_value_t = 1e-3, value_name = "S")]
+    pub dt: f64,
+    /// Steps per timed round.
+    #[arg(long, default_value_t = 2000)]
+    pub steps: usize,
+    /// Timed rounds (the median is reported).
+    #[arg(long, default_value_t = 11)]
+    pub rounds: usize,
+    #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
+    pub servo: ServoChoice,
+    /// Write JSON {"robot", "dt", "nv", "contact_points", "us_per_step",
+    /// "steps_per_second"} to FILE (-: to stdout, in place of the text).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct SimBenchReport {
+    robot: String,
+    dt: f64,
+    nv: usize,
+    contact_points: usize,
+    us_per_step: f64,
+    steps_per_second: f64,
+}
+
+pub fn run(a: &SimBenchArgs) -> CliResult {
+    let (robot, _) = load_description(&a.robot)?;
+    let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
+    // Settle first, so the timed steps are steady standing with feet in contact.
+    sim.run(0.5)?;
+    let mut samples = Vec::with_capacity(a.rounds);
+    for _ in 0..a.rounds.max(1) {
+        let t = Instant::now();
+        for _ in 0..a.steps.max(1) {
+            sim.step()?;
+        }
+        samples.push(t.elapsed().as_secs_f64() * 1e6 / a.steps.max(1) as f64);
+    }
+    samples.sort_by(f64::total_cmp);
+    let us = samples[samples.len() / 2];
+    let report = SimBenchReport {
+        robot: a.robot.clone(),
+        dt: a.dt,
+        nv: sim.model.nv,
+        contact_points: sim.contact_points().len(),
+        us_per_step: us,
+        steps_per_second: 1e6 / us,
+    };
+    let text = format!(
+        "{}: {:.2} us per step ({:.0} steps/s), nv = {}, {} contact points, dt = {} s\n",
+        report.robot,
+        report.us_per_step,
+        report.steps_per_second,
+        report.nv,
+        report.contact_points,
+        report.dt
+    );
+    emit(&text, a.json.as_ref(), &report)?;
+    Ok(Outcome::Ok)
+}

@@ -1,0 +1,154 @@
+//! `twinloop experiment ...`: run the experiments whose data the identifications
+//! fit: tip-over (seeds 000/001), the virtual force plate and the squat (seed 004),
+//! the lab17 walk (seed 003) and the COMAN walk (seed 002).
+
+mod compliant_walk;
+mod squat;
+mod static_poses;
+mod tipover;
+mod walk;
+
+use crate::error::{CliError, CliResult};
+use clap::Subcommand;
+use twinloop_ident::IdentError;
+
+#[derive(Subcommand, Debug)]
+pub enum ExperimentCommand {
+    /// Ramp both ankles forward, backward, left and right until the robot tips over
+    ///
+    /// The robot stands on its servos in the simulator (compliance slope 2: stiff). Forward
+    /// and backward, both ankle pitches ramp (--ramp deg/s); left and right, both ankle
+    /// rolls and both hip rolls turn together, so the legs lean as a parallelogram with the
+    /// feet flat and the pelvis level (with the hips held, the two ankle axes would lock the
+    /// lean into a closed chain through the ground). Each direction runs twice: a first ramp
+    /// finds the tip, a second ramps to 0.5 deg before it and creeps slowly (--slow-ramp) so
+    /// the detection lag does not inflate the angle. The tip is where the trunk tilts beyond
+    /// what the joints explain. Recorded: the angle commanded and measured at the onset and
+    /// the time taken (seed 000 Table IV), beside the model's static tipping angle (CoM over
+    /// the support edge, from the joints measured at the onset; `rigid_static_deg` from the
+    /// rigid standing pose). From the four angles, the CoM by the seed's geometric method
+    /// (seed 000 eq 8-13) and by the exact method, next to the model's true CoM, all relative
+    /// to the midpoint of the ankle axes (x forward, y left, z up).
+    ///
+    /// Example:
+    ///   twinloop experiment tipover --robot builtin:km20 --add-mass 0.2@torso:0.05,0,0 --json tip.json
+    ///
+    /// Output: on stdout the four directions' commanded and measured angles, the model's
+    /// static angle and the time taken, then the CoM by each method and its error;
+    /// --json FILE (- for stdout) writes the same with full precision.
+    #[command(verbatim_doc_comment)]
+    Tipover(tipover::TipoverArgs),
+    /// Virtual force plate: statically stable poses and the CoP each would give
+    ///
+    /// Stands the robot (the TRUTH description: the robot as it really is) in
+    /// statically stable poses in the six categories of seed 004, section 3.1:
+    ///
+    ///   arm     double support, feet --gap apart (2 cm), arm joints swept
+    ///   left    single support on the left foot, right leg swept
+    ///   right   single support on the right foot, left leg swept
+    ///   torso   double support, torso (and head) joints swept
+    ///   crouch  double support, knees bent, upper body varied
+    ///   wide    double support, feet --wide-gap apart (20 cm), upper body random
+    ///
+    /// Swept joints are set systematically below 10 % and above 90 % of their range,
+    /// one at a time, then at random (at least a third of each category's poses, up
+    /// to 10). The soles are put flat on the ground (z = 0) by inverse kinematics
+    /// over the whole configuration; on one foot the CoM is brought over the sole
+    /// centre. A pose is kept only if its ground-projected CoM (GCOM) lies inside
+    /// the support polygon, nothing else touches the ground and every joint is in
+    /// its limits; otherwise it is drawn again. A category the robot cannot stand in
+    /// is skipped (said on stderr) and its share goes to the others.
+    ///
+    /// Feet are found from the geometry (the lowest primitive shapes on either side);
+    /// name them with --feet when that fails. The sole is the lowest face of the
+    /// foot's box/cylinder/sphere shapes.
+    ///
+    /// Example:
+    ///   twinloop experiment static-poses --robot models/unitree_h1/h1.urdf --count 172 \
+    ///       --cop-noise 0.001 --joint-noise 0.0017 --seed 7 --out poses.csv
+    ///
+    /// Output: a CSV with one row per pose: `category` (1-6 as above), the
+    /// configuration `q:base.x .. q:base.qw`, `q:<joint>` (with --joint-noise added to
+    /// the joints) and the plate's centre of pressure `cop.x`, `cop.y` (the truth's
+    /// GCOM plus --cop-noise), world frame, metres. stdout gets a summary: poses per
+    /// category and how far inside the support polygon the GCOMs lie.
+    #[command(verbatim_doc_comment)]
+    StaticPoses(static_poses::StaticPosesArgs),
+    /// Squat-like validation motion with force-plate readings (seed 004, Fig. 4)
+    ///
+    /// Makes the validation motion of seed 004, section 3.4 with the TRUTH description:
+    /// standing on both feet, the pelvis goes down by --depth and up again (each half a
+    /// minimum-jerk move) while the arms swing forward and the CoM stays over the middle
+    /// of the feet, between --rest seconds of standing still. Each frame is solved
+    /// exactly (feet flat where they stand); the plate readings are what the truth's
+    /// inverse dynamics needs from the ground.
+    ///
+    /// Example:
+    ///   twinloop experiment squat --robot models/unitree_h1/h1.urdf --out squat.csv
+    ///   twinloop experiment squat --robot truth.urdf --out squat.csv \
+    ///       --markers markers.toml --frames-out frames.csv --marker-noise 0.0005
+    ///
+    /// Output: a CSV with `t`, the configuration `q:*` and the plate: `grf.fx grf.fy
+    /// grf.fz` (ground reaction on the robot, world, N), `cop.x cop.y` (m) and `grf.tz`
+    /// (free moment, N m). With --markers, --frames-out gets the markers' world positions
+    /// `marker:<name>.x .y .z` per frame (plus --marker-noise), input for `twinloop ik`.
+    #[command(verbatim_doc_comment)]
+    Squat(squat::SquatArgs),
+    /// Seed 003's identification dataset: lab17 walking the sequence in the simulator
+    ///
+    /// The robot stands on two-loop servos (LD-2015 ratings), settles at its trims, then
+    /// walks the 13-stage sequence of `twinloop gait sequence`. Every tick it reads an
+    /// MPU-6050 gyro on each foot (131 LSB per deg/s, 0.05 deg/s rms noise) and then sets
+    /// that tick's goals.
+    ///
+    /// Example (estimation record; validation record = cycles 11-20, other noise):
+    ///   twinloop experiment walk --robot builtin:lab17 --out lab17_walk.csv
+    ///   twinloop experiment walk --seed 2 --skip-samples 1000 --out lab17_walk_val.csv
+    ///
+    /// Output: a CSV with `t` (s), `u:<joint>` (the ten offsets of seed 003 eq 6, servo
+    /// degrees) and `gyro:l_foot.roll|pitch|yaw`, `gyro:r_foot.roll|pitch|yaw` (deg/s),
+    /// input for `twinloop identify walk`. stderr says whether the robot fell.
+    #[command(verbatim_doc_comment)]
+    Walk(walk::WalkArgs),
+    /// COMAN walking the ZMP gait in the full simulator: seed 002's "real robot" dataset
+    ///
+    /// Series-elastic knee and ankle pitch joints (eq 1-6, k_j = K_h K_s/(K_h + K_s)),
+    /// every other joint a stiff position servo (stiffness K_h); the ZMP/LIPM CoM
+    /// reference (eq 12-13) and swing-foot trajectories go through a whole-body IK to the
+    /// joints (section 4).
+    ///
+    /// Example:
+    ///   twinloop experiment compliant-walk --robot models/coman/coman.urdf --step-length 0.03 \
+    ///       --tss 0.5 --tdb 0.2 --duration 30 --out coman_walk.csv --json summary.json
+    ///
+    /// Output: OUT.csv with `t, xr, zr, x, z, phase` at 1 kHz: the reference CoM (xr,
+    /// zr = Zc) and the simulated robot's true CoM (x, z), world frame (origin on the
+    /// ground between the starting feet, x forward, z up), phase 0 single / 1 double
+    /// support: input for `twinloop identify compliant`. stdout summarises the tracking;
+    /// --json writes it. Exit code 1 if the robot falls.
+    #[command(verbatim_doc_comment)]
+    CompliantWalk(compliant_walk::CompliantWalkArgs),
+}
+
+pub fn run(cmd: ExperimentCommand) -> CliResult {
+    match cmd {
+        ExperimentCommand::Tipover(a) => tipover::run(&a),
+        ExperimentCommand::StaticPoses(a) => static_poses::run(&a),
+        ExperimentCommand::Squat(a) => squat::run(&a),
+        ExperimentCommand::Walk(a) => walk::run(&a),
+        ExperimentCommand::CompliantWalk(a) => compliant_walk::run(&a),
+    }
+}
+
+/// A noise option must be a standard deviation: finite and not negative.
+fn check_noise(x: f64, option: &str) -> Result<(), CliError> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(())
+    } else {
+        Err(
+            IdentError::new(format!("{x} is not a standard deviation (finite, >= 0)"))
+                .field(option)
+                .into(),
+        )
+    }
+}

@@ -1,0 +1,319 @@
+//! `twinloop identify static`: link masses and CoMs from static poses on a force
+//! plate (seed 004, eq 8-9).
+
+use crate::cmd_validate::residual_table;
+use crate::common::{JSON_HELP, emit, load_model};
+use crate::error::{CliError, CliResult, Outcome};
+use crate::progress;
+use clap::Args;
+use std::path::PathBuf;
+use std::time::Instant;
+use twinloop_description::Description;
+use twinloop_dynamics::{BaseKind, Model};
+use twinloop_ident::html::{residual_sections, static_sections};
+use twinloop_ident::static_ident::{
+    StaticProblem, StaticWorkspace, Suggestion, assemble, candidate_poses, solve, suggest_poses,
+};
+use twinloop_ident::validate::{ResidualSeries, Smoothing, read_motion, residual_wrench};
+use twinloop_ident::{
+    StaticOptions, StaticPose, StaticResult, adapted_robot, identify_static, read_static_poses,
+};
+use twinloop_io::{CsvWriter, Quantity};
+use twinloop_report::Report;
+
+#[derive(Args, Debug)]
+pub struct IdentifyStaticArgs {
+    /// The prior description (CAD model): starting point and regulariser. A URDF or
+    /// MJCF file, or builtin:NAME.
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: String,
+    /// Static poses: configuration and measured CoP per row.
+    #[arg(long, value_name = "poses.csv")]
+    pub poses: PathBuf,
+    /// The robot's mass on a scale, kg (seed 004, eq 9).
+    #[arg(long, value_name = "KG")]
+    pub total_mass: f64,
+    /// Links to identify, comma-separated (default: every link with mass).
+    #[arg(long, value_delimiter = ',', value_name = "LINKS")]
+    pub links: Vec<String>,
+    /// CoP noise per axis the regulariser assumes, m (0: exact data, prior only where
+    /// the data see nothing).
+    #[arg(long, default_value_t = 0.001, value_name = "M")]
+    pub cop_sigma: f64,
+    /// How far a CoM may leave its link's geometry box, m.
+    #[arg(long, default_value_t = 0.03, value_name = "M")]
+    pub com_margin: f64,
+    /// The adapted description to write (URDF).
+    #[arg(long, value_name = "ADAPTED.urdf")]
+    pub out: Option<PathBuf>,
+    #[arg(long, value_name = "FILE", help = JSON_HELP)]
+    pub json: Option<PathBuf>,
+    /// HTML report to write.
+    #[arg(long, value_name = "OUT.html")]
+    pub report: Option<PathBuf>,
+    /// A validation motion with plate columns (from `experiment squat` or a
+    /// recording): the residual base wrench of prior and adapted models is reported.
+    #[arg(long, value_name = "MOTION.csv")]
+    pub squat: Option<PathBuf>,
+    /// How many further poses to suggest (from the virtual force plate on the prior).
+    #[arg(long, default_value_t = 5)]
+    pub suggest: usize,
+    /// Where to write the suggested poses (category and configuration, no CoP).
+    #[arg(long, value_name = "SUGGESTED.csv")]
+    pub suggest_out: Option<PathBuf>,
+    /// Repeat the fit (regressor and constrained solve) N times and print the median time.
+    #[arg(long, value_name = "N")]
+    pub time: Option<usize>,
+    /// Seed of the candidate poses the suggestions are drawn from.
+    #[arg(long, default_value_t = 7)]
+    pub seed: u64,
+}
+
+fn mm(x: f64) -> String {
+    format!("{:.3}", x * 1e3)
+}
+
+/// The prior and adapted models' residuals on the --squat motion.
+type Validation = (ResidualSeries, ResidualSeries);
+
+pub fn run(a: &IdentifyStaticArgs) -> CliResult {
+    let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
+    let poses = read_static_poses(&a.poses, &model)?;
+    let options = StaticOptions {
+        links: (!a.links.is_empty()).then(|| a.links.clone()),
+        cop_sigma: a.cop_sigma,
+        com_margin: a.com_margin,
+        ..StaticOptions::default()
+    };
+    let problem = StaticProblem::new(&robot, &model, a.total_mass, &options)?;
+    let result = identify_static(&robot, &model, &poses, a.total_mass, &options).map_err(|e| {
+        if e.field.as_deref() == Some("--poses") {
+            e.in_file(&a.poses)
+        } else {
+            e
+        }
+    })?;
+    let timing = a
+        .time
+        .map(|n| median_fit_seconds(&model, &problem, &poses, n))
+        .transpose()?;
+    let adapted = adapted_robot(&robot, &result);
+    if let Some(p) = &a.out {
+        twinloop_description::urdf::write_file(&adapted, p)?;
+    }
+    let suggestions = suggestions(a, &robot, &model, &problem, &poses)?;
+    if let Some(p) = &a.suggest_out {
+        write_suggestions(p, &model, &suggestions)?;
+    }
+    let validation = match &a.squat {
+        Some(m) => Some(validate_on_motion(m, &model, &adapted)?),
+        None => None,
+    };
+    let json = serde_json::json!({
+        "schema": "twinloop-static-identification/1",
+        "prior": a.robot,
+        "poses_file": a.poses.display().to_string(),
+        "cop_sigma": a.cop_sigma,
+        "com_margin": a.com_margin,
+        "result": &result,
+        "suggested_poses": &suggestions,
+        "validation": validation.as_ref().map(|(p, q)| serde_json::json!({
+            "motion": a.squat.as_ref().map(|m| m.display().to_string()),
+            "prior": p.summary,
+            "adapted": q.summary,
+        })),
+        "fit_seconds_median": timing,
+    });
+    if let Some(p) = &a.report {
+        let mut r = Report::new(format!("Static identification of {}", model.name));
+        r.preformatted(format!(
+            "twinloop identify static --robot {} --poses {} --total-mass {}",
+            a.robot,
+            a.poses.display(),
+            a.total_mass
+        ));
+        static_sections(&mut r, &result, &suggestions);
+        if let Some((p0, p1)) = &validation {
+            residual_sections(&mut r, &[("prior", p0), ("adapted", p1)]);
+        }
+        r.write(p)?;
+    }
+    let text = summary(&model, &result, &suggestions, validation.as_ref(), timing);
+    emit(&text, a.json.as_ref(), &json)?;
+    Ok(Outcome::Ok)
+}
+
+/// Median time of the fit (regressor and constrained solve) over `n` repeats.
+fn median_fit_seconds(
+    model: &Model,
+    problem: &StaticProblem,
+    poses: &[StaticPose],
+    n: usize,
+) -> Result<f64, CliError> {
+    let mut ws = StaticWorkspace::new(model, problem, poses.len());
+    let mut samples = Vec::with_capacity(n.max(1));
+    for _ in 0..n.max(1) {
+        let t0 = Instant::now();
+        assemble(model, problem, poses, &mut ws);
+        let fit = solve(problem, &ws)?;
+        std::hint::black_box(&fit.x);
+        samples.push(t0.elapsed().as_secs_f64());
+    }
+    samples.sort_by(f64::total_cmp);
+    Ok(samples[samples.len() / 2])
+}
+
+/// The --suggest poses that would help most, from the virtual force plate on the prior.
+fn suggestions(
+    a: &IdentifyStaticArgs,
+    robot: &Description,
+    model: &Model,
+    problem: &StaticProblem,
+    poses: &[StaticPose],
+) -> Result<Vec<Suggestion>, CliError> {
+    if a.suggest == 0 {
+        return Ok(Vec::new());
+    }
+    let bar = progress::steps(1);
+    bar.set_message("candidate poses for suggestions");
+    let mut suggestions = Vec::new();
+    match candidate_poses(robot, model, 12, a.seed) {
+        Ok(cands) => {
+            let mut ws = StaticWorkspace::new(model, problem, poses.len());
+            assemble(model, problem, poses, &mut ws);
+            let fit = solve(problem, &ws)?;
+            suggestions = suggest_poses(model, problem, &fit.gram, &cands, a.suggest);
+        }
+        Err(e) => eprintln!("note: no pose suggestions: {e}"),
+    }
+    bar.finish_and_clear();
+    Ok(suggestions)
+}
+
+/// The suggested poses: category and configuration, no CoP.
+fn write_suggestions(
+    path: &std::path::Path,
+    model: &Model,
+    suggestions: &[Suggestion],
+) -> Result<(), CliError> {
+    let mut cols = vec!["category".to_string()];
+    cols.extend(Quantity::Q.column_names(&model.q_names()));
+    let mut w = CsvWriter::create(path, &cols)?;
+    for s in suggestions {
+        let mut row = vec![s.category as i32 as f64];
+        row.extend_from_slice(&s.q);
+        w.write_row(&row)?;
+    }
+    Ok(w.finish()?)
+}
+
+/// The residual base wrench of the prior and the adapted model on a motion.
+fn validate_on_motion(
+    motion_file: &std::path::Path,
+    model: &Model,
+    adapted: &Description,
+) -> Result<Validation, CliError> {
+    let motion = read_motion(motion_file, model)?;
+    let adapted_model = Model::from_description(adapted)?;
+    let prior_res = residual_wrench(model, &motion, Some(Smoothing::default()))
+        .map_err(|e| e.in_file(motion_file))?;
+    let adapted_res = residual_wrench(&adapted_model, &motion, Some(Smoothing::default()))
+        .map_err(|e| e.in_file(motion_file))?;
+    Ok((prior_res, adapted_res))
+}
+
+/// What stdout says: the fit, its identifiability, the links, suggestions, validation.
+fn summary(
+    model: &Model,
+    result: &StaticResult,
+    suggestions: &[Suggestion],
+    validation: Option<&Validation>,
+    timing: Option<f64>,
+) -> String {
+    let id = &result.identifiability;
+    let mut t = format!(
+        "static identification of {} from {} poses (seed 004, eq 8-9)\n\
+         total mass: measured {:.3} kg, prior {:.3} kg, {:.3} kg on {} links kept fixed\n\
+         GCOM to CoP distance (mm): before mean {} std {} max {}  ->  after mean {} std {} max {}\n\
+         identifiability: {} parameters, rank {}, {} above the noise ({:.2e} kg m), condition number {:.3e}\n\
+         \x20 {} directions no static pose can determine (kept at the prior)\n",
+        model.name,
+        result.poses,
+        result.total_mass,
+        result.prior_total_mass,
+        result.fixed_mass,
+        result.fixed_links.len(),
+        mm(result.before.mean),
+        mm(result.before.std),
+        mm(result.before.max),
+        mm(result.after.mean),
+        mm(result.after.std),
+        mm(result.after.max),
+        id.parameters,
+        id.rank,
+        id.well_determined,
+        id.noise_level,
+        id.condition_number,
+        id.structural_null,
+    );
+    for g in &id.welded {
+        t.push_str(&format!(
+            "  welded to one body (only their sum is seen): {}\n",
+            g.join(", ")
+        ));
+    }
+    for g in &id.unidentifiable {
+        t.push_str(&format!(
+            "  not excited by these poses ({} directions): {}\n",
+            g.directions,
+            g.links.join(", ")
+        ));
+    }
+    t.push_str("\nlink                              prior kg        kg   ± kg   CoM (mm, link frame)        determined m\n");
+    for l in &result.links {
+        t.push_str(&format!(
+            "{:<32} {:>9.4} {:>9.4} {:>6.3}   {:>7.1} {:>7.1} {:>7.1}   {:>5.2}{}\n",
+            l.name,
+            l.prior_mass,
+            l.mass,
+            l.mass_std,
+            l.com[0] * 1e3,
+            l.com[1] * 1e3,
+            l.com[2] * 1e3,
+            l.mass_determined,
+            if l.at_bounds.is_empty() {
+                String::new()
+            } else {
+                format!("  at {}", l.at_bounds.join(", "))
+            }
+        ));
+    }
+    if !suggestions.is_empty() {
+        t.push_str("\nposes that would help most (smallest singular value before -> after):\n");
+        for (i, s) in suggestions.iter().enumerate() {
+            t.push_str(&format!(
+                "  {}. {:<6} {:.3e} -> {:.3e}\n",
+                i + 1,
+                s.category.name(),
+                s.smallest_singular_value_before,
+                s.smallest_singular_value_after
+            ));
+        }
+    }
+    if let Some((p0, p1)) = validation {
+        t.push_str(
+            "\nresidual base wrench on the motion, mean [std] of |.| (seed 004, Table 1):\n",
+        );
+        t.push_str(&residual_table(&[
+            ("prior", &p0.summary),
+            ("adapted", &p1.summary),
+        ]));
+    }
+    if let Some(s) = timing {
+        t.push_str(&format!(
+            "\nfit time (regressor + constrained solve), median: {:.3} ms\n",
+            s * 1e3
+        ));
+    }
+    t
+}

@@ -1,0 +1,340 @@
+//! `twinloop serve`: put a virtual robot on a pseudo-terminal or TCP port that any
+//! Dynamixel program can talk to.
+
+use crate::cmd_link::interrupt_flag;
+use crate::common::{ROBOT_HELP, load_description, print};
+use crate::error::{CliError, CliResult, Outcome};
+use clap::Args;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+use twinloop_description::Description;
+use twinloop_link::servo::{ServeOptions, serve as serve_bus};
+use twinloop_link::transport::{PtyTransport, TcpTransport, Transport};
+use twinloop_link::{BusServo, RobotMapping, VirtualBus};
+
+/// The robot served when neither --robot nor --map is given.
+const DEFAULT_ROBOT: &str = "builtin:km20";
+
+#[derive(Args)]
+pub struct ServeArgs {
+    #[arg(
+        long,
+        value_name = "ROBOT",
+        help = ROBOT_HELP,
+        long_help = "Robot description: a URDF or MJCF file, or builtin:NAME. builtin:km20 (the \
+default without --map) is simulated on RX-28/RX-64 servos on Protocol 1.0 with its own mapping; \
+a file needs --map. Without --robot, the description is the mapping's `urdf` (if any)"
+    )]
+    pub robot: Option<String>,
+    /// Servo mapping: a TOML file or builtin:km20 / builtin:op3 (servo ids, models and
+    /// protocols of the robot's joints; default: the built-in robot's own). builtin:op3
+    /// alone is 20 XM430 on Protocol 2.0, stand-in servos
+    #[arg(long, value_name = "MAPPING")]
+    pub map: Option<String>,
+    /// What moves the servos: sim (the physics simulation of the robot standing on the
+    /// ground, in real time), ideal (each servo tracks its goal, no physics: for
+    /// protocol-only benchmarks) or auto (sim when the robot has a description)
+    #[arg(long, default_value = "auto", value_parser = ["auto", "sim", "ideal"])]
+    pub servo_model: String,
+    /// Simulated robot: servos power on limp, as real ones do (the robot falls)
+    #[arg(long)]
+    pub torque_off: bool,
+    /// Simulated robot: simulated seconds per wall-clock second
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub realtime_factor: f64,
+    /// Where to serve: pty (a new pseudo-terminal) or tcp:ADDR (e.g. tcp:127.0.0.1:5555)
+    #[arg(long, default_value = "pty", value_name = "PORT")]
+    pub port: String,
+    /// With a pty: also make this path a symbolic link to it (a stable name for scripts)
+    #[arg(long, value_name = "PATH")]
+    pub link: Option<PathBuf>,
+    /// Bit rate whose wire time (and each servo's Return Delay Time) is emulated
+    #[arg(long, default_value_t = 1_000_000)]
+    pub baud: u32,
+    /// Answer at once instead of emulating wire time
+    #[arg(long)]
+    pub no_timing: bool,
+    /// Busy-check the line for up to this many microseconds before sleeping while
+    /// waiting for a request: requests are answered without a scheduler wake-up,
+    /// at the cost of a busy core (helps only with idle cores: on a loaded machine
+    /// the spinning steals the client's CPU and round trips get slower)
+    #[arg(long, default_value_t = 0, value_name = "US")]
+    pub spin_us: u64,
+}
+
+/// The mapping: --map, or the built-in robot's own.
+fn serve_mapping(a: &ServeArgs) -> Result<RobotMapping, CliError> {
+    if let Some(m) = &a.map {
+        return Ok(RobotMapping::resolve(m)?);
+    }
+    let spec = a.robot.as_deref().unwrap_or(DEFAULT_ROBOT);
+    match spec.strip_prefix("builtin:") {
+        Some(name) => RobotMapping::builtin(name).ok_or_else(|| {
+            CliError::new(format!(
+                "--robot {spec}: no built-in mapping for {name:?} (built-in: {}); give --map MAPPING",
+                RobotMapping::BUILTINS.join(", ")
+            ))
+        }),
+        None => Err(CliError::new(format!(
+            "--robot {spec}: a description file needs --map MAPPING (which servo drives which joint)"
+        ))),
+    }
+}
+
+/// The robot's description: --robot, else the mapping's `urdf` (relative to the
+/// mapping file), else none (a mapping-only bus).
+fn serve_description(
+    a: &ServeArgs,
+    mapping: &RobotMapping,
+) -> Result<Option<Description>, CliError> {
+    if let Some(spec) = &a.robot {
+        return Ok(Some(load_description(spec)?.0));
+    }
+    if a.map.is_none() {
+        return Ok(Some(load_description(DEFAULT_ROBOT)?.0));
+    }
+    let Some(urdf) = &mapping.urdf else {
+        return Ok(None);
+    };
+    let s = urdf.display().to_string();
+    if let Some(name) = s.strip_prefix("builtin:") {
+        return Ok(twinloop_description::builtin::builtin(name));
+    }
+    let path = match Path::new(&mapping.source).parent() {
+        Some(d) if urdf.is_relative() => d.join(urdf),
+        _ => urdf.clone(),
+    };
+    match load_description(&path.display().to_string()) {
+        Ok((r, _)) => Ok(Some(r)),
+        Err(e) if a.servo_model == "sim" => Err(e),
+        Err(_) => Ok(None),
+    }
+}
+
+/// `twinloop serve`.
+pub fn run(a: ServeArgs) -> CliResult {
+    let mapping = serve_mapping(&a)?;
+    let robot = serve_description(&a, &mapping)?;
+    let servos: Vec<BusServo> = mapping
+        .joints
+        .iter()
+        .map(|j| BusServo {
+            id: j.id,
+            model: j.model,
+        })
+        .collect();
+    let simulate = match (a.servo_model.as_str(), &robot) {
+        ("ideal", _) => false,
+        ("sim", None) => {
+            return Err(CliError::from(format!(
+                "--servo-model sim: {} has no robot description to simulate (give --robot)",
+                a.map.as_deref().unwrap_or("the mapping")
+            )));
+        }
+        (_, r) => r.is_some(),
+    };
+    if let (true, Some(robot)) = (simulate, &robot) {
+        return serve_simulated(&a, &mapping, &servos, robot);
+    }
+    let bus = VirtualBus::with_tracking_model(&servos);
+    serve_on(
+        &a,
+        &mapping,
+        &servos,
+        bus,
+        "stand-in servos (each tracks its goal, 50 ms lag; no physics)",
+    )
+}
+
+/// Serve the physics simulation of the robot standing on the ground.
+fn serve_simulated(
+    a: &ServeArgs,
+    mapping: &RobotMapping,
+    servos: &[BusServo],
+    robot: &Description,
+) -> CliResult {
+    let options = twinloop_virtual::VirtualRobotOptions {
+        torque_on: !a.torque_off,
+        realtime_factor: a.realtime_factor,
+        ..Default::default()
+    };
+    if !(a.realtime_factor > 0.0 && a.realtime_factor.is_finite()) {
+        return Err(CliError::from(format!(
+            "--realtime-factor must be positive, not {}",
+            a.realtime_factor
+        )));
+    }
+    let vr = twinloop_virtual::VirtualRobot::new(robot, mapping, &options)?;
+    if !vr.unmapped.is_empty() {
+        eprintln!(
+            "joints without a servo on the bus (they hold their pose): {}",
+            vr.unmapped.join(", ")
+        );
+    }
+    let bus = vr.bus();
+    let sim = vr.spawn();
+    let what = format!(
+        "the physics simulation of {} standing on the ground (real time x{}, servos {})",
+        robot.name,
+        a.realtime_factor,
+        if a.torque_off { "limp" } else { "torque on" }
+    );
+    let code = serve_on(a, mapping, servos, bus, &what);
+    let status = sim.status();
+    if let Some(e) = &status.error {
+        eprintln!("the simulation stopped: {e}");
+    }
+    if status.behind_s > 0.0 {
+        eprintln!(
+            "the simulation fell {:.3} s behind the wall clock in {:.1} s",
+            status.behind_s, status.time
+        );
+    }
+    code
+}
+
+fn serve_on<B: twinloop_link::VirtualServoBackend>(
+    a: &ServeArgs,
+    mapping: &RobotMapping,
+    servos: &[BusServo],
+    mut bus: VirtualBus<B>,
+    what: &str,
+) -> CliResult {
+    let options = ServeOptions {
+        emulate_baud: (!a.no_timing).then_some(a.baud),
+        stop_on_eof: true,
+    };
+    let banner = Banner {
+        mapping,
+        servos: servos.len(),
+        what,
+        emulate_baud: options.emulate_baud,
+    };
+    if a.port == "pty" {
+        return serve_pty(a, &mut bus, &options, &banner);
+    }
+    let Some(addr) = a.port.strip_prefix("tcp:") else {
+        return Err(CliError::new(format!(
+            "--port {:?}: use pty or tcp:ADDR",
+            a.port
+        )));
+    };
+    serve_tcp(addr, &mut bus, &options, &banner)
+}
+
+/// What stderr says when serving starts.
+struct Banner<'a> {
+    mapping: &'a RobotMapping,
+    servos: usize,
+    what: &'a str,
+    emulate_baud: Option<u32>,
+}
+
+impl Banner<'_> {
+    fn text(&self, place: &str) -> String {
+        let mut models: Vec<String> = Vec::new();
+        for j in &self.mapping.joints {
+            let m = format!("{} ({})", j.model, j.protocol);
+            if !models.contains(&m) {
+                models.push(m);
+            }
+        }
+        format!(
+            "serving {} ({} servos: {}) on {place}\nmoved by {}\n{}\nCtrl-C stops.\n",
+            if self.mapping.name.is_empty() {
+                &self.mapping.source
+            } else {
+                &self.mapping.name
+            },
+            self.servos,
+            models.join(", "),
+            self.what,
+            match self.emulate_baud {
+                Some(b) =>
+                    format!("wire time emulated at {b} bps, return delay per servo register"),
+                None => "answering at once (no wire-time emulation)".to_string(),
+            }
+        )
+    }
+}
+
+/// Serve on a new pseudo-terminal (and --link to it) until Ctrl-C.
+fn serve_pty<B: twinloop_link::VirtualServoBackend>(
+    a: &ServeArgs,
+    bus: &mut VirtualBus<B>,
+    options: &ServeOptions,
+    banner: &Banner,
+) -> CliResult {
+    let stop = interrupt_flag();
+    let mut pty = PtyTransport::open()
+        .map_err(|e| CliError::new(format!("cannot open a pseudo-terminal: {e}")))?;
+    pty.set_spin(Duration::from_micros(a.spin_us));
+    let path = pty.path().to_path_buf();
+    if let Some(link) = &a.link {
+        let _ = std::fs::remove_file(link);
+        std::os::unix::fs::symlink(&path, link).map_err(|e| {
+            CliError::new(format!(
+                "--link: cannot link {} to {}: {e}",
+                link.display(),
+                path.display()
+            ))
+        })?;
+    }
+    // The path first, alone on its line, for scripts.
+    print(&format!("{}\n", path.display()));
+    eprint!("{}", banner.text(&path.display().to_string()));
+    let options = ServeOptions {
+        stop_on_eof: false,
+        ..*options
+    };
+    let r = serve_bus(bus, &mut pty, &options, &stop);
+    if let Some(link) = &a.link {
+        let _ = std::fs::remove_file(link);
+    }
+    r.map_err(|e| CliError::new(format!("{}: {e}", path.display())))?;
+    Ok(Outcome::Ok)
+}
+
+/// Serve one TCP client at a time on `addr` until Ctrl-C.
+fn serve_tcp<B: twinloop_link::VirtualServoBackend>(
+    addr: &str,
+    bus: &mut VirtualBus<B>,
+    options: &ServeOptions,
+    banner: &Banner,
+) -> CliResult {
+    let stop = interrupt_flag();
+    let listener = std::net::TcpListener::bind(addr)
+        .map_err(|e| CliError::new(format!("--port tcp:{addr}: cannot listen: {e}")))?;
+    let local = listener
+        .local_addr()
+        .map(|a| a.to_string())
+        .unwrap_or_else(|_| addr.to_string());
+    print(&format!("tcp:{local}\n"));
+    eprint!("{}", banner.text(&format!("tcp:{local}")));
+    let _ = listener.set_nonblocking(true);
+    while !stop.load(Ordering::Relaxed) {
+        match listener.accept() {
+            Ok((stream, peer)) => {
+                let _ = stream.set_nonblocking(false);
+                eprintln!("client {peer} connected");
+                let mut t = match TcpTransport::from_stream(stream) {
+                    Ok(t) => t,
+                    Err(e) => {
+                        eprintln!("client {peer}: {e}");
+                        continue;
+                    }
+                };
+                if let Err(e) = serve_bus(bus, &mut t, options, &stop) {
+                    eprintln!("client {peer}: {e}");
+                }
+                eprintln!("client {peer} left");
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            Err(e) => return Err(CliError::new(format!("accept on {addr}: {e}"))),
+        }
+    }
+    Ok(Outcome::Ok)
+}
