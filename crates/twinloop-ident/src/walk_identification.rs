@@ -133,7 +133,7 @@ pub fn order_for_energy(hsv: &[f64], share: f64) -> usize {
     hsv.len()
 }
 
-/// Seed 003 section 7 on a walk record (`twinloop gait dataset` columns): the ARX
+/// Seed 003 section 7 on a walk record (the columns `experiment walk` writes): the ARX
 /// initial model and the ARX -> balanced truncation -> PEM final model, evaluated on
 /// `val` (or `est`).
 pub fn identify_walk(
@@ -157,7 +157,7 @@ pub fn identify_walk(
         .collect();
     if inputs.is_empty() {
         return Err(IdentError::new(
-            "data: no `u:` input columns (record it with `twinloop gait dataset`)",
+            "data: no `u:` input columns (the walk experiment records them)",
         ));
     }
     let outputs = vec!["gyro:*".to_string()];

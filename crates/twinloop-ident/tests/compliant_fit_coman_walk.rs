@@ -1,6 +1,6 @@
 //! Issue 7's full-model check: the compact model (seed 002, eq 14-17) fitted by
 //! Levenberg-Marquardt to COMAN walking in the full simulator (the committed 30 s
-//! datasets of `twinloop compliant dataset`) must beat the all-ones model on the training
+//! datasets of `twinloop experiment compliant-walk`) must beat the all-ones model on the training
 //! gait and on the two other gaits it was not fitted to (seed 002: "the set of parameters
 //! found has been also used to perform walking with different gaits").
 //!

@@ -1,4 +1,4 @@
-//! A bus behind TCP: a virtual robot served with `twinloop serve --tcp`, or a
+//! A bus behind TCP: a virtual robot served with `twinloop serve --port tcp:ADDR`, or a
 //! serial-to-network bridge. Bytes pass through unchanged.
 
 use super::Transport;
@@ -26,7 +26,7 @@ impl TcpTransport {
         }))
     }
 
-    /// Wrap an accepted connection (the server side of `twinloop serve --tcp`).
+    /// Wrap an accepted connection (the server side of `twinloop serve --port tcp:ADDR`).
     pub fn from_stream(stream: TcpStream) -> io::Result<TcpTransport> {
         // Packets are small and latency is the point: no Nagle delay.
         stream.set_nodelay(true)?;
