@@ -6,7 +6,7 @@
 
 For each model: writes DIR/<stem>.csv with make_states.py (unless it exists), runs
 build/bench_pinocchio and build/bench_pinocchio_native (those that were built) and
-`twinloop bench dynamics --urdf FILE --states CSV --json` (--urdf takes MJCF files too), then prints the
+`twinloop bench dynamics --robot FILE --states CSV --json -` (--robot takes MJCF files too), then prints the
 median ns per call of each and the ratio twinloop / Pinocchio. The twinloop JSON is expected to
 carry an `ns_per_call` object with the same algorithm keys (fk, com, rnea, crba, aba, jacobians,
 regressor); keys it lacks are shown as "-". PATH defaults to target/release/twinloop.
@@ -74,8 +74,8 @@ def main(argv=None) -> int:
             results[name] = run_json([path, model, states] + extra)
         if not args.no_twinloop:
             if os.path.exists(args.twinloop):
-                results["twinloop"] = run_json([args.twinloop, "bench", "dynamics", "--urdf", model,
-                                                "--states", states, "--json"])
+                results["twinloop"] = run_json([args.twinloop, "bench", "dynamics", "--robot", model,
+                                                "--states", states, "--json", "-"])
             else:
                 print(f"compare: {args.twinloop} not found (cargo build --release); "
                       "twinloop column skipped", file=sys.stderr)
