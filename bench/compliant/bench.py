@@ -19,7 +19,7 @@ sample interval, phase of the interval's first sample):
   fit, scipy            scipy.optimize.least_squares(method="lm"): MINPACK's
                          Levenberg-Marquardt with a finite-difference Jacobian on the
                          residuals (numba rollout), from all ones
-twinloop: `twinloop fit compliant --timing-rounds N` times its rollout, its sensitivity
+twinloop: `twinloop identify compliant --timing-rounds N` times its rollout, its sensitivity
 rollout and its whole LM fit in-process and reports medians.
 """
 
@@ -149,7 +149,7 @@ def main():
     with open(model, "w") as fh:
         fh.write("".join(f"{k} = {v!r}\n" for k, v in MODEL.items()))
     ref, walk = os.path.join(work, "ref.csv"), os.path.join(work, "walk.csv")
-    run([TWINLOOP, "gait", "zmp", "--steps", "40", "--out", ref])
+    run([TWINLOOP, "gait", "zmp", "--footsteps", "40", "--out", ref])
     run([TWINLOOP, "compliant", "simulate", "--reference", ref, "--model", model, "--table1", "--out", walk])
     d = np.genfromtxt(walk, delimiter=",", names=True)
     t, xr, zr, xm, zm = (np.ascontiguousarray(d[k]) for k in ("t", "xr", "zr", "x", "z"))
@@ -161,7 +161,7 @@ def main():
 
     # twinloop, in-process medians
     out_json = os.path.join(work, "fit.json")
-    run([TWINLOOP, "fit", "compliant", "--data", walk, "--model", model, "--timing-rounds", str(args.rounds), "--json", out_json])
+    run([TWINLOOP, "identify", "compliant", "--data", walk, "--model", model, "--timing-rounds", str(args.rounds), "--json", out_json])
     tl = json.load(open(out_json))
     res["twinloop"] = dict(tl["timing"], evaluations=tl["evaluations"], iterations=tl["iterations"],
                            mse_after=tl["mse_after"],

@@ -2,7 +2,7 @@
 """The official ROBOTIS Python SDK (PyPI `dynamixel-sdk`) timed on the same transactions as
 `twinloop bench link --port`, against the same served robot:
 
-    twinloop serve --robot builtin:op3 --no-timing --link /tmp/op3 &
+    twinloop serve --map builtin:op3 --no-timing --link /tmp/op3 &
     python3 bench/dynamixel_sdk/bench_sdk.py --port /tmp/op3 --json
 
 Cases (names match twinloop's): READ of 4 bytes from one servo; SYNC_READ and FAST_SYNC_READ of

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Side-by-side markdown tables of `twinloop bench link --json` and bench_sdk.py --json runs:
+"""Side-by-side markdown tables of `twinloop bench link --json FILE` and bench_sdk.py --json runs:
 per case, the median over runs of each run's median."""
 
 import argparse

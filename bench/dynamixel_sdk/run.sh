@@ -10,7 +10,7 @@ mkdir -p "$OUT"
 cargo build --release -p twinloop-cli
 BIN=target/release/twinloop
 # Stand-in servos (no physics): the benchmark times the protocol path only.
-$BIN serve --robot builtin:op3 --servo-model ideal --no-timing --spin-us "${SERVER_SPIN_US:-0}" > "$OUT/pty.txt" 2> "$OUT/serve.log" &
+$BIN serve --map builtin:op3 --servo-model ideal --no-timing --spin-us "${SERVER_SPIN_US:-0}" > "$OUT/pty.txt" 2> "$OUT/serve.log" &
 SERVER=$!
 trap 'kill -INT $SERVER 2>/dev/null || true' EXIT
 sleep 0.5
@@ -22,7 +22,7 @@ ours=""
 theirs=""
 i=1
 while [ "$i" -le "$ROUNDS" ]; do
-    $BIN bench link --port "$PTY" --seconds "$SECONDS_PER_CASE" --spin-us "${CLIENT_SPIN_US:-0}" --json > "$OUT/twinloop-$i.json"
+    $BIN bench link --port "$PTY" --seconds "$SECONDS_PER_CASE" --spin-us "${CLIENT_SPIN_US:-0}" --json - > "$OUT/twinloop-$i.json"
     "$PYTHON" bench/dynamixel_sdk/bench_sdk.py --port "$PTY" --seconds "$SECONDS_PER_CASE" --json > "$OUT/sdk-$i.json"
     ours="$ours $OUT/twinloop-$i.json"
     theirs="$theirs $OUT/sdk-$i.json"

@@ -26,7 +26,7 @@ def main():
         m = subprocess.run([sys.executable, os.path.join(ROOT, "bench/mujoco/bench_sim.py"), "--model", args.model,
                             "--dt", str(args.dt), "--json"], check=True, capture_output=True, text=True, cwd=ROOT)
         theirs.append(json.loads(m.stdout)["us_per_step"])
-        t = subprocess.run([args.twinloop, "bench", "sim", "--robot", args.model, "--dt", str(args.dt), "--json"],
+        t = subprocess.run([args.twinloop, "bench", "sim", "--robot", args.model, "--dt", str(args.dt), "--json", "-"],
                            check=True, capture_output=True, text=True, cwd=ROOT)
         ours.append(json.loads(t.stdout)["us_per_step"])
     o, p = statistics.median(ours), statistics.median(theirs)

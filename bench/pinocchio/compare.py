@@ -74,8 +74,8 @@ def main(argv=None) -> int:
             results[name] = run_json([path, model, states] + extra)
         if not args.no_twinloop:
             if os.path.exists(args.twinloop):
-                results["twinloop"] = run_json([args.twinloop, "bench", "dynamics", "--urdf", model,
-                                                "--states", states, "--json"])
+                results["twinloop"] = run_json([args.twinloop, "bench", "dynamics", "--robot", model,
+                                                "--states", states, "--json", "-"])
             else:
                 print(f"compare: {args.twinloop} not found (cargo build --release); "
                       "twinloop column skipped", file=sys.stderr)

@@ -83,11 +83,11 @@ def main():
     rows = []
     for name, truth, prior in cases:
         poses = tmp / (truth.stem + "_poses.csv")
-        run([TWINLOOP, "experiment", "static-poses", "--urdf", truth, "--count", "172", "--cop-noise", "0.001",
+        run([TWINLOOP, "experiment", "static-poses", "--robot", truth, "--count", "172", "--cop-noise", "0.001",
              "--joint-noise", str(math.radians(0.1)), "--seed", "3", "--out", poses])
         m = total_mass(truth)
         out_json = tmp / (truth.stem + "_twinloop.json")
-        run([TWINLOOP, "identify", "static", "--urdf", prior, "--poses", poses, "--total-mass", repr(m),
+        run([TWINLOOP, "identify", "static", "--robot", prior, "--poses", poses, "--total-mass", repr(m),
              "--suggest", "0", "--time", str(args.rounds), "--json", out_json])
         tw = json.loads(out_json.read_text())
         ref_json = tmp / (truth.stem + "_python.json")

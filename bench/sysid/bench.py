@@ -26,7 +26,10 @@ PEM of a 6th-order state-space model (innovations form, D = 0) in Python: scipy'
 least_squares (MINPACK Levenberg-Marquardt, finite-difference Jacobian) on the one-step
 prediction errors over the full parameterisation (A, B, C, K: 168 parameters), started from
 twinloop's own subspace estimate so both searches start at the same model. twinloop: the CLI
-`sysid ss --method pem`, whose estimation time includes computing that subspace estimate.
+`identify ss --method pem`, whose estimation time includes computing that subspace estimate.
+
+The Python side fits the data as they are, so twinloop runs with --no-detrend (the CLI removes
+the means by default).
 
 Medians over the runs and the ratios python / twinloop are printed; --json writes them.
 numpy's lstsq runs LAPACK through OpenBLAS with one thread per CPU; on a loaded machine those
@@ -205,8 +208,8 @@ def main():
     out = os.path.join(tmp, "arx.json")
     lib, wall = [], []
     for _ in range(args.twinloop_runs):
-        wall.append(twinloop(args.twinloop, ["sysid", "arx", "--data", args.data, "--inputs", "u*", "--outputs", "y*",
-                                             "--na", str(na), "--nb", str(nb), "--nk", str(nk), "--json", out]))
+        wall.append(twinloop(args.twinloop, ["identify", "arx", "--data", args.data, "--inputs", "u*", "--outputs", "y*",
+                                             "--no-detrend", "--na", str(na), "--nb", str(nb), "--nk", str(nk), "--json", out]))
         with open(out) as f:
             res = json.load(f)
         lib.append(res["timing_seconds"]["estimation"])
@@ -226,15 +229,15 @@ def main():
 
     # PEM: both start from twinloop's subspace estimate.
     init = os.path.join(tmp, "n4sid.json")
-    twinloop(args.twinloop, ["sysid", "ss", "--data", args.data, "--inputs", "u*", "--outputs", "y*",
-                             "--order", str(args.order), "--method", "n4sid", "--json", init])
+    twinloop(args.twinloop, ["identify", "ss", "--data", args.data, "--inputs", "u*", "--outputs", "y*",
+                             "--no-detrend", "--order", str(args.order), "--method", "n4sid", "--json", init])
     with open(init) as f:
         m0 = json.load(f)
     out = os.path.join(tmp, "pem.json")
     lib, wall = [], []
     for _ in range(args.twinloop_runs):
-        wall.append(twinloop(args.twinloop, ["sysid", "ss", "--data", args.data, "--inputs", "u*", "--outputs", "y*",
-                                             "--order", str(args.order), "--method", "pem", "--json", out]))
+        wall.append(twinloop(args.twinloop, ["identify", "ss", "--data", args.data, "--inputs", "u*", "--outputs", "y*",
+                                             "--no-detrend", "--order", str(args.order), "--method", "pem", "--json", out]))
         with open(out) as f:
             res = json.load(f)
         lib.append(res["timing_seconds"]["estimation"])

@@ -3,7 +3,7 @@
 robot: everything a user's SDK program does must work against `twinloop serve`.
 
     pip install dynamixel-sdk==4.1.0
-    twinloop serve --robot tools/oracle/sdk_bus.toml --link /tmp/dxl &
+    twinloop serve --map tools/oracle/sdk_bus.toml --link /tmp/dxl &
     python3 tools/oracle/dynamixel_sdk_conformance.py --port /tmp/dxl
 
 The bus (sdk_bus.toml): XM430-W350 ids 1-3 and XL430-W250 id 4 on Protocol 2.0, RX-28 id 11,
