@@ -15,7 +15,7 @@ use twinloop_link::{BusServo, Client, Model, Protocol, VirtualBus, plan_cycle};
 
 #[derive(Args, Debug)]
 pub struct LinkBenchArgs {
-    /// A served robot (`twinloop serve --robot builtin:op3 --no-timing`) to time real
+    /// A served robot (`twinloop serve --map builtin:op3 --no-timing`) to time real
     /// transactions against; without it only the software overhead is measured
     #[arg(long, value_name = "PATH")]
     pub port: Option<String>,
@@ -304,7 +304,7 @@ fn port_cases(a: &LinkBenchArgs, port: &str, cases: &mut Vec<BenchCase>) -> Resu
         if !transaction_cases(&mut c, n, a.seconds, "pty", cases) {
             return Err(CliError::new(format!(
                 "some transactions on {port} failed: serve a robot with XM430 ids 1..={n} \
-                 (twinloop serve --robot builtin:op3 --no-timing)"
+                 (twinloop serve --map builtin:op3 --no-timing)"
             )));
         }
     }

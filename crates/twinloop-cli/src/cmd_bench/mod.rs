@@ -60,7 +60,7 @@ pub enum BenchCommand {
     /// decode, CRC, checks; the replies are replayed from memory, so neither a wire nor
     /// a servo costs anything), against that cycle's wire time at 1 Mbps
     /// (`twinloop link plan`).
-    /// With --port (a robot from `twinloop serve --robot builtin:op3 --no-timing`):
+    /// With --port (a robot from `twinloop serve --map builtin:op3 --no-timing`):
     /// also READ, SYNC_READ, FAST_SYNC_READ and a whole cycle over that port, timed the
     /// same way bench/dynamixel_sdk/bench_sdk.py times the official Python SDK.
     ///

@@ -87,7 +87,7 @@ pub fn run(a: &IdentifyStaticArgs) -> CliResult {
     };
     let problem = StaticProblem::new(&robot, &model, a.total_mass, &options)?;
     let result = identify_static(&robot, &model, &poses, a.total_mass, &options).map_err(|e| {
-        if e.field.as_deref() == Some("--poses") {
+        if e.option.as_deref() == Some("poses") {
             e.in_file(&a.poses)
         } else {
             e
