@@ -54,6 +54,9 @@ pub struct Table {
     pub path: Option<PathBuf>,
     pub columns: Vec<String>,
     pub rows: Vec<Vec<f64>>,
+    /// The 1-based file line of each data row, when the table was read from text
+    /// (empty for a table built in memory), so an error about row `r` can name its line.
+    pub lines: Vec<usize>,
 }
 
 impl Table {
@@ -62,6 +65,7 @@ impl Table {
             path: None,
             columns,
             rows: Vec::new(),
+            lines: Vec::new(),
         }
     }
 
@@ -104,6 +108,7 @@ impl Table {
             }
         }
         let mut rows = Vec::new();
+        let mut row_lines = Vec::new();
         for (ln, line) in lines {
             let mut row = Vec::with_capacity(columns.len());
             for (k, cell) in line.split(',').enumerate() {
@@ -136,12 +141,19 @@ impl Table {
                 });
             }
             rows.push(row);
+            row_lines.push(ln + 1);
         }
         Ok(Table {
             path: None,
             columns,
             rows,
+            lines: row_lines,
         })
+    }
+
+    /// The file line of data row `row` (0-based), if the table was read from text.
+    pub fn line_of_row(&self, row: usize) -> Option<usize> {
+        self.lines.get(row).copied()
     }
 
     pub fn column_index(&self, name: &str) -> Option<usize> {

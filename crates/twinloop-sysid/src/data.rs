@@ -49,7 +49,8 @@ impl IoData {
                     k + 1,
                     u[k].len(),
                     nu
-                )));
+                ))
+                .at_row(k + 1));
             }
             if y[k].len() != ny {
                 return Err(SysidError::data(format!(
@@ -57,7 +58,8 @@ impl IoData {
                     k + 1,
                     y[k].len(),
                     ny
-                )));
+                ))
+                .at_row(k + 1));
             }
             um.column_mut(k).copy_from_slice(&u[k]);
             ym.column_mut(k).copy_from_slice(&y[k]);
@@ -108,7 +110,8 @@ impl IoData {
                             "data row {}, {what} \"{name}\": {x} is not a finite number; \
                              remove the row or fill the gap before identifying",
                             k + 1
-                        )));
+                        ))
+                        .at_row(k + 1));
                     }
                 }
             }
@@ -119,6 +122,25 @@ impl IoData {
             u,
             y,
             sample_time,
+        })
+    }
+
+    /// [`IoData::from_table`] on a table read from a CSV file: an error about a
+    /// data row also names the file and its line (`walk.csv:43: data row 42, ...`).
+    pub fn from_io_table(
+        table: &twinloop_io::Table,
+        inputs: &[String],
+        outputs: &[String],
+    ) -> Result<IoData> {
+        IoData::from_table(&table.columns, &table.rows, inputs, outputs).map_err(|mut e| {
+            let line = e.row.and_then(|r| table.line_of_row(r - 1));
+            e.place = match (&table.path, line) {
+                (Some(p), Some(l)) => Some(format!("{}:{l}", p.display())),
+                (Some(p), None) => Some(p.display().to_string()),
+                (None, Some(l)) => Some(format!("line {l}")),
+                (None, None) => None,
+            };
+            e
         })
     }
 
@@ -182,7 +204,8 @@ impl IoData {
                     k + 1,
                     r.len(),
                     columns.len()
-                )));
+                ))
+                .at_row(k + 1));
             }
             for (j, &c) in ui.iter().enumerate() {
                 u[(j, k)] = r[c];
@@ -341,5 +364,19 @@ mod tests {
         assert!((d.sample_time.unwrap() - 0.02).abs() < 1e-15);
         let e = IoData::from_table(&cols, &rows, &["u:c".into()], &["y:x".into()]).unwrap_err();
         assert!(e.message.contains("\"u:c\""), "{e}");
+    }
+
+    #[test]
+    fn a_bad_row_read_from_a_file_names_its_line() {
+        // Line 1 header, line 2 a comment, line 3 blank: data row 2 is on line 5.
+        let text = "t,u:a,y:x\n# recorded on the bench\n\n0,1,2\n0.1,NaN,3\n0.2,2,4\n";
+        let mut table = twinloop_io::Table::parse(text).unwrap();
+        table.path = Some("walk.csv".into());
+        let e = IoData::from_io_table(&table, &["u:a".into()], &["y:x".into()]).unwrap_err();
+        assert_eq!(e.row, Some(2));
+        assert!(
+            e.to_string().starts_with("walk.csv:5: data row 2, input"),
+            "{e}"
+        );
     }
 }

@@ -1,11 +1,16 @@
 use std::fmt;
 
 /// Why an identification could not be done. The message names the data row,
-/// the channel or the order at fault; callers that read files prefix the file.
+/// the channel or the order at fault; data read from a file
+/// ([`crate::IoData::from_io_table`]) also names the file and line.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SysidError {
     pub kind: ErrorKind,
     pub message: String,
+    /// The 1-based data row at fault, when one is.
+    pub row: Option<usize>,
+    /// `file:line` of that row, when the data came from a file.
+    pub place: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -24,6 +29,8 @@ impl SysidError {
         SysidError {
             kind: ErrorKind::Data,
             message: message.into(),
+            row: None,
+            place: None,
         }
     }
 
@@ -31,6 +38,8 @@ impl SysidError {
         SysidError {
             kind: ErrorKind::Order,
             message: message.into(),
+            row: None,
+            place: None,
         }
     }
 
@@ -38,12 +47,25 @@ impl SysidError {
         SysidError {
             kind: ErrorKind::Numerical,
             message: message.into(),
+            row: None,
+            place: None,
         }
+    }
+}
+
+impl SysidError {
+    /// The same error about data row `row` (1-based).
+    pub fn at_row(mut self, row: usize) -> Self {
+        self.row = Some(row);
+        self
     }
 }
 
 impl fmt::Display for SysidError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(p) = &self.place {
+            write!(f, "{p}: ")?;
+        }
         f.write_str(&self.message)
     }
 }

@@ -181,36 +181,9 @@ pub enum FocusArg {
     Simulation,
 }
 
-/// The 1-based file line of data row `row` (0-based), counting as `Table::parse`
-/// does (blank and `#` lines skipped, the header first).
-fn line_of_row(path: &Path, row: usize) -> Option<usize> {
-    let text = std::fs::read_to_string(path).ok()?;
-    text.lines()
-        .enumerate()
-        .filter(|(_, l)| {
-            let l = l.trim();
-            !l.is_empty() && !l.starts_with('#')
-        })
-        .nth(row + 1)
-        .map(|(i, _)| i + 1)
-}
-
 fn load(path: &Path, a: &DataArgs) -> Result<IoData, CliError> {
     let table = read_table(path)?;
-    let mut d =
-        IoData::from_table(&table.columns, &table.rows, &a.inputs, &a.outputs).map_err(|e| {
-            // "data row 42, ..." -> "file:43: data row 42, ..."
-            let line = e
-                .message
-                .strip_prefix("data row ")
-                .and_then(|r| r.split(|c: char| !c.is_ascii_digit()).next())
-                .and_then(|n| n.parse::<usize>().ok())
-                .and_then(|r| line_of_row(path, r - 1));
-            match line {
-                Some(l) => CliError::new(format!("{}:{l}: {}", path.display(), e.message)),
-                None => CliError::new(format!("{}: {}", path.display(), e.message)),
-            }
-        })?;
+    let mut d = IoData::from_io_table(&table, &a.inputs, &a.outputs)?;
     if let Some(dt) = a.dt {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(CliError::new(format!(
