@@ -173,17 +173,7 @@ pub fn read_table(path: &Path) -> Result<twinloop_io::Table, CliError> {
 }
 
 /// A number for people: 6 significant digits, no float noise (3.1474699999999998 -> 3.14747).
-pub fn num(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
-    if (1e-4..1e7).contains(&rounded.abs()) {
-        format!("{rounded}")
-    } else {
-        format!("{rounded:e}")
-    }
-}
+pub use twinloop_report::number as num;
 
 /// The model's coordinate names that a quantity's columns are named after.
 pub fn coordinate_names(

@@ -11,6 +11,20 @@ pub use plot::{Plot, Series, SeriesStyle};
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// A number for people: 6 significant digits, no float noise
+/// (3.1474699999999998 -> 3.14747), exponent form outside 1e-4..1e7.
+pub fn number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    if (1e-4..1e7).contains(&rounded.abs()) {
+        format!("{rounded}")
+    } else {
+        format!("{rounded:e}")
+    }
+}
+
 /// Escape text for HTML.
 pub fn escape(s: &str) -> String {
     let mut o = String::with_capacity(s.len());

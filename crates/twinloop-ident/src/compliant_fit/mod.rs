@@ -19,6 +19,7 @@ pub mod identifiability;
 pub mod lm;
 pub mod model_file;
 pub mod power;
+pub mod report;
 pub mod sensitivity;
 pub mod synthetic;
 
