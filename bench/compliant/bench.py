@@ -145,12 +145,12 @@ def main():
     if args.held:
         MODEL.update(Kxx=57188.06530958703, Kxz=217399.9125848724, Kzx=217399.9125848724, Kzz=916201.4610526043)
     work = tempfile.mkdtemp(prefix="bench-compliant-")
-    model = os.path.join(work, "MODEL.toml")
+    model = os.path.join(work, "PLANT.toml")
     with open(model, "w") as fh:
         fh.write("".join(f"{k} = {v!r}\n" for k, v in MODEL.items()))
     ref, walk = os.path.join(work, "ref.csv"), os.path.join(work, "walk.csv")
     run([TWINLOOP, "gait", "zmp", "--footsteps", "40", "--out", ref])
-    run([TWINLOOP, "compliant", "simulate", "--reference", ref, "--model", model, "--table1", "--out", walk])
+    run([TWINLOOP, "compliant", "simulate", "--reference", ref, "--plant", model, "--table1", "--out", walk])
     d = np.genfromtxt(walk, delimiter=",", names=True)
     t, xr, zr, xm, zm = (np.ascontiguousarray(d[k]) for k in ("t", "xr", "zr", "x", "z"))
     ds = np.ascontiguousarray(d["phase"] == 1.0)
@@ -161,7 +161,7 @@ def main():
 
     # twinloop, in-process medians
     out_json = os.path.join(work, "fit.json")
-    run([TWINLOOP, "identify", "compliant", "--data", walk, "--model", model, "--timing-rounds", str(args.rounds), "--json", out_json])
+    run([TWINLOOP, "identify", "compliant", "--data", walk, "--plant", model, "--timing-rounds", str(args.rounds), "--json", out_json])
     tl = json.load(open(out_json))
     res["twinloop"] = dict(tl["timing"], evaluations=tl["evaluations"], iterations=tl["iterations"],
                            mse_after=tl["mse_after"],

@@ -42,7 +42,7 @@ pub enum CompliantCommand {
     ///
     /// Example:
     ///   twinloop gait zmp --footsteps 3 --out ref.csv
-    ///   twinloop compliant simulate --reference ref.csv --model kc.json --table1 --out sim.csv
+    ///   twinloop compliant simulate --reference ref.csv --plant kc.json --table1 --out sim.csv
     ///
     /// Output: SIM.csv with t, xr, zr, x, z, phase; stdout gives the time taken and the
     /// RMS deviation from the reference.
@@ -247,9 +247,9 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "FILE.csv")]
     pub reference: PathBuf,
     /// The JSON written by `compliant stiffness --json` (mass, gravity, sagittal entries),
-    /// or a MODEL.toml as `identify compliant` reads it.
-    #[arg(long, value_name = "FILE.json|MODEL.toml")]
-    pub model: PathBuf,
+    /// or a PLANT.toml as `identify compliant` reads it.
+    #[arg(long, value_name = "FILE.json|PLANT.toml")]
+    pub plant: PathBuf,
     /// The ten corrections alpha1,beta1,gamma1,epsilon1,alpha2,beta2,gamma2,epsilon2,eta1,eta2
     /// (default all ones: eq 11 uncorrected).
     #[arg(long, value_name = "P1,..,P10", conflicts_with = "table1")]
@@ -296,7 +296,7 @@ fn read_plant_json(path: &Path) -> Result<SagittalCompliance, String> {
     })
 }
 
-/// MODEL.toml, or the JSON written by `compliant stiffness --json`.
+/// PLANT.toml, or the JSON written by `compliant stiffness --json`.
 pub fn read_plant_any(path: &Path) -> Result<SagittalCompliance, CliError> {
     if path.extension().is_some_and(|e| e == "json") {
         Ok(read_plant_json(path)?)
@@ -354,7 +354,7 @@ fn read_reference(path: &Path) -> Result<(SagittalReference, Option<(f64, f64)>)
 }
 
 fn simulate(args: &SimulateArgs) -> CliResult {
-    let plant = read_plant_any(&args.model)?;
+    let plant = read_plant_any(&args.plant)?;
     let corrections = corrections(args)?;
     if !(args.noise.is_finite() && args.noise >= 0.0) {
         return Err(CliError::new(format!(

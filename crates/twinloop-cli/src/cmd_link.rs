@@ -45,7 +45,7 @@ Exit code 0 (also when nothing answered), 2 when the port cannot be opened."
     #[command(
         long_about = "Read a servo's whole control table (one READ) and print every register \
 (or the ones named) with its raw value and its value in SI units. The model is found by PING unless \
---model says it.",
+--servo-model says it.",
         after_long_help = "Example:\n  twinloop link read --port /dev/ttyUSB0 --protocol 1 --id 3\n  \
 twinloop link read --port /dev/pts/5 --protocol 2 --id 1 \"present position\" \"present current\"\n\n\
 Output: one line per register:\n  \
@@ -145,9 +145,9 @@ pub struct ReadArgs {
     /// Servo id
     #[arg(long)]
     pub id: u8,
-    /// Model (found by PING when omitted)
+    /// Servo model, e.g. XM430-W350 (found by PING when omitted)
     #[arg(long)]
-    pub model: Option<String>,
+    pub servo_model: Option<String>,
     /// Registers to show (e-manual names, case and spaces ignored); all when omitted
     pub registers: Vec<String>,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
@@ -356,12 +356,12 @@ fn unit_name(u: twinloop_link::Unit) -> &'static str {
 
 fn read(a: &ReadArgs) -> CliResult {
     let mut c = open_client(&a.port, None)?;
-    let model = match &a.model {
+    let model = match &a.servo_model {
         Some(name) => match Model::parse(name) {
             Some(m) => m,
             None => {
                 return Err(CliError::from(format!(
-                    "--model {name:?}: unknown; known: {}",
+                    "--servo-model {name:?}: unknown; known: {}",
                     Model::known_names()
                 )));
             }

@@ -26,7 +26,7 @@ fn s(p: &std::path::Path) -> &str {
 const MODEL: &str = "m = 32.053860196\ng = 9.81\nKxx = 440.91346363174296\nKxz = -2173.515375145169\nKzx = -2173.515375145169\nKzz = 60061.10789312922\nDxx = 14.527209046033501\nDxz = -3.3326729999481515\nDzx = -3.3326729999481515\nDzz = 667.4461329201686\n";
 
 fn walk(name: &str, step_length: &str, tss: &str, noise: &str) -> PathBuf {
-    let model = tmp("MODEL.toml");
+    let model = tmp("PLANT.toml");
     std::fs::write(&model, MODEL).unwrap();
     let reference = tmp(&format!("{name}.ref.csv"));
     let o = twinloop(&[
@@ -48,7 +48,7 @@ fn walk(name: &str, step_length: &str, tss: &str, noise: &str) -> PathBuf {
         "simulate",
         "--reference",
         s(&reference),
-        "--model",
+        "--plant",
         s(&model),
         "--table1",
         "--noise",
@@ -70,8 +70,8 @@ fn fit_recovers_table_1_and_validates_on_another_gait() {
         "compliant",
         "--data",
         s(&train),
-        "--model",
-        s(&tmp("MODEL.toml")),
+        "--plant",
+        s(&tmp("PLANT.toml")),
         "--method",
         "lm",
         "--val",
@@ -116,7 +116,7 @@ fn fit_recovers_table_1_and_validates_on_another_gait() {
 #[test]
 fn bad_input_is_named() {
     let good = std::fs::read_to_string(walk("bad-base", "0.03", "0.5", "0")).unwrap();
-    let model = tmp("MODEL.toml");
+    let model = tmp("PLANT.toml");
     let mut lines: Vec<String> = good.lines().map(String::from).collect();
     // NaN in x on the 11th data row (line 12)
     let mut cells: Vec<String> = lines[11].split(',').map(String::from).collect();
@@ -129,7 +129,7 @@ fn bad_input_is_named() {
         "compliant",
         "--data",
         s(&nan),
-        "--model",
+        "--plant",
         s(&model),
     ]);
     assert_eq!(o.status.code(), Some(2));
@@ -148,7 +148,7 @@ fn bad_input_is_named() {
         "compliant",
         "--data",
         s(&gapped),
-        "--model",
+        "--plant",
         s(&model),
     ]);
     assert_eq!(o.status.code(), Some(2));
@@ -162,7 +162,7 @@ fn bad_input_is_named() {
         "compliant",
         "--data",
         s(&nan),
-        "--model",
+        "--plant",
         s(&neg),
     ]);
     assert_eq!(o.status.code(), Some(2));
@@ -177,7 +177,7 @@ fn bad_input_is_named() {
         "compliant",
         "--data",
         s(&nan),
-        "--model",
+        "--plant",
         s(&knee),
     ]);
     assert_eq!(o.status.code(), Some(2));
@@ -192,7 +192,7 @@ fn bad_input_is_named() {
         "compliant",
         "--data",
         s(&nan),
-        "--model",
+        "--plant",
         s(&model),
         "--params",
         "alpha1,zeta",

@@ -37,9 +37,9 @@ pub struct CompliantFitArgs {
     /// Recorded data: t, xr, zr, x, z, phase.
     #[arg(long, value_name = "FILE.csv")]
     pub data: PathBuf,
-    /// m, g and the x-z stiffness/damping (MODEL.toml, or the JSON of `compliant stiffness`).
-    #[arg(long, value_name = "MODEL.toml")]
-    pub model: PathBuf,
+    /// m, g and the x-z stiffness/damping (PLANT.toml, or the JSON of `compliant stiffness`).
+    #[arg(long, value_name = "PLANT.toml")]
+    pub plant: PathBuf,
     /// Optimiser.
     #[arg(long, value_enum, default_value_t = MethodArg::Lm)]
     pub method: MethodArg,
@@ -173,7 +173,7 @@ struct Inputs {
 }
 
 fn read_inputs(args: &CompliantFitArgs) -> Result<Inputs, CliError> {
-    let plant = read_plant_any(&args.model)?;
+    let plant = read_plant_any(&args.plant)?;
     let data = Dataset::read(&args.data)?;
     let val = args
         .val
@@ -247,7 +247,7 @@ pub fn run(args: &CompliantFitArgs) -> CliResult {
     if let Some(path) = &args.report {
         let html = fit_report(
             &args.data.display().to_string(),
-            &args.model.display().to_string(),
+            &args.plant.display().to_string(),
             &plant,
             &start,
             &data,
@@ -259,7 +259,7 @@ pub fn run(args: &CompliantFitArgs) -> CliResult {
     }
     let report = FitReport {
         data: args.data.display().to_string(),
-        model: args.model.display().to_string(),
+        model: args.plant.display().to_string(),
         samples: data.len(),
         plant,
         method,

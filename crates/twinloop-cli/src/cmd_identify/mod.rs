@@ -93,7 +93,7 @@ method. The prediction error never ends above the initial model's. The model is 
     /// learning: kept for fidelity, it stalls 0.1-0.2 away on the flat directions).
     ///
     /// DATA.csv columns: t, xr, zr, x, z, phase (0 single, 1 double support), uniform
-    /// sampling. MODEL.toml: m, g, Kxx, Kxz, Kzx, Kzz, Dxx, Dxz, Dzx, Dzz, or
+    /// sampling. PLANT.toml: m, g, Kxx, Kxz, Kzx, Kzz, Dxx, Dxz, Dzx, Dzz, or
     /// `urdf = "coman.urdf"` with support, knee_bend, [q] to compute them (eq 7-8); the
     /// JSON of `compliant stiffness --json` works too.
     ///
@@ -107,12 +107,12 @@ method. The prediction error never ends above the initial model's. The model is 
     ///
     /// Example, on data the compact model makes itself (Table 1, 0.1 mm noise):
     ///   twinloop gait zmp --footsteps 40 --out ref.csv
-    ///   twinloop compliant simulate --reference ref.csv --model MODEL.toml --table1 --noise 1e-4 --out walk.csv
-    ///   twinloop identify compliant --data walk.csv --model MODEL.toml --json fit.json --report fit.html
+    ///   twinloop compliant simulate --reference ref.csv --plant PLANT.toml --table1 --noise 1e-4 --out walk.csv
+    ///   twinloop identify compliant --data walk.csv --plant PLANT.toml --json fit.json --report fit.html
     /// On the full simulator's COMAN walk:
     ///   twinloop experiment compliant-walk --robot models/coman/coman.urdf --out coman_walk.csv
     ///   twinloop compliant stiffness --robot models/coman/coman.urdf --json kc.json
-    ///   twinloop identify compliant --data coman_walk.csv --model kc.json
+    ///   twinloop identify compliant --data coman_walk.csv --plant kc.json
     #[command(verbatim_doc_comment)]
     Compliant(compliant::CompliantFitArgs),
     /// Seed 003's identification of a recorded walk: 24th-order ARX, then ARX -> reduce -> PEM

@@ -1,4 +1,4 @@
-//! MODEL.toml: m, g and the x-z stiffness and damping at the CoM for the compact model
+//! PLANT.toml: m, g and the x-z stiffness and damping at the CoM for the compact model
 //! (seed 002, eq 11), given as numbers or computed from a URDF and a configuration by
 //! K_C = J^-T K_j J^-1, D_C = J^-T D_j J^-1 (seed 002, eq 7-8).
 //!
@@ -51,7 +51,7 @@ const URDF_KEYS: [&str; 9] = [
     "q",
 ];
 
-/// Reads MODEL.toml; errors name the file and the key.
+/// Reads PLANT.toml; errors name the file and the key.
 pub fn read_model_file(path: &Path) -> Result<SagittalCompliance, IdentError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| IdentError::new(format!("{}: cannot read: {e}", path.display())))?;
@@ -59,7 +59,7 @@ pub fn read_model_file(path: &Path) -> Result<SagittalCompliance, IdentError> {
     parse_model_file(&text, base).map_err(|e| IdentError::new(format!("{}: {e}", path.display())))
 }
 
-/// Parses MODEL.toml text; a relative `urdf` path is taken from `base`.
+/// Parses PLANT.toml text; a relative `urdf` path is taken from `base`.
 pub fn parse_model_file(text: &str, base: &Path) -> Result<SagittalCompliance, IdentError> {
     let table: toml::Table = toml::from_str(text).map_err(|e| IdentError::new(e.to_string()))?;
     for key in table.keys() {
