@@ -54,7 +54,7 @@
 
 use crate::description::*;
 use crate::error::DescriptionError;
-use crate::load::{
+use crate::xml::{
     Places, error_at, error_at_attr, opt_array, parse_array, parse_numbers, read_text, required,
     validate_placed,
 };
@@ -64,7 +64,7 @@ use std::path::Path;
 
 /// Read an MJCF model from text. Errors name the line, column and element.
 pub fn from_str(text: &str) -> Result<Description, DescriptionError> {
-    let doc = crate::load::parse_xml(text)?;
+    let doc = crate::xml::parse_xml(text)?;
     from_document(&doc)
 }
 
@@ -214,7 +214,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
             root,
             format!(
                 "root element is <{}>: an MJCF model has <mujoco>",
-                crate::load::qualified_name(root)
+                crate::xml::qualified_name(root)
             ),
         ));
     }
@@ -594,7 +594,7 @@ impl<'a, 'i> Reader<'a, 'i> {
 
     fn number(&self, found: Option<Found>, attr: &str) -> Result<Option<f64>, DescriptionError> {
         match found {
-            Some((n, v)) => Ok(Some(crate::load::parse_number(n, attr, v)?)),
+            Some((n, v)) => Ok(Some(crate::xml::parse_number(n, attr, v)?)),
             None => Ok(None),
         }
     }
@@ -872,7 +872,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                     }
                     let pos = parse_array::<3>(c, "pos", required(c, "pos")?)?;
                     let rot = self.orientation(c, "inertial", None)?;
-                    let mass = crate::load::parse_number(c, "mass", required(c, "mass")?)?;
+                    let mass = crate::xml::parse_number(c, "mass", required(c, "mass")?)?;
                     let inertia = match (c.attribute("fullinertia"), c.attribute("diaginertia")) {
                         (Some(v), _) => {
                             let f = parse_array::<6>(c, "fullinertia", v)?;
