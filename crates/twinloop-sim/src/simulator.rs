@@ -3,11 +3,13 @@
 use crate::actuator::{Actuator, Drive};
 use crate::contact::{ContactParams, ContactPoint, ContactState, contact_points};
 use crate::ltdl;
+use crate::sensors::{self, SensedState, SensorState};
 use nalgebra::{DMatrix, Vector3};
 use std::fmt;
 use twinloop_description::{Description, DescriptionError};
 use twinloop_dynamics::configuration::integrate;
 use twinloop_dynamics::{BASE, Data, Model, compute_joint_jacobians, crba, nonlinear_effects};
+use twinloop_robot::RobotState;
 use twinloop_spatial::Se3;
 
 /// Simulation settings. `Default` gives a 1 ms step, gravity 9.81, a ground plane,
@@ -120,7 +122,7 @@ pub struct Simulator {
     contact_bodies: Vec<ContactBody>,
     js: Vec<nalgebra::Vector6<f64>>,
     su: Vec<nalgebra::Vector6<f64>>,
-    pub(crate) sensors: crate::sensors::SensorState,
+    pub(crate) sensors: SensorState,
 }
 
 impl Simulator {
@@ -193,7 +195,7 @@ impl Simulator {
             .unwrap_or(weight.max(1.0) * 1.0);
         let limit_d = config.joint_limit_damping.unwrap_or(0.1 * limit_k.sqrt());
         let q = model.neutral_configuration();
-        let sensors = crate::sensors::SensorState::new(&model, robot);
+        let sensors = SensorState::new(&model, robot);
         Ok(Simulator {
             data,
             contact_params,
@@ -596,5 +598,66 @@ impl Simulator {
     /// Whole-body CoM at the current state.
     pub fn center_of_mass(&mut self) -> Vector3<f64> {
         twinloop_dynamics::center_of_mass(&self.model, &mut self.data, &self.q)
+    }
+}
+
+/// Sensors: the settings live in [`SensorState`]; reading them is [`sensors::read`]
+/// over the simulator's state.
+impl Simulator {
+    /// Give every joint a Dynamixel RX encoder (1024 counts over 300 degrees).
+    pub fn use_dynamixel_encoders(&mut self) {
+        self.sensors.use_dynamixel_encoders();
+    }
+
+    pub fn sensors_mut(&mut self) -> &mut SensorState {
+        &mut self.sensors
+    }
+
+    pub fn sensors(&self) -> &SensorState {
+        &self.sensors
+    }
+
+    /// Set the feet by link name.
+    pub fn set_feet(&mut self, names: &[&str]) -> Result<(), SimError> {
+        let mut feet = Vec::new();
+        for n in names {
+            let i = self
+                .model
+                .links
+                .iter()
+                .position(|l| l.name == *n)
+                .ok_or_else(|| SimError::Input(format!("no link named \"{n}\" for a foot")))?;
+            feet.push(i);
+        }
+        self.sensors.feet = feet;
+        Ok(())
+    }
+
+    /// The exact angular velocity of a link in its own frame, rad/s: what a perfect gyro
+    /// fixed to the link reads. For a second gyroscope (seed 003 has one MPU-6050 on each
+    /// foot); the configured IMU applies quantisation and noise, this does not.
+    pub fn link_angular_velocity(&mut self, link: &str) -> Option<Vector3<f64>> {
+        let i = self.model.links.iter().position(|l| l.name == link)?;
+        Some(sensors::link_angular_velocity(
+            &self.model,
+            &mut self.data,
+            &self.q,
+            &self.v,
+            i,
+        ))
+    }
+
+    /// Read every sensor into `state` (the `Robot` interface's measurement).
+    pub fn read_sensors(&mut self, state: &mut RobotState) {
+        let at = SensedState {
+            time: self.time,
+            dt: self.config.dt,
+            q: &self.q,
+            v: &self.v,
+            applied: &self.applied,
+            points: &self.points,
+            contacts: &self.contacts,
+        };
+        sensors::read(&self.model, &mut self.data, &mut self.sensors, &at, state);
     }
 }
