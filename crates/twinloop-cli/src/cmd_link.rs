@@ -15,8 +15,8 @@ use twinloop_link::control_cycle::ReadMethod;
 use twinloop_link::servo::{ServeOptions, serve as serve_bus};
 use twinloop_link::transport::{self, PtyTransport, SerialOptions, TcpTransport, Transport};
 use twinloop_link::{
-    BusServo, Client, ClientConfig, DynamixelRobot, FoundServo, JointMapping, Model, Protocol,
-    RobotMapping, VirtualBus, plan_cycle,
+    BusServo, Client, ClientConfig, DynamixelRobot, FoundServo, JointMapping, Protocol,
+    RobotMapping, ServoModel as Model, VirtualBus, plan_cycle,
 };
 use twinloop_robot::{Robot, RobotState};
 

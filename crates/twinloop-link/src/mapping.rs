@@ -21,9 +21,9 @@
 //!
 //! servo angle = zero + direction * joint angle. Joint order is file order.
 
-use crate::model::Model;
 use crate::protocol::Protocol;
 use crate::register::{Item, Register};
+use crate::servo_model::ServoModel;
 use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -60,7 +60,7 @@ pub struct JointMapping {
     pub name: String,
     pub id: u8,
     pub protocol: Protocol,
-    pub model: Model,
+    pub model: ServoModel,
     /// Servo angle (rad from its centre) at joint angle 0.
     pub zero: f64,
     /// +1 or -1.
@@ -111,7 +111,7 @@ impl JointMapping {
     }
 
     /// The servo angles the servo's position limit registers allow (its range).
-    pub fn servo_range(model: Model) -> (f64, f64) {
+    pub fn servo_range(model: ServoModel) -> (f64, f64) {
         let t = model.table();
         let r = t
             .item(Item::MaxPositionLimit)
@@ -277,14 +277,14 @@ impl RobotMapping {
             if name.is_empty() {
                 return Err(at(j.name.span(), "name", "empty".into()));
             }
-            let model = Model::parse(j.model.get_ref()).ok_or_else(|| {
+            let model = ServoModel::parse(j.model.get_ref()).ok_or_else(|| {
                 at(
                     j.model.span(),
                     "model",
                     format!(
                         "unknown model {:?}; known: {}",
                         j.model.get_ref(),
-                        Model::known_names()
+                        ServoModel::known_names()
                     ),
                 )
             })?;

@@ -14,10 +14,10 @@ use super::virtual_servo::{Fault, VirtualServo, WriteEffects};
 use crate::crc16::crc16_update;
 use crate::decoder::{Accept, DecodeEvent, Decoder, Frame};
 use crate::instruction::Instruction;
-use crate::model::Model;
 use crate::packet::PacketWriter;
 use crate::protocol::{BROADCAST_ID, Protocol};
 use crate::register::{Item, Unit};
+use crate::servo_model::ServoModel;
 use crate::transport::Responder;
 use std::time::{Duration, Instant};
 
@@ -50,7 +50,7 @@ pub struct BusStats {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct BusServo {
     pub id: u8,
-    pub model: Model,
+    pub model: ServoModel,
 }
 
 pub struct VirtualBus<B: VirtualServoBackend> {
