@@ -327,20 +327,15 @@ fn predict(
     sum
 }
 
-/// The Jacobian of the weighted residuals along the columns of `basis` (after
-/// `predict` ran at the same model). Per step only two small products are left:
-/// the inputs of the recursion for a chunk of steps are formed at once by
-/// `F = Pf [z; w]` and `G = P2 w` (`z = [x^; u; e]`, `w = [x^; u]`), where `Pf`, `P2`
-/// rearrange the basis so that column `k` of `F` is `dA x^ + dB u + dK e - K(dC x^ + dD u)`
-/// for every direction at once.
-fn jacobian(
+/// The basis rearranged for the sensitivity recursion: `P2` maps `w = [x^; u]` to
+/// `dC x^ + dD u` and `Pf = [P1, -(K applied blockwise to P2)]` maps `[z; w]`
+/// (`z = [x^; u; e]`) to `dA x^ + dB u + dK e - K(dC x^ + dD u)`, every direction at
+/// once (direction `j` in rows `n j..n (j+1)`, resp. `ny j..ny (j+1)`).
+fn recursion_maps(
     model: &StateSpace,
     l: &Layout,
     basis: &DMatrix<f64>,
-    data: &IoData,
-    lt: &DMatrix<f64>,
-    ws: &mut Workspace,
-) {
+) -> (DMatrix<f64>, DMatrix<f64>) {
     let (n, nu, ny, nd) = (l.n, l.nu, l.ny, l.nd);
     let m = basis.ncols();
     let nz = n + nu + ny;
@@ -375,6 +370,51 @@ fn jacobian(
             }
         }
     }
+    (pf, p2)
+}
+
+/// The recursion's inputs `[z; w]` of steps `k0..k0 + len` into the columns of `ws.vin`.
+fn load_chunk_inputs(l: &Layout, data: &IoData, k0: usize, len: usize, ws: &mut Workspace) {
+    let (n, nu, ny, nd) = (l.n, l.nu, l.ny, l.nd);
+    let nz = n + nu + ny;
+    for t in 0..len {
+        let k = k0 + t;
+        let mut col = ws.vin.column_mut(t);
+        for i in 0..n {
+            col[i] = ws.xs[(i, k)];
+            col[nz + i] = ws.xs[(i, k)];
+        }
+        for i in 0..nu {
+            col[n + i] = data.u[(i, k)];
+        }
+        for i in 0..ny {
+            col[n + nu + i] = ws.e[(i, k)];
+        }
+        for i in 0..nd {
+            col[nz + n + i] = data.u[(i, k)];
+        }
+    }
+}
+
+/// The Jacobian of the weighted residuals along the columns of `basis` (after
+/// `predict` ran at the same model). Per step only two small products are left:
+/// the inputs of the recursion for a chunk of steps are formed at once by
+/// `F = Pf [z; w]` and `G = P2 w` (`z = [x^; u; e]`, `w = [x^; u]`), where `Pf`, `P2`
+/// rearrange the basis so that column `k` of `F` is `dA x^ + dB u + dK e - K(dC x^ + dD u)`
+/// for every direction at once.
+fn jacobian(
+    model: &StateSpace,
+    l: &Layout,
+    basis: &DMatrix<f64>,
+    data: &IoData,
+    lt: &DMatrix<f64>,
+    ws: &mut Workspace,
+) {
+    let (n, nu, ny, nd) = (l.n, l.nu, l.ny, l.nd);
+    let m = basis.ncols();
+    let nz = n + nu + ny;
+    let nw = n + nd;
+    let (pf, p2) = recursion_maps(model, l, basis);
     ws.abar.copy_from(&model.a);
     ws.abar.gemm(-1.0, &model.k, &model.c, 1.0);
     // dx(0): the initial-state directions.
@@ -391,23 +431,7 @@ fn jacobian(
     let mut k0 = 0;
     while k0 < n_samples {
         let len = CHUNK.min(n_samples - k0);
-        for t in 0..len {
-            let k = k0 + t;
-            let mut col = ws.vin.column_mut(t);
-            for i in 0..n {
-                col[i] = ws.xs[(i, k)];
-                col[nz + i] = ws.xs[(i, k)];
-            }
-            for i in 0..nu {
-                col[n + i] = data.u[(i, k)];
-            }
-            for i in 0..ny {
-                col[n + nu + i] = ws.e[(i, k)];
-            }
-            for i in 0..nd {
-                col[nz + n + i] = data.u[(i, k)];
-            }
-        }
+        load_chunk_inputs(l, data, k0, len, ws);
         ws.f.view_mut((0, 0), (n * m, len)).gemm(
             1.0,
             &pf,
