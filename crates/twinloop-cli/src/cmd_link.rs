@@ -14,8 +14,8 @@ use twinloop_io::CsvWriter;
 use twinloop_link::control_cycle::ReadMethod;
 use twinloop_link::transport::{self, SerialOptions, Transport};
 use twinloop_link::{
-    Client, ClientConfig, DynamixelRobot, FoundServo, JointMapping, Model, Protocol, RobotMapping,
-    plan_cycle,
+    Client, ClientConfig, DynamixelRobot, FoundServo, JointMapping, Protocol, RobotMapping,
+    ServoModel, plan_cycle,
 };
 use twinloop_robot::{Robot, RobotState};
 
@@ -357,12 +357,12 @@ fn unit_name(u: twinloop_link::Unit) -> &'static str {
 fn read(a: &ReadArgs) -> CliResult {
     let mut c = open_client(&a.port, None)?;
     let model = match &a.servo_model {
-        Some(name) => match Model::parse(name) {
+        Some(name) => match ServoModel::parse(name) {
             Some(m) => m,
             None => {
                 return Err(CliError::from(format!(
                     "--servo-model {name:?}: unknown; known: {}",
-                    Model::known_names()
+                    ServoModel::known_names()
                 )));
             }
         },
@@ -373,7 +373,7 @@ fn read(a: &ReadArgs) -> CliResult {
                     "servo id {}: model number {} has no control table in twinloop (known: {})",
                     a.id,
                     s.model_number,
-                    Model::known_names()
+                    ServoModel::known_names()
                 )));
             }
             Err(e) => return Err(e.into()),

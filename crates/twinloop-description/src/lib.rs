@@ -15,6 +15,7 @@ mod load;
 pub mod mjcf;
 pub mod tree;
 pub mod urdf;
+mod xml;
 
 pub use builder::{DescriptionBuilder, JointBuilder, LinkBuilder};
 pub use description::*;

@@ -54,7 +54,7 @@
 
 use crate::description::*;
 use crate::error::DescriptionError;
-use crate::load::{
+use crate::xml::{
     Places, error_at, error_at_attr, opt_array, parse_array, parse_numbers, read_text, required,
     validate_placed,
 };
@@ -64,7 +64,7 @@ use std::path::Path;
 
 /// Read an MJCF model from text. Errors name the line, column and element.
 pub fn from_str(text: &str) -> Result<Description, DescriptionError> {
-    let doc = crate::load::parse_xml(text)?;
+    let doc = crate::xml::parse_xml(text)?;
     from_document(&doc)
 }
 
@@ -214,7 +214,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
             root,
             format!(
                 "root element is <{}>: an MJCF model has <mujoco>",
-                crate::load::qualified_name(root)
+                crate::xml::qualified_name(root)
             ),
         ));
     }
@@ -594,7 +594,7 @@ impl<'a, 'i> Reader<'a, 'i> {
 
     fn number(&self, found: Option<Found>, attr: &str) -> Result<Option<f64>, DescriptionError> {
         match found {
-            Some((n, v)) => Ok(Some(crate::load::parse_number(n, attr, v)?)),
+            Some((n, v)) => Ok(Some(crate::xml::parse_number(n, attr, v)?)),
             None => Ok(None),
         }
     }
@@ -626,91 +626,12 @@ impl<'a, 'i> Reader<'a, 'i> {
             childclass,
         } = todo;
         let parent = parent.as_ref().map(|(l, o)| (l.as_str(), *o));
-        let childclass = childclass.as_deref();
-        let name = match node.attribute("name") {
-            Some(n) => n.to_string(),
-            None => {
-                self.unnamed_bodies += 1;
-                format!("body{}", self.unnamed_bodies)
-            }
-        };
-        let childclass: Option<String> = match node.attribute("childclass") {
-            Some(c) if self.classes.contains_key(c) => Some(c.to_string()),
-            Some(c) => {
-                return Err(error_at_attr(
-                    node,
-                    "childclass",
-                    format!("unknown default class \"{c}\""),
-                ));
-            }
-            None => childclass.map(str::to_string),
-        };
+        let name = self.body_name(node);
+        let childclass = self.childclass(node, childclass)?;
         let cc = childclass.as_deref();
         let pos = opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]);
         let rot = self.orientation(node, "body", None)?;
-
-        // The joint, if any.
-        let joints: Vec<Node> = node
-            .children()
-            .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
-            .collect();
-        if joints.len() > 1 {
-            return Err(error_at(
-                node,
-                format!(
-                    "the body has {} joints: only one joint per body is supported",
-                    joints.len()
-                ),
-            ));
-        }
-        let mut joint: Option<Joint> = None;
-        let mut joint_node = node;
-        // Offset of this link's frame from the body frame (a hinge's pos).
-        let mut offset = [0.0; 3];
-        if let Some(&j) = joints.first() {
-            joint_node = j;
-            let class = self.class_of(j, cc)?;
-            let kind = if j.tag_name().name() == "freejoint" {
-                "free"
-            } else {
-                self.get(j, "joint", &class, "type")
-                    .map_or("hinge", |f| f.1)
-            };
-            match kind {
-                "free" => {
-                    if parent.is_some() {
-                        return Err(error_at(
-                            j,
-                            "a free joint is only supported on the top-level body",
-                        ));
-                    }
-                }
-                "ball" => {
-                    return Err(error_at(j, "ball joints are not supported"));
-                }
-                "hinge" | "slide" => {
-                    let hinge = kind == "hinge";
-                    if hinge && let Some((n, v)) = self.get(j, "joint", &class, "pos") {
-                        offset = parse_array::<3>(n, "pos", v)?;
-                    }
-                    let jname = match j.attribute("name") {
-                        Some(n) => n.to_string(),
-                        None => format!("{name}_joint"),
-                    };
-                    joint = Some(self.joint(j, &class, jname, hinge)?);
-                }
-                other => {
-                    let (n, _) = self.get(j, "joint", &class, "type").unwrap_or((j, other));
-                    return Err(error_at_attr(
-                        n,
-                        "type",
-                        format!(
-                            "unknown joint type \"{other}\" (expected free, ball, slide or hinge)"
-                        ),
-                    ));
-                }
-            }
-        }
+        let (joint, joint_node, offset) = self.body_joint(node, &name, parent.is_some(), cc)?;
 
         // The joint to the parent link.
         let (parent_link, parent_offset) = match parent {
@@ -753,23 +674,111 @@ impl<'a, 'i> Reader<'a, 'i> {
             self.robot.order.push(Item::Frame(self.robot.frames.len()));
             self.robot.frames.push(f);
         }
+        queue_child_bodies(node, &name, offset, childclass, pending)
+    }
 
-        let mut children = Vec::new();
-        for c in node.children().filter(Node::is_element) {
-            match c.tag_name().name() {
-                "body" => children.push(Pending {
-                    node: c,
-                    parent: Some((name.clone(), offset)),
-                    childclass: childclass.clone(),
-                }),
-                t @ ("frame" | "replicate" | "attach" | "include" | "composite" | "flexcomp") => {
-                    return Err(error_at(c, format!("<{t}> is not supported")));
-                }
-                _ => {}
+    /// The body's name; an unnamed body is `body1`, `body2`, ... in reading order.
+    fn body_name(&mut self, node: Node) -> String {
+        match node.attribute("name") {
+            Some(n) => n.to_string(),
+            None => {
+                self.unnamed_bodies += 1;
+                format!("body{}", self.unnamed_bodies)
             }
         }
-        pending.extend(children.into_iter().rev());
-        Ok(())
+    }
+
+    /// The `childclass` in force inside a body: its own (which must be a known
+    /// class), else the one inherited.
+    fn childclass(
+        &self,
+        node: Node,
+        inherited: Option<String>,
+    ) -> Result<Option<String>, DescriptionError> {
+        match node.attribute("childclass") {
+            Some(c) if self.classes.contains_key(c) => Ok(Some(c.to_string())),
+            Some(c) => Err(error_at_attr(
+                node,
+                "childclass",
+                format!("unknown default class \"{c}\""),
+            )),
+            None => Ok(inherited),
+        }
+    }
+
+    /// The body's joint, if any (at most one; a free joint only on a top-level body,
+    /// where it makes no joint), the element the joint was read from (the body
+    /// itself without one), and the offset of the link frame from the body frame (a
+    /// hinge's `pos`).
+    fn body_joint(
+        &self,
+        node: Node<'a, 'i>,
+        name: &str,
+        has_parent: bool,
+        cc: Option<&str>,
+    ) -> Result<(Option<Joint>, Node<'a, 'i>, Vec3), DescriptionError> {
+        let joints: Vec<Node> = node
+            .children()
+            .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
+            .collect();
+        if joints.len() > 1 {
+            return Err(error_at(
+                node,
+                format!(
+                    "the body has {} joints: only one joint per body is supported",
+                    joints.len()
+                ),
+            ));
+        }
+        let mut joint: Option<Joint> = None;
+        let mut joint_node = node;
+        // Offset of this link's frame from the body frame (a hinge's pos).
+        let mut offset = [0.0; 3];
+        if let Some(&j) = joints.first() {
+            joint_node = j;
+            let class = self.class_of(j, cc)?;
+            let kind = if j.tag_name().name() == "freejoint" {
+                "free"
+            } else {
+                self.get(j, "joint", &class, "type")
+                    .map_or("hinge", |f| f.1)
+            };
+            match kind {
+                "free" => {
+                    if has_parent {
+                        return Err(error_at(
+                            j,
+                            "a free joint is only supported on the top-level body",
+                        ));
+                    }
+                }
+                "ball" => {
+                    return Err(error_at(j, "ball joints are not supported"));
+                }
+                "hinge" | "slide" => {
+                    let hinge = kind == "hinge";
+                    if hinge && let Some((n, v)) = self.get(j, "joint", &class, "pos") {
+                        offset = parse_array::<3>(n, "pos", v)?;
+                    }
+                    let jname = match j.attribute("name") {
+                        Some(n) => n.to_string(),
+                        None => format!("{name}_joint"),
+                    };
+                    joint = Some(self.joint(j, &class, jname, hinge)?);
+                }
+                other => {
+                    let (n, _) = self.get(j, "joint", &class, "type").unwrap_or((j, other));
+                    return Err(error_at_attr(
+                        n,
+                        "type",
+                        format!(
+                            "unknown joint type \"{other}\" (expected free, ball, slide or hinge)"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok((joint, joint_node, offset))
     }
 
     /// A hinge or slide joint (name, parent, child and origin are set by the caller).
@@ -872,7 +881,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                     }
                     let pos = parse_array::<3>(c, "pos", required(c, "pos")?)?;
                     let rot = self.orientation(c, "inertial", None)?;
-                    let mass = crate::load::parse_number(c, "mass", required(c, "mass")?)?;
+                    let mass = crate::xml::parse_number(c, "mass", required(c, "mass")?)?;
                     let inertia = match (c.attribute("fullinertia"), c.attribute("diaginertia")) {
                         (Some(v), _) => {
                             let f = parse_array::<6>(c, "fullinertia", v)?;
@@ -962,7 +971,44 @@ impl<'a, 'i> Reader<'a, 'i> {
             Some((n, v)) => Some(from_to(n, v)?),
             None => None,
         };
-        let size = match self.get(g, "geom", &class, "size") {
+        let size = self.geom_size(g, &class)?;
+        let Some(geometry) = self.geometry(g, &class, kind, mesh, &fromto, &size)? else {
+            return Ok(());
+        };
+        let (pos, rot) = match &fromto {
+            Some((p, r, _)) => (*p, *r),
+            None => self.placement(g, "geom", &class)?,
+        };
+        let origin = pose(sub(&pos, &offset), &rot);
+        let group = self.integer(self.get(g, "geom", &class, "group"), "group", 0)?;
+        let contype = self.integer(self.get(g, "geom", &class, "contype"), "contype", 1)?;
+        let conaffinity =
+            self.integer(self.get(g, "geom", &class, "conaffinity"), "conaffinity", 1)?;
+        let name = g.attribute("name").map(str::to_string);
+        if (0..=2).contains(&group) {
+            let material =
+                self.geom_material(g, &class, name.as_deref().unwrap_or(default_name))?;
+            link.visuals.push(Shape {
+                name: name.clone(),
+                origin,
+                geometry: geometry.clone(),
+                material,
+            });
+        }
+        if contype != 0 || conaffinity != 0 {
+            link.collisions.push(Shape {
+                name,
+                origin,
+                geometry,
+                material: None,
+            });
+        }
+        Ok(())
+    }
+
+    /// A geom's `size`: one to three numbers (none when absent).
+    fn geom_size(&self, g: Node<'a, 'i>, class: &str) -> Result<Vec<f64>, DescriptionError> {
+        Ok(match self.get(g, "geom", class, "size") {
             Some((n, v)) => {
                 let s = parse_numbers(n, "size", v)?;
                 if s.is_empty() || s.len() > 3 {
@@ -975,7 +1021,21 @@ impl<'a, 'i> Reader<'a, 'i> {
                 s
             }
             None => Vec::new(),
-        };
+        })
+    }
+
+    /// The shape of a geom of type `kind` from its `size` (or `fromto`) and, for a
+    /// mesh, its asset; `None` for the types twinloop ignores (plane, height field,
+    /// ellipsoid, SDF).
+    fn geometry(
+        &self,
+        g: Node<'a, 'i>,
+        class: &str,
+        kind: &str,
+        mesh: Option<(Node<'a, 'i>, &'a str)>,
+        fromto: &Option<(Vec3, Mat, f64)>,
+        size: &[f64],
+    ) -> Result<Option<Geometry>, DescriptionError> {
         let need = |k: usize| -> Result<(), DescriptionError> {
             if size.len() < k {
                 Err(error_at(
@@ -990,7 +1050,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             }
         };
         let half_length = |need_from_size: usize| -> Result<f64, DescriptionError> {
-            match &fromto {
+            match fromto {
                 Some((_, _, h)) => Ok(*h),
                 None => {
                     need(need_from_size + 1)?;
@@ -998,7 +1058,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 }
             }
         };
-        let geometry = match kind {
+        Ok(Some(match kind {
             "sphere" => {
                 need(1)?;
                 Geometry::Sphere { radius: size[0] }
@@ -1040,64 +1100,74 @@ impl<'a, 'i> Reader<'a, 'i> {
                     scale: asset.scale,
                 }
             }
-            "plane" | "hfield" | "ellipsoid" | "sdf" => return Ok(()),
+            "plane" | "hfield" | "ellipsoid" | "sdf" => return Ok(None),
             other => {
-                let (n, _) = self.get(g, "geom", &class, "type").unwrap_or((g, other));
+                let (n, _) = self.get(g, "geom", class, "type").unwrap_or((g, other));
                 return Err(error_at_attr(
                     n,
                     "type",
                     format!("unknown geom type \"{other}\""),
                 ));
             }
-        };
-        let (pos, rot) = match &fromto {
-            Some((p, r, _)) => (*p, *r),
-            None => self.placement(g, "geom", &class)?,
-        };
-        let origin = pose(sub(&pos, &offset), &rot);
-        let group = self.integer(self.get(g, "geom", &class, "group"), "group", 0)?;
-        let contype = self.integer(self.get(g, "geom", &class, "contype"), "contype", 1)?;
-        let conaffinity =
-            self.integer(self.get(g, "geom", &class, "conaffinity"), "conaffinity", 1)?;
-        let name = g.attribute("name").map(str::to_string);
-        if (0..=2).contains(&group) {
-            let material = match self.get(g, "geom", &class, "material") {
-                Some((n, m)) => {
-                    let rgba = self.materials.get(m).ok_or_else(|| {
-                        error_at_attr(n, "material", format!("unknown material \"{m}\""))
-                    })?;
-                    Some(Material {
-                        name: m.to_string(),
-                        rgba: Some(*rgba),
-                        texture: None,
-                    })
-                }
-                None => match self.get(g, "geom", &class, "rgba") {
-                    Some((n, v)) => Some(Material {
-                        name: format!("{}_material", name.as_deref().unwrap_or(default_name)),
-                        rgba: Some(parse_array::<4>(n, "rgba", v)?),
-                        texture: None,
-                    }),
-                    None => None,
-                },
-            };
-            link.visuals.push(Shape {
-                name: name.clone(),
-                origin,
-                geometry: geometry.clone(),
-                material,
-            });
-        }
-        if contype != 0 || conaffinity != 0 {
-            link.collisions.push(Shape {
-                name,
-                origin,
-                geometry,
-                material: None,
-            });
-        }
-        Ok(())
+        }))
     }
+
+    /// A visual geom's material: its named `material`, else one made of its `rgba`
+    /// named after the geom (`name`).
+    fn geom_material(
+        &self,
+        g: Node<'a, 'i>,
+        class: &str,
+        name: &str,
+    ) -> Result<Option<Material>, DescriptionError> {
+        Ok(match self.get(g, "geom", class, "material") {
+            Some((n, m)) => {
+                let rgba = self.materials.get(m).ok_or_else(|| {
+                    error_at_attr(n, "material", format!("unknown material \"{m}\""))
+                })?;
+                Some(Material {
+                    name: m.to_string(),
+                    rgba: Some(*rgba),
+                    texture: None,
+                })
+            }
+            None => match self.get(g, "geom", class, "rgba") {
+                Some((n, v)) => Some(Material {
+                    name: format!("{name}_material"),
+                    rgba: Some(parse_array::<4>(n, "rgba", v)?),
+                    texture: None,
+                }),
+                None => None,
+            },
+        })
+    }
+}
+
+/// Queue a body's child bodies (in file order: pushed reversed onto the stack);
+/// elements that would bring in bodies twinloop cannot read are errors.
+fn queue_child_bodies<'a, 'i>(
+    node: Node<'a, 'i>,
+    name: &str,
+    offset: Vec3,
+    childclass: Option<String>,
+    pending: &mut Vec<Pending<'a, 'i>>,
+) -> Result<(), DescriptionError> {
+    let mut children = Vec::new();
+    for c in node.children().filter(Node::is_element) {
+        match c.tag_name().name() {
+            "body" => children.push(Pending {
+                node: c,
+                parent: Some((name.to_string(), offset)),
+                childclass: childclass.clone(),
+            }),
+            t @ ("frame" | "replicate" | "attach" | "include" | "composite" | "flexcomp") => {
+                return Err(error_at(c, format!("<{t}> is not supported")));
+            }
+            _ => {}
+        }
+    }
+    pending.extend(children.into_iter().rev());
+    Ok(())
 }
 
 /// `fromto="x1 y1 z1 x2 y2 z2"`: the midpoint, the rotation taking +z along the

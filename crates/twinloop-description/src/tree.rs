@@ -9,6 +9,15 @@ use std::collections::HashMap;
 impl Description {
     /// Check that the description is a tree; the error names the joint or link at fault.
     pub fn validate(&self) -> Result<(), DescriptionError> {
+        let link_ix = self.link_indices()?;
+        let parent_of = self.link_parents(&link_ix)?;
+        self.check_inertials()?;
+        self.check_one_tree(&parent_of)
+    }
+
+    /// Index of every link by name; links must have unique, non-empty names, and
+    /// there must be one.
+    fn link_indices(&self) -> Result<HashMap<&str, usize>, DescriptionError> {
         let mut link_ix: HashMap<&str, usize> = HashMap::with_capacity(self.links.len());
         for (i, l) in self.links.iter().enumerate() {
             if l.name.is_empty() {
@@ -23,6 +32,16 @@ impl Description {
         if self.links.is_empty() {
             return Err(DescriptionError::new("the robot has no links"));
         }
+        Ok(link_ix)
+    }
+
+    /// The parent link of every link, from the joints, whose names must be unique,
+    /// whose links must exist (a link the child of at most one joint) and whose
+    /// numbers must be finite.
+    fn link_parents(
+        &self,
+        link_ix: &HashMap<&str, usize>,
+    ) -> Result<Vec<Option<usize>>, DescriptionError> {
         let mut joint_names: HashMap<&str, ()> = HashMap::with_capacity(self.joints.len());
         let mut parent_of: Vec<Option<usize>> = vec![None; self.links.len()];
         for j in &self.joints {
@@ -58,37 +77,50 @@ impl Description {
                 .at_element(here()));
             }
             parent_of[c] = Some(p);
-            for v in j.origin.xyz.iter().chain(j.origin.rpy.iter()) {
-                if !v.is_finite() {
-                    return Err(DescriptionError::new("origin is not finite").at_element(here()));
-                }
-            }
-            if let Some(a) = j.axis {
-                if a.iter().any(|v| !v.is_finite()) {
-                    return Err(DescriptionError::new("axis is not finite").at_element(here()));
-                }
-                let moves = matches!(
-                    j.kind,
-                    crate::JointKind::Revolute
-                        | crate::JointKind::Continuous
-                        | crate::JointKind::Prismatic
-                );
-                if moves && a.iter().all(|v| *v == 0.0) {
-                    return Err(
-                        DescriptionError::new("a moving joint has a zero axis").at_element(here())
-                    );
-                }
-            }
-            if let Some(m) = &j.mimic
-                && !self.joints.iter().any(|o| o.name == m.joint)
-            {
-                return Err(DescriptionError::new(format!(
-                    "mimic refers to unknown joint \"{}\"",
-                    m.joint
-                ))
-                .at_element(here()));
+            self.check_joint_values(j)?;
+        }
+        Ok(parent_of)
+    }
+
+    /// A joint's origin and axis are finite, a moving joint's axis is not zero, and
+    /// a mimic names a joint that exists.
+    fn check_joint_values(&self, j: &crate::Joint) -> Result<(), DescriptionError> {
+        let here = || format!("<joint name=\"{}\">", j.name);
+        for v in j.origin.xyz.iter().chain(j.origin.rpy.iter()) {
+            if !v.is_finite() {
+                return Err(DescriptionError::new("origin is not finite").at_element(here()));
             }
         }
+        if let Some(a) = j.axis {
+            if a.iter().any(|v| !v.is_finite()) {
+                return Err(DescriptionError::new("axis is not finite").at_element(here()));
+            }
+            let moves = matches!(
+                j.kind,
+                crate::JointKind::Revolute
+                    | crate::JointKind::Continuous
+                    | crate::JointKind::Prismatic
+            );
+            if moves && a.iter().all(|v| *v == 0.0) {
+                return Err(
+                    DescriptionError::new("a moving joint has a zero axis").at_element(here())
+                );
+            }
+        }
+        if let Some(m) = &j.mimic
+            && !self.joints.iter().any(|o| o.name == m.joint)
+        {
+            return Err(DescriptionError::new(format!(
+                "mimic refers to unknown joint \"{}\"",
+                m.joint
+            ))
+            .at_element(here()));
+        }
+        Ok(())
+    }
+
+    /// Every `<inertial>` is finite.
+    fn check_inertials(&self) -> Result<(), DescriptionError> {
         for l in &self.links {
             if let Some(i) = l.inertial {
                 let vals = [
@@ -111,6 +143,11 @@ impl Description {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// Exactly one root, and every link reaches it (else it sits on a cycle).
+    fn check_one_tree(&self, parent_of: &[Option<usize>]) -> Result<(), DescriptionError> {
         let roots: Vec<usize> = (0..self.links.len())
             .filter(|&i| parent_of[i].is_none())
             .collect();

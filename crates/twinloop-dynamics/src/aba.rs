@@ -47,20 +47,39 @@ fn aba_impl<'a>(
     check_q(model, q);
     check_v(model, v, "v");
     check_v(model, tau, "tau");
-    let floating = model.is_floating();
     let base = base_placement(model, q);
     data.base_placement = base;
-    let off = model.v_offset;
-    let qj = &q[model.q_offset..];
-    let vj = &v[off..];
-
     // Pass 1: placements, velocities, bias terms, body inertias (all in base coordinates).
+    let (mut ia0, mut pa0) = velocity_pass(model, data, q, v, fext);
+    // Pass 2: articulated inertias and bias forces, leaves to root.
+    articulated_pass(model, data, tau, &mut ia0, &mut pa0);
+    // Pass 3: accelerations, root to leaves. Gravity is an upward base acceleration.
+    acceleration_pass(model, data, tau, &ia0, &pa0);
+    &data.ddq
+}
+
+/// ABA's first pass, root to leaves, at `data.base_placement`: body placements,
+/// subspaces, velocities, velocity-product accelerations, rigid inertias and bias
+/// forces (external forces subtracted). Returns the floating base's own inertia and
+/// bias force (zero for a fixed base).
+#[inline(always)]
+fn velocity_pass(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    fext: Option<(&[Force], Force)>,
+) -> (Symmetric6, Force) {
+    let floating = model.is_floating();
+    let base = data.base_placement;
+    let qj = &q[model.q_offset..];
+    let vj = &v[model.v_offset..];
     let v0 = if floating {
         Motion::from_slice(&v[0..6])
     } else {
         Motion::ZERO
     };
-    let (mut ia0, mut pa0) = if floating {
+    let (ia0, pa0) = if floating {
         let i0 = &model.base_inertia;
         let mut pa0 = v0.cross_force(&i0.mul_motion(&v0));
         if let Some((_, fb)) = fext {
@@ -93,9 +112,21 @@ fn aba_impl<'a>(
             data.pa[i] -= base.act_inv_force(&f[i]);
         }
     }
+    (ia0, pa0)
+}
 
-    // Pass 2: articulated inertias and bias forces, leaves to root.
-    let tj = &tau[off..];
+/// ABA's second pass, leaves to root: each body's articulated inertia and bias force
+/// folded into its parent's (the base's into `ia0`, `pa0`), keeping `U`, `D^-1` and
+/// `u` for the third pass.
+#[inline(always)]
+fn articulated_pass(
+    model: &Model,
+    data: &mut Data,
+    tau: &[f64],
+    ia0: &mut Symmetric6,
+    pa0: &mut Force,
+) {
+    let tj = &tau[model.v_offset..];
     for i in (0..model.nbodies).rev() {
         let s = data.s[i];
         let ia = data.ia[i];
@@ -110,19 +141,26 @@ fn aba_impl<'a>(
         let pa_a = data.pa[i] + ia_a.mul_motion(&data.c[i]) + ucol * (d_inv * u);
         let p = model.parents[i];
         if p == BASE {
-            ia0 += ia_a;
-            pa0 += pa_a;
+            *ia0 += ia_a;
+            *pa0 += pa_a;
         } else {
             data.ia[p] += ia_a;
             data.pa[p] += pa_a;
         }
     }
+}
 
-    // Pass 3: accelerations, root to leaves. Gravity is an upward base acceleration.
+/// ABA's third pass, root to leaves: the base acceleration (solving the locked
+/// system for a floating base), then each joint's, into `data.ddq`.
+#[inline(always)]
+fn acceleration_pass(model: &Model, data: &mut Data, tau: &[f64], ia0: &Symmetric6, pa0: &Force) {
+    let floating = model.is_floating();
+    let base = data.base_placement;
+    let off = model.v_offset;
     let up = Motion::new(base.rotation.tr_mul(&(-model.gravity)), Vector3::zeros());
     let a0 = if floating {
         // The base: ia0 a0 + pa0 = applied base wrench.
-        let rhs = Force::from_slice(&tau[0..6]) - pa0;
+        let rhs = Force::from_slice(&tau[0..6]) - *pa0;
         let a0 = match ia0.to_matrix6().cholesky() {
             Some(ch) => Motion::from_vector6(&ch.solve(&rhs.to_vector6())),
             // Singular only for a massless robot; report NaN rather than panic.
@@ -144,5 +182,4 @@ fn aba_impl<'a>(
         data.ddq[off + i] = qdd;
         data.a[i] = ai + data.s[i] * qdd;
     }
-    &data.ddq
 }

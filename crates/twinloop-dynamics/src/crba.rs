@@ -4,60 +4,8 @@
 use crate::data::Data;
 use crate::kinematics::{base_frame_pass, base_placement, check_q};
 use crate::model::{BASE, Model};
-use nalgebra::{DMatrix, Matrix3, Vector3};
-use twinloop_spatial::{Force, Inertia, Motion};
-
-/// A rigid inertia in the linear form (m, h = m c, I about the origin): sums of
-/// bodies are plain sums, which is what the composite pass needs.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct LinearInertia {
-    pub m: f64,
-    pub h: Vector3<f64>,
-    pub i: Matrix3<f64>,
-}
-
-impl LinearInertia {
-    pub const ZERO: LinearInertia = LinearInertia {
-        m: 0.0,
-        h: Vector3::new(0.0, 0.0, 0.0),
-        i: Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
-    };
-
-    #[inline(always)]
-    pub fn from_inertia(y: &Inertia) -> Self {
-        let c = y.com;
-        let h = c * y.mass;
-        let cc = c.dot(&c);
-        let mut i = y.inertia;
-        // Parallel-axis theorem: I_O = I_c + m (|c|^2 1 - c c^T).
-        i[(0, 0)] += y.mass * cc - h.x * c.x;
-        i[(1, 1)] += y.mass * cc - h.y * c.y;
-        i[(2, 2)] += y.mass * cc - h.z * c.z;
-        let (xy, xz, yz) = (h.x * c.y, h.x * c.z, h.y * c.z);
-        i[(0, 1)] -= xy;
-        i[(1, 0)] -= xy;
-        i[(0, 2)] -= xz;
-        i[(2, 0)] -= xz;
-        i[(1, 2)] -= yz;
-        i[(2, 1)] -= yz;
-        LinearInertia { m: y.mass, h, i }
-    }
-
-    #[inline(always)]
-    pub fn add(&mut self, o: &LinearInertia) {
-        self.m += o.m;
-        self.h += o.h;
-        self.i += o.i;
-    }
-
-    #[inline(always)]
-    pub fn mul_motion(&self, s: &Motion) -> Force {
-        Force {
-            f: s.v * self.m - self.h.cross(&s.w),
-            n: self.h.cross(&s.v) + self.i * s.w,
-        }
-    }
-}
+use nalgebra::DMatrix;
+use twinloop_spatial::{LinearInertia, Motion};
 
 /// The mass matrix M(q) (`data.mass_matrix`, upper triangle as Pinocchio fills it;
 /// [`Data::symmetrize_mass_matrix`] completes it). For a floating base the first six

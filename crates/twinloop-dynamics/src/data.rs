@@ -2,7 +2,7 @@
 
 use crate::model::Model;
 use nalgebra::{DMatrix, DVector, Vector3};
-use twinloop_spatial::{Force, Motion, Se3, Symmetric6};
+use twinloop_spatial::{Force, LinearInertia, Motion, Se3, Symmetric6};
 
 /// Workspace and results. Create one per model (and per thread); algorithms reuse
 /// it and allocate nothing.
@@ -33,7 +33,7 @@ pub struct Data {
     pub d_inv: Vec<f64>,
     pub u: Vec<f64>,
     /// Composite rigid-body inertias (CRBA), linear form about the base origin.
-    pub(crate) ycrb: Vec<crate::crba::LinearInertia>,
+    pub(crate) ycrb: Vec<LinearInertia>,
     /// Subtree masses and first moments (CoM, CoM Jacobian).
     pub subtree_mass: Vec<f64>,
     pub(crate) subtree_moment: Vec<Vector3<f64>>,
@@ -75,7 +75,7 @@ impl Data {
             u_col: vec![Force::ZERO; nb],
             d_inv: vec![0.0; nb],
             u: vec![0.0; nb],
-            ycrb: vec![crate::crba::LinearInertia::ZERO; nb],
+            ycrb: vec![LinearInertia::ZERO; nb],
             subtree_mass: vec![0.0; nb],
             subtree_moment: vec![Vector3::zeros(); nb],
             tau: DVector::zeros(model.nv),

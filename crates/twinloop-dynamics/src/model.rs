@@ -133,6 +133,105 @@ fn link_inertia(link: &twinloop_description::Link) -> Inertia {
     }
 }
 
+/// A link still to visit in the depth-first walk: (link, the body it belongs to,
+/// placement of the link in that body, the moving joint that leads to it if its body
+/// is still to be made).
+type Pending = (usize, usize, Se3, Option<usize>);
+
+/// Index of a link of a validated description.
+fn link_ix(robot: &Description, name: &str) -> usize {
+    robot.link_index(name).expect("validated")
+}
+
+/// The joints below each link, in file order.
+fn child_joints(robot: &Description) -> Vec<Vec<usize>> {
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
+    for (j, joint) in robot.joints.iter().enumerate() {
+        children[link_ix(robot, &joint.parent)].push(j);
+    }
+    children
+}
+
+/// The base link and, for a URDF "world -> floating -> base", the world link that the
+/// floating joint hangs from: that joint is then the free flyer and the world link is
+/// dropped.
+fn find_base_link(
+    robot: &Description,
+    children: &[Vec<usize>],
+) -> Result<(usize, Option<usize>), DescriptionError> {
+    let root = robot
+        .root_link()
+        .ok_or_else(|| DescriptionError::new("no single root link"))?;
+    let root = link_ix(robot, root);
+    let root_children = &children[root];
+    if root_children.len() == 1 && robot.joints[root_children[0]].kind == JointKind::Floating {
+        let fj = &robot.joints[root_children[0]];
+        if !fj.origin.is_identity() {
+            // q would then not be the base link's pose; refuse rather than mislead.
+            return Err(DescriptionError::new(
+                "the floating root joint has a non-identity <origin>: twinloop's base pose q is the base \
+                 link's world pose, so move the offset into the robot (or remove it)",
+            )
+            .at_element(format!("<joint name=\"{}\">", fj.name)));
+        }
+        return Ok((link_ix(robot, &fj.child), Some(root)));
+    }
+    Ok((root, None))
+}
+
+/// The joint type of a moving joint with unit axis `axis`: axis-aligned revolute
+/// joints get their own variants for the hot loops.
+fn joint_type(kind: JointKind, axis: &Vector3<f64>) -> JointType {
+    if kind == JointKind::Prismatic {
+        JointType::Prismatic
+    } else if *axis == Vector3::x() {
+        JointType::RevoluteX
+    } else if *axis == Vector3::y() {
+        JointType::RevoluteY
+    } else if *axis == Vector3::z() {
+        JointType::RevoluteZ
+    } else {
+        JointType::Revolute
+    }
+}
+
+/// Queue the links below `link` (placed at `placement` in `body`): a fixed joint keeps
+/// its child in the same body, a moving joint starts a new one. Pushed in reverse so
+/// children are visited in file order.
+fn push_child_links(
+    robot: &Description,
+    children: &[usize],
+    body: usize,
+    placement: Se3,
+    stack: &mut Vec<Pending>,
+) -> Result<(), DescriptionError> {
+    for &j in children.iter().rev() {
+        let joint = &robot.joints[j];
+        let child = link_ix(robot, &joint.child);
+        let origin = placement * pose_to_se3(&joint.origin);
+        let here = || format!("<joint name=\"{}\">", joint.name);
+        match joint.kind {
+            JointKind::Fixed => stack.push((child, body, origin, None)),
+            JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic => {
+                stack.push((child, body, origin, Some(j)));
+            }
+            JointKind::Floating => {
+                return Err(DescriptionError::new(
+                    "a floating joint is only supported as the root joint (world -> base)",
+                )
+                .at_element(here()));
+            }
+            JointKind::Planar => {
+                return Err(DescriptionError::new(
+                    "planar joints are not supported by the dynamics",
+                )
+                .at_element(here()));
+            }
+        }
+    }
+    Ok(())
+}
+
 impl Model {
     /// Compile with a floating base (the usual case for a humanoid).
     pub fn from_description(robot: &Description) -> Result<Model, DescriptionError> {
@@ -146,35 +245,37 @@ impl Model {
         base: BaseKind,
     ) -> Result<Model, DescriptionError> {
         robot.validate()?;
-        let root = robot
-            .root_link()
-            .ok_or_else(|| DescriptionError::new("no single root link"))?;
-        let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
-        let link_ix = |name: &str| robot.link_index(name).expect("validated");
-        for (j, joint) in robot.joints.iter().enumerate() {
-            children[link_ix(&joint.parent)].push(j);
+        let children = child_joints(robot);
+        let (base_link, dropped_root) = find_base_link(robot, &children)?;
+        let mut m = Model::without_bodies(robot, base, base_link);
+        let mut link_info: Vec<Option<LinkInfo>> = vec![None; robot.links.len()];
+        if let Some(r) = dropped_root {
+            // The world link of a "world -> floating" URDF is not part of the robot.
+            link_info[r] = Some(LinkInfo {
+                name: robot.links[r].name.clone(),
+                body: BASE,
+                placement: Se3::IDENTITY,
+                inertia: Inertia::ZERO,
+            });
         }
-        let mut base_link = link_ix(root);
-        let root_children = &children[base_link];
-        let mut dropped_root = None;
-        if root_children.len() == 1 && robot.joints[root_children[0]].kind == JointKind::Floating {
-            // URDF "world -> floating -> base": the floating joint is the free flyer.
-            let fj = &robot.joints[root_children[0]];
-            if !fj.origin.is_identity() {
-                // q would then not be the base link's pose; refuse rather than mislead.
-                return Err(DescriptionError::new(
-                    "the floating root joint has a non-identity <origin>: twinloop's base pose q is the base \
-                     link's world pose, so move the offset into the robot (or remove it)",
-                )
-                .at_element(format!("<joint name=\"{}\">", fj.name)));
-            }
-            dropped_root = Some(base_link);
-            base_link = link_ix(&robot.joints[root_children[0]].child);
+        m.add_bodies(robot, &children, base_link, &mut link_info)?;
+        m.number_subtrees();
+        m.add_frames(robot, link_info)?;
+        if base != BaseKind::Floating {
+            m.base_inertia = Inertia::ZERO;
         }
-        let floating = base == BaseKind::Floating;
-        let (q_offset, v_offset) = if floating { (7, 6) } else { (0, 0) };
+        m.total_mass = m.base_inertia.mass + m.inertias.iter().map(|i| i.mass).sum::<f64>();
+        Ok(m)
+    }
 
-        let mut m = Model {
+    /// The model of the base alone: offsets set, every per-body list empty.
+    fn without_bodies(robot: &Description, base: BaseKind, base_link: usize) -> Model {
+        let (q_offset, v_offset) = if base == BaseKind::Floating {
+            (7, 6)
+        } else {
+            (0, 0)
+        };
+        Model {
             name: robot.name.clone(),
             base,
             base_link: robot.links[base_link].name.clone(),
@@ -201,79 +302,29 @@ impl Model {
             frames: Vec::new(),
             links: Vec::new(),
             total_mass: 0.0,
-        };
-        let mut link_info: Vec<Option<LinkInfo>> = vec![None; robot.links.len()];
-        if let Some(r) = dropped_root {
-            // The world link of a "world -> floating" URDF is not part of the robot.
-            link_info[r] = Some(LinkInfo {
-                name: robot.links[r].name.clone(),
-                body: BASE,
-                placement: Se3::IDENTITY,
-                inertia: Inertia::ZERO,
-            });
         }
+    }
 
-        // Depth-first walk: (link, body it belongs to, placement of link in that body,
-        // the moving joint that leads to it if its body is still to be made). A body is
-        // numbered when its link is reached, not when its parent is, so that bodies come
-        // in depth-first pre-order with children in file order, and every subtree is a
-        // contiguous range.
-        let mut stack: Vec<(usize, usize, Se3, Option<usize>)> =
-            vec![(base_link, BASE, Se3::IDENTITY, None)];
+    /// Walk the tree from the base link depth-first, making a body at every moving
+    /// joint and adding each link's inertia to its body; `link_info` gets where each
+    /// link is. A body is numbered when its link is reached, not when its parent is, so
+    /// that bodies come in depth-first pre-order with children in file order, and every
+    /// subtree is a contiguous range.
+    fn add_bodies(
+        &mut self,
+        robot: &Description,
+        children: &[Vec<usize>],
+        base_link: usize,
+        link_info: &mut [Option<LinkInfo>],
+    ) -> Result<(), DescriptionError> {
+        let mut stack: Vec<Pending> = vec![(base_link, BASE, Se3::IDENTITY, None)];
         while let Some((link, parent_body, placement, via)) = stack.pop() {
             let (body, placement) = match via {
                 None => (parent_body, placement),
-                Some(j) => {
-                    let joint = &robot.joints[j];
-                    let here = || format!("<joint name=\"{}\">", joint.name);
-                    let a = joint.axis_or_default();
-                    let axis = Vector3::new(a[0], a[1], a[2]);
-                    let n = axis.norm();
-                    if n.is_nan() || n <= 1e-12 {
-                        return Err(
-                            DescriptionError::new("a moving joint needs a non-zero axis")
-                                .at_element(here()),
-                        );
-                    }
-                    let axis = axis / n;
-                    let jt = if joint.kind == JointKind::Prismatic {
-                        JointType::Prismatic
-                    } else if axis == Vector3::x() {
-                        JointType::RevoluteX
-                    } else if axis == Vector3::y() {
-                        JointType::RevoluteY
-                    } else if axis == Vector3::z() {
-                        JointType::RevoluteZ
-                    } else {
-                        JointType::Revolute
-                    };
-                    let lim = joint.limit.unwrap_or_default();
-                    let new_body = m.parents.len();
-                    m.parents.push(parent_body);
-                    m.joint_types.push(jt);
-                    m.axes.push(axis);
-                    // `placement` is the joint frame in the parent body.
-                    m.joint_placements.push(placement);
-                    m.inertias.push(Inertia::ZERO);
-                    m.joint_names.push(joint.name.clone());
-                    m.body_names.push(joint.child.clone());
-                    let continuous = joint.kind == JointKind::Continuous;
-                    m.lower_limits.push(if continuous {
-                        f64::NEG_INFINITY
-                    } else {
-                        lim.lower.unwrap_or(f64::NEG_INFINITY)
-                    });
-                    m.upper_limits.push(if continuous {
-                        f64::INFINITY
-                    } else {
-                        lim.upper.unwrap_or(f64::INFINITY)
-                    });
-                    m.effort_limits.push(lim.effort.unwrap_or(f64::INFINITY));
-                    m.velocity_limits
-                        .push(lim.velocity.unwrap_or(f64::INFINITY));
-                    m.armature.push(0.0);
-                    (new_body, Se3::IDENTITY)
-                }
+                Some(j) => (
+                    self.add_joint_body(&robot.joints[j], parent_body, placement)?,
+                    Se3::IDENTITY,
+                ),
             };
             let own = link_inertia(&robot.links[link]);
             link_info[link] = Some(LinkInfo {
@@ -284,59 +335,95 @@ impl Model {
             });
             let in_body = own.transformed(&placement);
             if body == BASE {
-                m.base_inertia += in_body;
+                self.base_inertia += in_body;
             } else {
-                m.inertias[body] += in_body;
+                self.inertias[body] += in_body;
             }
-            // Push in reverse so children are visited in file order.
-            for &j in children[link].iter().rev() {
-                let joint = &robot.joints[j];
-                let child = link_ix(&joint.child);
-                let origin = placement * pose_to_se3(&joint.origin);
-                let here = || format!("<joint name=\"{}\">", joint.name);
-                match joint.kind {
-                    JointKind::Fixed => stack.push((child, body, origin, None)),
-                    JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic => {
-                        stack.push((child, body, origin, Some(j)));
-                    }
-                    JointKind::Floating => {
-                        return Err(DescriptionError::new(
-                            "a floating joint is only supported as the root joint (world -> base)",
-                        )
-                        .at_element(here()));
-                    }
-                    JointKind::Planar => {
-                        return Err(DescriptionError::new(
-                            "planar joints are not supported by the dynamics",
-                        )
-                        .at_element(here()));
-                    }
-                }
-            }
+            push_child_links(robot, &children[link], body, placement, &mut stack)?;
         }
-        m.nbodies = m.parents.len();
-        m.nq += m.nbodies;
-        m.nv += m.nbodies;
-        // Depth-first numbering: a subtree is a contiguous range.
-        m.subtree_end = (0..m.nbodies).map(|i| i + 1).collect();
-        for i in (0..m.nbodies).rev() {
-            let p = m.parents[i];
+        Ok(())
+    }
+
+    /// A new body moved by `joint`, whose frame sits at `placement` in `parent_body`;
+    /// returns its index. Its inertia starts at zero.
+    fn add_joint_body(
+        &mut self,
+        joint: &twinloop_description::Joint,
+        parent_body: usize,
+        placement: Se3,
+    ) -> Result<usize, DescriptionError> {
+        let a = joint.axis_or_default();
+        let axis = Vector3::new(a[0], a[1], a[2]);
+        let n = axis.norm();
+        if n.is_nan() || n <= 1e-12 {
+            return Err(
+                DescriptionError::new("a moving joint needs a non-zero axis")
+                    .at_element(format!("<joint name=\"{}\">", joint.name)),
+            );
+        }
+        let axis = axis / n;
+        let lim = joint.limit.unwrap_or_default();
+        let new_body = self.parents.len();
+        self.parents.push(parent_body);
+        self.joint_types.push(joint_type(joint.kind, &axis));
+        self.axes.push(axis);
+        // `placement` is the joint frame in the parent body.
+        self.joint_placements.push(placement);
+        self.inertias.push(Inertia::ZERO);
+        self.joint_names.push(joint.name.clone());
+        self.body_names.push(joint.child.clone());
+        let continuous = joint.kind == JointKind::Continuous;
+        self.lower_limits.push(if continuous {
+            f64::NEG_INFINITY
+        } else {
+            lim.lower.unwrap_or(f64::NEG_INFINITY)
+        });
+        self.upper_limits.push(if continuous {
+            f64::INFINITY
+        } else {
+            lim.upper.unwrap_or(f64::INFINITY)
+        });
+        self.effort_limits.push(lim.effort.unwrap_or(f64::INFINITY));
+        self.velocity_limits
+            .push(lim.velocity.unwrap_or(f64::INFINITY));
+        self.armature.push(0.0);
+        Ok(new_body)
+    }
+
+    /// Count the bodies into `nq`, `nv` and `subtree_end`. Depth-first numbering makes
+    /// a subtree a contiguous range.
+    fn number_subtrees(&mut self) {
+        self.nbodies = self.parents.len();
+        self.nq += self.nbodies;
+        self.nv += self.nbodies;
+        self.subtree_end = (0..self.nbodies).map(|i| i + 1).collect();
+        for i in (0..self.nbodies).rev() {
+            let p = self.parents[i];
             if p != BASE {
-                m.subtree_end[p] = m.subtree_end[p].max(m.subtree_end[i]);
+                self.subtree_end[p] = self.subtree_end[p].max(self.subtree_end[i]);
             }
         }
+    }
+
+    /// A frame per link (in description order, every link must have been reached),
+    /// then the description's named frames.
+    fn add_frames(
+        &mut self,
+        robot: &Description,
+        link_info: Vec<Option<LinkInfo>>,
+    ) -> Result<(), DescriptionError> {
         for (l, info) in link_info.into_iter().enumerate() {
             let info = info.ok_or_else(|| {
                 DescriptionError::new("link is not reachable from the root")
                     .at_element(format!("<link name=\"{}\">", robot.links[l].name))
             })?;
-            m.frames.push(FrameInfo {
+            self.frames.push(FrameInfo {
                 name: info.name.clone(),
                 body: info.body,
                 placement: info.placement,
                 link: Some(l),
             });
-            m.links.push(info);
+            self.links.push(info);
         }
         for f in &robot.frames {
             let l = robot.link_index(&f.link).ok_or_else(|| {
@@ -345,19 +432,15 @@ impl Model {
                     f.name, f.link
                 ))
             })?;
-            let li = &m.links[l];
-            m.frames.push(FrameInfo {
+            let li = &self.links[l];
+            self.frames.push(FrameInfo {
                 name: f.name.clone(),
                 body: li.body,
                 placement: li.placement * pose_to_se3(&f.origin),
                 link: None,
             });
         }
-        if !floating {
-            m.base_inertia = Inertia::ZERO;
-        }
-        m.total_mass = m.base_inertia.mass + m.inertias.iter().map(|i| i.mass).sum::<f64>();
-        Ok(m)
+        Ok(())
     }
 
     pub fn is_floating(&self) -> bool {

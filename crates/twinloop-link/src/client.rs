@@ -10,9 +10,9 @@ use crate::crc16::crc16_update;
 use crate::decoder::{Accept, Decoder};
 use crate::instruction::Instruction;
 use crate::link_error::{LinkError, Outcome};
-use crate::model::Model;
 use crate::packet::PacketWriter;
 use crate::protocol::{BROADCAST_ID, Protocol};
+use crate::servo_model::ServoModel;
 use crate::status_error::StatusError;
 use crate::transport::Transport;
 use std::ops::RangeInclusive;
@@ -65,7 +65,7 @@ pub struct FoundServo {
     pub model_number: u16,
     pub firmware: u8,
     /// The model, when twinloop knows the number.
-    pub model: Option<Model>,
+    pub model: Option<ServoModel>,
 }
 
 /// One servo's part of a BULK_READ.
@@ -316,7 +316,7 @@ impl<T: Transport> Client<T> {
             id,
             model_number,
             firmware,
-            model: Model::from_model_number(model_number),
+            model: ServoModel::from_model_number(model_number),
         })
     }
 
@@ -341,7 +341,7 @@ impl<T: Transport> Client<T> {
                         id: f.id,
                         model_number,
                         firmware: f.params[3],
-                        model: Model::from_model_number(model_number),
+                        model: ServoModel::from_model_number(model_number),
                     });
                 }
             }

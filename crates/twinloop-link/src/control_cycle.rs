@@ -8,9 +8,9 @@
 
 use crate::client::{BulkRead, Client};
 use crate::link_error::{LinkError, Outcome};
-use crate::model::Model;
 use crate::protocol::Protocol;
 use crate::register::{Item, Register};
+use crate::servo_model::ServoModel;
 use crate::status_error::StatusError;
 use crate::transport::Transport;
 use std::fmt;
@@ -19,7 +19,7 @@ use std::fmt;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CycleServo {
     pub id: u8,
-    pub model: Model,
+    pub model: ServoModel,
 }
 
 /// How a group of servos is read.
@@ -197,23 +197,26 @@ impl ControlCycle {
                 continue;
             }
             let models: Vec<&CycleServo> = members.iter().map(|&i| &servos[i]).collect();
-            let lacking = |has: fn(Model) -> bool| models.iter().find(|s| !has(s.model)).copied();
+            let lacking =
+                |has: fn(ServoModel) -> bool| models.iter().find(|s| !has(s.model)).copied();
             let chosen = match method {
                 ReadMethod::Auto => match protocol {
-                    Protocol::V2 if lacking(Model::has_fast_sync_read).is_none() => {
+                    Protocol::V2 if lacking(ServoModel::has_fast_sync_read).is_none() => {
                         ReadMethod::FastSyncRead
                     }
                     Protocol::V2 => ReadMethod::SyncRead,
-                    Protocol::V1 if lacking(Model::has_bulk_read).is_none() && models.len() > 1 => {
+                    Protocol::V1
+                        if lacking(ServoModel::has_bulk_read).is_none() && models.len() > 1 =>
+                    {
                         ReadMethod::BulkRead
                     }
                     Protocol::V1 => ReadMethod::Read,
                 },
                 m => {
-                    let check: Option<fn(Model) -> bool> = match m {
-                        ReadMethod::BulkRead => Some(Model::has_bulk_read),
-                        ReadMethod::SyncRead => Some(Model::has_sync_read),
-                        ReadMethod::FastSyncRead => Some(Model::has_fast_sync_read),
+                    let check: Option<fn(ServoModel) -> bool> = match m {
+                        ReadMethod::BulkRead => Some(ServoModel::has_bulk_read),
+                        ReadMethod::SyncRead => Some(ServoModel::has_sync_read),
+                        ReadMethod::FastSyncRead => Some(ServoModel::has_fast_sync_read),
                         _ => None,
                     };
                     if let Some(has) = check

@@ -5,25 +5,36 @@
 //! MX-28/64/106(2.0) pages, EM-XM (XM430-W350) and the XL430-W250 page. Indirect
 //! Address/Data blocks are not listed (nothing here uses them).
 
-use crate::model::Model;
 use crate::protocol::Protocol;
 use crate::register::{Access, Area, DEGREE, Encoding, Item, RPM, Register, Unit};
+use crate::servo_model::ServoModel;
 use std::sync::OnceLock;
 
 /// A model's control table.
 #[derive(Debug)]
 pub struct ControlTable {
-    pub model: Model,
+    pub model: ServoModel,
     /// Registers in address order.
     pub registers: Vec<Register>,
 }
 
+/// The table of a servo model. Defined here rather than beside [`ServoModel`] so
+/// that the dependency runs one way: tables know servo models, not the reverse.
+impl ServoModel {
+    pub fn table(self) -> &'static ControlTable {
+        ControlTable::of(self)
+    }
+}
+
 impl ControlTable {
     /// The table of `model` (built once, then shared).
-    pub fn of(model: Model) -> &'static ControlTable {
+    pub fn of(model: ServoModel) -> &'static ControlTable {
         static TABLES: OnceLock<Vec<ControlTable>> = OnceLock::new();
-        let tables = TABLES.get_or_init(|| Model::ALL.iter().map(|&m| build(m)).collect());
-        let k = Model::ALL.iter().position(|&m| m == model).unwrap_or(0);
+        let tables = TABLES.get_or_init(|| ServoModel::ALL.iter().map(|&m| build(m)).collect());
+        let k = ServoModel::ALL
+            .iter()
+            .position(|&m| m == model)
+            .unwrap_or(0);
         &tables[k]
     }
 
@@ -193,10 +204,10 @@ fn with(mut r: Register, encoding: Encoding, unit: Unit) -> Register {
 
 use Area::{Eeprom as E, Ram as R};
 
-fn build(model: Model) -> ControlTable {
+fn build(model: ServoModel) -> ControlTable {
     let registers = match model {
-        Model::Rx28 | Model::Rx64 => table_rx(),
-        Model::Mx28 | Model::Mx64 | Model::Mx106 => table_mx_v1(model),
+        ServoModel::Rx28 | ServoModel::Rx64 => table_rx(),
+        ServoModel::Mx28 | ServoModel::Mx64 | ServoModel::Mx106 => table_mx_v1(model),
         _ => table_v2(model),
     };
     let mut registers = registers;
@@ -309,7 +320,7 @@ fn table_rx() -> Vec<Register> {
 /// MX-28 / MX-64 / MX-106 with Protocol 1.0 firmware (e-manual MX pages). Position
 /// 0..4095 over 360 degrees (0.088 deg/unit, 2048 = centre; multi-turn -28672..28672),
 /// speed 0.114 rpm/unit, load 0.1 %/unit.
-fn table_mx_v1(model: Model) -> Vec<Register> {
+fn table_mx_v1(model: ServoModel) -> Vec<Register> {
     let angle = Unit::Angle {
         rad_per_unit: 360.0 / 4096.0 * DEGREE,
         center: 2048,
@@ -402,7 +413,7 @@ fn table_mx_v1(model: Model) -> Vec<Register> {
         rw("Goal Acceleration", None, 73, 1, R, Some(0), 0, 254),
     ]);
     v.extend(common_v1_tail(speed, load, 0));
-    if matches!(model, Model::Mx64 | Model::Mx106) {
+    if matches!(model, ServoModel::Mx64 | ServoModel::Mx106) {
         let current = Unit::Current {
             amps_per_unit: 0.0045,
             zero: 2048,
@@ -449,7 +460,7 @@ fn table_mx_v1(model: Model) -> Vec<Register> {
             ),
         ]);
     }
-    if model == Model::Mx106 {
+    if model == ServoModel::Mx106 {
         v.push(rw("Drive Mode", None, 10, 1, E, Some(0), 0, 3));
     }
     v
@@ -666,7 +677,7 @@ fn common_v1_tail(speed: Unit, load: Unit, punch: i32) -> Vec<Register> {
 /// (2.0) pages). Position 0.088 deg/unit (4096 per turn, 2048 = centre), velocity
 /// 0.229 rpm/unit, current 2.69 mA/unit (XM430) or 3.36 mA/unit (MX-64/106), load
 /// 0.1 %/unit where the model senses no current (XL430, MX-28).
-fn table_v2(model: Model) -> Vec<Register> {
+fn table_v2(model: ServoModel) -> Vec<Register> {
     let angle = Unit::Angle {
         rad_per_unit: 360.0 / 4096.0 * DEGREE,
         center: 2048,
@@ -676,29 +687,29 @@ fn table_v2(model: Model) -> Vec<Register> {
     };
     // (Current Limit initial, A per unit) for models that sense current.
     let current = match model {
-        Model::Xm430W350 => Some((1193, 0.00269)),
-        Model::Mx64V2 => Some((1941, 0.00336)),
-        Model::Mx106V2 => Some((2047, 0.00336)),
+        ServoModel::Xm430W350 => Some((1193, 0.00269)),
+        ServoModel::Mx64V2 => Some((1941, 0.00336)),
+        ServoModel::Mx106V2 => Some((2047, 0.00336)),
         _ => None,
     };
     let velocity_limit = match model {
-        Model::Xm430W350 => 350,
-        Model::Xl430W250 => 265,
-        Model::Mx28V2 => 380,
-        Model::Mx64V2 => 435,
-        Model::Mx106V2 => 210,
+        ServoModel::Xm430W350 => 350,
+        ServoModel::Xl430W250 => 265,
+        ServoModel::Mx28V2 => 380,
+        ServoModel::Mx64V2 => 435,
+        ServoModel::Mx106V2 => 210,
         _ => 1023,
     };
     let (max_volt, min_volt, volt_lo, volt_hi) = match model {
-        Model::Xl430W250 => (140, 60, 60, 140),
+        ServoModel::Xl430W250 => (140, 60, 60, 140),
         _ => (160, 95, 95, 160),
     };
     let position_p = match model {
-        Model::Xm430W350 => 800,
-        Model::Xl430W250 => 640,
+        ServoModel::Xm430W350 => 800,
+        ServoModel::Xl430W250 => 640,
         _ => 850,
     };
-    let velocity_i = if model == Model::Xl430W250 {
+    let velocity_i = if model == ServoModel::Xl430W250 {
         1000
     } else {
         1920
@@ -1134,7 +1145,10 @@ fn table_v2(model: Model) -> Vec<Register> {
             Unit::LoadRatio { per_unit: 0.001 },
         )),
     }
-    if matches!(model, Model::Mx28V2 | Model::Mx64V2 | Model::Mx106V2) {
+    if matches!(
+        model,
+        ServoModel::Mx28V2 | ServoModel::Mx64V2 | ServoModel::Mx106V2
+    ) {
         v.push(rw(
             "Acceleration Limit",
             None,

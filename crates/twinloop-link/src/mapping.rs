@@ -21,9 +21,9 @@
 //!
 //! servo angle = zero + direction * joint angle. Joint order is file order.
 
-use crate::model::Model;
 use crate::protocol::Protocol;
 use crate::register::{Item, Register};
+use crate::servo_model::ServoModel;
 use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -60,7 +60,7 @@ pub struct JointMapping {
     pub name: String,
     pub id: u8,
     pub protocol: Protocol,
-    pub model: Model,
+    pub model: ServoModel,
     /// Servo angle (rad from its centre) at joint angle 0.
     pub zero: f64,
     /// +1 or -1.
@@ -111,7 +111,7 @@ impl JointMapping {
     }
 
     /// The servo angles the servo's position limit registers allow (its range).
-    pub fn servo_range(model: Model) -> (f64, f64) {
+    pub fn servo_range(model: ServoModel) -> (f64, f64) {
         let t = model.table();
         let r = t
             .item(Item::MaxPositionLimit)
@@ -168,6 +168,178 @@ struct RawJoint {
     direction: Option<Spanned<i64>>,
     min: Option<Spanned<f64>>,
     max: Option<Spanned<f64>>,
+}
+
+/// An error about field `field` of joint `name`, at the start of `span`.
+type JointError<'a> = dyn Fn(std::ops::Range<usize>, &str, String) -> MappingError + 'a;
+
+/// One `[[joint]]` entry (starting on line `line`), checked against itself and the
+/// joints before it (`earlier`): names and (id, protocol) pairs are unique.
+fn parse_joint(
+    j: RawJoint,
+    line: usize,
+    earlier: &[JointMapping],
+    err_at: &dyn Fn(usize, String) -> MappingError,
+) -> Result<JointMapping, MappingError> {
+    let name = j.name.get_ref().trim().to_string();
+    let at = |s: std::ops::Range<usize>, field: &str, msg: String| {
+        err_at(s.start, format!("joint {name:?}: {field}: {msg}"))
+    };
+    if name.is_empty() {
+        return Err(at(j.name.span(), "name", "empty".into()));
+    }
+    let model = ServoModel::parse(j.model.get_ref()).ok_or_else(|| {
+        at(
+            j.model.span(),
+            "model",
+            format!(
+                "unknown model {:?}; known: {}",
+                j.model.get_ref(),
+                ServoModel::known_names()
+            ),
+        )
+    })?;
+    let protocol = joint_protocol(&j, model, &at)?;
+    let id = *j.id.get_ref();
+    if id < 0 || id > protocol.max_id() as i64 {
+        return Err(at(
+            j.id.span(),
+            "id",
+            format!(
+                "servo id {id} outside 0..={} ({protocol})",
+                protocol.max_id()
+            ),
+        ));
+    }
+    let id = id as u8;
+    let direction = match &j.direction {
+        None => 1.0,
+        Some(d) => match *d.get_ref() {
+            1 => 1.0,
+            -1 => -1.0,
+            v => return Err(at(d.span(), "direction", format!("{v} is not 1 or -1"))),
+        },
+    };
+    let zero = j.zero.as_ref().map(|z| *z.get_ref()).unwrap_or(0.0);
+    if !zero.is_finite() {
+        return Err(at(
+            j.zero.as_ref().unwrap().span(),
+            "zero",
+            "not a finite number".into(),
+        ));
+    }
+    let (lo, hi) = joint_limits(&j, model, id, zero, direction, &at)?;
+    if let Some(other) = earlier.iter().find(|o| o.name == name) {
+        return Err(at(
+            j.name.span(),
+            "name",
+            format!("joint listed twice (first on line {})", other.line),
+        ));
+    }
+    if let Some(other) = earlier
+        .iter()
+        .find(|o| o.id == id && o.protocol == protocol)
+    {
+        return Err(at(
+            j.id.span(),
+            "id",
+            format!(
+                "servo id {id} ({protocol}) already drives joint {:?} (line {})",
+                other.name, other.line
+            ),
+        ));
+    }
+    Ok(JointMapping {
+        name,
+        id,
+        protocol,
+        model,
+        zero,
+        direction,
+        min: lo,
+        max: hi,
+        line,
+    })
+}
+
+/// The joint's protocol: the model's, which an explicit `protocol` (1 or 2) must match.
+fn joint_protocol(
+    j: &RawJoint,
+    model: ServoModel,
+    at: &JointError,
+) -> Result<Protocol, MappingError> {
+    Ok(match &j.protocol {
+        None => model.protocol(),
+        Some(p) => {
+            let parsed = match p.get_ref() {
+                RawProtocol::Int(1) => Some(Protocol::V1),
+                RawProtocol::Int(2) => Some(Protocol::V2),
+                RawProtocol::Float(v) if *v == 1.0 => Some(Protocol::V1),
+                RawProtocol::Float(v) if *v == 2.0 => Some(Protocol::V2),
+                RawProtocol::Text(t) => Protocol::parse(t),
+                _ => None,
+            };
+            let parsed = parsed.ok_or_else(|| at(p.span(), "protocol", "must be 1 or 2".into()))?;
+            if parsed != model.protocol() {
+                return Err(at(
+                    p.span(),
+                    "protocol",
+                    format!(
+                        "{model} runs {}; for the other firmware name the model so (e.g. MX-28(2.0))",
+                        model.protocol()
+                    ),
+                ));
+            }
+            parsed
+        }
+    })
+}
+
+/// The joint's limits: `min` and `max` where given (within what the servo reaches
+/// through `zero` and `direction`), else the servo's reach; never empty.
+fn joint_limits(
+    j: &RawJoint,
+    model: ServoModel,
+    id: u8,
+    zero: f64,
+    direction: f64,
+    at: &JointError,
+) -> Result<(f64, f64), MappingError> {
+    let (smin, smax) = JointMapping::servo_range(model);
+    // The joint angles the servo can reach.
+    let (a, b) = (direction * (smin - zero), direction * (smax - zero));
+    let (reach_min, reach_max) = (a.min(b), a.max(b));
+    let min = j.min.as_ref().map(|v| (*v.get_ref(), v.span()));
+    let max = j.max.as_ref().map(|v| (*v.get_ref(), v.span()));
+    let lo = min.clone().map(|v| v.0).unwrap_or(reach_min);
+    let hi = max.clone().map(|v| v.0).unwrap_or(reach_max);
+    if let Some((v, span)) = &min
+        && (!v.is_finite() || *v < reach_min - 1e-9)
+    {
+        return Err(at(
+            span.clone(),
+            "min",
+            format!(
+                "{v} rad is outside what servo id {id} ({model}) reaches: {reach_min:.4}..{reach_max:.4} rad"
+            ),
+        ));
+    }
+    if let Some((v, span)) = &max
+        && (!v.is_finite() || *v > reach_max + 1e-9)
+    {
+        return Err(at(
+            span.clone(),
+            "max",
+            format!(
+                "{v} rad is outside what servo id {id} ({model}) reaches: {reach_min:.4}..{reach_max:.4} rad"
+            ),
+        ));
+    }
+    if lo >= hi {
+        let span = max.map(|m| m.1).unwrap_or(j.name.span());
+        return Err(at(span, "max", format!("limits {lo} .. {hi} are empty")));
+    }
+    Ok((lo, hi))
 }
 
 /// 1-based line and column of byte `offset` in `text`.
@@ -249,167 +421,39 @@ impl RobotMapping {
             source: source.to_string(),
         };
         if let Some(robot) = raw.robot {
-            let robot = robot.into_inner();
-            mapping.name = robot.name.unwrap_or_default();
-            mapping.urdf = robot.urdf.map(PathBuf::from);
-            mapping.port = robot.port;
-            if let Some(b) = robot.baud {
-                let v = *b.get_ref();
-                if !(1..=10_000_000).contains(&v) {
-                    return Err(err_at(
-                        b.span().start,
-                        format!("robot.baud: {v} is not a bit rate"),
-                    ));
-                }
-                mapping.baud = Some(v as u32);
-            }
+            mapping.read_robot(robot.into_inner(), &err_at)?;
         }
         if raw.joint.is_empty() {
             return Err(err_at(0, "no [[joint]] entries".into()));
         }
         for entry in raw.joint {
-            let entry_start = entry.span().start;
-            let j = entry.into_inner();
-            let name = j.name.get_ref().trim().to_string();
-            let at = |s: std::ops::Range<usize>, field: &str, msg: String| {
-                err_at(s.start, format!("joint {name:?}: {field}: {msg}"))
-            };
-            if name.is_empty() {
-                return Err(at(j.name.span(), "name", "empty".into()));
-            }
-            let model = Model::parse(j.model.get_ref()).ok_or_else(|| {
-                at(
-                    j.model.span(),
-                    "model",
-                    format!(
-                        "unknown model {:?}; known: {}",
-                        j.model.get_ref(),
-                        Model::known_names()
-                    ),
-                )
-            })?;
-            let protocol = match &j.protocol {
-                None => model.protocol(),
-                Some(p) => {
-                    let parsed = match p.get_ref() {
-                        RawProtocol::Int(1) => Some(Protocol::V1),
-                        RawProtocol::Int(2) => Some(Protocol::V2),
-                        RawProtocol::Float(v) if *v == 1.0 => Some(Protocol::V1),
-                        RawProtocol::Float(v) if *v == 2.0 => Some(Protocol::V2),
-                        RawProtocol::Text(t) => Protocol::parse(t),
-                        _ => None,
-                    };
-                    let parsed =
-                        parsed.ok_or_else(|| at(p.span(), "protocol", "must be 1 or 2".into()))?;
-                    if parsed != model.protocol() {
-                        return Err(at(
-                            p.span(),
-                            "protocol",
-                            format!(
-                                "{model} runs {}; for the other firmware name the model so (e.g. MX-28(2.0))",
-                                model.protocol()
-                            ),
-                        ));
-                    }
-                    parsed
-                }
-            };
-            let id = *j.id.get_ref();
-            if id < 0 || id > protocol.max_id() as i64 {
-                return Err(at(
-                    j.id.span(),
-                    "id",
-                    format!(
-                        "servo id {id} outside 0..={} ({protocol})",
-                        protocol.max_id()
-                    ),
-                ));
-            }
-            let id = id as u8;
-            let direction = match &j.direction {
-                None => 1.0,
-                Some(d) => match *d.get_ref() {
-                    1 => 1.0,
-                    -1 => -1.0,
-                    v => return Err(at(d.span(), "direction", format!("{v} is not 1 or -1"))),
-                },
-            };
-            let zero = j.zero.as_ref().map(|z| *z.get_ref()).unwrap_or(0.0);
-            if !zero.is_finite() {
-                return Err(at(
-                    j.zero.as_ref().unwrap().span(),
-                    "zero",
-                    "not a finite number".into(),
-                ));
-            }
-            let (smin, smax) = JointMapping::servo_range(model);
-            // The joint angles the servo can reach.
-            let (a, b) = (direction * (smin - zero), direction * (smax - zero));
-            let (reach_min, reach_max) = (a.min(b), a.max(b));
-            let min = j.min.as_ref().map(|v| (*v.get_ref(), v.span()));
-            let max = j.max.as_ref().map(|v| (*v.get_ref(), v.span()));
-            let lo = min.clone().map(|v| v.0).unwrap_or(reach_min);
-            let hi = max.clone().map(|v| v.0).unwrap_or(reach_max);
-            if let Some((v, span)) = &min
-                && (!v.is_finite() || *v < reach_min - 1e-9)
-            {
-                return Err(at(
-                    span.clone(),
-                    "min",
-                    format!(
-                        "{v} rad is outside what servo id {id} ({model}) reaches: {reach_min:.4}..{reach_max:.4} rad"
-                    ),
-                ));
-            }
-            if let Some((v, span)) = &max
-                && (!v.is_finite() || *v > reach_max + 1e-9)
-            {
-                return Err(at(
-                    span.clone(),
-                    "max",
-                    format!(
-                        "{v} rad is outside what servo id {id} ({model}) reaches: {reach_min:.4}..{reach_max:.4} rad"
-                    ),
-                ));
-            }
-            if lo >= hi {
-                let span = max.map(|m| m.1).unwrap_or(j.name.span());
-                return Err(at(span, "max", format!("limits {lo} .. {hi} are empty")));
-            }
-            if let Some(other) = mapping.joints.iter().find(|o| o.name == name) {
-                return Err(at(
-                    j.name.span(),
-                    "name",
-                    format!("joint listed twice (first on line {})", other.line),
-                ));
-            }
-            if let Some(other) = mapping
-                .joints
-                .iter()
-                .find(|o| o.id == id && o.protocol == protocol)
-            {
-                return Err(at(
-                    j.id.span(),
-                    "id",
-                    format!(
-                        "servo id {id} ({protocol}) already drives joint {:?} (line {})",
-                        other.name, other.line
-                    ),
-                ));
-            }
-            mapping.joints.push(JointMapping {
-                name,
-                id,
-                protocol,
-                model,
-                zero,
-                direction,
-                min: lo,
-                max: hi,
-                line: line_col(text, entry_start).0,
-            });
+            let line = line_col(text, entry.span().start).0;
+            let joint = parse_joint(entry.into_inner(), line, &mapping.joints, &err_at)?;
+            mapping.joints.push(joint);
         }
         Ok(mapping)
+    }
+
+    /// The `[robot]` table: name, URDF, port and a bit rate that is one.
+    fn read_robot(
+        &mut self,
+        robot: RawRobot,
+        err_at: &dyn Fn(usize, String) -> MappingError,
+    ) -> Result<(), MappingError> {
+        self.name = robot.name.unwrap_or_default();
+        self.urdf = robot.urdf.map(PathBuf::from);
+        self.port = robot.port;
+        if let Some(b) = robot.baud {
+            let v = *b.get_ref();
+            if !(1..=10_000_000).contains(&v) {
+                return Err(err_at(
+                    b.span().start,
+                    format!("robot.baud: {v} is not a bit rate"),
+                ));
+            }
+            self.baud = Some(v as u32);
+        }
+        Ok(())
     }
 
     pub fn joint_names(&self) -> Vec<String> {

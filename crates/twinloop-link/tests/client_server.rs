@@ -5,14 +5,14 @@ use std::time::Duration;
 use twinloop_link::servo::Fault;
 use twinloop_link::transport::LoopbackTransport;
 use twinloop_link::{
-    BulkRead, BusServo, Client, ControlCycle, CycleServo, ErrorNumberV2, Item, LinkError, Model,
-    PacketWriter, Protocol, ReadMethod, ServoReading, StatusError, TrackingServoModel, Transport,
-    VirtualBus,
+    BulkRead, BusServo, Client, ControlCycle, CycleServo, ErrorNumberV2, Item, LinkError,
+    PacketWriter, Protocol, ReadMethod, ServoModel, ServoReading, StatusError, TrackingServoModel,
+    Transport, VirtualBus,
 };
 
 type Bus = VirtualBus<TrackingServoModel>;
 
-fn client(servos: &[(u8, Model)]) -> Client<LoopbackTransport<Bus>> {
+fn client(servos: &[(u8, ServoModel)]) -> Client<LoopbackTransport<Bus>> {
     let servos: Vec<BusServo> = servos
         .iter()
         .map(|&(id, model)| BusServo { id, model })
@@ -43,37 +43,40 @@ fn rejected_v1(r: Result<StatusError, LinkError>) -> u8 {
 #[test]
 fn ping_and_scan_on_a_mixed_bus() {
     let mut c = client(&[
-        (1, Model::Rx28),
-        (2, Model::Rx64),
-        (3, Model::Mx28),
-        (1, Model::Xm430W350),
-        (5, Model::Xl430W250),
+        (1, ServoModel::Rx28),
+        (2, ServoModel::Rx64),
+        (3, ServoModel::Mx28),
+        (1, ServoModel::Xm430W350),
+        (5, ServoModel::Xl430W250),
     ]);
     let s = c.ping(Protocol::V1, 2).unwrap();
-    assert_eq!((s.model, s.firmware), (Some(Model::Rx64), 45));
+    assert_eq!((s.model, s.firmware), (Some(ServoModel::Rx64), 45));
     let s = c.ping(Protocol::V2, 1).unwrap();
-    assert_eq!(s.model, Some(Model::Xm430W350));
+    assert_eq!(s.model, Some(ServoModel::Xm430W350));
     assert!(matches!(
         c.ping(Protocol::V2, 9),
         Err(LinkError::Timeout { id: 9 })
     ));
     let found = c.broadcast_ping(Duration::from_millis(10)).unwrap();
-    let ids: Vec<(u8, Option<Model>)> = found.iter().map(|s| (s.id, s.model)).collect();
+    let ids: Vec<(u8, Option<ServoModel>)> = found.iter().map(|s| (s.id, s.model)).collect();
     assert_eq!(
         ids,
-        vec![(1, Some(Model::Xm430W350)), (5, Some(Model::Xl430W250))]
+        vec![
+            (1, Some(ServoModel::Xm430W350)),
+            (5, Some(ServoModel::Xl430W250))
+        ]
     );
     let p1 = c.scan(Protocol::V1, 0..=253).unwrap();
     let ids: Vec<u8> = p1.iter().map(|s| s.id).collect();
     assert_eq!(ids, vec![1, 2, 3]);
-    assert_eq!(p1[2].model, Some(Model::Mx28));
+    assert_eq!(p1[2].model, Some(ServoModel::Mx28));
     let p2 = c.scan(Protocol::V2, 0..=252).unwrap();
     assert_eq!(p2.len(), 2);
 }
 
 #[test]
 fn write_goal_and_watch_the_servo_move() {
-    let mut c = client(&[(7, Model::Xm430W350), (8, Model::Rx28)]);
+    let mut c = client(&[(7, ServoModel::Xm430W350), (8, ServoModel::Rx28)]);
     c.write(Protocol::V2, 7, 64, &[1]).unwrap();
     c.write(Protocol::V2, 7, 116, &3000i32.to_le_bytes())
         .unwrap();
@@ -99,7 +102,7 @@ fn write_goal_and_watch_the_servo_move() {
 
 #[test]
 fn reg_write_waits_for_action() {
-    let mut c = client(&[(1, Model::Xm430W350), (2, Model::Rx64)]);
+    let mut c = client(&[(1, ServoModel::Xm430W350), (2, ServoModel::Rx64)]);
     c.reg_write(Protocol::V2, 1, 65, &[1]).unwrap();
     let mut b = [0u8; 2];
     c.read(Protocol::V2, 1, 65, &mut b[..1]).unwrap();
@@ -124,7 +127,7 @@ fn reg_write_waits_for_action() {
 
 #[test]
 fn every_error_status_both_protocols() {
-    let mut c = client(&[(1, Model::Xm430W350), (2, Model::Rx28)]);
+    let mut c = client(&[(1, ServoModel::Xm430W350), (2, ServoModel::Rx28)]);
     // 2.0: access (read-only), data range, data length, data limit, EEPROM with
     // torque on, read past the table.
     assert_eq!(
@@ -172,7 +175,7 @@ fn every_error_status_both_protocols() {
 
 #[test]
 fn damaged_instruction_gets_checksum_and_crc_errors() {
-    let mut c = client(&[(1, Model::Xm430W350), (2, Model::Rx28)]);
+    let mut c = client(&[(1, ServoModel::Xm430W350), (2, ServoModel::Rx28)]);
     for (protocol, id, expected) in [(Protocol::V2, 1, 0x03), (Protocol::V1, 2, 0x10)] {
         let mut p = Vec::new();
         let mut w =
@@ -199,7 +202,7 @@ fn damaged_instruction_gets_checksum_and_crc_errors() {
 
 #[test]
 fn minus_131073_is_stuffed_and_read_back_every_way() {
-    let mut c = client(&[(1, Model::Xm430W350), (2, Model::Xm430W350)]);
+    let mut c = client(&[(1, ServoModel::Xm430W350), (2, ServoModel::Xm430W350)]);
     // Present Position = actual + Homing Offset (EM-XM): the servo sits at 2048.
     let offset: i32 = -131073 - 2048;
     c.write(Protocol::V2, 1, 20, &offset.to_le_bytes()).unwrap();
@@ -226,11 +229,11 @@ fn minus_131073_is_stuffed_and_read_back_every_way() {
 #[test]
 fn group_instructions() {
     let mut c = client(&[
-        (1, Model::Xm430W350),
-        (2, Model::Xl430W250),
-        (3, Model::Mx64),
-        (4, Model::Mx106),
-        (5, Model::Rx28),
+        (1, ServoModel::Xm430W350),
+        (2, ServoModel::Xl430W250),
+        (3, ServoModel::Mx64),
+        (4, ServoModel::Mx106),
+        (5, ServoModel::Rx28),
     ]);
     // SYNC_WRITE torque on, then goals (2.0).
     c.sync_write(Protocol::V2, 64, 1, &[1, 2], &[1, 1]).unwrap();
@@ -309,7 +312,7 @@ fn group_instructions() {
 
 #[test]
 fn reboot_and_factory_reset() {
-    let mut c = client(&[(4, Model::Xm430W350)]);
+    let mut c = client(&[(4, ServoModel::Xm430W350)]);
     c.write(Protocol::V2, 4, 64, &[1]).unwrap();
     c.reboot(Protocol::V2, 4).unwrap();
     let mut b = [0u8; 1];
@@ -327,7 +330,7 @@ fn reboot_and_factory_reset() {
 
 #[test]
 fn status_return_level_zero_answers_only_ping() {
-    let mut c = client(&[(3, Model::Xm430W350)]);
+    let mut c = client(&[(3, ServoModel::Xm430W350)]);
     c.write(Protocol::V2, 3, 68, &[0]).unwrap_err(); // level 0 from this write on: no reply
     assert!(c.ping(Protocol::V2, 3).is_ok());
     let mut b = [0u8; 1];
@@ -348,16 +351,16 @@ fn control_cycle_on_a_mixed_humanoid_bus() {
     // protocols.
     let mut servos = Vec::new();
     for id in 1..=8 {
-        servos.push((id, Model::Rx28));
+        servos.push((id, ServoModel::Rx28));
     }
     for id in 9..=12 {
-        servos.push((id, Model::Rx64));
+        servos.push((id, ServoModel::Rx64));
     }
     for id in 1..=6 {
-        servos.push((id, Model::Xm430W350));
+        servos.push((id, ServoModel::Xm430W350));
     }
-    servos.push((7, Model::Xl430W250));
-    servos.push((8, Model::Xl430W250));
+    servos.push((7, ServoModel::Xl430W250));
+    servos.push((8, ServoModel::Xl430W250));
     let mut c = client(&servos);
     let cycle_servos: Vec<CycleServo> = servos
         .iter()
@@ -426,19 +429,19 @@ fn control_cycle_on_a_mixed_humanoid_bus() {
 
 #[test]
 fn missing_servo_is_reported_per_servo_and_others_still_read() {
-    let mut c = client(&[(1, Model::Xm430W350), (3, Model::Xm430W350)]);
+    let mut c = client(&[(1, ServoModel::Xm430W350), (3, ServoModel::Xm430W350)]);
     let servos = [
         CycleServo {
             id: 1,
-            model: Model::Xm430W350,
+            model: ServoModel::Xm430W350,
         },
         CycleServo {
             id: 2,
-            model: Model::Xm430W350,
+            model: ServoModel::Xm430W350,
         },
         CycleServo {
             id: 3,
-            model: Model::Xm430W350,
+            model: ServoModel::Xm430W350,
         },
     ];
     let mut cycle = ControlCycle::new(&servos, ReadMethod::SyncRead).unwrap();
@@ -462,7 +465,7 @@ fn malformed_instructions_get_errors_not_panics() {
     for k in 0..300u32 {
         servos.push(BusServo {
             id: (k % 200) as u8,
-            model: Model::Xm430W350,
+            model: ServoModel::Xm430W350,
         });
     }
     let mut bus = VirtualBus::with_tracking_model(&servos);

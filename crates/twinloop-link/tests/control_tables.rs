@@ -2,9 +2,9 @@
 //! and the e-manual model pages), and unit conversions against hand-computed values.
 
 use std::f64::consts::PI;
-use twinloop_link::{Encoding, Item, Model, Protocol, baud_from_register};
+use twinloop_link::{Encoding, Item, Protocol, ServoModel, baud_from_register};
 
-fn addr(model: Model, item: Item) -> (u16, u8) {
+fn addr(model: ServoModel, item: Item) -> (u16, u8) {
     let r = model
         .table()
         .item(item)
@@ -14,7 +14,7 @@ fn addr(model: Model, item: Item) -> (u16, u8) {
 
 #[test]
 fn addresses_match_the_emanual() {
-    for m in [Model::Rx28, Model::Rx64] {
+    for m in [ServoModel::Rx28, ServoModel::Rx64] {
         assert_eq!(m.protocol(), Protocol::V1);
         assert_eq!(addr(m, Item::ModelNumber), (0, 2));
         assert_eq!(addr(m, Item::Id), (3, 1));
@@ -35,19 +35,24 @@ fn addresses_match_the_emanual() {
         assert_eq!(addr(m, Item::Moving), (46, 1));
         assert_eq!(m.table().by_name("punch").unwrap().address, 48);
     }
-    for m in [Model::Mx28, Model::Mx64, Model::Mx106] {
+    for m in [ServoModel::Mx28, ServoModel::Mx64, ServoModel::Mx106] {
         assert_eq!(addr(m, Item::GoalPosition), (30, 2));
         assert_eq!(addr(m, Item::PresentPosition), (36, 2));
         assert_eq!(m.table().by_name("Goal Acceleration").unwrap().address, 73);
     }
-    assert_eq!(addr(Model::Mx64, Item::PresentCurrent), (68, 2));
-    assert!(Model::Mx28.table().item(Item::PresentCurrent).is_none());
+    assert_eq!(addr(ServoModel::Mx64, Item::PresentCurrent), (68, 2));
+    assert!(
+        ServoModel::Mx28
+            .table()
+            .item(Item::PresentCurrent)
+            .is_none()
+    );
     for m in [
-        Model::Xm430W350,
-        Model::Xl430W250,
-        Model::Mx28V2,
-        Model::Mx64V2,
-        Model::Mx106V2,
+        ServoModel::Xm430W350,
+        ServoModel::Xl430W250,
+        ServoModel::Mx28V2,
+        ServoModel::Mx64V2,
+        ServoModel::Mx106V2,
     ] {
         assert_eq!(m.protocol(), Protocol::V2);
         assert_eq!(addr(m, Item::FirmwareVersion), (6, 1));
@@ -65,39 +70,47 @@ fn addresses_match_the_emanual() {
         assert_eq!(addr(m, Item::PresentVoltage), (144, 2));
         assert_eq!(addr(m, Item::PresentTemperature), (146, 1));
     }
-    assert_eq!(addr(Model::Xm430W350, Item::PresentCurrent), (126, 2));
-    assert_eq!(addr(Model::Xm430W350, Item::CurrentLimit), (38, 2));
-    assert_eq!(addr(Model::Xl430W250, Item::PresentLoad), (126, 2));
-    assert!(Model::Xl430W250.table().item(Item::CurrentLimit).is_none());
+    assert_eq!(addr(ServoModel::Xm430W350, Item::PresentCurrent), (126, 2));
+    assert_eq!(addr(ServoModel::Xm430W350, Item::CurrentLimit), (38, 2));
+    assert_eq!(addr(ServoModel::Xl430W250, Item::PresentLoad), (126, 2));
+    assert!(
+        ServoModel::Xl430W250
+            .table()
+            .item(Item::CurrentLimit)
+            .is_none()
+    );
 }
 
 #[test]
 fn model_numbers_and_names() {
     let expected = [
-        (Model::Rx28, 28),
-        (Model::Rx64, 64),
-        (Model::Mx28, 29),
-        (Model::Mx64, 310),
-        (Model::Mx106, 320),
-        (Model::Mx28V2, 30),
-        (Model::Mx64V2, 311),
-        (Model::Mx106V2, 321),
-        (Model::Xm430W350, 1020),
-        (Model::Xl430W250, 1060),
+        (ServoModel::Rx28, 28),
+        (ServoModel::Rx64, 64),
+        (ServoModel::Mx28, 29),
+        (ServoModel::Mx64, 310),
+        (ServoModel::Mx106, 320),
+        (ServoModel::Mx28V2, 30),
+        (ServoModel::Mx64V2, 311),
+        (ServoModel::Mx106V2, 321),
+        (ServoModel::Xm430W350, 1020),
+        (ServoModel::Xl430W250, 1060),
     ];
     for (m, n) in expected {
         assert_eq!(m.model_number(), n);
-        assert_eq!(Model::from_model_number(n), Some(m));
-        assert_eq!(Model::parse(m.name()), Some(m), "{}", m.name());
+        assert_eq!(ServoModel::from_model_number(n), Some(m));
+        assert_eq!(ServoModel::parse(m.name()), Some(m), "{}", m.name());
     }
-    assert_eq!(Model::parse("mx-28-2"), Some(Model::Mx28V2));
-    assert_eq!(Model::parse("xm430-w350-t"), Some(Model::Xm430W350));
-    assert_eq!(Model::parse("ax-12"), None);
+    assert_eq!(ServoModel::parse("mx-28-2"), Some(ServoModel::Mx28V2));
+    assert_eq!(
+        ServoModel::parse("xm430-w350-t"),
+        Some(ServoModel::Xm430W350)
+    );
+    assert_eq!(ServoModel::parse("ax-12"), None);
 }
 
 #[test]
 fn tables_are_consistent() {
-    for m in Model::ALL {
+    for m in ServoModel::ALL {
         let t = m.table();
         let mut end = 0;
         for r in &t.registers {
@@ -146,7 +159,7 @@ fn tables_are_consistent() {
 
 #[test]
 fn factory_memory_holds_model_number_and_initial_values() {
-    let t = Model::Rx64.table();
+    let t = ServoModel::Rx64.table();
     let mem = t.factory_memory(7, 24);
     assert_eq!(&mem[0..2], &[64, 0]);
     assert_eq!(mem[2], 24);
@@ -159,7 +172,7 @@ fn factory_memory_holds_model_number_and_initial_values() {
         &1023u16.to_le_bytes(),
         "torque limit = max torque"
     );
-    let t = Model::Xm430W350.table();
+    let t = ServoModel::Xm430W350.table();
     let mem = t.factory_memory(1, 45);
     assert_eq!(&mem[0..2], &1020u16.to_le_bytes());
     assert_eq!(mem[7], 1);
@@ -170,7 +183,7 @@ fn factory_memory_holds_model_number_and_initial_values() {
 
 #[test]
 fn unit_conversions() {
-    let rx = Model::Rx28.table();
+    let rx = ServoModel::Rx28.table();
     let pos = rx.item(Item::PresentPosition).unwrap();
     assert_eq!(pos.to_si(512), 0.0);
     // 0.29 degree per unit (300 degrees over 1024 units).
@@ -197,7 +210,7 @@ fn unit_conversions() {
     let speed = rx.item(Item::PresentVelocity).unwrap();
     assert!((speed.to_si(100) - 100.0 * 0.111 * 2.0 * PI / 60.0).abs() < 1e-12);
 
-    let xm = Model::Xm430W350.table();
+    let xm = ServoModel::Xm430W350.table();
     let pos = xm.item(Item::PresentPosition).unwrap();
     assert_eq!(pos.to_si(2048), 0.0);
     assert!((pos.to_si(4096) - PI).abs() < 1e-12);
@@ -209,7 +222,7 @@ fn unit_conversions() {
     assert!((cur.to_si(-100) + 0.269).abs() < 1e-12);
     let volt = xm.item(Item::PresentVoltage).unwrap();
     assert!((volt.to_si(120) - 12.0).abs() < 1e-12);
-    let mx = Model::Mx64.table();
+    let mx = ServoModel::Mx64.table();
     let cur = mx.item(Item::PresentCurrent).unwrap();
     assert!(
         (cur.to_si(2148) - 0.45).abs() < 1e-12,

@@ -1,7 +1,7 @@
 //! The robot mapping file: built-ins, round trip, conversions, and errors that name
 //! the file, line, field and servo id.
 
-use twinloop_link::{Model, Protocol, RobotMapping};
+use twinloop_link::{Protocol, RobotMapping, ServoModel};
 
 #[test]
 fn builtins_parse_and_round_trip() {
@@ -22,13 +22,13 @@ fn builtins_parse_and_round_trip() {
         );
     }
     let km = RobotMapping::builtin("km20").unwrap();
-    assert_eq!(km.joints[0].model, Model::Rx28);
+    assert_eq!(km.joints[0].model, ServoModel::Rx28);
     // The seed robot's knees are RX-64, everything else RX-28 (twinloop-description (builtin) km20).
     for j in &km.joints {
         let want = if j.name.ends_with("knee") {
-            Model::Rx64
+            ServoModel::Rx64
         } else {
-            Model::Rx28
+            ServoModel::Rx28
         };
         assert_eq!(j.model, want, "{}", j.name);
     }
@@ -69,7 +69,7 @@ fn conversions_follow_zero_and_direction() {
     let knee = &m.joints[0];
     assert_eq!(
         (knee.protocol, knee.model, knee.line),
-        (Protocol::V2, Model::Mx28V2, 5)
+        (Protocol::V2, ServoModel::Mx28V2, 5)
     );
     // servo = 0.5 - q
     assert!((knee.servo_angle(0.2) - 0.3).abs() < 1e-12);

@@ -5,7 +5,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use twinloop_link::transport::LoopbackTransport;
 use twinloop_link::{
-    BusServo, Client, ControlCycle, CycleServo, Model, Protocol, ReadMethod, ServoReading,
+    BusServo, Client, ControlCycle, CycleServo, Protocol, ReadMethod, ServoModel, ServoReading,
     VirtualBus,
 };
 
@@ -35,11 +35,11 @@ fn control_cycles_allocate_nothing() {
     for id in 1..=10 {
         bus_servos.push(BusServo {
             id,
-            model: Model::Rx28,
+            model: ServoModel::Rx28,
         });
         bus_servos.push(BusServo {
             id,
-            model: Model::Xm430W350,
+            model: ServoModel::Xm430W350,
         });
     }
     let mut c = Client::new(LoopbackTransport::new(VirtualBus::with_tracking_model(
@@ -55,11 +55,11 @@ fn control_cycles_allocate_nothing() {
         .collect();
     servos.push(CycleServo {
         id: 11,
-        model: Model::Rx28,
+        model: ServoModel::Rx28,
     });
     servos.push(CycleServo {
         id: 11,
-        model: Model::Xm430W350,
+        model: ServoModel::Xm430W350,
     });
     for method in [ReadMethod::Auto, ReadMethod::SyncRead, ReadMethod::Read] {
         let method = if method == ReadMethod::SyncRead {

@@ -13,7 +13,7 @@
 use twinloop_link::transport::{LoopbackTransport, NoisyTransport};
 use twinloop_link::{
     BusServo, Client, ClientConfig, ControlCycle, CycleServo, DynamixelRobot, Item, LinkError,
-    Model, ReadMethod, RobotMapping, ServoReading, TrackingServoModel, VirtualBus,
+    ReadMethod, RobotMapping, ServoModel, ServoReading, TrackingServoModel, VirtualBus,
 };
 use twinloop_robot::{Robot, RobotState};
 
@@ -148,13 +148,17 @@ fn hundred_thousand_noisy_cycles_on_a_mixed_bus() {
     for id in 1..=10 {
         servos.push(BusServo {
             id,
-            model: Model::Xm430W350,
+            model: ServoModel::Xm430W350,
         });
     }
     for id in 11..=20 {
         servos.push(BusServo {
             id,
-            model: if id < 16 { Model::Rx28 } else { Model::Rx64 },
+            model: if id < 16 {
+                ServoModel::Rx28
+            } else {
+                ServoModel::Rx64
+            },
         });
     }
     let mut c = noisy_client(&servos, 0.01, 0x7711_2024);
@@ -249,9 +253,9 @@ fn protocol_1_defences() {
         .map(|id| BusServo {
             id,
             model: if id % 2 == 0 {
-                Model::Rx64
+                ServoModel::Rx64
             } else {
-                Model::Rx28
+                ServoModel::Rx28
             },
         })
         .collect();

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use twinloop_link::servo::{ServeOptions, serve};
 use twinloop_link::transport::{self, PtyTransport, SerialOptions};
 use twinloop_link::{
-    BusServo, Client, ClientConfig, ControlCycle, CycleServo, Model, Protocol, ReadMethod,
+    BusServo, Client, ClientConfig, ControlCycle, CycleServo, Protocol, ReadMethod, ServoModel,
     ServoReading, VirtualBus,
 };
 
@@ -16,11 +16,11 @@ fn client_over_a_pty_with_emulated_wire_time() {
     let servos: Vec<BusServo> = (1..=4)
         .map(|id| BusServo {
             id,
-            model: Model::Xm430W350,
+            model: ServoModel::Xm430W350,
         })
         .chain((5..=6).map(|id| BusServo {
             id,
-            model: Model::Rx28,
+            model: ServoModel::Rx28,
         }))
         .collect();
     let mut pty = PtyTransport::open().unwrap();
@@ -51,7 +51,10 @@ fn client_over_a_pty_with_emulated_wire_time() {
         found.iter().map(|s| s.id).collect::<Vec<_>>(),
         vec![1, 2, 3, 4]
     );
-    assert_eq!(c.ping(Protocol::V1, 6).unwrap().model, Some(Model::Rx28));
+    assert_eq!(
+        c.ping(Protocol::V1, 6).unwrap().model,
+        Some(ServoModel::Rx28)
+    );
 
     // One READ of 4 bytes at 57600 bps: request 14 B + reply 15 B = 29 bytes =
     // 5.0 ms of wire, plus 500 us return delay: the emulation must take at least

@@ -4,29 +4,29 @@
 
 use proptest::prelude::*;
 use twinloop_link::transport::Responder;
-use twinloop_link::{BusServo, Model, PacketWriter, Protocol, VirtualBus};
+use twinloop_link::{BusServo, PacketWriter, Protocol, ServoModel, VirtualBus};
 
 fn servos() -> Vec<BusServo> {
     vec![
         BusServo {
             id: 1,
-            model: Model::Xm430W350,
+            model: ServoModel::Xm430W350,
         },
         BusServo {
             id: 2,
-            model: Model::Xl430W250,
+            model: ServoModel::Xl430W250,
         },
         BusServo {
             id: 3,
-            model: Model::Mx64V2,
+            model: ServoModel::Mx64V2,
         },
         BusServo {
             id: 1,
-            model: Model::Rx28,
+            model: ServoModel::Rx28,
         },
         BusServo {
             id: 2,
-            model: Model::Mx106,
+            model: ServoModel::Mx106,
         },
     ]
 }

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use twinloop_link::servo::{ServeOptions, serve};
 use twinloop_link::transport::PtyTransport;
-use twinloop_link::{BusServo, Model, VirtualBus};
+use twinloop_link::{BusServo, ServoModel, VirtualBus};
 
 fn motor_error(e: TransferError) -> u8 {
     match e {
@@ -22,7 +22,7 @@ fn dynamixel2_drives_the_virtual_bus() {
     let servos: Vec<BusServo> = (1..=4)
         .map(|id| BusServo {
             id,
-            model: Model::Xm430W350,
+            model: ServoModel::Xm430W350,
         })
         .collect();
     let mut pty = PtyTransport::open().unwrap();

@@ -1,12 +1,17 @@
 //! Sensors: joint encoders with quantisation, a trunk IMU (MPU-6050 scales), joint
 //! load, and foot force with centre of pressure.
+//!
+//! As in MuJoCo, sensors are functions of the model, the dynamics workspace, the
+//! sensor settings ([`SensorState`]) and the simulated state ([`SensedState`]): they
+//! never see the simulator, which calls them ([`read`]).
 
-use crate::simulator::Simulator;
+use crate::contact::{ContactPoint, ContactState};
 use nalgebra::Vector3;
 use twinloop_description::Description;
 use twinloop_dynamics::{BASE, Data, Model, compute_joint_jacobians};
 use twinloop_random::SplitMix64;
 use twinloop_robot::{FootSensor, Imu, RobotState};
+use twinloop_spatial::Se3;
 
 /// MPU-6050 gyro scale at +-250 deg/s: 131 LSB per deg/s.
 pub const MPU6050_GYRO_LSB_PER_DEG_S: f64 = 131.0;
@@ -35,6 +40,36 @@ pub struct SensorState {
     g: Vector3<f64>,
 }
 
+/// What the sensors read of the simulated robot at one instant.
+#[derive(Debug, Clone, Copy)]
+pub struct SensedState<'a> {
+    /// Simulated time, s.
+    pub time: f64,
+    /// Step, s (the IMU differentiates its point's velocity over one step).
+    pub dt: f64,
+    /// Configuration and velocity (Pinocchio's conventions).
+    pub q: &'a [f64],
+    pub v: &'a [f64],
+    /// Torque each actuator applied in the last step.
+    pub applied: &'a [f64],
+    /// Contact points and their states, index for index.
+    pub points: &'a [ContactPoint],
+    pub contacts: &'a [ContactState],
+}
+
+/// World placement of a description link after a kinematics pass over `data`.
+#[inline]
+fn link_world_placement(model: &Model, data: &Data, link: usize) -> Se3 {
+    let info = &model.links[link];
+    (if info.body == BASE {
+        data.base_placement
+    } else {
+        data.o_m_i[info.body]
+    }) * info.placement
+}
+
+/// World linear velocity of a link's origin and world angular velocity of the link,
+/// from the joint Jacobians in `data`.
 fn imu_world_velocity(
     model: &Model,
     data: &Data,
@@ -42,11 +77,7 @@ fn imu_world_velocity(
     link: usize,
 ) -> (Vector3<f64>, Vector3<f64>) {
     let info = &model.links[link];
-    let x = if info.body == BASE {
-        data.base_placement
-    } else {
-        data.o_m_i[info.body]
-    } * info.placement;
+    let x = link_world_placement(model, data, link);
     let mut lin = Vector3::zeros();
     let mut ang = Vector3::zeros();
     let mut add = |dof: usize| {
@@ -123,6 +154,14 @@ impl SensorState {
     pub fn set_noise_seed(&mut self, seed: u64) {
         self.rng = SplitMix64(seed);
     }
+
+    /// Give every joint a Dynamixel RX encoder (1024 counts over 300 degrees).
+    pub fn use_dynamixel_encoders(&mut self) {
+        let res = 300f64.to_radians() / DYNAMIXEL_RX_COUNTS_PER_300_DEG;
+        self.encoder_resolution
+            .iter_mut()
+            .for_each(|r| *r = Some(res));
+    }
 }
 
 /// Quantise to a step.
@@ -131,130 +170,115 @@ pub fn quantize(x: f64, step: f64) -> f64 {
     (x / step).round() * step
 }
 
-impl Simulator {
-    /// Give every joint a Dynamixel RX encoder (1024 counts over 300 degrees).
-    pub fn use_dynamixel_encoders(&mut self) {
-        let res = 300f64.to_radians() / DYNAMIXEL_RX_COUNTS_PER_300_DEG;
-        self.sensors
-            .encoder_resolution
-            .iter_mut()
-            .for_each(|r| *r = Some(res));
-    }
+/// The exact angular velocity of a link in its own frame, rad/s: what a perfect gyro
+/// fixed to the link reads (the configured IMU adds quantisation and noise, this does
+/// not). Runs the joint Jacobians into `data`.
+pub fn link_angular_velocity(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    link: usize,
+) -> Vector3<f64> {
+    compute_joint_jacobians(model, data, q);
+    let (_, ang) = imu_world_velocity(model, data, v, link);
+    let x = link_world_placement(model, data, link);
+    x.rotation.transpose() * ang
+}
 
-    pub fn sensors_mut(&mut self) -> &mut SensorState {
-        &mut self.sensors
-    }
+/// Read every sensor into `out` (the `Robot` interface's measurement): encoders,
+/// joint velocities and loads, the IMU, then the feet. Allocates only the first time
+/// `out` is filled.
+pub fn read(
+    model: &Model,
+    data: &mut Data,
+    sensors: &mut SensorState,
+    at: &SensedState,
+    out: &mut RobotState,
+) {
+    out.time = at.time;
+    read_joints(model, sensors, at, out);
+    read_imu(model, data, sensors, at, out);
+    read_feet(model, sensors, at, out);
+}
 
-    pub fn sensors(&self) -> &SensorState {
-        &self.sensors
-    }
-
-    /// Set the feet by link name.
-    pub fn set_feet(&mut self, names: &[&str]) -> Result<(), crate::SimError> {
-        let mut feet = Vec::new();
-        for n in names {
-            let i = self
-                .model
-                .links
-                .iter()
-                .position(|l| l.name == *n)
-                .ok_or_else(|| {
-                    crate::SimError::Input(format!("no link named \"{n}\" for a foot"))
-                })?;
-            feet.push(i);
-        }
-        self.sensors.feet = feet;
-        Ok(())
-    }
-
-    /// The exact angular velocity of a link in its own frame, rad/s: what a perfect gyro
-    /// fixed to the link reads. For a second gyroscope (seed 003 has one MPU-6050 on each
-    /// foot); the configured IMU applies quantisation and noise, this does not.
-    pub fn link_angular_velocity(&mut self, link: &str) -> Option<Vector3<f64>> {
-        let i = self.model.links.iter().position(|l| l.name == link)?;
-        compute_joint_jacobians(&self.model, &mut self.data, &self.q);
-        let (_, ang) = imu_world_velocity(&self.model, &self.data, &self.v, i);
-        let info = &self.model.links[i];
-        let x = if info.body == BASE {
-            self.data.base_placement
-        } else {
-            self.data.o_m_i[info.body]
-        } * info.placement;
-        Some(x.rotation.transpose() * ang)
-    }
-
-    /// Read every sensor into `state` (the `Robot` interface's measurement).
-    pub fn read_sensors(&mut self, state: &mut RobotState) {
-        let nb = self.model.nbodies;
-        let (qo, vo) = (self.model.q_offset, self.model.v_offset);
-        state.time = self.time;
-        state.positions.resize(nb, 0.0);
-        for i in 0..nb {
-            let q = self.q[qo + i];
-            state.positions[i] = match self.sensors.encoder_resolution[i] {
-                Some(r) => quantize(q, r),
-                None => q,
-            };
-        }
-        let vel = state.velocities.get_or_insert_with(Vec::new);
-        vel.clear();
-        vel.extend_from_slice(&self.v[vo..]);
-        let eff = state.efforts.get_or_insert_with(Vec::new);
-        eff.clear();
-        eff.extend_from_slice(&self.applied);
-        // IMU: angular velocity and specific force in the IMU frame.
-        compute_joint_jacobians(&self.model, &mut self.data, &self.q);
-        let link = self.sensors.imu_link;
-        let (lin, ang) = imu_world_velocity(&self.model, &self.data, &self.v, link);
-        let info = &self.model.links[link];
-        let x = if info.body == BASE {
-            self.data.base_placement
-        } else {
-            self.data.o_m_i[info.body]
-        } * info.placement;
-        let accel_world = match self.sensors.imu_velocity_time {
-            Some(_) => (lin - self.sensors.imu_velocity) / self.config.dt,
-            None => Vector3::zeros(),
+/// Encoder positions (quantised where a resolution is set), velocities and applied torques.
+fn read_joints(model: &Model, sensors: &SensorState, at: &SensedState, out: &mut RobotState) {
+    let nb = model.nbodies;
+    let (qo, vo) = (model.q_offset, model.v_offset);
+    out.positions.resize(nb, 0.0);
+    for i in 0..nb {
+        let q = at.q[qo + i];
+        out.positions[i] = match sensors.encoder_resolution[i] {
+            Some(r) => quantize(q, r),
+            None => q,
         };
-        let rt = x.rotation.transpose();
-        let mut gyro = rt * ang;
-        let mut accel = rt * (accel_world - self.sensors.g);
-        if self.sensors.gyro_noise > 0.0 || self.sensors.accel_noise > 0.0 {
-            for k in 0..3 {
-                gyro[k] += self.sensors.gyro_noise * self.sensors.normal();
-                accel[k] += self.sensors.accel_noise * self.sensors.normal();
+    }
+    let vel = out.velocities.get_or_insert_with(Vec::new);
+    vel.clear();
+    vel.extend_from_slice(&at.v[vo..]);
+    let eff = out.efforts.get_or_insert_with(Vec::new);
+    eff.clear();
+    eff.extend_from_slice(at.applied);
+}
+
+/// IMU: angular velocity and specific force in the IMU frame, with noise and
+/// MPU-6050 quantisation when set, and the link's orientation.
+fn read_imu(
+    model: &Model,
+    data: &mut Data,
+    sensors: &mut SensorState,
+    at: &SensedState,
+    out: &mut RobotState,
+) {
+    compute_joint_jacobians(model, data, at.q);
+    let link = sensors.imu_link;
+    let (lin, ang) = imu_world_velocity(model, data, at.v, link);
+    let x = link_world_placement(model, data, link);
+    let accel_world = match sensors.imu_velocity_time {
+        Some(_) => (lin - sensors.imu_velocity) / at.dt,
+        None => Vector3::zeros(),
+    };
+    let rt = x.rotation.transpose();
+    let mut gyro = rt * ang;
+    let mut accel = rt * (accel_world - sensors.g);
+    if sensors.gyro_noise > 0.0 || sensors.accel_noise > 0.0 {
+        for k in 0..3 {
+            gyro[k] += sensors.gyro_noise * sensors.normal();
+            accel[k] += sensors.accel_noise * sensors.normal();
+        }
+    }
+    if sensors.imu_quantize {
+        let gstep = (1.0 / MPU6050_GYRO_LSB_PER_DEG_S).to_radians();
+        let astep = twinloop_description::GRAVITY / MPU6050_ACCEL_LSB_PER_G;
+        gyro = gyro.map(|w| quantize(w, gstep));
+        accel = accel.map(|a| quantize(a, astep));
+    }
+    out.imu = Some(Imu {
+        gyro: [gyro.x, gyro.y, gyro.z],
+        accel: [accel.x, accel.y, accel.z],
+        orientation: Some(twinloop_spatial::matrix_to_quaternion_xyzw(&x.rotation)),
+    });
+}
+
+/// Feet: total normal force and centre of pressure of each foot link's contact points.
+fn read_feet(model: &Model, sensors: &SensorState, at: &SensedState, out: &mut RobotState) {
+    out.feet
+        .resize_with(sensors.feet.len(), FootSensor::default);
+    for (k, &link) in sensors.feet.iter().enumerate() {
+        let (mut f, mut mx, mut my) = (0.0, 0.0, 0.0);
+        for (p, c) in at.points.iter().zip(at.contacts) {
+            if p.link == link && c.active {
+                f += c.force.z;
+                mx += c.force.z * c.position.x;
+                my += c.force.z * c.position.y;
             }
         }
-        if self.sensors.imu_quantize {
-            let gstep = (1.0 / MPU6050_GYRO_LSB_PER_DEG_S).to_radians();
-            let astep = twinloop_description::GRAVITY / MPU6050_ACCEL_LSB_PER_G;
-            gyro = gyro.map(|w| quantize(w, gstep));
-            accel = accel.map(|a| quantize(a, astep));
+        let s = &mut out.feet[k];
+        if s.name != model.links[link].name {
+            s.name = model.links[link].name.clone();
         }
-        state.imu = Some(Imu {
-            gyro: [gyro.x, gyro.y, gyro.z],
-            accel: [accel.x, accel.y, accel.z],
-            orientation: Some(twinloop_spatial::matrix_to_quaternion_xyzw(&x.rotation)),
-        });
-        // Feet: total normal force and centre of pressure of each foot link's points.
-        state
-            .feet
-            .resize_with(self.sensors.feet.len(), FootSensor::default);
-        for (k, &link) in self.sensors.feet.iter().enumerate() {
-            let (mut f, mut mx, mut my) = (0.0, 0.0, 0.0);
-            for (p, c) in self.points.iter().zip(&self.contacts) {
-                if p.link == link && c.active {
-                    f += c.force.z;
-                    mx += c.force.z * c.position.x;
-                    my += c.force.z * c.position.y;
-                }
-            }
-            let s = &mut state.feet[k];
-            if s.name != self.model.links[link].name {
-                s.name = self.model.links[link].name.clone();
-            }
-            s.force = f;
-            s.cop = (f > 0.0).then(|| [mx / f, my / f]);
-        }
+        s.force = f;
+        s.cop = (f > 0.0).then(|| [mx / f, my / f]);
     }
 }

@@ -3,11 +3,13 @@
 use crate::actuator::{Actuator, Drive};
 use crate::contact::{ContactParams, ContactPoint, ContactState, contact_points};
 use crate::ltdl;
+use crate::sensors::{self, SensedState, SensorState};
 use nalgebra::{DMatrix, Vector3};
 use std::fmt;
 use twinloop_description::{Description, DescriptionError};
 use twinloop_dynamics::configuration::integrate;
 use twinloop_dynamics::{BASE, Data, Model, compute_joint_jacobians, crba, nonlinear_effects};
+use twinloop_robot::RobotState;
 use twinloop_spatial::Se3;
 
 /// Simulation settings. `Default` gives a 1 ms step, gravity 9.81, a ground plane,
@@ -84,6 +86,95 @@ struct ContactBody {
     wrench: nalgebra::Vector6<f64>,
 }
 
+/// World twist of a body from the world-frame joint Jacobians: the sum of
+/// `J_dof v_dof` over its chain.
+#[inline]
+fn body_twist(jacobians: &DMatrix<f64>, chain: &[usize], v: &[f64]) -> nalgebra::Vector6<f64> {
+    let mut tw = nalgebra::Vector6::zeros();
+    for &dof in chain {
+        let col = jacobians.column(dof);
+        tw += nalgebra::Vector6::from_column_slice(col.as_slice()) * v[dof];
+    }
+    tw
+}
+
+/// Force on a point at `x`, `pen` below the ground and moving at `vp`: a normal
+/// spring-damper, and a tangential spring to the anchor clipped to the friction cone
+/// (the anchor then follows the point: sliding). Updates the anchor and the sliding
+/// flag of `state`. Returns the force and the tangential stiffness and damping the
+/// implicit step keeps (zero while sliding), or `None` when the normal force would pull.
+#[inline]
+fn point_force(
+    cp: &ContactParams,
+    state: &mut ContactState,
+    x: &Vector3<f64>,
+    vp: &Vector3<f64>,
+    pen: f64,
+) -> Option<(Vector3<f64>, f64, f64)> {
+    let fn_ = cp.stiffness * pen - cp.damping * vp.z;
+    if fn_ <= 0.0 {
+        return None;
+    }
+    if !state.active {
+        state.anchor = [x.x, x.y];
+        state.active = true;
+    }
+    let mut ft = [
+        -cp.tangential_stiffness * (x.x - state.anchor[0]) - cp.tangential_damping * vp.x,
+        -cp.tangential_stiffness * (x.y - state.anchor[1]) - cp.tangential_damping * vp.y,
+    ];
+    let norm = (ft[0] * ft[0] + ft[1] * ft[1]).sqrt();
+    let limit = cp.friction * fn_;
+    let (kt, dtan) = if norm > limit {
+        // Sliding: the force sits on the cone, the anchor follows the point.
+        let s = limit / norm;
+        ft = [ft[0] * s, ft[1] * s];
+        state.anchor = [
+            x.x + ft[0] / cp.tangential_stiffness,
+            x.y + ft[1] / cp.tangential_stiffness,
+        ];
+        state.sliding = true;
+        (0.0, 0.0)
+    } else {
+        state.sliding = false;
+        (cp.tangential_stiffness, cp.tangential_damping)
+    };
+    Some((Vector3::new(ft[0], ft[1], fn_), kt, dtan))
+}
+
+/// A point's share of its body's step terms: the force `f` less the part the
+/// implicit stiffness will add back, as a wrench about the world origin, and
+/// `A_p^T W A_p` with `W` the implicit weights of its springs and dampers.
+#[inline]
+fn implicit_point_terms(
+    cp: &ContactParams,
+    dt: f64,
+    x: &Vector3<f64>,
+    vp: &Vector3<f64>,
+    f: &Vector3<f64>,
+    kt: f64,
+    dtan: f64,
+) -> (nalgebra::Vector6<f64>, nalgebra::Matrix6<f64>) {
+    let g = f - Vector3::new(dt * kt * vp.x, dt * kt * vp.y, dt * cp.stiffness * vp.z);
+    let w = Vector3::new(
+        dt * dtan + dt * dt * kt,
+        dt * dtan + dt * dt * kt,
+        dt * cp.damping + dt * dt * cp.stiffness,
+    );
+    let m = x.cross(&g);
+    let wrench = nalgebra::Vector6::new(g.x, g.y, g.z, m.x, m.y, m.z);
+    let wm = nalgebra::Matrix3::from_diagonal(&w);
+    let sx = twinloop_spatial::skew(x);
+    let wsx = wm * sx;
+    let mut blk = nalgebra::Matrix6::zeros();
+    blk.fixed_view_mut::<3, 3>(0, 0).copy_from(&wm);
+    blk.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-wsx));
+    blk.fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&(-wsx.transpose()));
+    blk.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-(sx * wsx)));
+    (wrench, blk)
+}
+
 /// A robot simulated over the reduced-coordinate dynamics.
 pub struct Simulator {
     pub model: Model,
@@ -120,7 +211,7 @@ pub struct Simulator {
     contact_bodies: Vec<ContactBody>,
     js: Vec<nalgebra::Vector6<f64>>,
     su: Vec<nalgebra::Vector6<f64>>,
-    pub(crate) sensors: crate::sensors::SensorState,
+    pub(crate) sensors: SensorState,
 }
 
 impl Simulator {
@@ -193,7 +284,7 @@ impl Simulator {
             .unwrap_or(weight.max(1.0) * 1.0);
         let limit_d = config.joint_limit_damping.unwrap_or(0.1 * limit_k.sqrt());
         let q = model.neutral_configuration();
-        let sensors = crate::sensors::SensorState::new(&model, robot);
+        let sensors = SensorState::new(&model, robot);
         Ok(Simulator {
             data,
             contact_params,
@@ -447,6 +538,14 @@ impl Simulator {
     /// `A_p = [I, -[x_p]x]`, so the body's points add up to one 6x6 matrix and one wrench,
     /// and the joint-space terms are formed once per body instead of once per point.
     fn add_contacts(&mut self, dt: f64) {
+        self.add_point_forces(dt);
+        self.add_contact_terms();
+    }
+
+    /// Every point's contact force for the step, summed per body (`contact_bodies`)
+    /// as a wrench about the world origin and the matrix `A_p^T W A_p` of its implicit
+    /// spring and damper terms; `contacts` gets each point's state.
+    fn add_point_forces(&mut self, dt: f64) {
         let cp = self.contact_params;
         let nb = self.model.nbodies;
         for acc in self.contact_bodies.iter_mut() {
@@ -473,74 +572,31 @@ impl Simulator {
                 acc.active = true;
                 acc.matrix = nalgebra::Matrix6::zeros();
                 acc.wrench = nalgebra::Vector6::zeros();
-                let mut tw = nalgebra::Vector6::zeros();
-                for &dof in &self.chains[bi] {
-                    let col = self.data.joint_jacobians.column(dof);
-                    tw += nalgebra::Vector6::from_column_slice(col.as_slice()) * self.v[dof];
-                }
-                acc.twist = tw;
+                acc.twist = body_twist(&self.data.joint_jacobians, &self.chains[bi], &self.v);
             }
             let (lin, ang) = (
                 acc.twist.fixed_rows::<3>(0).into_owned(),
                 acc.twist.fixed_rows::<3>(3).into_owned(),
             );
             let vp = lin + ang.cross(&x);
-            let fn_ = cp.stiffness * pen - cp.damping * vp.z;
-            if fn_ <= 0.0 {
+            let Some((f, kt, dtan)) = point_force(&cp, state, &x, &vp, pen) else {
                 *state = ContactState {
                     position: x,
                     ..Default::default()
                 };
                 continue;
-            }
-            if !state.active {
-                state.anchor = [x.x, x.y];
-                state.active = true;
-            }
-            let mut ft = [
-                -cp.tangential_stiffness * (x.x - state.anchor[0]) - cp.tangential_damping * vp.x,
-                -cp.tangential_stiffness * (x.y - state.anchor[1]) - cp.tangential_damping * vp.y,
-            ];
-            let norm = (ft[0] * ft[0] + ft[1] * ft[1]).sqrt();
-            let limit = cp.friction * fn_;
-            let (kt, dtan) = if norm > limit {
-                // Sliding: the force sits on the cone, the anchor follows the point.
-                let s = limit / norm;
-                ft = [ft[0] * s, ft[1] * s];
-                state.anchor = [
-                    x.x + ft[0] / cp.tangential_stiffness,
-                    x.y + ft[1] / cp.tangential_stiffness,
-                ];
-                state.sliding = true;
-                (0.0, 0.0)
-            } else {
-                state.sliding = false;
-                (cp.tangential_stiffness, cp.tangential_damping)
             };
-            let f = Vector3::new(ft[0], ft[1], fn_);
             state.force = f;
-            // Force for the step, less the part the implicit stiffness will add back.
-            let g = f - Vector3::new(dt * kt * vp.x, dt * kt * vp.y, dt * cp.stiffness * vp.z);
-            let w = Vector3::new(
-                dt * dtan + dt * dt * kt,
-                dt * dtan + dt * dt * kt,
-                dt * cp.damping + dt * dt * cp.stiffness,
-            );
-            // Wrench about the world origin, and A_p^T W A_p.
-            let m = x.cross(&g);
-            acc.wrench += nalgebra::Vector6::new(g.x, g.y, g.z, m.x, m.y, m.z);
-            let wm = nalgebra::Matrix3::from_diagonal(&w);
-            let sx = twinloop_spatial::skew(&x);
-            let wsx = wm * sx;
-            let mut blk = nalgebra::Matrix6::zeros();
-            blk.fixed_view_mut::<3, 3>(0, 0).copy_from(&wm);
-            blk.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-wsx));
-            blk.fixed_view_mut::<3, 3>(3, 0)
-                .copy_from(&(-wsx.transpose()));
-            blk.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-(sx * wsx)));
-            acc.matrix += blk;
+            let (wrench, matrix) = implicit_point_terms(&cp, dt, &x, &vp, &f, kt, dtan);
+            acc.wrench += wrench;
+            acc.matrix += matrix;
         }
-        // Joint-space terms per body: h[a][b] += j_b . (S j_a), rhs[a] += j_a . wrench.
+    }
+
+    /// Joint-space terms of each body in contact: `h[a][b] += j_b . (S j_a)`,
+    /// `rhs[a] += j_a . wrench` over the DOFs of its chain.
+    fn add_contact_terms(&mut self) {
+        let nb = self.model.nbodies;
         let n = self.h.nrows();
         for bi in 0..=nb {
             if !self.contact_bodies[bi].active {
@@ -596,5 +652,66 @@ impl Simulator {
     /// Whole-body CoM at the current state.
     pub fn center_of_mass(&mut self) -> Vector3<f64> {
         twinloop_dynamics::center_of_mass(&self.model, &mut self.data, &self.q)
+    }
+}
+
+/// Sensors: the settings live in [`SensorState`]; reading them is [`sensors::read`]
+/// over the simulator's state.
+impl Simulator {
+    /// Give every joint a Dynamixel RX encoder (1024 counts over 300 degrees).
+    pub fn use_dynamixel_encoders(&mut self) {
+        self.sensors.use_dynamixel_encoders();
+    }
+
+    pub fn sensors_mut(&mut self) -> &mut SensorState {
+        &mut self.sensors
+    }
+
+    pub fn sensors(&self) -> &SensorState {
+        &self.sensors
+    }
+
+    /// Set the feet by link name.
+    pub fn set_feet(&mut self, names: &[&str]) -> Result<(), SimError> {
+        let mut feet = Vec::new();
+        for n in names {
+            let i = self
+                .model
+                .links
+                .iter()
+                .position(|l| l.name == *n)
+                .ok_or_else(|| SimError::Input(format!("no link named \"{n}\" for a foot")))?;
+            feet.push(i);
+        }
+        self.sensors.feet = feet;
+        Ok(())
+    }
+
+    /// The exact angular velocity of a link in its own frame, rad/s: what a perfect gyro
+    /// fixed to the link reads. For a second gyroscope (seed 003 has one MPU-6050 on each
+    /// foot); the configured IMU applies quantisation and noise, this does not.
+    pub fn link_angular_velocity(&mut self, link: &str) -> Option<Vector3<f64>> {
+        let i = self.model.links.iter().position(|l| l.name == link)?;
+        Some(sensors::link_angular_velocity(
+            &self.model,
+            &mut self.data,
+            &self.q,
+            &self.v,
+            i,
+        ))
+    }
+
+    /// Read every sensor into `state` (the `Robot` interface's measurement).
+    pub fn read_sensors(&mut self, state: &mut RobotState) {
+        let at = SensedState {
+            time: self.time,
+            dt: self.config.dt,
+            q: &self.q,
+            v: &self.v,
+            applied: &self.applied,
+            points: &self.points,
+            contacts: &self.contacts,
+        };
+        sensors::read(&self.model, &mut self.data, &mut self.sensors, &at, state);
     }
 }

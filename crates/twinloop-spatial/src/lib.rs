@@ -5,18 +5,22 @@
 //! - [`Motion`]: spatial velocity/acceleration, linear part first (`v`, `w`).
 //! - [`Force`]: spatial force, linear part first (`f`, `n`).
 //! - [`Inertia`]: rigid-body inertia in compact form (mass, CoM, rotational inertia about the CoM).
+//! - [`LinearInertia`]: the same in the form linear in the parameters (m, m c, inertia about
+//!   the origin), whose sums are plain sums.
 //! - [`Symmetric6`]: a symmetric 6x6 operator (articulated-body inertia) kept as three 3x3 blocks.
 //!
 //! Everything is `Copy` and fixed-size: nothing here allocates.
 
 mod force;
 mod inertia;
+mod linear_inertia;
 mod motion;
 mod se3;
 mod symmetric6;
 
 pub use force::Force;
 pub use inertia::Inertia;
+pub use linear_inertia::LinearInertia;
 pub use motion::Motion;
 pub use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 pub use se3::Se3;

@@ -105,3 +105,22 @@ fn quaternion_round_trip() {
         assert!((r - r2).norm() < 1e-12);
     }
 }
+
+#[test]
+fn linear_inertia_agrees_with_inertia() {
+    let mut s = 13u64;
+    for _ in 0..50 {
+        let a = Matrix3::from_fn(|_, _| lcg(&mut s));
+        let y1 = Inertia::new(1.0 + lcg(&mut s).abs(), v3(&mut s), a * a.transpose());
+        let y2 = Inertia::new(0.5, v3(&mut s), Matrix3::identity() * 0.1);
+        let m = Motion::new(v3(&mut s), v3(&mut s));
+        let l1 = LinearInertia::from_inertia(&y1);
+        assert!((l1.mul_motion(&m).to_vector6() - y1.mul_motion(&m).to_vector6()).norm() < 1e-12);
+        assert!((l1.i - y1.inertia_about_origin()).norm() < 1e-12);
+        // The linear form's plain sum is the rigid union.
+        let mut sum = l1;
+        sum.add(&LinearInertia::from_inertia(&y2));
+        let expect = (y1 + y2).mul_motion(&m).to_vector6();
+        assert!((sum.mul_motion(&m).to_vector6() - expect).norm() < 1e-11);
+    }
+}

@@ -327,20 +327,15 @@ fn predict(
     sum
 }
 
-/// The Jacobian of the weighted residuals along the columns of `basis` (after
-/// `predict` ran at the same model). Per step only two small products are left:
-/// the inputs of the recursion for a chunk of steps are formed at once by
-/// `F = Pf [z; w]` and `G = P2 w` (`z = [x^; u; e]`, `w = [x^; u]`), where `Pf`, `P2`
-/// rearrange the basis so that column `k` of `F` is `dA x^ + dB u + dK e - K(dC x^ + dD u)`
-/// for every direction at once.
-fn jacobian(
+/// The basis rearranged for the sensitivity recursion: `P2` maps `w = [x^; u]` to
+/// `dC x^ + dD u` and `Pf = [P1, -(K applied blockwise to P2)]` maps `[z; w]`
+/// (`z = [x^; u; e]`) to `dA x^ + dB u + dK e - K(dC x^ + dD u)`, every direction at
+/// once (direction `j` in rows `n j..n (j+1)`, resp. `ny j..ny (j+1)`).
+fn recursion_maps(
     model: &StateSpace,
     l: &Layout,
     basis: &DMatrix<f64>,
-    data: &IoData,
-    lt: &DMatrix<f64>,
-    ws: &mut Workspace,
-) {
+) -> (DMatrix<f64>, DMatrix<f64>) {
     let (n, nu, ny, nd) = (l.n, l.nu, l.ny, l.nd);
     let m = basis.ncols();
     let nz = n + nu + ny;
@@ -375,6 +370,51 @@ fn jacobian(
             }
         }
     }
+    (pf, p2)
+}
+
+/// The recursion's inputs `[z; w]` of steps `k0..k0 + len` into the columns of `ws.vin`.
+fn load_chunk_inputs(l: &Layout, data: &IoData, k0: usize, len: usize, ws: &mut Workspace) {
+    let (n, nu, ny, nd) = (l.n, l.nu, l.ny, l.nd);
+    let nz = n + nu + ny;
+    for t in 0..len {
+        let k = k0 + t;
+        let mut col = ws.vin.column_mut(t);
+        for i in 0..n {
+            col[i] = ws.xs[(i, k)];
+            col[nz + i] = ws.xs[(i, k)];
+        }
+        for i in 0..nu {
+            col[n + i] = data.u[(i, k)];
+        }
+        for i in 0..ny {
+            col[n + nu + i] = ws.e[(i, k)];
+        }
+        for i in 0..nd {
+            col[nz + n + i] = data.u[(i, k)];
+        }
+    }
+}
+
+/// The Jacobian of the weighted residuals along the columns of `basis` (after
+/// `predict` ran at the same model). Per step only two small products are left:
+/// the inputs of the recursion for a chunk of steps are formed at once by
+/// `F = Pf [z; w]` and `G = P2 w` (`z = [x^; u; e]`, `w = [x^; u]`), where `Pf`, `P2`
+/// rearrange the basis so that column `k` of `F` is `dA x^ + dB u + dK e - K(dC x^ + dD u)`
+/// for every direction at once.
+fn jacobian(
+    model: &StateSpace,
+    l: &Layout,
+    basis: &DMatrix<f64>,
+    data: &IoData,
+    lt: &DMatrix<f64>,
+    ws: &mut Workspace,
+) {
+    let (n, nu, ny, nd) = (l.n, l.nu, l.ny, l.nd);
+    let m = basis.ncols();
+    let nz = n + nu + ny;
+    let nw = n + nd;
+    let (pf, p2) = recursion_maps(model, l, basis);
     ws.abar.copy_from(&model.a);
     ws.abar.gemm(-1.0, &model.k, &model.c, 1.0);
     // dx(0): the initial-state directions.
@@ -391,23 +431,7 @@ fn jacobian(
     let mut k0 = 0;
     while k0 < n_samples {
         let len = CHUNK.min(n_samples - k0);
-        for t in 0..len {
-            let k = k0 + t;
-            let mut col = ws.vin.column_mut(t);
-            for i in 0..n {
-                col[i] = ws.xs[(i, k)];
-                col[nz + i] = ws.xs[(i, k)];
-            }
-            for i in 0..nu {
-                col[n + i] = data.u[(i, k)];
-            }
-            for i in 0..ny {
-                col[n + nu + i] = ws.e[(i, k)];
-            }
-            for i in 0..nd {
-                col[nz + n + i] = data.u[(i, k)];
-            }
-        }
+        load_chunk_inputs(l, data, k0, len, ws);
         ws.f.view_mut((0, 0), (n * m, len)).gemm(
             1.0,
             &pf,
@@ -449,6 +473,79 @@ pub fn pem(
     opts: &PemOptions,
     progress: &mut dyn FnMut(&PemProgress),
 ) -> Result<PemResult> {
+    let (l, m) = parameter_layout(data, initial, opts)?;
+    let (n, ny) = (l.n, l.ny);
+    let x0v = x0.cloned().unwrap_or_else(|| DVector::zeros(n));
+    if x0v.len() != n {
+        return Err(SysidError::order("the initial state has the wrong length"));
+    }
+    let oe_initial;
+    let initial = if opts.output_error {
+        oe_initial = StateSpace {
+            k: DMatrix::zeros(n, ny),
+            ..initial.clone()
+        };
+        &oe_initial
+    } else {
+        initial
+    };
+    check_initial_stability(initial, opts)?;
+    let mut ws = Workspace::new(&l, data.len(), m);
+    let lt = output_weight(initial, &x0v, data, opts, &mut ws)?;
+    let nf = data.len() as f64;
+    let search = Search {
+        data,
+        l,
+        lt,
+        opts,
+        n_res: data.len() * ny,
+        m,
+    };
+    let mut it = Iterate {
+        model: initial.clone(),
+        x0: x0v,
+        cost: 0.0,
+        lambda: 1e-3,
+        nu_fac: 2.0,
+    };
+    it.cost = predict(&it.model, &it.x0, data, &search.lt, &mut ws);
+    let initial_cost = it.cost / nf;
+    let mut history = vec![initial_cost];
+    let (iterations, termination) = search.minimise(&mut it, &mut ws, &mut history, progress);
+    let Iterate {
+        mut model,
+        x0: x0v,
+        cost,
+        ..
+    } = it;
+    let final_cost = cost / nf;
+    let (_, e) = model.predictor_states(data, Some(&x0v))?;
+    model.noise_covariance = &e * e.transpose() / nf;
+    let final_prediction_cost = e.norm_squared() / nf;
+    let (_, e0) = initial.predictor_states(data, x0)?;
+    Ok(PemResult {
+        model,
+        x0: x0v,
+        initial_cost,
+        final_cost,
+        initial_prediction_cost: e0.norm_squared() / nf,
+        final_prediction_cost,
+        iterations,
+        free_parameters: m,
+        termination,
+        cost_history: history,
+    })
+}
+
+/// The parameter layout for `initial` and `opts`, and the number of free
+/// parameters of a step (all minus the `n^2` basis changes, minus `K` for an
+/// output-error fit); errors when the record does not fit the model or has fewer
+/// prediction errors than free parameters.
+fn parameter_layout(
+    data: &IoData,
+    initial: &StateSpace,
+    opts: &PemOptions,
+) -> Result<(Layout, usize)> {
     let (n, nu, ny) = (initial.n(), initial.nu(), initial.ny());
     if data.nu() != nu || data.ny() != ny {
         return Err(SysidError::data(format!(
@@ -479,20 +576,12 @@ pub fn pem(
             data.len()
         )));
     }
-    let mut x0v = x0.cloned().unwrap_or_else(|| DVector::zeros(n));
-    if x0v.len() != n {
-        return Err(SysidError::order("the initial state has the wrong length"));
-    }
-    let oe_initial;
-    let initial = if opts.output_error {
-        oe_initial = StateSpace {
-            k: DMatrix::zeros(n, ny),
-            ..initial.clone()
-        };
-        &oe_initial
-    } else {
-        initial
-    };
+    Ok((l, m))
+}
+
+/// The search starts from a model whose predictor `A - KC` is stable and, when `A`
+/// is kept stable, whose `A` is inside `max_pole_radius` (itself in (0, 1]).
+fn check_initial_stability(initial: &StateSpace, opts: &PemOptions) -> Result<()> {
     if !(opts.max_pole_radius > 0.0 && opts.max_pole_radius <= 1.0) {
         return Err(SysidError::order(format!(
             "max_pole_radius must be in (0, 1], got {}",
@@ -514,17 +603,30 @@ pub fn pem(
              grow without bound; start from a model with a stable predictor",
         ));
     }
-    let mut ws = Workspace::new(&l, data.len(), m);
+    Ok(())
+}
+
+/// The weight factor `L^T` (`W = L L^T`) of the cost: the identity, or for
+/// [`OutputWeight::InverseNoise`] the Cholesky factor of the inverse of the initial
+/// model's innovation covariance. Runs the initial predictor unweighted into `ws`.
+fn output_weight(
+    initial: &StateSpace,
+    x0: &DVector<f64>,
+    data: &IoData,
+    opts: &PemOptions,
+    ws: &mut Workspace,
+) -> Result<DMatrix<f64>> {
+    let ny = initial.ny();
     let eye = DMatrix::identity(ny, ny);
-    let sum0 = predict(initial, &x0v, data, &eye, &mut ws);
+    let sum0 = predict(initial, x0, data, &eye, ws);
     if !sum0.is_finite() {
         return Err(SysidError::numerical(
             "the initial model's prediction errors are not finite",
         ));
     }
     let nf = data.len() as f64;
-    let lt = match opts.weight {
-        OutputWeight::Identity => eye.clone(),
+    Ok(match opts.weight {
+        OutputWeight::Identity => eye,
         OutputWeight::InverseNoise => {
             let lam = &ws.e * ws.e.transpose() / nf;
             let inv = lam.clone().cholesky().map(|c| c.inverse()).ok_or_else(|| {
@@ -539,21 +641,113 @@ pub fn pem(
                 .l()
                 .transpose()
         }
-    };
-    let mut model = initial.clone();
-    let mut cost = predict(&model, &x0v, data, &lt, &mut ws);
-    let initial_cost = cost / nf;
-    let mut history = vec![initial_cost];
-    let mut lambda = 1e-3;
-    let mut nu_fac = 2.0;
-    let mut iterations = 0;
-    let mut termination = format!("reached the iteration limit ({})", opts.max_iterations);
-    let mut trial_x0 = x0v.clone();
-    let mut ws_trial = Workspace::new(&l, data.len(), 0);
-    'outer: while iterations < opts.max_iterations {
-        // Local coordinates: complement of the basis-change directions at the model.
-        let mut t = l.basis_change_directions(&model, &x0v);
-        if opts.output_error {
+    })
+}
+
+/// What stays fixed during the search: the record, the layout, the weight factor
+/// `L^T`, the options, and the numbers of residuals and free parameters.
+struct Search<'a> {
+    data: &'a IoData,
+    l: Layout,
+    lt: DMatrix<f64>,
+    opts: &'a PemOptions,
+    n_res: usize,
+    m: usize,
+}
+
+/// Where the search stands: the model and its initial state, its cost `sum |r|^2`,
+/// and Marquardt's damping `lambda` with its growth factor.
+struct Iterate {
+    model: StateSpace,
+    x0: DVector<f64>,
+    cost: f64,
+    lambda: f64,
+    nu_fac: f64,
+}
+
+/// Expected cost decrease `-g^T d - d^T H d / 2` of the step `d` on the quadratic model.
+fn predicted_decrease(h: &DMatrix<f64>, g: &DVector<f64>, step: &DVector<f64>) -> f64 {
+    -g.dot(step) - 0.5 * step.dot(&(h * step))
+}
+
+impl Search<'_> {
+    /// Levenberg-Marquardt iterations from `it` until convergence, the iteration
+    /// limit or exhausted damping; `history` gets the cost after every accepted
+    /// step. Returns the number of iterations and why the search stopped.
+    fn minimise(
+        &self,
+        it: &mut Iterate,
+        ws: &mut Workspace,
+        history: &mut Vec<f64>,
+        progress: &mut dyn FnMut(&PemProgress),
+    ) -> (usize, String) {
+        let opts = self.opts;
+        let nf = self.data.len() as f64;
+        let mut iterations = 0;
+        let mut termination = format!("reached the iteration limit ({})", opts.max_iterations);
+        let mut trial_x0 = it.x0.clone();
+        let mut ws_trial = Workspace::new(&self.l, self.data.len(), 0);
+        while iterations < opts.max_iterations {
+            let basis = self.local_basis(&it.model, &it.x0); // p x m
+            // predict() left xs, e, r at the current model.
+            predict(&it.model, &it.x0, self.data, &self.lt, ws);
+            jacobian(&it.model, &self.l, &basis, self.data, &self.lt, ws);
+            let (h, g) = self.normal_equations(ws);
+            let diag: Vec<f64> = (0..self.m).map(|i| h[(i, i)]).collect();
+            let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b));
+            if dmax == 0.0 || g.amax() <= 1e-14 * it.cost.max(f64::MIN_POSITIVE) {
+                termination = "the gradient vanished".to_string();
+                break;
+            }
+            let dfloor = dmax * 1e-12;
+            // Expected improvement of a (barely damped) Gauss-Newton step.
+            if let Some(step) = damped_step(&h, &g, &diag, 1e-10, dfloor) {
+                let pred = predicted_decrease(&h, &g, &step);
+                if pred <= opts.tolerance * it.cost {
+                    termination = format!(
+                        "converged: a Gauss-Newton step would lower the cost by less than {:.0e}",
+                        opts.tolerance
+                    );
+                    break;
+                }
+            }
+            let step = DampedSystem {
+                h: &h,
+                g: &g,
+                diag: &diag,
+                floor: dfloor,
+                basis: &basis,
+            };
+            let Some(crawled) = self.damped_search(it, &step, &mut trial_x0, &mut ws_trial) else {
+                termination = "no step lowers the cost (damping exhausted)".to_string();
+                break;
+            };
+            iterations += 1;
+            history.push(it.cost / nf);
+            progress(&PemProgress {
+                iteration: iterations,
+                max_iterations: opts.max_iterations,
+                cost: it.cost / nf,
+                lambda: it.lambda,
+            });
+            if crawled {
+                termination = format!(
+                    "converged: the last step lowered the cost by less than {:.0e}",
+                    opts.min_decrease
+                );
+                break;
+            }
+        }
+        (iterations, termination)
+    }
+
+    /// Local coordinates at `(model, x0)`: an orthonormal basis of the complement of
+    /// the basis-change directions (and, for an output-error fit, of `K`'s
+    /// coordinates, so that `K` stays zero).
+    fn local_basis(&self, model: &StateSpace, x0: &DVector<f64>) -> DMatrix<f64> {
+        let (n, nu, ny) = (self.l.n, self.l.nu, self.l.ny);
+        let mut t = self.l.basis_change_directions(model, x0);
+        if self.opts.output_error {
             // Hold K at zero: its coordinates join the directions the step avoids.
             let base = t.ncols();
             t = t.resize_horizontally(base + n * ny, 0.0);
@@ -563,10 +757,13 @@ pub fn pem(
                 }
             }
         }
-        let basis = HouseholderQr::new(t).complement_basis(); // p x m
-        // predict() left xs, e, r at the current model.
-        predict(&model, &x0v, data, &lt, &mut ws);
-        jacobian(&model, &l, &basis, data, &lt, &mut ws);
+        HouseholderQr::new(t).complement_basis()
+    }
+
+    /// Gauss-Newton's `H = J^T J` and gradient `g = J^T r` from the Jacobian and
+    /// residuals in `ws`.
+    fn normal_equations(&self, ws: &Workspace) -> (DMatrix<f64>, DVector<f64>) {
+        let (m, n_res) = (self.m, self.n_res);
         let mut h = DMatrix::zeros(m, m);
         gemm_tn(
             &mut h.view_mut((0, 0), (m, m)),
@@ -578,101 +775,78 @@ pub fn pem(
             0.0,
         );
         let g = ws.j.tr_mul(&ws.r);
-        let diag: Vec<f64> = (0..m).map(|i| h[(i, i)]).collect();
-        let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b));
-        if dmax == 0.0 || g.amax() <= 1e-14 * cost.max(f64::MIN_POSITIVE) {
-            termination = "the gradient vanished".to_string();
-            break;
-        }
-        let dfloor = dmax * 1e-12;
-        // Expected improvement of a (barely damped) Gauss-Newton step.
-        if let Some(step) = damped_step(&h, &g, &diag, 1e-10, dfloor) {
-            let pred = -g.dot(&step) - 0.5 * step.dot(&(&h * &step));
-            if pred <= opts.tolerance * cost {
-                termination = format!(
-                    "converged: a Gauss-Newton step would lower the cost by less than {:.0e}",
-                    opts.tolerance
-                );
-                break;
-            }
-        }
-        let crawled = loop {
-            let Some(step) = damped_step(&h, &g, &diag, lambda, dfloor) else {
-                lambda *= nu_fac;
-                nu_fac *= 2.0;
-                if lambda > 1e20 {
-                    termination = "no step lowers the cost (damping exhausted)".to_string();
-                    break 'outer;
+        (h, g)
+    }
+
+    /// Whether a trial model may be taken: a stable predictor `A - KC` and, when `A`
+    /// is kept stable, `A` inside `max_pole_radius`.
+    fn admissible(&self, trial: &StateSpace) -> bool {
+        let opts = self.opts;
+        spectral_radius(&(&trial.a - &trial.k * &trial.c)).is_some_and(|r| r < 1.0)
+            && (!(opts.enforce_stability || opts.output_error)
+                || spectral_radius(&trial.a).is_some_and(|r| r < opts.max_pole_radius))
+    }
+
+    /// Raise the damping until a step lowers the exactly evaluated cost, and take it
+    /// (Nielsen's update of `lambda`). Returns whether the decrease was below
+    /// `min_decrease` (the search crawls), or `None` when the damping is exhausted.
+    fn damped_search(
+        &self,
+        it: &mut Iterate,
+        sys: &DampedSystem,
+        trial_x0: &mut DVector<f64>,
+        ws_trial: &mut Workspace,
+    ) -> Option<bool> {
+        loop {
+            let Some(step) = damped_step(sys.h, sys.g, sys.diag, it.lambda, sys.floor) else {
+                it.lambda *= it.nu_fac;
+                it.nu_fac *= 2.0;
+                if it.lambda > 1e20 {
+                    return None;
                 }
                 continue;
             };
-            let mut th = l.pack(&model, &x0v);
-            th.gemv(1.0, &basis, &step, 1.0);
-            let trial = l.unpack(&th, &model, &mut trial_x0);
-            let stable = spectral_radius(&(&trial.a - &trial.k * &trial.c))
-                .is_some_and(|r| r < 1.0)
-                && (!(opts.enforce_stability || opts.output_error)
-                    || spectral_radius(&trial.a).is_some_and(|r| r < opts.max_pole_radius));
-            let new_cost = if stable {
-                predict(&trial, &trial_x0, data, &lt, &mut ws_trial)
+            let mut th = self.l.pack(&it.model, &it.x0);
+            th.gemv(1.0, sys.basis, &step, 1.0);
+            let trial = self.l.unpack(&th, &it.model, trial_x0);
+            let new_cost = if self.admissible(&trial) {
+                predict(&trial, trial_x0, self.data, &self.lt, ws_trial)
             } else {
                 f64::INFINITY
             };
-            let pred = -g.dot(&step) - 0.5 * step.dot(&(&h * &step));
-            if new_cost < cost {
+            let pred = predicted_decrease(sys.h, sys.g, &step);
+            if new_cost < it.cost {
                 let rho = if pred > 0.0 {
-                    (cost - new_cost) / (2.0 * pred)
+                    (it.cost - new_cost) / (2.0 * pred)
                 } else {
                     1.0
                 };
-                lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
-                nu_fac = 2.0;
-                model = trial;
-                x0v.copy_from(&trial_x0);
-                let small = cost - new_cost <= opts.min_decrease * cost;
-                cost = new_cost;
-                break small;
+                it.lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
+                it.nu_fac = 2.0;
+                it.model = trial;
+                it.x0.copy_from(trial_x0);
+                let small = it.cost - new_cost <= self.opts.min_decrease * it.cost;
+                it.cost = new_cost;
+                return Some(small);
             }
-            lambda *= nu_fac;
-            nu_fac *= 2.0;
-            if lambda > 1e20 {
-                termination = "no step lowers the cost (damping exhausted)".to_string();
-                break 'outer;
+            it.lambda *= it.nu_fac;
+            it.nu_fac *= 2.0;
+            if it.lambda > 1e20 {
+                return None;
             }
-        };
-        iterations += 1;
-        history.push(cost / nf);
-        progress(&PemProgress {
-            iteration: iterations,
-            max_iterations: opts.max_iterations,
-            cost: cost / nf,
-            lambda,
-        });
-        if crawled {
-            termination = format!(
-                "converged: the last step lowered the cost by less than {:.0e}",
-                opts.min_decrease
-            );
-            break;
         }
     }
-    let final_cost = cost / nf;
-    let (_, e) = model.predictor_states(data, Some(&x0v))?;
-    model.noise_covariance = &e * e.transpose() / nf;
-    let final_prediction_cost = e.norm_squared() / nf;
-    let (_, e0) = initial.predictor_states(data, x0)?;
-    Ok(PemResult {
-        model,
-        x0: x0v,
-        initial_cost,
-        final_cost,
-        initial_prediction_cost: e0.norm_squared() / nf,
-        final_prediction_cost,
-        iterations,
-        free_parameters: m,
-        termination,
-        cost_history: history,
-    })
+}
+
+/// One iteration's damped normal equations in local coordinates: `H`, `g`, the
+/// diagonal Marquardt scales by (floored at `floor`), and the basis that maps a
+/// step back to the full parameters.
+struct DampedSystem<'a> {
+    h: &'a DMatrix<f64>,
+    g: &'a DVector<f64>,
+    diag: &'a [f64],
+    floor: f64,
+    basis: &'a DMatrix<f64>,
 }
 
 /// Solve `(H + lambda diag(max(H_ii, floor))) d = -g` by Cholesky.

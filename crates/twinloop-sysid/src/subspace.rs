@@ -99,38 +99,7 @@ pub fn n4sid(data: &IoData, opts: &SubspaceOptions) -> Result<SubspaceResult> {
             "subspace identification here needs at least one input channel",
         ));
     }
-    // The largest horizon the record supports: j rows for i (2 nu + ny) + nu unknowns,
-    // with at least twice as many rows as unknowns.
-    let max_i = (1..=n_samples / 2)
-        .take_while(|&i| {
-            n_samples + 1 >= 2 * i && (n_samples + 1 - 2 * i) >= 2 * ((i + 1) * (2 * nu + ny))
-        })
-        .last()
-        .unwrap_or(0);
-    let want = opts.horizon.unwrap_or_else(|| {
-        let need = opts.order.map_or(0, |n| n.div_ceil(ny) + 2);
-        need.max(10)
-    });
-    let i = want.min(max_i);
-    if i < 2 {
-        return Err(SysidError::data(format!(
-            "{n_samples} samples are too few for subspace identification with {nu} inputs and {ny} outputs"
-        )));
-    }
-    if let Some(n) = opts.order
-        && n > (i - 1) * ny
-    {
-        return Err(SysidError::order(format!(
-            "order {n} needs a horizon of at least {} block rows, but {} samples allow only {i}{}",
-            n.div_ceil(ny) + 1,
-            n_samples,
-            if opts.horizon.is_some() {
-                " (or the horizon option is set too low)"
-            } else {
-                ""
-            }
-        )));
-    }
+    let i = horizon(n_samples, nu, ny, opts)?;
     let j = n_samples + 1 - 2 * i;
     let (u, y) = (&data.u, &data.y);
     // Step 1: oblique projections.
@@ -155,33 +124,7 @@ pub fn n4sid(data: &IoData, opts: &SubspaceOptions) -> Result<SubspaceResult> {
     let mut idx: Vec<usize> = (0..svd.singular_values.len()).collect();
     idx.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
     let sv: Vec<f64> = idx.iter().map(|&k| svd.singular_values[k]).collect();
-    let nmax = (i - 1) * ny;
-    let n = match opts.order {
-        Some(n) => n,
-        None => {
-            let lim = nmax.min(sv.len() - 1);
-            let floor = sv[0] * 1e-12;
-            (1..=lim)
-                .max_by(|&a, &b| {
-                    let ga = sv[a - 1] / sv[a].max(floor);
-                    let gb = sv[b - 1] / sv[b].max(floor);
-                    ga.total_cmp(&gb)
-                })
-                .unwrap_or(1)
-        }
-    };
-    if n == 0 {
-        return Err(SysidError::order(
-            "order 0: a state-space model needs at least one state",
-        ));
-    }
-    if sv[n - 1] <= sv[0] * 1e-12 {
-        return Err(SysidError::order(format!(
-            "order {n} is more than the data support: only {} singular values of the projection are \
-             non-zero; choose a lower order",
-            sv.iter().filter(|&&s| s > sv[0] * 1e-12).count()
-        )));
-    }
+    let n = choose_order(opts, &sv, (i - 1) * ny)?;
     let Some(su) = svd.u else {
         return Err(SysidError::numerical("SVD gave no singular vectors"));
     };
@@ -218,25 +161,7 @@ pub fn n4sid(data: &IoData, opts: &SubspaceOptions) -> Result<SubspaceResult> {
     let qn = rho_w.transpose() * &rho_w / jf;
     let sn = rho_w.transpose() * &rho_v / jf;
     let rn = rho_v.transpose() * &rho_v / jf;
-    let mut warnings = Vec::new();
-    let k = match kalman_gain(&a, &c, &qn, &sn, &rn) {
-        Some(k) => k,
-        None => {
-            warnings.push(
-                "the Kalman filter Riccati equation did not converge; K is the least-squares \
-                 regression of the state residuals on the output residuals"
-                    .to_string(),
-            );
-            let ls = HouseholderQr::new(rho_v.clone()).solve(&rho_w)?; // ny x n
-            let k = ls.transpose();
-            if spectral_radius(&(&a - &k * &c)).is_some_and(|r| r < 1.0) {
-                k
-            } else {
-                warnings.push("that K gave an unstable predictor; K set to zero".to_string());
-                DMatrix::zeros(n, ny)
-            }
-        }
-    };
+    let (k, warnings) = noise_gain(&a, &c, &rho_w, &rho_v, &qn, &sn, &rn)?;
     let mut model = StateSpace {
         a,
         b,
@@ -255,6 +180,116 @@ pub fn n4sid(data: &IoData, opts: &SubspaceOptions) -> Result<SubspaceResult> {
         x0,
         warnings,
     })
+}
+
+/// The block rows `i` of past and future: the asked horizon, else
+/// `max(10, order/ny + 2)`, within the largest the record supports (j rows for
+/// i (2 nu + ny) + nu unknowns, with at least twice as many rows as unknowns).
+/// Errors when the record allows less than 2 or less than the order needs.
+fn horizon(n_samples: usize, nu: usize, ny: usize, opts: &SubspaceOptions) -> Result<usize> {
+    // The largest horizon the record supports: j rows for i (2 nu + ny) + nu unknowns,
+    // with at least twice as many rows as unknowns.
+    let max_i = (1..=n_samples / 2)
+        .take_while(|&i| {
+            n_samples + 1 >= 2 * i && (n_samples + 1 - 2 * i) >= 2 * ((i + 1) * (2 * nu + ny))
+        })
+        .last()
+        .unwrap_or(0);
+    let want = opts.horizon.unwrap_or_else(|| {
+        let need = opts.order.map_or(0, |n| n.div_ceil(ny) + 2);
+        need.max(10)
+    });
+    let i = want.min(max_i);
+    if i < 2 {
+        return Err(SysidError::data(format!(
+            "{n_samples} samples are too few for subspace identification with {nu} inputs and {ny} outputs"
+        )));
+    }
+    if let Some(n) = opts.order
+        && n > (i - 1) * ny
+    {
+        return Err(SysidError::order(format!(
+            "order {n} needs a horizon of at least {} block rows, but {} samples allow only {i}{}",
+            n.div_ceil(ny) + 1,
+            n_samples,
+            if opts.horizon.is_some() {
+                " (or the horizon option is set too low)"
+            } else {
+                ""
+            }
+        )));
+    }
+    Ok(i)
+}
+
+/// The model order: the asked one, else the largest gap among the first `nmax + 1`
+/// singular values `sv` (sorted, decreasing); it must be positive and supported by a
+/// non-zero singular value.
+fn choose_order(opts: &SubspaceOptions, sv: &[f64], nmax: usize) -> Result<usize> {
+    let n = match opts.order {
+        Some(n) => n,
+        None => {
+            let lim = nmax.min(sv.len() - 1);
+            let floor = sv[0] * 1e-12;
+            (1..=lim)
+                .max_by(|&a, &b| {
+                    let ga = sv[a - 1] / sv[a].max(floor);
+                    let gb = sv[b - 1] / sv[b].max(floor);
+                    ga.total_cmp(&gb)
+                })
+                .unwrap_or(1)
+        }
+    };
+    if n == 0 {
+        return Err(SysidError::order(
+            "order 0: a state-space model needs at least one state",
+        ));
+    }
+    if sv[n - 1] <= sv[0] * 1e-12 {
+        return Err(SysidError::order(format!(
+            "order {n} is more than the data support: only {} singular values of the projection are \
+             non-zero; choose a lower order",
+            sv.iter().filter(|&&s| s > sv[0] * 1e-12).count()
+        )));
+    }
+    Ok(n)
+}
+
+/// The Kalman gain from the state and output residuals' covariances (`qn`, `sn`,
+/// `rn`); if the Riccati equation does not converge, the least-squares regression of
+/// the state residuals `rho_w` on the output residuals `rho_v`, or zero when that
+/// gives an unstable predictor. Returns the warnings those fallbacks raise.
+fn noise_gain(
+    a: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    rho_w: &DMatrix<f64>,
+    rho_v: &DMatrix<f64>,
+    qn: &DMatrix<f64>,
+    sn: &DMatrix<f64>,
+    rn: &DMatrix<f64>,
+) -> Result<(DMatrix<f64>, Vec<String>)> {
+    let n = a.nrows();
+    let ny = c.nrows();
+    let mut warnings = Vec::new();
+    let k = match kalman_gain(a, c, qn, sn, rn) {
+        Some(k) => k,
+        None => {
+            warnings.push(
+                "the Kalman filter Riccati equation did not converge; K is the least-squares \
+                 regression of the state residuals on the output residuals"
+                    .to_string(),
+            );
+            let ls = HouseholderQr::new(rho_v.clone()).solve(rho_w)?; // ny x n
+            let k = ls.transpose();
+            if spectral_radius(&(a - &k * c)).is_some_and(|r| r < 1.0) {
+                k
+            } else {
+                warnings.push("that K gave an unstable predictor; K set to zero".to_string());
+                DMatrix::zeros(n, ny)
+            }
+        }
+    };
+    Ok((k, warnings))
 }
 
 /// `B`, `D` (when `feedthrough`) and `x(0)` minimising `sum |y(k) - yhat(k)|^2` of the

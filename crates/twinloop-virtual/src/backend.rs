@@ -4,14 +4,14 @@
 use crate::shared::Shared;
 use std::sync::Arc;
 use twinloop_link::servo::ServoMeasurement;
-use twinloop_link::{Item, Model, VirtualServoBackend};
+use twinloop_link::{Item, ServoModel, VirtualServoBackend};
 
 /// Moves the bus's servos by handing their registers to the simulator thread and
 /// answers from the simulator's latest snapshot.
 pub struct SimServoBackend {
     pub(crate) shared: Arc<Shared>,
     /// Each servo's model (bus order), to read its registers' units.
-    pub(crate) models: Vec<Model>,
+    pub(crate) models: Vec<ServoModel>,
 }
 
 impl VirtualServoBackend for SimServoBackend {

@@ -2,7 +2,7 @@
 //! compliance (RX), position gain (MX, X), moving speed and torque limit, turned
 //! into the parameters of the simulator's [`DynamixelServo`].
 
-use twinloop_link::{Item, Model, Unit};
+use twinloop_link::{Item, ServoModel, Unit};
 use twinloop_sim::DynamixelServo;
 
 /// The registers that shape one servo's motion, in SI units (servo angles: radians
@@ -43,7 +43,7 @@ impl DriveRegisters {
 
     /// Take a register's raw value (see
     /// [`VirtualServoBackend::register_written`](twinloop_link::VirtualServoBackend::register_written)).
-    pub fn set(&mut self, model: Model, item: Item, raw: i32) {
+    pub fn set(&mut self, model: ServoModel, item: Item, raw: i32) {
         let table = model.table();
         let Some(r) = table.item(item) else { return };
         // Compliance is in position units of this model.
@@ -150,12 +150,12 @@ mod tests {
     fn registers_become_servo_parameters() {
         let unit = (300.0f64 / 1024.0).to_radians();
         let mut r = DriveRegisters::new(0.0);
-        r.set(Model::Rx28, Item::CwComplianceSlope, 8);
-        r.set(Model::Rx28, Item::CcwComplianceSlope, 64);
-        r.set(Model::Rx28, Item::CwComplianceMargin, 0);
-        r.set(Model::Rx28, Item::CcwComplianceMargin, 3);
-        r.set(Model::Rx28, Item::TorqueLimit, 512);
-        r.set(Model::Rx28, Item::MovingSpeed, 100);
+        r.set(ServoModel::Rx28, Item::CwComplianceSlope, 8);
+        r.set(ServoModel::Rx28, Item::CcwComplianceSlope, 64);
+        r.set(ServoModel::Rx28, Item::CwComplianceMargin, 0);
+        r.set(ServoModel::Rx28, Item::CcwComplianceMargin, 3);
+        r.set(ServoModel::Rx28, Item::TorqueLimit, 512);
+        r.set(ServoModel::Rx28, Item::MovingSpeed, 100);
         let base = DynamixelServo::rx28();
         let cw = servo_with_registers(&base, &r, false);
         let ccw = servo_with_registers(&base, &r, true);
@@ -169,8 +169,8 @@ mod tests {
         // X-series: P gain twice the factory value halves the slope; PWM Limit is the
         // torque limit.
         let mut x = DriveRegisters::new(0.0);
-        x.set(Model::Xm430W350, Item::PositionPGain, 1600);
-        x.set(Model::Xm430W350, Item::MaxTorque, 885 / 5);
+        x.set(ServoModel::Xm430W350, Item::PositionPGain, 1600);
+        x.set(ServoModel::Xm430W350, Item::MaxTorque, 885 / 5);
         let s = servo_with_registers(&base, &x, true);
         assert!((s.compliance_slope - base.compliance_slope / 2.0).abs() < 1e-12);
         assert!((s.torque_limit - 177.0 / 885.0).abs() < 1e-12);

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use twinloop_link::servo::{ServeOptions, serve};
 use twinloop_link::transport::{self, PtyTransport, SerialOptions, Transport};
-use twinloop_link::{Client, ClientConfig, Item, Model, Protocol, RobotMapping};
+use twinloop_link::{Client, ClientConfig, Item, Protocol, RobotMapping, ServoModel};
 use twinloop_virtual::{SimHandle, Snapshot, VirtualRobot, VirtualRobotOptions};
 
 /// The client, the simulator handle, the server's stop flag and its thread.
@@ -75,7 +75,7 @@ fn knee_goals_over_a_pty_move_the_simulated_knees_and_km20_stands() {
     assert!(vr.unmapped.is_empty());
     let (mut c, sim, stop, server) = serve_on_pty(vr);
     let id = |name: &str| mapping.joints.iter().find(|j| j.name == name).unwrap().id;
-    let table = Model::Rx64.table();
+    let table = ServoModel::Rx64.table();
     let pos = table.item(Item::PresentPosition).unwrap();
     let load = table.item(Item::PresentLoad).unwrap();
     let goal = table.item(Item::GoalPosition).unwrap();

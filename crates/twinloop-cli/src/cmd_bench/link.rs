@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use twinloop_link::control_cycle::ReadMethod;
 use twinloop_link::transport::Transport;
-use twinloop_link::{BusServo, Client, Model, Protocol, VirtualBus, plan_cycle};
+use twinloop_link::{BusServo, Client, Protocol, ServoModel, VirtualBus, plan_cycle};
 
 #[derive(Args, Debug)]
 pub struct LinkBenchArgs {
@@ -100,7 +100,7 @@ fn median_us(seconds: f64, batch: usize, mut f: impl FnMut()) -> (f64, Option<f6
     (samples[samples.len() / 2], cpu)
 }
 
-fn cycle_servos(model: Model, n: u8) -> Vec<twinloop_link::CycleServo> {
+fn cycle_servos(model: ServoModel, n: u8) -> Vec<twinloop_link::CycleServo> {
     (1..=n)
         .map(|id| twinloop_link::CycleServo { id, model })
         .collect()
@@ -155,7 +155,7 @@ fn transaction_cases<T: Transport>(
                 && outcomes.iter().all(|o| o.is_ok())
         }),
     );
-    let servos = cycle_servos(Model::Xm430W350, n);
+    let servos = cycle_servos(ServoModel::Xm430W350, n);
     let mut cycle =
         twinloop_link::ControlCycle::new(&servos, ReadMethod::FastSyncRead).expect("valid");
     let mut readings = vec![twinloop_link::ServoReading::default(); servos.len()];
@@ -203,13 +203,13 @@ fn software_cases(a: &LinkBenchArgs) -> Result<Vec<BenchCase>, CliError> {
     // Software overhead per cycle: replayed replies.
     for (model, method, len, label) in [
         (
-            Model::Xm430W350,
+            ServoModel::Xm430W350,
             ReadMethod::FastSyncRead,
             10,
             "FAST_SYNC_READ",
         ),
-        (Model::Xm430W350, ReadMethod::SyncRead, 10, "SYNC_READ"),
-        (Model::Rx28, ReadMethod::Read, 6, "READ x N"),
+        (ServoModel::Xm430W350, ReadMethod::SyncRead, 10, "SYNC_READ"),
+        (ServoModel::Rx28, ReadMethod::Read, 6, "READ x N"),
     ] {
         let servos = cycle_servos(model, n);
         let bus_servos: Vec<BusServo> = servos
@@ -275,7 +275,7 @@ fn software_cases(a: &LinkBenchArgs) -> Result<Vec<BenchCase>, CliError> {
         let servos: Vec<BusServo> = (1..=n)
             .map(|id| BusServo {
                 id,
-                model: Model::Xm430W350,
+                model: ServoModel::Xm430W350,
             })
             .collect();
         let replay = Replay {

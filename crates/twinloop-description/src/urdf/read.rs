@@ -2,7 +2,7 @@
 
 use crate::description::*;
 use crate::error::DescriptionError;
-use crate::load::{
+use crate::xml::{
     Places, error_at, error_at_attr, opt_array, opt_number, parse_array, parse_number,
     qualified_name, read_text, required, source_text, validate_placed,
 };
@@ -11,7 +11,7 @@ use std::path::Path;
 
 /// Read a URDF from text. Errors name the line, column and element at fault.
 pub fn from_str(text: &str) -> Result<Description, DescriptionError> {
-    let doc = crate::load::parse_xml(text)?;
+    let doc = crate::xml::parse_xml(text)?;
     from_document(&doc)
 }
 

@@ -4,8 +4,8 @@
 //! out of here so the link needs no dynamics); [`TrackingServoModel`] is a
 //! stand-in without physics for protocol-only work.
 
-use crate::model::ServoSpec;
 use crate::register::Item;
+use crate::servo_model::ServoSpec;
 
 /// One servo's measurable state, SI units, in the servo's own angle (radians from
 /// the middle of its range, counter-clockwise positive: what the Present Position

@@ -14,10 +14,10 @@ use super::virtual_servo::{Fault, VirtualServo, WriteEffects};
 use crate::crc16::crc16_update;
 use crate::decoder::{Accept, DecodeEvent, Decoder, Frame};
 use crate::instruction::Instruction;
-use crate::model::Model;
 use crate::packet::PacketWriter;
 use crate::protocol::{BROADCAST_ID, Protocol};
 use crate::register::{Item, Unit};
+use crate::servo_model::ServoModel;
 use crate::transport::Responder;
 use std::time::{Duration, Instant};
 
@@ -50,7 +50,7 @@ pub struct BusStats {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct BusServo {
     pub id: u8,
-    pub model: Model,
+    pub model: ServoModel,
 }
 
 pub struct VirtualBus<B: VirtualServoBackend> {
@@ -481,166 +481,205 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         let code = f.instruction;
         let mut targets = [0usize; 256];
         let n = self.targets(protocol, f.id, &mut targets);
+        let targets = &targets[..n];
         let instruction = Instruction::from_code(code).filter(|i| i.in_protocol(protocol));
         let Some(instruction) = instruction else {
             // Undefined here (e.g. SYNC_READ or REBOOT sent to a 1.0 servo).
-            for &k in &targets[..n] {
+            for &k in targets {
                 self.reply(k, f.id, code, Err(Fault::Instruction), &[]);
             }
             return;
         };
         match instruction {
-            Instruction::Ping => {
-                if protocol == Protocol::V1 && f.id == BROADCAST_ID {
-                    return; // EM-P1: no status for broadcast.
-                }
-                for &k in &targets[..n] {
-                    let s = &self.servos[k];
-                    let model = s.model.model_number().to_le_bytes();
-                    let fw = s.firmware;
-                    match protocol {
-                        Protocol::V1 => self.status(k, 0, &[]),
-                        Protocol::V2 => self.status(k, 0, &[model[0], model[1], fw]),
-                    }
-                }
-            }
-            Instruction::Read => {
-                let mut p = Params::new(protocol, f.params);
-                let (Some(address), Some(len)) = (p.addr(), p.addr()) else {
-                    for &k in &targets[..n] {
-                        self.reply(k, f.id, code, Err(Fault::Instruction), &[]);
-                    }
-                    return;
-                };
-                if f.id != BROADCAST_ID {
-                    for &k in &targets[..n] {
-                        self.read_reply(k, address, len);
-                    }
-                }
-            }
+            Instruction::Ping => self.ping(f, targets),
+            Instruction::Read => self.read(f, targets),
             Instruction::Write | Instruction::RegWrite => {
-                let mut p = Params::new(protocol, f.params);
-                let address = p.addr();
-                let data = p.rest();
-                for &k in &targets[..n] {
-                    let r = match address {
-                        None => Err(Fault::Instruction),
-                        Some(a) if instruction == Instruction::Write => self.write(k, a, data),
-                        Some(a) => self.servos[k].check_write(a, data).map(|()| {
-                            self.servos[k].stage(a, data);
-                        }),
-                    };
-                    self.reply(k, f.id, code, r, &[]);
-                }
+                self.write_or_stage(f, instruction, targets)
             }
-            Instruction::Action => {
-                for &k in &targets[..n] {
-                    let r = match self.servos[k].take_staged() {
-                        Some(fx) => {
-                            self.apply_effects(k, fx);
-                            Ok(())
-                        }
-                        None => Err(Fault::Instruction),
-                    };
-                    self.reply(k, f.id, code, r, &[]);
-                }
-            }
-            Instruction::FactoryReset => {
-                let option = f.params.first().copied().unwrap_or(0xFF);
-                if protocol == Protocol::V2 && f.id == BROADCAST_ID && option == 0xFF {
-                    return; // Ignored since firmware 42 (EM-P2).
-                }
-                for &k in &targets[..n] {
-                    // Answer first, under the old id.
-                    self.reply(k, f.id, code, Ok(()), &[]);
-                    self.servos[k].factory_reset(option);
-                    self.backend.set_torque_enabled(k, false);
-                    announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
-                    self.refresh(k);
-                }
-            }
-            Instruction::Reboot => {
-                for &k in &targets[..n] {
-                    self.reply(k, f.id, code, Ok(()), &[]);
-                    self.servos[k].reboot();
-                    self.backend.set_torque_enabled(k, false);
-                    announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
-                    self.refresh(k);
-                    let s = &mut self.servos[k];
-                    let p = s.value(Item::PresentPosition);
-                    s.set_value(Item::GoalPosition, p);
-                }
-            }
-            Instruction::Clear => {
-                let valid = f.params == [0x01, 0x44, 0x58, 0x4C, 0x22];
-                for &k in &targets[..n] {
-                    let r = if !valid {
-                        Err(Fault::Instruction)
-                    } else if self.backend.measure(k).velocity.abs() > 0.01 {
-                        Err(Fault::ResultFail)
-                    } else {
-                        Ok(())
-                    };
-                    self.reply(k, f.id, code, r, &[]);
-                }
-            }
+            Instruction::Action => self.action(f, targets),
+            Instruction::FactoryReset => self.factory_reset(f, targets),
+            Instruction::Reboot => self.reboot(f, targets),
+            Instruction::Clear => self.clear(f, targets),
             Instruction::SyncWrite => self.sync_write(protocol, f.params),
             Instruction::BulkWrite => self.bulk_write(f.params),
-            Instruction::SyncRead | Instruction::FastSyncRead => {
-                let mut p = Params::new(protocol, f.params);
-                let (Some(address), Some(len)) = (p.u16(), p.u16()) else {
-                    return;
-                };
-                let ids = p.rest();
-                if instruction == Instruction::SyncRead {
-                    for &id in ids {
-                        if let Some(k) = self.find(protocol, id) {
-                            self.read_reply(k, address, len);
-                        }
-                    }
-                } else {
-                    self.fast_reply(ids.iter().map(|&id| (id, address, len)));
-                }
+            Instruction::SyncRead | Instruction::FastSyncRead => self.sync_read(f, instruction),
+            Instruction::BulkRead | Instruction::FastBulkRead => self.bulk_read(f, instruction),
+            Instruction::Status => {}
+        }
+    }
+
+    /// PING: the model number and firmware (2.0), an empty status (1.0).
+    fn ping(&mut self, f: &Frame<'_>, targets: &[usize]) {
+        let protocol = f.protocol;
+        if protocol == Protocol::V1 && f.id == BROADCAST_ID {
+            return; // EM-P1: no status for broadcast.
+        }
+        for &k in targets {
+            let s = &self.servos[k];
+            let model = s.model.model_number().to_le_bytes();
+            let fw = s.firmware;
+            match protocol {
+                Protocol::V1 => self.status(k, 0, &[]),
+                Protocol::V2 => self.status(k, 0, &[model[0], model[1], fw]),
             }
-            Instruction::BulkRead | Instruction::FastBulkRead => {
-                let mut items = [(0u8, 0u16, 0u16); 256];
-                let mut count = 0;
-                let mut p = Params::new(protocol, f.params);
-                if protocol == Protocol::V1 && p.u8() != Some(0x00) {
-                    return;
+        }
+    }
+
+    /// READ: a status with the registers asked for (none to a broadcast).
+    fn read(&mut self, f: &Frame<'_>, targets: &[usize]) {
+        let (protocol, code) = (f.protocol, f.instruction);
+        let mut p = Params::new(protocol, f.params);
+        let (Some(address), Some(len)) = (p.addr(), p.addr()) else {
+            for &k in targets {
+                self.reply(k, f.id, code, Err(Fault::Instruction), &[]);
+            }
+            return;
+        };
+        if f.id != BROADCAST_ID {
+            for &k in targets {
+                self.read_reply(k, address, len);
+            }
+        }
+    }
+
+    /// WRITE (applied now) or REG_WRITE (staged for ACTION).
+    fn write_or_stage(&mut self, f: &Frame<'_>, instruction: Instruction, targets: &[usize]) {
+        let (protocol, code) = (f.protocol, f.instruction);
+        let mut p = Params::new(protocol, f.params);
+        let address = p.addr();
+        let data = p.rest();
+        for &k in targets {
+            let r = match address {
+                None => Err(Fault::Instruction),
+                Some(a) if instruction == Instruction::Write => self.write(k, a, data),
+                Some(a) => self.servos[k].check_write(a, data).map(|()| {
+                    self.servos[k].stage(a, data);
+                }),
+            };
+            self.reply(k, f.id, code, r, &[]);
+        }
+    }
+
+    /// ACTION: apply the staged REG_WRITE of each target.
+    fn action(&mut self, f: &Frame<'_>, targets: &[usize]) {
+        let code = f.instruction;
+        for &k in targets {
+            let r = match self.servos[k].take_staged() {
+                Some(fx) => {
+                    self.apply_effects(k, fx);
+                    Ok(())
                 }
-                while !p.done() && count < items.len() {
-                    let item = match protocol {
-                        Protocol::V1 => (|| {
-                            let len = p.u8()?;
-                            let id = p.u8()?;
-                            let address = p.u8()?;
-                            Some((id, address as u16, len as u16))
-                        })(),
-                        Protocol::V2 => (|| Some((p.u8()?, p.u16()?, p.u16()?)))(),
-                    };
-                    let Some(item) = item else { return };
-                    // A repeated id is read once (EM-P1).
-                    if items[..count].iter().all(|i| i.0 != item.0) {
-                        items[count] = item;
-                        count += 1;
-                    }
-                }
-                if instruction == Instruction::FastBulkRead {
-                    self.fast_reply(items[..count].iter().copied());
-                    return;
-                }
-                for &(id, address, len) in &items[..count] {
-                    let Some(k) = self.find(protocol, id) else {
-                        continue;
-                    };
-                    if !self.servos[k].model.has_bulk_read() {
-                        continue; // RX: no BULK_READ.
-                    }
+                None => Err(Fault::Instruction),
+            };
+            self.reply(k, f.id, code, r, &[]);
+        }
+    }
+
+    /// FACTORY_RESET: answer under the old id, then reset the control table.
+    fn factory_reset(&mut self, f: &Frame<'_>, targets: &[usize]) {
+        let (protocol, code) = (f.protocol, f.instruction);
+        let option = f.params.first().copied().unwrap_or(0xFF);
+        if protocol == Protocol::V2 && f.id == BROADCAST_ID && option == 0xFF {
+            return; // Ignored since firmware 42 (EM-P2).
+        }
+        for &k in targets {
+            // Answer first, under the old id.
+            self.reply(k, f.id, code, Ok(()), &[]);
+            self.servos[k].factory_reset(option);
+            self.backend.set_torque_enabled(k, false);
+            announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
+            self.refresh(k);
+        }
+    }
+
+    /// REBOOT: answer, then restart with torque off and the goal at the present position.
+    fn reboot(&mut self, f: &Frame<'_>, targets: &[usize]) {
+        let code = f.instruction;
+        for &k in targets {
+            self.reply(k, f.id, code, Ok(()), &[]);
+            self.servos[k].reboot();
+            self.backend.set_torque_enabled(k, false);
+            announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
+            self.refresh(k);
+            let s = &mut self.servos[k];
+            let p = s.value(Item::PresentPosition);
+            s.set_value(Item::GoalPosition, p);
+        }
+    }
+
+    /// CLEAR (multi-turn reset): refused while the servo moves.
+    fn clear(&mut self, f: &Frame<'_>, targets: &[usize]) {
+        let code = f.instruction;
+        let valid = f.params == [0x01, 0x44, 0x58, 0x4C, 0x22];
+        for &k in targets {
+            let r = if !valid {
+                Err(Fault::Instruction)
+            } else if self.backend.measure(k).velocity.abs() > 0.01 {
+                Err(Fault::ResultFail)
+            } else {
+                Ok(())
+            };
+            self.reply(k, f.id, code, r, &[]);
+        }
+    }
+
+    /// SYNC_READ (one status per id, in order) or FAST_SYNC_READ (one shared status).
+    fn sync_read(&mut self, f: &Frame<'_>, instruction: Instruction) {
+        let protocol = f.protocol;
+        let mut p = Params::new(protocol, f.params);
+        let (Some(address), Some(len)) = (p.u16(), p.u16()) else {
+            return;
+        };
+        let ids = p.rest();
+        if instruction == Instruction::SyncRead {
+            for &id in ids {
+                if let Some(k) = self.find(protocol, id) {
                     self.read_reply(k, address, len);
                 }
             }
-            Instruction::Status => {}
+        } else {
+            self.fast_reply(ids.iter().map(|&id| (id, address, len)));
+        }
+    }
+
+    /// BULK_READ (one status per item, not from RX) or FAST_BULK_READ (one shared status).
+    fn bulk_read(&mut self, f: &Frame<'_>, instruction: Instruction) {
+        let protocol = f.protocol;
+        let mut items = [(0u8, 0u16, 0u16); 256];
+        let mut count = 0;
+        let mut p = Params::new(protocol, f.params);
+        if protocol == Protocol::V1 && p.u8() != Some(0x00) {
+            return;
+        }
+        while !p.done() && count < items.len() {
+            let item = match protocol {
+                Protocol::V1 => (|| {
+                    let len = p.u8()?;
+                    let id = p.u8()?;
+                    let address = p.u8()?;
+                    Some((id, address as u16, len as u16))
+                })(),
+                Protocol::V2 => (|| Some((p.u8()?, p.u16()?, p.u16()?)))(),
+            };
+            let Some(item) = item else { return };
+            // A repeated id is read once (EM-P1).
+            if items[..count].iter().all(|i| i.0 != item.0) {
+                items[count] = item;
+                count += 1;
+            }
+        }
+        if instruction == Instruction::FastBulkRead {
+            self.fast_reply(items[..count].iter().copied());
+            return;
+        }
+        for &(id, address, len) in &items[..count] {
+            let Some(k) = self.find(protocol, id) else {
+                continue;
+            };
+            if !self.servos[k].model.has_bulk_read() {
+                continue; // RX: no BULK_READ.
+            }
+            self.read_reply(k, address, len);
         }
     }
 

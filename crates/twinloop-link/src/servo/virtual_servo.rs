@@ -3,9 +3,9 @@
 //! with each violation answered by the error the e-manual names.
 
 use crate::control_table::ControlTable;
-use crate::model::Model;
 use crate::protocol::Protocol;
 use crate::register::{Access, Area, Item, Register};
+use crate::servo_model::ServoModel;
 use std::time::Duration;
 
 /// Why a servo refuses an instruction, before it is turned into the protocol's
@@ -67,7 +67,7 @@ pub struct WriteEffects {
 /// A servo's memory and identity.
 #[derive(Debug, Clone)]
 pub struct VirtualServo {
-    pub model: Model,
+    pub model: ServoModel,
     pub firmware: u8,
     pub memory: Vec<u8>,
     /// REG_WRITE staged for the next ACTION: address and data.
@@ -77,7 +77,7 @@ pub struct VirtualServo {
 }
 
 impl VirtualServo {
-    pub fn new(id: u8, model: Model, firmware: u8) -> VirtualServo {
+    pub fn new(id: u8, model: ServoModel, firmware: u8) -> VirtualServo {
         VirtualServo {
             model,
             firmware,

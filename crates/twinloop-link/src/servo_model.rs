@@ -1,6 +1,5 @@
 //! The servo models twinloop knows: model numbers, protocol, datasheet figures.
 
-use crate::control_table::ControlTable;
 use crate::protocol::Protocol;
 use crate::register::RPM;
 use std::fmt;
@@ -8,7 +7,7 @@ use std::fmt;
 /// A servo model with the firmware protocol it runs. MX servos exist with either
 /// firmware (different control tables, different model numbers: EM-COMPAT).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Model {
+pub enum ServoModel {
     Rx28,
     Rx64,
     Mx28,
@@ -43,39 +42,39 @@ impl ServoSpec {
     }
 }
 
-impl Model {
-    pub const ALL: [Model; 10] = [
-        Model::Rx28,
-        Model::Rx64,
-        Model::Mx28,
-        Model::Mx64,
-        Model::Mx106,
-        Model::Mx28V2,
-        Model::Mx64V2,
-        Model::Mx106V2,
-        Model::Xm430W350,
-        Model::Xl430W250,
+impl ServoModel {
+    pub const ALL: [ServoModel; 10] = [
+        ServoModel::Rx28,
+        ServoModel::Rx64,
+        ServoModel::Mx28,
+        ServoModel::Mx64,
+        ServoModel::Mx106,
+        ServoModel::Mx28V2,
+        ServoModel::Mx64V2,
+        ServoModel::Mx106V2,
+        ServoModel::Xm430W350,
+        ServoModel::Xl430W250,
     ];
 
     /// The e-manual's name.
     pub const fn name(self) -> &'static str {
         match self {
-            Model::Rx28 => "RX-28",
-            Model::Rx64 => "RX-64",
-            Model::Mx28 => "MX-28",
-            Model::Mx64 => "MX-64",
-            Model::Mx106 => "MX-106",
-            Model::Mx28V2 => "MX-28(2.0)",
-            Model::Mx64V2 => "MX-64(2.0)",
-            Model::Mx106V2 => "MX-106(2.0)",
-            Model::Xm430W350 => "XM430-W350",
-            Model::Xl430W250 => "XL430-W250",
+            ServoModel::Rx28 => "RX-28",
+            ServoModel::Rx64 => "RX-64",
+            ServoModel::Mx28 => "MX-28",
+            ServoModel::Mx64 => "MX-64",
+            ServoModel::Mx106 => "MX-106",
+            ServoModel::Mx28V2 => "MX-28(2.0)",
+            ServoModel::Mx64V2 => "MX-64(2.0)",
+            ServoModel::Mx106V2 => "MX-106(2.0)",
+            ServoModel::Xm430W350 => "XM430-W350",
+            ServoModel::Xl430W250 => "XL430-W250",
         }
     }
 
     /// Parse a model name, forgiving case, spaces and the e-manual's URL spelling
     /// (`rx-28`, `MX-28(2.0)`, `mx-28-2`, `xm430-w350`).
-    pub fn parse(text: &str) -> Option<Model> {
+    pub fn parse(text: &str) -> Option<ServoModel> {
         let norm: String = text
             .chars()
             .filter(|c| c.is_ascii_alphanumeric() || *c == '.')
@@ -83,23 +82,23 @@ impl Model {
             .collect();
         let norm = norm.replace("2.0", "v2");
         Some(match norm.as_str() {
-            "rx28" => Model::Rx28,
-            "rx64" => Model::Rx64,
-            "mx28" | "mx28v1" => Model::Mx28,
-            "mx64" | "mx64v1" => Model::Mx64,
-            "mx106" | "mx106v1" => Model::Mx106,
-            "mx28v2" | "mx282" => Model::Mx28V2,
-            "mx64v2" | "mx642" => Model::Mx64V2,
-            "mx106v2" | "mx1062" => Model::Mx106V2,
-            "xm430w350" | "xm430w350t" | "xm430w350r" => Model::Xm430W350,
-            "xl430w250" | "xl430w250t" => Model::Xl430W250,
+            "rx28" => ServoModel::Rx28,
+            "rx64" => ServoModel::Rx64,
+            "mx28" | "mx28v1" => ServoModel::Mx28,
+            "mx64" | "mx64v1" => ServoModel::Mx64,
+            "mx106" | "mx106v1" => ServoModel::Mx106,
+            "mx28v2" | "mx282" => ServoModel::Mx28V2,
+            "mx64v2" | "mx642" => ServoModel::Mx64V2,
+            "mx106v2" | "mx1062" => ServoModel::Mx106V2,
+            "xm430w350" | "xm430w350t" | "xm430w350r" => ServoModel::Xm430W350,
+            "xl430w250" | "xl430w250t" => ServoModel::Xl430W250,
             _ => return None,
         })
     }
 
-    /// Names accepted by [`Model::parse`], for error messages.
+    /// Names accepted by [`ServoModel::parse`], for error messages.
     pub fn known_names() -> String {
-        Model::ALL
+        ServoModel::ALL
             .iter()
             .map(|m| m.name())
             .collect::<Vec<_>>()
@@ -108,7 +107,11 @@ impl Model {
 
     pub const fn protocol(self) -> Protocol {
         match self {
-            Model::Rx28 | Model::Rx64 | Model::Mx28 | Model::Mx64 | Model::Mx106 => Protocol::V1,
+            ServoModel::Rx28
+            | ServoModel::Rx64
+            | ServoModel::Mx28
+            | ServoModel::Mx64
+            | ServoModel::Mx106 => Protocol::V1,
             _ => Protocol::V2,
         }
     }
@@ -116,31 +119,29 @@ impl Model {
     /// Model Number (address 0) as the servo reports it (e-manual control tables).
     pub const fn model_number(self) -> u16 {
         match self {
-            Model::Rx28 => 28,
-            Model::Rx64 => 64,
-            Model::Mx28 => 29,
-            Model::Mx64 => 310,
-            Model::Mx106 => 320,
-            Model::Mx28V2 => 30,
-            Model::Mx64V2 => 311,
-            Model::Mx106V2 => 321,
-            Model::Xm430W350 => 1020,
-            Model::Xl430W250 => 1060,
+            ServoModel::Rx28 => 28,
+            ServoModel::Rx64 => 64,
+            ServoModel::Mx28 => 29,
+            ServoModel::Mx64 => 310,
+            ServoModel::Mx106 => 320,
+            ServoModel::Mx28V2 => 30,
+            ServoModel::Mx64V2 => 311,
+            ServoModel::Mx106V2 => 321,
+            ServoModel::Xm430W350 => 1020,
+            ServoModel::Xl430W250 => 1060,
         }
     }
 
-    pub fn from_model_number(number: u16) -> Option<Model> {
-        Model::ALL.into_iter().find(|m| m.model_number() == number)
-    }
-
-    pub fn table(self) -> &'static ControlTable {
-        ControlTable::of(self)
+    pub fn from_model_number(number: u16) -> Option<ServoModel> {
+        ServoModel::ALL
+            .into_iter()
+            .find(|m| m.model_number() == number)
     }
 
     /// Whether the servo answers BULK_READ. In 1.0 only MX does (RX-UM lists no
     /// BULK_READ; PROTOCOL.md 1.3); every 2.0 model does.
     pub const fn has_bulk_read(self) -> bool {
-        !matches!(self, Model::Rx28 | Model::Rx64)
+        !matches!(self, ServoModel::Rx28 | ServoModel::Rx64)
     }
 
     /// Whether the servo answers SYNC_READ (Protocol 2.0 only).
@@ -152,7 +153,7 @@ impl Model {
     /// firmware needed is not in the e-manual copy read, so it is assumed for the X
     /// series only (MX(2.0) falls back to SYNC_READ).
     pub const fn has_fast_sync_read(self) -> bool {
-        matches!(self, Model::Xm430W350 | Model::Xl430W250)
+        matches!(self, ServoModel::Xm430W350 | ServoModel::Xl430W250)
     }
 
     /// Datasheet figures (e-manual specification tables).
@@ -165,18 +166,18 @@ impl Model {
             gear_ratio,
         };
         match self {
-            Model::Rx28 => s(3.7, Some(1.9), 85.0, 18.5, 193.0),
-            Model::Rx64 => s(5.3, Some(2.6), 64.0, 18.5, 200.0),
-            Model::Mx28 | Model::Mx28V2 => s(2.5, Some(1.4), 55.0, 12.0, 193.0),
-            Model::Mx64 | Model::Mx64V2 => s(6.0, Some(4.1), 63.0, 12.0, 200.0),
-            Model::Mx106 | Model::Mx106V2 => s(8.4, Some(5.2), 45.0, 12.0, 225.0),
-            Model::Xm430W350 => s(4.1, Some(2.3), 46.0, 12.0, 353.5),
-            Model::Xl430W250 => s(1.5, Some(1.4), 61.0, 12.0, 258.5),
+            ServoModel::Rx28 => s(3.7, Some(1.9), 85.0, 18.5, 193.0),
+            ServoModel::Rx64 => s(5.3, Some(2.6), 64.0, 18.5, 200.0),
+            ServoModel::Mx28 | ServoModel::Mx28V2 => s(2.5, Some(1.4), 55.0, 12.0, 193.0),
+            ServoModel::Mx64 | ServoModel::Mx64V2 => s(6.0, Some(4.1), 63.0, 12.0, 200.0),
+            ServoModel::Mx106 | ServoModel::Mx106V2 => s(8.4, Some(5.2), 45.0, 12.0, 225.0),
+            ServoModel::Xm430W350 => s(4.1, Some(2.3), 46.0, 12.0, 353.5),
+            ServoModel::Xl430W250 => s(1.5, Some(1.4), 61.0, 12.0, 258.5),
         }
     }
 }
 
-impl fmt::Display for Model {
+impl fmt::Display for ServoModel {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
