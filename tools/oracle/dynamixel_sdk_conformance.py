@@ -247,7 +247,7 @@ def protocol1(port, p1, p2):
     check("1.0 GroupSyncRead is not available (no SYNC_READ in 1.0)", gr.addParam(11) is False
           and gr.txRxPacket() == COMM_NOT_AVAILABLE)
     # SDK 4.1.0 GroupBulkRead.txPacket passes 4 arguments to Protocol1PacketHandler.bulkReadTx,
-    # which takes 3 (PROTOCOL.md 1.4): confirm, then do what it meant to do.
+    # which takes 3 (the Python SDK's Protocol 1.0 bulkReadTx): confirm, then do what it meant to do.
     br = sdk.GroupBulkRead(port, p1)
     br.addParam(13, 36, 2)
     br.addParam(11, 30, 2)

@@ -156,7 +156,7 @@ def main():
             record(out, p, "bulk_write", bulk_write, items=[{"id": i, "address": a, "data": d} for i, a, d in bw])
         else:
             # Protocol 1.0 BULK_READ. GroupBulkRead.txPacket() raises TypeError in SDK 4.1.0
-            # (it passes fast_option to a 3-argument bulkReadTx; PROTOCOL.md 1.4), so the
+            # (it passes fast_option to a 3-argument bulkReadTx; the Python SDK's Protocol 1.0 bulkReadTx), so the
             # packet handler is called the way GroupBulkRead builds its parameters.
             bulk = [(1, 30, 2), (2, 36, 2)]
             param = []

@@ -190,7 +190,7 @@ impl Description {
     }
 
     /// Joints in depth-first order from the root, children in file order.
-    /// This is twinloop's joint order (DESIGN.md section 3).
+    /// This is twinloop's joint order (docs/architecture.md, "Conventions").
     pub fn joints_depth_first(&self) -> Vec<usize> {
         let mut children: HashMap<&str, Vec<usize>> = HashMap::new();
         for (i, j) in self.joints.iter().enumerate() {

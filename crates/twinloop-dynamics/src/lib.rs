@@ -3,7 +3,7 @@
 //! A [`Model`] is compiled once from a description; a [`Data`] holds every buffer
 //! the algorithms write. After `Data::new`, none of the algorithms allocates.
 //!
-//! Conventions (DESIGN.md section 3): q = [x, y, z, qx, qy, qz, qw, joints], v = [base
+//! Conventions (docs/architecture.md, "Conventions"): q = [x, y, z, qx, qy, qz, qw, joints], v = [base
 //! linear, base angular (base frame), joints]; gravity (0, 0, -9.81); spatial vectors
 //! linear part first.
 //!

@@ -1,4 +1,4 @@
-//! Static-pose data (DESIGN.md section 4): one row per pose, the configuration
+//! Static-pose data (docs/architecture.md, "Data files"): one row per pose, the configuration
 //! columns `q:base.x .. q:base.qw`, `q:<joint>` and the measured centre of pressure
 //! `cop.x`, `cop.y` (world frame, metres). An optional `category` column holds the
 //! seed's pose category (1-6, [`PoseCategory`]).

@@ -538,7 +538,7 @@ impl<T: Transport> Client<T> {
     }
 
     /// FAST_SYNC_READ (Protocol 2.0): like [`Client::sync_read`] but all servos
-    /// answer in one packet (`[ERR ID DATA CRC]` per servo, PROTOCOL.md 2.6). Each
+    /// answer in one packet (`[ERR ID DATA CRC]` per servo, the SDK's fastSyncReadRxPacket). Each
     /// block's CRC is checked (cumulative from the packet's start), then its id.
     pub fn fast_sync_read(
         &mut self,

@@ -2,7 +2,7 @@
 //! SYNC_WRITE per protocol, then read every joint's present position, velocity and
 //! load (or current) with the cheapest read its servos have: FAST_SYNC_READ or
 //! SYNC_READ on Protocol 2.0, BULK_READ on MX with 1.0 firmware, and one READ per
-//! servo on RX, which has nothing else (PROTOCOL.md 1.3).
+//! servo on RX, which has nothing else (ROBOTIS e-manual, Protocol 1.0 instruction set).
 //!
 //! Everything is laid out when the cycle is built; running it allocates nothing.
 

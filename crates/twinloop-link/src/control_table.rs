@@ -215,7 +215,7 @@ fn build(model: ServoModel) -> ControlTable {
     ControlTable { model, registers }
 }
 
-/// RX-28 / RX-64, Protocol 1.0 (EM-RX28, EM-RX64; PROTOCOL.md 3.1). Position
+/// RX-28 / RX-64, Protocol 1.0 (EM-RX28, EM-RX64; e-manual control table). Position
 /// 0..1023 over 300 degrees (0.29 deg/unit, 512 = centre), speed about 0.111 rpm/unit,
 /// load 0.1 %/unit with bit 10 the direction.
 fn table_rx() -> Vec<Register> {

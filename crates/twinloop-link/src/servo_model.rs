@@ -139,7 +139,7 @@ impl ServoModel {
     }
 
     /// Whether the servo answers BULK_READ. In 1.0 only MX does (RX-UM lists no
-    /// BULK_READ; PROTOCOL.md 1.3); every 2.0 model does.
+    /// BULK_READ; ROBOTIS e-manual, Protocol 1.0 instruction set); every 2.0 model does.
     pub const fn has_bulk_read(self) -> bool {
         !matches!(self, ServoModel::Rx28 | ServoModel::Rx64)
     }

@@ -1,4 +1,4 @@
-//! Bytes and wire time of one control cycle (WIRETIME.md's model): 10 bits per byte
+//! Bytes and wire time of one control cycle (the model of docs/link.md, "Wire time"): 10 bits per byte
 //! (8N1) at the bit rate, plus each servo's Return Delay Time before its status
 //! packet. Byte stuffing is ignored (it adds a byte only where data holds FF FF FD).
 

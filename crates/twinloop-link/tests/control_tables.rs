@@ -1,4 +1,4 @@
-//! Control tables against the e-manual's addresses and units (PROTOCOL.md 3.1, 3.2
+//! Control tables against the e-manual's addresses and units (e-manual control tables of the RX-28/RX-64 and the XM430-W350
 //! and the e-manual model pages), and unit conversions against hand-computed values.
 
 use std::f64::consts::PI;
@@ -241,10 +241,10 @@ fn baud_registers() {
 }
 
 #[test]
-fn wire_time_matches_wiretime_md() {
+fn wire_time_matches_the_documented_table() {
     use std::time::Duration;
     use twinloop_link::{ReadMethod, plan_cycle};
-    // Rows of WIRETIME.md (20 servos): (protocol, method, read len, baud, RDT us,
+    // Rows of the wire-time table in docs/link.md (20 servos): (protocol, method, read len, baud, RDT us,
     // write B, read B, wire ms, round trips).
     let rows = [
         (

@@ -116,7 +116,7 @@ fn crc_table_matches_the_sdk_table_and_check_vectors() {
         ]
     );
     assert_eq!(&CRC16_TABLE[253..], &[0x820D, 0x8207, 0x0202]);
-    // EM-P2 check vectors (PROTOCOL.md 2.3).
+    // EM-P2 check vectors (e-manual Protocol 2.0, CRC).
     assert_eq!(
         crc16(&[0xFF, 0xFF, 0xFD, 0x00, 0x01, 0x03, 0x00, 0x01]),
         0x4E19
@@ -132,7 +132,7 @@ fn crc_table_matches_the_sdk_table_and_check_vectors() {
 #[test]
 fn stuffing_of_minus_131073_both_ways() {
     // A present position of -131073 is FF FF FD FF little-endian; on the wire the
-    // pattern FF FF FD gets an extra FD (PROTOCOL.md 2.4).
+    // pattern FF FF FD gets an extra FD (e-manual Protocol 2.0, packet process).
     let value: i32 = -131073;
     assert_eq!(value.to_le_bytes(), [0xFF, 0xFF, 0xFD, 0xFF]);
     let mut out = Vec::new();

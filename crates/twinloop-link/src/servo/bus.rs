@@ -705,7 +705,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         }
     }
 
-    /// One FAST_SYNC_READ / FAST_BULK_READ reply (PROTOCOL.md 2.6): id 0xFE, then
+    /// One FAST_SYNC_READ / FAST_BULK_READ reply (the SDK's fastSyncReadRxPacket): id 0xFE, then
     /// `[ERR ID DATA CRC]` per servo present, each CRC over the packet from its
     /// first byte, the last being the packet's CRC. Not byte-stuffed: the SDK
     /// parses these replies with a fixed stride and removes no stuffing.
