@@ -1,5 +1,6 @@
 //! COMAN walking in the full simulator (seed 002, section 4): a few seconds of the
-//! seed's gait (the 30 s dataset is made by the CLI and committed under tests/data).
+//! seed's gait (the 30 s datasets are made by the CLI and committed with the fit that
+//! reads them, under twinloop-ident's tests/data).
 
 use nalgebra::{Matrix3, Vector3};
 use twinloop_dynamics::{BaseKind, Data, Model, center_of_mass, generalized_gravity};
@@ -269,10 +270,11 @@ fn csv_has_the_seed_columns_at_1_khz() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The committed 30 s datasets: 30 000 rows at 1 kHz with the seed's columns.
+/// The committed 30 s datasets: 30 000 rows at 1 kHz with the seed's columns. They moved
+/// with the fit that reads them to twinloop-ident's tests/data.
 #[test]
 fn committed_datasets_are_30_s_at_1_khz() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data");
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../twinloop-ident/tests/data");
     for name in [
         "coman_walk_sl0.03_tss0.5.csv",
         "coman_walk_sl0.02_tss0.4.csv",
