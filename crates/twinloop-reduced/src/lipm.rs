@@ -204,6 +204,7 @@ impl Lipm {
         Ok(out)
     }
 
+    /// One RK4 step of eq. 1 over `h` with the inputs at the step's start, middle and end.
     fn rk4(
         &self,
         x: f64,
@@ -214,14 +215,7 @@ impl Lipm {
         u1: LipmInput,
     ) -> (f64, f64) {
         let a = |x: f64, u: LipmInput| self.acceleration(x, u);
-        let (k1x, k1v) = (v, a(x, u0));
-        let (k2x, k2v) = (v + 0.5 * h * k1v, a(x + 0.5 * h * k1x, um));
-        let (k3x, k3v) = (v + 0.5 * h * k2v, a(x + 0.5 * h * k2x, um));
-        let (k4x, k4v) = (v + h * k3v, a(x + h * k3x, u1));
-        (
-            x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
-            v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
-        )
+        rk4_step(x, v, h, [&|x| a(x, u0), &|x| a(x, um), &|x| a(x, u1)])
     }
 
     /// A fall from an initial lean: eq. 1 with no ankle moment, from the mass `lean` m
@@ -271,6 +265,24 @@ impl Lipm {
             .collect();
         self.simulate_segments(-0.5 * step_length, v0, &segments, dt)
     }
+}
+
+/// One classical Runge-Kutta 4 step of a second-order equation `x'' = a(t, x)` from
+/// `(x, v)` over `h`, with `accel = [a(t0, .), a(t0 + h/2, .), a(t0 + h, .)]`: the
+/// acceleration as a function of position at the step's start, middle and end (the
+/// caller fixes the time-dependent inputs there, so inputs that jump between steps are
+/// read once per stage time). Shared by the LIPM (seed 000 eq. 1) and the three-mass
+/// LIPM (eq. 6-7).
+pub(crate) fn rk4_step(x: f64, v: f64, h: f64, accel: [&dyn Fn(f64) -> f64; 3]) -> (f64, f64) {
+    let [a0, am, a1] = accel;
+    let (k1x, k1v) = (v, a0(x));
+    let (k2x, k2v) = (v + 0.5 * h * k1v, am(x + 0.5 * h * k1x));
+    let (k3x, k3v) = (v + 0.5 * h * k2v, am(x + 0.5 * h * k2x));
+    let (k4x, k4v) = (v + h * k3v, a1(x + h * k3x));
+    (
+        x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+        v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+    )
 }
 
 /// The pendulum's time constant `Tc = sqrt(height / gravity)`, s (seed 000 eq. 1 with
