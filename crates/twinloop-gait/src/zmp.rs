@@ -357,7 +357,8 @@ impl ZmpReference {
         &self.segments[i.min(self.segments.len() - 1)]
     }
 
-    /// The references at time t (clamped to the plan's span).
+    /// The references at time t (clamped to the plan's span): the ZMP and the LIPM CoM
+    /// of seed 002 eq 12-13 on the phase that holds t.
     pub fn at(&self, t: f64) -> ZmpSample {
         let t = t.clamp(0.0, self.duration());
         let seg = self.segment(t);
