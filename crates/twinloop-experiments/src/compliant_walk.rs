@@ -541,83 +541,37 @@ impl ComanWalker {
             sole_offset: [-sole_offset[0], -sole_offset[1]],
             swing_height: config.swing_height,
         };
-        // IK pass.
-        let n = (config.duration / SAMPLE_TIME).round() as usize;
-        let mut joint_references = Vec::with_capacity(n);
-        let mut ik_max_error: f64 = 0.0;
-        let mut ik_iterations = 0;
-        let qo = model.q_offset;
-        let mut q_first = q.clone();
-        let mut statics = StaticLoad::new(&model, soles)?;
-        let mut feedforward = Vec::new();
-        let k_compliant = config.compliant_stiffness();
-        let compliant_joints: Vec<usize> = model
-            .joint_names
-            .iter()
-            .enumerate()
-            .filter(|(_, name)| {
-                compliance
-                    .compliant
-                    .iter()
-                    .any(|c| name.ends_with(c.as_str()))
-            })
-            .map(|(k, _)| k)
-            .collect();
-        for i in 0..n {
-            let t = i as f64 / SAMPLE_RATE;
-            let r = reference.at(t);
-            let targets = targets_of(&r);
-            let rep = ik.solve(&model, &mut data, &mut q, &targets).map_err(|e| {
-                ExperimentError(format!(
-                    "at t = {t:.3} s (sl {} m, Tss {} s): {e}",
-                    config.step_length, config.t_single
-                ))
-            })?;
-            ik_max_error = ik_max_error.max(rep.error);
-            ik_iterations += rep.iterations;
-            for (k, name) in model.joint_names.iter().enumerate() {
-                let v = q[qo + k];
-                let (lo, hi) = (model.lower_limits[k], model.upper_limits[k]);
-                if v < lo - 1e-9 || v > hi + 1e-9 {
-                    return err(format!(
-                        "at t = {t:.3} s the step is out of reach: joint {name} would need \
-                         {v:.3} rad, beyond its limits [{lo:.3}, {hi:.3}]"
-                    ));
-                }
-            }
-            if i == 0 {
-                q_first.copy_from_slice(&q);
-            }
-            let mut refs = q[qo..].to_vec();
-            if config.gravity_feedforward {
-                let share = left_load_share(&r, &reference);
-                let tau = statics.joint_torques(&model, &mut data, &q, share)?;
-                for &k in &compliant_joints {
-                    refs[k] += tau[k] / k_compliant;
-                    feedforward.push(tau[k] / k_compliant);
-                }
-            }
-            joint_references.push(refs);
-        }
+        let compliant_joints = compliant_joint_indices(&model, &compliance);
+        let pass = JointReferencePass::run(
+            &model,
+            &mut data,
+            &mut ik,
+            &reference,
+            config,
+            &compliant_joints,
+            &mut q,
+        )?;
         let (actuators, compliant) = joint_actuators(robot, &model, config)?;
         sim.actuators = actuators;
         // On the ground where the plan has the feet: the IK's first pose has the soles at
         // z = 0, where the bottoms of the foot boxes are.
-        sim.place_on_ground(&joint_references[0]).map_err(sim_err)?;
-        sim.q[..qo].copy_from_slice(&q_first[..qo]);
+        let qo = model.q_offset;
+        sim.place_on_ground(&pass.joint_references[0])
+            .map_err(sim_err)?;
+        sim.q[..qo].copy_from_slice(&pass.q_first[..qo]);
         Ok(ComanWalker {
             config: config.clone(),
             sim,
             reference,
-            joint_references,
+            joint_references: pass.joint_references,
             compliant,
             sole_points,
-            feedforward,
+            feedforward: pass.feedforward,
             legs,
             ik,
-            q_first,
-            ik_max_error,
-            ik_iterations,
+            q_first: pass.q_first,
+            ik_max_error: pass.ik_max_error,
+            ik_iterations: pass.ik_iterations,
         })
     }
 
@@ -628,8 +582,6 @@ impl ComanWalker {
         mut progress: impl FnMut(usize, usize),
     ) -> Result<WalkingDataset, ExperimentError> {
         let n = self.joint_references.len();
-        let substeps = self.config.substeps;
-        let qo = self.sim.model.q_offset;
         // Settle first, under the same controller holding the first sample's references,
         // so the recording starts at rest (the fit starts its model from the first row).
         let settle = (self.config.settle / SAMPLE_TIME).round() as usize;
@@ -654,9 +606,7 @@ impl ComanWalker {
         self.ik.max_iterations = 10;
         let mut online_ik_error: f64 = 0.0;
         let mut correction = [0.0; 2];
-        // Where each stance sole was when it touched down (slip is measured from there).
-        let mut anchors: [Option<[f64; 2]>; 2] = [None, None];
-        let mut lift_off: [Option<[f64; 2]>; 2] = [None, None];
+        let mut anchors = FootAnchors::default();
         let mut polygon = [[0.0f64; 2]; MAX_SUPPORT_POINTS];
         let mut ik_data = Data::new(&model);
         for step in 0..settle + n {
@@ -664,12 +614,7 @@ impl ComanWalker {
             let i = step.saturating_sub(settle);
             let r = self.reference.at(i as f64 / SAMPLE_RATE);
             // Record the state at the sample time, then command and step.
-            let jc = jacobian_center_of_mass(&model, &mut data, &self.sim.q);
-            let mut vel = Vector3::zeros();
-            for (k, v) in self.sim.v.iter().enumerate() {
-                vel += Vector3::new(jc[(0, k)], jc[(1, k)], jc[(2, k)]) * *v;
-            }
-            let com = data.com;
+            let (com, vel) = com_state(&model, &mut data, &self.sim.q, &self.sim.v);
             twinloop_dynamics::frames_forward_kinematics(&model, &mut data, &self.sim.q);
             if recording {
                 rows.push(DatasetRow {
@@ -682,75 +627,13 @@ impl ComanWalker {
                 });
                 s.add(com, &r);
             }
-            for (f, &frame) in soles.iter().enumerate() {
-                if r.stance[f] {
-                    let p = WholeBodyIk::frame_placement(&model, &data, frame).translation;
-                    match anchors[f] {
-                        None => {
-                            anchors[f] = Some([p.x, p.y]);
-                            if recording {
-                                let e = (p.x - r.soles[f][0]).hypot(p.y - r.soles[f][1]);
-                                s.max_landing = s.max_landing.max(e);
-                            }
-                        }
-                        Some(a) if recording => {
-                            s.max_slip = s.max_slip.max((p.x - a[0]).hypot(p.y - a[1]));
-                        }
-                        Some(_) => {}
-                    }
-                } else {
-                    if anchors[f].is_some() {
-                        lift_off[f] = anchors[f];
-                    }
-                    anchors[f] = None;
-                }
-            }
+            anchors.update(&model, &data, soles, &r, recording.then_some(&mut s));
             let rb = data.base_placement.rotation;
             let tilt = rb[(2, 2)].clamp(-1.0, 1.0).acos();
             if recording {
                 s.max_tilt = s.max_tilt.max(tilt);
-                // Support polygon: the soles of the feet meant to be down, where they are.
-                let mut n_pts = 0;
-                for (f, &frame) in soles.iter().enumerate() {
-                    if r.stance[f] {
-                        let m = WholeBodyIk::frame_placement(&model, &data, frame);
-                        for p in &self.sole_points[f] {
-                            if n_pts < MAX_SUPPORT_POINTS {
-                                let w = m.act_point(p);
-                                polygon[n_pts] = [w.x, w.y];
-                                n_pts += 1;
-                            }
-                        }
-                    }
-                }
-                if let Some(m) = support_margin(&mut polygon[..n_pts], [com.x, com.y]) {
-                    s.min_support = s.min_support.min(m);
-                }
-                // The same for the reference CoM over the planned soles: the LIPM gait itself
-                // puts its CoM at the stance foot's inner edge when single support begins.
-                let mut n_pts = 0;
-                for f in 0..2 {
-                    if r.stance[f] {
-                        for p in &self.sole_points[f] {
-                            if n_pts < MAX_SUPPORT_POINTS {
-                                polygon[n_pts] = [r.soles[f][0] + p.x, r.soles[f][1] + p.y];
-                                n_pts += 1;
-                            }
-                        }
-                    }
-                }
-                if let Some(m) = support_margin(&mut polygon[..n_pts], [r.com[0], r.com[1]]) {
-                    s.min_support_ref = s.min_support_ref.min(m);
-                }
-                for &k in &self.compliant {
-                    if let Actuator::SeriesElastic(a) = &self.sim.actuators[k] {
-                        let d = (a.theta - self.sim.q[qo + k]).abs();
-                        if d > s.max_deflection {
-                            s.max_deflection = d;
-                            s.max_deflection_joint = k;
-                        }
-                    }
-                }
+                self.record_support_margins(&model, &data, soles, &r, com, &mut polygon, &mut s);
+                self.record_deflection(&mut s);
             }
             if tilt > FALL_TILT || com.z < 0.5 * r.com[2] {
                 return err(format!(
@@ -758,41 +641,16 @@ impl ComanWalker {
                     r.t, tilt, com.z
                 ));
             }
-            // Foot placement on the actual feet: stance soles stay where they touched
-            // down, a swing starts where the foot lifted off and ends on the planned
-            // footprint. Without this, each landing error (the compliant stance leg
-            // leans under the body's inertia) would carry the whole plan along.
             let mut targets = targets_of(&r);
-            for f in 0..2 {
-                let start = if r.stance[f] { anchors[f] } else { lift_off[f] };
-                if let Some(a) = start {
-                    let b = if r.stance[f] { 0.0 } else { r.blend[f] };
-                    let end = if r.stance[f] { a } else { r.landing[f] };
-                    targets.soles[f].translation.x = a[0] + (end[0] - a[0]) * b;
-                    targets.soles[f].translation.y = a[1] + (end[1] - a[1]) * b;
-                }
-            }
-            // Balance feedback, gains [x, y], low-pass filtered.
-            let alpha = SAMPLE_TIME / (SAMPLE_TIME + self.config.balance_filter);
-            for axis in 0..2 {
-                let u = self.config.balance_kp[axis] * (r.com[axis] - com[axis])
-                    + self.config.balance_kd[axis] * (r.com_vel[axis] - vel[axis]);
-                correction[axis] += alpha * (u - correction[axis]);
-                targets.com[axis] += correction[axis];
-            }
+            anchors.place(&r, &mut targets);
+            self.balance(&r, com, vel, &mut correction, &mut targets);
             let rep = self
                 .ik
                 .solve(&model, &mut ik_data, &mut q_cmd, &targets)
                 .map_err(|e| ExperimentError(format!("at t = {:.3} s: {e}", r.t)))?;
             online_ik_error = online_ik_error.max(rep.error);
-            self.sim.goals.copy_from_slice(&q_cmd[qo..]);
-            if !self.feedforward.is_empty() {
-                let nc = self.compliant.len();
-                for (c, &k) in self.compliant.iter().enumerate() {
-                    self.sim.goals[k] += self.feedforward[i * nc + c];
-                }
-            }
-            for _ in 0..substeps {
+            self.command(&q_cmd, i);
+            for _ in 0..self.config.substeps {
                 self.sim.step().map_err(sim_err)?;
             }
             if recording && i % 100 == 0 {
@@ -800,9 +658,107 @@ impl ComanWalker {
             }
         }
         progress(n, n);
+        let summary = self.summary(&model, &s, n, online_ik_error);
+        Ok(WalkingDataset { rows, summary })
+    }
+
+    /// Support polygons of the feet meant to be down, into the statistics: the CoM over
+    /// the soles where they are, and the reference CoM over the planned soles.
+    #[allow(clippy::too_many_arguments)]
+    fn record_support_margins(
+        &self,
+        model: &Model,
+        data: &Data,
+        soles: [usize; 2],
+        r: &WalkingSample,
+        com: Vector3<f64>,
+        polygon: &mut [[f64; 2]; MAX_SUPPORT_POINTS],
+        s: &mut Stats,
+    ) {
+        let mut n_pts = 0;
+        for (f, &frame) in soles.iter().enumerate() {
+            if r.stance[f] {
+                let m = WholeBodyIk::frame_placement(model, data, frame);
+                for p in &self.sole_points[f] {
+                    if n_pts < MAX_SUPPORT_POINTS {
+                        let w = m.act_point(p);
+                        polygon[n_pts] = [w.x, w.y];
+                        n_pts += 1;
+                    }
+                }
+            }
+        }
+        if let Some(m) = support_margin(&mut polygon[..n_pts], [com.x, com.y]) {
+            s.min_support = s.min_support.min(m);
+        }
+        // The same for the reference CoM over the planned soles: the LIPM gait itself
+        // puts its CoM at the stance foot's inner edge when single support begins.
+        let mut n_pts = 0;
+        for f in 0..2 {
+            if r.stance[f] {
+                for p in &self.sole_points[f] {
+                    if n_pts < MAX_SUPPORT_POINTS {
+                        polygon[n_pts] = [r.soles[f][0] + p.x, r.soles[f][1] + p.y];
+                        n_pts += 1;
+                    }
+                }
+            }
+        }
+        if let Some(m) = support_margin(&mut polygon[..n_pts], [r.com[0], r.com[1]]) {
+            s.min_support_ref = s.min_support_ref.min(m);
+        }
+    }
+
+    /// The largest spring deflection of a compliant joint so far, into the statistics.
+    fn record_deflection(&self, s: &mut Stats) {
+        let qo = self.sim.model.q_offset;
+        for &k in &self.compliant {
+            if let Actuator::SeriesElastic(a) = &self.sim.actuators[k] {
+                let d = (a.theta - self.sim.q[qo + k]).abs();
+                if d > s.max_deflection {
+                    s.max_deflection = d;
+                    s.max_deflection_joint = k;
+                }
+            }
+        }
+    }
+
+    /// Balance feedback on the CoM target, gains [x, y], low-pass filtered (see
+    /// [`WalkingConfig::balance_kp`]).
+    fn balance(
+        &self,
+        r: &WalkingSample,
+        com: Vector3<f64>,
+        vel: Vector3<f64>,
+        correction: &mut [f64; 2],
+        targets: &mut IkTargets,
+    ) {
+        let alpha = SAMPLE_TIME / (SAMPLE_TIME + self.config.balance_filter);
+        for axis in 0..2 {
+            let u = self.config.balance_kp[axis] * (r.com[axis] - com[axis])
+                + self.config.balance_kd[axis] * (r.com_vel[axis] - vel[axis]);
+            correction[axis] += alpha * (u - correction[axis]);
+            targets.com[axis] += correction[axis];
+        }
+    }
+
+    /// The joint goals of sample `i`: the IK's joints plus the compliant joints' gravity
+    /// feed-forward.
+    fn command(&mut self, q_cmd: &[f64], i: usize) {
+        let qo = self.sim.model.q_offset;
+        self.sim.goals.copy_from_slice(&q_cmd[qo..]);
+        if !self.feedforward.is_empty() {
+            let nc = self.compliant.len();
+            for (c, &k) in self.compliant.iter().enumerate() {
+                self.sim.goals[k] += self.feedforward[i * nc + c];
+            }
+        }
+    }
+
+    fn summary(&self, model: &Model, s: &Stats, n: usize, online_ik_error: f64) -> WalkingSummary {
         let plan = self.reference.zmp.plan();
         let nf = n.max(1) as f64;
-        let summary = WalkingSummary {
+        WalkingSummary {
             samples: n,
             steps: plan.steps,
             com_height: plan.com_height,
@@ -831,9 +787,185 @@ impl ComanWalker {
             ik_max_error: self.ik_max_error,
             online_ik_max_error: online_ik_error,
             ik_iterations: self.ik_iterations,
-        };
-        Ok(WalkingDataset { rows, summary })
+        }
     }
+}
+
+/// The CoM's position and velocity (`Jcom v`) at the simulated state.
+fn com_state(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> (Vector3<f64>, Vector3<f64>) {
+    let jc = jacobian_center_of_mass(model, data, q);
+    let mut vel = Vector3::zeros();
+    for (k, v) in v.iter().enumerate() {
+        vel += Vector3::new(jc[(0, k)], jc[(1, k)], jc[(2, k)]) * *v;
+    }
+    (data.com, vel)
+}
+
+/// Where each foot is held: the sole's place when it touched down (slip is measured
+/// from there) and where it lifted off (a swing starts there).
+#[derive(Default)]
+struct FootAnchors {
+    down: [Option<[f64; 2]>; 2],
+    lift_off: [Option<[f64; 2]>; 2],
+}
+
+impl FootAnchors {
+    /// Anchors a stance sole where it is when it touches down, releases a swinging
+    /// one; with `stats` (recording), the landing error against the plan and the slip
+    /// since touchdown.
+    fn update(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        soles: [usize; 2],
+        r: &WalkingSample,
+        mut stats: Option<&mut Stats>,
+    ) {
+        for (f, &frame) in soles.iter().enumerate() {
+            if r.stance[f] {
+                let p = WholeBodyIk::frame_placement(model, data, frame).translation;
+                match (self.down[f], stats.as_deref_mut()) {
+                    (None, stats) => {
+                        self.down[f] = Some([p.x, p.y]);
+                        if let Some(s) = stats {
+                            let e = (p.x - r.soles[f][0]).hypot(p.y - r.soles[f][1]);
+                            s.max_landing = s.max_landing.max(e);
+                        }
+                    }
+                    (Some(a), Some(s)) => {
+                        s.max_slip = s.max_slip.max((p.x - a[0]).hypot(p.y - a[1]));
+                    }
+                    (Some(_), None) => {}
+                }
+            } else {
+                if self.down[f].is_some() {
+                    self.lift_off[f] = self.down[f];
+                }
+                self.down[f] = None;
+            }
+        }
+    }
+
+    /// Foot placement on the actual feet: stance soles stay where they touched down, a
+    /// swing starts where the foot lifted off and ends on the planned footprint.
+    /// Without this, each landing error (the compliant stance leg leans under the
+    /// body's inertia) would carry the whole plan along.
+    fn place(&self, r: &WalkingSample, targets: &mut IkTargets) {
+        for f in 0..2 {
+            let start = if r.stance[f] {
+                self.down[f]
+            } else {
+                self.lift_off[f]
+            };
+            if let Some(a) = start {
+                let b = if r.stance[f] { 0.0 } else { r.blend[f] };
+                let end = if r.stance[f] { a } else { r.landing[f] };
+                targets.soles[f].translation.x = a[0] + (end[0] - a[0]) * b;
+                targets.soles[f].translation.y = a[1] + (end[1] - a[1]) * b;
+            }
+        }
+    }
+}
+
+/// The joints (model order) whose names end in one of the compliance's compliant
+/// joint names.
+fn compliant_joint_indices(model: &Model, compliance: &JointCompliance) -> Vec<usize> {
+    model
+        .joint_names
+        .iter()
+        .enumerate()
+        .filter(|(_, name)| {
+            compliance
+                .compliant
+                .iter()
+                .any(|c| name.ends_with(c.as_str()))
+        })
+        .map(|(k, _)| k)
+        .collect()
+}
+
+/// The planning pass: the whole-body IK over every 1 ms sample of the plan before any
+/// simulation, which finds an unreachable step first.
+struct JointReferencePass {
+    /// Joint position references (all joints, model order) per sample, the compliant
+    /// joints' gravity feed-forward included.
+    joint_references: Vec<Vec<f64>>,
+    /// The feed-forward alone (sample-major, compliant joints in model order).
+    feedforward: Vec<f64>,
+    /// The IK's full configuration at t = 0.
+    q_first: Vec<f64>,
+    ik_max_error: f64,
+    ik_iterations: usize,
+}
+
+impl JointReferencePass {
+    /// Solves the IK at every sample from `q` (the crouch; left at the last sample),
+    /// each warm-started from the previous one.
+    fn run(
+        model: &Model,
+        data: &mut Data,
+        ik: &mut WholeBodyIk,
+        reference: &WalkingReference,
+        config: &WalkingConfig,
+        compliant_joints: &[usize],
+        q: &mut [f64],
+    ) -> Result<JointReferencePass, ExperimentError> {
+        let n = (config.duration / SAMPLE_TIME).round() as usize;
+        let mut pass = JointReferencePass {
+            joint_references: Vec::with_capacity(n),
+            feedforward: Vec::new(),
+            q_first: q.to_vec(),
+            ik_max_error: 0.0,
+            ik_iterations: 0,
+        };
+        let qo = model.q_offset;
+        let mut statics = StaticLoad::new(model, ik.sole_frames())?;
+        let k_compliant = config.compliant_stiffness();
+        for i in 0..n {
+            let t = i as f64 / SAMPLE_RATE;
+            let r = reference.at(t);
+            let targets = targets_of(&r);
+            let rep = ik.solve(model, data, q, &targets).map_err(|e| {
+                ExperimentError(format!(
+                    "at t = {t:.3} s (sl {} m, Tss {} s): {e}",
+                    config.step_length, config.t_single
+                ))
+            })?;
+            pass.ik_max_error = pass.ik_max_error.max(rep.error);
+            pass.ik_iterations += rep.iterations;
+            check_reachable(model, q, t)?;
+            if i == 0 {
+                pass.q_first.copy_from_slice(q);
+            }
+            let mut refs = q[qo..].to_vec();
+            if config.gravity_feedforward {
+                let share = left_load_share(&r, reference);
+                let tau = statics.joint_torques(model, data, q, share)?;
+                for &k in compliant_joints {
+                    refs[k] += tau[k] / k_compliant;
+                    pass.feedforward.push(tau[k] / k_compliant);
+                }
+            }
+            pass.joint_references.push(refs);
+        }
+        Ok(pass)
+    }
+}
+
+/// Errors if a joint of the IK's solution at `t` is beyond its limits: the step is out
+/// of reach.
+fn check_reachable(model: &Model, q: &[f64], t: f64) -> Result<(), ExperimentError> {
+    for (k, name) in model.joint_names.iter().enumerate() {
+        let v = q[model.q_offset + k];
+        let (lo, hi) = (model.lower_limits[k], model.upper_limits[k]);
+        if v < lo - 1e-9 || v > hi + 1e-9 {
+            return err(format!(
+                "at t = {t:.3} s the step is out of reach: joint {name} would need \
+                 {v:.3} rad, beyond its limits [{lo:.3}, {hi:.3}]"
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[derive(Default)]

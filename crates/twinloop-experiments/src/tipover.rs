@@ -167,10 +167,73 @@ fn tilt(q: [f64; 4]) -> (f64, f64) {
 
 /// Run one direction from `standing` (joint positions). The robot must be standing
 /// still in that pose when called.
+/// One sample of a run: ankle command, measured ankle angle (rad), time (s), the
+/// trunk's tilt beyond what the joints explain and its tilt, both in the lean
+/// direction (rad).
+type Sample = (f64, f64, f64, f64, f64);
+
+/// The ankle joints `direction` turns, the sign of each that leans the robot forward or
+/// left, and the direction's sign (forward and left +1).
+fn ankles_of(direction: Direction, cfg: &TipoverConfig) -> ([usize; 2], [f64; 2], f64) {
+    match direction {
+        Direction::Forward => (cfg.ankle_pitch, cfg.forward_sign, 1.0),
+        Direction::Backward => (cfg.ankle_pitch, cfg.forward_sign, -1.0),
+        Direction::Left => (cfg.ankle_roll, cfg.left_sign, 1.0),
+        Direction::Right => (cfg.ankle_roll, cfg.left_sign, -1.0),
+    }
+}
+
+/// The ankle command at `t` s into the ramp, rad: `rate t`, slowed to the creep rate
+/// past `slow_from_deg` (see [`TipoverConfig::slow_from_deg`]).
+fn ramp_command(cfg: &TipoverConfig, rate: f64, t: f64) -> f64 {
+    match cfg.slow_from_deg.map(f64::to_radians) {
+        Some(a) if rate * t > a => a + cfg.slow_ramp_deg_per_s.to_radians() * (t - a / rate),
+        _ => rate * t,
+    }
+}
+
+/// The goals that lean the robot by `cmd` rad in `direction`: both ankles, and
+/// sideways the hip rolls too when the configuration turns them.
+fn lean_goals(
+    goals: &mut [f64],
+    standing: &[f64],
+    direction: Direction,
+    cfg: &TipoverConfig,
+    cmd: f64,
+) {
+    let (joints, signs, dir_sign) = ankles_of(direction, cfg);
+    for k in 0..2 {
+        goals[joints[k]] = standing[joints[k]] + signs[k] * dir_sign * cmd;
+    }
+    if let (false, Some(hips)) = (direction.is_pitch(), cfg.hip_roll) {
+        for k in 0..2 {
+            goals[hips[k]] = standing[hips[k]] + cfg.hip_left_sign[k] * dir_sign * cmd;
+        }
+    }
+}
+
+/// The onset of the fall in a run's history: the last sample at which, over the onset
+/// window, the excess tilt grew by no more than `onset_ratio` times the ankle angle
+/// (0 if none).
+fn find_onset(history: &[Sample], cfg: &TipoverConfig) -> usize {
+    let w = ((cfg.onset_window_s / cfg.period_s).round() as usize).max(1);
+    (w..history.len())
+        .rev()
+        .find(|&k| {
+            let excess_rate = history[k].3 - history[k - w].3;
+            let ankle_rate = history[k].1.abs() - history[k - w].1.abs();
+            excess_rate <= cfg.onset_ratio * ankle_rate.max(0.0)
+        })
+        .unwrap_or(0)
+}
+
 /// Trunk pitch and roll (rad; forward and left positive) predicted from joint positions
 /// with the feet flat on the ground.
 pub type TiltPredictor<'a> = &'a mut dyn FnMut(&[f64]) -> [f64; 2];
 
+/// One tip-over run (seeds 000/001): from `standing`, ramp the ankles (and sideways the
+/// hip rolls) in `direction` until the trunk tilts beyond what the joints explain by
+/// `fall_deg`, then report the ankle angle at the onset of that excess.
 pub fn run_direction<R: Robot + ?Sized>(
     robot: &mut R,
     standing: &[f64],
@@ -190,12 +253,7 @@ pub fn run_direction<R: Robot + ?Sized>(
     robot.command_positions(&goals)?;
     robot.advance(cfg.settle_s)?;
     robot.read(&mut st)?;
-    let (joints, signs, dir_sign) = match direction {
-        Direction::Forward => (cfg.ankle_pitch, cfg.forward_sign, 1.0),
-        Direction::Backward => (cfg.ankle_pitch, cfg.forward_sign, -1.0),
-        Direction::Left => (cfg.ankle_roll, cfg.left_sign, 1.0),
-        Direction::Right => (cfg.ankle_roll, cfg.left_sign, -1.0),
-    };
+    let (joints, signs, dir_sign) = ankles_of(direction, cfg);
     let ankle_now = |st: &RobotState| {
         0.5 * ((st.positions[joints[0]] - standing[joints[0]]) * signs[0]
             + (st.positions[joints[1]] - standing[joints[1]]) * signs[1])
@@ -234,17 +292,14 @@ pub fn run_direction<R: Robot + ?Sized>(
     let t_start = robot.time();
     // History of (command, measured, time, excess) to find the onset afterwards, and
     // the joint positions of the recent past.
-    let mut history: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
+    let mut history: Vec<Sample> = Vec::new();
     // Joint positions of every sample, flat (one row of `n` per sample).
     let n = standing.len();
     let mut positions: Vec<f64> = Vec::with_capacity(n * 4096);
     let rate = cfg.ramp_deg_per_s.to_radians();
     loop {
         let t = robot.time() - t_start;
-        let cmd = match cfg.slow_from_deg.map(f64::to_radians) {
-            Some(a) if rate * t > a => a + cfg.slow_ramp_deg_per_s.to_radians() * (t - a / rate),
-            _ => rate * t,
-        };
+        let cmd = ramp_command(cfg, rate, t);
         if cmd > cfg.max_deg.to_radians() {
             return Err(RobotError::new(format!(
                 "no fall {} within {} deg of ankle command",
@@ -252,14 +307,7 @@ pub fn run_direction<R: Robot + ?Sized>(
                 cfg.max_deg
             )));
         }
-        for k in 0..2 {
-            goals[joints[k]] = standing[joints[k]] + signs[k] * dir_sign * cmd;
-        }
-        if let (false, Some(hips)) = (direction.is_pitch(), cfg.hip_roll) {
-            for k in 0..2 {
-                goals[hips[k]] = standing[hips[k]] + cfg.hip_left_sign[k] * dir_sign * cmd;
-            }
-        }
+        lean_goals(&mut goals, standing, direction, cfg, cmd);
         robot.command_positions(&goals)?;
         robot.advance(cfg.period_s)?;
         robot.read(&mut st)?;
@@ -275,15 +323,7 @@ pub fn run_direction<R: Robot + ?Sized>(
         history.push((cmd, ankle, robot.time() - t_start, excess, body * lean_sign));
         positions.extend_from_slice(&st.positions[..n]);
         if excess > cfg.fall_deg.to_radians() {
-            let w = ((cfg.onset_window_s / cfg.period_s).round() as usize).max(1);
-            let onset = (w..history.len())
-                .rev()
-                .find(|&k| {
-                    let excess_rate = history[k].3 - history[k - w].3;
-                    let ankle_rate = history[k].1.abs() - history[k - w].1.abs();
-                    excess_rate <= cfg.onset_ratio * ankle_rate.max(0.0)
-                })
-                .unwrap_or(0);
+            let onset = find_onset(&history, cfg);
             let (c, m, t, e, lean) = history[onset];
             return Ok(TipoverResult {
                 direction,

@@ -136,12 +136,8 @@ fn trunk_pose(sim: &mut Simulator) -> Result<([f64; 3], f64, f64), ExperimentErr
     ))
 }
 
-/// Seed 003 section 7: walk `robot` (lab17) through the sequence in the simulator and
-/// record the identification data.
-pub fn record_walk(
-    robot: &Description,
-    o: &DatasetOptions,
-) -> Result<WalkDataset, ExperimentError> {
+/// The option checks of [`record_walk`]; the error names the option.
+fn check_options(o: &DatasetOptions) -> Result<(), ExperimentError> {
     if o.samples == 0 {
         return Err(ExperimentError("samples must be at least 1".into()));
     }
@@ -169,23 +165,20 @@ pub fn record_walk(
             o.kp_position
         )));
     }
-    let total = o.samples.checked_add(o.skip_samples).ok_or_else(|| {
-        ExperimentError(format!(
-            "skip_samples {} plus samples {} overflow",
-            o.skip_samples, o.samples
-        ))
-    })?;
-    let goals: JointGoals = walking_sequence_samples(&o.sequence, total)?;
-    let sim_err = |e: twinloop_sim::SimError| ExperimentError(format!("simulator: {e}"));
-    let mut sim = Simulator::new(
-        robot,
-        SimConfig {
-            dt: o.dt,
-            ..Default::default()
-        },
-    )
-    .map_err(sim_err)?;
-    // Map the sequence's joints onto the simulator's.
+    Ok(())
+}
+
+fn sim_err(e: twinloop_sim::SimError) -> ExperimentError {
+    ExperimentError(format!("simulator: {e}"))
+}
+
+/// The simulator's joint index of each of the sequence's joints; errors if the robot
+/// lacks one or a foot link for a gyroscope.
+fn sequence_joints(
+    robot: &Description,
+    sim: &Simulator,
+    goals: &JointGoals,
+) -> Result<Vec<usize>, ExperimentError> {
     let mut map = Vec::with_capacity(goals.joints.len());
     for j in &goals.joints {
         map.push(sim.joint_index(j).ok_or_else(|| {
@@ -204,11 +197,22 @@ pub fn record_walk(
             )));
         }
     }
+    Ok(map)
+}
+
+/// Every joint an LD-2015 two-loop servo with its gear train's friction; the robot on
+/// the ground at the sequence's first goals; the left foot's gyro the simulator's IMU
+/// (quantised, with the noise).
+fn prepare_lab17(
+    sim: &mut Simulator,
+    o: &DatasetOptions,
+    goals: &JointGoals,
+    map: &[usize],
+) -> Result<(), ExperimentError> {
     let servo = ld2015_two_loop(o.kp_position);
     for a in sim.actuators.iter_mut() {
         *a = Actuator::TwoLoop(servo);
     }
-    // Every joint is an LD-2015 with its gear train's friction.
     for f in sim.joint_friction.iter_mut() {
         *f = LD2015_GEAR_FRICTION;
     }
@@ -224,23 +228,89 @@ pub fn record_walk(
         .iter()
         .position(|l| l.name == FEET[0])
         .expect("checked");
-    let noise_rad = o.gyro_noise_deg_s.to_radians();
-    {
-        let s = sim.sensors_mut();
-        s.imu_link = left;
-        s.imu_quantize = true;
-        s.gyro_noise = noise_rad;
-        s.set_noise_seed(o.noise_seed ^ 0x0068);
-    }
-    let mut right_noise = SplitMix64(o.noise_seed ^ 0x0069_0000_0000_0069);
-    let lsb = (1.0 / MPU6050_GYRO_LSB_PER_DEG_S).to_radians();
-    sim.run(o.settle).map_err(sim_err)?;
+    let s = sim.sensors_mut();
+    s.imu_link = left;
+    s.imu_quantize = true;
+    s.gyro_noise = o.gyro_noise_deg_s.to_radians();
+    s.set_noise_seed(o.noise_seed ^ 0x0068);
+    Ok(())
+}
 
+/// `t`, the ten offsets `u:<joint>`, the six rates `gyro:<foot>.<axis>`.
+fn dataset_columns() -> Vec<String> {
     let mut columns = vec!["t".to_string()];
     columns.extend(OFFSET_JOINTS.iter().map(|j| format!("u:{j}")));
     for f in FEET {
         columns.extend(AXES.iter().map(|a| format!("gyro:{f}.{a}")));
     }
+    columns
+}
+
+/// An angle difference brought into (-180, 180] degrees.
+fn wrap_degrees(mut d: f64) -> f64 {
+    if d > 180.0 {
+        d -= 360.0;
+    } else if d < -180.0 {
+        d += 360.0;
+    }
+    d
+}
+
+/// The right foot's MPU-6050, read from the simulator state: the foot's angular
+/// velocity with white noise, quantised at its LSB (seed 003 eq 7).
+struct RightGyro {
+    noise: SplitMix64,
+    noise_rad: f64,
+    lsb: f64,
+}
+
+impl RightGyro {
+    fn new(o: &DatasetOptions) -> RightGyro {
+        RightGyro {
+            noise: SplitMix64(o.noise_seed ^ 0x0069_0000_0000_0069),
+            noise_rad: o.gyro_noise_deg_s.to_radians(),
+            lsb: (1.0 / MPU6050_GYRO_LSB_PER_DEG_S).to_radians(),
+        }
+    }
+
+    /// Appends the roll, pitch and yaw rates, deg/s.
+    fn read(&mut self, sim: &mut Simulator, row: &mut Vec<f64>) {
+        let wr = sim.link_angular_velocity(FEET[1]).expect("checked");
+        for a in 0..3 {
+            let w = wr[a] + self.noise_rad * self.noise.normal();
+            row.push(quantize(w, self.lsb).to_degrees());
+        }
+    }
+}
+
+/// Seed 003 section 7: walk `robot` (lab17) through the sequence in the simulator and
+/// record the identification data.
+pub fn record_walk(
+    robot: &Description,
+    o: &DatasetOptions,
+) -> Result<WalkDataset, ExperimentError> {
+    check_options(o)?;
+    let total = o.samples.checked_add(o.skip_samples).ok_or_else(|| {
+        ExperimentError(format!(
+            "skip_samples {} plus samples {} overflow",
+            o.skip_samples, o.samples
+        ))
+    })?;
+    let goals: JointGoals = walking_sequence_samples(&o.sequence, total)?;
+    let mut sim = Simulator::new(
+        robot,
+        SimConfig {
+            dt: o.dt,
+            ..Default::default()
+        },
+    )
+    .map_err(sim_err)?;
+    let map = sequence_joints(robot, &sim, &goals)?;
+    prepare_lab17(&mut sim, o, &goals, &map)?;
+    let mut right_gyro = RightGyro::new(o);
+    sim.run(o.settle).map_err(sim_err)?;
+
+    let columns = dataset_columns();
     let steps = (o.sequence.sample_time / o.dt).round().max(1.0) as usize;
     let (mut p0, _, mut yaw0) = trunk_pose(&mut sim)?;
     let mut max_tilt: f64 = 0.0;
@@ -256,15 +326,11 @@ pub fn record_walk(
             // Read both gyros (the state after the previous tick's goals) ...
             sim.read_sensors(&mut state);
             let gl = state.imu.as_ref().expect("the simulator has an IMU").gyro;
-            let wr = sim.link_angular_velocity(FEET[1]).expect("checked");
             let mut row = Vec::with_capacity(columns.len());
             row.push(goals.times[k]);
             row.extend_from_slice(&goals.offsets_deg[k]);
             row.extend(gl.iter().map(|w| w.to_degrees()));
-            for a in 0..3 {
-                let w = wr[a] + noise_rad * right_noise.normal();
-                row.push(quantize(w, lsb).to_degrees());
-            }
+            right_gyro.read(&mut sim, &mut row);
             rows.push(row);
         }
         // ... then command this tick's goals and let the servos work for one tick.
@@ -283,18 +349,12 @@ pub fn record_walk(
         }
     }
     let (p1, _, yaw1) = trunk_pose(&mut sim)?;
-    let mut dyaw = yaw1 - yaw0;
-    if dyaw > 180.0 {
-        dyaw -= 360.0;
-    } else if dyaw < -180.0 {
-        dyaw += 360.0;
-    }
     Ok(WalkDataset {
         columns,
         rows,
         max_tilt_deg: max_tilt,
         fell_at,
         travel: [p1[0] - p0[0], p1[1] - p0[1]],
-        yaw_deg: dyaw,
+        yaw_deg: wrap_degrees(yaw1 - yaw0),
     })
 }

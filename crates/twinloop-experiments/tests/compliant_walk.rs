@@ -1,5 +1,6 @@
 //! COMAN walking in the full simulator (seed 002, section 4): a few seconds of the
-//! seed's gait (the 30 s dataset is made by the CLI and committed under tests/data).
+//! seed's gait (the 30 s datasets are made by the CLI and committed with the fit that
+//! reads them, under twinloop-ident's tests/data).
 
 use nalgebra::{Matrix3, Vector3};
 use twinloop_dynamics::{BaseKind, Data, Model, center_of_mass, generalized_gravity};

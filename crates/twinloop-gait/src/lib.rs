@@ -4,9 +4,10 @@
 //!   coordination sequence A..N around the trims of its Table 2, as joint goals over
 //!   time.
 //! - [`zmp`]: ZMP walking references and the LIPM CoM reference (seed 002, eq 12-13).
-//! - [`ik`]: inverse kinematics over the full configuration by Levenberg-Marquardt on
-//!   weighted tasks (feet, markers, CoM, posture); [`walking_ik`]: the whole-body
-//!   walking IK (sole poses, CoM, pelvis orientation) on the same tasks.
+//! - [`ik`]: the inverse kinematics over the full configuration, on weighted tasks
+//!   (points, directions, frame poses and orientations, CoM, posture), by
+//!   Levenberg-Marquardt or damped least squares; [`walking_ik`]: its walking
+//!   configuration (both sole poses, CoM, pelvis orientation over base and legs).
 //!
 //! The experiments that walk a robot on these references (seed 003's lab17 dataset,
 //! seed 002's COMAN walk) live in twinloop-experiments; the identification of a walk

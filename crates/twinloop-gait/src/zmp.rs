@@ -15,7 +15,10 @@
 //!    then standing for `t_end`.
 //!
 //! The CoM reference solves the LIPM of eq 12-13, `x'' = (x - p) / Tc^2` with
-//! `Tc = sqrt(Zc / g)`, in closed form per phase. With the divergent component of
+//! `Tc = sqrt(Zc / g)`, in closed form per phase. The pendulum itself (the time constant,
+//! the per-phase solution and its boundary fits) is twinloop-reduced's
+//! ([`twinloop_reduced::lipm::LipmPhase`], seed 000's LIPM); this module plans the
+//! footsteps and phases and chains the boundary conditions. With the divergent component of
 //! motion `xi = x + Tc x'` the LIPM splits into `xi' = (xi - p) / Tc` (unstable) and
 //! `x' = (xi - x) / Tc` (stable). For a linear ZMP `p(t) = p0 + s tau` on a phase of
 //! length `D` (tau = t - t0) the exact solution is
@@ -36,6 +39,7 @@
 //! periodic: a step later the CoM is shifted by `sl` in x and mirrored in y.
 
 use crate::error::{GaitError, err};
+use twinloop_reduced::lipm::{self, LipmPhase};
 
 /// Which foot bears the robot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -154,9 +158,9 @@ impl GaitPlan {
         Ok(())
     }
 
-    /// Pendulum time constant Tc = sqrt(Zc / g).
+    /// Pendulum time constant Tc = sqrt(Zc / g) (seed 002 eq 12).
     pub fn time_constant(&self) -> f64 {
-        (self.com_height / self.gravity).sqrt()
+        lipm::time_constant(self.com_height, self.gravity)
     }
 
     /// Footprint centre of swing `j` (j = 0: the right foot's start, j = -1 would be the
@@ -167,18 +171,16 @@ impl GaitPlan {
     }
 }
 
-/// One phase of the piecewise-linear ZMP with its closed-form CoM coefficients.
+/// One phase of the piecewise-linear ZMP with its closed-form CoM solution per axis.
 #[derive(Debug, Clone, PartialEq)]
 struct Segment {
     t0: f64,
     t1: f64,
     phase: Phase,
-    p0: [f64; 2],
-    slope: [f64; 2],
+    /// The pendulum on this phase, x and y.
+    axes: [LipmPhase; 2],
     /// Support feet (centres) for the support polygon.
     feet: Vec<[f64; 2]>,
-    a: [f64; 2],
-    b: [f64; 2],
 }
 
 /// The ZMP reference and the LIPM CoM reference of a plan.
@@ -204,105 +206,119 @@ pub struct ZmpSample {
     pub acc: [f64; 2],
 }
 
-#[allow(clippy::needless_range_loop)] // x and y side by side read clearer indexed
+/// One phase of the ZMP plan before the pendulum is solved on it: duration, phase, ZMP
+/// at its start and end, support footprints.
+struct Piece {
+    duration: f64,
+    phase: Phase,
+    from: [f64; 2],
+    to: [f64; 2],
+    feet: Vec<[f64; 2]>,
+}
+
+/// The phases of a plan (see the module documentation): standing, the first double
+/// support, then single support on each support foot and double support to the next,
+/// ending between the last two feet.
+fn plan_pieces(plan: &GaitPlan) -> Vec<Piece> {
+    let piece = |duration, phase, from, to, feet| Piece {
+        duration,
+        phase,
+        from,
+        to,
+        feet,
+    };
+    let mut pieces = Vec::new();
+    let right0 = plan.footprint(0);
+    let left0 = [0.0, 0.5 * plan.step_width];
+    let mid0 = [0.0, 0.0];
+    // support foot during swing j (1-based): j = 1 the right foot at start, else F_{j-1}
+    let support = |j: usize| {
+        if j == 1 {
+            right0
+        } else {
+            plan.footprint(j - 1)
+        }
+    };
+    let side = |j: usize| if j % 2 == 1 { Foot::Right } else { Foot::Left };
+    if plan.t_start > 0.0 {
+        let feet = vec![right0, left0];
+        pieces.push(piece(plan.t_start, Phase::Standing, mid0, mid0, feet));
+    }
+    let feet = vec![right0, left0];
+    pieces.push(piece(plan.t_double, Phase::Double, mid0, support(1), feet));
+    for j in 1..=plan.steps {
+        let s = support(j);
+        pieces.push(piece(plan.t_single, Phase::Single(side(j)), s, s, vec![s]));
+        let landed = plan.footprint(j);
+        if j < plan.steps {
+            let next = support(j + 1);
+            pieces.push(piece(
+                plan.t_double,
+                Phase::Double,
+                s,
+                next,
+                vec![s, landed],
+            ));
+        } else {
+            let mid = [0.5 * (s[0] + landed[0]), 0.5 * (s[1] + landed[1])];
+            pieces.push(piece(plan.t_double, Phase::Double, s, mid, vec![s, landed]));
+            if plan.t_end > 0.0 {
+                let feet = vec![s, landed];
+                pieces.push(piece(plan.t_end, Phase::Standing, mid, mid, feet));
+            }
+        }
+    }
+    pieces
+}
+
+/// The pieces laid end to end in time, each with the pendulum of time constant `tc`
+/// on its linear ZMP (coefficients not yet fitted).
+fn timed_segments(pieces: Vec<Piece>, tc: f64) -> Vec<Segment> {
+    let mut segments = Vec::with_capacity(pieces.len());
+    let mut t = 0.0;
+    for piece in pieces {
+        let (t0, t1) = (t, t + piece.duration);
+        let axis = |k: usize| {
+            let slope = (piece.to[k] - piece.from[k]) / piece.duration;
+            LipmPhase::new(tc, t1 - t0, piece.from[k], slope)
+        };
+        segments.push(Segment {
+            t0,
+            t1,
+            phase: piece.phase,
+            axes: [axis(0), axis(1)],
+            feet: piece.feet,
+        });
+        t = t1;
+    }
+    segments
+}
+
+/// Fits every phase's pendulum to the plan's boundary conditions (seed 002 eq 12-13):
+/// `xi(T) = p(T)` at the end, carried backwards on the divergent component, then
+/// `x(0) = p(0)` at the start, carried forwards on the position.
+fn fit_boundary_conditions(segments: &mut [Segment]) {
+    for k in 0..2 {
+        let last = &segments.last().expect("at least one segment").axes[k];
+        let mut xi = last.zmp(last.duration);
+        for seg in segments.iter_mut().rev() {
+            xi = seg.axes[k].fit_end_divergent_component(xi);
+        }
+        let mut x = segments[0].axes[k].p0;
+        for seg in segments.iter_mut() {
+            x = seg.axes[k].fit_start_position(x);
+        }
+    }
+}
+
 impl ZmpReference {
     /// Builds the ZMP reference of a plan and solves the LIPM exactly (seed 002, eq 12-13;
     /// the formulation is in the module documentation).
     pub fn new(plan: &GaitPlan) -> Result<ZmpReference, GaitError> {
         plan.validate()?;
         let tc = plan.time_constant();
-        // (duration, phase, ZMP at start, ZMP at end, support footprints)
-        type Piece = (f64, Phase, [f64; 2], [f64; 2], Vec<[f64; 2]>);
-        let mut pieces: Vec<Piece> = Vec::new();
-        let right0 = plan.footprint(0);
-        let left0 = [0.0, 0.5 * plan.step_width];
-        let mid0 = [0.0, 0.0];
-        // support foot during swing j (1-based): j = 1 the right foot at start, else F_{j-1}
-        let support = |j: usize| {
-            if j == 1 {
-                right0
-            } else {
-                plan.footprint(j - 1)
-            }
-        };
-        let side = |j: usize| if j % 2 == 1 { Foot::Right } else { Foot::Left };
-        if plan.t_start > 0.0 {
-            pieces.push((
-                plan.t_start,
-                Phase::Standing,
-                mid0,
-                mid0,
-                vec![right0, left0],
-            ));
-        }
-        pieces.push((
-            plan.t_double,
-            Phase::Double,
-            mid0,
-            support(1),
-            vec![right0, left0],
-        ));
-        for j in 1..=plan.steps {
-            let s = support(j);
-            pieces.push((plan.t_single, Phase::Single(side(j)), s, s, vec![s]));
-            let landed = plan.footprint(j);
-            if j < plan.steps {
-                pieces.push((
-                    plan.t_double,
-                    Phase::Double,
-                    s,
-                    support(j + 1),
-                    vec![s, landed],
-                ));
-            } else {
-                let mid = [0.5 * (s[0] + landed[0]), 0.5 * (s[1] + landed[1])];
-                pieces.push((plan.t_double, Phase::Double, s, mid, vec![s, landed]));
-                if plan.t_end > 0.0 {
-                    pieces.push((plan.t_end, Phase::Standing, mid, mid, vec![s, landed]));
-                }
-            }
-        }
-        let mut segments = Vec::with_capacity(pieces.len());
-        let mut t = 0.0;
-        for (duration, phase, from, to, feet) in pieces {
-            let slope = [(to[0] - from[0]) / duration, (to[1] - from[1]) / duration];
-            segments.push(Segment {
-                t0: t,
-                t1: t + duration,
-                phase,
-                p0: from,
-                slope,
-                feet,
-                a: [0.0; 2],
-                b: [0.0; 2],
-            });
-            t += duration;
-        }
-        // Backward pass on the divergent component: xi(T) = p(T).
-        let last = segments.last().expect("at least one segment");
-        let mut xi = [
-            last.p0[0] + last.slope[0] * (last.t1 - last.t0),
-            last.p0[1] + last.slope[1] * (last.t1 - last.t0),
-        ];
-        for seg in segments.iter_mut().rev() {
-            let d = seg.t1 - seg.t0;
-            let decay = (-d / tc).exp();
-            for k in 0..2 {
-                let p1 = seg.p0[k] + seg.slope[k] * d;
-                seg.b[k] = 0.5 * (xi[k] - p1 - tc * seg.slope[k]);
-                xi[k] = seg.p0[k] + tc * seg.slope[k] + 2.0 * seg.b[k] * decay;
-            }
-        }
-        // Forward pass on the CoM: x(0) = p(0).
-        let mut x = segments[0].p0;
-        for seg in segments.iter_mut() {
-            let d = seg.t1 - seg.t0;
-            let decay = (-d / tc).exp();
-            for k in 0..2 {
-                seg.a[k] = x[k] - seg.p0[k] - seg.b[k] * decay;
-                x[k] = seg.p0[k] + seg.slope[k] * d + seg.a[k] * decay + seg.b[k];
-            }
-        }
+        let mut segments = timed_segments(plan_pieces(plan), tc);
+        fit_boundary_conditions(&mut segments);
         Ok(ZmpReference {
             plan: plan.clone(),
             tc,
@@ -341,32 +357,20 @@ impl ZmpReference {
         &self.segments[i.min(self.segments.len() - 1)]
     }
 
-    /// The references at time t (clamped to the plan's span).
+    /// The references at time t (clamped to the plan's span): the ZMP and the LIPM CoM
+    /// of seed 002 eq 12-13 on the phase that holds t.
     pub fn at(&self, t: f64) -> ZmpSample {
         let t = t.clamp(0.0, self.duration());
         let seg = self.segment(t);
         let tau = t - seg.t0;
-        let d = seg.t1 - seg.t0;
-        let em = (-tau / self.tc).exp();
-        let ep = ((tau - d) / self.tc).exp();
-        let mut zmp = [0.0; 2];
-        let mut com = [0.0, 0.0, self.plan.com_height];
-        let mut vel = [0.0; 2];
-        let mut acc = [0.0; 2];
-        for k in 0..2 {
-            zmp[k] = seg.p0[k] + seg.slope[k] * tau;
-            let h = seg.a[k] * em + seg.b[k] * ep;
-            com[k] = zmp[k] + h;
-            vel[k] = seg.slope[k] + (seg.b[k] * ep - seg.a[k] * em) / self.tc;
-            acc[k] = h / (self.tc * self.tc);
-        }
+        let [x, y] = seg.axes.map(|axis| (axis.zmp(tau), axis.state(tau)));
         ZmpSample {
             t,
             phase: seg.phase,
-            zmp,
-            com,
-            vel,
-            acc,
+            zmp: [x.0, y.0],
+            com: [x.1.x, y.1.x, self.plan.com_height],
+            vel: [x.1.v, y.1.v],
+            acc: [x.1.a, y.1.a],
         }
     }
 

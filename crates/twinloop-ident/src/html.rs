@@ -12,6 +12,14 @@ fn mm(x: f64) -> String {
 
 /// The static-identification sections: summary, Fig. 5, link table, identifiability.
 pub fn static_sections(r: &mut Report, res: &StaticResult, suggestions: &[Suggestion]) {
+    gcom_section(r, res);
+    link_table_section(r, res);
+    identifiability_section(r, res);
+    suggestions_section(r, suggestions);
+}
+
+/// GCOM to CoP distance per pose before and after (seed 004, Fig. 5).
+fn gcom_section(r: &mut Report, res: &StaticResult) {
     r.heading("GCOM distance per pose (seed 004, Fig. 5)");
     r.paragraph(format!(
         "Distance between the model's ground-projected CoM and the measured centre of pressure for \
@@ -33,6 +41,10 @@ pub fn static_sections(r: &mut Report, res: &StaticResult, suggestions: &[Sugges
             .series("prior model", &x, &before, SeriesStyle::Bars)
             .series("identified model", &x, &after, SeriesStyle::Points),
     );
+}
+
+/// The identified masses and CoMs per link, with the prior (seed 004, eq 9).
+fn link_table_section(r: &mut Report, res: &StaticResult) {
     r.heading("Masses and centres of mass");
     r.paragraph(format!(
         "Total mass: measured {:.3} kg (seed 004, eq 9), prior {:.3} kg; {:.3} kg on links kept \
@@ -76,6 +88,10 @@ pub fn static_sections(r: &mut Report, res: &StaticResult, suggestions: &[Sugges
         })
         .collect();
     r.table(header, rows);
+}
+
+/// Rank, singular values against the noise, and the groups the poses do not decide.
+fn identifiability_section(r: &mut Report, res: &StaticResult) {
     let id = &res.identifiability;
     r.heading("Identifiability");
     r.paragraph(format!(
@@ -136,6 +152,10 @@ pub fn static_sections(r: &mut Report, res: &StaticResult, suggestions: &[Sugges
                 .collect(),
         );
     }
+}
+
+/// The poses that would raise the smallest singular value most.
+fn suggestions_section(r: &mut Report, suggestions: &[Suggestion]) {
     if !suggestions.is_empty() {
         r.subheading("Poses that would help most");
         r.table(

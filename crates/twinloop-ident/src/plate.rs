@@ -181,6 +181,106 @@ fn foot_tasks(foot: &crate::anatomy::Foot, y: f64, weight_xy: f64) -> [Task; 3] 
     ]
 }
 
+/// A foot flat on the ground with its sole centre at the origin, `xy` weighting the
+/// horizontal placement: the hard constraints the weighted solution is projected on.
+fn hard_foot_tasks(foot: &crate::anatomy::Foot, xy: f64) -> [Task; 2] {
+    [
+        Task::Axis {
+            frame: foot.frame,
+            axis: foot.down,
+            target: Vector3::new(0.0, 0.0, -1.0),
+            weight: Vector3::new(1.0, 1.0, 0.0),
+        },
+        Task::Point {
+            frame: foot.frame,
+            point: foot.sole_center,
+            target: Vector3::zeros(),
+            weight: Vector3::new(xy, xy, 1.0),
+        },
+    ]
+}
+
+/// A posture task over every joint, its reference and weights set per pose.
+fn posture_task(nj: usize) -> Task {
+    Task::Posture {
+        reference: vec![0.0; nj],
+        weight: vec![0.0; nj],
+    }
+}
+
+/// The weighted double-support IK for a gap between the soles' inner edges: both feet
+/// flat at +-d/2, the CoM over the origin, a posture; with the sole-centre distance d.
+fn double_support_ik(model: &Model, anatomy: &Anatomy, gap: f64) -> (Ik, f64) {
+    let (lf, rf) = (&anatomy.left_foot, &anatomy.right_foot);
+    let d = gap + 0.5 * (lf.size[1] + rf.size[1]);
+    let mut tasks: Vec<Task> = Vec::new();
+    tasks.extend(foot_tasks(lf, 0.5 * d, 1.0));
+    tasks.extend(foot_tasks(rf, -0.5 * d, 1.0));
+    tasks.push(Task::Com {
+        target: Vector3::zeros(),
+        weight: Vector3::new(1.0, 1.0, 0.0),
+    });
+    tasks.push(posture_task(model.nbodies));
+    (Ik::new(model, tasks), d)
+}
+
+/// The hard double-support projection: both feet flat on the ground, over the base
+/// and the legs.
+fn double_support_hard_ik(model: &Model, anatomy: &Anatomy) -> Ik {
+    let mut tasks: Vec<Task> = hard_foot_tasks(&anatomy.left_foot, 0.0).to_vec();
+    tasks.extend(hard_foot_tasks(&anatomy.right_foot, 0.0));
+    let mut ik = Ik::new(model, tasks);
+    let legs: Vec<usize> = anatomy
+        .left_leg
+        .iter()
+        .chain(&anatomy.right_leg)
+        .copied()
+        .collect();
+    let vo = model.v_offset;
+    ik.set_free(|k| k < vo || legs.contains(&(k - vo)));
+    ik
+}
+
+/// The weighted single-support IK: the stance foot flat at the origin, the CoM over
+/// it, the swing foot lifted, a posture.
+fn single_support_ik(model: &Model, anatomy: &Anatomy, stance_left: bool) -> Ik {
+    let (lf, rf) = (&anatomy.left_foot, &anatomy.right_foot);
+    let (st, sw) = if stance_left { (lf, rf) } else { (rf, lf) };
+    let mut tasks: Vec<Task> = foot_tasks(st, 0.0, 1.0).to_vec();
+    tasks.push(Task::Com {
+        target: Vector3::zeros(),
+        weight: Vector3::new(3.0, 3.0, 0.0),
+    });
+    tasks.push(Task::Point {
+        frame: sw.frame,
+        point: sw.sole_center,
+        target: Vector3::new(0.0, 0.0, 0.08),
+        weight: Vector3::new(0.0, 0.0, 0.3),
+    });
+    tasks.push(posture_task(model.nbodies));
+    Ik::new(model, tasks)
+}
+
+/// The hard single-support projection: the stance foot flat at the origin and the CoM
+/// over it, over the base and the stance leg.
+fn single_support_hard_ik(model: &Model, anatomy: &Anatomy, stance_left: bool) -> Ik {
+    let st = if stance_left {
+        &anatomy.left_foot
+    } else {
+        &anatomy.right_foot
+    };
+    let mut tasks: Vec<Task> = hard_foot_tasks(st, 1.0).to_vec();
+    tasks.push(Task::Com {
+        target: Vector3::zeros(),
+        weight: Vector3::new(1.0, 1.0, 0.0),
+    });
+    let mut ik = Ik::new(model, tasks);
+    let leg = anatomy.leg(stance_left).to_vec();
+    let vo = model.v_offset;
+    ik.set_free(|k| k < vo || leg.contains(&(k - vo)));
+    ik
+}
+
 impl<'a> PlateGenerator<'a> {
     pub fn new(
         robot: &Description,
@@ -211,83 +311,6 @@ impl<'a> PlateGenerator<'a> {
         for &h in hold {
             hold_mask[h] = true;
         }
-        let nj = model.nbodies;
-        let posture = || Task::Posture {
-            reference: vec![0.0; nj],
-            weight: vec![0.0; nj],
-        };
-        let (lf, rf) = (&anatomy.left_foot, &anatomy.right_foot);
-        // Sole-centre distance for a given gap between the inner edges.
-        let centre_distance = |gap: f64| gap + 0.5 * (lf.size[1] + rf.size[1]);
-        let double = |gap: f64| {
-            let d = centre_distance(gap);
-            let mut tasks: Vec<Task> = Vec::new();
-            tasks.extend(foot_tasks(lf, 0.5 * d, 1.0));
-            tasks.extend(foot_tasks(rf, -0.5 * d, 1.0));
-            tasks.push(Task::Com {
-                target: Vector3::zeros(),
-                weight: Vector3::new(1.0, 1.0, 0.0),
-            });
-            tasks.push(posture());
-            (Ik::new(model, tasks), d)
-        };
-        let hard_foot = |foot: &crate::anatomy::Foot, xy: f64| {
-            [
-                Task::Axis {
-                    frame: foot.frame,
-                    axis: foot.down,
-                    target: Vector3::new(0.0, 0.0, -1.0),
-                    weight: Vector3::new(1.0, 1.0, 0.0),
-                },
-                Task::Point {
-                    frame: foot.frame,
-                    point: foot.sole_center,
-                    target: Vector3::zeros(),
-                    weight: Vector3::new(xy, xy, 1.0),
-                },
-            ]
-        };
-        let mut double_hard = Ik::new(model, {
-            let mut t: Vec<Task> = hard_foot(lf, 0.0).to_vec();
-            t.extend(hard_foot(rf, 0.0));
-            t
-        });
-        let legs: Vec<usize> = anatomy
-            .left_leg
-            .iter()
-            .chain(&anatomy.right_leg)
-            .copied()
-            .collect();
-        let vo = model.v_offset;
-        double_hard.set_free(|k| k < vo || legs.contains(&(k - vo)));
-        let single = |stance_left: bool| {
-            let (st, sw) = if stance_left { (lf, rf) } else { (rf, lf) };
-            let mut tasks: Vec<Task> = foot_tasks(st, 0.0, 1.0).to_vec();
-            tasks.push(Task::Com {
-                target: Vector3::zeros(),
-                weight: Vector3::new(3.0, 3.0, 0.0),
-            });
-            tasks.push(Task::Point {
-                frame: sw.frame,
-                point: sw.sole_center,
-                target: Vector3::new(0.0, 0.0, 0.08),
-                weight: Vector3::new(0.0, 0.0, 0.3),
-            });
-            tasks.push(posture());
-            Ik::new(model, tasks)
-        };
-        let single_hard = |stance_left: bool| {
-            let st = if stance_left { lf } else { rf };
-            let mut tasks: Vec<Task> = hard_foot(st, 1.0).to_vec();
-            tasks.push(Task::Com {
-                target: Vector3::zeros(),
-                weight: Vector3::new(1.0, 1.0, 0.0),
-            });
-            let mut ik = Ik::new(model, tasks);
-            let leg = anatomy.leg(stance_left).to_vec();
-            ik.set_free(|k| k < vo || leg.contains(&(k - vo)));
-            ik
-        };
         let knees = [
             knee_of(model, &anatomy.left_leg),
             knee_of(model, &anatomy.right_leg),
@@ -300,11 +323,17 @@ impl<'a> PlateGenerator<'a> {
             hold: hold_mask,
             knees,
             stand_height,
-            double_weighted: Some(double(0.02)),
-            wide_weighted: Some(double(0.20)),
-            double_hard,
-            single_weighted: [single(true), single(false)],
-            single_hard: [single_hard(true), single_hard(false)],
+            double_weighted: Some(double_support_ik(model, &anatomy, 0.02)),
+            wide_weighted: Some(double_support_ik(model, &anatomy, 0.20)),
+            double_hard: double_support_hard_ik(model, &anatomy),
+            single_weighted: [
+                single_support_ik(model, &anatomy, true),
+                single_support_ik(model, &anatomy, false),
+            ],
+            single_hard: [
+                single_support_hard_ik(model, &anatomy, true),
+                single_support_hard_ik(model, &anatomy, false),
+            ],
             options: IkOptions {
                 max_iterations: 200,
                 ..IkOptions::default()

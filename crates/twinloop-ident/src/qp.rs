@@ -32,6 +32,11 @@ pub struct QpSolution {
     pub iterations: usize,
 }
 
+/// A constraint row's size, for relative tolerances.
+fn row_scale(row: nalgebra::DMatrixView<f64>) -> f64 {
+    row.amax().max(1e-300)
+}
+
 impl Qp<'_> {
     /// Solve from a feasible `z0` (the equalities and inequalities must hold there, to
     /// within `1e-9` relative).
@@ -43,73 +48,18 @@ impl Qp<'_> {
             .ok_or("the quadratic program's Hessian is not positive definite")?;
         let l = chol.l();
         let mut z = z0;
-        let scale = |row: nalgebra::DMatrixView<f64>| row.amax().max(1e-300);
-        // Feasibility check of the start.
-        for i in 0..me {
-            let r = (self.eq.row(i) * &z)[0] - self.eq_rhs[i];
-            if r.abs() > 1e-9 * (1.0 + self.eq_rhs[i].abs()) {
-                return Err(format!("start point violates equality {i} by {r:e}"));
-            }
-        }
+        self.check_start(&z)?;
         let mut active: Vec<usize> = Vec::new();
-        for i in 0..mi {
-            let r = (self.ineq.row(i) * &z)[0] - self.ineq_rhs[i];
-            let tol = 1e-9 * (1.0 + self.ineq_rhs[i].abs()) * scale(self.ineq.row(i).as_view());
-            if r > tol {
-                return Err(format!("start point violates inequality {i} by {r:e}"));
-            }
-        }
         let max_iter = 10 * (mi + n) + 50;
         let mut full_step = false;
         for it in 0..max_iter {
-            // Working-set rows: equalities, then active inequalities.
-            let w = me + active.len();
-            let mut aw = DMatrix::zeros(w, n);
-            for i in 0..me {
-                aw.row_mut(i).copy_from(&self.eq.row(i));
-            }
-            for (k, &i) in active.iter().enumerate() {
-                aw.row_mut(me + k).copy_from(&self.ineq.row(i));
-            }
-            // g = H z - f; the step p solves H p + A_W^T mu = -g, A_W p = 0.
-            let g = self.h * &z - self.f;
-            let u = l
-                .solve_lower_triangular(&g)
-                .ok_or("singular Cholesky factor")?;
-            let y = l
-                .solve_lower_triangular(&aw.transpose())
-                .ok_or("singular Cholesky factor")?;
-            let k = y.transpose() * &y;
-            let rhs = -(y.transpose() * &u);
-            let mu = if w > 0 {
-                let lu = k.clone().lu();
-                let sol = lu.solve(&rhs).ok_or(
-                    "the working set of constraints is linearly dependent (degenerate bounds)",
-                )?;
-                if !sol.iter().all(|x| x.is_finite()) {
-                    return Err("the working set of constraints is linearly dependent".into());
-                }
-                sol
-            } else {
-                DVector::zeros(0)
-            };
-            let t = &u + &y * &mu;
-            let p = -l
-                .tr_solve_lower_triangular(&t)
-                .ok_or("singular Cholesky factor")?;
+            let (p, mu) = self.working_set_step(&l, &z, &active)?;
             let zmax = z.amax().max(1.0);
             // After a full step the point minimises over the working set (p is then
             // only round-off).
             if full_step || p.amax() <= 1e-13 * zmax {
                 // Stationary on the working set: optimal if no active inequality pulls inward.
-                let mut worst: Option<(usize, f64)> = None;
-                for (k, _) in active.iter().enumerate() {
-                    let m = mu[me + k];
-                    if m < -1e-12 * (1.0 + mu.amax()) && worst.is_none_or(|(_, wm)| m < wm) {
-                        worst = Some((k, m));
-                    }
-                }
-                match worst {
+                match most_negative_multiplier(&mu, me, active.len()) {
                     None => {
                         let multipliers = (0..active.len()).map(|k| mu[me + k].max(0.0)).collect();
                         return Ok(QpSolution {
@@ -119,30 +69,14 @@ impl Qp<'_> {
                             iterations: it + 1,
                         });
                     }
-                    Some((k, _)) => {
+                    Some(k) => {
                         active.remove(k);
                         full_step = false;
                         continue;
                     }
                 }
             }
-            // Longest feasible step along p.
-            let mut alpha = 1.0;
-            let mut blocking = None;
-            for i in 0..mi {
-                if active.contains(&i) {
-                    continue;
-                }
-                let ap = (self.ineq.row(i) * &p)[0];
-                if ap > 1e-14 * scale(self.ineq.row(i).as_view()) * p.amax() {
-                    let slack = self.ineq_rhs[i] - (self.ineq.row(i) * &z)[0];
-                    let a = (slack / ap).max(0.0);
-                    if a < alpha {
-                        alpha = a;
-                        blocking = Some(i);
-                    }
-                }
-            }
+            let (alpha, blocking) = self.longest_feasible_step(&z, &p, &active);
             z += &p * alpha;
             full_step = blocking.is_none();
             if let Some(i) = blocking {
@@ -153,4 +87,109 @@ impl Qp<'_> {
             "the active-set method did not converge in {max_iter} iterations"
         ))
     }
+
+    /// Errors unless `z` satisfies the equalities and inequalities (to `1e-9` relative).
+    fn check_start(&self, z: &DVector<f64>) -> Result<(), String> {
+        for i in 0..self.eq.nrows() {
+            let r = (self.eq.row(i) * z)[0] - self.eq_rhs[i];
+            if r.abs() > 1e-9 * (1.0 + self.eq_rhs[i].abs()) {
+                return Err(format!("start point violates equality {i} by {r:e}"));
+            }
+        }
+        for i in 0..self.ineq.nrows() {
+            let r = (self.ineq.row(i) * z)[0] - self.ineq_rhs[i];
+            let tol = 1e-9 * (1.0 + self.ineq_rhs[i].abs()) * row_scale(self.ineq.row(i).as_view());
+            if r > tol {
+                return Err(format!("start point violates inequality {i} by {r:e}"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The step to the minimiser over the working set (the equalities, then the
+    /// `active` inequalities) and its multipliers: `p` solves `H p + A_W^T mu = -g`,
+    /// `A_W p = 0` with `g = H z - f`, through the Cholesky factor `l` of `H` and the
+    /// Schur complement `K = Y^T Y`, `Y = L^-1 A_W^T`.
+    fn working_set_step(
+        &self,
+        l: &DMatrix<f64>,
+        z: &DVector<f64>,
+        active: &[usize],
+    ) -> Result<(DVector<f64>, DVector<f64>), String> {
+        let (n, me) = (self.h.nrows(), self.eq.nrows());
+        let w = me + active.len();
+        let mut aw = DMatrix::zeros(w, n);
+        for i in 0..me {
+            aw.row_mut(i).copy_from(&self.eq.row(i));
+        }
+        for (k, &i) in active.iter().enumerate() {
+            aw.row_mut(me + k).copy_from(&self.ineq.row(i));
+        }
+        let g = self.h * z - self.f;
+        let u = l
+            .solve_lower_triangular(&g)
+            .ok_or("singular Cholesky factor")?;
+        let y = l
+            .solve_lower_triangular(&aw.transpose())
+            .ok_or("singular Cholesky factor")?;
+        let k = y.transpose() * &y;
+        let rhs = -(y.transpose() * &u);
+        let mu = if w > 0 {
+            let lu = k.clone().lu();
+            let sol = lu.solve(&rhs).ok_or(
+                "the working set of constraints is linearly dependent (degenerate bounds)",
+            )?;
+            if !sol.iter().all(|x| x.is_finite()) {
+                return Err("the working set of constraints is linearly dependent".into());
+            }
+            sol
+        } else {
+            DVector::zeros(0)
+        };
+        let t = &u + &y * &mu;
+        let p = -l
+            .tr_solve_lower_triangular(&t)
+            .ok_or("singular Cholesky factor")?;
+        Ok((p, mu))
+    }
+
+    /// The longest step `alpha <= 1` along `p` that keeps the inactive inequalities, and
+    /// the one that blocks it (None for the full step).
+    fn longest_feasible_step(
+        &self,
+        z: &DVector<f64>,
+        p: &DVector<f64>,
+        active: &[usize],
+    ) -> (f64, Option<usize>) {
+        let mut alpha = 1.0;
+        let mut blocking = None;
+        for i in 0..self.ineq.nrows() {
+            if active.contains(&i) {
+                continue;
+            }
+            let ap = (self.ineq.row(i) * p)[0];
+            if ap > 1e-14 * row_scale(self.ineq.row(i).as_view()) * p.amax() {
+                let slack = self.ineq_rhs[i] - (self.ineq.row(i) * z)[0];
+                let a = (slack / ap).max(0.0);
+                if a < alpha {
+                    alpha = a;
+                    blocking = Some(i);
+                }
+            }
+        }
+        (alpha, blocking)
+    }
+}
+
+/// The active inequality (index into the active list) whose multiplier is the most
+/// negative, beyond round-off: the constraint to release. None: the point is optimal.
+fn most_negative_multiplier(mu: &DVector<f64>, me: usize, n_active: usize) -> Option<usize> {
+    let mut worst: Option<(usize, f64)> = None;
+    for k in 0..n_active {
+        let m = mu[me + k];
+        if m < -1e-12 * (1.0 + mu.amax()) && worst.is_none_or(|(_, wm)| m < wm) {
+            worst = Some((k, m));
+        }
+    }
+    worst.map(|(k, _)| k)
 }

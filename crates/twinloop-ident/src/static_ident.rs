@@ -230,6 +230,129 @@ fn param_names(link: &str) -> [String; 4] {
     ]
 }
 
+/// The input checks of [`StaticProblem::new`], each error naming its option.
+fn check_static_inputs(
+    model: &Model,
+    total_mass: f64,
+    options: &StaticOptions,
+) -> Result<(), IdentError> {
+    if !model.is_floating() {
+        return Err(IdentError::new(
+            "static identification needs a floating-base model",
+        ));
+    }
+    if !(total_mass.is_finite() && total_mass > 0.0) {
+        return Err(IdentError::new(format!(
+            "{total_mass} is not a mass: give the robot's weight on a scale, in kg"
+        ))
+        .option("total_mass"));
+    }
+    if !(options.cop_sigma.is_finite() && options.cop_sigma >= 0.0) {
+        return Err(IdentError::new(format!(
+            "{} is not a standard deviation (finite, >= 0)",
+            options.cop_sigma
+        ))
+        .option("cop_sigma"));
+    }
+    Ok(())
+}
+
+/// The description links to identify: the named ones (each once, each with an
+/// `<inertial>` in the prior), or every link with mass.
+fn identified_links(
+    robot: &Description,
+    model: &Model,
+    options: &StaticOptions,
+) -> Result<Vec<usize>, IdentError> {
+    let nl = model.links.len();
+    let links: Vec<usize> = match &options.links {
+        None => (0..nl)
+            .filter(|&l| model.links[l].inertia.mass > 0.0)
+            .collect(),
+        Some(names) => {
+            let mut v = Vec::new();
+            for n in names {
+                let l = robot.link_index(n).ok_or_else(|| {
+                    IdentError::new(format!(
+                        "no link named \"{n}\" in the model \"{}\"",
+                        model.name
+                    ))
+                    .option("links")
+                })?;
+                if robot.links[l].inertial.is_none() {
+                    return Err(IdentError::new(format!(
+                        "link \"{n}\" has no <inertial> in the prior: give it one, or leave it out"
+                    ))
+                    .option("links"));
+                }
+                if !v.contains(&l) {
+                    v.push(l);
+                }
+            }
+            v
+        }
+    };
+    if links.is_empty() {
+        return Err(IdentError::new("no link to identify").option("links"));
+    }
+    Ok(links)
+}
+
+/// The identified unknowns' prior, scales, CoM bounds and names.
+struct PriorScales {
+    x0: DVector<f64>,
+    scale: DVector<f64>,
+    com_lower: Vec<Vector3<f64>>,
+    com_upper: Vec<Vector3<f64>>,
+    names: Vec<String>,
+}
+
+/// Per identified link: the prior (m, h); the prior uncertainty, the mass itself
+/// (floored) and that mass times the link's size for its first moment; and the CoM box,
+/// the link's geometry (with its prior CoM) grown by the CoM margin.
+fn prior_scales(
+    robot: &Description,
+    model: &Model,
+    links: &[usize],
+    prior: &[f64],
+    total_mass: f64,
+    com_margin: f64,
+) -> PriorScales {
+    let n = 4 * links.len();
+    let mut out = PriorScales {
+        x0: DVector::zeros(n),
+        scale: DVector::zeros(n),
+        com_lower: Vec::new(),
+        com_upper: Vec::new(),
+        names: Vec::new(),
+    };
+    for (k, &l) in links.iter().enumerate() {
+        let m = model.links[l].inertia.mass;
+        let c = model.links[l].inertia.com;
+        for j in 0..4 {
+            out.x0[4 * k + j] = prior[4 * l + j];
+        }
+        let sm = m.max(0.01 * total_mass / links.len() as f64).max(1e-3);
+        let pts = link_geometry_points(robot, l);
+        let mut lo = c;
+        let mut hi = c;
+        for p in &pts {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        let size = (hi - lo).amax().max(c.norm()).max(0.05);
+        out.scale[4 * k] = sm;
+        for j in 1..4 {
+            out.scale[4 * k + j] = sm * size;
+        }
+        let margin = Vector3::repeat(com_margin);
+        out.com_lower.push(lo - margin);
+        out.com_upper.push(hi + margin);
+        out.names.extend(param_names(&model.links[l].name));
+    }
+    out
+}
+
 impl StaticProblem {
     /// Choose the links, check the total mass, and set scales and bounds.
     pub fn new(
@@ -238,55 +361,9 @@ impl StaticProblem {
         total_mass: f64,
         options: &StaticOptions,
     ) -> Result<StaticProblem, IdentError> {
-        if !model.is_floating() {
-            return Err(IdentError::new(
-                "static identification needs a floating-base model",
-            ));
-        }
-        if !(total_mass.is_finite() && total_mass > 0.0) {
-            return Err(IdentError::new(format!(
-                "{total_mass} is not a mass: give the robot's weight on a scale, in kg"
-            ))
-            .option("total_mass"));
-        }
-        if !(options.cop_sigma.is_finite() && options.cop_sigma >= 0.0) {
-            return Err(IdentError::new(format!(
-                "{} is not a standard deviation (finite, >= 0)",
-                options.cop_sigma
-            ))
-            .option("cop_sigma"));
-        }
+        check_static_inputs(model, total_mass, options)?;
         let nl = model.links.len();
-        let links: Vec<usize> = match &options.links {
-            None => (0..nl)
-                .filter(|&l| model.links[l].inertia.mass > 0.0)
-                .collect(),
-            Some(names) => {
-                let mut v = Vec::new();
-                for n in names {
-                    let l = robot.link_index(n).ok_or_else(|| {
-                        IdentError::new(format!(
-                            "no link named \"{n}\" in the model \"{}\"",
-                            model.name
-                        ))
-                        .option("links")
-                    })?;
-                    if robot.links[l].inertial.is_none() {
-                        return Err(IdentError::new(format!(
-                            "link \"{n}\" has no <inertial> in the prior: give it one, or leave it out"
-                        ))
-                        .option("links"));
-                    }
-                    if !v.contains(&l) {
-                        v.push(l);
-                    }
-                }
-                v
-            }
-        };
-        if links.is_empty() {
-            return Err(IdentError::new("no link to identify").option("links"));
-        }
+        let links = identified_links(robot, model, options)?;
         let prior = twinloop_dynamics::link_static_parameters(model);
         let fixed_mass: f64 = (0..nl)
             .filter(|l| !links.contains(l))
@@ -304,38 +381,7 @@ impl StaticProblem {
             ))
             .option("total_mass"));
         }
-        let n = 4 * links.len();
-        let mut x0 = DVector::zeros(n);
-        let mut scale = DVector::zeros(n);
-        let mut com_lower = Vec::new();
-        let mut com_upper = Vec::new();
-        let mut names = Vec::new();
-        for (k, &l) in links.iter().enumerate() {
-            let m = model.links[l].inertia.mass;
-            let c = model.links[l].inertia.com;
-            for j in 0..4 {
-                x0[4 * k + j] = prior[4 * l + j];
-            }
-            // Prior uncertainty: the mass itself (floored), and that mass times the
-            // link's size for its first moment.
-            let sm = m.max(0.01 * total_mass / links.len() as f64).max(1e-3);
-            let pts = link_geometry_points(robot, l);
-            let mut lo = c;
-            let mut hi = c;
-            for p in &pts {
-                lo = lo.inf(p);
-                hi = hi.sup(p);
-            }
-            let size = (hi - lo).amax().max(c.norm()).max(0.05);
-            scale[4 * k] = sm;
-            for j in 1..4 {
-                scale[4 * k + j] = sm * size;
-            }
-            let margin = Vector3::repeat(options.com_margin);
-            com_lower.push(lo - margin);
-            com_upper.push(hi + margin);
-            names.extend(param_names(&model.links[l].name));
-        }
+        let p = prior_scales(robot, model, &links, &prior, total_mass, options.com_margin);
         Ok(StaticProblem {
             bodies: links.iter().map(|&l| model.links[l].body).collect(),
             link_names: model.links.iter().map(|l| l.name.clone()).collect(),
@@ -343,13 +389,13 @@ impl StaticProblem {
             total_mass,
             fixed_mass,
             prior,
-            x0,
-            scale,
-            com_lower,
-            com_upper,
+            x0: p.x0,
+            scale: p.scale,
+            com_lower: p.com_lower,
+            com_upper: p.com_upper,
             min_mass,
             cop_sigma: options.cop_sigma,
-            names,
+            names: p.names,
         })
     }
 
@@ -826,6 +872,133 @@ pub fn identify_static(
     Ok(report(robot, model, poses, &problem, &mut ws, &fit))
 }
 
+/// Posterior standard deviations of the scaled unknowns: `sigma_b^2 S H^-1 S`, with
+/// `sigma_b` the CoP noise as a moment (total weight times the CoP's deviation).
+struct Posterior {
+    sigma_b: f64,
+    hinv: DMatrix<f64>,
+}
+
+impl Posterior {
+    fn new(problem: &StaticProblem, fit: &Fit) -> Posterior {
+        let n = problem.unknowns();
+        let hinv = fit
+            .hessian
+            .clone()
+            .cholesky()
+            .map(|c| c.inverse())
+            .unwrap_or_else(|| DMatrix::zeros(n, n));
+        Posterior {
+            sigma_b: problem.total_mass * problem.cop_sigma,
+            hinv,
+        }
+    }
+
+    /// Standard deviation of unknown `j` in its own units.
+    fn std(&self, problem: &StaticProblem, j: usize) -> f64 {
+        self.sigma_b * problem.scale[j] * self.hinv[(j, j)].max(0.0).sqrt()
+    }
+}
+
+/// The bounds of identified link `k` active at the fit, in words (the QP's seven
+/// constraints per link: mass lower bound, then upper and lower per CoM axis).
+fn active_bounds(fit: &Fit, k: usize) -> Vec<String> {
+    let labels = ["com.x", "com.y", "com.z"];
+    let mut at_bounds = Vec::new();
+    for &i in &fit.active {
+        if i / 7 == k {
+            let r = i % 7;
+            at_bounds.push(if r == 0 {
+                "mass lower bound".to_string()
+            } else {
+                let a = (r - 1) / 2;
+                let side = if (r - 1) % 2 == 0 { "upper" } else { "lower" };
+                format!("{} {side} bound", labels[a])
+            });
+        }
+    }
+    at_bounds
+}
+
+/// The estimate of identified link `k` (description link `l`): mass and CoM with
+/// their prior, standard deviations (the CoM's by the delta method for `c = h / m`),
+/// bounds and how well the data determine them.
+fn link_estimate(
+    model: &Model,
+    problem: &StaticProblem,
+    fit: &Fit,
+    posterior: &Posterior,
+    identifiability: &Identifiability,
+    (k, l): (usize, usize),
+) -> LinkEstimate {
+    let std = |j: usize| posterior.std(problem, j);
+    let m = fit.x[4 * k];
+    let h = Vector3::new(fit.x[4 * k + 1], fit.x[4 * k + 2], fit.x[4 * k + 3]);
+    let c = h / m;
+    let pm = problem.x0[4 * k];
+    let pc = Vector3::new(
+        problem.x0[4 * k + 1],
+        problem.x0[4 * k + 2],
+        problem.x0[4 * k + 3],
+    ) / pm;
+    let com_std = [0, 1, 2].map(|a| {
+        let sh = std(4 * k + 1 + a);
+        let sm = std(4 * k);
+        ((sh / m).powi(2) + (c[a] * sm / m).powi(2)).sqrt()
+    });
+    LinkEstimate {
+        name: model.links[l].name.clone(),
+        prior_mass: pm,
+        mass: m,
+        mass_std: std(4 * k),
+        prior_com: [pc.x, pc.y, pc.z],
+        com: [c.x, c.y, c.z],
+        com_std,
+        com_lower: problem.com_lower[k].into(),
+        com_upper: problem.com_upper[k].into(),
+        at_bounds: active_bounds(fit, k),
+        mass_determined: identifiability.determined_fraction[4 * k].1,
+        first_moment_determined: [1, 2, 3]
+            .map(|j| identifiability.determined_fraction[4 * k + j].1),
+    }
+}
+
+/// The ground projections of the CoM per pose with the prior and the fitted
+/// parameters, and their distances from the measured CoP, m.
+struct GcomComparison {
+    before: Vec<[f64; 2]>,
+    after: Vec<[f64; 2]>,
+    distance_before: Vec<f64>,
+    distance_after: Vec<f64>,
+}
+
+fn compare_gcom(
+    model: &Model,
+    data: &mut Data,
+    poses: &[StaticPose],
+    prior: &[f64],
+    phi: &[f64],
+) -> GcomComparison {
+    let mut gb = Vec::with_capacity(poses.len());
+    let mut ga = Vec::with_capacity(poses.len());
+    let mut db = Vec::with_capacity(poses.len());
+    let mut da = Vec::with_capacity(poses.len());
+    for p in poses {
+        let b = gcom(model, data, prior, &p.q);
+        let a = gcom(model, data, phi, &p.q);
+        db.push(((b[0] - p.cop[0]).powi(2) + (b[1] - p.cop[1]).powi(2)).sqrt());
+        da.push(((a[0] - p.cop[0]).powi(2) + (a[1] - p.cop[1]).powi(2)).sqrt());
+        gb.push(b);
+        ga.push(a);
+    }
+    GcomComparison {
+        before: gb,
+        after: ga,
+        distance_before: db,
+        distance_after: da,
+    }
+}
+
 /// Turn a fit into the result: per-link estimates, GCOM distances, identifiability.
 pub fn report(
     _robot: &Description,
@@ -835,88 +1008,23 @@ pub fn report(
     ws: &mut StaticWorkspace,
     fit: &Fit,
 ) -> StaticResult {
-    let n = problem.unknowns();
     let mut phi = problem.prior.clone();
     for (k, &l) in problem.links.iter().enumerate() {
         for j in 0..4 {
             phi[4 * l + j] = fit.x[4 * k + j];
         }
     }
-    // Posterior standard deviations: sigma_b^2 S H^-1 S.
-    let sigma_b = problem.total_mass * problem.cop_sigma;
-    let hinv = fit
-        .hessian
-        .clone()
-        .cholesky()
-        .map(|c| c.inverse())
-        .unwrap_or_else(|| DMatrix::zeros(n, n));
-    let std = |j: usize| sigma_b * problem.scale[j] * hinv[(j, j)].max(0.0).sqrt();
+    let posterior = Posterior::new(problem, fit);
     let structural = structural_null_space(model, problem);
     let identifiability = identifiability(problem, model, &fit.gram, fit.lambda, &structural);
-    let mut links = Vec::new();
-    let labels = ["com.x", "com.y", "com.z"];
-    for (k, &l) in problem.links.iter().enumerate() {
-        let m = fit.x[4 * k];
-        let h = Vector3::new(fit.x[4 * k + 1], fit.x[4 * k + 2], fit.x[4 * k + 3]);
-        let c = h / m;
-        let pm = problem.x0[4 * k];
-        let pc = Vector3::new(
-            problem.x0[4 * k + 1],
-            problem.x0[4 * k + 2],
-            problem.x0[4 * k + 3],
-        ) / pm;
-        // Delta method for c = h / m.
-        let com_std = [0, 1, 2].map(|a| {
-            let sh = std(4 * k + 1 + a);
-            let sm = std(4 * k);
-            ((sh / m).powi(2) + (c[a] * sm / m).powi(2)).sqrt()
-        });
-        let mut at_bounds = Vec::new();
-        for &i in &fit.active {
-            if i / 7 == k {
-                let r = i % 7;
-                at_bounds.push(if r == 0 {
-                    "mass lower bound".to_string()
-                } else {
-                    let a = (r - 1) / 2;
-                    let side = if (r - 1) % 2 == 0 { "upper" } else { "lower" };
-                    format!("{} {side} bound", labels[a])
-                });
-            }
-        }
-        links.push(LinkEstimate {
-            name: model.links[l].name.clone(),
-            prior_mass: pm,
-            mass: m,
-            mass_std: std(4 * k),
-            prior_com: [pc.x, pc.y, pc.z],
-            com: [c.x, c.y, c.z],
-            com_std,
-            com_lower: problem.com_lower[k].into(),
-            com_upper: problem.com_upper[k].into(),
-            at_bounds,
-            mass_determined: identifiability.determined_fraction[4 * k].1,
-            first_moment_determined: [1, 2, 3]
-                .map(|j| identifiability.determined_fraction[4 * k + j].1),
-        });
-    }
+    let links = (problem.links.iter().copied().enumerate())
+        .map(|kl| link_estimate(model, problem, fit, &posterior, &identifiability, kl))
+        .collect();
     let fixed_links = (0..model.links.len())
         .filter(|l| !problem.links.contains(l) && model.links[*l].inertia.mass > 0.0)
         .map(|l| (model.links[l].name.clone(), model.links[l].inertia.mass))
         .collect();
-    let mut gb = Vec::with_capacity(poses.len());
-    let mut ga = Vec::with_capacity(poses.len());
-    let mut db = Vec::with_capacity(poses.len());
-    let mut da = Vec::with_capacity(poses.len());
-    let data = &mut ws.data;
-    for p in poses {
-        let b = gcom(model, data, &problem.prior, &p.q);
-        let a = gcom(model, data, &phi, &p.q);
-        db.push(((b[0] - p.cop[0]).powi(2) + (b[1] - p.cop[1]).powi(2)).sqrt());
-        da.push(((a[0] - p.cop[0]).powi(2) + (a[1] - p.cop[1]).powi(2)).sqrt());
-        gb.push(b);
-        ga.push(a);
-    }
+    let g = compare_gcom(model, &mut ws.data, poses, &problem.prior, &phi);
     StaticResult {
         model: model.name.clone(),
         poses: poses.len(),
@@ -925,15 +1033,15 @@ pub fn report(
         fixed_mass: problem.fixed_mass,
         links,
         fixed_links,
-        before: Stats::of(&db),
-        after: Stats::of(&da),
-        gcom_distance_before: db,
-        gcom_distance_after: da,
+        before: Stats::of(&g.distance_before),
+        after: Stats::of(&g.distance_after),
+        gcom_distance_before: g.distance_before,
+        gcom_distance_after: g.distance_after,
         identifiability,
         qp_iterations: fit.iterations,
         parameters: phi,
-        gcom_before: gb,
-        gcom_after: ga,
+        gcom_before: g.before,
+        gcom_after: g.after,
     }
 }
 

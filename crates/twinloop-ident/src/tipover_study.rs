@@ -272,8 +272,39 @@ fn measure_feet(sim: &Simulator, names: &[String; 6], feet: [usize; 2]) -> FootG
     }
 }
 
-/// Run the study on `robot` (a built-in robot gets its own servos and foot data).
-pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport, String> {
+/// The joints and links the protocol turns and reads, found by name.
+struct StudyJoints {
+    /// Ankle pitch (left, right), ankle roll (left, right), foot links (left, right):
+    /// [`ankle_names`].
+    names: [String; 6],
+    /// Joint indices (left, right) of the ankle pitches, ankle rolls and hip rolls.
+    pitch: [usize; 2],
+    roll: [usize; 2],
+    hip: [usize; 2],
+    hip_names: [String; 2],
+    /// Description links of the feet (left, right).
+    feet: [usize; 2],
+}
+
+/// Which sign of each joint pair leans the standing robot forward (ankle pitches) and
+/// to the left (ankle rolls, hip rolls).
+struct LeanSigns {
+    forward: [f64; 2],
+    left: [f64; 2],
+    hip_left: [f64; 2],
+}
+
+/// One direction's run: the result of the run with the creep, the static tipping
+/// angle at its onset, deg, and the rigid robot's, deg.
+type DirectionRun = (TipoverResult, f64, f64);
+
+/// The simulator of the study: the robot's servos (stiffened to the protocol's
+/// compliance), optionally its encoders, standing on the ground at the zero pose
+/// (clamped to the limits), which is returned.
+fn study_simulator(
+    robot: &Description,
+    opts: &StudyOptions,
+) -> Result<(Simulator, Vec<f64>), String> {
     let mass = twinloop_dynamics::Model::from_description(robot)
         .map_err(err)?
         .total_mass;
@@ -299,6 +330,11 @@ pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport
         .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
         .collect();
     sim.place_on_ground(&standing).map_err(err)?;
+    Ok((sim, standing))
+}
+
+/// The ankle, hip roll and foot names of `robot` resolved in the simulator's model.
+fn find_study_joints(robot: &Description, sim: &Simulator) -> Result<StudyJoints, String> {
     let names = ankle_names(robot)?;
     let joint = |n: &str| {
         sim.joint_index(n)
@@ -320,122 +356,191 @@ pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport
     let feet = [link(&names[4])?, link(&names[5])?];
     let hip_names = hip_roll_names(robot)?;
     let (lh, rh) = (joint(&hip_names[0])?, joint(&hip_names[1])?);
-    let sim_feet: Vec<&str> = vec![names[4].as_str(), names[5].as_str()];
-    sim.set_feet(&sim_feet).map_err(err)?;
-    let (foot, seed_constants, label) =
-        match twinloop_description::builtin::foot_geometry(&robot.name) {
-            Some(f) if robot.name == twinloop_description::builtin::km20::NAME => (
-                f,
-                SEED_000_CONSTANTS,
-                "seed 000 (F1 3.5 cm, F2 9.5 cm, L0 3.1 cm)",
-            ),
-            Some(f) => {
-                let c = SeedConstants::from_foot(&f);
-                (f, c, "the robot's own feet")
-            }
-            None => {
-                let f = measure_feet(&sim, &names, feet);
-                let c = SeedConstants::from_foot(&f);
-                (f, c, "the robot's own feet (measured)")
-            }
-        };
+    Ok(StudyJoints {
+        names,
+        pitch: [lp, rp],
+        roll: [lr, rr],
+        hip: [lh, rh],
+        hip_names,
+        feet,
+    })
+}
+
+/// The feet the estimators assume: the seed's constants on the KM-20, a built-in
+/// robot's own feet, or feet measured on the model; with a label saying which.
+fn study_feet(
+    robot: &Description,
+    sim: &Simulator,
+    j: &StudyJoints,
+) -> (FootGeometry, SeedConstants, &'static str) {
+    match twinloop_description::builtin::foot_geometry(&robot.name) {
+        Some(f) if robot.name == twinloop_description::builtin::km20::NAME => (
+            f,
+            SEED_000_CONSTANTS,
+            "seed 000 (F1 3.5 cm, F2 9.5 cm, L0 3.1 cm)",
+        ),
+        Some(f) => {
+            let c = SeedConstants::from_foot(&f);
+            (f, c, "the robot's own feet")
+        }
+        None => {
+            let f = measure_feet(sim, &j.names, j.feet);
+            let c = SeedConstants::from_foot(&f);
+            (f, c, "the robot's own feet (measured)")
+        }
+    }
+}
+
+/// The joints the protocol turns in direction `d`, with the sign that leans the robot
+/// that way, and the lean's world direction: the static reference sweeps the same
+/// joints from the onset.
+fn turned_joints(
+    d: Direction,
+    j: &StudyJoints,
+    s: &LeanSigns,
+) -> (Vec<(usize, f64)>, Vector3<f64>) {
+    let ([lp, rp], [lr, rr], [lh, rh]) = (j.pitch, j.roll, j.hip);
+    let (fs, ls, hs) = (s.forward, s.left, s.hip_left);
+    match d {
+        Direction::Forward => (vec![(lp, fs[0]), (rp, fs[1])], Vector3::x()),
+        Direction::Backward => (vec![(lp, -fs[0]), (rp, -fs[1])], -Vector3::x()),
+        Direction::Left => (
+            vec![(lr, ls[0]), (rr, ls[1]), (lh, hs[0]), (rh, hs[1])],
+            Vector3::y(),
+        ),
+        Direction::Right => (
+            vec![(lr, -ls[0]), (rr, -ls[1]), (lh, -hs[0]), (rh, -hs[1])],
+            -Vector3::y(),
+        ),
+    }
+}
+
+/// Which feet the kinematics hold flat in direction `d`: sideways the one the robot
+/// leans onto (the other unloads); forward and backward both stand, so both chains are
+/// used and averaged (the legs give by slightly different amounts when the load is
+/// off-centre, and one leg alone would read that as a tilt).
+fn held_feet(d: Direction) -> &'static [usize] {
+    match d {
+        Direction::Left => &[0],
+        Direction::Right => &[1],
+        Direction::Forward | Direction::Backward => &[0, 1],
+    }
+}
+
+/// The static tipping angles of one direction's run, deg: from the joint angles at the
+/// onset with the feet as rolled as the IMU saw them (averaged over the held feet), and
+/// the rigid robot's, from the standing pose with the feet flat.
+fn static_tipping_angles(
+    flat: &mut FlatFeet,
+    data: &mut Data,
+    r: &TipoverResult,
+    standing: &[f64],
+    helds: &[usize],
+    turned: &[(usize, f64)],
+    dir: Vector3<f64>,
+) -> (f64, f64) {
+    let n_held = helds.len() as f64;
+    let mut offset = 0.0;
+    for &h in helds {
+        flat.held = h;
+        flat.tilt = r.excess_deg.to_radians();
+        offset += flat
+            .tipping_angle(data, &r.positions_at_onset, turned, dir, -0.2, 0.2)
+            .map(f64::to_degrees)
+            .unwrap_or(f64::NAN)
+            / n_held;
+    }
+    flat.held = helds[0];
+    flat.tilt = 0.0;
+    let rigid = flat
+        .tipping_angle(data, standing, turned, dir, 0.0, 1.2)
+        .map(f64::to_degrees)
+        .unwrap_or(f64::NAN);
+    (offset, rigid)
+}
+
+/// Tips the robot over in all four directions, each twice: at the constant ramp (its
+/// time to fall is seed 000's Table IV quantity), then up to half a degree before that
+/// tip and on at a creep (see `TipoverConfig::slow_from_deg`); with the static tipping
+/// angles at each onset.
+fn tip_all_directions(
+    sim: &mut Simulator,
+    standing: &[f64],
+    j: &StudyJoints,
+    q0: &[f64],
+    opts: &StudyOptions,
+) -> Result<Vec<DirectionRun>, String> {
     let model = sim.model.clone();
     let points = sim.contact_points().to_vec();
     let place = |s: &mut Simulator, l: &str| {
         s.link_placement(l)
             .ok_or_else(|| format!("no link \"{l}\""))
     };
-    let foot_world = [place(&mut sim, &names[4])?, place(&mut sim, &names[5])?];
+    let foot_world = [place(sim, &j.names[4])?, place(sim, &j.names[5])?];
     let mut flat = FlatFeet {
         model: &model,
-        feet,
+        feet: j.feet,
         points: &points,
         foot_world,
         held: 0,
         tilt: 0.0,
     };
     let mut data = Data::new(&model);
-    let mut q0 = model.neutral_configuration();
-    q0[model.q_offset..].copy_from_slice(&standing);
-    let fs = lean_signs(&model, &mut data, &q0, [lp, rp], Vector3::x());
-    let ls = lean_signs(&model, &mut data, &q0, [lr, rr], Vector3::y());
-    let hs = hip_lean_signs(&model, &mut data, &q0, [lh, rh], Vector3::y());
-    let mut cfg = TipoverConfig::new([lp, rp], [lr, rr], fs, ls);
-    cfg.hip_roll = Some([lh, rh]);
-    cfg.hip_left_sign = hs;
+    let signs = LeanSigns {
+        forward: lean_signs(&model, &mut data, q0, j.pitch, Vector3::x()),
+        left: lean_signs(&model, &mut data, q0, j.roll, Vector3::y()),
+        hip_left: hip_lean_signs(&model, &mut data, q0, j.hip, Vector3::y()),
+    };
+    let mut cfg = TipoverConfig::new(j.pitch, j.roll, signs.forward, signs.left);
+    cfg.hip_roll = Some(j.hip);
+    cfg.hip_left_sign = signs.hip_left;
     cfg.ramp_deg_per_s = opts.ramp_deg_per_s;
     let imu_link = sim.sensors().imu_link;
-    let mut results: Vec<(TipoverResult, f64, f64)> = Vec::new();
+    let mut results: Vec<DirectionRun> = Vec::new();
     let mut pdata = Data::new(&model);
     for d in Direction::ALL {
-        // Which foot the kinematics hold flat: sideways the one the robot leans onto
-        // (the other unloads); forward and backward both stand, so both chains are used
-        // and averaged (the legs give by slightly different amounts when the load is
-        // off-centre, and one leg alone would read that as a tilt).
-        let helds: &[usize] = match d {
-            Direction::Left => &[0],
-            Direction::Right => &[1],
-            Direction::Forward | Direction::Backward => &[0, 1],
-        };
+        let helds = held_feet(d);
         let n_held = helds.len() as f64;
-        // A first run at the constant ramp (its time to fall is seed 000's Table IV
-        // quantity), then a second that comes up to half a degree before that tip and
-        // creeps (see `TipoverConfig::slow_from_deg`).
         let mut run = |cfg: &TipoverConfig, sim: &mut Simulator| {
-            sim.place_on_ground(&standing).map_err(err)?;
-            let mut predict = |j: &[f64]| {
+            sim.place_on_ground(standing).map_err(err)?;
+            let mut predict = |jq: &[f64]| {
                 let mut t = [0.0; 2];
                 for &h in helds {
                     flat.held = h;
-                    let x = flat.link_tilt(&mut pdata, j, imu_link);
+                    let x = flat.link_tilt(&mut pdata, jq, imu_link);
                     t[0] += x[0] / n_held;
                     t[1] += x[1] / n_held;
                 }
                 t
             };
-            run_direction(sim, &standing, d, cfg, Some(&mut predict))
+            run_direction(sim, standing, d, cfg, Some(&mut predict))
                 .map_err(|e: RobotError| e.to_string())
         };
-        let first = run(&cfg, &mut sim)?;
+        let first = run(&cfg, sim)?;
         let mut slow = cfg.clone();
         slow.slow_from_deg = Some((first.commanded_deg - 0.5).max(0.0));
         slow.slow_ramp_deg_per_s = opts.slow_ramp_deg_per_s;
-        let mut r = run(&slow, &mut sim)?;
+        let mut r = run(&slow, sim)?;
         r.time_s = first.time_s;
-        // The joints the protocol turns, with the sign that leans the robot the way of
-        // `d`: the static reference sweeps the same joints from the onset.
-        let (turned, dir): (Vec<(usize, f64)>, _) = match d {
-            Direction::Forward => (vec![(lp, fs[0]), (rp, fs[1])], Vector3::x()),
-            Direction::Backward => (vec![(lp, -fs[0]), (rp, -fs[1])], -Vector3::x()),
-            Direction::Left => (
-                vec![(lr, ls[0]), (rr, ls[1]), (lh, hs[0]), (rh, hs[1])],
-                Vector3::y(),
-            ),
-            Direction::Right => (
-                vec![(lr, -ls[0]), (rr, -ls[1]), (lh, -hs[0]), (rh, -hs[1])],
-                -Vector3::y(),
-            ),
-        };
-        let mut offset = 0.0;
-        for &h in helds {
-            flat.held = h;
-            flat.tilt = r.excess_deg.to_radians();
-            offset += flat
-                .tipping_angle(&mut data, &r.positions_at_onset, &turned, dir, -0.2, 0.2)
-                .map(f64::to_degrees)
-                .unwrap_or(f64::NAN)
-                / n_held;
-        }
-        // The rigid robot's: from the standing pose, feet flat, no joint giving.
-        flat.held = helds[0];
-        flat.tilt = 0.0;
-        let rigid = flat
-            .tipping_angle(&mut data, &standing, &turned, dir, 0.0, 1.2)
-            .map(f64::to_degrees)
-            .unwrap_or(f64::NAN);
+        let (turned, dir) = turned_joints(d, j, &signs);
+        let (offset, rigid) =
+            static_tipping_angles(&mut flat, &mut data, &r, standing, helds, &turned, dir);
         results.push((r.clone(), r.measured_deg + offset, rigid));
     }
-    // The CoM by the two estimators from the measured angles, and the truth.
+    Ok(results)
+}
+
+/// The CoM by the two estimators from the measured angles, next to the model's true
+/// CoM, and the feet's mass the exact method used.
+fn estimate_com(
+    results: &[DirectionRun],
+    model: &twinloop_dynamics::Model,
+    q0: &[f64],
+    j: &StudyJoints,
+    foot: &FootGeometry,
+    seed_constants: &SeedConstants,
+) -> Result<(ComReport, crate::tipover::FeetMass), String> {
+    let names = &j.names;
     let pick = |d: Direction, f: fn(&TipoverResult) -> f64| {
         results
             .iter()
@@ -457,7 +562,7 @@ pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport
             alpha2: l,
             beta2: r,
         },
-        &seed_constants,
+        seed_constants,
     )
     .map_err(err)?;
     // The exact method takes the ankle angles and the feet's roll onto the edge at each
@@ -475,50 +580,67 @@ pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport
         left_roll: pick(Direction::Left, |r| r.excess_deg) * rad,
         right_roll: pick(Direction::Right, |r| r.excess_deg) * rad,
     };
-    let feet = feet_mass(&model, &q0, [&names[0], &names[1]]).map_err(err)?;
-    let exact = exact_method(&angles, &feet, &foot).map_err(err)?;
+    let feet = feet_mass(model, q0, [&names[0], &names[1]]).map_err(err)?;
+    let exact = exact_method(&angles, &feet, foot).map_err(err)?;
     let lever = frontal_lever(
-        &model,
-        &q0,
-        [&hip_names[0], &hip_names[1]],
+        model,
+        q0,
+        [&j.hip_names[0], &j.hip_names[1]],
         [&names[2], &names[3]],
     )
     .map_err(err)?;
     let truth =
-        twinloop_reduced::com_relative_to_ankles(&model, &q0, &names[0], &names[1]).map_err(err)?;
+        twinloop_reduced::com_relative_to_ankles(model, q0, &names[0], &names[1]).map_err(err)?;
     let dist = |a: [f64; 3]| {
         ((a[0] - truth[0]).powi(2) + (a[1] - truth[1]).powi(2) + (a[2] - truth[2]).powi(2)).sqrt()
     };
-    let rep = |d: Direction| {
-        let (r, s, rigid) = results
-            .iter()
-            .find(|r| r.0.direction == d)
-            .expect("all four ran");
-        DirectionReport {
-            commanded_deg: r.commanded_deg,
-            measured_deg: r.measured_deg,
-            time_s: r.time_s,
-            static_deg: *s,
-            rigid_static_deg: *rigid,
-            lean_deg: r.lean_deg,
-            excess_deg: r.excess_deg,
-        }
+    let com = ComReport {
+        truth,
+        seed_method: seed.com,
+        exact_method: exact.com,
+        seed_error: dist(seed.com),
+        exact_error: dist(exact.com),
+        frontal_lever_true: lever.sin,
+        frontal_lever_exact: exact.frontal_lever,
     };
+    Ok((com, feet))
+}
+
+fn direction_report(results: &[DirectionRun], d: Direction) -> DirectionReport {
+    let (r, s, rigid) = results
+        .iter()
+        .find(|r| r.0.direction == d)
+        .expect("all four ran");
+    DirectionReport {
+        commanded_deg: r.commanded_deg,
+        measured_deg: r.measured_deg,
+        time_s: r.time_s,
+        static_deg: *s,
+        rigid_static_deg: *rigid,
+        lean_deg: r.lean_deg,
+        excess_deg: r.excess_deg,
+    }
+}
+
+/// Run the study on `robot` (a built-in robot gets its own servos and foot data).
+pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport, String> {
+    let (mut sim, standing) = study_simulator(robot, opts)?;
+    let j = find_study_joints(robot, &sim)?;
+    let sim_feet: Vec<&str> = vec![j.names[4].as_str(), j.names[5].as_str()];
+    sim.set_feet(&sim_feet).map_err(err)?;
+    let (foot, seed_constants, label) = study_feet(robot, &sim, &j);
+    let model = sim.model.clone();
+    let mut q0 = model.neutral_configuration();
+    q0[model.q_offset..].copy_from_slice(&standing);
+    let results = tip_all_directions(&mut sim, &standing, &j, &q0, opts)?;
+    let (com, feet) = estimate_com(&results, &model, &q0, &j, &foot, &seed_constants)?;
     Ok(StudyReport {
         robot: robot.name.clone(),
-        forward: rep(Direction::Forward),
-        backward: rep(Direction::Backward),
-        left: rep(Direction::Left),
-        right: rep(Direction::Right),
-        com: ComReport {
-            truth,
-            seed_method: seed.com,
-            exact_method: exact.com,
-            seed_error: dist(seed.com),
-            exact_error: dist(exact.com),
-            frontal_lever_true: lever.sin,
-            frontal_lever_exact: exact.frontal_lever,
-        },
+        forward: direction_report(&results, Direction::Forward),
+        backward: direction_report(&results, Direction::Backward),
+        left: direction_report(&results, Direction::Left),
+        right: direction_report(&results, Direction::Right),
+        com,
         seed_constants: label.to_string(),
         foot: FootReport {
             front: foot.front,

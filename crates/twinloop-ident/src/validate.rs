@@ -394,6 +394,275 @@ impl Default for SquatOptions {
     }
 }
 
+/// Where the squat stands: the neutral stance on the ground and the heights of the
+/// pelvis.
+struct SquatStance {
+    /// The neutral configuration with the soles on z = 0.
+    q0: Vec<f64>,
+    /// Sole centres (left, right) on the ground, and their middle.
+    soles: [Vector3<f64>; 2],
+    mid: Vector3<f64>,
+    /// Standing pelvis height, and how far the squat lowers it, m.
+    stand: f64,
+    depth: f64,
+}
+
+/// The neutral stance's soles (the base at the origin) put on z = 0, the pelvis height
+/// that stands with the knees a little bent, and the squat's depth (the option, or
+/// 12 % of the straight-legged height).
+fn squat_stance(
+    model: &Model,
+    anatomy: &Anatomy,
+    data: &mut Data,
+    options: &SquatOptions,
+) -> SquatStance {
+    let mut q0 = model.neutral_configuration();
+    twinloop_dynamics::forward_kinematics(model, data, &q0);
+    let (lf, rf) = (&anatomy.left_foot, &anatomy.right_foot);
+    let sole = |f: &crate::anatomy::Foot, d: &Data| {
+        link_placement(model, d, f.link).act_point(&f.sole_center)
+    };
+    let (sl, sr) = (sole(lf, data), sole(rf, data));
+    let ground = sl.z.min(sr.z);
+    q0[2] = -ground;
+    let depth = options.depth.unwrap_or(0.12 * q0[2]);
+    // Stand with the knees a little bent (4 % lower than straight legs): straight
+    // knees are a singular point of the leg's kinematics.
+    let stand = 0.96 * q0[2];
+    let sl = Vector3::new(sl.x, sl.y, 0.0);
+    let sr = Vector3::new(sr.x, sr.y, 0.0);
+    let mid = (sl + sr) * 0.5;
+    SquatStance {
+        q0,
+        soles: [sl, sr],
+        mid,
+        stand,
+        depth,
+    }
+}
+
+/// The joint posture the squat projects from: joints at zero, or 5 % inside their
+/// range where zero is a limit; knees slightly bent (a straight knee is a singular
+/// start for IK).
+fn squat_reference_posture(model: &Model, anatomy: &Anatomy) -> Vec<f64> {
+    let mut reference: Vec<f64> = (0..model.nbodies)
+        .map(|i| {
+            let (lo, hi) = (model.lower_limits[i], model.upper_limits[i]);
+            if lo.is_finite() && hi.is_finite() && lo < hi {
+                0.0f64.clamp(lo + 0.05 * (hi - lo), hi - 0.05 * (hi - lo))
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    for leg in [&anatomy.left_leg, &anatomy.right_leg] {
+        if let Some((k, sign)) = crate::plate::knee_of(model, leg) {
+            let ext = if sign > 0.0 {
+                model.upper_limits[k]
+            } else {
+                model.lower_limits[k]
+            };
+            reference[k] = 0.1 * ext;
+        }
+    }
+    reference
+}
+
+/// Each arm's first joint that swings the hand forward, with the limit in that
+/// direction.
+fn arm_swings(model: &Model, anatomy: &Anatomy, data: &mut Data) -> Vec<(usize, f64)> {
+    let mut swings: Vec<(usize, f64)> = Vec::new();
+    for arm in [&anatomy.left_arm, &anatomy.right_arm] {
+        let Some(&first) = arm.first() else { continue };
+        let tip = *arm.last().unwrap_or(&first);
+        let mut q = model.neutral_configuration();
+        let x_of = |q: &[f64], d: &mut Data| {
+            twinloop_dynamics::forward_kinematics(model, d, q);
+            d.o_m_i[tip].translation.x
+        };
+        q[model.q_offset + first] = 0.3;
+        let plus = x_of(&q, data);
+        q[model.q_offset + first] = -0.3;
+        let minus = x_of(&q, data);
+        let (lo, hi) = (model.lower_limits[first], model.upper_limits[first]);
+        let ext = if plus > minus { hi } else { lo };
+        if ext.is_finite() {
+            swings.push((first, ext));
+        }
+    }
+    swings
+}
+
+/// A foot flat (its down axis down, its forward axis without sideways yaw) with its
+/// sole centre at `target`.
+fn flat_foot_tasks(f: &crate::anatomy::Foot, target: Vector3<f64>) -> Vec<Task> {
+    vec![
+        Task::Axis {
+            frame: f.frame,
+            axis: f.down,
+            target: Vector3::new(0.0, 0.0, -1.0),
+            weight: Vector3::new(1.0, 1.0, 0.0),
+        },
+        Task::Axis {
+            frame: f.frame,
+            axis: f.forward,
+            target: Vector3::new(1.0, 0.0, 0.0),
+            weight: Vector3::new(0.0, 1.0, 0.0),
+        },
+        Task::Point {
+            frame: f.frame,
+            point: f.sole_center,
+            target,
+            weight: Vector3::repeat(1.0),
+        },
+    ]
+}
+
+/// The squat's IK and the index of its pelvis-height task: each frame is the
+/// least-norm projection of a smooth reference configuration onto the constraints
+/// (feet flat where they stand, CoM over their middle, pelvis at its height, not
+/// pitching). Arms and torso follow their prescribed motion; base and legs keep the
+/// balance.
+fn squat_ik(
+    model: &Model,
+    anatomy: &Anatomy,
+    data: &mut Data,
+    stance: &SquatStance,
+) -> Result<(Ik, usize), IdentError> {
+    let base_frame = model
+        .frames
+        .iter()
+        .position(|f| f.name == model.base_link)
+        .ok_or_else(|| IdentError::new("the base link has no frame"))?;
+    let mut tasks = flat_foot_tasks(&anatomy.left_foot, stance.soles[0]);
+    tasks.extend(flat_foot_tasks(&anatomy.right_foot, stance.soles[1]));
+    // Fore-aft balance: the CoM over the middle of the feet (the symmetric motion keeps
+    // it central sideways; H1's parallel legs could not move it sideways anyway).
+    tasks.push(Task::Com {
+        target: stance.mid,
+        weight: Vector3::new(1.0, 0.0, 0.0),
+    });
+    tasks.push(Task::Point {
+        frame: base_frame,
+        point: Vector3::zeros(),
+        target: Vector3::new(0.0, 0.0, stance.stand),
+        weight: Vector3::new(0.0, 0.0, 1.0),
+    });
+    let base_task = tasks.len() - 1;
+    // The pelvis does not pitch: its forward axis stays horizontal.
+    let q_neutral = model.neutral_configuration();
+    twinloop_dynamics::forward_kinematics(model, data, &q_neutral);
+    let base_forward = data.base_placement.rotation.tr_mul(&Vector3::x());
+    tasks.push(Task::Axis {
+        frame: base_frame,
+        axis: base_forward,
+        target: Vector3::x(),
+        weight: Vector3::new(0.0, 0.0, 1.0),
+    });
+    let mut ik = Ik::new(model, tasks);
+    let balance: Vec<usize> = anatomy
+        .left_leg
+        .iter()
+        .chain(&anatomy.right_leg)
+        .copied()
+        .collect();
+    let vo = model.v_offset;
+    ik.set_free(|k| k < vo || balance.contains(&(k - vo)));
+    Ok((ik, base_task))
+}
+
+/// The squat's depth profile over time, 0 to 1 and back: down and up, each a
+/// minimum-jerk move (rest to rest, no jump in acceleration).
+fn squat_profile(options: &SquatOptions, t: f64) -> f64 {
+    let s = ((t - options.rest) / options.duration).clamp(0.0, 1.0);
+    let x = if s < 0.5 { 2.0 * s } else { 2.0 - 2.0 * s };
+    x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
+}
+
+/// The squat's configuration as a function of time alone. Continuation: every frame
+/// starts from the same standing solution and moves to its depth in a fixed number of
+/// projections, so the result depends on t alone and can be differentiated.
+struct SquatFrames<'a> {
+    model: &'a Model,
+    options: &'a SquatOptions,
+    stance: &'a SquatStance,
+    reference: &'a [f64],
+    swings: &'a [(usize, f64)],
+    ik: Ik,
+    base_task: usize,
+    data: &'a mut Data,
+    /// The standing solution, once solved.
+    stand_q: Option<Vec<f64>>,
+}
+
+impl SquatFrames<'_> {
+    /// Projections per frame from the standing solution to its depth.
+    const STEPS: usize = 4;
+
+    /// The configuration at `t` into `q` (the first call solves the standing pose).
+    fn solve_at(&mut self, t: f64, q: &mut [f64]) -> Result<(), IdentError> {
+        let (model, stance) = (self.model, self.stance);
+        let s_end = squat_profile(self.options, t);
+        let fail = |rep: twinloop_gait::ik::IkReport| {
+            IdentError::new(format!(
+                "the squat at t = {t:.3} s cannot keep the feet flat where they stand with the CoM \
+                 over them (residual {:.2e}): try a smaller squat depth",
+                rep.max_residual
+            ))
+            .option("depth")
+        };
+        let start = self.stand_q.is_none();
+        if start {
+            q.copy_from_slice(&stance.q0);
+            q[0] = stance.mid.x;
+            q[1] = stance.mid.y;
+            q[2] = stance.stand;
+            q[model.q_offset..].copy_from_slice(self.reference);
+        } else if let Some(sq) = &self.stand_q {
+            q.copy_from_slice(sq);
+        }
+        let steps = if start { 0 } else { Self::STEPS };
+        for j in 0..=steps {
+            let s = if steps == 0 {
+                0.0
+            } else {
+                s_end * j as f64 / steps as f64
+            };
+            for &(a, ext) in self.swings {
+                q[model.q_offset + a] = ext * self.options.arm_swing * s;
+            }
+            if let Task::Point { target, .. } = &mut self.ik.tasks[self.base_task] {
+                target.z = stance.stand - stance.depth * s;
+            }
+            let rep = self.ik.project(model, self.data, q, 60, 1e-13);
+            if rep.max_residual > 1e-9 {
+                return Err(fail(rep));
+            }
+        }
+        if start {
+            self.stand_q = Some(q.to_vec());
+            return Ok(());
+        }
+        check_squat_limits(model, q, t)
+    }
+}
+
+/// Errors if a joint of the squat's configuration at `t` is outside its limits.
+fn check_squat_limits(model: &Model, q: &[f64], t: f64) -> Result<(), IdentError> {
+    for i in 0..model.nbodies {
+        let x = q[model.q_offset + i];
+        if x < model.lower_limits[i] - 1e-9 || x > model.upper_limits[i] + 1e-9 {
+            return Err(IdentError::new(format!(
+                "the squat at t = {t:.3} s needs joint {} at {x:.3} rad, outside its limits: \
+                 try a smaller squat depth",
+                model.joint_names[i]
+            ))
+            .option("depth"));
+        }
+    }
+    Ok(())
+}
+
 /// The squat of seed 004, Fig. 4, made with the truth model: double support with the
 /// feet where the neutral stance puts them, the pelvis lowered by `depth` and raised
 /// again along a cosine, the arms swinging forward, the CoM kept over the middle of
@@ -415,213 +684,37 @@ pub fn squat_motion(
     let feet = options.feet.as_ref().map(|(l, r)| (l.as_str(), r.as_str()));
     let anatomy = Anatomy::detect(robot, model, feet)?;
     let mut data = Data::new(model);
-    let nj = model.nbodies;
-    // Where the neutral stance puts the soles (the base at the origin, soles on z = 0).
-    let mut q0 = model.neutral_configuration();
-    twinloop_dynamics::forward_kinematics(model, &mut data, &q0);
-    let (lf, rf) = (&anatomy.left_foot, &anatomy.right_foot);
-    let sole = |f: &crate::anatomy::Foot, d: &Data| {
-        link_placement(model, d, f.link).act_point(&f.sole_center)
-    };
-    let (sl, sr) = (sole(lf, &data), sole(rf, &data));
-    let ground = sl.z.min(sr.z);
-    q0[2] = -ground;
-    let depth = options.depth.unwrap_or(0.12 * q0[2]);
-    // Stand with the knees a little bent (4 % lower than straight legs): straight
-    // knees are a singular point of the leg's kinematics.
-    let stand = 0.96 * q0[2];
-    let sl = Vector3::new(sl.x, sl.y, 0.0);
-    let sr = Vector3::new(sr.x, sr.y, 0.0);
-    let mid = (sl + sr) * 0.5;
-    // Joints at zero, or 5 % inside their range where zero is a limit; knees slightly
-    // bent to start (a straight knee is a singular start for IK).
-    let mut reference: Vec<f64> = (0..nj)
-        .map(|i| {
-            let (lo, hi) = (model.lower_limits[i], model.upper_limits[i]);
-            if lo.is_finite() && hi.is_finite() && lo < hi {
-                0.0f64.clamp(lo + 0.05 * (hi - lo), hi - 0.05 * (hi - lo))
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    for leg in [&anatomy.left_leg, &anatomy.right_leg] {
-        if let Some((k, sign)) = crate::plate::knee_of(model, leg) {
-            let ext = if sign > 0.0 {
-                model.upper_limits[k]
-            } else {
-                model.lower_limits[k]
-            };
-            reference[k] = 0.1 * ext;
-        }
-    }
-    // The arm's first joint that swings the hand forward, and its direction.
-    let mut swings: Vec<(usize, f64)> = Vec::new();
-    for arm in [&anatomy.left_arm, &anatomy.right_arm] {
-        let Some(&first) = arm.first() else { continue };
-        let tip = *arm.last().unwrap_or(&first);
-        let mut q = model.neutral_configuration();
-        let x_of = |q: &[f64], d: &mut Data| {
-            twinloop_dynamics::forward_kinematics(model, d, q);
-            d.o_m_i[tip].translation.x
-        };
-        q[model.q_offset + first] = 0.3;
-        let plus = x_of(&q, &mut data);
-        q[model.q_offset + first] = -0.3;
-        let minus = x_of(&q, &mut data);
-        let (lo, hi) = (model.lower_limits[first], model.upper_limits[first]);
-        let ext = if plus > minus { hi } else { lo };
-        if ext.is_finite() {
-            swings.push((first, ext));
-        }
-    }
-    let foot_tasks = |f: &crate::anatomy::Foot, target: Vector3<f64>| {
-        vec![
-            Task::Axis {
-                frame: f.frame,
-                axis: f.down,
-                target: Vector3::new(0.0, 0.0, -1.0),
-                weight: Vector3::new(1.0, 1.0, 0.0),
-            },
-            Task::Axis {
-                frame: f.frame,
-                axis: f.forward,
-                target: Vector3::new(1.0, 0.0, 0.0),
-                weight: Vector3::new(0.0, 1.0, 0.0),
-            },
-            Task::Point {
-                frame: f.frame,
-                point: f.sole_center,
-                target,
-                weight: Vector3::repeat(1.0),
-            },
-        ]
-    };
-    let base_frame = model
-        .frames
-        .iter()
-        .position(|f| f.name == model.base_link)
-        .ok_or_else(|| IdentError::new("the base link has no frame"))?;
-    // Each frame is the least-norm projection of a smooth reference configuration onto
-    // the constraints (feet flat where they stand, CoM over their middle, pelvis at
-    // its height). Frames are solved independently, every Gauss-Newton step taken, so
-    // the motion is a smooth function of time that can be differentiated.
-    let mut tasks = foot_tasks(lf, sl);
-    tasks.extend(foot_tasks(rf, sr));
-    // Fore-aft balance: the CoM over the middle of the feet (the symmetric motion keeps
-    // it central sideways; H1's parallel legs could not move it sideways anyway).
-    tasks.push(Task::Com {
-        target: mid,
-        weight: Vector3::new(1.0, 0.0, 0.0),
-    });
-    tasks.push(Task::Point {
-        frame: base_frame,
-        point: Vector3::zeros(),
-        target: Vector3::new(0.0, 0.0, stand),
-        weight: Vector3::new(0.0, 0.0, 1.0),
-    });
-    let base_task = tasks.len() - 1;
-    // The pelvis does not pitch: its forward axis stays horizontal.
-    let q_neutral = model.neutral_configuration();
-    twinloop_dynamics::forward_kinematics(model, &mut data, &q_neutral);
-    let base_forward = data.base_placement.rotation.tr_mul(&Vector3::x());
-    tasks.push(Task::Axis {
-        frame: base_frame,
-        axis: base_forward,
-        target: Vector3::x(),
-        weight: Vector3::new(0.0, 0.0, 1.0),
-    });
-    let mut ik = Ik::new(model, tasks);
-    // Arms and torso follow their prescribed motion; base and legs keep the balance.
-    let balance: Vec<usize> = anatomy
-        .left_leg
-        .iter()
-        .chain(&anatomy.right_leg)
-        .copied()
-        .collect();
-    let vo = model.v_offset;
-    ik.set_free(|k| k < vo || balance.contains(&(k - vo)));
+    let stance = squat_stance(model, &anatomy, &mut data, options);
+    let reference = squat_reference_posture(model, &anatomy);
+    let swings = arm_swings(model, &anatomy, &mut data);
+    let (ik, base_task) = squat_ik(model, &anatomy, &mut data, &stance)?;
     let total = options.rest * 2.0 + options.duration;
     let frames = (total * options.rate).round() as usize + 1;
     // Step of the central differences of the exact motion (1 ms).
     let h = 1e-3;
-    // Down and up, each a minimum-jerk move (rest to rest, no jump in acceleration).
-    let profile = |t: f64| {
-        let s = ((t - options.rest) / options.duration).clamp(0.0, 1.0);
-        let x = if s < 0.5 { 2.0 * s } else { 2.0 - 2.0 * s };
-        x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
-    };
-    // Continuation: every frame starts from the same standing solution and moves to
-    // its depth in a fixed number of projections, so the result depends on t alone.
-    const STEPS: usize = 4;
-    let mut stand_q: Option<Vec<f64>> = None;
-    let mut solve_at = |t: f64, q: &mut Vec<f64>| -> Result<(), IdentError> {
-        let s_end = profile(t);
-        let fail = |rep: twinloop_gait::ik::IkReport| {
-            IdentError::new(format!(
-                "the squat at t = {t:.3} s cannot keep the feet flat where they stand with the CoM \
-                 over them (residual {:.2e}): try a smaller squat depth",
-                rep.max_residual
-            ))
-            .option("depth")
-        };
-        let start = stand_q.is_none();
-        if start {
-            q.copy_from_slice(&q0);
-            q[0] = mid.x;
-            q[1] = mid.y;
-            q[2] = stand;
-            q[model.q_offset..].copy_from_slice(&reference);
-        } else if let Some(sq) = &stand_q {
-            q.copy_from_slice(sq);
-        }
-        let steps = if start { 0 } else { STEPS };
-        for j in 0..=steps {
-            let s = if steps == 0 {
-                0.0
-            } else {
-                s_end * j as f64 / steps as f64
-            };
-            for &(a, ext) in &swings {
-                q[model.q_offset + a] = ext * options.arm_swing * s;
-            }
-            if let Task::Point { target, .. } = &mut ik.tasks[base_task] {
-                target.z = stand - depth * s;
-            }
-            let rep = ik.project(model, &mut data, q, 60, 1e-13);
-            if rep.max_residual > 1e-9 {
-                return Err(fail(rep));
-            }
-        }
-        if start {
-            stand_q = Some(q.clone());
-            return Ok(());
-        }
-        for i in 0..nj {
-            let x = q[model.q_offset + i];
-            if x < model.lower_limits[i] - 1e-9 || x > model.upper_limits[i] + 1e-9 {
-                return Err(IdentError::new(format!(
-                    "the squat at t = {t:.3} s needs joint {} at {x:.3} rad, outside its limits: \
-                     try a smaller squat depth",
-                    model.joint_names[i]
-                ))
-                .option("depth"));
-            }
-        }
-        Ok(())
+    let mut squat = SquatFrames {
+        model,
+        options,
+        stance: &stance,
+        reference: &reference,
+        swings: &swings,
+        ik,
+        base_task,
+        data: &mut data,
+        stand_q: None,
     };
     let mut motion = Motion::default();
     let mut plate = Vec::with_capacity(frames);
     let mut truth_data = Data::new(model);
-    let mut q = q0.clone();
-    solve_at(0.0, &mut q)?; // the standing solution every frame starts from
+    let mut q = stance.q0.clone();
+    squat.solve_at(0.0, &mut q)?; // the standing solution every frame starts from
     let (mut qm, mut qp) = (q.clone(), q.clone());
     let (mut v, mut a) = (vec![0.0; model.nv], vec![0.0; model.nv]);
     for k in 0..frames {
         let t = k as f64 / options.rate;
-        solve_at(t, &mut q)?;
-        solve_at(t - h, &mut qm)?;
-        solve_at(t + h, &mut qp)?;
+        squat.solve_at(t, &mut q)?;
+        squat.solve_at(t - h, &mut qm)?;
+        squat.solve_at(t + h, &mut qp)?;
         // v, a by central differences on the manifold (base twist in the base frame).
         central_state(model, &qm, &q, &qp, h, &mut v, &mut a);
         let need = Force::from_slice(&rnea(model, &mut truth_data, &q, &v, &a).as_slice()[0..6]);

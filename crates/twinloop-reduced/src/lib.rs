@@ -20,7 +20,7 @@ pub mod three_mass;
 
 pub use compact::{CompactModel, Corrections, SagittalCompliance, SagittalReference};
 pub use error::ReducedError;
-pub use lipm::{GRAVITY, Lipm, LipmInput, LipmSample};
+pub use lipm::{GRAVITY, Lipm, LipmInput, LipmPhase, LipmSample, LipmState};
 pub use stiffness::{
     CartesianCompliance, JointCompliance, SupportLeg, cartesian_compliance, coman_crouch,
     support_leg_com_jacobian,

@@ -18,6 +18,12 @@
 //! (`M = 0`: the CoM runs away from the ankle) and walking, where the ankle moment
 //! places the zero-moment point (ZMP) on the successive footholds,
 //! `M = -m (g + z'') p` (from eq. 1: `x'' = (g + z'')/l (x - p)`).
+//!
+//! The same pendulum is seed 002's eq 12-13, `x'' = (x - p) / Tc^2` with the ZMP `p`
+//! as input; its closed-form solutions for a ZMP constant or linear in time are here
+//! ([`linear_zmp_closed_form`] from an initial state, [`LipmPhase`] for a phase fitted
+//! to boundary conditions), so the ZMP references of twinloop-gait plan footsteps and
+//! phases without writing the pendulum again.
 
 use crate::error::{ReducedError, finite, non_negative, positive};
 
@@ -75,9 +81,10 @@ impl Lipm {
         Ok(self)
     }
 
-    /// `Tc = sqrt(l / g)`, s: the time in which an unbraked lean grows by a factor e.
+    /// `Tc = sqrt(l / g)`, s: the time in which an unbraked lean grows by a factor e
+    /// (seed 000 eq. 1; [`time_constant`]).
     pub fn time_constant(&self) -> f64 {
-        (self.length / self.gravity).sqrt()
+        time_constant(self.length, self.gravity)
     }
 
     /// Seed 000 eq. 1 solved for `x''`: `x'' = ((g + z'') x + M / m) / l`.
@@ -104,12 +111,11 @@ impl Lipm {
 
     /// The closed-form solution of eq. 1 for a constant moment and `z'' = 0`: position
     /// and velocity at time `t` from `(x0, v0)`:
-    /// `x - p = (x0 - p) cosh(t/Tc) + Tc v0 sinh(t/Tc)` with `p = -M / (m g)`.
+    /// `x - p = (x0 - p) cosh(t/Tc) + Tc v0 sinh(t/Tc)` with `p = -M / (m g)` (a
+    /// constant ZMP: [`linear_zmp_closed_form`] with no slope).
     pub fn closed_form(&self, x0: f64, v0: f64, moment: f64, t: f64) -> (f64, f64) {
-        let tc = self.time_constant();
         let p = -moment / (self.mass * self.gravity);
-        let (s, c) = ((t / tc).sinh(), (t / tc).cosh());
-        (p + (x0 - p) * c + tc * v0 * s, (x0 - p) * s / tc + v0 * c)
+        linear_zmp_closed_form(self.time_constant(), x0, v0, p, 0.0, t)
     }
 
     fn sample(&self, t: f64, x: f64, xdot: f64, input: LipmInput) -> LipmSample {
@@ -198,6 +204,7 @@ impl Lipm {
         Ok(out)
     }
 
+    /// One RK4 step of eq. 1 over `h` with the inputs at the step's start, middle and end.
     fn rk4(
         &self,
         x: f64,
@@ -208,14 +215,7 @@ impl Lipm {
         u1: LipmInput,
     ) -> (f64, f64) {
         let a = |x: f64, u: LipmInput| self.acceleration(x, u);
-        let (k1x, k1v) = (v, a(x, u0));
-        let (k2x, k2v) = (v + 0.5 * h * k1v, a(x + 0.5 * h * k1x, um));
-        let (k3x, k3v) = (v + 0.5 * h * k2v, a(x + 0.5 * h * k2x, um));
-        let (k4x, k4v) = (v + h * k3v, a(x + h * k3x, u1));
-        (
-            x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
-            v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
-        )
+        rk4_step(x, v, h, [&|x| a(x, u0), &|x| a(x, um), &|x| a(x, u1)])
     }
 
     /// A fall from an initial lean: eq. 1 with no ankle moment, from the mass `lean` m
@@ -264,6 +264,151 @@ impl Lipm {
             })
             .collect();
         self.simulate_segments(-0.5 * step_length, v0, &segments, dt)
+    }
+}
+
+/// One classical Runge-Kutta 4 step of a second-order equation `x'' = a(t, x)` from
+/// `(x, v)` over `h`, with `accel = [a(t0, .), a(t0 + h/2, .), a(t0 + h, .)]`: the
+/// acceleration as a function of position at the step's start, middle and end (the
+/// caller fixes the time-dependent inputs there, so inputs that jump between steps are
+/// read once per stage time). Shared by the LIPM (seed 000 eq. 1) and the three-mass
+/// LIPM (eq. 6-7).
+pub(crate) fn rk4_step(x: f64, v: f64, h: f64, accel: [&dyn Fn(f64) -> f64; 3]) -> (f64, f64) {
+    let [a0, am, a1] = accel;
+    let (k1x, k1v) = (v, a0(x));
+    let (k2x, k2v) = (v + 0.5 * h * k1v, am(x + 0.5 * h * k1x));
+    let (k3x, k3v) = (v + 0.5 * h * k2v, am(x + 0.5 * h * k2x));
+    let (k4x, k4v) = (v + h * k3v, a1(x + h * k3x));
+    (
+        x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+        v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+    )
+}
+
+/// The pendulum's time constant `Tc = sqrt(height / gravity)`, s (seed 000 eq. 1 with
+/// `l` the height; seed 002 eq 12, `Tc = sqrt(Zc / g)`).
+pub fn time_constant(height: f64, gravity: f64) -> f64 {
+    (height / gravity).sqrt()
+}
+
+/// The LIPM `x'' = (x - p) / Tc^2` (seed 000 eq. 1 with `z'' = 0` and the ankle moment
+/// placing the ZMP, `M = -m g p`; seed 002 eq 12-13) solved in closed form for a ZMP
+/// linear in time, `p(t) = p0 + slope t` (constant: `slope = 0`), from `(x0, v0)` at
+/// `t = 0`: position and velocity at `t`,
+///
+/// ```text
+/// x - p = (x0 - p0) cosh(t/Tc) + Tc (v0 - slope) sinh(t/Tc)
+/// ```
+///
+/// (the ramp `p` is itself a solution of the forced pendulum, so only the homogeneous
+/// part, in `x - p`, swings).
+pub fn linear_zmp_closed_form(
+    tc: f64,
+    x0: f64,
+    v0: f64,
+    p0: f64,
+    slope: f64,
+    t: f64,
+) -> (f64, f64) {
+    let (s, c) = ((t / tc).sinh(), (t / tc).cosh());
+    let p = p0 + slope * t;
+    (
+        p + (x0 - p0) * c + tc * (v0 - slope) * s,
+        slope + (x0 - p0) * s / tc + (v0 - slope) * c,
+    )
+}
+
+/// One phase of the LIPM `x'' = (x - p) / Tc^2` (seed 002 eq 12-13; seed 000 eq. 1)
+/// under a ZMP linear in time, `p(tau) = p0 + slope tau` for `tau` in `[0, duration]`,
+/// solved in the exponential basis that boundary-value problems need:
+///
+/// ```text
+/// x(tau) = p(tau) + A exp(-tau/Tc) + B exp((tau - D)/Tc)
+/// ```
+///
+/// With the divergent component of motion `xi = x + Tc x'` the pendulum splits into
+/// `xi' = (xi - p) / Tc` (unstable) and `x' = (xi - x) / Tc` (stable): `B` is fixed by
+/// `xi` at the phase's end ([`LipmPhase::fit_end_divergent_component`]), `A` by `x`
+/// at its start ([`LipmPhase::fit_start_position`]). Each coefficient multiplies an
+/// exponential that is at most 1 on the phase, so long phases lose no accuracy
+/// (the `cosh`/`sinh` form of [`linear_zmp_closed_form`] would cancel large terms).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LipmPhase {
+    /// Pendulum time constant Tc, s.
+    pub tc: f64,
+    /// Phase length D, s.
+    pub duration: f64,
+    /// ZMP at the phase start, m, and its rate, m/s.
+    pub p0: f64,
+    pub slope: f64,
+    /// Coefficient A of the decaying mode, m.
+    pub decaying: f64,
+    /// Coefficient B of the growing mode, m.
+    pub growing: f64,
+}
+
+/// Position, velocity and acceleration of the pendulum at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LipmState {
+    pub x: f64,
+    pub v: f64,
+    pub a: f64,
+}
+
+impl LipmPhase {
+    /// A phase with both mode coefficients zero (fit them with the two `fit_` methods).
+    pub fn new(tc: f64, duration: f64, p0: f64, slope: f64) -> LipmPhase {
+        LipmPhase {
+            tc,
+            duration,
+            p0,
+            slope,
+            decaying: 0.0,
+            growing: 0.0,
+        }
+    }
+
+    /// The ZMP at `tau` into the phase.
+    pub fn zmp(&self, tau: f64) -> f64 {
+        self.p0 + self.slope * tau
+    }
+
+    /// `exp(-D/Tc)`: how much each mode shrinks over the phase.
+    fn decay(&self) -> f64 {
+        (-self.duration / self.tc).exp()
+    }
+
+    /// Sets `B` so that the divergent component at the phase's end is `xi_end`,
+    /// `B = (xi(D) - p(D) - Tc slope) / 2`, and returns the divergent component at the
+    /// phase's start, `xi(0) = p0 + Tc slope + 2 B exp(-D/Tc)`: a backward pass over
+    /// consecutive phases carries `xi` from a final condition to the start.
+    pub fn fit_end_divergent_component(&mut self, xi_end: f64) -> f64 {
+        let p1 = self.zmp(self.duration);
+        self.growing = 0.5 * (xi_end - p1 - self.tc * self.slope);
+        self.p0 + self.tc * self.slope + 2.0 * self.growing * self.decay()
+    }
+
+    /// Sets `A` so that the position at the phase's start is `x_start` (with `B`
+    /// already fitted), `A = x(0) - p0 - B exp(-D/Tc)`, and returns the position at the
+    /// phase's end, `x(D) = p(D) + A exp(-D/Tc) + B`: a forward pass carries `x` on.
+    pub fn fit_start_position(&mut self, x_start: f64) -> f64 {
+        let decay = self.decay();
+        self.decaying = x_start - self.p0 - self.growing * decay;
+        self.p0 + self.slope * self.duration + self.decaying * decay + self.growing
+    }
+
+    /// Position, velocity and acceleration at `tau` into the phase:
+    /// `x = p + h`, `x' = slope + (B e+ - A e-) / Tc`, `x'' = h / Tc^2` with
+    /// `h = A e- + B e+`, `e- = exp(-tau/Tc)`, `e+ = exp((tau - D)/Tc)`.
+    pub fn state(&self, tau: f64) -> LipmState {
+        let em = (-tau / self.tc).exp();
+        let ep = ((tau - self.duration) / self.tc).exp();
+        let h = self.decaying * em + self.growing * ep;
+        LipmState {
+            x: self.zmp(tau) + h,
+            v: self.slope + (self.growing * ep - self.decaying * em) / self.tc,
+            a: h / (self.tc * self.tc),
+        }
     }
 }
 

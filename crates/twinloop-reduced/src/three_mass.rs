@@ -19,7 +19,7 @@
 //! the subtree below its hip joint, the hip mass is everything else.
 
 use crate::error::{ReducedError, finite, non_negative, positive};
-use crate::lipm::GRAVITY;
+use crate::lipm::{GRAVITY, rk4_step};
 use nalgebra::Vector3;
 use twinloop_dynamics::{BASE, Data, Model, center_of_mass, forward_kinematics};
 
@@ -368,95 +368,17 @@ impl ThreeMassLipm {
         finite("hip_velocity", hip_velocity)?;
         positive("dt", dt)?;
         non_negative("duration", duration)?;
-        let ax = plane.axis();
-        let g = self.gravity;
-        let hip = self.masses.hip;
-        let (zh, u0) = (hip.position[2], hip.position[ax]);
-        // Support-line coefficients (k, c) per leg, or None when prescribed.
-        let legs = [
-            (&left, self.masses.left_leg),
-            (&right, self.masses.right_leg),
-        ];
-        let line = |p: PointMass| {
-            let k = p.position[2] / zh;
-            (k, p.position[ax] - k * u0)
-        };
-        let mut a_coef = hip.mass * zh;
-        let mut b_coef = hip.mass;
-        let mut c_const = 0.0;
-        for (motion, p) in legs {
-            if let LegMotion::SupportLine = motion {
-                let (k, c) = line(p);
-                a_coef += k * p.mass * p.position[2];
-                b_coef += k * p.mass;
-                c_const += p.mass * c;
-            }
-        }
-        let sign = match plane {
-            Plane::Sagittal => 1.0,
-            Plane::Frontal => -1.0,
-        };
-        // Leg coordinate and acceleration at time t for hip (u, u'').
-        let leg_state =
-            |motion: &LegMotion<'_>, p: PointMass, t: f64, u: f64, udd: f64| match motion {
-                LegMotion::SupportLine => {
-                    let (k, c) = line(p);
-                    (k * u + c, k * udd)
-                }
-                LegMotion::Prescribed(f) => f(t),
-            };
-        let accel = |t: f64, u: f64| {
-            let mut rhs = g * (b_coef * u + c_const) + sign * torque(t);
-            for (motion, p) in legs {
-                if let LegMotion::Prescribed(f) = motion {
-                    let (uj, ujdd) = f(t);
-                    rhs += g * p.mass * uj - p.mass * p.position[2] * ujdd;
-                }
-            }
-            rhs / a_coef
-        };
-        let sample = |t: f64, u: f64, v: f64| {
-            let udd = accel(t, u);
-            let (ul, ul_dd) = leg_state(&left, self.masses.left_leg, t, u, udd);
-            let (ur, ur_dd) = leg_state(&right, self.masses.right_leg, t, u, udd);
-            // Back through eq. 4/5 with the simulated state.
-            let mut ps = self.masses.as_array();
-            ps[0].position[ax] = ul;
-            ps[1].position[ax] = ur;
-            ps[2].position[ax] = u;
-            let mut acc = [[0.0; 3]; 3];
-            acc[0][ax] = ul_dd;
-            acc[1][ax] = ur_dd;
-            acc[2][ax] = udd;
-            let tau = ankle_torque(&ps, &acc, g);
-            let m: f64 = ps.iter().map(|p| p.mass).sum();
-            ThreeMassSample {
-                t,
-                hip: u,
-                hip_velocity: v,
-                hip_acceleration: udd,
-                left_leg: ul,
-                right_leg: ur,
-                ankle_torque: match plane {
-                    Plane::Sagittal => tau[1],
-                    Plane::Frontal => tau[0],
-                },
-                com: ps.iter().map(|p| p.mass * p.position[ax]).sum::<f64>() / m,
-            }
-        };
+        let eq = HipEquation::new(self, plane, [&left, &right], torque);
         let n = ((duration / dt) - 1e-9).ceil().max(0.0) as usize;
         let mut out = Vec::with_capacity(n + 1);
-        let (mut t, mut u, mut v) = (0.0, u0, hip_velocity);
-        out.push(sample(t, u, v));
+        let (mut t, mut u, mut v) = (0.0, eq.u0, hip_velocity);
+        out.push(eq.sample(t, u, v));
         for k in 1..=n {
             let next = if k == n { duration } else { k as f64 * dt };
             let h = next - t;
-            let (k1u, k1v) = (v, accel(t, u));
-            let (k2u, k2v) = (v + 0.5 * h * k1v, accel(t + 0.5 * h, u + 0.5 * h * k1u));
-            let (k3u, k3v) = (v + 0.5 * h * k2v, accel(t + 0.5 * h, u + 0.5 * h * k2u));
-            let (k4u, k4v) = (v + h * k3v, accel(next, u + h * k3u));
-            u += h / 6.0 * (k1u + 2.0 * k2u + 2.0 * k3u + k4u);
-            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            let eq = &eq;
+            let accel = |t: f64| move |u: f64| eq.accel(t, u);
+            (u, v) = rk4_step(u, v, h, [&accel(t), &accel(t + 0.5 * h), &accel(next)]);
             t = next;
             if !(u.is_finite() && v.is_finite()) {
                 return Err(ReducedError::new(
@@ -464,8 +386,129 @@ impl ThreeMassLipm {
                     format!("the state stopped being finite at t = {t} s (non-finite input?)"),
                 ));
             }
-            out.push(sample(t, u, v));
+            out.push(eq.sample(t, u, v));
         }
         Ok(out)
+    }
+}
+
+/// The hip equation of [`ThreeMassLipm::simulate`] in one plane (seed 000 eq. 4-7 at
+/// constant heights): `a u'' = g (b u + c + sum m_j u_j) - sum m_j z_j u_j'' + sign tau`,
+/// with `a = m_h z_h + sum k_i m_i z_i`, `b = m_h + sum k_i m_i`, `c = sum m_i c_i` over
+/// the support-line legs `i` and the prescribed legs `j`.
+struct HipEquation<'a, 'l, T> {
+    lipm: &'a ThreeMassLipm,
+    plane: Plane,
+    /// Index of the plane's horizontal coordinate.
+    ax: usize,
+    legs: [(&'a LegMotion<'l>, PointMass); 2],
+    /// Hip height and initial horizontal coordinate.
+    zh: f64,
+    u0: f64,
+    a_coef: f64,
+    b_coef: f64,
+    c_const: f64,
+    /// +1 sagittal (eq. 5), -1 frontal (eq. 4).
+    sign: f64,
+    torque: T,
+}
+
+impl<'a, 'l, T: Fn(f64) -> f64> HipEquation<'a, 'l, T> {
+    fn new(
+        lipm: &'a ThreeMassLipm,
+        plane: Plane,
+        [left, right]: [&'a LegMotion<'l>; 2],
+        torque: T,
+    ) -> Self {
+        let ax = plane.axis();
+        let hip = lipm.masses.hip;
+        let mut eq = HipEquation {
+            lipm,
+            plane,
+            ax,
+            legs: [(left, lipm.masses.left_leg), (right, lipm.masses.right_leg)],
+            zh: hip.position[2],
+            u0: hip.position[ax],
+            a_coef: hip.mass * hip.position[2],
+            b_coef: hip.mass,
+            c_const: 0.0,
+            sign: match plane {
+                Plane::Sagittal => 1.0,
+                Plane::Frontal => -1.0,
+            },
+            torque,
+        };
+        for (motion, p) in eq.legs {
+            if let LegMotion::SupportLine = motion {
+                let (k, c) = eq.line(p);
+                eq.a_coef += k * p.mass * p.position[2];
+                eq.b_coef += k * p.mass;
+                eq.c_const += p.mass * c;
+            }
+        }
+        eq
+    }
+
+    /// Support-line coefficients `(k, c)` of a leg: `u_leg = k u + c`.
+    fn line(&self, p: PointMass) -> (f64, f64) {
+        let k = p.position[2] / self.zh;
+        (k, p.position[self.ax] - k * self.u0)
+    }
+
+    /// The hip's acceleration at time `t` and coordinate `u`.
+    fn accel(&self, t: f64, u: f64) -> f64 {
+        let g = self.lipm.gravity;
+        let mut rhs = g * (self.b_coef * u + self.c_const) + self.sign * (self.torque)(t);
+        for (motion, p) in self.legs {
+            if let LegMotion::Prescribed(f) = motion {
+                let (uj, ujdd) = f(t);
+                rhs += g * p.mass * uj - p.mass * p.position[2] * ujdd;
+            }
+        }
+        rhs / self.a_coef
+    }
+
+    /// A leg's coordinate and acceleration at time `t` for hip `(u, u'')`.
+    fn leg_state(&self, leg: usize, t: f64, u: f64, udd: f64) -> (f64, f64) {
+        let (motion, p) = self.legs[leg];
+        match motion {
+            LegMotion::SupportLine => {
+                let (k, c) = self.line(p);
+                (k * u + c, k * udd)
+            }
+            LegMotion::Prescribed(f) => f(t),
+        }
+    }
+
+    /// The sample at `(t, u, v)`, with the ankle torque back through eq. 4/5 and the
+    /// CoM of the simulated state.
+    fn sample(&self, t: f64, u: f64, v: f64) -> ThreeMassSample {
+        let (ax, g) = (self.ax, self.lipm.gravity);
+        let udd = self.accel(t, u);
+        let (ul, ul_dd) = self.leg_state(0, t, u, udd);
+        let (ur, ur_dd) = self.leg_state(1, t, u, udd);
+        let mut ps = self.lipm.masses.as_array();
+        ps[0].position[ax] = ul;
+        ps[1].position[ax] = ur;
+        ps[2].position[ax] = u;
+        let mut acc = [[0.0; 3]; 3];
+        acc[0][ax] = ul_dd;
+        acc[1][ax] = ur_dd;
+        acc[2][ax] = udd;
+        let tau = ankle_torque(&ps, &acc, g);
+        let m: f64 = ps.iter().map(|p| p.mass).sum();
+        ThreeMassSample {
+            t,
+            hip: u,
+            hip_velocity: v,
+            hip_acceleration: udd,
+            left_leg: ul,
+            right_leg: ur,
+            ankle_torque: match self.plane {
+                Plane::Sagittal => tau[1],
+                Plane::Frontal => tau[0],
+            },
+            com: ps.iter().map(|p| p.mass * p.position[ax]).sum::<f64>() / m,
+        }
     }
 }

@@ -347,3 +347,38 @@ fn three_masses_refuse_bad_input() {
         "left_leg.position.z"
     );
 }
+
+/// The two closed forms of a phase under a linear ZMP (seed 002 eq 12-13) agree: the
+/// exponential basis fitted to a start state is the cosh/sinh solution from it, and
+/// both satisfy x'' = (x - p) / Tc^2.
+#[test]
+fn linear_zmp_phase_matches_the_initial_value_closed_form() {
+    use twinloop_reduced::lipm::{LipmPhase, linear_zmp_closed_form, time_constant};
+    let tc = time_constant(0.5, 9.81);
+    assert_eq!(
+        tc,
+        Lipm::new(30.0, 0.5)
+            .unwrap()
+            .with_gravity(9.81)
+            .unwrap()
+            .time_constant()
+    );
+    let (p0, slope, d) = (0.02, 0.15, 0.7);
+    let mut phase = LipmPhase::new(tc, d, p0, slope);
+    // Fit B from an end condition, A from a start position; read the start velocity.
+    phase.fit_end_divergent_component(0.1);
+    let x_end = phase.fit_start_position(-0.01);
+    let start = phase.state(0.0);
+    assert!((start.x + 0.01).abs() < 1e-15);
+    for i in 0..=20 {
+        let t = d * i as f64 / 20.0;
+        let (x, v) = linear_zmp_closed_form(tc, start.x, start.v, p0, slope, t);
+        let s = phase.state(t);
+        assert!((x - s.x).abs() < 1e-12 && (v - s.v).abs() < 1e-12, "t {t}");
+        assert!((s.a - (s.x - phase.zmp(t)) / (tc * tc)).abs() < 1e-12);
+    }
+    assert!((phase.state(d).x - x_end).abs() < 1e-14);
+    // xi(D) = x + Tc x' is the end condition.
+    let end = phase.state(d);
+    assert!((end.x + tc * end.v - 0.1).abs() < 1e-14);
+}

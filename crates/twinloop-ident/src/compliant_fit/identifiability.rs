@@ -10,7 +10,7 @@
 use super::sensitivity::normal_equations;
 use super::{FitProblem, PARAMETER_NAMES};
 use crate::error::{IdentError, err};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 /// A parameter counts as poorly determined above this relative standard deviation: the
 /// data cannot place it within +-3 % (3 sigma) of its value.
@@ -63,43 +63,20 @@ pub fn identifiability(
     }
     let dof = ne.residuals.saturating_sub(n).max(1);
     let noise_std_estimated = (ne.sse / dof as f64).sqrt();
-    let sigma = match noise_std {
-        Some(s) if s.is_finite() && s > 0.0 => s,
-        Some(s) => {
-            return err(format!(
-                "noise standard deviation must be positive, got {s}"
-            ));
-        }
-        None => noise_std_estimated,
-    };
+    let sigma = noise_sigma(noise_std, noise_std_estimated)?;
     let jtj = DMatrix::from_fn(n, n, |r, c| ne.jtj[problem.free[r]][problem.free[c]]);
     let names: Vec<String> = problem
         .free
         .iter()
         .map(|&i| PARAMETER_NAMES[i].to_string())
         .collect();
-    for i in 0..n {
-        if jtj[(i, i)].is_nan() || jtj[(i, i)] <= 0.0 {
-            return err(format!(
-                "the data carry no information on {}: the CoM does not depend on it (e.g. eta without double support)",
-                names[i]
-            ));
-        }
-    }
+    check_informative(&jtj, &names)?;
     // Scale to unit diagonal so the inverse and the condition number are meaningful
     // whatever the parameters' effect sizes.
     let d: Vec<f64> = (0..n).map(|i| jtj[(i, i)].sqrt()).collect();
     let scaled = DMatrix::from_fn(n, n, |r, c| jtj[(r, c)] / (d[r] * d[c]));
     let eig = scaled.clone().symmetric_eigen();
-    let (mut lo, mut hi) = (0, 0);
-    for i in 0..n {
-        if eig.eigenvalues[i] < eig.eigenvalues[lo] {
-            lo = i;
-        }
-        if eig.eigenvalues[i] > eig.eigenvalues[hi] {
-            hi = i;
-        }
-    }
+    let (lo, hi) = extreme_indices(&eig.eigenvalues);
     let condition = eig.eigenvalues[hi] / eig.eigenvalues[lo];
     let Some(inv_scaled) = scaled
         .try_inverse()
@@ -118,30 +95,8 @@ pub fn identifiability(
         .map(|r| (0..n).map(|c| cov[(r, c)] / (std[r] * std[c])).collect())
         .collect();
     let relative_std: Vec<f64> = (0..n).map(|i| std[i] / p[i].abs()).collect();
-    let mut weakest: Vec<f64> = (0..n)
-        .map(|i| eig.eigenvectors[(i, lo)] / d[i] / p[i].abs())
-        .collect();
-    let norm = weakest.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let sign = if weakest
-        .iter()
-        .fold(0.0, |a: f64, v| if v.abs() > a.abs() { *v } else { a })
-        < 0.0
-    {
-        -1.0
-    } else {
-        1.0
-    };
-    for v in &mut weakest {
-        *v *= sign / norm;
-    }
-    let mut correlated = Vec::new();
-    for r in 0..n {
-        for c in 0..r {
-            if correlation[r][c].abs() > HIGH_CORRELATION {
-                correlated.push((names[c].clone(), names[r].clone(), correlation[r][c]));
-            }
-        }
-    }
+    let weakest = weakest_direction(&eig.eigenvectors, lo, &d, p);
+    let correlated = correlated_pairs(&correlation, &names);
     Ok(Identifiability {
         poorly_determined: (0..n)
             .filter(|&i| relative_std[i] > POOR_RELATIVE_STD)
@@ -162,4 +117,78 @@ pub fn identifiability(
         weakest_direction: weakest,
         correlated,
     })
+}
+
+/// The noise standard deviation to use: the given one (positive), else the estimate
+/// from the residuals.
+fn noise_sigma(noise_std: Option<f64>, estimated: f64) -> Result<f64, IdentError> {
+    match noise_std {
+        Some(s) if s.is_finite() && s > 0.0 => Ok(s),
+        Some(s) => err(format!(
+            "noise standard deviation must be positive, got {s}"
+        )),
+        None => Ok(estimated),
+    }
+}
+
+/// Errors naming a parameter the CoM does not depend on (a zero diagonal of J^T J).
+fn check_informative(jtj: &DMatrix<f64>, names: &[String]) -> Result<(), IdentError> {
+    for i in 0..jtj.nrows() {
+        if jtj[(i, i)].is_nan() || jtj[(i, i)] <= 0.0 {
+            return err(format!(
+                "the data carry no information on {}: the CoM does not depend on it (e.g. eta without double support)",
+                names[i]
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Indices of the smallest and the largest value (the first of equals).
+fn extreme_indices(values: &DVector<f64>) -> (usize, usize) {
+    let (mut lo, mut hi) = (0, 0);
+    for i in 0..values.len() {
+        if values[i] < values[lo] {
+            lo = i;
+        }
+        if values[i] > values[hi] {
+            hi = i;
+        }
+    }
+    (lo, hi)
+}
+
+/// The eigenvector `lo` of the unit-diagonal Fisher matrix back in relative parameter
+/// changes (`/ d_i / |p_i|`), normalised, its largest entry positive.
+fn weakest_direction(vectors: &DMatrix<f64>, lo: usize, d: &[f64], p: &[f64]) -> Vec<f64> {
+    let mut weakest: Vec<f64> = (0..d.len())
+        .map(|i| vectors[(i, lo)] / d[i] / p[i].abs())
+        .collect();
+    let norm = weakest.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let sign = if weakest
+        .iter()
+        .fold(0.0, |a: f64, v| if v.abs() > a.abs() { *v } else { a })
+        < 0.0
+    {
+        -1.0
+    } else {
+        1.0
+    };
+    for v in &mut weakest {
+        *v *= sign / norm;
+    }
+    weakest
+}
+
+/// Parameter pairs whose correlation exceeds [`HIGH_CORRELATION`] in magnitude.
+fn correlated_pairs(correlation: &[Vec<f64>], names: &[String]) -> Vec<(String, String, f64)> {
+    let mut correlated = Vec::new();
+    for r in 0..correlation.len() {
+        for c in 0..r {
+            if correlation[r][c].abs() > HIGH_CORRELATION {
+                correlated.push((names[c].clone(), names[r].clone(), correlation[r][c]));
+            }
+        }
+    }
+    correlated
 }

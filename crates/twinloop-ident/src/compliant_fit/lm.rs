@@ -76,23 +76,8 @@ pub fn levenberg_marquardt(
     };
     record(evaluations, sse, &p);
     loop {
-        if sse / residuals <= options.target_mse {
-            stop = "reached the target MSE".to_string();
-            break;
-        }
-        if evaluations + 1 > options.max_evaluations {
-            stop = format!("evaluation budget {} spent", options.max_evaluations);
-            break;
-        }
-        // The most the linearised model can still gain is g^T A^-1 g (the full
-        // Gauss-Newton step). Below 1 % of the noise variance that is statistically
-        // insignificant (a shift of about 0.1 Cramer-Rao sigma along the flattest
-        // direction): stop instead of crawling along a flat valley at the noise floor.
-        let gain = gauss_newton_gain(&a, &g);
-        let noise_variance = sse / (residuals - n as f64).max(1.0);
-        if gain < NOISE_FRACTION * noise_variance {
-            stop =
-                "converged (what is left to gain is below 1 % of the noise variance)".to_string();
+        if let Some(why) = stop_before_step(&a, &g, sse, residuals, evaluations, options) {
+            stop = why;
             break;
         }
         iterations += 1;
@@ -126,11 +111,7 @@ pub fn levenberg_marquardt(
             evaluations += jacobian_cost;
             jacobians += 1;
             record(evaluations, sse, &p);
-            if rho > 0.75 {
-                radius = radius.max(3.0 * delta.norm());
-            } else if rho < 0.25 {
-                radius = 0.5 * delta.norm();
-            }
+            radius = updated_radius(radius, rho, delta.norm());
             if small_step || reduction < F_TOL {
                 stop = "converged (step or cost reduction below tolerance)".to_string();
                 break;
@@ -159,6 +140,50 @@ pub fn levenberg_marquardt(
         jacobians,
         stop,
         history,
+    }
+}
+
+/// Why to stop before another step, if so: the target MSE reached, the evaluation
+/// budget spent, or nothing left to gain. The most the linearised model can still gain
+/// is g^T A^-1 g (the full Gauss-Newton step); below 1 % of the noise variance that is
+/// statistically insignificant (a shift of about 0.1 Cramer-Rao sigma along the
+/// flattest direction): stop instead of crawling along a flat valley at the noise floor.
+fn stop_before_step(
+    a: &DMatrix<f64>,
+    g: &DVector<f64>,
+    sse: f64,
+    residuals: f64,
+    evaluations: usize,
+    options: &FitOptions,
+) -> Option<String> {
+    if sse / residuals <= options.target_mse {
+        return Some("reached the target MSE".to_string());
+    }
+    if evaluations + 1 > options.max_evaluations {
+        return Some(format!(
+            "evaluation budget {} spent",
+            options.max_evaluations
+        ));
+    }
+    let gain = gauss_newton_gain(a, g);
+    let noise_variance = sse / (residuals - a.nrows() as f64).max(1.0);
+    if gain < NOISE_FRACTION * noise_variance {
+        return Some(
+            "converged (what is left to gain is below 1 % of the noise variance)".to_string(),
+        );
+    }
+    None
+}
+
+/// The trust radius after an accepted step of length `step` with gain ratio `rho`:
+/// at least three times the step above 0.75, half the step below 0.25, else as it was.
+fn updated_radius(radius: f64, rho: f64, step: f64) -> f64 {
+    if rho > 0.75 {
+        radius.max(3.0 * step)
+    } else if rho < 0.25 {
+        0.5 * step
+    } else {
+        radius
     }
 }
 

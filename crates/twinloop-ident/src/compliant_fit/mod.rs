@@ -11,7 +11,7 @@
 //! | CMA-ES, (mu/mu_w, lambda) with rank-one and rank-mu updates | [`cmaes`] |
 //! | PoWER, as the seed (Kober and Peters) | [`power`] |
 //!
-//! and [`identifiability`] reports what the data determine at the optimum.
+//! and [`identifiability()`] reports what the data determine at the optimum.
 
 pub mod cmaes;
 pub mod dataset;
