@@ -37,6 +37,17 @@
 //! equations for `y0` and `S`. Sideways the experiment measures the CoM's lateral
 //! offset and the lever, not a second height: the height does not enter a
 //! parallelogram lean except through S.
+//!
+//! ```
+//! use twinloop_ident::tipover::{FeetMass, FrontalLever, exact_method, tip_angles};
+//! let foot = twinloop_description::builtin::foot_geometry("km20").unwrap();
+//! let com = [0.004, -0.002, 0.22];
+//! let lever = FrontalLever { sin: 0.17, cos: 0.0 };
+//! let feet = FeetMass { fraction: 0.11, x: -0.025, z: -0.011 };
+//! let angles = tip_angles(com, &feet, &lever, &foot).unwrap();
+//! let back = exact_method(&angles, &feet, &foot).unwrap();
+//! assert!((back.com[2] - 0.22).abs() < 1e-12);
+//! ```
 
 use crate::error::IdentError;
 use twinloop_description::builtin::FootGeometry;

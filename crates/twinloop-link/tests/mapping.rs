@@ -23,7 +23,7 @@ fn builtins_parse_and_round_trip() {
     }
     let km = RobotMapping::builtin("km20").unwrap();
     assert_eq!(km.joints[0].model, ServoModel::Rx28);
-    // The seed robot's knees are RX-64, everything else RX-28 (twinloop-description (builtin) km20).
+    // The seed robot's knees are RX-64, everything else RX-28 (the built-in km20).
     for j in &km.joints {
         let want = if j.name.ends_with("knee") {
             ServoModel::Rx64
