@@ -126,16 +126,22 @@ impl<T: Transport> DynamixelRobot<T> {
         let outcome = self
             .client
             .read(b.board.protocol, b.board.id, base, &mut b.block);
-        let at = |m: String| {
-            RobotError::new(format!("board {:?} (id {}): {m}", b.board.name, b.board.id))
-        };
+        // A board that does not answer is named like a joint (the link itself is
+        // alive): `board "trunk_imu": ...`; only a dead port is a link error.
+        let who = format!("board {:?}", b.board.name);
         if let Err(e) = outcome {
             state.imu = None;
-            return Err(at(e.to_string()));
+            return Err(link_to_robot(&e, &who));
         }
         let Some(sample) = decode_imu(b.board.model, base, &b.block) else {
             state.imu = None;
-            return Err(at("gyro or accelerometer value outside 10 bits".into()));
+            return Err(RobotError::at_joint(
+                who,
+                format!(
+                    "id {}: gyro or accelerometer value outside 10 bits",
+                    b.board.id
+                ),
+            ));
         };
         let link = crate::board::ImuSample {
             gyro: b.board.axes.board_to_link(sample.gyro),
