@@ -36,8 +36,8 @@ use crate::servo_model::ServoModel;
 
 /// The id a CM-730 answers at (`CM730::ID_CM`).
 pub const CM730_ID: u8 = 200;
-/// Model Number of the CM-730 (see the module's sources).
-pub const CM730_MODEL_NUMBER: u16 = 0x7300;
+/// Model Number of the CM-730, 0x7300 (see the module's sources).
+pub const CM730_MODEL_NUMBER: u16 = ServoModel::Cm730.model_number();
 /// Standard gravity, m/s^2: the accelerometer's "g".
 pub const STANDARD_GRAVITY: f64 = 9.806_65;
 /// Gyroscope: 1600 deg/s over 512 counts.

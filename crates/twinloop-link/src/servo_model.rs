@@ -176,7 +176,7 @@ impl ServoModel {
             // CM-730 emulation (HROS1-Framework, CM730.cpp Reset_CM730_Emulation:
             // model number bytes 0x00, 0x73) and NimbRo-OP's CM730 register map
             // (its own firmware reports 0x7301) agree on it.
-            ServoModel::Cm730 => crate::board::CM730_MODEL_NUMBER,
+            ServoModel::Cm730 => 0x7300,
         }
     }
 
