@@ -351,6 +351,8 @@ fn unit_name(u: twinloop_link::Unit) -> &'static str {
         Voltage { .. } => "V",
         Celsius => "degC",
         Duration { .. } => "s",
+        Gyro { .. } => "rad/s",
+        Accel { .. } => "m/s^2",
     }
 }
 
@@ -502,6 +504,7 @@ fn mapping_from_ids(
         port: None,
         baud: None,
         joints,
+        boards: Vec::new(),
         source: "--ids".into(),
     })
 }

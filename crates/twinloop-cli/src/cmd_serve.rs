@@ -116,14 +116,8 @@ fn serve_description(
 pub fn run(a: ServeArgs) -> CliResult {
     let mapping = serve_mapping(&a)?;
     let robot = serve_description(&a, &mapping)?;
-    let servos: Vec<BusServo> = mapping
-        .joints
-        .iter()
-        .map(|j| BusServo {
-            id: j.id,
-            model: j.model,
-        })
-        .collect();
+    // The joints' servos, then the mapping's boards (the CM-730 of the trunk IMU).
+    let servos: Vec<BusServo> = mapping.bus();
     let simulate = match (a.servo_model.as_str(), &robot) {
         ("ideal", _) => false,
         ("sim", None) => {
@@ -207,7 +201,7 @@ fn serve_on<B: twinloop_link::VirtualServoBackend>(
     };
     let banner = Banner {
         mapping,
-        servos: servos.len(),
+        servos: servos.len() - mapping.boards.len(),
         what,
         emulate_baud: options.emulate_baud,
     };
@@ -239,6 +233,9 @@ impl Banner<'_> {
             if !models.contains(&m) {
                 models.push(m);
             }
+        }
+        for b in &self.mapping.boards {
+            models.push(format!("{} board at id {} ({})", b.model, b.id, b.protocol));
         }
         format!(
             "serving {} ({} servos: {}) on {place}\nmoved by {}\n{}\nCtrl-C stops.\n",

@@ -208,11 +208,118 @@ fn build(model: ServoModel) -> ControlTable {
     let registers = match model {
         ServoModel::Rx28 | ServoModel::Rx64 => table_rx(),
         ServoModel::Mx28 | ServoModel::Mx64 | ServoModel::Mx106 => table_mx_v1(model),
+        ServoModel::Cm730 => table_cm730(),
         _ => table_v2(model),
     };
     let mut registers = registers;
     registers.sort_by_key(|r| r.address);
     ControlTable { model, registers }
+}
+
+/// The CM-730 sub-controller, Protocol 1.0: addresses from the DARwIn-OP framework's
+/// `CM730.h`, ranges from the board firmware's parameter table, scales as the
+/// ROBOTIS-OP ROS interface converts them (sources in [`crate::board`]). The
+/// inertial registers start at the values of a board lying level and still (gyro
+/// 512, accelerometer X and Y 512, Z 512 + 1 g).
+fn table_cm730() -> Vec<Register> {
+    use crate::board::{
+        CM730_ACCEL_M_S2_PER_COUNT, CM730_CENTER, CM730_GYRO_RAD_S_PER_COUNT, CM730_ID,
+    };
+    let gyro = Unit::Gyro {
+        rad_s_per_unit: CM730_GYRO_RAD_S_PER_COUNT,
+        center: CM730_CENTER,
+    };
+    let accel = Unit::Accel {
+        m_s2_per_unit: CM730_ACCEL_M_S2_PER_COUNT,
+        center: CM730_CENTER,
+    };
+    let one_g = (crate::board::STANDARD_GRAVITY / CM730_ACCEL_M_S2_PER_COUNT).round() as i32;
+    let sensor = |name, item, address, initial, unit| {
+        let mut r = with(
+            ro(name, Some(item), address, 2, R),
+            Encoding::Unsigned,
+            unit,
+        );
+        r.max = 1023;
+        r.initial = Some(initial);
+        r
+    };
+    let mut v = vec![
+        ro("Model Number", Some(Item::ModelNumber), 0, 2, E),
+        ro("Firmware Version", Some(Item::FirmwareVersion), 2, 1, E),
+        rw("ID", Some(Item::Id), 3, 1, E, Some(CM730_ID as i32), 0, 253),
+        rw("Baud Rate", Some(Item::BaudRate), 4, 1, E, Some(1), 1, 254),
+        with(
+            rw(
+                "Return Delay Time",
+                Some(Item::ReturnDelayTime),
+                5,
+                1,
+                E,
+                Some(0),
+                0,
+                254,
+            ),
+            Encoding::Unsigned,
+            Unit::Duration {
+                seconds_per_unit: 2e-6,
+            },
+        ),
+        rw(
+            "Status Return Level",
+            Some(Item::StatusReturnLevel),
+            16,
+            1,
+            E,
+            Some(2),
+            0,
+            2,
+        ),
+        rw("Dynamixel Power", None, 24, 1, R, Some(0), 0, 1),
+        rw("LED Panel", Some(Item::Led), 25, 1, R, Some(0), 0, 7),
+        rw("LED Head", None, 26, 2, R, Some(0), 0, 0x7FFF),
+        rw("LED Eye", None, 28, 2, R, Some(0), 0, 0x7FFF),
+        ro("Button", None, 30, 1, R),
+        sensor("Gyro Z", Item::GyroZ, 38, CM730_CENTER, gyro),
+        sensor("Gyro Y", Item::GyroY, 40, CM730_CENTER, gyro),
+        sensor("Gyro X", Item::GyroX, 42, CM730_CENTER, gyro),
+        sensor("Accel X", Item::AccelX, 44, CM730_CENTER, accel),
+        sensor("Accel Y", Item::AccelY, 46, CM730_CENTER, accel),
+        sensor("Accel Z", Item::AccelZ, 48, CM730_CENTER + one_g, accel),
+        with(
+            ro("Present Voltage", Some(Item::PresentVoltage), 50, 1, R),
+            Encoding::Unsigned,
+            Unit::Voltage {
+                volts_per_unit: 0.1,
+            },
+        ),
+    ];
+    // A 12 V supply (0.1 V per unit).
+    if let Some(r) = v.iter_mut().find(|r| r.item == Some(Item::PresentVoltage)) {
+        r.initial = Some(120);
+    }
+    // Microphones and ADC channels 51..80 (2 bytes each): read as raw counts.
+    const ADC: [&str; 15] = [
+        "Left Mic",
+        "ADC 2",
+        "ADC 3",
+        "ADC 4",
+        "ADC 5",
+        "ADC 6",
+        "ADC 7",
+        "ADC 8",
+        "Right Mic",
+        "ADC 10",
+        "ADC 11",
+        "ADC 12",
+        "ADC 13",
+        "ADC 14",
+        "ADC 15",
+    ];
+    for (k, name) in ADC.iter().enumerate() {
+        v.push(ro(name, None, 51 + 2 * k as u16, 2, R));
+    }
+    v
 }
 
 /// RX-28 / RX-64, Protocol 1.0 (EM-RX28, EM-RX64; e-manual control table). Position

@@ -8,6 +8,7 @@
 //! packets and packets built by the SDK byte for byte. Nothing here knows dynamics:
 //! a simulator plugs into the virtual robot through [`VirtualServoBackend`].
 
+pub mod board;
 pub mod client;
 pub mod control_cycle;
 pub mod control_table;
@@ -26,6 +27,7 @@ pub mod status_error;
 pub mod transport;
 pub mod wire_time;
 
+pub use board::{BoardAxes, ImuSample, TiltFilter};
 pub use client::{BulkRead, Client, ClientConfig, ClientStats, FoundServo};
 pub use control_cycle::{ControlCycle, CycleServo, CycleSummary, ReadMethod, ServoReading};
 pub use control_table::ControlTable;

@@ -20,7 +20,20 @@
 //! ```
 //!
 //! servo angle = zero + direction * joint angle. Joint order is file order.
+//!
+//! A sub-controller on the same bus (the CM-730's gyroscope and accelerometer) is a
+//! `[[board]]`:
+//!
+//! ```toml
+//! [[board]]
+//! name = "trunk_imu"       # a name for messages
+//! id = 200                 # the board's id (CM-730: 200)
+//! model = "CM-730"         # the protocol follows from the model; `protocol = 1` checks it
+//! link = "torso"           # the description link carrying the board
+//! axes = ["x", "y", "z"]   # optional: the link axis board X, Y, Z point along (default as here)
+//! ```
 
+use crate::board::BoardAxes;
 use crate::protocol::Protocol;
 use crate::register::{Item, Register};
 use crate::servo_model::ServoModel;
@@ -120,7 +133,22 @@ impl JointMapping {
     }
 }
 
-/// A robot's mapping: joints in order.
+/// A sub-controller board on the bus (the CM-730) and where it sits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoardMapping {
+    pub name: String,
+    pub id: u8,
+    pub protocol: Protocol,
+    pub model: ServoModel,
+    /// The description link the board is fixed to.
+    pub link: String,
+    /// The link axis each board axis points along.
+    pub axes: BoardAxes,
+    /// Line of the `[[board]]` entry (0 for built-ins made in code).
+    pub line: usize,
+}
+
+/// A robot's mapping: joints in order, then boards.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RobotMapping {
     pub name: String,
@@ -128,6 +156,8 @@ pub struct RobotMapping {
     pub port: Option<String>,
     pub baud: Option<u32>,
     pub joints: Vec<JointMapping>,
+    /// Sub-controllers (the trunk IMU's board), in file order.
+    pub boards: Vec<BoardMapping>,
     /// Where it came from (file path or `builtin:NAME`), for messages.
     pub source: String,
 }
@@ -138,6 +168,19 @@ struct RawFile {
     robot: Option<Spanned<RawRobot>>,
     #[serde(default)]
     joint: Vec<Spanned<RawJoint>>,
+    #[serde(default)]
+    board: Vec<Spanned<RawBoard>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBoard {
+    name: Spanned<String>,
+    id: Spanned<i64>,
+    model: Spanned<String>,
+    protocol: Option<Spanned<RawProtocol>>,
+    link: Spanned<String>,
+    axes: Option<Spanned<Vec<String>>>,
 }
 
 #[derive(Deserialize)]
@@ -199,7 +242,14 @@ fn parse_joint(
             ),
         )
     })?;
-    let protocol = joint_protocol(&j, model, &at)?;
+    if model.is_board() {
+        return Err(at(
+            j.model.span(),
+            "model",
+            format!("{model} is a sub-controller, not a servo: declare it as a [[board]]"),
+        ));
+    }
+    let protocol = explicit_protocol(j.protocol.as_ref(), model, &at)?;
     let id = *j.id.get_ref();
     if id < 0 || id > protocol.max_id() as i64 {
         return Err(at(
@@ -262,13 +312,14 @@ fn parse_joint(
     })
 }
 
-/// The joint's protocol: the model's, which an explicit `protocol` (1 or 2) must match.
-fn joint_protocol(
-    j: &RawJoint,
+/// A joint's or board's protocol: the model's, which an explicit `protocol` (1 or
+/// 2) must match.
+fn explicit_protocol(
+    protocol: Option<&Spanned<RawProtocol>>,
     model: ServoModel,
     at: &JointError,
 ) -> Result<Protocol, MappingError> {
-    Ok(match &j.protocol {
+    Ok(match protocol {
         None => model.protocol(),
         Some(p) => {
             let parsed = match p.get_ref() {
@@ -340,6 +391,94 @@ fn joint_limits(
         return Err(at(span, "max", format!("limits {lo} .. {hi} are empty")));
     }
     Ok((lo, hi))
+}
+
+/// One `[[board]]` entry (on line `line`), checked against the joints and the
+/// boards before it: names and (id, protocol) pairs are unique on the bus.
+fn parse_board(
+    b: RawBoard,
+    line: usize,
+    joints: &[JointMapping],
+    earlier: &[BoardMapping],
+    err_at: &dyn Fn(usize, String) -> MappingError,
+) -> Result<BoardMapping, MappingError> {
+    let name = b.name.get_ref().trim().to_string();
+    let at = |s: std::ops::Range<usize>, field: &str, msg: String| {
+        err_at(s.start, format!("board {name:?}: {field}: {msg}"))
+    };
+    if name.is_empty() {
+        return Err(at(b.name.span(), "name", "empty".into()));
+    }
+    let model = ServoModel::parse(b.model.get_ref())
+        .filter(|m| m.is_board())
+        .ok_or_else(|| {
+            at(
+                b.model.span(),
+                "model",
+                format!(
+                    "unknown board {:?}; known: {}",
+                    b.model.get_ref(),
+                    ServoModel::known_boards()
+                ),
+            )
+        })?;
+    let protocol = explicit_protocol(b.protocol.as_ref(), model, &at)?;
+    let id = *b.id.get_ref();
+    if id < 0 || id > protocol.max_id() as i64 {
+        return Err(at(
+            b.id.span(),
+            "id",
+            format!("id {id} outside 0..={} ({protocol})", protocol.max_id()),
+        ));
+    }
+    let id = id as u8;
+    let link = b.link.get_ref().trim().to_string();
+    if link.is_empty() {
+        return Err(at(b.link.span(), "link", "empty".into()));
+    }
+    let axes = match &b.axes {
+        None => BoardAxes::default(),
+        Some(a) => BoardAxes::parse(a.get_ref()).map_err(|m| at(a.span(), "axes", m))?,
+    };
+    if let Some(other) = earlier.iter().find(|o| o.name == name) {
+        return Err(at(
+            b.name.span(),
+            "name",
+            format!("board listed twice (first on line {})", other.line),
+        ));
+    }
+    if let Some(j) = joints.iter().find(|j| j.id == id && j.protocol == protocol) {
+        return Err(at(
+            b.id.span(),
+            "id",
+            format!(
+                "id {id} ({protocol}) is the servo of joint {:?} (line {})",
+                j.name, j.line
+            ),
+        ));
+    }
+    if let Some(o) = earlier
+        .iter()
+        .find(|o| o.id == id && o.protocol == protocol)
+    {
+        return Err(at(
+            b.id.span(),
+            "id",
+            format!(
+                "id {id} ({protocol}) is board {:?} (line {})",
+                o.name, o.line
+            ),
+        ));
+    }
+    Ok(BoardMapping {
+        name,
+        id,
+        protocol,
+        model,
+        link,
+        axes,
+        line,
+    })
 }
 
 /// 1-based line and column of byte `offset` in `text`.
@@ -418,6 +557,7 @@ impl RobotMapping {
             port: None,
             baud: None,
             joints: Vec::with_capacity(raw.joint.len()),
+            boards: Vec::with_capacity(raw.board.len()),
             source: source.to_string(),
         };
         if let Some(robot) = raw.robot {
@@ -430,6 +570,17 @@ impl RobotMapping {
             let line = line_col(text, entry.span().start).0;
             let joint = parse_joint(entry.into_inner(), line, &mapping.joints, &err_at)?;
             mapping.joints.push(joint);
+        }
+        for entry in raw.board {
+            let line = line_col(text, entry.span().start).0;
+            let board = parse_board(
+                entry.into_inner(),
+                line,
+                &mapping.joints,
+                &mapping.boards,
+                &err_at,
+            )?;
+            mapping.boards.push(board);
         }
         Ok(mapping)
     }
@@ -454,6 +605,17 @@ impl RobotMapping {
             self.baud = Some(v as u32);
         }
         Ok(())
+    }
+
+    /// Everything on the bus, in bus order: the joints' servos, then the boards
+    /// (what a virtual bus serves for this mapping).
+    pub fn bus(&self) -> Vec<crate::servo::BusServo> {
+        let joints = self.joints.iter().map(|j| (j.id, j.model));
+        let boards = self.boards.iter().map(|b| (b.id, b.model));
+        joints
+            .chain(boards)
+            .map(|(id, model)| crate::servo::BusServo { id, model })
+            .collect()
     }
 
     pub fn joint_names(&self) -> Vec<String> {
@@ -484,6 +646,17 @@ impl RobotMapping {
                 j.direction as i32,
                 j.min,
                 j.max
+            );
+        }
+        for b in &self.boards {
+            s += &format!(
+                "\n[[board]]\nname = {:?}\nid = {}\nmodel = {:?}\nprotocol = {}\nlink = {:?}\naxes = {:?}\n",
+                b.name,
+                b.id,
+                b.model.name(),
+                b.protocol.number(),
+                b.link,
+                b.axes.names()
             );
         }
         s

@@ -1,17 +1,30 @@
 //! The real-robot backend of [`twinloop_robot::Robot`]: joints are servos on a
 //! Dynamixel bus, tied to URDF joints by a [`RobotMapping`]. Reading runs one
-//! control-cycle read (positions, velocities, loads of every joint), commanding
-//! sends one SYNC_WRITE per protocol, and time is the wall clock.
+//! control-cycle read (positions, velocities, loads of every joint) and, when the
+//! mapping has a `[[board]]`, one READ of the board's gyro and accelerometer (the
+//! trunk IMU, with the host's tilt estimate); commanding sends one SYNC_WRITE per
+//! protocol, and time is the wall clock.
 
+use crate::board::{CM730_IMU_BLOCK, TiltFilter, decode_imu};
 use crate::client::Client;
 use crate::control_cycle::{ControlCycle, CycleServo, ReadMethod, ServoReading};
 use crate::link_error::{LinkError, Outcome};
-use crate::mapping::RobotMapping;
+use crate::mapping::{BoardMapping, RobotMapping};
 use crate::protocol::Protocol;
 use crate::register::{Item, Unit};
 use crate::transport::Transport;
 use std::time::{Duration, Instant};
-use twinloop_robot::{Robot, RobotError, RobotState};
+use twinloop_robot::{Imu, Robot, RobotError, RobotState};
+
+/// The trunk IMU's board as the host reads it: one READ of its inertial block per
+/// cycle, decoded into the link frame, and the tilt filter.
+struct BoardReader {
+    board: BoardMapping,
+    block: [u8; CM730_IMU_BLOCK.1 as usize],
+    filter: TiltFilter,
+    /// Robot time of the previous good reading, s.
+    last: Option<f64>,
+}
 
 /// A physical robot on a Dynamixel bus.
 pub struct DynamixelRobot<T: Transport> {
@@ -26,6 +39,7 @@ pub struct DynamixelRobot<T: Transport> {
     effort_scale: Vec<f64>,
     start: Instant,
     next_tick: Option<Instant>,
+    imu: Option<BoardReader>,
 }
 
 fn link_to_robot(e: &LinkError, joint: &str) -> RobotError {
@@ -71,6 +85,13 @@ impl<T: Transport> DynamixelRobot<T> {
             })
             .collect();
         let n = mapping.joints.len();
+        // The first board is the trunk IMU.
+        let imu = mapping.boards.first().map(|b| BoardReader {
+            board: b.clone(),
+            block: [0; CM730_IMU_BLOCK.1 as usize],
+            filter: TiltFilter::default(),
+            last: None,
+        });
         Ok(DynamixelRobot {
             client,
             names: mapping.joint_names(),
@@ -81,7 +102,60 @@ impl<T: Transport> DynamixelRobot<T> {
             effort_scale,
             start: Instant::now(),
             next_tick: None,
+            imu,
         })
+    }
+
+    /// The board the trunk IMU is read from, if the mapping has one.
+    pub fn imu_board(&self) -> Option<&BoardMapping> {
+        self.imu.as_ref().map(|b| &b.board)
+    }
+
+    /// The host's tilt estimate (its time constant can be changed).
+    pub fn tilt_filter_mut(&mut self) -> Option<&mut TiltFilter> {
+        self.imu.as_mut().map(|b| &mut b.filter)
+    }
+
+    /// Read the board into `state.imu` (None if it failed).
+    fn read_imu(&mut self, state: &mut RobotState) -> Result<(), RobotError> {
+        let now = self.time();
+        let Some(b) = self.imu.as_mut() else {
+            return Ok(());
+        };
+        let (base, _) = CM730_IMU_BLOCK;
+        let outcome = self
+            .client
+            .read(b.board.protocol, b.board.id, base, &mut b.block);
+        // A board that does not answer is named like a joint (the link itself is
+        // alive): `board "trunk_imu": ...`; only a dead port is a link error.
+        let who = format!("board {:?}", b.board.name);
+        if let Err(e) = outcome {
+            state.imu = None;
+            return Err(link_to_robot(&e, &who));
+        }
+        let Some(sample) = decode_imu(b.board.model, base, &b.block) else {
+            state.imu = None;
+            return Err(RobotError::at_joint(
+                who,
+                format!(
+                    "id {}: gyro or accelerometer value outside 10 bits",
+                    b.board.id
+                ),
+            ));
+        };
+        let link = crate::board::ImuSample {
+            gyro: b.board.axes.board_to_link(sample.gyro),
+            accel: b.board.axes.board_to_link(sample.accel),
+        };
+        let dt = b.last.map(|t| now - t).unwrap_or(0.0);
+        b.last = Some(now);
+        b.filter.update(&link, dt);
+        state.imu = Some(Imu {
+            gyro: link.gyro,
+            accel: link.accel,
+            orientation: b.filter.orientation(),
+        });
+        Ok(())
     }
 
     pub fn mapping(&self) -> &RobotMapping {
@@ -185,8 +259,9 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
                 }
             }
         }
+        let imu = self.read_imu(state);
         match first_error {
-            None => Ok(()),
+            None => imu,
             Some(mut e) => {
                 if summary.failed > 1 {
                     e.message =

@@ -51,6 +51,12 @@ pub enum Unit {
     Celsius,
     /// Seconds per unit (Return Delay Time: 2 us; Realtime Tick: 1 ms).
     Duration { seconds_per_unit: f64 },
+    /// A gyroscope axis: `(raw - center) * rad_s_per_unit` rad/s (CM-730: 10 bits
+    /// centred on 512).
+    Gyro { rad_s_per_unit: f64, center: i32 },
+    /// An accelerometer axis: `(raw - center) * m_s2_per_unit` m/s^2 of specific
+    /// force (CM-730: 10 bits centred on 512).
+    Accel { m_s2_per_unit: f64, center: i32 },
 }
 
 /// Revolutions per minute to rad/s.
@@ -115,6 +121,14 @@ pub enum Item {
     PositionDGain,
     /// Minimum drive current (1.0).
     Punch,
+    /// A sub-controller's gyroscope (angular rate about the board's X, Y, Z axes)
+    /// and accelerometer (specific force along them).
+    GyroX,
+    GyroY,
+    GyroZ,
+    AccelX,
+    AccelY,
+    AccelZ,
 }
 
 /// One control-table register.
@@ -214,6 +228,14 @@ impl Register {
             } => (value - zero) as f64 * amps_per_unit,
             Unit::Voltage { volts_per_unit } => value as f64 * volts_per_unit,
             Unit::Duration { seconds_per_unit } => value as f64 * seconds_per_unit,
+            Unit::Gyro {
+                rad_s_per_unit,
+                center,
+            } => (value - center) as f64 * rad_s_per_unit,
+            Unit::Accel {
+                m_s2_per_unit,
+                center,
+            } => (value - center) as f64 * m_s2_per_unit,
         }
     }
 
@@ -234,6 +256,14 @@ impl Register {
             } => si / amps_per_unit + zero as f64,
             Unit::Voltage { volts_per_unit } => si / volts_per_unit,
             Unit::Duration { seconds_per_unit } => si / seconds_per_unit,
+            Unit::Gyro {
+                rad_s_per_unit,
+                center,
+            } => si / rad_s_per_unit + center as f64,
+            Unit::Accel {
+                m_s2_per_unit,
+                center,
+            } => si / m_s2_per_unit + center as f64,
         };
         let r = raw.round();
         if r.is_nan() {

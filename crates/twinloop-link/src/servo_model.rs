@@ -6,6 +6,13 @@ use std::fmt;
 
 /// A servo model with the firmware protocol it runs. MX servos exist with either
 /// firmware (different control tables, different model numbers: EM-COMPAT).
+///
+/// One entry is not a servo: [`ServoModel::Cm730`], the ROBOTIS CM-730
+/// sub-controller of Darwin-OP, which answers on the same bus with a control table
+/// of its own (its gyroscope and accelerometer among it). It is a "model" here
+/// because everything the bus does with a servo's identity (PING, model number,
+/// control table) it does with the board's; [`ServoModel::is_board`] tells them
+/// apart, and a mapping's `[[joint]]` refuses it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum ServoModel {
     Rx28,
@@ -18,6 +25,8 @@ pub enum ServoModel {
     Mx106V2,
     Xm430W350,
     Xl430W250,
+    /// ROBOTIS CM-730 sub-controller (Darwin-OP), Protocol 1.0, usually id 200.
+    Cm730,
 }
 
 /// Datasheet figures of a model, used to turn load or current into torque and by
@@ -43,7 +52,23 @@ impl ServoSpec {
 }
 
 impl ServoModel {
-    pub const ALL: [ServoModel; 10] = [
+    /// Every model twinloop has a control table for: the servos, then the boards.
+    pub const ALL: [ServoModel; 11] = [
+        ServoModel::Rx28,
+        ServoModel::Rx64,
+        ServoModel::Mx28,
+        ServoModel::Mx64,
+        ServoModel::Mx106,
+        ServoModel::Mx28V2,
+        ServoModel::Mx64V2,
+        ServoModel::Mx106V2,
+        ServoModel::Xm430W350,
+        ServoModel::Xl430W250,
+        ServoModel::Cm730,
+    ];
+
+    /// The servos (what a `[[joint]]` may name).
+    pub const SERVOS: [ServoModel; 10] = [
         ServoModel::Rx28,
         ServoModel::Rx64,
         ServoModel::Mx28,
@@ -69,6 +94,7 @@ impl ServoModel {
             ServoModel::Mx106V2 => "MX-106(2.0)",
             ServoModel::Xm430W350 => "XM430-W350",
             ServoModel::Xl430W250 => "XL430-W250",
+            ServoModel::Cm730 => "CM-730",
         }
     }
 
@@ -92,14 +118,30 @@ impl ServoModel {
             "mx106v2" | "mx1062" => ServoModel::Mx106V2,
             "xm430w350" | "xm430w350t" | "xm430w350r" => ServoModel::Xm430W350,
             "xl430w250" | "xl430w250t" => ServoModel::Xl430W250,
+            "cm730" => ServoModel::Cm730,
             _ => return None,
         })
     }
 
-    /// Names accepted by [`ServoModel::parse`], for error messages.
+    /// Servo names accepted by [`ServoModel::parse`], for error messages.
     pub fn known_names() -> String {
+        ServoModel::SERVOS
+            .iter()
+            .map(|m| m.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// Whether this is a sub-controller board rather than a servo.
+    pub const fn is_board(self) -> bool {
+        matches!(self, ServoModel::Cm730)
+    }
+
+    /// Board names accepted by [`ServoModel::parse`], for error messages.
+    pub fn known_boards() -> String {
         ServoModel::ALL
             .iter()
+            .filter(|m| m.is_board())
             .map(|m| m.name())
             .collect::<Vec<_>>()
             .join(", ")
@@ -111,7 +153,8 @@ impl ServoModel {
             | ServoModel::Rx64
             | ServoModel::Mx28
             | ServoModel::Mx64
-            | ServoModel::Mx106 => Protocol::V1,
+            | ServoModel::Mx106
+            | ServoModel::Cm730 => Protocol::V1,
             _ => Protocol::V2,
         }
     }
@@ -129,6 +172,11 @@ impl ServoModel {
             ServoModel::Mx106V2 => 321,
             ServoModel::Xm430W350 => 1020,
             ServoModel::Xl430W250 => 1060,
+            // 0x7300: not in the e-manual copy read; the DARwIn-OP framework's
+            // CM-730 emulation (HROS1-Framework, CM730.cpp Reset_CM730_Emulation:
+            // model number bytes 0x00, 0x73) and NimbRo-OP's CM730 register map
+            // (its own firmware reports 0x7301) agree on it.
+            ServoModel::Cm730 => 0x7300,
         }
     }
 
@@ -140,6 +188,8 @@ impl ServoModel {
 
     /// Whether the servo answers BULK_READ. In 1.0 only MX does (RX-UM lists no
     /// BULK_READ; ROBOTIS e-manual, Protocol 1.0 instruction set); every 2.0 model does.
+    /// The CM-730 does: the DARwIn-OP framework bulk-reads it with the MX-28s
+    /// (MotionManager::Process, CM730::BulkRead).
     pub const fn has_bulk_read(self) -> bool {
         !matches!(self, ServoModel::Rx28 | ServoModel::Rx64)
     }
@@ -156,7 +206,8 @@ impl ServoModel {
         matches!(self, ServoModel::Xm430W350 | ServoModel::Xl430W250)
     }
 
-    /// Datasheet figures (e-manual specification tables).
+    /// Datasheet figures (e-manual specification tables); all zero for a board,
+    /// which drives nothing.
     pub fn spec(self) -> ServoSpec {
         let s = |stall_torque, stall_current, rpm: f64, voltage, gear_ratio| ServoSpec {
             stall_torque,
@@ -173,6 +224,7 @@ impl ServoModel {
             ServoModel::Mx106 | ServoModel::Mx106V2 => s(8.4, Some(5.2), 45.0, 12.0, 225.0),
             ServoModel::Xm430W350 => s(4.1, Some(2.3), 46.0, 12.0, 353.5),
             ServoModel::Xl430W250 => s(1.5, Some(1.4), 61.0, 12.0, 258.5),
+            ServoModel::Cm730 => s(0.0, None, 0.0, 12.0, 1.0),
         }
     }
 }

@@ -189,14 +189,7 @@ fn hundred_thousand_noisy_cycles_on_a_mixed_bus() {
 #[test]
 fn recording_over_a_noisy_line_keeps_every_row_it_read() {
     let mapping = RobotMapping::builtin("km20").unwrap();
-    let servos: Vec<BusServo> = mapping
-        .joints
-        .iter()
-        .map(|j| BusServo {
-            id: j.id,
-            model: j.model,
-        })
-        .collect();
+    let servos: Vec<BusServo> = mapping.bus();
     let c = noisy_client(&servos, 0.01, 99);
     let mut robot = DynamixelRobot::new(c, mapping.clone(), ReadMethod::Auto).unwrap();
     let path = std::env::temp_dir().join(format!("twinloop-noisy-{}.csv", std::process::id()));

@@ -22,13 +22,7 @@ fn robot_on_virtual_bus(
 }
 
 fn servos_of(m: &RobotMapping) -> Vec<BusServo> {
-    m.joints
-        .iter()
-        .map(|j| BusServo {
-            id: j.id,
-            model: j.model,
-        })
-        .collect()
+    m.bus()
 }
 
 #[test]

@@ -4,7 +4,7 @@
 use crate::shared::Shared;
 use std::sync::Arc;
 use twinloop_link::servo::ServoMeasurement;
-use twinloop_link::{Item, ServoModel, VirtualServoBackend};
+use twinloop_link::{BoardAxes, ImuSample, Item, ServoModel, VirtualServoBackend};
 
 /// Moves the bus's servos by handing their registers to the simulator thread and
 /// answers from the simulator's latest snapshot.
@@ -12,6 +12,8 @@ pub struct SimServoBackend {
     pub(crate) shared: Arc<Shared>,
     /// Each servo's model (bus order), to read its registers' units.
     pub(crate) models: Vec<ServoModel>,
+    /// The boards after the servos (bus order): how each sits in the IMU's link.
+    pub(crate) boards: Vec<BoardAxes>,
 }
 
 impl VirtualServoBackend for SimServoBackend {
@@ -44,6 +46,22 @@ impl VirtualServoBackend for SimServoBackend {
 
     /// Time runs on the simulator's thread.
     fn step(&mut self, _dt: f64) {}
+
+    /// The simulated trunk IMU (the link the board is on), turned onto the board's
+    /// axes; the bus quantises it into the board's counts.
+    fn board_imu(&self, board: usize) -> Option<ImuSample> {
+        let axes = self.boards.get(board.checked_sub(self.models.len())?)?;
+        let s = self
+            .shared
+            .snapshot
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        let imu = s.state.imu?;
+        Some(ImuSample {
+            gyro: axes.link_to_board(imu.gyro),
+            accel: axes.link_to_board(imu.accel),
+        })
+    }
 
     fn register_written(&mut self, servo: usize, item: Item, raw: i32) {
         let model = self.models[servo];

@@ -9,7 +9,7 @@ use crate::shared::{Shared, Snapshot};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
-use twinloop_link::{BusServo, Item, RobotMapping, VirtualBus};
+use twinloop_link::{BoardAxes, BusServo, Item, RobotMapping, VirtualBus};
 use twinloop_sim::{Actuator, SimConfig, Simulator};
 
 /// Settings of a virtual robot.
@@ -44,6 +44,8 @@ pub struct VirtualRobot {
     runner: Runner,
     shared: Arc<Shared>,
     servos: Vec<BusServo>,
+    /// Sub-controller boards after the servos (the trunk IMU's CM-730).
+    boards: Vec<(BusServo, BoardAxes)>,
     torque_on: bool,
     /// Joints the mapping leaves off the bus (they hold their standing pose).
     pub unmapped: Vec<String>,
@@ -106,6 +108,7 @@ impl VirtualRobot {
                 voltage: spec.voltage,
             });
         }
+        let boards = place_boards(&mut sim, robot, mapping)?;
         let standing: Vec<f64> = (0..nb)
             .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
             .collect();
@@ -141,19 +144,24 @@ impl VirtualRobot {
                     model: j.model,
                 })
                 .collect(),
+            boards,
             torque_on: options.torque_on,
             unmapped,
         })
     }
 
-    /// The bus: one virtual servo per mapped joint, answering from the simulation;
-    /// torque on if the options say so.
+    /// The bus: one virtual servo per mapped joint, answering from the simulation,
+    /// then the mapping's boards, whose gyro and accelerometer read the simulated
+    /// IMU; torque on if the options say so.
     pub fn bus(&self) -> VirtualBus<SimServoBackend> {
         let backend = SimServoBackend {
             shared: self.shared.clone(),
             models: self.servos.iter().map(|s| s.model).collect(),
+            boards: self.boards.iter().map(|b| b.1).collect(),
         };
-        let mut bus = VirtualBus::new(&self.servos, backend);
+        let mut devices = self.servos.clone();
+        devices.extend(self.boards.iter().map(|b| b.0));
+        let mut bus = VirtualBus::new(&devices, backend);
         if self.torque_on {
             for k in 0..self.servos.len() {
                 // Torque Enable 1 is within every table's range: cannot fail.
@@ -202,6 +210,52 @@ impl VirtualRobot {
             .ok();
         SimHandle { shared, thread }
     }
+}
+
+/// Put the simulator's IMU on the link of the mapping's boards (one IMU: every
+/// board must be on the same link) and return the boards with their axes.
+fn place_boards(
+    sim: &mut Simulator,
+    robot: &twinloop_description::Description,
+    mapping: &RobotMapping,
+) -> Result<Vec<(BusServo, BoardAxes)>, String> {
+    let mut imu_link: Option<(usize, &str)> = None;
+    let mut out = Vec::with_capacity(mapping.boards.len());
+    for b in &mapping.boards {
+        let at = if b.line > 0 {
+            format!("{}:{}", mapping.source, b.line)
+        } else {
+            mapping.source.clone()
+        };
+        let Some(link) = sim.model.links.iter().position(|l| l.name == b.link) else {
+            let names: Vec<&str> = sim.model.links.iter().map(|l| l.name.as_str()).collect();
+            return Err(format!(
+                "{at}: board \"{}\": link \"{}\" is not a link of robot \"{}\" (its links: {})",
+                b.name,
+                b.link,
+                robot.name,
+                names.join(", ")
+            ));
+        };
+        if let Some((other, name)) = imu_link
+            && other != link
+        {
+            return Err(format!(
+                "{at}: board \"{}\" is on link \"{}\", board \"{name}\" on another: the simulated robot has one IMU",
+                b.name, b.link
+            ));
+        }
+        imu_link = Some((link, &b.name));
+        sim.sensors_mut().imu_link = link;
+        out.push((
+            BusServo {
+                id: b.id,
+                model: b.model,
+            },
+            b.axes,
+        ));
+    }
+    Ok(out)
 }
 
 /// The running simulation. Dropping it stops the thread.

@@ -46,6 +46,12 @@ fn simulator_steps_and_bus_replies_allocate_nothing() {
         w.finish().unwrap();
         requests.push(buf);
     }
+    // And a READ of the CM-730's gyro and accelerometer (id 200, 38..49).
+    let mut buf = Vec::new();
+    let mut w = PacketWriter::instruction(&mut buf, Protocol::V1, 200, Instruction::Read);
+    w.bytes(&[38, 12]);
+    w.finish().unwrap();
+    requests.push(buf);
     let mut reply = Vec::with_capacity(1024);
     let mut round = |bus: &mut twinloop_link::VirtualBus<_>, vr: &mut VirtualRobot| {
         for r in &requests {

@@ -4,6 +4,7 @@
 //! out of here so the link needs no dynamics); [`TrackingServoModel`] is a
 //! stand-in without physics for protocol-only work.
 
+use crate::board::ImuSample;
 use crate::register::Item;
 use crate::servo_model::ServoSpec;
 
@@ -42,6 +43,15 @@ pub trait VirtualServoBackend: Send {
     /// default ignores it (the stand-in model has no such behaviour).
     fn register_written(&mut self, servo: usize, item: Item, raw: i32) {
         let _ = (servo, item, raw);
+    }
+    /// What the inertial sensors of the board at bus index `board` (a
+    /// sub-controller such as the CM-730, after the servos) measure now, SI units
+    /// along the board's own axes; the bus turns it into the board's counts.
+    /// `None` (the default) leaves the registers as they are: a board lying level
+    /// and still.
+    fn board_imu(&self, board: usize) -> Option<ImuSample> {
+        let _ = board;
+        None
     }
 }
 

@@ -71,10 +71,11 @@ pub const VIRTUAL_FIRMWARE: u8 = 45;
 impl VirtualBus<TrackingServoModel> {
     /// A bus whose servos are moved by the stand-in [`TrackingServoModel`], each
     /// able to reach its Goal Position register's whole range, starting at rest at
-    /// its centre.
+    /// its centre. Boards (which must come after the servos) read level and still.
     pub fn with_tracking_model(servos: &[BusServo]) -> VirtualBus<TrackingServoModel> {
         let ranges: Vec<_> = servos
             .iter()
+            .filter(|s| !s.model.is_board())
             .map(|s| {
                 let r = s
                     .model
@@ -89,7 +90,9 @@ impl VirtualBus<TrackingServoModel> {
 }
 
 impl<B: VirtualServoBackend> VirtualBus<B> {
-    /// Servos in backend order.
+    /// Servos in backend order, then any boards (sub-controllers: the backend
+    /// moves no motor of theirs, it only feeds their sensors,
+    /// [`VirtualServoBackend::board_imu`]).
     pub fn new(servos: &[BusServo], backend: B) -> VirtualBus<B> {
         let mut bus = VirtualBus {
             servos: servos
@@ -268,8 +271,26 @@ fn homing_offset(s: &VirtualServo) -> i32 {
 }
 
 /// Present values from the backend into the control table. 2.0 reports
-/// Present Position = actual position + Homing Offset (EM-XM).
+/// Present Position = actual position + Homing Offset (EM-XM). A board's
+/// gyroscope and accelerometer registers get the backend's IMU in counts (rounded,
+/// clamped to 10 bits as the board's converter would).
 fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, time: f64) {
+    if s.is_board() {
+        let Some(imu) = backend.board_imu(k) else {
+            return;
+        };
+        let t = s.table();
+        let items = crate::board::gyro_items()
+            .into_iter()
+            .zip(imu.gyro)
+            .chain(crate::board::accel_items().into_iter().zip(imu.accel));
+        for (item, si) in items {
+            if let Some(r) = t.item(item) {
+                s.set_value(item, r.from_si(si));
+            }
+        }
+        return;
+    }
     let m = backend.measure(k);
     let t = s.table();
     let spec = s.model.spec();
@@ -310,6 +331,9 @@ fn announce_registers<B: VirtualServoBackend>(
     start: u16,
     end: u16,
 ) {
+    if s.is_board() {
+        return; // nothing of a board's moves the backend
+    }
     for r in &s.table().registers {
         if r.address >= end {
             break; // registers are in address order
@@ -437,6 +461,9 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
 
     fn apply_effects(&mut self, k: usize, fx: WriteEffects) {
         let s = &self.servos[k];
+        if s.is_board() {
+            return;
+        }
         if fx.end > fx.start {
             announce_registers(s, self.backend, k, fx.start, fx.end);
         }
@@ -586,7 +613,9 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
             // Answer first, under the old id.
             self.reply(k, f.id, code, Ok(()), &[]);
             self.servos[k].factory_reset(option);
-            self.backend.set_torque_enabled(k, false);
+            if !self.servos[k].is_board() {
+                self.backend.set_torque_enabled(k, false);
+            }
             announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
             self.refresh(k);
         }
@@ -598,7 +627,9 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         for &k in targets {
             self.reply(k, f.id, code, Ok(()), &[]);
             self.servos[k].reboot();
-            self.backend.set_torque_enabled(k, false);
+            if !self.servos[k].is_board() {
+                self.backend.set_torque_enabled(k, false);
+            }
             announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
             self.refresh(k);
             let s = &mut self.servos[k];
@@ -614,7 +645,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         for &k in targets {
             let r = if !valid {
                 Err(Fault::Instruction)
-            } else if self.backend.measure(k).velocity.abs() > 0.01 {
+            } else if !self.servos[k].is_board() && self.backend.measure(k).velocity.abs() > 0.01 {
                 Err(Fault::ResultFail)
             } else {
                 Ok(())

@@ -96,6 +96,11 @@ impl VirtualServo {
         self.model.protocol()
     }
 
+    /// A sub-controller board (no motor: the backend does not move it).
+    pub fn is_board(&self) -> bool {
+        self.model.is_board()
+    }
+
     fn register(&self, item: Item) -> Option<&'static Register> {
         self.table().item(item)
     }
@@ -263,7 +268,16 @@ impl VirtualServo {
     pub fn factory_reset(&mut self, option: u8) {
         let id = self.id();
         let baud = self.value(Item::BaudRate);
-        self.memory = self.table().factory_memory(1, self.firmware);
+        // Servos come back as id 1; a board as its own id (the CM-730: 200).
+        let factory_id = if self.is_board() {
+            self.table()
+                .item(Item::Id)
+                .and_then(|r| r.initial)
+                .unwrap_or(1) as u8
+        } else {
+            1
+        };
+        self.memory = self.table().factory_memory(factory_id, self.firmware);
         if self.protocol() == Protocol::V2 {
             if option == 0x01 || option == 0x02 {
                 self.set_value(Item::Id, id as i32);
