@@ -82,8 +82,9 @@ pub struct SequenceArgs {
     pub out: PathBuf,
 }
 
-#[derive(Args, Debug)]
-pub struct ZmpArgs {
+/// The footstep timing of seed 002's ZMP gait, shared by every command that plans one.
+#[derive(Args, Debug, Clone, Copy)]
+pub struct StepTiming {
     /// Step length sl, m.
     #[arg(long, default_value_t = 0.03)]
     pub step_length: f64,
@@ -93,6 +94,12 @@ pub struct ZmpArgs {
     /// Double-support duration Tdb, s.
     #[arg(long, default_value_t = 0.2)]
     pub tdb: f64,
+}
+
+#[derive(Args, Debug)]
+pub struct ZmpArgs {
+    #[command(flatten)]
+    pub steps: StepTiming,
     /// Number of footsteps (swings).
     #[arg(long, default_value_t = 10)]
     pub footsteps: usize,
@@ -186,9 +193,9 @@ fn sequence(a: &SequenceArgs) -> CliResult {
 
 fn zmp(args: &ZmpArgs) -> CliResult {
     let plan = GaitPlan {
-        step_length: args.step_length,
-        t_single: args.tss,
-        t_double: args.tdb,
+        step_length: args.steps.step_length,
+        t_single: args.steps.tss,
+        t_double: args.steps.tdb,
         step_width: args.step_width,
         steps: args.footsteps,
         com_height: args.com_height,

@@ -13,15 +13,8 @@ pub struct CompliantWalkArgs {
     /// COMAN's description (with the feet's collision boxes: models/coman/coman.urdf).
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
-    /// Step length sl, m.
-    #[arg(long, default_value_t = 0.03)]
-    pub step_length: f64,
-    /// Single-support duration Tss, s.
-    #[arg(long, default_value_t = 0.5)]
-    pub tss: f64,
-    /// Double-support duration Tdb, s.
-    #[arg(long, default_value_t = 0.2)]
-    pub tdb: f64,
+    #[command(flatten)]
+    pub steps: crate::cmd_gait::StepTiming,
     /// Recorded duration, s (1 kHz samples).
     #[arg(long, default_value_t = 30.0)]
     pub duration: f64,
@@ -66,9 +59,9 @@ struct DatasetReport {
 pub fn run(args: &CompliantWalkArgs) -> CliResult {
     let (robot, _) = load_description(&args.robot)?;
     let config = WalkingConfig {
-        step_length: args.step_length,
-        t_single: args.tss,
-        t_double: args.tdb,
+        step_length: args.steps.step_length,
+        t_single: args.steps.tss,
+        t_double: args.steps.tdb,
         duration: args.duration,
         k_harmonic: args.k_harmonic,
         k_series: args.k_series,
