@@ -21,6 +21,7 @@
 //! | HTML report with the seed's Fig. 5 and Fig. 6 | [`html`] |
 //! | errors naming file, row and field | [`error`] |
 
+pub mod adapt;
 pub mod anatomy;
 pub mod compliant_fit;
 pub mod error;
