@@ -94,6 +94,9 @@ pub struct AdaptReport {
     pub iterations: usize,
     pub prior_reduced: ReducedSummary,
     pub adapted_reduced: Option<ReducedSummary>,
+    /// The prior model's static fall angles (exact method's forward problem: its CoM,
+    /// feet and frontal lever, feet flat), deg.
+    pub prior_model_deg: [f64; 4],
     /// The adapted model's simulated fall angles (with `--check`), deg.
     pub check_deg: Option<[f64; 4]>,
     /// What is and is not well determined.
@@ -441,6 +444,7 @@ pub fn adapt(
         iterations,
         prior_reduced,
         adapted_reduced: None,
+        prior_model_deg: prior_model_angles(&pf, prior, c0, &foot)?,
         check_deg: None,
         notes,
         files: vec![],
@@ -469,7 +473,6 @@ pub fn adapt(
             Some(d)
         }
     };
-    let _ = hip_roll_names;
     Ok(Adapted { report, robot })
 }
 
@@ -487,4 +490,146 @@ fn nearest_link(frame: &Frame, robot: &Description, p: Vector3<f64>) -> Result<S
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|x| x.0)
         .ok_or("the model has no links".into())
+}
+
+/// The prior's static fall angles, deg: [`crate::tipover::tip_angles`] of its CoM, feet
+/// and frontal lever.
+fn prior_model_angles(
+    frame: &Frame,
+    robot: &Description,
+    c0: Vector3<f64>,
+    foot: &FootGeometry,
+) -> Result<[f64; 4], String> {
+    let n = ankle_names(robot)?;
+    let h = hip_roll_names(robot)?;
+    let feet = feet_mass(&frame.model, &frame.q, [&n[0], &n[1]]).map_err(|e| e.to_string())?;
+    let lever =
+        crate::tipover::frontal_lever(&frame.model, &frame.q, [&h[0], &h[1]], [&n[2], &n[3]])
+            .map_err(|e| e.to_string())?;
+    let t = crate::tipover::tip_angles(v3(c0), &feet, &lever, foot).map_err(|e| e.to_string())?;
+    Ok(t.to_degrees())
+}
+
+/// `--check`: the simulated tip-over study on the adapted model; its four fall angles
+/// go into the report beside the measured ones.
+pub fn check(
+    adapted: &mut Adapted,
+    opts: &crate::tipover_study::StudyOptions,
+) -> Result<(), String> {
+    let robot = adapted
+        .robot
+        .as_ref()
+        .ok_or("--check needs an adapted model: give --total-mass or --where")?;
+    let s = crate::tipover_study::run_study(robot, opts)?;
+    adapted.report.check_deg = Some([
+        s.forward.measured_deg,
+        s.backward.measured_deg,
+        s.left.measured_deg,
+        s.right.measured_deg,
+    ]);
+    Ok(())
+}
+
+/// The HTML report: fall angles robot vs model, the CoMs, side (x-z) and front (y-z)
+/// views with the prior CoM, the measured CoM and the added mass.
+pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
+    use twinloop_report::{Plot, SeriesStyle, number};
+    let mut rep =
+        twinloop_report::Report::new(format!("Adapting {} to the tip-over angles", r.robot));
+    rep.paragraph(
+        "Seed 000 sections III and V.B: the exact method turns the measured fall angles into \
+         the CoM; one added point mass explains its move from the prior model's CoM. Frame: \
+         the midpoint of the ankle pitch joints in the standing pose, x forward, y left, z up.",
+    );
+    rep.heading("Fall angles, deg");
+    let dirs = ["forward", "backward", "left", "right"];
+    let mut header = vec![
+        "direction".into(),
+        "robot (measured)".into(),
+        "prior model".into(),
+    ];
+    if r.check_deg.is_some() {
+        header.push("adapted model (simulated)".into());
+    }
+    let rows = (0..4)
+        .map(|k| {
+            let mut row = vec![
+                dirs[k].to_string(),
+                format!("{:.3}", r.measured_deg[k]),
+                format!("{:.3}", r.prior_model_deg[k]),
+            ];
+            if let Some(c) = r.check_deg {
+                row.push(format!("{:.3}", c[k]));
+            }
+            row
+        })
+        .collect();
+    rep.table(header, rows);
+    rep.heading("CoM, mm");
+    let mm = |v: [f64; 3]| {
+        v.iter()
+            .map(|x| format!("{:.2}", x * 1e3))
+            .collect::<Vec<_>>()
+    };
+    let mut rows = vec![
+        [vec!["prior".to_string()], mm(r.prior_com)].concat(),
+        [vec!["measured".to_string()], mm(r.measured_com)].concat(),
+        [
+            vec!["measured, 1 sigma".to_string()],
+            mm(r.measured_com_sigma),
+        ]
+        .concat(),
+    ];
+    if let Some(c) = r.adapted_com {
+        rows.push([vec!["adapted model".to_string()], mm(c)].concat());
+    }
+    if let Some(a) = &r.added {
+        rows.push(
+            [
+                vec![format!("added {} kg on {}", number(a.mass), a.host)],
+                mm(a.position),
+            ]
+            .concat(),
+        );
+        rows.push(
+            [
+                vec!["added mass, 1 sigma".to_string()],
+                mm(a.position_sigma),
+            ]
+            .concat(),
+        );
+    }
+    rep.table(vec!["".into(), "x".into(), "y".into(), "z".into()], rows);
+    for (title, i, label) in [
+        ("Side view (x-z)", 0, "x, m"),
+        ("Front view (y-z)", 1, "y, m"),
+    ] {
+        let mut p = Plot::new(title, label, "z, m")
+            .series(
+                "prior CoM",
+                &[r.prior_com[i]],
+                &[r.prior_com[2]],
+                SeriesStyle::Points,
+            )
+            .series(
+                "measured CoM",
+                &[r.measured_com[i]],
+                &[r.measured_com[2]],
+                SeriesStyle::Points,
+            );
+        if let Some(a) = &r.added {
+            p = p.series(
+                "added mass",
+                &[a.position[i]],
+                &[a.position[2]],
+                SeriesStyle::Points,
+            );
+        }
+        rep.plot(&p);
+    }
+    rep.heading("What is determined");
+    for n in &r.notes {
+        rep.paragraph(n.clone());
+    }
+    rep
 }
