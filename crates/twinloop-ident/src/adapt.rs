@@ -219,8 +219,7 @@ fn leg_roots(model: &Model, robot: &Description) -> Result<[String; 2], String> 
     let top = |a: &[usize], other: &[usize]| {
         a.iter()
             .copied()
-            .filter(|i| !other.contains(i))
-            .last()
+            .rfind(|i| !other.contains(i))
             .map(|i| model.joint_names[i].clone())
     };
     match (top(&la, &ra), top(&ra, &la)) {

@@ -75,6 +75,7 @@ fn total_mass_places_the_hidden_mass() {
         com_err * 1e3,
         r.iterations
     );
+    eprintln!("total-mass notes: {:?}", r.notes);
     assert_eq!(added.host, HOST);
     assert!(com_err < 3e-3, "CoM error {com_err}");
     assert!(pos_err < 2e-2, "position error {pos_err}");
@@ -111,6 +112,8 @@ fn where_alone_places_the_mass_on_the_ray() {
         added.position_host,
         com_err * 1e3
     );
+    let pos_err = dist(added.position_host, XYZ);
+    eprintln!("where: position error {:.1} mm", pos_err * 1e3);
     // The ray fixes the CoM (the adapted CoM is the measured one) but not how far along
     // it the mass sits.
     assert!(com_err < 3e-3, "CoM error {com_err}");
