@@ -475,8 +475,8 @@ pub fn adapt(
     Ok(Adapted { report, robot })
 }
 
-/// The link whose CoM (origin if massless) is nearest `p` (standing frame); the feet
-/// are excluded (a mass there would not move like the rest).
+/// The link whose CoM (origin if massless) is nearest `p` (standing frame), any link
+/// of the description.
 fn nearest_link(frame: &Frame, robot: &Description, p: Vector3<f64>) -> Result<String, String> {
     robot
         .links

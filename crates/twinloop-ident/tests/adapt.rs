@@ -133,3 +133,30 @@ fn neither_gives_the_family_and_no_model() {
     let e = adapt(&prior(), study, &bad).unwrap_err();
     assert!(e.contains("no_such_link"), "{e}");
 }
+
+#[test]
+fn merge_gives_the_same_model_dynamics() {
+    let (_, study) = truth();
+    let m0 = twinloop_dynamics::Model::from_description(&prior())
+        .unwrap()
+        .total_mass;
+    let run = |merge: bool| {
+        let opts = AdaptOptions {
+            total_mass: Some(m0 + MASS),
+            host: Some(HOST.into()),
+            merge,
+            ..Default::default()
+        };
+        adapt(&prior(), study, &opts).unwrap()
+    };
+    let (link, merged) = (run(false), run(true));
+    let (a, b) = (
+        link.report.adapted_com.unwrap(),
+        merged.report.adapted_com.unwrap(),
+    );
+    assert!(dist(a, b) < 1e-9, "{a:?} vs {b:?}");
+    let robot = merged.robot.unwrap();
+    assert!(robot.link("added_mass").is_none());
+    assert_eq!(robot.links.len(), prior().links.len());
+    assert!(link.robot.unwrap().link("added_mass").is_some());
+}
