@@ -5,6 +5,7 @@
 //! Every command returns `Result<Outcome, CliError>`; `main` alone prints
 //! `error: ...` and picks the exit code (see `error.rs`).
 
+mod cmd_adapt;
 mod cmd_bench;
 mod cmd_compliant;
 mod cmd_dynamics;
@@ -81,6 +82,22 @@ enum Command {
     /// Identify model parameters from measurements: static, ARX, state space, compliant, walk
     #[command(subcommand)]
     Identify(cmd_identify::IdentifyCommand),
+    /// Adapt the model to a hardware change from the tip-over angles (seed 000 III, V.B)
+    ///
+    /// The exact method turns the measured fall angles (--tipover, the JSON of
+    /// `twinloop experiment tipover`) into the CoM; one added point mass explains its
+    /// move from the prior model's CoM. --total-mass fixes it in 3-D; --where LINK alone
+    /// puts it on the ray from the prior CoM through the measured one, nearest the link.
+    ///
+    /// Example:
+    ///   twinloop adapt --robot builtin:km20 --tipover tip.json --total-mass 3.636 \
+    ///       --out adapted.urdf --json - --report adapt.html --check
+    ///
+    /// Output: ADAPTED.urdf (an `added_mass` link on a fixed joint, or --merge into the
+    /// host), the JSON (measured and prior CoM, the mass found with its uncertainty,
+    /// LIPM and three-mass LIPM of the adapted model).
+    #[command(verbatim_doc_comment)]
+    Adapt(cmd_adapt::AdaptArgs),
     /// Validate a model against measurements (inverse-dynamics residual, seed 004)
     #[command(subcommand)]
     Validate(cmd_validate::ValidateCommand),
@@ -143,6 +160,7 @@ fn run(command: Command) -> CliResult {
         Command::Simulate(args) => cmd_simulate::run(args),
         Command::Experiment(cmd) => cmd_experiment::run(cmd),
         Command::Identify(cmd) => cmd_identify::run(cmd),
+        Command::Adapt(args) => cmd_adapt::run(args),
         Command::Validate(cmd) => cmd_validate::run(cmd),
         Command::Ik(args) => cmd_ik::run(&args),
         Command::Gait(cmd) => cmd_gait::run(cmd),

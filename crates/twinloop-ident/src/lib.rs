@@ -3,6 +3,7 @@
 //! | estimator | seed | module |
 //! |---|---|---|
 //! | CoM from the tip-over angles: the seed's geometric method and the exact rigid-body method | 000 eq 8-13 | [`tipover`]; the simulated study that runs the experiment and checks them: [`tipover_study`] |
+//! | an added mass (mass, host link, position) from the tip-over angles and the prior model | 000 III, V.B | [`adapt`] |
 //! | static identification of link masses and CoMs (below) | 004 | [`static_ident`] |
 //! | the compliant compact model's 8 corrections (LM, CMA-ES, PoWER), identifiability | 002 section 4 | [`compliant_fit`] |
 //! | a walk record to MIMO ARX and state-space models | 003 section 7 | [`walk_identification`] |
@@ -21,6 +22,7 @@
 //! | HTML report with the seed's Fig. 5 and Fig. 6 | [`html`] |
 //! | errors naming file, row and field | [`error`] |
 
+pub mod adapt;
 pub mod anatomy;
 pub mod compliant_fit;
 pub mod error;

@@ -15,7 +15,7 @@ use crate::tipover::{
     frontal_lever, seed_method,
 };
 use nalgebra::Vector3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use twinloop_description::Description;
 use twinloop_description::builtin::FootGeometry;
 use twinloop_dynamics::{BASE, Data};
@@ -60,7 +60,7 @@ impl Default for StudyOptions {
 }
 
 /// One direction's outcome with its static reference.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct DirectionReport {
     pub commanded_deg: f64,
     pub measured_deg: f64,
@@ -80,7 +80,7 @@ pub struct DirectionReport {
 
 /// CoM estimates, m, relative to the midpoint of the ankle pitch joints in the
 /// standing pose (x forward, y left, z up).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ComReport {
     #[serde(rename = "true")]
     pub truth: [f64; 3],
@@ -95,7 +95,7 @@ pub struct ComReport {
     pub frontal_lever_exact: f64,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct StudyReport {
     pub robot: String,
     pub forward: DirectionReport,
@@ -109,7 +109,7 @@ pub struct StudyReport {
     pub foot: FootReport,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FootReport {
     pub front: f64,
     pub back: f64,
@@ -131,7 +131,7 @@ fn err(e: impl std::fmt::Display) -> String {
 /// Ankle and foot names: the built-in robot's, or found by name in a description
 /// (`*ank*pitch*` and `*ank*roll*` joints with a left/right prefix; the feet are the
 /// roll joints' child links).
-fn ankle_names(robot: &Description) -> Result<[String; 6], String> {
+pub(crate) fn ankle_names(robot: &Description) -> Result<[String; 6], String> {
     if let Some(f) = twinloop_description::builtin::foot_geometry(&robot.name) {
         return Ok([
             f.left_ankle_pitch,
@@ -180,7 +180,7 @@ fn ankle_names(robot: &Description) -> Result<[String; 6], String> {
 
 /// The hip roll joints (left, right), found by name: `*hip*roll*` with a left/right
 /// prefix.
-fn hip_roll_names(robot: &Description) -> Result<[String; 2], String> {
+pub(crate) fn hip_roll_names(robot: &Description) -> Result<[String; 2], String> {
     let find = |left: bool| -> Result<String, String> {
         let hits: Vec<&str> = robot
             .joints

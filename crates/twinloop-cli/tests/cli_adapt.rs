@@ -1,0 +1,114 @@
+//! `twinloop adapt` through the binary: the tip-over JSON of a km20 with a hidden
+//! 0.3 kg on its torso, the unchanged km20 adapted from it; bad input named, exit 2.
+
+use std::process::Command;
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("twinloop-cli-adapt-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+fn twinloop(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn fails_naming(args: &[&str], what: &str) {
+    let o = twinloop(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    assert!(err.contains(what), "{args:?}: {err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+}
+
+#[test]
+fn adapt_finds_the_hidden_mass_and_names_bad_input() {
+    let tip = tmp("tip.json");
+    let tip_s = tip.to_str().unwrap();
+    let o = twinloop(&[
+        "experiment",
+        "tipover",
+        "--robot",
+        "builtin:km20",
+        "--add-mass",
+        "0.3@torso:0.04,0.02,0.05",
+        "--json",
+        tip_s,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = tmp("a.urdf");
+    let out_s = out.to_str().unwrap();
+    let html = tmp("a.html");
+    let o = twinloop(&[
+        "adapt",
+        "--robot",
+        "builtin:km20",
+        "--tipover",
+        tip_s,
+        "--total-mass",
+        &format!("{}", 3.336 + 0.3),
+        "--out",
+        out_s,
+        "--report",
+        html.to_str().unwrap(),
+        "--json",
+        "-",
+        "--check",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let added = &j["added"];
+    assert_eq!(added["host"], "torso");
+    let mass = added["mass"].as_f64().unwrap();
+    assert!((mass - 0.3).abs() < 1e-3, "{mass}");
+    let p: Vec<f64> = added["position_host"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let err = ((p[0] - 0.04).powi(2) + (p[1] - 0.02).powi(2) + (p[2] - 0.05).powi(2)).sqrt();
+    assert!(err < 0.02, "{p:?}");
+    assert!(j["adapted_reduced"]["three_masses"].is_array());
+    assert_eq!(j["files"].as_array().unwrap().len(), 2);
+    let measured = j["measured_deg"].as_array().unwrap();
+    let check = j["check_deg"].as_array().unwrap();
+    for k in 0..4 {
+        let d = measured[k].as_f64().unwrap() - check[k].as_f64().unwrap();
+        assert!(d.abs() < 0.3, "direction {k}: {measured:?} vs {check:?}");
+    }
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("<svg") && page.contains("added mass"));
+    let urdf = std::fs::read_to_string(&out).unwrap();
+    assert!(urdf.contains("added_mass"));
+    // The adapted URDF reads back.
+    let o = twinloop(&["model", "info", out_s]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let base = ["adapt", "--robot", "builtin:km20", "--tipover"];
+    let with = |rest: &[&str], tip: &str| -> Vec<String> {
+        base.iter()
+            .map(|s| s.to_string())
+            .chain([tip.to_string()])
+            .chain(rest.iter().map(|s| s.to_string()))
+            .collect()
+    };
+    let missing = tmp("missing.json");
+    let a = with(
+        &["--total-mass", "3.6", "--out", out_s],
+        missing.to_str().unwrap(),
+    );
+    fails_naming(
+        &a.iter().map(String::as_str).collect::<Vec<_>>(),
+        "missing.json",
+    );
+    let a = with(&["--where", "nolink", "--out", out_s], tip_s);
+    fails_naming(&a.iter().map(String::as_str).collect::<Vec<_>>(), "nolink");
+    let a = with(&["--out", out_s], tip_s);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    fails_naming(&a, "--total-mass");
+    fails_naming(&a, "--where");
+}

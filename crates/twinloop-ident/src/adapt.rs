@@ -1,0 +1,634 @@
+//! Adapt the model when the hardware changes (seed 000 sections III and V.B): the
+//! tip-over experiment measured the four fall angles of the changed robot; the exact
+//! method ([`crate::tipover::exact_method`]) turns them into the measured CoM, the prior
+//! model gives its own CoM in the same frame (relative to the midpoint of the ankle
+//! pitch joints in the standing pose, x forward, y left, z up), and the difference is
+//! explained by one added point mass `m_a` at `p`:
+//!
+//! `(M0 c0 + m_a p) / (M0 + m_a) = c_meas`, i.e. `m_a (p - c_meas) = M0 (c_meas - c0)`.
+//!
+//! One equation in four unknowns: with the new total mass `M` (weigh the robot),
+//! `m_a = M - M0` and `p = c_meas + M0 (c_meas - c0) / m_a` (3-D). With only the host
+//! link, `p` lies on the ray from `c0` through `c_meas`; it is taken where the ray
+//! passes nearest the host link's CoM (its frame origin when it has no mass), and
+//! `m_a = M0 |c_meas - c0| / |p - c_meas|`. With neither, only the one-parameter family
+//! is known and no model is written.
+//!
+//! The exact method uses the feet's mass share (they stay on the ground in the fore/aft
+//! lean), which changes with the added mass: the estimate is iterated with the adapted
+//! model until the measured CoM moves by less than 1e-9 m (two or three iterations).
+
+use crate::tipover::{FeetMass, TipAngles, exact_method, feet_mass};
+use crate::tipover_study::{StudyReport, ankle_names, hip_roll_names};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use twinloop_description::builtin::FootGeometry;
+use twinloop_description::{Description, Inertia, Inertial, Joint, JointKind, Link, Pose};
+use twinloop_dynamics::{BASE, Data, Model};
+use twinloop_spatial::Se3;
+
+/// What fixes the one-parameter family.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct AdaptOptions {
+    /// The changed robot's total mass, kg.
+    pub total_mass: Option<f64>,
+    /// The link the mass was added to.
+    pub host: Option<String>,
+    /// Merge the mass into the host's inertial instead of a fixed `added_mass` link.
+    pub merge: bool,
+    /// Resolution of the measured angles, deg (0.05 if unknown).
+    pub angle_resolution_deg: Option<f64>,
+}
+
+/// The added mass found.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct AddedMass {
+    pub mass: f64,
+    pub host: String,
+    /// Position in the host link's frame, m.
+    pub position_host: [f64; 3],
+    /// Position in the standing frame (relative to the ankle pitch midpoint), m.
+    pub position: [f64; 3],
+    /// One-sigma uncertainty of the position, per standing axis, m:
+    /// `(M0 + m_a) / m_a` times the CoM's.
+    pub position_sigma: [f64; 3],
+    /// One-sigma uncertainty of the mass (only with `--where`), kg.
+    pub mass_sigma: Option<f64>,
+}
+
+/// The LIPM and three-mass LIPM of a model.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ReducedSummary {
+    pub mass: f64,
+    /// CoM height above the sole, m.
+    pub com_height: f64,
+    /// Left leg, right leg, hip (trunk, arms, head): mass, kg, and position, m, in the
+    /// standing frame.
+    pub three_masses: [(f64, [f64; 3]); 3],
+}
+
+/// The result of [`adapt`], serialised as the command's JSON.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct AdaptReport {
+    pub robot: String,
+    /// `[forward, backward, left, right]`, deg.
+    pub measured_deg: [f64; 4],
+    /// The feet's roll at each tip (IMU excess), deg.
+    pub excess_deg: [f64; 4],
+    pub prior_mass: f64,
+    /// CoM of the prior model, m, standing frame.
+    pub prior_com: [f64; 3],
+    /// CoM from the measured angles (exact method, feet of the adapted model), m.
+    pub measured_com: [f64; 3],
+    /// One-sigma uncertainty of the measured CoM per axis, m, from the angle
+    /// resolution by finite differences.
+    pub measured_com_sigma: [f64; 3],
+    pub angle_resolution_deg: f64,
+    /// "total-mass", "where" or "family".
+    pub mode: String,
+    /// The family `m_a (p - c_meas) = M0 (c_meas - c0)`: its right side, kg m.
+    pub family_moment: [f64; 3],
+    pub added: Option<AddedMass>,
+    /// CoM of the adapted model, m.
+    pub adapted_com: Option<[f64; 3]>,
+    pub iterations: usize,
+    pub prior_reduced: ReducedSummary,
+    pub adapted_reduced: Option<ReducedSummary>,
+    /// The prior model's static fall angles (exact method's forward problem: its CoM,
+    /// feet and frontal lever, feet flat), deg.
+    pub prior_model_deg: [f64; 4],
+    /// The adapted model's simulated fall angles (with `--check`), deg.
+    pub check_deg: Option<[f64; 4]>,
+    /// What is and is not well determined.
+    pub notes: Vec<String>,
+    pub files: Vec<String>,
+}
+
+/// The adapted description next to its report.
+#[derive(Debug, Clone)]
+pub struct Adapted {
+    pub report: AdaptReport,
+    pub robot: Option<Description>,
+}
+
+struct Frame {
+    model: Model,
+    q: Vec<f64>,
+    mid: Vector3<f64>,
+    data: Data,
+}
+
+fn standing(robot: &Description) -> Result<Frame, String> {
+    let model = Model::from_description(robot).map_err(|e| e.to_string())?;
+    let mut q = model.neutral_configuration();
+    for i in 0..model.nbodies {
+        q[model.q_offset + i] = 0f64.clamp(model.lower_limits[i], model.upper_limits[i]);
+    }
+    let names = ankle_names(robot)?;
+    let mid = twinloop_reduced::ankle_midpoint(&model, &q, &names[0], &names[1])
+        .map_err(|e| e.to_string())?;
+    let mut data = Data::new(&model);
+    twinloop_dynamics::frames_forward_kinematics(&model, &mut data, &q);
+    Ok(Frame {
+        model,
+        q,
+        mid: Vector3::new(mid[0], mid[1], mid[2]),
+        data,
+    })
+}
+
+impl Frame {
+    fn link_pose(&self, link: &str) -> Option<Se3> {
+        let l = self.model.links.iter().find(|l| l.name == link)?;
+        let body = if l.body == BASE {
+            self.data.base_placement
+        } else {
+            self.data.o_m_i[l.body]
+        };
+        Some(body * l.placement)
+    }
+    /// The link's CoM (its origin if massless) in the standing frame.
+    fn link_point(&self, link: &str) -> Option<Vector3<f64>> {
+        let l = self.model.links.iter().find(|l| l.name == link)?;
+        let pose = self.link_pose(link)?;
+        let local = if l.inertia.mass > 0.0 {
+            l.inertia.com
+        } else {
+            Vector3::zeros()
+        };
+        Some(pose.act_point(&local) - self.mid)
+    }
+    fn com(&self, robot: &Description) -> Result<Vector3<f64>, String> {
+        let n = ankle_names(robot)?;
+        let c = twinloop_reduced::com_relative_to_ankles(&self.model, &self.q, &n[0], &n[1])
+            .map_err(|e| e.to_string())?;
+        Ok(Vector3::new(c[0], c[1], c[2]))
+    }
+}
+
+fn foot_of(robot: &Description, tip: &StudyReport) -> FootGeometry {
+    if let Some(f) = twinloop_description::builtin::foot_geometry(&robot.name) {
+        return f;
+    }
+    let f = &tip.foot;
+    FootGeometry {
+        front: f.front,
+        back: f.back,
+        ankle_height: f.ankle_height,
+        roll_axis_height: f.roll_axis_height,
+        ankle_half_spacing: f.ankle_half_spacing,
+        outer: f.outer,
+        inner: f.inner,
+        left_foot: String::new(),
+        right_foot: String::new(),
+        left_ankle_pitch: String::new(),
+        right_ankle_pitch: String::new(),
+        left_ankle_roll: String::new(),
+        right_ankle_roll: String::new(),
+        forward_lean_sign: 0.0,
+        left_lean_sign: 0.0,
+    }
+}
+
+fn angles_of(tip: &StudyReport) -> TipAngles {
+    let r = std::f64::consts::PI / 180.0;
+    TipAngles {
+        forward: tip.forward.measured_deg * r,
+        backward: tip.backward.measured_deg * r,
+        left: tip.left.measured_deg * r,
+        right: tip.right.measured_deg * r,
+        forward_roll: tip.forward.excess_deg * r,
+        backward_roll: tip.backward.excess_deg * r,
+        left_roll: tip.left.excess_deg * r,
+        right_roll: tip.right.excess_deg * r,
+    }
+}
+
+fn v3(v: Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+/// The top joint of each leg (below the joint both legs share): the leg roots the
+/// three-mass LIPM splits at.
+fn leg_roots(model: &Model, robot: &Description) -> Result<[String; 2], String> {
+    let n = ankle_names(robot)?;
+    let idx = |s: &str| model.joint_index(s).ok_or(format!("no joint \"{s}\""));
+    let (l, r) = (idx(&n[0])?, idx(&n[1])?);
+    let ra: Vec<usize> = model.ancestors(r).collect();
+    let la: Vec<usize> = model.ancestors(l).collect();
+    let top = |a: &[usize], other: &[usize]| {
+        a.iter()
+            .copied()
+            .rfind(|i| !other.contains(i))
+            .map(|i| model.joint_names[i].clone())
+    };
+    match (top(&la, &ra), top(&ra, &la)) {
+        (Some(a), Some(b)) => Ok([a, b]),
+        _ => Err("cannot find the legs' root joints".into()),
+    }
+}
+
+fn reduced(
+    frame: &Frame,
+    robot: &Description,
+    foot: &FootGeometry,
+) -> Result<ReducedSummary, String> {
+    let com = frame.com(robot)?;
+    let roots = leg_roots(&frame.model, robot)?;
+    let three =
+        twinloop_reduced::ThreeMasses::from_model(&frame.model, &frame.q, &roots[0], &roots[1])
+            .map_err(|e| e.to_string())?
+            .relative_to(v3(frame.mid));
+    let pm = |p: twinloop_reduced::PointMass| (p.mass, p.position);
+    Ok(ReducedSummary {
+        mass: frame.model.total_mass,
+        com_height: com.z + foot.ankle_height,
+        three_masses: [pm(three.left_leg), pm(three.right_leg), pm(three.hip)],
+    })
+}
+
+/// The prior with the added mass: a fixed `added_mass` link (point mass, a 1 cm sphere's
+/// inertia) on the host, or merged into the host's inertial.
+pub fn with_added_mass(
+    prior: &Description,
+    host: &str,
+    mass: f64,
+    xyz: [f64; 3],
+    merge: bool,
+) -> Result<Description, String> {
+    let mut d = prior.clone();
+    if merge {
+        twinloop_description::builtin::add_point_mass(&mut d, host, mass, xyz)
+            .map_err(|e| e.to_string())?;
+        return Ok(d);
+    }
+    if d.link(host).is_none() {
+        return Err(format!("no link \"{host}\" in \"{}\"", prior.name));
+    }
+    let mut name = "added_mass".to_string();
+    let mut k = 1;
+    while d.link(&name).is_some() {
+        k += 1;
+        name = format!("added_mass_{k}");
+    }
+    let i = 0.4 * mass * 0.01 * 0.01;
+    let mut link = Link::new(name.clone());
+    link.inertial = Some(Inertial {
+        origin: Pose::IDENTITY,
+        mass,
+        inertia: Inertia::from_matrix([[i, 0.0, 0.0], [0.0, i, 0.0], [0.0, 0.0, i]]),
+    });
+    d.links.push(link);
+    let mut j = Joint::new(format!("{name}_joint"), JointKind::Fixed, host, name);
+    j.origin = Pose::from_xyz(xyz);
+    d.joints.push(j);
+    Ok(d)
+}
+
+fn measured_com(
+    angles: &TipAngles,
+    frame: &Frame,
+    robot: &Description,
+    foot: &FootGeometry,
+) -> Result<(Vector3<f64>, FeetMass), String> {
+    let n = ankle_names(robot)?;
+    let feet = feet_mass(&frame.model, &frame.q, [&n[0], &n[1]]).map_err(|e| e.to_string())?;
+    let e = exact_method(angles, &feet, foot).map_err(|e| e.to_string())?;
+    Ok((Vector3::new(e.com[0], e.com[1], e.com[2]), feet))
+}
+
+/// Adapt `prior` to the tip-over measurement `tip` (see the module documentation).
+pub fn adapt(
+    prior: &Description,
+    tip: &StudyReport,
+    opts: &AdaptOptions,
+) -> Result<Adapted, String> {
+    let foot = foot_of(prior, tip);
+    let angles = angles_of(tip);
+    let pf = standing(prior)?;
+    let m0 = pf.model.total_mass;
+    let c0 = pf.com(prior)?;
+    let res = opts.angle_resolution_deg.unwrap_or(0.05);
+    if let Some(h) = &opts.host
+        && prior.link(h).is_none()
+    {
+        return Err(format!("--where: no link \"{h}\" in \"{}\"", prior.name));
+    }
+    if let Some(m) = opts.total_mass
+        && !(m.is_finite() && m > m0)
+    {
+        return Err(format!(
+            "--total-mass: {m} kg must exceed the prior's {m0:.4} kg (an added mass)"
+        ));
+    }
+    let mode = match (opts.total_mass, &opts.host) {
+        (Some(_), _) => "total-mass",
+        (None, Some(_)) => "where",
+        (None, None) => "family",
+    };
+    let mut frame_for_feet = standing(prior)?;
+    let mut adapted: Option<(Description, AddedMass)> = None;
+    let mut cm = Vector3::zeros();
+    let mut iterations = 0;
+    for it in 1..=20 {
+        iterations = it;
+        let (c, _) = measured_com(&angles, &frame_for_feet, prior, &foot)?;
+        let settled = (c - cm).norm() < 1e-9;
+        cm = c;
+        if mode == "family" || settled {
+            break;
+        }
+        let d = cm - c0;
+        let (ma, p, host) = if let Some(m) = opts.total_mass {
+            let ma = m - m0;
+            let p = cm + d * (m0 / ma);
+            let host = match &opts.host {
+                Some(h) => h.clone(),
+                None => nearest_link(&pf, prior, p)?,
+            };
+            (ma, p, host)
+        } else {
+            let host = opts.host.clone().unwrap_or_default();
+            let h = pf.link_point(&host).ok_or(format!("no link \"{host}\""))?;
+            let u = d / d.norm();
+            let t = (h - c0).dot(&u);
+            if t <= d.norm() * 1.001 {
+                return Err(format!(
+                    "--where {host}: the CoM moved away from that link (the ray from the prior CoM through the measured one passes it {:.1} mm before the measured CoM); give --total-mass",
+                    (d.norm() - t) * 1e3
+                ));
+            }
+            let p = c0 + u * t;
+            (m0 * d.norm() / (t - d.norm()), p, host)
+        };
+        let pose = pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
+        let local = pose.inverse().act_point(&(p + pf.mid));
+        let merged = with_added_mass(prior, &host, ma, v3(local), true)?;
+        frame_for_feet = standing(&merged)?;
+        let out = with_added_mass(prior, &host, ma, v3(local), opts.merge)?;
+        adapted = Some((
+            out,
+            AddedMass {
+                mass: ma,
+                host,
+                position_host: v3(local),
+                position: v3(p),
+                position_sigma: [0.0; 3],
+                mass_sigma: None,
+            },
+        ));
+    }
+    // Uncertainty: each angle moved by the resolution, through the exact method.
+    let (_, feet) = measured_com(&angles, &frame_for_feet, prior, &foot)?;
+    let r = res.to_radians();
+    let mut var = Vector3::zeros();
+    for k in 0..4 {
+        let mut a = angles;
+        let mut b = angles;
+        let (pa, pb) = match k {
+            0 => (&mut a.forward, &mut b.forward),
+            1 => (&mut a.backward, &mut b.backward),
+            2 => (&mut a.left, &mut b.left),
+            _ => (&mut a.right, &mut b.right),
+        };
+        *pa += r;
+        *pb -= r;
+        let ea = exact_method(&a, &feet, &foot).map_err(|e| e.to_string())?;
+        let eb = exact_method(&b, &feet, &foot).map_err(|e| e.to_string())?;
+        let dc = (Vector3::from(ea.com) - Vector3::from(eb.com)) * 0.5;
+        var += dc.component_mul(&dc);
+    }
+    let sigma = var.map(f64::sqrt);
+    let mut notes = vec![
+        "x and z come from the forward/backward pair alone, y from the left/right pair".into(),
+        format!(
+            "CoM sigma from a {res} deg angle resolution: x {:.2} mm, y {:.2} mm, z {:.2} mm",
+            sigma.x * 1e3,
+            sigma.y * 1e3,
+            sigma.z * 1e3
+        ),
+    ];
+    let imax = if sigma.x >= sigma.y && sigma.x >= sigma.z {
+        "x"
+    } else if sigma.y >= sigma.z {
+        "y"
+    } else {
+        "z"
+    };
+    notes.push(format!("the poorest determined direction is {imax}"));
+    let prior_reduced = reduced(&pf, prior, &foot)?;
+    let mut report = AdaptReport {
+        robot: prior.name.clone(),
+        measured_deg: [
+            tip.forward.measured_deg,
+            tip.backward.measured_deg,
+            tip.left.measured_deg,
+            tip.right.measured_deg,
+        ],
+        excess_deg: [
+            tip.forward.excess_deg,
+            tip.backward.excess_deg,
+            tip.left.excess_deg,
+            tip.right.excess_deg,
+        ],
+        prior_mass: m0,
+        prior_com: v3(c0),
+        measured_com: v3(cm),
+        measured_com_sigma: v3(sigma),
+        angle_resolution_deg: res,
+        mode: mode.into(),
+        family_moment: v3((cm - c0) * m0),
+        added: None,
+        adapted_com: None,
+        iterations,
+        prior_reduced,
+        adapted_reduced: None,
+        prior_model_deg: prior_model_angles(&pf, prior, c0, &foot)?,
+        check_deg: None,
+        notes,
+        files: vec![],
+    };
+    let robot = match adapted {
+        None => {
+            report.notes.push(
+                "only m_a (p - c_meas) = M0 (c_meas - c0) is known: give --total-mass or --where LINK to place the mass".into(),
+            );
+            None
+        }
+        Some((d, mut added)) => {
+            let k = (m0 + added.mass) / added.mass;
+            added.position_sigma = v3(sigma * k);
+            if mode == "where" {
+                let dn = (cm - c0).norm();
+                added.mass_sigma = Some(added.mass * sigma.norm() / dn.max(1e-12));
+                report.notes.push(
+                    "with --where only, the mass and the distance along the ray trade off: the mass is as uncertain as |c_meas - c0|".into(),
+                );
+            }
+            let af = standing(&d)?;
+            report.adapted_com = Some(v3(af.com(&d)?));
+            report.adapted_reduced = Some(reduced(&af, &d, &foot)?);
+            report.added = Some(added);
+            Some(d)
+        }
+    };
+    Ok(Adapted { report, robot })
+}
+
+/// The link whose CoM (origin if massless) is nearest `p` (standing frame), any link
+/// of the description.
+fn nearest_link(frame: &Frame, robot: &Description, p: Vector3<f64>) -> Result<String, String> {
+    robot
+        .links
+        .iter()
+        .filter_map(|l| {
+            frame
+                .link_point(&l.name)
+                .map(|x| (l.name.clone(), (x - p).norm()))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|x| x.0)
+        .ok_or("the model has no links".into())
+}
+
+/// The prior's static fall angles, deg: [`crate::tipover::tip_angles`] of its CoM, feet
+/// and frontal lever.
+fn prior_model_angles(
+    frame: &Frame,
+    robot: &Description,
+    c0: Vector3<f64>,
+    foot: &FootGeometry,
+) -> Result<[f64; 4], String> {
+    let n = ankle_names(robot)?;
+    let h = hip_roll_names(robot)?;
+    let feet = feet_mass(&frame.model, &frame.q, [&n[0], &n[1]]).map_err(|e| e.to_string())?;
+    let lever =
+        crate::tipover::frontal_lever(&frame.model, &frame.q, [&h[0], &h[1]], [&n[2], &n[3]])
+            .map_err(|e| e.to_string())?;
+    let t = crate::tipover::tip_angles(v3(c0), &feet, &lever, foot).map_err(|e| e.to_string())?;
+    Ok(t.to_degrees())
+}
+
+/// `--check`: the simulated tip-over study on the adapted model; its four fall angles
+/// go into the report beside the measured ones.
+pub fn check(
+    adapted: &mut Adapted,
+    opts: &crate::tipover_study::StudyOptions,
+) -> Result<(), String> {
+    let robot = adapted
+        .robot
+        .as_ref()
+        .ok_or("--check needs an adapted model: give --total-mass or --where")?;
+    let s = crate::tipover_study::run_study(robot, opts)?;
+    adapted.report.check_deg = Some([
+        s.forward.measured_deg,
+        s.backward.measured_deg,
+        s.left.measured_deg,
+        s.right.measured_deg,
+    ]);
+    Ok(())
+}
+
+/// The HTML report: fall angles robot vs model, the CoMs, side (x-z) and front (y-z)
+/// views with the prior CoM, the measured CoM and the added mass.
+pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
+    use twinloop_report::{Plot, SeriesStyle, number};
+    let mut rep =
+        twinloop_report::Report::new(format!("Adapting {} to the tip-over angles", r.robot));
+    rep.paragraph(
+        "Seed 000 sections III and V.B: the exact method turns the measured fall angles into \
+         the CoM; one added point mass explains its move from the prior model's CoM. Frame: \
+         the midpoint of the ankle pitch joints in the standing pose, x forward, y left, z up.",
+    );
+    rep.heading("Fall angles, deg");
+    let dirs = ["forward", "backward", "left", "right"];
+    let mut header = vec![
+        "direction".into(),
+        "robot (measured)".into(),
+        "prior model".into(),
+    ];
+    if r.check_deg.is_some() {
+        header.push("adapted model (simulated)".into());
+    }
+    let rows = (0..4)
+        .map(|k| {
+            let mut row = vec![
+                dirs[k].to_string(),
+                format!("{:.3}", r.measured_deg[k]),
+                format!("{:.3}", r.prior_model_deg[k]),
+            ];
+            if let Some(c) = r.check_deg {
+                row.push(format!("{:.3}", c[k]));
+            }
+            row
+        })
+        .collect();
+    rep.table(header, rows);
+    rep.heading("CoM, mm");
+    let mm = |v: [f64; 3]| {
+        v.iter()
+            .map(|x| format!("{:.2}", x * 1e3))
+            .collect::<Vec<_>>()
+    };
+    let mut rows = vec![
+        [vec!["prior".to_string()], mm(r.prior_com)].concat(),
+        [vec!["measured".to_string()], mm(r.measured_com)].concat(),
+        [
+            vec!["measured, 1 sigma".to_string()],
+            mm(r.measured_com_sigma),
+        ]
+        .concat(),
+    ];
+    if let Some(c) = r.adapted_com {
+        rows.push([vec!["adapted model".to_string()], mm(c)].concat());
+    }
+    if let Some(a) = &r.added {
+        rows.push(
+            [
+                vec![format!("added {} kg on {}", number(a.mass), a.host)],
+                mm(a.position),
+            ]
+            .concat(),
+        );
+        rows.push(
+            [
+                vec!["added mass, 1 sigma".to_string()],
+                mm(a.position_sigma),
+            ]
+            .concat(),
+        );
+    }
+    rep.table(vec!["".into(), "x".into(), "y".into(), "z".into()], rows);
+    for (title, i, label) in [
+        ("Side view (x-z)", 0, "x, m"),
+        ("Front view (y-z)", 1, "y, m"),
+    ] {
+        let mut p = Plot::new(title, label, "z, m")
+            .series(
+                "prior CoM",
+                &[r.prior_com[i]],
+                &[r.prior_com[2]],
+                SeriesStyle::Points,
+            )
+            .series(
+                "measured CoM",
+                &[r.measured_com[i]],
+                &[r.measured_com[2]],
+                SeriesStyle::Points,
+            );
+        if let Some(a) = &r.added {
+            p = p.series(
+                "added mass",
+                &[a.position[i]],
+                &[a.position[2]],
+                SeriesStyle::Points,
+            );
+        }
+        rep.plot(&p);
+    }
+    rep.heading("What is determined");
+    for n in &r.notes {
+        rep.paragraph(n.clone());
+    }
+    rep
+}

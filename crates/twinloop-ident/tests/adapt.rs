@@ -1,0 +1,162 @@
+//! `twinloop adapt` with a known truth (seed 000 sections III, V.B): a 0.3 kg mass is
+//! hidden on km20's torso, the simulated tip-over study of the changed robot is the
+//! "measurement", and the UNCHANGED prior is adapted from it. Checks: the adapted CoM
+//! within 3 mm of the truth's, the added mass within 2 cm of where it was put, and (the
+//! `--check`) the adapted model's simulated fall angles within 0.3 deg of the measured
+//! ones. The cases run on parallel threads; each runs the study twice (truth, check).
+
+use std::sync::OnceLock;
+use twinloop_description::Description;
+use twinloop_description::builtin::{add_point_mass, resolve};
+use twinloop_ident::adapt::{AdaptOptions, adapt};
+use twinloop_ident::tipover_study::{StudyOptions, StudyReport, run_study};
+
+const HOST: &str = "torso";
+const MASS: f64 = 0.3;
+const XYZ: [f64; 3] = [0.04, 0.02, 0.05];
+
+fn prior() -> Description {
+    resolve("builtin:km20").unwrap()
+}
+
+/// The changed robot and its measurement, shared by the cases.
+fn truth() -> &'static (Description, StudyReport) {
+    static T: OnceLock<(Description, StudyReport)> = OnceLock::new();
+    T.get_or_init(|| {
+        let mut robot = prior();
+        add_point_mass(&mut robot, HOST, MASS, XYZ).unwrap();
+        let study = run_study(&robot, &StudyOptions::default()).unwrap();
+        // Through JSON, as the CLI reads it.
+        let json = serde_json::to_string(&study).unwrap();
+        (robot, serde_json::from_str(&json).unwrap())
+    })
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn angles(s: &StudyReport) -> [f64; 4] {
+    [
+        s.forward.measured_deg,
+        s.backward.measured_deg,
+        s.left.measured_deg,
+        s.right.measured_deg,
+    ]
+}
+
+#[test]
+fn total_mass_places_the_hidden_mass() {
+    let (robot, study) = truth();
+    let m0 = twinloop_dynamics::Model::from_description(&prior())
+        .unwrap()
+        .total_mass;
+    let opts = AdaptOptions {
+        total_mass: Some(m0 + MASS),
+        ..Default::default()
+    };
+    let a = adapt(&prior(), study, &opts).unwrap();
+    let r = &a.report;
+    let added = r.added.as_ref().unwrap();
+    let true_com = study.com.truth;
+    let com_err = dist(r.adapted_com.unwrap(), true_com);
+    let pos_err = dist(added.position_host, XYZ);
+    eprintln!(
+        "total-mass: host {} mass {:.3} at {:?} (host frame; truth {XYZ:?}): position error {:.1} mm, \
+         sigma {:?} mm; CoM adapted {:?} truth {:?} measured {:?}: error {:.2} mm; {} iterations",
+        added.host,
+        added.mass,
+        added.position_host,
+        pos_err * 1e3,
+        added.position_sigma.map(|s| (s * 1e4).round() / 10.0),
+        r.adapted_com.unwrap(),
+        true_com,
+        r.measured_com,
+        com_err * 1e3,
+        r.iterations
+    );
+    eprintln!("total-mass notes: {:?}", r.notes);
+    assert_eq!(added.host, HOST);
+    assert!(com_err < 3e-3, "CoM error {com_err}");
+    assert!(pos_err < 2e-2, "position error {pos_err}");
+    // The check: the adapted model tips where the changed robot did.
+    let check = run_study(a.robot.as_ref().unwrap(), &StudyOptions::default()).unwrap();
+    let (m, c) = (angles(study), angles(&check));
+    eprintln!("total-mass check: measured {m:?} adapted model {c:?} deg");
+    for k in 0..4 {
+        assert!(
+            (m[k] - c[k]).abs() < 0.3,
+            "direction {k}: {} vs {}",
+            m[k],
+            c[k]
+        );
+    }
+    let _ = robot;
+}
+
+#[test]
+fn where_alone_places_the_mass_on_the_ray() {
+    let (_, study) = truth();
+    let opts = AdaptOptions {
+        host: Some(HOST.into()),
+        ..Default::default()
+    };
+    let a = adapt(&prior(), study, &opts).unwrap();
+    let r = &a.report;
+    let added = r.added.as_ref().unwrap();
+    let com_err = dist(r.adapted_com.unwrap(), study.com.truth);
+    eprintln!(
+        "where: mass {:.3} kg (truth {MASS}, sigma {:?}) at {:?} (host frame; truth {XYZ:?}); CoM error {:.2} mm",
+        added.mass,
+        added.mass_sigma,
+        added.position_host,
+        com_err * 1e3
+    );
+    let pos_err = dist(added.position_host, XYZ);
+    eprintln!("where: position error {:.1} mm", pos_err * 1e3);
+    // The ray fixes the CoM (the adapted CoM is the measured one) but not how far along
+    // it the mass sits.
+    assert!(com_err < 3e-3, "CoM error {com_err}");
+    assert_eq!(added.host, HOST);
+}
+
+#[test]
+fn neither_gives_the_family_and_no_model() {
+    let (_, study) = truth();
+    let a = adapt(&prior(), study, &AdaptOptions::default()).unwrap();
+    assert!(a.robot.is_none());
+    assert_eq!(a.report.mode, "family");
+    let bad = AdaptOptions {
+        host: Some("no_such_link".into()),
+        ..Default::default()
+    };
+    let e = adapt(&prior(), study, &bad).unwrap_err();
+    assert!(e.contains("no_such_link"), "{e}");
+}
+
+#[test]
+fn merge_gives_the_same_model_dynamics() {
+    let (_, study) = truth();
+    let m0 = twinloop_dynamics::Model::from_description(&prior())
+        .unwrap()
+        .total_mass;
+    let run = |merge: bool| {
+        let opts = AdaptOptions {
+            total_mass: Some(m0 + MASS),
+            host: Some(HOST.into()),
+            merge,
+            ..Default::default()
+        };
+        adapt(&prior(), study, &opts).unwrap()
+    };
+    let (link, merged) = (run(false), run(true));
+    let (a, b) = (
+        link.report.adapted_com.unwrap(),
+        merged.report.adapted_com.unwrap(),
+    );
+    assert!(dist(a, b) < 1e-9, "{a:?} vs {b:?}");
+    let robot = merged.robot.unwrap();
+    assert!(robot.link("added_mass").is_none());
+    assert_eq!(robot.links.len(), prior().links.len());
+    assert!(link.robot.unwrap().link("added_mass").is_some());
+}
