@@ -577,14 +577,16 @@ mod bus {
         };
         let mut outcome: Result<(), String> = Ok(());
         for (k, &d) in directions.iter().enumerate() {
-            if k > 0 && serial && !a.yes {
-                if let Err(e) = confirm(&format!(
+            if k > 0
+                && serial
+                && !a.yes
+                && let Err(e) = confirm(&format!(
                     "stand the robot up again for the {} lean; continue?",
                     d.name()
-                )) {
-                    outcome = Err(e.message);
-                    break;
-                }
+                ))
+            {
+                outcome = Err(e.message);
+                break;
             }
             eprintln!("leaning {} over {port} ...", d.name());
             let r: Result<TipoverResult, RobotError> =
