@@ -151,3 +151,61 @@ fn a_servo_that_does_not_answer_stops_the_tipover_with_exit_2_naming_it_and_ever
     assert!(!table.rows.is_empty());
     assert!(err.contains(&format!("{} rows", table.rows.len())), "{err}");
 }
+
+#[test]
+fn a_servo_that_reports_overload_mid_ramp_stops_the_tipover_with_exit_2_naming_it_and_every_row_recorded()
+ {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use twinloop_link::servo::{ServeOptions, VirtualBus, serve};
+    use twinloop_link::transport::PtyTransport;
+    // km20's bus with stand-in servos that track their goals and a level board: the
+    // robot never tips, so the ramp runs until the overload.
+    let mapping = twinloop_link::RobotMapping::builtin("km20").unwrap();
+    let mut bus = VirtualBus::with_tracking_model(&mapping.bus());
+    let k = mapping.joints.iter().position(|j| j.id == 7).unwrap();
+    let condition = bus.servos[k].condition.clone();
+    let mut pty = PtyTransport::open().unwrap();
+    let path = pty.path().to_str().unwrap().to_string();
+    let stop = Arc::new(AtomicBool::new(false));
+    let stop2 = stop.clone();
+    let server = std::thread::spawn(move || {
+        let o = ServeOptions {
+            emulate_baud: None,
+            stop_on_eof: false,
+        };
+        let _ = serve(&mut bus, &mut pty, &o, &stop2);
+    });
+    let record = scratch("tipover-overload.csv");
+    let child = Command::new(bin())
+        .args(["experiment", "tipover", "--port", &path])
+        .args([
+            "--map",
+            "builtin:km20",
+            "--directions",
+            "forward",
+            "--ramp",
+            "5",
+        ])
+        .arg("--record")
+        .arg(&record)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // 1 s of settling, then half a second into the ramp: overload (Protocol 1.0 bit 5).
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    condition.store(0x20, Ordering::Relaxed);
+    let o = child.wait_with_output().unwrap();
+    stop.store(true, Ordering::Relaxed);
+    server.join().unwrap();
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    let last = err.lines().last().unwrap_or("");
+    assert!(last.starts_with("error: "), "{err}");
+    assert!(last.contains("servo id 7"), "{err}");
+    assert!(last.contains("overload"), "{err}");
+    assert!(last.contains("standing pose"), "{err}");
+    let table = twinloop_io::Table::read(&record).unwrap();
+    assert!(table.rows.len() > 10, "{} rows", table.rows.len());
+    assert!(err.contains(&format!("{} rows", table.rows.len())), "{err}");
+}
