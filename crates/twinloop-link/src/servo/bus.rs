@@ -353,6 +353,19 @@ fn announce_registers<B: VirtualServoBackend>(
     }
 }
 
+/// A status packet's error byte with the servo's hardware condition added
+/// ([`VirtualServo::condition`]): 1.0 its bits, 2.0 the Alert bit.
+fn with_condition(s: &VirtualServo, error: u8) -> u8 {
+    match (
+        s.condition.load(std::sync::atomic::Ordering::Relaxed),
+        s.protocol(),
+    ) {
+        (0, _) => error,
+        (c, Protocol::V1) => error | c,
+        (_, Protocol::V2) => error | 0x80,
+    }
+}
+
 /// What one instruction needs to reach.
 struct Ctx<'a, B: VirtualServoBackend> {
     servos: &'a mut Vec<VirtualServo>,
@@ -433,6 +446,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
     /// Append a status packet from servo `k`.
     fn status(&mut self, k: usize, error: u8, data: &[u8]) {
         let s = &self.servos[k];
+        let error = with_condition(s, error);
         let mut w = PacketWriter::status(self.out, s.protocol(), s.id(), error);
         w.bytes(data);
         // A status packet of at most 4 + 1 + 65535 bytes always encodes.
@@ -724,7 +738,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
             Ok(()) => {
                 self.refresh(k);
                 let s = &self.servos[k];
-                let mut w = PacketWriter::status(self.out, protocol, s.id(), 0);
+                let mut w = PacketWriter::status(self.out, protocol, s.id(), with_condition(s, 0));
                 w.bytes(s.read(address, len));
                 let _ = w.finish();
                 self.marks.push(ReplyMark {

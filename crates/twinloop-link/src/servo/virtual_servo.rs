@@ -6,6 +6,8 @@ use crate::control_table::ControlTable;
 use crate::protocol::Protocol;
 use crate::register::{Access, Area, Item, Register};
 use crate::servo_model::ServoModel;
+use std::sync::Arc;
+use std::sync::atomic::AtomicU8;
 use std::time::Duration;
 
 /// Why a servo refuses an instruction, before it is turned into the protocol's
@@ -74,6 +76,11 @@ pub struct VirtualServo {
     staged_address: u16,
     staged: Vec<u8>,
     has_staged: bool,
+    /// Hardware condition bits added to every status packet this servo sends
+    /// (Protocol 1.0 error bits: overload 0x20, overheating 0x04, input voltage
+    /// 0x01; on 2.0 any bit sets the Alert bit). Shared, so a test can make a
+    /// served servo report a fault mid-run; 0 (the default) reports nothing.
+    pub condition: Arc<AtomicU8>,
 }
 
 impl VirtualServo {
@@ -85,6 +92,7 @@ impl VirtualServo {
             staged_address: 0,
             staged: Vec::with_capacity(64),
             has_staged: false,
+            condition: Arc::new(AtomicU8::new(0)),
         }
     }
 
