@@ -106,6 +106,53 @@ pub fn evaluate_with_response(
 ) -> Result<Evaluation> {
     model.check_shapes(&data.u, Some(&data.y), None)?;
     let mut warnings = Vec::new();
+    let stability = assess_stability(model, &mut warnings);
+    let stable = stability.stable;
+    let horizon = opts.prediction_horizon.max(1);
+    let (fit, simulated, predicted) = simulate_and_fit(model, data, horizon)?;
+    let e = model.residuals(data)?;
+    let prediction_cost = e.norm_squared() / data.len().max(1) as f64;
+    if fit.simulation.iter().any(|f| f.is_none()) && stable {
+        warnings.push(
+            "a simulation FIT is undefined (constant output or non-finite simulation)".to_string(),
+        );
+    }
+    let hsv = if stable {
+        match hankel_singular_values_of_stable(model) {
+            Ok(h) => Some(h),
+            Err(err) => {
+                warnings.push(format!("Hankel singular values: {err}"));
+                None
+            }
+        }
+    } else {
+        None
+    };
+    let order_suggestion = hsv.as_deref().and_then(suggest_order);
+    let frequency_response = sigma_response(
+        response,
+        data.sample_time.or(model.sample_time),
+        opts.frequency_points,
+    );
+    let residual_tests = finite_residual_tests(&e, data, opts.max_lag, &mut warnings);
+    Ok(Evaluation {
+        data: which.to_string(),
+        samples: data.len(),
+        fit_percent: fit,
+        prediction_cost,
+        stability,
+        hankel_singular_values: hsv,
+        order_suggestion,
+        frequency_response,
+        residual_tests,
+        warnings,
+        simulated,
+        predicted,
+    })
+}
+
+/// Poles and predictor eigenvalues, with a warning for each that is unstable.
+fn assess_stability(model: &StateSpace, warnings: &mut Vec<String>) -> Stability {
     let poles = model.poles();
     let rho = poles
         .as_ref()
@@ -131,11 +178,23 @@ pub fn evaluate_with_response(
             prho.map_or("unknown".to_string(), |r| format!("{r:.6}"))
         ));
     }
+    Stability {
+        stable,
+        spectral_radius: rho,
+        poles_outside_unit_circle: outside,
+        predictor_spectral_radius: prho,
+    }
+}
+
+/// FIT of the simulation and the `horizon`-step prediction, with both outputs
+/// kept for the plots.
+fn simulate_and_fit(
+    model: &StateSpace,
+    data: &IoData,
+    horizon: usize,
+) -> Result<(Fit, DMatrix<f64>, DMatrix<f64>)> {
     let simulated = model.simulate(&data.u, None)?;
-    let horizon = opts.prediction_horizon.max(1);
     let predicted = model.predict(data, horizon)?;
-    let e = model.residuals(data)?;
-    let prediction_cost = e.norm_squared() / data.len().max(1) as f64;
     let fit = Fit {
         simulation: fit_percent(&data.y, &simulated),
         prediction: fit_percent(&data.y, &predicted),
@@ -143,36 +202,19 @@ pub fn evaluate_with_response(
         seed_eq10_simulation: seed_eq10_percent(&data.y, &simulated),
         seed_eq10_prediction: seed_eq10_percent(&data.y, &predicted),
     };
-    if fit.simulation.iter().any(|f| f.is_none()) && stable {
-        warnings.push(
-            "a simulation FIT is undefined (constant output or non-finite simulation)".to_string(),
-        );
-    }
-    let hsv = if stable {
-        match hankel_singular_values_of_stable(model) {
-            Ok(h) => Some(h),
-            Err(err) => {
-                warnings.push(format!("Hankel singular values: {err}"));
-                None
-            }
-        }
-    } else {
-        None
-    };
-    let order_suggestion = hsv.as_deref().and_then(suggest_order);
-    let frequency_response = sigma_response(
-        response,
-        data.sample_time.or(model.sample_time),
-        opts.frequency_points,
-    );
-    let residual_tests = if e.iter().all(|x| x.is_finite()) {
-        residual_tests(
-            &e,
-            &data.u,
-            &data.output_names,
-            &data.input_names,
-            opts.max_lag,
-        )
+    Ok((fit, simulated, predicted))
+}
+
+/// Residual tests of `e`; on zeros when `e` is not finite, so that the report
+/// keeps its shape, with a warning.
+fn finite_residual_tests(
+    e: &DMatrix<f64>,
+    data: &IoData,
+    max_lag: usize,
+    warnings: &mut Vec<String>,
+) -> ResidualTests {
+    if e.iter().all(|x| x.is_finite()) {
+        residual_tests(e, &data.u, &data.output_names, &data.input_names, max_lag)
     } else {
         warnings.push("residual tests skipped: the prediction errors are not finite".to_string());
         residual_tests(
@@ -180,28 +222,9 @@ pub fn evaluate_with_response(
             &data.u,
             &data.output_names,
             &data.input_names,
-            opts.max_lag,
+            max_lag,
         )
-    };
-    Ok(Evaluation {
-        data: which.to_string(),
-        samples: data.len(),
-        fit_percent: fit,
-        prediction_cost,
-        stability: Stability {
-            stable,
-            spectral_radius: rho,
-            poles_outside_unit_circle: outside,
-            predictor_spectral_radius: prho,
-        },
-        hankel_singular_values: hsv,
-        order_suggestion,
-        frequency_response,
-        residual_tests,
-        warnings,
-        simulated,
-        predicted,
-    })
+    }
 }
 
 /// An ARX model and its evaluation.
