@@ -461,53 +461,14 @@ pub fn identify_state_space(
     let t0 = std::time::Instant::now();
     let initial = match opts.method {
         SsMethod::N4sid | SsMethod::Pem => {
-            let s = n4sid(
-                est,
-                &SubspaceOptions {
-                    order: Some(opts.order),
-                    horizon: opts.horizon,
-                    feedthrough: opts.pem.feedthrough,
-                },
-            )?;
-            warnings.extend(s.warnings.iter().map(|w| format!("subspace: {w}")));
-            subspace_sv = Some(s.singular_values.clone());
-            s.model
+            let (model, sv) = subspace_initial(est, opts, &mut warnings)?;
+            subspace_sv = Some(sv);
+            model
         }
         SsMethod::ArxReducePem => {
-            let arx = estimate_arx(est, opts.arx_orders)?;
-            let full = arx.to_state_space();
-            stages.push(stage(
-                &format!(
-                    "arx (na={}, nb={}, nk={})",
-                    opts.arx_orders.na, opts.arx_orders.nb, opts.arx_orders.nk
-                ),
-                &full,
-            )?);
-            if opts.order > full.n() {
-                return Err(SysidError::order(format!(
-                    "order {} is above the ARX realisation's {} states: raise na/nb or lower the order",
-                    opts.order,
-                    full.n()
-                )));
-            }
-            let (mut red, hsv, w) = reduce_with_noise_model(&full, opts.order)?;
-            warnings.extend(w);
+            let (model, hsv) = arx_reduced_initial(est, opts, &stage, &mut stages, &mut warnings)?;
             arx_hsv = Some(hsv);
-            if !opts.pem.feedthrough {
-                if red.d.amax() > 0.0 {
-                    warnings.push(format!(
-                        "the ARX model with nk = {} has a direct feedthrough; it is dropped because D is \
-                         not estimated (ask for a feedthrough to keep it)",
-                        opts.arx_orders.nk
-                    ));
-                }
-                red.d.fill(0.0);
-            }
-            stages.push(stage(
-                &format!("balanced truncation to order {}", opts.order),
-                &red,
-            )?);
-            red
+            model
         }
     };
     let (model, x0, pem_summary) = if opts.method == SsMethod::N4sid {
@@ -516,16 +477,7 @@ pub fn identify_state_space(
         if opts.method == SsMethod::Pem {
             stages.push(stage("n4sid", &initial)?);
         }
-        let r = pem(est, &initial, None, &opts.pem, progress)?;
-        let summary = PemSummary {
-            iterations: r.iterations,
-            free_parameters: r.free_parameters,
-            initial_cost: r.initial_cost,
-            final_cost: r.final_cost,
-            termination: r.termination.clone(),
-            cost_history: r.cost_history.clone(),
-        };
-        (r.model, r.x0, Some(summary))
+        refine_by_pem(est, &initial, opts, progress)?
     };
     let estimation_seconds = t0.elapsed().as_secs_f64();
     let mut evaluation = evaluate(&model, ev_data, which, eopts)?;
@@ -552,6 +504,89 @@ pub fn identify_state_space(
         arx_hankel_singular_values: arx_hsv,
         warnings,
     })
+}
+
+/// The n4sid model of the `N4sid` and `Pem` routes, with the projection's
+/// singular values.
+fn subspace_initial(
+    est: &IoData,
+    opts: &SsOptions,
+    warnings: &mut Vec<String>,
+) -> Result<(StateSpace, Vec<f64>)> {
+    let s = n4sid(
+        est,
+        &SubspaceOptions {
+            order: Some(opts.order),
+            horizon: opts.horizon,
+            feedthrough: opts.pem.feedthrough,
+        },
+    )?;
+    warnings.extend(s.warnings.iter().map(|w| format!("subspace: {w}")));
+    Ok((s.model, s.singular_values))
+}
+
+/// The `ArxReducePem` route's start: a high-order ARX model reduced by balanced
+/// truncation, each recorded as a stage; returns the Hankel singular values too.
+fn arx_reduced_initial(
+    est: &IoData,
+    opts: &SsOptions,
+    stage: &dyn Fn(&str, &StateSpace) -> Result<Stage>,
+    stages: &mut Vec<Stage>,
+    warnings: &mut Vec<String>,
+) -> Result<(StateSpace, Vec<f64>)> {
+    let arx = estimate_arx(est, opts.arx_orders)?;
+    let full = arx.to_state_space();
+    stages.push(stage(
+        &format!(
+            "arx (na={}, nb={}, nk={})",
+            opts.arx_orders.na, opts.arx_orders.nb, opts.arx_orders.nk
+        ),
+        &full,
+    )?);
+    if opts.order > full.n() {
+        return Err(SysidError::order(format!(
+            "order {} is above the ARX realisation's {} states: raise na/nb or lower the order",
+            opts.order,
+            full.n()
+        )));
+    }
+    let (mut red, hsv, w) = reduce_with_noise_model(&full, opts.order)?;
+    warnings.extend(w);
+    if !opts.pem.feedthrough {
+        if red.d.amax() > 0.0 {
+            warnings.push(format!(
+                "the ARX model with nk = {} has a direct feedthrough; it is dropped because D is \
+                 not estimated (ask for a feedthrough to keep it)",
+                opts.arx_orders.nk
+            ));
+        }
+        red.d.fill(0.0);
+    }
+    stages.push(stage(
+        &format!("balanced truncation to order {}", opts.order),
+        &red,
+    )?);
+    Ok((red, hsv))
+}
+
+/// The prediction-error search from `initial`: the model, its initial state and a
+/// summary of the search.
+fn refine_by_pem(
+    est: &IoData,
+    initial: &StateSpace,
+    opts: &SsOptions,
+    progress: &mut dyn FnMut(&PemProgress),
+) -> Result<(StateSpace, DVector<f64>, Option<PemSummary>)> {
+    let r = pem(est, initial, None, &opts.pem, progress)?;
+    let summary = PemSummary {
+        iterations: r.iterations,
+        free_parameters: r.free_parameters,
+        initial_cost: r.initial_cost,
+        final_cost: r.final_cost,
+        termination: r.termination.clone(),
+        cost_history: r.cost_history.clone(),
+    };
+    Ok((r.model, r.x0, Some(summary)))
 }
 
 fn evaluate_fit(model: &StateSpace, data: &IoData, horizon: usize) -> Result<Fit> {
