@@ -36,7 +36,7 @@
 //! Axes of fixed and floating joints are not checked: URDF ignores them (many
 //! files write `0 0 0` there).
 
-use crate::description::{Description, Inertia, JointKind};
+use crate::description::{Description, Inertia, Joint, JointKind};
 use serde::Serialize;
 use std::fmt;
 
@@ -444,91 +444,131 @@ fn check_moving_masses(robot: &Description, out: &mut Vec<Finding>) {
     }
 }
 
-fn check_joint(j: &crate::description::Joint, out: &mut Vec<Finding>) {
-    let at = |severity, code, message| finding(severity, code, Subject::Joint, &j.name, message);
-    let kind = j.kind.urdf_name();
+/// All joint checks, in the order their findings are reported.
+fn check_joint(j: &Joint, out: &mut Vec<Finding>) {
     let ranged = matches!(j.kind, JointKind::Revolute | JointKind::Prismatic);
-    let limit = j.limit.unwrap_or_default();
     if ranged {
-        match (limit.lower, limit.upper) {
-            (Some(lo), Some(hi)) if lo > hi => out.push(at(
-                Severity::Error,
-                codes::LIMITS_INVERTED,
-                format!("lower limit {} is above upper limit {}", num(lo), num(hi)),
-            )),
-            (Some(lo), Some(hi)) if lo == hi => out.push(at(
-                Severity::Warning,
-                codes::LIMITS_EMPTY_RANGE,
-                format!(
-                    "lower and upper limit are both {}: the joint cannot move",
-                    num(lo)
-                ),
-            )),
-            (Some(_), Some(_)) => {}
-            (lo, hi) => {
-                let missing: Vec<&str> = [("lower", lo), ("upper", hi)]
-                    .iter()
-                    .filter(|(_, v)| v.is_none())
-                    .map(|(n, _)| *n)
-                    .collect();
-                out.push(at(
-                    Severity::Warning,
-                    codes::MISSING_LIMITS,
-                    format!(
-                        "{kind} joint without {} limit: nothing bounds its range in simulation \
-                         (URDF requires both; some readers take 0 and lock the joint)",
-                        missing.join("/")
-                    ),
-                ));
-            }
-        }
-        let missing: Vec<&str> = [("effort", limit.effort), ("velocity", limit.velocity)]
-            .iter()
-            .filter(|(_, v)| v.is_none())
-            .map(|(n, _)| *n)
-            .collect();
-        if !missing.is_empty() {
-            out.push(at(
-                Severity::Info,
-                codes::MISSING_EFFORT_VELOCITY,
-                format!(
-                    "{kind} joint without {} limit: actuator saturation is unknown",
-                    missing.join(" and ")
-                ),
-            ));
-        }
+        check_position_limits(j, out);
+        check_effort_velocity_present(j, out);
     }
     if matches!(
         j.kind,
         JointKind::Revolute | JointKind::Prismatic | JointKind::Continuous
     ) {
-        for (name, value) in [("effort", limit.effort), ("velocity", limit.velocity)] {
-            if let Some(v) = value
-                && v <= 0.0
-            {
-                out.push(at(
-                    Severity::Warning,
-                    codes::ZERO_EFFORT_OR_VELOCITY,
-                    format!("{name} limit is {}: the joint could not be driven", num(v)),
-                ));
-            }
-        }
-        let a = j.axis_or_default();
-        let norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-        if (norm - 1.0).abs() > AXIS_NORM_TOLERANCE {
-            out.push(at(
+        check_effort_velocity_positive(j, out);
+        check_axis_norm(j, out);
+    }
+    check_mimic(j, out);
+}
+
+/// A finding about joint `j`.
+fn joint_finding(j: &Joint, severity: Severity, code: &'static str, message: String) -> Finding {
+    finding(severity, code, Subject::Joint, &j.name, message)
+}
+
+/// `limits-inverted`, `limits-empty-range` and `missing-limits` of a ranged joint.
+fn check_position_limits(j: &Joint, out: &mut Vec<Finding>) {
+    let kind = j.kind.urdf_name();
+    let limit = j.limit.unwrap_or_default();
+    match (limit.lower, limit.upper) {
+        (Some(lo), Some(hi)) if lo > hi => out.push(joint_finding(
+            j,
+            Severity::Error,
+            codes::LIMITS_INVERTED,
+            format!("lower limit {} is above upper limit {}", num(lo), num(hi)),
+        )),
+        (Some(lo), Some(hi)) if lo == hi => out.push(joint_finding(
+            j,
+            Severity::Warning,
+            codes::LIMITS_EMPTY_RANGE,
+            format!(
+                "lower and upper limit are both {}: the joint cannot move",
+                num(lo)
+            ),
+        )),
+        (Some(_), Some(_)) => {}
+        (lo, hi) => {
+            let missing: Vec<&str> = [("lower", lo), ("upper", hi)]
+                .iter()
+                .filter(|(_, v)| v.is_none())
+                .map(|(n, _)| *n)
+                .collect();
+            out.push(joint_finding(
+                j,
                 Severity::Warning,
-                codes::NON_UNIT_AXIS,
+                codes::MISSING_LIMITS,
                 format!(
-                    "axis ({}, {}, {}) has norm {}; twinloop normalises it, other tools may not",
-                    num(a[0]),
-                    num(a[1]),
-                    num(a[2]),
-                    num_digits(norm, 10)
+                    "{kind} joint without {} limit: nothing bounds its range in simulation \
+                     (URDF requires both; some readers take 0 and lock the joint)",
+                    missing.join("/")
                 ),
             ));
         }
     }
+}
+
+/// `missing-effort-velocity` of a ranged joint.
+fn check_effort_velocity_present(j: &Joint, out: &mut Vec<Finding>) {
+    let kind = j.kind.urdf_name();
+    let limit = j.limit.unwrap_or_default();
+    let missing: Vec<&str> = [("effort", limit.effort), ("velocity", limit.velocity)]
+        .iter()
+        .filter(|(_, v)| v.is_none())
+        .map(|(n, _)| *n)
+        .collect();
+    if !missing.is_empty() {
+        out.push(joint_finding(
+            j,
+            Severity::Info,
+            codes::MISSING_EFFORT_VELOCITY,
+            format!(
+                "{kind} joint without {} limit: actuator saturation is unknown",
+                missing.join(" and ")
+            ),
+        ));
+    }
+}
+
+/// `zero-effort-or-velocity` of a moving joint.
+fn check_effort_velocity_positive(j: &Joint, out: &mut Vec<Finding>) {
+    let limit = j.limit.unwrap_or_default();
+    for (name, value) in [("effort", limit.effort), ("velocity", limit.velocity)] {
+        if let Some(v) = value
+            && v <= 0.0
+        {
+            out.push(joint_finding(
+                j,
+                Severity::Warning,
+                codes::ZERO_EFFORT_OR_VELOCITY,
+                format!("{name} limit is {}: the joint could not be driven", num(v)),
+            ));
+        }
+    }
+}
+
+/// `non-unit-axis` of a moving joint.
+fn check_axis_norm(j: &Joint, out: &mut Vec<Finding>) {
+    let a = j.axis_or_default();
+    let norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    if (norm - 1.0).abs() > AXIS_NORM_TOLERANCE {
+        out.push(joint_finding(
+            j,
+            Severity::Warning,
+            codes::NON_UNIT_AXIS,
+            format!(
+                "axis ({}, {}, {}) has norm {}; twinloop normalises it, other tools may not",
+                num(a[0]),
+                num(a[1]),
+                num(a[2]),
+                num_digits(norm, 10)
+            ),
+        ));
+    }
+}
+
+/// `mimic-joint`: twinloop does not couple mimic joints.
+fn check_mimic(j: &Joint, out: &mut Vec<Finding>) {
+    let kind = j.kind.urdf_name();
     if let Some(m) = &j.mimic {
         let how = format!(
             "mimics \"{}\" (q = {} * q_{} + {})",
@@ -538,13 +578,15 @@ fn check_joint(j: &crate::description::Joint, out: &mut Vec<Finding>) {
             num(m.offset)
         );
         if j.kind == JointKind::Fixed {
-            out.push(at(
+            out.push(joint_finding(
+                j,
                 Severity::Info,
                 codes::MIMIC_JOINT,
                 format!("{how} but is fixed: the mimic has no effect"),
             ));
         } else {
-            out.push(at(
+            out.push(joint_finding(
+                j,
                 Severity::Warning,
                 codes::MIMIC_JOINT,
                 format!("{how}; twinloop's dynamics treats it as an independent {kind} joint"),

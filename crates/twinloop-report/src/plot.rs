@@ -150,13 +150,61 @@ impl Plot {
     }
 
     pub fn to_svg(&self) -> String {
+        let f = self.frame();
+        let mut s = String::new();
+        self.write_axes(&mut s, &f);
+        self.write_ticks(&mut s, &f);
+        self.write_hlines(&mut s, &f);
+        for (i, se) in self.series.iter().enumerate() {
+            let color = PALETTE[i % PALETTE.len()];
+            self.write_series(&mut s, &f, se, color);
+            write_legend_entry(&mut s, &f, i, &se.name, color);
+        }
+        s.push_str("</svg>");
+        s
+    }
+
+    /// Margins (room for the legend on the right) and the padded data ranges.
+    fn frame(&self) -> Frame {
         let (w, h) = (self.width, self.height);
         let (ml, mr, mt, mb) = (70.0, 160.0, 30.0, 45.0);
         let (pw, ph) = (w - ml - mr, h - mt - mb);
         let (x0, x1, y0, y1) = self.ranges();
-        let px = |x: f64| ml + (self.tx(x) - x0) / (x1 - x0) * pw;
-        let py = |y: f64| mt + ph - (self.ty(y) - y0) / (y1 - y0) * ph;
-        let mut s = String::new();
+        Frame {
+            w,
+            h,
+            ml,
+            mt,
+            pw,
+            ph,
+            x0,
+            x1,
+            y0,
+            y1,
+        }
+    }
+
+    /// Screen x of data value `x`.
+    fn px(&self, f: &Frame, x: f64) -> f64 {
+        f.ml + (self.tx(x) - f.x0) / (f.x1 - f.x0) * f.pw
+    }
+
+    /// Screen y of data value `y`.
+    fn py(&self, f: &Frame, y: f64) -> f64 {
+        f.mt + f.ph - (self.ty(y) - f.y0) / (f.y1 - f.y0) * f.ph
+    }
+
+    /// The `<svg>` opening, plot frame, title and axis labels.
+    fn write_axes(&self, s: &mut String, f: &Frame) {
+        let Frame {
+            w,
+            h,
+            ml,
+            mt,
+            pw,
+            ph,
+            ..
+        } = *f;
         let _ = write!(
             s,
             "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-size=\"12\" font-family=\"sans-serif\">\
@@ -172,7 +220,21 @@ impl Plot {
             mt + ph / 2.0,
             escape(&self.y_label)
         );
-        // Ticks: 5 on each axis, in data units (powers of ten on a log axis).
+    }
+
+    /// Ticks: 5 on each axis, in data units (powers of ten on a log axis).
+    fn write_ticks(&self, s: &mut String, f: &Frame) {
+        let Frame {
+            ml,
+            mt,
+            pw,
+            ph,
+            x0,
+            x1,
+            y0,
+            y1,
+            ..
+        } = *f;
         for k in 0..=4 {
             let f = k as f64 / 4.0;
             let (xv, yv) = (x0 + f * (x1 - x0), y0 + f * (y1 - y0));
@@ -193,8 +255,13 @@ impl Plot {
                 tick(yl)
             );
         }
+    }
+
+    /// Dashed horizontal reference lines, labelled on the right.
+    fn write_hlines(&self, s: &mut String, f: &Frame) {
+        let Frame { ml, pw, .. } = *f;
         for (y, label) in &self.hlines {
-            let sy = py(*y);
+            let sy = self.py(f, *y);
             if sy.is_finite() {
                 let _ = write!(
                     s,
@@ -207,84 +274,106 @@ impl Plot {
                 );
             }
         }
-        for (i, se) in self.series.iter().enumerate() {
-            let color = PALETTE[i % PALETTE.len()];
-            let pts: Vec<(f64, f64)> =
-                se.x.iter()
-                    .zip(&se.y)
-                    .filter(|(x, y)| {
-                        x.is_finite()
-                            && y.is_finite()
-                            && !(self.log_y && **y <= 0.0)
-                            && !(self.log_x && **x <= 0.0)
-                    })
-                    .map(|(&x, &y)| (px(x), py(y)))
-                    .collect();
-            match se.style {
-                SeriesStyle::Line | SeriesStyle::DashedLine => {
-                    // Thin long series so the file stays small: at most ~4 points per pixel.
-                    let step = (pts.len() as f64 / (4.0 * pw)).ceil().max(1.0) as usize;
-                    let mut d = String::new();
-                    for (k, (x, y)) in pts
-                        .iter()
-                        .enumerate()
-                        .filter(|(k, _)| k % step == 0 || *k + 1 == pts.len())
-                    {
-                        let _ = write!(d, "{}{:.1},{:.1}", if k == 0 { "M" } else { "L" }, x, y);
-                    }
-                    let dash = if se.style == SeriesStyle::DashedLine {
-                        " stroke-dasharray=\"6 3\""
+    }
+
+    /// One series in its style; points that the axes cannot show are dropped.
+    fn write_series(&self, s: &mut String, f: &Frame, se: &Series, color: &str) {
+        let Frame { mt, pw, ph, .. } = *f;
+        let pts: Vec<(f64, f64)> =
+            se.x.iter()
+                .zip(&se.y)
+                .filter(|(x, y)| {
+                    x.is_finite()
+                        && y.is_finite()
+                        && !(self.log_y && **y <= 0.0)
+                        && !(self.log_x && **x <= 0.0)
+                })
+                .map(|(&x, &y)| (self.px(f, x), self.py(f, y)))
+                .collect();
+        match se.style {
+            SeriesStyle::Line | SeriesStyle::DashedLine => {
+                // Thin long series so the file stays small: at most ~4 points per pixel.
+                let step = (pts.len() as f64 / (4.0 * pw)).ceil().max(1.0) as usize;
+                let mut d = String::new();
+                for (k, (x, y)) in pts
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| k % step == 0 || *k + 1 == pts.len())
+                {
+                    let _ = write!(d, "{}{:.1},{:.1}", if k == 0 { "M" } else { "L" }, x, y);
+                }
+                let dash = if se.style == SeriesStyle::DashedLine {
+                    " stroke-dasharray=\"6 3\""
+                } else {
+                    ""
+                };
+                let _ = write!(
+                    s,
+                    "<path d=\"{d}\" fill=\"none\" stroke=\"{color}\" stroke-width=\"1.3\"{dash}/>"
+                );
+            }
+            SeriesStyle::Points => {
+                for (x, y) in &pts {
+                    let _ = write!(
+                        s,
+                        "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"2.5\" fill=\"{color}\"/>"
+                    );
+                }
+            }
+            SeriesStyle::Bars => {
+                let base = if self.log_y {
+                    mt + ph
+                } else {
+                    self.py(f, 0.0).clamp(mt, mt + ph)
+                };
+                let bw = (pw / (pts.len().max(1) as f64) * 0.6).clamp(1.0, 30.0);
+                for (x, y) in &pts {
+                    let (top, hgt) = if *y < base {
+                        (*y, base - y)
                     } else {
-                        ""
+                        (base, y - base)
                     };
                     let _ = write!(
                         s,
-                        "<path d=\"{d}\" fill=\"none\" stroke=\"{color}\" stroke-width=\"1.3\"{dash}/>"
+                        "<rect x=\"{:.1}\" y=\"{top:.1}\" width=\"{bw:.1}\" height=\"{hgt:.1}\" fill=\"{color}\"/>",
+                        x - bw / 2.0
                     );
                 }
-                SeriesStyle::Points => {
-                    for (x, y) in &pts {
-                        let _ = write!(
-                            s,
-                            "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"2.5\" fill=\"{color}\"/>"
-                        );
-                    }
-                }
-                SeriesStyle::Bars => {
-                    let base = if self.log_y {
-                        mt + ph
-                    } else {
-                        py(0.0).clamp(mt, mt + ph)
-                    };
-                    let bw = (pw / (pts.len().max(1) as f64) * 0.6).clamp(1.0, 30.0);
-                    for (x, y) in &pts {
-                        let (top, hgt) = if *y < base {
-                            (*y, base - y)
-                        } else {
-                            (base, y - base)
-                        };
-                        let _ = write!(
-                            s,
-                            "<rect x=\"{:.1}\" y=\"{top:.1}\" width=\"{bw:.1}\" height=\"{hgt:.1}\" fill=\"{color}\"/>",
-                            x - bw / 2.0
-                        );
-                    }
-                }
             }
-            let ly = mt + 14.0 + 16.0 * i as f64;
-            let _ = write!(
-                s,
-                "<rect x=\"{}\" y=\"{}\" width=\"12\" height=\"3\" fill=\"{color}\"/><text x=\"{}\" y=\"{}\">{}</text>",
-                ml + pw + 8.0,
-                ly - 4.0,
-                ml + pw + 24.0,
-                ly,
-                escape(&se.name)
-            );
         }
-        s.push_str("</svg>");
-        s
     }
+}
+
+/// Plot geometry in pixels and the data ranges it maps (after the axis transforms).
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    w: f64,
+    h: f64,
+    /// Left and top margins.
+    ml: f64,
+    mt: f64,
+    /// Width and height of the plotting area.
+    pw: f64,
+    ph: f64,
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+}
+
+/// The `i`-th legend entry, right of the plotting area.
+fn write_legend_entry(s: &mut String, f: &Frame, i: usize, name: &str, color: &str) {
+    let Frame { ml, mt, pw, .. } = *f;
+    let ly = mt + 14.0 + 16.0 * i as f64;
+    let _ = write!(
+        s,
+        "<rect x=\"{}\" y=\"{}\" width=\"12\" height=\"3\" fill=\"{color}\"/><text x=\"{}\" y=\"{}\">{}</text>",
+        ml + pw + 8.0,
+        ly - 4.0,
+        ml + pw + 24.0,
+        ly,
+        escape(name)
+    );
 }
 
 fn tick(v: f64) -> String {

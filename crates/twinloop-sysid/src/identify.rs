@@ -106,6 +106,53 @@ pub fn evaluate_with_response(
 ) -> Result<Evaluation> {
     model.check_shapes(&data.u, Some(&data.y), None)?;
     let mut warnings = Vec::new();
+    let stability = assess_stability(model, &mut warnings);
+    let stable = stability.stable;
+    let horizon = opts.prediction_horizon.max(1);
+    let (fit, simulated, predicted) = simulate_and_fit(model, data, horizon)?;
+    let e = model.residuals(data)?;
+    let prediction_cost = e.norm_squared() / data.len().max(1) as f64;
+    if fit.simulation.iter().any(|f| f.is_none()) && stable {
+        warnings.push(
+            "a simulation FIT is undefined (constant output or non-finite simulation)".to_string(),
+        );
+    }
+    let hsv = if stable {
+        match hankel_singular_values_of_stable(model) {
+            Ok(h) => Some(h),
+            Err(err) => {
+                warnings.push(format!("Hankel singular values: {err}"));
+                None
+            }
+        }
+    } else {
+        None
+    };
+    let order_suggestion = hsv.as_deref().and_then(suggest_order);
+    let frequency_response = sigma_response(
+        response,
+        data.sample_time.or(model.sample_time),
+        opts.frequency_points,
+    );
+    let residual_tests = finite_residual_tests(&e, data, opts.max_lag, &mut warnings);
+    Ok(Evaluation {
+        data: which.to_string(),
+        samples: data.len(),
+        fit_percent: fit,
+        prediction_cost,
+        stability,
+        hankel_singular_values: hsv,
+        order_suggestion,
+        frequency_response,
+        residual_tests,
+        warnings,
+        simulated,
+        predicted,
+    })
+}
+
+/// Poles and predictor eigenvalues, with a warning for each that is unstable.
+fn assess_stability(model: &StateSpace, warnings: &mut Vec<String>) -> Stability {
     let poles = model.poles();
     let rho = poles
         .as_ref()
@@ -131,11 +178,23 @@ pub fn evaluate_with_response(
             prho.map_or("unknown".to_string(), |r| format!("{r:.6}"))
         ));
     }
+    Stability {
+        stable,
+        spectral_radius: rho,
+        poles_outside_unit_circle: outside,
+        predictor_spectral_radius: prho,
+    }
+}
+
+/// FIT of the simulation and the `horizon`-step prediction, with both outputs
+/// kept for the plots.
+fn simulate_and_fit(
+    model: &StateSpace,
+    data: &IoData,
+    horizon: usize,
+) -> Result<(Fit, DMatrix<f64>, DMatrix<f64>)> {
     let simulated = model.simulate(&data.u, None)?;
-    let horizon = opts.prediction_horizon.max(1);
     let predicted = model.predict(data, horizon)?;
-    let e = model.residuals(data)?;
-    let prediction_cost = e.norm_squared() / data.len().max(1) as f64;
     let fit = Fit {
         simulation: fit_percent(&data.y, &simulated),
         prediction: fit_percent(&data.y, &predicted),
@@ -143,36 +202,19 @@ pub fn evaluate_with_response(
         seed_eq10_simulation: seed_eq10_percent(&data.y, &simulated),
         seed_eq10_prediction: seed_eq10_percent(&data.y, &predicted),
     };
-    if fit.simulation.iter().any(|f| f.is_none()) && stable {
-        warnings.push(
-            "a simulation FIT is undefined (constant output or non-finite simulation)".to_string(),
-        );
-    }
-    let hsv = if stable {
-        match hankel_singular_values_of_stable(model) {
-            Ok(h) => Some(h),
-            Err(err) => {
-                warnings.push(format!("Hankel singular values: {err}"));
-                None
-            }
-        }
-    } else {
-        None
-    };
-    let order_suggestion = hsv.as_deref().and_then(suggest_order);
-    let frequency_response = sigma_response(
-        response,
-        data.sample_time.or(model.sample_time),
-        opts.frequency_points,
-    );
-    let residual_tests = if e.iter().all(|x| x.is_finite()) {
-        residual_tests(
-            &e,
-            &data.u,
-            &data.output_names,
-            &data.input_names,
-            opts.max_lag,
-        )
+    Ok((fit, simulated, predicted))
+}
+
+/// Residual tests of `e`; on zeros when `e` is not finite, so that the report
+/// keeps its shape, with a warning.
+fn finite_residual_tests(
+    e: &DMatrix<f64>,
+    data: &IoData,
+    max_lag: usize,
+    warnings: &mut Vec<String>,
+) -> ResidualTests {
+    if e.iter().all(|x| x.is_finite()) {
+        residual_tests(e, &data.u, &data.output_names, &data.input_names, max_lag)
     } else {
         warnings.push("residual tests skipped: the prediction errors are not finite".to_string());
         residual_tests(
@@ -180,28 +222,9 @@ pub fn evaluate_with_response(
             &data.u,
             &data.output_names,
             &data.input_names,
-            opts.max_lag,
+            max_lag,
         )
-    };
-    Ok(Evaluation {
-        data: which.to_string(),
-        samples: data.len(),
-        fit_percent: fit,
-        prediction_cost,
-        stability: Stability {
-            stable,
-            spectral_radius: rho,
-            poles_outside_unit_circle: outside,
-            predictor_spectral_radius: prho,
-        },
-        hankel_singular_values: hsv,
-        order_suggestion,
-        frequency_response,
-        residual_tests,
-        warnings,
-        simulated,
-        predicted,
-    })
+    }
 }
 
 /// An ARX model and its evaluation.
@@ -438,53 +461,14 @@ pub fn identify_state_space(
     let t0 = std::time::Instant::now();
     let initial = match opts.method {
         SsMethod::N4sid | SsMethod::Pem => {
-            let s = n4sid(
-                est,
-                &SubspaceOptions {
-                    order: Some(opts.order),
-                    horizon: opts.horizon,
-                    feedthrough: opts.pem.feedthrough,
-                },
-            )?;
-            warnings.extend(s.warnings.iter().map(|w| format!("subspace: {w}")));
-            subspace_sv = Some(s.singular_values.clone());
-            s.model
+            let (model, sv) = subspace_initial(est, opts, &mut warnings)?;
+            subspace_sv = Some(sv);
+            model
         }
         SsMethod::ArxReducePem => {
-            let arx = estimate_arx(est, opts.arx_orders)?;
-            let full = arx.to_state_space();
-            stages.push(stage(
-                &format!(
-                    "arx (na={}, nb={}, nk={})",
-                    opts.arx_orders.na, opts.arx_orders.nb, opts.arx_orders.nk
-                ),
-                &full,
-            )?);
-            if opts.order > full.n() {
-                return Err(SysidError::order(format!(
-                    "order {} is above the ARX realisation's {} states: raise na/nb or lower the order",
-                    opts.order,
-                    full.n()
-                )));
-            }
-            let (mut red, hsv, w) = reduce_with_noise_model(&full, opts.order)?;
-            warnings.extend(w);
+            let (model, hsv) = arx_reduced_initial(est, opts, &stage, &mut stages, &mut warnings)?;
             arx_hsv = Some(hsv);
-            if !opts.pem.feedthrough {
-                if red.d.amax() > 0.0 {
-                    warnings.push(format!(
-                        "the ARX model with nk = {} has a direct feedthrough; it is dropped because D is \
-                         not estimated (ask for a feedthrough to keep it)",
-                        opts.arx_orders.nk
-                    ));
-                }
-                red.d.fill(0.0);
-            }
-            stages.push(stage(
-                &format!("balanced truncation to order {}", opts.order),
-                &red,
-            )?);
-            red
+            model
         }
     };
     let (model, x0, pem_summary) = if opts.method == SsMethod::N4sid {
@@ -493,16 +477,7 @@ pub fn identify_state_space(
         if opts.method == SsMethod::Pem {
             stages.push(stage("n4sid", &initial)?);
         }
-        let r = pem(est, &initial, None, &opts.pem, progress)?;
-        let summary = PemSummary {
-            iterations: r.iterations,
-            free_parameters: r.free_parameters,
-            initial_cost: r.initial_cost,
-            final_cost: r.final_cost,
-            termination: r.termination.clone(),
-            cost_history: r.cost_history.clone(),
-        };
-        (r.model, r.x0, Some(summary))
+        refine_by_pem(est, &initial, opts, progress)?
     };
     let estimation_seconds = t0.elapsed().as_secs_f64();
     let mut evaluation = evaluate(&model, ev_data, which, eopts)?;
@@ -529,6 +504,89 @@ pub fn identify_state_space(
         arx_hankel_singular_values: arx_hsv,
         warnings,
     })
+}
+
+/// The n4sid model of the `N4sid` and `Pem` routes, with the projection's
+/// singular values.
+fn subspace_initial(
+    est: &IoData,
+    opts: &SsOptions,
+    warnings: &mut Vec<String>,
+) -> Result<(StateSpace, Vec<f64>)> {
+    let s = n4sid(
+        est,
+        &SubspaceOptions {
+            order: Some(opts.order),
+            horizon: opts.horizon,
+            feedthrough: opts.pem.feedthrough,
+        },
+    )?;
+    warnings.extend(s.warnings.iter().map(|w| format!("subspace: {w}")));
+    Ok((s.model, s.singular_values))
+}
+
+/// The `ArxReducePem` route's start: a high-order ARX model reduced by balanced
+/// truncation, each recorded as a stage; returns the Hankel singular values too.
+fn arx_reduced_initial(
+    est: &IoData,
+    opts: &SsOptions,
+    stage: &dyn Fn(&str, &StateSpace) -> Result<Stage>,
+    stages: &mut Vec<Stage>,
+    warnings: &mut Vec<String>,
+) -> Result<(StateSpace, Vec<f64>)> {
+    let arx = estimate_arx(est, opts.arx_orders)?;
+    let full = arx.to_state_space();
+    stages.push(stage(
+        &format!(
+            "arx (na={}, nb={}, nk={})",
+            opts.arx_orders.na, opts.arx_orders.nb, opts.arx_orders.nk
+        ),
+        &full,
+    )?);
+    if opts.order > full.n() {
+        return Err(SysidError::order(format!(
+            "order {} is above the ARX realisation's {} states: raise na/nb or lower the order",
+            opts.order,
+            full.n()
+        )));
+    }
+    let (mut red, hsv, w) = reduce_with_noise_model(&full, opts.order)?;
+    warnings.extend(w);
+    if !opts.pem.feedthrough {
+        if red.d.amax() > 0.0 {
+            warnings.push(format!(
+                "the ARX model with nk = {} has a direct feedthrough; it is dropped because D is \
+                 not estimated (ask for a feedthrough to keep it)",
+                opts.arx_orders.nk
+            ));
+        }
+        red.d.fill(0.0);
+    }
+    stages.push(stage(
+        &format!("balanced truncation to order {}", opts.order),
+        &red,
+    )?);
+    Ok((red, hsv))
+}
+
+/// The prediction-error search from `initial`: the model, its initial state and a
+/// summary of the search.
+fn refine_by_pem(
+    est: &IoData,
+    initial: &StateSpace,
+    opts: &SsOptions,
+    progress: &mut dyn FnMut(&PemProgress),
+) -> Result<(StateSpace, DVector<f64>, Option<PemSummary>)> {
+    let r = pem(est, initial, None, &opts.pem, progress)?;
+    let summary = PemSummary {
+        iterations: r.iterations,
+        free_parameters: r.free_parameters,
+        initial_cost: r.initial_cost,
+        final_cost: r.final_cost,
+        termination: r.termination.clone(),
+        cost_history: r.cost_history.clone(),
+    };
+    Ok((r.model, r.x0, Some(summary)))
 }
 
 fn evaluate_fit(model: &StateSpace, data: &IoData, horizon: usize) -> Result<Fit> {

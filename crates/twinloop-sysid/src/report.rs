@@ -4,6 +4,7 @@
 
 use crate::data::IoData;
 use crate::identify::{ArxIdentification, Evaluation, Fit, StateSpaceIdentification};
+use crate::resid::{CorrelationTest, ResidualTests};
 use twinloop_report::{Plot, Report, SeriesStyle};
 
 /// FIT values to print beside the model's, e.g. the seed's own results.
@@ -103,11 +104,20 @@ fn time_axis(data: &IoData) -> (Vec<f64>, &'static str) {
     }
 }
 
+/// The four report sections for one evaluation, in the seed's figure order.
 fn evaluation_sections(report: &mut Report, ev: &Evaluation, data: &IoData, fig: (u32, u32, u32)) {
+    output_comparison_section(report, ev, data, fig.0);
+    hankel_section(report, ev, fig.1);
+    frequency_response_section(report, ev, fig.2);
+    residual_section(report, ev);
+}
+
+/// One plot per output: measured against simulated, titled with its FIT.
+fn output_comparison_section(report: &mut Report, ev: &Evaluation, data: &IoData, fig: u32) {
     let (t, tl) = time_axis(data);
     report.subheading(format!(
-        "Measured and simulated outputs ({} data; seed Fig. {})",
-        ev.data, fig.0
+        "Measured and simulated outputs ({} data; seed Fig. {fig})",
+        ev.data
     ));
     report.paragraph(
         "The model is driven by the measured inputs alone from a zero state (no output feedback), \
@@ -128,7 +138,11 @@ fn evaluation_sections(report: &mut Report, ev: &Evaluation, data: &IoData, fig:
             ..plot
         });
     }
-    report.subheading(format!("Hankel singular values (seed Fig. {})", fig.1));
+}
+
+/// Hankel singular values with the suggested order, or why there are none.
+fn hankel_section(report: &mut Report, ev: &Evaluation, fig: u32) {
+    report.subheading(format!("Hankel singular values (seed Fig. {fig})"));
     match &ev.hankel_singular_values {
         Some(h) => {
             let x: Vec<f64> = (1..=h.len()).map(|k| k as f64).collect();
@@ -152,10 +166,13 @@ fn evaluation_sections(report: &mut Report, ev: &Evaluation, data: &IoData, fig:
             );
         }
     }
+}
+
+/// Singular values of the frequency response, with peak, DC gain and bandwidth.
+fn frequency_response_section(report: &mut Report, ev: &Evaluation, fig: u32) {
     let fr = &ev.frequency_response;
     report.subheading(format!(
-        "Singular values of the frequency response (seed Fig. {})",
-        fig.2
+        "Singular values of the frequency response (seed Fig. {fig})"
     ));
     let nsv = fr.sigma_db.iter().map(|r| r.len()).max().unwrap_or(0);
     let mut plot = Plot::new(
@@ -185,6 +202,10 @@ fn evaluation_sections(report: &mut Report, ev: &Evaluation, data: &IoData, fig:
         fr.bandwidth
             .map_or("not reached below the Nyquist frequency".to_string(), |b| format!("{} {}", sig(b, 4), fr.frequency_unit))
     ));
+}
+
+/// Residual tests: summary, autocorrelation plot, worst cross-correlations, table.
+fn residual_section(report: &mut Report, ev: &Evaluation) {
     let rt = &ev.residual_tests;
     report.subheading("Residual tests (seed section 8.1, eqs 11-12)");
     report.paragraph(format!(
@@ -192,6 +213,13 @@ fn evaluation_sections(report: &mut Report, ev: &Evaluation, data: &IoData, fig:
          +-{:.4}. {}",
         ev.data, rt.samples, rt.max_lag, rt.band_99, rt.summary
     ));
+    residual_autocorrelation_plot(report, rt);
+    residual_cross_correlation_plots(report, rt);
+    residual_test_table(report, rt);
+}
+
+/// Autocorrelation of each residual at positive lags, inside the 99 % band.
+fn residual_autocorrelation_plot(report: &mut Report, rt: &ResidualTests) {
     let band = rt.band_99;
     let mut auto = Plot::new("Residual autocorrelation", "lag", "correlation")
         .hline(band, "99 %")
@@ -207,11 +235,14 @@ fn evaluation_sections(report: &mut Report, ev: &Evaluation, data: &IoData, fig:
         auto = auto.series(a.residual.clone(), &x, &y, SeriesStyle::Points);
     }
     report.plot(&auto);
-    fn worst(
-        tests: &[crate::resid::CorrelationTest],
-        n: usize,
-    ) -> Vec<&crate::resid::CorrelationTest> {
-        let mut v: Vec<&crate::resid::CorrelationTest> = tests.iter().collect();
+}
+
+/// Output-output and residual-input cross-correlations: only the 4 lowest
+/// p-values each, since all pairs would crowd the plot.
+fn residual_cross_correlation_plots(report: &mut Report, rt: &ResidualTests) {
+    let band = rt.band_99;
+    fn worst(tests: &[CorrelationTest], n: usize) -> Vec<&CorrelationTest> {
+        let mut v: Vec<&CorrelationTest> = tests.iter().collect();
         v.sort_by(|a, b| a.p_value.total_cmp(&b.p_value));
         v.truncate(n);
         v
@@ -243,6 +274,11 @@ fn evaluation_sections(report: &mut Report, ev: &Evaluation, data: &IoData, fig:
         }
         report.plot(&p);
     }
+}
+
+/// Every output test, plus only the failed input tests (the passing ones are many
+/// and say little).
+fn residual_test_table(report: &mut Report, rt: &ResidualTests) {
     let mut rows = Vec::new();
     for t in rt.autocorrelation.iter().chain(&rt.cross_correlation) {
         rows.push(vec![
@@ -258,7 +294,7 @@ fn evaluation_sections(report: &mut Report, ev: &Evaluation, data: &IoData, fig:
             if t.pass { "pass" } else { "fail" }.to_string(),
         ]);
     }
-    let failed_inputs: Vec<&crate::resid::CorrelationTest> =
+    let failed_inputs: Vec<&CorrelationTest> =
         rt.input_correlation.iter().filter(|t| !t.pass).collect();
     for t in failed_inputs {
         rows.push(vec![

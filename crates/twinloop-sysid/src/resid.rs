@@ -108,16 +108,64 @@ pub fn residual_tests(
     let n = e.ncols();
     let m = max_lag.min(n.saturating_sub(2)).max(1);
     let nf = n as f64;
-    let band = NORMAL_99_TWO_SIDED / nf.sqrt();
+    let lagging = Lagging {
+        m,
+        nf,
+        band: NORMAL_99_TWO_SIDED / nf.sqrt(),
+        lags: (-(m as i64)..=(m as i64)).collect(),
+    };
     let es: Vec<Vec<f64>> = (0..e.nrows())
         .map(|i| centred(e.row(i).into_owned()))
         .collect();
     let us: Vec<Vec<f64>> = (0..u.nrows())
         .map(|i| centred(u.row(i).into_owned()))
         .collect();
-    let lags: Vec<i64> = (-(m as i64)..=(m as i64)).collect();
-    let mid = m; // index of lag 0
 
+    let mut auto = autocorrelation_tests(&es, output_names, &lagging);
+    let mut cross = output_cross_tests(&es, output_names, &lagging);
+    let mut input_tests = input_cross_tests(&es, &us, output_names, input_names, &lagging);
+    set_verdicts(&mut auto, &mut cross, &mut input_tests);
+    let whiteness_pass = auto.iter().chain(cross.iter()).all(|t| t.pass);
+    let independence_pass = input_tests.iter().all(|t| t.pass);
+    let summary = summary(
+        &auto,
+        &cross,
+        &input_tests,
+        whiteness_pass && independence_pass,
+    );
+    ResidualTests {
+        samples: n,
+        max_lag: m,
+        band_99: lagging.band,
+        autocorrelation: auto,
+        cross_correlation: cross,
+        input_correlation: input_tests,
+        whiteness_pass,
+        independence_pass,
+        pass: whiteness_pass && independence_pass,
+        summary,
+    }
+}
+
+/// What every test shares: the lag range and the sample count it depends on.
+struct Lagging {
+    /// Largest lag tested; also the index of lag 0 in a correlation vector.
+    m: usize,
+    /// Number of samples, as a float.
+    nf: f64,
+    /// Half-width of the 99 % band.
+    band: f64,
+    /// `-m..=m`.
+    lags: Vec<i64>,
+}
+
+/// Ljung-Box test per residual (seed eq 11).
+fn autocorrelation_tests(
+    es: &[Vec<f64>],
+    output_names: &[String],
+    l: &Lagging,
+) -> Vec<CorrelationTest> {
+    let (m, mid, nf, band) = (l.m, l.m, l.nf, l.band);
     let mut auto = Vec::new();
     for (i, ei) in es.iter().enumerate() {
         let r = cross_correlation(ei, ei, m);
@@ -130,7 +178,7 @@ pub fn residual_tests(
         auto.push(CorrelationTest {
             residual: output_names[i].clone(),
             with: output_names[i].clone(),
-            lags: lags[mid..].to_vec(),
+            lags: l.lags[mid..].to_vec(),
             correlation: r[mid..].to_vec(),
             outside_band: outside,
             statistic: q,
@@ -139,6 +187,16 @@ pub fn residual_tests(
             pass: true,
         });
     }
+    auto
+}
+
+/// One test per pair of residuals at lags `+-1..+-M` (seed eq 12).
+fn output_cross_tests(
+    es: &[Vec<f64>],
+    output_names: &[String],
+    l: &Lagging,
+) -> Vec<CorrelationTest> {
+    let (m, mid, nf, band) = (l.m, l.m, l.nf, l.band);
     let mut cross = Vec::new();
     for i in 0..es.len() {
         for j in i + 1..es.len() {
@@ -156,7 +214,7 @@ pub fn residual_tests(
             cross.push(CorrelationTest {
                 residual: output_names[i].clone(),
                 with: output_names[j].clone(),
-                lags: lags.clone(),
+                lags: l.lags.clone(),
                 correlation: r,
                 outside_band: outside,
                 statistic: s,
@@ -166,6 +224,19 @@ pub fn residual_tests(
             });
         }
     }
+    cross
+}
+
+/// One test per residual and input at lags `0..M`, weighted by the input's own
+/// autocorrelation.
+fn input_cross_tests(
+    es: &[Vec<f64>],
+    us: &[Vec<f64>],
+    output_names: &[String],
+    input_names: &[String],
+    l: &Lagging,
+) -> Vec<CorrelationTest> {
+    let (m, mid, nf, band) = (l.m, l.m, l.nf, l.band);
     // Input autocorrelations (Toeplitz R_u), one pseudo-inverse per input.
     let mut input_tests = Vec::new();
     let ru_pinv: Vec<(DMatrix<f64>, f64)> = us
@@ -186,7 +257,7 @@ pub fn residual_tests(
             input_tests.push(CorrelationTest {
                 residual: output_names[i].clone(),
                 with: input_names[j].clone(),
-                lags: lags.clone(),
+                lags: l.lags.clone(),
                 correlation: r,
                 outside_band: outside,
                 statistic: s,
@@ -196,6 +267,15 @@ pub fn residual_tests(
             });
         }
     }
+    input_tests
+}
+
+/// Bonferroni per family: whiteness (auto and cross) and independence (inputs).
+fn set_verdicts(
+    auto: &mut [CorrelationTest],
+    cross: &mut [CorrelationTest],
+    input_tests: &mut [CorrelationTest],
+) {
     let white_count = auto.len() + cross.len();
     let white_thr = 0.01 / white_count.max(1) as f64;
     for t in auto.iter_mut().chain(cross.iter_mut()) {
@@ -205,8 +285,16 @@ pub fn residual_tests(
     for t in input_tests.iter_mut() {
         t.pass = t.p_value > indep_thr;
     }
-    let whiteness_pass = auto.iter().chain(cross.iter()).all(|t| t.pass);
-    let independence_pass = input_tests.iter().all(|t| t.pass);
+}
+
+/// One line naming the failed tests (at most 6 of the input ones, as there can be
+/// many).
+fn summary(
+    auto: &[CorrelationTest],
+    cross: &[CorrelationTest],
+    input_tests: &[CorrelationTest],
+    pass: bool,
+) -> String {
     let failed = |ts: &[CorrelationTest]| -> Vec<String> {
         ts.iter()
             .filter(|t| !t.pass)
@@ -219,49 +307,34 @@ pub fn residual_tests(
             })
             .collect()
     };
-    let mut summary = String::new();
-    if whiteness_pass && independence_pass {
-        summary.push_str(
-            "pass: residuals are white and uncorrelated with the inputs (family-wise 99 %)",
-        );
-    } else {
-        let mut parts = Vec::new();
-        let (fa, fc, fi) = (failed(&auto), failed(&cross), failed(&input_tests));
-        if !fa.is_empty() {
-            parts.push(format!("residuals not white: {}", fa.join(", ")));
-        }
-        if !fc.is_empty() {
-            parts.push(format!(
-                "residuals correlated across outputs: {}",
-                fc.join(", ")
-            ));
-        }
-        if !fi.is_empty() {
-            let shown: Vec<String> = fi.iter().take(6).cloned().collect();
-            let more = if fi.len() > 6 {
-                format!(" and {} more", fi.len() - 6)
-            } else {
-                String::new()
-            };
-            parts.push(format!(
-                "residuals correlated with inputs: {}{more}",
-                shown.join(", ")
-            ));
-        }
-        summary = format!("fail: {}", parts.join("; "));
+    if pass {
+        return "pass: residuals are white and uncorrelated with the inputs (family-wise 99 %)"
+            .to_string();
     }
-    ResidualTests {
-        samples: n,
-        max_lag: m,
-        band_99: band,
-        autocorrelation: auto,
-        cross_correlation: cross,
-        input_correlation: input_tests,
-        whiteness_pass,
-        independence_pass,
-        pass: whiteness_pass && independence_pass,
-        summary,
+    let mut parts = Vec::new();
+    let (fa, fc, fi) = (failed(auto), failed(cross), failed(input_tests));
+    if !fa.is_empty() {
+        parts.push(format!("residuals not white: {}", fa.join(", ")));
     }
+    if !fc.is_empty() {
+        parts.push(format!(
+            "residuals correlated across outputs: {}",
+            fc.join(", ")
+        ));
+    }
+    if !fi.is_empty() {
+        let shown: Vec<String> = fi.iter().take(6).cloned().collect();
+        let more = if fi.len() > 6 {
+            format!(" and {} more", fi.len() - 6)
+        } else {
+            String::new()
+        };
+        parts.push(format!(
+            "residuals correlated with inputs: {}{more}",
+            shown.join(", ")
+        ));
+    }
+    format!("fail: {}", parts.join("; "))
 }
 
 /// Pseudo-inverse of a symmetric positive semi-definite matrix and its rank

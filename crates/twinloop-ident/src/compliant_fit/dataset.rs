@@ -45,76 +45,16 @@ impl Dataset {
                 "{source}: empty file; expected a header with columns t, xr, zr, x, z, phase"
             ));
         };
-        let names: Vec<&str> = header
-            .split(',')
-            .map(|c| c.trim().trim_matches('"'))
-            .collect();
-        let mut index = [0usize; 6];
-        for (k, want) in COLUMNS.iter().enumerate() {
-            index[k] = names.iter().position(|n| n == want).ok_or_else(|| {
-                IdentError::new(format!(
-                    "{source}: no column `{want}` (the fit needs t, xr, zr, x, z, phase; found {})",
-                    names.join(", ")
-                ))
-            })?;
-        }
+        let (ncols, index) = column_index(header, source)?;
         let mut reference = SagittalReference::default();
         let (mut x, mut z) = (Vec::new(), Vec::new());
-        let mut row = [0.0; 6];
         let mut first_step = None;
         for (ln, line) in lines {
             let line_no = ln + 1;
-            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-            if cells.len() != names.len() {
-                return err(format!(
-                    "{source}, line {line_no}: {} cells, but the header has {}",
-                    cells.len(),
-                    names.len()
-                ));
-            }
-            for (k, col) in COLUMNS.iter().enumerate() {
-                let cell = cells[index[k]];
-                let v: f64 = cell.parse().map_err(|_| {
-                    IdentError::new(format!(
-                        "{source}, line {line_no}, column {col}: \"{cell}\" is not a number"
-                    ))
-                })?;
-                if !v.is_finite() {
-                    return err(format!(
-                        "{source}, line {line_no}, column {col}: {cell} (the data must be finite; \
-                         drop or repair the sample)"
-                    ));
-                }
-                row[k] = v;
-            }
-            let [t, xr, zr, xm, zm, phase] = row;
-            let double = if phase == 0.0 {
-                false
-            } else if phase == 1.0 {
-                true
-            } else {
-                return err(format!(
-                    "{source}, line {line_no}, column phase: {phase} (0 = single support, 1 = double)"
-                ));
-            };
+            let [t, xr, zr, xm, zm, phase] = parse_row(line, ncols, &index, source, line_no)?;
+            let double = double_support(phase, source, line_no)?;
             if let Some(&prev) = reference.t.last() {
-                let h: f64 = t - prev;
-                if h <= 0.0 {
-                    return err(format!(
-                        "{source}, line {line_no}, column t: time {t} does not increase (previous {prev})"
-                    ));
-                }
-                match first_step {
-                    None => first_step = Some(h),
-                    Some(h0) => {
-                        if (h - h0).abs() > 1e-6 * h0 {
-                            return err(format!(
-                                "{source}, line {line_no}, column t: time step {h} after t = {prev}, \
-                                 but the sampling interval is {h0}: a gap or jitter (the fit needs uniform sampling)"
-                            ));
-                        }
-                    }
-                }
+                check_step(prev, t, &mut first_step, source, line_no)?;
             }
             reference.t.push(t);
             reference.xr.push(xr);
@@ -167,6 +107,100 @@ impl Dataset {
         }
         s
     }
+}
+
+/// The number of header cells and where each of [`COLUMNS`] is among them.
+fn column_index(header: &str, source: &str) -> Result<(usize, [usize; 6]), IdentError> {
+    let names: Vec<&str> = header
+        .split(',')
+        .map(|c| c.trim().trim_matches('"'))
+        .collect();
+    let mut index = [0usize; 6];
+    for (k, want) in COLUMNS.iter().enumerate() {
+        index[k] = names.iter().position(|n| n == want).ok_or_else(|| {
+            IdentError::new(format!(
+                "{source}: no column `{want}` (the fit needs t, xr, zr, x, z, phase; found {})",
+                names.join(", ")
+            ))
+        })?;
+    }
+    Ok((names.len(), index))
+}
+
+/// The finite values of [`COLUMNS`] on one data line of `ncols` cells.
+fn parse_row(
+    line: &str,
+    ncols: usize,
+    index: &[usize; 6],
+    source: &str,
+    line_no: usize,
+) -> Result<[f64; 6], IdentError> {
+    let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+    if cells.len() != ncols {
+        return err(format!(
+            "{source}, line {line_no}: {} cells, but the header has {}",
+            cells.len(),
+            ncols
+        ));
+    }
+    let mut row = [0.0; 6];
+    for (k, col) in COLUMNS.iter().enumerate() {
+        let cell = cells[index[k]];
+        let v: f64 = cell.parse().map_err(|_| {
+            IdentError::new(format!(
+                "{source}, line {line_no}, column {col}: \"{cell}\" is not a number"
+            ))
+        })?;
+        if !v.is_finite() {
+            return err(format!(
+                "{source}, line {line_no}, column {col}: {cell} (the data must be finite; \
+                 drop or repair the sample)"
+            ));
+        }
+        row[k] = v;
+    }
+    Ok(row)
+}
+
+/// The phase cell as double support (1) or single (0); nothing else is a phase.
+fn double_support(phase: f64, source: &str, line_no: usize) -> Result<bool, IdentError> {
+    if phase == 0.0 {
+        Ok(false)
+    } else if phase == 1.0 {
+        Ok(true)
+    } else {
+        err(format!(
+            "{source}, line {line_no}, column phase: {phase} (0 = single support, 1 = double)"
+        ))
+    }
+}
+
+/// Time must increase by the first step every row: a gap means lost samples.
+fn check_step(
+    prev: f64,
+    t: f64,
+    first_step: &mut Option<f64>,
+    source: &str,
+    line_no: usize,
+) -> Result<(), IdentError> {
+    let h: f64 = t - prev;
+    if h <= 0.0 {
+        return err(format!(
+            "{source}, line {line_no}, column t: time {t} does not increase (previous {prev})"
+        ));
+    }
+    match *first_step {
+        None => *first_step = Some(h),
+        Some(h0) => {
+            if (h - h0).abs() > 1e-6 * h0 {
+                return err(format!(
+                    "{source}, line {line_no}, column t: time step {h} after t = {prev}, \
+                     but the sampling interval is {h0}: a gap or jitter (the fit needs uniform sampling)"
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -37,17 +37,39 @@ pub fn fit_report(
         number(r.mse_before),
         number(r.mse_after)
     ));
-    let roll = |c: &Corrections| {
-        let m = CompactModel {
-            plant: *plant,
-            corrections: *c,
-        };
-        let (mut x, mut z) = (Vec::new(), Vec::new());
-        m.rollout_unchecked(&data.reference, data.x[0], data.z[0], &mut x, &mut z);
-        (x, z)
+    trajectory_sections(&mut rep, plant, start, data, r);
+    parameter_section(&mut rep, start, r, ident);
+    if let Some(id) = ident {
+        identifiability_section(&mut rep, id);
+    }
+    if !validation.is_empty() {
+        validation_section(&mut rep, validation);
+    }
+    rep
+}
+
+/// The CoM trajectory of `plant` with corrections `c`, from the data's first sample.
+fn rollout(plant: &SagittalCompliance, c: &Corrections, data: &Dataset) -> (Vec<f64>, Vec<f64>) {
+    let m = CompactModel {
+        plant: *plant,
+        corrections: *c,
     };
-    let (xb, zb) = roll(start);
-    let (xa, za) = roll(&r.params);
+    let (mut x, mut z) = (Vec::new(), Vec::new());
+    m.rollout_unchecked(&data.reference, data.x[0], data.z[0], &mut x, &mut z);
+    (x, z)
+}
+
+/// Seed 002's Fig. 4 (measured, before and after), then the model's error, which
+/// shows what the overlapping curves hide.
+fn trajectory_sections(
+    rep: &mut Report,
+    plant: &SagittalCompliance,
+    start: &Corrections,
+    data: &Dataset,
+    r: &FitResult,
+) {
+    let (xb, zb) = rollout(plant, start, data);
+    let (xa, za) = rollout(plant, &r.params, data);
     let t = decimate(&data.reference.t);
     rep.heading("Seed 002 Fig. 4: the model before and after the fit");
     for (axis, meas, before, after) in [("x", &data.x, &xb, &xa), ("z", &data.z, &zb, &za)] {
@@ -80,6 +102,16 @@ pub fn fit_report(
             .series("after", &t, &err(after), SeriesStyle::Line),
         );
     }
+}
+
+/// Start and fitted value of every parameter, with its Cramer-Rao standard
+/// deviation when it was estimated ("fixed" otherwise).
+fn parameter_section(
+    rep: &mut Report,
+    start: &Corrections,
+    r: &FitResult,
+    ident: Option<&Identifiability>,
+) {
     rep.heading("Parameters");
     let p = r.params.to_array();
     let s = start.to_array();
@@ -111,60 +143,63 @@ pub fn fit_report(
         ],
         rows,
     );
-    if let Some(id) = ident {
-        rep.paragraph(format!(
-            "Noise standard deviation estimated from the residuals: {} m (variance {} m^2, \
-             Cramer-Rao std of that variance {} m^2; the bounds use {} m). \
-             Condition of the scaled Fisher information: {}. Least determined direction \
-             (relative changes): {}.",
-            number(id.noise_std_estimated),
-            number(id.noise_std_estimated.powi(2)),
-            number(id.noise_variance_std),
-            number(id.noise_std),
-            number(id.condition),
-            id.names
-                .iter()
-                .zip(&id.weakest_direction)
-                .map(|(n, v)| format!("{n} {}", number(*v)))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-        let mut header = vec![String::new()];
-        header.extend(id.names.iter().cloned());
-        let rows = id
-            .names
+}
+
+/// Noise estimate, conditioning, weakest direction and the correlation matrix.
+fn identifiability_section(rep: &mut Report, id: &Identifiability) {
+    rep.paragraph(format!(
+        "Noise standard deviation estimated from the residuals: {} m (variance {} m^2, \
+         Cramer-Rao std of that variance {} m^2; the bounds use {} m). \
+         Condition of the scaled Fisher information: {}. Least determined direction \
+         (relative changes): {}.",
+        number(id.noise_std_estimated),
+        number(id.noise_std_estimated.powi(2)),
+        number(id.noise_variance_std),
+        number(id.noise_std),
+        number(id.condition),
+        id.names
             .iter()
-            .zip(&id.correlation)
-            .map(|(n, row)| {
-                let mut r = vec![n.clone()];
-                r.extend(row.iter().map(|v| format!("{v:.3}")));
-                r
+            .zip(&id.weakest_direction)
+            .map(|(n, v)| format!("{n} {}", number(*v)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    let mut header = vec![String::new()];
+    header.extend(id.names.iter().cloned());
+    let rows = id
+        .names
+        .iter()
+        .zip(&id.correlation)
+        .map(|(n, row)| {
+            let mut r = vec![n.clone()];
+            r.extend(row.iter().map(|v| format!("{v:.3}")));
+            r
+        })
+        .collect();
+    rep.subheading("Parameter correlation (Cramer-Rao covariance)");
+    rep.table(header, rows);
+}
+
+/// MSE before and after the fit on the other gaits.
+fn validation_section(rep: &mut Report, validation: &[Validation]) {
+    rep.heading("Generalisation: other gaits");
+    rep.table(
+        vec![
+            "data".into(),
+            "samples".into(),
+            "MSE before [m^2]".into(),
+            "MSE after [m^2]".into(),
+        ],
+        validation
+            .iter()
+            .map(|v| {
+                vec![
+                    v.source.clone(),
+                    v.samples.to_string(),
+                    number(v.mse_before),
+                    number(v.mse_after),
+                ]
             })
-            .collect();
-        rep.subheading("Parameter correlation (Cramer-Rao covariance)");
-        rep.table(header, rows);
-    }
-    if !validation.is_empty() {
-        rep.heading("Generalisation: other gaits");
-        rep.table(
-            vec![
-                "data".into(),
-                "samples".into(),
-                "MSE before [m^2]".into(),
-                "MSE after [m^2]".into(),
-            ],
-            validation
-                .iter()
-                .map(|v| {
-                    vec![
-                        v.source.clone(),
-                        v.samples.to_string(),
-                        number(v.mse_before),
-                        number(v.mse_after),
-                    ]
-                })
-                .collect(),
-        );
-    }
-    rep
+            .collect(),
+    );
 }
