@@ -98,7 +98,7 @@ TRIPS         request/reply round trips (each also pays the USB adapter's latenc
     Plan(PlanArgs),
 }
 
-#[derive(Args, Clone)]
+#[derive(Args, Clone, Debug)]
 pub struct PortArgs {
     /// The bus: a serial device (/dev/ttyUSB0), a pty path from `twinloop serve`, or tcp:HOST:PORT
     #[arg(long, value_name = "PORT")]

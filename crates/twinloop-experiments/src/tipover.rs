@@ -156,7 +156,7 @@ pub struct TipoverResult {
 }
 
 /// Trunk pitch and roll (rad) from an IMU orientation (x, y, z, w).
-fn tilt(q: [f64; 4]) -> (f64, f64) {
+pub fn tilt(q: [f64; 4]) -> (f64, f64) {
     let [x, y, z, w] = q;
     // Third column of the rotation matrix: where the trunk's up axis points.
     let r02 = 2.0 * (x * z + w * y);

@@ -16,19 +16,10 @@ pub struct TipoverArgs {
     /// With --port, the model for the lean signs (default: the mapping's `urdf`).
     #[arg(long, value_name = "ROBOT")]
     pub robot: Option<String>,
-    /// Run on a robot over its bus instead of the simulator: a serial device, a pty
-    /// from `twinloop serve`, or tcp:HOST:PORT (needs --map).
-    #[arg(long, value_name = "PORT")]
-    pub port: Option<String>,
-    /// Over the bus: bit rate.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub baud: u32,
-    /// Over the bus: allowance per reply on top of its wire time, ms.
-    #[arg(long, default_value_t = 10.0)]
-    pub timeout_ms: f64,
-    /// Over the bus: extra attempts after a lost or damaged reply.
-    #[arg(long, default_value_t = 2)]
-    pub retries: u32,
+    /// With --port (needs --map), the experiment runs on a robot over its bus instead
+    /// of the simulator; the bus flags mean what they mean for `twinloop link`.
+    #[command(flatten)]
+    pub bus: PortArgs,
     /// Servo mapping of the robot on --port: builtin:km20 or a mapping TOML.
     #[arg(long, value_name = "MAP")]
     pub map: Option<String>,
@@ -90,7 +81,7 @@ fn parse_mass(s: &str) -> Result<(f64, String, [f64; 3]), String> {
 }
 
 pub fn run(a: &TipoverArgs) -> CliResult {
-    if a.port.is_some() || a.map.is_some() {
+    if a.bus.port.is_some() || a.map.is_some() {
         return bus::run(a);
     }
     let Some(spec) = a.robot.as_deref() else {
@@ -254,7 +245,10 @@ mod bus {
                         imu.accel[1],
                         imu.accel[2],
                     ]);
-                    let (p, r) = imu.orientation.map(tilt).unwrap_or((f64::NAN, f64::NAN));
+                    let (p, r) = imu
+                        .orientation
+                        .map(twinloop_experiments::tipover::tilt)
+                        .unwrap_or((f64::NAN, f64::NAN));
                     self.row.extend_from_slice(&[p, r]);
                 }
                 None => self.row.extend_from_slice(&[f64::NAN; 8]),
@@ -264,15 +258,6 @@ mod bus {
             self.rows += 1;
             Ok(())
         }
-    }
-
-    /// Trunk pitch and roll (rad) from an orientation (x, y, z, w).
-    fn tilt(q: [f64; 4]) -> (f64, f64) {
-        let [x, y, z, w] = q;
-        let r02 = 2.0 * (x * z + w * y);
-        let r12 = 2.0 * (y * z - w * x);
-        let r22 = 1.0 - 2.0 * (x * x + y * y);
-        (r02.atan2(r22), (-r12).atan2(r22))
     }
 
     impl Robot for Guarded<'_> {
@@ -489,6 +474,7 @@ mod bus {
         };
         let mapping = RobotMapping::resolve(map)?;
         let port = a
+            .bus
             .port
             .clone()
             .or_else(|| mapping.port.clone())
@@ -513,11 +499,7 @@ mod bus {
         let serial = is_serial(&port);
         let port_args = PortArgs {
             port: Some(port.clone()),
-            baud: a.baud,
-            timeout_ms: a.timeout_ms,
-            retries: a.retries,
-            low_latency: false,
-            spin_us: 0,
+            ..a.bus.clone()
         };
         let client = open_client(&port_args, None)?;
         let names = mapping.joint_names();
