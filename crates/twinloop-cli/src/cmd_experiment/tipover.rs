@@ -19,7 +19,7 @@ pub struct TipoverArgs {
     /// With --port (needs --map), the experiment runs on a robot over its bus instead
     /// of the simulator; the bus flags mean what they mean for `twinloop link`.
     #[command(flatten)]
-    pub bus: PortArgs,
+    pub bus: crate::cmd_link::PortArgs,
     /// Servo mapping of the robot on --port: builtin:km20 or a mapping TOML.
     #[arg(long, value_name = "MAP")]
     pub map: Option<String>,
