@@ -82,8 +82,13 @@ pub fn run(a: AdaptArgs) -> CliResult {
         )
     };
     let mut t = format!(
-        "measured fall angles {:?} deg\nprior CoM {}, measured CoM {} (sigma {})\n",
-        r.measured_deg,
+        "measured fall angles {} deg (forward, backward, left, right)\n\
+         prior CoM {}, measured CoM {} (sigma {})\n",
+        r.measured_deg
+            .iter()
+            .map(|a| format!("{a:.2}"))
+            .collect::<Vec<_>>()
+            .join(" / "),
         mm(r.prior_com),
         mm(r.measured_com),
         mm(r.measured_com_sigma)
