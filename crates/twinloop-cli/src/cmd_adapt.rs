@@ -57,9 +57,9 @@ pub fn run(a: AdaptArgs) -> CliResult {
         merge: a.merge,
         angle_resolution_deg: Some(a.resolution),
     };
-    let mut adapted = adapt(&prior, &tip, &opts).map_err(CliError::new)?;
+    let mut adapted = adapt(&prior, &tip, &opts).map_err(where_flag)?;
     if a.check {
-        check(&mut adapted, &StudyOptions::default()).map_err(CliError::new)?;
+        check(&mut adapted, &StudyOptions::default()).map_err(where_flag)?;
     }
     if let (Some(out), Some(robot)) = (&a.out, &adapted.robot) {
         twinloop_description::urdf::write_file(robot, out)
@@ -120,4 +120,13 @@ pub fn run(a: AdaptArgs) -> CliResult {
     }
     emit(&t, a.json.as_ref(), r)?;
     Ok(Outcome::Ok)
+}
+
+/// The library's `host` option is the `--where` flag (the seed's word for the general
+/// location of the change; `where` cannot name a field).
+fn where_flag(mut e: twinloop_ident::IdentError) -> CliError {
+    if e.option.as_deref() == Some("host") {
+        e.option = Some("where".into());
+    }
+    CliError::from(e)
 }

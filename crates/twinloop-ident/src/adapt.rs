@@ -18,6 +18,7 @@
 //! lean), which changes with the added mass: the estimate is iterated with the adapted
 //! model until the measured CoM moves by less than 1e-9 m (two or three iterations).
 
+use crate::error::IdentError;
 use crate::tipover::{FeetMass, TipAngles, exact_method, feet_mass};
 use crate::tipover_study::{StudyReport, ankle_names, hip_roll_names};
 use nalgebra::Vector3;
@@ -302,7 +303,7 @@ pub fn adapt(
     prior: &Description,
     tip: &StudyReport,
     opts: &AdaptOptions,
-) -> Result<Adapted, String> {
+) -> Result<Adapted, IdentError> {
     let foot = foot_of(prior, tip);
     let angles = angles_of(tip);
     let pf = standing(prior)?;
@@ -312,14 +313,17 @@ pub fn adapt(
     if let Some(h) = &opts.host
         && prior.link(h).is_none()
     {
-        return Err(format!("--where: no link \"{h}\" in \"{}\"", prior.name));
+        return Err(
+            IdentError::new(format!("no link \"{h}\" in \"{}\"", prior.name)).option("host"),
+        );
     }
     if let Some(m) = opts.total_mass
         && !(m.is_finite() && m > m0)
     {
-        return Err(format!(
-            "--total-mass: {m} kg must exceed the prior's {m0:.4} kg (an added mass)"
-        ));
+        return Err(IdentError::new(format!(
+            "{m} kg must exceed the prior's {m0:.4} kg (an added mass)"
+        ))
+        .option("total_mass"));
     }
     let mode = match (opts.total_mass, &opts.host) {
         (Some(_), _) => "total-mass",
@@ -353,10 +357,11 @@ pub fn adapt(
             let u = d / d.norm();
             let t = (h - c0).dot(&u);
             if t <= d.norm() * 1.001 {
-                return Err(format!(
-                    "--where {host}: the CoM moved away from that link (the ray from the prior CoM through the measured one passes it {:.1} mm before the measured CoM); give --total-mass",
+                return Err(IdentError::new(format!(
+                    "{host}: the CoM moved away from that link (the ray from the prior CoM through the measured one passes it {:.1} mm before the measured CoM); give the total mass",
                     (d.norm() - t) * 1e3
-                ));
+                ))
+                .option("host"));
             }
             let p = c0 + u * t;
             (m0 * d.norm() / (t - d.norm()), p, host)
@@ -451,7 +456,7 @@ pub fn adapt(
     let robot = match adapted {
         None => {
             report.notes.push(
-                "only m_a (p - c_meas) = M0 (c_meas - c0) is known: give --total-mass or --where LINK to place the mass".into(),
+                "only m_a (p - c_meas) = M0 (c_meas - c0) is known: give the total mass or the link the mass is on to place it".into(),
             );
             None
         }
@@ -462,7 +467,7 @@ pub fn adapt(
                 let dn = (cm - c0).norm();
                 added.mass_sigma = Some(added.mass * sigma.norm() / dn.max(1e-12));
                 report.notes.push(
-                    "with --where only, the mass and the distance along the ray trade off: the mass is as uncertain as |c_meas - c0|".into(),
+                    "with only the host link given, the mass and the distance along the ray trade off: the mass is as uncertain as |c_meas - c0|".into(),
                 );
             }
             let af = standing(&d)?;
@@ -514,11 +519,11 @@ fn prior_model_angles(
 pub fn check(
     adapted: &mut Adapted,
     opts: &crate::tipover_study::StudyOptions,
-) -> Result<(), String> {
-    let robot = adapted
-        .robot
-        .as_ref()
-        .ok_or("--check needs an adapted model: give --total-mass or --where")?;
+) -> Result<(), IdentError> {
+    let robot = adapted.robot.as_ref().ok_or_else(|| {
+        IdentError::new("checking needs an adapted model: give the total mass or the host link")
+            .option("check")
+    })?;
     let s = crate::tipover_study::run_study(robot, opts)?;
     adapted.report.check_deg = Some([
         s.forward.measured_deg,

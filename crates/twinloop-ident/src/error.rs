@@ -73,6 +73,14 @@ impl fmt::Display for IdentError {
 
 impl std::error::Error for IdentError {}
 
+/// A message that already names what is at fault (the internal steps of an estimator
+/// that report in words).
+impl From<String> for IdentError {
+    fn from(message: String) -> Self {
+        IdentError::new(message)
+    }
+}
+
 /// An error whose message says what is at fault.
 pub(crate) fn err<T>(message: impl Into<String>) -> Result<T, IdentError> {
     Err(IdentError::new(message))

@@ -10,6 +10,7 @@
 //! then up to half a degree before that tip and on at a creep, which cuts the lag of
 //! the onset detection tenfold (see [`TipoverConfig::slow_from_deg`]).
 
+use crate::error::IdentError;
 use crate::tipover::{
     SEED_000_CONSTANTS, SeedAngles, SeedConstants, TipAngles, exact_method, feet_mass,
     frontal_lever, seed_method,
@@ -623,7 +624,7 @@ fn direction_report(results: &[DirectionRun], d: Direction) -> DirectionReport {
 }
 
 /// Run the study on `robot` (a built-in robot gets its own servos and foot data).
-pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport, String> {
+pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport, IdentError> {
     let (mut sim, standing) = study_simulator(robot, opts)?;
     let j = find_study_joints(robot, &sim)?;
     let sim_feet: Vec<&str> = vec![j.names[4].as_str(), j.names[5].as_str()];

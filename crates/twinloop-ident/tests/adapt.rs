@@ -131,7 +131,8 @@ fn neither_gives_the_family_and_no_model() {
         ..Default::default()
     };
     let e = adapt(&prior(), study, &bad).unwrap_err();
-    assert!(e.contains("no_such_link"), "{e}");
+    assert!(e.message.contains("no_such_link"), "{e}");
+    assert_eq!(e.option.as_deref(), Some("host"));
 }
 
 #[test]
