@@ -106,22 +106,9 @@ struct StiffnessReport {
     stiffness: Vec<Vec<f64>>,
     damping: Vec<Vec<f64>>,
     /// The entries of eq 11: Kxx, Kxz, Kzx, Kzz, Dxx, Dxz, Dzx, Dzz.
-    sagittal: Sagittal,
+    sagittal: SagittalCompliance,
     /// x-z stiffness under forces alone (pelvis free to turn), for comparison.
     stiffness_xz_force_only: Option<[[f64; 2]; 2]>,
-}
-
-#[derive(Serialize)]
-#[allow(non_snake_case)]
-struct Sagittal {
-    Kxx: f64,
-    Kxz: f64,
-    Kzx: f64,
-    Kzz: f64,
-    Dxx: f64,
-    Dxz: f64,
-    Dzx: f64,
-    Dzz: f64,
 }
 
 fn rows(m: &nalgebra::Matrix6<f64>) -> Vec<Vec<f64>> {
@@ -197,16 +184,12 @@ fn stiffness(args: &StiffnessArgs) -> CliResult {
         stiffness: rows(&cc.stiffness),
         damping: rows(&cc.damping),
         stiffness_xz_force_only: soft.map(|m| [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]]),
-        sagittal: Sagittal {
-            Kxx: k[(0, 0)],
-            Kxz: k[(0, 1)],
-            Kzx: k[(1, 0)],
-            Kzz: k[(1, 1)],
-            Dxx: d[(0, 0)],
-            Dxz: d[(0, 1)],
-            Dzx: d[(1, 0)],
-            Dzz: d[(1, 1)],
-        },
+        sagittal: SagittalCompliance::from_xz(
+            model.total_mass,
+            twinloop_description::GRAVITY,
+            &k,
+            &d,
+        ),
     };
     let mut text = format!(
         "support {:?} ({}), mass {} kg, CoM in foot frame ({}, {}, {}) m\n\

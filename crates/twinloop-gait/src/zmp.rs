@@ -297,9 +297,12 @@ fn timed_segments(pieces: Vec<Piece>, tc: f64) -> Vec<Segment> {
 /// Fits every phase's pendulum to the plan's boundary conditions (seed 002 eq 12-13):
 /// `xi(T) = p(T)` at the end, carried backwards on the divergent component, then
 /// `x(0) = p(0)` at the start, carried forwards on the position.
+/// An empty plan has no boundary to fit (a validated plan has at least one segment).
 fn fit_boundary_conditions(segments: &mut [Segment]) {
-    for k in 0..2 {
-        let last = &segments.last().expect("at least one segment").axes[k];
+    let Some(end) = segments.last().map(|s| s.axes) else {
+        return;
+    };
+    for (k, last) in end.iter().enumerate() {
         let mut xi = last.zmp(last.duration);
         for seg in segments.iter_mut().rev() {
             xi = seg.axes[k].fit_end_divergent_component(xi);

@@ -34,6 +34,29 @@ pub struct SagittalCompliance {
 }
 
 impl SagittalCompliance {
+    /// The plant of eq 11 from the x-z blocks of K_C and D_C (seed 002, eq 7-8), rows
+    /// and columns in the order (x, z).
+    pub fn from_xz(
+        m: f64,
+        g: f64,
+        stiffness: &nalgebra::Matrix2<f64>,
+        damping: &nalgebra::Matrix2<f64>,
+    ) -> SagittalCompliance {
+        let (k, d) = (stiffness, damping);
+        SagittalCompliance {
+            m,
+            g,
+            Kxx: k[(0, 0)],
+            Kxz: k[(0, 1)],
+            Kzx: k[(1, 0)],
+            Kzz: k[(1, 1)],
+            Dxx: d[(0, 0)],
+            Dxz: d[(0, 1)],
+            Dzx: d[(1, 0)],
+            Dzz: d[(1, 1)],
+        }
+    }
+
     /// Checks the entries; the error names the one at fault.
     pub fn validate(&self) -> Result<(), ReducedError> {
         for (name, v) in [

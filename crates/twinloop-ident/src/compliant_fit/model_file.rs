@@ -234,19 +234,12 @@ fn from_urdf(
             ));
         }
     };
-    let d = cc.damping_xz();
-    Ok(SagittalCompliance {
-        m: model.total_mass,
-        g: twinloop_description::GRAVITY,
-        Kxx: k[(0, 0)],
-        Kxz: k[(0, 1)],
-        Kzx: k[(1, 0)],
-        Kzz: k[(1, 1)],
-        Dxx: d[(0, 0)],
-        Dxz: d[(0, 1)],
-        Dzx: d[(1, 0)],
-        Dzz: d[(1, 1)],
-    })
+    Ok(SagittalCompliance::from_xz(
+        model.total_mass,
+        twinloop_description::GRAVITY,
+        &k,
+        &cc.damping_xz(),
+    ))
 }
 
 #[cfg(test)]

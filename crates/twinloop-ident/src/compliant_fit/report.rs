@@ -118,9 +118,9 @@ fn parameter_section(
     let rows = (0..10)
         .map(|i| {
             let name = PARAMETER_NAMES[i];
-            let (std, flag) = match ident.and_then(|id| id.names.iter().position(|n| n == name)) {
-                Some(k) => {
-                    let id = ident.expect("position came from it");
+            let fitted = ident.and_then(|id| Some((id, id.names.iter().position(|n| n == name)?)));
+            let (std, flag) = match fitted {
+                Some((id, k)) => {
                     let flag = if id.poorly_determined.iter().any(|n| n == name) {
                         "poorly determined"
                     } else {
