@@ -214,14 +214,22 @@ fn lean_goals(
 
 /// The onset of the fall in a run's history: the last sample at which, over the onset
 /// window, the excess tilt grew by no more than `onset_ratio` times the ankle angle
-/// (0 if none).
+/// (0 if none). The window is in time, not samples: over a bus a cycle takes what
+/// the bus takes, not `period_s`.
 fn find_onset(history: &[Sample], cfg: &TipoverConfig) -> usize {
-    let w = ((cfg.onset_window_s / cfg.period_s).round() as usize).max(1);
-    (w..history.len())
+    let window = cfg.onset_window_s.max(cfg.period_s);
+    (1..history.len())
         .rev()
         .find(|&k| {
-            let excess_rate = history[k].3 - history[k - w].3;
-            let ankle_rate = history[k].1.abs() - history[k - w].1.abs();
+            // The latest sample a whole window before k (the tolerance keeps the
+            // simulator's evenly spaced samples exactly `window / period_s` apart).
+            let before = history[..k].partition_point(|s| s.2 <= history[k].2 - window + 1e-9);
+            if before == 0 {
+                return false;
+            }
+            let j = before - 1;
+            let excess_rate = history[k].3 - history[j].3;
+            let ankle_rate = history[k].1.abs() - history[j].1.abs();
             excess_rate <= cfg.onset_ratio * ankle_rate.max(0.0)
         })
         .unwrap_or(0)

@@ -22,6 +22,7 @@ use twinloop_description::builtin::FootGeometry;
 use twinloop_dynamics::{BASE, Data};
 use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
 use twinloop_robot::RobotError;
+use twinloop_spatial::Se3;
 use twinloop_sim::statics::{FlatFeet, hip_lean_signs, lean_signs};
 use twinloop_sim::{Actuator, ContactParams, SimConfig, Simulator, servo_for_joint};
 
@@ -460,60 +461,63 @@ fn static_tipping_angles(
     (offset, rigid)
 }
 
+/// Each foot's world placement with the robot placed standing in `standing`, where
+/// the static analysis holds them.
+fn standing_feet(
+    sim: &mut Simulator,
+    standing: &[f64],
+    j: &StudyJoints,
+) -> Result<[Se3; 2], String> {
+    sim.place_on_ground(standing).map_err(err)?;
+    let mut place = |l: &str| {
+        sim.link_placement(l)
+            .ok_or_else(|| format!("no link \"{l}\""))
+    };
+    Ok([place(&j.names[4])?, place(&j.names[5])?])
+}
+
+fn lean_signs_of(model: &twinloop_dynamics::Model, j: &StudyJoints, q0: &[f64]) -> LeanSigns {
+    let mut data = Data::new(model);
+    LeanSigns {
+        forward: lean_signs(model, &mut data, q0, j.pitch, Vector3::x()),
+        left: lean_signs(model, &mut data, q0, j.roll, Vector3::y()),
+        hip_left: hip_lean_signs(model, &mut data, q0, j.hip, Vector3::y()),
+    }
+}
+
 /// Tips the robot over in all four directions, each twice: at the constant ramp (its
 /// time to fall is seed 000's Table IV quantity), then up to half a degree before that
-/// tip and on at a creep (see `TipoverConfig::slow_from_deg`); with the static tipping
-/// angles at each onset.
+/// tip and on at a creep (see `TipoverConfig::slow_from_deg`). The second run's result,
+/// with the first run's time to fall, per direction.
 fn tip_all_directions(
     sim: &mut Simulator,
     standing: &[f64],
     j: &StudyJoints,
     q0: &[f64],
     opts: &StudyOptions,
-) -> Result<Vec<DirectionRun>, String> {
+) -> Result<Vec<TipoverResult>, String> {
     let model = sim.model.clone();
     let points = sim.contact_points().to_vec();
-    let place = |s: &mut Simulator, l: &str| {
-        s.link_placement(l)
-            .ok_or_else(|| format!("no link \"{l}\""))
-    };
-    let foot_world = [place(sim, &j.names[4])?, place(sim, &j.names[5])?];
     let mut flat = FlatFeet {
         model: &model,
         feet: j.feet,
         points: &points,
-        foot_world,
+        foot_world: standing_feet(sim, standing, j)?,
         held: 0,
         tilt: 0.0,
     };
-    let mut data = Data::new(&model);
-    let signs = LeanSigns {
-        forward: lean_signs(&model, &mut data, q0, j.pitch, Vector3::x()),
-        left: lean_signs(&model, &mut data, q0, j.roll, Vector3::y()),
-        hip_left: hip_lean_signs(&model, &mut data, q0, j.hip, Vector3::y()),
-    };
+    let signs = lean_signs_of(&model, j, q0);
     let mut cfg = TipoverConfig::new(j.pitch, j.roll, signs.forward, signs.left);
     cfg.hip_roll = Some(j.hip);
     cfg.hip_left_sign = signs.hip_left;
     cfg.ramp_deg_per_s = opts.ramp_deg_per_s;
     let imu_link = sim.sensors().imu_link;
-    let mut results: Vec<DirectionRun> = Vec::new();
+    let mut results = Vec::new();
     let mut pdata = Data::new(&model);
     for d in Direction::ALL {
-        let helds = held_feet(d);
-        let n_held = helds.len() as f64;
         let mut run = |cfg: &TipoverConfig, sim: &mut Simulator| {
             sim.place_on_ground(standing).map_err(err)?;
-            let mut predict = |jq: &[f64]| {
-                let mut t = [0.0; 2];
-                for &h in helds {
-                    flat.held = h;
-                    let x = flat.link_tilt(&mut pdata, jq, imu_link);
-                    t[0] += x[0] / n_held;
-                    t[1] += x[1] / n_held;
-                }
-                t
-            };
+            let mut predict = |jq: &[f64]| flat_tilt(&mut flat, &mut pdata, jq, imu_link, d);
             run_direction(sim, standing, d, cfg, Some(&mut predict))
                 .map_err(|e: RobotError| e.to_string())
         };
@@ -523,12 +527,48 @@ fn tip_all_directions(
         slow.slow_ramp_deg_per_s = opts.slow_ramp_deg_per_s;
         let mut r = run(&slow, sim)?;
         r.time_s = first.time_s;
-        let (turned, dir) = turned_joints(d, j, &signs);
-        let (offset, rigid) =
-            static_tipping_angles(&mut flat, &mut data, &r, standing, helds, &turned, dir);
-        results.push((r.clone(), r.measured_deg + offset, rigid));
+        results.push(r);
     }
     Ok(results)
+}
+
+/// Each run beside the model's static tipping angles (at its onset, and of the rigid
+/// robot): `runs[k].positions_at_onset` are in the simulator's joint order.
+fn with_static_references(
+    sim: &mut Simulator,
+    standing: &[f64],
+    j: &StudyJoints,
+    q0: &[f64],
+    runs: Vec<TipoverResult>,
+) -> Result<Vec<DirectionRun>, String> {
+    let model = sim.model.clone();
+    let points = sim.contact_points().to_vec();
+    let mut flat = FlatFeet {
+        model: &model,
+        feet: j.feet,
+        points: &points,
+        foot_world: standing_feet(sim, standing, j)?,
+        held: 0,
+        tilt: 0.0,
+    };
+    let signs = lean_signs_of(&model, j, q0);
+    let mut data = Data::new(&model);
+    let mut out = Vec::with_capacity(runs.len());
+    for r in runs {
+        let (turned, dir) = turned_joints(r.direction, j, &signs);
+        let (offset, rigid) = static_tipping_angles(
+            &mut flat,
+            &mut data,
+            &r,
+            standing,
+            held_feet(r.direction),
+            &turned,
+            dir,
+        );
+        let s = r.measured_deg + offset;
+        out.push((r, s, rigid));
+    }
+    Ok(out)
 }
 
 /// The CoM by the two estimators from the measured angles, next to the model's true
@@ -623,26 +663,99 @@ fn direction_report(results: &[DirectionRun], d: Direction) -> DirectionReport {
     }
 }
 
-/// Run the study on `robot` (a built-in robot gets its own servos and foot data).
-pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport, IdentError> {
+/// The study's simulator and what the estimators need of the model.
+struct Prepared {
+    sim: Simulator,
+    standing: Vec<f64>,
+    j: StudyJoints,
+    foot: FootGeometry,
+    seed_constants: SeedConstants,
+    label: &'static str,
+    q0: Vec<f64>,
+}
+
+fn prepare(robot: &Description, opts: &StudyOptions) -> Result<Prepared, String> {
     let (mut sim, standing) = study_simulator(robot, opts)?;
     let j = find_study_joints(robot, &sim)?;
     let sim_feet: Vec<&str> = vec![j.names[4].as_str(), j.names[5].as_str()];
     sim.set_feet(&sim_feet).map_err(err)?;
     let (foot, seed_constants, label) = study_feet(robot, &sim, &j);
-    let model = sim.model.clone();
-    let mut q0 = model.neutral_configuration();
-    q0[model.q_offset..].copy_from_slice(&standing);
-    let results = tip_all_directions(&mut sim, &standing, &j, &q0, opts)?;
-    let (com, feet) = estimate_com(&results, &model, &q0, &j, &foot, &seed_constants)?;
+    let mut q0 = sim.model.neutral_configuration();
+    q0[sim.model.q_offset..].copy_from_slice(&standing);
+    Ok(Prepared {
+        sim,
+        standing,
+        j,
+        foot,
+        seed_constants,
+        label,
+        q0,
+    })
+}
+
+/// Run the study on `robot` (a built-in robot gets its own servos and foot data).
+pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport, IdentError> {
+    let mut p = prepare(robot, opts)?;
+    let runs = tip_all_directions(&mut p.sim, &p.standing, &p.j, &p.q0, opts)?;
+    let results = with_static_references(&mut p.sim, &p.standing, &p.j, &p.q0, runs)?;
+    Ok(assemble(robot, &p, &results)?)
+}
+
+/// The study's report for runs made outside the simulator (a robot over its bus, one
+/// result per direction, in any order): the same JSON as [`run_study`], the static
+/// references and CoM estimates from `robot`'s model. `joint_names` orders the
+/// results' `positions_at_onset`. `com.true` is then the model's CoM, not the robot's:
+/// the comparison `adapt` makes.
+pub fn report_for_runs(
+    robot: &Description,
+    runs: &[TipoverResult],
+    joint_names: &[String],
+) -> Result<StudyReport, IdentError> {
+    let mut p = prepare(robot, &StudyOptions::default())?;
+    let mut ordered = Vec::with_capacity(4);
+    for d in Direction::ALL {
+        let Some(r) = runs.iter().find(|r| r.direction == d) else {
+            return Err(IdentError::new(format!(
+                "no {} run: the CoM needs all four directions",
+                d.name()
+            )));
+        };
+        let mut r = r.clone();
+        let mut q = p.standing.clone();
+        for (name, &v) in joint_names.iter().zip(&r.positions_at_onset) {
+            if let Some(i) = p.sim.joint_index(name) {
+                q[i] = v;
+            }
+        }
+        r.positions_at_onset = q;
+        ordered.push(r);
+    }
+    let results = with_static_references(&mut p.sim, &p.standing, &p.j, &p.q0, ordered)?;
+    Ok(assemble(robot, &p, &results)?)
+}
+
+fn assemble(
+    robot: &Description,
+    p: &Prepared,
+    results: &[DirectionRun],
+) -> Result<StudyReport, String> {
+    let (com, feet) = estimate_com(
+        results,
+        &p.sim.model,
+        &p.q0,
+        &p.j,
+        &p.foot,
+        &p.seed_constants,
+    )?;
+    let foot = &p.foot;
     Ok(StudyReport {
         robot: robot.name.clone(),
-        forward: direction_report(&results, Direction::Forward),
-        backward: direction_report(&results, Direction::Backward),
-        left: direction_report(&results, Direction::Left),
-        right: direction_report(&results, Direction::Right),
+        forward: direction_report(results, Direction::Forward),
+        backward: direction_report(results, Direction::Backward),
+        left: direction_report(results, Direction::Left),
+        right: direction_report(results, Direction::Right),
         com,
-        seed_constants: label.to_string(),
+        seed_constants: p.label.to_string(),
         foot: FootReport {
             front: foot.front,
             back: foot.back,
@@ -655,4 +768,88 @@ pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport
             feet_com: [feet.x, feet.z],
         },
     })
+}
+
+/// The model's prediction of the trunk IMU's tilt from the measured joint angles with
+/// the feet flat: the reference the tip-over compares the IMU with, for a robot over
+/// its bus (the study's simulator predicts the same way). Joint positions come in the
+/// robot's order (`joint_names`), joints the model lacks stay at the standing pose.
+pub struct TiltModel {
+    model: twinloop_dynamics::Model,
+    points: Vec<twinloop_sim::ContactPoint>,
+    foot_world: [Se3; 2],
+    feet: [usize; 2],
+    imu_link: usize,
+    data: Data,
+    /// Model joint of each of the robot's joints.
+    index: Vec<Option<usize>>,
+    /// Joint positions in the model's order (sized once).
+    q: Vec<f64>,
+}
+
+impl TiltModel {
+    /// `imu_link`: the link the IMU is on (a `[[board]]`'s `link`).
+    pub fn new(
+        robot: &Description,
+        joint_names: &[String],
+        imu_link: &str,
+    ) -> Result<TiltModel, IdentError> {
+        let mut p = prepare(robot, &StudyOptions::default())?;
+        let foot_world = standing_feet(&mut p.sim, &p.standing, &p.j)?;
+        let model = p.sim.model.clone();
+        let imu = model
+            .links
+            .iter()
+            .position(|l| l.name == imu_link)
+            .ok_or_else(|| format!("no link \"{imu_link}\" (the IMU's) in \"{}\"", robot.name))?;
+        Ok(TiltModel {
+            points: p.sim.contact_points().to_vec(),
+            foot_world,
+            feet: p.j.feet,
+            imu_link: imu,
+            data: Data::new(&model),
+            index: joint_names.iter().map(|n| p.sim.joint_index(n)).collect(),
+            q: p.standing.clone(),
+            model,
+        })
+    }
+
+    /// Trunk pitch and roll (rad; forward and left positive) with the feet flat, the
+    /// foot the robot leans onto held (both averaged leaning forward or backward).
+    pub fn predict(&mut self, direction: Direction, positions: &[f64]) -> [f64; 2] {
+        for (k, &v) in positions.iter().enumerate() {
+            if let Some(Some(i)) = self.index.get(k) {
+                self.q[*i] = v;
+            }
+        }
+        let mut flat = FlatFeet {
+            model: &self.model,
+            feet: self.feet,
+            points: &self.points,
+            foot_world: self.foot_world,
+            held: 0,
+            tilt: 0.0,
+        };
+        flat_tilt(&mut flat, &mut self.data, &self.q, self.imu_link, direction)
+    }
+}
+
+/// The IMU link's tilt with the feet flat, the foot the robot leans onto held (both,
+/// averaged, leaning forward or backward; see [`held_feet`]).
+fn flat_tilt(
+    flat: &mut FlatFeet,
+    data: &mut Data,
+    q: &[f64],
+    imu_link: usize,
+    direction: Direction,
+) -> [f64; 2] {
+    let helds = held_feet(direction);
+    let mut t = [0.0; 2];
+    for &h in helds {
+        flat.held = h;
+        let x = flat.link_tilt(data, q, imu_link);
+        t[0] += x[0] / helds.len() as f64;
+        t[1] += x[1] / helds.len() as f64;
+    }
+    t
 }

@@ -3,7 +3,8 @@
 //! control-cycle read (positions, velocities, loads of every joint) and, when the
 //! mapping has a `[[board]]`, one READ of the board's gyro and accelerometer (the
 //! trunk IMU, with the host's tilt estimate); commanding sends one SYNC_WRITE per
-//! protocol, and time is the wall clock.
+//! protocol, and time is the wall clock (times a clock rate for a simulated robot served
+//! faster than real time).
 
 use crate::board::{CM730_IMU_BLOCK, TiltFilter, decode_imu};
 use crate::client::Client;
@@ -39,6 +40,8 @@ pub struct DynamixelRobot<T: Transport> {
     effort_scale: Vec<f64>,
     start: Instant,
     next_tick: Option<Instant>,
+    /// Robot seconds per host second (see [`DynamixelRobot::set_clock_rate`]).
+    clock_rate: f64,
     imu: Option<BoardReader>,
 }
 
@@ -102,8 +105,24 @@ impl<T: Transport> DynamixelRobot<T> {
             effort_scale,
             start: Instant::now(),
             next_tick: None,
+            clock_rate: 1.0,
             imu,
         })
+    }
+
+    /// How many seconds pass on the robot per second of the host's clock: 1 for a
+    /// real robot; for a simulated one served faster than real time (`twinloop
+    /// serve --realtime-factor F`), F, so that [`Robot::time`], [`Robot::advance`]
+    /// and the tilt filter count the robot's seconds and an experiment runs the same
+    /// protocol F times faster. Rates that are not positive and finite are refused.
+    pub fn set_clock_rate(&mut self, rate: f64) -> Result<(), RobotError> {
+        if !(rate.is_finite() && rate > 0.0) {
+            return Err(RobotError::new(format!(
+                "clock rate {rate}: robot seconds per host second must be positive"
+            )));
+        }
+        self.clock_rate = rate;
+        Ok(())
     }
 
     /// The board the trunk IMU is read from, if the mapping has one.
@@ -181,34 +200,42 @@ impl<T: Transport> DynamixelRobot<T> {
 
     /// Torque on or off for every joint (one SYNC_WRITE per protocol).
     pub fn set_torque(&mut self, on: bool) -> Result<(), RobotError> {
-        for protocol in [Protocol::V1, Protocol::V2] {
-            let ids: Vec<u8> = self
-                .mapping
-                .joints
-                .iter()
-                .filter(|j| j.protocol == protocol)
-                .map(|j| j.id)
-                .collect();
-            if ids.is_empty() {
+        self.set_register(Item::TorqueEnable, on as i32).map(|_| ())
+    }
+
+    /// Write `value` (raw) to `item` of every joint whose servo has that register
+    /// (one SYNC_WRITE per protocol and register layout); returns how many servos
+    /// were written. For RAM settings an experiment needs, such as the RX compliance
+    /// slopes and margins.
+    pub fn set_register(&mut self, item: Item, value: i32) -> Result<usize, RobotError> {
+        use crate::register::Register;
+        // Servos of one protocol whose register sits at the same address and size.
+        let mut groups: Vec<(Protocol, &'static Register, Vec<u8>)> = Vec::new();
+        for j in &self.mapping.joints {
+            let Some(reg) = j.model.table().item(item) else {
                 continue;
+            };
+            let same = |g: &&mut (Protocol, &Register, Vec<u8>)| {
+                g.0 == j.protocol && g.1.address == reg.address && g.1.size == reg.size
+            };
+            match groups.iter_mut().find(same) {
+                Some(g) => g.2.push(j.id),
+                None => groups.push((j.protocol, reg, vec![j.id])),
             }
-            let address = self
-                .mapping
-                .joints
-                .iter()
-                .find(|j| j.protocol == protocol)
-                .expect("non-empty")
-                .model
-                .table()
-                .item(Item::TorqueEnable)
-                .expect("every table has Torque Enable")
-                .address;
-            let data = vec![on as u8; ids.len()];
-            self.client
-                .sync_write(protocol, address, 1, &ids, &data)
-                .map_err(|e| RobotError::new(e.to_string()))?;
         }
-        Ok(())
+        let mut written = 0;
+        for (protocol, reg, ids) in groups {
+            let size = reg.size as usize;
+            let mut data = vec![0u8; size * ids.len()];
+            for chunk in data.chunks_mut(size) {
+                reg.encode(value, chunk);
+            }
+            self.client
+                .sync_write(protocol, reg.address, reg.size as u16, &ids, &data)
+                .map_err(|e| RobotError::new(e.to_string()))?;
+            written += ids.len();
+        }
+        Ok(written)
     }
 }
 
@@ -218,7 +245,7 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
     }
 
     fn time(&self) -> f64 {
-        self.start.elapsed().as_secs_f64()
+        self.start.elapsed().as_secs_f64() * self.clock_rate
     }
 
     /// One read of every joint. Joints whose servo failed read NaN; the first such
@@ -297,7 +324,7 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
             return Err(RobotError::new(format!("advance by {dt} s")));
         }
         let now = Instant::now();
-        let step = Duration::from_secs_f64(dt);
+        let step = Duration::from_secs_f64(dt / self.clock_rate);
         let target = match self.next_tick {
             Some(t) if t + step > now => t + step,
             _ => now + step,

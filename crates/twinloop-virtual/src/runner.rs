@@ -3,6 +3,7 @@
 
 use crate::drive::{DriveRegisters, servo_with_registers};
 use crate::shared::{Shared, Snapshot, thermal_step};
+use crate::virtual_robot::FALLEN_DEG;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
@@ -50,6 +51,14 @@ pub(crate) struct Runner {
     pub servos: Vec<ServoJoint>,
     pub shared: Arc<Shared>,
     pub realtime_factor: f64,
+    /// See [`crate::VirtualRobotOptions::pick_up_after_s`].
+    pub pick_up_after_s: Option<f64>,
+    /// How long the robot has lain fallen, s.
+    fallen_s: f64,
+    /// Times the operator stood the robot up.
+    pub pick_ups: u64,
+    /// Joint pose the operator stands the robot in (sized once).
+    pose: Vec<f64>,
     regs: Vec<DriveRegisters>,
     /// Goal after the Moving Speed limit, servo angle.
     profile: Vec<f64>,
@@ -92,8 +101,13 @@ impl Runner {
             servos,
             shared,
             realtime_factor,
+            pick_up_after_s: None,
+            fallen_s: 0.0,
+            pick_ups: 0,
+            pose: Vec::new(),
             behind_s: 0.0,
         };
+        r.pose = vec![0.0; r.sim.model.nbodies];
         for k in 0..n {
             r.profile[k] = r.servo_angle(k);
         }
@@ -175,6 +189,44 @@ impl Runner {
         out.copy_from(&self.snap);
     }
 
+    /// The virtual operator (see [`crate::VirtualRobotOptions::pick_up_after_s`]):
+    /// after `elapsed` more simulated seconds, stand the robot up if it has lain
+    /// fallen long enough. The pose is the servos' commanded one, so the robot lands
+    /// in the posture its host holds and does not jump when the servos take over.
+    pub(crate) fn operator(&mut self, elapsed: f64) -> Result<(), SimError> {
+        let Some(after) = self.pick_up_after_s else {
+            return Ok(());
+        };
+        if !self.sim.model.is_floating() {
+            return Ok(());
+        }
+        // The trunk's up axis against the world's: z of the base's z axis.
+        let (x, y) = (self.sim.q[3], self.sim.q[4]);
+        let up = 1.0 - 2.0 * (x * x + y * y);
+        if up > FALLEN_DEG.to_radians().cos() {
+            self.fallen_s = 0.0;
+            return Ok(());
+        }
+        self.fallen_s += elapsed;
+        if self.fallen_s < after {
+            return Ok(());
+        }
+        for i in 0..self.pose.len() {
+            let m = &self.sim.model;
+            self.pose[i] = self.sim.goals[i].clamp(m.lower_limits[i], m.upper_limits[i]);
+        }
+        let pose = std::mem::take(&mut self.pose);
+        let placed = self.sim.place_on_ground(&pose);
+        self.pose = pose;
+        placed?;
+        for k in 0..self.servos.len() {
+            self.profile[k] = self.servo_angle(k);
+        }
+        self.fallen_s = 0.0;
+        self.pick_ups += 1;
+        Ok(())
+    }
+
     fn fail(&mut self, e: SimError) {
         self.snap.error = Some(e.to_string());
         self.publish();
@@ -205,6 +257,11 @@ impl Runner {
                 }
                 self.snap.steps += 1;
                 n += 1;
+            }
+            if n > 0
+                && let Err(e) = self.operator(n as f64 * dt)
+            {
+                self.fail(e);
             }
             let lag = target - self.sim.time;
             if lag > MAX_LAG_S {

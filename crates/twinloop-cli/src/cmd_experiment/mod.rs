@@ -6,6 +6,7 @@ mod compliant_walk;
 mod squat;
 mod static_poses;
 mod tipover;
+pub mod tipover_bus;
 mod walk;
 
 use crate::error::{CliError, CliResult};

@@ -27,6 +27,11 @@ pub struct TipoverArgs {
     /// imu:gyro_x..imu:accel_z, tilt:pitch, tilt:roll), flushed row by row.
     #[arg(long, value_name = "FILE.csv")]
     pub record: Option<PathBuf>,
+    /// Over the bus, when the robot is a simulation served faster than real time
+    /// (`twinloop serve --realtime-factor F`): F, so the protocol's ramps, waits and
+    /// tilt filter count the robot's seconds. 1 for a real robot.
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub realtime_factor: f64,
     /// Over a serial port: do not ask for confirmation before the first ramp.
     #[arg(long)]
     pub yes: bool,
@@ -160,325 +165,23 @@ fn summary(r: &StudyReport) -> String {
     s
 }
 
-/// The tip-over experiment on a robot over its Dynamixel bus (`--port`, `--map`).
+/// `experiment tipover --port --map`: the experiment over the bus, printed like the
+/// simulator's when all four directions ran.
 mod bus {
-    use super::TipoverArgs;
-    use crate::cmd_link::{PortArgs, interrupt_flag, open_client};
-    use crate::common::{emit, load_description};
+    use super::{TipoverArgs, summary};
+    use crate::cmd_experiment::tipover_bus::{
+        BusOutcome, BusPlan, BusReport, parse_directions, tipover_on_bus,
+    };
+    use crate::common::emit;
     use crate::error::{CliError, CliResult, Outcome};
-    use nalgebra::Vector3;
-    use serde::Serialize;
-    use std::io::{BufRead, IsTerminal, Write};
-    use std::sync::Arc;
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
-    use twinloop_io::CsvWriter;
-    use twinloop_link::transport::Transport;
-    use twinloop_link::{DynamixelRobot, ReadMethod, RobotMapping};
-    use twinloop_robot::{Robot, RobotError, RobotState};
-
-    type BusRobot = DynamixelRobot<Box<dyn Transport>>;
-
-    /// The robot as the experiment sees it, with the safety checks: every read is
-    /// recorded, any servo that stops answering or reports overload, overheating or
-    /// input voltage ends the run, and so does Ctrl-C.
-    struct Guarded<'a> {
-        robot: &'a mut BusRobot,
-        writer: Option<CsvWriter>,
-        goals: Vec<f64>,
-        row: Vec<f64>,
-        stop: Arc<AtomicBool>,
-        abort: Option<String>,
-        rows: usize,
-    }
-
-    impl Guarded<'_> {
-        fn fail(&mut self, message: String) -> RobotError {
-            if self.abort.is_none() {
-                self.abort = Some(message.clone());
-            }
-            RobotError::new(message)
-        }
-
-        /// A servo that reports a hardware condition (1.0 overload, overheating,
-        /// input voltage; 2.0 Alert), named by id.
-        fn hardware_fault(&self) -> Option<String> {
-            let joints = &self.robot.mapping().joints;
-            self.robot
-                .outcomes()
-                .zip(joints)
-                .find_map(|((name, o), j)| match o {
-                    Ok(status) if status.hardware_fault() => {
-                        Some(format!("servo id {} (joint \"{name}\"): {status}", j.id))
-                    }
-                    _ => None,
-                })
-        }
-
-        /// The first servo that did not answer, named by id.
-        fn silent_servo(&self) -> Option<String> {
-            let joints = &self.robot.mapping().joints;
-            self.robot
-                .outcomes()
-                .zip(joints)
-                .find_map(|((name, o), j)| match o {
-                    Err(e) => Some(format!("servo id {} (joint \"{name}\"): {e}", j.id)),
-                    _ => None,
-                })
-        }
-
-        fn record(&mut self, st: &RobotState) -> Result<(), RobotError> {
-            let Some(w) = self.writer.as_mut() else {
-                return Ok(());
-            };
-            self.row.clear();
-            self.row.push(st.time);
-            self.row.extend_from_slice(&st.positions);
-            self.row.extend_from_slice(&self.goals);
-            match st.imu {
-                Some(imu) => {
-                    self.row.extend_from_slice(&[
-                        imu.gyro[0],
-                        imu.gyro[1],
-                        imu.gyro[2],
-                        imu.accel[0],
-                        imu.accel[1],
-                        imu.accel[2],
-                    ]);
-                    let (p, r) = imu
-                        .orientation
-                        .map(twinloop_experiments::tipover::tilt)
-                        .unwrap_or((f64::NAN, f64::NAN));
-                    self.row.extend_from_slice(&[p, r]);
-                }
-                None => self.row.extend_from_slice(&[f64::NAN; 8]),
-            }
-            w.write_row(&self.row)
-                .map_err(|e| RobotError::new(format!("--record: {e}")))?;
-            self.rows += 1;
-            Ok(())
-        }
-    }
-
-    impl Robot for Guarded<'_> {
-        fn joint_names(&self) -> &[String] {
-            self.robot.joint_names()
-        }
-
-        fn time(&self) -> f64 {
-            self.robot.time()
-        }
-
-        fn read(&mut self, state: &mut RobotState) -> Result<(), RobotError> {
-            let r = self.robot.read(state);
-            // Every read reaches the file, a failed one too (NaN where a servo was
-            // silent).
-            self.record(state)?;
-            if let Some(m) = self.silent_servo() {
-                return Err(self.fail(m));
-            }
-            if let Err(e) = r {
-                return Err(self.fail(e.to_string()));
-            }
-            if let Some(m) = self.hardware_fault() {
-                return Err(self.fail(m));
-            }
-            if self.stop.load(Ordering::Relaxed) {
-                return Err(self.fail("interrupted (Ctrl-C)".into()));
-            }
-            Ok(())
-        }
-
-        fn command_positions(&mut self, goals: &[f64]) -> Result<(), RobotError> {
-            self.goals.clear();
-            self.goals.extend_from_slice(goals);
-            if self.stop.load(Ordering::Relaxed) {
-                return Err(self.fail("interrupted (Ctrl-C)".into()));
-            }
-            self.robot
-                .command_positions(goals)
-                .map_err(|e| self.fail(e.to_string()))
-        }
-
-        fn advance(&mut self, dt: f64) -> Result<(), RobotError> {
-            self.robot.advance(dt)
-        }
-    }
-
-    #[derive(Serialize)]
-    struct BusDirection {
-        commanded_deg: f64,
-        measured_deg: f64,
-        time_s: f64,
-        excess_deg: f64,
-        lean_deg: f64,
-    }
-
-    #[derive(Serialize)]
-    struct BusReport {
-        robot: String,
-        port: String,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        forward: Option<BusDirection>,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        backward: Option<BusDirection>,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        left: Option<BusDirection>,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        right: Option<BusDirection>,
-    }
-
-    fn parse_directions(list: &[String]) -> Result<Vec<Direction>, CliError> {
-        if list.is_empty() {
-            return Ok(Direction::ALL.to_vec());
-        }
-        list.iter()
-            .map(|s| {
-                Direction::ALL
-                    .into_iter()
-                    .find(|d| d.name() == s.trim())
-                    .ok_or_else(|| {
-                        CliError::new(format!(
-                            "--directions: \"{s}\" is not forward, backward, left or right"
-                        ))
-                    })
-            })
-            .collect()
-    }
-
-    /// Whether `port` is a serial device (not a pty from `serve`, not tcp).
-    fn is_serial(port: &str) -> bool {
-        if port.starts_with("tcp:") {
-            return false;
-        }
-        let real = std::fs::canonicalize(port).unwrap_or_else(|_| port.into());
-        !real.starts_with("/dev/pts")
-    }
-
-    fn confirm(question: &str) -> Result<(), CliError> {
-        let stdin = std::io::stdin();
-        if !stdin.is_terminal() {
-            return Err(CliError::new(format!(
-                "{question}: no terminal to ask on; pass --yes to run without asking"
-            )));
-        }
-        eprint!("{question} [y/N] ");
-        let _ = std::io::stderr().flush();
-        let mut line = String::new();
-        stdin
-            .lock()
-            .read_line(&mut line)
-            .map_err(|e| CliError::new(format!("reading the answer: {e}")))?;
-        if matches!(line.trim(), "y" | "Y" | "yes") {
-            Ok(())
-        } else {
-            Err(CliError::new("not confirmed; the robot was not moved"))
-        }
-    }
-
-    /// The experiment's joints and lean signs from the model, in the mapping's order.
-    fn config(
-        model_spec: &str,
-        mapping: &RobotMapping,
-        a: &TipoverArgs,
-    ) -> Result<TipoverConfig, CliError> {
-        let (robot, _) = load_description(model_spec)?;
-        let sim = twinloop_sim::Simulator::new(&robot, twinloop_sim::SimConfig::default())
-            .map_err(|e| CliError::new(format!("{model_spec}: {e}")))?;
-        let m = &sim.model;
-        let mut data = twinloop_dynamics::Data::new(m);
-        let q0 = m.neutral_configuration();
-        let names = twinloop_description::builtin::foot_geometry(&robot.name)
-            .map(|f| {
-                [
-                    f.left_ankle_pitch,
-                    f.right_ankle_pitch,
-                    f.left_ankle_roll,
-                    f.right_ankle_roll,
-                ]
-            })
-            .unwrap_or_else(|| {
-                [
-                    "l_ank_pitch".into(),
-                    "r_ank_pitch".into(),
-                    "l_ank_roll".into(),
-                    "r_ank_roll".into(),
-                ]
-            });
-        let hips = ["l_hip_roll".to_string(), "r_hip_roll".to_string()];
-        let sim_index = |n: &str| {
-            sim.joint_index(n).ok_or_else(|| {
-                CliError::new(format!(
-                    "{model_spec}: no joint \"{n}\" (the tip-over turns it)"
-                ))
-            })
-        };
-        let map_index = |n: &str| {
-            mapping
-                .joints
-                .iter()
-                .position(|j| j.name == n)
-                .ok_or_else(|| {
-                    CliError::new(format!(
-                        "{}: no servo drives joint \"{n}\" (the tip-over turns it)",
-                        mapping.source
-                    ))
-                })
-        };
-        let s2 = |a: &str, b: &str| -> Result<[usize; 2], CliError> {
-            Ok([sim_index(a)?, sim_index(b)?])
-        };
-        let m2 = |a: &str, b: &str| -> Result<[usize; 2], CliError> {
-            Ok([map_index(a)?, map_index(b)?])
-        };
-        let fs = twinloop_sim::statics::lean_signs(
-            m,
-            &mut data,
-            &q0,
-            s2(&names[0], &names[1])?,
-            Vector3::x(),
-        );
-        let ls = twinloop_sim::statics::lean_signs(
-            m,
-            &mut data,
-            &q0,
-            s2(&names[2], &names[3])?,
-            Vector3::y(),
-        );
-        let hs = twinloop_sim::statics::hip_lean_signs(
-            m,
-            &mut data,
-            &q0,
-            s2(&hips[0], &hips[1])?,
-            Vector3::y(),
-        );
-        let mut cfg =
-            TipoverConfig::new(m2(&names[0], &names[1])?, m2(&names[2], &names[3])?, fs, ls);
-        cfg.hip_roll = Some(m2(&hips[0], &hips[1])?);
-        cfg.hip_left_sign = hs;
-        cfg.ramp_deg_per_s = a.ramp;
-        Ok(cfg)
-    }
-
-    /// Leave the robot holding the standing pose: torque on, goal = standing.
-    fn hold_standing(robot: &mut BusRobot, standing: &[f64]) {
-        let _ = robot.set_torque(true);
-        let _ = robot.command_positions(standing);
-    }
 
     pub fn run(a: &TipoverArgs) -> CliResult {
-        let Some(map) = a.map.as_deref() else {
+        let Some(map) = a.map.clone() else {
             return Err(CliError::new(
                 "--port needs --map MAP (builtin:km20 or a mapping TOML)",
             ));
         };
-        let mapping = RobotMapping::resolve(map)?;
-        let port = a
-            .bus
-            .port
-            .clone()
-            .or_else(|| mapping.port.clone())
-            .ok_or_else(|| CliError::new("--map needs --port PORT (or the mapping's port)"))?;
+        let mapping = twinloop_link::RobotMapping::resolve(&map)?;
         let model_spec = a
             .robot
             .clone()
@@ -494,133 +197,44 @@ mod bus {
                     mapping.source
                 ))
             })?;
-        let directions = parse_directions(&a.directions)?;
-        let cfg = config(&model_spec, &mapping, a)?;
-        let serial = is_serial(&port);
-        let port_args = PortArgs {
-            port: Some(port.clone()),
-            ..a.bus.clone()
+        let plan = BusPlan {
+            model_spec,
+            map,
+            port: a.bus.clone(),
+            record: a.record.clone(),
+            yes: a.yes,
+            directions: parse_directions(&a.directions)?,
+            ramp: a.ramp,
+            slow_ramp: a.slow_ramp,
+            compliance_slope: a.compliance_slope.round() as i32,
+            clock_rate: a.realtime_factor,
+            verbose: true,
         };
-        let client = open_client(&port_args, None)?;
-        let names = mapping.joint_names();
-        let mut robot = DynamixelRobot::new(client, mapping, ReadMethod::Auto)?;
-        if robot.imu_board().is_none() {
-            return Err(CliError::new(format!(
-                "{map}: no [[board]]: the tip-over experiment needs the trunk IMU"
-            )));
+        let run = tipover_on_bus(&plan)?;
+        if let Some(p) = &a.record {
+            eprintln!("{} rows written to {}", run.rows, p.display());
         }
-        let writer = match &a.record {
-            Some(path) => {
-                let mut cols = vec!["t".to_string()];
-                for prefix in ["q", "goal"] {
-                    cols.extend(names.iter().map(|n| format!("{prefix}:{n}")));
-                }
-                for c in [
-                    "imu:gyro_x",
-                    "imu:gyro_y",
-                    "imu:gyro_z",
-                    "imu:accel_x",
-                    "imu:accel_y",
-                    "imu:accel_z",
-                    "tilt:pitch",
-                    "tilt:roll",
-                ] {
-                    cols.push(c.to_string());
-                }
-                let mut w = CsvWriter::create(path, &cols)?;
-                w.flush_each_row = true;
-                Some(w)
-            }
-            None => None,
-        };
-        if serial && !a.yes {
-            confirm(
-                "the robot will lean until it tips in four directions; hold a hand ready; continue?",
-            )?;
+        match run.outcome {
+            BusOutcome::Study(r) => emit(
+                &format!("over {}\n{}", run.port, summary(&r)),
+                a.json.as_ref(),
+                &*r,
+            )?,
+            BusOutcome::Partial(r) => emit(&partial_summary(&r), a.json.as_ref(), &r)?,
         }
-        let standing = vec![0.0; names.len()];
-        let stop = interrupt_flag();
-        let mut g = Guarded {
-            robot: &mut robot,
-            writer,
-            goals: standing.clone(),
-            row: Vec::new(),
-            stop,
-            abort: None,
-            rows: 0,
-        };
-        let mut report = BusReport {
-            robot: model_spec.clone(),
-            port: port.clone(),
-            forward: None,
-            backward: None,
-            left: None,
-            right: None,
-        };
-        let mut outcome: Result<(), String> = Ok(());
-        for (k, &d) in directions.iter().enumerate() {
-            if k > 0
-                && serial
-                && !a.yes
-                && let Err(e) = confirm(&format!(
-                    "stand the robot up again for the {} lean; continue?",
-                    d.name()
-                ))
-            {
-                outcome = Err(e.message);
-                break;
-            }
-            eprintln!("leaning {} over {port} ...", d.name());
-            let r: Result<TipoverResult, RobotError> =
-                run_direction(&mut g, &standing, d, &cfg, None);
-            // The ramp ends at the first sign of tipping (or a fault): the ankles
-            // go back to the standing pose at once.
-            let _ = g.robot.command_positions(&standing);
-            match r {
-                Ok(r) => {
-                    let out = BusDirection {
-                        commanded_deg: r.commanded_deg,
-                        measured_deg: r.measured_deg,
-                        time_s: r.time_s,
-                        excess_deg: r.excess_deg,
-                        lean_deg: r.lean_deg,
-                    };
-                    match d {
-                        Direction::Forward => report.forward = Some(out),
-                        Direction::Backward => report.backward = Some(out),
-                        Direction::Left => report.left = Some(out),
-                        Direction::Right => report.right = Some(out),
-                    }
-                }
-                Err(e) => {
-                    outcome = Err(g.abort.clone().unwrap_or_else(|| e.to_string()));
-                    break;
-                }
-            }
-        }
-        let rows = g.rows;
-        let writer = g.writer.take();
-        hold_standing(&mut robot, &standing);
-        if let Some(w) = writer {
-            w.finish()?;
-            if let Some(p) = &a.record {
-                eprintln!("{rows} rows written to {}", p.display());
-            }
-        }
-        if let Err(m) = outcome {
-            return Err(CliError::new(format!(
-                "{m}; stopped, the servos hold the standing pose"
-            )));
-        }
+        Ok(Outcome::Ok)
+    }
+
+    fn partial_summary(r: &BusReport) -> String {
         let mut text = format!(
-            "{}: tip-over over {port} (ankle angles from the standing pose, deg)\n  direction  commanded  measured  time(s)\n",
-            model_spec
+            "{}: tip-over over {} (ankle angles from the standing pose, deg)\n  direction  commanded  measured  time(s)\n",
+            r.robot, r.port
         );
         for (name, d) in [
-            ("forward", &report.forward),
-            ("backward", &report.backward),
-            ("left", &report.left),
-            ("right", &report.right),
+            ("forward", &r.forward),
+            ("backward", &r.backward),
+            ("left", &r.left),
+            ("right", &r.right),
         ] {
             if let Some(d) = d {
                 text.push_str(&format!(
@@ -629,7 +243,6 @@ mod bus {
                 ));
             }
         }
-        emit(&text, a.json.as_ref(), &report)?;
-        Ok(Outcome::Ok)
+        text
     }
 }

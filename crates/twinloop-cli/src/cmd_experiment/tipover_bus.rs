@@ -1,0 +1,589 @@
+//! The tip-over experiment on a robot over its Dynamixel bus (`experiment tipover
+//! --port --map`, and what `adapt --port` and `demo` run): the study's protocol (each
+//! direction twice, the second time creeping up to the tip) through nothing but the
+//! servos' registers and the IMU board, with the safety checks; four directions give
+//! the same JSON as the simulator's study.
+
+use crate::cmd_link::{PortArgs, interrupt_flag, open_client};
+use crate::common::load_description;
+use crate::error::CliError;
+use serde::Serialize;
+use std::io::{BufRead, IsTerminal, Write};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction, tilt};
+use twinloop_ident::tipover_study::{StudyReport, TiltModel, report_for_runs};
+use twinloop_io::CsvWriter;
+use twinloop_link::transport::Transport;
+use twinloop_link::{DynamixelRobot, Item, ReadMethod, RobotMapping};
+use twinloop_robot::{Robot, RobotError, RobotState};
+
+type BusRobot = DynamixelRobot<Box<dyn Transport>>;
+
+/// How the experiment runs over the bus.
+#[derive(Debug, Clone)]
+pub struct BusPlan {
+    /// The model: lean signs, the tilt reference and the static references.
+    pub model_spec: String,
+    pub map: String,
+    pub port: PortArgs,
+    pub record: Option<PathBuf>,
+    /// Do not ask before moving a robot on a serial port.
+    pub yes: bool,
+    pub directions: Vec<Direction>,
+    /// First ramp of each direction, deg/s of robot time.
+    pub ramp: f64,
+    /// The second run's creep over the last half degree, deg/s.
+    pub slow_ramp: f64,
+    /// RX Compliance Slope written to every servo before the ramps (2: stiffest).
+    pub compliance_slope: i32,
+    /// Robot seconds per host second (a simulated robot served faster than real time).
+    pub clock_rate: f64,
+    /// Say on stderr what is happening.
+    pub verbose: bool,
+}
+
+/// One direction over the bus.
+#[derive(Debug, Clone, Serialize)]
+pub struct BusDirection {
+    pub commanded_deg: f64,
+    pub measured_deg: f64,
+    pub time_s: f64,
+    pub excess_deg: f64,
+    pub lean_deg: f64,
+}
+
+/// The directions run when not all four were asked for.
+#[derive(Debug, Clone, Serialize)]
+pub struct BusReport {
+    pub robot: String,
+    pub port: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forward: Option<BusDirection>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub backward: Option<BusDirection>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub left: Option<BusDirection>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub right: Option<BusDirection>,
+}
+
+/// What a run over the bus gave.
+pub enum BusOutcome {
+    /// All four directions: the study's report (static references and CoM from the
+    /// model, `com.true` being the model's CoM).
+    Study(Box<StudyReport>),
+    Partial(BusReport),
+}
+
+/// The outcome, the rows recorded, and the port.
+pub struct BusRun {
+    pub outcome: BusOutcome,
+    pub rows: usize,
+    pub port: String,
+}
+
+/// Trunk tilt within which the robot counts as standing again, deg, and for how long
+/// it must stay there, s of robot time.
+const UPRIGHT_DEG: f64 = 3.0;
+const UPRIGHT_HOLD_S: f64 = 1.0;
+/// How long a person (or the virtual robot's operator) has to stand the robot up, s.
+const STAND_UP_TIMEOUT_S: f64 = 120.0;
+
+/// The robot as the experiment sees it, with the safety checks: every read is
+/// recorded, any servo that stops answering or reports overload, overheating or
+/// input voltage ends the run, and so does Ctrl-C.
+struct Guarded<'a> {
+    robot: &'a mut BusRobot,
+    writer: Option<CsvWriter>,
+    goals: Vec<f64>,
+    row: Vec<f64>,
+    stop: Arc<AtomicBool>,
+    abort: Option<String>,
+    rows: usize,
+}
+
+impl Guarded<'_> {
+    fn fail(&mut self, message: String) -> RobotError {
+        if self.abort.is_none() {
+            self.abort = Some(message.clone());
+        }
+        RobotError::new(message)
+    }
+
+    /// A servo that reports a hardware condition (1.0 overload, overheating,
+    /// input voltage; 2.0 Alert), named by id.
+    fn hardware_fault(&self) -> Option<String> {
+        let joints = &self.robot.mapping().joints;
+        self.robot
+            .outcomes()
+            .zip(joints)
+            .find_map(|((name, o), j)| match o {
+                Ok(status) if status.hardware_fault() => {
+                    Some(format!("servo id {} (joint \"{name}\"): {status}", j.id))
+                }
+                _ => None,
+            })
+    }
+
+    /// The first servo that did not answer, named by id.
+    fn silent_servo(&self) -> Option<String> {
+        let joints = &self.robot.mapping().joints;
+        self.robot
+            .outcomes()
+            .zip(joints)
+            .find_map(|((name, o), j)| match o {
+                Err(e) => Some(format!("servo id {} (joint \"{name}\"): {e}", j.id)),
+                _ => None,
+            })
+    }
+
+    fn record(&mut self, st: &RobotState) -> Result<(), RobotError> {
+        let Some(w) = self.writer.as_mut() else {
+            return Ok(());
+        };
+        self.row.clear();
+        self.row.push(st.time);
+        self.row.extend_from_slice(&st.positions);
+        self.row.extend_from_slice(&self.goals);
+        match st.imu {
+            Some(imu) => {
+                self.row.extend_from_slice(&[
+                    imu.gyro[0],
+                    imu.gyro[1],
+                    imu.gyro[2],
+                    imu.accel[0],
+                    imu.accel[1],
+                    imu.accel[2],
+                ]);
+                let (p, r) = imu
+                    .orientation
+                    .map(twinloop_experiments::tipover::tilt)
+                    .unwrap_or((f64::NAN, f64::NAN));
+                self.row.extend_from_slice(&[p, r]);
+            }
+            None => self.row.extend_from_slice(&[f64::NAN; 8]),
+        }
+        w.write_row(&self.row)
+            .map_err(|e| RobotError::new(format!("--record: {e}")))?;
+        self.rows += 1;
+        Ok(())
+    }
+}
+
+impl Robot for Guarded<'_> {
+    fn joint_names(&self) -> &[String] {
+        self.robot.joint_names()
+    }
+
+    fn time(&self) -> f64 {
+        self.robot.time()
+    }
+
+    fn read(&mut self, state: &mut RobotState) -> Result<(), RobotError> {
+        let r = self.robot.read(state);
+        // Every read reaches the file, a failed one too (NaN where a servo was
+        // silent).
+        self.record(state)?;
+        if let Some(m) = self.silent_servo() {
+            return Err(self.fail(m));
+        }
+        if let Err(e) = r {
+            return Err(self.fail(e.to_string()));
+        }
+        if let Some(m) = self.hardware_fault() {
+            return Err(self.fail(m));
+        }
+        if self.stop.load(Ordering::Relaxed) {
+            return Err(self.fail("interrupted (Ctrl-C)".into()));
+        }
+        Ok(())
+    }
+
+    fn command_positions(&mut self, goals: &[f64]) -> Result<(), RobotError> {
+        self.goals.clear();
+        self.goals.extend_from_slice(goals);
+        if self.stop.load(Ordering::Relaxed) {
+            return Err(self.fail("interrupted (Ctrl-C)".into()));
+        }
+        self.robot
+            .command_positions(goals)
+            .map_err(|e| self.fail(e.to_string()))
+    }
+
+    fn advance(&mut self, dt: f64) -> Result<(), RobotError> {
+        self.robot.advance(dt)
+    }
+}
+
+pub fn parse_directions(list: &[String]) -> Result<Vec<Direction>, CliError> {
+    if list.is_empty() {
+        return Ok(Direction::ALL.to_vec());
+    }
+    list.iter()
+        .map(|s| {
+            Direction::ALL
+                .into_iter()
+                .find(|d| d.name() == s.trim())
+                .ok_or_else(|| {
+                    CliError::new(format!(
+                        "--directions: \"{s}\" is not forward, backward, left or right"
+                    ))
+                })
+        })
+        .collect()
+}
+
+/// Whether `port` is a serial device (not a pty from `serve`, not tcp).
+fn is_serial(port: &str) -> bool {
+    if port.starts_with("tcp:") {
+        return false;
+    }
+    let real = std::fs::canonicalize(port).unwrap_or_else(|_| port.into());
+    !real.starts_with("/dev/pts")
+}
+
+fn confirm(question: &str) -> Result<(), CliError> {
+    let stdin = std::io::stdin();
+    if !stdin.is_terminal() {
+        return Err(CliError::new(format!(
+            "{question}: no terminal to ask on; pass --yes to run without asking"
+        )));
+    }
+    eprint!("{question} [y/N] ");
+    let _ = std::io::stderr().flush();
+    let mut line = String::new();
+    stdin
+        .lock()
+        .read_line(&mut line)
+        .map_err(|e| CliError::new(format!("reading the answer: {e}")))?;
+    if matches!(line.trim(), "y" | "Y" | "yes") {
+        Ok(())
+    } else {
+        Err(CliError::new("not confirmed; the robot was not moved"))
+    }
+}
+
+/// The experiment's joints and lean signs from the model, in the mapping's order.
+fn config(
+    model_spec: &str,
+    robot: &twinloop_description::Description,
+    mapping: &RobotMapping,
+    ramp: f64,
+) -> Result<TipoverConfig, CliError> {
+    let sim = twinloop_sim::Simulator::new(robot, twinloop_sim::SimConfig::default())
+        .map_err(|e| CliError::new(format!("{model_spec}: {e}")))?;
+    let m = &sim.model;
+    let mut data = twinloop_dynamics::Data::new(m);
+    let q0 = m.neutral_configuration();
+    let names = twinloop_description::builtin::foot_geometry(&robot.name)
+        .map(|f| {
+            [
+                f.left_ankle_pitch,
+                f.right_ankle_pitch,
+                f.left_ankle_roll,
+                f.right_ankle_roll,
+            ]
+        })
+        .unwrap_or_else(|| {
+            [
+                "l_ank_pitch".into(),
+                "r_ank_pitch".into(),
+                "l_ank_roll".into(),
+                "r_ank_roll".into(),
+            ]
+        });
+    let hips = ["l_hip_roll".to_string(), "r_hip_roll".to_string()];
+    let sim_index = |n: &str| {
+        sim.joint_index(n).ok_or_else(|| {
+            CliError::new(format!(
+                "{model_spec}: no joint \"{n}\" (the tip-over turns it)"
+            ))
+        })
+    };
+    let map_index = |n: &str| {
+        mapping
+            .joints
+            .iter()
+            .position(|j| j.name == n)
+            .ok_or_else(|| {
+                CliError::new(format!(
+                    "{}: no servo drives joint \"{n}\" (the tip-over turns it)",
+                    mapping.source
+                ))
+            })
+    };
+    let s2 = |a: &str, b: &str| -> Result<[usize; 2], CliError> {
+        Ok([sim_index(a)?, sim_index(b)?])
+    };
+    let m2 = |a: &str, b: &str| -> Result<[usize; 2], CliError> {
+        Ok([map_index(a)?, map_index(b)?])
+    };
+    let fs = twinloop_sim::statics::lean_signs(
+        m,
+        &mut data,
+        &q0,
+        s2(&names[0], &names[1])?,
+        nalgebra::Vector3::x(),
+    );
+    let ls = twinloop_sim::statics::lean_signs(
+        m,
+        &mut data,
+        &q0,
+        s2(&names[2], &names[3])?,
+        nalgebra::Vector3::y(),
+    );
+    let hs = twinloop_sim::statics::hip_lean_signs(
+        m,
+        &mut data,
+        &q0,
+        s2(&hips[0], &hips[1])?,
+        nalgebra::Vector3::y(),
+    );
+    let mut cfg =
+        TipoverConfig::new(m2(&names[0], &names[1])?, m2(&names[2], &names[3])?, fs, ls);
+    cfg.hip_roll = Some(m2(&hips[0], &hips[1])?);
+    cfg.hip_left_sign = hs;
+    cfg.ramp_deg_per_s = ramp;
+    Ok(cfg)
+}
+
+/// Leave the robot holding the standing pose: torque on, goal = standing.
+fn hold_standing(robot: &mut BusRobot, standing: &[f64]) {
+    let _ = robot.set_torque(true);
+    let _ = robot.command_positions(standing);
+}
+
+/// The trunk's (pitch, roll) from the IMU, rad.
+fn trunk_tilt(st: &RobotState) -> Option<(f64, f64)> {
+    st.imu.and_then(|i| i.orientation).map(tilt)
+}
+
+/// Hold the standing pose until the robot stands again: its trunk within
+/// [`UPRIGHT_DEG`] of `upright` for [`UPRIGHT_HOLD_S`]. A person stands a fallen
+/// robot up (the virtual robot's operator does it by itself); a robot caught before
+/// it fell is standing already.
+fn wait_upright(
+    g: &mut Guarded,
+    standing: &[f64],
+    upright: (f64, f64),
+    period: f64,
+) -> Result<(), RobotError> {
+    let mut st = RobotState::default();
+    let t0 = g.time();
+    let mut since: Option<f64> = None;
+    loop {
+        g.command_positions(standing)?;
+        g.advance(period)?;
+        g.read(&mut st)?;
+        let now = g.time();
+        let ok = trunk_tilt(&st).is_some_and(|(p, r)| {
+            (p - upright.0).abs().max((r - upright.1).abs()) < UPRIGHT_DEG.to_radians()
+        });
+        since = if ok { since.or(Some(now)) } else { None };
+        if since.is_some_and(|s| now - s >= UPRIGHT_HOLD_S) {
+            return Ok(());
+        }
+        if now - t0 > STAND_UP_TIMEOUT_S {
+            let (p, r) = trunk_tilt(&st).unwrap_or((f64::NAN, f64::NAN));
+            return Err(g.fail(format!(
+                "the robot did not stand up again within {STAND_UP_TIMEOUT_S} s (trunk pitch {:.1} deg, roll {:.1} deg)",
+                p.to_degrees(),
+                r.to_degrees()
+            )));
+        }
+    }
+}
+
+/// The record's columns: t, q:*, goal:*, the IMU and the host's tilt.
+fn record_columns(names: &[String]) -> Vec<String> {
+    let mut cols = vec!["t".to_string()];
+    for prefix in ["q", "goal"] {
+        cols.extend(names.iter().map(|n| format!("{prefix}:{n}")));
+    }
+    for c in [
+        "imu:gyro_x",
+        "imu:gyro_y",
+        "imu:gyro_z",
+        "imu:accel_x",
+        "imu:accel_y",
+        "imu:accel_z",
+        "tilt:pitch",
+        "tilt:roll",
+    ] {
+        cols.push(c.to_string());
+    }
+    cols
+}
+
+/// Stiffen every servo as the study does (RX compliance margin 0, slope
+/// `slope`): the CoM methods treat the robot as rigid. Servos without these
+/// registers are left as they are.
+fn stiffen(robot: &mut BusRobot, slope: i32) -> Result<(), RobotError> {
+    for (item, v) in [
+        (Item::CwComplianceMargin, 0),
+        (Item::CcwComplianceMargin, 0),
+        (Item::CwComplianceSlope, slope),
+        (Item::CcwComplianceSlope, slope),
+    ] {
+        robot.set_register(item, v)?;
+    }
+    Ok(())
+}
+
+/// Run the tip-over over the bus (see the module documentation).
+pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
+    let mapping = RobotMapping::resolve(&plan.map)?;
+    let port = plan
+        .port
+        .port
+        .clone()
+        .or_else(|| mapping.port.clone())
+        .ok_or_else(|| CliError::new("--map needs --port PORT (or the mapping's port)"))?;
+    let (model, _) = load_description(&plan.model_spec)?;
+    let cfg = config(&plan.model_spec, &model, &mapping, plan.ramp)?;
+    let names = mapping.joint_names();
+    let Some(board) = mapping.boards.first() else {
+        return Err(CliError::new(format!(
+            "{}: no [[board]]: the tip-over experiment needs the trunk IMU",
+            plan.map
+        )));
+    };
+    let mut tilt_model = TiltModel::new(&model, &names, &board.link)?;
+    let serial = is_serial(&port);
+    let port_args = PortArgs {
+        port: Some(port.clone()),
+        ..plan.port.clone()
+    };
+    let client = open_client(&port_args, None)?;
+    let mut robot = DynamixelRobot::new(client, mapping, ReadMethod::Auto)?;
+    robot.set_clock_rate(plan.clock_rate)?;
+    let writer = match &plan.record {
+        Some(path) => {
+            let mut w = CsvWriter::create(path, &record_columns(&names))?;
+            w.flush_each_row = true;
+            Some(w)
+        }
+        None => None,
+    };
+    if serial && !plan.yes {
+        confirm(
+            "the robot will lean until it tips in four directions; hold a hand ready; continue?",
+        )?;
+    }
+    let standing = vec![0.0; names.len()];
+    let mut g = Guarded {
+        robot: &mut robot,
+        writer,
+        goals: standing.clone(),
+        row: Vec::new(),
+        stop: interrupt_flag(),
+        abort: None,
+        rows: 0,
+    };
+    let runs = run_directions(&mut g, plan, &cfg, &standing, &mut tilt_model, serial, &port);
+    let rows = g.rows;
+    let writer = g.writer.take();
+    let abort = g.abort.take();
+    hold_standing(&mut robot, &standing);
+    if let Some(w) = writer {
+        w.finish()?;
+    }
+    let runs = runs.map_err(|e| {
+        CliError::new(format!(
+            "{}; stopped, the servos hold the standing pose",
+            abort.unwrap_or(e.message)
+        ))
+    })?;
+    let outcome = if runs.len() == 4 {
+        BusOutcome::Study(Box::new(report_for_runs(&model, &runs, &names)?))
+    } else {
+        let mut r = BusReport {
+            robot: plan.model_spec.clone(),
+            port: port.clone(),
+            forward: None,
+            backward: None,
+            left: None,
+            right: None,
+        };
+        for run in runs {
+            let d = Some(BusDirection {
+                commanded_deg: run.commanded_deg,
+                measured_deg: run.measured_deg,
+                time_s: run.time_s,
+                excess_deg: run.excess_deg,
+                lean_deg: run.lean_deg,
+            });
+            match run.direction {
+                Direction::Forward => r.forward = d,
+                Direction::Backward => r.backward = d,
+                Direction::Left => r.left = d,
+                Direction::Right => r.right = d,
+            }
+        }
+        BusOutcome::Partial(r)
+    };
+    Ok(BusRun {
+        outcome,
+        rows,
+        port,
+    })
+}
+
+/// Each direction twice, as the study: a first ramp finds the tip, a second comes up
+/// to half a degree before it and creeps; the robot stood up before each run.
+fn run_directions(
+    g: &mut Guarded,
+    plan: &BusPlan,
+    cfg: &TipoverConfig,
+    standing: &[f64],
+    tilt_model: &mut TiltModel,
+    serial: bool,
+    port: &str,
+) -> Result<Vec<TipoverResult>, CliError> {
+    stiffen(g.robot, plan.compliance_slope).map_err(|e| CliError::new(e.to_string()))?;
+    // Upright is the trunk's tilt the model gives standing with the feet flat (the
+    // robot's first readings may still rock from the stiffening).
+    // (`tilt` counts roll the other way: positive leaning right.)
+    let t = tilt_model.predict(Direction::Forward, standing);
+    let upright = (t[0], -t[1]);
+    let mut out = Vec::with_capacity(plan.directions.len());
+    for (k, &d) in plan.directions.iter().enumerate() {
+        if k > 0 && serial && !plan.yes {
+            confirm(&format!(
+                "stand the robot up again for the {} lean; continue?",
+                d.name()
+            ))?;
+        }
+        if plan.verbose {
+            eprintln!("leaning {} over {port} ...", d.name());
+        }
+        let mut run = |cfg: &TipoverConfig, g: &mut Guarded| -> Result<TipoverResult, RobotError> {
+            wait_upright(g, standing, upright, cfg.period_s)?;
+            let mut predict = |q: &[f64]| tilt_model.predict(d, q);
+            let r = run_direction(g, standing, d, cfg, Some(&mut predict));
+            // The ramp ends at the first sign of tipping (or a fault): the ankles go
+            // back to the standing pose at once.
+            let _ = g.robot.command_positions(standing);
+            r
+        };
+        let first = run(cfg, g)?;
+        let mut slow = cfg.clone();
+        slow.slow_from_deg = Some((first.commanded_deg - 0.5).max(0.0));
+        slow.slow_ramp_deg_per_s = plan.slow_ramp;
+        let mut r = run(&slow, g)?;
+        r.time_s = first.time_s;
+        if plan.verbose {
+            eprintln!(
+                "  {}: tipped at {:.2} deg (first ramp {:.2} deg)",
+                d.name(),
+                r.measured_deg,
+                first.measured_deg
+            );
+        }
+        out.push(r);
+    }
+    wait_upright(g, standing, upright, cfg.period_s)?;
+    Ok(out)
+}
