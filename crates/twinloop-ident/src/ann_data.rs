@@ -365,6 +365,16 @@ pub fn generate(
     opts: &DataOptions,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<(BodyParts, Vec<Sample>), IdentError> {
+    generate_range(prior, opts, 0..opts.samples, progress)
+}
+
+/// The samples of indices `range` of [`generate`]'s (the same draws).
+pub fn generate_range(
+    prior: &Description,
+    opts: &DataOptions,
+    range: std::ops::Range<usize>,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<(BodyParts, Vec<Sample>), IdentError> {
     let (lo, hi) = opts.mass_range;
     if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi >= lo) {
         return Err(
@@ -387,8 +397,8 @@ pub fn generate(
         ))
         .option("robot"));
     }
-    let samples = parallel_map(opts.samples, opts.threads, progress, &|i| {
-        sample(prior, &parts, &links, &foot, opts, i)
+    let samples = parallel_map(range.len(), opts.threads, progress, &|i| {
+        sample(prior, &parts, &links, &foot, opts, range.start + i)
     })?;
     Ok((parts, samples))
 }

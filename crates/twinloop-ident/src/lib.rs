@@ -28,6 +28,7 @@ pub mod anatomy;
 pub mod ann;
 pub mod ann_adapt;
 pub mod ann_data;
+pub mod ann_report;
 pub mod compliant_fit;
 pub mod error;
 pub mod filter;
