@@ -226,7 +226,11 @@ pub fn run(a: AdaptArgs) -> CliResult {
 }
 
 /// `adapt --method ann`.
-fn run_ann(a: &AdaptArgs, prior: &twinloop_description::Description, tip: &StudyReport) -> CliResult {
+fn run_ann(
+    a: &AdaptArgs,
+    prior: &twinloop_description::Description,
+    tip: &StudyReport,
+) -> CliResult {
     if a.out.is_some() || a.check || a.merge || a.report.is_some() {
         return Err(CliError::new(
             "--method ann gives the three-mass LIPM, not a URDF: --out, --merge, --check and --report are for --method exact",
@@ -243,7 +247,14 @@ fn run_ann(a: &AdaptArgs, prior: &twinloop_description::Description, tip: &Study
     let model = AnnModel::from_json(&text)
         .map_err(|e| CliError::new(format!("{}: {e}", net.display())).context("--net"))?;
     let r = adapt_ann(prior, tip, &model, host, a.total_mass).map_err(where_flag)?;
-    let mm = |v: [f64; 3]| format!("[{:.1}, {:.1}, {:.1}] mm", v[0] * 1e3, v[1] * 1e3, v[2] * 1e3);
+    let mm = |v: [f64; 3]| {
+        format!(
+            "[{:.1}, {:.1}, {:.1}] mm",
+            v[0] * 1e3,
+            v[1] * 1e3,
+            v[2] * 1e3
+        )
+    };
     let mut t = format!(
         "measured fall angles {:.2} / {:.2} deg (forward, backward), change on {} (part {})
 ",
@@ -271,7 +282,10 @@ fn run_ann(a: &AdaptArgs, prior: &twinloop_description::Description, tip: &Study
 }
 
 fn mass_range(s: &str) -> Result<(f64, f64), CliError> {
-    let bad = || CliError::new(format!("\"{s}\": expected LO,HI in kg, e.g. 0.05,0.5")).context("--mass-range");
+    let bad = || {
+        CliError::new(format!("\"{s}\": expected LO,HI in kg, e.g. 0.05,0.5"))
+            .context("--mass-range")
+    };
     let (lo, hi) = s.split_once(',').ok_or_else(bad)?;
     let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
     let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
@@ -337,8 +351,7 @@ fn validation_changes(
     let total = opts.data.samples;
     let first = total * 70 / 100 + total * 15 / 100;
     let range = first..(first + n).min(total);
-    let (_, samples) =
-        twinloop_ident::ann_data::generate_range(prior, &opts.data, range, &|_| {})?;
+    let (_, samples) = twinloop_ident::ann_data::generate_range(prior, &opts.data, range, &|_| {})?;
     Ok(samples.into_iter().map(|s| s.change).collect())
 }
 
@@ -370,7 +383,13 @@ fn train_text(r: &TrainReport) -> String {
         for m in &set.methods {
             t += &format!(
                 "  {:44} vCoM {:6.2} / {:6.2}  fall {:6.3} / {:6.3}  positions {:6.2} / {:6.2}\n",
-                m.method, m.com_mm[0], m.com_mm[1], m.fall_deg[0], m.fall_deg[1], m.position_mm[0], m.position_mm[1]
+                m.method,
+                m.com_mm[0],
+                m.com_mm[1],
+                m.fall_deg[0],
+                m.fall_deg[1],
+                m.position_mm[0],
+                m.position_mm[1]
             );
         }
     }

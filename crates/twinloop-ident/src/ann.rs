@@ -466,3 +466,35 @@ pub fn train(
     }
     Ok((best.1, log))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Back-propagation against central differences of the squared error.
+    #[test]
+    fn backprop_is_the_gradient() {
+        let mut rng = SplitMix64(11);
+        let net = Mlp::new(&[3, 5, 10, 5, 4], &mut rng);
+        let x = [0.3, -0.7, 1.1];
+        let t = [0.2, -0.1, 0.5, 1.0];
+        let mut work = MlpWork::new(&net);
+        let mut grad = vec![0.0; net.n_params()];
+        net.backprop(&x, &t, &mut work, &mut grad);
+        let mut scratch = vec![0.0; net.n_params()];
+        let h = 1e-6;
+        for p in 0..net.n_params() {
+            let mut moved = |d: f64| {
+                let mut n = net.clone();
+                *n.params_mut().nth(p).unwrap() += d;
+                0.5 * n.backprop(&x, &t, &mut work, &mut scratch)
+            };
+            let fd = (moved(h) - moved(-h)) / (2.0 * h);
+            assert!(
+                (fd - grad[p]).abs() < 1e-7,
+                "parameter {p}: {fd} vs {}",
+                grad[p]
+            );
+        }
+    }
+}

@@ -72,7 +72,10 @@ fn rows_table(rep: &mut Report, set: &SetEvaluation) {
 
 /// The report.
 pub fn train_html_report(r: &TrainReport) -> Report {
-    let mut rep = Report::new(format!("The seed's ANN on {}: training and evaluation", r.robot));
+    let mut rep = Report::new(format!(
+        "The seed's ANN on {}: training and evaluation",
+        r.robot
+    ));
     rep.paragraph(format!(
         "Seed 000 section V.C: a perceptron with hidden layers {:?} (layout {:?}) maps the \
          forward and backward fall angles{} and the body part of the change to the \
@@ -125,7 +128,10 @@ pub fn train_html_report(r: &TrainReport) -> Report {
     let epochs: Vec<f64> = (1..=r.log.train_mse.len()).map(|e| e as f64).collect();
     rep.plot(
         &Plot::new(
-            format!("Mean squared error (standardised outputs); best epoch {}", r.log.best_epoch),
+            format!(
+                "Mean squared error (standardised outputs); best epoch {}",
+                r.log.best_epoch
+            ),
             "epoch",
             "MSE",
         )
@@ -140,7 +146,8 @@ pub fn train_html_report(r: &TrainReport) -> Report {
             .iter()
             .map(|c| {
                 let d = c.max_difference();
-                let four = |v: [f64; 4]| format!("{:.2} / {:.2} / {:.2} / {:.2}", v[0], v[1], v[2], v[3]);
+                let four =
+                    |v: [f64; 4]| format!("{:.2} / {:.2} / {:.2} / {:.2}", v[0], v[1], v[2], v[3]);
                 vec![
                     format!("{:.3} kg on {}", c.change.mass, c.change.link),
                     four(c.static_deg),
