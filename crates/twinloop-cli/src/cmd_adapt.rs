@@ -1,20 +1,40 @@
 //! `twinloop adapt`: the model adapted to a hardware change from the tip-over angles
-//! (seed 000 sections III and V.B); the algorithm is `twinloop_ident::adapt`.
+//! (seed 000 sections III and V.B); the algorithm is `twinloop_ident::adapt`. With
+//! `--method ann` the three-mass LIPM comes from the seed's ANN (section V.C), which
+//! `twinloop adapt train` trains (`twinloop_ident::ann_adapt`).
 
 use crate::common::{JSON_HELP, ROBOT_HELP, emit, load_description};
 use crate::error::{CliError, CliResult, Outcome};
-use clap::Args;
-use std::path::PathBuf;
+use clap::{Args, Subcommand, ValueEnum};
+use std::path::{Path, PathBuf};
 use twinloop_ident::adapt::{AdaptOptions, adapt, check, html_report};
+use twinloop_ident::ann::TrainOptions;
+use twinloop_ident::ann_adapt::{AnnModel, AnnTrainOptions, TrainReport, adapt_ann, train_ann};
+use twinloop_ident::ann_data::{Change, DataOptions, check_against_simulation};
 use twinloop_ident::tipover_study::{StudyOptions, StudyReport};
 
 #[derive(Args, Debug)]
+#[command(
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    override_usage = "twinloop adapt [OPTIONS] --robot <ROBOT> --tipover <TIP.json>\n       \
+                      (to train the ANN: adapt train --help)"
+)]
 pub struct AdaptArgs {
-    #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
-    pub robot: String,
+    #[command(subcommand)]
+    pub command: Option<AdaptCommand>,
+    #[arg(long, value_name = "ROBOT", help = ROBOT_HELP, required = true)]
+    pub robot: Option<String>,
     /// The tip-over experiment's JSON (`twinloop experiment tipover --json`).
-    #[arg(long, value_name = "TIP.json")]
-    pub tipover: PathBuf,
+    #[arg(long, value_name = "TIP.json", required = true)]
+    pub tipover: Option<PathBuf>,
+    /// exact: the exact inversion (an added point mass, the adapted URDF); ann: the
+    /// three-mass LIPM from the network of `twinloop adapt train` (--net; needs --where).
+    #[arg(long, value_enum, default_value_t = Method::Exact)]
+    pub method: Method,
+    /// The network of `twinloop adapt train --out` (with --method ann).
+    #[arg(long, value_name = "NET.json")]
+    pub net: Option<PathBuf>,
     /// The changed robot's total mass, kg: the added mass is this minus the prior's.
     #[arg(long, value_name = "KG")]
     pub total_mass: Option<f64>,
@@ -40,12 +60,95 @@ pub struct AdaptArgs {
     pub check: bool,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Method {
+    Exact,
+    Ann,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum AdaptCommand {
+    /// Train the seed's ANN (seed 000 V.C) on simulated changes of a robot
+    ///
+    /// Draws --samples random changes (a point mass of 0.05-0.5 kg anywhere in a link's
+    /// collision outline), finds each changed robot's fall angles by the static tipping
+    /// analysis (its CoM over the sole edge; --check-sim N runs the full simulated
+    /// tip-over on N of them to compare), on all cores, splits them 70/15/15 into
+    /// training, testing and validation sets, trains a 5-10-5 perceptron (tanh,
+    /// back-propagation with Adam) from the forward and backward fall angles, the added
+    /// mass and the body part to the three-mass LIPM's positions, and scores it beside the
+    /// seed's manual method and the exact inversion on the held-out changes.
+    ///
+    /// Example:
+    ///   twinloop adapt train --robot builtin:km20 --samples 10000 --seed 1 --out net.json \
+    ///       --json train.json --report train.html
+    ///
+    /// Output: NET.json (layers, weights, input and output scalings, the body parts), the
+    /// JSON (split, learning curve, errors per method and set: three-mass positions, vCoM
+    /// and fall angles, mean / 95th percentile / largest) and the report (seed Tables
+    /// VI-VII style).
+    #[command(verbatim_doc_comment)]
+    Train(TrainArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct TrainArgs {
+    #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
+    pub robot: String,
+    /// Random changes to draw.
+    #[arg(long, default_value_t = 10_000, value_name = "N")]
+    pub samples: usize,
+    /// Seed of every random draw (changes, noise, weights, batch order).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// The trained network.
+    #[arg(long, value_name = "NET.json")]
+    pub out: PathBuf,
+    /// One-sigma noise added to each fall angle, deg.
+    #[arg(long, default_value_t = 0.05, value_name = "DEG")]
+    pub noise: f64,
+    /// Smallest and largest added mass, kg.
+    #[arg(long, default_value = "0.05,0.5", value_name = "LO,HI")]
+    pub mass_range: String,
+    /// The seed's inputs only (fall angles and body part): no added mass input.
+    #[arg(long)]
+    pub seed_inputs: bool,
+    /// Most training epochs.
+    #[arg(long, default_value_t = 400, value_name = "N")]
+    pub epochs: usize,
+    /// Worker threads (0: all cores).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub threads: usize,
+    /// Run the full simulated tip-over on the first N validation changes and compare its
+    /// angles with the static route's.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub check_sim: usize,
+    #[arg(long, value_name = "FILE", help = JSON_HELP)]
+    pub json: Option<PathBuf>,
+    /// HTML report to write.
+    #[arg(long, value_name = "FILE.html")]
+    pub report: Option<PathBuf>,
+}
+
+fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
+    let text =
+        std::fs::read_to_string(path).map_err(|e| CliError::io(path, e).context("--tipover"))?;
+    serde_json::from_str(&text)
+        .map_err(|e| CliError::new(format!("{}: {e}", path.display())).context("--tipover"))
+}
+
 pub fn run(a: AdaptArgs) -> CliResult {
-    let (prior, _) = load_description(&a.robot)?;
-    let text = std::fs::read_to_string(&a.tipover)
-        .map_err(|e| CliError::io(&a.tipover, e).context("--tipover"))?;
-    let tip: StudyReport = serde_json::from_str(&text)
-        .map_err(|e| CliError::new(format!("{}: {e}", a.tipover.display())).context("--tipover"))?;
+    if let Some(AdaptCommand::Train(t)) = a.command {
+        return run_train(t);
+    }
+    let (Some(robot), Some(tipover)) = (&a.robot, &a.tipover) else {
+        return Err(CliError::new("adapt needs --robot and --tipover"));
+    };
+    let (prior, _) = load_description(robot)?;
+    let tip = read_tip(tipover)?;
+    if a.method == Method::Ann {
+        return run_ann(&a, &prior, &tip);
+    }
     if a.total_mass.is_none() && a.host.is_none() && (a.out.is_some() || a.check) {
         return Err(CliError::new(
             "the tip-over angles fix only m_a (p - c_meas) = M0 (c_meas - c0): give --total-mass KG or --where LINK to place the mass",
@@ -120,6 +223,196 @@ pub fn run(a: AdaptArgs) -> CliResult {
     }
     emit(&t, a.json.as_ref(), r)?;
     Ok(Outcome::Ok)
+}
+
+/// `adapt --method ann`.
+fn run_ann(
+    a: &AdaptArgs,
+    prior: &twinloop_description::Description,
+    tip: &StudyReport,
+) -> CliResult {
+    if a.out.is_some() || a.check || a.merge || a.report.is_some() {
+        return Err(CliError::new(
+            "--method ann gives the three-mass LIPM, not a URDF: --out, --merge, --check and --report are for --method exact",
+        ));
+    }
+    let net = a
+        .net
+        .as_ref()
+        .ok_or_else(|| CliError::new("--method ann needs the network: --net NET.json"))?;
+    let host = a.host.as_ref().ok_or_else(|| {
+        CliError::new("--method ann needs --where LINK: the general location of the change is the network's input")
+    })?;
+    let text = std::fs::read_to_string(net).map_err(|e| CliError::io(net, e).context("--net"))?;
+    let model = AnnModel::from_json(&text)
+        .map_err(|e| CliError::new(format!("{}: {e}", net.display())).context("--net"))?;
+    let r = adapt_ann(prior, tip, &model, host, a.total_mass).map_err(where_flag)?;
+    let mm = |v: [f64; 3]| {
+        format!(
+            "[{:.1}, {:.1}, {:.1}] mm",
+            v[0] * 1e3,
+            v[1] * 1e3,
+            v[2] * 1e3
+        )
+    };
+    let mut t = format!(
+        "measured fall angles {:.2} / {:.2} deg (forward, backward), change on {} (part {})
+",
+        r.measured_deg[0], r.measured_deg[1], r.host, r.part
+    );
+    for (k, name) in ["left leg", "right leg", "hip"].iter().enumerate() {
+        t += &format!(
+            "{name:9} {:.3} kg at {} (prior {:.3} kg at {})
+",
+            r.adapted.masses[k],
+            mm(r.adapted.positions[k]),
+            r.prior.masses[k],
+            mm(r.prior.positions[k])
+        );
+    }
+    t += &format!(
+        "vCoM {}; the three-mass model's fall angles {:.2} / {:.2} deg
+",
+        mm(r.adapted_com),
+        r.adapted_fall_deg[0],
+        r.adapted_fall_deg[1]
+    );
+    emit(&t, a.json.as_ref(), &r)?;
+    Ok(Outcome::Ok)
+}
+
+fn mass_range(s: &str) -> Result<(f64, f64), CliError> {
+    let bad = || {
+        CliError::new(format!("\"{s}\": expected LO,HI in kg, e.g. 0.05,0.5"))
+            .context("--mass-range")
+    };
+    let (lo, hi) = s.split_once(',').ok_or_else(bad)?;
+    let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
+    let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
+    Ok((lo, hi))
+}
+
+/// `adapt train`.
+fn run_train(a: TrainArgs) -> CliResult {
+    let (prior, _) = load_description(&a.robot)?;
+    let opts = AnnTrainOptions {
+        data: DataOptions {
+            samples: a.samples,
+            seed: a.seed,
+            mass_range: mass_range(&a.mass_range)?,
+            noise_deg: a.noise,
+            threads: a.threads,
+        },
+        train: TrainOptions {
+            max_epochs: a.epochs,
+            seed: a.seed,
+            ..Default::default()
+        },
+        mass_input: !a.seed_inputs,
+    };
+    let bar = crate::progress::steps(a.samples);
+    bar.set_message("changes tipped (static route)");
+    let (model, mut report) =
+        train_ann(&prior, &opts, &|done| bar.set_position(done as u64)).map_err(train_flags)?;
+    bar.finish_and_clear();
+    if a.check_sim > 0 {
+        let changes: Vec<Change> = validation_changes(&prior, &opts, a.check_sim)?;
+        let bar = crate::progress::steps(changes.len());
+        bar.set_message("simulated tip-over studies");
+        report.sim_check = check_against_simulation(
+            &prior,
+            &changes,
+            &StudyOptions::default(),
+            a.threads,
+            &|done| bar.set_position(done as u64),
+        )?;
+        bar.finish_and_clear();
+    }
+    std::fs::write(&a.out, model.to_json())
+        .map_err(|e| CliError::io(&a.out, e).context("--out"))?;
+    report.files.push(a.out.display().to_string());
+    if let Some(p) = &a.report {
+        report.files.push(p.display().to_string());
+        twinloop_ident::ann_report::train_html_report(&report)
+            .write(p)
+            .map_err(|e| CliError::new(e).context("--report"))?;
+    }
+    emit(&train_text(&report), a.json.as_ref(), &report)?;
+    Ok(Outcome::Ok)
+}
+
+/// The validation set's first `n` changes (drawn again: each sample's draw depends
+/// only on the seed and its index).
+fn validation_changes(
+    prior: &twinloop_description::Description,
+    opts: &AnnTrainOptions,
+    n: usize,
+) -> Result<Vec<Change>, CliError> {
+    let total = opts.data.samples;
+    let first = total * 70 / 100 + total * 15 / 100;
+    let range = first..(first + n).min(total);
+    let (_, samples) = twinloop_ident::ann_data::generate_range(prior, &opts.data, range, &|_| {})?;
+    Ok(samples.into_iter().map(|s| s.change).collect())
+}
+
+fn train_text(r: &TrainReport) -> String {
+    let mut t = format!(
+        "{} changes of {} ({}-{} kg, {} deg noise): training {}, testing {}, validation {}\n\
+         data {:.2} s on {} threads, training {:.2} s (layout {:?}, best epoch {} of {}), evaluation {:.2} s\n",
+        r.samples,
+        r.robot,
+        r.mass_range[0],
+        r.mass_range[1],
+        r.noise_deg,
+        r.split[0],
+        r.split[1],
+        r.split[2],
+        r.seconds[0],
+        r.threads,
+        r.seconds[1],
+        r.layout,
+        r.log.best_epoch,
+        r.log.train_mse.len(),
+        r.seconds[2]
+    );
+    for set in [&r.testing, &r.validation] {
+        t += &format!(
+            "{} set: vCoM mm, fall angle deg, three-mass positions mm (mean / 95th percentile)\n",
+            set.set
+        );
+        for m in &set.methods {
+            t += &format!(
+                "  {:44} vCoM {:6.2} / {:6.2}  fall {:6.3} / {:6.3}  positions {:6.2} / {:6.2}\n",
+                m.method,
+                m.com_mm[0],
+                m.com_mm[1],
+                m.fall_deg[0],
+                m.fall_deg[1],
+                m.position_mm[0],
+                m.position_mm[1]
+            );
+        }
+    }
+    for c in &r.sim_check {
+        let d = c.max_difference();
+        t += &format!(
+            "static vs simulated tip-over, {:.3} kg on {}: fw/bw {:.3} deg, left/right {:.3} deg\n",
+            c.change.mass, c.change.link, d[0], d[1]
+        );
+    }
+    for f in &r.files {
+        t += &format!("wrote {f}\n");
+    }
+    t
+}
+
+/// The library's option names in `adapt train`'s flags.
+fn train_flags(mut e: twinloop_ident::IdentError) -> CliError {
+    e.option = e.option.map(|o| match o.as_str() {
+        "noise_deg" => "noise".into(),
+        _ => o,
+    });
+    CliError::from(e)
 }
 
 /// The library's `host` option is the `--where` flag (the seed's word for the general

@@ -93,9 +93,17 @@ enum Command {
     ///   twinloop adapt --robot builtin:km20 --tipover tip.json --total-mass 3.636 \
     ///       --out adapted.urdf --json - --report adapt.html --check
     ///
+    /// --method ann puts the three masses of the three-mass LIPM where the seed's ANN
+    /// (seed 000 V.C) says, from the forward and backward angles and --where; `twinloop
+    /// adapt train` trains it on simulated changes.
+    ///   twinloop adapt train --robot builtin:km20 --samples 10000 --out net.json
+    ///   twinloop adapt --robot builtin:km20 --tipover tip.json --method ann --net net.json \
+    ///       --where torso --total-mass 3.636 --json -
+    ///
     /// Output: ADAPTED.urdf (an `added_mass` link on a fixed joint, or --merge into the
     /// host), the JSON (measured and prior CoM, the mass found with its uncertainty,
-    /// LIPM and three-mass LIPM of the adapted model).
+    /// LIPM and three-mass LIPM of the adapted model; with --method ann the three masses,
+    /// their CoM and fall angles).
     #[command(verbatim_doc_comment)]
     Adapt(cmd_adapt::AdaptArgs),
     /// Validate a model against measurements (inverse-dynamics residual, seed 004)

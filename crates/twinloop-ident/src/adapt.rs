@@ -112,14 +112,14 @@ pub struct Adapted {
     pub robot: Option<Description>,
 }
 
-struct Frame {
-    model: Model,
-    q: Vec<f64>,
+pub(crate) struct Frame {
+    pub(crate) model: Model,
+    pub(crate) q: Vec<f64>,
     mid: Vector3<f64>,
     data: Data,
 }
 
-fn standing(robot: &Description) -> Result<Frame, String> {
+pub(crate) fn standing(robot: &Description) -> Result<Frame, String> {
     let model = Model::from_description(robot).map_err(|e| e.to_string())?;
     let mut q = model.neutral_configuration();
     for i in 0..model.nbodies {
@@ -159,7 +159,7 @@ impl Frame {
         };
         Some(pose.act_point(&local) - self.mid)
     }
-    fn com(&self, robot: &Description) -> Result<Vector3<f64>, String> {
+    pub(crate) fn com(&self, robot: &Description) -> Result<Vector3<f64>, String> {
         let n = ankle_names(robot)?;
         let c = twinloop_reduced::com_relative_to_ankles(&self.model, &self.q, &n[0], &n[1])
             .map_err(|e| e.to_string())?;
@@ -211,7 +211,7 @@ fn v3(v: Vector3<f64>) -> [f64; 3] {
 
 /// The top joint of each leg (below the joint both legs share): the leg roots the
 /// three-mass LIPM splits at.
-fn leg_roots(model: &Model, robot: &Description) -> Result<[String; 2], String> {
+pub(crate) fn leg_roots(model: &Model, robot: &Description) -> Result<[String; 2], String> {
     let n = ankle_names(robot)?;
     let idx = |s: &str| model.joint_index(s).ok_or(format!("no joint \"{s}\""));
     let (l, r) = (idx(&n[0])?, idx(&n[1])?);
@@ -229,7 +229,7 @@ fn leg_roots(model: &Model, robot: &Description) -> Result<[String; 2], String> 
     }
 }
 
-fn reduced(
+pub(crate) fn reduced(
     frame: &Frame,
     robot: &Description,
     foot: &FootGeometry,

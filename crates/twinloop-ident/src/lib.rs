@@ -4,6 +4,7 @@
 //! |---|---|---|
 //! | CoM from the tip-over angles: the seed's geometric method and the exact rigid-body method | 000 eq 8-13 | [`tipover`]; the simulated study that runs the experiment and checks them: [`tipover_study`] |
 //! | an added mass (mass, host link, position) from the tip-over angles and the prior model | 000 III, V.B | [`adapt`] |
+//! | the three-mass LIPM from the fall angles by a 5-10-5 perceptron trained on simulated changes | 000 V.C | [`ann`] (the network), [`ann_data`] (the changes), [`ann_adapt`] (training and evaluation) |
 //! | static identification of link masses and CoMs (below) | 004 | [`static_ident`] |
 //! | the compliant compact model's 8 corrections (LM, CMA-ES, PoWER), identifiability | 002 section 4 | [`compliant_fit`] |
 //! | a walk record to MIMO ARX and state-space models | 003 section 7 | [`walk_identification`] |
@@ -24,6 +25,10 @@
 
 pub mod adapt;
 pub mod anatomy;
+pub mod ann;
+pub mod ann_adapt;
+pub mod ann_data;
+pub mod ann_report;
 pub mod compliant_fit;
 pub mod error;
 pub mod filter;
