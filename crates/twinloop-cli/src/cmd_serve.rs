@@ -43,11 +43,11 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     /// Simulated robot: simulated seconds per wall-clock second
     #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
     pub realtime_factor: f64,
-    /// Simulated robot: an operator stands the robot up again this many simulated
-    /// seconds after it fell (trunk tilted beyond 45 deg), in the pose its servos are
-    /// commanded to, as a person does between the runs of `experiment tipover`
-    #[arg(long, value_name = "S")]
-    pub pick_up_after: Option<f64>,
+    /// Simulated robot: an operator catches the robot when its trunk tilts past 30
+    /// deg and stands it up in the pose its servos are commanded to, as a person does
+    /// between the runs of `experiment tipover --port`
+    #[arg(long)]
+    pub catch_falls: bool,
     /// Simulated robot: how far its weight sinks into the ground, m (the floor's
     /// stiffness; default 0.001). 1e-5 is the near-rigid floor of the simulated
     /// tip-over study (`experiment tipover --robot`), whose angles it then gives
@@ -161,7 +161,7 @@ fn serve_simulated(
     let options = twinloop_virtual::VirtualRobotOptions {
         torque_on: !a.torque_off,
         realtime_factor: a.realtime_factor,
-        pick_up_after_s: a.pick_up_after,
+        catch_falls: a.catch_falls,
         ground_sink: a.ground_sink,
         ..Default::default()
     };
@@ -170,13 +170,6 @@ fn serve_simulated(
     {
         return Err(CliError::from(format!(
             "--ground-sink must be a positive number of metres, not {s}"
-        )));
-    }
-    if let Some(s) = a.pick_up_after
-        && !(s >= 0.0 && s.is_finite())
-    {
-        return Err(CliError::from(format!(
-            "--pick-up-after must be a number of seconds >= 0, not {s}"
         )));
     }
     if !(a.realtime_factor > 0.0 && a.realtime_factor.is_finite()) {

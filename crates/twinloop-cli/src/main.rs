@@ -8,6 +8,7 @@
 mod cmd_adapt;
 mod cmd_bench;
 mod cmd_compliant;
+mod cmd_demo;
 mod cmd_dynamics;
 mod cmd_experiment;
 mod cmd_gait;
@@ -156,6 +157,22 @@ enum Command {
     /// stderr describes what is served. Ctrl-C stops.
     #[command(verbatim_doc_comment)]
     Serve(cmd_serve::ServeArgs),
+    /// The adaptation loop with no hardware: a km20 with a hidden change, found over its bus
+    ///
+    /// A simulated km20 with a change the adapting side is not told (a random mass,
+    /// --seed, or a seed 000 battery scenario, --scenario) answers on a pseudo-terminal as
+    /// a real robot does on its USB adapter, faster than real time. Over that bus, exactly
+    /// as on a real robot: the servos are found, the robot leans until it tips in four
+    /// directions (each twice, the second time creeping up to the tip; the robot's own
+    /// IMU board gives the tilt), the change is found from the fall angles and the
+    /// weight (seed 000's exact inversion), the adapted URDF is written and its fall
+    /// angles checked against the robot's. Then the truth is shown beside what was found.
+    ///
+    /// Example:
+    ///   twinloop demo --seed 3 --json demo.json
+    ///   twinloop demo --scenario a
+    #[command(verbatim_doc_comment)]
+    Demo(cmd_demo::DemoArgs),
     /// Benchmarks against peers (median time per call): dynamics, simulator, servo link
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
@@ -175,6 +192,7 @@ fn run(command: Command) -> CliResult {
         Command::Compliant(cmd) => cmd_compliant::run(cmd),
         Command::Link(cmd) => cmd_link::run(cmd),
         Command::Serve(args) => cmd_serve::run(args),
+        Command::Demo(args) => cmd_demo::run(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
     }
 }

@@ -138,6 +138,28 @@ pub(crate) fn standing(robot: &Description) -> Result<Frame, String> {
     })
 }
 
+/// A robot's CoM in the standing frame (joints at zero, feet flat), relative to the
+/// ankle pitch midpoint, m: the frame of [`AdaptReport::prior_com`] and
+/// [`AdaptReport::adapted_com`].
+pub fn standing_com(robot: &Description) -> Result<[f64; 3], IdentError> {
+    let f = standing(robot)?;
+    Ok(v3(f.com(robot)?))
+}
+
+/// Where `xyz` (m, in `link`'s frame) is in the standing frame of
+/// [`standing_com`], m.
+pub fn standing_point(
+    robot: &Description,
+    link: &str,
+    xyz: [f64; 3],
+) -> Result<[f64; 3], IdentError> {
+    let f = standing(robot)?;
+    let pose = f
+        .link_pose(link)
+        .ok_or_else(|| IdentError::new(format!("no link \"{link}\" in \"{}\"", robot.name)))?;
+    Ok(v3(pose.act_point(&Vector3::from(xyz)) - f.mid))
+}
+
 impl Frame {
     fn link_pose(&self, link: &str) -> Option<Se3> {
         let l = self.model.links.iter().find(|l| l.name == link)?;

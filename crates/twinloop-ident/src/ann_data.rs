@@ -215,7 +215,7 @@ fn point_in(shape: &Shape, rng: &mut SplitMix64) -> Option<[f64; 3]> {
 }
 
 /// The links a change can go on: those with a primitive collision outline.
-fn outlined_links(robot: &Description) -> Vec<usize> {
+pub fn outlined_links(robot: &Description) -> Vec<usize> {
     (0..robot.links.len())
         .filter(|&i| {
             robot.links[i]

@@ -215,6 +215,18 @@ impl Default for TiltFilter {
     }
 }
 
+/// Deviation of the accelerometer's magnitude from g, as a fraction of g, beyond
+/// which its direction is not used.
+const ACCEL_GATE: f64 = 0.1;
+
+/// Weight of the accelerometer's direction: 1 when it reads g, falling linearly to
+/// 0 at a deviation of [`ACCEL_GATE`] g.
+fn accel_trust(a: [f64; 3]) -> f64 {
+    let g = STANDARD_GRAVITY;
+    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    (1.0 - ((n - g).abs() / g) / ACCEL_GATE).clamp(0.0, 1.0)
+}
+
 fn normalized(v: [f64; 3]) -> Option<[f64; 3]> {
     let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     (n > 1e-9 && n.is_finite()).then(|| [v[0] / n, v[1] / n, v[2] / n])
@@ -264,6 +276,11 @@ impl TiltFilter {
             } else {
                 1.0
             };
+            // Trust the accelerometer's direction only as far as it reads gravity's
+            // magnitude: a jolt (a foot landing, contact chatter, the fall's own
+            // acceleration) reads more or less than g and would tilt the estimate by
+            // a whole cycle's correction at once.
+            let k = k * accel_trust(s.accel);
             for i in 0..3 {
                 p[i] += k * (m[i] - p[i]);
             }

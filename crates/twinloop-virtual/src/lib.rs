@@ -33,4 +33,4 @@ pub use backend::SimServoBackend;
 pub use drive::{DriveRegisters, servo_with_registers};
 pub use runner::SimStatus;
 pub use shared::{Snapshot, thermal_step};
-pub use virtual_robot::{FALLEN_DEG, SimHandle, VirtualRobot, VirtualRobotOptions};
+pub use virtual_robot::{CATCH_DEG, SimHandle, VirtualRobot, VirtualRobotOptions};

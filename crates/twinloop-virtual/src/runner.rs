@@ -3,7 +3,7 @@
 
 use crate::drive::{DriveRegisters, servo_with_registers};
 use crate::shared::{Shared, Snapshot, thermal_step};
-use crate::virtual_robot::FALLEN_DEG;
+use crate::virtual_robot::CATCH_DEG;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
@@ -51,11 +51,9 @@ pub(crate) struct Runner {
     pub servos: Vec<ServoJoint>,
     pub shared: Arc<Shared>,
     pub realtime_factor: f64,
-    /// See [`crate::VirtualRobotOptions::pick_up_after_s`].
-    pub pick_up_after_s: Option<f64>,
-    /// How long the robot has lain fallen, s.
-    fallen_s: f64,
-    /// Times the operator stood the robot up.
+    /// See [`crate::VirtualRobotOptions::catch_falls`].
+    pub catch_falls: bool,
+    /// Times the operator caught the robot.
     pub pick_ups: u64,
     /// Joint pose the operator stands the robot in (sized once).
     pose: Vec<f64>,
@@ -101,8 +99,7 @@ impl Runner {
             servos,
             shared,
             realtime_factor,
-            pick_up_after_s: None,
-            fallen_s: 0.0,
+            catch_falls: false,
             pick_ups: 0,
             pose: Vec::new(),
             behind_s: 0.0,
@@ -189,26 +186,17 @@ impl Runner {
         out.copy_from(&self.snap);
     }
 
-    /// The virtual operator (see [`crate::VirtualRobotOptions::pick_up_after_s`]):
-    /// after `elapsed` more simulated seconds, stand the robot up if it has lain
-    /// fallen long enough. The pose is the servos' commanded one, so the robot lands
-    /// in the posture its host holds and does not jump when the servos take over.
-    pub(crate) fn operator(&mut self, elapsed: f64) -> Result<(), SimError> {
-        let Some(after) = self.pick_up_after_s else {
-            return Ok(());
-        };
-        if !self.sim.model.is_floating() {
+    /// The virtual operator (see [`crate::VirtualRobotOptions::catch_falls`]): if
+    /// the trunk tilts beyond [`CATCH_DEG`], stand the robot up. The pose is the
+    /// servos' commanded one, so the robot lands in the posture its host holds and
+    /// does not jump when the servos take over.
+    pub(crate) fn operator(&mut self) -> Result<(), SimError> {
+        if !self.catch_falls || !self.sim.model.is_floating() {
             return Ok(());
         }
         // The trunk's up axis against the world's: z of the base's z axis.
         let (x, y) = (self.sim.q[3], self.sim.q[4]);
-        let up = 1.0 - 2.0 * (x * x + y * y);
-        if up > FALLEN_DEG.to_radians().cos() {
-            self.fallen_s = 0.0;
-            return Ok(());
-        }
-        self.fallen_s += elapsed;
-        if self.fallen_s < after {
+        if 1.0 - 2.0 * (x * x + y * y) > CATCH_DEG.to_radians().cos() {
             return Ok(());
         }
         for i in 0..self.pose.len() {
@@ -222,7 +210,6 @@ impl Runner {
         for k in 0..self.servos.len() {
             self.profile[k] = self.servo_angle(k);
         }
-        self.fallen_s = 0.0;
         self.pick_ups += 1;
         Ok(())
     }
@@ -259,7 +246,7 @@ impl Runner {
                 n += 1;
             }
             if n > 0
-                && let Err(e) = self.operator(n as f64 * dt)
+                && let Err(e) = self.operator()
             {
                 self.fail(e);
             }

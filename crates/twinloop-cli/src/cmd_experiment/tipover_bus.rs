@@ -77,9 +77,12 @@ pub enum BusOutcome {
     Partial(BusReport),
 }
 
-/// The outcome, the rows recorded, and the port.
+/// The outcome, the runs behind it (the mapping's joint order), the rows recorded,
+/// and the port.
 pub struct BusRun {
     pub outcome: BusOutcome,
+    pub runs: Vec<TipoverResult>,
+    pub joint_names: Vec<String>,
     pub rows: usize,
     pub port: String,
 }
@@ -496,6 +499,7 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
             abort.unwrap_or(e.message)
         ))
     })?;
+    let kept = runs.clone();
     let outcome = if runs.len() == 4 {
         BusOutcome::Study(Box::new(report_for_runs(&model, &runs, &names)?))
     } else {
@@ -526,6 +530,8 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
     };
     Ok(BusRun {
         outcome,
+        runs: kept,
+        joint_names: names,
         rows,
         port,
     })

@@ -1,0 +1,367 @@
+//! `twinloop demo`: the adaptation loop of seed 000 end to end, with no hardware. A
+//! simulated km20 with a hardware change the adapting side is not told (a random
+//! one, `--seed`, or one of seed 000's battery scenarios, `--scenario`) answers on a
+//! pseudo-terminal as a real robot does on its USB adapter; the tip-over runs over
+//! that bus exactly as on a real robot (faster than real time); the change is found
+//! from the four fall angles and the robot's weight; the adapted model is written and
+//! checked; then the truth is revealed beside what was found.
+
+use crate::cmd_experiment::tipover_bus::{BusOutcome, BusPlan, tipover_on_bus};
+use crate::cmd_link::{PortArgs, open_client};
+use crate::common::{JSON_HELP, emit};
+use crate::error::{CliError, CliResult, Outcome};
+use clap::Args;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+use twinloop_description::Description;
+use twinloop_description::builtin::km20;
+use twinloop_experiments::tipover::Direction;
+use twinloop_ident::adapt::{AdaptOptions, adapt, html_report, standing_com, standing_point};
+use twinloop_ident::ann_data::{Change, changed, outlined_links, random_change};
+use twinloop_ident::tipover_study::{StudyReport, report_for_runs};
+use twinloop_link::servo::{ServeOptions, serve as serve_bus};
+use twinloop_link::transport::PtyTransport;
+use twinloop_link::{Item, RobotMapping};
+use twinloop_virtual::{VirtualRobot, VirtualRobotOptions};
+
+#[derive(Args, Debug)]
+pub struct DemoArgs {
+    /// Draw the hidden change from this seed: one mass of 0.05-0.5 kg on a random link
+    /// of km20, at a random point inside its outline
+    #[arg(long, default_value_t = 7, conflicts_with = "scenario")]
+    pub seed: u64,
+    /// Instead of a random change, one of seed 000's battery scenarios (0.2 kg): a
+    /// (both legs: two masses at once), c (front of the hip), d (left arm), e (right
+    /// arm), f (shoulders)
+    #[arg(long, value_name = "LABEL", value_parser = ["a", "c", "d", "e", "f"])]
+    pub scenario: Option<String>,
+    /// Simulated seconds per wall-clock second of the robot behind the bus (and the
+    /// host's clock rate)
+    #[arg(long, default_value_t = 4.0, value_name = "FACTOR")]
+    pub realtime_factor: f64,
+    /// How far the simulated robot's weight sinks into its floor, m (the floor's
+    /// stiffness, as `serve --ground-sink`)
+    #[arg(long, default_value_t = 1e-4, value_name = "M")]
+    pub ground_sink: f64,
+    /// Folder for the files written: the adapted URDF, the tip-over and adaptation
+    /// JSON, the HTML report and the CSV of every cycle read over the bus
+    #[arg(long, default_value = "twinloop-demo", value_name = "DIR")]
+    pub out: PathBuf,
+    #[arg(long, value_name = "FILE", help = JSON_HELP)]
+    pub json: Option<PathBuf>,
+}
+
+/// What the demo found, beside the truth (`--json`).
+#[derive(Debug, Serialize)]
+struct DemoReport {
+    /// The hidden change(s).
+    truth: Vec<Change>,
+    /// `[forward, backward, left, right]`, deg: measured over the bus, the prior
+    /// model's and the adapted model's static tipping angles at the measured onsets.
+    measured_deg: [f64; 4],
+    prior_model_deg: [f64; 4],
+    adapted_model_deg: [f64; 4],
+    found: Option<twinloop_ident::adapt::AddedMass>,
+    true_com: [f64; 3],
+    adapted_com: Option<[f64; 3]>,
+    /// Distance of the adapted model's CoM from the true one, m.
+    com_error: Option<f64>,
+    /// Distance of the found mass from the true one (one change), m, in the standing
+    /// frame.
+    position_error: Option<f64>,
+    files: Vec<String>,
+    wall_s: f64,
+}
+
+/// The hidden change: a battery scenario's masses, or one random mass.
+fn hidden_change(a: &DemoArgs, prior: &Description) -> Result<(Vec<Change>, String), CliError> {
+    if let Some(label) = &a.scenario {
+        let s = km20::BATTERY_SCENARIOS
+            .iter()
+            .find(|s| s.label == label)
+            .ok_or_else(|| CliError::new(format!("--scenario {label}: no such scenario")))?;
+        let changes = s
+            .masses
+            .iter()
+            .map(|m| Change {
+                link: m.link.to_string(),
+                mass: m.mass,
+                xyz: m.xyz,
+            })
+            .collect();
+        return Ok((changes, format!("seed 000 battery scenario {label} ({})", s.name)));
+    }
+    let mut rng = twinloop_random::SplitMix64(a.seed);
+    let links = outlined_links(prior);
+    let c = random_change(prior, &links, (0.05, 0.5), &mut rng);
+    Ok((vec![c], format!("drawn from seed {}", a.seed)))
+}
+
+/// Serve `truth` on a new pty on a thread of its own, as `twinloop serve --catch-falls`
+/// does: the simulation runs `factor` times faster than real time, and the servos
+/// answer without a return delay (a tuned robot; the bus cycle is then a third as long).
+struct ServedRobot {
+    path: String,
+    stop: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl ServedRobot {
+    fn start(
+        truth: &Description,
+        mapping: &RobotMapping,
+        factor: f64,
+        ground_sink: f64,
+    ) -> Result<Self, CliError> {
+        let options = VirtualRobotOptions {
+            realtime_factor: factor,
+            catch_falls: true,
+            ground_sink: Some(ground_sink),
+            ..Default::default()
+        };
+        let vr = VirtualRobot::new(truth, mapping, &options)?;
+        let mut bus = vr.bus();
+        for k in 0..mapping.joints.len() + mapping.boards.len() {
+            // Return Delay Time 0 is within every table's range.
+            let _ = bus.host_write(k, Item::ReturnDelayTime, 0);
+        }
+        let mut pty = PtyTransport::open()
+            .map_err(|e| CliError::new(format!("cannot open a pseudo-terminal: {e}")))?;
+        let path = pty.path().display().to_string();
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let thread = std::thread::Builder::new()
+            .name("twinloop-demo-robot".into())
+            .spawn(move || {
+                let sim = vr.spawn();
+                let opts = ServeOptions {
+                    emulate_baud: Some(1_000_000),
+                    stop_on_eof: false,
+                };
+                let _ = serve_bus(&mut bus, &mut pty, &opts, &flag);
+                drop(sim);
+            })
+            .map_err(|e| CliError::new(format!("cannot start the robot's thread: {e}")))?;
+        Ok(ServedRobot {
+            path,
+            stop,
+            thread: Some(thread),
+        })
+    }
+}
+
+impl Drop for ServedRobot {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The bus as the demo's host opens it: a reply may wait 50 ms beyond its wire time
+/// (a real adapter needs 10; the simulated robot shares the machine with the host).
+fn demo_port(path: &str) -> PortArgs {
+    PortArgs {
+        port: Some(path.to_string()),
+        baud: 1_000_000,
+        timeout_ms: 50.0,
+        retries: 3,
+        low_latency: false,
+        spin_us: 0,
+    }
+}
+
+/// Ping every id of the mapping: how many servos and boards answer.
+fn find_robot(port: &str, mapping: &RobotMapping) -> Result<(usize, usize), CliError> {
+    let mut client = open_client(&demo_port(port), None)?;
+    let servos = mapping
+        .joints
+        .iter()
+        .filter(|j| client.ping(j.protocol, j.id).is_ok())
+        .count();
+    let boards = mapping
+        .boards
+        .iter()
+        .filter(|b| client.ping(b.protocol, b.id).is_ok())
+        .count();
+    Ok((servos, boards))
+}
+
+fn angles(r: &StudyReport, f: fn(&twinloop_ident::tipover_study::DirectionReport) -> f64) -> [f64; 4] {
+    [f(&r.forward), f(&r.backward), f(&r.left), f(&r.right)]
+}
+
+fn join(v: [f64; 4]) -> String {
+    v.map(|a| format!("{a:5.2}")).join(" ")
+}
+
+fn mm(v: [f64; 3]) -> String {
+    format!(
+        "({:+.1}, {:+.1}, {:+.1}) mm",
+        v[0] * 1e3,
+        v[1] * 1e3,
+        v[2] * 1e3
+    )
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<(), CliError> {
+    let text = serde_json::to_string_pretty(v).map_err(|e| CliError::new(e.to_string()))?;
+    std::fs::write(path, text + "\n").map_err(|e| CliError::io(path, e))
+}
+
+/// `twinloop demo`.
+pub fn run(a: DemoArgs) -> CliResult {
+    let t0 = Instant::now();
+    if !(a.realtime_factor > 0.0 && a.realtime_factor.is_finite()) {
+        return Err(CliError::new(format!(
+            "--realtime-factor must be positive, not {}",
+            a.realtime_factor
+        )));
+    }
+    std::fs::create_dir_all(&a.out).map_err(|e| CliError::io(&a.out, e).context("--out"))?;
+    let prior = km20::build()?;
+    let mapping = RobotMapping::builtin("km20").ok_or("no built-in km20 mapping")?;
+    let (truth_changes, how) = hidden_change(&a, &prior)?;
+    let mut truth = prior.clone();
+    for c in &truth_changes {
+        truth = changed(&truth, c)?;
+    }
+    let robot = ServedRobot::start(&truth, &mapping, a.realtime_factor, a.ground_sink)?;
+    let mut text = format!(
+        "a km20 with a hidden change ({how}) answers on {} (simulated, x{} real time)\n",
+        robot.path, a.realtime_factor
+    );
+    let (servos, boards) = find_robot(&robot.path, &mapping)?;
+    text += &format!(
+        "found on the bus: {servos} of {} servos, {boards} IMU board(s) at id {}\n",
+        mapping.joints.len(),
+        mapping.boards.first().map(|b| b.id).unwrap_or(0)
+    );
+    let scale = truth.total_mass();
+    text += &format!(
+        "the scale says {scale:.3} kg (the model: {:.3} kg)\n",
+        prior.total_mass()
+    );
+    eprint!("{text}");
+    let record = a.out.join("tipover.csv");
+    let plan = BusPlan {
+        model_spec: "builtin:km20".into(),
+        map: "builtin:km20".into(),
+        port: demo_port(&robot.path),
+        record: Some(record.clone()),
+        yes: true,
+        directions: Direction::ALL.to_vec(),
+        ramp: 2.0,
+        slow_ramp: 0.1,
+        compliance_slope: 2,
+        clock_rate: a.realtime_factor,
+        verbose: true,
+    };
+    let run = tipover_on_bus(&plan)?;
+    drop(robot);
+    let BusOutcome::Study(study) = run.outcome else {
+        return Err(CliError::new("the tip-over did not run all four directions"));
+    };
+    let tip_json = a.out.join("tipover.json");
+    write_json(&tip_json, &*study)?;
+    let opts = AdaptOptions {
+        total_mass: Some(scale),
+        angle_resolution_deg: Some(0.05),
+        ..Default::default()
+    };
+    let mut adapted = adapt(&prior, &study, &opts)?;
+    let measured = angles(&study, |d| d.measured_deg);
+    let prior_deg = angles(&study, |d| d.static_deg);
+    let mut files = vec![record.display().to_string(), tip_json.display().to_string()];
+    let mut adapted_deg = [f64::NAN; 4];
+    if let Some(model) = &adapted.robot {
+        let after = report_for_runs(model, &run.runs, &run.joint_names)?;
+        adapted_deg = angles(&after, |d| d.static_deg);
+        let urdf = a.out.join("km20_adapted.urdf");
+        twinloop_description::urdf::write_file(model, &urdf)
+            .map_err(|e| CliError::new(format!("{}: {e}", urdf.display())))?;
+        files.push(urdf.display().to_string());
+    }
+    let html = a.out.join("report.html");
+    adapted.report.files = files.clone();
+    html_report(&adapted.report)
+        .write(&html)
+        .map_err(|e| CliError::new(format!("{}: {e}", html.display())))?;
+    files.push(html.display().to_string());
+    let adapt_json = a.out.join("adapt.json");
+    write_json(&adapt_json, &adapted.report)?;
+    files.push(adapt_json.display().to_string());
+
+    let true_com = standing_com(&truth)?;
+    let r = &adapted.report;
+    let com_error = r.adapted_com.map(|c| dist(c, true_com));
+    // One change: where it is in the standing frame (the found one's frame).
+    let position_error = match (&r.added, truth_changes.as_slice()) {
+        (Some(found), [one]) => Some(dist(
+            found.position,
+            standing_point(&prior, &one.link, one.xyz)?,
+        )),
+        _ => None,
+    };
+    let mut t = String::new();
+    t += "fall angles, deg    forward backward  left right\n";
+    t += &format!("  robot (bus)        {}\n", join(measured));
+    t += &format!("  model before       {}\n", join(prior_deg));
+    t += &format!("  model adapted      {}\n", join(adapted_deg));
+    match &r.added {
+        Some(m) => {
+            t += &format!(
+                "found: {:.3} kg on {} at {} in its frame\n",
+                m.mass,
+                m.host,
+                mm(m.position_host)
+            );
+        }
+        None => t += "found: no placement (see the report)\n",
+    }
+    for c in &truth_changes {
+        t += &format!("truth: {:.3} kg on {} at {} in its frame\n", c.mass, c.link, mm(c.xyz));
+    }
+    if truth_changes.len() > 1 {
+        t += "  (two changes at once are found as the one equivalent change)\n";
+    }
+    t += &format!(
+        "CoM: model {} -> adapted {}, true {}: off by {:.1} mm\n",
+        mm(r.prior_com),
+        r.adapted_com.map(mm).unwrap_or_else(|| "-".into()),
+        mm(true_com),
+        com_error.unwrap_or(f64::NAN) * 1e3
+    );
+    if let Some(e) = position_error {
+        t += &format!(
+            "the mass is {:.1} mm from where it really is (CoM sigma x mass ratio: {})\n",
+            e * 1e3,
+            r.added.as_ref().map(|m| mm(m.position_sigma)).unwrap_or_default()
+        );
+    }
+    let wall_s = t0.elapsed().as_secs_f64();
+    t += &format!("wrote {} ({wall_s:.0} s)\n", files.join(", "));
+    let report = DemoReport {
+        truth: truth_changes,
+        measured_deg: measured,
+        prior_model_deg: prior_deg,
+        adapted_model_deg: adapted_deg,
+        found: r.added.clone(),
+        true_com,
+        adapted_com: r.adapted_com,
+        com_error,
+        position_error,
+        files,
+        wall_s,
+    };
+    emit(&t, a.json.as_ref(), &report)?;
+    Ok(Outcome::Ok)
+}
