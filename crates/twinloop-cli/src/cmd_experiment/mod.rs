@@ -2,6 +2,7 @@
 //! fit: tip-over (seeds 000/001), the virtual force plate and the squat (seed 004),
 //! the lab17 walk (seed 003) and the COMAN walk (seed 002).
 
+mod bus;
 mod compliant_walk;
 mod squat;
 mod static_poses;

@@ -163,147 +163,17 @@ fn summary(r: &StudyReport) -> String {
 /// The tip-over experiment on a robot over its Dynamixel bus (`--port`, `--map`).
 mod bus {
     use super::TipoverArgs;
-    use crate::cmd_link::{PortArgs, interrupt_flag, open_client};
+    use crate::cmd_experiment::bus::{
+        Guarded, confirm, hold_standing, is_serial, record_writer, resolve,
+    };
+    use crate::cmd_link::{PortArgs, open_client};
     use crate::common::{emit, load_description};
     use crate::error::{CliError, CliResult, Outcome};
     use nalgebra::Vector3;
     use serde::Serialize;
-    use std::io::{BufRead, IsTerminal, Write};
-    use std::sync::Arc;
-    use std::sync::atomic::{AtomicBool, Ordering};
     use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
-    use twinloop_io::CsvWriter;
-    use twinloop_link::transport::Transport;
     use twinloop_link::{DynamixelRobot, ReadMethod, RobotMapping};
-    use twinloop_robot::{Robot, RobotError, RobotState};
-
-    type BusRobot = DynamixelRobot<Box<dyn Transport>>;
-
-    /// The robot as the experiment sees it, with the safety checks: every read is
-    /// recorded, any servo that stops answering or reports overload, overheating or
-    /// input voltage ends the run, and so does Ctrl-C.
-    struct Guarded<'a> {
-        robot: &'a mut BusRobot,
-        writer: Option<CsvWriter>,
-        goals: Vec<f64>,
-        row: Vec<f64>,
-        stop: Arc<AtomicBool>,
-        abort: Option<String>,
-        rows: usize,
-    }
-
-    impl Guarded<'_> {
-        fn fail(&mut self, message: String) -> RobotError {
-            if self.abort.is_none() {
-                self.abort = Some(message.clone());
-            }
-            RobotError::new(message)
-        }
-
-        /// A servo that reports a hardware condition (1.0 overload, overheating,
-        /// input voltage; 2.0 Alert), named by id.
-        fn hardware_fault(&self) -> Option<String> {
-            let joints = &self.robot.mapping().joints;
-            self.robot
-                .outcomes()
-                .zip(joints)
-                .find_map(|((name, o), j)| match o {
-                    Ok(status) if status.hardware_fault() => {
-                        Some(format!("servo id {} (joint \"{name}\"): {status}", j.id))
-                    }
-                    _ => None,
-                })
-        }
-
-        /// The first servo that did not answer, named by id.
-        fn silent_servo(&self) -> Option<String> {
-            let joints = &self.robot.mapping().joints;
-            self.robot
-                .outcomes()
-                .zip(joints)
-                .find_map(|((name, o), j)| match o {
-                    Err(e) => Some(format!("servo id {} (joint \"{name}\"): {e}", j.id)),
-                    _ => None,
-                })
-        }
-
-        fn record(&mut self, st: &RobotState) -> Result<(), RobotError> {
-            let Some(w) = self.writer.as_mut() else {
-                return Ok(());
-            };
-            self.row.clear();
-            self.row.push(st.time);
-            self.row.extend_from_slice(&st.positions);
-            self.row.extend_from_slice(&self.goals);
-            match st.imu {
-                Some(imu) => {
-                    self.row.extend_from_slice(&[
-                        imu.gyro[0],
-                        imu.gyro[1],
-                        imu.gyro[2],
-                        imu.accel[0],
-                        imu.accel[1],
-                        imu.accel[2],
-                    ]);
-                    let (p, r) = imu
-                        .orientation
-                        .map(twinloop_experiments::tipover::tilt)
-                        .unwrap_or((f64::NAN, f64::NAN));
-                    self.row.extend_from_slice(&[p, r]);
-                }
-                None => self.row.extend_from_slice(&[f64::NAN; 8]),
-            }
-            w.write_row(&self.row)
-                .map_err(|e| RobotError::new(format!("--record: {e}")))?;
-            self.rows += 1;
-            Ok(())
-        }
-    }
-
-    impl Robot for Guarded<'_> {
-        fn joint_names(&self) -> &[String] {
-            self.robot.joint_names()
-        }
-
-        fn time(&self) -> f64 {
-            self.robot.time()
-        }
-
-        fn read(&mut self, state: &mut RobotState) -> Result<(), RobotError> {
-            let r = self.robot.read(state);
-            // Every read reaches the file, a failed one too (NaN where a servo was
-            // silent).
-            self.record(state)?;
-            if let Some(m) = self.silent_servo() {
-                return Err(self.fail(m));
-            }
-            if let Err(e) = r {
-                return Err(self.fail(e.to_string()));
-            }
-            if let Some(m) = self.hardware_fault() {
-                return Err(self.fail(m));
-            }
-            if self.stop.load(Ordering::Relaxed) {
-                return Err(self.fail("interrupted (Ctrl-C)".into()));
-            }
-            Ok(())
-        }
-
-        fn command_positions(&mut self, goals: &[f64]) -> Result<(), RobotError> {
-            self.goals.clear();
-            self.goals.extend_from_slice(goals);
-            if self.stop.load(Ordering::Relaxed) {
-                return Err(self.fail("interrupted (Ctrl-C)".into()));
-            }
-            self.robot
-                .command_positions(goals)
-                .map_err(|e| self.fail(e.to_string()))
-        }
-
-        fn advance(&mut self, dt: f64) -> Result<(), RobotError> {
-            self.robot.advance(dt)
-        }
-    }
+    use twinloop_robot::{Robot, RobotError};
 
     #[derive(Serialize)]
     struct BusDirection {
@@ -344,36 +214,6 @@ mod bus {
                     })
             })
             .collect()
-    }
-
-    /// Whether `port` is a serial device (not a pty from `serve`, not tcp).
-    fn is_serial(port: &str) -> bool {
-        if port.starts_with("tcp:") {
-            return false;
-        }
-        let real = std::fs::canonicalize(port).unwrap_or_else(|_| port.into());
-        !real.starts_with("/dev/pts")
-    }
-
-    fn confirm(question: &str) -> Result<(), CliError> {
-        let stdin = std::io::stdin();
-        if !stdin.is_terminal() {
-            return Err(CliError::new(format!(
-                "{question}: no terminal to ask on; pass --yes to run without asking"
-            )));
-        }
-        eprint!("{question} [y/N] ");
-        let _ = std::io::stderr().flush();
-        let mut line = String::new();
-        stdin
-            .lock()
-            .read_line(&mut line)
-            .map_err(|e| CliError::new(format!("reading the answer: {e}")))?;
-        if matches!(line.trim(), "y" | "Y" | "yes") {
-            Ok(())
-        } else {
-            Err(CliError::new("not confirmed; the robot was not moved"))
-        }
     }
 
     /// The experiment's joints and lean signs from the model, in the mapping's order.
@@ -460,40 +300,10 @@ mod bus {
         Ok(cfg)
     }
 
-    /// Leave the robot holding the standing pose: torque on, goal = standing.
-    fn hold_standing(robot: &mut BusRobot, standing: &[f64]) {
-        let _ = robot.set_torque(true);
-        let _ = robot.command_positions(standing);
-    }
-
     pub fn run(a: &TipoverArgs) -> CliResult {
-        let Some(map) = a.map.as_deref() else {
-            return Err(CliError::new(
-                "--port needs --map MAP (builtin:km20 or a mapping TOML)",
-            ));
-        };
-        let mapping = RobotMapping::resolve(map)?;
-        let port = a
-            .bus
-            .port
-            .clone()
-            .or_else(|| mapping.port.clone())
-            .ok_or_else(|| CliError::new("--map needs --port PORT (or the mapping's port)"))?;
-        let model_spec = a
-            .robot
-            .clone()
-            .or_else(|| {
-                mapping
-                    .urdf
-                    .as_ref()
-                    .map(|p| p.to_string_lossy().into_owned())
-            })
-            .ok_or_else(|| {
-                CliError::new(format!(
-                    "{}: no `urdf` in [robot]; give --robot ROBOT for the lean signs",
-                    mapping.source
-                ))
-            })?;
+        let (mapping, port, model_spec) =
+            resolve(a.map.as_deref(), &a.bus, a.robot.as_deref(), "the lean signs")?;
+        let map = mapping.source.clone();
         let directions = parse_directions(&a.directions)?;
         let cfg = config(&model_spec, &mapping, a)?;
         let serial = is_serial(&port);
@@ -510,27 +320,7 @@ mod bus {
             )));
         }
         let writer = match &a.record {
-            Some(path) => {
-                let mut cols = vec!["t".to_string()];
-                for prefix in ["q", "goal"] {
-                    cols.extend(names.iter().map(|n| format!("{prefix}:{n}")));
-                }
-                for c in [
-                    "imu:gyro_x",
-                    "imu:gyro_y",
-                    "imu:gyro_z",
-                    "imu:accel_x",
-                    "imu:accel_y",
-                    "imu:accel_z",
-                    "tilt:pitch",
-                    "tilt:roll",
-                ] {
-                    cols.push(c.to_string());
-                }
-                let mut w = CsvWriter::create(path, &cols)?;
-                w.flush_each_row = true;
-                Some(w)
-            }
+            Some(path) => Some(record_writer(path, &names)?),
             None => None,
         };
         if serial && !a.yes {
@@ -539,16 +329,7 @@ mod bus {
             )?;
         }
         let standing = vec![0.0; names.len()];
-        let stop = interrupt_flag();
-        let mut g = Guarded {
-            robot: &mut robot,
-            writer,
-            goals: standing.clone(),
-            row: Vec::new(),
-            stop,
-            abort: None,
-            rows: 0,
-        };
+        let mut g = Guarded::new(&mut robot, writer, &standing);
         let mut report = BusReport {
             robot: model_spec.clone(),
             port: port.clone(),
