@@ -68,6 +68,10 @@ pub struct LeanConfig {
     pub settle_s: f64,
     /// Control period, s.
     pub period_s: f64,
+    /// Stop (an error) once the trunk's pitch has moved more than this from where the
+    /// lean started, deg: the robot is falling. The model's static tip angle is a good
+    /// bound: the trunk cannot lean that far and stay up. `None`: no check.
+    pub max_tilt_deg: Option<f64>,
 }
 
 impl LeanConfig {
@@ -82,6 +86,7 @@ impl LeanConfig {
             hold_s: 1.0,
             settle_s: 1.0,
             period_s: 0.005,
+            max_tilt_deg: None,
         }
     }
 
@@ -299,6 +304,7 @@ fn command_loop<R: Robot + ?Sized>(
     let mut record = LeanRecord::new(cfg.recorded_names.clone());
     let (mut g, mut q, mut tau) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
     let mut st = RobotState::default();
+    let mut tilt0 = None;
     loop {
         let t = robot.time() - t0;
         if !set_goals(t, goals) {
@@ -327,6 +333,17 @@ fn command_loop<R: Robot + ?Sized>(
         };
         on_row(&row)?;
         record.push(&row);
+        let start = *tilt0.get_or_insert(row.tilt);
+        if let Some(max) = cfg.max_tilt_deg
+            && (row.tilt - start).abs() > max.to_radians()
+        {
+            return Err(RobotError::new(format!(
+                "the trunk leans {:.2} deg from where the lean started, beyond {max:.2} deg: the \
+                 robot is falling (t = {:.2} s)",
+                (row.tilt - start).abs().to_degrees(),
+                row.t
+            )));
+        }
     }
 }
 
@@ -573,4 +590,85 @@ fn sole_links(sim: &mut Simulator) -> Result<[usize; 2], ExperimentError> {
     } else {
         [links[1].0, links[0].0]
     })
+}
+
+/// The three holds of a lean (forward, backward, centre) in its time, s: from `settle`
+/// s after each ramp ends to the end of the hold (the seed's stabilizing sections).
+pub fn hold_windows(cfg: &LeanConfig, settle: f64) -> [(f64, f64); 3] {
+    let r = cfg.amplitude_deg / cfg.ramp_deg_per_s;
+    let starts = [r, 3.0 * r + cfg.hold_s, 4.0 * r + 2.0 * cfg.hold_s];
+    starts.map(|s| ((s + settle).min(s + cfg.hold_s), s + cfg.hold_s))
+}
+
+/// One recorded joint over a lean: its mean angle and torque in each hold (forward,
+/// backward, centre) and its torque's range.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LeanJointSummary {
+    pub joint: String,
+    /// Mean measured angle in the holds, rad.
+    pub q_hold: [f64; 3],
+    /// Mean torque in the holds, N m.
+    pub tau_hold: [f64; 3],
+    pub tau_min: f64,
+    pub tau_max: f64,
+}
+
+/// Per joint, the holds' means (the second half of each hold, once the servos have
+/// settled) and the torque range of `record`, a lean run with `cfg`.
+pub fn summarize(record: &LeanRecord, cfg: &LeanConfig) -> Vec<LeanJointSummary> {
+    let windows = hold_windows(cfg, 0.5 * cfg.hold_s);
+    let mean = |y: &[f64], (a, b): (f64, f64)| {
+        let v: Vec<f64> = (0..record.t.len())
+            .filter(|&i| record.t[i] >= a && record.t[i] <= b)
+            .map(|i| y[i])
+            .collect();
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        }
+    };
+    (0..record.joints.len())
+        .map(|k| LeanJointSummary {
+            joint: record.joints[k].clone(),
+            q_hold: windows.map(|w| mean(&record.q[k], w)),
+            tau_hold: windows.map(|w| mean(&record.tau[k], w)),
+            tau_min: record.tau[k].iter().copied().fold(f64::INFINITY, f64::min),
+            tau_max: record.tau[k]
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_profile_ramps_forward_back_through_zero_and_home_with_holds() {
+        let mut cfg = LeanConfig::new([0, 1], [1.0, 1.0], 4.0);
+        cfg.ramp_deg_per_s = 2.0;
+        cfg.hold_s = 1.0;
+        let deg = |t: f64| lean_command(&cfg, t).map(f64::to_degrees);
+        assert!((cfg.duration_s() - 11.0).abs() < 1e-12);
+        for (t, want) in [
+            (0.0, 0.0),
+            (1.0, 2.0),
+            (2.5, 4.0),
+            (4.0, 2.0),
+            (5.0, 0.0),
+            (7.0, -4.0),
+            (8.5, -3.0),
+            (10.0, 0.0),
+            (10.9, 0.0),
+        ] {
+            let got = deg(t).unwrap();
+            assert!((got - want).abs() < 1e-9, "t = {t}: {got} deg, want {want}");
+        }
+        assert_eq!(deg(11.1), None);
+        let w = hold_windows(&cfg, 0.5);
+        assert_eq!(w, [(2.5, 3.0), (7.5, 8.0), (10.5, 11.0)]);
+    }
 }

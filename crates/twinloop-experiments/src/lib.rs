@@ -18,7 +18,7 @@ pub mod tipover;
 pub mod walk;
 
 pub use error::ExperimentError;
-pub use lean::{LeanConfig, LeanJointNames, LeanRecord, LeanRow, run_lean};
+pub use lean::{LeanConfig, LeanJointNames, LeanRecord, LeanRow, run_lean, summarize};
 pub use lean_validation::{LeanAdaptationCheck, LeanComparison, compare_leans, lean_comparison};
 pub use tipover::{Direction, TipoverConfig, TipoverResult, run_tipover};
 pub use walk::{DatasetOptions, WalkDataset, ld2015_two_loop, record_walk};

@@ -34,7 +34,11 @@ pub(super) struct Guarded<'a> {
 impl Guarded<'_> {
     /// Guard `robot`, recording to `writer`, stopping on Ctrl-C; the goals start at
     /// `standing`.
-    pub fn new<'a>(robot: &'a mut BusRobot, writer: Option<CsvWriter>, standing: &[f64]) -> Guarded<'a> {
+    pub fn new<'a>(
+        robot: &'a mut BusRobot,
+        writer: Option<CsvWriter>,
+        standing: &[f64],
+    ) -> Guarded<'a> {
         Guarded {
             robot,
             writer,

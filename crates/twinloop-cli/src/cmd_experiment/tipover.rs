@@ -59,7 +59,7 @@ pub struct TipoverArgs {
 }
 
 /// Parse `KG@LINK:X,Y,Z`.
-fn parse_mass(s: &str) -> Result<(f64, String, [f64; 3]), String> {
+pub(super) fn parse_mass(s: &str) -> Result<(f64, String, [f64; 3]), String> {
     let bad = |why: &str| format!("--add-mass \"{s}\": {why} (expected KG@LINK:X,Y,Z)");
     let (kg, rest) = s.split_once('@').ok_or_else(|| bad("no '@'"))?;
     let (link, xyz) = rest
@@ -301,8 +301,12 @@ mod bus {
     }
 
     pub fn run(a: &TipoverArgs) -> CliResult {
-        let (mapping, port, model_spec) =
-            resolve(a.map.as_deref(), &a.bus, a.robot.as_deref(), "the lean signs")?;
+        let (mapping, port, model_spec) = resolve(
+            a.map.as_deref(),
+            &a.bus,
+            a.robot.as_deref(),
+            "the lean signs",
+        )?;
         let map = mapping.source.clone();
         let directions = parse_directions(&a.directions)?;
         let cfg = config(&model_spec, &mapping, a)?;
