@@ -49,7 +49,7 @@ pub struct LeanArgs {
     pub amplitude: Option<f64>,
     /// Amplitude as a fraction of the smaller of the model's static forward and backward
     /// tip angles (rigid model, feet flat). The servos' give adds to it: on km20 with
-    /// factory RX settings the trunk leans about 1.7 times the ankle command.
+    /// factory RX settings the trunk leans 1.6-2.1 times the ankle command.
     #[arg(long, default_value_t = 0.3)]
     pub fraction: f64,
     /// Ankle speed during the ramps, deg/s.

@@ -53,7 +53,7 @@ pub enum ExperimentCommand {
     /// the centre, hold. It does not go to the fall: the amplitude is --fraction (0.3) of
     /// the model's smaller static tip angle (rigid, feet flat), or --amplitude DEG, and is
     /// refused at or beyond that angle. The servos' give leans the trunk further than the
-    /// ankles' command (km20 on factory RX settings: about 1.7 times): keep the fraction
+    /// ankles' command (km20 on factory RX settings: 1.6-2.1 times): keep the fraction
     /// well below 1. Should the trunk's pitch move beyond the tip angle anyway, the robot
     /// is falling: the lean stops there (exit 2), the rows so far written.
     ///
