@@ -217,24 +217,16 @@ impl LeanRecord {
         out.extend_from_slice(row.tau);
     }
 
+    /// The record as a table with the columns of [`LeanRecord::columns`]; a series the
+    /// record lacks (read from a table without it) is NaN.
     pub fn to_table(&self) -> Table {
         let mut t = Table::new(Self::columns(&self.joints));
-        let mut row = Vec::new();
         for i in 0..self.t.len() {
-            let g: Vec<f64> = self.goal.iter().map(|c| c[i]).collect();
-            let q: Vec<f64> = self.q.iter().map(|c| c[i]).collect();
-            let tau: Vec<f64> = self.tau.iter().map(|c| c[i]).collect();
-            Self::row_values(
-                &LeanRow {
-                    t: self.t[i],
-                    tilt: self.tilt.get(i).copied().unwrap_or(f64::NAN),
-                    goal: &g,
-                    q: &q,
-                    tau: &tau,
-                },
-                &mut row,
-            );
-            t.rows.push(row.clone());
+            let mut row = vec![self.t[i], self.tilt.get(i).copied().unwrap_or(f64::NAN)];
+            for series in [&self.goal, &self.q, &self.tau] {
+                row.extend(series.iter().map(|c| c.get(i).copied().unwrap_or(f64::NAN)));
+            }
+            t.rows.push(row);
         }
         t
     }
