@@ -8,7 +8,7 @@ use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use twinloop_dynamics::{BaseKind, Model};
 use twinloop_experiments::lean::LeanRecord;
-use twinloop_experiments::lean_validation::{LeanComparison, compare_leans, read_lean_record};
+use twinloop_experiments::lean_validation::{LeanComparison, align_and_compare, read_lean_record};
 use twinloop_ident::IdentError;
 use twinloop_ident::html::residual_sections;
 use twinloop_ident::validate::{
@@ -58,9 +58,11 @@ pub enum ValidateCommand {
     ///
     /// Reads two runs of `twinloop experiment lean` (the robot's over its bus, the
     /// model's in the simulator; any CSV with `t` and `tau:<joint>` columns, `q:<joint>`
-    /// optional), puts them on one time axis (both count from the start of the lean),
-    /// interpolates the denser run linearly at the sparser run's samples over the span
-    /// both cover, and gives per joint the RMS, mean and largest torque difference
+    /// and `goal:<joint>` optional), puts them on one time axis (both count from the
+    /// start of the lean; the simulation is shifted by up to --max-shift s to match the
+    /// measured, else the commanded, angles), interpolates the denser run linearly at
+    /// the sparser run's samples over the span both cover, and gives per joint the
+    /// RMS, mean and largest torque difference
     /// (robot minus simulation) and the RMS angle difference. Both runs must record the
     /// same joints and follow the same lean (give the simulated one the robot's
     /// --amplitude, --ramp and --hold).
@@ -68,8 +70,8 @@ pub enum ValidateCommand {
     /// Example:
     ///   twinloop validate lean --robot-run robot.csv --sim-run sim.csv --json - --report lean.html
     ///
-    /// Output: stdout a table per joint; --json FILE (- for stdout): samples, t_start,
-    /// t_end and per joint torque_rms, torque_mean, torque_max_abs, torque_rms_robot (N m)
+    /// Output: stdout a table per joint; --json FILE (- for stdout): shift_s, samples,
+    /// t_start, t_end and per joint torque_rms, torque_mean, torque_max_abs, torque_rms_robot (N m)
     /// and angle_rms (rad); --report FILE.html: the table and, per joint, both runs'
     /// torque over time (the seed's Figs 10-11) and the ankle angles.
     #[command(verbatim_doc_comment)]
@@ -89,6 +91,9 @@ pub struct LeanArgs {
     /// HTML report with a plot per joint.
     #[arg(long, value_name = "OUT.html")]
     pub report: Option<PathBuf>,
+    /// Largest clock offset between the runs to look for, s (0: align on `t` as it is).
+    #[arg(long, default_value_t = 0.5, value_name = "S")]
+    pub max_shift: f64,
 }
 
 #[derive(Args, Debug)]
@@ -138,12 +143,19 @@ fn lean(a: &LeanArgs) -> CliResult {
         a.robot_run.display().to_string(),
         a.sim_run.display().to_string(),
     );
-    let c = compare_leans(&robot, &sim, &rn, &sn)?;
+    if !(a.max_shift.is_finite() && a.max_shift >= 0.0) {
+        return Err(CliError::new(format!(
+            "--max-shift {}: must be a number of seconds >= 0",
+            a.max_shift
+        )));
+    }
+    let c = align_and_compare(&robot, &sim, &rn, &sn, a.max_shift)?;
     let mut text = format!(
-        "lean: {rn} (robot) against {sn} (simulation), {} samples over {:.2} .. {:.2} s\n\
+        "lean: {rn} (robot) against {sn} (simulation), {} samples over {:.2} .. {:.2} s, \
+         simulation shifted by {:+.3} s\n\
          joint           torque rms   mean diff    max |diff|   robot rms    angle rms\n\
          \x20                    N m         N m          N m          N m          deg\n",
-        c.samples, c.t_start, c.t_end
+        c.samples, c.t_start, c.t_end, c.shift_s
     );
     for j in &c.joints {
         text.push_str(&format!(
@@ -175,8 +187,9 @@ fn lean_report(
 ) -> Report {
     let mut r = Report::new("Lean validation (seed 001, section F)");
     r.paragraph(format!(
-        "Robot: {robot_name}. Simulation: {sim_name}. {} samples of the sparser run over \
-         {} .. {} s; differences are robot minus simulation.",
+        "Robot: {robot_name}. Simulation: {sim_name}, shifted by {} s. {} samples of the \
+         sparser run over {} .. {} s; differences are robot minus simulation.",
+        num(c.shift_s),
         c.samples,
         num(c.t_start),
         num(c.t_end)
@@ -208,19 +221,20 @@ fn lean_report(
         .to_vec(),
         rows,
     );
+    let sim_t: Vec<f64> = sim.t.iter().map(|t| t + c.shift_s).collect();
     for (k, name) in robot.joints.iter().enumerate() {
         let ks = sim.joints.iter().position(|j| j == name).unwrap_or(k);
         r.subheading(name.clone());
         r.plot(
             &Plot::new(format!("{name}: torque"), "t (s)", "torque (N m)")
-                .line("simulation", &sim.t, &sim.tau[ks])
+                .line("simulation", &sim_t, &sim.tau[ks])
                 .series("robot", &robot.t, &robot.tau[k], SeriesStyle::Points),
         );
         if !robot.q[k].is_empty() && !sim.q[ks].is_empty() {
             let deg = |v: &[f64]| v.iter().map(|x| x.to_degrees()).collect::<Vec<_>>();
             r.plot(
                 &Plot::new(format!("{name}: angle"), "t (s)", "angle (deg)")
-                    .line("simulation", &sim.t, &deg(&sim.q[ks]))
+                    .line("simulation", &sim_t, &deg(&sim.q[ks]))
                     .series("robot", &robot.t, &deg(&robot.q[k]), SeriesStyle::Points),
             );
         }

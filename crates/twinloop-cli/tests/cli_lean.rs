@@ -238,6 +238,8 @@ fn the_lean_over_the_bus_matches_the_simulated_lean() {
         .args(["experiment", "lean", "--port", link.to_str().unwrap()])
         .args(["--map", "builtin:km20", "--json", "-"])
         .args(LEAN)
+        // A loaded test machine can be slow to answer; this test is not about timing.
+        .args(["--timeout-ms", "50", "--retries", "3"])
         .arg("--out")
         .arg(&robot_run)
         .arg("--record")
@@ -271,6 +273,12 @@ fn the_lean_over_the_bus_matches_the_simulated_lean() {
     let o = validate(&robot_run, &sim_run, &["--json", "-"]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
     let c: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // Both leans count from their start, but over the bus a goal reaches the servo
+    // some milliseconds after it was computed and a row is stamped after the whole
+    // cycle's reads: the bus run's motion lags by the loop's latency (measured 20 ms).
+    let shift = c["shift_s"].as_f64().unwrap();
+    eprintln!("shift found {shift} s");
+    assert!((0.0..=0.05).contains(&shift), "{shift}");
     for j in c["joints"].as_array().unwrap() {
         let (rms, scale) = (
             j["torque_rms"].as_f64().unwrap(),

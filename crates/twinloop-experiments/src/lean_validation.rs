@@ -5,9 +5,12 @@
 //! the torque and (when both records have them) the measured angle.
 //!
 //! Time alignment: both records count time from the start of the lean (the `t` of
-//! [`crate::lean::run_lean`]), so they align on `t`. The robot is sampled far more
-//! sparsely than the simulator (the seed's ratio was about 1:20), so the denser record
-//! is interpolated linearly at the other's sample times, over the span both cover.
+//! [`crate::lean::run_lean`]), so they align on `t`; a record whose clock started
+//! elsewhere (another tool's log) is shifted by the lag that best matches the two
+//! runs' measured (else commanded) angles ([`estimate_shift`]). The robot is sampled
+//! far more sparsely than the simulator (the seed's ratio was about 1:20), so the
+//! denser record is interpolated linearly at the other's sample times, over the span
+//! both cover.
 //!
 //! [`lean_comparison`] is the adaptation's check: the lean a robot did, replayed on a
 //! model before and on one after adaptation, and each compared with the robot.
@@ -128,6 +131,8 @@ pub struct JointComparison {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LeanComparison {
     pub joints: Vec<JointComparison>,
+    /// Shift added to the simulation's time before comparing, s.
+    pub shift_s: f64,
     /// Samples compared, and the time span, s.
     pub samples: usize,
     pub t_start: f64,
@@ -145,16 +150,22 @@ fn sparse_dense<'a>(a: &'a LeanRecord, b: &'a LeanRecord) -> (&'a LeanRecord, &'
     }
 }
 
-/// Linear interpolation of `y(t)` at `x` (`t` increasing, `x` within its span); `at`
-/// is the search position, carried between calls with increasing `x`.
-fn interpolate(t: &[f64], y: &[f64], x: f64, at: &mut usize) -> f64 {
+/// Where `x` falls in `t` (increasing, `x` within its span): the sample before it and
+/// the weight of the one after; `at` is the search position, carried between calls
+/// with increasing `x`.
+fn bracket(t: &[f64], x: f64, at: &mut usize) -> (usize, f64) {
     while *at + 2 < t.len() && t[*at + 1] < x {
         *at += 1;
     }
     let (ta, tb) = (t[*at], t[*at + 1]);
-    let w = ((x - ta) / (tb - ta)).clamp(0.0, 1.0);
+    (*at, ((x - ta) / (tb - ta)).clamp(0.0, 1.0))
+}
+
+/// Linear interpolation of `y(t)` at `x` (see [`bracket`]).
+fn interpolate(t: &[f64], y: &[f64], x: f64, at: &mut usize) -> f64 {
+    let (i, w) = bracket(t, x, at);
     // This form gives the samples themselves exactly at w = 0 and 1.
-    (1.0 - w) * y[*at] + w * y[*at + 1]
+    (1.0 - w) * y[i] + w * y[i + 1]
 }
 
 /// Compare a robot's lean with a simulated one (seed 001, Figs 10-11): align on `t`,
@@ -243,10 +254,89 @@ pub fn compare_leans(
     }
     Ok(LeanComparison {
         joints,
+        shift_s: 0.0,
         samples: idx.len(),
         t_start: sparse.t[idx[0]],
         t_end: sparse.t[idx[idx.len() - 1]],
     })
+}
+
+/// The shift (s, added to the simulation's time) within `max_shift_s` that best
+/// matches the two runs' angles: the measured ones when both runs have them, else the
+/// commanded ones; `None` when they share no angle series. (A row's goal is the one in
+/// force when the row was read, which over a bus was sent a cycle or two earlier than
+/// in the simulator: aligning the goals would shift the runs by that latency.) A grid search at the denser run's sample period: the error is a smooth
+/// function of the shift only within a sample.
+pub fn estimate_shift(robot: &LeanRecord, sim: &LeanRecord, max_shift_s: f64) -> Option<f64> {
+    let (a, b) = match (angles(robot, robot, false), angles(sim, robot, false)) {
+        (Some(a), Some(b)) => (a, b),
+        _ => (angles(robot, robot, true)?, angles(sim, robot, true)?),
+    };
+    let step = (sim.t[sim.t.len() - 1] - sim.t[0]) / (sim.t.len() - 1) as f64;
+    let steps = (max_shift_s / step).floor() as i64;
+    let cost = |shift: f64| -> f64 {
+        let (mut sum, mut n, mut at) = (0.0, 0usize, 0usize);
+        for (i, &t) in robot.t.iter().enumerate() {
+            let x = t - shift;
+            if x < sim.t[0] || x > sim.t[sim.t.len() - 1] {
+                continue;
+            }
+            let (j, w) = bracket(&sim.t, x, &mut at);
+            for (ya, yb) in a.iter().zip(&b) {
+                let d = ya[i] - ((1.0 - w) * yb[j] + w * yb[j + 1]);
+                sum += d * d;
+            }
+            n += 1;
+        }
+        // Half the robot's run at least must overlap, or a far shift wins on little.
+        if 2 * n < robot.t.len() {
+            f64::INFINITY
+        } else {
+            sum / n as f64
+        }
+    };
+    (-steps..=steps)
+        .map(|k| k as f64 * step)
+        .map(|s| (s, cost(s)))
+        .filter(|(_, c)| c.is_finite())
+        .min_by(|x, y| x.1.total_cmp(&y.1))
+        .map(|(s, _)| s)
+}
+
+/// The commanded (`goal`) or measured angle series of `r` for the joints of `of`, if
+/// it has them all.
+fn angles<'a>(r: &'a LeanRecord, of: &LeanRecord, goal: bool) -> Option<Vec<&'a [f64]>> {
+    of.joints
+        .iter()
+        .map(|j| {
+            let k = r.joints.iter().position(|x| x == j)?;
+            let s = if goal { &r.goal[k] } else { &r.q[k] };
+            (!s.is_empty()).then_some(s.as_slice())
+        })
+        .collect()
+}
+
+/// [`compare_leans`] after shifting the simulation's time by [`estimate_shift`] (within
+/// `max_shift_s`; no shift when the runs share no angles or `max_shift_s` is 0).
+pub fn align_and_compare(
+    robot: &LeanRecord,
+    sim: &LeanRecord,
+    robot_name: &str,
+    sim_name: &str,
+    max_shift_s: f64,
+) -> Result<LeanComparison, IoError> {
+    // The joint sets are checked (and named) first.
+    compare_leans(robot, sim, robot_name, sim_name)?;
+    let shift = if max_shift_s > 0.0 {
+        estimate_shift(robot, sim, max_shift_s).unwrap_or(0.0)
+    } else {
+        0.0
+    };
+    let mut shifted = sim.clone();
+    shifted.t.iter_mut().for_each(|t| *t += shift);
+    let mut c = compare_leans(robot, &shifted, robot_name, sim_name)?;
+    c.shift_s = shift;
+    Ok(c)
 }
 
 fn rms(x: &[f64]) -> f64 {

@@ -13,7 +13,8 @@ use twinloop_experiments::lean::{
     sagittal_tip_angles,
 };
 use twinloop_experiments::lean_validation::{
-    LeanSimOptions, compare_leans, lean_comparison, read_lean_record,
+    LeanSimOptions, align_and_compare, compare_leans, estimate_shift, lean_comparison,
+    read_lean_record,
 };
 
 const ADDED_KG: f64 = 0.3;
@@ -304,4 +305,26 @@ fn bad_tables_are_named_by_file_line_and_column() {
         e.contains("only in a.csv: a") && e.contains("only in b.csv: b"),
         "{e}"
     );
+}
+
+#[test]
+fn a_run_whose_clock_started_late_is_found_and_aligned() {
+    let (base, _, _) = lean(&km20(), Some(3.0));
+    let mut late = base.clone();
+    late.t.iter_mut().for_each(|t| *t += 0.2);
+    let shift = estimate_shift(&base, &late, 0.5).unwrap();
+    assert!((shift + 0.2).abs() < 1e-6, "{shift}");
+    // From the commanded angles alone, too.
+    let mut no_q = late.clone();
+    no_q.q.iter_mut().for_each(Vec::clear);
+    let shift = estimate_shift(&base, &no_q, 0.5).unwrap();
+    assert!((shift + 0.2).abs() < 1e-6, "{shift}");
+    let c = align_and_compare(&base, &late, "a", "late", 0.5).unwrap();
+    assert!((c.shift_s + 0.2).abs() < 1e-6);
+    for j in &c.joints {
+        assert!(j.torque_rms < 1e-9, "{j:?}");
+    }
+    // Unaligned, the 0.2 s shows.
+    let c = compare_leans(&base, &late, "a", "late").unwrap();
+    assert!(c.joints[0].torque_rms > 0.01, "{:?}", c.joints[0]);
 }
