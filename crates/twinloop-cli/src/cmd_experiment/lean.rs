@@ -258,6 +258,12 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
     let client = open_client(&port_args, None)?;
     let joints = mapping.joint_names();
     let mut robot = DynamixelRobot::new(client, mapping, ReadMethod::Auto)?;
+    if robot.imu_board().is_none() {
+        eprintln!(
+            "warning: {}: no [[board]] with an IMU: tilt:pitch is NaN and nothing watches for a fall",
+            robot.mapping().source
+        );
+    }
     let raw = match &a.record {
         Some(path) => Some(record_writer(path, &joints)?),
         None => None,
