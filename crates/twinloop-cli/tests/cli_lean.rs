@@ -328,3 +328,22 @@ fn a_servo_that_does_not_answer_stops_the_lean_with_exit_2_naming_it() {
     let rows = twinloop_io::Table::read(&raw).unwrap().rows.len();
     assert!(rows > 0 && err.contains(&format!("{rows} rows")), "{err}");
 }
+
+#[test]
+fn a_robot_that_starts_to_fall_stops_the_lean_with_exit_2_and_its_rows_kept() {
+    // km20 on factory servos with 0.3 kg bolted 6 cm ahead of its torso, leaned by the
+    // unchanged robot's amplitude: its trunk passes the tip angle in the forward hold.
+    let out = scratch("lean-fall.csv");
+    let o = Command::new(bin())
+        .args(["experiment", "lean", "--robot", "builtin:km20"])
+        .args(["--add-mass", "0.3@torso:0.06,0,0.05", "--amplitude", "3.88"])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("falling"), "{err}");
+    let rows = twinloop_io::Table::read(&out).unwrap().rows.len();
+    assert!(rows > 100, "{rows} rows");
+}
