@@ -1,18 +1,21 @@
 //! `twinloop validate residual`: the inverse-dynamics residual of the base on a
-//! measured motion (seed 004, section 3.4).
+//! measured motion (seed 004, section 3.4); `twinloop validate lean`: a robot's lean
+//! against a simulated one (seed 001, Figs 10-11).
 
-use crate::common::{JSON_HELP, emit, load_model, read_table};
+use crate::common::{JSON_HELP, emit, load_model, num, read_table};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use twinloop_dynamics::{BaseKind, Model};
+use twinloop_experiments::lean::LeanRecord;
+use twinloop_experiments::lean_validation::{LeanComparison, align_and_compare, read_lean_record};
 use twinloop_ident::IdentError;
 use twinloop_ident::html::residual_sections;
 use twinloop_ident::validate::{
     Motion, ResidualSeries, ResidualSummary, Smoothing, read_motion, read_plate, residual_wrench,
 };
 use twinloop_io::CsvWriter;
-use twinloop_report::Report;
+use twinloop_report::{Plot, Report, SeriesStyle};
 
 /// The seed's Table 1: mean [std] of |Fx| .. |Tz| per model.
 pub fn residual_table(rows: &[(&str, &ResidualSummary)]) -> String {
@@ -51,6 +54,46 @@ pub enum ValidateCommand {
     /// the mean and standard deviation of |Fx| .. |Tz| (the seed's Table 1).
     #[command(verbatim_doc_comment)]
     Residual(ResidualArgs),
+    /// A robot's lean against a simulated one: torque and angle RMS per joint (seed 001, Figs 10-11)
+    ///
+    /// Reads two runs of `twinloop experiment lean` (the robot's over its bus, the
+    /// model's in the simulator; any CSV with `t` and `tau:<joint>` columns, `q:<joint>`
+    /// and `goal:<joint>` optional), puts them on one time axis (both count from the
+    /// start of the lean; the simulation is shifted by up to --max-shift s to match the
+    /// measured, else the commanded, angles), interpolates the denser run linearly at
+    /// the sparser run's samples over the span both cover, and gives per joint the
+    /// RMS, mean and largest torque difference
+    /// (robot minus simulation) and the RMS angle difference. Both runs must record the
+    /// same joints and follow the same lean (give the simulated one the robot's
+    /// --amplitude, --ramp and --hold).
+    ///
+    /// Example:
+    ///   twinloop validate lean --robot-run robot.csv --sim-run sim.csv --json - --report lean.html
+    ///
+    /// Output: stdout a table per joint; --json FILE (- for stdout): shift_s, samples,
+    /// t_start, t_end and per joint torque_rms, torque_mean, torque_max_abs, torque_rms_robot (N m)
+    /// and angle_rms (rad); --report FILE.html: the table and, per joint, both runs'
+    /// torque over time (the seed's Figs 10-11) and the ankle angles.
+    #[command(verbatim_doc_comment)]
+    Lean(LeanArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct LeanArgs {
+    /// The robot's lean (CSV of `experiment lean --port`).
+    #[arg(long, value_name = "ROBOT.csv")]
+    pub robot_run: PathBuf,
+    /// The simulated lean (CSV of `experiment lean --robot`).
+    #[arg(long, value_name = "SIM.csv")]
+    pub sim_run: PathBuf,
+    #[arg(long, value_name = "FILE", help = JSON_HELP)]
+    pub json: Option<PathBuf>,
+    /// HTML report with a plot per joint.
+    #[arg(long, value_name = "OUT.html")]
+    pub report: Option<PathBuf>,
+    /// Largest clock offset between the runs to look for, s (0: align on `t` as it is).
+    #[arg(long, default_value_t = 0.5, value_name = "S")]
+    pub max_shift: f64,
 }
 
 #[derive(Args, Debug)]
@@ -89,7 +132,114 @@ pub struct ResidualArgs {
 pub fn run(cmd: ValidateCommand) -> CliResult {
     match cmd {
         ValidateCommand::Residual(a) => residual(&a),
+        ValidateCommand::Lean(a) => lean(&a),
     }
+}
+
+fn lean(a: &LeanArgs) -> CliResult {
+    let robot = read_lean_record(&read_table(&a.robot_run)?)?;
+    let sim = read_lean_record(&read_table(&a.sim_run)?)?;
+    let (rn, sn) = (
+        a.robot_run.display().to_string(),
+        a.sim_run.display().to_string(),
+    );
+    if !(a.max_shift.is_finite() && a.max_shift >= 0.0) {
+        return Err(CliError::new(format!(
+            "--max-shift {}: must be a number of seconds >= 0",
+            a.max_shift
+        )));
+    }
+    let c = align_and_compare(&robot, &sim, &rn, &sn, a.max_shift)?;
+    let mut text = format!(
+        "lean: {rn} (robot) against {sn} (simulation), {} samples over {:.2} .. {:.2} s, \
+         simulation shifted by {:+.3} s\n\
+         joint           torque rms   mean diff    max |diff|   robot rms    angle rms\n\
+         \x20                    N m         N m          N m          N m          deg\n",
+        c.samples, c.t_start, c.t_end, c.shift_s
+    );
+    for j in &c.joints {
+        text.push_str(&format!(
+            "{:<14} {:>11.4} {:>+11.4} {:>12.4} {:>12.4} {:>12}\n",
+            j.joint,
+            j.torque_rms,
+            j.torque_mean,
+            j.torque_max_abs,
+            j.torque_rms_robot,
+            j.angle_rms
+                .map(|r| format!("{:.3}", r.to_degrees()))
+                .unwrap_or_else(|| "-".into())
+        ));
+    }
+    if let Some(p) = &a.report {
+        lean_report(&c, &robot, &sim, &rn, &sn).write(p)?;
+    }
+    emit(&text, a.json.as_ref(), &c)?;
+    Ok(Outcome::Ok)
+}
+
+/// The report: the table, then per joint both runs' torque over time and the angles.
+fn lean_report(
+    c: &LeanComparison,
+    robot: &LeanRecord,
+    sim: &LeanRecord,
+    robot_name: &str,
+    sim_name: &str,
+) -> Report {
+    let mut r = Report::new("Lean validation (seed 001, section F)");
+    r.paragraph(format!(
+        "Robot: {robot_name}. Simulation: {sim_name}, shifted by {} s. {} samples of the \
+         sparser run over {} .. {} s; differences are robot minus simulation.",
+        num(c.shift_s),
+        c.samples,
+        num(c.t_start),
+        num(c.t_end)
+    ));
+    let rows = c
+        .joints
+        .iter()
+        .map(|j| {
+            vec![
+                j.joint.clone(),
+                num(j.torque_rms),
+                num(j.torque_mean),
+                num(j.torque_max_abs),
+                num(j.torque_rms_robot),
+                j.angle_rms.map(|x| num(x.to_degrees())).unwrap_or_default(),
+            ]
+        })
+        .collect();
+    r.table(
+        [
+            "joint",
+            "torque RMS (N m)",
+            "mean diff (N m)",
+            "max |diff| (N m)",
+            "robot RMS (N m)",
+            "angle RMS (deg)",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows,
+    );
+    let sim_t: Vec<f64> = sim.t.iter().map(|t| t + c.shift_s).collect();
+    for (k, name) in robot.joints.iter().enumerate() {
+        let ks = sim.joints.iter().position(|j| j == name).unwrap_or(k);
+        r.subheading(name.clone());
+        r.plot(
+            &Plot::new(format!("{name}: torque"), "t (s)", "torque (N m)")
+                .line("simulation", &sim_t, &sim.tau[ks])
+                .series("robot", &robot.t, &robot.tau[k], SeriesStyle::Points),
+        );
+        if !robot.q[k].is_empty() && !sim.q[ks].is_empty() {
+            let deg = |v: &[f64]| v.iter().map(|x| x.to_degrees()).collect::<Vec<_>>();
+            r.plot(
+                &Plot::new(format!("{name}: angle"), "t (s)", "angle (deg)")
+                    .line("simulation", &sim_t, &deg(&sim.q[ks]))
+                    .series("robot", &robot.t, &deg(&robot.q[k]), SeriesStyle::Points),
+            );
+        }
+    }
+    r
 }
 
 fn residual(a: &ResidualArgs) -> CliResult {

@@ -77,7 +77,7 @@ enum Command {
     /// (N, m) for each foot.
     #[command(verbatim_doc_comment)]
     Simulate(cmd_simulate::SimulateArgs),
-    /// Run experiments: tip-over, force-plate poses, squat, lab17 walk, COMAN walk
+    /// Run experiments: tip-over, lean, force-plate poses, squat, lab17 walk, COMAN walk
     #[command(subcommand)]
     Experiment(cmd_experiment::ExperimentCommand),
     /// Identify model parameters from measurements: static, ARX, state space, compliant, walk
@@ -107,7 +107,7 @@ enum Command {
     /// their CoM and fall angles).
     #[command(verbatim_doc_comment)]
     Adapt(cmd_adapt::AdaptArgs),
-    /// Validate a model against measurements (inverse-dynamics residual, seed 004)
+    /// Validate a model against measurements: inverse-dynamics residual (seed 004), lean (seed 001)
     #[command(subcommand)]
     Validate(cmd_validate::ValidateCommand),
     /// IK marker fitting: joint angles and base pose from motion capture (seed 004, eq 7)

@@ -78,15 +78,10 @@ impl VirtualRobot {
         mapping: &RobotMapping,
         options: &VirtualRobotOptions,
     ) -> Result<VirtualRobot, String> {
-        let contact = match options.ground_sink {
-            // Four corners per sole, two soles: the weight shares eight points.
-            Some(sink) => Some(twinloop_sim::ContactParams::for_robot(
-                robot.total_mass(),
-                8,
-                sink,
-            )),
-            None => None,
-        };
+        // Four corners per sole, two soles: the weight shares eight points.
+        let contact = options
+            .ground_sink
+            .map(|sink| twinloop_sim::ContactParams::for_robot(robot.total_mass(), 8, sink));
         let config = SimConfig {
             dt: options.dt,
             contact,

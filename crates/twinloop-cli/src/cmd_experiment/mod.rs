@@ -2,7 +2,9 @@
 //! fit: tip-over (seeds 000/001), the virtual force plate and the squat (seed 004),
 //! the lab17 walk (seed 003) and the COMAN walk (seed 002).
 
+mod bus;
 mod compliant_walk;
+mod lean;
 mod squat;
 mod static_poses;
 mod tipover;
@@ -45,6 +47,40 @@ pub enum ExperimentCommand {
     /// --json FILE (- for stdout) writes the same with full precision.
     #[command(verbatim_doc_comment)]
     Tipover(tipover::TipoverArgs),
+    /// Lean over the ankles centre -> forward -> backward -> centre, recording ankle and knee torque
+    ///
+    /// Seed 001's validation motion (section F, Figs 8-11): both ankle pitches ramp (--ramp
+    /// deg/s) to +amplitude (forward), hold (--hold s), ramp to -amplitude, hold, back to
+    /// the centre, hold. It does not go to the fall: the amplitude is --fraction (0.3) of
+    /// the model's smaller static tip angle (rigid, feet flat), or --amplitude DEG, and is
+    /// refused at or beyond that angle. The servos' give leans the trunk further than the
+    /// ankles' command (km20 on factory RX settings: 1.6-2.1 times): keep the fraction
+    /// well below 1. Should the trunk's pitch move beyond the tip angle anyway, the robot
+    /// is falling: the lean stops there (exit 2), the rows so far written.
+    ///
+    /// In the simulator (--robot) the torque is the servos' applied torque. Over a bus
+    /// (--port PORT --map MAP) it is each servo's Present Load (0.1 % of the stall
+    /// torque per count) times the datasheet stall torque of its model (RX-28 3.7 N m,
+    /// RX-64 5.3 N m at 18.5 V; X series from Present Current by the stall torque over
+    /// the stall current): see docs/lean-validation.md for what that conversion is worth.
+    /// On a serial port it asks first (--yes skips); a silent or overloaded, overheated
+    /// or undervolted servo, or Ctrl-C, stops it with the servos holding the standing
+    /// pose (exit 2), and --record keeps every cycle read, as the tip-over does.
+    ///
+    /// Example:
+    ///   twinloop experiment lean --robot builtin:km20 --out sim.csv --json -
+    ///   twinloop experiment lean --port /tmp/km20 --map builtin:km20 --out robot.csv
+    ///
+    /// Output: OUT.csv, one row per control period (--dt), written as it comes: `t` (s
+    /// from the start of the lean), `tilt:pitch` (trunk pitch from the IMU, rad, forward
+    /// positive; NaN without one), and for the ankle pitches and knees `goal:<joint>`
+    /// (commanded, rad), `q:<joint>` (measured, rad), `tau:<joint>` (N m): the input of
+    /// `twinloop validate lean`. stdout: the mean torque and angle in each hold; --json
+    /// FILE (- for stdout) writes amplitude_deg, tip_forward_deg, tip_backward_deg,
+    /// ramp_deg_per_s, hold_s, rows, duration_s and per joint q_hold, tau_hold
+    /// (forward, backward, centre) and tau_min, tau_max.
+    #[command(verbatim_doc_comment)]
+    Lean(lean::LeanArgs),
     /// Virtual force plate: statically stable poses and the CoP each would give
     ///
     /// Stands the robot (the TRUTH description: the robot as it really is) in
@@ -140,6 +176,7 @@ pub enum ExperimentCommand {
 pub fn run(cmd: ExperimentCommand) -> CliResult {
     match cmd {
         ExperimentCommand::Tipover(a) => tipover::run(&a),
+        ExperimentCommand::Lean(a) => lean::run(&a),
         ExperimentCommand::StaticPoses(a) => static_poses::run(&a),
         ExperimentCommand::Squat(a) => squat::run(&a),
         ExperimentCommand::Walk(a) => walk::run(&a),

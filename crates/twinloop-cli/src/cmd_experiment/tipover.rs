@@ -64,7 +64,7 @@ pub struct TipoverArgs {
 }
 
 /// Parse `KG@LINK:X,Y,Z`.
-fn parse_mass(s: &str) -> Result<(f64, String, [f64; 3]), String> {
+pub(super) fn parse_mass(s: &str) -> Result<(f64, String, [f64; 3]), String> {
     let bad = |why: &str| format!("--add-mass \"{s}\": {why} (expected KG@LINK:X,Y,Z)");
     let (kg, rest) = s.split_once('@').ok_or_else(|| bad("no '@'"))?;
     let (link, xyz) = rest
@@ -169,34 +169,21 @@ fn summary(r: &StudyReport) -> String {
 /// simulator's when all four directions ran.
 mod bus {
     use super::{TipoverArgs, summary};
+    use crate::cmd_experiment::bus::resolve;
     use crate::cmd_experiment::tipover_bus::{
         BusOutcome, BusPlan, BusReport, parse_directions, tipover_on_bus,
     };
     use crate::common::emit;
-    use crate::error::{CliError, CliResult, Outcome};
+    use crate::error::{CliResult, Outcome};
 
     pub fn run(a: &TipoverArgs) -> CliResult {
-        let Some(map) = a.map.clone() else {
-            return Err(CliError::new(
-                "--port needs --map MAP (builtin:km20 or a mapping TOML)",
-            ));
-        };
-        let mapping = twinloop_link::RobotMapping::resolve(&map)?;
-        let model_spec = a
-            .robot
-            .clone()
-            .or_else(|| {
-                mapping
-                    .urdf
-                    .as_ref()
-                    .map(|p| p.to_string_lossy().into_owned())
-            })
-            .ok_or_else(|| {
-                CliError::new(format!(
-                    "{}: no `urdf` in [robot]; give --robot ROBOT for the lean signs",
-                    mapping.source
-                ))
-            })?;
+        let (_, _, model_spec) = resolve(
+            a.map.as_deref(),
+            &a.bus,
+            a.robot.as_deref(),
+            "the lean signs",
+        )?;
+        let map = a.map.clone().unwrap_or_default();
         let plan = BusPlan {
             model_spec,
             map,

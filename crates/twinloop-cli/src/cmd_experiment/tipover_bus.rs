@@ -4,22 +4,16 @@
 //! servos' registers and the IMU board, with the safety checks; four directions give
 //! the same JSON as the simulator's study.
 
-use crate::cmd_link::{PortArgs, interrupt_flag, open_client};
+use super::bus::{BusRobot, Guarded, confirm, hold_standing, is_serial, record_writer};
+use crate::cmd_link::{PortArgs, open_client};
 use crate::common::load_description;
 use crate::error::CliError;
 use serde::Serialize;
-use std::io::{BufRead, IsTerminal, Write};
 use std::path::PathBuf;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction, tilt};
 use twinloop_ident::tipover_study::{StudyReport, TiltModel, report_for_runs};
-use twinloop_io::CsvWriter;
-use twinloop_link::transport::Transport;
 use twinloop_link::{DynamixelRobot, Item, ReadMethod, RobotMapping};
 use twinloop_robot::{Robot, RobotError, RobotState};
-
-type BusRobot = DynamixelRobot<Box<dyn Transport>>;
 
 /// How the experiment runs over the bus.
 #[derive(Debug, Clone)]
@@ -94,132 +88,6 @@ const UPRIGHT_HOLD_S: f64 = 1.0;
 /// How long a person (or the virtual robot's operator) has to stand the robot up, s.
 const STAND_UP_TIMEOUT_S: f64 = 120.0;
 
-/// The robot as the experiment sees it, with the safety checks: every read is
-/// recorded, any servo that stops answering or reports overload, overheating or
-/// input voltage ends the run, and so does Ctrl-C.
-struct Guarded<'a> {
-    robot: &'a mut BusRobot,
-    writer: Option<CsvWriter>,
-    goals: Vec<f64>,
-    row: Vec<f64>,
-    stop: Arc<AtomicBool>,
-    abort: Option<String>,
-    rows: usize,
-}
-
-impl Guarded<'_> {
-    fn fail(&mut self, message: String) -> RobotError {
-        if self.abort.is_none() {
-            self.abort = Some(message.clone());
-        }
-        RobotError::new(message)
-    }
-
-    /// A servo that reports a hardware condition (1.0 overload, overheating,
-    /// input voltage; 2.0 Alert), named by id.
-    fn hardware_fault(&self) -> Option<String> {
-        let joints = &self.robot.mapping().joints;
-        self.robot
-            .outcomes()
-            .zip(joints)
-            .find_map(|((name, o), j)| match o {
-                Ok(status) if status.hardware_fault() => {
-                    Some(format!("servo id {} (joint \"{name}\"): {status}", j.id))
-                }
-                _ => None,
-            })
-    }
-
-    /// The first servo that did not answer, named by id.
-    fn silent_servo(&self) -> Option<String> {
-        let joints = &self.robot.mapping().joints;
-        self.robot
-            .outcomes()
-            .zip(joints)
-            .find_map(|((name, o), j)| match o {
-                Err(e) => Some(format!("servo id {} (joint \"{name}\"): {e}", j.id)),
-                _ => None,
-            })
-    }
-
-    fn record(&mut self, st: &RobotState) -> Result<(), RobotError> {
-        let Some(w) = self.writer.as_mut() else {
-            return Ok(());
-        };
-        self.row.clear();
-        self.row.push(st.time);
-        self.row.extend_from_slice(&st.positions);
-        self.row.extend_from_slice(&self.goals);
-        match st.imu {
-            Some(imu) => {
-                self.row.extend_from_slice(&[
-                    imu.gyro[0],
-                    imu.gyro[1],
-                    imu.gyro[2],
-                    imu.accel[0],
-                    imu.accel[1],
-                    imu.accel[2],
-                ]);
-                let (p, r) = imu
-                    .orientation
-                    .map(twinloop_experiments::tipover::tilt)
-                    .unwrap_or((f64::NAN, f64::NAN));
-                self.row.extend_from_slice(&[p, r]);
-            }
-            None => self.row.extend_from_slice(&[f64::NAN; 8]),
-        }
-        w.write_row(&self.row)
-            .map_err(|e| RobotError::new(format!("--record: {e}")))?;
-        self.rows += 1;
-        Ok(())
-    }
-}
-
-impl Robot for Guarded<'_> {
-    fn joint_names(&self) -> &[String] {
-        self.robot.joint_names()
-    }
-
-    fn time(&self) -> f64 {
-        self.robot.time()
-    }
-
-    fn read(&mut self, state: &mut RobotState) -> Result<(), RobotError> {
-        let r = self.robot.read(state);
-        // Every read reaches the file, a failed one too (NaN where a servo was
-        // silent).
-        self.record(state)?;
-        if let Some(m) = self.silent_servo() {
-            return Err(self.fail(m));
-        }
-        if let Err(e) = r {
-            return Err(self.fail(e.to_string()));
-        }
-        if let Some(m) = self.hardware_fault() {
-            return Err(self.fail(m));
-        }
-        if self.stop.load(Ordering::Relaxed) {
-            return Err(self.fail("interrupted (Ctrl-C)".into()));
-        }
-        Ok(())
-    }
-
-    fn command_positions(&mut self, goals: &[f64]) -> Result<(), RobotError> {
-        self.goals.clear();
-        self.goals.extend_from_slice(goals);
-        if self.stop.load(Ordering::Relaxed) {
-            return Err(self.fail("interrupted (Ctrl-C)".into()));
-        }
-        self.robot
-            .command_positions(goals)
-            .map_err(|e| self.fail(e.to_string()))
-    }
-
-    fn advance(&mut self, dt: f64) -> Result<(), RobotError> {
-        self.robot.advance(dt)
-    }
-}
-
 pub fn parse_directions(list: &[String]) -> Result<Vec<Direction>, CliError> {
     if list.is_empty() {
         return Ok(Direction::ALL.to_vec());
@@ -236,36 +104,6 @@ pub fn parse_directions(list: &[String]) -> Result<Vec<Direction>, CliError> {
                 })
         })
         .collect()
-}
-
-/// Whether `port` is a serial device (not a pty from `serve`, not tcp).
-fn is_serial(port: &str) -> bool {
-    if port.starts_with("tcp:") {
-        return false;
-    }
-    let real = std::fs::canonicalize(port).unwrap_or_else(|_| port.into());
-    !real.starts_with("/dev/pts")
-}
-
-fn confirm(question: &str) -> Result<(), CliError> {
-    let stdin = std::io::stdin();
-    if !stdin.is_terminal() {
-        return Err(CliError::new(format!(
-            "{question}: no terminal to ask on; pass --yes to run without asking"
-        )));
-    }
-    eprint!("{question} [y/N] ");
-    let _ = std::io::stderr().flush();
-    let mut line = String::new();
-    stdin
-        .lock()
-        .read_line(&mut line)
-        .map_err(|e| CliError::new(format!("reading the answer: {e}")))?;
-    if matches!(line.trim(), "y" | "Y" | "yes") {
-        Ok(())
-    } else {
-        Err(CliError::new("not confirmed; the robot was not moved"))
-    }
 }
 
 /// The experiment's joints and lean signs from the model, in the mapping's order.
@@ -352,12 +190,6 @@ fn config(
     Ok(cfg)
 }
 
-/// Leave the robot holding the standing pose: torque on, goal = standing.
-fn hold_standing(robot: &mut BusRobot, standing: &[f64]) {
-    let _ = robot.set_torque(true);
-    let _ = robot.command_positions(standing);
-}
-
 /// The trunk's (pitch, roll) from the IMU, rad.
 fn trunk_tilt(st: &RobotState) -> Option<(f64, f64)> {
     st.imu.and_then(|i| i.orientation).map(tilt)
@@ -397,27 +229,6 @@ fn wait_upright(
             )));
         }
     }
-}
-
-/// The record's columns: t, q:*, goal:*, the IMU and the host's tilt.
-fn record_columns(names: &[String]) -> Vec<String> {
-    let mut cols = vec!["t".to_string()];
-    for prefix in ["q", "goal"] {
-        cols.extend(names.iter().map(|n| format!("{prefix}:{n}")));
-    }
-    for c in [
-        "imu:gyro_x",
-        "imu:gyro_y",
-        "imu:gyro_z",
-        "imu:accel_x",
-        "imu:accel_y",
-        "imu:accel_z",
-        "tilt:pitch",
-        "tilt:roll",
-    ] {
-        cols.push(c.to_string());
-    }
-    cols
 }
 
 /// Stiffen every servo as the study does (RX compliance margin 0, slope
@@ -463,11 +274,7 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
     let mut robot = DynamixelRobot::new(client, mapping, ReadMethod::Auto)?;
     robot.set_clock_rate(plan.clock_rate)?;
     let writer = match &plan.record {
-        Some(path) => {
-            let mut w = CsvWriter::create(path, &record_columns(&names))?;
-            w.flush_each_row = true;
-            Some(w)
-        }
+        Some(path) => Some(record_writer(path, &names)?),
         None => None,
     };
     if serial && !plan.yes {
@@ -476,15 +283,7 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
         )?;
     }
     let standing = vec![0.0; names.len()];
-    let mut g = Guarded {
-        robot: &mut robot,
-        writer,
-        goals: standing.clone(),
-        row: Vec::new(),
-        stop: interrupt_flag(),
-        abort: None,
-        rows: 0,
-    };
+    let mut g = Guarded::new(&mut robot, writer, &standing);
     let runs = run_directions(&mut g, plan, &cfg, &standing, &mut tilt_model, serial, &port);
     let rows = g.rows;
     let writer = g.writer.take();
