@@ -120,6 +120,9 @@ impl ServedRobot {
             realtime_factor: factor,
             catch_falls: true,
             ground_sink: Some(ground_sink),
+            // The host shares the machine: a host held up by the scheduler finds
+            // the robot where it left it.
+            tether_s: Some(0.02),
             ..Default::default()
         };
         let vr = VirtualRobot::new(truth, mapping, &options)?;

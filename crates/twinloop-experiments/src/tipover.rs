@@ -28,6 +28,9 @@
 use serde::Serialize;
 use twinloop_robot::{Robot, RobotError, RobotState};
 
+/// Longest step of the ramp's clock per control cycle, s (see [`run_direction`]).
+const MAX_RAMP_STEP_S: f64 = 0.05;
+
 /// A ramp direction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -305,9 +308,16 @@ pub fn run_direction<R: Robot + ?Sized>(
     let n = standing.len();
     let mut positions: Vec<f64> = Vec::with_capacity(n * 4096);
     let rate = cfg.ramp_deg_per_s.to_radians();
+    // Time along the ramp: the robot's, but a cycle that took long (a host held up,
+    // a bus retry) moves the command on by at most `MAX_RAMP_STEP_S`, so the servos
+    // never get a jump that jolts the robot.
+    let mut ramp_t = 0.0;
+    let mut last = robot.time();
     loop {
-        let t = robot.time() - t_start;
-        let cmd = ramp_command(cfg, rate, t);
+        let now = robot.time();
+        ramp_t += (now - last).clamp(0.0, MAX_RAMP_STEP_S);
+        last = now;
+        let cmd = ramp_command(cfg, rate, ramp_t);
         if cmd > cfg.max_deg.to_radians() {
             return Err(RobotError::new(format!(
                 "no fall {} within {} deg of ankle command",

@@ -27,6 +27,7 @@ impl VirtualServoBackend for SimServoBackend {
     }
 
     fn set_goal_position(&mut self, servo: usize, position: f64) {
+        self.shared.heard();
         let mut r = self
             .shared
             .registers
@@ -36,6 +37,7 @@ impl VirtualServoBackend for SimServoBackend {
     }
 
     fn measure(&self, servo: usize) -> ServoMeasurement {
+        self.shared.heard();
         let s = self
             .shared
             .snapshot

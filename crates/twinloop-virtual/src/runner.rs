@@ -13,6 +13,12 @@ use twinloop_sim::{Actuator, DynamixelServo, SimError, Simulator};
 /// so a host's command takes effect within a few milliseconds even when the
 /// simulator is catching up.
 const MAX_BATCH: usize = 8;
+/// Time constant of the IMU's analogue low-pass, s (about 16 Hz): a MEMS gyro and
+/// accelerometer read through RC filters do not pass the contact's high-frequency
+/// chatter, which sampled at the bus's rate would alias into jumps of a whole m/s^2.
+/// The figure is ours, not from a board's datasheet.
+pub const IMU_TIME_CONSTANT_S: f64 = 0.01;
+
 /// Lagging more than this, the simulator stops chasing the wall clock (it runs as
 /// fast as it can from there) and counts the time it dropped.
 const MAX_LAG_S: f64 = 0.1;
@@ -53,10 +59,16 @@ pub(crate) struct Runner {
     pub realtime_factor: f64,
     /// See [`crate::VirtualRobotOptions::catch_falls`].
     pub catch_falls: bool,
+    /// See [`crate::VirtualRobotOptions::tether_s`].
+    pub tether_s: Option<f64>,
     /// Times the operator caught the robot.
     pub pick_ups: u64,
     /// Joint pose the operator stands the robot in (sized once).
     pose: Vec<f64>,
+    /// The IMU's gyro and accelerometer after its low-pass ([`IMU_TIME_CONSTANT_S`]),
+    /// updated every step, and the state it is read into (sized once).
+    imu_lp: Option<[f64; 6]>,
+    sensed: twinloop_robot::RobotState,
     regs: Vec<DriveRegisters>,
     /// Goal after the Moving Speed limit, servo angle.
     profile: Vec<f64>,
@@ -100,8 +112,11 @@ impl Runner {
             shared,
             realtime_factor,
             catch_falls: false,
+            tether_s: None,
             pick_ups: 0,
             pose: Vec::new(),
+            imu_lp: None,
+            sensed: twinloop_robot::RobotState::default(),
             behind_s: 0.0,
         };
         r.pose = vec![0.0; r.sim.model.nbodies];
@@ -152,6 +167,7 @@ impl Runner {
             self.sim.goals[s.joint] = s.direction * (self.profile[k] - s.zero);
         }
         self.sim.step()?;
+        self.filter_imu();
         for (k, s) in self.servos.iter().enumerate() {
             let load = self.sim.applied[s.joint] / s.base.stall_torque;
             self.temperature[k] = thermal_step(self.temperature[k], load, dt);
@@ -159,9 +175,34 @@ impl Runner {
         Ok(())
     }
 
+    /// One step of the IMU's low-pass.
+    fn filter_imu(&mut self) {
+        self.sim.read_sensors(&mut self.sensed);
+        let Some(imu) = self.sensed.imu else {
+            return;
+        };
+        let x = [
+            imu.gyro[0],
+            imu.gyro[1],
+            imu.gyro[2],
+            imu.accel[0],
+            imu.accel[1],
+            imu.accel[2],
+        ];
+        let a = self.sim.dt() / (IMU_TIME_CONSTANT_S + self.sim.dt());
+        let y = self.imu_lp.get_or_insert(x);
+        for i in 0..6 {
+            y[i] += a * (x[i] - y[i]);
+        }
+    }
+
     /// Measure and hand the snapshot to the bus.
     pub fn publish(&mut self) {
         self.sim.read_sensors(&mut self.snap.state);
+        if let (Some(imu), Some(y)) = (self.snap.state.imu.as_mut(), self.imu_lp) {
+            imu.gyro = [y[0], y[1], y[2]];
+            imu.accel = [y[3], y[4], y[5]];
+        }
         let (qo, vo) = (self.sim.model.q_offset, self.sim.model.v_offset);
         for (k, s) in self.servos.iter().enumerate() {
             let m = &mut self.snap.servos[k];
@@ -211,6 +252,8 @@ impl Runner {
             self.profile[k] = self.servo_angle(k);
         }
         self.pick_ups += 1;
+        // Held still in the operator's hands: the IMU settles.
+        self.imu_lp = None;
         Ok(())
     }
 
@@ -231,6 +274,15 @@ impl Runner {
         while !self.shared.stop.load(Ordering::Relaxed) {
             if self.snap.error.is_some() {
                 std::thread::sleep(Duration::from_millis(10));
+                continue;
+            }
+            if let Some(t) = self.tether_s
+                && self.shared.silence_s() > t
+            {
+                // Held: the wall clock runs on without the robot.
+                let pause = Instant::now();
+                std::thread::sleep(Duration::from_millis(1));
+                dropped += pause.elapsed().as_secs_f64();
                 continue;
             }
             self.take_registers();

@@ -4,7 +4,8 @@
 
 use crate::drive::DriveRegisters;
 use std::sync::Mutex;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
 use twinloop_link::servo::ServoMeasurement;
 use twinloop_robot::RobotState;
 
@@ -63,6 +64,34 @@ pub(crate) struct Shared {
     pub registers: Mutex<Vec<DriveRegisters>>,
     pub snapshot: Mutex<Snapshot>,
     pub stop: AtomicBool,
+    /// When the bus last served the host (a servo read or a goal written), in
+    /// nanoseconds since `epoch`: the tether of [`crate::VirtualRobotOptions::tether_s`].
+    pub epoch: Instant,
+    pub last_heard_ns: AtomicU64,
+}
+
+impl Shared {
+    pub fn new(registers: Vec<DriveRegisters>) -> Shared {
+        Shared {
+            registers: Mutex::new(registers),
+            snapshot: Mutex::new(Snapshot::default()),
+            stop: AtomicBool::new(false),
+            epoch: Instant::now(),
+            last_heard_ns: AtomicU64::new(0),
+        }
+    }
+
+    /// The host was just served.
+    pub fn heard(&self) {
+        let ns = self.epoch.elapsed().as_nanos() as u64;
+        self.last_heard_ns.store(ns, Ordering::Relaxed);
+    }
+
+    /// Wall-clock seconds since the host was last served.
+    pub fn silence_s(&self) -> f64 {
+        let now = self.epoch.elapsed().as_nanos() as u64;
+        now.saturating_sub(self.last_heard_ns.load(Ordering::Relaxed)) as f64 * 1e-9
+    }
 }
 
 /// Winding temperature after `dt` seconds: a first-order thermal model driven by

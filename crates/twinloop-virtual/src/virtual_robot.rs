@@ -6,8 +6,8 @@ use crate::backend::SimServoBackend;
 use crate::drive::DriveRegisters;
 use crate::runner::{Runner, ServoJoint, SimStatus};
 use crate::shared::{Shared, Snapshot};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use twinloop_link::{BoardAxes, BusServo, Item, RobotMapping, VirtualBus};
 use twinloop_sim::{Actuator, SimConfig, Simulator};
@@ -36,6 +36,11 @@ pub struct VirtualRobotOptions {
     /// `None`: the simulator's default, 1 mm). The tip-over study stands on a
     /// near-rigid floor (1e-5 m), as its static references assume.
     pub ground_sink: Option<f64>,
+    /// Hold the simulation while the host has been silent for longer than this,
+    /// wall-clock s: a host descheduled on a loaded machine (the simulation and the
+    /// host share it) would otherwise find its robot moved on without it, which a
+    /// real host on its own computer does not. `None`: the robot never waits.
+    pub tether_s: Option<f64>,
 }
 
 /// Trunk tilt at which the virtual operator catches a falling robot, deg: well past
@@ -52,6 +57,7 @@ impl Default for VirtualRobotOptions {
             torque_on: true,
             catch_falls: false,
             ground_sink: None,
+            tether_s: None,
         }
     }
 }
@@ -148,13 +154,10 @@ impl VirtualRobot {
                 DriveRegisters::new(s.zero + s.direction * q)
             })
             .collect();
-        let shared = Arc::new(Shared {
-            registers: Mutex::new(registers),
-            snapshot: Mutex::new(Snapshot::default()),
-            stop: AtomicBool::new(false),
-        });
+        let shared = Arc::new(Shared::new(registers));
         let mut runner = Runner::new(sim, servos, shared.clone(), options.realtime_factor);
         runner.catch_falls = options.catch_falls;
+        runner.tether_s = options.tether_s;
         runner.publish();
         Ok(VirtualRobot {
             runner,
