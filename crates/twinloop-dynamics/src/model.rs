@@ -99,8 +99,10 @@ pub struct Model {
     pub upper_limits: Vec<f64>,
     pub effort_limits: Vec<f64>,
     pub velocity_limits: Vec<f64>,
-    /// Rotor inertia reflected to each joint (added to the mass-matrix diagonal). Zero by default.
+    /// Rotor inertia reflected to each joint (added to the mass-matrix diagonal): the
+    /// description's (MJCF `armature`), zero for URDF.
     pub armature: Vec<f64>,
+    /// The description's gravity (MJCF `<option gravity>`), else (0, 0, -9.81).
     pub gravity: Vector3<f64>,
     pub frames: Vec<FrameInfo>,
     pub links: Vec<LinkInfo>,
@@ -298,7 +300,10 @@ impl Model {
             effort_limits: Vec::new(),
             velocity_limits: Vec::new(),
             armature: Vec::new(),
-            gravity: Vector3::new(0.0, 0.0, -twinloop_description::GRAVITY),
+            gravity: robot.gravity.map_or(
+                Vector3::new(0.0, 0.0, -twinloop_description::GRAVITY),
+                Vector3::from,
+            ),
             frames: Vec::new(),
             links: Vec::new(),
             total_mass: 0.0,
@@ -386,7 +391,7 @@ impl Model {
         self.effort_limits.push(lim.effort.unwrap_or(f64::INFINITY));
         self.velocity_limits
             .push(lim.velocity.unwrap_or(f64::INFINITY));
-        self.armature.push(0.0);
+        self.armature.push(joint.armature);
         Ok(new_body)
     }
 

@@ -53,30 +53,35 @@
 //!   errors rather than silently dropped bodies.
 
 use crate::description::*;
+mod include;
+mod inertia;
+
 use crate::error::DescriptionError;
 use crate::xml::{
     Places, error_at, error_at_attr, opt_array, parse_array, parse_numbers, read_text, required,
     validate_placed,
 };
+use inertia::{MassProps, Solid};
 use roxmltree::{Document, Node};
 use std::collections::HashMap;
 use std::path::Path;
 
 /// Read an MJCF model from text. Errors name the line, column and element.
+/// `<include>` needs a directory: use [`read_file`] for models that include files.
 pub fn from_str(text: &str) -> Result<Description, DescriptionError> {
     let doc = crate::xml::parse_xml(text)?;
-    from_document(&doc)
+    from_document(&doc, None)
 }
 
-/// Read an MJCF file; errors carry the file path.
+/// Read an MJCF file (and the files it includes); errors carry the file path.
 pub fn read_file(path: impl AsRef<Path>) -> Result<Description, DescriptionError> {
     let path = path.as_ref();
     let text = read_text(path)?;
-    from_str(&text).map_err(|e| e.in_file(path))
+    let doc = crate::xml::parse_xml(&text).map_err(|e| e.in_file(path))?;
+    from_document(&doc, path.parent()).map_err(|e| e.in_file(path))
 }
 
-type Mat = [[f64; 3]; 3];
-type Vec3 = [f64; 3];
+use inertia::{Mat, Vec3};
 
 const IDENTITY: Mat = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
@@ -171,6 +176,17 @@ fn pose(xyz: Vec3, r: &Mat) -> Pose {
     }
 }
 
+/// A hinge or slide joint of a body: the joint (axis, limits, dynamics), its
+/// element, its anchor in the body frame (a hinge's `pos`; a slide keeps the
+/// anchor before it) and its `ref` (radians for a hinge).
+struct BodyJoint<'a, 'i> {
+    joint: Joint,
+    node: Node<'a, 'i>,
+    anchor: Vec3,
+    hinge: bool,
+    reference: f64,
+}
+
 /// `<compiler>` settings that change how numbers are read.
 struct Compiler {
     degrees: bool,
@@ -178,6 +194,25 @@ struct Compiler {
     eulerseq: [u8; 3],
     autolimits: bool,
     meshdir: Option<String>,
+    inertia_from_geom: FromGeom,
+    /// `inertiagrouprange`: the geom groups that count for a body's inertia.
+    inertia_groups: [i64; 2],
+    bound_mass: f64,
+    bound_inertia: f64,
+    balance_inertia: bool,
+    /// `settotalmass`: every body's mass and inertia scaled to give this total.
+    total_mass: Option<f64>,
+}
+
+/// `inertiafromgeom`: when a body's mass properties come from its geoms.
+#[derive(Clone, Copy, PartialEq)]
+enum FromGeom {
+    /// Never: a body without `<inertial>` is massless.
+    False,
+    /// Always, overriding `<inertial>`.
+    True,
+    /// When the body has no `<inertial>` (MuJoCo's default).
+    Auto,
 }
 
 /// A default class: its parent and its element templates (`<joint>`, `<geom>`, ...).
@@ -207,7 +242,11 @@ type Found<'a, 'i> = (Node<'a, 'i>, &'a str);
 
 const ORIENTATIONS: [&str; 5] = ["quat", "axisangle", "euler", "xyaxes", "zaxis"];
 
-pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionError> {
+/// Read an MJCF document; `dir` is the directory `<include>` paths are relative to.
+pub(crate) fn from_document(
+    doc: &Document,
+    dir: Option<&Path>,
+) -> Result<Description, DescriptionError> {
     let root = doc.root_element();
     if root.tag_name().name() != "mujoco" {
         return Err(error_at(
@@ -218,90 +257,198 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
             ),
         ));
     }
-    let mut reader = Reader {
-        compiler: Compiler {
-            degrees: true,
-            eulerseq: *b"xyz",
-            autolimits: true,
-            meshdir: None,
-        },
-        classes: HashMap::new(),
-        meshes: HashMap::new(),
-        materials: HashMap::new(),
-        robot: Description {
-            name: root.attribute("model").unwrap_or_default().to_string(),
-            ..Default::default()
-        },
-        places: Places {
-            robot: root.range().start,
-            links: Vec::new(),
-            joints: Vec::new(),
-        },
-        unnamed_bodies: 0,
-    };
-    let sections: Vec<Node> = root.children().filter(Node::is_element).collect();
-    for &s in &sections {
-        match s.tag_name().name() {
-            "compiler" => reader.compiler(s)?,
-            "include" => {
-                return Err(error_at(
-                    s,
-                    "<include> is not supported: read the included file, or merge it into this one",
-                ));
-            }
-            _ => {}
-        }
+    let texts = include::read_includes(root, dir)?;
+    let mut docs = Vec::with_capacity(texts.len());
+    for (path, text) in &texts {
+        docs.push(crate::xml::parse_xml(text).map_err(|e| e.in_file(path))?);
     }
-    for &s in &sections {
-        if s.tag_name().name() == "default" {
-            let name = s.attribute("class").unwrap_or("main").to_string();
-            reader.default_class(s, name)?;
-        }
-    }
-    for &s in &sections {
-        if s.tag_name().name() == "asset" {
-            reader.assets(s)?;
-        }
-    }
-    let mut top: Vec<Node> = Vec::new();
-    for &s in &sections {
-        if s.tag_name().name() != "worldbody" {
-            continue;
-        }
-        for c in s.children().filter(Node::is_element) {
-            match c.tag_name().name() {
-                "body" => top.push(c),
-                t @ ("frame" | "replicate" | "attach" | "include" | "composite" | "flexcomp") => {
-                    return Err(error_at(c, format!("<{t}> is not supported")));
-                }
-                _ => {} // world geoms, sites, lights, cameras
-            }
-        }
-    }
-    let Some(&first) = top.first() else {
-        return Err(error_at(root, "no <body> in <worldbody>"));
-    };
-    if let Some(&second) = top.get(1) {
-        return Err(error_at(
-            second,
-            "a second top-level body: only one robot (one body tree) per file is supported",
-        ));
-    }
-    // Depth first, children in file order, with an explicit stack: deep
-    // nesting must not become deep recursion.
-    let mut pending = vec![Pending {
-        node: first,
-        parent: None,
-        childclass: None,
-    }];
-    while let Some(p) = pending.pop() {
-        reader.body(p, &mut pending)?;
-    }
-    validate_placed(doc, &reader.robot, &reader.places)?;
+    let mut sections: Vec<Node> = Vec::new();
+    include::splice(root, &docs, &mut 0, &mut sections);
+    let mut reader = Reader::new(root);
+    reader.read(doc, root, &sections)?;
     Ok(reader.robot)
 }
 
 impl<'a, 'i> Reader<'a, 'i> {
+    fn new(root: Node) -> Self {
+        Reader {
+            compiler: Compiler {
+                degrees: true,
+                eulerseq: *b"xyz",
+                autolimits: true,
+                meshdir: None,
+                inertia_from_geom: FromGeom::Auto,
+                inertia_groups: [0, 5],
+                bound_mass: 0.0,
+                bound_inertia: 0.0,
+                balance_inertia: false,
+                total_mass: None,
+            },
+            classes: HashMap::new(),
+            meshes: HashMap::new(),
+            materials: HashMap::new(),
+            robot: Description {
+                name: root.attribute("model").unwrap_or_default().to_string(),
+                ..Default::default()
+            },
+            places: Places {
+                robot: root.range().start,
+                links: Vec::new(),
+                joints: Vec::new(),
+            },
+            unnamed_bodies: 0,
+        }
+    }
+
+    /// The sections of `<mujoco>` (includes spliced in): settings, defaults,
+    /// assets, then the bodies; last the compiler's `settotalmass`.
+    fn read(
+        &mut self,
+        doc: &Document,
+        root: Node<'a, 'i>,
+        sections: &[Node<'a, 'i>],
+    ) -> Result<(), DescriptionError> {
+        for &s in sections {
+            match s.tag_name().name() {
+                "compiler" => self.compiler(s)?,
+                "option" => self.option(s)?,
+                _ => {}
+            }
+        }
+        for &s in sections {
+            if s.tag_name().name() == "default" {
+                let name = s.attribute("class").unwrap_or("main").to_string();
+                self.default_class(s, name)?;
+            }
+        }
+        for &s in sections {
+            if s.tag_name().name() == "asset" {
+                self.assets(s)?;
+            }
+        }
+        let mut top: Vec<Node> = Vec::new();
+        for &s in sections {
+            if s.tag_name().name() != "worldbody" {
+                continue;
+            }
+            for c in s.children().filter(Node::is_element) {
+                match c.tag_name().name() {
+                    "body" => top.push(c),
+                    t @ ("frame" | "replicate" | "attach" | "include" | "composite"
+                    | "flexcomp") => {
+                        return Err(error_at(c, format!("<{t}> is not supported")));
+                    }
+                    _ => {} // world geoms, sites, lights, cameras
+                }
+            }
+        }
+        if top.is_empty() {
+            return Err(error_at(root, "no <body> in <worldbody>"));
+        }
+        let world = self.needs_world_link(&top)?;
+        if world {
+            self.robot.order.push(Item::Link(self.robot.links.len()));
+            self.places.links.push(root.range().start);
+            self.robot.links.push(Link::new("world"));
+        }
+        // Depth first, children in file order, with an explicit stack: deep
+        // nesting must not become deep recursion.
+        let mut pending: Vec<Pending> = top
+            .iter()
+            .rev()
+            .map(|&node| Pending {
+                node,
+                parent: world.then(|| ("world".to_string(), [0.0; 3])),
+                childclass: None,
+            })
+            .collect();
+        while let Some(p) = pending.pop() {
+            self.body(p, &mut pending)?;
+        }
+        if let Some(total) = self.compiler.total_mass {
+            self.set_total_mass(total);
+        }
+        validate_placed(doc, &self.robot, &self.places)
+    }
+
+    /// Whether the top-level bodies hang from a `world` link. Not for one body
+    /// with a free joint (the floating base; its `pos`/`quat` are only MuJoCo's
+    /// initial qpos) nor for one jointless body at the origin (the root itself);
+    /// otherwise yes, and then no top-level body may have a free joint.
+    fn needs_world_link(&self, top: &[Node<'a, 'i>]) -> Result<bool, DescriptionError> {
+        let joints = |b: Node<'a, 'i>| -> Vec<Node<'a, 'i>> {
+            b.children()
+                .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
+                .collect()
+        };
+        if let [only] = top {
+            let js = joints(*only);
+            if js.len() == 1 && self.joint_type(js[0], None)? == "free" {
+                return Ok(false);
+            }
+            let placed = only.attribute("pos").is_some()
+                || ORIENTATIONS.iter().any(|a| only.attribute(*a).is_some());
+            if js.is_empty() && !placed {
+                return Ok(false);
+            }
+        }
+        for &b in top {
+            for j in joints(b) {
+                if self.joint_type(j, None)? == "free" && top.len() > 1 {
+                    let other = if top[0] == b { top[1] } else { top[0] };
+                    return Err(error_at(
+                        other,
+                        format!(
+                            "a second top-level body beside the free-floating \"{}\": twinloop \
+                             models one floating body tree per file",
+                            b.attribute("name").unwrap_or("body")
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    /// MuJoCo's `settotalmass`: every body's mass and inertia scaled by one factor.
+    fn set_total_mass(&mut self, total: f64) {
+        let now = self.robot.total_mass();
+        if now <= 0.0 {
+            return;
+        }
+        let k = total / now;
+        for l in &mut self.robot.links {
+            if let Some(i) = &mut l.inertial {
+                i.mass *= k;
+                let t = &mut i.inertia;
+                for v in [&mut t.ixx, &mut t.iyy, &mut t.izz, &mut t.ixy, &mut t.ixz, &mut t.iyz] {
+                    *v *= k;
+                }
+            }
+        }
+    }
+
+    /// `<option gravity>` and `<flag gravity="disable">`.
+    fn option(&mut self, node: Node<'a, 'i>) -> Result<(), DescriptionError> {
+        if let Some(v) = node.attribute("gravity") {
+            self.robot.gravity = Some(parse_array::<3>(node, "gravity", v)?);
+        }
+        for f in node.children().filter(|c| c.has_tag_name("flag")) {
+            match f.attribute("gravity") {
+                Some("disable") => self.robot.gravity = Some([0.0; 3]),
+                Some("enable") | None => {}
+                Some(v) => {
+                    return Err(error_at_attr(
+                        f,
+                        "gravity",
+                        format!("gravity=\"{v}\": expected \"enable\" or \"disable\""),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn compiler(&mut self, node: Node<'a, 'i>) -> Result<(), DescriptionError> {
         if let Some(a) = node.attribute("angle") {
             self.compiler.degrees = match a {
@@ -330,14 +477,39 @@ impl<'a, 'i> Reader<'a, 'i> {
         if let Some(v) = node.attribute("autolimits") {
             self.compiler.autolimits = bool_attr(node, "autolimits", v)?;
         }
-        if let Some(v) = node.attribute("inertiafromgeom")
-            && v == "true"
-        {
-            return Err(error_at_attr(
-                node,
-                "inertiafromgeom",
-                "inertiafromgeom=\"true\" is not supported: inertials are read as written",
-            ));
+        if let Some(v) = node.attribute("inertiafromgeom") {
+            self.compiler.inertia_from_geom = match v {
+                "true" => FromGeom::True,
+                "false" => FromGeom::False,
+                "auto" => FromGeom::Auto,
+                _ => {
+                    return Err(error_at_attr(
+                        node,
+                        "inertiafromgeom",
+                        format!("inertiafromgeom=\"{v}\": expected true, false or auto"),
+                    ));
+                }
+            };
+        }
+        if let Some(v) = node.attribute("inertiagrouprange") {
+            let r = parse_array::<2>(node, "inertiagrouprange", v)?;
+            self.compiler.inertia_groups = r.map(|g| g as i64);
+        }
+        let number = |attr: &str| match node.attribute(attr) {
+            Some(v) => crate::xml::parse_number(node, attr, v).map(Some),
+            None => Ok(None),
+        };
+        if let Some(m) = number("boundmass")? {
+            self.compiler.bound_mass = m;
+        }
+        if let Some(i) = number("boundinertia")? {
+            self.compiler.bound_inertia = i;
+        }
+        if let Some(m) = number("settotalmass")? {
+            self.compiler.total_mass = (m > 0.0).then_some(m);
+        }
+        if let Some(v) = node.attribute("balanceinertia") {
+            self.compiler.balance_inertia = bool_attr(node, "balanceinertia", v)?;
         }
         if node.attribute("coordinate") == Some("global") {
             return Err(error_at_attr(
@@ -615,6 +787,13 @@ impl<'a, 'i> Reader<'a, 'i> {
     }
 
     /// One body and its contents; its child bodies go onto `pending`.
+    ///
+    /// MuJoCo applies a body's joints in order, each about its own anchor (`pos`)
+    /// and axis in the body frame as moved by the joints before it, at `qpos - ref`.
+    /// Here each joint gets a link: massless ones `<body>_<joint>` for all but the
+    /// last, whose link is the body's, with its frame at the last hinge anchor.
+    /// A joint's `ref` goes into its origin (a turn or shift of `-ref` along its
+    /// axis), so a twinloop joint position is MuJoCo's qpos.
     fn body(
         &mut self,
         todo: Pending<'a, 'i>,
@@ -625,56 +804,83 @@ impl<'a, 'i> Reader<'a, 'i> {
             parent,
             childclass,
         } = todo;
-        let parent = parent.as_ref().map(|(l, o)| (l.as_str(), *o));
         let name = self.body_name(node);
         let childclass = self.childclass(node, childclass)?;
         let cc = childclass.as_deref();
         let pos = opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]);
         let rot = self.orientation(node, "body", None)?;
-        let (joint, joint_node, offset) = self.body_joint(node, &name, parent.is_some(), cc)?;
+        let joints = self.body_joints(node, &name, parent.is_some(), cc)?;
+        let offset = joints.last().map_or([0.0; 3], |j| j.anchor);
 
-        // The joint to the parent link.
-        let (parent_link, parent_offset) = match parent {
-            Some((l, o)) => (Some(l.to_string()), o),
-            None if joint.is_some() => {
-                // A robot on a hinge or slide to the world.
-                self.robot.order.push(Item::Link(self.robot.links.len()));
-                self.places.links.push(node.range().start);
-                self.robot.links.push(Link::new("world"));
-                (Some("world".to_string()), [0.0; 3])
+        let (link, frames) = self.link_contents(node, &name, cc, offset)?;
+        // Joints to the parent, in order, each with its child link.
+        let mut chain: Vec<(Joint, Node)> = Vec::new();
+        if let Some((parent_link, parent_offset)) = parent {
+            // Placement of the next joint frame's base in the previous link frame.
+            let mut at = sub(&pos, &parent_offset);
+            let mut r = rot;
+            let mut prev = (parent_link, [0.0; 3]);
+            let n = joints.len();
+            for (k, bj) in joints.into_iter().enumerate() {
+                let child = if k + 1 == n {
+                    name.clone()
+                } else {
+                    format!("{name}_{}", bj.joint.name)
+                };
+                let axis = bj.joint.axis_or_default();
+                let mut xyz = add(&at, &mat_vec(&r, &sub(&bj.anchor, &prev.1)));
+                if bj.hinge {
+                    r = mat_mul(&r, &axis_angle(&axis, -bj.reference));
+                } else {
+                    xyz = add(&xyz, &mat_vec(&r, &axis.map(|a| -bj.reference * a)));
+                }
+                let mut j = bj.joint;
+                j.parent = std::mem::take(&mut prev.0);
+                j.child = child.clone();
+                j.origin = pose(xyz, &r);
+                chain.push((j, bj.node));
+                prev = (child, bj.anchor);
+                (at, r) = ([0.0; 3], IDENTITY);
             }
-            None => (None, [0.0; 3]),
-        };
-        let origin = pose(
-            add(&sub(&pos, &parent_offset), &mat_vec(&rot, &offset)),
-            &rot,
-        );
-
-        let link = self.link_contents(node, &name, cc, offset)?;
-        self.robot.order.push(Item::Link(self.robot.links.len()));
-        self.places.links.push(node.range().start);
-        self.robot.links.push(link.0);
-        if let Some(parent_link) = parent_link {
-            let mut j = joint.unwrap_or_else(|| {
-                Joint::new(
+            if n == 0 {
+                let mut j = Joint::new(
                     format!("{name}_fixed"),
                     JointKind::Fixed,
-                    String::new(),
-                    String::new(),
-                )
-            });
-            j.parent = parent_link;
-            j.child = name.clone();
-            j.origin = origin;
-            self.robot.order.push(Item::Joint(self.robot.joints.len()));
-            self.places.joints.push(joint_node.range().start);
-            self.robot.joints.push(j);
+                    prev.0,
+                    name.clone(),
+                );
+                j.origin = pose(at, &r);
+                chain.push((j, node));
+            }
         }
-        for f in link.1 {
+        // Massless links between joints, each before its joint; the body's link
+        // before the joint that moves it.
+        let last = chain.pop();
+        for (j, jn) in chain {
+            self.push_link(Link::new(j.child.clone()), node);
+            self.push_joint(j, jn);
+        }
+        self.push_link(link, node);
+        if let Some((j, jn)) = last {
+            self.push_joint(j, jn);
+        }
+        for f in frames {
             self.robot.order.push(Item::Frame(self.robot.frames.len()));
             self.robot.frames.push(f);
         }
         queue_child_bodies(node, &name, offset, childclass, pending)
+    }
+
+    fn push_link(&mut self, l: Link, node: Node) {
+        self.robot.order.push(Item::Link(self.robot.links.len()));
+        self.places.links.push(node.range().start);
+        self.robot.links.push(l);
+    }
+
+    fn push_joint(&mut self, j: Joint, node: Node) {
+        self.robot.order.push(Item::Joint(self.robot.joints.len()));
+        self.places.joints.push(node.range().start);
+        self.robot.joints.push(j);
     }
 
     /// The body's name; an unnamed body is `body1`, `body2`, ... in reading order.
@@ -706,45 +912,41 @@ impl<'a, 'i> Reader<'a, 'i> {
         }
     }
 
-    /// The body's joint, if any (at most one; a free joint only on a top-level body,
-    /// where it makes no joint), the element the joint was read from (the body
-    /// itself without one), and the offset of the link frame from the body frame (a
-    /// hinge's `pos`).
-    fn body_joint(
+    /// A joint element's type: `free` for `<freejoint>`, else its (or its
+    /// class's) `type`, `hinge` by default.
+    fn joint_type(&self, j: Node<'a, 'i>, cc: Option<&str>) -> Result<&'a str, DescriptionError> {
+        if j.tag_name().name() == "freejoint" {
+            return Ok("free");
+        }
+        let class = self.class_of(j, cc)?;
+        Ok(self.get(j, "joint", &class, "type").map_or("hinge", |f| f.1))
+    }
+
+    /// The body's hinge and slide joints in order (a free joint only as the only
+    /// joint of a top-level body, where it makes no joint).
+    fn body_joints(
         &self,
         node: Node<'a, 'i>,
         name: &str,
         has_parent: bool,
         cc: Option<&str>,
-    ) -> Result<(Option<Joint>, Node<'a, 'i>, Vec3), DescriptionError> {
-        let joints: Vec<Node> = node
+    ) -> Result<Vec<BodyJoint<'a, 'i>>, DescriptionError> {
+        let elements: Vec<Node> = node
             .children()
             .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
             .collect();
-        if joints.len() > 1 {
-            return Err(error_at(
-                node,
-                format!(
-                    "the body has {} joints: only one joint per body is supported",
-                    joints.len()
-                ),
-            ));
-        }
-        let mut joint: Option<Joint> = None;
-        let mut joint_node = node;
-        // Offset of this link's frame from the body frame (a hinge's pos).
-        let mut offset = [0.0; 3];
-        if let Some(&j) = joints.first() {
-            joint_node = j;
+        let mut out = Vec::new();
+        let mut anchor = [0.0; 3];
+        for &j in &elements {
             let class = self.class_of(j, cc)?;
-            let kind = if j.tag_name().name() == "freejoint" {
-                "free"
-            } else {
-                self.get(j, "joint", &class, "type")
-                    .map_or("hinge", |f| f.1)
-            };
-            match kind {
+            match self.joint_type(j, cc)? {
                 "free" => {
+                    if elements.len() > 1 {
+                        return Err(error_at(
+                            node,
+                            "a free joint must be the body's only joint (MuJoCo allows 6 dofs per body)",
+                        ));
+                    }
                     if has_parent {
                         return Err(error_at(
                             j,
@@ -753,18 +955,34 @@ impl<'a, 'i> Reader<'a, 'i> {
                     }
                 }
                 "ball" => {
-                    return Err(error_at(j, "ball joints are not supported"));
+                    return Err(error_at(
+                        j,
+                        "ball joints are not supported: twinloop's dynamics has no spherical joint yet",
+                    ));
                 }
-                "hinge" | "slide" => {
+                kind @ ("hinge" | "slide") => {
                     let hinge = kind == "hinge";
-                    if hinge && let Some((n, v)) = self.get(j, "joint", &class, "pos") {
-                        offset = parse_array::<3>(n, "pos", v)?;
+                    if hinge {
+                        anchor = match self.get(j, "joint", &class, "pos") {
+                            Some((n, v)) => parse_array::<3>(n, "pos", v)?,
+                            None => [0.0; 3],
+                        };
                     }
                     let jname = match j.attribute("name") {
                         Some(n) => n.to_string(),
-                        None => format!("{name}_joint"),
+                        None if out.is_empty() => format!("{name}_joint"),
+                        None => format!("{name}_joint{}", out.len() + 1),
                     };
-                    joint = Some(self.joint(j, &class, jname, hinge)?);
+                    let reference = self
+                        .number(self.get(j, "joint", &class, "ref"), "ref")?
+                        .unwrap_or(0.0);
+                    out.push(BodyJoint {
+                        joint: self.joint(j, &class, jname, hinge)?,
+                        node: j,
+                        anchor,
+                        hinge,
+                        reference: if hinge { self.angle(reference) } else { reference },
+                    });
                 }
                 other => {
                     let (n, _) = self.get(j, "joint", &class, "type").unwrap_or((j, other));
@@ -778,7 +996,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 }
             }
         }
-        Ok((joint, joint_node, offset))
+        Ok(out)
     }
 
     /// A hinge or slide joint (name, parent, child and origin are set by the caller).
@@ -844,6 +1062,9 @@ impl<'a, 'i> Reader<'a, 'i> {
         if damping.is_some() || friction.is_some() {
             joint.dynamics = Some(JointDynamics { damping, friction });
         }
+        joint.armature = self
+            .number(self.get(j, "joint", class, "armature"), "armature")?
+            .unwrap_or(0.0);
         Ok(joint)
     }
 
@@ -873,48 +1094,28 @@ impl<'a, 'i> Reader<'a, 'i> {
         let mut link = Link::new(name);
         let mut frames = Vec::new();
         let mut geoms = 0;
+        let mut explicit: Option<(Vec3, Mat, f64, Inertia)> = None;
+        let from_geoms = match self.compiler.inertia_from_geom {
+            FromGeom::True => true,
+            FromGeom::False => false,
+            FromGeom::Auto => !node.children().any(|c| c.has_tag_name("inertial")),
+        };
+        let mut parts = Vec::new();
         for c in node.children().filter(Node::is_element) {
             match c.tag_name().name() {
                 "inertial" => {
-                    if link.inertial.is_some() {
+                    if explicit.is_some() {
                         return Err(error_at(c, "a second <inertial> in the body"));
                     }
-                    let pos = parse_array::<3>(c, "pos", required(c, "pos")?)?;
-                    let rot = self.orientation(c, "inertial", None)?;
-                    let mass = crate::xml::parse_number(c, "mass", required(c, "mass")?)?;
-                    let inertia = match (c.attribute("fullinertia"), c.attribute("diaginertia")) {
-                        (Some(v), _) => {
-                            let f = parse_array::<6>(c, "fullinertia", v)?;
-                            Inertia {
-                                ixx: f[0],
-                                iyy: f[1],
-                                izz: f[2],
-                                ixy: f[3],
-                                ixz: f[4],
-                                iyz: f[5],
-                            }
-                        }
-                        (None, Some(v)) => {
-                            let d = parse_array::<3>(c, "diaginertia", v)?;
-                            Inertia::diagonal(d[0], d[1], d[2])
-                        }
-                        (None, None) => {
-                            return Err(error_at(
-                                c,
-                                "missing attribute \"diaginertia\" or \"fullinertia\"",
-                            ));
-                        }
-                    };
-                    link.inertial = Some(Inertial {
-                        origin: pose(sub(&pos, &offset), &rot),
-                        mass,
-                        inertia,
-                    });
+                    explicit = Some(self.inertial(c)?);
                 }
                 "geom" => {
                     geoms += 1;
                     let default_name = format!("{name}_geom{geoms}");
                     self.geom(c, childclass, offset, &default_name, &mut link)?;
+                    if from_geoms && let Some(p) = self.geom_mass(c, childclass)? {
+                        parts.push(p);
+                    }
                 }
                 "site" => {
                     let class = self.class_of(c, childclass)?;
@@ -931,7 +1132,135 @@ impl<'a, 'i> Reader<'a, 'i> {
                 _ => {}
             }
         }
+        let c = &self.compiler;
+        let bounds = c.bound_mass > 0.0 || c.bound_inertia > 0.0 || c.balance_inertia;
+        link.inertial = if from_geoms || bounds {
+            let props = if from_geoms {
+                MassProps::combine(&parts)
+            } else {
+                explicit.map(|(pos, rot, mass, i)| MassProps::rotated(mass, pos, &rot, i.matrix()))
+            };
+            let props = match props {
+                Some(p) if bounds => Some(p.bounded(c.bound_mass, c.bound_inertia, c.balance_inertia)),
+                None if bounds => Some(MassProps::NONE.bounded(
+                    c.bound_mass,
+                    c.bound_inertia,
+                    c.balance_inertia,
+                )),
+                p => p,
+            };
+            props.map(|p| Inertial {
+                origin: pose(sub(&p.com, &offset), &IDENTITY),
+                mass: p.mass,
+                inertia: Inertia::from_matrix(p.inertia),
+            })
+        } else {
+            // As written: the file's numbers in the file's frame.
+            explicit.map(|(pos, rot, mass, inertia)| Inertial {
+                origin: pose(sub(&pos, &offset), &rot),
+                mass,
+                inertia,
+            })
+        };
         Ok((link, frames))
+    }
+
+    /// `<inertial pos quat mass diaginertia|fullinertia>`: CoM, frame, mass and
+    /// the tensor in that frame.
+    fn inertial(&self, c: Node<'a, 'i>) -> Result<(Vec3, Mat, f64, Inertia), DescriptionError> {
+        let pos = parse_array::<3>(c, "pos", required(c, "pos")?)?;
+        let rot = self.orientation(c, "inertial", None)?;
+        let mass = crate::xml::parse_number(c, "mass", required(c, "mass")?)?;
+        let inertia = match (c.attribute("fullinertia"), c.attribute("diaginertia")) {
+            (Some(v), _) => {
+                let f = parse_array::<6>(c, "fullinertia", v)?;
+                Inertia {
+                    ixx: f[0],
+                    iyy: f[1],
+                    izz: f[2],
+                    ixy: f[3],
+                    ixz: f[4],
+                    iyz: f[5],
+                }
+            }
+            (None, Some(v)) => {
+                let d = parse_array::<3>(c, "diaginertia", v)?;
+                Inertia::diagonal(d[0], d[1], d[2])
+            }
+            (None, None) => {
+                return Err(error_at(
+                    c,
+                    "missing attribute \"diaginertia\" or \"fullinertia\"",
+                ));
+            }
+        };
+        Ok((pos, rot, mass, inertia))
+    }
+
+    /// A geom's part of its body's mass properties, in the body frame, as
+    /// MuJoCo's compiler makes it: `mass`, else `density` (1000) times the volume
+    /// (the area with `shellinertia`); `None` for a geom outside
+    /// `inertiagrouprange`.
+    fn geom_mass(
+        &self,
+        g: Node<'a, 'i>,
+        childclass: Option<&str>,
+    ) -> Result<Option<MassProps>, DescriptionError> {
+        let class = self.class_of(g, childclass)?;
+        let group = self.integer(self.get(g, "geom", &class, "group"), "group", 0)?;
+        let [lo, hi] = self.compiler.inertia_groups;
+        if group < lo || group > hi {
+            return Ok(None);
+        }
+        let kind = match self.get(g, "geom", &class, "type") {
+            Some((_, t)) => t,
+            None if self.get(g, "geom", &class, "mesh").is_some() => "mesh",
+            None => "sphere",
+        };
+        let fromto = match self.get(g, "geom", &class, "fromto") {
+            Some((n, v)) => Some(from_to(n, v)?),
+            None => None,
+        };
+        let size = self.geom_size(g, &class)?;
+        let (pos, rot) = match &fromto {
+            Some((p, r, _)) => (*p, *r),
+            None => self.placement(g, "geom", &class)?,
+        };
+        let sized = |k: usize| size.get(k).copied().unwrap_or(0.0);
+        let long = |k: usize| fromto.as_ref().map_or(sized(k), |f| f.2);
+        let solid = match kind {
+            "sphere" => Solid::Sphere { radius: sized(0) },
+            "capsule" => Solid::Capsule { radius: sized(0), half: long(1) },
+            "cylinder" => Solid::Cylinder { radius: sized(0), half: long(1) },
+            "box" => Solid::Box { half: [sized(0), sized(1), long(2)] },
+            "ellipsoid" => Solid::Ellipsoid { semi: [sized(0), sized(1), long(2)] },
+            "plane" => return Ok(Some(MassProps { com: pos, ..MassProps::NONE })),
+            other => {
+                return Err(error_at(
+                    g,
+                    format!(
+                        "the inertia of a {other} geom is not computed: give the body an \
+                         <inertial>, or put the geom outside inertiagrouprange"
+                    ),
+                ));
+            }
+        };
+        let shell = match self.get(g, "geom", &class, "shellinertia") {
+            Some((n, v)) => bool_attr(n, "shellinertia", v)?,
+            None => false,
+        };
+        let measure = solid.measure(shell);
+        let density = match self.number(self.get(g, "geom", &class, "mass"), "mass")? {
+            // MuJoCo turns a geom's mass into a density, then back.
+            Some(m) if measure > 0.0 => m / measure,
+            Some(_) => 0.0,
+            None => self
+                .number(self.get(g, "geom", &class, "density"), "density")?
+                .unwrap_or(1000.0),
+        };
+        let mass = density * measure;
+        let principal = solid.principal_inertia(mass, shell);
+        Ok(Some(MassProps::placed(mass, pos, &rot, principal)))
     }
 
     /// Position and orientation of a geom or site; `fromto` wins over both.
