@@ -1227,13 +1227,18 @@ impl<'a, 'i> Reader<'a, 'i> {
             None => self.placement(g, "geom", &class)?,
         };
         let sized = |k: usize| size.get(k).copied().unwrap_or(0.0);
-        let long = |k: usize| fromto.as_ref().map_or(sized(k), |f| f.2);
+        // With fromto: the half-length along the segment, and (box, ellipsoid) a
+        // cross-section of size[0] both ways, as MuJoCo does.
+        let (y, z) = match &fromto {
+            Some(f) => (sized(0), f.2),
+            None => (sized(1), sized(2)),
+        };
         let solid = match kind {
             "sphere" => Solid::Sphere { radius: sized(0) },
-            "capsule" => Solid::Capsule { radius: sized(0), half: long(1) },
-            "cylinder" => Solid::Cylinder { radius: sized(0), half: long(1) },
-            "box" => Solid::Box { half: [sized(0), sized(1), long(2)] },
-            "ellipsoid" => Solid::Ellipsoid { semi: [sized(0), sized(1), long(2)] },
+            "capsule" => Solid::Capsule { radius: sized(0), half: fromto.as_ref().map_or(y, |f| f.2) },
+            "cylinder" => Solid::Cylinder { radius: sized(0), half: fromto.as_ref().map_or(y, |f| f.2) },
+            "box" => Solid::Box { half: [sized(0), y, z] },
+            "ellipsoid" => Solid::Ellipsoid { semi: [sized(0), y, z] },
             "plane" => return Ok(Some(MassProps { com: pos, ..MassProps::NONE })),
             other => {
                 return Err(error_at(
@@ -1403,10 +1408,12 @@ impl<'a, 'i> Reader<'a, 'i> {
                 }
             }
             "box" => {
-                need(2)?;
+                // With fromto MuJoCo makes the cross-section square: size[0] both ways.
+                let y = if fromto.is_some() { 0 } else { 1 };
+                need(y + 1)?;
                 let z = half_length(2)?;
                 Geometry::Box {
-                    size: [2.0 * size[0], 2.0 * size[1], 2.0 * z],
+                    size: [2.0 * size[0], 2.0 * size[y], 2.0 * z],
                 }
             }
             "mesh" => {

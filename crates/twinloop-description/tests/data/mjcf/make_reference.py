@@ -124,8 +124,152 @@ def reference(m):
     }
 
 
+def fmt(v):
+    return " ".join(repr(round(float(x), 6)) for x in v)
+
+
+def random_orientation(rng):
+    """One of MJCF's orientation forms, sometimes exactly at pitch +-90 deg."""
+    k = rng.integers(6)
+    if k == 0:
+        return f'quat="{fmt(rng.normal(size=4))}"'
+    if k == 1:
+        return f'axisangle="{fmt(rng.normal(size=3))} {round(float(rng.uniform(-3, 3)), 4)}"'
+    if k == 2:
+        return f'euler="{fmt(rng.uniform(-1.5, 1.5, 3))}"'
+    if k == 3:
+        return f'xyaxes="{fmt(rng.normal(size=6))}"'
+    if k == 4:
+        return f'zaxis="{fmt(rng.normal(size=3))}"'
+    return 'quat="0.7071067811865476 0 0.7071067811865476 0"'  # pitch +90 deg
+
+
+def random_geom(rng, group_hi):
+    kind = ["sphere", "capsule", "cylinder", "box", "ellipsoid"][rng.integers(5)]
+    n = {"sphere": 1, "capsule": 2, "cylinder": 2, "box": 3, "ellipsoid": 3}[kind]
+    attrs = [f'type="{kind}"']
+    if kind in ("capsule", "cylinder", "box", "ellipsoid") and rng.random() < 0.3:
+        a, b = rng.uniform(-0.2, 0.2, 3), rng.uniform(-0.2, 0.2, 3)
+        size = rng.uniform(0.02, 0.1, n - 1 if kind != "capsule" and kind != "cylinder" else 1)
+        attrs += [f'size="{fmt(size)}"', f'fromto="{fmt(a)} {fmt(b)}"']
+    else:
+        attrs += [f'size="{fmt(rng.uniform(0.02, 0.15, n))}"', f'pos="{fmt(rng.uniform(-0.2, 0.2, 3))}"']
+        if rng.random() < 0.7:
+            attrs.append(random_orientation(rng))
+    if rng.random() < 0.3:
+        attrs.append(f'mass="{round(float(rng.uniform(0.1, 3)), 4)}"')
+    elif rng.random() < 0.5:
+        attrs.append(f'density="{round(float(rng.uniform(100, 3000)), 2)}"')
+    if rng.random() < 0.2:
+        attrs.append('shellinertia="true"')
+    attrs.append(f'group="{rng.integers(0, group_hi + 1)}"')
+    return "<geom " + " ".join(attrs) + "/>"
+
+
+def random_body(rng, depth, counter, degrees, group_hi, lines, indent):
+    counter[0] += 1
+    name = f"b{counter[0]}"
+    cls = ' childclass="heavy"' if rng.random() < 0.2 else ""
+    lines.append(f'{indent}<body name="{name}" pos="{fmt(rng.uniform(-0.3, 0.3, 3))}" '
+                 f'{random_orientation(rng)}{cls}>')
+    for j in range(rng.integers(0, 4)):
+        kind = "hinge" if rng.random() < 0.7 else "slide"
+        ref = rng.uniform(-40, 40) if degrees and kind == "hinge" else rng.uniform(-0.7, 0.7)
+        extra = f' pos="{fmt(rng.uniform(-0.1, 0.1, 3))}"' if rng.random() < 0.6 else ""
+        extra += f' ref="{round(float(ref), 4)}"' if rng.random() < 0.5 else ""
+        extra += f' armature="{round(float(rng.uniform(0, 0.1)), 4)}"' if rng.random() < 0.3 else ""
+        lines.append(f'{indent}  <joint name="{name}_j{j}" type="{kind}" '
+                     f'axis="{fmt(rng.normal(size=3))}"{extra}/>')
+    if rng.random() < 0.25:
+        if rng.random() < 0.5:
+            inertia = f'diaginertia="{fmt(rng.uniform(0.01, 0.02, 3))}" {random_orientation(rng)}'
+        else:
+            d = rng.uniform(0.02, 0.03, 3)
+            inertia = f'fullinertia="{fmt(d)} {fmt(rng.uniform(-0.002, 0.002, 3))}"'
+        lines.append(f'{indent}  <inertial pos="{fmt(rng.uniform(-0.1, 0.1, 3))}" '
+                     f'mass="{round(float(rng.uniform(0.5, 2)), 4)}" {inertia}/>')
+    # At least one geom in group 0 so that every body has mass.
+    lines.append(f'{indent}  ' + random_geom(rng, 0))
+    for _ in range(rng.integers(0, 3)):
+        lines.append(f'{indent}  ' + random_geom(rng, group_hi))
+    if depth < 3:
+        for _ in range(rng.integers(0, 3)):
+            random_body(rng, depth + 1, counter, degrees, group_hi, lines, indent + "  ")
+    lines.append(f"{indent}</body>")
+
+
+def generated_model(seed):
+    """A random tree exercising the compiler: geoms of every primitive type,
+    several joints per body with anchors and refs, rotated roots, defaults and
+    childclass, include, and the compiler's mass options."""
+    rng = np.random.default_rng(1000 + seed)
+    degrees = rng.random() < 0.5
+    group_hi = int(rng.integers(0, 5))
+    comp = [f'angle="{"degree" if degrees else "radian"}"']
+    if rng.random() < 0.5:
+        comp.append(f'inertiafromgeom="{["true", "auto"][rng.integers(2)]}"')
+    if rng.random() < 0.3:
+        comp.append(f'inertiagrouprange="0 {rng.integers(0, 4)}"')
+    if rng.random() < 0.3:
+        comp.append(f'settotalmass="{round(float(rng.uniform(1, 30)), 3)}"')
+    if rng.random() < 0.3:
+        comp.append(f'boundmass="{round(float(rng.uniform(0.1, 2)), 3)}"')
+    if rng.random() < 0.3:
+        comp.append(f'boundinertia="{round(float(rng.uniform(0.001, 0.05)), 4)}"')
+    if rng.random() < 0.3:
+        comp.append('balanceinertia="true"')
+    if rng.random() < 0.3:
+        comp.append(f'eulerseq="{["zyx", "XYZ", "xzy"][rng.integers(3)]}"')
+    defaults = ['<default>',
+                f'  <joint armature="{round(float(rng.uniform(0, 0.05)), 4)}" damping="0.1"/>',
+                f'  <geom density="{round(float(rng.uniform(300, 1500)), 1)}"/>',
+                '  <default class="heavy">',
+                '    <geom density="5000"/>',
+                '    <joint armature="0.2"/>',
+                '  </default>',
+                '</default>']
+    lines = ['<mujoco model="generated_%d">' % seed, f'  <compiler {" ".join(comp)}/>']
+    include = None
+    if rng.random() < 0.4:
+        include = [f'<mujoco>'] + ["  " + d for d in defaults] + ['</mujoco>']
+        lines.append(f'  <include file="generated_{seed}_defaults.xml"/>')
+    else:
+        lines += ["  " + d for d in defaults]
+    if rng.random() < 0.3:
+        lines.append(f'  <option gravity="{fmt(rng.normal(size=3) * 5)}"/>')
+    elif rng.random() < 0.2:
+        lines.append('  <option><flag gravity="disable"/></option>')
+    lines.append("  <worldbody>")
+    lines.append('    <geom type="plane" size="5 5 0.1"/>')
+    counter = [0]
+    for _ in range(1 + (rng.random() < 0.3)):
+        random_body(rng, 0, counter, degrees, group_hi, lines, "    ")
+    lines.append("  </worldbody>")
+    lines.append("</mujoco>")
+    return "\n".join(lines) + "\n", include
+
+
+GENERATED = 24
+
+
+def write_generated():
+    out = os.path.join(HERE, "generated")
+    os.makedirs(out, exist_ok=True)
+    for f in glob.glob(os.path.join(out, "*.xml")):
+        os.remove(f)
+    for seed in range(GENERATED):
+        text, include = generated_model(seed)
+        path = os.path.join(out, f"generated_{seed}.xml")
+        with open(path, "w") as f:
+            f.write(text)
+        if include:
+            with open(os.path.join(out, f"generated_{seed}_defaults.xml"), "w") as f:
+                f.write("\n".join(include) + "\n")
+        yield "generated", out, path
+
+
 def main():
-    for package, src_dir, path in sources():
+    for package, src_dir, path in list(sources()) + list(write_generated()):
         name = os.path.basename(path)
         if name in SKIP:
             continue
@@ -134,7 +278,8 @@ def main():
         except Exception as e:  # noqa: BLE001 -- MuJoCo refuses it: not in the corpus
             print(f"{package}/{name}: MuJoCo does not load it: {e}")
             continue
-        copy_tree(package, src_dir, path)
+        if package != "generated":
+            copy_tree(package, src_dir, path)
         out = os.path.join(HERE, "reference", package)
         os.makedirs(out, exist_ok=True)
         with open(os.path.join(out, name.replace(".xml", ".json")), "w") as f:
