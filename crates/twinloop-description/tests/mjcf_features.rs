@@ -251,12 +251,13 @@ fn geoms_sites_materials() {
         Some([0.0, 1.0, 0.0, 1.0])
     );
     assert_eq!(cyl.material.as_ref().unwrap().name, "b_geom2_material");
-    // A box along x from fromto: its z axis turned onto x.
+    // A box along x from fromto: its z axis turned onto x; MuJoCo makes its
+    // cross-section square from size[0] (compiled geom_size 0.01 0.01 0.1).
     let bx = &b.visuals[2];
     assert_eq!(
         bx.geometry,
         Geometry::Box {
-            size: [0.02, 0.04, 0.2]
+            size: [0.02, 0.02, 0.2]
         }
     );
     let z = rpy_to_matrix(bx.origin.rpy);
