@@ -13,9 +13,13 @@ fn max_diff(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> f64 {
 /// A quaternion turned about y by `pitch` after a random turn, so that the
 /// matrix sits at (or within `eps` of) the singularity.
 fn near_singular(seed: u64, eps: f64) -> [[f64; 3]; 3] {
-    let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut x = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     let mut next = || {
-        x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        x = x
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
     };
     let roll = 3.0 * next();

@@ -36,7 +36,9 @@ fn vec3(v: &Value) -> Vector3<f64> {
 
 fn rot(wxyz: &Value) -> Matrix3<f64> {
     let q = vecf(wxyz);
-    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3])).to_rotation_matrix().into_inner()
+    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
+        .to_rotation_matrix()
+        .into_inner()
 }
 
 fn mat(v: &Value) -> DMatrix<f64> {
@@ -74,7 +76,8 @@ fn corpus(packages: &[&str]) -> Vec<(String, PathBuf, Value)> {
         for json in files {
             let stem = json.file_stem().unwrap().to_string_lossy().to_string();
             let xml = corpus_dir().join(package).join(format!("{stem}.xml"));
-            let refd: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+            let refd: Value =
+                serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
             out.push((format!("{package}/{stem}"), xml, refd));
         }
     }
@@ -101,11 +104,22 @@ fn link_names(refd: &Value) -> Vec<String> {
 
 /// Per-body mass, world CoM and world inertia at one state.
 fn check_bodies(name: &str, model: &Model, data: &Data, refd: &Value, state: &Value) {
-    let scale = Vector3::from_iterator(
-        (0..3).map(|k| state["xpos"].as_array().unwrap().iter().map(|p| f(&p[k]).abs()).fold(1.0, f64::max)),
-    )
+    let scale = Vector3::from_iterator((0..3).map(|k| {
+        state["xpos"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| f(&p[k]).abs())
+            .fold(1.0, f64::max)
+    }))
     .max();
-    for (i, (b, link)) in refd["bodies"].as_array().unwrap().iter().zip(link_names(refd)).enumerate() {
+    for (i, (b, link)) in refd["bodies"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(link_names(refd))
+        .enumerate()
+    {
         let l = model
             .links
             .iter()
@@ -129,7 +143,12 @@ fn check_bodies(name: &str, model: &Model, data: &Data, refd: &Value, state: &Va
         let size = inertia.abs().max();
         for r in 0..3 {
             for c in 0..3 {
-                close(&format!("{what} inertia[{r}][{c}]"), ours.inertia[(r, c)], inertia[(r, c)], size);
+                close(
+                    &format!("{what} inertia[{r}][{c}]"),
+                    ours.inertia[(r, c)],
+                    inertia[(r, c)],
+                    size,
+                );
             }
         }
     }
@@ -139,7 +158,11 @@ fn check_bodies(name: &str, model: &Model, data: &Data, refd: &Value, state: &Va
 fn check_model(name: &str, robot: &Description, refd: &Value) {
     let model = Model::from_description_with_base(robot, BaseKind::Fixed)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
-    assert_eq!(model.nv, refd["states"][0]["qvel"].as_array().unwrap().len(), "{name}: nv");
+    assert_eq!(
+        model.nv,
+        refd["states"][0]["qvel"].as_array().unwrap().len(),
+        "{name}: nv"
+    );
     let mut data = Data::new(&model);
     for (s, state) in refd["states"].as_array().unwrap().iter().enumerate() {
         let (q, v) = (vecf(&state["qpos"]), vecf(&state["qvel"]));
@@ -150,14 +173,24 @@ fn check_model(name: &str, robot: &Description, refd: &Value) {
         let size = m_ref.abs().max();
         for r in 0..model.nv {
             for c in r..model.nv {
-                close(&format!("{name} state {s} M[{r}][{c}]"), m[(r, c)], m_ref[(r, c)], size);
+                close(
+                    &format!("{name} state {s} M[{r}][{c}]"),
+                    m[(r, c)],
+                    m_ref[(r, c)],
+                    size,
+                );
             }
         }
         let bias_ref = vecf(&state["bias"]);
         let bias = nonlinear_effects(&model, &mut data, &q, &v).clone();
         let size = bias_ref.iter().fold(1e-12_f64, |a, b| a.max(b.abs()));
         for k in 0..model.nv {
-            close(&format!("{name} state {s} bias[{k}]"), bias[k], bias_ref[k], size);
+            close(
+                &format!("{name} state {s} bias[{k}]"),
+                bias[k],
+                bias_ref[k],
+                size,
+            );
         }
     }
 }
@@ -204,7 +237,12 @@ fn mjcf_corpus_agrees_with_mujoco() {
         loaded.len(),
         refused.join("\n")
     );
-    for humanoid in ["dm_control/humanoid", "dm_control/humanoid_CMU", "gymnasium/humanoid", "gymnasium/humanoidstandup"] {
+    for humanoid in [
+        "dm_control/humanoid",
+        "dm_control/humanoid_CMU",
+        "gymnasium/humanoid",
+        "gymnasium/humanoidstandup",
+    ] {
         assert!(loaded.iter().any(|l| l == humanoid), "{humanoid} loads");
     }
     assert_eq!(not_robots, ["dm_control/lqr"]);
@@ -223,5 +261,8 @@ fn generated_corpus_agrees_with_mujoco() {
         let robot = load(&xml).unwrap_or_else(|e| panic!("{name}: {e}"));
         check_model(&name, &robot, &refd);
     }
-    println!("generated corpus: largest relative error {:.1e}", WORST.with(|w| w.get()));
+    println!(
+        "generated corpus: largest relative error {:.1e}",
+        WORST.with(|w| w.get())
+    );
 }

@@ -45,17 +45,18 @@ fn collect(
                 format!("{} includes itself (or nests too deep)", path.display()),
             ));
         }
-        let text = read_text(&path).map_err(|e| {
-            error_at(inc, format!("cannot read the included file: {}", e.message))
-        })?;
+        let text = read_text(&path)
+            .map_err(|e| error_at(inc, format!("cannot read the included file: {}", e.message)))?;
         let slot = out.len();
         out.push((path.clone(), String::new()));
         {
             let doc = parse_xml(&text).map_err(|e| e.in_file(&path))?;
             let inner = doc.root_element();
             if inner.tag_name().name() != "mujoco" {
-                return Err(error_at(inner, "an included file must have <mujoco> at its root")
-                    .in_file(&path));
+                return Err(
+                    error_at(inner, "an included file must have <mujoco> at its root")
+                        .in_file(&path),
+                );
             }
             chain.push(path);
             collect(inner, Some(dir), chain, out)?;

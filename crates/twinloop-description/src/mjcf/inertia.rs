@@ -14,12 +14,24 @@ pub(crate) type Vec3 = [f64; 3];
 /// A primitive geom's shape, by MuJoCo's size parameters (half sizes).
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Solid {
-    Sphere { radius: f64 },
+    Sphere {
+        radius: f64,
+    },
     /// Along z: radius and half-length of the cylindrical part.
-    Capsule { radius: f64, half: f64 },
-    Cylinder { radius: f64, half: f64 },
-    Ellipsoid { semi: Vec3 },
-    Box { half: Vec3 },
+    Capsule {
+        radius: f64,
+        half: f64,
+    },
+    Cylinder {
+        radius: f64,
+        half: f64,
+    },
+    Ellipsoid {
+        semi: Vec3,
+    },
+    Box {
+        half: Vec3,
+    },
 }
 
 /// Mass properties of a rigid part in a body frame: mass, centre of mass and
@@ -193,7 +205,12 @@ impl MassProps {
     /// A part with principal moments `principal` along the axes `rot` (columns), centred at `pos`.
     pub(crate) fn placed(mass: f64, pos: Vec3, rot: &Mat, principal: Vec3) -> Self {
         let [a, b, c] = principal;
-        MassProps::rotated(mass, pos, rot, [[a, 0.0, 0.0], [0.0, b, 0.0], [0.0, 0.0, c]])
+        MassProps::rotated(
+            mass,
+            pos,
+            rot,
+            [[a, 0.0, 0.0], [0.0, b, 0.0], [0.0, 0.0, c]],
+        )
     }
 
     /// The parts as one body (MuJoCo: one part is copied; several are summed about
@@ -265,19 +282,34 @@ mod tests {
     /// A capsule of zero cylinder length is a sphere; of zero radius a rod.
     #[test]
     fn capsule_limits() {
-        let c = Solid::Capsule { radius: 0.2, half: 0.0 }.principal_inertia(3.0, false);
+        let c = Solid::Capsule {
+            radius: 0.2,
+            half: 0.0,
+        }
+        .principal_inertia(3.0, false);
         let s = Solid::Sphere { radius: 0.2 }.principal_inertia(3.0, false);
         for k in 0..3 {
             assert!((c[k] - s[k]).abs() < 1e-15);
         }
-        let v = Solid::Capsule { radius: 0.2, half: 0.0 }.measure(false);
+        let v = Solid::Capsule {
+            radius: 0.2,
+            half: 0.0,
+        }
+        .measure(false);
         assert!((v - Solid::Sphere { radius: 0.2 }.measure(false)).abs() < 1e-15);
     }
 
     /// Two point-like halves of a dumbbell: mass 2m, inertia 2 m d^2 across the bar.
     #[test]
     fn combine_is_parallel_axis() {
-        let p = |x| MassProps::placed(1.0, [x, 0.0, 0.0], &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], [0.0; 3]);
+        let p = |x| {
+            MassProps::placed(
+                1.0,
+                [x, 0.0, 0.0],
+                &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                [0.0; 3],
+            )
+        };
         let c = MassProps::combine(&[p(-1.0), p(1.0)]).unwrap();
         assert_eq!(c.mass, 2.0);
         assert_eq!(c.com, [0.0; 3]);
@@ -287,7 +319,12 @@ mod tests {
 
     #[test]
     fn balance_replaces_impossible_moments_by_their_mean() {
-        let m = MassProps::placed(1.0, [0.0; 3], &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], [1.0, 1.0, 3.0]);
+        let m = MassProps::placed(
+            1.0,
+            [0.0; 3],
+            &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            [1.0, 1.0, 3.0],
+        );
         let b = m.bounded(0.0, 0.0, true);
         for k in 0..3 {
             assert!((b.inertia[k][k] - 5.0 / 3.0).abs() < 1e-14);

@@ -421,7 +421,9 @@ impl<'a, 'i> Reader<'a, 'i> {
             if let Some(i) = &mut l.inertial {
                 i.mass *= k;
                 let t = &mut i.inertia;
-                for v in [&mut t.ixx, &mut t.iyy, &mut t.izz, &mut t.ixy, &mut t.ixz, &mut t.iyz] {
+                for v in [
+                    &mut t.ixx, &mut t.iyy, &mut t.izz, &mut t.ixy, &mut t.ixz, &mut t.iyz,
+                ] {
                     *v *= k;
                 }
             }
@@ -919,7 +921,9 @@ impl<'a, 'i> Reader<'a, 'i> {
             return Ok("free");
         }
         let class = self.class_of(j, cc)?;
-        Ok(self.get(j, "joint", &class, "type").map_or("hinge", |f| f.1))
+        Ok(self
+            .get(j, "joint", &class, "type")
+            .map_or("hinge", |f| f.1))
     }
 
     /// The body's hinge and slide joints in order (a free joint only as the only
@@ -981,7 +985,11 @@ impl<'a, 'i> Reader<'a, 'i> {
                         node: j,
                         anchor,
                         hinge,
-                        reference: if hinge { self.angle(reference) } else { reference },
+                        reference: if hinge {
+                            self.angle(reference)
+                        } else {
+                            reference
+                        },
                     });
                 }
                 other => {
@@ -1141,12 +1149,12 @@ impl<'a, 'i> Reader<'a, 'i> {
                 explicit.map(|(pos, rot, mass, i)| MassProps::rotated(mass, pos, &rot, i.matrix()))
             };
             let props = match props {
-                Some(p) if bounds => Some(p.bounded(c.bound_mass, c.bound_inertia, c.balance_inertia)),
-                None if bounds => Some(MassProps::NONE.bounded(
-                    c.bound_mass,
-                    c.bound_inertia,
-                    c.balance_inertia,
-                )),
+                Some(p) if bounds => {
+                    Some(p.bounded(c.bound_mass, c.bound_inertia, c.balance_inertia))
+                }
+                None if bounds => {
+                    Some(MassProps::NONE.bounded(c.bound_mass, c.bound_inertia, c.balance_inertia))
+                }
                 p => p,
             };
             props.map(|p| Inertial {
@@ -1235,11 +1243,26 @@ impl<'a, 'i> Reader<'a, 'i> {
         };
         let solid = match kind {
             "sphere" => Solid::Sphere { radius: sized(0) },
-            "capsule" => Solid::Capsule { radius: sized(0), half: fromto.as_ref().map_or(y, |f| f.2) },
-            "cylinder" => Solid::Cylinder { radius: sized(0), half: fromto.as_ref().map_or(y, |f| f.2) },
-            "box" => Solid::Box { half: [sized(0), y, z] },
-            "ellipsoid" => Solid::Ellipsoid { semi: [sized(0), y, z] },
-            "plane" => return Ok(Some(MassProps { com: pos, ..MassProps::NONE })),
+            "capsule" => Solid::Capsule {
+                radius: sized(0),
+                half: fromto.as_ref().map_or(y, |f| f.2),
+            },
+            "cylinder" => Solid::Cylinder {
+                radius: sized(0),
+                half: fromto.as_ref().map_or(y, |f| f.2),
+            },
+            "box" => Solid::Box {
+                half: [sized(0), y, z],
+            },
+            "ellipsoid" => Solid::Ellipsoid {
+                semi: [sized(0), y, z],
+            },
+            "plane" => {
+                return Ok(Some(MassProps {
+                    com: pos,
+                    ..MassProps::NONE
+                }));
+            }
             other => {
                 return Err(error_at(
                     g,
