@@ -40,6 +40,7 @@ fn rpy_round_trip_is_exact_to_rounding_everywhere() {
     }
     assert!(worst < 2e-15, "largest matrix error {worst:e}");
     // MuJoCo's pitch-90 quaternion as the MJCF files write it.
-    let q = quaternion_to_matrix([0.7071067811865476, 0.0, 0.7071067811865476, 0.0]);
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let q = quaternion_to_matrix([h, 0.0, h, 0.0]);
     assert!(max_diff(&rpy_to_matrix(matrix_to_rpy(q)), &q) < 1e-15);
 }
