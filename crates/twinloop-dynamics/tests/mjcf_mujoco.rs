@@ -54,11 +54,15 @@ thread_local! {
 
 /// `ours` equals `theirs` to TOL relative to `scale` (the size of the quantity).
 fn close(what: &str, ours: f64, theirs: f64, scale: f64) {
+    close_to(what, ours, theirs, scale, TOL);
+}
+
+fn close_to(what: &str, ours: f64, theirs: f64, scale: f64, tol: f64) {
     let err = (ours - theirs).abs();
     let rel = err / scale.max(theirs.abs());
     WORST.with(|w| w.set(w.get().max(rel)));
     assert!(
-        rel <= TOL,
+        rel <= tol,
         "{what}: twinloop {ours:e} vs MuJoCo {theirs:e} (error {err:e})"
     );
 }
@@ -102,8 +106,16 @@ fn link_names(refd: &Value) -> Vec<String> {
         .collect()
 }
 
-/// Per-body mass, world CoM and world inertia at one state.
-fn check_bodies(name: &str, model: &Model, data: &Data, refd: &Value, state: &Value) {
+/// Per-body mass and world CoM (to TOL), principal moments and world inertia
+/// tensor (to `axes_tol`: they carry MuJoCo's principal axes) at one state.
+fn check_bodies(
+    name: &str,
+    model: &Model,
+    data: &Data,
+    refd: &Value,
+    state: &Value,
+    axes_tol: f64,
+) {
     let scale = Vector3::from_iterator((0..3).map(|k| {
         state["xpos"]
             .as_array()
@@ -138,24 +150,45 @@ fn check_bodies(name: &str, model: &Model, data: &Data, refd: &Value, state: &Va
         for a in 0..3 {
             close(&format!("{what} com[{a}]"), ours.com[a], com[a], scale);
         }
+        let principal = vec3(&b["inertia"]);
+        let mut theirs: Vec<f64> = principal.iter().copied().collect();
+        let mut moments: Vec<f64> = ours
+            .inertia
+            .symmetric_eigenvalues()
+            .iter()
+            .copied()
+            .collect();
+        theirs.sort_by(f64::total_cmp);
+        moments.sort_by(f64::total_cmp);
+        let size = principal.abs().max();
+        for k in 0..3 {
+            close_to(
+                &format!("{what} principal moment {k}"),
+                moments[k],
+                theirs[k],
+                size,
+                axes_tol,
+            );
+        }
         let ir = xr * rot(&b["iquat"]);
-        let inertia = ir * Matrix3::from_diagonal(&vec3(&b["inertia"])) * ir.transpose();
-        let size = inertia.abs().max();
+        let inertia = ir * Matrix3::from_diagonal(&principal) * ir.transpose();
         for r in 0..3 {
             for c in 0..3 {
-                close(
+                close_to(
                     &format!("{what} inertia[{r}][{c}]"),
                     ours.inertia[(r, c)],
                     inertia[(r, c)],
                     size,
+                    axes_tol,
                 );
             }
         }
     }
 }
 
-/// Everything at every state of one model.
-fn check_model(name: &str, robot: &Description, refd: &Value) {
+/// Everything at every state of one model; `axes_tol` for what depends on
+/// MuJoCo's principal axes of inertia (tensors, mass matrix, bias forces).
+fn check_model(name: &str, robot: &Description, refd: &Value, axes_tol: f64) {
     let model = Model::from_description_with_base(robot, BaseKind::Fixed)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     assert_eq!(
@@ -167,17 +200,25 @@ fn check_model(name: &str, robot: &Description, refd: &Value) {
     for (s, state) in refd["states"].as_array().unwrap().iter().enumerate() {
         let (q, v) = (vecf(&state["qpos"]), vecf(&state["qvel"]));
         frames_forward_kinematics(&model, &mut data, &q);
-        check_bodies(&format!("{name} state {s}"), &model, &data, refd, state);
+        check_bodies(
+            &format!("{name} state {s}"),
+            &model,
+            &data,
+            refd,
+            state,
+            axes_tol,
+        );
         let m_ref = mat(&state["mass_matrix"]);
         let m = crba(&model, &mut data, &q).clone();
         let size = m_ref.abs().max();
         for r in 0..model.nv {
             for c in r..model.nv {
-                close(
+                close_to(
                     &format!("{name} state {s} M[{r}][{c}]"),
                     m[(r, c)],
                     m_ref[(r, c)],
                     size,
+                    axes_tol,
                 );
             }
         }
@@ -185,11 +226,12 @@ fn check_model(name: &str, robot: &Description, refd: &Value) {
         let bias = nonlinear_effects(&model, &mut data, &q, &v).clone();
         let size = bias_ref.iter().fold(1e-12_f64, |a, b| a.max(b.abs()));
         for k in 0..model.nv {
-            close(
+            close_to(
                 &format!("{name} state {s} bias[{k}]"),
                 bias[k],
                 bias_ref[k],
                 size,
+                axes_tol,
             );
         }
     }
@@ -209,7 +251,7 @@ fn mjcf_corpus_agrees_with_mujoco() {
         }
         match load(&xml) {
             Ok(robot) => {
-                check_model(&name, &robot, &refd);
+                check_model(&name, &robot, &refd, TOL);
                 loaded.push(name);
             }
             Err(e) => {
@@ -255,14 +297,40 @@ fn mjcf_corpus_agrees_with_mujoco() {
 /// settotalmass and gravity. Every one must load and agree.
 #[test]
 fn generated_corpus_agrees_with_mujoco() {
-    let models = corpus(&["generated"]);
+    let models: Vec<_> = corpus(&["generated"])
+        .into_iter()
+        .filter(|m| !m.0.starts_with("generated/mesh_"))
+        .collect();
     assert_eq!(models.len(), 24);
     for (name, xml, refd) in models {
         let robot = load(&xml).unwrap_or_else(|e| panic!("{name}: {e}"));
-        check_model(&name, &robot, &refd);
+        check_model(&name, &robot, &refd, TOL);
     }
     println!(
         "generated corpus: largest relative error {:.1e}",
+        WORST.with(|w| w.get())
+    );
+}
+
+/// Bodies weighed from mesh geoms (a torus STL, not star-shaped, so MuJoCo's
+/// legacy volume is not the exact one; a lumpy OBJ; scaled; legacy and exact).
+/// Mass and CoM to 1e-9. MuJoCo turns each mesh into principal axes with its
+/// `mju_eig3`, which finds them only to about 1e-8 here (for a lone mesh its
+/// eigenvalues agree with ours to 1e-15, its axes do not), and sums bodies from
+/// those: principal moments, tensors, mass matrix and bias forces to 1e-7.
+#[test]
+fn mesh_bodies_agree_with_mujoco() {
+    let models: Vec<_> = corpus(&["generated"])
+        .into_iter()
+        .filter(|m| m.0.starts_with("generated/mesh_"))
+        .collect();
+    assert_eq!(models.len(), 6);
+    for (name, xml, refd) in models {
+        let robot = load(&xml).unwrap_or_else(|e| panic!("{name}: {e}"));
+        check_model(&name, &robot, &refd, 1e-7);
+    }
+    println!(
+        "mesh bodies: largest relative error {:.1e}",
         WORST.with(|w| w.get())
     );
 }

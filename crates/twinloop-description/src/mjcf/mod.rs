@@ -55,6 +55,7 @@
 use crate::description::*;
 mod include;
 mod inertia;
+mod mesh;
 
 use crate::error::DescriptionError;
 use crate::xml::{
@@ -225,9 +226,13 @@ struct Class<'a, 'i> {
 struct MeshAsset {
     file: Option<String>,
     scale: Option<Vec3>,
+    /// `inertia`: how MuJoCo counts the mesh's volume (legacy, exact, convex, shell).
+    inertia: Option<String>,
 }
 
 struct Reader<'a, 'i> {
+    /// The model file's directory: where mesh paths start.
+    dir: Option<std::path::PathBuf>,
     compiler: Compiler,
     classes: HashMap<String, Class<'a, 'i>>,
     meshes: HashMap<String, MeshAsset>,
@@ -265,6 +270,7 @@ pub(crate) fn from_document(
     let mut sections: Vec<Node> = Vec::new();
     include::splice(root, &docs, &mut 0, &mut sections);
     let mut reader = Reader::new(root);
+    reader.dir = dir.map(Path::to_path_buf);
     reader.read(doc, root, &sections)?;
     Ok(reader.robot)
 }
@@ -272,6 +278,7 @@ pub(crate) fn from_document(
 impl<'a, 'i> Reader<'a, 'i> {
     fn new(root: Node) -> Self {
         Reader {
+            dir: None,
             compiler: Compiler {
                 degrees: true,
                 eulerseq: *b"xyz",
@@ -739,7 +746,17 @@ impl<'a, 'i> Reader<'a, 'i> {
                         Some((n, v)) => Some(parse_array::<3>(n, "scale", v)?),
                         None => None,
                     };
-                    self.meshes.insert(name, MeshAsset { file, scale });
+                    let inertia = self
+                        .get(a, "mesh", &class, "inertia")
+                        .map(|f| f.1.to_string());
+                    self.meshes.insert(
+                        name,
+                        MeshAsset {
+                            file,
+                            scale,
+                            inertia,
+                        },
+                    );
                 }
                 "material" => {
                     let class = self.class_of(a, None)?;
@@ -1257,6 +1274,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             "ellipsoid" => Solid::Ellipsoid {
                 semi: [sized(0), y, z],
             },
+            "mesh" => return self.mesh_mass(g, &class, pos, &rot).map(Some),
             "plane" => {
                 return Ok(Some(MassProps {
                     com: pos,
@@ -1289,6 +1307,67 @@ impl<'a, 'i> Reader<'a, 'i> {
         let mass = density * measure;
         let principal = solid.principal_inertia(mass, shell);
         Ok(Some(MassProps::placed(mass, pos, &rot, principal)))
+    }
+
+    /// A mesh geom's part of its body's mass properties: the mesh's volume, CoM
+    /// and inertia (MuJoCo's, see [`mesh`]) placed by the geom, at the geom's
+    /// `mass` or `density`.
+    fn mesh_mass(
+        &self,
+        g: Node<'a, 'i>,
+        class: &str,
+        pos: Vec3,
+        rot: &Mat,
+    ) -> Result<MassProps, DescriptionError> {
+        let Some((n, name)) = self.get(g, "geom", class, "mesh") else {
+            return Err(error_at(g, "a mesh geom without a mesh"));
+        };
+        let asset = self
+            .meshes
+            .get(name)
+            .ok_or_else(|| error_at_attr(n, "mesh", format!("unknown mesh \"{name}\"")))?;
+        let bad = |what: String| error_at(g, format!("mesh \"{name}\": {what}"));
+        let Some(file) = &asset.file else {
+            return Err(bad("no file (inline meshes are not read)".into()));
+        };
+        if let Some((n, v)) = self.get(g, "geom", class, "shellinertia")
+            && bool_attr(n, "shellinertia", v)?
+        {
+            return Err(bad("the shell inertia of a mesh is not computed".into()));
+        }
+        let signed = match asset.inertia.as_deref() {
+            None | Some("legacy") => mesh::Signed::Legacy,
+            Some("exact") => mesh::Signed::Exact,
+            Some(other) => {
+                return Err(bad(format!(
+                    "inertia=\"{other}\" is not computed (legacy and exact are)"
+                )));
+            }
+        };
+        let path = match &self.dir {
+            Some(d) => d.join(file),
+            None => std::path::PathBuf::from(file),
+        };
+        let props = mesh::read(&path)
+            .map_err(&bad)?
+            .scaled(asset.scale.unwrap_or([1.0; 3]))
+            .mass_properties(signed)
+            .map_err(|e| bad(e.to_string()))?;
+        let density = match self.number(self.get(g, "geom", class, "mass"), "mass")? {
+            Some(m) => m / props.volume,
+            None => self
+                .number(self.get(g, "geom", class, "density"), "density")?
+                .unwrap_or(1000.0),
+        };
+        let mass = density * props.volume;
+        let unit = mass / props.volume;
+        let com = add(&pos, &mat_vec(rot, &props.com));
+        Ok(MassProps::rotated(
+            mass,
+            com,
+            rot,
+            props.inertia.map(|row| row.map(|v| unit * v)),
+        ))
     }
 
     /// Position and orientation of a geom or site; `fromto` wins over both.

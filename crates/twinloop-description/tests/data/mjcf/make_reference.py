@@ -250,6 +250,97 @@ def generated_model(seed):
 
 
 GENERATED = 24
+MESH_MODELS = 6
+
+
+def torus(R=0.1, r=0.04, n=16, m=8):
+    """A closed torus: not star-shaped, so MuJoCo's legacy volume differs from the exact one."""
+    v = []
+    for i in range(n):
+        for j in range(m):
+            a, b = 2 * np.pi * i / n, 2 * np.pi * j / m
+            v.append([(R + r * np.cos(b)) * np.cos(a), (R + r * np.cos(b)) * np.sin(a), r * np.sin(b)])
+    f = []
+    for i in range(n):
+        for j in range(m):
+            p, q = i * m + j, ((i + 1) % n) * m + j
+            p2, q2 = i * m + (j + 1) % m, ((i + 1) % n) * m + (j + 1) % m
+            f += [[p, q, q2], [p, q2, p2]]
+    return np.array(v), np.array(f)
+
+
+def blob(rng, n=10, m=7):
+    """A closed, lumpy, star-shaped surface (a deformed UV sphere, poles capped)."""
+    v = [[0, 0, 0.08]]
+    for j in range(1, m):
+        for i in range(n):
+            a, b = 2 * np.pi * i / n, np.pi * j / m
+            rad = 0.08 * (1 + 0.3 * rng.random())
+            v.append([rad * np.sin(b) * np.cos(a) * 1.3, rad * np.sin(b) * np.sin(a), rad * np.cos(b)])
+    v.append([0, 0, -0.08])
+    ring = lambda j, i: 1 + (j - 1) * n + i % n
+    f = [[0, ring(1, i), ring(1, i + 1)] for i in range(n)]
+    for j in range(1, m - 1):
+        for i in range(n):
+            f += [[ring(j, i), ring(j + 1, i), ring(j + 1, i + 1)], [ring(j, i), ring(j + 1, i + 1), ring(j, i + 1)]]
+    last = len(v) - 1
+    f += [[last, ring(m - 1, i + 1), ring(m - 1, i)] for i in range(n)]
+    return np.array(v), np.array(f)
+
+
+def write_stl(path, v, f):
+    import struct
+    with open(path, "wb") as out:
+        out.write(b"twinloop test mesh".ljust(80, b" "))
+        out.write(struct.pack("<I", len(f)))
+        for t in f:
+            out.write(struct.pack("<3f", 0, 0, 0))
+            for k in t:
+                out.write(struct.pack("<3f", *v[k]))
+            out.write(struct.pack("<H", 0))
+
+
+def write_obj(path, v, f):
+    with open(path, "w") as out:
+        for p in v:
+            out.write(f"v {p[0]:.6f} {p[1]:.6f} {p[2]:.6f}\n")
+        for t in f:
+            out.write(f"f {t[0] + 1} {t[1] + 1} {t[2] + 1}\n")
+
+
+def mesh_model(seed, out):
+    """Bodies whose mass comes from mesh geoms (STL and OBJ, scaled, legacy or
+    exact inertia, mass or density) beside primitive geoms."""
+    rng = np.random.default_rng(2000 + seed)
+    lines = [f'<mujoco model="mesh_{seed}">',
+             '  <compiler angle="radian" meshdir="meshes"/>',
+             '  <asset>',
+             f'    <mesh name="torus" file="torus.stl" scale="{fmt(rng.uniform(0.5, 2, 3))}"/>',
+             '    <mesh name="torus_exact" file="torus.stl" inertia="exact"/>',
+             f'    <mesh name="blob" file="blob.obj" scale="{fmt(rng.uniform(0.5, 2, 3))}"/>',
+             '    <mesh name="blob_exact" file="blob.obj" inertia="exact"/>',
+             '  </asset>',
+             '  <worldbody>']
+    indent = "    "
+    for b in range(3):
+        lines.append(f'{indent}<body name="m{b}" pos="{fmt(rng.uniform(-0.2, 0.2, 3))}" {random_orientation(rng)}>')
+        lines.append(f'{indent}  <joint name="m{b}_j" axis="{fmt(rng.normal(size=3))}" pos="{fmt(rng.uniform(-0.1, 0.1, 3))}"/>')
+        for _ in range(1 + rng.integers(2)):
+            mesh = ["torus", "torus_exact", "blob", "blob_exact"][rng.integers(4)]
+            extra = f' mass="{round(float(rng.uniform(0.1, 2)), 4)}"' if rng.random() < 0.4 else ""
+            lines.append(f'{indent}  <geom type="mesh" mesh="{mesh}" pos="{fmt(rng.uniform(-0.1, 0.1, 3))}" '
+                         f'{random_orientation(rng)}{extra}/>')
+        if rng.random() < 0.5:
+            lines.append(f'{indent}  ' + random_geom(rng, 0))
+        indent += "  "
+    for b in range(3):
+        indent = indent[:-2]
+        lines.append(f"{indent}</body>")
+    lines += ["  </worldbody>", "</mujoco>"]
+    path = os.path.join(out, f"mesh_{seed}.xml")
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return path
 
 
 def write_generated():
@@ -266,6 +357,12 @@ def write_generated():
             with open(os.path.join(out, f"generated_{seed}_defaults.xml"), "w") as f:
                 f.write("\n".join(include) + "\n")
         yield "generated", out, path
+    meshes = os.path.join(out, "meshes")
+    os.makedirs(meshes, exist_ok=True)
+    write_stl(os.path.join(meshes, "torus.stl"), *torus())
+    write_obj(os.path.join(meshes, "blob.obj"), *blob(np.random.default_rng(7)))
+    for seed in range(MESH_MODELS):
+        yield "generated", out, mesh_model(seed, out)
 
 
 def main():
