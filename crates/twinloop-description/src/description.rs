@@ -399,6 +399,17 @@ pub struct Frame {
     pub origin: Pose,
 }
 
+/// An element the dynamics leave out: where it is and what is lost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unmodeled {
+    /// The element, e.g. `<spatial name="tendon1"> in <tendon>`.
+    pub element: String,
+    /// 1-based line in the file.
+    pub line: u32,
+    /// What the dynamics leave out.
+    pub what: String,
+}
+
 /// Top-level elements kept verbatim, with their position among the links and
 /// joints so a written URDF keeps the original order.
 #[derive(Debug, Clone, PartialEq)]
@@ -432,6 +443,9 @@ pub struct Description {
     pub order: Vec<Item>,
     /// Attributes of `<robot>` other than `name` (xmlns declarations, version), verbatim.
     pub robot_attributes: Vec<(String, String)>,
+    /// Elements of the file that change the physics but that twinloop's rigid-body
+    /// dynamics leave out (MJCF tendons, equality constraints, ...): `lint` warns.
+    pub unmodeled: Vec<Unmodeled>,
     /// Gravity in the world frame when the file sets it (MJCF `<option gravity>`,
     /// zero with `<flag gravity="disable">`); `None` means (0, 0, -[`crate::GRAVITY`]).
     pub gravity: Option<[f64; 3]>,

@@ -31,6 +31,7 @@
 //! | `zero-effort-or-velocity` | warning | an effort or velocity limit <= 0 |
 //! | `non-unit-axis` | warning | a moving joint's axis norm differs from 1 by more than [`AXIS_NORM_TOLERANCE`] (twinloop normalises it; other tools may not) |
 //! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect) |
+//! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites |
 //! | `total-mass` | info | the robot's total mass, as a scale would weigh it |
 //!
 //! Axes of fixed and floating joints are not checked: URDF ignores them (many
@@ -69,10 +70,11 @@ pub mod codes {
     pub const ZERO_EFFORT_OR_VELOCITY: &str = "zero-effort-or-velocity";
     pub const NON_UNIT_AXIS: &str = "non-unit-axis";
     pub const MIMIC_JOINT: &str = "mimic-joint";
+    pub const UNMODELED_ELEMENT: &str = "unmodeled-element";
     pub const TOTAL_MASS: &str = "total-mass";
 
     /// Every code, in the order of the table in the module documentation.
-    pub const ALL: [&str; 14] = [
+    pub const ALL: [&str; 15] = [
         NEGATIVE_MASS,
         INERTIA_NOT_POSITIVE_DEFINITE,
         TRIANGLE_INEQUALITY,
@@ -86,6 +88,7 @@ pub mod codes {
         ZERO_EFFORT_OR_VELOCITY,
         NON_UNIT_AXIS,
         MIMIC_JOINT,
+        UNMODELED_ELEMENT,
         TOTAL_MASS,
     ];
 }
@@ -126,6 +129,8 @@ pub enum Subject {
     Robot,
     Link,
     Joint,
+    /// An element of the file by its path (line in the message).
+    Element,
 }
 
 impl Subject {
@@ -134,6 +139,7 @@ impl Subject {
             Subject::Robot => "robot",
             Subject::Link => "link",
             Subject::Joint => "joint",
+            Subject::Element => "element",
         }
     }
 }
@@ -206,6 +212,24 @@ impl LintReport {
     pub fn worst(&self) -> Option<Severity> {
         self.findings.iter().map(|f| f.severity).max()
     }
+
+    /// The report with every `unmodeled-element` warning made an error: for
+    /// users who need the dynamics to be the whole physics of the file.
+    pub fn strict(mut self) -> LintReport {
+        for f in &mut self.findings {
+            if f.code == codes::UNMODELED_ELEMENT {
+                f.severity = Severity::Error;
+            }
+        }
+        self.findings.sort_by_key(|f| std::cmp::Reverse(f.severity));
+        let count = |s| self.findings.iter().filter(|f| f.severity == s).count();
+        (self.errors, self.warnings, self.infos) = (
+            count(Severity::Error),
+            count(Severity::Warning),
+            count(Severity::Info),
+        );
+        self
+    }
 }
 
 /// Check a description. Never fails: a robot that is not a tree (see
@@ -218,6 +242,15 @@ pub fn lint(robot: &Description) -> LintReport {
     check_moving_masses(robot, &mut out);
     for joint in &robot.joints {
         check_joint(joint, &mut out);
+    }
+    for u in &robot.unmodeled {
+        out.push(finding(
+            Severity::Warning,
+            codes::UNMODELED_ELEMENT,
+            Subject::Element,
+            &u.element,
+            format!("line {}: {}", u.line, u.what),
+        ));
     }
     let total_mass = robot.total_mass();
     let without_inertial = robot.links.iter().filter(|l| l.inertial.is_none()).count();

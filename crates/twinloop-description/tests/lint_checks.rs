@@ -576,3 +576,48 @@ fn every_code_is_listed_once() {
     all.dedup();
     assert_eq!(all.len(), codes::ALL.len());
 }
+
+/// MJCF elements the dynamics leave out are warnings (errors when strict), each
+/// naming the element and its line.
+#[test]
+fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
+    let robot = twinloop_description::mjcf::from_str(
+        r#"<mujoco>
+  <worldbody>
+    <body name="a"><joint name="j1"/><geom size="0.1"/><site name="s" size="0.01"/>
+      <body name="b"><joint name="j2"/><geom size="0.1"/></body>
+    </body>
+  </worldbody>
+  <tendon><fixed name="t"><joint joint="j1" coef="1"/><joint joint="j2" coef="-1"/></fixed></tendon>
+  <equality><joint joint1="j1" joint2="j2"/></equality>
+  <actuator><motor joint="j1"/><motor tendon="t"/><general site="s"/></actuator>
+  <sensor><jointpos joint="j1"/><accelerometer site="s"/></sensor>
+</mujoco>"#,
+    )
+    .unwrap();
+    let report = lint(&robot);
+    let found: Vec<(&str, &str)> = report
+        .with_code(codes::UNMODELED_ELEMENT)
+        .map(|f| (f.name.as_str(), f.message.split(':').next().unwrap()))
+        .collect();
+    assert_eq!(
+        found,
+        [
+            (r#"<fixed name="t">"#, "line 7"),
+            ("<joint> in <equality>", "line 8"),
+            ("<motor> in <actuator>", "line 9"),
+            ("<general> in <actuator>", "line 9"),
+            ("<accelerometer> in <sensor>", "line 10"),
+        ]
+    );
+    assert!(
+        report
+            .with_code(codes::UNMODELED_ELEMENT)
+            .all(|f| f.severity == Severity::Warning)
+    );
+    assert!(!report.has_errors());
+    let strict = report.strict();
+    assert_eq!(strict.errors, 5);
+    assert_eq!(strict.findings[0].code, codes::UNMODELED_ELEMENT);
+    assert!(strict.findings[0].message.contains("tendon"));
+}

@@ -375,6 +375,9 @@ impl<'a, 'i> Reader<'a, 'i> {
         if let Some(total) = self.compiler.total_mass {
             self.set_total_mass(total);
         }
+        for &s in sections {
+            self.unmodeled(s);
+        }
         validate_placed(doc, &self.robot, &self.places)
     }
 
@@ -415,6 +418,44 @@ impl<'a, 'i> Reader<'a, 'i> {
             }
         }
         Ok(true)
+    }
+
+    /// Elements of a section that act on the physics beyond the rigid-body tree:
+    /// tendons, equality constraints, actuators that do not drive a joint, and
+    /// sensors at sites.
+    fn unmodeled(&mut self, section: Node<'a, 'i>) {
+        for e in section.children().filter(Node::is_element) {
+            let what = match (section.tag_name().name(), e.tag_name().name()) {
+                ("tendon", t) => format!(
+                    "a {t} tendon: its length limits, stiffness, damping and any actuator on it \
+                     act on the joints it spans; twinloop's dynamics leave them out"
+                ),
+                ("equality", t) => format!(
+                    "a {t} equality constraint: twinloop's dynamics leave it out (the joints \
+                     or bodies it ties move independently)"
+                ),
+                ("actuator", t) if e.attribute("joint").is_none() => {
+                    let on = ["tendon", "site", "body", "jointinparent", "cranksite"]
+                        .into_iter()
+                        .find(|a| e.attribute(*a).is_some())
+                        .unwrap_or("something other than a joint");
+                    format!(
+                        "a {t} actuator on a {on}: only actuators on a joint become joint \
+                         torques in twinloop"
+                    )
+                }
+                ("sensor", t) if e.attribute("site").is_some() => {
+                    format!("a {t} sensor at a site: twinloop does not simulate it")
+                }
+                _ => continue,
+            };
+            let (line, _) = crate::xml::position(e.document(), e.range().start);
+            self.robot.unmodeled.push(Unmodeled {
+                element: crate::xml::element_path(e),
+                line,
+                what,
+            });
+        }
     }
 
     /// MuJoCo's `settotalmass`: every body's mass and inertia scaled by one factor.
