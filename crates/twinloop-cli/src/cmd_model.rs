@@ -53,7 +53,7 @@ CODE      stable, scripts may match on it: negative-mass, inertia-not-positive-d
 triangle-inequality, zero-inertia-with-mass, inertia-without-mass,\n            \
 zero-mass-moving-link, missing-limits, limits-inverted, limits-empty-range,\n            \
 missing-effort-velocity, zero-effort-or-velocity, non-unit-axis, mimic-joint,\n            \
-unmodeled-element, total-mass\n  \
+unmodeled-element, ignored-detail, total-mass\n  \
 SUBJECT   the link or joint (or robot) by name, or the file's element\n  \
 MESSAGE   what is wrong, with the numbers (principal moments in kg m^2, masses in kg)\n\n\
 With --json FILE (- for stdout) the same as one JSON object: file, format, robot, total_mass, links,\n\

@@ -399,14 +399,14 @@ pub struct Frame {
     pub origin: Pose,
 }
 
-/// An element the dynamics leave out: where it is and what is lost.
+/// An element the reader or the dynamics leave out: where it is and what is lost.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Unmodeled {
+pub struct FileNote {
     /// The element, e.g. `<spatial name="tendon1"> in <tendon>`.
     pub element: String,
     /// 1-based line in the file.
     pub line: u32,
-    /// What the dynamics leave out.
+    /// What is left out.
     pub what: String,
 }
 
@@ -445,7 +445,10 @@ pub struct Description {
     pub robot_attributes: Vec<(String, String)>,
     /// Elements of the file that change the physics but that twinloop's rigid-body
     /// dynamics leave out (MJCF tendons, equality constraints, ...): `lint` warns.
-    pub unmodeled: Vec<Unmodeled>,
+    pub unmodeled: Vec<FileNote>,
+    /// Visual-only details the reader could not take and read past (a URDF
+    /// `<texture/>` without a file, a mesh scale with a fourth number): `lint` warns.
+    pub ignored: Vec<FileNote>,
     /// Gravity in the world frame when the file sets it (MJCF `<option gravity>`,
     /// zero with `<flag gravity="disable">`); `None` means (0, 0, -[`crate::GRAVITY`]).
     pub gravity: Option<[f64; 3]>,

@@ -32,6 +32,7 @@
 //! | `non-unit-axis` | warning | a moving joint's axis norm differs from 1 by more than [`AXIS_NORM_TOLERANCE`] (twinloop normalises it; other tools may not) |
 //! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect) |
 //! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites |
+//! | `ignored-detail` | warning | a visual-only detail the reader read past: a URDF `<texture/>` without a file, a mesh `scale` with a fourth number |
 //! | `total-mass` | info | the robot's total mass, as a scale would weigh it |
 //!
 //! Axes of fixed and floating joints are not checked: URDF ignores them (many
@@ -71,10 +72,11 @@ pub mod codes {
     pub const NON_UNIT_AXIS: &str = "non-unit-axis";
     pub const MIMIC_JOINT: &str = "mimic-joint";
     pub const UNMODELED_ELEMENT: &str = "unmodeled-element";
+    pub const IGNORED_DETAIL: &str = "ignored-detail";
     pub const TOTAL_MASS: &str = "total-mass";
 
     /// Every code, in the order of the table in the module documentation.
-    pub const ALL: [&str; 15] = [
+    pub const ALL: [&str; 16] = [
         NEGATIVE_MASS,
         INERTIA_NOT_POSITIVE_DEFINITE,
         TRIANGLE_INEQUALITY,
@@ -89,6 +91,7 @@ pub mod codes {
         NON_UNIT_AXIS,
         MIMIC_JOINT,
         UNMODELED_ELEMENT,
+        IGNORED_DETAIL,
         TOTAL_MASS,
     ];
 }
@@ -243,14 +246,20 @@ pub fn lint(robot: &Description) -> LintReport {
     for joint in &robot.joints {
         check_joint(joint, &mut out);
     }
-    for u in &robot.unmodeled {
-        out.push(finding(
-            Severity::Warning,
-            codes::UNMODELED_ELEMENT,
-            Subject::Element,
-            &u.element,
-            format!("line {}: {}", u.line, u.what),
-        ));
+    let notes = [
+        (&robot.unmodeled, codes::UNMODELED_ELEMENT),
+        (&robot.ignored, codes::IGNORED_DETAIL),
+    ];
+    for (list, code) in notes {
+        for u in list {
+            out.push(finding(
+                Severity::Warning,
+                code,
+                Subject::Element,
+                &u.element,
+                format!("line {}: {}", u.line, u.what),
+            ));
+        }
     }
     let total_mass = robot.total_mass();
     let without_inertial = robot.links.iter().filter(|l| l.inertial.is_none()).count();

@@ -425,7 +425,7 @@ fn mjcf_models_have_no_errors_or_warnings() {
         // TALOS ties its gripper joints with <equality><joint .../>; the Unitree
         // files put IMU sensors (gyro, accelerometer) at sites: those, and
         // nothing else, are warned about as unmodeled.
-        let (expected, element) = match rel {
+        let (expected, element) = match *rel {
             r if r.starts_with("talos/") => (6, "<joint> in <equality>"),
             r if r.starts_with("unitree_g1/") => (4, "imu-"),
             "unitree_h1/mjcf/h1_unitree.xml" => (2, "imu-"),

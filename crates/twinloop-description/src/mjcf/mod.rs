@@ -450,7 +450,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 _ => continue,
             };
             let (line, _) = crate::xml::position(e.document(), e.range().start);
-            self.robot.unmodeled.push(Unmodeled {
+            self.robot.unmodeled.push(FileNote {
                 element: crate::xml::element_path(e),
                 line,
                 what,
