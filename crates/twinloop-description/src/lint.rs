@@ -24,6 +24,7 @@
 //! | `zero-inertia-with-mass` | warning | mass > 0 with an all-zero tensor: a point mass, usually a dummy frame (1e-9 kg) |
 //! | `inertia-without-mass` | warning | mass 0 with a non-zero tensor |
 //! | `zero-mass-moving-link` | error / warning | a body moved by a non-fixed joint (the joint's child plus every link fixed to it) has no mass. Error when nothing with mass moves with that joint at all (the joint's row of the mass matrix is zero); warning when links further down carry mass |
+//! | `singular-floating-base` | warning | as a floating base (twinloop's default) the mass matrix is singular: the robot has no mass, or its rotational inertia about its CoM is singular (all mass on a line) |
 //! | `missing-limits` | warning | revolute or prismatic joint without lower/upper |
 //! | `limits-inverted` | error | lower > upper |
 //! | `limits-empty-range` | warning | lower == upper: the joint cannot move |
@@ -37,6 +38,8 @@
 //!
 //! Axes of fixed and floating joints are not checked: URDF ignores them (many
 //! files write `0 0 0` there).
+
+mod floating_base;
 
 use crate::description::{Description, Inertia, Joint, JointKind};
 use serde::Serialize;
@@ -64,6 +67,7 @@ pub mod codes {
     pub const ZERO_INERTIA_WITH_MASS: &str = "zero-inertia-with-mass";
     pub const INERTIA_WITHOUT_MASS: &str = "inertia-without-mass";
     pub const ZERO_MASS_MOVING_LINK: &str = "zero-mass-moving-link";
+    pub const SINGULAR_FLOATING_BASE: &str = "singular-floating-base";
     pub const MISSING_LIMITS: &str = "missing-limits";
     pub const LIMITS_INVERTED: &str = "limits-inverted";
     pub const LIMITS_EMPTY_RANGE: &str = "limits-empty-range";
@@ -76,13 +80,14 @@ pub mod codes {
     pub const TOTAL_MASS: &str = "total-mass";
 
     /// Every code, in the order of the table in the module documentation.
-    pub const ALL: [&str; 16] = [
+    pub const ALL: [&str; 17] = [
         NEGATIVE_MASS,
         INERTIA_NOT_POSITIVE_DEFINITE,
         TRIANGLE_INEQUALITY,
         ZERO_INERTIA_WITH_MASS,
         INERTIA_WITHOUT_MASS,
         ZERO_MASS_MOVING_LINK,
+        SINGULAR_FLOATING_BASE,
         MISSING_LIMITS,
         LIMITS_INVERTED,
         LIMITS_EMPTY_RANGE,
@@ -243,6 +248,7 @@ pub fn lint(robot: &Description) -> LintReport {
         check_link_inertial(link, &mut out);
     }
     check_moving_masses(robot, &mut out);
+    floating_base::check(robot, &mut out);
     for joint in &robot.joints {
         check_joint(joint, &mut out);
     }

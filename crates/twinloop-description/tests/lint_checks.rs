@@ -621,3 +621,51 @@ fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
     assert_eq!(strict.findings[0].code, codes::UNMODELED_ELEMENT);
     assert!(strict.findings[0].message.contains("tendon"));
 }
+
+/// Two point masses on a line: every joint moves mass, but the whole robot has
+/// no rotational inertia about that line, so as a floating base its mass matrix
+/// is singular.
+#[test]
+fn point_masses_on_a_line_make_a_singular_floating_base() {
+    let point = Inertia::default();
+    let robot = DescriptionBuilder::new("dumbbell")
+        .link("a")
+        .mass(1.0, [0.0; 3], point)
+        .done()
+        .link("b")
+        .mass(1.0, [0.0, 0.0, -0.5], point)
+        .done()
+        .revolute("j", "a", "b", [0.0, 0.0, 1.0])
+        .limits(-1.0, 1.0, 5.0, 6.0)
+        .done()
+        .build()
+        .unwrap();
+    let r = lint(&robot);
+    let f: Vec<_> = r.with_code(codes::SINGULAR_FLOATING_BASE).collect();
+    assert_eq!(f.len(), 1, "{:#?}", r.findings);
+    assert_eq!(
+        (f[0].severity, f[0].subject),
+        (Severity::Warning, Subject::Robot)
+    );
+    assert!(
+        f[0].message
+            .contains("principal moments about its CoM are 0"),
+        "{}",
+        f[0].message
+    );
+    // A body of real extent instead of one of the points: a full inertia.
+    let mut solid = robot.clone();
+    solid
+        .link_mut("a")
+        .unwrap()
+        .inertial
+        .as_mut()
+        .unwrap()
+        .inertia = Inertia::solid_sphere(1.0, 0.1);
+    assert_eq!(
+        lint(&solid)
+            .with_code(codes::SINGULAR_FLOATING_BASE)
+            .count(),
+        0
+    );
+}
