@@ -1,56 +1,71 @@
-//! MJCF reader: the subset of MuJoCo's format that the MuJoCo Menagerie
-//! humanoids (and Unitree's own MJCF files) use.
+//! MJCF reader: a MuJoCo model read as MuJoCo's compiler reads it, as far as a
+//! rigid-body model goes: the masses, inertias, kinematics and gravity of the
+//! description are those of MuJoCo's compiled model, and a joint position is
+//! MuJoCo's `qpos` (docs/mjcf.md; checked against MuJoCo on dm_control's and
+//! gymnasium's models by crates/twinloop-dynamics/tests/mjcf_mujoco.rs).
 //!
 //! # How MJCF maps onto a [`Description`]
 //!
 //! - Every `<body>` becomes a [`Link`] of the body's name (unnamed bodies get
 //!   `body<N>`), in a tree that follows the body nesting. The link frame is the
-//!   body frame, except for a hinge joint with a non-zero `pos` (see below).
-//! - The top-level body is the root link. If it has a `<freejoint/>` (or
-//!   `<joint type="free">`) the robot is floating: there is no joint for it and no
-//!   `world` link (twinloop adds the floating base itself when it compiles the
-//!   dynamics). Without a joint it is simply the root, and its placement in the
-//!   world (`pos`, `quat`) is dropped. If it has a hinge or slide joint, a link
-//!   `world` is added as its parent. Only one top-level body is supported.
-//! - A body's joint: `hinge` becomes [`JointKind::Revolute`] when limited (the
-//!   `range`, converted from degrees unless `<compiler angle="radian">`) and
-//!   [`JointKind::Continuous`] otherwise; `slide` becomes
-//!   [`JointKind::Prismatic`]; `ball` is an error, and so is more than one joint in
-//!   a body. A body without a joint is attached by a fixed joint named
-//!   `<body>_fixed`. Joint names are MJCF's, or `<body>_joint` for an unnamed one.
-//!   "Limited" follows MuJoCo: `limited="true"`, or `"auto"`/absent with a `range`
-//!   when `autolimits` is on (its default). `actuatorfrcrange` gives the limit's
+//!   body frame, except that it sits at the last hinge's `pos` (see below).
+//! - Top-level bodies: one with a `<freejoint/>` (or `<joint type="free">`) as its
+//!   only joint is the floating base: no joint, no `world` link (twinloop adds the
+//!   floating base itself when it compiles the dynamics); its `pos`/`quat` are
+//!   MuJoCo's initial qpos and are dropped. One jointless body at the origin is
+//!   simply the root. Otherwise a link `world` is added and every top-level body
+//!   hangs from it at its `pos`/`quat`; a free joint beside other top-level bodies
+//!   is an error (one floating tree per file).
+//! - A body's joints, in order: `hinge` becomes [`JointKind::Revolute`] when
+//!   limited (the `range`, converted from degrees unless `<compiler
+//!   angle="radian">`) and [`JointKind::Continuous`] otherwise; `slide` becomes
+//!   [`JointKind::Prismatic`]; `ball` is an error. MuJoCo applies a body's joints
+//!   one after the other in the body frame as moved by the ones before; each
+//!   joint but the last gets a massless link `<body>_<joint>`. A body without a
+//!   joint is attached by a fixed joint named `<body>_fixed`. Joint names are
+//!   MJCF's, or `<body>_joint` (`<body>_joint2`, ...) for unnamed ones. "Limited"
+//!   follows MuJoCo: `limited="true"`, or `"auto"`/absent with a `range` when
+//!   `autolimits` is on (its default). `actuatorfrcrange` gives the limit's
 //!   effort (the larger magnitude), `damping` and `frictionloss` the
-//!   [`JointDynamics`]. The axis is normalised; `ref` and `springref` are ignored.
-//! - A hinge `pos` (a point on the axis, in the body frame) that is not zero is
-//!   handled by putting the link frame at that point, axes unchanged: everything
-//!   placed in that body (inertial, geoms, sites, child bodies) is shifted by
-//!   `-pos`. The kinematics are exactly MuJoCo's; only the link frame differs
-//!   from the body frame. (A slide joint's `pos` does not matter and is ignored.)
-//! - `<inertial pos quat mass diaginertia|fullinertia>` becomes the link's
-//!   [`Inertial`]: origin from `pos` and the orientation, the tensor as written
-//!   (`diaginertia`: principal moments in the rotated frame; `fullinertia`: Ixx
-//!   Iyy Izz Ixy Ixz Iyz). A body without `<inertial>` gets no inertial (MuJoCo
-//!   would infer one from the geoms; that is not done here), and
-//!   `<compiler inertiafromgeom="true">` is refused.
-//! - Geoms: `box` (half sizes, written as full sizes), `sphere`, `cylinder` and
-//!   `capsule` (radius and half-length; the [`Geometry`] holds the full length),
-//!   and `mesh` by asset name (the asset's `file` with `meshdir` or `assetdir` in
-//!   front, and its `scale`). `fromto` is turned into a position and orientation.
-//!   `plane`, `hfield`, `ellipsoid` and `sdf` geoms are skipped. A geom is a
-//!   visual if its `group` is 0, 1 or 2 (the groups MuJoCo's viewer shows by
-//!   default) and a collision shape if its `contype` or `conaffinity` is not 0, so
-//!   Menagerie's `visual`/`collision` classes land where expected. A visual's
-//!   material is the geom's `material` asset (name and rgba) or, failing that, its
-//!   `rgba`.
+//!   [`JointDynamics`], `armature` [`Joint::armature`]. The axis is normalised.
+//!   `ref` goes into the joint's origin (a turn or shift of `-ref` along the
+//!   axis), so that q is MuJoCo's qpos; `springref` is ignored.
+//! - A hinge `pos` (a point on the axis, in the body frame) is handled by putting
+//!   the joint's link frame at that point, axes unchanged: everything placed in
+//!   the body (inertial, geoms, sites, child bodies) is shifted by minus the last
+//!   hinge's `pos`. The kinematics are exactly MuJoCo's; only the link frame
+//!   differs from the body frame. (A slide keeps the anchor before it.)
+//! - Mass properties (modules `inertia` and `mesh`): `<inertial pos quat mass
+//!   diaginertia|fullinertia>` as written; a body without one (or every body with
+//!   `inertiafromgeom="true"`) gets MuJoCo's sum of its geoms in
+//!   `inertiagrouprange` (box, sphere, capsule, cylinder, ellipsoid, solid or
+//!   `shellinertia`; STL and OBJ meshes), each of its `mass` or `density`. Then
+//!   `boundmass`, `boundinertia`, `balanceinertia` and, over the whole model,
+//!   `settotalmass`.
+//! - Geoms as shapes: `box` (half sizes, written as full sizes), `sphere`,
+//!   `cylinder` and `capsule` (radius and half-length; the [`Geometry`] holds the
+//!   full length), and `mesh` by asset name (the asset's `file` with `meshdir` or
+//!   `assetdir` in front, and its `scale`). `fromto` is turned into a position and
+//!   orientation (box and ellipsoid get a square cross-section of `size[0]`, as
+//!   in MuJoCo). `plane`, `hfield`, `ellipsoid` and `sdf` geoms are not shapes. A
+//!   geom is a visual if its `group` is 0, 1 or 2 (the groups MuJoCo's viewer
+//!   shows by default) and a collision shape if its `contype` or `conaffinity` is
+//!   not 0, so Menagerie's `visual`/`collision` classes land where expected. A
+//!   visual's material is the geom's `material` asset (name and rgba) or, failing
+//!   that, its `rgba`.
 //! - `<site>` becomes a [`Frame`] on the body's link (unnamed: `<body>_site<N>`).
 //! - `<default>` classes (nested, `class` and `childclass`) apply to joints,
 //!   geoms, sites, meshes and materials, and orientations may be given as `quat`
 //!   (normalised), `axisangle`, `euler` (with `eulerseq`), `xyaxes` or `zaxis`.
-//! - Ignored: cameras, lights, actuators, sensors, tendons, equality constraints,
-//!   contact settings, keyframes, and geoms and sites attached to the world.
-//!   `<include>`, `<frame>`, `<replicate>`, `<attach>` and composite objects are
-//!   errors rather than silently dropped bodies.
+//! - `<include file>` at the top level splices the file's sections in place
+//!   (module `include`); `<option gravity>` and `<flag gravity="disable">` set
+//!   [`Description::gravity`].
+//! - Read past, and listed in [`Description::unmodeled`] for `lint`: tendons,
+//!   equality constraints, actuators that drive no joint, sensors at sites.
+//!   Ignored: cameras, lights, other actuators and sensors, contact settings,
+//!   keyframes, and geoms and sites attached to the world. `<frame>`,
+//!   `<replicate>`, `<attach>`, composite objects and nested includes are errors
+//!   rather than silently dropped bodies.
 
 use crate::description::*;
 mod include;
