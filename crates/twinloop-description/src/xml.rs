@@ -138,9 +138,14 @@ pub(crate) fn position(doc: &Document, byte: usize) -> (u32, u32) {
 /// An error located at an element.
 pub(crate) fn error_at(node: Node, message: impl Into<String>) -> DescriptionError {
     let (line, column) = position(node.document(), node.range().start);
-    DescriptionError::new(message)
+    let e = DescriptionError::new(message)
         .at_line(line, column)
-        .at_element(element_path(node))
+        .at_element(element_path(node));
+    // An element of an MJCF <include>d file: name that file.
+    match crate::mjcf::include::file_of(node.document()) {
+        Some(file) => e.in_file(file),
+        None => e,
+    }
 }
 
 /// An error located at an attribute of an element (the element is named too).
@@ -154,9 +159,13 @@ pub(crate) fn error_at_attr(
         .find(|a| a.name() == attr)
         .map_or(node.range().start, |a| a.range().start);
     let (line, column) = position(node.document(), start);
-    DescriptionError::new(message)
+    let e = DescriptionError::new(message)
         .at_line(line, column)
-        .at_element(element_path(node))
+        .at_element(element_path(node));
+    match crate::mjcf::include::file_of(node.document()) {
+        Some(file) => e.in_file(file),
+        None => e,
+    }
 }
 
 /// A required attribute.

@@ -630,3 +630,43 @@ fn deeply_nested_bodies_and_classes() {
     assert!(e.to_string().len() < 200, "{e}");
     assert!(e.message.contains("unknown geom type \"what\""), "{e}");
 }
+
+/// `<include>`: the included file's sections count as if written in place (here
+/// its defaults); an error in it names that file and its own line.
+#[test]
+fn include_splices_files_and_errors_name_the_included_file() {
+    let dir = std::env::temp_dir().join(format!("twinloop-mjcf-include-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("parts")).unwrap();
+    let main = dir.join("robot.xml");
+    std::fs::write(
+        &main,
+        r#"<mujoco>
+  <include file="parts/defaults.xml"/>
+  <worldbody><body name="b"><joint name="j"/><geom size="0.1"/></body></worldbody>
+</mujoco>"#,
+    )
+    .unwrap();
+    let defaults = dir.join("parts/defaults.xml");
+    std::fs::write(
+        &defaults,
+        "<mujoco>\n  <default><joint armature=\"0.25\"/><geom density=\"500\"/></default>\n</mujoco>\n",
+    )
+    .unwrap();
+    let r = twinloop_description::load(&main).unwrap();
+    assert_eq!(r.joint("j").unwrap().armature, 0.25);
+    let mass = r.link("b").unwrap().mass();
+    assert!((mass - 500.0 * 4.0 / 3.0 * std::f64::consts::PI * 1e-3).abs() < 1e-12);
+    std::fs::write(
+        &defaults,
+        "<mujoco>\n  <default><joint armature=\"x\"/></default>\n</mujoco>\n",
+    )
+    .unwrap();
+    let e = twinloop_description::load(&main).unwrap_err();
+    assert_eq!(e.location.file.as_deref(), Some(defaults.as_path()), "{e}");
+    assert_eq!(e.location.line, Some(2), "{e}");
+    std::fs::remove_file(&defaults).unwrap();
+    let e = twinloop_description::load(&main).unwrap_err();
+    assert_eq!(e.location.file.as_deref(), Some(main.as_path()), "{e}");
+    assert!(e.message.contains("cannot read the included file"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
