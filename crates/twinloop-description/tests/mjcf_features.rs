@@ -489,9 +489,9 @@ fn errors_name_line_and_element() {
         "duplicate link name",
     );
     check(
-        &err(&with("<worldbody>", "<worldbody><frame/>")),
+        &err(&with("<worldbody>", "<worldbody><replicate/>")),
         6,
-        "<frame>",
+        "<replicate>",
         "not supported",
     );
     // Truncated and not XML.

@@ -294,14 +294,15 @@ fn mjcf_corpus_agrees_with_mujoco() {
 /// shell, mass or density, several joints per body with anchors and refs,
 /// rotated roots (some at pitch 90 deg), defaults, childclass and include,
 /// inertiafromgeom, inertiagrouprange, boundmass, boundinertia, balanceinertia,
-/// settotalmass and gravity. Every one must load and agree.
+/// settotalmass and gravity; six of them (`framed_*`) with `<frame>`s around
+/// bodies, geoms and sites. Every one must load and agree.
 #[test]
 fn generated_corpus_agrees_with_mujoco() {
     let models: Vec<_> = corpus(&["generated"])
         .into_iter()
         .filter(|m| !m.0.starts_with("generated/mesh_"))
         .collect();
-    assert_eq!(models.len(), 24);
+    assert_eq!(models.len(), 30);
     for (name, xml, refd) in models {
         let robot = load(&xml).unwrap_or_else(|e| panic!("{name}: {e}"));
         check_model(&name, &robot, &refd, TOL);

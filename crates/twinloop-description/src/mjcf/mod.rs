@@ -63,9 +63,11 @@
 //! - Read past, and listed in [`Description::unmodeled`] for `lint`: tendons,
 //!   equality constraints, actuators that drive no joint, sensors at sites.
 //!   Ignored: cameras, lights, other actuators and sensors, contact settings,
-//!   keyframes, and geoms and sites attached to the world. `<frame>`,
-//!   `<replicate>`, `<attach>`, composite objects and nested includes are errors
-//!   rather than silently dropped bodies.
+//!   keyframes, and geoms and sites attached to the world. `<replicate>`,
+//!   `<attach>`, composite objects and nested includes are errors rather than
+//!   silently dropped bodies.
+//! - `<frame>`: its placement is composed onto the bodies, geoms, sites and
+//!   frames inside it, and its `childclass` applies to them.
 
 use crate::description::*;
 pub(crate) mod include;
@@ -101,6 +103,20 @@ use inertia::{Mat, Vec3};
 
 const IDENTITY: Mat = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
+/// A placement: translation and rotation (of `<frame>`s around an element).
+type Xf = (Vec3, Mat);
+
+/// No enclosing frame.
+const NO_FRAME: Xf = ([0.0; 3], IDENTITY);
+
+/// `(pos, rot)` given inside frame `f`, in the frame's parent.
+fn compose(f: &Xf, pos: Vec3, rot: Mat) -> Xf {
+    (add(&f.0, &mat_vec(&f.1, &pos)), mat_mul(&f.1, &rot))
+}
+
+/// Deepest nesting of `<frame>` elements followed.
+const MAX_FRAME_DEPTH: usize = 1000;
+
 /// Longest chain of default classes followed (a guard; class chains are trees).
 const MAX_DEPTH: usize = 100_000;
 
@@ -110,6 +126,8 @@ struct Pending<'a, 'i> {
     node: Node<'a, 'i>,
     parent: Option<(String, Vec3)>,
     childclass: Option<String>,
+    /// Placement of the `<frame>`s around the body in its parent body.
+    frame: Xf,
 }
 
 fn mat_mul(a: &Mat, b: &Mat) -> Mat {
@@ -349,16 +367,15 @@ impl<'a, 'i> Reader<'a, 'i> {
                 self.assets(s)?;
             }
         }
-        let mut top: Vec<Node> = Vec::new();
+        let mut top: Vec<(Node, Xf, Option<String>)> = Vec::new();
         for &s in sections {
             if s.tag_name().name() != "worldbody" {
                 continue;
             }
-            for c in s.children().filter(Node::is_element) {
+            for (c, xf, cc) in self.through_frames(s, None)? {
                 match c.tag_name().name() {
-                    "body" => top.push(c),
-                    t @ ("frame" | "replicate" | "attach" | "include" | "composite"
-                    | "flexcomp") => {
+                    "body" => top.push((c, xf, cc)),
+                    t @ ("replicate" | "attach" | "include" | "composite" | "flexcomp") => {
                         return Err(error_at(c, format!("<{t}> is not supported")));
                     }
                     _ => {} // world geoms, sites, lights, cameras
@@ -377,12 +394,13 @@ impl<'a, 'i> Reader<'a, 'i> {
         // Depth first, children in file order, with an explicit stack: deep
         // nesting must not become deep recursion.
         let mut pending: Vec<Pending> = top
-            .iter()
+            .into_iter()
             .rev()
-            .map(|&node| Pending {
+            .map(|(node, frame, childclass)| Pending {
                 node,
                 parent: world.then(|| ("world".to_string(), [0.0; 3])),
-                childclass: None,
+                childclass,
+                frame,
             })
             .collect();
         while let Some(p) = pending.pop() {
@@ -397,31 +415,72 @@ impl<'a, 'i> Reader<'a, 'i> {
         validate_placed(doc, &self.robot, &self.places)
     }
 
+    /// The element children of `node` with every `<frame>` opened: each with the
+    /// placement of the frames around it (in `node`'s frame) and the
+    /// `childclass` in force (a frame's own, else `cc`).
+    #[allow(clippy::type_complexity)]
+    fn through_frames(
+        &self,
+        node: Node<'a, 'i>,
+        cc: Option<&str>,
+    ) -> Result<Vec<(Node<'a, 'i>, Xf, Option<String>)>, DescriptionError> {
+        let mut out = Vec::new();
+        // (element, enclosing placement, childclass, depth), in file order.
+        let mut stack: Vec<(Node, Xf, Option<String>, usize)> = node
+            .children()
+            .filter(Node::is_element)
+            .map(|c| (c, NO_FRAME, cc.map(str::to_string), 0))
+            .collect();
+        stack.reverse();
+        while let Some((c, xf, cc, depth)) = stack.pop() {
+            if c.tag_name().name() != "frame" {
+                out.push((c, xf, cc));
+                continue;
+            }
+            if depth >= MAX_FRAME_DEPTH {
+                return Err(error_at(c, "<frame>s nested too deep"));
+            }
+            let pos = opt_array::<3>(c, "pos")?.unwrap_or([0.0; 3]);
+            let inner = compose(&xf, pos, self.orientation(c, "frame", None)?);
+            let cc = self.childclass(c, cc)?;
+            let children: Vec<Node> = c.children().filter(Node::is_element).collect();
+            for k in children.into_iter().rev() {
+                stack.push((k, inner, cc.clone(), depth + 1));
+            }
+        }
+        Ok(out)
+    }
+
     /// Whether the top-level bodies hang from a `world` link. Not for one body
     /// with a free joint (the floating base; its `pos`/`quat` are only MuJoCo's
     /// initial qpos) nor for one jointless body at the origin (the root itself);
     /// otherwise yes, and then no top-level body may have a free joint.
-    fn needs_world_link(&self, top: &[Node<'a, 'i>]) -> Result<bool, DescriptionError> {
+    fn needs_world_link(
+        &self,
+        top: &[(Node<'a, 'i>, Xf, Option<String>)],
+    ) -> Result<bool, DescriptionError> {
         let joints = |b: Node<'a, 'i>| -> Vec<Node<'a, 'i>> {
             b.children()
                 .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
                 .collect()
         };
-        if let [only] = top {
-            let js = joints(*only);
+        if let [(only, frame, _)] = top {
+            let (only, framed) = (*only, *frame != NO_FRAME);
+            let js = joints(only);
             if js.len() == 1 && self.joint_type(js[0], None)? == "free" {
                 return Ok(false);
             }
-            let placed = only.attribute("pos").is_some()
+            let placed = framed
+                || only.attribute("pos").is_some()
                 || ORIENTATIONS.iter().any(|a| only.attribute(*a).is_some());
             if js.is_empty() && !placed {
                 return Ok(false);
             }
         }
-        for &b in top {
+        for &(b, _, _) in top {
             for j in joints(b) {
                 if self.joint_type(j, None)? == "free" && top.len() > 1 {
-                    let other = if top[0] == b { top[1] } else { top[0] };
+                    let other = if top[0].0 == b { top[1].0 } else { top[0].0 };
                     return Err(error_at(
                         other,
                         format!(
@@ -879,12 +938,13 @@ impl<'a, 'i> Reader<'a, 'i> {
             node,
             parent,
             childclass,
+            frame,
         } = todo;
         let name = self.body_name(node);
         let childclass = self.childclass(node, childclass)?;
         let cc = childclass.as_deref();
         let pos = opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]);
-        let rot = self.orientation(node, "body", None)?;
+        let (pos, rot) = compose(&frame, pos, self.orientation(node, "body", None)?);
         let joints = self.body_joints(node, &name, parent.is_some(), cc)?;
         let offset = joints.last().map_or([0.0; 3], |j| j.anchor);
 
@@ -944,7 +1004,37 @@ impl<'a, 'i> Reader<'a, 'i> {
             self.robot.order.push(Item::Frame(self.robot.frames.len()));
             self.robot.frames.push(f);
         }
-        queue_child_bodies(node, &name, offset, childclass, pending)
+        self.queue_child_bodies(node, &name, offset, cc, pending)
+    }
+
+    /// Queue a body's child bodies, `<frame>`s opened (in file order: pushed
+    /// reversed onto the stack); elements that would bring in bodies twinloop
+    /// cannot read are errors.
+    fn queue_child_bodies(
+        &self,
+        node: Node<'a, 'i>,
+        name: &str,
+        offset: Vec3,
+        childclass: Option<&str>,
+        pending: &mut Vec<Pending<'a, 'i>>,
+    ) -> Result<(), DescriptionError> {
+        let mut children = Vec::new();
+        for (c, frame, cc) in self.through_frames(node, childclass)? {
+            match c.tag_name().name() {
+                "body" => children.push(Pending {
+                    node: c,
+                    parent: Some((name.to_string(), offset)),
+                    childclass: cc,
+                    frame,
+                }),
+                t @ ("replicate" | "attach" | "include" | "composite" | "flexcomp") => {
+                    return Err(error_at(c, format!("<{t}> is not supported")));
+                }
+                _ => {}
+            }
+        }
+        pending.extend(children.into_iter().rev());
+        Ok(())
     }
 
     fn push_link(&mut self, l: Link, node: Node) {
@@ -1183,7 +1273,8 @@ impl<'a, 'i> Reader<'a, 'i> {
             FromGeom::Auto => !node.children().any(|c| c.has_tag_name("inertial")),
         };
         let mut parts = Vec::new();
-        for c in node.children().filter(Node::is_element) {
+        for (c, xf, cc) in self.through_frames(node, childclass)? {
+            let childclass = cc.as_deref();
             match c.tag_name().name() {
                 "inertial" => {
                     if explicit.is_some() {
@@ -1194,14 +1285,15 @@ impl<'a, 'i> Reader<'a, 'i> {
                 "geom" => {
                     geoms += 1;
                     let default_name = format!("{name}_geom{geoms}");
-                    self.geom(c, childclass, offset, &default_name, &mut link)?;
-                    if from_geoms && let Some(p) = self.geom_mass(c, childclass)? {
+                    self.geom(c, childclass, offset, &xf, &default_name, &mut link)?;
+                    if from_geoms && let Some(p) = self.geom_mass(c, childclass, &xf)? {
                         parts.push(p);
                     }
                 }
                 "site" => {
                     let class = self.class_of(c, childclass)?;
                     let (pos, rot) = self.placement(c, "site", &class)?;
+                    let (pos, rot) = compose(&xf, pos, rot);
                     frames.push(Frame {
                         name: match c.attribute("name") {
                             Some(n) => n.to_string(),
@@ -1287,6 +1379,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         &self,
         g: Node<'a, 'i>,
         childclass: Option<&str>,
+        frame: &Xf,
     ) -> Result<Option<MassProps>, DescriptionError> {
         let class = self.class_of(g, childclass)?;
         let group = self.integer(self.get(g, "geom", &class, "group"), "group", 0)?;
@@ -1308,6 +1401,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             Some((p, r, _)) => (*p, *r),
             None => self.placement(g, "geom", &class)?,
         };
+        let (pos, rot) = compose(frame, pos, rot);
         let sized = |k: usize| size.get(k).copied().unwrap_or(0.0);
         // With fromto: the half-length along the segment, and (box, ellipsoid) a
         // cross-section of size[0] both ways, as MuJoCo does.
@@ -1450,6 +1544,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         g: Node<'a, 'i>,
         childclass: Option<&str>,
         offset: Vec3,
+        frame: &Xf,
         default_name: &str,
         link: &mut Link,
     ) -> Result<(), DescriptionError> {
@@ -1472,6 +1567,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             Some((p, r, _)) => (*p, *r),
             None => self.placement(g, "geom", &class)?,
         };
+        let (pos, rot) = compose(frame, pos, rot);
         let origin = pose(sub(&pos, &offset), &rot);
         let group = self.integer(self.get(g, "geom", &class, "group"), "group", 0)?;
         let contype = self.integer(self.get(g, "geom", &class, "contype"), "contype", 1)?;
@@ -1636,33 +1732,6 @@ impl<'a, 'i> Reader<'a, 'i> {
             },
         })
     }
-}
-
-/// Queue a body's child bodies (in file order: pushed reversed onto the stack);
-/// elements that would bring in bodies twinloop cannot read are errors.
-fn queue_child_bodies<'a, 'i>(
-    node: Node<'a, 'i>,
-    name: &str,
-    offset: Vec3,
-    childclass: Option<String>,
-    pending: &mut Vec<Pending<'a, 'i>>,
-) -> Result<(), DescriptionError> {
-    let mut children = Vec::new();
-    for c in node.children().filter(Node::is_element) {
-        match c.tag_name().name() {
-            "body" => children.push(Pending {
-                node: c,
-                parent: Some((name.to_string(), offset)),
-                childclass: childclass.clone(),
-            }),
-            t @ ("frame" | "replicate" | "attach" | "include" | "composite" | "flexcomp") => {
-                return Err(error_at(c, format!("<{t}> is not supported")));
-            }
-            _ => {}
-        }
-    }
-    pending.extend(children.into_iter().rev());
-    Ok(())
 }
 
 /// `fromto="x1 y1 z1 x2 y2 z2"`: the midpoint, the rotation taking +z along the

@@ -166,10 +166,25 @@ def random_geom(rng, group_hi):
     return "<geom " + " ".join(attrs) + "/>"
 
 
-def random_body(rng, depth, counter, degrees, group_hi, lines, indent):
+def open_frame(rng, frames, lines, indent):
+    """Sometimes a <frame> (placed, maybe with a childclass) around what follows."""
+    if not frames or rng.random() < 0.5:
+        return indent, False
+    cls = ' childclass="heavy"' if rng.random() < 0.3 else ""
+    lines.append(f'{indent}<frame pos="{fmt(rng.uniform(-0.2, 0.2, 3))}" {random_orientation(rng)}{cls}>')
+    return indent + "  ", True
+
+
+def close_frame(opened, lines, indent):
+    if opened:
+        lines.append(f"{indent[:-2]}</frame>")
+
+
+def random_body(rng, depth, counter, degrees, group_hi, lines, indent, frames=False):
     counter[0] += 1
     name = f"b{counter[0]}"
     cls = ' childclass="heavy"' if rng.random() < 0.2 else ""
+    indent, framed = open_frame(rng, frames, lines, indent)
     lines.append(f'{indent}<body name="{name}" pos="{fmt(rng.uniform(-0.3, 0.3, 3))}" '
                  f'{random_orientation(rng)}{cls}>')
     for j in range(rng.integers(0, 4)):
@@ -190,19 +205,24 @@ def random_body(rng, depth, counter, degrees, group_hi, lines, indent):
                      f'mass="{round(float(rng.uniform(0.5, 2)), 4)}" {inertia}/>')
     # At least one geom in group 0 so that every body has mass.
     lines.append(f'{indent}  ' + random_geom(rng, 0))
+    inner, opened = open_frame(rng, frames, lines, indent + "  ")
     for _ in range(rng.integers(0, 3)):
-        lines.append(f'{indent}  ' + random_geom(rng, group_hi))
+        lines.append(f'{inner}' + random_geom(rng, group_hi))
+    if frames:
+        lines.append(f'{inner}<site name="{name}_s" pos="{fmt(rng.uniform(-0.1, 0.1, 3))}"/>')
+    close_frame(opened, lines, inner)
     if depth < 3:
         for _ in range(rng.integers(0, 3)):
-            random_body(rng, depth + 1, counter, degrees, group_hi, lines, indent + "  ")
+            random_body(rng, depth + 1, counter, degrees, group_hi, lines, indent + "  ", frames)
     lines.append(f"{indent}</body>")
+    close_frame(framed, lines, indent)
 
 
-def generated_model(seed):
+def generated_model(seed, frames=False):
     """A random tree exercising the compiler: geoms of every primitive type,
     several joints per body with anchors and refs, rotated roots, defaults and
     childclass, include, and the compiler's mass options."""
-    rng = np.random.default_rng(1000 + seed)
+    rng = np.random.default_rng(1000 + seed + (5000 if frames else 0))
     degrees = rng.random() < 0.5
     group_hi = int(rng.integers(0, 5))
     comp = [f'angle="{"degree" if degrees else "radian"}"']
@@ -228,11 +248,12 @@ def generated_model(seed):
                 '    <joint armature="0.2"/>',
                 '  </default>',
                 '</default>']
-    lines = ['<mujoco model="generated_%d">' % seed, f'  <compiler {" ".join(comp)}/>']
+    prefix = "framed" if frames else "generated"
+    lines = [f'<mujoco model="{prefix}_{seed}">', f'  <compiler {" ".join(comp)}/>']
     include = None
     if rng.random() < 0.4:
         include = [f'<mujoco>'] + ["  " + d for d in defaults] + ['</mujoco>']
-        lines.append(f'  <include file="generated_{seed}_defaults.xml"/>')
+        lines.append(f'  <include file="{prefix}_{seed}_defaults.xml"/>')
     else:
         lines += ["  " + d for d in defaults]
     if rng.random() < 0.3:
@@ -243,13 +264,14 @@ def generated_model(seed):
     lines.append('    <geom type="plane" size="5 5 0.1"/>')
     counter = [0]
     for _ in range(1 + (rng.random() < 0.3)):
-        random_body(rng, 0, counter, degrees, group_hi, lines, "    ")
+        random_body(rng, 0, counter, degrees, group_hi, lines, "    ", frames)
     lines.append("  </worldbody>")
     lines.append("</mujoco>")
     return "\n".join(lines) + "\n", include
 
 
 GENERATED = 24
+FRAMED = 6
 MESH_MODELS = 6
 
 
@@ -348,15 +370,17 @@ def write_generated():
     os.makedirs(out, exist_ok=True)
     for f in glob.glob(os.path.join(out, "*.xml")):
         os.remove(f)
-    for seed in range(GENERATED):
-        text, include = generated_model(seed)
-        path = os.path.join(out, f"generated_{seed}.xml")
-        with open(path, "w") as f:
-            f.write(text)
-        if include:
-            with open(os.path.join(out, f"generated_{seed}_defaults.xml"), "w") as f:
-                f.write("\n".join(include) + "\n")
-        yield "generated", out, path
+    for frames, count in [(False, GENERATED), (True, FRAMED)]:
+        prefix = "framed" if frames else "generated"
+        for seed in range(count):
+            text, include = generated_model(seed, frames)
+            path = os.path.join(out, f"{prefix}_{seed}.xml")
+            with open(path, "w") as f:
+                f.write(text)
+            if include:
+                with open(os.path.join(out, f"{prefix}_{seed}_defaults.xml"), "w") as f:
+                    f.write("\n".join(include) + "\n")
+            yield "generated", out, path
     meshes = os.path.join(out, "meshes")
     os.makedirs(meshes, exist_ok=True)
     write_stl(os.path.join(meshes, "torus.stl"), *torus())
