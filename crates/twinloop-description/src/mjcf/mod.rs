@@ -114,6 +114,10 @@ fn compose(f: &Xf, pos: Vec3, rot: Mat) -> Xf {
     (add(&f.0, &mat_vec(&f.1, &pos)), mat_mul(&f.1, &rot))
 }
 
+/// An element seen through the `<frame>`s around it: the element, their
+/// placement and the `childclass` in force.
+type Framed<'a, 'i> = (Node<'a, 'i>, Xf, Option<String>);
+
 /// Deepest nesting of `<frame>` elements followed.
 const MAX_FRAME_DEPTH: usize = 1000;
 
@@ -367,7 +371,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 self.assets(s)?;
             }
         }
-        let mut top: Vec<(Node, Xf, Option<String>)> = Vec::new();
+        let mut top: Vec<Framed> = Vec::new();
         for &s in sections {
             if s.tag_name().name() != "worldbody" {
                 continue;
@@ -418,12 +422,11 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// The element children of `node` with every `<frame>` opened: each with the
     /// placement of the frames around it (in `node`'s frame) and the
     /// `childclass` in force (a frame's own, else `cc`).
-    #[allow(clippy::type_complexity)]
     fn through_frames(
         &self,
         node: Node<'a, 'i>,
         cc: Option<&str>,
-    ) -> Result<Vec<(Node<'a, 'i>, Xf, Option<String>)>, DescriptionError> {
+    ) -> Result<Vec<Framed<'a, 'i>>, DescriptionError> {
         let mut out = Vec::new();
         // (element, enclosing placement, childclass, depth), in file order.
         let mut stack: Vec<(Node, Xf, Option<String>, usize)> = node
@@ -455,10 +458,7 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// with a free joint (the floating base; its `pos`/`quat` are only MuJoCo's
     /// initial qpos) nor for one jointless body at the origin (the root itself);
     /// otherwise yes, and then no top-level body may have a free joint.
-    fn needs_world_link(
-        &self,
-        top: &[(Node<'a, 'i>, Xf, Option<String>)],
-    ) -> Result<bool, DescriptionError> {
+    fn needs_world_link(&self, top: &[Framed<'a, 'i>]) -> Result<bool, DescriptionError> {
         let joints = |b: Node<'a, 'i>| -> Vec<Node<'a, 'i>> {
             b.children()
                 .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
