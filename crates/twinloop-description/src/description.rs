@@ -243,6 +243,9 @@ pub struct Link {
     pub collisions: Vec<Shape>,
     /// Children of `<link>` that are not URDF, kept verbatim.
     pub extra: Vec<RawXml>,
+    /// A link the MJCF reader put between two joints of one body (MuJoCo has no
+    /// such body): massless by design, the body's mass is on the last link.
+    pub between_joints: bool,
 }
 
 impl Link {

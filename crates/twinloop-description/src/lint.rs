@@ -460,6 +460,10 @@ fn check_moving_masses(robot: &Description, out: &mut Vec<Finding>) {
         }
         let below = mass_from(child, false);
         let kind = j.kind.urdf_name();
+        if below > 0.0 && robot.links[child].between_joints {
+            // MJCF: one body with several joints; its mass is on the last link.
+            continue;
+        }
         let (severity, message) = if below > 0.0 {
             (
                 Severity::Warning,

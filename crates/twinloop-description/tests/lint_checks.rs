@@ -669,3 +669,30 @@ fn point_masses_on_a_line_make_a_singular_floating_base() {
         0
     );
 }
+
+/// An MJCF body with several joints becomes a chain with massless links between
+/// its joints: they are not the file's, so no zero-mass warning names them.
+#[test]
+fn links_between_the_joints_of_one_mjcf_body_are_not_massless_links() {
+    let robot = twinloop_description::mjcf::from_str(
+        r#"<mujoco><worldbody><body name="hip">
+  <joint name="x" axis="1 0 0"/><joint name="y" axis="0 1 0"/><joint name="z" axis="0 0 1"/>
+  <geom type="capsule" size="0.05" fromto="0 0 0 0 0 -0.4"/>
+</body></worldbody></mujoco>"#,
+    )
+    .unwrap();
+    let between: Vec<&str> = robot
+        .links
+        .iter()
+        .filter(|l| l.between_joints)
+        .map(|l| l.name.as_str())
+        .collect();
+    assert_eq!(between, ["hip_x", "hip_y"]);
+    let r = lint(&robot);
+    assert_eq!(
+        r.with_code(codes::ZERO_MASS_MOVING_LINK).count(),
+        0,
+        "{:#?}",
+        r.findings
+    );
+}

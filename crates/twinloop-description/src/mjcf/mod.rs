@@ -993,7 +993,11 @@ impl<'a, 'i> Reader<'a, 'i> {
         // before the joint that moves it.
         let last = chain.pop();
         for (j, jn) in chain {
-            self.push_link(Link::new(j.child.clone()), node);
+            let link = Link {
+                between_joints: true,
+                ..Link::new(j.child.clone())
+            };
+            self.push_link(link, node);
             self.push_joint(j, jn);
         }
         self.push_link(link, node);
