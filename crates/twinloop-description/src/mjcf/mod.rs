@@ -502,11 +502,11 @@ impl<'a, 'i> Reader<'a, 'i> {
         for e in section.children().filter(Node::is_element) {
             let what = match (section.tag_name().name(), e.tag_name().name()) {
                 ("tendon", t) => format!(
-                    "a {t} tendon: its length limits, stiffness, damping and any actuator on it \
+                    "{t} tendon: its length limits, stiffness, damping and any actuator on it \
                      act on the joints it spans; twinloop's dynamics leave them out"
                 ),
                 ("equality", t) => format!(
-                    "a {t} equality constraint: twinloop's dynamics leave it out (the joints \
+                    "{t} equality constraint: twinloop's dynamics leave it out (the joints \
                      or bodies it ties move independently)"
                 ),
                 ("actuator", t) if e.attribute("joint").is_none() => {
@@ -515,12 +515,12 @@ impl<'a, 'i> Reader<'a, 'i> {
                         .find(|a| e.attribute(*a).is_some())
                         .unwrap_or("something other than a joint");
                     format!(
-                        "a {t} actuator on a {on}: only actuators on a joint become joint \
+                        "{t} actuator on a {on}: only actuators on a joint become joint \
                          torques in twinloop"
                     )
                 }
                 ("sensor", t) if e.attribute("site").is_some() => {
-                    format!("a {t} sensor at a site: twinloop does not simulate it")
+                    format!("{t} sensor at a site: twinloop does not simulate it")
                 }
                 _ => continue,
             };
