@@ -6,8 +6,9 @@
 //! Per body: mass, world CoM and world inertia tensor at seeded random states
 //! (MuJoCo's `body_mass`, `body_ipos`, `body_inertia`, `body_iquat` placed by its
 //! `xpos`, `xquat`). With the root fixed (a free root held at the identity): the
-//! joint-space mass matrix (`mj_fullM`) and bias forces (`qfrc_bias`). All to 1e-9
-//! relative. A file twinloop cannot represent must be refused naming the element.
+//! joint-space mass matrix (`mj_fullM`) and bias forces (`qfrc_bias`); with a
+//! free root also the floating-base ones. All to 1e-9 relative. A file twinloop
+//! cannot represent must be refused naming the element.
 
 use nalgebra::{DMatrix, Matrix3, Quaternion, UnitQuaternion, Vector3};
 use serde_json::Value;
@@ -186,6 +187,38 @@ fn check_bodies(
     }
 }
 
+/// With a free root: the floating-base model at the identity base pose, at rest,
+/// against MuJoCo's full mass matrix and bias forces. At the identity MuJoCo's
+/// free-joint velocity (world linear, local angular) is twinloop's (both in the
+/// base frame), so the matrices compare entry by entry.
+fn check_floating(name: &str, robot: &Description, refd: &Value, tol: f64) {
+    let model = Model::from_description(robot).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut data = Data::new(&model);
+    for (s, state) in refd["states"].as_array().unwrap().iter().enumerate() {
+        let mut q = vec![0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        q.extend(vecf(&state["qpos"]));
+        let mut v = vec![0.0; 6];
+        v.extend(vecf(&state["qvel"]));
+        let m_ref = mat(&state["floating_mass_matrix"]);
+        assert_eq!(m_ref.nrows(), model.nv, "{name}: nv");
+        let m = crba(&model, &mut data, &q).clone();
+        let size = m_ref.abs().max();
+        for r in 0..model.nv {
+            for c in r..model.nv {
+                let what = format!("{name} floating state {s} M[{r}][{c}]");
+                close_to(&what, m[(r, c)], m_ref[(r, c)], size, tol);
+            }
+        }
+        let bias_ref = vecf(&state["floating_bias"]);
+        let bias = nonlinear_effects(&model, &mut data, &q, &v).clone();
+        let size = bias_ref.iter().fold(1e-12_f64, |a, b| a.max(b.abs()));
+        for k in 0..model.nv {
+            let what = format!("{name} floating state {s} bias[{k}]");
+            close_to(&what, bias[k], bias_ref[k], size, tol);
+        }
+    }
+}
+
 /// Everything at every state of one model; `axes_tol` for what depends on
 /// MuJoCo's principal axes of inertia (tensors, mass matrix, bias forces).
 fn check_model(name: &str, robot: &Description, refd: &Value, axes_tol: f64) {
@@ -244,6 +277,7 @@ fn file_name(p: &Path) -> String {
 #[test]
 fn mjcf_corpus_agrees_with_mujoco() {
     let (mut loaded, mut refused, mut not_robots) = (Vec::new(), Vec::new(), Vec::new());
+    let mut floating = 0;
     for (name, xml, refd) in corpus(&["dm_control", "gymnasium"]) {
         if refd["bodies"].as_array().unwrap().is_empty() {
             not_robots.push(name); // a template without bodies (dm_control's lqr.xml)
@@ -252,6 +286,10 @@ fn mjcf_corpus_agrees_with_mujoco() {
         match load(&xml) {
             Ok(robot) => {
                 check_model(&name, &robot, &refd, TOL);
+                if refd["root_free"] == true {
+                    check_floating(&name, &robot, &refd, TOL);
+                    floating += 1;
+                }
                 loaded.push(name);
             }
             Err(e) => {
@@ -288,6 +326,8 @@ fn mjcf_corpus_agrees_with_mujoco() {
         assert!(loaded.iter().any(|l| l == humanoid), "{humanoid} loads");
     }
     assert_eq!(not_robots, ["dm_control/lqr"]);
+    // fish, both humanoids of each package, ant: also as floating bases.
+    assert_eq!(floating, 6);
 }
 
 /// Random trees from make_reference.py: every primitive geom type, solid and

@@ -11,7 +11,9 @@ installs them), this copies the file (and the files it includes) into
   that twinloop models (a free joint on the root body is held at the identity
   pose with zero velocity and left out), the joint-space mass matrix
   (`mj_fullM`, same rows), the bias forces (`qfrc_bias`) and every body's
-  world pose (`xpos`, `xquat`).
+  world pose (`xpos`, `xquat`); with a free root, also the mass matrix and bias
+  forces with the root's six dofs first (`floating_mass_matrix`,
+  `floating_bias`).
 
 `cargo test` reads only the JSON. Rerun with `python3 make_reference.py`
 (needs `pip install mujoco dm_control gymnasium`); the MuJoCo version is
@@ -92,7 +94,15 @@ def state(m, seed, free):
     mujoco.mj_forward(m, d)
     full = np.zeros((m.nv, m.nv))
     mujoco.mj_fullM(m, d, full)
-    return {
+    floating = {}
+    if free is not None:
+        # The root free too, at the identity pose and at rest: its dofs first.
+        dofs = list(range(free[2], free[2] + 6)) + keep_v
+        floating = {
+            "floating_mass_matrix": full[np.ix_(dofs, dofs)].tolist(),
+            "floating_bias": d.qfrc_bias[dofs].tolist(),
+        }
+    return floating | {
         "qpos": d.qpos[keep_q].tolist(),
         "qvel": d.qvel[keep_v].tolist(),
         "mass_matrix": full[np.ix_(keep_v, keep_v)].tolist(),
