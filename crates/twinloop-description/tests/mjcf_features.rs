@@ -670,3 +670,17 @@ fn include_splices_files_and_errors_name_the_included_file() {
     assert!(e.message.contains("cannot read the included file"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `inertiafromgeom="true"` replaces a body's `<inertial>` only when it has geoms
+/// to sum (MuJoCo 4.0 compiles this file to body masses 2 and 0.5236).
+#[test]
+fn inertia_from_geoms_keeps_the_inertial_of_a_body_without_geoms() {
+    let r = ok(r#"<mujoco><compiler inertiafromgeom="true"/><worldbody>
+  <body name="a"><joint axis="0 1 0"/><inertial pos="0 0 -0.1" mass="2" diaginertia="0.1 0.2 0.3"/>
+    <body name="b" pos="0 0 -0.3"><joint/><geom size="0.05"/>
+      <inertial pos="0 0 0" mass="7" diaginertia="1 1 1"/></body>
+  </body></worldbody></mujoco>"#);
+    assert_eq!(r.link("a").unwrap().mass(), 2.0);
+    let sphere = 1000.0 * 4.0 / 3.0 * std::f64::consts::PI * 0.05_f64.powi(3);
+    assert!((r.link("b").unwrap().mass() - sphere).abs() < 1e-12);
+}

@@ -1312,33 +1312,35 @@ impl<'a, 'i> Reader<'a, 'i> {
         }
         let c = &self.compiler;
         let bounds = c.bound_mass > 0.0 || c.bound_inertia > 0.0 || c.balance_inertia;
-        link.inertial = if from_geoms || bounds {
-            let props = if from_geoms {
-                MassProps::combine(&parts)
-            } else {
-                explicit.map(|(pos, rot, mass, i)| MassProps::rotated(mass, pos, &rot, i.matrix()))
-            };
-            let props = match props {
-                Some(p) if bounds => {
-                    Some(p.bounded(c.bound_mass, c.bound_inertia, c.balance_inertia))
-                }
-                None if bounds => {
-                    Some(MassProps::NONE.bounded(c.bound_mass, c.bound_inertia, c.balance_inertia))
-                }
-                p => p,
-            };
-            props.map(|p| Inertial {
+        // MuJoCo: geoms replace the inertial only when there are some to sum.
+        let from_geoms = if from_geoms {
+            MassProps::combine(&parts)
+        } else {
+            None
+        };
+        let bound = |p: MassProps| p.bounded(c.bound_mass, c.bound_inertia, c.balance_inertia);
+        let props = match (from_geoms, bounds) {
+            (Some(p), true) => Some(bound(p)),
+            (Some(p), false) => Some(p),
+            (None, true) => Some(bound(
+                explicit.map_or(MassProps::NONE, |(pos, rot, mass, i)| {
+                    MassProps::rotated(mass, pos, &rot, i.matrix())
+                }),
+            )),
+            (None, false) => None,
+        };
+        link.inertial = match props {
+            Some(p) => Some(Inertial {
                 origin: pose(sub(&p.com, &offset), &IDENTITY),
                 mass: p.mass,
                 inertia: Inertia::from_matrix(p.inertia),
-            })
-        } else {
+            }),
             // As written: the file's numbers in the file's frame.
-            explicit.map(|(pos, rot, mass, inertia)| Inertial {
+            None => explicit.map(|(pos, rot, mass, inertia)| Inertial {
                 origin: pose(sub(&pos, &offset), &rot),
                 mass,
                 inertia,
-            })
+            }),
         };
         Ok((link, frames))
     }
