@@ -684,3 +684,20 @@ fn inertia_from_geoms_keeps_the_inertial_of_a_body_without_geoms() {
     let sphere = 1000.0 * 4.0 / 3.0 * std::f64::consts::PI * 0.05_f64.powi(3);
     assert!((r.link("b").unwrap().mass() - sphere).abs() < 1e-12);
 }
+
+/// `boundmass` gives a body with nothing to weigh a mass; MuJoCo 4.0 puts its
+/// CoM at the body's own `pos` in the body frame (compiled body_ipos 0.3 0.2
+/// 0.1 here) and its inertia at `boundinertia`.
+#[test]
+fn boundmass_weighs_an_empty_body_where_mujoco_does() {
+    let r = ok(
+        r#"<mujoco><compiler boundmass="0.1" boundinertia="0.01"/><worldbody>
+  <body name="a" pos="0.3 0.2 0.1"><joint axis="0 1 0"/>
+    <body name="b" pos="0 0 -0.3"><joint/><geom size="0.05"/></body>
+  </body></worldbody></mujoco>"#,
+    );
+    let a = r.link("a").unwrap().inertial.unwrap();
+    assert_eq!(a.mass, 0.1);
+    assert_eq!(a.origin.xyz, [0.3, 0.2, 0.1]);
+    assert!((a.inertia.ixx - 0.01).abs() < 1e-15 && (a.inertia.izz - 0.01).abs() < 1e-15);
+}

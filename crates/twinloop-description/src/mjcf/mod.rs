@@ -1322,11 +1322,15 @@ impl<'a, 'i> Reader<'a, 'i> {
         let props = match (from_geoms, bounds) {
             (Some(p), true) => Some(bound(p)),
             (Some(p), false) => Some(p),
-            (None, true) => Some(bound(
-                explicit.map_or(MassProps::NONE, |(pos, rot, mass, i)| {
-                    MassProps::rotated(mass, pos, &rot, i.matrix())
-                }),
-            )),
+            (None, true) => Some(bound(match explicit {
+                Some((pos, rot, mass, i)) => MassProps::rotated(mass, pos, &rot, i.matrix()),
+                // Nothing to weigh: MuJoCo puts the CoM at the body's own `pos`
+                // (in the body frame), which matters once boundmass gives it mass.
+                None => MassProps {
+                    com: opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]),
+                    ..MassProps::NONE
+                },
+            })),
             (None, false) => None,
         };
         link.inertial = match props {
