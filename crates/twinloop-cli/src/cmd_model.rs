@@ -40,26 +40,31 @@ Exit code 0, or 2 when the file cannot be read (the message names file, line and
         long_about = "Check the numbers of a robot description that parse fine but make dynamics \
 wrong or singular: inertia tensors that are not positive definite or violate the triangle inequality \
 of principal moments, moving bodies without mass, point masses with zero inertia, joints without \
-limits, non-unit axes, mimic joints (which twinloop's dynamics treats as independent).",
-        after_long_help = "Example:\n  twinloop model lint models/coman/coman.urdf\n\n\
+limits, non-unit axes, mimic joints (which twinloop's dynamics treats as independent), and \
+elements of an MJCF file that the rigid-body dynamics leave out (tendons, equality constraints, \
+actuators on no joint, sensors at sites).",
+        after_long_help = "Example:\n  twinloop model lint models/coman/coman.urdf\n  \
+twinloop model lint models/talos/mjcf/talos.xml --strict\n\n\
 Output: a table, one finding per line, errors first, then a summary line.\n  \
 SEVERITY  error: physically impossible or singular, dynamics from this model is wrong;\n            \
 warning: plausible, but the dynamics may differ from the robot or other tools;\n            \
 info: worth knowing (missing effort limits, mimic on a fixed joint, total mass)\n  \
 CODE      stable, scripts may match on it: negative-mass, inertia-not-positive-definite,\n            \
 triangle-inequality, zero-inertia-with-mass, inertia-without-mass,\n            \
-zero-mass-moving-link, missing-limits, limits-inverted, limits-empty-range,\n            \
+zero-mass-moving-link, singular-floating-base, missing-limits, limits-inverted, limits-empty-range,\n            \
 missing-effort-velocity, zero-effort-or-velocity, non-unit-axis, mimic-joint,\n            \
-total-mass\n  \
-SUBJECT   the link or joint (or robot) by name\n  \
+unmodeled-element, ignored-detail, total-mass\n  \
+SUBJECT   the link or joint (or robot) by name, or the file's element\n  \
 MESSAGE   what is wrong, with the numbers (principal moments in kg m^2, masses in kg)\n\n\
 With --json FILE (- for stdout) the same as one JSON object: file, format, robot, total_mass, links,\n\
 links_without_inertial, joints, moving_joints, dof, mimic_joints, errors, warnings, infos,\n\
 findings [{severity, code, subject, name, message}].\n\n\
+With --strict, unmodeled-element findings are errors: for when the dynamics must be the whole\n\
+physics of the file.\n\n\
 Exit code 1 if any finding is an error, 0 otherwise, 2 when the file cannot be read (the\n\
 message names file, line and element)."
     )]
-    Lint(DescriptionArgs),
+    Lint(LintArgs),
 
     /// List the built-in robots
     #[command(
@@ -103,6 +108,15 @@ pub struct DescriptionArgs {
 }
 
 #[derive(Args)]
+pub struct LintArgs {
+    #[command(flatten)]
+    pub description: DescriptionArgs,
+    /// Make elements the dynamics leave out (tendons, equality constraints, ...) errors
+    #[arg(long)]
+    pub strict: bool,
+}
+
+#[derive(Args)]
 pub struct ListArgs {
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
@@ -121,7 +135,7 @@ pub struct ExportArgs {
 pub fn run(cmd: ModelCommand) -> CliResult {
     match cmd {
         ModelCommand::Info(args) => info(&args),
-        ModelCommand::Lint(args) => lint_command(&args),
+        ModelCommand::Lint(args) => lint_command(&args.description, args.strict),
         ModelCommand::List(args) => list(&args),
         ModelCommand::Export(args) => export(&args),
     }
@@ -342,9 +356,13 @@ struct LintOutput<'a> {
     report: &'a LintReport,
 }
 
-fn lint_command(args: &DescriptionArgs) -> CliResult {
+fn lint_command(args: &DescriptionArgs, strict: bool) -> CliResult {
     let (robot, format) = common::load_description(&args.robot)?;
-    let report = lint(&robot);
+    let report = if strict {
+        lint(&robot).strict()
+    } else {
+        lint(&robot)
+    };
     let out = LintOutput {
         file: args.robot.clone(),
         format: format.as_str(),

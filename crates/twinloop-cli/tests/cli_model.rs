@@ -156,6 +156,15 @@ fn mjcf_models_are_read_by_their_root_element() {
             stderr(&o)
         );
     }
+    // TALOS's gripper equality constraints: warnings, errors with --strict.
+    let o = run_on(
+        &["model", "lint", "--strict"],
+        &model("talos/mjcf/talos.xml"),
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let s = stdout(&o);
+    assert_eq!(s.matches("error     unmodeled-element").count(), 6, "{s}");
+    assert!(s.contains("<joint> in <equality>"), "{s}");
 }
 
 #[test]

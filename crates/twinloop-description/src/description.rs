@@ -68,21 +68,28 @@ pub fn rpy_to_matrix(rpy: [f64; 3]) -> [[f64; 3]; 3] {
     ]
 }
 
-/// Inverse of [`rpy_to_matrix`]; at the pitch singularity yaw is set to zero.
+/// Inverse of [`rpy_to_matrix`], backward stable: `rpy_to_matrix` of the result
+/// gives back `r` to rounding everywhere, the pitch +-90 deg singularity included.
+///
+/// Pitch comes from `atan2` of its sine and cosine (not `asin`, which loses half the
+/// digits near +-90 deg); roll from the bottom row; yaw is then the rotation about z
+/// that best maps the columns of Ry(pitch) Rx(roll) onto those of `r` (a 2-D
+/// Procrustes fit), so any error in roll near the singularity, where only roll -
+/// yaw or roll + yaw is defined, is absorbed by yaw instead of showing in the matrix.
 pub fn matrix_to_rpy(r: [[f64; 3]; 3]) -> [f64; 3] {
-    let sp = (-r[2][0]).clamp(-1.0, 1.0);
-    let pitch = sp.asin();
-    if sp.abs() > 1.0 - 1e-12 {
-        // Gimbal lock: only roll - yaw (or roll + yaw) is defined.
-        let roll = if sp > 0.0 {
-            r[0][1].atan2(r[1][1])
-        } else {
-            (-r[0][1]).atan2(r[1][1])
-        };
-        [roll, pitch, 0.0]
-    } else {
-        [r[2][1].atan2(r[2][2]), pitch, r[1][0].atan2(r[0][0])]
+    let cos_pitch = 0.5 * (r[0][0].hypot(r[1][0]) + r[2][1].hypot(r[2][2]));
+    let pitch = (-r[2][0]).atan2(cos_pitch);
+    let roll = r[2][1].atan2(r[2][2]);
+    let (sp, cp) = pitch.sin_cos();
+    let (sr, cr) = roll.sin_cos();
+    // Top two rows of Ry(pitch) Rx(roll), column by column.
+    let m = [[cp, sp * sr, sp * cr], [0.0, cr, -sr]];
+    let (mut cross, mut dot) = (0.0, 0.0);
+    for j in 0..3 {
+        cross += m[0][j] * r[1][j] - m[1][j] * r[0][j];
+        dot += m[0][j] * r[0][j] + m[1][j] * r[1][j];
     }
+    [roll, pitch, cross.atan2(dot)]
 }
 
 /// Rotation matrix of a quaternion (w, x, y, z), normalised first.
@@ -236,6 +243,9 @@ pub struct Link {
     pub collisions: Vec<Shape>,
     /// Children of `<link>` that are not URDF, kept verbatim.
     pub extra: Vec<RawXml>,
+    /// A link the MJCF reader put between two joints of one body (MuJoCo has no
+    /// such body): massless by design, the body's mass is on the last link.
+    pub between_joints: bool,
 }
 
 impl Link {
@@ -349,6 +359,9 @@ pub struct Joint {
     pub calibration: Option<Calibration>,
     /// Children of `<joint>` that are not URDF, kept verbatim.
     pub extra: Vec<RawXml>,
+    /// Rotor inertia reflected to the joint (MJCF `armature`), added to the
+    /// mass matrix diagonal; 0 when the file gives none (URDF has no such field).
+    pub armature: f64,
 }
 
 impl Joint {
@@ -371,6 +384,7 @@ impl Joint {
             safety_controller: None,
             calibration: None,
             extra: Vec::new(),
+            armature: 0.0,
         }
     }
 
@@ -386,6 +400,17 @@ pub struct Frame {
     pub name: String,
     pub link: String,
     pub origin: Pose,
+}
+
+/// An element the reader or the dynamics leave out: where it is and what is lost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FileNote {
+    /// The element, e.g. `<spatial name="tendon1"> in <tendon>`.
+    pub element: String,
+    /// 1-based line in the file.
+    pub line: u32,
+    /// What is left out.
+    pub what: String,
 }
 
 /// Top-level elements kept verbatim, with their position among the links and
@@ -421,6 +446,15 @@ pub struct Description {
     pub order: Vec<Item>,
     /// Attributes of `<robot>` other than `name` (xmlns declarations, version), verbatim.
     pub robot_attributes: Vec<(String, String)>,
+    /// Elements of the file that change the physics but that twinloop's rigid-body
+    /// dynamics leave out (MJCF tendons, equality constraints, ...): `lint` warns.
+    pub unmodeled: Vec<FileNote>,
+    /// Visual-only details the reader could not take and read past (a URDF
+    /// `<texture/>` without a file, a mesh scale with a fourth number): `lint` warns.
+    pub ignored: Vec<FileNote>,
+    /// Gravity in the world frame when the file sets it (MJCF `<option gravity>`,
+    /// zero with `<flag gravity="disable">`); `None` means (0, 0, -[`crate::GRAVITY`]).
+    pub gravity: Option<[f64; 3]>,
 }
 
 impl Description {

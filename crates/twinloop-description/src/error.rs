@@ -69,8 +69,12 @@ impl DescriptionError {
         self
     }
 
+    /// The file the error is in, unless it already names one (an element of a
+    /// file that the reader's file includes).
     pub fn in_file(mut self, file: impl Into<PathBuf>) -> Self {
-        self.location.file = Some(file.into());
+        if self.location.file.is_none() {
+            self.location.file = Some(file.into());
+        }
         self
     }
 }

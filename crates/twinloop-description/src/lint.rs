@@ -24,6 +24,7 @@
 //! | `zero-inertia-with-mass` | warning | mass > 0 with an all-zero tensor: a point mass, usually a dummy frame (1e-9 kg) |
 //! | `inertia-without-mass` | warning | mass 0 with a non-zero tensor |
 //! | `zero-mass-moving-link` | error / warning | a body moved by a non-fixed joint (the joint's child plus every link fixed to it) has no mass. Error when nothing with mass moves with that joint at all (the joint's row of the mass matrix is zero); warning when links further down carry mass |
+//! | `singular-floating-base` | warning | as a floating base (twinloop's default) the mass matrix is singular: the robot has no mass, or its rotational inertia about its CoM is singular (all mass on a line) |
 //! | `missing-limits` | warning | revolute or prismatic joint without lower/upper |
 //! | `limits-inverted` | error | lower > upper |
 //! | `limits-empty-range` | warning | lower == upper: the joint cannot move |
@@ -31,10 +32,14 @@
 //! | `zero-effort-or-velocity` | warning | an effort or velocity limit <= 0 |
 //! | `non-unit-axis` | warning | a moving joint's axis norm differs from 1 by more than [`AXIS_NORM_TOLERANCE`] (twinloop normalises it; other tools may not) |
 //! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect) |
+//! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites |
+//! | `ignored-detail` | warning | a visual-only detail the reader read past: a URDF `<texture/>` without a file, a mesh `scale` with a fourth number |
 //! | `total-mass` | info | the robot's total mass, as a scale would weigh it |
 //!
 //! Axes of fixed and floating joints are not checked: URDF ignores them (many
 //! files write `0 0 0` there).
+
+mod floating_base;
 
 use crate::description::{Description, Inertia, Joint, JointKind};
 use serde::Serialize;
@@ -62,6 +67,7 @@ pub mod codes {
     pub const ZERO_INERTIA_WITH_MASS: &str = "zero-inertia-with-mass";
     pub const INERTIA_WITHOUT_MASS: &str = "inertia-without-mass";
     pub const ZERO_MASS_MOVING_LINK: &str = "zero-mass-moving-link";
+    pub const SINGULAR_FLOATING_BASE: &str = "singular-floating-base";
     pub const MISSING_LIMITS: &str = "missing-limits";
     pub const LIMITS_INVERTED: &str = "limits-inverted";
     pub const LIMITS_EMPTY_RANGE: &str = "limits-empty-range";
@@ -69,16 +75,19 @@ pub mod codes {
     pub const ZERO_EFFORT_OR_VELOCITY: &str = "zero-effort-or-velocity";
     pub const NON_UNIT_AXIS: &str = "non-unit-axis";
     pub const MIMIC_JOINT: &str = "mimic-joint";
+    pub const UNMODELED_ELEMENT: &str = "unmodeled-element";
+    pub const IGNORED_DETAIL: &str = "ignored-detail";
     pub const TOTAL_MASS: &str = "total-mass";
 
     /// Every code, in the order of the table in the module documentation.
-    pub const ALL: [&str; 14] = [
+    pub const ALL: [&str; 17] = [
         NEGATIVE_MASS,
         INERTIA_NOT_POSITIVE_DEFINITE,
         TRIANGLE_INEQUALITY,
         ZERO_INERTIA_WITH_MASS,
         INERTIA_WITHOUT_MASS,
         ZERO_MASS_MOVING_LINK,
+        SINGULAR_FLOATING_BASE,
         MISSING_LIMITS,
         LIMITS_INVERTED,
         LIMITS_EMPTY_RANGE,
@@ -86,6 +95,8 @@ pub mod codes {
         ZERO_EFFORT_OR_VELOCITY,
         NON_UNIT_AXIS,
         MIMIC_JOINT,
+        UNMODELED_ELEMENT,
+        IGNORED_DETAIL,
         TOTAL_MASS,
     ];
 }
@@ -126,6 +137,8 @@ pub enum Subject {
     Robot,
     Link,
     Joint,
+    /// An element of the file by its path (line in the message).
+    Element,
 }
 
 impl Subject {
@@ -134,6 +147,7 @@ impl Subject {
             Subject::Robot => "robot",
             Subject::Link => "link",
             Subject::Joint => "joint",
+            Subject::Element => "element",
         }
     }
 }
@@ -206,6 +220,24 @@ impl LintReport {
     pub fn worst(&self) -> Option<Severity> {
         self.findings.iter().map(|f| f.severity).max()
     }
+
+    /// The report with every `unmodeled-element` warning made an error: for
+    /// users who need the dynamics to be the whole physics of the file.
+    pub fn strict(mut self) -> LintReport {
+        for f in &mut self.findings {
+            if f.code == codes::UNMODELED_ELEMENT {
+                f.severity = Severity::Error;
+            }
+        }
+        self.findings.sort_by_key(|f| std::cmp::Reverse(f.severity));
+        let count = |s| self.findings.iter().filter(|f| f.severity == s).count();
+        (self.errors, self.warnings, self.infos) = (
+            count(Severity::Error),
+            count(Severity::Warning),
+            count(Severity::Info),
+        );
+        self
+    }
 }
 
 /// Check a description. Never fails: a robot that is not a tree (see
@@ -216,8 +248,24 @@ pub fn lint(robot: &Description) -> LintReport {
         check_link_inertial(link, &mut out);
     }
     check_moving_masses(robot, &mut out);
+    floating_base::check(robot, &mut out);
     for joint in &robot.joints {
         check_joint(joint, &mut out);
+    }
+    let notes = [
+        (&robot.unmodeled, codes::UNMODELED_ELEMENT),
+        (&robot.ignored, codes::IGNORED_DETAIL),
+    ];
+    for (list, code) in notes {
+        for u in list {
+            out.push(finding(
+                Severity::Warning,
+                code,
+                Subject::Element,
+                &u.element,
+                format!("line {}: {}", u.line, u.what),
+            ));
+        }
     }
     let total_mass = robot.total_mass();
     let without_inertial = robot.links.iter().filter(|l| l.inertial.is_none()).count();
@@ -412,6 +460,10 @@ fn check_moving_masses(robot: &Description, out: &mut Vec<Finding>) {
         }
         let below = mass_from(child, false);
         let kind = j.kind.urdf_name();
+        if below > 0.0 && robot.links[child].between_joints {
+            // MJCF: one body with several joints; its mass is on the last link.
+            continue;
+        }
         let (severity, message) = if below > 0.0 {
             (
                 Severity::Warning,

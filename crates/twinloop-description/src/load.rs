@@ -15,7 +15,7 @@ pub fn load(path: impl AsRef<Path>) -> Result<Description, DescriptionError> {
         let root = doc.root_element();
         match root.tag_name().name() {
             "robot" => crate::urdf::from_document(&doc),
-            "mujoco" => crate::mjcf::from_document(&doc),
+            "mujoco" => crate::mjcf::from_document(&doc, path.parent()),
             other => Err(error_at(
                 root,
                 format!("root element is <{other}>: expected <robot> (URDF) or <mujoco> (MJCF)"),

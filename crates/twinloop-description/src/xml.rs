@@ -12,14 +12,31 @@ use std::path::Path;
 pub(crate) fn read_text(path: &Path) -> Result<String, DescriptionError> {
     let bytes = std::fs::read(path)
         .map_err(|e| DescriptionError::new(format!("cannot read the file: {e}")).in_file(path))?;
-    String::from_utf8(bytes).map_err(|e| {
+    let text = String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let text = String::from_utf8_lossy(&e.as_bytes()[..at]).into_owned();
         let (line, column) = end_position(&text);
         DescriptionError::new("the file is not UTF-8 text")
             .at_line(line, column)
             .in_file(path)
-    })
+    })?;
+    Ok(late_declaration_blanked(text))
+}
+
+/// XML allows its `<?xml ...?>` declaration only at the very start; files with a
+/// blank line before it are common and harmless (parsers such as Pinocchio's read
+/// them). Blank such a declaration out with spaces, so every byte keeps its
+/// place and errors keep their lines.
+fn late_declaration_blanked(mut text: String) -> String {
+    let start = text.len() - text.trim_start().len();
+    if start > 0
+        && text[start..].starts_with("<?xml")
+        && let Some(end) = text[start..].find("?>")
+    {
+        let blank = " ".repeat(end + 2);
+        text.replace_range(start..start + end + 2, &blank);
+    }
+    text
 }
 
 /// Parse XML; a syntax error becomes a [`DescriptionError`] at the place roxmltree reports.
@@ -121,9 +138,14 @@ pub(crate) fn position(doc: &Document, byte: usize) -> (u32, u32) {
 /// An error located at an element.
 pub(crate) fn error_at(node: Node, message: impl Into<String>) -> DescriptionError {
     let (line, column) = position(node.document(), node.range().start);
-    DescriptionError::new(message)
+    let e = DescriptionError::new(message)
         .at_line(line, column)
-        .at_element(element_path(node))
+        .at_element(element_path(node));
+    // An element of an MJCF <include>d file: name that file.
+    match crate::mjcf::include::file_of(node.document()) {
+        Some(file) => e.in_file(file),
+        None => e,
+    }
 }
 
 /// An error located at an attribute of an element (the element is named too).
@@ -137,9 +159,13 @@ pub(crate) fn error_at_attr(
         .find(|a| a.name() == attr)
         .map_or(node.range().start, |a| a.range().start);
     let (line, column) = position(node.document(), start);
-    DescriptionError::new(message)
+    let e = DescriptionError::new(message)
         .at_line(line, column)
-        .at_element(element_path(node))
+        .at_element(element_path(node));
+    match crate::mjcf::include::file_of(node.document()) {
+        Some(file) => e.in_file(file),
+        None => e,
+    }
 }
 
 /// A required attribute.

@@ -576,3 +576,123 @@ fn every_code_is_listed_once() {
     all.dedup();
     assert_eq!(all.len(), codes::ALL.len());
 }
+
+/// MJCF elements the dynamics leave out are warnings (errors when strict), each
+/// naming the element and its line.
+#[test]
+fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
+    let robot = twinloop_description::mjcf::from_str(
+        r#"<mujoco>
+  <worldbody>
+    <body name="a"><joint name="j1"/><geom size="0.1"/><site name="s" size="0.01"/>
+      <body name="b"><joint name="j2"/><geom size="0.1"/></body>
+    </body>
+  </worldbody>
+  <tendon><fixed name="t"><joint joint="j1" coef="1"/><joint joint="j2" coef="-1"/></fixed></tendon>
+  <equality><joint joint1="j1" joint2="j2"/></equality>
+  <actuator><motor joint="j1"/><motor tendon="t"/><general site="s"/></actuator>
+  <sensor><jointpos joint="j1"/><accelerometer site="s"/></sensor>
+</mujoco>"#,
+    )
+    .unwrap();
+    let report = lint(&robot);
+    let found: Vec<(&str, &str)> = report
+        .with_code(codes::UNMODELED_ELEMENT)
+        .map(|f| (f.name.as_str(), f.message.split(':').next().unwrap()))
+        .collect();
+    assert_eq!(
+        found,
+        [
+            (r#"<fixed name="t">"#, "line 7"),
+            ("<joint> in <equality>", "line 8"),
+            ("<motor> in <actuator>", "line 9"),
+            ("<general> in <actuator>", "line 9"),
+            ("<accelerometer> in <sensor>", "line 10"),
+        ]
+    );
+    assert!(
+        report
+            .with_code(codes::UNMODELED_ELEMENT)
+            .all(|f| f.severity == Severity::Warning)
+    );
+    assert!(!report.has_errors());
+    let strict = report.strict();
+    assert_eq!(strict.errors, 5);
+    assert_eq!(strict.findings[0].code, codes::UNMODELED_ELEMENT);
+    assert!(strict.findings[0].message.contains("tendon"));
+}
+
+/// Two point masses on a line: every joint moves mass, but the whole robot has
+/// no rotational inertia about that line, so as a floating base its mass matrix
+/// is singular.
+#[test]
+fn point_masses_on_a_line_make_a_singular_floating_base() {
+    let point = Inertia::default();
+    let robot = DescriptionBuilder::new("dumbbell")
+        .link("a")
+        .mass(1.0, [0.0; 3], point)
+        .done()
+        .link("b")
+        .mass(1.0, [0.0, 0.0, -0.5], point)
+        .done()
+        .revolute("j", "a", "b", [0.0, 0.0, 1.0])
+        .limits(-1.0, 1.0, 5.0, 6.0)
+        .done()
+        .build()
+        .unwrap();
+    let r = lint(&robot);
+    let f: Vec<_> = r.with_code(codes::SINGULAR_FLOATING_BASE).collect();
+    assert_eq!(f.len(), 1, "{:#?}", r.findings);
+    assert_eq!(
+        (f[0].severity, f[0].subject),
+        (Severity::Warning, Subject::Robot)
+    );
+    assert!(
+        f[0].message
+            .contains("principal moments about its CoM are 0"),
+        "{}",
+        f[0].message
+    );
+    // A body of real extent instead of one of the points: a full inertia.
+    let mut solid = robot.clone();
+    solid
+        .link_mut("a")
+        .unwrap()
+        .inertial
+        .as_mut()
+        .unwrap()
+        .inertia = Inertia::solid_sphere(1.0, 0.1);
+    assert_eq!(
+        lint(&solid)
+            .with_code(codes::SINGULAR_FLOATING_BASE)
+            .count(),
+        0
+    );
+}
+
+/// An MJCF body with several joints becomes a chain with massless links between
+/// its joints: they are not the file's, so no zero-mass warning names them.
+#[test]
+fn links_between_the_joints_of_one_mjcf_body_are_not_massless_links() {
+    let robot = twinloop_description::mjcf::from_str(
+        r#"<mujoco><worldbody><body name="hip">
+  <joint name="x" axis="1 0 0"/><joint name="y" axis="0 1 0"/><joint name="z" axis="0 0 1"/>
+  <geom type="capsule" size="0.05" fromto="0 0 0 0 0 -0.4"/>
+</body></worldbody></mujoco>"#,
+    )
+    .unwrap();
+    let between: Vec<&str> = robot
+        .links
+        .iter()
+        .filter(|l| l.between_joints)
+        .map(|l| l.name.as_str())
+        .collect();
+    assert_eq!(between, ["hip_x", "hip_y"]);
+    let r = lint(&robot);
+    assert_eq!(
+        r.with_code(codes::ZERO_MASS_MOVING_LINK).count(),
+        0,
+        "{:#?}",
+        r.findings
+    );
+}

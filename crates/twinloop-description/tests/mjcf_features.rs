@@ -121,8 +121,9 @@ fn quaternions_are_normalised_and_other_orientations_work() {
 
 #[test]
 fn default_classes_nest_and_childclass_applies() {
+    // The meshes are not there: no inertia from geoms (MuJoCo would need them).
     let r = ok(r#"<mujoco>
-  <compiler angle="radian" meshdir="meshes/"/>
+  <compiler angle="radian" meshdir="meshes/" inertiafromgeom="false"/>
   <default>
     <joint axis="0 1 0" damping="0.5"/>
     <mesh scale="0.001 0.001 0.001"/>
@@ -250,12 +251,13 @@ fn geoms_sites_materials() {
         Some([0.0, 1.0, 0.0, 1.0])
     );
     assert_eq!(cyl.material.as_ref().unwrap().name, "b_geom2_material");
-    // A box along x from fromto: its z axis turned onto x.
+    // A box along x from fromto: its z axis turned onto x; MuJoCo makes its
+    // cross-section square from size[0] (compiled geom_size 0.01 0.01 0.1).
     let bx = &b.visuals[2];
     assert_eq!(
         bx.geometry,
         Geometry::Box {
-            size: [0.02, 0.04, 0.2]
+            size: [0.02, 0.02, 0.2]
         }
     );
     let z = rpy_to_matrix(bx.origin.rpy);
@@ -412,7 +414,7 @@ fn errors_name_line_and_element() {
         &err(&with("<freejoint/>", "<freejoint/><joint name=\"x\"/>")),
         7,
         r#"<body name="base">"#,
-        "only one joint per body",
+        "free joint must be the body's only joint",
     );
     check(
         &err(&with(r#"axis="0 1 0""#, r#"axis="0 NaN 0""#)),
@@ -487,9 +489,9 @@ fn errors_name_line_and_element() {
         "duplicate link name",
     );
     check(
-        &err(&with("<worldbody>", "<worldbody><frame/>")),
+        &err(&with("<worldbody>", "<worldbody><replicate/>")),
         6,
-        "<frame>",
+        "<replicate>",
         "not supported",
     );
     // Truncated and not XML.
@@ -627,4 +629,75 @@ fn deeply_nested_bodies_and_classes() {
     let e = mjcf::from_str(&deep).unwrap_err();
     assert!(e.to_string().len() < 200, "{e}");
     assert!(e.message.contains("unknown geom type \"what\""), "{e}");
+}
+
+/// `<include>`: the included file's sections count as if written in place (here
+/// its defaults); an error in it names that file and its own line.
+#[test]
+fn include_splices_files_and_errors_name_the_included_file() {
+    let dir = std::env::temp_dir().join(format!("twinloop-mjcf-include-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("parts")).unwrap();
+    let main = dir.join("robot.xml");
+    std::fs::write(
+        &main,
+        r#"<mujoco>
+  <include file="parts/defaults.xml"/>
+  <worldbody><body name="b"><joint name="j"/><geom size="0.1"/></body></worldbody>
+</mujoco>"#,
+    )
+    .unwrap();
+    let defaults = dir.join("parts/defaults.xml");
+    std::fs::write(
+        &defaults,
+        "<mujoco>\n  <default><joint armature=\"0.25\"/><geom density=\"500\"/></default>\n</mujoco>\n",
+    )
+    .unwrap();
+    let r = twinloop_description::load(&main).unwrap();
+    assert_eq!(r.joint("j").unwrap().armature, 0.25);
+    let mass = r.link("b").unwrap().mass();
+    assert!((mass - 500.0 * 4.0 / 3.0 * std::f64::consts::PI * 1e-3).abs() < 1e-12);
+    std::fs::write(
+        &defaults,
+        "<mujoco>\n  <default><joint armature=\"x\"/></default>\n</mujoco>\n",
+    )
+    .unwrap();
+    let e = twinloop_description::load(&main).unwrap_err();
+    assert_eq!(e.location.file.as_deref(), Some(defaults.as_path()), "{e}");
+    assert_eq!(e.location.line, Some(2), "{e}");
+    std::fs::remove_file(&defaults).unwrap();
+    let e = twinloop_description::load(&main).unwrap_err();
+    assert_eq!(e.location.file.as_deref(), Some(main.as_path()), "{e}");
+    assert!(e.message.contains("cannot read the included file"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `inertiafromgeom="true"` replaces a body's `<inertial>` only when it has geoms
+/// to sum (MuJoCo 4.0 compiles this file to body masses 2 and 0.5236).
+#[test]
+fn inertia_from_geoms_keeps_the_inertial_of_a_body_without_geoms() {
+    let r = ok(r#"<mujoco><compiler inertiafromgeom="true"/><worldbody>
+  <body name="a"><joint axis="0 1 0"/><inertial pos="0 0 -0.1" mass="2" diaginertia="0.1 0.2 0.3"/>
+    <body name="b" pos="0 0 -0.3"><joint/><geom size="0.05"/>
+      <inertial pos="0 0 0" mass="7" diaginertia="1 1 1"/></body>
+  </body></worldbody></mujoco>"#);
+    assert_eq!(r.link("a").unwrap().mass(), 2.0);
+    let sphere = 1000.0 * 4.0 / 3.0 * std::f64::consts::PI * 0.05_f64.powi(3);
+    assert!((r.link("b").unwrap().mass() - sphere).abs() < 1e-12);
+}
+
+/// `boundmass` gives a body with nothing to weigh a mass; MuJoCo 4.0 puts its
+/// CoM at the body's own `pos` in the body frame (compiled body_ipos 0.3 0.2
+/// 0.1 here) and its inertia at `boundinertia`.
+#[test]
+fn boundmass_weighs_an_empty_body_where_mujoco_does() {
+    let r = ok(
+        r#"<mujoco><compiler boundmass="0.1" boundinertia="0.01"/><worldbody>
+  <body name="a" pos="0.3 0.2 0.1"><joint axis="0 1 0"/>
+    <body name="b" pos="0 0 -0.3"><joint/><geom size="0.05"/></body>
+  </body></worldbody></mujoco>"#,
+    );
+    let a = r.link("a").unwrap().inertial.unwrap();
+    assert_eq!(a.mass, 0.1);
+    assert_eq!(a.origin.xyz, [0.3, 0.2, 0.1]);
+    assert!((a.inertia.ixx - 0.01).abs() < 1e-15 && (a.inertia.izz - 0.01).abs() < 1e-15);
 }

@@ -4,7 +4,9 @@
 //! the algorithms write. After `Data::new`, none of the algorithms allocates.
 //!
 //! Conventions (docs/architecture.md, "Conventions"): q = [x, y, z, qx, qy, qz, qw, joints], v = [base
-//! linear, base angular (base frame), joints]; gravity (0, 0, -9.81); spatial vectors
+//! linear, base angular (base frame), joints]; gravity (0, 0, -9.81) unless the
+//! description sets one (MJCF `<option gravity>`); joint armature from the
+//! description on the mass-matrix diagonal; spatial vectors
 //! linear part first.
 //!
 //! | algorithm | function |

@@ -10,6 +10,9 @@ use nalgebra::{Matrix3, Vector3};
 use twinloop_description::{Description, DescriptionError, JointKind};
 use twinloop_spatial::{Inertia, Se3};
 
+/// The largest dynamics workspace (`Data`) a model may need, in bytes.
+pub const MAX_DATA_BYTES: usize = 4_000_000_000;
+
 /// Marks a body attached directly to the base (or to the world for a fixed base).
 pub const BASE: usize = usize::MAX;
 
@@ -99,8 +102,10 @@ pub struct Model {
     pub upper_limits: Vec<f64>,
     pub effort_limits: Vec<f64>,
     pub velocity_limits: Vec<f64>,
-    /// Rotor inertia reflected to each joint (added to the mass-matrix diagonal). Zero by default.
+    /// Rotor inertia reflected to each joint (added to the mass-matrix diagonal): the
+    /// description's (MJCF `armature`), zero for URDF.
     pub armature: Vec<f64>,
+    /// The description's gravity (MJCF `<option gravity>`), else (0, 0, -9.81).
     pub gravity: Vector3<f64>,
     pub frames: Vec<FrameInfo>,
     pub links: Vec<LinkInfo>,
@@ -260,6 +265,7 @@ impl Model {
         }
         m.add_bodies(robot, &children, base_link, &mut link_info)?;
         m.number_subtrees();
+        m.check_workspace_size(robot.links.len())?;
         m.add_frames(robot, link_info)?;
         if base != BaseKind::Floating {
             m.base_inertia = Inertia::ZERO;
@@ -298,7 +304,10 @@ impl Model {
             effort_limits: Vec::new(),
             velocity_limits: Vec::new(),
             armature: Vec::new(),
-            gravity: Vector3::new(0.0, 0.0, -twinloop_description::GRAVITY),
+            gravity: robot.gravity.map_or(
+                Vector3::new(0.0, 0.0, -twinloop_description::GRAVITY),
+                Vector3::from,
+            ),
             frames: Vec::new(),
             links: Vec::new(),
             total_mass: 0.0,
@@ -386,8 +395,36 @@ impl Model {
         self.effort_limits.push(lim.effort.unwrap_or(f64::INFINITY));
         self.velocity_limits
             .push(lim.velocity.unwrap_or(f64::INFINITY));
-        self.armature.push(0.0);
+        self.armature.push(joint.armature);
         Ok(new_body)
+    }
+
+    /// Refuse a model whose `Data` would not fit in memory, before anything
+    /// allocates it: the regressor alone is nv x 10 (bodies + base) numbers, so a
+    /// 20 000-joint chain would need 32 GB.
+    fn check_workspace_size(&self, links: usize) -> Result<(), DescriptionError> {
+        let nparam = self.nbodies + usize::from(self.is_floating());
+        let numbers = [
+            self.nv.checked_mul(10 * nparam),
+            self.nv.checked_mul(self.nv),
+            links.checked_mul(12),
+        ]
+        .into_iter()
+        .try_fold(0usize, |sum, n| n.and_then(|n| sum.checked_add(n)));
+        match numbers.and_then(|n| n.checked_mul(8)) {
+            Some(bytes) if bytes <= MAX_DATA_BYTES => Ok(()),
+            bytes => Err(DescriptionError::new(format!(
+                "the model has {} moving joints: its dynamics workspace would need {}, more \
+                 than twinloop's limit of {} GB (the joint-torque regressor alone is nv x 10 \
+                 bodies numbers)",
+                self.nbodies,
+                bytes.map_or("more than 2^64 bytes".to_string(), |b| format!(
+                    "{:.1} GB",
+                    b as f64 / 1e9
+                )),
+                MAX_DATA_BYTES / 1_000_000_000
+            ))),
+        }
     }
 
     /// Count the bodies into `nq`, `nv` and `subtree_end`. Depth-first numbering makes

@@ -83,3 +83,33 @@ fn bodies_are_numbered_depth_first_in_file_order() {
             .all(|(i, &p)| p == twinloop_dynamics::BASE || p < i)
     );
 }
+
+/// A chain too long for memory is refused with a message before `Data` allocates
+/// (8 000 joints: the regressor and mass matrix would take 5.6 GB; a 20 000-link
+/// chain, 35 GB, used to abort the process).
+#[test]
+fn too_large_a_model_is_refused_before_allocating() {
+    let inertia = Inertia::solid_sphere(1.0, 0.1);
+    let mut b = DescriptionBuilder::new("chain")
+        .link("l0")
+        .mass(1.0, [0.0; 3], inertia)
+        .done();
+    for i in 1..8_000 {
+        b = b
+            .link(format!("l{i}"))
+            .mass(1.0, [0.0; 3], inertia)
+            .done()
+            .joint(
+                format!("j{i}"),
+                JointKind::Continuous,
+                format!("l{}", i - 1),
+                format!("l{i}"),
+            )
+            .axis([0.0, 0.0, 1.0])
+            .done();
+    }
+    let robot = b.build().unwrap();
+    let e = Model::from_description(&robot).unwrap_err();
+    assert!(e.message.contains("7999 moving joints"), "{e}");
+    assert!(e.message.contains("5.6 GB"), "{e}");
+}

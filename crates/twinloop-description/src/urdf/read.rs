@@ -59,6 +59,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
             .push((qname.to_string(), a.value().to_string()));
     }
 
+    let mut notes = Vec::new();
     let mut places = Places {
         robot: root.range().start,
         links: Vec::new(),
@@ -74,7 +75,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
             "link" => {
                 robot.order.push(Item::Link(robot.links.len()));
                 places.links.push(node.range().start);
-                robot.links.push(read_link(node)?);
+                robot.links.push(read_link(node, &mut notes)?);
             }
             "joint" => {
                 robot.order.push(Item::Joint(robot.joints.len()));
@@ -84,7 +85,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
             "material" => {
                 let name = required(node, "name")?;
                 robot.order.push(Item::Material(robot.materials.len()));
-                robot.materials.push(read_material(node, name)?);
+                robot.materials.push(read_material(node, name, &mut notes)?);
             }
             _ => {
                 robot.order.push(Item::Extension(robot.extensions.len()));
@@ -95,8 +96,19 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
             }
         }
     }
+    robot.ignored = notes;
     validate_placed(doc, &robot, &places)?;
     Ok(robot)
+}
+
+/// A note that the reader read past `node`.
+fn note(node: Node, what: impl Into<String>) -> FileNote {
+    let (line, _) = crate::xml::position(node.document(), node.range().start);
+    FileNote {
+        element: crate::xml::element_path(node),
+        line,
+        what: what.into(),
+    }
 }
 
 /// The element's URDF tag: its name, or "" for a prefixed (foreign) element.
@@ -112,7 +124,7 @@ fn raw(node: Node) -> RawXml {
     RawXml(source_text(node).to_string())
 }
 
-fn read_link(node: Node) -> Result<Link, DescriptionError> {
+fn read_link(node: Node, notes: &mut Vec<FileNote>) -> Result<Link, DescriptionError> {
     let mut link = Link::new(required(node, "name")?);
     let mut have_inertial = false;
     for child in node.children().filter(Node::is_element) {
@@ -121,8 +133,8 @@ fn read_link(node: Node) -> Result<Link, DescriptionError> {
                 have_inertial = true;
                 link.inertial = Some(read_inertial(child)?);
             }
-            "visual" => link.visuals.push(read_shape(child)?),
-            "collision" => link.collisions.push(read_shape(child)?),
+            "visual" => link.visuals.push(read_shape(child, notes)?),
+            "collision" => link.collisions.push(read_shape(child, notes)?),
             // Anything else (and a second <inertial>) is kept as written.
             _ => link.extra.push(raw(child)),
         }
@@ -166,7 +178,7 @@ fn read_inertial(node: Node) -> Result<Inertial, DescriptionError> {
     })
 }
 
-fn read_shape(node: Node) -> Result<Shape, DescriptionError> {
+fn read_shape(node: Node, notes: &mut Vec<FileNote>) -> Result<Shape, DescriptionError> {
     let origin = read_origin(node)?;
     let g = child(node, "geometry").ok_or_else(|| error_at(node, "missing <geometry>"))?;
     let shape = g
@@ -186,7 +198,7 @@ fn read_shape(node: Node) -> Result<Shape, DescriptionError> {
         },
         "mesh" => Geometry::Mesh {
             filename: required(shape, "filename")?.to_string(),
-            scale: opt_array::<3>(shape, "scale")?,
+            scale: mesh_scale(shape, notes)?,
         },
         _ => {
             return Err(error_at(
@@ -199,7 +211,11 @@ fn read_shape(node: Node) -> Result<Shape, DescriptionError> {
         }
     };
     let material = match child(node, "material") {
-        Some(m) => Some(read_material(m, m.attribute("name").unwrap_or_default())?),
+        Some(m) => Some(read_material(
+            m,
+            m.attribute("name").unwrap_or_default(),
+            notes,
+        )?),
         None => None,
     };
     Ok(Shape {
@@ -210,13 +226,43 @@ fn read_shape(node: Node) -> Result<Shape, DescriptionError> {
     })
 }
 
-fn read_material(node: Node, name: &str) -> Result<Material, DescriptionError> {
+/// A mesh's `scale`: three numbers; a fourth (written by some exporters) is
+/// read past with a note.
+fn mesh_scale(
+    shape: Node,
+    notes: &mut Vec<FileNote>,
+) -> Result<Option<[f64; 3]>, DescriptionError> {
+    let Some(v) = shape.attribute("scale") else {
+        return Ok(None);
+    };
+    let n = crate::xml::parse_numbers(shape, "scale", v)?;
+    if n.len() == 4 {
+        notes.push(note(
+            shape,
+            format!("scale=\"{v}\" has 4 numbers: the first three are used"),
+        ));
+        return Ok(Some([n[0], n[1], n[2]]));
+    }
+    parse_array::<3>(shape, "scale", v).map(Some)
+}
+
+fn read_material(
+    node: Node,
+    name: &str,
+    notes: &mut Vec<FileNote>,
+) -> Result<Material, DescriptionError> {
     let rgba = match child(node, "color") {
         Some(c) => Some(parse_array::<4>(c, "rgba", required(c, "rgba")?)?),
         None => None,
     };
     let texture = match child(node, "texture") {
-        Some(t) => Some(required(t, "filename")?.to_string()),
+        Some(t) => match t.attribute("filename") {
+            Some(f) => Some(f.to_string()),
+            None => {
+                notes.push(note(t, "a <texture> without a filename: no texture"));
+                None
+            }
+        },
         None => None,
     };
     Ok(Material {

@@ -1,0 +1,126 @@
+//! `<include file="...">`: MuJoCo splices the children of the included file's
+//! `<mujoco>` element in place of the `<include>`. Paths are relative to the
+//! directory of the main model file; included files may include others.
+
+use crate::error::DescriptionError;
+use crate::xml::{error_at, parse_xml, read_text, required};
+use roxmltree::{Document, Node};
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+
+thread_local! {
+    /// The included documents being read on this thread (by address) and their
+    /// files, so that an error at one of their elements names the right file.
+    static FILES: RefCell<Vec<(usize, PathBuf)>> = const { RefCell::new(Vec::new()) };
+}
+
+/// While alive, errors at elements of the registered documents name their files.
+pub(crate) struct Registered(usize);
+
+impl Drop for Registered {
+    fn drop(&mut self) {
+        FILES.with(|f| f.borrow_mut().truncate(self.0));
+    }
+}
+
+/// Register the included documents (`docs[k]` read from `texts[k].0`).
+pub(crate) fn register(docs: &[Document], texts: &[(PathBuf, String)]) -> Registered {
+    FILES.with(|f| {
+        let mut f = f.borrow_mut();
+        let before = f.len();
+        for (d, (path, _)) in docs.iter().zip(texts) {
+            f.push((d as *const Document as usize, path.clone()));
+        }
+        Registered(before)
+    })
+}
+
+/// The file an element's document was included from, if it was.
+pub(crate) fn file_of(doc: &Document) -> Option<PathBuf> {
+    let at = doc as *const Document as usize;
+    FILES.with(|f| {
+        f.borrow()
+            .iter()
+            .find(|(d, _)| *d == at)
+            .map(|(_, p)| p.clone())
+    })
+}
+
+/// Deepest chain of files including files (a guard against runaway nesting).
+const MAX_DEPTH: usize = 32;
+
+/// The text of every file that `root`'s top-level `<include>`s bring in, depth
+/// first in document order (the order [`splice`] consumes them).
+pub(crate) fn read_includes(
+    root: Node,
+    dir: Option<&Path>,
+) -> Result<Vec<(PathBuf, String)>, DescriptionError> {
+    let mut out = Vec::new();
+    collect(root, dir, &mut Vec::new(), &mut out)?;
+    Ok(out)
+}
+
+fn collect(
+    root: Node,
+    dir: Option<&Path>,
+    chain: &mut Vec<PathBuf>,
+    out: &mut Vec<(PathBuf, String)>,
+) -> Result<(), DescriptionError> {
+    for inc in root
+        .children()
+        .filter(|c| c.is_element() && c.tag_name().name() == "include")
+    {
+        let file = required(inc, "file")?;
+        let Some(dir) = dir else {
+            return Err(error_at(
+                inc,
+                "<include> needs the model's directory: read the model from its file",
+            ));
+        };
+        let path = dir.join(file);
+        if chain.contains(&path) || chain.len() >= MAX_DEPTH {
+            return Err(error_at(
+                inc,
+                format!("{} includes itself (or nests too deep)", path.display()),
+            ));
+        }
+        let text = read_text(&path)
+            .map_err(|e| error_at(inc, format!("cannot read the included file: {}", e.message)))?;
+        let slot = out.len();
+        out.push((path.clone(), String::new()));
+        {
+            let doc = parse_xml(&text).map_err(|e| e.in_file(&path))?;
+            let inner = doc.root_element();
+            if inner.tag_name().name() != "mujoco" {
+                return Err(
+                    error_at(inner, "an included file must have <mujoco> at its root")
+                        .in_file(&path),
+                );
+            }
+            chain.push(path);
+            collect(inner, Some(dir), chain, out)?;
+            chain.pop();
+        }
+        out[slot].1 = text;
+    }
+    Ok(())
+}
+
+/// The children of `root` with every `<include>` replaced by the children of the
+/// file it names (`docs`, parsed from [`read_includes`]'s texts in its order).
+pub(crate) fn splice<'a, 'i>(
+    root: Node<'a, 'i>,
+    docs: &'a [Document<'i>],
+    next: &mut usize,
+    out: &mut Vec<Node<'a, 'i>>,
+) {
+    for c in root.children().filter(Node::is_element) {
+        if c.tag_name().name() == "include" {
+            let doc = &docs[*next];
+            *next += 1;
+            splice(doc.root_element(), docs, next, out);
+        } else {
+            out.push(c);
+        }
+    }
+}

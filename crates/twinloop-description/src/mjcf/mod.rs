@@ -1,0 +1,1789 @@
+//! MJCF reader: a MuJoCo model read as MuJoCo's compiler reads it, as far as a
+//! rigid-body model goes: the masses, inertias, kinematics and gravity of the
+//! description are those of MuJoCo's compiled model, and a joint position is
+//! MuJoCo's `qpos` (docs/mjcf.md; checked against MuJoCo on dm_control's and
+//! gymnasium's models by crates/twinloop-dynamics/tests/mjcf_mujoco.rs).
+//!
+//! # How MJCF maps onto a [`Description`]
+//!
+//! - Every `<body>` becomes a [`Link`] of the body's name (unnamed bodies get
+//!   `body<N>`), in a tree that follows the body nesting. The link frame is the
+//!   body frame, except that it sits at the last hinge's `pos` (see below).
+//! - Top-level bodies: one with a `<freejoint/>` (or `<joint type="free">`) as its
+//!   only joint is the floating base: no joint, no `world` link (twinloop adds the
+//!   floating base itself when it compiles the dynamics); its `pos`/`quat` are
+//!   MuJoCo's initial qpos and are dropped. One jointless body at the origin is
+//!   simply the root. Otherwise a link `world` is added and every top-level body
+//!   hangs from it at its `pos`/`quat`; a free joint beside other top-level bodies
+//!   is an error (one floating tree per file).
+//! - A body's joints, in order: `hinge` becomes [`JointKind::Revolute`] when
+//!   limited (the `range`, converted from degrees unless `<compiler
+//!   angle="radian">`) and [`JointKind::Continuous`] otherwise; `slide` becomes
+//!   [`JointKind::Prismatic`]; `ball` is an error. MuJoCo applies a body's joints
+//!   one after the other in the body frame as moved by the ones before; each
+//!   joint but the last gets a massless link `<body>_<joint>`. A body without a
+//!   joint is attached by a fixed joint named `<body>_fixed`. Joint names are
+//!   MJCF's, or `<body>_joint` (`<body>_joint2`, ...) for unnamed ones. "Limited"
+//!   follows MuJoCo: `limited="true"`, or `"auto"`/absent with a `range` when
+//!   `autolimits` is on (its default). `actuatorfrcrange` gives the limit's
+//!   effort (the larger magnitude), `damping` and `frictionloss` the
+//!   [`JointDynamics`], `armature` [`Joint::armature`]. The axis is normalised.
+//!   `ref` goes into the joint's origin (a turn or shift of `-ref` along the
+//!   axis), so that q is MuJoCo's qpos; `springref` is ignored.
+//! - A hinge `pos` (a point on the axis, in the body frame) is handled by putting
+//!   the joint's link frame at that point, axes unchanged: everything placed in
+//!   the body (inertial, geoms, sites, child bodies) is shifted by minus the last
+//!   hinge's `pos`. The kinematics are exactly MuJoCo's; only the link frame
+//!   differs from the body frame. (A slide keeps the anchor before it.)
+//! - Mass properties (modules `inertia` and `mesh`): `<inertial pos quat mass
+//!   diaginertia|fullinertia>` as written; a body without one (or every body with
+//!   `inertiafromgeom="true"`) gets MuJoCo's sum of its geoms in
+//!   `inertiagrouprange` (box, sphere, capsule, cylinder, ellipsoid, solid or
+//!   `shellinertia`; STL and OBJ meshes), each of its `mass` or `density`. Then
+//!   `boundmass`, `boundinertia`, `balanceinertia` and, over the whole model,
+//!   `settotalmass`.
+//! - Geoms as shapes: `box` (half sizes, written as full sizes), `sphere`,
+//!   `cylinder` and `capsule` (radius and half-length; the [`Geometry`] holds the
+//!   full length), and `mesh` by asset name (the asset's `file` with `meshdir` or
+//!   `assetdir` in front, and its `scale`). `fromto` is turned into a position and
+//!   orientation (box and ellipsoid get a square cross-section of `size[0]`, as
+//!   in MuJoCo). `plane`, `hfield`, `ellipsoid` and `sdf` geoms are not shapes. A
+//!   geom is a visual if its `group` is 0, 1 or 2 (the groups MuJoCo's viewer
+//!   shows by default) and a collision shape if its `contype` or `conaffinity` is
+//!   not 0, so Menagerie's `visual`/`collision` classes land where expected. A
+//!   visual's material is the geom's `material` asset (name and rgba) or, failing
+//!   that, its `rgba`.
+//! - `<site>` becomes a [`Frame`] on the body's link (unnamed: `<body>_site<N>`).
+//! - `<default>` classes (nested, `class` and `childclass`) apply to joints,
+//!   geoms, sites, meshes and materials, and orientations may be given as `quat`
+//!   (normalised), `axisangle`, `euler` (with `eulerseq`), `xyaxes` or `zaxis`.
+//! - `<include file>` at the top level splices the file's sections in place
+//!   (module `include`); `<option gravity>` and `<flag gravity="disable">` set
+//!   [`Description::gravity`].
+//! - Read past, and listed in [`Description::unmodeled`] for `lint`: tendons,
+//!   equality constraints, actuators that drive no joint, sensors at sites.
+//!   Ignored: cameras, lights, other actuators and sensors, contact settings,
+//!   keyframes, and geoms and sites attached to the world. `<replicate>`,
+//!   `<attach>`, composite objects and nested includes are errors rather than
+//!   silently dropped bodies.
+//! - `<frame>`: its placement is composed onto the bodies, geoms, sites and
+//!   frames inside it, and its `childclass` applies to them.
+
+use crate::description::*;
+pub(crate) mod include;
+mod inertia;
+mod mesh;
+
+use crate::error::DescriptionError;
+use crate::xml::{
+    Places, error_at, error_at_attr, opt_array, parse_array, parse_numbers, read_text, required,
+    validate_placed,
+};
+use inertia::{MassProps, Solid};
+use roxmltree::{Document, Node};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Read an MJCF model from text. Errors name the line, column and element.
+/// `<include>` needs a directory: use [`read_file`] for models that include files.
+pub fn from_str(text: &str) -> Result<Description, DescriptionError> {
+    let doc = crate::xml::parse_xml(text)?;
+    from_document(&doc, None)
+}
+
+/// Read an MJCF file (and the files it includes); errors carry the file path.
+pub fn read_file(path: impl AsRef<Path>) -> Result<Description, DescriptionError> {
+    let path = path.as_ref();
+    let text = read_text(path)?;
+    let doc = crate::xml::parse_xml(&text).map_err(|e| e.in_file(path))?;
+    from_document(&doc, path.parent()).map_err(|e| e.in_file(path))
+}
+
+use inertia::{Mat, Vec3};
+
+const IDENTITY: Mat = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// A placement: translation and rotation (of `<frame>`s around an element).
+type Xf = (Vec3, Mat);
+
+/// No enclosing frame.
+const NO_FRAME: Xf = ([0.0; 3], IDENTITY);
+
+/// `(pos, rot)` given inside frame `f`, in the frame's parent.
+fn compose(f: &Xf, pos: Vec3, rot: Mat) -> Xf {
+    (add(&f.0, &mat_vec(&f.1, &pos)), mat_mul(&f.1, &rot))
+}
+
+/// An element seen through the `<frame>`s around it: the element, their
+/// placement and the `childclass` in force.
+type Framed<'a, 'i> = (Node<'a, 'i>, Xf, Option<String>);
+
+/// Deepest nesting of `<frame>` elements followed.
+const MAX_FRAME_DEPTH: usize = 1000;
+
+/// Longest chain of default classes followed (a guard; class chains are trees).
+const MAX_DEPTH: usize = 100_000;
+
+/// A body still to read: its parent link (name, and the offset of that link's
+/// frame from its body frame) and the `childclass` in force.
+struct Pending<'a, 'i> {
+    node: Node<'a, 'i>,
+    parent: Option<(String, Vec3)>,
+    childclass: Option<String>,
+    /// Placement of the `<frame>`s around the body in its parent body.
+    frame: Xf,
+}
+
+fn mat_mul(a: &Mat, b: &Mat) -> Mat {
+    let mut m = [[0.0; 3]; 3];
+    for (i, row) in m.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    m
+}
+
+fn mat_vec(a: &Mat, v: &Vec3) -> Vec3 {
+    [
+        a[0][0] * v[0] + a[0][1] * v[1] + a[0][2] * v[2],
+        a[1][0] * v[0] + a[1][1] * v[1] + a[1][2] * v[2],
+        a[2][0] * v[0] + a[2][1] * v[1] + a[2][2] * v[2],
+    ]
+}
+
+fn sub(a: &Vec3, b: &Vec3) -> Vec3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn add(a: &Vec3, b: &Vec3) -> Vec3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn dot(a: &Vec3, b: &Vec3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm(a: &Vec3) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// `a / |a|`, or `None` for a (near) zero vector.
+fn unit(a: &Vec3) -> Option<Vec3> {
+    let n = norm(a);
+    (n > 1e-12 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
+}
+
+/// Rotation by `angle` about the unit `axis` (Rodrigues).
+fn axis_angle(axis: &Vec3, angle: f64) -> Mat {
+    let (s, c) = angle.sin_cos();
+    let t = 1.0 - c;
+    let [x, y, z] = *axis;
+    [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
+}
+
+/// The smallest rotation taking +z to the unit vector `z` (MuJoCo's `zaxis`).
+fn z_to(z: &Vec3) -> Mat {
+    let ez = [0.0, 0.0, 1.0];
+    let c = cross(&ez, z);
+    match unit(&c) {
+        Some(axis) => axis_angle(&axis, dot(&ez, z).clamp(-1.0, 1.0).acos()),
+        None if z[2] < 0.0 => axis_angle(&[1.0, 0.0, 0.0], std::f64::consts::PI),
+        None => IDENTITY,
+    }
+}
+
+/// A pose from a translation and a rotation matrix, without negative zeros.
+fn pose(xyz: Vec3, r: &Mat) -> Pose {
+    let p = Pose::from_matrix(xyz, *r);
+    Pose {
+        xyz: p.xyz.map(|v| v + 0.0),
+        rpy: p.rpy.map(|v| v + 0.0),
+    }
+}
+
+/// A hinge or slide joint of a body: the joint (axis, limits, dynamics), its
+/// element, its anchor in the body frame (a hinge's `pos`; a slide keeps the
+/// anchor before it) and its `ref` (radians for a hinge).
+struct BodyJoint<'a, 'i> {
+    joint: Joint,
+    node: Node<'a, 'i>,
+    anchor: Vec3,
+    hinge: bool,
+    reference: f64,
+}
+
+/// `<compiler>` settings that change how numbers are read.
+struct Compiler {
+    degrees: bool,
+    /// `eulerseq`: axis per angle, lowercase = rotating axes, uppercase = fixed.
+    eulerseq: [u8; 3],
+    autolimits: bool,
+    meshdir: Option<String>,
+    inertia_from_geom: FromGeom,
+    /// `inertiagrouprange`: the geom groups that count for a body's inertia.
+    inertia_groups: [i64; 2],
+    bound_mass: f64,
+    bound_inertia: f64,
+    balance_inertia: bool,
+    /// `settotalmass`: every body's mass and inertia scaled to give this total.
+    total_mass: Option<f64>,
+}
+
+/// `inertiafromgeom`: when a body's mass properties come from its geoms.
+#[derive(Clone, Copy, PartialEq)]
+enum FromGeom {
+    /// Never: a body without `<inertial>` is massless.
+    False,
+    /// Always, overriding `<inertial>`.
+    True,
+    /// When the body has no `<inertial>` (MuJoCo's default).
+    Auto,
+}
+
+/// A default class: its parent and its element templates (`<joint>`, `<geom>`, ...).
+struct Class<'a, 'i> {
+    parent: Option<String>,
+    elements: Vec<Node<'a, 'i>>,
+}
+
+#[derive(Clone)]
+struct MeshAsset {
+    file: Option<String>,
+    scale: Option<Vec3>,
+    /// `inertia`: how MuJoCo counts the mesh's volume (legacy, exact, convex, shell).
+    inertia: Option<String>,
+}
+
+struct Reader<'a, 'i> {
+    /// The model file's directory: where mesh paths start.
+    dir: Option<std::path::PathBuf>,
+    compiler: Compiler,
+    classes: HashMap<String, Class<'a, 'i>>,
+    meshes: HashMap<String, MeshAsset>,
+    materials: HashMap<String, [f64; 4]>,
+    robot: Description,
+    places: Places,
+    unnamed_bodies: usize,
+}
+
+/// Where an attribute's value came from: the element itself or a default class.
+type Found<'a, 'i> = (Node<'a, 'i>, &'a str);
+
+const ORIENTATIONS: [&str; 5] = ["quat", "axisangle", "euler", "xyaxes", "zaxis"];
+
+/// Read an MJCF document; `dir` is the directory `<include>` paths are relative to.
+pub(crate) fn from_document(
+    doc: &Document,
+    dir: Option<&Path>,
+) -> Result<Description, DescriptionError> {
+    let root = doc.root_element();
+    if root.tag_name().name() != "mujoco" {
+        return Err(error_at(
+            root,
+            format!(
+                "root element is <{}>: an MJCF model has <mujoco>",
+                crate::xml::qualified_name(root)
+            ),
+        ));
+    }
+    let texts = include::read_includes(root, dir)?;
+    let mut docs = Vec::with_capacity(texts.len());
+    for (path, text) in &texts {
+        docs.push(crate::xml::parse_xml(text).map_err(|e| e.in_file(path))?);
+    }
+    let _files = include::register(&docs, &texts);
+    let mut sections: Vec<Node> = Vec::new();
+    include::splice(root, &docs, &mut 0, &mut sections);
+    let mut reader = Reader::new(root);
+    reader.dir = dir.map(Path::to_path_buf);
+    reader.read(doc, root, &sections)?;
+    Ok(reader.robot)
+}
+
+impl<'a, 'i> Reader<'a, 'i> {
+    fn new(root: Node) -> Self {
+        Reader {
+            dir: None,
+            compiler: Compiler {
+                degrees: true,
+                eulerseq: *b"xyz",
+                autolimits: true,
+                meshdir: None,
+                inertia_from_geom: FromGeom::Auto,
+                inertia_groups: [0, 5],
+                bound_mass: 0.0,
+                bound_inertia: 0.0,
+                balance_inertia: false,
+                total_mass: None,
+            },
+            classes: HashMap::new(),
+            meshes: HashMap::new(),
+            materials: HashMap::new(),
+            robot: Description {
+                name: root.attribute("model").unwrap_or_default().to_string(),
+                ..Default::default()
+            },
+            places: Places {
+                robot: root.range().start,
+                links: Vec::new(),
+                joints: Vec::new(),
+            },
+            unnamed_bodies: 0,
+        }
+    }
+
+    /// The sections of `<mujoco>` (includes spliced in): settings, defaults,
+    /// assets, then the bodies; last the compiler's `settotalmass`.
+    fn read(
+        &mut self,
+        doc: &Document,
+        root: Node<'a, 'i>,
+        sections: &[Node<'a, 'i>],
+    ) -> Result<(), DescriptionError> {
+        for &s in sections {
+            match s.tag_name().name() {
+                "compiler" => self.compiler(s)?,
+                "option" => self.option(s)?,
+                _ => {}
+            }
+        }
+        for &s in sections {
+            if s.tag_name().name() == "default" {
+                let name = s.attribute("class").unwrap_or("main").to_string();
+                self.default_class(s, name)?;
+            }
+        }
+        for &s in sections {
+            if s.tag_name().name() == "asset" {
+                self.assets(s)?;
+            }
+        }
+        let mut top: Vec<Framed> = Vec::new();
+        for &s in sections {
+            if s.tag_name().name() != "worldbody" {
+                continue;
+            }
+            for (c, xf, cc) in self.through_frames(s, None)? {
+                match c.tag_name().name() {
+                    "body" => top.push((c, xf, cc)),
+                    t @ ("replicate" | "attach" | "include" | "composite" | "flexcomp") => {
+                        return Err(error_at(c, format!("<{t}> is not supported")));
+                    }
+                    _ => {} // world geoms, sites, lights, cameras
+                }
+            }
+        }
+        if top.is_empty() {
+            return Err(error_at(root, "no <body> in <worldbody>"));
+        }
+        let world = self.needs_world_link(&top)?;
+        if world {
+            self.robot.order.push(Item::Link(self.robot.links.len()));
+            self.places.links.push(root.range().start);
+            self.robot.links.push(Link::new("world"));
+        }
+        // Depth first, children in file order, with an explicit stack: deep
+        // nesting must not become deep recursion.
+        let mut pending: Vec<Pending> = top
+            .into_iter()
+            .rev()
+            .map(|(node, frame, childclass)| Pending {
+                node,
+                parent: world.then(|| ("world".to_string(), [0.0; 3])),
+                childclass,
+                frame,
+            })
+            .collect();
+        while let Some(p) = pending.pop() {
+            self.body(p, &mut pending)?;
+        }
+        if let Some(total) = self.compiler.total_mass {
+            self.set_total_mass(total);
+        }
+        for &s in sections {
+            self.unmodeled(s);
+        }
+        validate_placed(doc, &self.robot, &self.places)
+    }
+
+    /// The element children of `node` with every `<frame>` opened: each with the
+    /// placement of the frames around it (in `node`'s frame) and the
+    /// `childclass` in force (a frame's own, else `cc`).
+    fn through_frames(
+        &self,
+        node: Node<'a, 'i>,
+        cc: Option<&str>,
+    ) -> Result<Vec<Framed<'a, 'i>>, DescriptionError> {
+        let mut out = Vec::new();
+        // (element, enclosing placement, childclass, depth), in file order.
+        let mut stack: Vec<(Node, Xf, Option<String>, usize)> = node
+            .children()
+            .filter(Node::is_element)
+            .map(|c| (c, NO_FRAME, cc.map(str::to_string), 0))
+            .collect();
+        stack.reverse();
+        while let Some((c, xf, cc, depth)) = stack.pop() {
+            if c.tag_name().name() != "frame" {
+                out.push((c, xf, cc));
+                continue;
+            }
+            if depth >= MAX_FRAME_DEPTH {
+                return Err(error_at(c, "<frame>s nested too deep"));
+            }
+            let pos = opt_array::<3>(c, "pos")?.unwrap_or([0.0; 3]);
+            let inner = compose(&xf, pos, self.orientation(c, "frame", None)?);
+            let cc = self.childclass(c, cc)?;
+            let children: Vec<Node> = c.children().filter(Node::is_element).collect();
+            for k in children.into_iter().rev() {
+                stack.push((k, inner, cc.clone(), depth + 1));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Whether the top-level bodies hang from a `world` link. Not for one body
+    /// with a free joint (the floating base; its `pos`/`quat` are only MuJoCo's
+    /// initial qpos) nor for one jointless body at the origin (the root itself);
+    /// otherwise yes, and then no top-level body may have a free joint.
+    fn needs_world_link(&self, top: &[Framed<'a, 'i>]) -> Result<bool, DescriptionError> {
+        let joints = |b: Node<'a, 'i>| -> Vec<Node<'a, 'i>> {
+            b.children()
+                .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
+                .collect()
+        };
+        if let [(only, frame, _)] = top {
+            let (only, framed) = (*only, *frame != NO_FRAME);
+            let js = joints(only);
+            if js.len() == 1 && self.joint_type(js[0], None)? == "free" {
+                return Ok(false);
+            }
+            let placed = framed
+                || only.attribute("pos").is_some()
+                || ORIENTATIONS.iter().any(|a| only.attribute(*a).is_some());
+            if js.is_empty() && !placed {
+                return Ok(false);
+            }
+        }
+        for &(b, _, _) in top {
+            for j in joints(b) {
+                if self.joint_type(j, None)? == "free" && top.len() > 1 {
+                    let other = if top[0].0 == b { top[1].0 } else { top[0].0 };
+                    return Err(error_at(
+                        other,
+                        format!(
+                            "a second top-level body beside the free-floating \"{}\": twinloop \
+                             models one floating body tree per file",
+                            b.attribute("name").unwrap_or("body")
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    /// Elements of a section that act on the physics beyond the rigid-body tree:
+    /// tendons, equality constraints, actuators that do not drive a joint, and
+    /// sensors at sites.
+    fn unmodeled(&mut self, section: Node<'a, 'i>) {
+        for e in section.children().filter(Node::is_element) {
+            let what = match (section.tag_name().name(), e.tag_name().name()) {
+                ("tendon", t) => format!(
+                    "{t} tendon: its length limits, stiffness, damping and any actuator on it \
+                     act on the joints it spans; twinloop's dynamics leave them out"
+                ),
+                ("equality", t) => format!(
+                    "{t} equality constraint: twinloop's dynamics leave it out (the joints \
+                     or bodies it ties move independently)"
+                ),
+                ("actuator", t) if e.attribute("joint").is_none() => {
+                    let on = ["tendon", "site", "body", "jointinparent", "cranksite"]
+                        .into_iter()
+                        .find(|a| e.attribute(*a).is_some())
+                        .unwrap_or("something other than a joint");
+                    format!(
+                        "{t} actuator on a {on}: only actuators on a joint become joint \
+                         torques in twinloop"
+                    )
+                }
+                ("sensor", t) if e.attribute("site").is_some() => {
+                    format!("{t} sensor at a site: twinloop does not simulate it")
+                }
+                _ => continue,
+            };
+            let (line, _) = crate::xml::position(e.document(), e.range().start);
+            self.robot.unmodeled.push(FileNote {
+                element: crate::xml::element_path(e),
+                line,
+                what,
+            });
+        }
+    }
+
+    /// MuJoCo's `settotalmass`: every body's mass and inertia scaled by one factor.
+    fn set_total_mass(&mut self, total: f64) {
+        let now = self.robot.total_mass();
+        if now <= 0.0 {
+            return;
+        }
+        let k = total / now;
+        for l in &mut self.robot.links {
+            if let Some(i) = &mut l.inertial {
+                i.mass *= k;
+                let t = &mut i.inertia;
+                for v in [
+                    &mut t.ixx, &mut t.iyy, &mut t.izz, &mut t.ixy, &mut t.ixz, &mut t.iyz,
+                ] {
+                    *v *= k;
+                }
+            }
+        }
+    }
+
+    /// `<option gravity>` and `<flag gravity="disable">`.
+    fn option(&mut self, node: Node<'a, 'i>) -> Result<(), DescriptionError> {
+        if let Some(v) = node.attribute("gravity") {
+            self.robot.gravity = Some(parse_array::<3>(node, "gravity", v)?);
+        }
+        for f in node.children().filter(|c| c.has_tag_name("flag")) {
+            match f.attribute("gravity") {
+                Some("disable") => self.robot.gravity = Some([0.0; 3]),
+                Some("enable") | None => {}
+                Some(v) => {
+                    return Err(error_at_attr(
+                        f,
+                        "gravity",
+                        format!("gravity=\"{v}\": expected \"enable\" or \"disable\""),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn compiler(&mut self, node: Node<'a, 'i>) -> Result<(), DescriptionError> {
+        if let Some(a) = node.attribute("angle") {
+            self.compiler.degrees = match a {
+                "degree" => true,
+                "radian" => false,
+                _ => {
+                    return Err(error_at_attr(
+                        node,
+                        "angle",
+                        format!("angle=\"{a}\": expected \"degree\" or \"radian\""),
+                    ));
+                }
+            };
+        }
+        if let Some(s) = node.attribute("eulerseq") {
+            let b = s.as_bytes();
+            if b.len() != 3 || !b.iter().all(|c| b"xyzXYZ".contains(c)) {
+                return Err(error_at_attr(
+                    node,
+                    "eulerseq",
+                    format!("eulerseq=\"{s}\": expected three of x, y, z, X, Y, Z"),
+                ));
+            }
+            self.compiler.eulerseq = [b[0], b[1], b[2]];
+        }
+        if let Some(v) = node.attribute("autolimits") {
+            self.compiler.autolimits = bool_attr(node, "autolimits", v)?;
+        }
+        if let Some(v) = node.attribute("inertiafromgeom") {
+            self.compiler.inertia_from_geom = match v {
+                "true" => FromGeom::True,
+                "false" => FromGeom::False,
+                "auto" => FromGeom::Auto,
+                _ => {
+                    return Err(error_at_attr(
+                        node,
+                        "inertiafromgeom",
+                        format!("inertiafromgeom=\"{v}\": expected true, false or auto"),
+                    ));
+                }
+            };
+        }
+        if let Some(v) = node.attribute("inertiagrouprange") {
+            let r = parse_array::<2>(node, "inertiagrouprange", v)?;
+            self.compiler.inertia_groups = r.map(|g| g as i64);
+        }
+        let number = |attr: &str| match node.attribute(attr) {
+            Some(v) => crate::xml::parse_number(node, attr, v).map(Some),
+            None => Ok(None),
+        };
+        if let Some(m) = number("boundmass")? {
+            self.compiler.bound_mass = m;
+        }
+        if let Some(i) = number("boundinertia")? {
+            self.compiler.bound_inertia = i;
+        }
+        if let Some(m) = number("settotalmass")? {
+            self.compiler.total_mass = (m > 0.0).then_some(m);
+        }
+        if let Some(v) = node.attribute("balanceinertia") {
+            self.compiler.balance_inertia = bool_attr(node, "balanceinertia", v)?;
+        }
+        if node.attribute("coordinate") == Some("global") {
+            return Err(error_at_attr(
+                node,
+                "coordinate",
+                "coordinate=\"global\" is not supported",
+            ));
+        }
+        if let Some(d) = node.attribute("meshdir").or(node.attribute("assetdir")) {
+            self.compiler.meshdir = Some(d.to_string());
+        }
+        Ok(())
+    }
+
+    /// A `<default>` and the classes nested in it (iteratively: nesting depth
+    /// must not become stack depth).
+    fn default_class(
+        &mut self,
+        top: Node<'a, 'i>,
+        top_name: String,
+    ) -> Result<(), DescriptionError> {
+        let mut pending: Vec<(Node<'a, 'i>, String, Option<String>)> = vec![(top, top_name, None)];
+        while let Some((node, name, parent)) = pending.pop() {
+            let elements: Vec<Node> = node
+                .children()
+                .filter(|c| c.is_element() && c.tag_name().name() != "default")
+                .collect();
+            match self.classes.get_mut(&name) {
+                // Two top-level <default> sections both define "main": merge them.
+                Some(c) if parent.is_none() && name == "main" => c.elements.extend(elements),
+                Some(_) => {
+                    return Err(error_at(
+                        node,
+                        format!("default class \"{name}\" is defined twice"),
+                    ));
+                }
+                None => {
+                    self.classes
+                        .insert(name.clone(), Class { parent, elements });
+                }
+            }
+            let nested: Vec<Node> = node
+                .children()
+                .filter(|c| c.is_element() && c.tag_name().name() == "default")
+                .collect();
+            for c in nested.into_iter().rev() {
+                let child = required(c, "class")?.to_string();
+                pending.push((c, child, Some(name.clone())));
+            }
+        }
+        Ok(())
+    }
+
+    /// The class an element uses: its `class`, the nearest `childclass`, or "main".
+    fn class_of(
+        &self,
+        node: Node<'a, 'i>,
+        childclass: Option<&str>,
+    ) -> Result<String, DescriptionError> {
+        match node.attribute("class") {
+            Some(c) if self.classes.contains_key(c) => Ok(c.to_string()),
+            Some(c) => Err(error_at_attr(
+                node,
+                "class",
+                format!("unknown default class \"{c}\""),
+            )),
+            None => Ok(childclass.unwrap_or("main").to_string()),
+        }
+    }
+
+    /// An attribute of an element of kind `kind` (`geom`, `joint`, ...): its own,
+    /// else the nearest default class's.
+    fn get(
+        &self,
+        node: Node<'a, 'i>,
+        kind: &str,
+        class: &str,
+        attr: &str,
+    ) -> Option<Found<'a, 'i>> {
+        if let Some(v) = node.attribute(attr) {
+            return Some((node, v));
+        }
+        let mut at = Some(class);
+        let mut steps = 0;
+        while let Some(name) = at {
+            let c = self.classes.get(name)?;
+            for e in c.elements.iter().rev() {
+                if e.tag_name().name() == kind
+                    && let Some(v) = e.attribute(attr)
+                {
+                    return Some((*e, v));
+                }
+            }
+            at = c.parent.as_deref();
+            steps += 1;
+            if steps > MAX_DEPTH {
+                break;
+            }
+        }
+        None
+    }
+
+    /// The element's own orientation, else the one of its nearest default class.
+    fn orientation(
+        &self,
+        node: Node<'a, 'i>,
+        kind: &str,
+        class: Option<&str>,
+    ) -> Result<Mat, DescriptionError> {
+        let own: Vec<&str> = ORIENTATIONS
+            .iter()
+            .copied()
+            .filter(|a| node.attribute(*a).is_some())
+            .collect();
+        if own.len() > 1 {
+            return Err(error_at(
+                node,
+                format!("more than one orientation ({})", own.join(", ")),
+            ));
+        }
+        if let Some(attr) = own.first() {
+            return self.rotation(node, attr, node.attribute(*attr).unwrap_or_default());
+        }
+        let Some(class) = class else {
+            return Ok(IDENTITY);
+        };
+        let mut at = Some(class);
+        let mut steps = 0;
+        while let Some(name) = at {
+            let Some(c) = self.classes.get(name) else {
+                break;
+            };
+            for e in c.elements.iter().rev() {
+                if e.tag_name().name() != kind {
+                    continue;
+                }
+                if let Some(attr) = ORIENTATIONS.iter().find(|a| e.attribute(**a).is_some()) {
+                    return self.rotation(*e, attr, e.attribute(*attr).unwrap_or_default());
+                }
+            }
+            at = c.parent.as_deref();
+            steps += 1;
+            if steps > MAX_DEPTH {
+                break;
+            }
+        }
+        Ok(IDENTITY)
+    }
+
+    fn angle(&self, v: f64) -> f64 {
+        if self.compiler.degrees {
+            v.to_radians()
+        } else {
+            v
+        }
+    }
+
+    /// The rotation an orientation attribute describes.
+    fn rotation(&self, node: Node, attr: &str, value: &str) -> Result<Mat, DescriptionError> {
+        let bad = |what: &str| error_at_attr(node, attr, format!("{attr}=\"{value}\": {what}"));
+        match attr {
+            "quat" => {
+                let q = parse_array::<4>(node, attr, value)?;
+                let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if !(n > 1e-12 && n.is_finite()) {
+                    return Err(bad("zero quaternion"));
+                }
+                Ok(quaternion_to_matrix(q))
+            }
+            "axisangle" => {
+                let a = parse_array::<4>(node, attr, value)?;
+                let axis = unit(&[a[0], a[1], a[2]]).ok_or_else(|| bad("zero axis"))?;
+                Ok(axis_angle(&axis, self.angle(a[3])))
+            }
+            "euler" => {
+                let e = parse_array::<3>(node, attr, value)?;
+                let mut r = IDENTITY;
+                for (k, &c) in self.compiler.eulerseq.iter().enumerate() {
+                    let axis = match c.to_ascii_lowercase() {
+                        b'x' => [1.0, 0.0, 0.0],
+                        b'y' => [0.0, 1.0, 0.0],
+                        _ => [0.0, 0.0, 1.0],
+                    };
+                    let step = axis_angle(&axis, self.angle(e[k]));
+                    r = if c.is_ascii_lowercase() {
+                        mat_mul(&r, &step) // about the rotated (moving) axes
+                    } else {
+                        mat_mul(&step, &r) // about the fixed axes
+                    };
+                }
+                Ok(r)
+            }
+            "xyaxes" => {
+                let v = parse_array::<6>(node, attr, value)?;
+                let x = unit(&[v[0], v[1], v[2]]).ok_or_else(|| bad("zero x axis"))?;
+                let y0 = [v[3], v[4], v[5]];
+                let d = dot(&x, &y0);
+                let y = unit(&sub(&y0, &[d * x[0], d * x[1], d * x[2]]))
+                    .ok_or_else(|| bad("y axis parallel to x axis"))?;
+                let z = cross(&x, &y);
+                Ok([[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]])
+            }
+            _ => {
+                let z = parse_array::<3>(node, attr, value)?;
+                let z = unit(&z).ok_or_else(|| bad("zero axis"))?;
+                Ok(z_to(&z))
+            }
+        }
+    }
+
+    fn assets(&mut self, node: Node<'a, 'i>) -> Result<(), DescriptionError> {
+        for a in node.children().filter(Node::is_element) {
+            match a.tag_name().name() {
+                "mesh" => {
+                    let class = self.class_of(a, None)?;
+                    let file = a.attribute("file").map(|f| self.asset_path(f));
+                    let name = match a.attribute("name") {
+                        Some(n) => n.to_string(),
+                        None => {
+                            let f = required(a, "file")?;
+                            file_stem(f).to_string()
+                        }
+                    };
+                    let scale = match self.get(a, "mesh", &class, "scale") {
+                        Some((n, v)) => Some(parse_array::<3>(n, "scale", v)?),
+                        None => None,
+                    };
+                    let inertia = self
+                        .get(a, "mesh", &class, "inertia")
+                        .map(|f| f.1.to_string());
+                    self.meshes.insert(
+                        name,
+                        MeshAsset {
+                            file,
+                            scale,
+                            inertia,
+                        },
+                    );
+                }
+                "material" => {
+                    let class = self.class_of(a, None)?;
+                    let name = required(a, "name")?.to_string();
+                    let rgba = match self.get(a, "material", &class, "rgba") {
+                        Some((n, v)) => parse_array::<4>(n, "rgba", v)?,
+                        None => [1.0; 4],
+                    };
+                    self.materials.insert(name, rgba);
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// A mesh file as MuJoCo finds it: behind `meshdir` unless absolute.
+    fn asset_path(&self, file: &str) -> String {
+        match &self.compiler.meshdir {
+            Some(dir) if !dir.is_empty() && !file.starts_with('/') => {
+                format!("{}/{}", dir.trim_end_matches('/'), file)
+            }
+            _ => file.to_string(),
+        }
+    }
+
+    fn number(&self, found: Option<Found>, attr: &str) -> Result<Option<f64>, DescriptionError> {
+        match found {
+            Some((n, v)) => Ok(Some(crate::xml::parse_number(n, attr, v)?)),
+            None => Ok(None),
+        }
+    }
+
+    fn integer(
+        &self,
+        found: Option<Found>,
+        attr: &str,
+        default: i64,
+    ) -> Result<i64, DescriptionError> {
+        match found {
+            Some((n, v)) => v
+                .trim()
+                .parse::<i64>()
+                .map_err(|_| error_at_attr(n, attr, format!("{attr}=\"{v}\": not an integer"))),
+            None => Ok(default),
+        }
+    }
+
+    /// One body and its contents; its child bodies go onto `pending`.
+    ///
+    /// MuJoCo applies a body's joints in order, each about its own anchor (`pos`)
+    /// and axis in the body frame as moved by the joints before it, at `qpos - ref`.
+    /// Here each joint gets a link: massless ones `<body>_<joint>` for all but the
+    /// last, whose link is the body's, with its frame at the last hinge anchor.
+    /// A joint's `ref` goes into its origin (a turn or shift of `-ref` along its
+    /// axis), so a twinloop joint position is MuJoCo's qpos.
+    fn body(
+        &mut self,
+        todo: Pending<'a, 'i>,
+        pending: &mut Vec<Pending<'a, 'i>>,
+    ) -> Result<(), DescriptionError> {
+        let Pending {
+            node,
+            parent,
+            childclass,
+            frame,
+        } = todo;
+        let name = self.body_name(node);
+        let childclass = self.childclass(node, childclass)?;
+        let cc = childclass.as_deref();
+        let pos = opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]);
+        let (pos, rot) = compose(&frame, pos, self.orientation(node, "body", None)?);
+        let joints = self.body_joints(node, &name, parent.is_some(), cc)?;
+        let offset = joints.last().map_or([0.0; 3], |j| j.anchor);
+
+        let (link, frames) = self.link_contents(node, &name, cc, offset)?;
+        // Joints to the parent, in order, each with its child link.
+        let mut chain: Vec<(Joint, Node)> = Vec::new();
+        if let Some((parent_link, parent_offset)) = parent {
+            // Placement of the next joint frame's base in the previous link frame.
+            let mut at = sub(&pos, &parent_offset);
+            let mut r = rot;
+            let mut prev = (parent_link, [0.0; 3]);
+            let n = joints.len();
+            for (k, bj) in joints.into_iter().enumerate() {
+                let child = if k + 1 == n {
+                    name.clone()
+                } else {
+                    format!("{name}_{}", bj.joint.name)
+                };
+                let axis = bj.joint.axis_or_default();
+                let mut xyz = add(&at, &mat_vec(&r, &sub(&bj.anchor, &prev.1)));
+                if bj.hinge {
+                    r = mat_mul(&r, &axis_angle(&axis, -bj.reference));
+                } else {
+                    xyz = add(&xyz, &mat_vec(&r, &axis.map(|a| -bj.reference * a)));
+                }
+                let mut j = bj.joint;
+                j.parent = std::mem::take(&mut prev.0);
+                j.child = child.clone();
+                j.origin = pose(xyz, &r);
+                chain.push((j, bj.node));
+                prev = (child, bj.anchor);
+                (at, r) = ([0.0; 3], IDENTITY);
+            }
+            if n == 0 {
+                let mut j = Joint::new(
+                    format!("{name}_fixed"),
+                    JointKind::Fixed,
+                    prev.0,
+                    name.clone(),
+                );
+                j.origin = pose(at, &r);
+                chain.push((j, node));
+            }
+        }
+        // Massless links between joints, each before its joint; the body's link
+        // before the joint that moves it.
+        let last = chain.pop();
+        for (j, jn) in chain {
+            let link = Link {
+                between_joints: true,
+                ..Link::new(j.child.clone())
+            };
+            self.push_link(link, node);
+            self.push_joint(j, jn);
+        }
+        self.push_link(link, node);
+        if let Some((j, jn)) = last {
+            self.push_joint(j, jn);
+        }
+        for f in frames {
+            self.robot.order.push(Item::Frame(self.robot.frames.len()));
+            self.robot.frames.push(f);
+        }
+        self.queue_child_bodies(node, &name, offset, cc, pending)
+    }
+
+    /// Queue a body's child bodies, `<frame>`s opened (in file order: pushed
+    /// reversed onto the stack); elements that would bring in bodies twinloop
+    /// cannot read are errors.
+    fn queue_child_bodies(
+        &self,
+        node: Node<'a, 'i>,
+        name: &str,
+        offset: Vec3,
+        childclass: Option<&str>,
+        pending: &mut Vec<Pending<'a, 'i>>,
+    ) -> Result<(), DescriptionError> {
+        let mut children = Vec::new();
+        for (c, frame, cc) in self.through_frames(node, childclass)? {
+            match c.tag_name().name() {
+                "body" => children.push(Pending {
+                    node: c,
+                    parent: Some((name.to_string(), offset)),
+                    childclass: cc,
+                    frame,
+                }),
+                t @ ("replicate" | "attach" | "include" | "composite" | "flexcomp") => {
+                    return Err(error_at(c, format!("<{t}> is not supported")));
+                }
+                _ => {}
+            }
+        }
+        pending.extend(children.into_iter().rev());
+        Ok(())
+    }
+
+    fn push_link(&mut self, l: Link, node: Node) {
+        self.robot.order.push(Item::Link(self.robot.links.len()));
+        self.places.links.push(node.range().start);
+        self.robot.links.push(l);
+    }
+
+    fn push_joint(&mut self, j: Joint, node: Node) {
+        self.robot.order.push(Item::Joint(self.robot.joints.len()));
+        self.places.joints.push(node.range().start);
+        self.robot.joints.push(j);
+    }
+
+    /// The body's name; an unnamed body is `body1`, `body2`, ... in reading order.
+    fn body_name(&mut self, node: Node) -> String {
+        match node.attribute("name") {
+            Some(n) => n.to_string(),
+            None => {
+                self.unnamed_bodies += 1;
+                format!("body{}", self.unnamed_bodies)
+            }
+        }
+    }
+
+    /// The `childclass` in force inside a body: its own (which must be a known
+    /// class), else the one inherited.
+    fn childclass(
+        &self,
+        node: Node,
+        inherited: Option<String>,
+    ) -> Result<Option<String>, DescriptionError> {
+        match node.attribute("childclass") {
+            Some(c) if self.classes.contains_key(c) => Ok(Some(c.to_string())),
+            Some(c) => Err(error_at_attr(
+                node,
+                "childclass",
+                format!("unknown default class \"{c}\""),
+            )),
+            None => Ok(inherited),
+        }
+    }
+
+    /// A joint element's type: `free` for `<freejoint>`, else its (or its
+    /// class's) `type`, `hinge` by default.
+    fn joint_type(&self, j: Node<'a, 'i>, cc: Option<&str>) -> Result<&'a str, DescriptionError> {
+        if j.tag_name().name() == "freejoint" {
+            return Ok("free");
+        }
+        let class = self.class_of(j, cc)?;
+        Ok(self
+            .get(j, "joint", &class, "type")
+            .map_or("hinge", |f| f.1))
+    }
+
+    /// The body's hinge and slide joints in order (a free joint only as the only
+    /// joint of a top-level body, where it makes no joint).
+    fn body_joints(
+        &self,
+        node: Node<'a, 'i>,
+        name: &str,
+        has_parent: bool,
+        cc: Option<&str>,
+    ) -> Result<Vec<BodyJoint<'a, 'i>>, DescriptionError> {
+        let elements: Vec<Node> = node
+            .children()
+            .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
+            .collect();
+        let mut out = Vec::new();
+        let mut anchor = [0.0; 3];
+        for &j in &elements {
+            let class = self.class_of(j, cc)?;
+            match self.joint_type(j, cc)? {
+                "free" => {
+                    if elements.len() > 1 {
+                        return Err(error_at(
+                            node,
+                            "a free joint must be the body's only joint (MuJoCo allows 6 dofs per body)",
+                        ));
+                    }
+                    if has_parent {
+                        return Err(error_at(
+                            j,
+                            "a free joint is only supported on the top-level body",
+                        ));
+                    }
+                }
+                "ball" => {
+                    return Err(error_at(
+                        j,
+                        "ball joints are not supported: twinloop's dynamics has no spherical joint yet",
+                    ));
+                }
+                kind @ ("hinge" | "slide") => {
+                    let hinge = kind == "hinge";
+                    if hinge {
+                        anchor = match self.get(j, "joint", &class, "pos") {
+                            Some((n, v)) => parse_array::<3>(n, "pos", v)?,
+                            None => [0.0; 3],
+                        };
+                    }
+                    let jname = match j.attribute("name") {
+                        Some(n) => n.to_string(),
+                        None if out.is_empty() => format!("{name}_joint"),
+                        None => format!("{name}_joint{}", out.len() + 1),
+                    };
+                    let reference = self
+                        .number(self.get(j, "joint", &class, "ref"), "ref")?
+                        .unwrap_or(0.0);
+                    out.push(BodyJoint {
+                        joint: self.joint(j, &class, jname, hinge)?,
+                        node: j,
+                        anchor,
+                        hinge,
+                        reference: if hinge {
+                            self.angle(reference)
+                        } else {
+                            reference
+                        },
+                    });
+                }
+                other => {
+                    let (n, _) = self.get(j, "joint", &class, "type").unwrap_or((j, other));
+                    return Err(error_at_attr(
+                        n,
+                        "type",
+                        format!(
+                            "unknown joint type \"{other}\" (expected free, ball, slide or hinge)"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// A hinge or slide joint (name, parent, child and origin are set by the caller).
+    fn joint(
+        &self,
+        j: Node<'a, 'i>,
+        class: &str,
+        name: String,
+        hinge: bool,
+    ) -> Result<Joint, DescriptionError> {
+        let axis = match self.get(j, "joint", class, "axis") {
+            Some((n, v)) => {
+                let a = parse_array::<3>(n, "axis", v)?;
+                unit(&a).ok_or_else(|| error_at_attr(n, "axis", "zero axis"))?
+            }
+            None => [0.0, 0.0, 1.0],
+        };
+        let range = match self.get(j, "joint", class, "range") {
+            Some((n, v)) => {
+                let r = parse_array::<2>(n, "range", v)?;
+                Some(if hinge {
+                    [self.angle(r[0]), self.angle(r[1])]
+                } else {
+                    r
+                })
+            }
+            None => None,
+        };
+        let limited = self.limited(j, class, "limited", range.is_some())?;
+        let force = match self.get(j, "joint", class, "actuatorfrcrange") {
+            Some((n, v)) => Some(parse_array::<2>(n, "actuatorfrcrange", v)?),
+            None => None,
+        };
+        let force_limited = self.limited(j, class, "actuatorfrclimited", force.is_some())?;
+        let (lower, upper) = match (limited, range) {
+            (true, Some(r)) => (Some(r[0]), Some(r[1])),
+            (true, None) => {
+                return Err(error_at(j, "limited joint without a range"));
+            }
+            _ => (None, None),
+        };
+        let effort = match (force_limited, force) {
+            (true, Some(f)) => Some(f[0].abs().max(f[1].abs())),
+            _ => None,
+        };
+        let kind = match (hinge, limited) {
+            (true, true) => JointKind::Revolute,
+            (true, false) => JointKind::Continuous,
+            (false, _) => JointKind::Prismatic,
+        };
+        let mut joint = Joint::new(name, kind, String::new(), String::new());
+        joint.axis = Some(axis);
+        if lower.is_some() || effort.is_some() {
+            joint.limit = Some(Limit {
+                lower,
+                upper,
+                effort,
+                velocity: None,
+            });
+        }
+        let damping = self.number(self.get(j, "joint", class, "damping"), "damping")?;
+        let friction = self.number(self.get(j, "joint", class, "frictionloss"), "frictionloss")?;
+        if damping.is_some() || friction.is_some() {
+            joint.dynamics = Some(JointDynamics { damping, friction });
+        }
+        joint.armature = self
+            .number(self.get(j, "joint", class, "armature"), "armature")?
+            .unwrap_or(0.0);
+        Ok(joint)
+    }
+
+    /// MuJoCo's "limited" logic: true, false, or auto (limited when the range is
+    /// given and autolimits is on).
+    fn limited(
+        &self,
+        j: Node<'a, 'i>,
+        class: &str,
+        attr: &str,
+        has_range: bool,
+    ) -> Result<bool, DescriptionError> {
+        match self.get(j, "joint", class, attr) {
+            Some((_, "auto")) | None => Ok(has_range && self.compiler.autolimits),
+            Some((n, v)) => bool_attr(n, attr, v),
+        }
+    }
+
+    /// Inertial, geoms and sites of a body, shifted by `-offset`.
+    fn link_contents(
+        &self,
+        node: Node<'a, 'i>,
+        name: &str,
+        childclass: Option<&str>,
+        offset: Vec3,
+    ) -> Result<(Link, Vec<Frame>), DescriptionError> {
+        let mut link = Link::new(name);
+        let mut frames = Vec::new();
+        let mut geoms = 0;
+        let mut explicit: Option<(Vec3, Mat, f64, Inertia)> = None;
+        let from_geoms = match self.compiler.inertia_from_geom {
+            FromGeom::True => true,
+            FromGeom::False => false,
+            FromGeom::Auto => !node.children().any(|c| c.has_tag_name("inertial")),
+        };
+        let mut parts = Vec::new();
+        for (c, xf, cc) in self.through_frames(node, childclass)? {
+            let childclass = cc.as_deref();
+            match c.tag_name().name() {
+                "inertial" => {
+                    if explicit.is_some() {
+                        return Err(error_at(c, "a second <inertial> in the body"));
+                    }
+                    explicit = Some(self.inertial(c)?);
+                }
+                "geom" => {
+                    geoms += 1;
+                    let default_name = format!("{name}_geom{geoms}");
+                    self.geom(c, childclass, offset, &xf, &default_name, &mut link)?;
+                    if from_geoms && let Some(p) = self.geom_mass(c, childclass, &xf)? {
+                        parts.push(p);
+                    }
+                }
+                "site" => {
+                    let class = self.class_of(c, childclass)?;
+                    let (pos, rot) = self.placement(c, "site", &class)?;
+                    let (pos, rot) = compose(&xf, pos, rot);
+                    frames.push(Frame {
+                        name: match c.attribute("name") {
+                            Some(n) => n.to_string(),
+                            None => format!("{name}_site{}", frames.len() + 1),
+                        },
+                        link: name.to_string(),
+                        origin: pose(sub(&pos, &offset), &rot),
+                    });
+                }
+                _ => {}
+            }
+        }
+        let c = &self.compiler;
+        let bounds = c.bound_mass > 0.0 || c.bound_inertia > 0.0 || c.balance_inertia;
+        // MuJoCo: geoms replace the inertial only when there are some to sum.
+        let from_geoms = if from_geoms {
+            MassProps::combine(&parts)
+        } else {
+            None
+        };
+        let bound = |p: MassProps| p.bounded(c.bound_mass, c.bound_inertia, c.balance_inertia);
+        let props = match (from_geoms, bounds) {
+            (Some(p), true) => Some(bound(p)),
+            (Some(p), false) => Some(p),
+            (None, true) => Some(bound(match explicit {
+                Some((pos, rot, mass, i)) => MassProps::rotated(mass, pos, &rot, i.matrix()),
+                // Nothing to weigh: MuJoCo puts the CoM at the body's own `pos`
+                // (in the body frame), which matters once boundmass gives it mass.
+                None => MassProps {
+                    com: opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]),
+                    ..MassProps::NONE
+                },
+            })),
+            (None, false) => None,
+        };
+        link.inertial = match props {
+            Some(p) => Some(Inertial {
+                origin: pose(sub(&p.com, &offset), &IDENTITY),
+                mass: p.mass,
+                inertia: Inertia::from_matrix(p.inertia),
+            }),
+            // As written: the file's numbers in the file's frame.
+            None => explicit.map(|(pos, rot, mass, inertia)| Inertial {
+                origin: pose(sub(&pos, &offset), &rot),
+                mass,
+                inertia,
+            }),
+        };
+        Ok((link, frames))
+    }
+
+    /// `<inertial pos quat mass diaginertia|fullinertia>`: CoM, frame, mass and
+    /// the tensor in that frame.
+    fn inertial(&self, c: Node<'a, 'i>) -> Result<(Vec3, Mat, f64, Inertia), DescriptionError> {
+        let pos = parse_array::<3>(c, "pos", required(c, "pos")?)?;
+        let rot = self.orientation(c, "inertial", None)?;
+        let mass = crate::xml::parse_number(c, "mass", required(c, "mass")?)?;
+        let inertia = match (c.attribute("fullinertia"), c.attribute("diaginertia")) {
+            (Some(v), _) => {
+                let f = parse_array::<6>(c, "fullinertia", v)?;
+                Inertia {
+                    ixx: f[0],
+                    iyy: f[1],
+                    izz: f[2],
+                    ixy: f[3],
+                    ixz: f[4],
+                    iyz: f[5],
+                }
+            }
+            (None, Some(v)) => {
+                let d = parse_array::<3>(c, "diaginertia", v)?;
+                Inertia::diagonal(d[0], d[1], d[2])
+            }
+            (None, None) => {
+                return Err(error_at(
+                    c,
+                    "missing attribute \"diaginertia\" or \"fullinertia\"",
+                ));
+            }
+        };
+        Ok((pos, rot, mass, inertia))
+    }
+
+    /// A geom's part of its body's mass properties, in the body frame, as
+    /// MuJoCo's compiler makes it: `mass`, else `density` (1000) times the volume
+    /// (the area with `shellinertia`); `None` for a geom outside
+    /// `inertiagrouprange`.
+    fn geom_mass(
+        &self,
+        g: Node<'a, 'i>,
+        childclass: Option<&str>,
+        frame: &Xf,
+    ) -> Result<Option<MassProps>, DescriptionError> {
+        let class = self.class_of(g, childclass)?;
+        let group = self.integer(self.get(g, "geom", &class, "group"), "group", 0)?;
+        let [lo, hi] = self.compiler.inertia_groups;
+        if group < lo || group > hi {
+            return Ok(None);
+        }
+        let kind = match self.get(g, "geom", &class, "type") {
+            Some((_, t)) => t,
+            None if self.get(g, "geom", &class, "mesh").is_some() => "mesh",
+            None => "sphere",
+        };
+        let fromto = match self.get(g, "geom", &class, "fromto") {
+            Some((n, v)) => Some(from_to(n, v)?),
+            None => None,
+        };
+        let size = self.geom_size(g, &class)?;
+        let (pos, rot) = match &fromto {
+            Some((p, r, _)) => (*p, *r),
+            None => self.placement(g, "geom", &class)?,
+        };
+        let (pos, rot) = compose(frame, pos, rot);
+        let sized = |k: usize| size.get(k).copied().unwrap_or(0.0);
+        // With fromto: the half-length along the segment, and (box, ellipsoid) a
+        // cross-section of size[0] both ways, as MuJoCo does.
+        let (y, z) = match &fromto {
+            Some(f) => (sized(0), f.2),
+            None => (sized(1), sized(2)),
+        };
+        let solid = match kind {
+            "sphere" => Solid::Sphere { radius: sized(0) },
+            "capsule" => Solid::Capsule {
+                radius: sized(0),
+                half: fromto.as_ref().map_or(y, |f| f.2),
+            },
+            "cylinder" => Solid::Cylinder {
+                radius: sized(0),
+                half: fromto.as_ref().map_or(y, |f| f.2),
+            },
+            "box" => Solid::Box {
+                half: [sized(0), y, z],
+            },
+            "ellipsoid" => Solid::Ellipsoid {
+                semi: [sized(0), y, z],
+            },
+            "mesh" => return self.mesh_mass(g, &class, pos, &rot).map(Some),
+            "plane" => {
+                return Ok(Some(MassProps {
+                    com: pos,
+                    ..MassProps::NONE
+                }));
+            }
+            other => {
+                return Err(error_at(
+                    g,
+                    format!(
+                        "the inertia of a {other} geom is not computed: give the body an \
+                         <inertial>, or put the geom outside inertiagrouprange"
+                    ),
+                ));
+            }
+        };
+        let shell = match self.get(g, "geom", &class, "shellinertia") {
+            Some((n, v)) => bool_attr(n, "shellinertia", v)?,
+            None => false,
+        };
+        let measure = solid.measure(shell);
+        let density = match self.number(self.get(g, "geom", &class, "mass"), "mass")? {
+            // MuJoCo turns a geom's mass into a density, then back.
+            Some(m) if measure > 0.0 => m / measure,
+            Some(_) => 0.0,
+            None => self
+                .number(self.get(g, "geom", &class, "density"), "density")?
+                .unwrap_or(1000.0),
+        };
+        let mass = density * measure;
+        let principal = solid.principal_inertia(mass, shell);
+        Ok(Some(MassProps::placed(mass, pos, &rot, principal)))
+    }
+
+    /// A mesh geom's part of its body's mass properties: the mesh's volume, CoM
+    /// and inertia (MuJoCo's, see [`mesh`]) placed by the geom, at the geom's
+    /// `mass` or `density`.
+    fn mesh_mass(
+        &self,
+        g: Node<'a, 'i>,
+        class: &str,
+        pos: Vec3,
+        rot: &Mat,
+    ) -> Result<MassProps, DescriptionError> {
+        let Some((n, name)) = self.get(g, "geom", class, "mesh") else {
+            return Err(error_at(g, "a mesh geom without a mesh"));
+        };
+        let asset = self
+            .meshes
+            .get(name)
+            .ok_or_else(|| error_at_attr(n, "mesh", format!("unknown mesh \"{name}\"")))?;
+        let bad = |what: String| error_at(g, format!("mesh \"{name}\": {what}"));
+        let Some(file) = &asset.file else {
+            return Err(bad("no file (inline meshes are not read)".into()));
+        };
+        if let Some((n, v)) = self.get(g, "geom", class, "shellinertia")
+            && bool_attr(n, "shellinertia", v)?
+        {
+            return Err(bad("the shell inertia of a mesh is not computed".into()));
+        }
+        let signed = match asset.inertia.as_deref() {
+            None | Some("legacy") => mesh::Signed::Legacy,
+            Some("exact") => mesh::Signed::Exact,
+            Some(other) => {
+                return Err(bad(format!(
+                    "inertia=\"{other}\" is not computed (legacy and exact are)"
+                )));
+            }
+        };
+        let path = match &self.dir {
+            Some(d) => d.join(file),
+            None => std::path::PathBuf::from(file),
+        };
+        let props = mesh::read(&path)
+            .map_err(&bad)?
+            .scaled(asset.scale.unwrap_or([1.0; 3]))
+            .mass_properties(signed)
+            .map_err(|e| bad(e.to_string()))?;
+        let density = match self.number(self.get(g, "geom", class, "mass"), "mass")? {
+            Some(m) => m / props.volume,
+            None => self
+                .number(self.get(g, "geom", class, "density"), "density")?
+                .unwrap_or(1000.0),
+        };
+        let mass = density * props.volume;
+        let unit = mass / props.volume;
+        let com = add(&pos, &mat_vec(rot, &props.com));
+        Ok(MassProps::rotated(
+            mass,
+            com,
+            rot,
+            props.inertia.map(|row| row.map(|v| unit * v)),
+        ))
+    }
+
+    /// Position and orientation of a geom or site; `fromto` wins over both.
+    fn placement(
+        &self,
+        node: Node<'a, 'i>,
+        kind: &str,
+        class: &str,
+    ) -> Result<(Vec3, Mat), DescriptionError> {
+        if let Some((n, v)) = self.get(node, kind, class, "fromto") {
+            let (pos, rot, _) = from_to(n, v)?;
+            return Ok((pos, rot));
+        }
+        let pos = match self.get(node, kind, class, "pos") {
+            Some((n, v)) => parse_array::<3>(n, "pos", v)?,
+            None => [0.0; 3],
+        };
+        Ok((pos, self.orientation(node, kind, Some(class))?))
+    }
+
+    fn geom(
+        &self,
+        g: Node<'a, 'i>,
+        childclass: Option<&str>,
+        offset: Vec3,
+        frame: &Xf,
+        default_name: &str,
+        link: &mut Link,
+    ) -> Result<(), DescriptionError> {
+        let class = self.class_of(g, childclass)?;
+        let mesh = self.get(g, "geom", &class, "mesh");
+        let kind = match self.get(g, "geom", &class, "type") {
+            Some((_, t)) => t,
+            None if mesh.is_some() => "mesh",
+            None => "sphere",
+        };
+        let fromto = match self.get(g, "geom", &class, "fromto") {
+            Some((n, v)) => Some(from_to(n, v)?),
+            None => None,
+        };
+        let size = self.geom_size(g, &class)?;
+        let Some(geometry) = self.geometry(g, &class, kind, mesh, &fromto, &size)? else {
+            return Ok(());
+        };
+        let (pos, rot) = match &fromto {
+            Some((p, r, _)) => (*p, *r),
+            None => self.placement(g, "geom", &class)?,
+        };
+        let (pos, rot) = compose(frame, pos, rot);
+        let origin = pose(sub(&pos, &offset), &rot);
+        let group = self.integer(self.get(g, "geom", &class, "group"), "group", 0)?;
+        let contype = self.integer(self.get(g, "geom", &class, "contype"), "contype", 1)?;
+        let conaffinity =
+            self.integer(self.get(g, "geom", &class, "conaffinity"), "conaffinity", 1)?;
+        let name = g.attribute("name").map(str::to_string);
+        if (0..=2).contains(&group) {
+            let material =
+                self.geom_material(g, &class, name.as_deref().unwrap_or(default_name))?;
+            link.visuals.push(Shape {
+                name: name.clone(),
+                origin,
+                geometry: geometry.clone(),
+                material,
+            });
+        }
+        if contype != 0 || conaffinity != 0 {
+            link.collisions.push(Shape {
+                name,
+                origin,
+                geometry,
+                material: None,
+            });
+        }
+        Ok(())
+    }
+
+    /// A geom's `size`: one to three numbers (none when absent).
+    fn geom_size(&self, g: Node<'a, 'i>, class: &str) -> Result<Vec<f64>, DescriptionError> {
+        Ok(match self.get(g, "geom", class, "size") {
+            Some((n, v)) => {
+                let s = parse_numbers(n, "size", v)?;
+                if s.is_empty() || s.len() > 3 {
+                    return Err(error_at_attr(
+                        n,
+                        "size",
+                        format!("size=\"{v}\": expected 1 to 3 numbers"),
+                    ));
+                }
+                s
+            }
+            None => Vec::new(),
+        })
+    }
+
+    /// The shape of a geom of type `kind` from its `size` (or `fromto`) and, for a
+    /// mesh, its asset; `None` for the types twinloop ignores (plane, height field,
+    /// ellipsoid, SDF).
+    fn geometry(
+        &self,
+        g: Node<'a, 'i>,
+        class: &str,
+        kind: &str,
+        mesh: Option<(Node<'a, 'i>, &'a str)>,
+        fromto: &Option<(Vec3, Mat, f64)>,
+        size: &[f64],
+    ) -> Result<Option<Geometry>, DescriptionError> {
+        let need = |k: usize| -> Result<(), DescriptionError> {
+            if size.len() < k {
+                Err(error_at(
+                    g,
+                    format!(
+                        "a {kind} geom needs {k} size value(s), found {}",
+                        size.len()
+                    ),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        let half_length = |need_from_size: usize| -> Result<f64, DescriptionError> {
+            match fromto {
+                Some((_, _, h)) => Ok(*h),
+                None => {
+                    need(need_from_size + 1)?;
+                    Ok(size[need_from_size])
+                }
+            }
+        };
+        Ok(Some(match kind {
+            "sphere" => {
+                need(1)?;
+                Geometry::Sphere { radius: size[0] }
+            }
+            "capsule" | "cylinder" => {
+                need(1)?;
+                let radius = size[0];
+                let length = 2.0 * half_length(1)?;
+                if kind == "capsule" {
+                    Geometry::Capsule { radius, length }
+                } else {
+                    Geometry::Cylinder { radius, length }
+                }
+            }
+            "box" => {
+                // With fromto MuJoCo makes the cross-section square: size[0] both ways.
+                let y = if fromto.is_some() { 0 } else { 1 };
+                need(y + 1)?;
+                let z = half_length(2)?;
+                Geometry::Box {
+                    size: [2.0 * size[0], 2.0 * size[y], 2.0 * z],
+                }
+            }
+            "mesh" => {
+                let Some((n, m)) = mesh else {
+                    return Err(error_at(g, "a mesh geom without a mesh"));
+                };
+                let asset = self
+                    .meshes
+                    .get(m)
+                    .ok_or_else(|| error_at_attr(n, "mesh", format!("unknown mesh \"{m}\"")))?;
+                let Some(file) = &asset.file else {
+                    return Err(error_at_attr(
+                        n,
+                        "mesh",
+                        format!("mesh \"{m}\" has no file (inline meshes are not supported)"),
+                    ));
+                };
+                Geometry::Mesh {
+                    filename: file.clone(),
+                    scale: asset.scale,
+                }
+            }
+            "plane" | "hfield" | "ellipsoid" | "sdf" => return Ok(None),
+            other => {
+                let (n, _) = self.get(g, "geom", class, "type").unwrap_or((g, other));
+                return Err(error_at_attr(
+                    n,
+                    "type",
+                    format!("unknown geom type \"{other}\""),
+                ));
+            }
+        }))
+    }
+
+    /// A visual geom's material: its named `material`, else one made of its `rgba`
+    /// named after the geom (`name`).
+    fn geom_material(
+        &self,
+        g: Node<'a, 'i>,
+        class: &str,
+        name: &str,
+    ) -> Result<Option<Material>, DescriptionError> {
+        Ok(match self.get(g, "geom", class, "material") {
+            Some((n, m)) => {
+                let rgba = self.materials.get(m).ok_or_else(|| {
+                    error_at_attr(n, "material", format!("unknown material \"{m}\""))
+                })?;
+                Some(Material {
+                    name: m.to_string(),
+                    rgba: Some(*rgba),
+                    texture: None,
+                })
+            }
+            None => match self.get(g, "geom", class, "rgba") {
+                Some((n, v)) => Some(Material {
+                    name: format!("{name}_material"),
+                    rgba: Some(parse_array::<4>(n, "rgba", v)?),
+                    texture: None,
+                }),
+                None => None,
+            },
+        })
+    }
+}
+
+/// `fromto="x1 y1 z1 x2 y2 z2"`: the midpoint, the rotation taking +z along the
+/// segment, and the half-length.
+fn from_to(node: Node, value: &str) -> Result<(Vec3, Mat, f64), DescriptionError> {
+    let v = parse_array::<6>(node, "fromto", value)?;
+    let a = [v[0], v[1], v[2]];
+    let b = [v[3], v[4], v[5]];
+    let d = sub(&b, &a);
+    let len = norm(&d);
+    let z = unit(&d).ok_or_else(|| {
+        error_at_attr(
+            node,
+            "fromto",
+            format!("fromto=\"{value}\": the two points are the same"),
+        )
+    })?;
+    let mid = [
+        0.5 * (a[0] + b[0]),
+        0.5 * (a[1] + b[1]),
+        0.5 * (a[2] + b[2]),
+    ];
+    Ok((mid, z_to(&z), 0.5 * len))
+}
+
+fn bool_attr(node: Node, attr: &str, v: &str) -> Result<bool, DescriptionError> {
+    match v {
+        "true" => Ok(true),
+        "false" => Ok(false),
+        _ => Err(error_at_attr(
+            node,
+            attr,
+            format!("{attr}=\"{v}\": expected \"true\" or \"false\""),
+        )),
+    }
+}
+
+/// `dir/name.stl` -> `name` (MuJoCo's default name of a mesh asset).
+fn file_stem(path: &str) -> &str {
+    let base = path.rsplit(['/', '\\']).next().unwrap_or(path);
+    match base.rfind('.') {
+        Some(i) if i > 0 => &base[..i],
+        _ => base,
+    }
+}
