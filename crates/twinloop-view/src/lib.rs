@@ -1,0 +1,23 @@
+//! The 3D web viewer of `twinloop view`: a robot (URDF, MJCF or built-in) in the
+//! browser with its recordings replayed, ghosts, overlays and plots.
+//!
+//! - `scene`: the description made ready for the page (served URDF, meshes by
+//!   number, link and joint facts);
+//! - `inertia_box`: the equivalent box of a link's inertia;
+//! - `recording`: a CSV as column-major f32 and its missing joint columns;
+//! - `server`: the loopback HTTP server (tiny_http) and its fixed set of URLs;
+//! - `export`: one self-contained HTML file;
+//! - `assets`: the page and the vendored three.js, urdf-loader and uPlot
+//!   (`web/`, see VENDOR.md), compiled in.
+
+pub mod assets;
+pub mod export;
+pub mod inertia_box;
+pub mod recording;
+pub mod scene;
+pub mod server;
+
+pub use export::export_html;
+pub use recording::{Recording, RecordingInfo};
+pub use scene::{PackageDir, Scene, SceneInfo};
+pub use server::{Content, Server};

@@ -1,0 +1,154 @@
+//! The viewer's HTTP server: the embedded page, `scene.json`, `robot.urdf`, the
+//! meshes the description names (by number) and the recordings. Every URL is
+//! matched whole against this fixed set; nothing in a request path is ever joined
+//! to a file path, so `../` or `%2e%2e` can only miss (404).
+
+use crate::assets;
+use crate::recording::{Recording, RecordingInfo};
+use crate::scene::{Scene, SceneInfo};
+use serde::Serialize;
+use std::io;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use tiny_http::{Header, Request, Response, StatusCode};
+
+/// Everything the server hands out.
+pub struct Content {
+    pub scene: Scene,
+    pub recordings: Vec<Recording>,
+}
+
+/// `scene.json`: the scene and the list of recordings.
+#[derive(Serialize)]
+pub struct PageData<'a> {
+    #[serde(flatten)]
+    pub scene: &'a SceneInfo,
+    pub recordings: Vec<&'a RecordingInfo>,
+}
+
+impl Content {
+    pub fn page_data(&self) -> PageData<'_> {
+        PageData {
+            scene: &self.scene.info,
+            recordings: self.recordings.iter().map(|r| &r.info).collect(),
+        }
+    }
+
+    /// The answer to a GET of `url` (path and query): (MIME type, body), or None (404).
+    pub fn get(&self, url: &str) -> Option<(&'static str, Vec<u8>)> {
+        let path = url.split(['?', '#']).next().unwrap_or("");
+        if let Some(a) = assets::find(path) {
+            return Some((a.mime, a.body.as_bytes().to_vec()));
+        }
+        match path {
+            "/scene.json" => {
+                let json = serde_json::to_vec(&self.page_data()).ok()?;
+                return Some(("application/json", json));
+            }
+            "/robot.urdf" => {
+                return Some(("application/xml", self.scene.urdf.as_bytes().to_vec()));
+            }
+            _ => {}
+        }
+        if let Some(rest) = path.strip_prefix("/mesh/") {
+            let mesh = self
+                .scene
+                .info
+                .meshes
+                .iter()
+                .find(|m| m.url.as_deref() == Some(&path[1..]))?;
+            debug_assert!(rest.contains('.'));
+            let bytes = std::fs::read(mesh.path.as_ref()?).ok()?;
+            return Some(("application/octet-stream", bytes));
+        }
+        if let Some(rest) = path.strip_prefix("/recording/") {
+            let (index, ext) = rest.split_once('.')?;
+            if index.is_empty() || !index.bytes().all(|b| b.is_ascii_digit()) {
+                return None;
+            }
+            let rec = self.recordings.get(index.parse::<usize>().ok()?)?;
+            return match ext {
+                "json" => Some(("application/json", serde_json::to_vec(&rec.info).ok()?)),
+                "bin" => Some(("application/octet-stream", rec.data.clone())),
+                _ => None,
+            };
+        }
+        None
+    }
+}
+
+/// A running server; `run` answers requests until the process ends.
+pub struct Server {
+    http: Arc<tiny_http::Server>,
+    content: Arc<Content>,
+}
+
+/// How many requests are answered at once (the page loads meshes in parallel).
+const WORKERS: usize = 4;
+
+impl Server {
+    /// Bind to `addr` (`127.0.0.1:0` picks a free port).
+    pub fn bind(addr: &str, content: Content) -> io::Result<Server> {
+        let http = tiny_http::Server::http(addr).map_err(io::Error::other)?;
+        Ok(Server {
+            http: Arc::new(http),
+            content: Arc::new(content),
+        })
+    }
+
+    /// The address bound.
+    pub fn addr(&self) -> SocketAddr {
+        match self.http.server_addr() {
+            tiny_http::ListenAddr::IP(a) => a,
+            #[allow(unreachable_patterns)]
+            _ => SocketAddr::from(([127, 0, 0, 1], 0)),
+        }
+    }
+
+    /// The page's URL.
+    pub fn url(&self) -> String {
+        format!("http://{}/", self.addr())
+    }
+
+    /// Answer requests on worker threads, in the background.
+    pub fn spawn(&self) {
+        for _ in 0..WORKERS {
+            let http = Arc::clone(&self.http);
+            let content = Arc::clone(&self.content);
+            std::thread::spawn(move || {
+                while let Ok(request) = http.recv() {
+                    respond(&content, request);
+                }
+            });
+        }
+    }
+
+    /// Answer requests on this thread and the workers, until the process ends.
+    pub fn run(&self) {
+        self.spawn();
+        while let Ok(request) = self.http.recv() {
+            respond(&self.content, request);
+        }
+    }
+}
+
+fn respond(content: &Content, request: Request) {
+    let header = |k: &str, v: &str| Header::from_bytes(k.as_bytes(), v.as_bytes()).ok();
+    let answer = match request.method() {
+        tiny_http::Method::Get | tiny_http::Method::Head => content.get(request.url()),
+        _ => None,
+    };
+    // A client that went away mid-answer is its own business: the error is dropped
+    // and the server goes on.
+    let _ = match answer {
+        Some((mime, body)) => {
+            let mut r = Response::from_data(body);
+            r.add_header(header("Content-Type", mime).expect("static header"));
+            r.add_header(header("Cache-Control", "no-store").expect("static header"));
+            request.respond(r)
+        }
+        None => request.respond(
+            Response::from_string("not found\n").with_status_code(StatusCode(404)),
+        ),
+    };
+}
