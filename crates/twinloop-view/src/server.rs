@@ -133,7 +133,11 @@ impl Server {
 }
 
 fn respond(content: &Content, request: Request) {
-    let header = |k: &str, v: &str| Header::from_bytes(k.as_bytes(), v.as_bytes()).ok();
+    let header = |k: &str, v: &str| {
+        Header::from_bytes(k.as_bytes(), v.as_bytes()).unwrap_or_else(|()| {
+            unreachable!("header {k} is ASCII")
+        })
+    };
     let answer = match request.method() {
         tiny_http::Method::Get | tiny_http::Method::Head => content.get(request.url()),
         _ => None,
@@ -142,9 +146,10 @@ fn respond(content: &Content, request: Request) {
     // and the server goes on.
     let _ = match answer {
         Some((mime, body)) => {
-            let mut r = Response::from_data(body);
-            r.add_header(header("Content-Type", mime).expect("static header"));
-            r.add_header(header("Cache-Control", "no-store").expect("static header"));
+            // Content-Length rather than chunks: the page can show progress.
+            let mut r = Response::from_data(body).with_chunked_threshold(usize::MAX);
+            r.add_header(header("Content-Type", mime));
+            r.add_header(header("Cache-Control", "no-store"));
             request.respond(r)
         }
         None => request.respond(
