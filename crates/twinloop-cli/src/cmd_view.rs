@@ -10,7 +10,7 @@ use twinloop_view::{Content, PackageDir, Recording, Scene, Server};
 pub struct ViewArgs {
     #[arg(value_name = "ROBOT", help = ROBOT_HELP)]
     pub robot: String,
-    /// twinloop CSVs to replay (t, q:<joint>, optional q:base.*); the second and later
+    /// CSV files to replay (t, q:<joint>, optional q:base.*); the second and later
     /// are drawn as translucent ghosts
     #[arg(value_name = "RECORDING.csv")]
     pub recordings: Vec<PathBuf>,
@@ -48,7 +48,8 @@ pub fn run(args: ViewArgs) -> CliResult {
     }
     let content = Content { scene, recordings };
     if let Some(out) = &args.export {
-        let html = twinloop_view::export_html(&content).map_err(|e| CliError::new(e.to_string()))?;
+        let html =
+            twinloop_view::export_html(&content).map_err(|e| CliError::new(e.to_string()))?;
         std::fs::write(out, html).map_err(|e| CliError::io(out, e).context("--export"))?;
         common::print(&format!("wrote {}\n", out.display()));
         return Ok(Outcome::Ok);

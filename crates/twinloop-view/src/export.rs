@@ -21,9 +21,8 @@ pub fn export_html(content: &Content) -> io::Result<String> {
     let mut meshes = BTreeMap::new();
     for m in &content.scene.info.meshes {
         if let (Some(url), Some(path)) = (&m.url, &m.path) {
-            let bytes = std::fs::read(path).map_err(|e| {
-                io::Error::new(e.kind(), format!("{}: {e}", path.display()))
-            })?;
+            let bytes = std::fs::read(path)
+                .map_err(|e| io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
             meshes.insert(url.clone(), STANDARD.encode(bytes));
         }
     }

@@ -36,7 +36,11 @@ pub fn equivalent_box(inertial: &Inertial) -> Option<PlacedBox> {
     }
     let p = eig.eigenvalues;
     let edge = |a: f64, b: f64, c: f64| (6.0 * (b + c - a) / m).max(0.0).sqrt();
-    let size = [edge(p[0], p[1], p[2]), edge(p[1], p[2], p[0]), edge(p[2], p[0], p[1])];
+    let size = [
+        edge(p[0], p[1], p[2]),
+        edge(p[1], p[2], p[0]),
+        edge(p[2], p[0], p[1]),
+    ];
     // Box frame in the link frame: R_link_inertial * R_inertial_principal.
     let r0 = inertial.origin.rotation();
     let r0 = Matrix3::from_fn(|r, c| r0[r][c]);
@@ -89,7 +93,9 @@ mod tests {
         let b = equivalent_box(&inertial).unwrap();
         let r = twinloop_description::rpy_to_matrix(b.rpy);
         // The direction of the longest edge, in the link frame.
-        let k = (0..3).max_by(|&i, &j| b.size[i].total_cmp(&b.size[j])).unwrap();
+        let k = (0..3)
+            .max_by(|&i, &j| b.size[i].total_cmp(&b.size[j]))
+            .unwrap();
         let dir = [r[0][k], r[1][k], r[2][k]];
         assert!((b.size[k] - 0.4).abs() < 1e-12);
         assert!((dir[1].abs() - 1.0).abs() < 1e-9, "{dir:?}");

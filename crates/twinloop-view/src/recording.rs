@@ -78,9 +78,10 @@ impl Recording {
                 data.extend_from_slice(&(row[c] as f32).to_le_bytes());
             }
         }
-        let name = path
-            .file_name()
-            .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+        let name = path.file_name().map_or_else(
+            || path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
         Ok(Recording {
             info: RecordingInfo {
                 name,

@@ -30,7 +30,9 @@ impl PackageDir {
                 name: name.to_string(),
                 dir: PathBuf::from(dir),
             }),
-            _ => Err(format!("\"{text}\" is not NAME=DIR (e.g. op3_description=~/op3)")),
+            _ => Err(format!(
+                "\"{text}\" is not NAME=DIR (e.g. op3_description=~/op3)"
+            )),
         }
     }
 }

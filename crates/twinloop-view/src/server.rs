@@ -134,9 +134,8 @@ impl Server {
 
 fn respond(content: &Content, request: Request) {
     let header = |k: &str, v: &str| {
-        Header::from_bytes(k.as_bytes(), v.as_bytes()).unwrap_or_else(|()| {
-            unreachable!("header {k} is ASCII")
-        })
+        Header::from_bytes(k.as_bytes(), v.as_bytes())
+            .unwrap_or_else(|()| unreachable!("header {k} is ASCII"))
     };
     let answer = match request.method() {
         tiny_http::Method::Get | tiny_http::Method::Head => content.get(request.url()),
@@ -152,8 +151,8 @@ fn respond(content: &Content, request: Request) {
             r.add_header(header("Cache-Control", "no-store"));
             request.respond(r)
         }
-        None => request.respond(
-            Response::from_string("not found\n").with_status_code(StatusCode(404)),
-        ),
+        None => {
+            request.respond(Response::from_string("not found\n").with_status_code(StatusCode(404)))
+        }
     };
 }

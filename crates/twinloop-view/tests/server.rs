@@ -9,7 +9,9 @@ use std::time::Duration;
 use twinloop_view::{Content, Recording, Scene, Server};
 
 fn data(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(rel)
 }
 
 fn mesh_robot_content(recordings: usize) -> Content {
@@ -18,7 +20,9 @@ fn mesh_robot_content(recordings: usize) -> Content {
     let scene = Scene::new(&robot, Some(&path), &[]);
     let mut table = twinloop_io::Table::new(vec!["t".into(), "q:shoulder".into()]);
     for k in 0..50_000 {
-        table.rows.push(vec![k as f64 * 1e-3, (k as f64 * 1e-3).sin()]);
+        table
+            .rows
+            .push(vec![k as f64 * 1e-3, (k as f64 * 1e-3).sin()]);
     }
     let recordings = (0..recordings)
         .map(|_| Recording::from_table(&table, Path::new("swing.csv"), &scene.info).unwrap())
@@ -37,7 +41,11 @@ fn start(content: Content) -> SocketAddr {
 fn get(addr: SocketAddr, path: &str) -> (u16, Vec<u8>) {
     let mut s = TcpStream::connect(addr).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
-    write!(s, "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").unwrap();
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
     let mut all = Vec::new();
     s.read_to_end(&mut all).unwrap();
     let head_end = all.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
@@ -71,7 +79,10 @@ fn binds_to_loopback_and_serves_the_page_scene_and_named_meshes() {
     );
     let (code, stl) = get(addr, "/mesh/0.stl");
     assert_eq!(code, 200);
-    assert_eq!(stl, std::fs::read(data("mesh_robot/meshes/cube.stl")).unwrap());
+    assert_eq!(
+        stl,
+        std::fs::read(data("mesh_robot/meshes/cube.stl")).unwrap()
+    );
     assert_eq!(get(addr, "/mesh/1.obj").0, 200);
     // The served URDF names the meshes by number and draws the missing one as its
     // collision box.
@@ -120,7 +131,11 @@ fn nothing_outside_its_own_files_is_served() {
     }
     // Only GET and HEAD.
     let mut s = TcpStream::connect(addr).unwrap();
-    write!(s, "POST /scene.json HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\nConnection: close\r\n\r\n").unwrap();
+    write!(
+        s,
+        "POST /scene.json HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
     let mut head = String::new();
     s.read_to_string(&mut head).unwrap();
     assert!(head.starts_with("HTTP/1.1 404"), "{head}");
@@ -155,13 +170,17 @@ fn a_client_that_hangs_up_mid_answer_leaves_the_server_running() {
 fn a_recording_says_which_joint_columns_it_lacks() {
     let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
     let scene = Scene::new(&robot, None, &[]);
-    let table = twinloop_io::Table::parse("t,q:l_knee,q:r_knee\n0,0.1,0.2\n0.01,0.1,0.2\n").unwrap();
+    let table =
+        twinloop_io::Table::parse("t,q:l_knee,q:r_knee\n0,0.1,0.2\n0.01,0.1,0.2\n").unwrap();
     let rec = Recording::from_table(&table, Path::new("knees.csv"), &scene.info).unwrap();
     assert_eq!(rec.info.missing.len(), scene.info.joints.len() - 2);
     assert!(rec.info.missing.contains(&"q:l_hip_pitch".to_string()));
     assert!(!rec.info.has_base);
     let w = rec.warning().unwrap();
-    assert!(w.starts_with("knees.csv: 18 of the robot's joint columns are missing"), "{w}");
+    assert!(
+        w.starts_with("knees.csv: 18 of the robot's joint columns are missing"),
+        "{w}"
+    );
     // No time column, and time running backwards: errors naming the file and row.
     let no_t = twinloop_io::Table::parse("q:l_knee\n0\n").unwrap();
     let e = Recording::from_table(&no_t, Path::new("x.csv"), &scene.info).unwrap_err();
