@@ -208,6 +208,8 @@
     const support = new THREE.LineLoop(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: colour === null ? 0x2e7d32 : colour }));
     const comGroup = new THREE.Group();
     comGroup.add(com, comGround, comLine);
+    // Drawn over the robot: the CoM is inside the body.
+    for (const o of [com, comGround, comLine, support]) { o.material.depthTest = false; o.renderOrder = 10; }
     group.add(comGroup, support);
     // Link frames and inertia boxes ride on their links.
     const frames = [], boxes = [];
@@ -559,9 +561,10 @@
   let renderQueued = false;
   function requestRender() { if (!renderQueued) { renderQueued = true; requestAnimationFrame(frame); } }
   let lastTime = null;
-  const bench = { seconds: Number(params.get('bench') || 0), times: [], start: null };
+  const bench = { seconds: Number(params.get('bench') || 0), times: [], work: [], render: [], start: null };
 
   function renderNow() {
+    const w0 = performance.now();
     for (const a of state.actors) poseActor(a);
     for (const a of state.actors) a.overlays.update(state.show);
     updateCop();
@@ -575,7 +578,9 @@
     clock.textContent = state.now.toFixed(3) + ' s';
     plots.moveCursor();
     controls.update();
+    const r0 = performance.now();
     renderer.render(scene, camera);
+    if (bench.seconds > 0) { bench.render.push(performance.now() - r0); bench.work.push(performance.now() - w0); }
     status.frame++;
   }
 
@@ -601,7 +606,14 @@
     for (let i = 1; i < bench.times.length; i++) d.push(bench.times[i] - bench.times[i - 1]);
     d.sort((a, b) => a - b);
     const q = (p) => d[Math.min(d.length - 1, Math.floor(p * d.length))];
-    status.bench = { frames: d.length, median_ms: q(0.5), p95_ms: q(0.95), fps: d.length / ((bench.times[bench.times.length - 1] - bench.times[0]) / 1000) };
+    const work = bench.work.slice().sort((a, b) => a - b);
+    status.bench = {
+      frames: d.length, median_ms: q(0.5), p95_ms: q(0.95),
+      fps: d.length / ((bench.times[bench.times.length - 1] - bench.times[0]) / 1000),
+      // Time the page spends per frame: poses, overlays, plot cursor, and issuing the draw calls.
+      work_median_ms: work[Math.floor(work.length / 2)],
+      render_median_ms: bench.render.slice().sort((a, b) => a - b)[bench.render.length >> 1],
+    };
     bench.seconds = 0;
     publish();
   }
@@ -677,6 +689,7 @@
     if (bench.seconds > 0 && recs.length) { state.now = state.t0; state.playing = true; }
     renderNow();
     status.ready = true;
+    status.load_ms = performance.now();
     if (params.get('snapshot')) {
       // The rendered image itself, for tests: independent of the browser's compositor.
       const pre = document.createElement('pre');
