@@ -4,7 +4,7 @@ use crate::common::{self, ROBOT_HELP};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
 use std::path::{Path, PathBuf};
-use twinloop_view::{Content, PackageDir, Recording, Scene, Server};
+use twinloop_view::{Content, LiveFeed, PackageDir, Recording, Scene, Server};
 
 #[derive(Args)]
 pub struct ViewArgs {
@@ -27,8 +27,15 @@ pub struct ViewArgs {
     #[arg(long = "package-dir", value_name = "NAME=DIR", value_parser = PackageDir::parse)]
     pub package_dirs: Vec<PackageDir>,
     /// Write one self-contained HTML file (robot, meshes, recordings, plots) and exit
-    #[arg(long, value_name = "FILE.html")]
+    #[arg(long, value_name = "FILE.html", conflicts_with = "live")]
     pub export: Option<PathBuf>,
+    /// Show the robot live from a CSV while another command writes it (simulate
+    /// --out, link record --out): its newest row, --rate times a second
+    #[arg(long, value_name = "FILE.csv")]
+    pub live: Option<PathBuf>,
+    /// States per second sent to the page in --live
+    #[arg(long, value_name = "HZ", default_value_t = 60.0)]
+    pub rate: f64,
 }
 
 pub fn run(args: ViewArgs) -> CliResult {
@@ -46,7 +53,13 @@ pub fn run(args: ViewArgs) -> CliResult {
     for w in &scene.info.warnings {
         eprintln!("warning: {w}");
     }
-    let content = Content { scene, recordings };
+    let live = args.live.as_ref().map(|_| LiveFeed::new());
+    let joints: Vec<String> = scene.info.joints.iter().map(|j| j.name.clone()).collect();
+    let content = Content {
+        scene,
+        recordings,
+        live: live.clone(),
+    };
     if let Some(out) = &args.export {
         let html =
             twinloop_view::export_html(&content).map_err(|e| CliError::new(e.to_string()))?;
@@ -66,6 +79,17 @@ pub fn run(args: ViewArgs) -> CliResult {
     );
     if args.open {
         open_browser(&url);
+    }
+    if let (Some(path), Some(feed)) = (args.live.clone(), live) {
+        if !(args.rate > 0.0 && args.rate.is_finite()) {
+            return Err(CliError::new(format!("--rate {}: must be a positive number of states per second", args.rate)));
+        }
+        let rate = args.rate;
+        std::thread::spawn(move || {
+            if let Err(e) = twinloop_view::follow_csv(&path, &joints, rate, &feed, &|| false) {
+                eprintln!("warning: --live {}: {e}", path.display());
+            }
+        });
     }
     server.run();
     Ok(Outcome::Ok)

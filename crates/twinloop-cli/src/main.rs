@@ -161,11 +161,15 @@ enum Command {
     /// and its ground projection, support polygon, centre of pressure, link frames,
     /// inertia boxes, joints at a limit), plots of any columns following the
     /// timeline, and joint sliders. --export writes the same page as one file.
+    /// --live FILE.csv follows a CSV while another command writes it and shows
+    /// its newest row (decimated to --rate per second, never queued).
     ///
     /// Example:
     ///   twinloop view builtin:km20 km20.csv
     ///   twinloop view models/op3/robotis_op3.urdf --package-dir op3_description=~/op3 --open
     ///   twinloop view builtin:km20 real.csv sim.csv --export replay.html
+    ///   twinloop view builtin:km20 --live run.csv
+    ///   twinloop simulate --robot builtin:km20 --duration 60 --out run.csv   # in another terminal
     ///
     /// Output: the page's URL on stdout (then it serves until Ctrl-C); warnings
     /// (missing meshes, missing joint columns) on stderr and on the page.

@@ -4,18 +4,23 @@
 //! to a file path, so `../` or `%2e%2e` can only miss (404).
 
 use crate::assets;
+use crate::live::LiveFeed;
 use crate::recording::{Recording, RecordingInfo};
 use crate::scene::{Scene, SceneInfo};
 use serde::Serialize;
 use std::io;
 use std::net::SocketAddr;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
 use tiny_http::{Header, Request, Response, StatusCode};
 
 /// Everything the server hands out.
 pub struct Content {
     pub scene: Scene,
     pub recordings: Vec<Recording>,
+    /// The live state behind `/live`, when something publishes one.
+    pub live: Option<LiveFeed>,
 }
 
 /// `scene.json`: the scene and the list of recordings.
@@ -24,6 +29,8 @@ pub struct PageData<'a> {
     #[serde(flatten)]
     pub scene: &'a SceneInfo,
     pub recordings: Vec<&'a RecordingInfo>,
+    /// Whether the page should connect to `/live`.
+    pub live: bool,
 }
 
 impl Content {
@@ -31,6 +38,7 @@ impl Content {
         PageData {
             scene: &self.scene.info,
             recordings: self.recordings.iter().map(|r| &r.info).collect(),
+            live: self.live.is_some(),
         }
     }
 
@@ -132,7 +140,16 @@ impl Server {
     }
 }
 
+/// At most this many pages follow the live view at once.
+const MAX_LIVE_CLIENTS: usize = 8;
+static LIVE_CLIENTS: AtomicUsize = AtomicUsize::new(0);
+
 fn respond(content: &Content, request: Request) {
+    if request.url() == "/live"
+        && let Some(feed) = &content.live
+    {
+        return live_client(feed, request);
+    }
     let header = |k: &str, v: &str| {
         Header::from_bytes(k.as_bytes(), v.as_bytes())
             .unwrap_or_else(|()| unreachable!("header {k} is ASCII"))
@@ -155,4 +172,54 @@ fn respond(content: &Content, request: Request) {
             request.respond(Response::from_string("not found\n").with_status_code(StatusCode(404)))
         }
     };
+}
+
+/// Upgrade `/live` to a websocket and send it the newest state whenever there is
+/// one, on its own thread. A client that goes away ends its thread; the server and
+/// the other clients go on.
+fn live_client(feed: &LiveFeed, request: Request) {
+    let key = request
+        .headers()
+        .iter()
+        .find(|h| h.field.equiv("Sec-WebSocket-Key"))
+        .map(|h| h.value.as_str().to_string());
+    let Some(key) = key else {
+        let _ = request.respond(Response::from_string("websocket only\n").with_status_code(400));
+        return;
+    };
+    if LIVE_CLIENTS.fetch_add(1, Ordering::SeqCst) >= MAX_LIVE_CLIENTS {
+        LIVE_CLIENTS.fetch_sub(1, Ordering::SeqCst);
+        let _ = request.respond(Response::from_string("too many live pages\n").with_status_code(503));
+        return;
+    }
+    let accept = tungstenite::handshake::derive_accept_key(key.as_bytes());
+    let header = |k: &str, v: &str| {
+        Header::from_bytes(k.as_bytes(), v.as_bytes())
+            .unwrap_or_else(|()| unreachable!("header {k} is ASCII"))
+    };
+    let response = Response::empty(StatusCode(101))
+        .with_header(header("Upgrade", "websocket"))
+        .with_header(header("Connection", "Upgrade"))
+        .with_header(header("Sec-WebSocket-Accept", &accept));
+    let stream = request.upgrade("websocket", response);
+    let feed = feed.clone();
+    std::thread::spawn(move || {
+        let mut ws = tungstenite::WebSocket::from_raw_socket(stream, tungstenite::protocol::Role::Server, None);
+        let mut seen = 0;
+        while !feed.is_closed() {
+            // Wake now and then even without news, to notice a client gone quiet.
+            let Some((seq, json)) = feed.next(seen, Duration::from_millis(500)) else {
+                if ws.send(tungstenite::Message::Ping(Vec::new().into())).is_err() {
+                    break;
+                }
+                continue;
+            };
+            seen = seq;
+            if ws.send(tungstenite::Message::Text(json.as_ref().into())).is_err() {
+                break;
+            }
+        }
+        let _ = ws.close(None);
+        LIVE_CLIENTS.fetch_sub(1, Ordering::SeqCst);
+    });
 }

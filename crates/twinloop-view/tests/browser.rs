@@ -420,7 +420,7 @@ fn km20_replay_draws_the_robot_where_forward_kinematics_puts_it() {
     .unwrap();
     let url = serve(Content {
         scene,
-        recordings: vec![rec],
+        recordings: vec![rec], live: None,
     });
     let mut data = Data::new(&model);
     for (t, q) in [(0.5, &a), (1.0, &b)] {
@@ -470,7 +470,7 @@ fn a_second_recording_is_drawn_as_a_ghost_where_its_data_put_it() {
     .unwrap();
     let url = serve(Content {
         scene,
-        recordings: vec![real, sim],
+        recordings: vec![real, sim], live: None,
     });
     let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
     assert_clean(&page);
@@ -514,7 +514,7 @@ fn meshes_load_and_a_missing_one_is_a_box_with_a_warning() {
     .unwrap();
     let url = serve(Content {
         scene,
-        recordings: vec![rec],
+        recordings: vec![rec], live: None,
     });
     let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
     assert_clean(&page);
@@ -540,7 +540,7 @@ fn op3_urdf_and_mjcf_load_without_console_errors() {
         assert!(n_missing > 0, "{file}: no meshes named?");
         let url = serve(Content {
             scene,
-            recordings: vec![],
+            recordings: vec![], live: None,
         });
         let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
         assert_clean(&page);
@@ -559,7 +559,7 @@ fn a_recording_without_some_joint_columns_says_which() {
     let rec = Recording::from_table(&table, Path::new("knee.csv"), &scene.info).unwrap();
     let url = serve(Content {
         scene,
-        recordings: vec![rec],
+        recordings: vec![rec], live: None,
     });
     let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
     assert_clean(&page);
@@ -582,7 +582,7 @@ fn the_exported_file_renders_the_same_without_a_server() {
     .unwrap();
     let content = Content {
         scene,
-        recordings: vec![rec],
+        recordings: vec![rec], live: None,
     };
     let html = twinloop_view::export_html(&content).unwrap();
     let dir = tempdir("export");

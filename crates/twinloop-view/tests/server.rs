@@ -27,7 +27,11 @@ fn mesh_robot_content(recordings: usize) -> Content {
     let recordings = (0..recordings)
         .map(|_| Recording::from_table(&table, Path::new("swing.csv"), &scene.info).unwrap())
         .collect();
-    Content { scene, recordings }
+    Content {
+        scene,
+        recordings,
+        live: None,
+    }
 }
 
 fn start(content: Content) -> SocketAddr {

@@ -310,6 +310,8 @@
         robot.position.set(c['q:base.x'][i], c['q:base.y'][i], c['q:base.z'][i]);
         robot.quaternion.set(c['q:base.qx'][i], c['q:base.qy'][i], c['q:base.qz'][i], c['q:base.qw'][i]).normalize();
       }
+    } else if (actor === state.actors[0] && live.frame && !state.manual) {
+      live.apply(robot);
     } else if (actor === state.actors[0]) {
       sliders.apply(robot);
     }
@@ -372,6 +374,44 @@
       s.arrow.setLength(Math.max(f.length() * scale, 0.02), 0.02, 0.012);
     }
   }
+
+  // ---- live: the newest state of a running source, over a websocket ----
+  const live = {
+    frame: null, lags: [], frames: 0,
+    connect() {
+      const ws = new WebSocket((location.protocol === 'https:' ? 'wss://' : 'ws://') + location.host + '/live');
+      ws.onmessage = (e) => {
+        this.frame = JSON.parse(e.data);
+        this.frames++;
+        this.pending = true;
+        requestRender();
+      };
+      ws.onclose = () => { warn('live view: the connection closed (the source stopped or the server ended)'); };
+      document.getElementById('no-recordings').textContent = 'live';
+    },
+    apply(robot) {
+      const f = this.frame;
+      const joints = state.info.joints;
+      for (let j = 0; j < joints.length; j++) {
+        const v = f.q[j];
+        if (v !== null && robot.joints[joints[j].name]) robot.joints[joints[j].name].setJointValue(v);
+      }
+      if (f.base && f.base.every((v) => v !== null)) {
+        robot.position.set(f.base[0], f.base[1], f.base[2]);
+        robot.quaternion.set(f.base[3], f.base[4], f.base[5], f.base[6]).normalize();
+      }
+    },
+    // Called once the frame is on screen: lag from the publisher's clock.
+    drawn() {
+      if (!this.pending) return;
+      this.pending = false;
+      this.lags.push(Date.now() - this.frame.sent_ms);
+      if (this.lags.length > 600) this.lags.shift();
+      const sorted = this.lags.slice().sort((a, b) => a - b);
+      status.live = { frames: this.frames, t: this.frame.t, lag_median_ms: sorted[sorted.length >> 1], lag_max_ms: sorted[sorted.length - 1] };
+      if (this.frames % 30 === 0) publish();
+    },
+  };
 
   // ---- joint sliders ----
   const sliders = {
@@ -575,12 +615,13 @@
     }
     if (state.actors[0] && state.actors[0].rec && !state.manual && status.frame % 6 === 0) sliders.follow(state.actors[0].robot);
     scrub.value = state.now;
-    clock.textContent = state.now.toFixed(3) + ' s';
+    clock.textContent = (live.frame && !state.t1 ? live.frame.t : state.now).toFixed(3) + ' s';
     plots.moveCursor();
     controls.update();
     const r0 = performance.now();
     renderer.render(scene, camera);
     if (bench.seconds > 0) { bench.render.push(performance.now() - r0); bench.work.push(performance.now() - w0); }
+    live.drawn();
     status.frame++;
   }
 
@@ -661,6 +702,8 @@
       state.now = state.t0;
       bindTimeline();
       state.actors.forEach((a, k) => { if (a.rec) recordingPanel(a, k); });
+    } else if (info.live) {
+      live.connect();
     } else {
       document.getElementById('sliders').open = true;
       state.manual = true;
