@@ -82,7 +82,10 @@ pub fn run(args: ViewArgs) -> CliResult {
     }
     if let (Some(path), Some(feed)) = (args.live.clone(), live) {
         if !(args.rate > 0.0 && args.rate.is_finite()) {
-            return Err(CliError::new(format!("--rate {}: must be a positive number of states per second", args.rate)));
+            return Err(CliError::new(format!(
+                "--rate {}: must be a positive number of states per second",
+                args.rate
+            )));
         }
         let rate = args.rate;
         std::thread::spawn(move || {

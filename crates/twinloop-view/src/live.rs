@@ -86,7 +86,11 @@ impl LiveFeed {
     }
 
     pub(crate) fn is_closed(&self) -> bool {
-        self.inner.0.lock().unwrap_or_else(|p| p.into_inner()).closed
+        self.inner
+            .0
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .closed
     }
 }
 
@@ -150,9 +154,8 @@ pub fn follow_csv(
     }
     let names: Vec<&str> = header.trim_end().split(',').map(str::trim).collect();
     let find = |n: &str| names.iter().position(|c| *c == n);
-    let t_col = find("t").ok_or_else(|| {
-        std::io::Error::other(format!("{}: no \"t\" column", path.display()))
-    })?;
+    let t_col = find("t")
+        .ok_or_else(|| std::io::Error::other(format!("{}: no \"t\" column", path.display())))?;
     let q_cols: Vec<Option<usize>> = joints.iter().map(|j| find(&format!("q:{j}"))).collect();
     let base_cols: Option<Vec<usize>> = crate::recording::BASE_COLUMNS
         .iter()
@@ -178,7 +181,10 @@ pub fn follow_csv(
         let Some(row) = newest else {
             // The writer may have started over (a new run to the same file).
             let pos = reader.stream_position()?;
-            if std::fs::metadata(path).map(|m| m.len() < pos).unwrap_or(false) {
+            if std::fs::metadata(path)
+                .map(|m| m.len() < pos)
+                .unwrap_or(false)
+            {
                 reader.seek(SeekFrom::Start(0))?;
                 header.clear();
                 reader.read_line(&mut header)?;

@@ -189,7 +189,8 @@ fn live_client(feed: &LiveFeed, request: Request) {
     };
     if LIVE_CLIENTS.fetch_add(1, Ordering::SeqCst) >= MAX_LIVE_CLIENTS {
         LIVE_CLIENTS.fetch_sub(1, Ordering::SeqCst);
-        let _ = request.respond(Response::from_string("too many live pages\n").with_status_code(503));
+        let _ =
+            request.respond(Response::from_string("too many live pages\n").with_status_code(503));
         return;
     }
     let accept = tungstenite::handshake::derive_accept_key(key.as_bytes());
@@ -204,18 +205,28 @@ fn live_client(feed: &LiveFeed, request: Request) {
     let stream = request.upgrade("websocket", response);
     let feed = feed.clone();
     std::thread::spawn(move || {
-        let mut ws = tungstenite::WebSocket::from_raw_socket(stream, tungstenite::protocol::Role::Server, None);
+        let mut ws = tungstenite::WebSocket::from_raw_socket(
+            stream,
+            tungstenite::protocol::Role::Server,
+            None,
+        );
         let mut seen = 0;
         while !feed.is_closed() {
             // Wake now and then even without news, to notice a client gone quiet.
             let Some((seq, json)) = feed.next(seen, Duration::from_millis(500)) else {
-                if ws.send(tungstenite::Message::Ping(Vec::new().into())).is_err() {
+                if ws
+                    .send(tungstenite::Message::Ping(Vec::new().into()))
+                    .is_err()
+                {
                     break;
                 }
                 continue;
             };
             seen = seq;
-            if ws.send(tungstenite::Message::Text(json.as_ref().into())).is_err() {
+            if ws
+                .send(tungstenite::Message::Text(json.as_ref().into()))
+                .is_err()
+            {
                 break;
             }
         }

@@ -420,7 +420,8 @@ fn km20_replay_draws_the_robot_where_forward_kinematics_puts_it() {
     .unwrap();
     let url = serve(Content {
         scene,
-        recordings: vec![rec], live: None,
+        recordings: vec![rec],
+        live: None,
     });
     let mut data = Data::new(&model);
     for (t, q) in [(0.5, &a), (1.0, &b)] {
@@ -470,7 +471,8 @@ fn a_second_recording_is_drawn_as_a_ghost_where_its_data_put_it() {
     .unwrap();
     let url = serve(Content {
         scene,
-        recordings: vec![real, sim], live: None,
+        recordings: vec![real, sim],
+        live: None,
     });
     let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
     assert_clean(&page);
@@ -514,7 +516,8 @@ fn meshes_load_and_a_missing_one_is_a_box_with_a_warning() {
     .unwrap();
     let url = serve(Content {
         scene,
-        recordings: vec![rec], live: None,
+        recordings: vec![rec],
+        live: None,
     });
     let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
     assert_clean(&page);
@@ -540,7 +543,8 @@ fn op3_urdf_and_mjcf_load_without_console_errors() {
         assert!(n_missing > 0, "{file}: no meshes named?");
         let url = serve(Content {
             scene,
-            recordings: vec![], live: None,
+            recordings: vec![],
+            live: None,
         });
         let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
         assert_clean(&page);
@@ -559,7 +563,8 @@ fn a_recording_without_some_joint_columns_says_which() {
     let rec = Recording::from_table(&table, Path::new("knee.csv"), &scene.info).unwrap();
     let url = serve(Content {
         scene,
-        recordings: vec![rec], live: None,
+        recordings: vec![rec],
+        live: None,
     });
     let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
     assert_clean(&page);
@@ -582,7 +587,8 @@ fn the_exported_file_renders_the_same_without_a_server() {
     .unwrap();
     let content = Content {
         scene,
-        recordings: vec![rec], live: None,
+        recordings: vec![rec],
+        live: None,
     };
     let html = twinloop_view::export_html(&content).unwrap();
     let dir = tempdir("export");
@@ -602,4 +608,66 @@ fn the_exported_file_renders_the_same_without_a_server() {
     );
     assert_eq!(exported.status["com"], served.status["com"]);
     let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn the_live_page_draws_the_state_it_receives() {
+    let Some(chromium) = browser() else { return };
+    let (robot, model) = km20();
+    let a = pose_a(&model);
+    let scene = Scene::new(&robot, None, &[]);
+    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    // The joints in the scene's order, from the model's configuration.
+    let names = model.q_names();
+    let joints: Vec<f64> = scene
+        .info
+        .joints
+        .iter()
+        .map(|j| a[names.iter().position(|n| *n == j.name).unwrap()])
+        .collect();
+    let base: [f64; 7] = a[..7].try_into().unwrap();
+    let feed = twinloop_view::LiveFeed::new();
+    let url = serve(Content {
+        scene,
+        recordings: vec![],
+        live: Some(feed.clone()),
+    });
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let publisher = {
+        let (feed, stop) = (feed.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let mut t = 0.0;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                feed.publish(t, &joints, Some(base));
+                t += 0.005;
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        })
+    };
+    let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    publisher.join().unwrap();
+    assert_clean(&page);
+    assert!(
+        page.status["live"]["frames"].as_u64().unwrap() >= 1,
+        "{}",
+        page.status
+    );
+    let mut data = Data::new(&model);
+    let com = center_of_mass(&model, &mut data, &a);
+    let seen: Vec<f64> = page.status["com"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for k in 0..3 {
+        assert!(
+            (seen[k] - com[k]).abs() < 1e-5,
+            "live CoM {seen:?} vs {com:?}"
+        );
+    }
+    let img = &page.image;
+    let want = predicted_extent(&drawn, &a, img.width, img.height);
+    assert_extent_close(silhouette(img), want, "live km20");
 }

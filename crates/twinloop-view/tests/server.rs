@@ -221,3 +221,141 @@ fn op3_without_its_meshes_is_drawn_from_stand_ins_with_warnings() {
     }
     assert_eq!(scene.info.joints.len(), 20);
 }
+
+fn live_content(feed: &twinloop_view::LiveFeed) -> Content {
+    let mut c = mesh_robot_content(0);
+    c.live = Some(feed.clone());
+    c
+}
+
+fn live_socket(addr: SocketAddr) -> tungstenite::WebSocket<TcpStream> {
+    let stream = TcpStream::connect(addr).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    let (ws, _) = tungstenite::client::client(format!("ws://{addr}/live"), stream).unwrap();
+    ws
+}
+
+/// The next state sent: (t, q).
+fn next_state(ws: &mut tungstenite::WebSocket<TcpStream>) -> (f64, Vec<Option<f64>>) {
+    loop {
+        if let tungstenite::Message::Text(text) = ws.read().unwrap() {
+            let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            let q = v["q"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64())
+                .collect();
+            return (v["t"].as_f64().unwrap(), q);
+        }
+    }
+}
+
+#[test]
+fn the_live_socket_sends_the_newest_state_decimated_and_survives_hang_ups() {
+    let feed = twinloop_view::LiveFeed::new();
+    let addr = start(live_content(&feed));
+    let (_, scene) = get(addr, "/scene.json");
+    let scene: serde_json::Value = serde_json::from_slice(&scene).unwrap();
+    assert_eq!(scene["live"], true);
+    let mut ws = live_socket(addr);
+    // A 1 kHz source for 0.6 s of wall time, decimated to 60 Hz.
+    let source = {
+        let feed = feed.clone();
+        std::thread::spawn(move || {
+            let mut d = twinloop_view::Decimator::new(60.0);
+            let start = std::time::Instant::now();
+            let mut published = 0;
+            for k in 0..600 {
+                let t = k as f64 * 1e-3;
+                while start.elapsed().as_secs_f64() < t {
+                    std::thread::sleep(Duration::from_micros(200));
+                }
+                if d.admit(t) {
+                    feed.publish(t, &[t.sin()], None);
+                    published += 1;
+                }
+            }
+            published
+        })
+    };
+    let mut received = Vec::new();
+    while received.last().is_none_or(|(t, _)| *t < 0.58) {
+        received.push(next_state(&mut ws));
+    }
+    let published = source.join().unwrap();
+    assert!((35..=37).contains(&published), "{published}");
+    assert!(
+        received.len() <= published && received.len() > published / 2,
+        "{}",
+        received.len()
+    );
+    for w in received.windows(2) {
+        assert!(w[1].0 > w[0].0, "states out of order");
+    }
+    for (t, q) in &received {
+        assert!((q[0].unwrap() - t.sin()).abs() < 1e-12, "{t}: {q:?}");
+    }
+    // A client that hangs up mid-stream, and one that never reads: the server and
+    // the others go on.
+    drop(ws);
+    let stalled = live_socket(addr);
+    let mut other = live_socket(addr);
+    for k in 0..2000 {
+        feed.publish(1.0 + k as f64 * 1e-3, &[f64::NAN], None);
+    }
+    // A new page first gets the state current when it connected, then the newest.
+    let (mut t, mut q) = next_state(&mut other);
+    if t < 1.0 {
+        (t, q) = next_state(&mut other);
+    }
+    assert!(
+        t > 1.0 && q[0].is_none(),
+        "NaN arrives as null (not known): {t} {q:?}"
+    );
+    assert_eq!(get(addr, "/").0, 200);
+    drop(stalled);
+    feed.close();
+}
+
+#[test]
+fn following_a_csv_as_it_is_written_publishes_its_newest_row() {
+    let dir = std::env::temp_dir().join(format!("twinloop-view-follow-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("run.csv");
+    let _ = std::fs::remove_file(&csv);
+    let feed = twinloop_view::LiveFeed::new();
+    let addr = start(live_content(&feed));
+    let mut ws = live_socket(addr);
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let follower = {
+        let (csv, feed, stop) = (csv.clone(), feed.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let joints = ["shoulder".to_string()];
+            twinloop_view::follow_csv(&csv, &joints, 1000.0, &feed, &|| {
+                stop.load(std::sync::atomic::Ordering::Relaxed)
+            })
+        })
+    };
+    // The file appears after the follower started; rows come in pieces.
+    std::thread::sleep(Duration::from_millis(100));
+    let mut f = std::fs::File::create(&csv).unwrap();
+    write!(f, "t,q:base.x,q:shoulder\n0,0,0.25\n0.5,0,0.").unwrap();
+    f.flush().unwrap();
+    let (t, q) = next_state(&mut ws);
+    assert_eq!((t, q[0]), (0.0, Some(0.25)));
+    std::thread::sleep(Duration::from_millis(50));
+    writeln!(f, "75").unwrap();
+    f.flush().unwrap();
+    let (t, q) = next_state(&mut ws);
+    assert_eq!(
+        (t, q[0]),
+        (0.5, Some(0.75)),
+        "the half-written row waits for its end"
+    );
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    follower.join().unwrap().unwrap();
+    let _ = std::fs::remove_dir_all(dir);
+}

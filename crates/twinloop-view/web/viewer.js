@@ -409,7 +409,8 @@
       if (this.lags.length > 600) this.lags.shift();
       const sorted = this.lags.slice().sort((a, b) => a - b);
       status.live = { frames: this.frames, t: this.frame.t, lag_median_ms: sorted[sorted.length >> 1], lag_max_ms: sorted[sorted.length - 1] };
-      if (this.frames % 30 === 0) publish();
+      if (this.frames % 30 === 0 || this.frames === 1) publish();
+      takeSnapshot();
     },
   };
 
@@ -641,6 +642,18 @@
     if (state.playing) requestRender();
   }
 
+  // The rendered image itself in #snapshot (URL parameter snapshot=1), for tests:
+  // independent of the browser's compositor. Live: once the first state is drawn.
+  function takeSnapshot() {
+    if (!params.get('snapshot') || document.getElementById('snapshot')) return;
+    const pre = document.createElement('pre');
+    pre.id = 'snapshot'; pre.hidden = true;
+    pre.textContent = renderer.domElement.toDataURL('image/png');
+    document.body.appendChild(pre);
+    status.canvas = [renderer.domElement.width, renderer.domElement.height];
+    publish();
+  }
+
   function finishBench() {
     state.playing = false;
     const d = [];
@@ -733,14 +746,7 @@
     renderNow();
     status.ready = true;
     status.load_ms = performance.now();
-    if (params.get('snapshot')) {
-      // The rendered image itself, for tests: independent of the browser's compositor.
-      const pre = document.createElement('pre');
-      pre.id = 'snapshot'; pre.hidden = true;
-      pre.textContent = renderer.domElement.toDataURL('image/png');
-      document.body.appendChild(pre);
-      status.canvas = [renderer.domElement.width, renderer.domElement.height];
-    }
+    if (!info.live) takeSnapshot();
     publish();
     if (state.playing) requestRender();
   }
