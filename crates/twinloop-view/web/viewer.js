@@ -452,6 +452,10 @@
   };
 
   // ---- synchronised plots (uPlot) ----
+  function axisNumber(v) {
+    if (v === 0) return '0';
+    return Math.abs(v) < 1e-3 || Math.abs(v) >= 1e5 ? v.toExponential(1) : String(Number(v.toPrecision(3)));
+  }
   const plots = {
     u: null, cursor: null, xs: null,
     build() {
@@ -502,6 +506,8 @@
       const opts = {
         width: Math.max(el.clientWidth, 300), height: 180,
         scales: { x: { time: false } },
+        // Small values (rad, m) keep three significant digits on the axis.
+        axes: [{}, { values: (u, vals) => vals.map(axisNumber), size: 64 }],
         series, legend: { live: false },
         cursor: { drag: { x: false, y: false } },
       };
@@ -509,7 +515,6 @@
       this.cursor = document.createElement('div');
       this.cursor.className = 'cursor-line';
       this.u.over.appendChild(this.cursor);
-      this.cursor.style.height = this.u.over.clientHeight + 'px';
       this.u.over.addEventListener('click', (e) => seek(this.u.posToVal(e.offsetX, 'x')));
       this.moveCursor();
     },
