@@ -21,6 +21,7 @@
   const SWATCHES = ['#9e9e9e', '#1e88e5', '#e53935', '#43a047', '#8e24aa'];
   const GRAVITY = 9.81;
   const CONTACT_HEIGHT = 0.01; // m: geometry this close to the ground counts as touching it
+  const MAX_SUPPORT_POINTS = 256;
 
   // ---- status for people (banner) and for tests (#status JSON) ----
   const status = { ready: false, errors: [], warnings: [], recordings: [], com: null, frame: 0 };
@@ -94,7 +95,9 @@
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
   }
-  window.addEventListener('resize', () => { resize(); plots.resize(); });
+  window.addEventListener('resize', () => { resize(); plots.resize(); requestRender(); });
+  // The view's box also changes when the timeline and plot appear.
+  if (window.ResizeObserver) new ResizeObserver(() => { resize(); requestRender(); }).observe(host);
 
   // ---- robots: one per recording (the first solid, the others ghosts) ----
   const meshCache = new Map(); // url -> Promise<geometry or Object3D>
@@ -163,16 +166,16 @@
     robot.traverse((c) => { if (c.isMesh && !c.userData.overlay) out.push(c); });
     return out;
   }
-  // World corners of each visual's bounding box.
+  // World corners of each visual's bounding box, into `out` (reused frame to frame).
   function visualCorners(meshes, out) {
-    out.length = 0;
+    while (out.length < 8 * meshes.length) out.push(new THREE.Vector3());
+    let k = 0;
     for (const m of meshes) {
       const g = m.geometry;
       if (!g.boundingBox) g.computeBoundingBox();
       const b = g.boundingBox;
       for (let i = 0; i < 8; i++) {
-        tmpV.set(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);
-        out.push(tmpV.clone().applyMatrix4(m.matrixWorld));
+        out[k++].set(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z).applyMatrix4(m.matrixWorld);
       }
     }
     return out;
@@ -205,7 +208,13 @@
     const comGround = new THREE.Mesh(new THREE.CircleGeometry(0.012, 24), new THREE.MeshBasicMaterial({ color: tint }));
     const comLineGeom = new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3()]);
     const comLine = new THREE.Line(comLineGeom, new THREE.LineDashedMaterial({ color: tint, dashSize: 0.01, gapSize: 0.01 }));
-    const support = new THREE.LineLoop(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: colour === null ? 0x2e7d32 : colour }));
+    // One fixed buffer for the polygon (a new attribute each frame would leak GPU buffers).
+    const supportGeom = new THREE.BufferGeometry();
+    const supportPos = new THREE.BufferAttribute(new Float32Array(3 * MAX_SUPPORT_POINTS), 3);
+    supportPos.setUsage(THREE.DynamicDrawUsage);
+    supportGeom.setAttribute('position', supportPos);
+    supportGeom.setDrawRange(0, 0);
+    const support = new THREE.LineLoop(supportGeom, new THREE.LineBasicMaterial({ color: colour === null ? 0x2e7d32 : colour }));
     const comGroup = new THREE.Group();
     comGroup.add(com, comGround, comLine);
     // Drawn over the robot: the CoM is inside the body.
@@ -260,8 +269,12 @@
         if (show.support) {
           visualCorners(meshes, corners);
           const touching = corners.filter((c) => c.z < CONTACT_HEIGHT);
-          const hull = convexHull(touching).map((c) => new THREE.Vector3(c.x, c.y, 0.002));
-          support.geometry.setFromPoints(hull);
+          const hull = convexHull(touching);
+          const n = Math.min(hull.length, MAX_SUPPORT_POINTS);
+          for (let i = 0; i < n; i++) supportPos.setXYZ(i, hull[i].x, hull[i].y, 0.002);
+          supportPos.needsUpdate = true;
+          supportGeom.setDrawRange(0, n);
+          supportGeom.computeBoundingSphere();
         }
       },
     };
@@ -353,6 +366,8 @@
     }
     return out.map((s) => {
       const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 0.1, 0x00897b, 0.02, 0.012);
+      // Drawn through the foot and leg it starts inside.
+      for (const part of [arrow.line, arrow.cone]) { part.material.depthTest = false; part.renderOrder = 11; }
       copGroup.add(arrow);
       return Object.assign(s, { arrow });
     });
@@ -529,6 +544,7 @@
 
   // ---- timeline ----
   const scrub = document.getElementById('scrub');
+  const sliderPanel = document.getElementById('sliders');
   const clock = document.getElementById('clock');
   function updatePlayButton() { document.getElementById('play').innerHTML = state.playing ? '&#10074;&#10074;' : '&#9654;'; }
   function span() {
@@ -619,7 +635,7 @@
       const c = state.actors[0].overlays.comWorld;
       status.com = [c.x, c.y, c.z];
     }
-    if (state.actors[0] && state.actors[0].rec && !state.manual && status.frame % 6 === 0) sliders.follow(state.actors[0].robot);
+    if (sliderPanel.open && state.actors[0] && state.actors[0].rec && !state.manual && status.frame % 6 === 0) sliders.follow(state.actors[0].robot);
     scrub.value = state.now;
     clock.textContent = (live.frame && !state.t1 ? live.frame.t : state.now).toFixed(3) + ' s';
     plots.moveCursor();
@@ -742,8 +758,11 @@
       camera.position.set(cam[0], cam[1], cam[2]);
       controls.target.set(cam[3], cam[4], cam[5]);
     } else {
+      // Far enough that the bounding sphere fits the narrower side of the view.
+      const half = Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2);
+      const dist = 0.55 * size / (half * Math.min(1, camera.aspect));
       controls.target.copy(centre);
-      camera.position.set(centre.x + size * 1.1, centre.y - size * 1.1, centre.z + size * 0.5);
+      camera.position.copy(centre).addScaledVector(new THREE.Vector3(1, -1, 0.45).normalize(), dist);
     }
     plots.build();
     resize(); plots.resize();
