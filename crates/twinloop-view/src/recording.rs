@@ -58,10 +58,23 @@ impl Recording {
         if table.rows.is_empty() {
             return Err(IoError::new("no data rows").in_file(path));
         }
-        // Time must not run backwards: the page finds frames by bisection.
-        for r in 1..table.rows.len() {
-            if table.rows[r][t] < table.rows[r - 1][t] {
-                return Err(table.row_error(r, "t decreases (the rows must be in time order)"));
+        // Time must be a number and not run backwards: the page finds frames by
+        // bisection.
+        let row_error = |r: usize, what: &str| {
+            let mut e = table.row_error(r, what);
+            e.file.get_or_insert_with(|| path.to_path_buf());
+            e.column = Some("t".into());
+            e
+        };
+        for r in 0..table.rows.len() {
+            if !table.rows[r][t].is_finite() {
+                return Err(row_error(r, "not a finite number"));
+            }
+            if r > 0 && table.rows[r][t] < table.rows[r - 1][t] {
+                return Err(row_error(
+                    r,
+                    "time decreases (the rows must be in time order)",
+                ));
             }
         }
         let missing: Vec<String> = scene

@@ -58,14 +58,13 @@ impl Content {
             }
             _ => {}
         }
-        if let Some(rest) = path.strip_prefix("/mesh/") {
+        if path.starts_with("/mesh/") {
             let mesh = self
                 .scene
                 .info
                 .meshes
                 .iter()
                 .find(|m| m.url.as_deref() == Some(&path[1..]))?;
-            debug_assert!(rest.contains('.'));
             let bytes = std::fs::read(mesh.path.as_ref()?).ok()?;
             return Some(("application/octet-stream", bytes));
         }

@@ -191,7 +191,13 @@ fn a_recording_says_which_joint_columns_it_lacks() {
     assert!(e.to_string().contains("x.csv") && e.to_string().contains("\"t\""));
     let back = twinloop_io::Table::parse("t,q:l_knee\n0,0\n1,0\n0.5,0\n").unwrap();
     let e = Recording::from_table(&back, Path::new("x.csv"), &scene.info).unwrap_err();
-    assert!(e.to_string().contains("t decreases"), "{e}");
+    assert_eq!(
+        e.to_string(),
+        "x.csv: column \"t\": data row 3: time decreases (the rows must be in time order)"
+    );
+    let nan = twinloop_io::Table::parse("t,q:l_knee\n0,0\nNaN,0\n").unwrap();
+    let e = Recording::from_table(&nan, Path::new("x.csv"), &scene.info).unwrap_err();
+    assert!(e.to_string().contains("not a finite number"), "{e}");
 }
 
 #[test]
