@@ -11,6 +11,7 @@
 //   bare=1         the 3D view alone, filling the window
 //   bg=RRGGBB      background colour; overlays=a,b,...  overlays on (grid, com, support, ...)
 //   snapshot=1     put the rendered image (PNG data URL) in #snapshot
+  //   aa=0           no antialiasing (faster with software WebGL)
   //   bench=S        play S seconds at 1x from the start and report frame times in #status
 'use strict';
 (function () {
@@ -71,7 +72,8 @@
   THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
   const host = document.getElementById('view3d');
   if (params.get('bare')) document.body.classList.add('bare');
-  const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  // Antialiasing costs most where WebGL runs in software; aa=0 turns it off.
+  const renderer = new THREE.WebGLRenderer({ antialias: params.get('aa') !== '0', preserveDrawingBuffer: true });
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   host.appendChild(renderer.domElement);
   const scene = new THREE.Scene();
