@@ -673,3 +673,55 @@ fn the_live_page_draws_the_state_it_receives() {
     let want = predicted_extent(&drawn, &a, img.width, img.height);
     assert_extent_close(silhouette(img), want, "live km20");
 }
+
+#[test]
+fn the_joint_sliders_pose_the_robot_and_its_com() {
+    let Some(chromium) = browser() else { return };
+    let (robot, model) = km20();
+    let scene = Scene::new(&robot, None, &[]);
+    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    let url = serve(Content {
+        scene,
+        recordings: vec![],
+        live: None,
+    });
+    // Without a recording the robot stands on the ground at its zero pose: the root
+    // is lifted by the depth of the lowest visual point below it.
+    let zero = configuration(&model, [0.0; 3], 0.0, &[]);
+    let mut data = Data::new(&model);
+    frames_forward_kinematics(&model, &mut data, &zero);
+    let mut lowest = f64::MAX;
+    for link in &drawn.links {
+        let o = &data.o_m_f[model.frame_index(&link.name).unwrap()];
+        for v in &link.visuals {
+            let (r, t) = (matrix(v.origin.rotation()), Vector3::from(v.origin.xyz));
+            for p in geometry_points(&v.geometry) {
+                lowest = lowest.min((o.rotation * (r * p + t) + o.translation).z);
+            }
+        }
+    }
+    let joints = [("l_sho_pitch", -1.0), ("r_knee", 0.9), ("head_pan", 0.6)];
+    let q = configuration(&model, [0.0, 0.0, -lowest], 0.0, &joints);
+    let pose: Vec<String> = joints.iter().map(|(j, v)| format!("{j}:{v}")).collect();
+    let page = load(
+        &chromium,
+        &format!("{url}{}&pose={}", view_query(0.0), pose.join(",")),
+    );
+    assert_clean(&page);
+    let com = center_of_mass(&model, &mut data, &q);
+    let seen: Vec<f64> = page.status["com"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for k in 0..3 {
+        assert!(
+            (seen[k] - com[k]).abs() < 1e-5,
+            "slider CoM {seen:?} vs {com:?}"
+        );
+    }
+    let img = &page.image;
+    let want = predicted_extent(&drawn, &q, img.width, img.height);
+    assert_extent_close(silhouette(img), want, "km20 posed by sliders");
+}

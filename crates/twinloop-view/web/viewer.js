@@ -11,6 +11,7 @@
 //   bare=1         the 3D view alone, filling the window
 //   bg=RRGGBB      background colour; overlays=a,b,...  overlays on (grid, com, support, ...)
 //   snapshot=1     put the rendered image (PNG data URL) in #snapshot
+  //   pose=j:rad,... pose the robot by the joint sliders
   //   aa=0           no antialiasing (faster with software WebGL)
   //   bench=S        play S seconds at 1x from the start and report frame times in #status
 'use strict';
@@ -181,6 +182,16 @@
       }
     }
     return out;
+  }
+  // The world bounding box of a robot's visual geometry (not its overlays).
+  const tmpMeshBox = new THREE.Box3();
+  function visualBox(robot, box) {
+    box.makeEmpty();
+    for (const m of visualMeshes(robot)) {
+      if (!m.geometry.boundingBox) m.geometry.computeBoundingBox();
+      box.union(tmpMeshBox.copy(m.geometry.boundingBox).applyMatrix4(m.matrixWorld));
+    }
+    return box;
   }
   // Andrew's monotone chain: the convex hull of 2-D points, counter-clockwise.
   function convexHull(points) {
@@ -455,6 +466,17 @@
         this.inputs.push({ joint: j.name, input, val });
       }
     },
+    // A pose from the URL (pose=joint:rad,joint:rad): the sliders take over.
+    set(text) {
+      for (const item of text.split(',')) {
+        const [name, value] = item.split(':');
+        const s = this.inputs.find((i) => i.joint === name);
+        if (!s || !Number.isFinite(Number(value))) { warn('pose: no joint "' + name + '" or not a number: ' + item); continue; }
+        s.input.value = Number(value);
+        s.val.textContent = Number(value).toFixed(3);
+      }
+      state.manual = true;
+    },
     apply(robot) {
       for (const s of this.inputs) if (robot.joints[s.joint]) robot.joints[s.joint].setJointValue(Number(s.input.value));
     },
@@ -724,7 +746,7 @@
     for (const a of state.actors) {
       poseActor(a);
       if (a.rec && a.rec.info.has_base) continue;
-      tmpBox.setFromObject(a.robot);
+      visualBox(a.robot, tmpBox);
       if (Number.isFinite(tmpBox.min.z)) a.robot.position.z = -tmpBox.min.z;
     }
     status.recordings = recs.map((r) => ({ name: r.info.name, rows: r.info.rows, missing: r.info.missing }));
@@ -732,6 +754,7 @@
       if (r.info.missing.length) warn(r.info.name + ': missing columns ' + r.info.missing.join(', ') + ' (those joints stay at 0)');
     }
     sliders.build(info.joints);
+    if (params.has('pose')) sliders.set(params.get('pose'));
     if (recs.length) {
       document.getElementById('no-recordings').hidden = true;
       span();
@@ -752,7 +775,7 @@
     // Camera: from the URL, or framing the robot.
     if (params.has('t')) seek(Number(params.get('t')));
     poseActor(state.actors[0]);
-    tmpBox.setFromObject(state.actors[0].robot);
+    visualBox(state.actors[0].robot, tmpBox);
     const centre = tmpBox.getCenter(new THREE.Vector3());
     const size = tmpBox.getSize(new THREE.Vector3()).length() || 1;
     const cam = (params.get('camera') || '').split(',').map(Number);
