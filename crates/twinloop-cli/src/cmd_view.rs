@@ -39,6 +39,12 @@ pub struct ViewArgs {
 }
 
 pub fn run(args: ViewArgs) -> CliResult {
+    if !(args.rate > 0.0 && args.rate.is_finite()) {
+        return Err(CliError::new(format!(
+            "--rate {}: must be a positive number of states per second",
+            args.rate
+        )));
+    }
     let (robot, format) = common::load_description(&args.robot)?;
     let source = (format != common::Format::Builtin).then(|| Path::new(&args.robot));
     let scene = Scene::new(&robot, source, &args.package_dirs);
@@ -81,12 +87,6 @@ pub fn run(args: ViewArgs) -> CliResult {
         open_browser(&url);
     }
     if let (Some(path), Some(feed)) = (args.live.clone(), live) {
-        if !(args.rate > 0.0 && args.rate.is_finite()) {
-            return Err(CliError::new(format!(
-                "--rate {}: must be a positive number of states per second",
-                args.rate
-            )));
-        }
         let rate = args.rate;
         std::thread::spawn(move || {
             if let Err(e) = twinloop_view::follow_csv(&path, &joints, rate, &feed, &|| false) {

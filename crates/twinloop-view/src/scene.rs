@@ -26,10 +26,17 @@ impl PackageDir {
     /// Parse `NAME=DIR`.
     pub fn parse(text: &str) -> Result<PackageDir, String> {
         match text.split_once('=') {
-            Some((name, dir)) if !name.is_empty() && !dir.is_empty() => Ok(PackageDir {
-                name: name.to_string(),
-                dir: PathBuf::from(dir),
-            }),
+            Some((name, dir)) if !name.is_empty() && !dir.is_empty() => {
+                // `NAME=~/dir`: a shell leaves the tilde after `=` alone in some modes.
+                let dir = match (dir.strip_prefix("~/"), std::env::var_os("HOME")) {
+                    (Some(rest), Some(home)) => PathBuf::from(home).join(rest),
+                    _ => PathBuf::from(dir),
+                };
+                Ok(PackageDir {
+                    name: name.to_string(),
+                    dir,
+                })
+            }
             _ => Err(format!(
                 "\"{text}\" is not NAME=DIR (e.g. op3_description=~/op3)"
             )),
