@@ -88,6 +88,7 @@ impl Content {
 pub struct Server {
     http: Arc<tiny_http::Server>,
     content: Arc<Content>,
+    misses: Misses,
 }
 
 /// How many requests are answered at once (the page loads meshes in parallel).
@@ -100,6 +101,7 @@ impl Server {
         Ok(Server {
             http: Arc::new(http),
             content: Arc::new(content),
+            misses: Misses::default(),
         })
     }
 
@@ -112,6 +114,11 @@ impl Server {
         }
     }
 
+    /// What was asked for and not found so far.
+    pub fn misses(&self) -> Misses {
+        self.misses.clone()
+    }
+
     /// The page's URL.
     pub fn url(&self) -> String {
         format!("http://{}/", self.addr())
@@ -122,9 +129,10 @@ impl Server {
         for _ in 0..WORKERS {
             let http = Arc::clone(&self.http);
             let content = Arc::clone(&self.content);
+            let misses = self.misses.clone();
             std::thread::spawn(move || {
                 while let Ok(request) = http.recv() {
-                    respond(&content, request);
+                    respond(&content, &misses, request);
                 }
             });
         }
@@ -134,7 +142,7 @@ impl Server {
     pub fn run(&self) {
         self.spawn();
         while let Ok(request) = self.http.recv() {
-            respond(&self.content, request);
+            respond(&self.content, &self.misses, request);
         }
     }
 }
@@ -143,7 +151,28 @@ impl Server {
 const MAX_LIVE_CLIENTS: usize = 8;
 static LIVE_CLIENTS: AtomicUsize = AtomicUsize::new(0);
 
-fn respond(content: &Content, request: Request) {
+/// The paths answered 404, oldest first (at most [`MAX_MISSES`]): a page that
+/// asks for something the server does not have is a bug the tests look for.
+#[derive(Clone, Default)]
+pub struct Misses(Arc<std::sync::Mutex<Vec<String>>>);
+
+const MAX_MISSES: usize = 100;
+
+impl Misses {
+    pub fn list(&self) -> Vec<String> {
+        self.0.lock().map(|m| m.clone()).unwrap_or_default()
+    }
+
+    fn record(&self, path: &str) {
+        if let Ok(mut m) = self.0.lock()
+            && m.len() < MAX_MISSES
+        {
+            m.push(path.to_string());
+        }
+    }
+}
+
+fn respond(content: &Content, misses: &Misses, request: Request) {
     if request.url() == "/live"
         && let Some(feed) = &content.live
     {
@@ -168,6 +197,7 @@ fn respond(content: &Content, request: Request) {
             request.respond(r)
         }
         None => {
+            misses.record(request.url());
             request.respond(Response::from_string("not found\n").with_status_code(StatusCode(404)))
         }
     };

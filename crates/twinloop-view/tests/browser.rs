@@ -166,11 +166,21 @@ fn tempdir(what: &str) -> PathBuf {
     d
 }
 
-fn serve(content: Content) -> String {
+/// Serve `content`; the URL, and the paths the page asked for and did not get.
+fn serve_with_misses(content: Content) -> (String, twinloop_view::server::Misses) {
     let server = Server::bind("127.0.0.1:0", content).unwrap();
-    let url = server.url();
+    let (url, misses) = (server.url(), server.misses());
     std::thread::spawn(move || server.run());
-    url
+    (url, misses)
+}
+
+/// No request of the page went unanswered (a 404 is a console error in the browser).
+fn assert_no_misses(misses: &twinloop_view::server::Misses) {
+    assert_eq!(
+        misses.list(),
+        Vec::<String>::new(),
+        "the page asked for missing files"
+    );
 }
 
 fn assert_clean(page: &Page) {
@@ -420,7 +430,7 @@ fn km20_replay_draws_the_robot_where_forward_kinematics_puts_it() {
         &scene.info,
     )
     .unwrap();
-    let url = serve(Content {
+    let (url, misses) = serve_with_misses(Content {
         scene,
         recordings: vec![rec],
         live: None,
@@ -429,6 +439,7 @@ fn km20_replay_draws_the_robot_where_forward_kinematics_puts_it() {
     for (t, q) in [(0.5, &a), (1.0, &b)] {
         let page = load(&chromium, &format!("{url}{}", view_query(t)));
         assert_clean(&page);
+        assert_no_misses(&misses);
         // The CoM the page computes from the URDF's inertials, against the dynamics'.
         let com = center_of_mass(&model, &mut data, q);
         let seen: Vec<f64> = page.status["com"]
@@ -471,13 +482,14 @@ fn a_second_recording_is_drawn_as_a_ghost_where_its_data_put_it() {
         &scene.info,
     )
     .unwrap();
-    let url = serve(Content {
+    let (url, misses) = serve_with_misses(Content {
         scene,
         recordings: vec![real, sim],
         live: None,
     });
     let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
     assert_clean(&page);
+    assert_no_misses(&misses);
     assert_eq!(page.status["recordings"].as_array().unwrap().len(), 2);
     let img = &page.image;
     let (ea, eb) = (
@@ -516,13 +528,14 @@ fn meshes_load_and_a_missing_one_is_a_box_with_a_warning() {
         &scene.info,
     )
     .unwrap();
-    let url = serve(Content {
+    let (url, misses) = serve_with_misses(Content {
         scene,
         recordings: vec![rec],
         live: None,
     });
     let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
     assert_clean(&page);
+    assert_no_misses(&misses);
     let warnings = page.status["warnings"].to_string();
     assert!(
         warnings.contains("hand.stl") && warnings.contains("file not found"),
@@ -543,13 +556,14 @@ fn op3_urdf_and_mjcf_load_without_console_errors() {
         let scene = Scene::new(&robot, Some(&path), &[]);
         let n_missing = scene.info.meshes.len();
         assert!(n_missing > 0, "{file}: no meshes named?");
-        let url = serve(Content {
+        let (url, misses) = serve_with_misses(Content {
             scene,
             recordings: vec![],
             live: None,
         });
         let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
         assert_clean(&page);
+        assert_no_misses(&misses);
         let warnings = page.status["warnings"].as_array().unwrap();
         assert_eq!(warnings.len(), n_missing, "{file}: {warnings:?}");
         silhouette(&page.image);
@@ -563,13 +577,14 @@ fn a_recording_without_some_joint_columns_says_which() {
     let scene = Scene::new(&robot, None, &[]);
     let table = Table::parse("t,q:l_knee\n0,0.5\n1,0.6\n").unwrap();
     let rec = Recording::from_table(&table, Path::new("knee.csv"), &scene.info).unwrap();
-    let url = serve(Content {
+    let (url, misses) = serve_with_misses(Content {
         scene,
         recordings: vec![rec],
         live: None,
     });
     let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
     assert_clean(&page);
+    assert_no_misses(&misses);
     let missing = page.status["recordings"][0]["missing"].as_array().unwrap();
     assert_eq!(missing.len(), 19);
     assert!(page.status["warnings"].to_string().contains("q:r_knee"));
@@ -596,13 +611,14 @@ fn the_exported_file_renders_the_same_without_a_server() {
     let dir = tempdir("export");
     let file = dir.join("replay.html");
     std::fs::write(&file, html).unwrap();
-    let url = serve(content);
+    let (url, misses) = serve_with_misses(content);
     let served = load(&chromium, &format!("{url}{}", view_query(1.0)));
     let exported = load(
         &chromium,
         &format!("file://{}{}", file.display(), view_query(1.0)),
     );
     assert_clean(&exported);
+    assert_no_misses(&misses);
     assert_extent_close(
         silhouette(&exported.image),
         silhouette(&served.image),
@@ -629,7 +645,7 @@ fn the_live_page_draws_the_state_it_receives() {
         .collect();
     let base: [f64; 7] = a[..7].try_into().unwrap();
     let feed = twinloop_view::LiveFeed::new();
-    let url = serve(Content {
+    let (url, misses) = serve_with_misses(Content {
         scene,
         recordings: vec![],
         live: Some(feed.clone()),
@@ -650,6 +666,7 @@ fn the_live_page_draws_the_state_it_receives() {
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     publisher.join().unwrap();
     assert_clean(&page);
+    assert_no_misses(&misses);
     assert!(
         page.status["live"]["frames"].as_u64().unwrap() >= 1,
         "{}",
@@ -680,7 +697,7 @@ fn the_joint_sliders_pose_the_robot_and_its_com() {
     let (robot, model) = km20();
     let scene = Scene::new(&robot, None, &[]);
     let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
-    let url = serve(Content {
+    let (url, misses) = serve_with_misses(Content {
         scene,
         recordings: vec![],
         live: None,
@@ -708,6 +725,7 @@ fn the_joint_sliders_pose_the_robot_and_its_com() {
         &format!("{url}{}&pose={}", view_query(0.0), pose.join(",")),
     );
     assert_clean(&page);
+    assert_no_misses(&misses);
     let com = center_of_mass(&model, &mut data, &q);
     let seen: Vec<f64> = page.status["com"]
         .as_array()
