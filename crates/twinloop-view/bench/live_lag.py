@@ -4,7 +4,7 @@ ROBOT --live CSV` follows it, and headless Chromium (DevTools protocol) shows it
 Reports the frames drawn per second and the lag (publish on the server to the
 frame drawn in the page, same clock).
 
-    python3 bench/viewer/live_lag.py target/release/twinloop 10
+    python3 crates/twinloop-view/bench/live_lag.py target/release/twinloop 10
 """
 import asyncio
 import json

@@ -2,7 +2,7 @@
 t, q:base.* standing still, q:<joint> sinusoids, and v:<joint>, tau:<joint> columns
 as `twinloop simulate` writes them (60 001 rows, 68 columns).
 
-    python3 bench/viewer/make_replay.py /tmp/replay60.csv
+    python3 crates/twinloop-view/bench/make_replay.py /tmp/replay60.csv
 """
 import sys
 import numpy as np

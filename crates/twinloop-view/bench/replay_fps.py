@@ -3,8 +3,8 @@ time): starts `twinloop view ROBOT CSV`, opens the page through the DevTools
 protocol with `?bench=S` (play S seconds at 1x from the start), and reads the
 page's own measurement (requestAnimationFrame intervals) and its load time.
 
-    python3 bench/viewer/make_replay.py /tmp/replay60.csv
-    python3 bench/viewer/replay_fps.py target/release/twinloop builtin:km20 /tmp/replay60.csv
+    python3 crates/twinloop-view/bench/make_replay.py /tmp/replay60.csv
+    python3 crates/twinloop-view/bench/replay_fps.py target/release/twinloop builtin:km20 /tmp/replay60.csv
 
 Needs chromium and the `websockets` Python package.
 """
