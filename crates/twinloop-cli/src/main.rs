@@ -19,6 +19,7 @@ mod cmd_model;
 mod cmd_serve;
 mod cmd_simulate;
 mod cmd_validate;
+mod cmd_view;
 mod common;
 mod error;
 mod progress;
@@ -176,6 +177,29 @@ enum Command {
     /// Benchmarks against peers (median time per call): dynamics, simulator, servo link
     #[command(subcommand)]
     Bench(cmd_bench::BenchCommand),
+    /// See the robot in 3D in the browser, replay recordings, compare runs as ghosts
+    ///
+    /// Serves a page on this computer (127.0.0.1, a free port; the URL is printed):
+    /// the robot (URDF meshes, or primitives), each recording replayed from its q:*
+    /// (and q:base.*) columns with play, speed, stepping and scrubbing, the second
+    /// and later recordings as translucent ghosts with a time offset, overlays (CoM
+    /// and its ground projection, support polygon, centre of pressure, link frames,
+    /// inertia boxes, joints at a limit), plots of any columns following the
+    /// timeline, and joint sliders. --export writes the same page as one file.
+    /// --live FILE.csv follows a CSV while another command writes it and shows
+    /// its newest row (decimated to --rate per second, never queued).
+    ///
+    /// Example:
+    ///   twinloop view builtin:km20 km20.csv
+    ///   twinloop view models/op3/robotis_op3.urdf --package-dir op3_description=~/op3 --open
+    ///   twinloop view builtin:km20 real.csv sim.csv --export replay.html
+    ///   twinloop view builtin:km20 --live run.csv
+    ///   twinloop simulate --robot builtin:km20 --duration 60 --out run.csv   # in another terminal
+    ///
+    /// Output: the page's URL on stdout (then it serves until Ctrl-C); warnings
+    /// (missing meshes, missing joint columns) on stderr and on the page.
+    #[command(verbatim_doc_comment)]
+    View(cmd_view::ViewArgs),
 }
 
 fn run(command: Command) -> CliResult {
@@ -194,6 +218,7 @@ fn run(command: Command) -> CliResult {
         Command::Serve(args) => cmd_serve::run(args),
         Command::Demo(args) => cmd_demo::run(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
+        Command::View(args) => cmd_view::run(args),
     }
 }
 
