@@ -114,7 +114,7 @@ pub struct TrainArgs {
     #[arg(long)]
     pub seed_inputs: bool,
     /// Most training epochs.
-    #[arg(long, default_value_t = 400, value_name = "N")]
+    #[arg(long, default_value_t = 1000, value_name = "N")]
     pub epochs: usize,
     /// Worker threads (0: all cores).
     #[arg(long, default_value_t = 0, value_name = "N")]

@@ -3,9 +3,12 @@
 //!
 //! Hidden layers use `tanh` (the classical sigmoid-type unit of back-propagation
 //! networks), the output layer is linear (the outputs are positions, unbounded). Inputs
-//! and outputs are standardised (zero mean, unit deviation over the training set); the
-//! scalings are part of the network and saved with it, so a loaded network takes and
-//! gives physical units.
+//! are standardised (zero mean, unit deviation over the training set, per input);
+//! outputs are centred and divided by one common deviation, since they share a unit
+//! (a per-output deviation would make a millimetre of an output that hardly varies,
+//! such as a leg mass's position, weigh as much as a centimetre of one that varies a
+//! lot). The scalings are part of the network and saved with it, so a loaded network
+//! takes and gives physical units.
 //!
 //! Training minimises the mean squared error of the standardised outputs over mini
 //! batches. The gradient is back-propagation; the update is Adam (Kingma and Ba, 2015):
@@ -13,8 +16,9 @@
 //! hip mass moves with every change, a leg's mass only with changes on that leg), and
 //! Adam's per-weight step sizes make one learning rate work for all of them, where
 //! plain SGD with momentum needed its rate tuned per problem. The testing set picks
-//! the epoch (the weights with its lowest error are kept; training stops after
-//! `patience` epochs without a new lowest). Everything random (initial weights,
+//! the epoch (the weights with its lowest error are kept; the step size halves after
+//! each quarter of `patience` epochs without a new lowest, and training stops after
+//! `patience` of them). Everything random (initial weights,
 //! batch order) comes from one [`SplitMix64`] seeded by the caller: the same seed and
 //! data give the same network bit for bit.
 
@@ -62,6 +66,17 @@ impl Scaling {
         }
         Scaling { mean, std }
     }
+
+    /// Per-column means and one deviation for all columns (the root mean square of the
+    /// columns' own): for outputs in one unit, so the training error weighs a millimetre
+    /// the same in every output.
+    pub fn fit_common(rows: &[Vec<f64>]) -> Scaling {
+        let mut s = Scaling::fit(rows);
+        let n = s.std.len().max(1) as f64;
+        let common = (s.std.iter().map(|d| d * d).sum::<f64>() / n).sqrt();
+        s.std.iter_mut().for_each(|d| *d = common);
+        s
+    }
 }
 
 /// The network: layers, and the scalings of its inputs and outputs.
@@ -97,7 +112,8 @@ pub struct TrainOptions {
     pub hidden: Vec<usize>,
     /// Most epochs (passes over the training set).
     pub max_epochs: usize,
-    /// Stop after this many epochs without a lower testing error.
+    /// Stop after this many epochs without a lower testing error; the step size is
+    /// halved after each quarter of it without one.
     pub patience: usize,
     pub batch: usize,
     /// Adam's step size.
@@ -109,8 +125,8 @@ impl Default for TrainOptions {
     fn default() -> Self {
         TrainOptions {
             hidden: vec![5, 10, 5],
-            max_epochs: 400,
-            patience: 40,
+            max_epochs: 1000,
+            patience: 80,
             batch: 32,
             learning_rate: 3e-3,
             seed: 1,
@@ -404,7 +420,7 @@ pub fn train(
     sizes.push(train_y[0].len());
     let mut net = Mlp::new(&sizes, &mut rng);
     net.input_scaling = Scaling::fit(train_x);
-    net.output_scaling = Scaling::fit(train_y);
+    net.output_scaling = Scaling::fit_common(train_y);
     let (x, y) = (
         standardise(train_x, &net.input_scaling),
         standardise(train_y, &net.output_scaling),
@@ -429,6 +445,7 @@ pub fn train(
         best_epoch: 0,
     };
     let mut best = (f64::INFINITY, net.clone());
+    let (mut rate, mut last_cut) = (opts.learning_rate, 0);
     for epoch in 1..=opts.max_epochs {
         // Fisher-Yates shuffle of the batch order.
         for i in (1..order.len()).rev() {
@@ -442,7 +459,7 @@ pub fn train(
             }
             let k = 1.0 / batch.len() as f64;
             grad.iter_mut().for_each(|g| *g *= k);
-            adam.step(&mut net, &grad, opts.learning_rate);
+            adam.step(&mut net, &grad, rate);
         }
         log.train_mse.push(se / (x.len() * net.n_outputs()) as f64);
         let test = if tx.is_empty() {
@@ -462,6 +479,10 @@ pub fn train(
             log.best_epoch = epoch;
         } else if epoch - log.best_epoch >= opts.patience {
             break;
+        } else if epoch - log.best_epoch.max(last_cut) >= (opts.patience / 4).max(1) {
+            // A plateau: smaller steps to settle into the minimum.
+            rate *= 0.5;
+            last_cut = epoch;
         }
     }
     Ok((best.1, log))
