@@ -341,7 +341,9 @@ impl Mlp {
             if s.mean.len() != n || s.std.len() != n {
                 return Err(IdentError::new(format!("needs {n} entries")).field(name));
             }
-            if s.mean.iter().any(|v| !v.is_finite()) || s.std.iter().any(|v| !(*v > 0.0)) {
+            if s.mean.iter().any(|v| !v.is_finite())
+                || s.std.iter().any(|v| v.is_nan() || *v <= 0.0)
+            {
                 return Err(
                     IdentError::new("means must be finite, deviations positive").field(name)
                 );
@@ -504,18 +506,14 @@ mod tests {
         net.backprop(&x, &t, &mut work, &mut grad);
         let mut scratch = vec![0.0; net.n_params()];
         let h = 1e-6;
-        for p in 0..net.n_params() {
+        for (p, g) in grad.iter().enumerate() {
             let mut moved = |d: f64| {
                 let mut n = net.clone();
                 *n.params_mut().nth(p).unwrap() += d;
                 0.5 * n.backprop(&x, &t, &mut work, &mut scratch)
             };
             let fd = (moved(h) - moved(-h)) / (2.0 * h);
-            assert!(
-                (fd - grad[p]).abs() < 1e-7,
-                "parameter {p}: {fd} vs {}",
-                grad[p]
-            );
+            assert!((fd - g).abs() < 1e-7, "parameter {p}: {fd} vs {g}");
         }
     }
 }

@@ -471,8 +471,9 @@ fn method_errors(
 /// minus the prior's true CoM) taken off the changed mass's position.
 fn calibrated_manual(mut m: ThreeMassModel, changed_mass: usize, bias: [f64; 3]) -> ThreeMassModel {
     let total: f64 = m.masses.iter().sum();
-    for k in 0..3 {
-        m.positions[changed_mass][k] -= total * bias[k] / m.masses[changed_mass];
+    let mass = m.masses[changed_mass];
+    for (p, b) in m.positions[changed_mass].iter_mut().zip(bias) {
+        *p -= total * b / mass;
     }
     m
 }
