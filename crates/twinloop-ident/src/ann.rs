@@ -3,12 +3,9 @@
 //!
 //! Hidden layers use `tanh` (the classical sigmoid-type unit of back-propagation
 //! networks), the output layer is linear (the outputs are positions, unbounded). Inputs
-//! are standardised (zero mean, unit deviation over the training set, per input);
-//! outputs are centred and divided by one common deviation, since they share a unit
-//! (a per-output deviation would make a millimetre of an output that hardly varies,
-//! such as a leg mass's position, weigh as much as a centimetre of one that varies a
-//! lot). The scalings are part of the network and saved with it, so a loaded network
-//! takes and gives physical units.
+//! and outputs are standardised (zero mean, unit deviation over the training set); the
+//! scalings are part of the network and saved with it, so a loaded network takes and
+//! gives physical units.
 //!
 //! Training minimises the mean squared error of the standardised outputs over mini
 //! batches. The gradient is back-propagation; the update is Adam (Kingma and Ba, 2015):
@@ -65,17 +62,6 @@ impl Scaling {
             *s = if *s > 1e-24 { s.sqrt() } else { 1.0 };
         }
         Scaling { mean, std }
-    }
-
-    /// Per-column means and one deviation for all columns (the root mean square of the
-    /// columns' own): for outputs in one unit, so the training error weighs a millimetre
-    /// the same in every output.
-    pub fn fit_common(rows: &[Vec<f64>]) -> Scaling {
-        let mut s = Scaling::fit(rows);
-        let n = s.std.len().max(1) as f64;
-        let common = (s.std.iter().map(|d| d * d).sum::<f64>() / n).sqrt();
-        s.std.iter_mut().for_each(|d| *d = common);
-        s
     }
 }
 
@@ -422,7 +408,7 @@ pub fn train(
     sizes.push(train_y[0].len());
     let mut net = Mlp::new(&sizes, &mut rng);
     net.input_scaling = Scaling::fit(train_x);
-    net.output_scaling = Scaling::fit_common(train_y);
+    net.output_scaling = Scaling::fit(train_y);
     let (x, y) = (
         standardise(train_x, &net.input_scaling),
         standardise(train_y, &net.output_scaling),
