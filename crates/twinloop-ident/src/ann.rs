@@ -268,11 +268,18 @@ impl Mlp {
             .flat_map(|l| l.weights.iter_mut().chain(l.biases.iter_mut()))
     }
 
-    /// Mean squared error per output of standardised rows.
-    fn mse(&self, x: &[Vec<f64>], t: &[Vec<f64>], work: &mut MlpWork, scratch: &mut [f64]) -> f64 {
+    /// Mean squared error per output of standardised rows (forward passes only).
+    fn mse(&self, x: &[Vec<f64>], t: &[Vec<f64>], work: &mut MlpWork) -> f64 {
+        let n = self.layers.len();
         let mut se = 0.0;
         for (xi, ti) in x.iter().zip(t) {
-            se += self.backprop(xi, ti, work, scratch);
+            work.acts[0].copy_from_slice(xi);
+            self.forward_scaled(work);
+            se += work.acts[n]
+                .iter()
+                .zip(ti)
+                .map(|(y, t)| (y - t).powi(2))
+                .sum::<f64>();
         }
         se / (x.len().max(1) * self.n_outputs()) as f64
     }
@@ -419,7 +426,6 @@ pub fn train(
     );
     let np = net.n_params();
     let mut grad = vec![0.0; np];
-    let mut scratch = vec![0.0; np];
     let mut work = MlpWork::new(&net);
     let mut adam = Adam {
         m: vec![0.0; np],
@@ -453,7 +459,7 @@ pub fn train(
         let test = if tx.is_empty() {
             *log.train_mse.last().unwrap_or(&f64::INFINITY)
         } else {
-            net.mse(&tx, &ty, &mut work, &mut scratch)
+            net.mse(&tx, &ty, &mut work)
         };
         log.test_mse.push(test);
         if !test.is_finite() {
