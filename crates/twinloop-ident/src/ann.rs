@@ -11,8 +11,9 @@
 //! batches. The gradient is back-propagation; the update is Adam (Kingma and Ba, 2015):
 //! the standardised outputs still differ in how much they vary with the inputs (the
 //! hip mass moves with every change, a leg's mass only with changes on that leg), and
-//! Adam's per-weight step sizes make one learning rate work for all of them, where
-//! plain SGD with momentum needed its rate tuned per problem. The testing set picks
+//! Adam's per-weight step sizes let one learning rate serve all of them (SGD with
+//! momentum would need its rate tuned to the fastest-moving weights; it was not
+//! tried). The testing set picks
 //! the epoch (the weights with its lowest error are kept; the step size halves after
 //! each quarter of `patience` epochs without a new lowest, and training stops after
 //! `patience` of them). Everything random (initial weights,
