@@ -114,11 +114,15 @@ pub struct TrainArgs {
     #[arg(long)]
     pub seed_inputs: bool,
     /// Most training epochs.
-    #[arg(long, default_value_t = 400, value_name = "N")]
+    #[arg(long, default_value_t = 1000, value_name = "N")]
     pub epochs: usize,
     /// Worker threads (0: all cores).
     #[arg(long, default_value_t = 0, value_name = "N")]
     pub threads: usize,
+    /// Trainings from different initial weights (in parallel); the one whose models
+    /// fall at the testing set's angles best is kept.
+    #[arg(long, default_value_t = 4, value_name = "N")]
+    pub restarts: usize,
     /// Run the full simulated tip-over on the first N validation changes and compare its
     /// angles with the static route's.
     #[arg(long, default_value_t = 0, value_name = "N")]
@@ -309,6 +313,7 @@ fn run_train(a: TrainArgs) -> CliResult {
             ..Default::default()
         },
         mass_input: !a.seed_inputs,
+        restarts: a.restarts,
     };
     let bar = crate::progress::steps(a.samples);
     bar.set_message("changes tipped (static route)");
@@ -358,7 +363,7 @@ fn validation_changes(
 fn train_text(r: &TrainReport) -> String {
     let mut t = format!(
         "{} changes of {} ({}-{} kg, {} deg noise): training {}, testing {}, validation {}\n\
-         data {:.2} s on {} threads, training {:.2} s (layout {:?}, best epoch {} of {}), evaluation {:.2} s\n",
+         data {:.2} s on {} threads, training {:.2} s (layout {:?}, {} restarts, kept {} at epoch {} of {}), evaluation {:.2} s\n",
         r.samples,
         r.robot,
         r.mass_range[0],
@@ -371,6 +376,8 @@ fn train_text(r: &TrainReport) -> String {
         r.threads,
         r.seconds[1],
         r.layout,
+        r.restart_fall_deg.len(),
+        r.restart_kept + 1,
         r.log.best_epoch,
         r.log.train_mse.len(),
         r.seconds[2]
