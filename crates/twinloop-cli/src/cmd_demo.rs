@@ -92,7 +92,10 @@ fn hidden_change(a: &DemoArgs, prior: &Description) -> Result<(Vec<Change>, Stri
                 xyz: m.xyz,
             })
             .collect();
-        return Ok((changes, format!("seed 000 battery scenario {label} ({})", s.name)));
+        return Ok((
+            changes,
+            format!("seed 000 battery scenario {label} ({})", s.name),
+        ));
     }
     let mut rng = twinloop_random::SplitMix64(a.seed);
     let links = outlined_links(prior);
@@ -194,7 +197,10 @@ fn find_robot(port: &str, mapping: &RobotMapping) -> Result<(usize, usize), CliE
     Ok((servos, boards))
 }
 
-fn angles(r: &StudyReport, f: fn(&twinloop_ident::tipover_study::DirectionReport) -> f64) -> [f64; 4] {
+fn angles(
+    r: &StudyReport,
+    f: fn(&twinloop_ident::tipover_study::DirectionReport) -> f64,
+) -> [f64; 4] {
     [f(&r.forward), f(&r.backward), f(&r.left), f(&r.right)]
 }
 
@@ -271,7 +277,9 @@ pub fn run(a: DemoArgs) -> CliResult {
     let run = tipover_on_bus(&plan)?;
     drop(robot);
     let BusOutcome::Study(study) = run.outcome else {
-        return Err(CliError::new("the tip-over did not run all four directions"));
+        return Err(CliError::new(
+            "the tip-over did not run all four directions",
+        ));
     };
     let tip_json = a.out.join("tipover.json");
     write_json(&tip_json, &*study)?;
@@ -331,7 +339,12 @@ pub fn run(a: DemoArgs) -> CliResult {
         None => t += "found: no placement (see the report)\n",
     }
     for c in &truth_changes {
-        t += &format!("truth: {:.3} kg on {} at {} in its frame\n", c.mass, c.link, mm(c.xyz));
+        t += &format!(
+            "truth: {:.3} kg on {} at {} in its frame\n",
+            c.mass,
+            c.link,
+            mm(c.xyz)
+        );
     }
     if truth_changes.len() > 1 {
         t += "  (two changes at once are found as the one equivalent change)\n";
@@ -347,7 +360,10 @@ pub fn run(a: DemoArgs) -> CliResult {
         t += &format!(
             "the mass is {:.1} mm from where it really is (CoM sigma x mass ratio: {})\n",
             e * 1e3,
-            r.added.as_ref().map(|m| mm(m.position_sigma)).unwrap_or_default()
+            r.added
+                .as_ref()
+                .map(|m| mm(m.position_sigma))
+                .unwrap_or_default()
         );
     }
     let wall_s = t0.elapsed().as_secs_f64();

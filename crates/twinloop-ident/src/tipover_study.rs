@@ -22,9 +22,9 @@ use twinloop_description::builtin::FootGeometry;
 use twinloop_dynamics::{BASE, Data};
 use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
 use twinloop_robot::RobotError;
-use twinloop_spatial::Se3;
 use twinloop_sim::statics::{FlatFeet, hip_lean_signs, lean_signs};
 use twinloop_sim::{Actuator, ContactParams, SimConfig, Simulator, servo_for_joint};
+use twinloop_spatial::Se3;
 
 /// Settings of the study.
 #[derive(Debug, Clone, PartialEq)]
@@ -461,19 +461,42 @@ fn static_tipping_angles(
     (offset, rigid)
 }
 
-/// Each foot's world placement with the robot placed standing in `standing`, where
-/// the static analysis holds them.
-fn standing_feet(
-    sim: &mut Simulator,
-    standing: &[f64],
-    j: &StudyJoints,
-) -> Result<[Se3; 2], String> {
-    sim.place_on_ground(standing).map_err(err)?;
-    let mut place = |l: &str| {
-        sim.link_placement(l)
-            .ok_or_else(|| format!("no link \"{l}\""))
-    };
-    Ok([place(&j.names[4])?, place(&j.names[5])?])
+/// The standing robot as the static analysis holds it: the model, its contact points
+/// and each foot's world placement with the robot placed standing.
+struct StandingModel {
+    model: twinloop_dynamics::Model,
+    points: Vec<twinloop_sim::ContactPoint>,
+    foot_world: [Se3; 2],
+    feet: [usize; 2],
+}
+
+impl StandingModel {
+    fn new(sim: &mut Simulator, standing: &[f64], j: &StudyJoints) -> Result<Self, String> {
+        sim.place_on_ground(standing).map_err(err)?;
+        let mut place = |l: &str| {
+            sim.link_placement(l)
+                .ok_or_else(|| format!("no link \"{l}\""))
+        };
+        let foot_world = [place(&j.names[4])?, place(&j.names[5])?];
+        Ok(StandingModel {
+            model: sim.model.clone(),
+            points: sim.contact_points().to_vec(),
+            foot_world,
+            feet: j.feet,
+        })
+    }
+
+    /// The feet held flat at their standing places (the left one held, no roll).
+    fn flat(&self) -> FlatFeet<'_> {
+        FlatFeet {
+            model: &self.model,
+            feet: self.feet,
+            points: &self.points,
+            foot_world: self.foot_world,
+            held: 0,
+            tilt: 0.0,
+        }
+    }
 }
 
 fn lean_signs_of(model: &twinloop_dynamics::Model, j: &StudyJoints, q0: &[f64]) -> LeanSigns {
@@ -496,24 +519,17 @@ fn tip_all_directions(
     q0: &[f64],
     opts: &StudyOptions,
 ) -> Result<Vec<TipoverResult>, String> {
-    let model = sim.model.clone();
-    let points = sim.contact_points().to_vec();
-    let mut flat = FlatFeet {
-        model: &model,
-        feet: j.feet,
-        points: &points,
-        foot_world: standing_feet(sim, standing, j)?,
-        held: 0,
-        tilt: 0.0,
-    };
-    let signs = lean_signs_of(&model, j, q0);
+    let sm = StandingModel::new(sim, standing, j)?;
+    let model = &sm.model;
+    let mut flat = sm.flat();
+    let signs = lean_signs_of(model, j, q0);
     let mut cfg = TipoverConfig::new(j.pitch, j.roll, signs.forward, signs.left);
     cfg.hip_roll = Some(j.hip);
     cfg.hip_left_sign = signs.hip_left;
     cfg.ramp_deg_per_s = opts.ramp_deg_per_s;
     let imu_link = sim.sensors().imu_link;
     let mut results = Vec::new();
-    let mut pdata = Data::new(&model);
+    let mut pdata = Data::new(model);
     for d in Direction::ALL {
         let mut run = |cfg: &TipoverConfig, sim: &mut Simulator| {
             sim.place_on_ground(standing).map_err(err)?;
@@ -541,18 +557,10 @@ fn with_static_references(
     q0: &[f64],
     runs: Vec<TipoverResult>,
 ) -> Result<Vec<DirectionRun>, String> {
-    let model = sim.model.clone();
-    let points = sim.contact_points().to_vec();
-    let mut flat = FlatFeet {
-        model: &model,
-        feet: j.feet,
-        points: &points,
-        foot_world: standing_feet(sim, standing, j)?,
-        held: 0,
-        tilt: 0.0,
-    };
-    let signs = lean_signs_of(&model, j, q0);
-    let mut data = Data::new(&model);
+    let sm = StandingModel::new(sim, standing, j)?;
+    let mut flat = sm.flat();
+    let signs = lean_signs_of(&sm.model, j, q0);
+    let mut data = Data::new(&sm.model);
     let mut out = Vec::with_capacity(runs.len());
     for r in runs {
         let (turned, dir) = turned_joints(r.direction, j, &signs);
@@ -775,10 +783,7 @@ fn assemble(
 /// its bus (the study's simulator predicts the same way). Joint positions come in the
 /// robot's order (`joint_names`), joints the model lacks stay at the standing pose.
 pub struct TiltModel {
-    model: twinloop_dynamics::Model,
-    points: Vec<twinloop_sim::ContactPoint>,
-    foot_world: [Se3; 2],
-    feet: [usize; 2],
+    standing: StandingModel,
     imu_link: usize,
     data: Data,
     /// Model joint of each of the robot's joints.
@@ -795,22 +800,19 @@ impl TiltModel {
         imu_link: &str,
     ) -> Result<TiltModel, IdentError> {
         let mut p = prepare(robot, &StudyOptions::default())?;
-        let foot_world = standing_feet(&mut p.sim, &p.standing, &p.j)?;
-        let model = p.sim.model.clone();
-        let imu = model
+        let standing = StandingModel::new(&mut p.sim, &p.standing, &p.j)?;
+        let imu = standing
+            .model
             .links
             .iter()
             .position(|l| l.name == imu_link)
             .ok_or_else(|| format!("no link \"{imu_link}\" (the IMU's) in \"{}\"", robot.name))?;
         Ok(TiltModel {
-            points: p.sim.contact_points().to_vec(),
-            foot_world,
-            feet: p.j.feet,
             imu_link: imu,
-            data: Data::new(&model),
+            data: Data::new(&standing.model),
             index: joint_names.iter().map(|n| p.sim.joint_index(n)).collect(),
             q: p.standing.clone(),
-            model,
+            standing,
         })
     }
 
@@ -822,14 +824,7 @@ impl TiltModel {
                 self.q[*i] = v;
             }
         }
-        let mut flat = FlatFeet {
-            model: &self.model,
-            feet: self.feet,
-            points: &self.points,
-            foot_world: self.foot_world,
-            held: 0,
-            tilt: 0.0,
-        };
+        let mut flat = self.standing.flat();
         flat_tilt(&mut flat, &mut self.data, &self.q, self.imu_link, direction)
     }
 }

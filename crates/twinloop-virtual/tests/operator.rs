@@ -25,7 +25,9 @@ fn write(bus: &mut VirtualBus<SimServoBackend>, id: u8, address: u8, data: &[u8]
 /// The trunk's tilt from upright, deg (the base's up axis against the world's).
 fn tilt_deg(vr: &mut VirtualRobot) -> f64 {
     let q = &vr.simulator().q;
-    (1.0 - 2.0 * (q[3] * q[3] + q[4] * q[4])).acos().to_degrees()
+    (1.0 - 2.0 * (q[3] * q[3] + q[4] * q[4]))
+        .acos()
+        .to_degrees()
 }
 
 #[test]
@@ -61,7 +63,10 @@ fn a_km20_pushed_over_is_caught_and_stood_up_and_stands() {
         vr.step_for(0.005).unwrap();
         max_tilt = max_tilt.max(tilt_deg(&mut vr));
     }
-    assert!(vr.pick_ups() >= 1, "never caught (tilted {max_tilt:.1} deg at most)");
+    assert!(
+        vr.pick_ups() >= 1,
+        "never caught (tilted {max_tilt:.1} deg at most)"
+    );
     assert!(
         max_tilt <= twinloop_virtual::CATCH_DEG + 2.0,
         "caught late: {max_tilt:.1} deg"

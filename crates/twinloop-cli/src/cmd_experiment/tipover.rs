@@ -207,7 +207,7 @@ mod bus {
                 a.json.as_ref(),
                 &*r,
             )?,
-            BusOutcome::Partial(r) => emit(&partial_summary(&r), a.json.as_ref(), &r)?,
+            BusOutcome::Partial(r) => emit(&partial_summary(&r), a.json.as_ref(), &*r)?,
         }
         Ok(Outcome::Ok)
     }

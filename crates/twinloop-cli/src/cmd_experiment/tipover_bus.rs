@@ -68,7 +68,7 @@ pub enum BusOutcome {
     /// All four directions: the study's report (static references and CoM from the
     /// model, `com.true` being the model's CoM).
     Study(Box<StudyReport>),
-    Partial(BusReport),
+    Partial(Box<BusReport>),
 }
 
 /// The outcome, the runs behind it (the mapping's joint order), the rows recorded,
@@ -155,12 +155,10 @@ fn config(
                 ))
             })
     };
-    let s2 = |a: &str, b: &str| -> Result<[usize; 2], CliError> {
-        Ok([sim_index(a)?, sim_index(b)?])
-    };
-    let m2 = |a: &str, b: &str| -> Result<[usize; 2], CliError> {
-        Ok([map_index(a)?, map_index(b)?])
-    };
+    let s2 =
+        |a: &str, b: &str| -> Result<[usize; 2], CliError> { Ok([sim_index(a)?, sim_index(b)?]) };
+    let m2 =
+        |a: &str, b: &str| -> Result<[usize; 2], CliError> { Ok([map_index(a)?, map_index(b)?]) };
     let fs = twinloop_sim::statics::lean_signs(
         m,
         &mut data,
@@ -182,8 +180,7 @@ fn config(
         s2(&hips[0], &hips[1])?,
         nalgebra::Vector3::y(),
     );
-    let mut cfg =
-        TipoverConfig::new(m2(&names[0], &names[1])?, m2(&names[2], &names[3])?, fs, ls);
+    let mut cfg = TipoverConfig::new(m2(&names[0], &names[1])?, m2(&names[2], &names[3])?, fs, ls);
     cfg.hip_roll = Some(m2(&hips[0], &hips[1])?);
     cfg.hip_left_sign = hs;
     cfg.ramp_deg_per_s = ramp;
@@ -284,7 +281,15 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
     }
     let standing = vec![0.0; names.len()];
     let mut g = Guarded::new(&mut robot, writer, &standing);
-    let runs = run_directions(&mut g, plan, &cfg, &standing, &mut tilt_model, serial, &port);
+    let runs = run_directions(
+        &mut g,
+        plan,
+        &cfg,
+        &standing,
+        &mut tilt_model,
+        serial,
+        &port,
+    );
     let rows = g.rows;
     let writer = g.writer.take();
     let abort = g.abort.take();
@@ -325,7 +330,7 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
                 Direction::Right => r.right = d,
             }
         }
-        BusOutcome::Partial(r)
+        BusOutcome::Partial(Box::new(r))
     };
     Ok(BusRun {
         outcome,
