@@ -58,6 +58,10 @@ pub struct AdaptArgs {
     /// Run the simulated tip-over study on the adapted model and compare its angles.
     #[arg(long)]
     pub check: bool,
+    /// The lean the robot did (`twinloop experiment lean --out`): replayed on the prior
+    /// and the adapted model, the ankle and knee torques compared (seed 001 section F).
+    #[arg(long, value_name = "LEAN.csv")]
+    pub lean: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -168,6 +172,12 @@ pub fn run(a: AdaptArgs) -> CliResult {
     if a.check {
         check(&mut adapted, &StudyOptions::default()).map_err(where_flag)?;
     }
+    if let Some(path) = &a.lean {
+        let table =
+            twinloop_io::Table::read(path).map_err(|e| CliError::from(e).context("--lean"))?;
+        twinloop_ident::adapt::lean_check(&mut adapted, &prior, &table)
+            .map_err(|e| CliError::from(e).context(format!("--lean {}", path.display())))?;
+    }
     if let (Some(out), Some(robot)) = (&a.out, &adapted.robot) {
         twinloop_description::urdf::write_file(robot, out)
             .map_err(|e| CliError::new(format!("{}: {e}", out.display())).context("--out"))?;
@@ -221,6 +231,12 @@ pub fn run(a: AdaptArgs) -> CliResult {
     }
     if let Some(c) = r.check_deg {
         t += &format!("adapted model's fall angles {c:?} deg\n");
+    }
+    for l in &r.lean {
+        t += &format!(
+            "lean, {}: robot - model torque RMS {:.4} N m before, {:.4} after\n",
+            l.joint, l.before_rms, l.after_rms
+        );
     }
     for f in &r.files {
         t += &format!("wrote {f}\n");

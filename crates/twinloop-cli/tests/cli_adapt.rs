@@ -112,3 +112,74 @@ fn adapt_finds_the_hidden_mass_and_names_bad_input() {
     fails_naming(&a, "--total-mass");
     fails_naming(&a, "--where");
 }
+
+/// Seed 001's lean as the adaptation's second check: the lean of a km20 carrying a
+/// hidden 0.3 kg, replayed on the unchanged model and on the model adapted from the
+/// tip-over, differs far less in ankle torque after than before.
+#[test]
+fn adapt_with_the_robots_lean_reports_the_torque_gap_closing() {
+    let mass = "0.3@torso:0.04,0.02,0.05";
+    let tip = tmp("tip-lean.json");
+    let lean = tmp("lean-robot.csv");
+    let o = twinloop(&[
+        "experiment",
+        "tipover",
+        "--robot",
+        "builtin:km20",
+        "--add-mass",
+        mass,
+        "--json",
+        tip.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = twinloop(&[
+        "experiment",
+        "lean",
+        "--robot",
+        "builtin:km20",
+        "--add-mass",
+        mass,
+        "--out",
+        lean.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = twinloop(&[
+        "adapt",
+        "--robot",
+        "builtin:km20",
+        "--tipover",
+        tip.to_str().unwrap(),
+        "--total-mass",
+        &format!("{}", 3.336 + 0.3),
+        "--lean",
+        lean.to_str().unwrap(),
+        "--json",
+        "-",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let joints = j["lean"].as_array().unwrap();
+    let ankles: Vec<&serde_json::Value> = joints
+        .iter()
+        .filter(|l| l["joint"].as_str().unwrap().contains("ank"))
+        .collect();
+    assert!(!ankles.is_empty(), "{joints:?}");
+    for l in ankles {
+        let (before, after) = (
+            l["before_rms"].as_f64().unwrap(),
+            l["after_rms"].as_f64().unwrap(),
+        );
+        assert!(after < 0.3 * before, "{l}");
+    }
+    // Without a placed mass there is no adapted model to replay the lean on.
+    let o = twinloop(&[
+        "adapt",
+        "--robot",
+        "builtin:km20",
+        "--tipover",
+        tip.to_str().unwrap(),
+        "--lean",
+        lean.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+}

@@ -100,9 +100,55 @@ pub struct AdaptReport {
     pub prior_model_deg: [f64; 4],
     /// The adapted model's simulated fall angles (with `--check`), deg.
     pub check_deg: Option<[f64; 4]>,
+    /// The lean of seed 001 the robot did (`--lean`), replayed on the prior and the
+    /// adapted model: RMS torque difference per joint, before and after.
+    #[serde(default)]
+    pub lean: Vec<LeanJointCheck>,
     /// What is and is not well determined.
     pub notes: Vec<String>,
     pub files: Vec<String>,
+}
+
+/// One joint of the lean check: RMS of robot minus model torque, N m.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct LeanJointCheck {
+    pub joint: String,
+    pub before_rms: f64,
+    pub after_rms: f64,
+    /// RMS of the robot's own torque, N m (the scale).
+    pub robot_rms: f64,
+}
+
+/// Replay the lean the robot did (`robot_run`, a `twinloop experiment lean` record)
+/// on `prior` and on the adapted model (seed 001 section F) and put the torque
+/// differences in the report.
+pub fn lean_check(
+    adapted: &mut Adapted,
+    prior: &Description,
+    robot_run: &twinloop_io::Table,
+) -> Result<(), IdentError> {
+    let Some(after) = &adapted.robot else {
+        return Err(IdentError::new(
+            "the lean check needs the adapted model: give --total-mass or --where",
+        ));
+    };
+    let options = twinloop_experiments::lean_validation::LeanSimOptions::default();
+    let c =
+        twinloop_experiments::lean_validation::lean_comparison(robot_run, prior, after, &options)
+            .map_err(|e| IdentError::new(e.0))?;
+    adapted.report.lean = c
+        .before
+        .joints
+        .iter()
+        .zip(&c.after.joints)
+        .map(|(b, a)| LeanJointCheck {
+            joint: b.joint.clone(),
+            before_rms: b.torque_rms,
+            after_rms: a.torque_rms,
+            robot_rms: b.torque_rms_robot,
+        })
+        .collect();
+    Ok(())
 }
 
 /// The adapted description next to its report.
@@ -472,6 +518,7 @@ pub fn adapt(
         adapted_reduced: None,
         prior_model_deg: prior_model_angles(&pf, prior, c0, &foot)?,
         check_deg: None,
+        lean: Vec::new(),
         notes,
         files: vec![],
     };
@@ -591,6 +638,30 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
         })
         .collect();
     rep.table(header, rows);
+    if !r.lean.is_empty() {
+        rep.heading("The lean (seed 001): robot minus model torque, RMS, N m");
+        let rows = r
+            .lean
+            .iter()
+            .map(|l| {
+                vec![
+                    l.joint.clone(),
+                    format!("{:.4}", l.before_rms),
+                    format!("{:.4}", l.after_rms),
+                    format!("{:.4}", l.robot_rms),
+                ]
+            })
+            .collect();
+        rep.table(
+            vec![
+                "joint".into(),
+                "prior model".into(),
+                "adapted model".into(),
+                "robot's torque (scale)".into(),
+            ],
+            rows,
+        );
+    }
     rep.heading("CoM, mm");
     let mm = |v: [f64; 3]| {
         v.iter()
