@@ -104,6 +104,10 @@ pub struct AdaptReport {
     /// adapted model: RMS torque difference per joint, before and after.
     #[serde(default)]
     pub lean: Vec<LeanJointCheck>,
+    /// The robot's outline for the report's views: every link's origin in the
+    /// standing frame, m.
+    #[serde(default)]
+    pub outline: Vec<[f64; 3]>,
     /// What is and is not well determined.
     pub notes: Vec<String>,
     pub files: Vec<String>,
@@ -207,6 +211,16 @@ pub fn standing_point(
 }
 
 impl Frame {
+    /// Every link's origin in the standing frame, m.
+    fn outline(&self) -> Vec<[f64; 3]> {
+        self.model
+            .links
+            .iter()
+            .filter_map(|l| self.link_pose(&l.name))
+            .map(|p| v3(p.translation - self.mid))
+            .collect()
+    }
+
     fn link_pose(&self, link: &str) -> Option<Se3> {
         let l = self.model.links.iter().find(|l| l.name == link)?;
         let body = if l.body == BASE {
@@ -519,6 +533,7 @@ pub fn adapt(
         prior_model_deg: prior_model_angles(&pf, prior, c0, &foot)?,
         check_deg: None,
         lean: Vec::new(),
+        outline: pf.outline(),
         notes,
         files: vec![],
     };
@@ -701,7 +716,9 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
         ("Side view (x-z)", 0, "x, m"),
         ("Front view (y-z)", 1, "y, m"),
     ] {
+        let (ox, oz): (Vec<f64>, Vec<f64>) = r.outline.iter().map(|o| (o[i], o[2])).unzip();
         let mut p = Plot::new(title, label, "z, m")
+            .series("robot (link origins)", &ox, &oz, SeriesStyle::Points)
             .series(
                 "prior CoM",
                 &[r.prior_com[i]],
