@@ -70,7 +70,16 @@ fn simulated_forward_tip_deg() -> f64 {
 fn tipover_over_the_bus_of_a_served_km20_tips_forward_where_the_simulator_does() {
     let link = scratch("km20-tipover-link");
     let _ = std::fs::remove_file(&link);
-    let (mut server, _pty) = serve(&["--robot", "builtin:km20", "--link", link.to_str().unwrap()]);
+    // An operator stands the robot up between the two runs; 4x real time.
+    let (mut server, _pty) = serve(&[
+        "--robot",
+        "builtin:km20",
+        "--link",
+        link.to_str().unwrap(),
+        "--catch-falls",
+        "--realtime-factor",
+        "4",
+    ]);
     let record = scratch("tipover-forward.csv");
     let t0 = Instant::now();
     let o = Command::new(bin())
@@ -82,6 +91,10 @@ fn tipover_over_the_bus_of_a_served_km20_tips_forward_where_the_simulator_does()
             "forward",
             "--ramp",
             "5",
+            "--slow-ramp",
+            "0.2",
+            "--realtime-factor",
+            "4",
         ])
         .args(["--json", "-", "--record"])
         .arg(&record)
@@ -192,8 +205,9 @@ fn a_servo_that_reports_overload_mid_ramp_stops_the_tipover_with_exit_2_naming_i
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    // 1 s of settling, then half a second into the ramp: overload (Protocol 1.0 bit 5).
-    std::thread::sleep(std::time::Duration::from_millis(1500));
+    // Standing upright for 1 s, 1 s of settling, then half a second into the ramp:
+    // overload (Protocol 1.0 bit 5).
+    std::thread::sleep(std::time::Duration::from_millis(2500));
     condition.store(0x20, Ordering::Relaxed);
     let o = child.wait_with_output().unwrap();
     stop.store(true, Ordering::Relaxed);
