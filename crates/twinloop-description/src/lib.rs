@@ -16,6 +16,7 @@ pub mod mjcf;
 pub mod tree;
 pub mod urdf;
 mod xml;
+mod xml_origin;
 
 pub use builder::{DescriptionBuilder, JointBuilder, LinkBuilder};
 pub use description::*;

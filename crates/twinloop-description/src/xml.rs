@@ -142,7 +142,7 @@ pub(crate) fn error_at(node: Node, message: impl Into<String>) -> DescriptionErr
         .at_line(line, column)
         .at_element(element_path(node));
     // An element of an MJCF <include>d file: name that file.
-    match crate::mjcf::include::file_of(node.document()) {
+    match crate::xml_origin::file_of(node.document()) {
         Some(file) => e.in_file(file),
         None => e,
     }
@@ -162,7 +162,7 @@ pub(crate) fn error_at_attr(
     let e = DescriptionError::new(message)
         .at_line(line, column)
         .at_element(element_path(node));
-    match crate::mjcf::include::file_of(node.document()) {
+    match crate::xml_origin::file_of(node.document()) {
         Some(file) => e.in_file(file),
         None => e,
     }

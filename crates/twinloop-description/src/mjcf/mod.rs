@@ -304,7 +304,7 @@ pub(crate) fn from_document(
     for (path, text) in &texts {
         docs.push(crate::xml::parse_xml(text).map_err(|e| e.in_file(path))?);
     }
-    let _files = include::register(&docs, &texts);
+    let _files = crate::xml_origin::register(&docs, &texts);
     let mut sections: Vec<Node> = Vec::new();
     include::splice(root, &docs, &mut 0, &mut sections);
     let mut reader = Reader::new(root);
