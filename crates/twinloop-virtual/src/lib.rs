@@ -31,6 +31,6 @@ mod virtual_robot;
 
 pub use backend::SimServoBackend;
 pub use drive::{DriveRegisters, servo_with_registers};
-pub use runner::SimStatus;
+pub use runner::{CATCH_DEG, SimStatus};
 pub use shared::{Snapshot, thermal_step};
-pub use virtual_robot::{CATCH_DEG, SimHandle, VirtualRobot, VirtualRobotOptions};
+pub use virtual_robot::{SimHandle, VirtualRobot, VirtualRobotOptions};

@@ -3,7 +3,6 @@
 
 use crate::drive::{DriveRegisters, servo_with_registers};
 use crate::shared::{Shared, Snapshot, thermal_step};
-use crate::virtual_robot::CATCH_DEG;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
@@ -18,6 +17,11 @@ const MAX_BATCH: usize = 8;
 /// chatter, which sampled at the bus's rate would alias into jumps of a whole m/s^2.
 /// The figure is ours, not from a board's datasheet.
 pub const IMU_TIME_CONSTANT_S: f64 = 0.01;
+
+/// Trunk tilt at which the virtual operator catches a falling robot, deg: well past
+/// any tip (the host has seen the fall by then), before anything but the feet can
+/// touch the floor.
+pub const CATCH_DEG: f64 = 30.0;
 
 /// Lagging more than this, the simulator stops chasing the wall clock (it runs as
 /// fast as it can from there) and counts the time it dropped.

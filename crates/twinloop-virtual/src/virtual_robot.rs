@@ -28,7 +28,7 @@ pub struct VirtualRobotOptions {
     pub torque_on: bool,
     /// An operator who catches the robot as it falls and stands it up again, as a
     /// person does between the runs of a tip-over experiment: once the trunk tilts
-    /// beyond [`CATCH_DEG`], the robot is placed upright on its feet in the pose its
+    /// beyond [`crate::CATCH_DEG`], the robot is placed upright on its feet in the pose its
     /// servos are commanded to. Off, a fall goes on to the floor (whose impacts on
     /// light links the simulator does not resolve well on a stiff floor).
     pub catch_falls: bool,
@@ -42,11 +42,6 @@ pub struct VirtualRobotOptions {
     /// real host on its own computer does not. `None`: the robot never waits.
     pub tether_s: Option<f64>,
 }
-
-/// Trunk tilt at which the virtual operator catches a falling robot, deg: well past
-/// any tip (the host has seen the fall by then), before anything but the feet can
-/// touch the floor.
-pub const CATCH_DEG: f64 = 30.0;
 
 impl Default for VirtualRobotOptions {
     fn default() -> Self {

@@ -198,9 +198,6 @@ mod bus {
             verbose: true,
         };
         let run = tipover_on_bus(&plan)?;
-        if let Some(p) = &a.record {
-            eprintln!("{} rows written to {}", run.rows, p.display());
-        }
         match run.outcome {
             BusOutcome::Study(r) => emit(
                 &format!("over {}\n{}", run.port, summary(&r)),

@@ -71,13 +71,11 @@ pub enum BusOutcome {
     Partial(Box<BusReport>),
 }
 
-/// The outcome, the runs behind it (the mapping's joint order), the rows recorded,
-/// and the port.
+/// The outcome, the runs behind it (the mapping's joint order), and the port.
 pub struct BusRun {
     pub outcome: BusOutcome,
     pub runs: Vec<TipoverResult>,
     pub joint_names: Vec<String>,
-    pub rows: usize,
     pub port: String,
 }
 
@@ -296,6 +294,9 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
     hold_standing(&mut robot, &standing);
     if let Some(w) = writer {
         w.finish()?;
+        if let Some(p) = &plan.record {
+            eprintln!("{rows} rows written to {}", p.display());
+        }
     }
     let runs = runs.map_err(|e| {
         CliError::new(format!(
@@ -336,7 +337,6 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
         outcome,
         runs: kept,
         joint_names: names,
-        rows,
         port,
     })
 }
