@@ -25,9 +25,28 @@ pub struct AdaptArgs {
     pub command: Option<AdaptCommand>,
     #[arg(long, value_name = "ROBOT", help = ROBOT_HELP, required = true)]
     pub robot: Option<String>,
-    /// The tip-over experiment's JSON (`twinloop experiment tipover --json`).
-    #[arg(long, value_name = "TIP.json", required = true)]
+    /// The tip-over experiment's JSON (`twinloop experiment tipover --json`). With
+    /// --port, where the tip-over measured in place is written.
+    #[arg(long, value_name = "TIP.json", required_unless_present = "port")]
     pub tipover: Option<PathBuf>,
+    /// Run the tip-over in place on the robot on this bus first (as `experiment
+    /// tipover --port`: it asks before moving a robot on a serial port), then adapt
+    /// to what it measured; the bus flags mean what they mean for `twinloop link`.
+    #[command(flatten)]
+    pub bus: crate::cmd_link::PortArgs,
+    /// With --port: the servo mapping (builtin:km20 or a mapping TOML; it must have the
+    /// IMU [[board]]).
+    #[arg(long, value_name = "MAP", requires = "port")]
+    pub map: Option<String>,
+    /// With --port: every cycle read, as a CSV written row by row.
+    #[arg(long, value_name = "FILE.csv", requires = "port")]
+    pub record: Option<PathBuf>,
+    /// With --port on a serial device: do not ask before the first lean.
+    #[arg(long, requires = "port")]
+    pub yes: bool,
+    /// With --port, a simulated robot served faster than real time: its factor.
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub realtime_factor: f64,
     /// exact: the exact inversion (an added point mass, the adapted URDF); ann: the
     /// three-mass LIPM from the network of `twinloop adapt train` (--net; needs --where).
     #[arg(long, value_enum, default_value_t = Method::Exact)]
@@ -145,15 +164,56 @@ fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
         .map_err(|e| CliError::new(format!("{}: {e}", path.display())).context("--tipover"))
 }
 
+/// The tip-over run in place over the bus (`--port`), written to `out` if given.
+fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyReport, CliError> {
+    use crate::cmd_experiment::tipover_bus::{BusOutcome, BusPlan, tipover_on_bus};
+    use twinloop_experiments::tipover::Direction;
+    let Some(map) = a.map.clone() else {
+        return Err(CliError::new(
+            "--port needs --map MAP (the robot's servos and IMU board)",
+        ));
+    };
+    let plan = BusPlan {
+        model_spec: robot.to_string(),
+        map,
+        port: a.bus.clone(),
+        record: a.record.clone(),
+        yes: a.yes,
+        directions: Direction::ALL.to_vec(),
+        ramp: 2.0,
+        slow_ramp: 0.1,
+        compliance_slope: 2,
+        clock_rate: a.realtime_factor,
+        verbose: true,
+    };
+    let run = tipover_on_bus(&plan)?;
+    let BusOutcome::Study(study) = run.outcome else {
+        return Err(CliError::new(
+            "the tip-over did not run all four directions",
+        ));
+    };
+    if let Some(path) = out {
+        let text =
+            serde_json::to_string_pretty(&*study).map_err(|e| CliError::new(e.to_string()))?;
+        std::fs::write(path, text + "\n")
+            .map_err(|e| CliError::io(path, e).context("--tipover"))?;
+    }
+    Ok(*study)
+}
+
 pub fn run(a: AdaptArgs) -> CliResult {
     if let Some(AdaptCommand::Train(t)) = a.command {
         return run_train(t);
     }
-    let (Some(robot), Some(tipover)) = (&a.robot, &a.tipover) else {
-        return Err(CliError::new("adapt needs --robot and --tipover"));
+    let Some(robot) = &a.robot else {
+        return Err(CliError::new("adapt needs --robot"));
     };
     let (prior, _) = load_description(robot)?;
-    let tip = read_tip(tipover)?;
+    let tip = match (&a.bus.port, &a.tipover) {
+        (Some(_), out) => tip_in_place(&a, robot, out.as_deref())?,
+        (None, Some(path)) => read_tip(path)?,
+        (None, None) => return Err(CliError::new("adapt needs --tipover or --port")),
+    };
     if a.method == Method::Ann {
         return run_ann(&a, &prior, &tip);
     }
@@ -224,8 +284,10 @@ pub fn run(a: AdaptArgs) -> CliResult {
         }
         None => {
             t += &format!(
-                "m_a (p - c_meas) = {} kg mm: give --total-mass or --where to place it\n",
-                mm(r.family_moment)
+                "m_a (p - c_meas) = [{:.1}, {:.1}, {:.1}] kg mm: give --total-mass or --where to place it\n",
+                r.family_moment[0] * 1e3,
+                r.family_moment[1] * 1e3,
+                r.family_moment[2] * 1e3
             );
         }
     }

@@ -183,3 +183,19 @@ fn adapt_with_the_robots_lean_reports_the_torque_gap_closing() {
     ]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// `adapt --port` runs the tip-over in place; without the mapping it cannot know the
+/// servos and the IMU board, and says so before opening the port.
+#[test]
+fn adapt_in_place_needs_the_mapping() {
+    fails_naming(
+        &[
+            "adapt",
+            "--robot",
+            "builtin:km20",
+            "--port",
+            "/nonexistent/ttyUSB9",
+        ],
+        "--map",
+    );
+}
