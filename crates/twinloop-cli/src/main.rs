@@ -95,6 +95,12 @@ enum Command {
     ///   twinloop adapt --robot builtin:km20 --tipover tip.json --total-mass 3.636 \
     ///       --out adapted.urdf --json - --report adapt.html --check
     ///
+    /// --port PORT --map MAP runs the tip-over in place on the robot's bus first (and writes
+    /// it to --tipover); --lean LEAN.csv replays seed 001's lean the robot did on the prior
+    /// and the adapted model and compares the ankle and knee torques.
+    ///   twinloop adapt --robot builtin:km20 --port /tmp/km20 --map builtin:km20 \
+    ///       --total-mass 3.636 --tipover tip.json --out adapted.urdf
+    ///
     /// --method ann puts the three masses of the three-mass LIPM where the seed's ANN
     /// (seed 000 V.C) says, from the forward and backward angles and --where; `twinloop
     /// adapt train` trains it on simulated changes.

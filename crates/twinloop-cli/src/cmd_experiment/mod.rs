@@ -36,10 +36,13 @@ pub enum ExperimentCommand {
     /// Example:
     ///   twinloop experiment tipover --robot builtin:km20 --add-mass 0.2@torso:0.05,0,0 --json tip.json
     ///
-    /// On a robot over its bus (--port PORT --map MAP): one ramp per direction, the tilt from
-    /// the mapping's IMU board; on a serial port it asks first (--yes skips); a silent or
-    /// overloaded/overheated/undervolted servo, or Ctrl-C, stops it with the servos holding
-    /// the standing pose (exit 2); --record FILE.csv keeps every cycle read. See docs/tipover.md.
+    /// On a robot over its bus (--port PORT --map MAP): the same protocol through the servos'
+    /// registers (stiffened first), the tilt from the mapping's IMU board; between runs it
+    /// waits for the robot to be stood up again (`serve --catch-falls` does that for a
+    /// simulated one); with all four directions the JSON is the simulator's. On a serial
+    /// port it asks first (--yes skips); a silent or overloaded/overheated/undervolted servo,
+    /// or Ctrl-C, stops it with the servos holding the standing pose (exit 2); --record
+    /// FILE.csv keeps every cycle read. See docs/adaptation.md.
     ///   twinloop experiment tipover --port /tmp/km20 --map builtin:km20 --directions forward --record tip.csv
     ///
     /// Output: on stdout the four directions' commanded and measured angles, the model's
