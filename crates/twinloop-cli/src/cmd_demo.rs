@@ -368,6 +368,10 @@ pub fn run(a: DemoArgs) -> CliResult {
     }
     let wall_s = t0.elapsed().as_secs_f64();
     t += &format!("wrote {} ({wall_s:.0} s)\n", files.join(", "));
+    t += &format!(
+        "see the robot's run in 3D: twinloop view builtin:km20 {}\n",
+        record.display()
+    );
     let report = DemoReport {
         truth: truth_changes,
         measured_deg: measured,
