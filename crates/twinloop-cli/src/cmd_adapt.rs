@@ -181,7 +181,7 @@ fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyR
         yes: a.yes,
         directions: Direction::ALL.to_vec(),
         ramp: 2.0,
-        slow_ramp: 0.1,
+        slow_ramp: 0.15,
         compliance_slope: 2,
         clock_rate: a.realtime_factor,
         verbose: true,

@@ -269,7 +269,7 @@ pub fn run(a: DemoArgs) -> CliResult {
         yes: true,
         directions: Direction::ALL.to_vec(),
         ramp: 2.0,
-        slow_ramp: 0.1,
+        slow_ramp: 0.15,
         compliance_slope: 2,
         clock_rate: a.realtime_factor,
         verbose: true,

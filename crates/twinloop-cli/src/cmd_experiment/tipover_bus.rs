@@ -83,6 +83,10 @@ pub struct BusRun {
 /// it must stay there, s of robot time.
 const UPRIGHT_DEG: f64 = 3.0;
 const UPRIGHT_HOLD_S: f64 = 1.0;
+/// How far before the first run's tip the second run starts to creep, deg: more than
+/// the simulator's half degree, because over a bus the first run's detection lags by a
+/// cycle or more and the robot must not tip before the creep begins.
+const SLOW_MARGIN_DEG: f64 = 1.5;
 /// How long a person (or the virtual robot's operator) has to stand the robot up, s.
 const STAND_UP_TIMEOUT_S: f64 = 120.0;
 
@@ -342,7 +346,7 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
 }
 
 /// Each direction twice, as the study: a first ramp finds the tip, a second comes up
-/// to half a degree before it and creeps; the robot stood up before each run.
+/// to [`SLOW_MARGIN_DEG`] before it and creeps; the robot stood up before each run.
 fn run_directions(
     g: &mut Guarded,
     plan: &BusPlan,
@@ -380,7 +384,7 @@ fn run_directions(
         };
         let first = run(cfg, g)?;
         let mut slow = cfg.clone();
-        slow.slow_from_deg = Some((first.commanded_deg - 0.5).max(0.0));
+        slow.slow_from_deg = Some((first.commanded_deg - SLOW_MARGIN_DEG).max(0.0));
         slow.slow_ramp_deg_per_s = plan.slow_ramp;
         let mut r = run(&slow, g)?;
         r.time_s = first.time_s;
