@@ -42,7 +42,10 @@ pub struct StateColumns {
 
 impl StateColumns {
     /// Find the column of every coordinate in `coordinates` (see
-    /// [`Quantity::column_names`]); the error lists those missing.
+    /// [`Quantity::column_names`]); the error lists those missing, or names the
+    /// first cell of these columns that is NaN or infinite (file, line, column), so
+    /// every command that maps a table onto a model rejects non-finite input at read
+    /// time.
     pub fn find(
         table: &Table,
         quantity: Quantity,
@@ -73,6 +76,7 @@ impl StateColumns {
             e.file = table.path.clone();
             return Err(e);
         }
+        table.check_finite(&indices)?;
         Ok(StateColumns { quantity, indices })
     }
 
