@@ -80,6 +80,33 @@ impl StateColumns {
         Ok(StateColumns { quantity, indices })
     }
 
+    /// Every column of `table` with `quantity`'s prefix must name one of
+    /// `coordinates`: a misspelt `q:l_kne` is an error naming the column and the
+    /// nearest coordinate names, never a column silently ignored.
+    pub fn check_known(
+        table: &Table,
+        quantity: Quantity,
+        coordinates: &[String],
+    ) -> Result<(), IoError> {
+        let names = quantity.column_names(coordinates);
+        let unknown = table
+            .columns
+            .iter()
+            .find(|c| c.starts_with(quantity.prefix()) && !names.contains(c));
+        let Some(c) = unknown else {
+            return Ok(());
+        };
+        let mut e = IoError::new(format!(
+            "names no coordinate of the model; did you mean {}? (the model has {} such \
+             columns; `twinloop model info --joints` lists them)",
+            nearest(c, &names, 3).join(", "),
+            names.len()
+        ));
+        e.file = table.path.clone();
+        e.column = Some(c.clone());
+        Err(e)
+    }
+
     /// Gather row `r` into `out` (model order).
     #[inline]
     pub fn gather(&self, row: &[f64], out: &mut [f64]) {
@@ -87,4 +114,20 @@ impl StateColumns {
             *o = row[i];
         }
     }
+}
+
+/// The `n` names of `choices` nearest to `name` (Levenshtein distance, ties in the
+/// order given), for "did you mean" in errors.
+pub fn nearest<'a>(name: &str, choices: &'a [String], n: usize) -> Vec<&'a str> {
+    let mut scored: Vec<(usize, usize)> = choices
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (strsim::levenshtein(name, c), i))
+        .collect();
+    scored.sort_unstable();
+    scored
+        .iter()
+        .take(n)
+        .map(|&(_, i)| choices[i].as_str())
+        .collect()
 }
