@@ -107,7 +107,7 @@ pub struct PortArgs {
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
     /// Allowance per reply on top of its wire time, ms (USB latency, return delay)
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, value_parser = crate::common::positive)]
     pub timeout_ms: f64,
     /// Extra attempts after a lost or damaged reply
     #[arg(long, default_value_t = 2)]
@@ -168,13 +168,13 @@ pub struct RecordArgs {
     #[arg(long, value_name = "LIST")]
     pub ids: Option<String>,
     /// Seconds to record
-    #[arg(long)]
+    #[arg(long, value_parser = crate::common::positive)]
     pub duration: f64,
     /// Output CSV file
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
     /// Reads per second (0: as fast as the bus allows)
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, value_parser = crate::common::non_negative)]
     pub rate: f64,
     /// How to read: auto (cheapest the servos have), read, bulk, sync, fast
     #[arg(long, default_value = "auto", value_parser = parse_method)]
@@ -198,7 +198,7 @@ pub struct PlanArgs {
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
     /// Return Delay Time, us (register value x 2; factory setting 500)
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::common::non_negative)]
     pub return_delay_us: f64,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
@@ -510,18 +510,6 @@ fn mapping_from_ids(
 }
 
 fn record(a: &RecordArgs) -> CliResult {
-    if !a.duration.is_finite() || a.duration <= 0.0 {
-        return Err(CliError::from(format!(
-            "--duration {}: must be a positive number of seconds",
-            a.duration
-        )));
-    }
-    if !a.rate.is_finite() || a.rate < 0.0 {
-        return Err(CliError::from(format!(
-            "--rate {}: must be 0 or a positive number",
-            a.rate
-        )));
-    }
     let mapping = a.map.as_deref().map(RobotMapping::resolve).transpose()?;
     let default_port = mapping.as_ref().and_then(|m| m.port.clone());
     let mut c = open_client(&a.port, default_port.as_deref())?;
@@ -655,9 +643,6 @@ fn plan(a: &PlanArgs) -> CliResult {
             "--servos {}: must be 1..=253",
             a.servos
         )));
-    }
-    if !a.return_delay_us.is_finite() || a.return_delay_us < 0.0 {
-        return Err(CliError::from("--return-delay-us must be >= 0"));
     }
     let rdt = Duration::from_secs_f64(a.return_delay_us / 1e6);
     let (goal, cases): (usize, Vec<(ReadMethod, usize)>) = match a.protocol {
