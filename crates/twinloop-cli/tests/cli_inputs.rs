@@ -50,8 +50,10 @@ fn assert_bad_input(o: &Output, expected: &[&str]) {
 /// A km20 standing for 0.1 s: a recording with q:*, v:*, and NaN centres of
 /// pressure of any foot not in contact (columns the dynamics do not use).
 fn km20_recording() -> PathBuf {
-    let out = tmp("stand.csv");
-    if !out.exists() {
+    // Made once per test process: tests run in parallel and share it.
+    static MADE: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    MADE.get_or_init(|| {
+        let out = tmp("stand.csv");
         let o = twinloop(
             &[
                 "simulate",
@@ -66,8 +68,9 @@ fn km20_recording() -> PathBuf {
             Duration::from_secs(60),
         );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    }
-    out
+        out
+    })
+    .clone()
 }
 
 /// Replace the cell of `column` in data row `row` (0-based) of a CSV.
@@ -300,4 +303,61 @@ fn numeric_options_out_of_range_are_usage_errors_not_hangs() {
         assert_bad_input(&o, &[option, "out of range"]);
     }
     assert!(!json.exists());
+}
+
+#[test]
+fn model_info_joints_lists_the_order_and_headers_the_csv_files_need() {
+    let o = twinloop(
+        &["model", "info", "builtin:km20", "--joints", "--json", "-"],
+        Duration::from_secs(30),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let joints = info["joint_list"].as_array().unwrap();
+    let k = &info["joints_by_kind"];
+    let moving = k["revolute"].as_u64().unwrap()
+        + k["continuous"].as_u64().unwrap()
+        + k["prismatic"].as_u64().unwrap();
+    assert_eq!(joints.len() as u64, moving);
+    for j in joints {
+        let (lo, hi) = (j["lower"].as_f64().unwrap(), j["upper"].as_f64().unwrap());
+        assert!(lo < hi, "{j}");
+    }
+    // The state header is what a simulation writes: t and the q: columns, in order.
+    let rec = std::fs::read_to_string(km20_recording()).unwrap();
+    let written: Vec<&str> = rec.lines().next().unwrap().split(',').collect();
+    let state: Vec<&str> = info["state_header"].as_str().unwrap().split(',').collect();
+    assert_eq!(state[..], written[..state.len()]);
+    assert!(!written[state.len()].starts_with("q:"));
+    // The trajectory header, filled with zeros, is a trajectory simulate accepts.
+    let header = info["trajectory_header"].as_str().unwrap();
+    let n = header.split(',').count();
+    let zeros = vec!["0"; n].join(",");
+    let traj = tmp("from-header.csv");
+    std::fs::write(&traj, format!("{header}\n{zeros}\n")).unwrap();
+    let o = twinloop(
+        &[
+            "simulate",
+            "--robot",
+            "builtin:km20",
+            "--trajectory",
+            p(&traj),
+            "--duration",
+            "0.01",
+            "--out",
+            p(&tmp("h.csv")),
+        ],
+        Duration::from_secs(60),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The text lists every joint by name.
+    let o = twinloop(
+        &["model", "info", "builtin:km20", "--joints"],
+        Duration::from_secs(30),
+    );
+    let text = String::from_utf8_lossy(&o.stdout);
+    for j in joints {
+        assert!(text.contains(j["name"].as_str().unwrap()), "{text}");
+    }
+    assert!(text.contains(header), "{text}");
 }
