@@ -526,6 +526,11 @@ fn record(a: &RecordArgs) -> CliResult {
         }
     };
     let names = mapping.joint_names();
+    let ids: Vec<String> = mapping
+        .joints
+        .iter()
+        .map(|j| format!("{} (protocol {}.0)", j.id, j.protocol.number()))
+        .collect();
     let mut robot = DynamixelRobot::new(c, mapping, a.method)?;
     robot.cycle_mut().verify_v1 = a.verified_reads;
     let mut columns = vec!["t".to_string()];
@@ -539,6 +544,20 @@ fn record(a: &RecordArgs) -> CliResult {
     let stop = interrupt_flag();
     let rec = record_rows(&mut robot, &mut writer, a, &stop);
     let finished = writer.finish();
+    let nothing_measured = rec.link_error.is_none()
+        && (1..=FIRST_CYCLES).contains(&rec.rows)
+        && rec.failures.iter().all(|&f| f == rec.rows);
+    if nothing_measured {
+        // Nothing was measured: a file of NaN must not look like a recording.
+        let _ = std::fs::remove_file(&a.out);
+        return Err(CliError::new(format!(
+            "no servo of the mapping answered in the first {} cycles (ids {}); \
+             check --map, the port and the baud rate (`twinloop link scan --port ...` \
+             lists what answers)",
+            rec.rows,
+            ids.join(", ")
+        )));
+    }
     let mut summary = format!(
         "{} rows in {:.3} s ({:.1} reads/s) written to {}",
         rec.rows,
@@ -564,6 +583,9 @@ fn record(a: &RecordArgs) -> CliResult {
         None => Ok(Outcome::Ok),
     }
 }
+
+/// After this many cycles, a recording in which no servo has answered stops.
+const FIRST_CYCLES: usize = 3;
 
 /// What the recording loop did.
 struct Recording {
@@ -616,12 +638,42 @@ fn record_rows<T: Transport>(
             break;
         }
         rec.rows += 1;
+        if rec.rows == FIRST_CYCLES && never_answered(robot, &rec.failures, rec.rows) {
+            break;
+        }
         if dt > 0.0 {
             let _ = robot.advance(dt);
         }
     }
     rec.seconds = start.elapsed().as_secs_f64();
     rec
+}
+
+/// After the first cycles: true when no servo has answered (the recording stops);
+/// the servos that never answered while others did are named on stderr.
+fn never_answered<T: Transport>(
+    robot: &DynamixelRobot<T>,
+    failures: &[usize],
+    rows: usize,
+) -> bool {
+    let silent: Vec<&str> = robot
+        .outcomes()
+        .zip(failures)
+        .filter(|(_, f)| **f == rows)
+        .map(|((name, _), _)| name)
+        .collect();
+    if silent.len() == failures.len() {
+        return true;
+    }
+    if !silent.is_empty() {
+        eprintln!(
+            "warning: {} joint(s) have not answered in the first {rows} cycles: {} (NaN in \
+             their columns)",
+            silent.len(),
+            silent.join(", ")
+        );
+    }
+    false
 }
 
 #[derive(Serialize)]
