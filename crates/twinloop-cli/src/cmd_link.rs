@@ -4,6 +4,7 @@
 
 use crate::common::{JSON_HELP, emit, num};
 use crate::error::{CliError, CliResult, Outcome};
+use crate::progress;
 use clap::{Args, Subcommand};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -293,14 +294,26 @@ fn scan(a: &ScanArgs) -> CliResult {
     };
     let mut found: Vec<FoundServo> = Vec::new();
     for p in protocols {
-        let result = match &ids {
-            None => c.scan(p, 0..=p.max_id()),
-            Some(ids) => {
-                let (lo, hi) = (ids[0], *ids.last().expect("non-empty"));
-                c.scan(p, lo..=hi)
-                    .map(|v| v.into_iter().filter(|s| ids.contains(&s.id)).collect())
-            }
+        let (lo, hi) = match &ids {
+            None => (0, p.max_id()),
+            Some(ids) => (ids[0], *ids.last().expect("non-empty")),
         };
+        // A scan takes seconds: say what it does, then count the ids pinged.
+        eprintln!(
+            "scanning protocol {}.0, ids {lo}-{hi}, at {} baud ...",
+            p.number(),
+            a.port.baud
+        );
+        let bar = progress::steps(usize::from(hi - lo) + 1);
+        let result = c.scan_with_progress(p, lo..=hi, |id| {
+            bar.set_position(u64::from(id - lo));
+            bar.set_message(format!("id {id}"));
+        });
+        bar.finish_and_clear();
+        let result = result.map(|v: Vec<FoundServo>| match &ids {
+            None => v,
+            Some(ids) => v.into_iter().filter(|s| ids.contains(&s.id)).collect(),
+        });
         found.extend(result?);
     }
     let v: Vec<ServoJson> = found

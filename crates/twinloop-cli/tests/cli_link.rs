@@ -102,6 +102,12 @@ fn scan_read_and_record_a_served_robot() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v.as_array().unwrap().len(), 20);
     assert_eq!(v[0]["model"], "XM430-W350");
+    // The scan says what it does before the seconds it takes.
+    assert!(
+        text(&o.stderr).contains("scanning protocol 2.0, ids 0-252"),
+        "{}",
+        text(&o.stderr)
+    );
     let o = twinloop(&[
         "link",
         "read",
