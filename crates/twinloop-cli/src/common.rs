@@ -199,6 +199,12 @@ pub fn finite(s: &str) -> Result<f64, String> {
     parse_number(s, |_| true, "a finite number is needed (not NaN or inf)")
 }
 
+/// A count of 1 or more (cycles, steps, rounds, samples): 0 would do nothing and
+/// say nothing.
+pub fn count() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::<usize>::new().range(1..)
+}
+
 /// Read a CSV table; the error names the file (and line).
 pub fn read_table(path: &Path) -> Result<twinloop_io::Table, CliError> {
     Ok(twinloop_io::Table::read(path)?)
