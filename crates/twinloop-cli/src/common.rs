@@ -201,8 +201,16 @@ pub fn finite(s: &str) -> Result<f64, String> {
 
 /// A count of 1 or more (cycles, steps, rounds, samples): 0 would do nothing and
 /// say nothing.
-pub fn count() -> clap::builder::RangedU64ValueParser<usize> {
-    clap::builder::RangedU64ValueParser::<usize>::new().range(1..)
+pub fn count(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a whole number"))?;
+    if n >= 1 {
+        Ok(n)
+    } else {
+        Err(format!("{n} is out of range: a count >= 1 is needed"))
+    }
 }
 
 /// Read a CSV table; the error names the file (and line).
@@ -262,6 +270,8 @@ mod tests {
         assert!(non_negative("-1e-9").is_err());
         assert_eq!(finite("-3"), Ok(-3.0));
         assert!(finite("nan").is_err() && finite("-inf").is_err());
+        assert_eq!(count("3"), Ok(3));
+        assert!(count("0").is_err() && count("-1").is_err() && count("1.5").is_err());
     }
 
     #[test]

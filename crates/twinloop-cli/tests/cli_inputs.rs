@@ -302,12 +302,7 @@ fn numeric_options_out_of_range_are_usage_errors_not_hangs() {
             a.extend(["--json", p(&json)]);
         }
         let o = twinloop(&a, Duration::from_secs(10));
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(
-            err.contains("out of range") || err.contains("is not in 1.."),
-            "{err}"
-        );
-        assert_bad_input(&o, &[option]);
+        assert_bad_input(&o, &[option, "out of range"]);
     }
     assert!(!json.exists());
 }

@@ -16,7 +16,7 @@ pub struct StaticPosesArgs {
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     /// Number of poses, spread evenly over the categories.
-    #[arg(long, default_value_t = 172, value_parser = crate::common::count())]
+    #[arg(long, default_value_t = 172, value_parser = crate::common::count)]
     pub count: usize,
     /// Categories, comma-separated: arm, left, right, torso, crouch, wide.
     #[arg(
