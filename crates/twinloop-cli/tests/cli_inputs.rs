@@ -103,9 +103,14 @@ fn a_non_finite_cell_in_dynamics_input_names_file_line_and_column() {
         Duration::from_secs(60),
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for (value, name) in [("NaN", "nan.csv"), ("inf", "inf.csv"), ("-inf", "minf.csv")] {
+    for (column, value, name) in [
+        ("q:l_knee", "NaN", "nan.csv"),
+        ("q:l_knee", "inf", "inf.csv"),
+        ("q:l_knee", "-inf", "minf.csv"),
+        ("t", "NaN", "nan-t.csv"),
+    ] {
         let bad = tmp(name);
-        with_cell(&rec, "q:l_knee", 2, value, &bad);
+        with_cell(&rec, column, 2, value, &bad);
         let o = twinloop(
             &[
                 "dynamics",
@@ -124,7 +129,7 @@ fn a_non_finite_cell_in_dynamics_input_names_file_line_and_column() {
             &o,
             &[
                 &format!("{name}:4"),
-                "q:l_knee",
+                column,
                 "data row 3",
                 "not a finite number",
             ],
