@@ -72,16 +72,16 @@ pub struct StiffnessArgs {
     #[arg(long = "q", value_name = "NAME=RAD")]
     pub q: Vec<String>,
     /// Harmonic-drive stiffness K_h, N m/rad.
-    #[arg(long, default_value_t = 8000.0)]
+    #[arg(long, default_value_t = 8000.0, value_parser = crate::common::positive)]
     pub k_harmonic: f64,
     /// Series spring stiffness K_s, N m/rad.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, value_parser = crate::common::positive)]
     pub k_series: f64,
     /// Damping of the stiff joints, N m s/rad (the seed gives no value).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::common::non_negative)]
     pub d_stiff: f64,
     /// Damping of the compliant joints, N m s/rad (the seed gives no value).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::common::non_negative)]
     pub d_compliant: f64,
     /// Write the result as JSON to FILE (-: to stdout, in place of the text).
     #[arg(long, value_name = "FILE")]
@@ -242,7 +242,7 @@ pub struct SimulateArgs {
     pub table1: bool,
     /// White Gaussian noise added to x and z after the first row, m (synthetic data for
     /// `identify compliant`).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::common::non_negative)]
     pub noise: f64,
     /// Seed of the noise.
     #[arg(long, default_value_t = 1)]
@@ -339,12 +339,6 @@ fn read_reference(path: &Path) -> Result<(SagittalReference, Option<(f64, f64)>)
 fn simulate(args: &SimulateArgs) -> CliResult {
     let plant = read_plant_any(&args.plant)?;
     let corrections = corrections(args)?;
-    if !(args.noise.is_finite() && args.noise >= 0.0) {
-        return Err(CliError::new(format!(
-            "--noise {}: must be non-negative",
-            args.noise
-        )));
-    }
     let (reference, start) = read_reference(&args.reference)?;
     let model = CompactModel { plant, corrections };
     let (x0, z0) = match start {

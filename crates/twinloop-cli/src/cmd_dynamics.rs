@@ -94,14 +94,16 @@ fn base_kind(fixed: bool) -> BaseKind {
     }
 }
 
-fn with_time(table: &Table, names: Vec<String>) -> (Option<usize>, Vec<String>) {
+fn with_time(table: &Table, names: Vec<String>) -> Result<(Option<usize>, Vec<String>), IoError> {
     let t = table.column_index("t");
+    // The time is copied to the output: a NaN there is as wrong as one in q.
+    table.check_finite(t.as_slice())?;
     let mut cols = Vec::with_capacity(names.len() + 1);
     if t.is_some() {
         cols.push("t".to_string());
     }
     cols.extend(names);
-    (t, cols)
+    Ok((t, cols))
 }
 
 /// Quaternions must be unit for the dynamics to mean anything: say which row is not.
@@ -148,7 +150,7 @@ fn kinematics(args: &KinematicsArgs) -> Result<(), CliError> {
             names.push(format!("pose:{n}.{s}"));
         }
     }
-    let (tcol, cols) = with_time(&table, names);
+    let (tcol, cols) = with_time(&table, names)?;
     let mut w = CsvWriter::create(&a.out, &cols)?;
     let mut data = Data::new(&model);
     let mut q = vec![0.0; model.nq];
@@ -196,7 +198,7 @@ fn per_row(
     let (tcol, cols) = with_time(
         &table,
         output.column_names(&crate::common::coordinate_names(&model, output)),
-    );
+    )?;
     let mut w = CsvWriter::create(&a.out, &cols)?;
     let mut data = Data::new(&model);
     let (mut q, mut v, mut x) = (

@@ -59,14 +59,14 @@ pub struct TimingArgs {
     pub robot: String,
     /// Control tick and sample period, s (40 ms: two 20 ms servo PWM frames, and below
     /// the 57 ms the seed's 54.8 rad/s model bandwidth allows).
-    #[arg(long, default_value_t = SEED_SAMPLE_TIME, value_name = "S")]
+    #[arg(long, default_value_t = SEED_SAMPLE_TIME, value_name = "S", value_parser = crate::common::positive)]
     pub dt: f64,
     /// Duration of one step cycle (Step_State 0 to 100), s. Below ~3.5 s lab17 falls (seed
     /// 003 section 5: too fast a step cycle leaves the inertial forces undamped).
-    #[arg(long, default_value_t = SEED_CYCLE_PERIOD)]
+    #[arg(long, default_value_t = SEED_CYCLE_PERIOD, value_parser = crate::common::positive)]
     pub cycle_period: f64,
     /// Factor on every offset (1 = the seed's numbers).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::common::finite)]
     pub amplitude: f64,
 }
 
@@ -75,7 +75,7 @@ pub struct SequenceArgs {
     #[command(flatten)]
     pub timing: TimingArgs,
     /// Number of step cycles.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::common::count)]
     pub cycles: usize,
     /// Output CSV.
     #[arg(long, value_name = "FILE.csv")]
@@ -86,13 +86,13 @@ pub struct SequenceArgs {
 #[derive(Args, Debug, Clone, Copy)]
 pub struct StepTiming {
     /// Step length sl, m.
-    #[arg(long, default_value_t = 0.03)]
+    #[arg(long, default_value_t = 0.03, value_parser = crate::common::finite)]
     pub step_length: f64,
     /// Single-support duration Tss, s.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]
     pub tss: f64,
     /// Double-support duration Tdb, s.
-    #[arg(long, default_value_t = 0.2)]
+    #[arg(long, default_value_t = 0.2, value_parser = crate::common::non_negative)]
     pub tdb: f64,
 }
 
@@ -101,22 +101,22 @@ pub struct ZmpArgs {
     #[command(flatten)]
     pub steps: StepTiming,
     /// Number of footsteps (swings).
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = crate::common::count)]
     pub footsteps: usize,
     /// CoM height Zc, m.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]
     pub com_height: f64,
     /// Lateral distance between the foot centres, m.
-    #[arg(long, default_value_t = 0.14)]
+    #[arg(long, default_value_t = 0.14, value_parser = crate::common::finite)]
     pub step_width: f64,
     /// Standing time before the first and after the last step, s.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::common::non_negative)]
     pub settle: f64,
     /// Gravity, m/s^2.
-    #[arg(long, default_value_t = twinloop_description::GRAVITY)]
+    #[arg(long, default_value_t = twinloop_description::GRAVITY, value_parser = crate::common::positive)]
     pub gravity: f64,
     /// Sample period, s.
-    #[arg(long, default_value_t = 1e-3, value_name = "S")]
+    #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::common::positive)]
     pub dt: f64,
     /// Output CSV.
     #[arg(long, value_name = "FILE.csv")]

@@ -4,6 +4,7 @@
 
 use crate::common::{JSON_HELP, emit, num};
 use crate::error::{CliError, CliResult, Outcome};
+use crate::progress;
 use clap::{Args, Subcommand};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -107,7 +108,7 @@ pub struct PortArgs {
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
     /// Allowance per reply on top of its wire time, ms (USB latency, return delay)
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, value_parser = crate::common::positive)]
     pub timeout_ms: f64,
     /// Extra attempts after a lost or damaged reply
     #[arg(long, default_value_t = 2)]
@@ -168,13 +169,13 @@ pub struct RecordArgs {
     #[arg(long, value_name = "LIST")]
     pub ids: Option<String>,
     /// Seconds to record
-    #[arg(long)]
+    #[arg(long, value_parser = crate::common::positive)]
     pub duration: f64,
     /// Output CSV file
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
     /// Reads per second (0: as fast as the bus allows)
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, value_parser = crate::common::non_negative)]
     pub rate: f64,
     /// How to read: auto (cheapest the servos have), read, bulk, sync, fast
     #[arg(long, default_value = "auto", value_parser = parse_method)]
@@ -198,7 +199,7 @@ pub struct PlanArgs {
     #[arg(long, default_value_t = 1_000_000)]
     pub baud: u32,
     /// Return Delay Time, us (register value x 2; factory setting 500)
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::common::non_negative)]
     pub return_delay_us: f64,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
@@ -293,14 +294,26 @@ fn scan(a: &ScanArgs) -> CliResult {
     };
     let mut found: Vec<FoundServo> = Vec::new();
     for p in protocols {
-        let result = match &ids {
-            None => c.scan(p, 0..=p.max_id()),
-            Some(ids) => {
-                let (lo, hi) = (ids[0], *ids.last().expect("non-empty"));
-                c.scan(p, lo..=hi)
-                    .map(|v| v.into_iter().filter(|s| ids.contains(&s.id)).collect())
-            }
+        let (lo, hi) = match &ids {
+            None => (0, p.max_id()),
+            Some(ids) => (ids[0], *ids.last().expect("non-empty")),
         };
+        // A scan takes seconds: say what it does, then count the ids pinged.
+        eprintln!(
+            "scanning protocol {}.0, ids {lo}-{hi}, at {} baud ...",
+            p.number(),
+            a.port.baud
+        );
+        let bar = progress::steps(usize::from(hi - lo) + 1);
+        let result = c.scan_with_progress(p, lo..=hi, |id| {
+            bar.set_position(u64::from(id - lo));
+            bar.set_message(format!("id {id}"));
+        });
+        bar.finish_and_clear();
+        let result = result.map(|v: Vec<FoundServo>| match &ids {
+            None => v,
+            Some(ids) => v.into_iter().filter(|s| ids.contains(&s.id)).collect(),
+        });
         found.extend(result?);
     }
     let v: Vec<ServoJson> = found
@@ -510,18 +523,6 @@ fn mapping_from_ids(
 }
 
 fn record(a: &RecordArgs) -> CliResult {
-    if !a.duration.is_finite() || a.duration <= 0.0 {
-        return Err(CliError::from(format!(
-            "--duration {}: must be a positive number of seconds",
-            a.duration
-        )));
-    }
-    if !a.rate.is_finite() || a.rate < 0.0 {
-        return Err(CliError::from(format!(
-            "--rate {}: must be 0 or a positive number",
-            a.rate
-        )));
-    }
     let mapping = a.map.as_deref().map(RobotMapping::resolve).transpose()?;
     let default_port = mapping.as_ref().and_then(|m| m.port.clone());
     let mut c = open_client(&a.port, default_port.as_deref())?;
@@ -538,6 +539,11 @@ fn record(a: &RecordArgs) -> CliResult {
         }
     };
     let names = mapping.joint_names();
+    let ids: Vec<String> = mapping
+        .joints
+        .iter()
+        .map(|j| format!("{} (protocol {}.0)", j.id, j.protocol.number()))
+        .collect();
     let mut robot = DynamixelRobot::new(c, mapping, a.method)?;
     robot.cycle_mut().verify_v1 = a.verified_reads;
     let mut columns = vec!["t".to_string()];
@@ -551,6 +557,20 @@ fn record(a: &RecordArgs) -> CliResult {
     let stop = interrupt_flag();
     let rec = record_rows(&mut robot, &mut writer, a, &stop);
     let finished = writer.finish();
+    let nothing_measured = rec.link_error.is_none()
+        && (1..=FIRST_CYCLES).contains(&rec.rows)
+        && rec.failures.iter().all(|&f| f == rec.rows);
+    if nothing_measured {
+        // Nothing was measured: a file of NaN must not look like a recording.
+        let _ = std::fs::remove_file(&a.out);
+        return Err(CliError::new(format!(
+            "no servo of the mapping answered in the first {} cycles (ids {}); \
+             check --map, the port and the baud rate (`twinloop link scan --port ...` \
+             lists what answers)",
+            rec.rows,
+            ids.join(", ")
+        )));
+    }
     let mut summary = format!(
         "{} rows in {:.3} s ({:.1} reads/s) written to {}",
         rec.rows,
@@ -576,6 +596,9 @@ fn record(a: &RecordArgs) -> CliResult {
         None => Ok(Outcome::Ok),
     }
 }
+
+/// After this many cycles, a recording in which no servo has answered stops.
+const FIRST_CYCLES: usize = 3;
 
 /// What the recording loop did.
 struct Recording {
@@ -628,12 +651,42 @@ fn record_rows<T: Transport>(
             break;
         }
         rec.rows += 1;
+        if rec.rows == FIRST_CYCLES && never_answered(robot, &rec.failures, rec.rows) {
+            break;
+        }
         if dt > 0.0 {
             let _ = robot.advance(dt);
         }
     }
     rec.seconds = start.elapsed().as_secs_f64();
     rec
+}
+
+/// After the first cycles: true when no servo has answered (the recording stops);
+/// the servos that never answered while others did are named on stderr.
+fn never_answered<T: Transport>(
+    robot: &DynamixelRobot<T>,
+    failures: &[usize],
+    rows: usize,
+) -> bool {
+    let silent: Vec<&str> = robot
+        .outcomes()
+        .zip(failures)
+        .filter(|(_, f)| **f == rows)
+        .map(|((name, _), _)| name)
+        .collect();
+    if silent.len() == failures.len() {
+        return true;
+    }
+    if !silent.is_empty() {
+        eprintln!(
+            "warning: {} joint(s) have not answered in the first {rows} cycles: {} (NaN in \
+             their columns)",
+            silent.len(),
+            silent.join(", ")
+        );
+    }
+    false
 }
 
 #[derive(Serialize)]
@@ -655,9 +708,6 @@ fn plan(a: &PlanArgs) -> CliResult {
             "--servos {}: must be 1..=253",
             a.servos
         )));
-    }
-    if !a.return_delay_us.is_finite() || a.return_delay_us < 0.0 {
-        return Err(CliError::from("--return-delay-us must be >= 0"));
     }
     let rdt = Duration::from_secs_f64(a.return_delay_us / 1e6);
     let (goal, cases): (usize, Vec<(ReadMethod, usize)>) = match a.protocol {

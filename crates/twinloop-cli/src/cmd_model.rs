@@ -9,6 +9,8 @@ use std::path::PathBuf;
 use twinloop_description::builtin::{builtin, builtin_summaries, servo_table};
 use twinloop_description::lint::{LintReport, Severity, lint};
 use twinloop_description::{Description, JointKind};
+use twinloop_dynamics::{BaseKind, JointType, Model};
+use twinloop_io::Quantity;
 
 #[derive(Subcommand)]
 pub enum ModelCommand {
@@ -19,21 +21,26 @@ builtin:NAME): \
 robot name, file format, root link, links and joints counted by kind, degrees of freedom, mimic \
 joints, total mass, the heaviest links and the links without an <inertial>.",
         after_long_help = "Example:\n  twinloop model info models/op3/robotis_op3.urdf\n  \
-twinloop model info builtin:km20 --json -\n\n\
+twinloop model info builtin:km20 --json -\n  \
+twinloop model info builtin:km20 --joints\n\n\
 Output:\n  \
 dof           velocity degrees of freedom of the joints (a floating joint counts 6; the free\n                \
 base the dynamics adds to a URDF without one is not counted)\n  \
 actuated      revolute, continuous and prismatic joints that are not <mimic>s\n  \
 total mass    sum of every link's <mass> (dummy frame links included), kg: what a scale\n                \
 should read if the model is right\n  \
-heaviest      the five heaviest links, kg\n\n\
+heaviest      the five heaviest links, kg\n  \
+--joints      every moving joint in model order (the order of q:, v:, tau: columns) with\n                \
+its kind, limits (rad or m; rad/s or m/s; N m or N) and the CSV headers a trajectory\n                \
+(simulate --trajectory: t and any q:<joint>) and a state file (dynamics: q:base.* too) need\n\n\
 With --json FILE (- for stdout) the same facts as one JSON object with stable field names: file, format, robot,\n\
 root_link, links, links_without_inertial [names], joints, joints_by_kind {revolute, continuous,\n\
 prismatic, fixed, floating, planar}, dof, actuated_dof, mimic_joints [names], total_mass (kg,\n\
-full precision), heaviest_links [{name, mass}].\n\n\
+full precision), heaviest_links [{name, mass}]; with --joints also joint_list [{name, kind,\n\
+lower, upper, velocity, effort}], trajectory_header, state_header.\n\n\
 Exit code 0, or 2 when the file cannot be read (the message names file, line and element)."
     )]
-    Info(DescriptionArgs),
+    Info(InfoArgs),
 
     /// Check the physical plausibility of a description's numbers
     #[command(
@@ -108,6 +115,16 @@ pub struct DescriptionArgs {
 }
 
 #[derive(Args)]
+pub struct InfoArgs {
+    #[command(flatten)]
+    pub description: DescriptionArgs,
+    /// List the moving joints in model order with their limits, and the CSV headers
+    /// a trajectory and a state file need
+    #[arg(long)]
+    pub joints: bool,
+}
+
+#[derive(Args)]
 pub struct LintArgs {
     #[command(flatten)]
     pub description: DescriptionArgs,
@@ -175,6 +192,88 @@ struct Info {
     mimic_joints: Vec<String>,
     total_mass: f64,
     heaviest_links: Vec<LinkMass>,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    joint_order: Option<JointOrder>,
+}
+
+/// One moving joint of the compiled model, as `--joints` lists it.
+#[derive(Serialize)]
+struct JointRow {
+    name: String,
+    kind: &'static str,
+    lower: f64,
+    upper: f64,
+    velocity: f64,
+    effort: f64,
+}
+
+/// What `--joints` adds: the joints in the order of every `q:`, `v:` and `tau:`
+/// column, and the headers that name them.
+#[derive(Serialize)]
+struct JointOrder {
+    joint_list: Vec<JointRow>,
+    trajectory_header: String,
+    state_header: String,
+}
+
+/// The joints of `robot` as the dynamics and the simulator order them (floating
+/// base, as `simulate` and `dynamics` use it).
+fn joint_order(robot: &Description, spec: &str) -> Result<JointOrder, crate::error::CliError> {
+    let model = Model::from_description_with_base(robot, BaseKind::Floating).map_err(|mut e| {
+        if e.location.file.is_none() {
+            e.location.file = Some(PathBuf::from(spec));
+        }
+        crate::error::CliError::from(e)
+    })?;
+    let joint_list = (0..model.nbodies)
+        .map(|i| JointRow {
+            name: model.joint_names[i].clone(),
+            kind: match model.joint_types[i] {
+                JointType::Prismatic => "prismatic",
+                _ => "revolute",
+            },
+            lower: model.lower_limits[i],
+            upper: model.upper_limits[i],
+            velocity: model.velocity_limits[i],
+            effort: model.effort_limits[i],
+        })
+        .collect();
+    let header = |names: Vec<String>| {
+        std::iter::once("t".to_string())
+            .chain(Quantity::Q.column_names(&names))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    Ok(JointOrder {
+        joint_list,
+        trajectory_header: header(model.joint_names.clone()),
+        state_header: header(model.q_names()),
+    })
+}
+
+fn joint_order_text(j: &JointOrder) -> String {
+    let mut out = format!(
+        "\njoints in model order (q:<name> columns; rad or m)\n  {:>3}  {:<24}{:<11}{:>10}{:>10}{:>10}{:>10}\n",
+        "#", "name", "kind", "lower", "upper", "velocity", "effort"
+    );
+    for (i, r) in j.joint_list.iter().enumerate() {
+        out.push_str(&format!(
+            "  {:>3}  {:<24}{:<11}{:>10}{:>10}{:>10}{:>10}\n",
+            i + 1,
+            r.name,
+            r.kind,
+            num(r.lower),
+            num(r.upper),
+            num(r.velocity),
+            num(r.effort)
+        ));
+    }
+    out.push_str(&format!(
+        "\ntrajectory header (simulate --trajectory; any subset of the q: columns):\n{}\n\
+         \nstate header (dynamics, floating base; add v:, a:, tau: alike):\n{}\n",
+        j.trajectory_header, j.state_header
+    ));
+    out
 }
 
 fn summarise(robot: &Description, args: &DescriptionArgs, format: common::Format) -> Info {
@@ -235,6 +334,7 @@ fn summarise(robot: &Description, args: &DescriptionArgs, format: common::Format
             .collect(),
         total_mass: robot.total_mass(),
         heaviest_links: heaviest,
+        joint_order: None,
     }
 }
 
@@ -263,10 +363,17 @@ fn name_list(names: &[String], max: usize) -> String {
     s
 }
 
-fn info(args: &DescriptionArgs) -> CliResult {
-    let (robot, format) = common::load_description(&args.robot)?;
-    let info = summarise(&robot, args, format);
-    emit(&info_text(&info), args.json.as_ref(), &info)?;
+fn info(args: &InfoArgs) -> CliResult {
+    let d = &args.description;
+    let (robot, format) = common::load_description(&d.robot)?;
+    let mut info = summarise(&robot, d, format);
+    let mut text = info_text(&info);
+    if args.joints {
+        let j = joint_order(&robot, &d.robot)?;
+        text.push_str(&joint_order_text(&j));
+        info.joint_order = Some(j);
+    }
+    emit(&text, d.json.as_ref(), &info)?;
     Ok(Outcome::Ok)
 }
 

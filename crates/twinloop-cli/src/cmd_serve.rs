@@ -41,7 +41,7 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     #[arg(long)]
     pub torque_off: bool,
     /// Simulated robot: simulated seconds per wall-clock second
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::common::positive)]
     pub realtime_factor: f64,
     /// Simulated robot: an operator catches the robot when its trunk tilts past 30
     /// deg and stands it up in the pose its servos are commanded to, as a person does
@@ -51,7 +51,7 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     /// Simulated robot: how far its weight sinks into the ground, m (the floor's
     /// stiffness; default 0.001). 1e-5 is the near-rigid floor of the simulated
     /// tip-over study (`experiment tipover --robot`), whose angles it then gives
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = crate::common::positive)]
     pub ground_sink: Option<f64>,
     /// Where to serve: pty (a new pseudo-terminal) or tcp:ADDR (e.g. tcp:127.0.0.1:5555)
     #[arg(long, default_value = "pty", value_name = "PORT")]
@@ -165,19 +165,6 @@ fn serve_simulated(
         ground_sink: a.ground_sink,
         ..Default::default()
     };
-    if let Some(s) = a.ground_sink
-        && !(s > 0.0 && s.is_finite())
-    {
-        return Err(CliError::from(format!(
-            "--ground-sink must be a positive number of metres, not {s}"
-        )));
-    }
-    if !(a.realtime_factor > 0.0 && a.realtime_factor.is_finite()) {
-        return Err(CliError::from(format!(
-            "--realtime-factor must be positive, not {}",
-            a.realtime_factor
-        )));
-    }
     let vr = twinloop_virtual::VirtualRobot::new(robot, mapping, &options)?;
     if !vr.unmapped.is_empty() {
         eprintln!(

@@ -6,7 +6,7 @@ use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
-use twinloop_io::{CsvWriter, Table};
+use twinloop_io::{CsvWriter, Quantity, StateColumns, Table};
 use twinloop_robot::{Robot, RobotState};
 use twinloop_sim::{Actuator, DynamixelServo, SimConfig, Simulator};
 
@@ -28,21 +28,23 @@ pub enum ServoChoice {
 pub struct SimulateArgs {
     #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
     pub robot: String,
-    /// Simulated time, s.
-    #[arg(long, default_value_t = 2.0)]
-    pub duration: f64,
+    /// Simulated time, s [default: the --trajectory's last time, else 2].
+    #[arg(long, value_name = "S", value_parser = crate::common::non_negative)]
+    pub duration: Option<f64>,
     /// Hold the initial standing pose (the default when no --trajectory is given).
     #[arg(long)]
     pub hold: bool,
     /// Joint goals over time: a CSV with `t` and `q:<joint>` columns, linearly
-    /// interpolated; joints without a column hold their initial position.
+    /// interpolated; joints without a column hold their initial position. A `q:`
+    /// column that names no joint is an error (`twinloop model info --joints` lists
+    /// them).
     #[arg(long, value_name = "FILE")]
     pub trajectory: Option<PathBuf>,
     /// Output CSV.
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
     /// Time step, s.
-    #[arg(long, default_value_t = 1e-3, value_name = "S")]
+    #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::common::positive)]
     pub dt: f64,
     /// Write one row every N steps.
     #[arg(long, default_value_t = 1)]
@@ -107,11 +109,14 @@ struct Goals {
 }
 
 impl Goals {
-    fn load(path: &Path, joints: &[String]) -> Result<Goals, CliError> {
+    fn load(path: &Path, model: &twinloop_dynamics::Model) -> Result<Goals, CliError> {
+        let joints = &model.joint_names;
         let table = read_table(path)?;
+        StateColumns::check_known(&table, Quantity::Q, &model.q_names())?;
         let tc = table
             .column_index("t")
             .ok_or_else(|| CliError::new(format!("{}: a `t` column is needed", path.display())))?;
+        table.check_finite(&[tc])?;
         let t: Vec<f64> = table.rows.iter().map(|r| r[tc]).collect();
         if let Some(k) = t.windows(2).position(|w| w[1] <= w[0]) {
             return Err(CliError::new(format!(
@@ -130,7 +135,13 @@ impl Goals {
                 path.display()
             )));
         }
+        table.check_finite(&cols.iter().flatten().copied().collect::<Vec<_>>())?;
         Ok(Goals { t, cols, table })
+    }
+
+    /// The last goal's time.
+    fn end(&self) -> f64 {
+        self.t.last().copied().unwrap_or(0.0)
     }
 
     fn at(&self, time: f64, hold: &[f64], out: &mut [f64]) {
@@ -156,22 +167,19 @@ pub fn run(a: SimulateArgs) -> CliResult {
     if a.hold && a.trajectory.is_some() {
         return Err(CliError::new("--hold and --trajectory exclude each other"));
     }
-    if !(a.duration >= 0.0 && a.duration.is_finite()) {
-        return Err(CliError::new(format!(
-            "--duration must be a non-negative time, not {}",
-            a.duration
-        )));
-    }
     let (robot, _) = load_description(&a.robot)?;
     let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
-    let names = sim.model.joint_names.clone();
     let goals = a
         .trajectory
         .as_ref()
-        .map(|p| Goals::load(p, &names))
+        .map(|p| Goals::load(p, &sim.model))
         .transpose()?;
+    // A trajectory runs to its end unless --duration says otherwise.
+    let duration = a
+        .duration
+        .unwrap_or_else(|| goals.as_ref().map_or(2.0, Goals::end));
     let cols = record_columns(&sim);
-    record(&a, &mut sim, goals.as_ref(), &cols)?;
+    record(&a, duration, &mut sim, goals.as_ref(), &cols)?;
     Ok(Outcome::Ok)
 }
 
@@ -200,13 +208,14 @@ fn record_columns(sim: &Simulator) -> Vec<String> {
 /// Step the simulator for --duration, following the goals, writing every --every'th row.
 fn record(
     a: &SimulateArgs,
+    duration: f64,
     sim: &mut Simulator,
     goals: Option<&Goals>,
     cols: &[String],
 ) -> Result<(), CliError> {
     let hold: Vec<f64> = sim.goals.clone();
     let mut w = CsvWriter::create(&a.out, cols)?;
-    let steps = (a.duration / a.dt).round() as usize;
+    let steps = (duration / a.dt).round() as usize;
     let bar = progress::rows(if steps > 20_000 { steps } else { 0 });
     let mut st = RobotState::default();
     let mut g = vec![0.0; sim.model.joint_names.len()];

@@ -92,7 +92,7 @@ pub struct LeanArgs {
     #[arg(long, value_name = "OUT.html")]
     pub report: Option<PathBuf>,
     /// Largest clock offset between the runs to look for, s (0: align on `t` as it is).
-    #[arg(long, default_value_t = 0.5, value_name = "S")]
+    #[arg(long, default_value_t = 0.5, value_name = "S", value_parser = crate::common::non_negative)]
     pub max_shift: f64,
 }
 
@@ -114,7 +114,7 @@ pub struct ResidualArgs {
     #[arg(long, value_name = "RES.csv")]
     pub out: PathBuf,
     /// Low-pass cut-off, Hz.
-    #[arg(long, default_value_t = 10.0, value_name = "HZ")]
+    #[arg(long, default_value_t = 10.0, value_name = "HZ", value_parser = crate::common::positive)]
     pub cutoff: f64,
     /// Butterworth order (applied forwards and backwards).
     #[arg(long, default_value_t = 4)]
@@ -143,12 +143,6 @@ fn lean(a: &LeanArgs) -> CliResult {
         a.robot_run.display().to_string(),
         a.sim_run.display().to_string(),
     );
-    if !(a.max_shift.is_finite() && a.max_shift >= 0.0) {
-        return Err(CliError::new(format!(
-            "--max-shift {}: must be a number of seconds >= 0",
-            a.max_shift
-        )));
-    }
     let c = align_and_compare(&robot, &sim, &rn, &sn, a.max_shift)?;
     let mut text = format!(
         "lean: {rn} (robot) against {sn} (simulation), {} samples over {:.2} .. {:.2} s, \

@@ -34,17 +34,11 @@ pub struct ViewArgs {
     #[arg(long, value_name = "FILE.csv")]
     pub live: Option<PathBuf>,
     /// States per second sent to the page in --live
-    #[arg(long, value_name = "HZ", default_value_t = 60.0)]
+    #[arg(long, value_name = "HZ", default_value_t = 60.0, value_parser = crate::common::positive)]
     pub rate: f64,
 }
 
 pub fn run(args: ViewArgs) -> CliResult {
-    if !(args.rate > 0.0 && args.rate.is_finite()) {
-        return Err(CliError::new(format!(
-            "--rate {}: must be a positive number of states per second",
-            args.rate
-        )));
-    }
     let (robot, format) = common::load_description(&args.robot)?;
     let source = (format != common::Format::Builtin).then(|| Path::new(&args.robot));
     let scene = Scene::new(&robot, source, &args.package_dirs);

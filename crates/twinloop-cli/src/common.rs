@@ -167,6 +167,52 @@ pub fn emit<T: serde::Serialize + ?Sized>(
     Ok(())
 }
 
+/// Range checks of numeric options, as clap value parsers (`#[arg(value_parser =
+/// crate::common::positive)]`): a value out of range is a usage error (exit 2)
+/// naming the option and the range, before any work starts, so no option can make
+/// a command hang (a zero step or ramp) or diverge (a negative one). Integer counts
+/// use clap's own `value_parser!(u64).range(1..)`.
+fn parse_number(s: &str, ok: impl Fn(f64) -> bool, range: &str) -> Result<f64, String> {
+    let x: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a number"))?;
+    if x.is_finite() && ok(x) {
+        Ok(x)
+    } else {
+        Err(format!("{x} is out of range: {range}"))
+    }
+}
+
+/// A finite number > 0 (a step, a rate, a duration that must pass).
+pub fn positive(s: &str) -> Result<f64, String> {
+    parse_number(s, |x| x > 0.0, "a finite number > 0 is needed")
+}
+
+/// A finite number >= 0 (a duration, a noise level, a tolerance).
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    parse_number(s, |x| x >= 0.0, "a finite number >= 0 is needed")
+}
+
+/// Any finite number (an offset, an angle).
+pub fn finite(s: &str) -> Result<f64, String> {
+    parse_number(s, |_| true, "a finite number is needed (not NaN or inf)")
+}
+
+/// A count of 1 or more (cycles, steps, rounds, samples): 0 would do nothing and
+/// say nothing.
+pub fn count(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a whole number"))?;
+    if n >= 1 {
+        Ok(n)
+    } else {
+        Err(format!("{n} is out of range: a count >= 1 is needed"))
+    }
+}
+
 /// Read a CSV table; the error names the file (and line).
 pub fn read_table(path: &Path) -> Result<twinloop_io::Table, CliError> {
     Ok(twinloop_io::Table::read(path)?)
@@ -212,6 +258,20 @@ mod tests {
         assert_eq!(sniff_format("<sdf>"), Format::Unknown);
         assert_eq!(sniff_format("not xml"), Format::Unknown);
         assert_eq!(sniff_format("<!-- unterminated"), Format::Unknown);
+    }
+
+    #[test]
+    fn numeric_options_are_range_checked() {
+        assert_eq!(positive("0.5"), Ok(0.5));
+        for bad in ["0", "-1", "NaN", "inf", "x"] {
+            assert!(positive(bad).is_err(), "{bad}");
+        }
+        assert_eq!(non_negative("0"), Ok(0.0));
+        assert!(non_negative("-1e-9").is_err());
+        assert_eq!(finite("-3"), Ok(-3.0));
+        assert!(finite("nan").is_err() && finite("-inf").is_err());
+        assert_eq!(count("3"), Ok(3));
+        assert!(count("0").is_err() && count("-1").is_err() && count("1.5").is_err());
     }
 
     #[test]

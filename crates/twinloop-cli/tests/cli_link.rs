@@ -102,6 +102,12 @@ fn scan_read_and_record_a_served_robot() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v.as_array().unwrap().len(), 20);
     assert_eq!(v[0]["model"], "XM430-W350");
+    // The scan says what it does before the seconds it takes.
+    assert!(
+        text(&o.stderr).contains("scanning protocol 2.0, ids 0-252"),
+        "{}",
+        text(&o.stderr)
+    );
     let o = twinloop(&[
         "link",
         "read",
@@ -340,4 +346,41 @@ fn serve_km20_simulated_on_tcp() {
     );
     server.kill().unwrap();
     server.wait().unwrap();
+}
+
+#[test]
+fn a_recording_with_a_mapping_no_servo_answers_stops_at_once() {
+    // OP3's servos answer protocol 2.0 only; km20's mapping asks RX servos (1.0).
+    let (mut server, pty) = serve(&["--map", "builtin:op3"], &["--no-timing"]);
+    let out = scratch("nobody.csv");
+    let start = Instant::now();
+    let o = twinloop(&[
+        "link",
+        "record",
+        "--port",
+        &pty,
+        "--map",
+        "builtin:km20",
+        "--duration",
+        "60",
+        "--timeout-ms",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    server.kill().unwrap();
+    server.wait().unwrap();
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        start.elapsed() < Duration::from_secs(30),
+        "{:?}",
+        start.elapsed()
+    );
+    assert!(err.contains("no servo of the mapping answered"), "{err}");
+    assert!(
+        err.contains("ids 1 (protocol 1.0), 2 (protocol 1.0)"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a file of NaN was left behind");
 }

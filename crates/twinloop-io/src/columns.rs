@@ -42,7 +42,10 @@ pub struct StateColumns {
 
 impl StateColumns {
     /// Find the column of every coordinate in `coordinates` (see
-    /// [`Quantity::column_names`]); the error lists those missing.
+    /// [`Quantity::column_names`]); the error lists those missing, or names the
+    /// first cell of these columns that is NaN or infinite (file, line, column), so
+    /// every command that maps a table onto a model rejects non-finite input at read
+    /// time.
     pub fn find(
         table: &Table,
         quantity: Quantity,
@@ -73,7 +76,35 @@ impl StateColumns {
             e.file = table.path.clone();
             return Err(e);
         }
+        table.check_finite(&indices)?;
         Ok(StateColumns { quantity, indices })
+    }
+
+    /// Every column of `table` with `quantity`'s prefix must name one of
+    /// `coordinates`: a misspelt `q:l_kne` is an error naming the column and the
+    /// nearest coordinate names, never a column silently ignored.
+    pub fn check_known(
+        table: &Table,
+        quantity: Quantity,
+        coordinates: &[String],
+    ) -> Result<(), IoError> {
+        let names = quantity.column_names(coordinates);
+        let unknown = table
+            .columns
+            .iter()
+            .find(|c| c.starts_with(quantity.prefix()) && !names.contains(c));
+        let Some(c) = unknown else {
+            return Ok(());
+        };
+        let mut e = IoError::new(format!(
+            "names no coordinate of the model; did you mean {}? (the model has {} such \
+             columns; `twinloop model info --joints` lists them)",
+            nearest(c, &names, 3).join(", "),
+            names.len()
+        ));
+        e.file = table.path.clone();
+        e.column = Some(c.clone());
+        Err(e)
     }
 
     /// Gather row `r` into `out` (model order).
@@ -83,4 +114,20 @@ impl StateColumns {
             *o = row[i];
         }
     }
+}
+
+/// The `n` names of `choices` nearest to `name` (Levenshtein distance, ties in the
+/// order given), for "did you mean" in errors.
+pub fn nearest<'a>(name: &str, choices: &'a [String], n: usize) -> Vec<&'a str> {
+    let mut scored: Vec<(usize, usize)> = choices
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (strsim::levenshtein(name, c), i))
+        .collect();
+    scored.sort_unstable();
+    scored
+        .iter()
+        .take(n)
+        .map(|&(_, i)| choices[i].as_str())
+        .collect()
 }

@@ -11,5 +11,5 @@
 mod columns;
 mod table;
 
-pub use columns::{Quantity, StateColumns};
+pub use columns::{Quantity, StateColumns, nearest};
 pub use table::{CsvWriter, IoError, Table, format_f64};

@@ -156,6 +156,31 @@ impl Table {
         self.lines.get(row).copied()
     }
 
+    /// Every cell of `columns` (indices) must be a finite number: a NaN or an infinity
+    /// in a column a command uses is an error naming the file, the line, the data row
+    /// and the column, never a NaN carried into the results. Columns a command does not
+    /// use may hold NaN (a simulation's centre of pressure while a foot is in the air).
+    pub fn check_finite(&self, columns: &[usize]) -> Result<(), IoError> {
+        for (r, row) in self.rows.iter().enumerate() {
+            for &c in columns {
+                let x = row[c];
+                if !x.is_finite() {
+                    return Err(IoError {
+                        file: self.path.clone(),
+                        line: self.line_of_row(r),
+                        column: Some(self.columns[c].clone()),
+                        message: format!(
+                            "data row {}: {x} is not a finite number (every cell a command \
+                             uses must be measured)",
+                            r + 1
+                        ),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
     pub fn column_index(&self, name: &str) -> Option<usize> {
         self.columns.iter().position(|c| c == name)
     }

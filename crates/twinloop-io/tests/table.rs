@@ -45,3 +45,38 @@ fn errors_name_line_and_column() {
     let e = Table::parse("t,t\n").unwrap_err();
     assert!(e.to_string().contains("twice"));
 }
+
+#[test]
+fn a_non_finite_cell_in_a_used_column_names_file_line_and_column() {
+    use twinloop_io::{Quantity, StateColumns};
+    let names = vec!["knee".to_string(), "hip".to_string()];
+    // Comment and blank lines shift the file lines: the error names the file's line.
+    let text = "t,q:knee,q:hip,cop.x\n# a comment\n0,1,2,NaN\n\n0.1,1,inf,NaN\n";
+    let t = Table::parse(text).unwrap();
+    let e = StateColumns::find(&t, Quantity::Q, &names).unwrap_err();
+    assert_eq!(e.line, Some(5), "{e}");
+    assert_eq!(e.column.as_deref(), Some("q:hip"), "{e}");
+    assert!(e.to_string().contains("data row 2"), "{e}");
+    assert!(e.to_string().contains("not a finite number"), "{e}");
+    // NaN in a column the caller does not use (cop.x) is no error.
+    let ok = Table::parse("t,q:knee,q:hip,cop.x\n0,1,2,NaN\n").unwrap();
+    assert!(StateColumns::find(&ok, Quantity::Q, &names).is_ok());
+    let e = ok.check_finite(&[3]).unwrap_err();
+    assert_eq!((e.line, e.column.as_deref()), (Some(2), Some("cop.x")));
+}
+
+#[test]
+fn a_misspelt_column_is_named_with_the_nearest_names() {
+    use twinloop_io::{Quantity, StateColumns};
+    let names: Vec<String> = ["l_knee", "r_knee", "l_hip_pitch", "base.x"]
+        .map(String::from)
+        .to_vec();
+    let t = Table::parse("t,q:l_kne,q:base.x,tau:anything\n0,1,2,3\n").unwrap();
+    let e = StateColumns::check_known(&t, Quantity::Q, &names).unwrap_err();
+    assert_eq!(e.column.as_deref(), Some("q:l_kne"), "{e}");
+    let s = e.to_string();
+    assert!(s.contains("did you mean q:l_knee, q:r_knee"), "{s}");
+    // Other prefixes are not this quantity's business.
+    let ok = Table::parse("t,q:l_knee,tau:x\n0,1,2\n").unwrap();
+    assert!(StateColumns::check_known(&ok, Quantity::Q, &names).is_ok());
+}

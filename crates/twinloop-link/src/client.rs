@@ -372,6 +372,17 @@ impl<T: Transport> Client<T> {
         protocol: Protocol,
         ids: RangeInclusive<u8>,
     ) -> Result<Vec<FoundServo>, LinkError> {
+        self.scan_with_progress(protocol, ids, |_| {})
+    }
+
+    /// [`Client::scan`], calling `progress(id)` before each single ping (a 1.0
+    /// scan pings 254 ids one by one: seconds with nothing to show otherwise).
+    pub fn scan_with_progress(
+        &mut self,
+        protocol: Protocol,
+        ids: RangeInclusive<u8>,
+        mut progress: impl FnMut(u8),
+    ) -> Result<Vec<FoundServo>, LinkError> {
         let ids = *ids.start()..=(*ids.end()).min(protocol.max_id());
         if protocol == Protocol::V2 {
             // The SDK's window: 14 bytes per possible servo plus 3 ms each, + 16 ms.
@@ -388,6 +399,7 @@ impl<T: Transport> Client<T> {
         let mut found = Vec::new();
         let mut result = Ok(());
         for id in ids {
+            progress(id);
             match self.ping(protocol, id) {
                 Ok(s) => found.push(s),
                 Err(LinkError::Io(e)) => {

@@ -82,13 +82,13 @@ pub struct DynamicsBenchArgs {
     #[arg(long, value_name = "CSV")]
     pub states: Option<PathBuf>,
     /// Number of random states when --states is not given.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = crate::common::count)]
     pub count: usize,
     /// Seed of the random states.
     #[arg(long, default_value_t = 0x7417_1009)]
     pub seed: u64,
     /// Minimum time spent on each algorithm, in seconds.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, value_parser = crate::common::positive)]
     pub seconds: f64,
     /// Write JSON {"model", "nv", "states", "ns_per_call": {"fk", ...}} to FILE (-: to
     /// stdout, in place of the text).

@@ -13,13 +13,13 @@ pub struct SimBenchArgs {
     #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
     pub robot: String,
     /// Time step, s.
-    #[arg(long, default_value_t = 1e-3, value_name = "S")]
+    #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::common::positive)]
     pub dt: f64,
     /// Steps per timed round.
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = 2000, value_parser = crate::common::count)]
     pub steps: usize,
     /// Timed rounds (the median is reported).
-    #[arg(long, default_value_t = 11)]
+    #[arg(long, default_value_t = 11, value_parser = crate::common::count)]
     pub rounds: usize,
     #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
     pub servo: ServoChoice,

@@ -16,23 +16,23 @@ pub struct CompliantWalkArgs {
     #[command(flatten)]
     pub steps: crate::cmd_gait::StepTiming,
     /// Recorded duration, s (1 kHz samples).
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = crate::common::positive)]
     pub duration: f64,
     /// Harmonic-drive stiffness K_h, N m/rad (seed 002: about 8000).
-    #[arg(long, default_value_t = 8000.0)]
+    #[arg(long, default_value_t = 8000.0, value_parser = crate::common::positive)]
     pub k_harmonic: f64,
     /// Series spring stiffness K_s, N m/rad. The seed's 100 is for its lower-body robot;
     /// the full 32 kg COMAN needs k_j above m g Zc (about 165 N m/rad) to stand on one foot.
-    #[arg(long, default_value_t = 300.0)]
+    #[arg(long, default_value_t = 300.0, value_parser = crate::common::positive)]
     pub k_series: f64,
     /// Swing-foot lift, m.
     #[arg(long, default_value_t = 0.03)]
     pub swing_height: f64,
     /// Standing time before the recording starts, s (the robot settles; not recorded).
-    #[arg(long, default_value_t = WalkingConfig::default().settle)]
+    #[arg(long, default_value_t = WalkingConfig::default().settle, value_parser = crate::common::non_negative)]
     pub settle: f64,
     /// Simulator steps per 1 ms sample.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::common::count)]
     pub substeps: usize,
     /// Output CSV: t, xr, zr, x, z, phase.
     #[arg(long, value_name = "OUT.csv")]

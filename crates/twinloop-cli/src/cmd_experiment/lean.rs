@@ -53,16 +53,16 @@ pub struct LeanArgs {
     #[arg(long, default_value_t = 0.3)]
     pub fraction: f64,
     /// Ankle speed during the ramps, deg/s.
-    #[arg(long, default_value_t = 2.0, value_name = "DEG/S")]
+    #[arg(long, default_value_t = 2.0, value_name = "DEG/S", value_parser = crate::common::positive)]
     pub ramp: f64,
     /// Hold after each ramp, s.
-    #[arg(long, default_value_t = 1.5, value_name = "S")]
+    #[arg(long, default_value_t = 1.5, value_name = "S", value_parser = crate::common::non_negative)]
     pub hold: f64,
     /// Standing still before the lean, s.
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::common::non_negative)]
     pub settle: f64,
     /// Control (and row) period, s.
-    #[arg(long, default_value_t = 0.005, value_name = "S")]
+    #[arg(long, default_value_t = 0.005, value_name = "S", value_parser = crate::common::positive)]
     pub dt: f64,
     /// Ankle pitch joints, left,right.
     #[arg(long, value_delimiter = ',', num_args = 2, value_names = ["LEFT", "RIGHT"],

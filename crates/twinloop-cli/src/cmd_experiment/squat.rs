@@ -22,19 +22,19 @@ pub struct SquatArgs {
     #[arg(long, value_name = "squat.csv")]
     pub out: PathBuf,
     /// How far the pelvis goes down, m (default: 12 % of its standing height).
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = crate::common::finite)]
     pub depth: Option<f64>,
     /// Duration of the down-and-up motion, s.
-    #[arg(long, default_value_t = 5.0, value_name = "S")]
+    #[arg(long, default_value_t = 5.0, value_name = "S", value_parser = crate::common::positive)]
     pub duration: f64,
     /// Standing still before and after, s.
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::common::non_negative)]
     pub rest: f64,
     /// Sampling rate, Hz (seed 004's motion capture: 150 Hz).
-    #[arg(long, default_value_t = 150.0, value_name = "HZ")]
+    #[arg(long, default_value_t = 150.0, value_name = "HZ", value_parser = crate::common::positive)]
     pub rate: f64,
     /// How far the arms swing forward at the bottom, fraction of their range.
-    #[arg(long, default_value_t = 0.35)]
+    #[arg(long, default_value_t = 0.35, value_parser = crate::common::finite)]
     pub arm_swing: f64,
     /// The foot links, left then right, when they cannot be found from the geometry.
     #[arg(long, value_delimiter = ',', num_args = 2, value_name = "LEFT,RIGHT")]
@@ -46,7 +46,7 @@ pub struct SquatArgs {
     #[arg(long, value_name = "FRAMES.csv", requires = "markers")]
     pub frames_out: Option<PathBuf>,
     /// Marker noise, standard deviation per axis, m.
-    #[arg(long, default_value_t = 0.0, value_name = "M")]
+    #[arg(long, default_value_t = 0.0, value_name = "M", value_parser = crate::common::non_negative)]
     pub marker_noise: f64,
     /// Random seed of the marker noise.
     #[arg(long, default_value_t = 1)]

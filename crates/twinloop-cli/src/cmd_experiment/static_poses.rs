@@ -16,7 +16,7 @@ pub struct StaticPosesArgs {
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     /// Number of poses, spread evenly over the categories.
-    #[arg(long, default_value_t = 172)]
+    #[arg(long, default_value_t = 172, value_parser = crate::common::count)]
     pub count: usize,
     /// Categories, comma-separated: arm, left, right, torso, crouch, wide.
     #[arg(
@@ -26,19 +26,19 @@ pub struct StaticPosesArgs {
     )]
     pub categories: Vec<String>,
     /// CoP noise, standard deviation per axis, metres.
-    #[arg(long, default_value_t = 0.0, value_name = "M")]
+    #[arg(long, default_value_t = 0.0, value_name = "M", value_parser = crate::common::non_negative)]
     pub cop_noise: f64,
     /// Joint-angle noise added to the written configuration, standard deviation, rad.
-    #[arg(long, default_value_t = 0.0, value_name = "RAD")]
+    #[arg(long, default_value_t = 0.0, value_name = "RAD", value_parser = crate::common::non_negative)]
     pub joint_noise: f64,
     /// Random seed (same seed, same poses).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Gap between the soles for the double-support categories, metres.
-    #[arg(long, default_value_t = 0.02, value_name = "M")]
+    #[arg(long, default_value_t = 0.02, value_name = "M", value_parser = crate::common::non_negative)]
     pub gap: f64,
     /// Gap between the soles for the wide stance, metres.
-    #[arg(long, default_value_t = 0.20, value_name = "M")]
+    #[arg(long, default_value_t = 0.20, value_name = "M", value_parser = crate::common::non_negative)]
     pub wide_gap: f64,
     /// Joints held at their neutral value in every pose, comma-separated.
     #[arg(long, value_delimiter = ',', value_name = "JOINTS")]

@@ -30,7 +30,7 @@ pub struct TipoverArgs {
     /// Over the bus, when the robot is a simulation served faster than real time
     /// (`twinloop serve --realtime-factor F`): F, so the protocol's ramps, waits and
     /// tilt filter count the robot's seconds. 1 for a real robot.
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::common::positive)]
     pub realtime_factor: f64,
     /// Over a serial port: do not ask for confirmation before the first ramp.
     #[arg(long)]
@@ -47,16 +47,16 @@ pub struct TipoverArgs {
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
     /// Ankle ramp speed, deg/s.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]
     pub ramp: f64,
     /// Servo compliance slope during the experiment, Dynamixel RX units (2 = stiffest,
     /// the default). The CoM methods assume a rigid robot; stiffer servos bend less.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = crate::common::positive)]
     pub compliance_slope: f64,
     /// Ramp speed of the second run's slow final approach, deg/s: each direction is run
     /// twice, the second time up to half a degree before the first tip and then at this
     /// speed, so the tip is seen with less lag.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, value_parser = crate::common::positive)]
     pub slow_ramp: f64,
     /// Quantise the ankle readings like Dynamixel RX encoders (1024 counts over 300 deg).
     #[arg(long)]

@@ -14,7 +14,7 @@ pub struct WalkArgs {
     #[command(flatten)]
     pub timing: TimingArgs,
     /// Samples to record (seed 003: 1000).
-    #[arg(long, default_value_t = SEED_SAMPLES)]
+    #[arg(long, default_value_t = SEED_SAMPLES, value_parser = crate::common::count)]
     pub samples: usize,
     /// Seed of the gyro noise.
     #[arg(long, default_value_t = 1)]
@@ -24,7 +24,7 @@ pub struct WalkArgs {
     #[arg(long, default_value_t = 0)]
     pub skip_samples: usize,
     /// Gyro noise, deg/s rms.
-    #[arg(long, default_value_t = twinloop_experiments::walk::MPU6050_GYRO_NOISE_DEG_S)]
+    #[arg(long, default_value_t = twinloop_experiments::walk::MPU6050_GYRO_NOISE_DEG_S, value_parser = crate::common::non_negative)]
     pub gyro_noise: f64,
     /// Two-loop servo position gain, 1/s (60: full speed beyond 6 degrees of error).
     #[arg(long, default_value_t = twinloop_experiments::walk::LD2015_KP_POSITION)]

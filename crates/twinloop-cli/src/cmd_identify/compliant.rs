@@ -53,7 +53,7 @@ pub struct CompliantFitArgs {
     #[arg(long)]
     pub max_evaluations: Option<usize>,
     /// Initial step size (CMA-ES sigma, PoWER exploration std).
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, value_parser = crate::common::positive)]
     pub sigma: f64,
     /// Random seed (CMA-ES, PoWER).
     #[arg(long, default_value_t = 2012)]

@@ -31,17 +31,17 @@ pub struct IdentifyStaticArgs {
     #[arg(long, value_name = "poses.csv")]
     pub poses: PathBuf,
     /// The robot's mass on a scale, kg (seed 004, eq 9).
-    #[arg(long, value_name = "KG")]
+    #[arg(long, value_name = "KG", value_parser = crate::common::positive)]
     pub total_mass: f64,
     /// Links to identify, comma-separated (default: every link with mass).
     #[arg(long, value_delimiter = ',', value_name = "LINKS")]
     pub links: Vec<String>,
     /// CoP noise per axis the regulariser assumes, m (0: exact data, prior only where
     /// the data see nothing).
-    #[arg(long, default_value_t = 0.001, value_name = "M")]
+    #[arg(long, default_value_t = 0.001, value_name = "M", value_parser = crate::common::non_negative)]
     pub cop_sigma: f64,
     /// How far a CoM may leave its link's geometry box, m.
-    #[arg(long, default_value_t = 0.03, value_name = "M")]
+    #[arg(long, default_value_t = 0.03, value_name = "M", value_parser = crate::common::non_negative)]
     pub com_margin: f64,
     /// The adapted description to write (URDF).
     #[arg(long, value_name = "ADAPTED.urdf")]

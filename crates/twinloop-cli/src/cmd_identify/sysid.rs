@@ -67,7 +67,7 @@ pub struct DataArgs {
     pub outputs: Vec<String>,
     /// Sample period in seconds (default: from a uniform `t` column; frequencies are
     /// then in rad/s, else in rad/sample).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", value_parser = crate::common::positive)]
     pub dt: Option<f64>,
     /// Keep the means. By default the estimation data's mean is subtracted from every
     /// input and output (the same offsets from the validation data; the JSON's
