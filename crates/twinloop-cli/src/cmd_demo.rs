@@ -13,8 +13,6 @@ use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 use twinloop_description::Description;
 use twinloop_description::builtin::km20;
@@ -22,10 +20,8 @@ use twinloop_experiments::tipover::Direction;
 use twinloop_ident::adapt::{AdaptOptions, adapt, html_report, standing_com, standing_point};
 use twinloop_ident::ann_data::{Change, changed, outlined_links, random_change};
 use twinloop_ident::tipover_study::{StudyReport, report_for_runs};
-use twinloop_link::servo::{ServeOptions, serve as serve_bus};
-use twinloop_link::transport::PtyTransport;
 use twinloop_link::{Item, RobotMapping};
-use twinloop_virtual::{VirtualRobot, VirtualRobotOptions};
+use twinloop_virtual::{PtyServer, VirtualRobot, VirtualRobotOptions};
 
 #[derive(Args, Debug)]
 pub struct DemoArgs {
@@ -103,69 +99,32 @@ fn hidden_change(a: &DemoArgs, prior: &Description) -> Result<(Vec<Change>, Stri
     Ok((vec![c], format!("drawn from seed {}", a.seed)))
 }
 
-/// Serve `truth` on a new pty on a thread of its own, as `twinloop serve --catch-falls`
-/// does: the simulation runs `factor` times faster than real time, and the servos
-/// answer without a return delay (a tuned robot; the bus cycle is then a third as long).
-struct ServedRobot {
-    path: String,
-    stop: Arc<AtomicBool>,
-    thread: Option<std::thread::JoinHandle<()>>,
-}
-
-impl ServedRobot {
-    fn start(
-        truth: &Description,
-        mapping: &RobotMapping,
-        factor: f64,
-        ground_sink: f64,
-    ) -> Result<Self, CliError> {
-        let options = VirtualRobotOptions {
-            realtime_factor: factor,
-            catch_falls: true,
-            ground_sink: Some(ground_sink),
-            // The host shares the machine: a host held up by the scheduler finds
-            // the robot where it left it.
-            tether_s: Some(0.02),
-            ..Default::default()
-        };
-        let vr = VirtualRobot::new(truth, mapping, &options)?;
-        let mut bus = vr.bus();
-        for k in 0..mapping.joints.len() + mapping.boards.len() {
+/// Serve `truth` on a new pty, as `twinloop serve --catch-falls` does: the simulation
+/// runs `factor` times faster than real time, tethered to its host (a host held up by
+/// the scheduler finds the robot where it left it), and the servos answer without a
+/// return delay (a tuned robot; the bus cycle is then a third as long).
+fn serve_truth(
+    truth: &Description,
+    mapping: &RobotMapping,
+    factor: f64,
+    ground_sink: f64,
+) -> Result<PtyServer, CliError> {
+    let options = VirtualRobotOptions {
+        realtime_factor: factor,
+        catch_falls: true,
+        ground_sink: Some(ground_sink),
+        tether_s: Some(0.02),
+        ..Default::default()
+    };
+    let vr = VirtualRobot::new(truth, mapping, &options)?;
+    let devices = mapping.joints.len() + mapping.boards.len();
+    PtyServer::start(vr, Some(1_000_000), |bus| {
+        for k in 0..devices {
             // Return Delay Time 0 is within every table's range.
             let _ = bus.host_write(k, Item::ReturnDelayTime, 0);
         }
-        let mut pty = PtyTransport::open()
-            .map_err(|e| CliError::new(format!("cannot open a pseudo-terminal: {e}")))?;
-        let path = pty.path().display().to_string();
-        let stop = Arc::new(AtomicBool::new(false));
-        let flag = stop.clone();
-        let thread = std::thread::Builder::new()
-            .name("twinloop-demo-robot".into())
-            .spawn(move || {
-                let sim = vr.spawn();
-                let opts = ServeOptions {
-                    emulate_baud: Some(1_000_000),
-                    stop_on_eof: false,
-                };
-                let _ = serve_bus(&mut bus, &mut pty, &opts, &flag);
-                drop(sim);
-            })
-            .map_err(|e| CliError::new(format!("cannot start the robot's thread: {e}")))?;
-        Ok(ServedRobot {
-            path,
-            stop,
-            thread: Some(thread),
-        })
-    }
-}
-
-impl Drop for ServedRobot {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-    }
+    })
+    .map_err(|e| CliError::new(format!("cannot serve the robot on a pseudo-terminal: {e}")))
 }
 
 /// The bus as the demo's host opens it: a reply may wait 50 ms beyond its wire time
@@ -243,12 +202,13 @@ pub fn run(a: DemoArgs) -> CliResult {
     for c in &truth_changes {
         truth = changed(&truth, c)?;
     }
-    let robot = ServedRobot::start(&truth, &mapping, a.realtime_factor, a.ground_sink)?;
+    let robot = serve_truth(&truth, &mapping, a.realtime_factor, a.ground_sink)?;
     let mut text = format!(
         "a km20 with a hidden change ({how}) answers on {} (simulated, x{} real time)\n",
-        robot.path, a.realtime_factor
+        robot.path(),
+        a.realtime_factor
     );
-    let (servos, boards) = find_robot(&robot.path, &mapping)?;
+    let (servos, boards) = find_robot(robot.path(), &mapping)?;
     text += &format!(
         "found on the bus: {servos} of {} servos, {boards} IMU board(s) at id {}\n",
         mapping.joints.len(),
@@ -264,7 +224,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     let plan = BusPlan {
         model_spec: "builtin:km20".into(),
         map: "builtin:km20".into(),
-        port: demo_port(&robot.path),
+        port: demo_port(robot.path()),
         record: Some(record.clone()),
         yes: true,
         directions: Direction::ALL.to_vec(),

@@ -6,16 +6,13 @@
 //! mN m, a third of a count), and the hold means against the same lean run on the
 //! simulator directly.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 use twinloop_experiments::lean::{
     LeanConfig, LeanJointNames, LeanRecord, lean_config, lean_simulator, run_lean,
 };
-use twinloop_link::servo::{ServeOptions, serve};
-use twinloop_link::transport::{self, PtyTransport, SerialOptions};
+use twinloop_link::transport::{self, SerialOptions};
 use twinloop_link::{Client, ClientConfig, DynamixelRobot, ReadMethod, RobotMapping, ServoModel};
-use twinloop_virtual::{Snapshot, VirtualRobot, VirtualRobotOptions};
+use twinloop_virtual::{PtyServer, Snapshot, VirtualRobot, VirtualRobotOptions};
 
 fn settings(cfg: &mut LeanConfig) {
     cfg.ramp_deg_per_s = 4.0;
@@ -58,20 +55,9 @@ fn the_lean_over_the_bus_reads_the_simulated_torques_within_the_load_registers_r
 
     // Through the bus.
     let vr = VirtualRobot::new(&robot, &mapping, &VirtualRobotOptions::default()).unwrap();
-    let mut bus = vr.bus();
-    let handle = vr.spawn();
-    let mut pty = PtyTransport::open().unwrap();
-    let path = pty.path().to_str().unwrap().to_string();
-    let stop = Arc::new(AtomicBool::new(false));
-    let stop2 = stop.clone();
-    let server = std::thread::spawn(move || {
-        let o = ServeOptions {
-            emulate_baud: None,
-            stop_on_eof: false,
-        };
-        serve(&mut bus, &mut pty, &o, &stop2).unwrap();
-    });
-    let t = transport::open(&path, 1_000_000, &SerialOptions::default()).unwrap();
+    let server = PtyServer::start(vr, None, |_| {}).unwrap();
+    let handle = server.sim();
+    let t = transport::open(server.path(), 1_000_000, &SerialOptions::default()).unwrap();
     let client = Client::with_config(
         t,
         ClientConfig {
@@ -94,10 +80,8 @@ fn the_lean_over_the_bus_reads_the_simulated_torques_within_the_load_registers_r
     })
     .unwrap();
     let status = handle.status();
-    stop.store(true, Ordering::Relaxed);
-    server.join().unwrap();
     drop(br);
-    handle.stop();
+    server.stop().unwrap();
     assert!(status.error.is_none(), "{status:?}");
 
     let resolution = |name: &str| {

@@ -8,15 +8,12 @@
 //! real time) must not change what the experiment finds.
 
 use nalgebra::Vector3;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 use twinloop_experiments::tipover::{Direction, TipoverConfig, run_direction};
-use twinloop_link::servo::{ServeOptions, serve};
-use twinloop_link::transport::{self, PtyTransport, SerialOptions};
+use twinloop_link::transport::{self, SerialOptions};
 use twinloop_link::{Client, ClientConfig, DynamixelRobot, ReadMethod, RobotMapping};
 use twinloop_sim::{Actuator, SimConfig, Simulator};
-use twinloop_virtual::{VirtualRobot, VirtualRobotOptions};
+use twinloop_virtual::{PtyServer, VirtualRobot, VirtualRobotOptions};
 
 fn config(sim: &Simulator, index: impl Fn(&str) -> usize) -> TipoverConfig {
     let m = &sim.model;
@@ -68,20 +65,9 @@ fn tipover_forward_over_the_bus_with_the_imu_from_id_200_matches_the_simulator()
 
     // Through the bus: DynamixelRobot over a pty, the simulation in real time.
     let vr = VirtualRobot::new(&robot, &mapping, &options).unwrap();
-    let mut bus = vr.bus();
-    let handle = vr.spawn();
-    let mut pty = PtyTransport::open().unwrap();
-    let path = pty.path().to_str().unwrap().to_string();
-    let stop = Arc::new(AtomicBool::new(false));
-    let stop2 = stop.clone();
-    let server = std::thread::spawn(move || {
-        let o = ServeOptions {
-            emulate_baud: None,
-            stop_on_eof: false,
-        };
-        serve(&mut bus, &mut pty, &o, &stop2).unwrap();
-    });
-    let t = transport::open(&path, 1_000_000, &SerialOptions::default()).unwrap();
+    let server = PtyServer::start(vr, None, |_| {}).unwrap();
+    let handle = server.sim();
+    let t = transport::open(server.path(), 1_000_000, &SerialOptions::default()).unwrap();
     let client = Client::with_config(
         t,
         ClientConfig {
@@ -97,10 +83,8 @@ fn tipover_forward_over_the_bus_with_the_imu_from_id_200_matches_the_simulator()
     let over_bus =
         run_direction(&mut br, &standing_bus, Direction::Forward, &cfg_bus, None).unwrap();
     let status = handle.status();
-    stop.store(true, Ordering::Relaxed);
-    server.join().unwrap();
     drop(br);
-    handle.stop();
+    server.stop().unwrap();
 
     eprintln!("direct: {direct:?}\nover the bus: {over_bus:?}\n{status:?}");
     eprintln!(

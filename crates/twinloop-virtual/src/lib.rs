@@ -25,12 +25,14 @@
 
 mod backend;
 mod drive;
+mod pty_server;
 mod runner;
 mod shared;
 mod virtual_robot;
 
 pub use backend::SimServoBackend;
 pub use drive::{DriveRegisters, servo_with_registers};
+pub use pty_server::PtyServer;
 pub use runner::{CATCH_DEG, SimStatus};
 pub use shared::{Snapshot, thermal_step};
 pub use virtual_robot::{SimHandle, VirtualRobot, VirtualRobotOptions};

@@ -4,14 +4,11 @@
 //! --id 200` do) find it on a served km20, and a board on a link the robot lacks
 //! is named.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 use twinloop_link::board::{CM730_ACCEL_M_S2_PER_COUNT, CM730_GYRO_RAD_S_PER_COUNT};
-use twinloop_link::servo::{ServeOptions, serve};
-use twinloop_link::transport::{self, LoopbackTransport, PtyTransport, SerialOptions};
+use twinloop_link::transport::{self, LoopbackTransport, SerialOptions};
 use twinloop_link::{BoardAxes, Client, ClientConfig, Item, Protocol, RobotMapping, ServoModel};
-use twinloop_virtual::{Snapshot, VirtualRobot, VirtualRobotOptions};
+use twinloop_virtual::{PtyServer, Snapshot, VirtualRobot, VirtualRobotOptions};
 
 fn km20() -> (twinloop_description::Description, RobotMapping) {
     (
@@ -87,20 +84,8 @@ fn a_board_mounted_on_its_side_reads_gravity_along_its_own_x() {
 fn scan_and_a_whole_table_read_find_the_cm730_on_a_served_km20() {
     let (robot, mapping) = km20();
     let vr = VirtualRobot::new(&robot, &mapping, &VirtualRobotOptions::default()).unwrap();
-    let mut bus = vr.bus();
-    let handle = vr.spawn();
-    let mut pty = PtyTransport::open().unwrap();
-    let path = pty.path().to_str().unwrap().to_string();
-    let stop = Arc::new(AtomicBool::new(false));
-    let stop2 = stop.clone();
-    let server = std::thread::spawn(move || {
-        let o = ServeOptions {
-            emulate_baud: None,
-            stop_on_eof: false,
-        };
-        serve(&mut bus, &mut pty, &o, &stop2).unwrap();
-    });
-    let t = transport::open(&path, 1_000_000, &SerialOptions::default()).unwrap();
+    let server = PtyServer::start(vr, None, |_| {}).unwrap();
+    let t = transport::open(server.path(), 1_000_000, &SerialOptions::default()).unwrap();
     let mut c = Client::with_config(
         t,
         ClientConfig {
@@ -127,9 +112,8 @@ fn scan_and_a_whole_table_read_find_the_cm730_on_a_served_km20() {
     assert_eq!(value(Item::Id), 200);
     let up = table.item(Item::AccelZ).unwrap().to_si(value(Item::AccelZ));
     assert!((up - 9.81).abs() < 0.1, "{up} m/s^2");
-    stop.store(true, Ordering::Relaxed);
-    server.join().unwrap();
-    handle.stop();
+    drop(c);
+    server.stop().unwrap();
 }
 
 #[test]

@@ -2,38 +2,15 @@
 //! by our client: goals move the simulated joints, reads report them, and the
 //! robot stands.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-use twinloop_link::servo::{ServeOptions, serve};
-use twinloop_link::transport::{self, PtyTransport, SerialOptions, Transport};
+use twinloop_link::transport::{self, SerialOptions, Transport};
 use twinloop_link::{Client, ClientConfig, Item, Protocol, RobotMapping, ServoModel};
-use twinloop_virtual::{SimHandle, Snapshot, VirtualRobot, VirtualRobotOptions};
+use twinloop_virtual::{PtyServer, Snapshot, VirtualRobot, VirtualRobotOptions};
 
-/// The client, the simulator handle, the server's stop flag and its thread.
-type Served = (
-    Client<Box<dyn Transport>>,
-    SimHandle,
-    Arc<AtomicBool>,
-    std::thread::JoinHandle<()>,
-);
-
-/// Serve `vr` on a new pty (no wire-time emulation).
-fn serve_on_pty(vr: VirtualRobot) -> Served {
-    let mut bus = vr.bus();
-    let handle = vr.spawn();
-    let mut pty = PtyTransport::open().unwrap();
-    let path = pty.path().to_str().unwrap().to_string();
-    let stop = Arc::new(AtomicBool::new(false));
-    let stop2 = stop.clone();
-    let server = std::thread::spawn(move || {
-        let options = ServeOptions {
-            emulate_baud: None,
-            stop_on_eof: false,
-        };
-        serve(&mut bus, &mut pty, &options, &stop2).unwrap();
-    });
-    let t = transport::open(&path, 1_000_000, &SerialOptions::default()).unwrap();
+/// Serve `vr` on a new pty (no wire-time emulation) and open our client on it.
+fn serve_on_pty(vr: VirtualRobot) -> (Client<Box<dyn Transport>>, PtyServer) {
+    let server = PtyServer::start(vr, None, |_| {}).unwrap();
+    let t = transport::open(server.path(), 1_000_000, &SerialOptions::default()).unwrap();
     let c = Client::with_config(
         t,
         ClientConfig {
@@ -41,7 +18,7 @@ fn serve_on_pty(vr: VirtualRobot) -> Served {
             ..ClientConfig::default()
         },
     );
-    (c, handle, stop, server)
+    (c, server)
 }
 
 fn km20() -> (twinloop_description::Description, RobotMapping) {
@@ -73,7 +50,8 @@ fn knee_goals_over_a_pty_move_the_simulated_knees_and_km20_stands() {
     let (robot, mapping) = km20();
     let vr = VirtualRobot::new(&robot, &mapping, &VirtualRobotOptions::default()).unwrap();
     assert!(vr.unmapped.is_empty());
-    let (mut c, sim, stop, server) = serve_on_pty(vr);
+    let (mut c, server) = serve_on_pty(vr);
+    let sim = server.sim();
     let id = |name: &str| mapping.joints.iter().find(|j| j.name == name).unwrap().id;
     let table = ServoModel::Rx64.table();
     let pos = table.item(Item::PresentPosition).unwrap();
@@ -188,8 +166,6 @@ fn knee_goals_over_a_pty_move_the_simulated_knees_and_km20_stands() {
     );
     assert!(tilt(&after) < 5f64.to_radians(), "tilt {}", tilt(&after));
 
-    stop.store(true, Ordering::Relaxed);
-    server.join().unwrap();
     drop(c);
-    sim.stop().unwrap();
+    server.stop().unwrap();
 }
