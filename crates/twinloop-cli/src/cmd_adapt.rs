@@ -45,7 +45,7 @@ pub struct AdaptArgs {
     #[arg(long, requires = "port")]
     pub yes: bool,
     /// With --port, a simulated robot served faster than real time: its factor.
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::common::positive)]
     pub realtime_factor: f64,
     /// exact: the exact inversion (an added point mass, the adapted URDF); ann: the
     /// three-mass LIPM from the network of `twinloop adapt train` (--net; needs --where).

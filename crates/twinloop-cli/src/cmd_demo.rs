@@ -36,11 +36,11 @@ pub struct DemoArgs {
     pub scenario: Option<String>,
     /// Simulated seconds per wall-clock second of the robot behind the bus (and the
     /// host's clock rate)
-    #[arg(long, default_value_t = 4.0, value_name = "FACTOR")]
+    #[arg(long, default_value_t = 4.0, value_name = "FACTOR", value_parser = crate::common::positive)]
     pub realtime_factor: f64,
     /// How far the simulated robot's weight sinks into its floor, m (the floor's
     /// stiffness, as `serve --ground-sink`)
-    #[arg(long, default_value_t = 1e-4, value_name = "M")]
+    #[arg(long, default_value_t = 1e-4, value_name = "M", value_parser = crate::common::positive)]
     pub ground_sink: f64,
     /// Folder for the files written: the adapted URDF, the tip-over and adaptation
     /// JSON, the HTML report and the CSV of every cycle read over the bus
@@ -188,12 +188,6 @@ fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<(), CliError> {
 /// `twinloop demo`.
 pub fn run(a: DemoArgs) -> CliResult {
     let t0 = Instant::now();
-    if !(a.realtime_factor > 0.0 && a.realtime_factor.is_finite()) {
-        return Err(CliError::new(format!(
-            "--realtime-factor must be positive, not {}",
-            a.realtime_factor
-        )));
-    }
     std::fs::create_dir_all(&a.out).map_err(|e| CliError::io(&a.out, e).context("--out"))?;
     let prior = km20::build()?;
     let mapping = RobotMapping::builtin("km20").ok_or("no built-in km20 mapping")?;

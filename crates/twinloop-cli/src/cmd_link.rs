@@ -296,7 +296,11 @@ fn scan(a: &ScanArgs) -> CliResult {
     for p in protocols {
         let (lo, hi) = match &ids {
             None => (0, p.max_id()),
-            Some(ids) => (ids[0], *ids.last().expect("non-empty")),
+            // The span of the ids asked for, in whatever order they were given.
+            Some(ids) => match (ids.iter().min(), ids.iter().max()) {
+                (Some(&lo), Some(&hi)) => (lo, hi),
+                _ => (0, p.max_id()),
+            },
         };
         // A scan takes seconds: say what it does, then count the ids pinged.
         eprintln!(
