@@ -72,6 +72,9 @@ pub(crate) struct Runner {
     /// The IMU's gyro and accelerometer after its low-pass ([`IMU_TIME_CONSTANT_S`]),
     /// updated every step, and the state it is read into (sized once).
     imu_lp: Option<[f64; 6]>,
+    /// Whether a board reads the IMU over the bus (only then is it filtered: the
+    /// filter reads the sensors every step).
+    pub imu_on_bus: bool,
     sensed: twinloop_robot::RobotState,
     regs: Vec<DriveRegisters>,
     /// Goal after the Moving Speed limit, servo angle.
@@ -120,6 +123,7 @@ impl Runner {
             pick_ups: 0,
             pose: Vec::new(),
             imu_lp: None,
+            imu_on_bus: false,
             sensed: twinloop_robot::RobotState::default(),
             behind_s: 0.0,
         };
@@ -171,7 +175,9 @@ impl Runner {
             self.sim.goals[s.joint] = s.direction * (self.profile[k] - s.zero);
         }
         self.sim.step()?;
-        self.filter_imu();
+        if self.imu_on_bus {
+            self.filter_imu();
+        }
         for (k, s) in self.servos.iter().enumerate() {
             let load = self.sim.applied[s.joint] / s.base.stall_torque;
             self.temperature[k] = thermal_step(self.temperature[k], load, dt);

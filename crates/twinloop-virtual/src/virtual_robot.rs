@@ -153,6 +153,7 @@ impl VirtualRobot {
         let mut runner = Runner::new(sim, servos, shared.clone(), options.realtime_factor);
         runner.catch_falls = options.catch_falls;
         runner.tether_s = options.tether_s;
+        runner.imu_on_bus = !mapping.boards.is_empty();
         runner.publish();
         Ok(VirtualRobot {
             runner,
