@@ -848,3 +848,31 @@ fn flat_tilt(
     }
     t
 }
+
+/// The protocol's configuration for a robot whose joints come in `joint_names` order (a
+/// bus mapping's): the study's joints (ankle pitches and rolls, hip rolls) and lean
+/// signs, from `robot`'s model, at `ramp_deg_per_s`.
+pub fn tipover_config(
+    robot: &Description,
+    joint_names: &[String],
+    ramp_deg_per_s: f64,
+) -> Result<TipoverConfig, IdentError> {
+    let p = prepare(robot, &StudyOptions::default())?;
+    let model = &p.sim.model;
+    let signs = lean_signs_of(model, &p.j, &p.q0);
+    let at = |pair: [usize; 2]| -> Result<[usize; 2], String> {
+        let one = |i: usize| {
+            let n = &model.joint_names[i];
+            joint_names
+                .iter()
+                .position(|x| x == n)
+                .ok_or_else(|| format!("no servo drives joint \"{n}\" (the tip-over turns it)"))
+        };
+        Ok([one(pair[0])?, one(pair[1])?])
+    };
+    let mut cfg = TipoverConfig::new(at(p.j.pitch)?, at(p.j.roll)?, signs.forward, signs.left);
+    cfg.hip_roll = Some(at(p.j.hip)?);
+    cfg.hip_left_sign = signs.hip_left;
+    cfg.ramp_deg_per_s = ramp_deg_per_s;
+    Ok(cfg)
+}

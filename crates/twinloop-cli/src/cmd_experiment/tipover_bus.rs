@@ -11,7 +11,7 @@ use crate::error::CliError;
 use serde::Serialize;
 use std::path::PathBuf;
 use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction, tilt};
-use twinloop_ident::tipover_study::{StudyReport, TiltModel, report_for_runs};
+use twinloop_ident::tipover_study::{StudyReport, TiltModel, report_for_runs, tipover_config};
 use twinloop_link::{DynamixelRobot, Item, ReadMethod, RobotMapping};
 use twinloop_robot::{Robot, RobotError, RobotState};
 
@@ -108,87 +108,6 @@ pub fn parse_directions(list: &[String]) -> Result<Vec<Direction>, CliError> {
         .collect()
 }
 
-/// The experiment's joints and lean signs from the model, in the mapping's order.
-fn config(
-    model_spec: &str,
-    robot: &twinloop_description::Description,
-    mapping: &RobotMapping,
-    ramp: f64,
-) -> Result<TipoverConfig, CliError> {
-    let sim = twinloop_sim::Simulator::new(robot, twinloop_sim::SimConfig::default())
-        .map_err(|e| CliError::new(format!("{model_spec}: {e}")))?;
-    let m = &sim.model;
-    let mut data = twinloop_dynamics::Data::new(m);
-    let q0 = m.neutral_configuration();
-    let names = twinloop_description::builtin::foot_geometry(&robot.name)
-        .map(|f| {
-            [
-                f.left_ankle_pitch,
-                f.right_ankle_pitch,
-                f.left_ankle_roll,
-                f.right_ankle_roll,
-            ]
-        })
-        .unwrap_or_else(|| {
-            [
-                "l_ank_pitch".into(),
-                "r_ank_pitch".into(),
-                "l_ank_roll".into(),
-                "r_ank_roll".into(),
-            ]
-        });
-    let hips = ["l_hip_roll".to_string(), "r_hip_roll".to_string()];
-    let sim_index = |n: &str| {
-        sim.joint_index(n).ok_or_else(|| {
-            CliError::new(format!(
-                "{model_spec}: no joint \"{n}\" (the tip-over turns it)"
-            ))
-        })
-    };
-    let map_index = |n: &str| {
-        mapping
-            .joints
-            .iter()
-            .position(|j| j.name == n)
-            .ok_or_else(|| {
-                CliError::new(format!(
-                    "{}: no servo drives joint \"{n}\" (the tip-over turns it)",
-                    mapping.source
-                ))
-            })
-    };
-    let s2 =
-        |a: &str, b: &str| -> Result<[usize; 2], CliError> { Ok([sim_index(a)?, sim_index(b)?]) };
-    let m2 =
-        |a: &str, b: &str| -> Result<[usize; 2], CliError> { Ok([map_index(a)?, map_index(b)?]) };
-    let fs = twinloop_sim::statics::lean_signs(
-        m,
-        &mut data,
-        &q0,
-        s2(&names[0], &names[1])?,
-        nalgebra::Vector3::x(),
-    );
-    let ls = twinloop_sim::statics::lean_signs(
-        m,
-        &mut data,
-        &q0,
-        s2(&names[2], &names[3])?,
-        nalgebra::Vector3::y(),
-    );
-    let hs = twinloop_sim::statics::hip_lean_signs(
-        m,
-        &mut data,
-        &q0,
-        s2(&hips[0], &hips[1])?,
-        nalgebra::Vector3::y(),
-    );
-    let mut cfg = TipoverConfig::new(m2(&names[0], &names[1])?, m2(&names[2], &names[3])?, fs, ls);
-    cfg.hip_roll = Some(m2(&hips[0], &hips[1])?);
-    cfg.hip_left_sign = hs;
-    cfg.ramp_deg_per_s = ramp;
-    Ok(cfg)
-}
-
 /// The trunk's (pitch, roll) from the IMU, rad.
 fn trunk_tilt(st: &RobotState) -> Option<(f64, f64)> {
     st.imu.and_then(|i| i.orientation).map(tilt)
@@ -255,8 +174,10 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
         .or_else(|| mapping.port.clone())
         .ok_or_else(|| CliError::new("--map needs --port PORT (or the mapping's port)"))?;
     let (model, _) = load_description(&plan.model_spec)?;
-    let cfg = config(&plan.model_spec, &model, &mapping, plan.ramp)?;
     let names = mapping.joint_names();
+    let cfg = tipover_config(&model, &names, plan.ramp).map_err(|e| {
+        CliError::from(e).context(format!("{} with {}", plan.model_spec, mapping.source))
+    })?;
     let Some(board) = mapping.boards.first() else {
         return Err(CliError::new(format!(
             "{}: no [[board]]: the tip-over experiment needs the trunk IMU",
