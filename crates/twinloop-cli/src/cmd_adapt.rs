@@ -183,6 +183,7 @@ fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyR
         ramp: 2.0,
         slow_ramp: 0.15,
         compliance_slope: 2,
+        ankle_slope: crate::cmd_experiment::tipover_bus::ANKLE_SLOPE,
         clock_rate: a.realtime_factor,
         verbose: true,
     };

@@ -208,10 +208,24 @@ impl<T: Transport> DynamixelRobot<T> {
     /// were written. For RAM settings an experiment needs, such as the RX compliance
     /// slopes and margins.
     pub fn set_register(&mut self, item: Item, value: i32) -> Result<usize, RobotError> {
+        self.set_register_of(item, value, |_| true)
+    }
+
+    /// [`DynamixelRobot::set_register`] for the joints (indices in
+    /// [`Robot::joint_names`] order) that `pick` selects.
+    pub fn set_register_of(
+        &mut self,
+        item: Item,
+        value: i32,
+        pick: impl Fn(usize) -> bool,
+    ) -> Result<usize, RobotError> {
         use crate::register::Register;
         // Servos of one protocol whose register sits at the same address and size.
         let mut groups: Vec<(Protocol, &'static Register, Vec<u8>)> = Vec::new();
-        for j in &self.mapping.joints {
+        for (k, j) in self.mapping.joints.iter().enumerate() {
+            if !pick(k) {
+                continue;
+            }
             let Some(reg) = j.model.table().item(item) else {
                 continue;
             };

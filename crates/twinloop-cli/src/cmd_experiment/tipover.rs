@@ -53,6 +53,12 @@ pub struct TipoverArgs {
     /// the default). The CoM methods assume a rigid robot; stiffer servos bend less.
     #[arg(long, default_value_t = 2.0, value_parser = crate::common::positive)]
     pub compliance_slope: f64,
+    /// Over a bus (--port), the slope of the two ankles a direction ramps, RX units
+    /// (default 32, the factory value): goal positions are whole counts, and a stiff
+    /// ankle takes each count as a jolt that tips the robot early. The other servos
+    /// hold the pose at --compliance-slope.
+    #[arg(long, default_value_t = super::tipover_bus::ANKLE_SLOPE as f64, value_parser = crate::common::positive)]
+    pub ankle_slope: f64,
     /// Ramp speed of the second run's slow final approach, deg/s: each direction is run
     /// twice, the second time up to half a degree before the first tip and then at this
     /// speed, so the tip is seen with less lag.
@@ -194,6 +200,7 @@ mod bus {
             ramp: a.ramp,
             slow_ramp: a.slow_ramp,
             compliance_slope: a.compliance_slope.round() as i32,
+            ankle_slope: a.ankle_slope.round() as i32,
             clock_rate: a.realtime_factor,
             verbose: true,
         };

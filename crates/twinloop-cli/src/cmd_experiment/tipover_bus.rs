@@ -30,8 +30,10 @@ pub struct BusPlan {
     pub ramp: f64,
     /// The second run's creep over the last half degree, deg/s.
     pub slow_ramp: f64,
-    /// RX Compliance Slope written to every servo before the ramps (2: stiffest).
+    /// RX Compliance Slope written to the servos that hold the pose (2: stiffest).
     pub compliance_slope: i32,
+    /// RX Compliance Slope of the joints a direction ramps (see [`ANKLE_SLOPE`]).
+    pub ankle_slope: i32,
     /// Robot seconds per host second (a simulated robot served faster than real time).
     pub clock_rate: f64,
     /// Say on stderr what is happening.
@@ -152,16 +154,38 @@ fn wait_upright(
 /// Stiffen every servo as the study does (RX compliance margin 0, slope
 /// `slope`): the CoM methods treat the robot as rigid. Servos without these
 /// registers are left as they are.
-fn stiffen(robot: &mut BusRobot, slope: i32) -> Result<(), RobotError> {
+fn stiffen(
+    robot: &mut BusRobot,
+    slope: i32,
+    pick: impl Fn(usize) -> bool + Copy,
+) -> Result<(), RobotError> {
     for (item, v) in [
         (Item::CwComplianceMargin, 0),
         (Item::CcwComplianceMargin, 0),
         (Item::CwComplianceSlope, slope),
         (Item::CcwComplianceSlope, slope),
     ] {
-        robot.set_register(item, v)?;
+        robot.set_register_of(item, v, pick)?;
     }
     Ok(())
+}
+
+/// The ramped ankles' RX Compliance Slope over the bus: the factory value. Goal
+/// positions are whole counts (0.29 deg), so the ramp is a staircase; a servo at the
+/// stiffest slope takes each count as a jolt, and a robot on the edge of its soles
+/// tips up to a degree early (measured over the pty: forward and backward 1.1 deg
+/// early at slope 2, within the count at 32). The hip rolls that turn with the ankle
+/// rolls sideways stay stiff: soft, they let the legs' parallelogram shear and the
+/// robot tips 3-4 deg early.
+pub const ANKLE_SLOPE: i32 = 32;
+
+/// The ankle joints a lean in `d` ramps.
+fn ramped_ankles(cfg: &TipoverConfig, d: Direction) -> [usize; 2] {
+    if d.is_pitch() {
+        cfg.ankle_pitch
+    } else {
+        cfg.ankle_roll
+    }
 }
 
 /// Run the tip-over over the bus (see the module documentation).
@@ -277,7 +301,6 @@ fn run_directions(
     serial: bool,
     port: &str,
 ) -> Result<Vec<TipoverResult>, CliError> {
-    stiffen(g.robot, plan.compliance_slope).map_err(|e| CliError::new(e.to_string()))?;
     // Upright is the trunk's tilt the model gives standing with the feet flat (the
     // robot's first readings may still rock from the stiffening).
     // (`tilt` counts roll the other way: positive leaning right.)
@@ -294,6 +317,11 @@ fn run_directions(
         if plan.verbose {
             eprintln!("leaning {} over {port} ...", d.name());
         }
+        // Every servo stiff but the two ankles this direction ramps.
+        let ankles = ramped_ankles(cfg, d);
+        stiffen(g.robot, plan.compliance_slope, |k| !ankles.contains(&k))
+            .and_then(|()| stiffen(g.robot, plan.ankle_slope, |k| ankles.contains(&k)))
+            .map_err(|e| CliError::new(e.to_string()))?;
         let mut run = |cfg: &TipoverConfig, g: &mut Guarded| -> Result<TipoverResult, RobotError> {
             wait_upright(g, standing, upright, cfg.period_s)?;
             let mut predict = |q: &[f64]| tilt_model.predict(d, q);
