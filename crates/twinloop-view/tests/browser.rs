@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 use twinloop_description::{Description, Geometry};
 use twinloop_dynamics::{Data, Model, center_of_mass, frames_forward_kinematics};
