@@ -170,3 +170,51 @@ fn view_without_a_simulated_robot_is_an_error() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--view shows the simulated robot"), "{err}");
 }
+
+#[test]
+fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
+    let dir = tmp("demo");
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["demo", "--scenario", "d", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(report.contains("<a href=\"replay.html\">"), "no link");
+    // The ghosts: the adapted and prior models on the robot's joint commands, over
+    // the recording's span, with the base pose the bus recording lacks.
+    let (rec_header, rec) = read_csv(&dir.join("tipover.csv"));
+    assert!(!rec_header.iter().any(|c| c.starts_with("q:base.")));
+    for name in ["replay_adapted.csv", "replay_prior.csv"] {
+        let (header, rows) = read_csv(&dir.join(name));
+        assert!(header.iter().any(|c| c == "q:base.qw"), "{name}");
+        let end = rows.last().unwrap()[0];
+        let rec_end = rec.last().unwrap()[0];
+        assert!(
+            (end - rec_end).abs() < 0.05,
+            "{name} ends at {end}, the recording at {rec_end}"
+        );
+    }
+    let Some(browser) = chromium::browser() else {
+        return;
+    };
+    let page = format!(
+        "file://{}?snapshot=1&t=1",
+        dir.join("replay.html").display()
+    );
+    let dom = chromium::dump_dom(&browser, &page);
+    let status = chromium::element_text(&dom, "status").expect("no #status");
+    let status: serde_json::Value = serde_json::from_str(&chromium::unescape_html(status)).unwrap();
+    assert_eq!(status["ready"], true, "{status}");
+    assert_eq!(status["errors"].as_array().unwrap().len(), 0, "{status}");
+    let recs = status["recordings"].as_array().unwrap();
+    let names: Vec<&str> = recs.iter().map(|r| r["name"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        ["tipover.csv", "replay_adapted.csv", "replay_prior.csv"]
+    );
+    for r in recs {
+        assert_eq!(r["missing"].as_array().unwrap().len(), 0, "{r}");
+    }
+}
