@@ -457,6 +457,105 @@ fn meshes_load_and_a_missing_one_is_a_box_with_a_warning() {
 }
 
 #[test]
+fn a_collada_mesh_is_drawn_where_and_as_large_as_the_description_says() {
+    let Some(chromium) = browser() else { return };
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mesh_robot/urdf/dae_robot.urdf");
+    let robot = twinloop_description::load(&path).unwrap();
+    let model = Model::from_description(&robot).unwrap();
+    let scene = Scene::new(&robot, Some(&path), &[]);
+    assert_eq!(scene.info.warnings, Vec::<String>::new());
+    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    let q = configuration(&model, [0.0, 0.0, 0.0], 0.0, &[("shoulder", -0.9)]);
+    let rec = Recording::from_table(
+        &two_pose_table(&model, &q, &q),
+        Path::new("arm.csv"),
+        &scene.info,
+    )
+    .unwrap();
+    let (url, misses) = serve_with_misses(Content {
+        scene,
+        recordings: vec![rec],
+        live: None,
+    });
+    let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
+    assert_clean(&page);
+    assert_no_misses(&misses);
+    assert_eq!(
+        page.status["warnings"].as_array().unwrap().len(),
+        0,
+        "{}",
+        page.status
+    );
+    let img = &page.image;
+    let want = predicted_extent(&drawn, &q, img.width, img.height);
+    assert_extent_close(silhouette(img), want, "DAE robot");
+}
+
+#[test]
+fn g1_with_its_meshes_loads_and_its_com_follows_the_pose() {
+    let Some(chromium) = browser() else { return };
+    // The upstream meshes decimated (models/unitree_g1/decimate_meshes.py): 35 STL
+    // files, 1.7 MB instead of 19.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models/unitree_g1/g1_29dof_rev_1_0.decimated.urdf");
+    let robot = twinloop_description::load(&path).unwrap();
+    let model = Model::from_description(&robot).unwrap();
+    let scene = Scene::new(&robot, Some(&path), &[]);
+    assert_eq!(
+        scene.info.warnings,
+        Vec::<String>::new(),
+        "every mesh found"
+    );
+    assert!(scene.info.meshes.len() >= 30, "{}", scene.info.meshes.len());
+    let q = configuration(
+        &model,
+        [0.1, -0.2, 0.75],
+        0.4,
+        &[
+            ("left_knee_joint", 0.9),
+            ("left_hip_pitch_joint", -0.6),
+            ("right_shoulder_roll_joint", -0.8),
+            ("waist_yaw_joint", 0.3),
+        ],
+    );
+    let rec = Recording::from_table(
+        &two_pose_table(&model, &q, &q),
+        Path::new("g1.csv"),
+        &scene.info,
+    )
+    .unwrap();
+    let (url, misses) = serve_with_misses(Content {
+        scene,
+        recordings: vec![rec],
+        live: None,
+    });
+    let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
+    assert_clean(&page);
+    assert_no_misses(&misses);
+    assert_eq!(
+        page.status["warnings"].as_array().unwrap().len(),
+        0,
+        "{}",
+        page.status
+    );
+    silhouette(&page.image);
+    let com = center_of_mass(&model, &mut Data::new(&model), &q);
+    let seen: Vec<f64> = page.status["com"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for k in 0..3 {
+        assert!(
+            (seen[k] - com[k]).abs() < 1e-5,
+            "G1 CoM {seen:?} vs {com:?}"
+        );
+    }
+}
+
+#[test]
 fn op3_urdf_and_mjcf_load_without_console_errors() {
     let Some(chromium) = browser() else { return };
     let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/op3");
