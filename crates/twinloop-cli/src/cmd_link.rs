@@ -564,6 +564,9 @@ fn record(a: &RecordArgs) -> CliResult {
     writer.flush_each_row = true;
     let stop = interrupt_flag();
     let rec = record_rows(&mut robot, &mut writer, a, &stop, live.as_mut());
+    if let Some(live) = &live {
+        eprintln!("{}", live.summary());
+    }
     let finished = writer.finish();
     let nothing_measured = rec.link_error.is_none()
         && (1..=FIRST_CYCLES).contains(&rec.rows)

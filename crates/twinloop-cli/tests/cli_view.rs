@@ -218,3 +218,78 @@ fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
         assert_eq!(r["missing"].as_array().unwrap().len(), 0, "{r}");
     }
 }
+
+/// The first stderr line of `child` that starts with "live view: ": the page's URL.
+fn live_url(child: &mut Child) -> (String, BufReader<std::process::ChildStderr>) {
+    let mut err = BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    while err.read_line(&mut line).unwrap() > 0 {
+        if let Some(url) = line.trim().strip_prefix("live view: ") {
+            return (url.to_string(), err);
+        }
+        line.clear();
+    }
+    panic!("no live view URL on stderr");
+}
+
+#[test]
+fn serve_view_and_link_record_view_stream_the_robot() {
+    let bin = env!("CARGO_BIN_EXE_twinloop");
+    let mut serve = Command::new(bin)
+        .args(["serve", "--robot", "builtin:km20", "--view"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut pty = String::new();
+    BufReader::new(serve.stdout.as_mut().unwrap())
+        .read_line(&mut pty)
+        .unwrap();
+    let (url, serve_err) = live_url(&mut serve);
+    // The simulation behind the bus, as it runs: joint states in JSON frames.
+    let mut page = live_socket(&url, 400);
+    let mut more = vec![0u8; 4000];
+    page.read_exact(&mut more).unwrap();
+    assert!(String::from_utf8_lossy(&more).contains("\"q\":["));
+    drop(page);
+    // What a recording reads over that bus, as it reads it.
+    let out = tmp("record.csv");
+    let mut rec = Command::new(bin)
+        .args([
+            "link",
+            "record",
+            "--port",
+            pty.trim(),
+            "--map",
+            "builtin:km20",
+        ])
+        .args(["--duration", "3", "--view", "--out"])
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (url, mut rec_err) = live_url(&mut rec);
+    let mut page = live_socket(&url, 400);
+    page.read_exact(&mut more).unwrap();
+    assert!(String::from_utf8_lossy(&more).contains("\"q\":["));
+    assert!(rec.wait().unwrap().success());
+    let mut rest = String::new();
+    rec_err.read_to_string(&mut rest).unwrap();
+    let (sent, offered) = states_sent(&rest);
+    // 3 s read at up to 100 Hz (slower when the machine is busy), decimated to 60 a
+    // second on a grid (a 100 Hz source gives 60, not every other read: 50).
+    let want = offered.min(180);
+    assert!(
+        offered > 30 && sent <= want + 2 && sent + want / 10 >= want,
+        "{rest}"
+    );
+    let ok = Command::new("kill")
+        .args(["-INT", &serve.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    assert!(serve.wait().unwrap().success());
+    let mut rest = String::new();
+    BufReader::new(serve_err).read_to_string(&mut rest).unwrap();
+    states_sent(&rest);
+}
