@@ -215,7 +215,7 @@ fn replay_3d(
     };
     let urdf = a.out.as_deref().filter(|_| adapted);
     let out = report.with_file_name("replay.html");
-    crate::cmd_view::replay_for_report(record, robot, urdf, &out, files)
+    crate::replay3d::replay_for_report(record, robot, urdf, &out, files)
 }
 
 pub fn run(a: AdaptArgs) -> CliResult {
@@ -265,7 +265,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
         adapted.report.files.push(p.display().to_string());
         let mut page = html_report(&adapted.report);
         if let Some(replay) = &replay {
-            crate::cmd_view::link_replay(&mut page, replay);
+            crate::replay3d::link_replay(&mut page, replay);
         }
         page.write(p)
             .map_err(|e| CliError::new(e).context("--report"))?;

@@ -191,7 +191,7 @@ fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<(), CliError> {
 fn replay_3d(dir: &Path, record: &Path, adapted: bool, files: &mut Vec<String>) -> Option<PathBuf> {
     let urdf = adapted.then(|| dir.join("km20_adapted.urdf"));
     let out = dir.join("replay.html");
-    crate::cmd_view::replay_for_report(record, "builtin:km20", urdf.as_deref(), &out, files)
+    crate::replay3d::replay_for_report(record, "builtin:km20", urdf.as_deref(), &out, files)
 }
 
 /// `twinloop demo`.
@@ -269,7 +269,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     adapted.report.files = files.clone();
     let mut page = html_report(&adapted.report);
     if let Some(replay) = &replay {
-        crate::cmd_view::link_replay(&mut page, replay);
+        crate::replay3d::link_replay(&mut page, replay);
     }
     page.write(&html)
         .map_err(|e| CliError::new(format!("{}: {e}", html.display())))?;
