@@ -202,6 +202,23 @@ fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyR
     Ok(*study)
 }
 
+/// With --record and --report: the tip-over in 3D (`replay.html` beside the report),
+/// the recording with the adapted (--out) and prior models as ghosts. A replay that
+/// cannot be made is a warning.
+fn replay_3d(
+    a: &AdaptArgs,
+    report: &Path,
+    adapted: bool,
+    files: &mut Vec<String>,
+) -> Option<PathBuf> {
+    let (Some(record), Some(robot)) = (&a.record, &a.robot) else {
+        return None;
+    };
+    let urdf = a.out.as_deref().filter(|_| adapted);
+    let out = report.with_file_name("replay.html");
+    crate::replay3d::replay_for_report(record, robot, urdf, &out, files)
+}
+
 pub fn run(a: AdaptArgs) -> CliResult {
     if let Some(AdaptCommand::Train(t)) = a.command {
         return run_train(t);
@@ -245,9 +262,13 @@ pub fn run(a: AdaptArgs) -> CliResult {
         adapted.report.files.push(out.display().to_string());
     }
     if let Some(p) = &a.report {
+        let replay = replay_3d(&a, p, adapted.robot.is_some(), &mut adapted.report.files);
         adapted.report.files.push(p.display().to_string());
-        html_report(&adapted.report)
-            .write(p)
+        let mut page = html_report(&adapted.report);
+        if let Some(replay) = &replay {
+            crate::replay3d::link_replay(&mut page, replay);
+        }
+        page.write(p)
             .map_err(|e| CliError::new(e).context("--report"))?;
     }
     let r = &adapted.report;

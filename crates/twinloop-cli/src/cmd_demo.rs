@@ -190,6 +190,15 @@ fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<(), CliError> {
     std::fs::write(path, text + "\n").map_err(|e| CliError::io(path, e))
 }
 
+/// The tip-over in 3D (`replay.html` in `dir`, beside the report): the robot's
+/// recording with the adapted and prior models as ghosts. A replay that cannot be
+/// made is a warning: the demo's result does not depend on it.
+fn replay_3d(dir: &Path, record: &Path, adapted: bool, files: &mut Vec<String>) -> Option<PathBuf> {
+    let urdf = adapted.then(|| dir.join("km20_adapted.urdf"));
+    let out = dir.join("replay.html");
+    crate::replay3d::replay_for_report(record, "builtin:km20", urdf.as_deref(), &out, files)
+}
+
 /// `twinloop demo`.
 pub fn run(a: DemoArgs) -> CliResult {
     let t0 = Instant::now();
@@ -262,9 +271,13 @@ pub fn run(a: DemoArgs) -> CliResult {
         files.push(urdf.display().to_string());
     }
     let html = a.out.join("report.html");
+    let replay = replay_3d(&a.out, &record, adapted.robot.is_some(), &mut files);
     adapted.report.files = files.clone();
-    html_report(&adapted.report)
-        .write(&html)
+    let mut page = html_report(&adapted.report);
+    if let Some(replay) = &replay {
+        crate::replay3d::link_replay(&mut page, replay);
+    }
+    page.write(&html)
         .map_err(|e| CliError::new(format!("{}: {e}", html.display())))?;
     files.push(html.display().to_string());
     let adapt_json = a.out.join("adapt.json");

@@ -185,6 +185,9 @@ pub struct RecordArgs {
     /// at one more round trip per servo)
     #[arg(long)]
     pub verified_reads: bool,
+    /// The robot comes from the mapping's `urdf`.
+    #[command(flatten)]
+    pub view: crate::cmd_view::LiveViewArgs,
 }
 
 #[derive(Args)]
@@ -548,6 +551,7 @@ fn record(a: &RecordArgs) -> CliResult {
         .iter()
         .map(|j| format!("{} (protocol {}.0)", j.id, j.protocol.number()))
         .collect();
+    let mut live = crate::cmd_view::start_live_for_mapping(&a.view, &mapping)?;
     let mut robot = DynamixelRobot::new(c, mapping, a.method)?;
     robot.cycle_mut().verify_v1 = a.verified_reads;
     let mut columns = vec!["t".to_string()];
@@ -559,7 +563,10 @@ fn record(a: &RecordArgs) -> CliResult {
     // or when the adapter is unplugged.
     writer.flush_each_row = true;
     let stop = interrupt_flag();
-    let rec = record_rows(&mut robot, &mut writer, a, &stop);
+    let rec = record_rows(&mut robot, &mut writer, a, &stop, live.as_mut());
+    if let Some(live) = &live {
+        eprintln!("{}", live.summary());
+    }
     let finished = writer.finish();
     let nothing_measured = rec.link_error.is_none()
         && (1..=FIRST_CYCLES).contains(&rec.rows)
@@ -621,6 +628,7 @@ fn record_rows<T: Transport>(
     writer: &mut CsvWriter,
     a: &RecordArgs,
     stop: &AtomicBool,
+    mut live: Option<&mut twinloop_view::LivePublisher>,
 ) -> Recording {
     let n = robot.outcomes().count();
     let mut state = RobotState::default();
@@ -655,6 +663,9 @@ fn record_rows<T: Transport>(
             break;
         }
         rec.rows += 1;
+        if let Some(live) = live.as_deref_mut() {
+            live.offer(state.time, &state.positions);
+        }
         if rec.rows == FIRST_CYCLES && never_answered(robot, &rec.failures, rec.rows) {
             break;
         }

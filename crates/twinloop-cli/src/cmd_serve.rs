@@ -71,6 +71,9 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     /// the spinning steals the client's CPU and round trips get slower)
     #[arg(long, default_value_t = 0, value_name = "US")]
     pub spin_us: u64,
+    /// Simulated robot only (not --servo-model ideal).
+    #[command(flatten)]
+    pub view: crate::cmd_view::LiveViewArgs,
 }
 
 /// The mapping: --map, or the built-in robot's own.
@@ -138,6 +141,11 @@ pub fn run(a: ServeArgs) -> CliResult {
         }
         (_, r) => r.is_some(),
     };
+    if !simulate && a.view.view.is_some() {
+        return Err(CliError::new(
+            "--view shows the simulated robot: it needs --servo-model sim (or auto with a description)",
+        ));
+    }
     if let (true, Some(robot)) = (simulate, &robot) {
         return serve_simulated(&a, &mapping, &servos, robot);
     }
@@ -165,7 +173,9 @@ fn serve_simulated(
         ground_sink: a.ground_sink,
         ..Default::default()
     };
-    let vr = twinloop_virtual::VirtualRobot::new(robot, mapping, &options)?;
+    let mut vr = twinloop_virtual::VirtualRobot::new(robot, mapping, &options)?;
+    let names = vr.simulator().model.joint_names.clone();
+    let live = crate::cmd_view::start_live(&a.view, robot, a.robot.as_deref(), &names)?;
     if !vr.unmapped.is_empty() {
         eprintln!(
             "joints without a servo on the bus (they hold their pose): {}",
@@ -180,7 +190,7 @@ fn serve_simulated(
         a.realtime_factor,
         if a.torque_off { "limp" } else { "torque on" }
     );
-    let code = serve_on(a, mapping, servos, bus, &what);
+    let code = serve_watched(a, mapping, servos, bus, &what, &sim, live);
     let status = sim.status();
     if let Some(e) = &status.error {
         eprintln!("the simulation stopped: {e}");
@@ -192,6 +202,29 @@ fn serve_simulated(
         );
     }
     code
+}
+
+/// `serve_on`, with `--view`'s page reading the simulation on its own thread.
+fn serve_watched<B: twinloop_link::VirtualServoBackend>(
+    a: &ServeArgs,
+    mapping: &RobotMapping,
+    servos: &[BusServo],
+    bus: VirtualBus<B>,
+    what: &str,
+    sim: &twinloop_virtual::SimHandle,
+    live: Option<twinloop_view::LivePublisher>,
+) -> CliResult {
+    let Some(mut live) = live else {
+        return serve_on(a, mapping, servos, bus, what);
+    };
+    let done = std::sync::atomic::AtomicBool::new(false);
+    std::thread::scope(|s| {
+        s.spawn(|| crate::cmd_view::watch_simulation(&mut live, sim, &done));
+        let code = serve_on(a, mapping, servos, bus, what);
+        done.store(true, Ordering::Relaxed);
+        code
+    })
+    .inspect(|_| eprintln!("{}", live.summary()))
 }
 
 fn serve_on<B: twinloop_link::VirtualServoBackend>(

@@ -51,6 +51,9 @@ pub struct SimulateArgs {
     pub every: usize,
     #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
     pub servo: ServoChoice,
+    /// With --view the run waits for the page to connect, then goes at real time.
+    #[command(flatten)]
+    pub view: crate::cmd_view::LiveViewArgs,
 }
 
 /// The servo for joint `i` under a choice (`Auto`: the built-in robot's own, or one
@@ -179,8 +182,28 @@ pub fn run(a: SimulateArgs) -> CliResult {
         .duration
         .unwrap_or_else(|| goals.as_ref().map_or(2.0, Goals::end));
     let cols = record_columns(&sim);
-    record(&a, duration, &mut sim, goals.as_ref(), &cols)?;
+    let mut live = live_view(&a, &robot, &sim)?;
+    record(&a, duration, &mut sim, goals.as_ref(), &cols, live.as_mut())?;
+    if let Some(live) = &live {
+        eprintln!("{}", live.summary());
+    }
     Ok(Outcome::Ok)
+}
+
+/// `--view`: the page, once a browser shows it (the run starts then).
+fn live_view(
+    a: &SimulateArgs,
+    robot: &twinloop_description::Description,
+    sim: &Simulator,
+) -> Result<Option<twinloop_view::LivePublisher>, CliError> {
+    let names = sim.model.q_names();
+    let live = crate::cmd_view::start_live(&a.view, robot, Some(&a.robot), &names)?;
+    if let Some(live) = &live {
+        // Nothing is written yet: Ctrl-C may end the wait as it ends any program.
+        eprintln!("the simulation starts when a page shows it (Ctrl-C stops)");
+        live.wait_for_page(&|| false);
+    }
+    Ok(live)
 }
 
 /// The column names of a simulation record: time, state, servo torques, CoM, IMU
@@ -212,6 +235,7 @@ fn record(
     sim: &mut Simulator,
     goals: Option<&Goals>,
     cols: &[String],
+    mut live: Option<&mut twinloop_view::LivePublisher>,
 ) -> Result<(), CliError> {
     let hold: Vec<f64> = sim.goals.clone();
     let mut w = CsvWriter::create(&a.out, cols)?;
@@ -237,6 +261,10 @@ fn record(
                 row.extend([f.force, cop[0], cop[1]]);
             }
             w.write_row(&row)?;
+        }
+        if let Some(live) = live.as_deref_mut() {
+            live.offer(sim.time, &sim.q);
+            live.keep_real_time(sim.time);
         }
         if k == steps {
             break;

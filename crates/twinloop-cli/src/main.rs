@@ -23,6 +23,7 @@ mod cmd_view;
 mod common;
 mod error;
 mod progress;
+mod replay3d;
 
 use clap::{Parser, Subcommand};
 use error::CliResult;
@@ -72,6 +73,7 @@ enum Command {
     /// Example:
     ///   twinloop simulate --robot models/op3/mjcf/op3.xml --duration 5 --hold --out stand.csv
     ///   twinloop simulate --robot builtin:km20 --duration 2 --out km20.csv
+    ///   twinloop simulate --robot builtin:km20 --duration 30 --out km20.csv --view
     ///
     /// Output: FILE.csv, each row holding t, q:*, v:*, tau:<joint> (the servo torques),
     /// com.x/y/z, imu:<link>.gx..az (rad/s, m/s^2) and foot:<link>.fz, .cop.x, .cop.y
@@ -201,6 +203,7 @@ enum Command {
     ///   twinloop view builtin:km20 real.csv sim.csv --export replay.html
     ///   twinloop view builtin:km20 --live run.csv
     ///   twinloop simulate --robot builtin:km20 --duration 60 --out run.csv   # in another terminal
+    ///   twinloop simulate --robot builtin:km20 --duration 60 --out run.csv --view   # the same, one command
     ///
     /// Output: the page's URL on stdout (then it serves until Ctrl-C); warnings
     /// (missing meshes, missing joint columns) on stderr and on the page.

@@ -49,6 +49,8 @@ enum Block {
     },
     Plot(String),
     Pre(String),
+    /// A paragraph that is a link: (text, href).
+    Link(String, String),
 }
 
 /// An HTML report under construction.
@@ -79,6 +81,12 @@ impl Report {
 
     pub fn paragraph(&mut self, text: impl Into<String>) -> &mut Self {
         self.blocks.push(Block::Paragraph(text.into()));
+        self
+    }
+
+    /// A paragraph that is a link to `href` (e.g. a file written beside the report).
+    pub fn link(&mut self, text: impl Into<String>, href: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Link(text.into(), href.into()));
         self
     }
 
@@ -121,6 +129,9 @@ impl Report {
                 }
                 Block::Pre(t) => {
                     let _ = writeln!(h, "<pre>{}</pre>", escape(t));
+                }
+                Block::Link(t, href) => {
+                    let _ = writeln!(h, "<p><a href=\"{}\">{}</a></p>", escape(href), escape(t));
                 }
                 Block::Table { header, rows } => {
                     h.push_str("<table><tr>");

@@ -56,3 +56,14 @@ fn degenerate_data_does_not_break_the_plot() {
         .to_svg();
     assert!(!flat.contains("NaN"));
 }
+
+#[test]
+fn a_link_is_an_anchor_with_its_text_and_target_escaped() {
+    let mut r = Report::new("t");
+    r.link("open <replay>", "replay \"1\".html");
+    let html = r.to_html();
+    assert!(
+        html.contains("<p><a href=\"replay &quot;1&quot;.html\">open &lt;replay&gt;</a></p>"),
+        "{html}"
+    );
+}

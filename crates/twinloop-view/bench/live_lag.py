@@ -5,6 +5,10 @@ Reports the frames drawn per second and the lag (publish on the server to the
 frame drawn in the page, same clock).
 
     python3 crates/twinloop-view/bench/live_lag.py target/release/twinloop 10
+    SOURCE=simulate python3 crates/twinloop-view/bench/live_lag.py target/release/twinloop 10
+
+SOURCE=simulate streams a km20 simulation at 1 kHz with `simulate --view` instead
+(the run starts when the page connects and goes at real time).
 """
 import asyncio
 import json
@@ -65,7 +69,7 @@ async def measure(ws_url, page_url, seconds):
         target = await call("Target.createTarget", {"url": "about:blank"})
         session = (await call("Target.attachToTarget", {"targetId": target["targetId"], "flatten": True}))["sessionId"]
         await call("Page.navigate", {"url": page_url}, session)
-        await asyncio.sleep(3)  # load, connect, warm up
+        await asyncio.sleep(5)  # load, connect, warm up
         a, ta = await status(), time.time()
         await asyncio.sleep(seconds)
         b, tb = await status(), time.time()
@@ -81,9 +85,14 @@ def main():
         csv = os.path.join(tmp, "run.csv")
         stop = threading.Event()
         w = threading.Thread(target=writer, args=(csv, stop))
-        w.start()
-        view = subprocess.Popen([binary, "view", "builtin:km20", "--live", csv], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-        url = view.stdout.readline().strip()
+        if os.environ.get("SOURCE") == "simulate":
+            view = subprocess.Popen([binary, "simulate", "--robot", "builtin:km20", "--duration", str(seconds + 10),
+                                     "--out", csv, "--view"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            url = view.stderr.readline().strip().removeprefix("live view: ")
+        else:
+            w.start()
+            view = subprocess.Popen([binary, "view", "builtin:km20", "--live", csv], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+            url = view.stdout.readline().strip()
         chrome = subprocess.Popen(["chromium", *CHROMIUM_FLAGS, "--user-data-dir=" + os.path.join(tmp, "profile")], stderr=subprocess.PIPE, text=True)
         try:
             for line in chrome.stderr:
@@ -96,8 +105,12 @@ def main():
             chrome.wait()
             view.terminate()
             stop.set()
-            w.join()
-    print("live: %.1f frames drawn/s, %.1f states received/s, lag median %.1f ms, max %.1f ms (last 600 frames)" % (drawn, received, live["lag_median_ms"], live["lag_max_ms"]))
+            if w.is_alive():
+                w.join()
+    print("live: %.1f frames drawn/s, %.1f states received/s; lag to the frame drawn: median %.1f ms, p95 %.1f, max %.1f; "
+          "lag on arrival: median %.1f, p95 %.1f, max %.1f (last 600 frames)" % (
+              drawn, received, live["lag_median_ms"], live["lag_p95_ms"], live["lag_max_ms"],
+              live["recv_lag_median_ms"], live["recv_lag_p95_ms"], live["recv_lag_max_ms"]))
 
 
 if __name__ == "__main__":

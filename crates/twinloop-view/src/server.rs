@@ -4,14 +4,13 @@
 //! to a file path, so `../` or `%2e%2e` can only miss (404).
 
 use crate::assets;
-use crate::live::LiveFeed;
+use crate::live::{LiveFeed, LiveFrame};
 use crate::recording::{Recording, RecordingInfo};
 use crate::scene::{Scene, SceneInfo};
 use serde::Serialize;
 use std::io;
 use std::net::SocketAddr;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 use tiny_http::{Header, Request, Response, StatusCode};
 
@@ -149,7 +148,6 @@ impl Server {
 
 /// At most this many pages follow the live view at once.
 const MAX_LIVE_CLIENTS: usize = 8;
-static LIVE_CLIENTS: AtomicUsize = AtomicUsize::new(0);
 
 /// The paths answered 404, oldest first (at most [`MAX_MISSES`]): a page that
 /// asks for something the server does not have is a bug the tests look for.
@@ -216,8 +214,7 @@ fn live_client(feed: &LiveFeed, request: Request) {
         let _ = request.respond(Response::from_string("websocket only\n").with_status_code(400));
         return;
     };
-    if LIVE_CLIENTS.fetch_add(1, Ordering::SeqCst) >= MAX_LIVE_CLIENTS {
-        LIVE_CLIENTS.fetch_sub(1, Ordering::SeqCst);
+    if !feed.join(MAX_LIVE_CLIENTS) {
         let _ =
             request.respond(Response::from_string("too many live pages\n").with_status_code(503));
         return;
@@ -240,9 +237,10 @@ fn live_client(feed: &LiveFeed, request: Request) {
             None,
         );
         let mut seen = 0;
+        let mut frame = LiveFrame::default();
         while !feed.is_closed() {
             // Wake now and then even without news, to notice a client gone quiet.
-            let Some((seq, json)) = feed.next(seen, Duration::from_millis(500)) else {
+            let Some(seq) = feed.next(seen, Duration::from_millis(500), &mut frame) else {
                 if ws
                     .send(tungstenite::Message::Ping(Vec::new().into()))
                     .is_err()
@@ -252,14 +250,15 @@ fn live_client(feed: &LiveFeed, request: Request) {
                 continue;
             };
             seen = seq;
-            if ws
-                .send(tungstenite::Message::Text(json.as_ref().into()))
-                .is_err()
-            {
+            // Non-finite numbers are not JSON: serde_json writes them as null, which
+            // the page reads as "not known".
+            let json = serde_json::to_string(&frame).unwrap_or_default();
+            if ws.send(tungstenite::Message::Text(json.into())).is_err() {
                 break;
             }
         }
         let _ = ws.close(None);
-        LIVE_CLIENTS.fetch_sub(1, Ordering::SeqCst);
+        let _ = ws.flush();
+        feed.leave();
     });
 }

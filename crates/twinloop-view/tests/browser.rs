@@ -10,9 +10,8 @@
 
 use nalgebra::{Matrix3, Vector3};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::path::Path;
+use std::time::Duration;
 use twinloop_description::{Description, Geometry};
 use twinloop_dynamics::{Data, Model, center_of_mass, frames_forward_kinematics};
 use twinloop_io::Table;
@@ -20,36 +19,9 @@ use twinloop_view::{Content, Recording, Scene, Server};
 
 // ---------- the browser ----------
 
-fn find_chromium() -> Option<PathBuf> {
-    if let Some(p) = std::env::var_os("TWINLOOP_CHROMIUM") {
-        return Some(PathBuf::from(p));
-    }
-    let path = std::env::var_os("PATH")?;
-    for dir in std::env::split_paths(&path) {
-        for name in ["chromium", "chromium-browser", "google-chrome", "chrome"] {
-            let p = dir.join(name);
-            if p.is_file() {
-                return Some(p);
-            }
-        }
-    }
-    None
-}
-
-/// The browser, or None (skip) when there is none and CI does not require it.
-fn browser() -> Option<PathBuf> {
-    let found = find_chromium();
-    if found.is_none() {
-        let why = "no chromium on PATH (apt-get install -y chromium, or set TWINLOOP_CHROMIUM)";
-        if std::env::var("TWINLOOP_REQUIRE_ORACLES").as_deref() == Ok("1") {
-            panic!("TWINLOOP_REQUIRE_ORACLES=1 and {why}");
-        }
-        // Straight to stderr: the test harness would swallow eprintln! of a passing test.
-        use std::io::Write;
-        let _ = writeln!(std::io::stderr(), "skipped: {why}");
-    }
-    found
-}
+#[path = "support/chromium.rs"]
+mod chromium;
+use chromium::{browser, dump_dom, element_text, tempdir, unescape_html};
 
 /// An RGB image.
 struct Image {
@@ -61,20 +33,6 @@ struct Image {
 struct Page {
     status: Value,
     image: Image,
-}
-
-fn unescape_html(s: &str) -> String {
-    s.replace("&lt;", "<")
-        .replace("&gt;", ">")
-        .replace("&quot;", "\"")
-        .replace("&amp;", "&")
-}
-
-fn element_text<'a>(dom: &'a str, id: &str) -> Option<&'a str> {
-    let start = dom.find(&format!("<pre id=\"{id}\""))?;
-    let open_end = start + dom[start..].find('>')? + 1;
-    let close = open_end + dom[open_end..].find("</pre>")?;
-    Some(&dom[open_end..close])
 }
 
 fn decode_png(bytes: &[u8]) -> Image {
@@ -98,43 +56,7 @@ fn decode_png(bytes: &[u8]) -> Image {
 /// Load `url` in headless Chromium (software WebGL) and read the page's status
 /// and its rendered image.
 fn load(chromium: &Path, url: &str) -> Page {
-    let profile = tempdir("chromium-profile");
-    let mut child = Command::new(chromium)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--use-angle=swiftshader",
-            "--enable-unsafe-swiftshader",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--no-first-run",
-            "--window-size=640,480",
-            "--virtual-time-budget=20000",
-            "--dump-dom",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .arg(url)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut stdout = child.stdout.take().unwrap();
-    let reader = std::thread::spawn(move || {
-        let mut s = String::new();
-        std::io::Read::read_to_string(&mut stdout, &mut s).unwrap();
-        s
-    });
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(180) {
-            let _ = child.kill();
-            panic!("chromium did not finish with {url} in 180 s");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let dom = reader.join().unwrap();
-    let _ = std::fs::remove_dir_all(&profile);
+    let dom = dump_dom(chromium, url);
     let status = element_text(&dom, "status").unwrap_or_else(|| {
         panic!(
             "no #status in the page of {url}: {}",
@@ -152,18 +74,6 @@ fn load(chromium: &Path, url: &str) -> Page {
         status,
         image: decode_png(&png),
     }
-}
-
-fn tempdir(what: &str) -> PathBuf {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    static N: AtomicUsize = AtomicUsize::new(0);
-    let d = std::env::temp_dir().join(format!(
-        "twinloop-view-{what}-{}-{}",
-        std::process::id(),
-        N.fetch_add(1, Ordering::Relaxed)
-    ));
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 /// Serve `content`; the URL, and the paths the page asked for and did not get.
@@ -544,6 +454,105 @@ fn meshes_load_and_a_missing_one_is_a_box_with_a_warning() {
     let img = &page.image;
     let want = predicted_extent(&drawn, &q, img.width, img.height);
     assert_extent_close(silhouette(img), want, "mesh robot");
+}
+
+#[test]
+fn a_collada_mesh_is_drawn_where_and_as_large_as_the_description_says() {
+    let Some(chromium) = browser() else { return };
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mesh_robot/urdf/dae_robot.urdf");
+    let robot = twinloop_description::load(&path).unwrap();
+    let model = Model::from_description(&robot).unwrap();
+    let scene = Scene::new(&robot, Some(&path), &[]);
+    assert_eq!(scene.info.warnings, Vec::<String>::new());
+    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    let q = configuration(&model, [0.0, 0.0, 0.0], 0.0, &[("shoulder", -0.9)]);
+    let rec = Recording::from_table(
+        &two_pose_table(&model, &q, &q),
+        Path::new("arm.csv"),
+        &scene.info,
+    )
+    .unwrap();
+    let (url, misses) = serve_with_misses(Content {
+        scene,
+        recordings: vec![rec],
+        live: None,
+    });
+    let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
+    assert_clean(&page);
+    assert_no_misses(&misses);
+    assert_eq!(
+        page.status["warnings"].as_array().unwrap().len(),
+        0,
+        "{}",
+        page.status
+    );
+    let img = &page.image;
+    let want = predicted_extent(&drawn, &q, img.width, img.height);
+    assert_extent_close(silhouette(img), want, "DAE robot");
+}
+
+#[test]
+fn g1_with_its_meshes_loads_and_its_com_follows_the_pose() {
+    let Some(chromium) = browser() else { return };
+    // The upstream meshes decimated (models/unitree_g1/decimate_meshes.py): 35 STL
+    // files, 1.7 MB instead of 19.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models/unitree_g1/g1_29dof_rev_1_0.decimated.urdf");
+    let robot = twinloop_description::load(&path).unwrap();
+    let model = Model::from_description(&robot).unwrap();
+    let scene = Scene::new(&robot, Some(&path), &[]);
+    assert_eq!(
+        scene.info.warnings,
+        Vec::<String>::new(),
+        "every mesh found"
+    );
+    assert!(scene.info.meshes.len() >= 30, "{}", scene.info.meshes.len());
+    let q = configuration(
+        &model,
+        [0.1, -0.2, 0.75],
+        0.4,
+        &[
+            ("left_knee_joint", 0.9),
+            ("left_hip_pitch_joint", -0.6),
+            ("right_shoulder_roll_joint", -0.8),
+            ("waist_yaw_joint", 0.3),
+        ],
+    );
+    let rec = Recording::from_table(
+        &two_pose_table(&model, &q, &q),
+        Path::new("g1.csv"),
+        &scene.info,
+    )
+    .unwrap();
+    let (url, misses) = serve_with_misses(Content {
+        scene,
+        recordings: vec![rec],
+        live: None,
+    });
+    let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
+    assert_clean(&page);
+    assert_no_misses(&misses);
+    assert_eq!(
+        page.status["warnings"].as_array().unwrap().len(),
+        0,
+        "{}",
+        page.status
+    );
+    silhouette(&page.image);
+    let com = center_of_mass(&model, &mut Data::new(&model), &q);
+    let seen: Vec<f64> = page.status["com"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for k in 0..3 {
+        assert!(
+            (seen[k] - com[k]).abs() < 1e-5,
+            "G1 CoM {seen:?} vs {com:?}"
+        );
+    }
 }
 
 #[test]

@@ -1,4 +1,5 @@
-"""Write meshes/cube.stl (ASCII) and meshes/cube.obj: a unit cube, corners at +-0.5."""
+"""Write meshes/cube.stl (ASCII), meshes/cube.obj and meshes/cube.dae: a unit cube,
+corners at +-0.5."""
 import numpy as np
 
 V = [(x, y, z) for x in (-.5, .5) for y in (-.5, .5) for z in (-.5, .5)]
@@ -26,3 +27,36 @@ with open('meshes/cube.obj', 'w') as f:
         f.write('v %g %g %g\n' % v)
     for t in TRIS:
         f.write('f %d %d %d\n' % tuple(i + 1 for i in t))
+
+# meshes/cube.dae: the same cube as COLLADA 1.4 (one triangle list, metres, Z up as
+# ROS meshes are), for three.js' ColladaLoader.
+positions = ' '.join('%g %g %g' % v for v in V)
+indices = ' '.join('%d' % i for t in TRIS for i in t)
+with open('meshes/cube.dae', 'w') as f:
+    f.write('''<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="meter" meter="1"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries>
+    <geometry id="cube" name="cube">
+      <mesh>
+        <source id="cube-positions">
+          <float_array id="cube-positions-array" count="%d">%s</float_array>
+          <technique_common>
+            <accessor source="#cube-positions-array" count="%d" stride="3">
+              <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+            </accessor>
+          </technique_common>
+        </source>
+        <vertices id="cube-vertices"><input semantic="POSITION" source="#cube-positions"/></vertices>
+        <triangles count="%d"><input semantic="VERTEX" source="#cube-vertices" offset="0"/><p>%s</p></triangles>
+      </mesh>
+    </geometry>
+  </library_geometries>
+  <library_visual_scenes>
+    <visual_scene id="scene" name="scene">
+      <node id="cube-node" name="cube"><instance_geometry url="#cube"/></node>
+    </visual_scene>
+  </library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+''' % (3 * len(V), positions, len(V), len(TRIS), indices))

@@ -1,0 +1,295 @@
+//! `--view` through the binary: `simulate --view` streams its state to the viewer
+//! page (a real headless Chromium draws it, and the CoM the page computes from the
+//! pose it received is the simulation's own), decimated to 60 states a second from
+//! a 1 kHz run; a page that hangs up mid-stream leaves the simulation running to its
+//! end; `--view` where there is nothing to show is a clear error.
+//!
+//! Without Chromium the browser test prints why and passes, unless
+//! TWINLOOP_REQUIRE_ORACLES=1 (CI).
+
+#[path = "../../twinloop-view/tests/support/chromium.rs"]
+mod chromium;
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("twinloop-cli-view-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+/// `simulate --view` for `seconds`, and the page's URL from its stderr; the rest of
+/// stderr is collected by a thread.
+fn simulate_view(out: &Path, seconds: &str) -> (Child, String, std::thread::JoinHandle<String>) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args([
+            "simulate",
+            "--robot",
+            "builtin:km20",
+            "--duration",
+            seconds,
+            "--view",
+            "--out",
+        ])
+        .arg(out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    err.read_line(&mut line).unwrap();
+    let url = line
+        .trim()
+        .strip_prefix("live view: ")
+        .unwrap_or_else(|| panic!("first stderr line: {line:?}"))
+        .to_string();
+    let rest = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = err.read_to_string(&mut s);
+        s
+    });
+    (child, url, rest)
+}
+
+/// The CSV's rows as numbers, and its header.
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+/// "live view: N of M states sent ...": (N, M).
+fn states_sent(stderr: &str) -> (usize, usize) {
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("live view: ") && l.contains("states sent"))
+        .unwrap_or_else(|| panic!("no summary in {stderr}"));
+    let words: Vec<&str> = line.split_whitespace().collect();
+    (words[2].parse().unwrap(), words[4].parse().unwrap())
+}
+
+#[test]
+fn the_live_page_draws_what_simulate_view_streams() {
+    let Some(browser) = chromium::browser() else {
+        return;
+    };
+    let out = tmp("browser.csv");
+    let (mut child, url, stderr) = simulate_view(&out, "4");
+    let camera = "camera=0.9,-1.5,0.5,0,0,0.25&snapshot=1&overlays=com";
+    let dom = chromium::dump_dom(&browser, &format!("{url}?{camera}"));
+    let status = chromium::element_text(&dom, "status").expect("no #status");
+    let status: serde_json::Value = serde_json::from_str(&chromium::unescape_html(status)).unwrap();
+    assert_eq!(status["ready"], true, "{status}");
+    assert_eq!(status["errors"].as_array().unwrap().len(), 0, "{status}");
+    let frames = status["live"]["frames"].as_u64().unwrap();
+    assert!(frames >= 1, "{status}");
+    assert!(child.wait().unwrap().success());
+    let stderr = stderr.join().unwrap();
+    // 4 s at 1 kHz, decimated on the server to 60 a second.
+    let (sent, offered) = states_sent(&stderr);
+    assert_eq!(offered, 4001, "{stderr}");
+    assert!((235..=245).contains(&sent), "{stderr}");
+    // The page's CoM, from the pose it was sent, is the simulation's at that time.
+    let t = status["live"]["t"].as_f64().unwrap();
+    let (header, rows) = read_csv(&out);
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    let row = rows
+        .iter()
+        .find(|r| r[0] == t)
+        .unwrap_or_else(|| panic!("no row at t = {t}"));
+    let seen = status["com"].as_array().unwrap();
+    for (k, c) in ["com.x", "com.y", "com.z"].iter().enumerate() {
+        let (page, sim) = (seen[k].as_f64().unwrap(), row[col(c)]);
+        assert!(
+            (page - sim).abs() < 1e-5,
+            "{c} at t = {t}: page {page}, simulation {sim}"
+        );
+    }
+}
+
+/// Open `/live` by hand (the websocket handshake) and read `bytes` of its stream.
+fn live_socket(url: &str, bytes: usize) -> TcpStream {
+    let addr = url
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_string();
+    let mut s = TcpStream::connect(&addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    write!(
+        s,
+        "GET /live HTTP/1.1\r\nHost: {addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+         Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    )
+    .unwrap();
+    let mut got = vec![0u8; bytes];
+    s.read_exact(&mut got).unwrap();
+    assert!(
+        got.starts_with(b"HTTP/1.1 101"),
+        "{}",
+        String::from_utf8_lossy(&got)
+    );
+    s
+}
+
+#[test]
+fn a_page_that_hangs_up_leaves_the_simulation_running() {
+    let out = tmp("hangup.csv");
+    let (mut child, url, stderr) = simulate_view(&out, "1.5");
+    // A page connects (the run starts), reads part of the stream and goes away
+    // mid-frame; another comes and goes; the run goes on to its end.
+    let first = live_socket(&url, 600);
+    std::thread::sleep(Duration::from_millis(300));
+    drop(first);
+    let second = live_socket(&url, 2000);
+    drop(second);
+    assert!(child.wait().unwrap().success());
+    let stderr = stderr.join().unwrap();
+    let (_, offered) = states_sent(&stderr);
+    assert_eq!(offered, 1501, "{stderr}");
+    let (_, rows) = read_csv(&out);
+    assert_eq!(rows.len(), 1501, "every step written");
+    assert!((rows[1500][0] - 1.5).abs() < 1e-9);
+}
+
+#[test]
+fn view_without_a_simulated_robot_is_an_error() {
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["serve", "--servo-model", "ideal", "--view"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--view shows the simulated robot"), "{err}");
+}
+
+#[test]
+fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
+    let dir = tmp("demo");
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["demo", "--scenario", "d", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(report.contains("<a href=\"replay.html\">"), "no link");
+    // The ghosts: the adapted and prior models on the robot's joint commands, over
+    // the recording's span, with the base pose the bus recording lacks.
+    let (rec_header, rec) = read_csv(&dir.join("tipover.csv"));
+    assert!(!rec_header.iter().any(|c| c.starts_with("q:base.")));
+    for name in ["replay_adapted.csv", "replay_prior.csv"] {
+        let (header, rows) = read_csv(&dir.join(name));
+        assert!(header.iter().any(|c| c == "q:base.qw"), "{name}");
+        let end = rows.last().unwrap()[0];
+        let rec_end = rec.last().unwrap()[0];
+        assert!(
+            (end - rec_end).abs() < 0.05,
+            "{name} ends at {end}, the recording at {rec_end}"
+        );
+    }
+    let Some(browser) = chromium::browser() else {
+        return;
+    };
+    let page = format!(
+        "file://{}?snapshot=1&t=1",
+        dir.join("replay.html").display()
+    );
+    let dom = chromium::dump_dom(&browser, &page);
+    let status = chromium::element_text(&dom, "status").expect("no #status");
+    let status: serde_json::Value = serde_json::from_str(&chromium::unescape_html(status)).unwrap();
+    assert_eq!(status["ready"], true, "{status}");
+    assert_eq!(status["errors"].as_array().unwrap().len(), 0, "{status}");
+    let recs = status["recordings"].as_array().unwrap();
+    let names: Vec<&str> = recs.iter().map(|r| r["name"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        ["tipover.csv", "replay_adapted.csv", "replay_prior.csv"]
+    );
+    for r in recs {
+        assert_eq!(r["missing"].as_array().unwrap().len(), 0, "{r}");
+    }
+}
+
+/// The first stderr line of `child` that starts with "live view: ": the page's URL.
+fn live_url(child: &mut Child) -> (String, BufReader<std::process::ChildStderr>) {
+    let mut err = BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    while err.read_line(&mut line).unwrap() > 0 {
+        if let Some(url) = line.trim().strip_prefix("live view: ") {
+            return (url.to_string(), err);
+        }
+        line.clear();
+    }
+    panic!("no live view URL on stderr");
+}
+
+#[test]
+fn serve_view_and_link_record_view_stream_the_robot() {
+    let bin = env!("CARGO_BIN_EXE_twinloop");
+    let mut serve = Command::new(bin)
+        .args(["serve", "--robot", "builtin:km20", "--view"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut pty = String::new();
+    BufReader::new(serve.stdout.as_mut().unwrap())
+        .read_line(&mut pty)
+        .unwrap();
+    let (url, serve_err) = live_url(&mut serve);
+    // The simulation behind the bus, as it runs: joint states in JSON frames.
+    let mut page = live_socket(&url, 400);
+    let mut more = vec![0u8; 4000];
+    page.read_exact(&mut more).unwrap();
+    assert!(String::from_utf8_lossy(&more).contains("\"q\":["));
+    drop(page);
+    // What a recording reads over that bus, as it reads it.
+    let out = tmp("record.csv");
+    let mut rec = Command::new(bin)
+        .args([
+            "link",
+            "record",
+            "--port",
+            pty.trim(),
+            "--map",
+            "builtin:km20",
+        ])
+        .args(["--duration", "3", "--view", "--out"])
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (url, mut rec_err) = live_url(&mut rec);
+    let mut page = live_socket(&url, 400);
+    page.read_exact(&mut more).unwrap();
+    assert!(String::from_utf8_lossy(&more).contains("\"q\":["));
+    assert!(rec.wait().unwrap().success());
+    let mut rest = String::new();
+    rec_err.read_to_string(&mut rest).unwrap();
+    let (sent, offered) = states_sent(&rest);
+    // 3 s read at up to 100 Hz (slower when the machine is busy), decimated to 60 a
+    // second on a grid (a 100 Hz source gives 60, not every other read: 50).
+    let want = offered.min(180);
+    assert!(
+        offered > 30 && sent <= want + 2 && sent + want / 10 >= want,
+        "{rest}"
+    );
+    let ok = Command::new("kill")
+        .args(["-INT", &serve.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    assert!(serve.wait().unwrap().success());
+    let mut rest = String::new();
+    BufReader::new(serve_err).read_to_string(&mut rest).unwrap();
+    states_sent(&rest);
+}
