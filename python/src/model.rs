@@ -38,30 +38,30 @@ pub struct PyDescription {
 }
 
 /// The lossless parts of a description for pickling: URDF text (the lossless writer),
-/// plus what URDF cannot say (an MJCF's gravity and joint armature).
-type DescriptionState = (String, Option<[f64; 3]>, Vec<f64>);
+/// plus what URDF cannot say (an MJCF's gravity and joint armature, by joint name).
+type DescriptionState = (String, Option<[f64; 3]>, Vec<(String, f64)>);
 
 fn description_state(d: &Description) -> DescriptionState {
     (
         urdf::to_string(d),
         d.gravity,
-        d.joints.iter().map(|j| j.armature).collect(),
+        d.joints
+            .iter()
+            .filter(|j| j.armature != 0.0)
+            .map(|j| (j.name.clone(), j.armature))
+            .collect(),
     )
 }
 
 fn description_from_state(state: DescriptionState) -> PyResult<Description> {
     let (text, gravity, armature) = state;
     let mut d = urdf::from_str(&text).map_err(description_error)?;
-    if armature.len() != d.joints.len() {
-        return Err(value_error(format!(
-            "pickled description: {} armature values for {} joints",
-            armature.len(),
-            d.joints.len()
-        )));
-    }
     d.gravity = gravity;
-    for (j, a) in d.joints.iter_mut().zip(armature) {
-        j.armature = a;
+    for (name, a) in armature {
+        let joint = d.joints.iter_mut().find(|j| j.name == name).ok_or_else(|| {
+            value_error(format!("pickled description: armature of joint \"{name}\", which it does not have"))
+        })?;
+        joint.armature = a;
     }
     Ok(d)
 }
