@@ -90,6 +90,11 @@ impl<'py> Arg<'py> {
         }
     }
 
+    /// The array's shape.
+    pub fn array_shape(&self) -> Vec<usize> {
+        self.array.shape().to_vec()
+    }
+
     /// Size of the first dimension (rows of a batch).
     pub fn rows(&self) -> usize {
         self.array.shape()[0]

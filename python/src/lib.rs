@@ -11,6 +11,7 @@ mod batch;
 mod dynamics;
 mod errors;
 mod model;
+mod sim;
 
 use pyo3::prelude::*;
 
@@ -21,6 +22,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::PyDescription>()?;
     m.add_class::<model::PyModel>()?;
     m.add_class::<model::PyData>()?;
+    m.add_class::<sim::PySimulator>()?;
+    m.add("SimulationError", py.get_type::<sim::SimulationError>())?;
     m.add_function(wrap_pyfunction!(model::load, m)?)?;
     m.add_function(wrap_pyfunction!(model::_description_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(model::_model_from_state, m)?)?;

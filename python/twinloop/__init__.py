@@ -18,6 +18,8 @@ from ._native import (
     Description,
     Model,
     ModelError,
+    SimulationError,
+    Simulator,
     aba,
     aba_batch,
     body_parameters,
