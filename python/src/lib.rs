@@ -10,6 +10,7 @@ mod arrays;
 mod batch;
 mod dynamics;
 mod errors;
+mod experiments;
 mod model;
 mod sim;
 
@@ -52,5 +53,11 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(batch::frame_jacobian_batch, m)?)?;
     m.add_function(wrap_pyfunction!(batch::joint_torque_regressor_batch, m)?)?;
     m.add_function(wrap_pyfunction!(batch::static_com_regressor_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::tipover, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::random_changes, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::tipover_changes, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::static_poses, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::identify_static, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::training_samples, m)?)?;
     Ok(())
 }
