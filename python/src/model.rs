@@ -194,6 +194,18 @@ impl PyDescription {
         self.lint(py)?.get_item("findings")
     }
 
+    /// A copy with a point mass (kg) added to a link at xyz (m, link frame), its
+    /// inertial merged (what `--add-mass KG@LINK:X,Y,Z` does).
+    fn with_point_mass(&self, link: &str, mass: f64, xyz: [f64; 3]) -> PyResult<PyDescription> {
+        if !(mass.is_finite() && xyz.iter().all(|x| x.is_finite())) {
+            return Err(value_error("mass, xyz: must be finite"));
+        }
+        let mut d = (*self.inner).clone();
+        twinloop_description::builtin::add_point_mass(&mut d, link, mass, xyz)
+            .map_err(|e| value_error(format!("link: {e}")))?;
+        Ok(PyDescription { inner: Arc::new(d) })
+    }
+
     /// The description as URDF text (twinloop's lossless writer).
     fn to_urdf(&self) -> String {
         urdf::to_string(&self.inner)
