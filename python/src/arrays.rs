@@ -4,7 +4,9 @@
 
 use nalgebra::DMatrix;
 use numpy::ndarray::{ArrayView1, ArrayView2, ShapeBuilder};
-use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{
+    PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -28,7 +30,11 @@ fn fmt_shape(shape: &[usize]) -> String {
         [n] => format!("({n},)"),
         _ => format!(
             "({})",
-            shape.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")
+            shape
+                .iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
     }
 }
@@ -37,7 +43,7 @@ fn fmt_expected(dims: &[Dim]) -> String {
     let parts: Vec<String> = dims
         .iter()
         .map(|d| match d {
-            Dim::Is(n, what) if what.is_empty() => n.to_string(),
+            Dim::Is(n, "") => n.to_string(),
             Dim::Is(n, what) => format!("{what} = {n}"),
             Dim::Any => "N".to_string(),
         })
@@ -155,7 +161,10 @@ pub unsafe fn view_vector<'py>(owner: &Bound<'py, PyAny>, v: &[f64]) -> Bound<'p
 ///
 /// # Safety
 /// As [`view_vector`].
-pub unsafe fn view_matrix<'py>(owner: &Bound<'py, PyAny>, m: &DMatrix<f64>) -> Bound<'py, PyArray2<f64>> {
+pub unsafe fn view_matrix<'py>(
+    owner: &Bound<'py, PyAny>,
+    m: &DMatrix<f64>,
+) -> Bound<'py, PyArray2<f64>> {
     let view = ArrayView2::from_shape((m.nrows(), m.ncols()).f(), m.as_slice())
         .expect("a DMatrix is column-major and dense");
     // SAFETY: as in view_vector.
@@ -165,7 +174,11 @@ pub unsafe fn view_matrix<'py>(owner: &Bound<'py, PyAny>, m: &DMatrix<f64>) -> B
 }
 
 /// A new (writable) numpy array of the given shape from row-major values.
-pub fn new_array<'py>(py: Python<'py>, values: Vec<f64>, shape: &[usize]) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn new_array<'py>(
+    py: Python<'py>,
+    values: Vec<f64>,
+    shape: &[usize],
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let flat = PyArray1::from_vec(py, values);
     Ok(flat.reshape(shape.to_vec())?.to_dyn().clone())
 }

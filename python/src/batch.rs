@@ -22,7 +22,15 @@ pub fn thread_count(threads: Option<usize>) -> PyResult<usize> {
 
 /// Run `row` on every row of the inputs (row-major, `widths[k]` values per row of
 /// input k), writing `out_width` values per row, on `threads` threads.
-pub fn run_rows<F>(model: &Model, inputs: &[&[f64]], widths: &[usize], n: usize, out_width: usize, threads: usize, row: F) -> Vec<f64>
+pub fn run_rows<F>(
+    model: &Model,
+    inputs: &[&[f64]],
+    widths: &[usize],
+    n: usize,
+    out_width: usize,
+    threads: usize,
+    row: F,
+) -> Vec<f64>
 where
     F: Fn(&Model, &mut Data, &mut DMatrix<f64>, &[&[f64]], &mut [f64]) + Sync,
 {
@@ -62,12 +70,20 @@ fn write_matrix(m: &DMatrix<f64>, out: &mut [f64]) {
 }
 
 /// The inputs of a batch: Q (N, nq) then arrays (N, nv) with the same N.
-fn batch_args<'py>(model: &Model, q: &Bound<'py, PyAny>, rest: &[(&Bound<'py, PyAny>, &'static str)]) -> PyResult<(usize, Vec<Arg<'py>>)> {
+fn batch_args<'py>(
+    model: &Model,
+    q: &Bound<'py, PyAny>,
+    rest: &[(&Bound<'py, PyAny>, &'static str)],
+) -> PyResult<(usize, Vec<Arg<'py>>)> {
     let qa = Arg::new(q, "Q", &[Dim::Any, Dim::Is(model.nq, "nq")])?;
     let n = qa.rows();
     let mut args = vec![qa];
     for (x, name) in rest {
-        args.push(Arg::new(x, name, &[Dim::Is(n, "N (rows of Q)"), Dim::Is(model.nv, "nv")])?);
+        args.push(Arg::new(
+            x,
+            name,
+            &[Dim::Is(n, "N (rows of Q)"), Dim::Is(model.nv, "nv")],
+        )?);
     }
     Ok((n, args))
 }
@@ -102,116 +118,245 @@ where
 #[pyfunction]
 #[pyo3(signature = (model, Q, V, A, threads = None))]
 #[allow(non_snake_case)]
-pub fn rnea_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, V: &Bound<'py, PyAny>, A: &Bound<'py, PyAny>, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn rnea_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    V: &Bound<'py, PyAny>,
+    A: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let nv = model.get().inner.nv;
-    batch(model.py(), model.get(), Q, &[(V, "V"), (A, "A")], &[nv], threads, |m, d, _, x, o| {
-        o.copy_from_slice(dy::rnea(m, d, x[0], x[1], x[2]).as_slice());
-    })
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[(V, "V"), (A, "A")],
+        &[nv],
+        threads,
+        |m, d, _, x, o| {
+            o.copy_from_slice(dy::rnea(m, d, x[0], x[1], x[2]).as_slice());
+        },
+    )
 }
 
 /// aba over rows: Q (N, nq), V (N, nv), TAU (N, nv) -> ddq (N, nv).
 #[pyfunction]
 #[pyo3(signature = (model, Q, V, TAU, threads = None))]
 #[allow(non_snake_case)]
-pub fn aba_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, V: &Bound<'py, PyAny>, TAU: &Bound<'py, PyAny>, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn aba_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    V: &Bound<'py, PyAny>,
+    TAU: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let nv = model.get().inner.nv;
-    batch(model.py(), model.get(), Q, &[(V, "V"), (TAU, "TAU")], &[nv], threads, |m, d, _, x, o| {
-        o.copy_from_slice(dy::aba(m, d, x[0], x[1], x[2]).as_slice());
-    })
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[(V, "V"), (TAU, "TAU")],
+        &[nv],
+        threads,
+        |m, d, _, x, o| {
+            o.copy_from_slice(dy::aba(m, d, x[0], x[1], x[2]).as_slice());
+        },
+    )
 }
 
 /// nonlinear_effects over rows: Q (N, nq), V (N, nv) -> (N, nv).
 #[pyfunction]
 #[pyo3(signature = (model, Q, V, threads = None))]
 #[allow(non_snake_case)]
-pub fn nonlinear_effects_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, V: &Bound<'py, PyAny>, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn nonlinear_effects_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    V: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let nv = model.get().inner.nv;
-    batch(model.py(), model.get(), Q, &[(V, "V")], &[nv], threads, |m, d, _, x, o| {
-        o.copy_from_slice(dy::nonlinear_effects(m, d, x[0], x[1]).as_slice());
-    })
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[(V, "V")],
+        &[nv],
+        threads,
+        |m, d, _, x, o| {
+            o.copy_from_slice(dy::nonlinear_effects(m, d, x[0], x[1]).as_slice());
+        },
+    )
 }
 
 /// crba over rows: Q (N, nq) -> M (N, nv, nv), full.
 #[pyfunction]
 #[pyo3(signature = (model, Q, threads = None))]
 #[allow(non_snake_case)]
-pub fn crba_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn crba_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let nv = model.get().inner.nv;
-    batch(model.py(), model.get(), Q, &[], &[nv, nv], threads, |m, d, _, x, o| {
-        dy::crba(m, d, x[0]);
-        d.symmetrize_mass_matrix();
-        write_matrix(&d.mass_matrix, o);
-    })
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[nv, nv],
+        threads,
+        |m, d, _, x, o| {
+            dy::crba(m, d, x[0]);
+            d.symmetrize_mass_matrix();
+            write_matrix(&d.mass_matrix, o);
+        },
+    )
 }
 
 /// center_of_mass over rows: Q (N, nq) -> (N, 3).
 #[pyfunction]
 #[pyo3(signature = (model, Q, threads = None))]
 #[allow(non_snake_case)]
-pub fn center_of_mass_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    batch(model.py(), model.get(), Q, &[], &[3], threads, |m, d, _, x, o| {
-        o.copy_from_slice(dy::center_of_mass(m, d, x[0]).as_slice());
-    })
+pub fn center_of_mass_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[3],
+        threads,
+        |m, d, _, x, o| {
+            o.copy_from_slice(dy::center_of_mass(m, d, x[0]).as_slice());
+        },
+    )
 }
 
 /// jacobian_center_of_mass over rows: Q (N, nq) -> (N, 3, nv).
 #[pyfunction]
 #[pyo3(signature = (model, Q, threads = None))]
 #[allow(non_snake_case)]
-pub fn jacobian_center_of_mass_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn jacobian_center_of_mass_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let nv = model.get().inner.nv;
-    batch(model.py(), model.get(), Q, &[], &[3, nv], threads, |m, d, _, x, o| {
-        write_matrix(dy::jacobian_center_of_mass(m, d, x[0]), o);
-    })
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[3, nv],
+        threads,
+        |m, d, _, x, o| {
+            write_matrix(dy::jacobian_center_of_mass(m, d, x[0]), o);
+        },
+    )
 }
 
 /// compute_joint_jacobians over rows: Q (N, nq) -> (N, 6, nv).
 #[pyfunction]
 #[pyo3(signature = (model, Q, threads = None))]
 #[allow(non_snake_case)]
-pub fn compute_joint_jacobians_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn compute_joint_jacobians_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let nv = model.get().inner.nv;
-    batch(model.py(), model.get(), Q, &[], &[6, nv], threads, |m, d, _, x, o| {
-        dy::compute_joint_jacobians(m, d, x[0]);
-        write_matrix(&d.joint_jacobians, o);
-    })
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[6, nv],
+        threads,
+        |m, d, _, x, o| {
+            dy::compute_joint_jacobians(m, d, x[0]);
+            write_matrix(&d.joint_jacobians, o);
+        },
+    )
 }
 
 /// frame_jacobian over rows: Q (N, nq) -> (N, 6, nv).
 #[pyfunction]
 #[pyo3(signature = (model, Q, frame, reference = "LOCAL", threads = None))]
 #[allow(non_snake_case)]
-pub fn frame_jacobian_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, frame: &Bound<'py, PyAny>, reference: &str, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn frame_jacobian_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    frame: &Bound<'py, PyAny>,
+    reference: &str,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let pm = model.get();
     let nv = pm.inner.nv;
     let k = pm.frame_id(frame)?;
     let rf = reference_frame(reference)?;
-    batch(model.py(), pm, Q, &[], &[6, nv], threads, move |m, d, jf, x, o| {
-        dy::compute_joint_jacobians(m, d, x[0]);
-        dy::frame_jacobian(m, d, k, rf, jf);
-        write_matrix(jf, o);
-    })
+    batch(
+        model.py(),
+        pm,
+        Q,
+        &[],
+        &[6, nv],
+        threads,
+        move |m, d, jf, x, o| {
+            dy::compute_joint_jacobians(m, d, x[0]);
+            dy::frame_jacobian(m, d, k, rf, jf);
+            write_matrix(jf, o);
+        },
+    )
 }
 
 /// joint_torque_regressor over rows: Q, V, A -> (N, nv, 10 * bodies).
 #[pyfunction]
 #[pyo3(signature = (model, Q, V, A, threads = None))]
 #[allow(non_snake_case)]
-pub fn joint_torque_regressor_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, V: &Bound<'py, PyAny>, A: &Bound<'py, PyAny>, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn joint_torque_regressor_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    V: &Bound<'py, PyAny>,
+    A: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let m = &model.get().inner;
     let cols = 10 * (m.nbodies + usize::from(m.is_floating()));
-    batch(model.py(), model.get(), Q, &[(V, "V"), (A, "A")], &[m.nv, cols], threads, |m, d, _, x, o| {
-        write_matrix(dy::joint_torque_regressor(m, d, x[0], x[1], x[2]), o);
-    })
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[(V, "V"), (A, "A")],
+        &[m.nv, cols],
+        threads,
+        |m, d, _, x, o| {
+            write_matrix(dy::joint_torque_regressor(m, d, x[0], x[1], x[2]), o);
+        },
+    )
 }
 
 /// static_com_regressor over rows: Q (N, nq) -> (N, 3, 4 * links).
 #[pyfunction]
 #[pyo3(signature = (model, Q, threads = None))]
 #[allow(non_snake_case)]
-pub fn static_com_regressor_batch<'py>(model: &Bound<'py, PyModel>, Q: &Bound<'py, PyAny>, threads: Option<usize>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub fn static_com_regressor_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let cols = 4 * model.get().inner.links.len();
-    batch(model.py(), model.get(), Q, &[], &[3, cols], threads, |m, d, _, x, o| {
-        write_matrix(dy::static_com_regressor(m, d, x[0]), o);
-    })
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[3, cols],
+        threads,
+        |m, d, _, x, o| {
+            write_matrix(dy::static_com_regressor(m, d, x[0]), o);
+        },
+    )
 }

@@ -44,13 +44,19 @@ pub fn reference_frame(name: &str) -> PyResult<ReferenceFrame> {
     }
 }
 
-fn vec_out<'py>(data: &Bound<'py, PyData>, f: impl Fn(&PyData) -> &[f64]) -> Bound<'py, PyArray1<f64>> {
+fn vec_out<'py>(
+    data: &Bound<'py, PyData>,
+    f: impl Fn(&PyData) -> &[f64],
+) -> Bound<'py, PyArray1<f64>> {
     let this = data.borrow();
     // SAFETY: the slice is a buffer of the Data object, allocated once in Data::new.
     unsafe { view_vector(data.as_any(), f(&this)) }
 }
 
-fn mat_out<'py>(data: &Bound<'py, PyData>, f: impl Fn(&PyData) -> &DMatrix<f64>) -> Bound<'py, PyArray2<f64>> {
+fn mat_out<'py>(
+    data: &Bound<'py, PyData>,
+    f: impl Fn(&PyData) -> &DMatrix<f64>,
+) -> Bound<'py, PyArray2<f64>> {
     let this = data.borrow();
     // SAFETY: as in vec_out.
     unsafe { view_matrix(data.as_any(), f(&this)) }
@@ -58,7 +64,11 @@ fn mat_out<'py>(data: &Bound<'py, PyData>, f: impl Fn(&PyData) -> &DMatrix<f64>)
 
 /// Forward kinematics: body placements in `data.oMi` (q: (nq,)).
 #[pyfunction]
-pub fn forward_kinematics(model: &Bound<'_, PyModel>, data: &Bound<'_, PyData>, q: &Bound<'_, PyAny>) -> PyResult<()> {
+pub fn forward_kinematics(
+    model: &Bound<'_, PyModel>,
+    data: &Bound<'_, PyData>,
+    q: &Bound<'_, PyAny>,
+) -> PyResult<()> {
     let mut d = data.borrow_mut();
     let c = check(model.get(), &d, q, &[])?;
     dy::forward_kinematics(&model.get().inner, &mut d.data, c.q.slice());
@@ -67,7 +77,11 @@ pub fn forward_kinematics(model: &Bound<'_, PyModel>, data: &Bound<'_, PyData>, 
 
 /// Forward kinematics and frame placements (`data.oMf`).
 #[pyfunction]
-pub fn frames_forward_kinematics(model: &Bound<'_, PyModel>, data: &Bound<'_, PyData>, q: &Bound<'_, PyAny>) -> PyResult<()> {
+pub fn frames_forward_kinematics(
+    model: &Bound<'_, PyModel>,
+    data: &Bound<'_, PyData>,
+    q: &Bound<'_, PyAny>,
+) -> PyResult<()> {
     let mut d = data.borrow_mut();
     let c = check(model.get(), &d, q, &[])?;
     dy::frames_forward_kinematics(&model.get().inner, &mut d.data, c.q.slice());
@@ -76,7 +90,11 @@ pub fn frames_forward_kinematics(model: &Bound<'_, PyModel>, data: &Bound<'_, Py
 
 /// Centre of mass (3,), world frame, m: `data.com`.
 #[pyfunction]
-pub fn center_of_mass<'py>(model: &Bound<'py, PyModel>, data: &Bound<'py, PyData>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+pub fn center_of_mass<'py>(
+    model: &Bound<'py, PyModel>,
+    data: &Bound<'py, PyData>,
+    q: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[])?;
@@ -88,7 +106,11 @@ pub fn center_of_mass<'py>(model: &Bound<'py, PyModel>, data: &Bound<'py, PyData
 
 /// CoM Jacobian (3, nv), world frame: `data.Jcom` (also sets `data.com`).
 #[pyfunction]
-pub fn jacobian_center_of_mass<'py>(model: &Bound<'py, PyModel>, data: &Bound<'py, PyData>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+pub fn jacobian_center_of_mass<'py>(
+    model: &Bound<'py, PyModel>,
+    data: &Bound<'py, PyData>,
+    q: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[])?;
@@ -99,7 +121,11 @@ pub fn jacobian_center_of_mass<'py>(model: &Bound<'py, PyModel>, data: &Bound<'p
 
 /// World-frame joint Jacobians (6, nv), rows linear then angular: `data.J`.
 #[pyfunction]
-pub fn compute_joint_jacobians<'py>(model: &Bound<'py, PyModel>, data: &Bound<'py, PyData>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+pub fn compute_joint_jacobians<'py>(
+    model: &Bound<'py, PyModel>,
+    data: &Bound<'py, PyData>,
+    q: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[])?;
@@ -144,7 +170,13 @@ pub fn rnea<'py>(
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[(v, "v"), (a, "a")])?;
-        dy::rnea(&model.get().inner, &mut d.data, c.q.slice(), c.rest[0].slice(), c.rest[1].slice());
+        dy::rnea(
+            &model.get().inner,
+            &mut d.data,
+            c.q.slice(),
+            c.rest[0].slice(),
+            c.rest[1].slice(),
+        );
     }
     Ok(vec_out(data, |d| d.data.tau.as_slice()))
 }
@@ -160,14 +192,23 @@ pub fn nonlinear_effects<'py>(
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[(v, "v")])?;
-        dy::nonlinear_effects(&model.get().inner, &mut d.data, c.q.slice(), c.rest[0].slice());
+        dy::nonlinear_effects(
+            &model.get().inner,
+            &mut d.data,
+            c.q.slice(),
+            c.rest[0].slice(),
+        );
     }
     Ok(vec_out(data, |d| d.data.tau.as_slice()))
 }
 
 /// Generalized gravity g(q) (nv,): `data.tau`.
 #[pyfunction]
-pub fn compute_generalized_gravity<'py>(model: &Bound<'py, PyModel>, data: &Bound<'py, PyData>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+pub fn compute_generalized_gravity<'py>(
+    model: &Bound<'py, PyModel>,
+    data: &Bound<'py, PyData>,
+    q: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[])?;
@@ -178,7 +219,11 @@ pub fn compute_generalized_gravity<'py>(model: &Bound<'py, PyModel>, data: &Boun
 
 /// Joint-space inertia matrix M(q) (nv, nv), full and symmetric: `data.M`.
 #[pyfunction]
-pub fn crba<'py>(model: &Bound<'py, PyModel>, data: &Bound<'py, PyData>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+pub fn crba<'py>(
+    model: &Bound<'py, PyModel>,
+    data: &Bound<'py, PyData>,
+    q: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[])?;
@@ -200,7 +245,13 @@ pub fn aba<'py>(
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[(v, "v"), (tau, "tau")])?;
-        dy::aba(&model.get().inner, &mut d.data, c.q.slice(), c.rest[0].slice(), c.rest[1].slice());
+        dy::aba(
+            &model.get().inner,
+            &mut d.data,
+            c.q.slice(),
+            c.rest[0].slice(),
+            c.rest[1].slice(),
+        );
     }
     Ok(vec_out(data, |d| d.data.ddq.as_slice()))
 }
@@ -219,7 +270,13 @@ pub fn joint_torque_regressor<'py>(
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[(v, "v"), (a, "a")])?;
-        dy::joint_torque_regressor(&model.get().inner, &mut d.data, c.q.slice(), c.rest[0].slice(), c.rest[1].slice());
+        dy::joint_torque_regressor(
+            &model.get().inner,
+            &mut d.data,
+            c.q.slice(),
+            c.rest[0].slice(),
+            c.rest[1].slice(),
+        );
     }
     Ok(mat_out(data, |d| &d.data.regressor))
 }
@@ -228,7 +285,11 @@ pub fn joint_torque_regressor<'py>(
 /// one block (m, m c_x, m c_y, m c_z) per description link (seed 004, eq 8).
 /// Pinocchio's computeStaticRegressor is this divided by the total mass, per joint.
 #[pyfunction]
-pub fn static_com_regressor<'py>(model: &Bound<'py, PyModel>, data: &Bound<'py, PyData>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+pub fn static_com_regressor<'py>(
+    model: &Bound<'py, PyModel>,
+    data: &Bound<'py, PyData>,
+    q: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[])?;

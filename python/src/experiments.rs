@@ -19,7 +19,10 @@ use twinloop_ident::{IdentError, PoseCategory, StaticPose, identify_static as id
 use twinloop_random::SplitMix64;
 
 /// A serde value as Python objects (dicts, lists, floats), through `json`.
-pub fn to_py<'py, T: Serialize + ?Sized>(py: Python<'py>, value: &T) -> PyResult<Bound<'py, PyAny>> {
+pub fn to_py<'py, T: Serialize + ?Sized>(
+    py: Python<'py>,
+    value: &T,
+) -> PyResult<Bound<'py, PyAny>> {
     let text = serde_json::to_string(value).map_err(|e| value_error(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
@@ -28,8 +31,17 @@ fn ident_error(e: IdentError) -> PyErr {
     value_error(e.to_string())
 }
 
-fn study_options(ramp: f64, slow_ramp: f64, compliance_slope: f64, encoders: bool) -> PyResult<StudyOptions> {
-    for (x, name) in [(ramp, "ramp"), (slow_ramp, "slow_ramp"), (compliance_slope, "compliance_slope")] {
+fn study_options(
+    ramp: f64,
+    slow_ramp: f64,
+    compliance_slope: f64,
+    encoders: bool,
+) -> PyResult<StudyOptions> {
+    for (x, name) in [
+        (ramp, "ramp"),
+        (slow_ramp, "slow_ramp"),
+        (compliance_slope, "compliance_slope"),
+    ] {
         if !(x > 0.0 && x.is_finite()) {
             return Err(value_error(format!("{name}: must be positive, got {x}")));
         }
@@ -46,9 +58,18 @@ fn study_options(ramp: f64, slow_ramp: f64, compliance_slope: f64, encoders: boo
 /// A change given as a dict {"link": str, "mass": kg, "xyz": [x, y, z] (m, link frame)}.
 fn change_arg(c: &Bound<'_, PyAny>, k: usize) -> PyResult<Change> {
     let bad = |what: &str| value_error(format!("changes[{k}]: {what}"));
-    let link: String = c.get_item("link").and_then(|x| x.extract()).map_err(|_| bad("needs \"link\" (str)"))?;
-    let mass: f64 = c.get_item("mass").and_then(|x| x.extract()).map_err(|_| bad("needs \"mass\" (kg)"))?;
-    let xyz: [f64; 3] = c.get_item("xyz").and_then(|x| x.extract()).map_err(|_| bad("needs \"xyz\" (3 numbers, m)"))?;
+    let link: String = c
+        .get_item("link")
+        .and_then(|x| x.extract())
+        .map_err(|_| bad("needs \"link\" (str)"))?;
+    let mass: f64 = c
+        .get_item("mass")
+        .and_then(|x| x.extract())
+        .map_err(|_| bad("needs \"mass\" (kg)"))?;
+    let xyz: [f64; 3] = c
+        .get_item("xyz")
+        .and_then(|x| x.extract())
+        .map_err(|_| bad("needs \"xyz\" (3 numbers, m)"))?;
     if !(mass.is_finite() && xyz.iter().all(|x| x.is_finite())) {
         return Err(bad("mass and xyz must be finite"));
     }
@@ -84,17 +105,31 @@ pub fn tipover<'py>(
 /// mass inside a link's collision outline, drawn from `seed`.
 #[pyfunction]
 #[pyo3(signature = (robot, n, seed = 1, mass_range = (0.05, 0.5)))]
-pub fn random_changes<'py>(py: Python<'py>, robot: &Bound<'py, PyAny>, n: usize, seed: u64, mass_range: (f64, f64)) -> PyResult<Bound<'py, PyAny>> {
+pub fn random_changes<'py>(
+    py: Python<'py>,
+    robot: &Bound<'py, PyAny>,
+    n: usize,
+    seed: u64,
+    mass_range: (f64, f64),
+) -> PyResult<Bound<'py, PyAny>> {
     let d = description_arg(robot)?;
     let links = ann_data::outlined_links(&d);
     if links.is_empty() {
-        return Err(value_error(format!("robot: \"{}\" has no link with a collision outline", d.name)));
+        return Err(value_error(format!(
+            "robot: \"{}\" has no link with a collision outline",
+            d.name
+        )));
     }
     if !(mass_range.0 > 0.0 && mass_range.1 >= mass_range.0 && mass_range.1.is_finite()) {
-        return Err(value_error(format!("mass_range: needs 0 < low <= high, got {:?}", mass_range)));
+        return Err(value_error(format!(
+            "mass_range: needs 0 < low <= high, got {:?}",
+            mass_range
+        )));
     }
     let mut rng = SplitMix64(seed);
-    let changes: Vec<Change> = (0..n).map(|_| ann_data::random_change(&d, &links, mass_range, &mut rng)).collect();
+    let changes: Vec<Change> = (0..n)
+        .map(|_| ann_data::random_change(&d, &links, mass_range, &mut rng))
+        .collect();
     to_py(py, &changes)
 }
 
@@ -114,7 +149,11 @@ pub fn tipover_changes<'py>(
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyList>> {
     let d = description_arg(robot)?;
-    let changes: Vec<Change> = changes.iter().enumerate().map(|(k, c)| change_arg(&c, k)).collect::<PyResult<_>>()?;
+    let changes: Vec<Change> = changes
+        .iter()
+        .enumerate()
+        .map(|(k, c)| change_arg(&c, k))
+        .collect::<PyResult<_>>()?;
     let opts = study_options(ramp, slow_ramp, 2.0, false)?;
     let threads = thread_count(threads)?;
     let foot = ann_data::training_foot(&d).map_err(ident_error)?;
@@ -125,7 +164,12 @@ pub fn tipover_changes<'py>(
                 let s = ann_data::static_tip(&changed, &foot)?;
                 let sim = if simulate {
                     let r = run_study(&changed, &opts)?;
-                    Some([r.forward.measured_deg, r.backward.measured_deg, r.left.measured_deg, r.right.measured_deg])
+                    Some([
+                        r.forward.measured_deg,
+                        r.backward.measured_deg,
+                        r.left.measured_deg,
+                        r.right.measured_deg,
+                    ])
                 } else {
                     None
                 };
@@ -170,7 +214,10 @@ fn parallel<T: Send, E: std::fmt::Display>(
     });
     let mut out = Vec::with_capacity(n);
     for part in parts {
-        let part = part.ok_or((out.len(), "a worker thread stopped unexpectedly".to_string()))?;
+        let part = part.ok_or((
+            out.len(),
+            "a worker thread stopped unexpectedly".to_string(),
+        ))?;
         for r in part {
             let i = out.len();
             out.push(r.map_err(|e| (i, e))?);
@@ -184,7 +231,14 @@ fn parallel<T: Send, E: std::fmt::Display>(
 /// plate noise, and each pose's category.
 #[pyfunction]
 #[pyo3(signature = (robot, count = 172, cop_noise = 0.0, joint_noise = 0.0, seed = 1))]
-pub fn static_poses<'py>(py: Python<'py>, robot: &Bound<'py, PyAny>, count: usize, cop_noise: f64, joint_noise: f64, seed: u64) -> PyResult<Bound<'py, PyDict>> {
+pub fn static_poses<'py>(
+    py: Python<'py>,
+    robot: &Bound<'py, PyAny>,
+    count: usize,
+    cop_noise: f64,
+    joint_noise: f64,
+    seed: u64,
+) -> PyResult<Bound<'py, PyDict>> {
     for (x, name) in [(cop_noise, "cop_noise"), (joint_noise, "joint_noise")] {
         if !(x >= 0.0 && x.is_finite()) {
             return Err(value_error(format!("{name}: must be >= 0, got {x}")));
@@ -209,7 +263,13 @@ pub fn static_poses<'py>(py: Python<'py>, robot: &Bound<'py, PyAny>, count: usiz
     let out = PyDict::new(py);
     out.set_item("q", new_array(py, q, &[poses.len(), nq])?)?;
     out.set_item("cop", new_array(py, cop, &[poses.len(), 2])?)?;
-    out.set_item("category", poses.iter().map(|p| p.category.map(|c| c.name())).collect::<Vec<_>>())?;
+    out.set_item(
+        "category",
+        poses
+            .iter()
+            .map(|p| p.category.map(|c| c.name()))
+            .collect::<Vec<_>>(),
+    )?;
     Ok(out)
 }
 
@@ -232,23 +292,31 @@ pub fn identify_static<'py>(
     category: Option<Vec<Option<String>>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let d = description_arg(robot)?;
-    let model = twinloop_dynamics::Model::from_description_with_base(&d, BaseKind::Floating).map_err(crate::errors::description_error)?;
+    let model = twinloop_dynamics::Model::from_description_with_base(&d, BaseKind::Floating)
+        .map_err(crate::errors::description_error)?;
     let qa = Arg::new(q, "q", &[Dim::Any, Dim::Is(model.nq, "nq")])?;
     let n = qa.rows();
     let ca = Arg::new(cop, "cop", &[Dim::Is(n, "P (rows of q)"), Dim::Is(2, "")])?;
     if !(total_mass > 0.0 && total_mass.is_finite()) {
-        return Err(value_error(format!("total_mass: must be positive, got {total_mass}")));
+        return Err(value_error(format!(
+            "total_mass: must be positive, got {total_mass}"
+        )));
     }
     if let Some(c) = &category
         && c.len() != n
     {
-        return Err(value_error(format!("category: {} entries for {n} poses", c.len())));
+        return Err(value_error(format!(
+            "category: {} entries for {n} poses",
+            c.len()
+        )));
     }
     let poses: Vec<StaticPose> = (0..n)
         .map(|i| -> PyResult<StaticPose> {
             let cat = match category.as_ref().and_then(|c| c[i].as_deref()) {
                 None => None,
-                Some(s) => Some(PoseCategory::from_name(s).ok_or_else(|| value_error(format!("category[{i}]: unknown category \"{s}\"")))?),
+                Some(s) => Some(PoseCategory::from_name(s).ok_or_else(|| {
+                    value_error(format!("category[{i}]: unknown category \"{s}\""))
+                })?),
             };
             Ok(StaticPose {
                 q: qa.slice()[i * model.nq..(i + 1) * model.nq].to_vec(),

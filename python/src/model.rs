@@ -17,15 +17,21 @@ use twinloop_spatial::Se3;
 /// on a strange file becomes an error naming the file, never a panic.
 pub fn load_description(spec: &str) -> PyResult<Description> {
     if spec.starts_with("builtin:") {
-        return twinloop_description::builtin::resolve(spec).map_err(|e| ModelError::new_err(e.to_string()));
+        return twinloop_description::builtin::resolve(spec)
+            .map_err(|e| ModelError::new_err(e.to_string()));
     }
     let path = Path::new(spec);
     if let Err(e) = std::fs::read(path) {
-        return Err(PyOSError::new_err(format!("{spec}: cannot read the file: {e}")));
+        return Err(PyOSError::new_err(format!(
+            "{spec}: cannot read the file: {e}"
+        )));
     }
     let loaded = std::panic::catch_unwind(|| twinloop_description::load(path));
     let result = loaded.unwrap_or_else(|_| {
-        Err(DescriptionError::new("the reader failed unexpectedly; please report this file").in_file(path))
+        Err(
+            DescriptionError::new("the reader failed unexpectedly; please report this file")
+                .in_file(path),
+        )
     });
     result.map_err(description_error)
 }
@@ -58,9 +64,15 @@ fn description_from_state(state: DescriptionState) -> PyResult<Description> {
     let mut d = urdf::from_str(&text).map_err(description_error)?;
     d.gravity = gravity;
     for (name, a) in armature {
-        let joint = d.joints.iter_mut().find(|j| j.name == name).ok_or_else(|| {
-            value_error(format!("pickled description: armature of joint \"{name}\", which it does not have"))
-        })?;
+        let joint = d
+            .joints
+            .iter_mut()
+            .find(|j| j.name == name)
+            .ok_or_else(|| {
+                value_error(format!(
+                    "pickled description: armature of joint \"{name}\", which it does not have"
+                ))
+            })?;
         joint.armature = a;
     }
     Ok(d)
@@ -143,7 +155,11 @@ impl PyDescription {
                     d.set_item("mass", i.mass)?;
                     d.set_item("com", PyArray1::from_slice(py, &i.origin.xyz))?;
                     let m = i.inertia.matrix();
-                    d.set_item("inertia", PyArray2::from_vec2(py, &m.map(|r| r.to_vec())).map_err(|e| value_error(e.to_string()))?)?;
+                    d.set_item(
+                        "inertia",
+                        PyArray2::from_vec2(py, &m.map(|r| r.to_vec()))
+                            .map_err(|e| value_error(e.to_string()))?,
+                    )?;
                 }
                 None => {
                     d.set_item("mass", 0.0)?;
@@ -212,7 +228,9 @@ impl PyDescription {
     }
 
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        let f = py.import("twinloop._native")?.getattr("_description_from_state")?;
+        let f = py
+            .import("twinloop._native")?
+            .getattr("_description_from_state")?;
         let state = description_state(&self.inner).into_pyobject(py)?;
         PyTuple::new(py, [f, PyTuple::new(py, [state])?.into_any()])
     }
@@ -238,8 +256,13 @@ pub struct PyModel {
 
 impl PyModel {
     pub fn build(description: Arc<Description>, floating: bool) -> PyResult<PyModel> {
-        let base = if floating { BaseKind::Floating } else { BaseKind::Fixed };
-        let model = Model::from_description_with_base(&description, base).map_err(description_error)?;
+        let base = if floating {
+            BaseKind::Floating
+        } else {
+            BaseKind::Fixed
+        };
+        let model =
+            Model::from_description_with_base(&description, base).map_err(description_error)?;
         Ok(PyModel {
             inner: Arc::new(model),
             description,
@@ -254,13 +277,20 @@ impl PyModel {
             if k < m.frames.len() {
                 return Ok(k);
             }
-            return Err(value_error(format!("frame: index {k} out of range (the model has {} frames)", m.frames.len())));
+            return Err(value_error(format!(
+                "frame: index {k} out of range (the model has {} frames)",
+                m.frames.len()
+            )));
         }
         let name: String = frame
             .extract()
             .map_err(|_| value_error("frame: expected a frame name (str) or index (int)"))?;
-        m.frame_index(&name)
-            .ok_or_else(|| value_error(format!("frame: no frame named \"{name}\" in robot \"{}\"", m.name)))
+        m.frame_index(&name).ok_or_else(|| {
+            value_error(format!(
+                "frame: no frame named \"{name}\" in robot \"{}\"",
+                m.name
+            ))
+        })
     }
 }
 
@@ -272,7 +302,10 @@ impl PyModel {
     /// link to the world. Raises ModelError for a description the dynamics cannot take.
     #[staticmethod]
     #[pyo3(signature = (description, floating = true))]
-    fn from_description(description: &Bound<'_, PyDescription>, floating: bool) -> PyResult<PyModel> {
+    fn from_description(
+        description: &Bound<'_, PyDescription>,
+        floating: bool,
+    ) -> PyResult<PyModel> {
         PyModel::build(description.get().inner.clone(), floating)
     }
 
@@ -353,8 +386,12 @@ impl PyModel {
         PyArray1::from_vec(py, q)
     }
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        let f = py.import("twinloop._native")?.getattr("_model_from_state")?;
-        let state = description_state(&self.description).into_pyobject(py)?.into_any();
+        let f = py
+            .import("twinloop._native")?
+            .getattr("_model_from_state")?;
+        let state = description_state(&self.description)
+            .into_pyobject(py)?
+            .into_any();
         let floating = self.floating.into_pyobject(py)?.to_owned().into_any();
         PyTuple::new(py, [f, PyTuple::new(py, [state, floating])?.into_any()])
     }
@@ -384,18 +421,26 @@ impl PyData {
         if Arc::ptr_eq(&self.model, &model.inner) {
             Ok(())
         } else {
-            Err(value_error("data: made for another model (create it with Data(model))"))
+            Err(value_error(
+                "data: made for another model (create it with Data(model))",
+            ))
         }
     }
 }
 
-fn vec_view<'py>(slf: &Bound<'py, PyData>, f: impl Fn(&Data) -> &[f64]) -> Bound<'py, PyArray1<f64>> {
+fn vec_view<'py>(
+    slf: &Bound<'py, PyData>,
+    f: impl Fn(&Data) -> &[f64],
+) -> Bound<'py, PyArray1<f64>> {
     let this = slf.borrow();
     // SAFETY: the buffer lives in the Data object, allocated once in Data::new.
     unsafe { view_vector(slf.as_any(), f(&this.data)) }
 }
 
-fn mat_view<'py>(slf: &Bound<'py, PyData>, f: impl Fn(&Data) -> &nalgebra::DMatrix<f64>) -> Bound<'py, PyArray2<f64>> {
+fn mat_view<'py>(
+    slf: &Bound<'py, PyData>,
+    f: impl Fn(&Data) -> &nalgebra::DMatrix<f64>,
+) -> Bound<'py, PyArray2<f64>> {
     let this = slf.borrow();
     // SAFETY: as in vec_view.
     unsafe { view_matrix(slf.as_any(), f(&this.data)) }

@@ -48,12 +48,17 @@ impl Settings {
                 "dt" => {
                     s.dt = v.extract().map_err(|_| bad("expected a number (s)"))?;
                     if !(s.dt > 0.0 && s.dt.is_finite()) {
-                        return Err(bad(&format!("the time step must be positive, not {}", s.dt)));
+                        return Err(bad(&format!(
+                            "the time step must be positive, not {}",
+                            s.dt
+                        )));
                     }
                 }
                 "servo" => {
                     s.servo = v.extract().map_err(|_| bad("expected a str"))?;
-                    if !["auto", "rx28", "rx64", "xm430", "passive", "torque"].contains(&s.servo.as_str()) {
+                    if !["auto", "rx28", "rx64", "xm430", "passive", "torque"]
+                        .contains(&s.servo.as_str())
+                    {
                         return Err(bad("expected auto, rx28, rx64, xm430, passive or torque"));
                     }
                 }
@@ -110,7 +115,8 @@ pub fn build(robot: &Description, s: &Settings) -> Result<Simulator, String> {
 /// Reset to (q, v) at time 0: contacts released, actuator states at the joints.
 fn reset(sim: &mut Simulator, q: &[f64], v: &[f64]) -> Result<(), String> {
     let o = sim.model.q_offset;
-    sim.set_joint_positions(&q[o..]).map_err(|e| e.to_string())?;
+    sim.set_joint_positions(&q[o..])
+        .map_err(|e| e.to_string())?;
     sim.q[..o].copy_from_slice(&q[..o]);
     sim.v.copy_from_slice(v);
     sim.time = 0.0;
@@ -254,11 +260,21 @@ impl PySimulator {
         if let Some(imu) = st.imu {
             d.set_item("imu_gyro", PyArray1::from_slice(py, &imu.gyro))?;
             d.set_item("imu_accel", PyArray1::from_slice(py, &imu.accel))?;
-            d.set_item("imu_orientation", imu.orientation.map(|o| PyArray1::from_slice(py, &o)))?;
+            d.set_item(
+                "imu_orientation",
+                imu.orientation.map(|o| PyArray1::from_slice(py, &o)),
+            )?;
         }
         let forces: Vec<f64> = st.feet.iter().map(|f| f.force).collect();
-        let cops: Vec<f64> = st.feet.iter().flat_map(|f| f.cop.unwrap_or([f64::NAN; 2])).collect();
-        d.set_item("foot_names", st.feet.iter().map(|f| f.name.clone()).collect::<Vec<_>>())?;
+        let cops: Vec<f64> = st
+            .feet
+            .iter()
+            .flat_map(|f| f.cop.unwrap_or([f64::NAN; 2]))
+            .collect();
+        d.set_item(
+            "foot_names",
+            st.feet.iter().map(|f| f.name.clone()).collect::<Vec<_>>(),
+        )?;
         d.set_item("foot_force", PyArray1::from_vec(py, forces))?;
         d.set_item("foot_cop", new_array(py, cops, &[st.feet.len(), 2])?)?;
         Ok(d)
@@ -296,12 +312,15 @@ impl PySimulator {
             description: &self.description,
             settings: &self.settings,
             q: (q.0.slice(), q.1),
-            v: v.as_ref().map_or((&zeros[..], false), |v| (v.0.slice(), v.1)),
+            v: v.as_ref()
+                .map_or((&zeros[..], false), |v| (v.0.slice(), v.1)),
             goals: g.slice(),
             n,
             t,
         };
-        let states = py.detach(|| job.run(threads)).map_err(SimulationError::new_err)?;
+        let states = py
+            .detach(|| job.run(threads))
+            .map_err(SimulationError::new_err)?;
         new_array(py, states, &[n, t, m.nq + m.nv])
     }
 
@@ -318,12 +337,24 @@ impl PySimulator {
 
 /// An argument given once for all rollouts, (width,), or per rollout, (N, width);
 /// returned with whether it is per rollout.
-fn per_rollout<'py>(x: &Bound<'py, PyAny>, name: &'static str, n: usize, width: usize) -> PyResult<(Arg<'py>, bool)> {
+fn per_rollout<'py>(
+    x: &Bound<'py, PyAny>,
+    name: &'static str,
+    n: usize,
+    width: usize,
+) -> PyResult<(Arg<'py>, bool)> {
     let ndim: usize = x.getattr("ndim").and_then(|d| d.extract()).unwrap_or(1);
     if ndim == 1 {
         Ok((Arg::new(x, name, &[Dim::Is(width, "")])?, false))
     } else {
-        Ok((Arg::new(x, name, &[Dim::Is(n, "N (rollouts in goals)"), Dim::Is(width, "")])?, true))
+        Ok((
+            Arg::new(
+                x,
+                name,
+                &[Dim::Is(n, "N (rollouts in goals)"), Dim::Is(width, "")],
+            )?,
+            true,
+        ))
     }
 }
 
@@ -339,7 +370,7 @@ struct Rollouts<'a> {
 }
 
 impl Rollouts<'_> {
-    fn row<'b>(x: (&'b [f64], bool), i: usize, w: usize) -> &'b [f64] {
+    fn row(x: (&[f64], bool), i: usize, w: usize) -> &[f64] {
         if x.1 { &x.0[i * w..(i + 1) * w] } else { x.0 }
     }
 
@@ -376,7 +407,10 @@ impl Rollouts<'_> {
                 .collect();
             handles
                 .into_iter()
-                .map(|h| h.join().unwrap_or_else(|_| Err("a rollout thread failed".into())))
+                .map(|h| {
+                    h.join()
+                        .unwrap_or_else(|_| Err("a rollout thread failed".into()))
+                })
                 .collect()
         });
         results.into_iter().collect::<Result<(), String>>()?;
