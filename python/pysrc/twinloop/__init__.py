@@ -54,6 +54,8 @@ from ._native import (
     static_com_regressor_batch,
 )
 
+from . import sysid  # noqa: E402  (twinloop.sysid.arx / .ss)
+
 LOCAL = "LOCAL"
 WORLD = "WORLD"
 LOCAL_WORLD_ALIGNED = "LOCAL_WORLD_ALIGNED"
