@@ -386,3 +386,54 @@ pub fn training_samples<'py>(
     }
     Ok(out)
 }
+
+/// Adapt the model to a tip-over experiment (`twinloop adapt --tipover FILE --json`,
+/// seed 000 sections III and V.B): `tipover` is `tipover()`'s dict (or a JSON file's
+/// contents). `total_mass` (kg) or `host` (the link the mass went on) fixes the added
+/// mass; `check=True` reruns the tip-over on the adapted model. Returns (the report's
+/// fields, the adapted Description or None when the family is not fixed).
+#[pyfunction]
+#[pyo3(signature = (prior, tipover, total_mass = None, host = None, merge = false, resolution = 0.05, check = false))]
+#[allow(clippy::too_many_arguments)]
+pub fn adapt<'py>(
+    py: Python<'py>,
+    prior: &Bound<'py, PyAny>,
+    tipover: &Bound<'py, PyAny>,
+    total_mass: Option<f64>,
+    host: Option<String>,
+    merge: bool,
+    resolution: f64,
+    check: bool,
+) -> PyResult<(Bound<'py, PyAny>, Option<crate::model::PyDescription>)> {
+    let d = description_arg(prior)?;
+    let text: String = py
+        .import("json")?
+        .call_method1("dumps", (tipover,))?
+        .extract()?;
+    let tip: twinloop_ident::tipover_study::StudyReport = serde_json::from_str(&text)
+        .map_err(|e| value_error(format!("tipover: not a tip-over report ({e})")))?;
+    if !(resolution > 0.0 && resolution.is_finite()) {
+        return Err(value_error(format!(
+            "resolution: must be positive, got {resolution}"
+        )));
+    }
+    let opts = twinloop_ident::adapt::AdaptOptions {
+        total_mass,
+        host,
+        merge,
+        angle_resolution_deg: Some(resolution),
+    };
+    let adapted = py
+        .detach(|| {
+            let mut a = twinloop_ident::adapt::adapt(&d, &tip, &opts)?;
+            if check {
+                twinloop_ident::adapt::check(&mut a, &StudyOptions::default())?;
+            }
+            Ok::<_, IdentError>(a)
+        })
+        .map_err(ident_error)?;
+    let robot = adapted.robot.map(|r| crate::model::PyDescription {
+        inner: std::sync::Arc::new(r),
+    });
+    Ok((to_py(py, &adapted.report)?, robot))
+}

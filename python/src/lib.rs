@@ -60,6 +60,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(experiments::static_poses, m)?)?;
     m.add_function(wrap_pyfunction!(experiments::identify_static, m)?)?;
     m.add_function(wrap_pyfunction!(experiments::training_samples, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::adapt, m)?)?;
     m.add_function(wrap_pyfunction!(sysid::sysid_arx, m)?)?;
     m.add_function(wrap_pyfunction!(sysid::sysid_ss, m)?)?;
     Ok(())

@@ -53,3 +53,20 @@ def test_tipover_json_matches_the_cli(tmp_path):
     ours = tl.tipover("builtin:km20", ramp=2.0, slow_ramp=0.2, add_mass=[(0.2, "torso", (0.05, 0.0, 0.0))])
     assert_same("tipover", ours, theirs)
     assert ours["com"]["true"][2] > 0.1  # a real result, not an empty one
+
+
+def test_adapt_json_matches_the_cli(tmp_path):
+    exe = cli()
+    prior = tl.load("builtin:km20")
+    tip = tl.tipover(prior, ramp=2.0, slow_ramp=0.2, add_mass=[(0.2, "torso", (0.05, 0.0, 0.0))])
+    tip_file = tmp_path / "tip.json"
+    tip_file.write_text(json.dumps(tip))
+    out = tmp_path / "adapt.json"
+    total = prior.total_mass + 0.2
+    subprocess.run([exe, "adapt", "--robot", "builtin:km20", "--tipover", str(tip_file), "--total-mass", repr(total),
+                    "--json", str(out)], check=True, capture_output=True, timeout=300)
+    theirs = json.loads(out.read_text())
+    ours, adapted = tl.adapt(prior, tip, total_mass=total)
+    assert_same("adapt", ours, theirs)
+    assert ours["added"]["mass"] == pytest.approx(0.2, abs=1e-9)
+    assert adapted.total_mass == pytest.approx(total)

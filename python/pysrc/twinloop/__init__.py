@@ -21,6 +21,7 @@ from ._native import (
     SimulationError,
     Simulator,
     aba,
+    adapt,
     aba_batch,
     body_parameters,
     center_of_mass,

@@ -205,3 +205,16 @@ def identify_static(robot: RobotSpec, q: ArrayLike, cop: ArrayLike, total_mass: 
     """`twinloop identify static --json`'s schema, cop_sigma, com_margin and result."""
 def training_samples(robot: RobotSpec, start: int, stop: int, seed: int = 1, mass_range: tuple[float, float] = (0.05, 0.5),
                      noise_deg: float = 0.0, threads: Optional[int] = None) -> list[dict[str, Any]]: ...
+def adapt(prior: RobotSpec, tipover: dict[str, Any], total_mass: Optional[float] = None, host: Optional[str] = None,
+          merge: bool = False, resolution: float = 0.05, check: bool = False) -> tuple[dict[str, Any], Optional[Description]]:
+    """`twinloop adapt --tipover FILE --json`'s report and the adapted description (None if not fixed)."""
+def sysid_arx(u: ArrayLike, y: ArrayLike, na: int = 2, nb: int = 2, nk: int = 1, u_val: Optional[ArrayLike] = None,
+              y_val: Optional[ArrayLike] = None, sample_time: Optional[float] = None, input_names: Optional[list[str]] = None,
+              output_names: Optional[list[str]] = None, kstep: int = 1, lags: int = 25) -> dict[str, Any]:
+    """u [N, nu], y [N, ny] -> `twinloop identify arx --json`'s fields."""
+def sysid_ss(u: ArrayLike, y: ArrayLike, order: int, method: Literal["n4sid", "pem", "arx-reduce-pem"] = "pem",
+             u_val: Optional[ArrayLike] = None, y_val: Optional[ArrayLike] = None, sample_time: Optional[float] = None,
+             na: int = 10, nb: int = 10, nk: int = 1, max_iter: int = 100, feedthrough: bool = False,
+             estimate_x0: bool = False, focus: Literal["prediction", "simulation"] = "prediction", kstep: int = 1,
+             lags: int = 25) -> dict[str, Any]:
+    """u [N, nu], y [N, ny] -> `twinloop identify ss --json`'s fields."""
