@@ -11,6 +11,7 @@ mod batch;
 mod dynamics;
 mod errors;
 mod experiments;
+mod link;
 mod model;
 mod sim;
 mod sysid;
@@ -25,6 +26,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::PyModel>()?;
     m.add_class::<model::PyData>()?;
     m.add_class::<sim::PySimulator>()?;
+    m.add_class::<link::PyBus>()?;
+    m.add_class::<link::PyVirtualServer>()?;
     m.add("SimulationError", py.get_type::<sim::SimulationError>())?;
     m.add_function(wrap_pyfunction!(model::load, m)?)?;
     m.add_function(wrap_pyfunction!(model::_description_from_state, m)?)?;

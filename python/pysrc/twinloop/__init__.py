@@ -14,6 +14,8 @@ float64.
 """
 
 from ._native import (
+    Bus,
+    VirtualRobotServer,
     Data,
     Description,
     Model,

@@ -218,3 +218,20 @@ def sysid_ss(u: ArrayLike, y: ArrayLike, order: int, method: Literal["n4sid", "p
              estimate_x0: bool = False, focus: Literal["prediction", "simulation"] = "prediction", kstep: int = 1,
              lags: int = 25) -> dict[str, Any]:
     """u [N, nu], y [N, ny] -> `twinloop identify ss --json`'s fields."""
+
+class Bus:
+    """A Dynamixel bus (serial device, pty path or tcp:HOST:PORT); OSError on port and servo errors."""
+    def __init__(self, port: str, baud: int = 1_000_000, timeout_ms: float = 10.0, retries: int = 2) -> None: ...
+    def scan(self, protocol: Optional[int] = None, ids: Optional[tuple[int, int]] = None) -> list[dict[str, Any]]:
+        """`twinloop link scan --json`: protocol, id, model, model_number, firmware."""
+    def read(self, id: int, protocol: int, registers: Optional[list[str]] = None) -> dict[str, Any]:
+        """`twinloop link read --json`: protocol, id, model, registers (address, name, size, access, raw, value)."""
+
+class VirtualRobotServer:
+    """A simulated robot behind the servo protocol on a new pty (`twinloop serve`); a context manager."""
+    def __init__(self, robot: Optional[RobotSpec] = None, mapping: str = "builtin:km20") -> None: ...
+    @property
+    def path(self) -> str: ...
+    def close(self) -> None: ...
+    def __enter__(self) -> VirtualRobotServer: ...
+    def __exit__(self, *args: Any) -> None: ...
