@@ -9,8 +9,9 @@
    loop over Pinocchio.
 3. Rollouts: 64 standing OP3 rollouts of 1 s (dt 1 ms) with Simulator.rollout vs
    mujoco.rollout on op3's MJCF (scene with floor), steps per second per core.
-4. Ray: 200 tip-overs (static route) of random km20 changes on a local Ray with 1 and
-   2 CPUs; overhead per task; bytes moved per job.
+4. Ray: 200 tip-overs (static route, ~0.4 ms each) and 16 simulated tip-over studies
+   (~1 s each) of random km20 changes on a local Ray with 1 and 2 CPUs; overhead per
+   task; bytes moved per job.
 
 Needs: twinloop (python/test.sh builds it), pin, mujoco, ray.
 """
@@ -163,45 +164,51 @@ def rollouts(results, quick):
           f"mujoco {r['mujoco_steps_per_s_per_core']:.0f} steps/s/core")
 
 
-def ray_sweep(results, quick):
+def ray_sweep(results, quick, jobs=200, batch_size=10, simulate=False):
     import ray
 
     import twinloop.distributed as td
 
     prior = tl.load("builtin:km20")
-    changes = tl.random_changes(prior, 200, seed=1)
+    changes = tl.random_changes(prior, jobs, seed=1)
+    kw = {"simulate": simulate, "ramp": 5.0, "slow_ramp": 1.0}
     t0 = time.perf_counter()
-    serial = tl.tipover_changes(prior, changes, threads=1)
+    serial = tl.tipover_changes(prior, changes, threads=1, **kw)
     t_serial = time.perf_counter() - t0
-    row = {"jobs": 200, "batch_size": 10, "serial_s": t_serial,
+    tasks = -(-jobs // batch_size)
+    row = {"jobs": jobs, "batch_size": batch_size, "simulate": simulate, "serial_s": t_serial,
            "description_pickle_bytes": len(pickle.dumps(prior)),
-           "bytes_per_job": (len(pickle.dumps(changes)) + len(pickle.dumps(serial))) / 200}
+           "bytes_per_job": (len(pickle.dumps(changes)) + len(pickle.dumps(serial))) / jobs}
     for cpus in (1, 2):
         ray.init(num_cpus=cpus, include_dashboard=False, log_to_driver=False)
-        td.tipover_sweep(prior, changes[:20], batch_size=10, progress=False)  # start the workers
+        # Start the workers first: one task per CPU, so neither run pays for it.
+        ray.get([ray.remote(lambda: None).remote() for _ in range(4 * cpus)])
         t0 = time.perf_counter()
-        out = td.tipover_sweep(prior, changes, batch_size=10, progress=False)
+        out = td.tipover_sweep(prior, changes, batch_size=batch_size, progress=False, **kw)
         row[f"ray_{cpus}cpu_s"] = time.perf_counter() - t0
         assert out == serial
         ray.shutdown()
     row["speedup_2_vs_1"] = row["ray_1cpu_s"] / row["ray_2cpu_s"]
-    row["overhead_per_task_ms"] = (row["ray_1cpu_s"] - t_serial) / 20 * 1e3
-    results["ray_sweep"] = row
-    print("ray 200 static tip-overs: " + ", ".join(f"{k} {v:.4g}" for k, v in row.items()))
+    row["overhead_per_task_ms"] = (row["ray_1cpu_s"] - t_serial) / tasks * 1e3
+    results[f"ray_sweep_{'simulated' if simulate else 'static'}"] = row
+    print(f"ray {jobs} {'simulated' if simulate else 'static'} tip-overs: " + ", ".join(f"{k} {v:.4g}" for k, v in row.items()))
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--skip-ray", action="store_true")
+    ap.add_argument("--only-ray", action="store_true")
     ap.add_argument("--json")
     a = ap.parse_args()
     results = {"cpus": os.cpu_count()}
-    per_call(results, a.quick)
-    batched(results, a.quick)
-    rollouts(results, a.quick)
+    if not a.only_ray:
+        per_call(results, a.quick)
+        batched(results, a.quick)
+        rollouts(results, a.quick)
     if not a.skip_ray:
         ray_sweep(results, a.quick)
+        ray_sweep(results, a.quick, jobs=8 if a.quick else 16, batch_size=2, simulate=True)
     if a.json:
         pathlib.Path(a.json).write_text(json.dumps(results, indent=2))
 
