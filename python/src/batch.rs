@@ -1,0 +1,362 @@
+//! `<function>_batch`: one call over N rows of (N, nq) / (N, nv) arrays, looped in
+//! Rust with the GIL released, the rows split over `threads` threads (each with its
+//! own `Data` and a 6 x nv scratch matrix, so the loop allocates nothing per row).
+
+use crate::arrays::{Arg, Dim, new_array};
+use crate::dynamics::reference_frame;
+use crate::errors::value_error;
+use crate::model::PyModel;
+use nalgebra::DMatrix;
+use numpy::PyArrayDyn;
+use pyo3::prelude::*;
+use twinloop_dynamics::{self as dy, Data, Model};
+
+/// Threads to use: the caller's number, else every core.
+pub fn thread_count(threads: Option<usize>) -> PyResult<usize> {
+    match threads {
+        Some(0) => Err(value_error("threads: must be at least 1")),
+        Some(n) => Ok(n),
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
+}
+
+/// Run `row` on every row of the inputs (row-major, `widths[k]` values per row of
+/// input k), writing `out_width` values per row, on `threads` threads.
+pub fn run_rows<F>(
+    model: &Model,
+    inputs: &[&[f64]],
+    widths: &[usize],
+    n: usize,
+    out_width: usize,
+    threads: usize,
+    row: F,
+) -> Vec<f64>
+where
+    F: Fn(&Model, &mut Data, &mut DMatrix<f64>, &[&[f64]], &mut [f64]) + Sync,
+{
+    let mut out = vec![0.0; n * out_width];
+    if n == 0 || out_width == 0 {
+        return out;
+    }
+    let per_thread = n.div_ceil(threads.min(n));
+    std::thread::scope(|s| {
+        for (c, chunk) in out.chunks_mut(per_thread * out_width).enumerate() {
+            let row = &row;
+            s.spawn(move || {
+                let mut data = Data::new(model);
+                let mut scratch = DMatrix::zeros(6, model.nv);
+                let mut args: Vec<&[f64]> = vec![&[]; inputs.len()];
+                for (k, o) in chunk.chunks_mut(out_width).enumerate() {
+                    let i = c * per_thread + k;
+                    for (a, (x, w)) in args.iter_mut().zip(inputs.iter().zip(widths)) {
+                        *a = &x[i * w..(i + 1) * w];
+                    }
+                    row(model, &mut data, &mut scratch, &args, o);
+                }
+            });
+        }
+    });
+    out
+}
+
+/// Copy a column-major matrix into row-major `out`.
+fn write_matrix(m: &DMatrix<f64>, out: &mut [f64]) {
+    let c = m.ncols();
+    for (j, col) in m.column_iter().enumerate() {
+        for (i, x) in col.iter().enumerate() {
+            out[i * c + j] = *x;
+        }
+    }
+}
+
+/// The inputs of a batch: Q (N, nq) then arrays (N, nv) with the same N.
+fn batch_args<'py>(
+    model: &Model,
+    q: &Bound<'py, PyAny>,
+    rest: &[(&Bound<'py, PyAny>, &'static str)],
+) -> PyResult<(usize, Vec<Arg<'py>>)> {
+    let qa = Arg::new(q, "Q", &[Dim::Any, Dim::Is(model.nq, "nq")])?;
+    let n = qa.rows();
+    let mut args = vec![qa];
+    for (x, name) in rest {
+        args.push(Arg::new(
+            x,
+            name,
+            &[Dim::Is(n, "N (rows of Q)"), Dim::Is(model.nv, "nv")],
+        )?);
+    }
+    Ok((n, args))
+}
+
+/// The shared body of every batch function: check, release the GIL, run, wrap.
+fn batch<'py, F>(
+    py: Python<'py>,
+    model: &PyModel,
+    q: &Bound<'py, PyAny>,
+    rest: &[(&Bound<'py, PyAny>, &'static str)],
+    out_shape: &[usize],
+    threads: Option<usize>,
+    row: F,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
+where
+    F: Fn(&Model, &mut Data, &mut DMatrix<f64>, &[&[f64]], &mut [f64]) + Sync + Send,
+{
+    let m = &*model.inner;
+    let threads = thread_count(threads)?;
+    let (n, args) = batch_args(m, q, rest)?;
+    let slices: Vec<&[f64]> = args.iter().map(|a| a.slice()).collect();
+    let mut widths = vec![m.nq];
+    widths.extend(std::iter::repeat_n(m.nv, rest.len()));
+    let out_width: usize = out_shape.iter().product();
+    let values = py.detach(|| run_rows(m, &slices, &widths, n, out_width, threads, row));
+    let mut shape = vec![n];
+    shape.extend_from_slice(out_shape);
+    new_array(py, values, &shape)
+}
+
+/// rnea over rows: Q (N, nq), V (N, nv), A (N, nv) -> tau (N, nv).
+#[pyfunction]
+#[pyo3(signature = (model, Q, V, A, threads = None))]
+#[allow(non_snake_case)]
+pub fn rnea_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    V: &Bound<'py, PyAny>,
+    A: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let nv = model.get().inner.nv;
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[(V, "V"), (A, "A")],
+        &[nv],
+        threads,
+        |m, d, _, x, o| {
+            o.copy_from_slice(dy::rnea(m, d, x[0], x[1], x[2]).as_slice());
+        },
+    )
+}
+
+/// aba over rows: Q (N, nq), V (N, nv), TAU (N, nv) -> ddq (N, nv).
+#[pyfunction]
+#[pyo3(signature = (model, Q, V, TAU, threads = None))]
+#[allow(non_snake_case)]
+pub fn aba_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    V: &Bound<'py, PyAny>,
+    TAU: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let nv = model.get().inner.nv;
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[(V, "V"), (TAU, "TAU")],
+        &[nv],
+        threads,
+        |m, d, _, x, o| {
+            o.copy_from_slice(dy::aba(m, d, x[0], x[1], x[2]).as_slice());
+        },
+    )
+}
+
+/// nonlinear_effects over rows: Q (N, nq), V (N, nv) -> (N, nv).
+#[pyfunction]
+#[pyo3(signature = (model, Q, V, threads = None))]
+#[allow(non_snake_case)]
+pub fn nonlinear_effects_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    V: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let nv = model.get().inner.nv;
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[(V, "V")],
+        &[nv],
+        threads,
+        |m, d, _, x, o| {
+            o.copy_from_slice(dy::nonlinear_effects(m, d, x[0], x[1]).as_slice());
+        },
+    )
+}
+
+/// crba over rows: Q (N, nq) -> M (N, nv, nv), full.
+#[pyfunction]
+#[pyo3(signature = (model, Q, threads = None))]
+#[allow(non_snake_case)]
+pub fn crba_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let nv = model.get().inner.nv;
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[nv, nv],
+        threads,
+        |m, d, _, x, o| {
+            dy::crba(m, d, x[0]);
+            d.symmetrize_mass_matrix();
+            write_matrix(&d.mass_matrix, o);
+        },
+    )
+}
+
+/// center_of_mass over rows: Q (N, nq) -> (N, 3).
+#[pyfunction]
+#[pyo3(signature = (model, Q, threads = None))]
+#[allow(non_snake_case)]
+pub fn center_of_mass_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[3],
+        threads,
+        |m, d, _, x, o| {
+            o.copy_from_slice(dy::center_of_mass(m, d, x[0]).as_slice());
+        },
+    )
+}
+
+/// jacobian_center_of_mass over rows: Q (N, nq) -> (N, 3, nv).
+#[pyfunction]
+#[pyo3(signature = (model, Q, threads = None))]
+#[allow(non_snake_case)]
+pub fn jacobian_center_of_mass_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let nv = model.get().inner.nv;
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[3, nv],
+        threads,
+        |m, d, _, x, o| {
+            write_matrix(dy::jacobian_center_of_mass(m, d, x[0]), o);
+        },
+    )
+}
+
+/// compute_joint_jacobians over rows: Q (N, nq) -> (N, 6, nv).
+#[pyfunction]
+#[pyo3(signature = (model, Q, threads = None))]
+#[allow(non_snake_case)]
+pub fn compute_joint_jacobians_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let nv = model.get().inner.nv;
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[6, nv],
+        threads,
+        |m, d, _, x, o| {
+            dy::compute_joint_jacobians(m, d, x[0]);
+            write_matrix(&d.joint_jacobians, o);
+        },
+    )
+}
+
+/// frame_jacobian over rows: Q (N, nq) -> (N, 6, nv).
+#[pyfunction]
+#[pyo3(signature = (model, Q, frame, reference = "LOCAL", threads = None))]
+#[allow(non_snake_case)]
+pub fn frame_jacobian_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    frame: &Bound<'py, PyAny>,
+    reference: &str,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let pm = model.get();
+    let nv = pm.inner.nv;
+    let k = pm.frame_id(frame)?;
+    let rf = reference_frame(reference)?;
+    batch(
+        model.py(),
+        pm,
+        Q,
+        &[],
+        &[6, nv],
+        threads,
+        move |m, d, jf, x, o| {
+            dy::compute_joint_jacobians(m, d, x[0]);
+            dy::frame_jacobian(m, d, k, rf, jf);
+            write_matrix(jf, o);
+        },
+    )
+}
+
+/// joint_torque_regressor over rows: Q, V, A -> (N, nv, 10 * bodies).
+#[pyfunction]
+#[pyo3(signature = (model, Q, V, A, threads = None))]
+#[allow(non_snake_case)]
+pub fn joint_torque_regressor_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    V: &Bound<'py, PyAny>,
+    A: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let m = &model.get().inner;
+    let cols = 10 * (m.nbodies + usize::from(m.is_floating()));
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[(V, "V"), (A, "A")],
+        &[m.nv, cols],
+        threads,
+        |m, d, _, x, o| {
+            write_matrix(dy::joint_torque_regressor(m, d, x[0], x[1], x[2]), o);
+        },
+    )
+}
+
+/// static_com_regressor over rows: Q (N, nq) -> (N, 3, 4 * links).
+#[pyfunction]
+#[pyo3(signature = (model, Q, threads = None))]
+#[allow(non_snake_case)]
+pub fn static_com_regressor_batch<'py>(
+    model: &Bound<'py, PyModel>,
+    Q: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let cols = 4 * model.get().inner.links.len();
+    batch(
+        model.py(),
+        model.get(),
+        Q,
+        &[],
+        &[3, cols],
+        threads,
+        |m, d, _, x, o| {
+            write_matrix(dy::static_com_regressor(m, d, x[0]), o);
+        },
+    )
+}
