@@ -82,10 +82,10 @@ fn oblique(
     let theta = HouseholderQr::new(reg).solve(target).map_err(|_| {
         SysidError::numerical(
             "the subspace regressor (past inputs and outputs, future inputs) is rank-deficient: \
-             the inputs do not excite the system over max(10, order / outputs + 2) block rows \
-             of past and future (piecewise-constant or periodic inputs, or inputs that copy \
-             others); drop the copies, use richer inputs, or start from an ARX model \
-             (method arx-reduce-pem), which needs no block Hankel matrix",
+             the inputs do not excite the system over this many block rows of past and \
+             future (the horizon; piecewise-constant or periodic inputs, or inputs that copy \
+             others); use a shorter horizon, drop the copies, use richer inputs, or start \
+             from an ARX model (method arx-reduce-pem)",
         )
     })?;
     Ok(keep * theta.rows(0, nk))
