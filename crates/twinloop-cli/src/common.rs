@@ -172,7 +172,8 @@ pub fn emit<T: serde::Serialize + ?Sized>(
 /// instead of clap reading "-1" as an unknown flag.
 pub fn parse_args<C: clap::Parser>() -> C {
     fn allow_negative(c: clap::Command) -> clap::Command {
-        c.allow_negative_numbers(true).mut_subcommands(allow_negative)
+        c.allow_negative_numbers(true)
+            .mut_subcommands(allow_negative)
     }
     let matches = allow_negative(C::command()).get_matches();
     C::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())

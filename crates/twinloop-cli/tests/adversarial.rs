@@ -37,6 +37,8 @@ const fn case(cmd: &'static str, args: &'static str, names: &'static str) -> Cas
 /// an input/output record and `{io_nan}`; `{cwalk}` a compact-model walk and
 /// `{cwalk_nan}`; `{plant}` a good PLANT.toml, `{bad_toml}` broken TOML; `{json_bad}`
 /// JSON that is not the expected document; `{gone}` a port path with nothing behind it.
+// One row per line, so that the table reads as one.
+#[rustfmt::skip]
 const CASES: &[Case] = &[
     // model
     case("model info", "{missing}", "missing.urdf"),
@@ -256,16 +258,44 @@ fn make_fixtures(dir: &Path) {
     // Cut in the middle of the last row, as a copy interrupted would be.
     let cut = state.trim_end().len() - 40;
     write(dir, "state_trunc.csv", &state[..cut]);
-    write(dir, "state_nan.csv", &with_cell(&state, "q:l_knee", 3, "NaN"));
-    write(dir, "state_inf.csv", &with_cell(&state, "q:l_knee", 5, "inf"));
-    write(dir, "tau_nan.csv", &with_cell(&state, "tau:l_knee", 2, "NaN"));
+    write(
+        dir,
+        "state_nan.csv",
+        &with_cell(&state, "q:l_knee", 3, "NaN"),
+    );
+    write(
+        dir,
+        "state_inf.csv",
+        &with_cell(&state, "q:l_knee", 5, "inf"),
+    );
+    write(
+        dir,
+        "tau_nan.csv",
+        &with_cell(&state, "tau:l_knee", 2, "NaN"),
+    );
     let (head, body) = state.split_once('\n').unwrap();
-    write(dir, "state_typo.csv", &format!("{}\n{body}", head.replace("q:l_knee", "q:l_kne")));
-    write(dir, "state_dup.csv", &format!("{}\n{body}", head.replace("q:l_hip_yaw", "q:l_knee")));
+    write(
+        dir,
+        "state_typo.csv",
+        &format!("{}\n{body}", head.replace("q:l_knee", "q:l_kne")),
+    );
+    write(
+        dir,
+        "state_dup.csv",
+        &format!("{}\n{body}", head.replace("q:l_hip_yaw", "q:l_knee")),
+    );
     let goals = std::fs::read_to_string(repo().join("examples/km20_goals.csv")).unwrap();
     let (gh, gb) = goals.split_once('\n').unwrap();
-    write(dir, "goals_typo.csv", &format!("{}\n{gb}", gh.replace("q:l_knee", "q:l_kne")));
-    write(dir, "goals_nan.csv", &with_cell(&goals, "q:l_knee", 2, "nan"));
+    write(
+        dir,
+        "goals_typo.csv",
+        &format!("{}\n{gb}", gh.replace("q:l_knee", "q:l_kne")),
+    );
+    write(
+        dir,
+        "goals_nan.csv",
+        &with_cell(&goals, "q:l_knee", 2, "nan"),
+    );
     // An input/output record: y(k) = 0.8 y(k-1) + 0.5 u(k-1), u a fixed pseudo-random +-1.
     let mut io = String::from("t,u:a,y:b\n");
     let (mut y, mut u, mut state_bits) = (0.0f64, 1.0f64, 0x2545f491u32);
@@ -292,7 +322,11 @@ fn make_fixtures(dir: &Path) {
     let plant = std::fs::read_to_string(repo().join("examples/coman_plant.toml")).unwrap();
     write(dir, "plant.toml", &plant);
     write(dir, "bad.toml", "[[marker]\nname = \"x\"\nlink = ");
-    write(dir, "bad.json", "{\"schema\": \"something else\", \"list\": [1, 2");
+    write(
+        dir,
+        "bad.json",
+        "{\"schema\": \"something else\", \"list\": [1, 2",
+    );
 }
 
 /// The arguments of a case with its placeholders filled in.
@@ -358,7 +392,10 @@ fn check(case: &Case, k: usize) -> Option<String> {
     let problem = if code.is_none() {
         format!("still running after {} s", LIMIT.as_secs())
     } else if err.contains("panicked") {
-        format!("panicked: {}", err.lines().find(|l| l.contains("panicked")).unwrap())
+        format!(
+            "panicked: {}",
+            err.lines().find(|l| l.contains("panicked")).unwrap()
+        )
     } else if code != Some(2) {
         format!("exit {code:?}, not 2; stderr: {}", err.trim())
     } else if errors.len() != 1 {
@@ -376,18 +413,28 @@ fn check(case: &Case, k: usize) -> Option<String> {
 #[test]
 fn every_command_has_bad_input_cases() {
     let commands = cli_commands();
-    assert!(commands.len() >= 30, "only {} commands found: {commands:?}", commands.len());
+    assert!(
+        commands.len() >= 30,
+        "only {} commands found: {commands:?}",
+        commands.len()
+    );
     let missing: Vec<&String> = commands
         .iter()
         .filter(|c| !CASES.iter().any(|k| k.cmd == c.as_str()))
         .collect();
-    assert!(missing.is_empty(), "commands without bad-input cases in CASES: {missing:?}");
+    assert!(
+        missing.is_empty(),
+        "commands without bad-input cases in CASES: {missing:?}"
+    );
     let unknown: Vec<&str> = CASES
         .iter()
         .map(|k| k.cmd)
         .filter(|c| !commands.iter().any(|k| k == c))
         .collect();
-    assert!(unknown.is_empty(), "CASES name commands the CLI does not have: {unknown:?}");
+    assert!(
+        unknown.is_empty(),
+        "CASES name commands the CLI does not have: {unknown:?}"
+    );
 }
 
 #[test]

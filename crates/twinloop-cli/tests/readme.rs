@@ -211,7 +211,8 @@ fn run_file(file: &str, bin_dir: &Path) -> Run {
         if let Some(server) = cmd.strip_suffix('&') {
             let (child, served) = start_server(server.trim(), &dir, bin_dir);
             if !served {
-                run.failures.push(format!("{file}:{n}: `{cmd}` served nothing"));
+                run.failures
+                    .push(format!("{file}:{n}: `{cmd}` served nothing"));
             }
             servers.push(child);
             continue;

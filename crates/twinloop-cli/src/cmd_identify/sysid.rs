@@ -430,7 +430,8 @@ pub fn ss(a: &SsArgs) -> CliResult {
             e.context(format!(
                 "--n4sid-horizon {}",
                 a.n4sid_horizon
-                    .map_or("(default max(10, order / outputs + 2))".into(), |i| i.to_string())
+                    .map_or("(default max(10, order / outputs + 2))".into(), |i| i
+                        .to_string())
             ))
         } else {
             e
