@@ -611,7 +611,7 @@ fn record(a: &RecordArgs) -> CliResult {
 fn rate_limit_note(a: &RecordArgs, servos: usize, achieved: f64) -> String {
     format!(
         "note: {achieved:.0} reads/s{}: the bus limits the rate. Each read asks {servos} servo(s) \
-         by {}, each waits its Return Delay Time (factory 500 us) before answering, and \
+         with {}, each waits its Return Delay Time (factory 500 us) before answering, and \
          each round trip pays the USB adapter's latency (16 ms on FTDI unless --low-latency). \
          `twinloop link plan --servos {servos} --baud {} --protocol 1|2 --return-delay-us US` \
          gives the floor; raise the rate with --low-latency, a higher --baud, --method bulk or \
@@ -621,7 +621,10 @@ fn rate_limit_note(a: &RecordArgs, servos: usize, achieved: f64) -> String {
         } else {
             String::new()
         },
-        a.method.name(),
+        match a.method {
+            ReadMethod::Auto => "the cheapest read they all have",
+            m => m.name(),
+        },
         a.port.baud
     )
 }

@@ -36,7 +36,8 @@ const fn case(cmd: &'static str, args: &'static str, names: &'static str) -> Cas
 /// twice), `{state_typo}` (q:l_kne), `{tau_nan}` (NaN in tau:l_knee); `{goals_typo}`, `{goals_nan}` joint goals; `{io}`
 /// an input/output record and `{io_nan}`; `{cwalk}` a compact-model walk and
 /// `{cwalk_nan}`; `{plant}` a good PLANT.toml, `{bad_toml}` broken TOML; `{json_bad}`
-/// JSON that is not the expected document; `{gone}` a port path with nothing behind it.
+/// JSON that is not the expected document; `{gone}` a port path with nothing behind it;
+/// `{op3_mesh_urdf}` the ROBOTIS OP3 URDF, whose feet collide only as meshes.
 // One row per line, so that the table reads as one.
 #[rustfmt::skip]
 const CASES: &[Case] = &[
@@ -78,6 +79,8 @@ const CASES: &[Case] = &[
     case("experiment tipover", "--robot {km20} --ramp inf", "--ramp"),
     case("experiment tipover", "--robot {km20} --add-mass 0.3@nolink:0,0,0", "nolink"),
     case("experiment tipover", "--robot {trunc_urdf}", "trunc.urdf"),
+    // The ROBOTIS OP3 URDF's feet are meshes: the tip-over names the foot, not "no fall".
+    case("experiment tipover", "--robot {op3_mesh_urdf}", "l_ank_roll_link"),
     case("experiment tipover", "--port {gone} --map builtin:km20 --yes", "gone"),
     case("experiment lean", "--robot {km20} --amplitude -1 --out {out}", "--amplitude"),
     case("experiment lean", "--robot {missing} --out {out}", "missing.urdf"),
@@ -347,6 +350,11 @@ fn fill(case: &Case, out: &Path) -> Vec<String> {
             "{json_bad}" => file("bad.json"),
             "{bad_toml}" => file("bad.toml"),
             "{plant}" => file("plant.toml"),
+            "{op3_mesh_urdf}" => repo()
+                .join("models/op3/robotis_op3.urdf")
+                .to_str()
+                .unwrap()
+                .to_string(),
             s if s.starts_with('{') && s.ends_with('}') => {
                 file(&format!("{}.csv", &s[1..s.len() - 1]))
             }
@@ -462,5 +470,58 @@ fn every_bad_input_is_refused_with_exit_2_and_one_line() {
         failures.len(),
         CASES.len(),
         failures.join("\n")
+    );
+}
+
+/// Outputs that say what limits them: `link plan` without --return-delay-us gives the
+/// factory delay's rate, the same as the table computed with it; the fixed-base help
+/// says the root's mass is left out and how to get the whole robot's CoM.
+#[test]
+fn answers_that_explain_themselves() {
+    let run = |args: &[&str]| {
+        let o = Command::new(bin()).args(args).output().unwrap();
+        assert!(o.status.success(), "{args:?}");
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let plain = run(&["link", "plan", "--protocol", "1", "--servos", "20"]);
+    let note = plain
+        .lines()
+        .find(|l| l.starts_with("return delay 0 assumed"))
+        .unwrap();
+    let hz_in_note: f64 = note
+        .split(" runs at ")
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let factory = run(&[
+        "link",
+        "plan",
+        "--protocol",
+        "1",
+        "--servos",
+        "20",
+        "--return-delay-us",
+        "500",
+    ]);
+    let first_row = factory
+        .lines()
+        .find(|l| l.starts_with("READ per servo"))
+        .unwrap();
+    let hz_in_table: f64 = first_row
+        .split_whitespace()
+        .nth(8)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(hz_in_note, hz_in_table, "{note}\n{first_row}");
+    assert!(!factory.contains("return delay 0 assumed"));
+    let help = run(&["dynamics", "kinematics", "--help"]);
+    assert!(
+        help.contains("Pinocchio") && help.contains("q:base.qw = 1"),
+        "{help}"
     );
 }
