@@ -374,7 +374,9 @@ fn find_study_joints(robot: &Description, sim: &Simulator) -> Result<StudyJoints
 /// tips the way the protocol assumes.
 fn feet_can_touch(robot: &Description, sim: &Simulator, j: &StudyJoints) -> Result<(), String> {
     for &foot in &j.feet {
-        if sim.contact_points().iter().any(|p| p.link == foot) {
+        // By body: a sole on a link welded to the foot counts.
+        let body = sim.model.links[foot].body;
+        if sim.contact_points().iter().any(|p| p.body == body) {
             continue;
         }
         let name = &sim.model.links[foot].name;
