@@ -55,7 +55,7 @@ pub struct AdaptArgs {
     #[arg(long, value_name = "NET.json")]
     pub net: Option<PathBuf>,
     /// The changed robot's total mass, kg: the added mass is this minus the prior's.
-    #[arg(long, value_name = "KG")]
+    #[arg(long, value_name = "KG", value_parser = crate::common::positive)]
     pub total_mass: Option<f64>,
     /// The link the mass was added to (with --total-mass it only names the host).
     #[arg(long = "where", value_name = "LINK")]

@@ -59,7 +59,11 @@ pub struct BatchArgs {
     #[arg(long, value_name = "OUT.csv")]
     pub out: PathBuf,
     /// Weld the root link to the world instead of adding a floating base
-    /// (then no `base.*` columns are read or written).
+    /// (then no `base.*` columns are read or written). As in Pinocchio, the fixed-base
+    /// model has no body for the root link: its mass is left out of `com.*` (5-7 cm off
+    /// on km20 and OP3). For the whole robot's CoM with the root where --fixed-base puts
+    /// it, leave --fixed-base off and add the columns q:base.x,q:base.y,q:base.z = 0,
+    /// q:base.qx,q:base.qy,q:base.qz = 0, q:base.qw = 1.
     #[arg(long)]
     pub fixed_base: bool,
 }

@@ -593,6 +593,10 @@ fn record(a: &RecordArgs) -> CliResult {
         summary += " (interrupted)";
     }
     eprintln!("{summary}");
+    let achieved = rec.rows as f64 / rec.seconds.max(1e-9);
+    if rec.rows > FIRST_CYCLES && (a.rate == 0.0 || achieved < 0.9 * a.rate) {
+        eprintln!("{}", rate_limit_note(a, names.len(), achieved));
+    }
     for (k, f) in rec.failures.iter().enumerate() {
         if *f > 0 {
             eprintln!("  joint {}: {f} failed reads (NaN in those rows)", names[k]);
@@ -606,6 +610,30 @@ fn record(a: &RecordArgs) -> CliResult {
         ))),
         None => Ok(Outcome::Ok),
     }
+}
+
+/// Why a recording ran slower than asked, and what raises its rate: each read is one
+/// round trip per servo (or one for BULK/SYNC_READ), and every servo waits its Return
+/// Delay Time before it answers.
+fn rate_limit_note(a: &RecordArgs, servos: usize, achieved: f64) -> String {
+    format!(
+        "note: {achieved:.0} reads/s{}: the bus limits the rate. Each read asks {servos} servo(s) \
+         with {}, each waits its Return Delay Time (factory 500 us) before answering, and \
+         each round trip pays the USB adapter's latency (16 ms on FTDI unless --low-latency). \
+         `twinloop link plan --servos {servos} --baud {} --protocol 1|2 --return-delay-us US` \
+         gives the floor; raise the rate with --low-latency, a higher --baud, --method bulk or \
+         sync where the servos have it, or a Return Delay Time of 0 on the servos",
+        if a.rate > 0.0 {
+            format!(" of the {} asked", a.rate)
+        } else {
+            String::new()
+        },
+        match a.method {
+            ReadMethod::Auto => "the cheapest read they all have",
+            m => m.name(),
+        },
+        a.port.baud
+    )
 }
 
 /// After this many cycles, a recording in which no servo has answered stops.
@@ -704,6 +732,9 @@ fn never_answered<T: Transport>(
     false
 }
 
+/// The Return Delay Time Dynamixel servos leave the factory with, us (register 250 x 2).
+const FACTORY_RETURN_DELAY_US: u64 = 500;
+
 #[derive(Serialize)]
 struct PlanJson {
     read: &'static str,
@@ -788,6 +819,26 @@ fn plan(a: &PlanArgs) -> CliResult {
     }
     out +=
         "bytes per servo: 2 or 4 = position only; 6 or 10 = load/current + velocity + position\n";
+    if a.return_delay_us == 0.0 {
+        // The table assumes servos set to answer at once; out of the box they do not.
+        let (m, l) = cases[0];
+        let factory = plan_cycle(
+            a.protocol,
+            m,
+            a.servos,
+            l,
+            goal,
+            a.baud,
+            Duration::from_micros(FACTORY_RETURN_DELAY_US),
+        );
+        out += &format!(
+            "return delay 0 assumed: at the factory Return Delay Time ({FACTORY_RETURN_DELAY_US} us, \
+             register 250) the first row runs at {:.0} Hz; give --return-delay-us (read it with \
+             `twinloop link read --port PORT --protocol {} --id ID return_delay_time`)\n",
+            factory.cycles_per_second(),
+            a.protocol.number()
+        );
+    }
     emit(&out, a.json.as_ref(), &plans)?;
     Ok(Outcome::Ok)
 }

@@ -29,7 +29,7 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
     pub robot: String,
     /// Simulated time, s [default: the --trajectory's last time, else 2].
-    #[arg(long, value_name = "S", value_parser = crate::common::non_negative)]
+    #[arg(long, value_name = "S", value_parser = crate::common::positive)]
     pub duration: Option<f64>,
     /// Hold the initial standing pose (the default when no --trajectory is given).
     #[arg(long)]

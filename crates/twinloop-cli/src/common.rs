@@ -167,6 +167,18 @@ pub fn emit<T: serde::Serialize + ?Sized>(
     Ok(())
 }
 
+/// Parse the command line. Every command takes a negative number as an option's value
+/// (`--dt -1`), so that the option's range check says what is wrong and names it,
+/// instead of clap reading "-1" as an unknown flag.
+pub fn parse_args<C: clap::Parser>() -> C {
+    fn allow_negative(c: clap::Command) -> clap::Command {
+        c.allow_negative_numbers(true)
+            .mut_subcommands(allow_negative)
+    }
+    let matches = allow_negative(C::command()).get_matches();
+    C::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
 /// Range checks of numeric options, as clap value parsers (`#[arg(value_parser =
 /// crate::common::positive)]`): a value out of range is a usage error (exit 2)
 /// naming the option and the range, before any work starts, so no option can make
@@ -272,6 +284,38 @@ mod tests {
         assert!(finite("nan").is_err() && finite("-inf").is_err());
         assert_eq!(count("3"), Ok(3));
         assert!(count("0").is_err() && count("-1").is_err() && count("1.5").is_err());
+    }
+
+    proptest::proptest! {
+        /// Every finite number is taken by `finite` as itself and by `positive` and
+        /// `non_negative` exactly when it is in their range, written any way Rust writes
+        /// it; any text that is not a number is refused with a message, never a panic.
+        #[test]
+        fn numeric_options_take_exactly_their_range(x in proptest::num::f64::ANY, junk in "\\PC{0,12}") {
+            for text in [format!("{x}"), format!("{x:e}"), format!(" {x:?} ")] {
+                let ok = x.is_finite();
+                proptest::prop_assert_eq!(finite(&text).is_ok(), ok);
+                proptest::prop_assert_eq!(positive(&text).is_ok(), ok && x > 0.0);
+                proptest::prop_assert_eq!(non_negative(&text).is_ok(), ok && x >= 0.0);
+                if ok {
+                    proptest::prop_assert_eq!(finite(&text).unwrap().to_bits(), x.to_bits());
+                }
+            }
+            let parsed = junk.trim().parse::<f64>();
+            let r = positive(&junk);
+            proptest::prop_assert_eq!(
+                r.is_ok(),
+                matches!(parsed, Ok(v) if v.is_finite() && v > 0.0)
+            );
+            if let Err(e) = r {
+                proptest::prop_assert!(!e.is_empty());
+            }
+            let c = count(&junk);
+            proptest::prop_assert_eq!(
+                c.is_ok(),
+                matches!(junk.trim().parse::<usize>(), Ok(n) if n >= 1)
+            );
+        }
     }
 
     #[test]

@@ -232,7 +232,7 @@ fn run(command: Command) -> CliResult {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli: Cli = common::parse_args();
     match run(cli.command) {
         Ok(outcome) => outcome.exit_code(),
         Err(e) => {

@@ -368,6 +368,33 @@ fn find_study_joints(robot: &Description, sim: &Simulator) -> Result<StudyJoints
     })
 }
 
+/// Each foot must have a collision primitive: the simulator makes contacts from boxes,
+/// spheres, cylinders and capsules only, and a foot without one (a mesh sole, as in the
+/// ROBOTIS OP3 URDF) stands on whatever else touches the floor, so the robot never
+/// tips the way the protocol assumes.
+fn feet_can_touch(robot: &Description, sim: &Simulator, j: &StudyJoints) -> Result<(), String> {
+    for &foot in &j.feet {
+        // By body: a sole on a link welded to the foot counts.
+        let body = sim.model.links[foot].body;
+        if sim.contact_points().iter().any(|p| p.body == body) {
+            continue;
+        }
+        let name = &sim.model.links[foot].name;
+        let why = if sim.mesh_only_links.iter().any(|l| l == name) {
+            "its collision shapes are meshes, which the simulator does not collide"
+        } else {
+            "it has no <collision> at all"
+        };
+        return Err(format!(
+            "foot link \"{name}\" of \"{}\" has no collision primitive: {why}; the tip-over \
+             needs box (or sphere, cylinder, capsule) soles: add a <collision> box under each \
+             foot, or use a description that has them (for the OP3: models/op3/mjcf/op3.xml)",
+            robot.name
+        ));
+    }
+    Ok(())
+}
+
 /// The feet the estimators assume: the seed's constants on the KM-20, a built-in
 /// robot's own feet, or feet measured on the model; with a label saying which.
 fn study_feet(
@@ -687,6 +714,7 @@ fn prepare(robot: &Description, opts: &StudyOptions) -> Result<Prepared, String>
     let j = find_study_joints(robot, &sim)?;
     let sim_feet: Vec<&str> = vec![j.names[4].as_str(), j.names[5].as_str()];
     sim.set_feet(&sim_feet).map_err(err)?;
+    feet_can_touch(robot, &sim, &j)?;
     let (foot, seed_constants, label) = study_feet(robot, &sim, &j);
     let mut q0 = sim.model.neutral_configuration();
     q0[sim.model.q_offset..].copy_from_slice(&standing);

@@ -213,24 +213,36 @@ pub fn format_f64(x: f64) -> String {
 
 /// A CSV writer that writes rows as they come; `flush_each_row` makes every row
 /// durable at once (recordings must survive an interrupted run).
+///
+/// The rows go to `FILE.partial` beside the file asked for, renamed to it by
+/// [`CsvWriter::finish`]: a command that fails half-way leaves no file that looks
+/// complete (the partial one is removed when the writer is dropped unfinished; a
+/// process killed outright leaves it under its `.partial` name).
 pub struct CsvWriter {
     path: PathBuf,
+    partial: PathBuf,
     out: BufWriter<File>,
     ncols: usize,
     pub flush_each_row: bool,
     line: String,
+    finished: bool,
 }
 
 impl CsvWriter {
     pub fn create(path: &Path, columns: &[String]) -> Result<CsvWriter, IoError> {
-        let file = File::create(path)
+        let mut partial = path.as_os_str().to_owned();
+        partial.push(".partial");
+        let partial = PathBuf::from(partial);
+        let file = File::create(&partial)
             .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(path))?;
         let mut w = CsvWriter {
             path: path.to_path_buf(),
+            partial,
             out: BufWriter::new(file),
             ncols: columns.len(),
             flush_each_row: false,
             line: String::new(),
+            finished: false,
         };
         let header = columns.join(",");
         w.write_line(&header)?;
@@ -264,9 +276,22 @@ impl CsvWriter {
         r
     }
 
+    /// Flush the rows and give the file its name.
     pub fn finish(mut self) -> Result<(), IoError> {
         self.out
             .flush()
-            .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))
+            .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))?;
+        std::fs::rename(&self.partial, &self.path)
+            .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))?;
+        self.finished = true;
+        Ok(())
+    }
+}
+
+impl Drop for CsvWriter {
+    fn drop(&mut self) {
+        if !self.finished {
+            let _ = std::fs::remove_file(&self.partial);
+        }
     }
 }

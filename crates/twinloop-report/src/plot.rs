@@ -155,10 +155,18 @@ impl Plot {
         self.write_axes(&mut s, &f);
         self.write_ticks(&mut s, &f);
         self.write_hlines(&mut s, &f);
-        for (i, se) in self.series.iter().enumerate() {
+        // Measured data are drawn last, above the model curves: a fit that matches
+        // them well must not hide them. Legend order and colours stay as given.
+        let measured = |se: &Series| se.name.to_ascii_lowercase().starts_with("measured");
+        let order = (0..self.series.len())
+            .filter(|&i| !measured(&self.series[i]))
+            .chain((0..self.series.len()).filter(|&i| measured(&self.series[i])));
+        for i in order {
             let color = PALETTE[i % PALETTE.len()];
-            self.write_series(&mut s, &f, se, color);
-            write_legend_entry(&mut s, &f, i, &se.name, color);
+            self.write_series(&mut s, &f, &self.series[i], color);
+        }
+        for (i, se) in self.series.iter().enumerate() {
+            write_legend_entry(&mut s, &f, i, &se.name, PALETTE[i % PALETTE.len()]);
         }
         s.push_str("</svg>");
         s
@@ -167,9 +175,11 @@ impl Plot {
     /// Margins (room for the legend on the right) and the padded data ranges.
     fn frame(&self) -> Frame {
         let (w, h) = (self.width, self.height);
-        let (ml, mr, mt, mb) = (70.0, 160.0, 30.0, 45.0);
-        let (pw, ph) = (w - ml - mr, h - mt - mb);
         let (x0, x1, y0, y1) = self.ranges();
+        // Room for the widest y tick label and, left of it, the rotated axis title.
+        let widest = widest_label(y0, y1, self.log_y);
+        let (ml, mr, mt, mb) = ((widest + 34.0).max(60.0), 160.0, 30.0, 45.0);
+        let (pw, ph) = (w - ml - mr, h - mt - mb);
         Frame {
             w,
             h,
@@ -211,18 +221,20 @@ impl Plot {
              <rect x=\"{ml}\" y=\"{mt}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" stroke=\"#888\"/>\
              <text x=\"{}\" y=\"18\" text-anchor=\"middle\" font-weight=\"bold\">{}</text>\
              <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\
-             <text transform=\"translate(16,{}) rotate(-90)\" text-anchor=\"middle\">{}</text>",
+             <text transform=\"translate({},{}) rotate(-90)\" text-anchor=\"middle\">{}</text>",
             ml + pw / 2.0,
             escape(&self.title),
             ml + pw / 2.0,
             h - 8.0,
             escape(&self.x_label),
+            ml - 22.0 - widest_label(f.y0, f.y1, self.log_y),
             mt + ph / 2.0,
             escape(&self.y_label)
         );
     }
 
-    /// Ticks: 5 on each axis, in data units (powers of ten on a log axis).
+    /// Ticks at round values (1, 2 or 5 times a power of ten; powers of ten on a log
+    /// axis), about five per axis, labelled with no more digits than the step needs.
     fn write_ticks(&self, s: &mut String, f: &Frame) {
         let Frame {
             ml,
@@ -235,24 +247,26 @@ impl Plot {
             y1,
             ..
         } = *f;
-        for k in 0..=4 {
-            let f = k as f64 / 4.0;
-            let (xv, yv) = (x0 + f * (x1 - x0), y0 + f * (y1 - y0));
-            let (sx, sy) = (ml + f * pw, mt + ph - f * ph);
-            let xl = if self.log_x { 10f64.powf(xv) } else { xv };
-            let yl = if self.log_y { 10f64.powf(yv) } else { yv };
+        for (xv, label) in axis_ticks(x0, x1, self.log_x) {
+            let sx = ml + (xv - x0) / (x1 - x0) * pw;
             let _ = write!(
                 s,
-                "<line x1=\"{sx}\" y1=\"{}\" x2=\"{sx}\" y2=\"{}\" stroke=\"#888\"/><text x=\"{sx}\" y=\"{}\" text-anchor=\"middle\">{}</text>\
-                 <line x1=\"{ml}\" y1=\"{sy}\" x2=\"{}\" y2=\"{sy}\" stroke=\"#eee\"/><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
+                "<line x1=\"{sx}\" y1=\"{}\" x2=\"{sx}\" y2=\"{}\" stroke=\"#888\"/><text x=\"{sx}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
                 mt + ph,
                 mt + ph + 4.0,
                 mt + ph + 16.0,
-                tick(xl),
+                escape(&label)
+            );
+        }
+        for (yv, label) in axis_ticks(y0, y1, self.log_y) {
+            let sy = mt + ph - (yv - y0) / (y1 - y0) * ph;
+            let _ = write!(
+                s,
+                "<line x1=\"{ml}\" y1=\"{sy}\" x2=\"{}\" y2=\"{sy}\" stroke=\"#eee\"/><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
                 ml + pw,
                 ml - 4.0,
                 sy + 4.0,
-                tick(yl)
+                escape(&label)
             );
         }
     }
@@ -376,17 +390,151 @@ fn write_legend_entry(s: &mut String, f: &Frame, i: usize, name: &str, color: &s
     );
 }
 
-fn tick(v: f64) -> String {
-    let a = v.abs();
-    if a != 0.0 && !(1e-3..1e5).contains(&a) {
-        format!("{v:.2e}")
-    } else {
-        let t = format!("{v:.4}");
-        let t = t.trim_end_matches('0').trim_end_matches('.');
-        if t == "-0" {
-            "0".to_string()
-        } else {
-            t.to_string()
+/// Round tick positions in `lo..=hi` (axis units: log10 of the value on a log axis)
+/// with their labels. A linear axis steps by 1, 2 or 5 times a power of ten, about
+/// five ticks; a log axis ticks whole decades (every second or more when there are
+/// many), and a range narrower than a decade falls back to round linear steps of
+/// the exponent's value.
+pub(crate) fn axis_ticks(lo: f64, hi: f64, log: bool) -> Vec<(f64, String)> {
+    if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
+        return Vec::new();
+    }
+    if log {
+        let (first, last) = (lo.ceil() as i64, hi.floor() as i64);
+        if last > first {
+            let every = ((last - first) as f64 / 6.0).ceil().max(1.0) as i64;
+            return (first..=last)
+                .filter(|e| (e - first) % every == 0)
+                .map(|e| (e as f64, tick(10f64.powi(e as i32), 0.0)))
+                .collect();
         }
+        // Less than a decade: round values between 10^lo and 10^hi.
+        return linear_ticks(10f64.powf(lo), 10f64.powf(hi))
+            .into_iter()
+            .filter(|&(v, _)| v > 0.0)
+            .map(|(v, l)| (v.log10(), l))
+            .collect();
+    }
+    linear_ticks(lo, hi)
+}
+
+fn linear_ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
+    let range = hi - lo;
+    let mag = 10f64.powf((range / 5.0).log10().floor());
+    // The round step giving the tick count nearest five.
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * mag)
+        .min_by(|a, b| {
+            let miss = |s: f64| (range / s - 5.0).abs();
+            miss(*a).total_cmp(&miss(*b))
+        })
+        .unwrap_or(mag);
+    // A hair of tolerance: an end that is a tick up to rounding keeps its tick.
+    let first = (lo / step - 1e-9).ceil() as i64;
+    let last = (hi / step + 1e-9).floor() as i64;
+    (first..=last)
+        .map(|k| {
+            let v = k as f64 * step;
+            (v, tick(v, step))
+        })
+        .collect()
+}
+
+/// Width in pixels of the widest tick label of an axis at the plot's 12 px
+/// sans-serif, estimated at 7 px a character.
+fn widest_label(lo: f64, hi: f64, log: bool) -> f64 {
+    axis_ticks(lo, hi, log)
+        .iter()
+        .map(|(_, l)| 7.0 * l.chars().count() as f64)
+        .fold(0.0, f64::max)
+}
+
+/// A tick label: as many decimals as `step` needs (all significant ones when 0),
+/// exponent notation outside 1e-3 .. 1e5.
+fn tick(v: f64, step: f64) -> String {
+    let a = v.abs();
+    if a < 1e-12 * step.max(1e-300) || v == 0.0 {
+        return "0".to_string();
+    }
+    if !(1e-3..1e5).contains(&a) {
+        let t = format!("{v:.1e}");
+        return t.replace(".0e", "e");
+    }
+    let decimals = if step > 0.0 {
+        (-(step.log10().floor()) as i64).clamp(0, 6) as usize
+    } else {
+        4
+    };
+    let t = format!("{v:.decimals$}");
+    let t = if t.contains('.') {
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        t
+    };
+    if t == "-0" { "0".to_string() } else { t }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_round_and_inside_the_range() {
+        let t = axis_ticks(-0.0137, 0.2511, false);
+        let labels: Vec<&str> = t.iter().map(|(_, l)| l.as_str()).collect();
+        assert_eq!(labels, ["0", "0.05", "0.1", "0.15", "0.2", "0.25"]);
+        let t = axis_ticks(812.3, 1187.9, false);
+        let labels: Vec<&str> = t.iter().map(|(_, l)| l.as_str()).collect();
+        assert_eq!(labels, ["900", "1000", "1100"]);
+        // Decades on a log axis: 10^-3 .. 10^2.
+        let t = axis_ticks(-3.2, 2.5, true);
+        let labels: Vec<&str> = t.iter().map(|(_, l)| l.as_str()).collect();
+        assert_eq!(labels, ["0.001", "0.01", "0.1", "1", "10", "100"]);
+        // Narrower than a decade: round values of the quantity itself.
+        let t = axis_ticks(2f64.log10(), 8f64.log10(), true);
+        let labels: Vec<&str> = t.iter().map(|(_, l)| l.as_str()).collect();
+        assert_eq!(labels, ["2", "3", "4", "5", "6", "7", "8"]);
+        assert!(axis_ticks(1.0, 1.0, false).is_empty());
+    }
+
+    #[test]
+    fn measured_is_drawn_over_the_fit_and_labels_clear_the_title() {
+        let t = [0.0, 1.0, 2.0];
+        let svg = Plot::new("fit", "t (s)", "CoM x (m)")
+            .line("measured", &t, &[1e-4, 2e-4, -3e-4])
+            .line("after", &t, &[1e-4, 2e-4, -3e-4])
+            .to_svg();
+        let measured = svg.find("stroke=\"#1f77b4\" stroke-width");
+        let after = svg.find("stroke=\"#d62728\" stroke-width");
+        assert!(measured.unwrap() > after.unwrap(), "measured drawn last");
+        // The y title sits left of the widest tick label ("-3e-4" or "-2.5e-4").
+        let title_x: f64 = svg
+            .split("<text transform=\"translate(")
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let label_left = svg
+            .split("text-anchor=\"end\">")
+            .skip(1)
+            .map(|l| l.split('<').next().unwrap().chars().count() as f64 * 7.0)
+            .fold(0.0, f64::max);
+        let ml: f64 = svg
+            .split("<rect x=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            title_x + 6.0 < ml - 4.0 - label_left,
+            "{title_x} vs {ml} - {label_left}"
+        );
     }
 }

@@ -82,8 +82,10 @@ fn oblique(
     let theta = HouseholderQr::new(reg).solve(target).map_err(|_| {
         SysidError::numerical(
             "the subspace regressor (past inputs and outputs, future inputs) is rank-deficient: \
-             the inputs do not excite the system enough for this horizon; use a shorter horizon, \
-             drop inputs that copy others, or use richer inputs",
+             the inputs do not excite the system over this many block rows of past and \
+             future (the horizon; piecewise-constant or periodic inputs, or inputs that copy \
+             others); use a shorter horizon, drop the copies, use richer inputs, or start \
+             from an ARX model (method arx-reduce-pem)",
         )
     })?;
     Ok(keep * theta.rows(0, nk))

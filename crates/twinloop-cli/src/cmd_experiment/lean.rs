@@ -144,9 +144,10 @@ pub fn run(a: &LeanArgs) -> CliResult {
     );
     let record = run_lean(&mut sim, &standing, &cfg, &mut |row| {
         write_row(&mut writer, row, &mut buf)
-    })?;
+    });
+    // A lean stopped by a fall is still a record of the run up to it: keep its rows.
     writer.finish()?;
-    report(a, spec.to_string(), None, &cfg, tips, &record)
+    report(a, spec.to_string(), None, &cfg, tips, &record?)
 }
 
 /// The lean's configuration for a robot ordering its joints as `order`: the amplitude

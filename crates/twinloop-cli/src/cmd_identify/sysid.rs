@@ -422,7 +422,21 @@ pub fn ss(a: &SsArgs) -> CliResult {
         bar.set_position(p.iteration as u64);
         bar.set_message(format!("cost {}", num(p.cost)));
     })
-    .map_err(|e| CliError::from(e).context(d.data.display()));
+    .map_err(|e| {
+        // The library speaks of the horizon; here it is an option.
+        let horizon = e.message.contains("horizon");
+        let e = CliError::from(e).context(d.data.display());
+        if horizon {
+            e.context(format!(
+                "--n4sid-horizon {}",
+                a.n4sid_horizon
+                    .map_or("(default max(10, order / outputs + 2))".into(), |i| i
+                        .to_string())
+            ))
+        } else {
+            e
+        }
+    });
     bar.finish_and_clear();
     let id = id?;
     let elapsed = t0.elapsed().as_secs_f64();

@@ -1,0 +1,527 @@
+//! Every command meets its bad inputs (issue 17): missing, empty and truncated files,
+//! NaN and infinite cells, unknown and duplicate columns, files of the wrong kind,
+//! out-of-range options, a port that is not there or goes away. Each case must end
+//! with exit code 2, one `error:` line naming the place (the file, column or option),
+//! no panic, within a time limit, and no output file left behind that looks complete.
+//!
+//! A port that goes away in the middle of a recording is `cli_link.rs`'s
+//! `interrupted_and_unplugged_recordings_keep_every_row` (exit 2, the rows read kept).
+//!
+//! The commands come from the CLI itself (`twinloop help`, recursively), and
+//! `every_command_has_bad_input_cases` fails for a command with no row in [`CASES`]:
+//! a new command gets its cases by adding rows to the table (placeholders below).
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+/// One bad input: the command (as `twinloop help` lists it), its arguments (split at
+/// spaces; `{name}` is a fixture file of [`Fixtures`], `{out}` a fresh output path that
+/// must not exist afterwards), and a text the error line must contain: the place.
+struct Case {
+    cmd: &'static str,
+    args: &'static str,
+    names: &'static str,
+}
+
+const fn case(cmd: &'static str, args: &'static str, names: &'static str) -> Case {
+    Case { cmd, args, names }
+}
+
+/// The table. Fixtures: `{km20}` a good URDF; `{empty}` an empty file; `{missing}` a
+/// path that does not exist; `{trunc_urdf}` half a URDF; `{csv_as_urdf}` a CSV named
+/// .urdf; `{state}` a good km20 state CSV (q, v, a, tau) and its broken copies
+/// `{state_trunc}` (cut mid-row), `{state_nan}`, `{state_inf}`, `{state_dup}` (a column
+/// twice), `{state_typo}` (q:l_kne), `{tau_nan}` (NaN in tau:l_knee); `{goals_typo}`, `{goals_nan}` joint goals; `{io}`
+/// an input/output record and `{io_nan}`; `{cwalk}` a compact-model walk and
+/// `{cwalk_nan}`; `{plant}` a good PLANT.toml, `{bad_toml}` broken TOML; `{json_bad}`
+/// JSON that is not the expected document; `{gone}` a port path with nothing behind it;
+/// `{op3_mesh_urdf}` the ROBOTIS OP3 URDF, whose feet collide only as meshes.
+// One row per line, so that the table reads as one.
+#[rustfmt::skip]
+const CASES: &[Case] = &[
+    // model
+    case("model info", "{missing}", "missing.urdf"),
+    case("model info", "{empty}", "empty.urdf"),
+    case("model info", "{trunc_urdf}", "trunc.urdf"),
+    case("model info", "{csv_as_urdf}", "csv_as.urdf"),
+    case("model info", "builtin:km21", "km21"),
+    case("model lint", "{missing}", "missing.urdf"),
+    case("model lint", "{trunc_urdf}", "trunc.urdf"),
+    case("model list", "extra", "extra"),
+    case("model export", "{trunc_urdf} --out {out}", "trunc.urdf"),
+    case("model export", "{csv_as_urdf} --out {out}", "csv_as.urdf"),
+    // dynamics
+    case("dynamics kinematics", "--robot {km20} --trajectory {missing_csv} --out {out}", "missing.csv"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {empty} --out {out}", "empty.urdf"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state_trunc} --out {out}", "state_trunc.csv"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state_nan} --out {out}", "q:l_knee"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state_inf} --out {out}", "q:l_knee"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state_dup} --out {out}", "q:l_knee"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state_typo} --out {out}", "q:l_kne"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state} --out {out} --frames nose", "nose"),
+    case("dynamics inverse", "--robot {km20} --trajectory {state_nan} --out {out}", "q:l_knee"),
+    case("dynamics inverse", "--robot {km20} --trajectory {state_typo} --out {out}", "q:l_kne"),
+    case("dynamics inverse", "--robot {trunc_urdf} --trajectory {state} --out {out}", "trunc.urdf"),
+    case("dynamics forward", "--robot {km20} --trajectory {state_inf} --out {out}", "q:l_knee"),
+    case("dynamics forward", "--robot {km20} --trajectory {state_dup} --out {out}", "q:l_knee"),
+    // simulate
+    case("simulate", "--robot {km20} --trajectory {goals_typo} --out {out}", "q:l_kne"),
+    case("simulate", "--robot {km20} --trajectory {goals_nan} --out {out}", "q:l_knee"),
+    case("simulate", "--robot {km20} --trajectory {empty} --out {out}", "empty.urdf"),
+    case("simulate", "--robot {km20} --duration 0 --out {out}", "--duration"),
+    case("simulate", "--robot {km20} --duration nan --out {out}", "--duration"),
+    case("simulate", "--robot {km20} --dt -0.001 --out {out}", "--dt"),
+    case("simulate", "--robot {missing} --out {out}", "missing.urdf"),
+    // experiment
+    case("experiment tipover", "--robot {km20} --ramp 0", "--ramp"),
+    case("experiment tipover", "--robot {km20} --ramp inf", "--ramp"),
+    case("experiment tipover", "--robot {km20} --add-mass 0.3@nolink:0,0,0", "nolink"),
+    case("experiment tipover", "--robot {trunc_urdf}", "trunc.urdf"),
+    // The ROBOTIS OP3 URDF's feet are meshes: the tip-over names the foot, not "no fall".
+    case("experiment tipover", "--robot {op3_mesh_urdf}", "l_ank_roll_link"),
+    case("experiment tipover", "--port {gone} --map builtin:km20 --yes", "gone"),
+    case("experiment lean", "--robot {km20} --amplitude -1 --out {out}", "--amplitude"),
+    case("experiment lean", "--robot {missing} --out {out}", "missing.urdf"),
+    case("experiment lean", "--port {gone} --map builtin:km20 --yes --out {out}", "gone"),
+    case("experiment static-poses", "--robot {km20} --count 0 --out {out}", "--count"),
+    case("experiment static-poses", "--robot {csv_as_urdf} --out {out}", "csv_as.urdf"),
+    case("experiment squat", "--robot {km20} --duration -1 --out {out}", "--duration"),
+    case(
+        "experiment squat",
+        "--robot {km20} --markers {bad_toml} --frames-out {out} --out {out}",
+        "bad.toml",
+    ),
+    case("experiment walk", "--dt 0 --out {out}", "--dt"),
+    case("experiment walk", "--robot {missing} --out {out}", "missing.urdf"),
+    case("experiment compliant-walk", "--robot {km20} --tss 0 --out {out}", "--tss"),
+    case("experiment compliant-walk", "--robot {trunc_urdf} --out {out}", "trunc.urdf"),
+    // identify
+    case("identify static", "--robot {km20} --poses {state_nan} --total-mass 3", "state_nan.csv"),
+    case("identify static", "--robot {km20} --poses {missing_csv} --total-mass 3", "missing.csv"),
+    case("identify static", "--robot {km20} --poses {state} --total-mass -3", "--total-mass"),
+    case("identify arx", "--data {io_nan} --inputs u:a --outputs y:b", "io_nan.csv"),
+    case("identify arx", "--data {io} --inputs u:x --outputs y:b", "u:x"),
+    case("identify arx", "--data {io} --inputs u:a --outputs y:b --na 0 --nb 0", "na"),
+    case("identify arx", "--data {empty} --inputs u:a --outputs y:b", "empty.urdf"),
+    case("identify ss", "--data {io_nan} --inputs u:a --outputs y:b --order 2", "io_nan.csv"),
+    case("identify ss", "--data {io} --inputs u:a --outputs y:b --order 0", "order"),
+    case("identify ss", "--data {io_trunc} --inputs u:a --outputs y:b --order 2", "io_trunc.csv"),
+    case("identify compliant", "--data {cwalk_nan} --plant {plant}", "xr"),
+    case("identify compliant", "--data {cwalk} --plant {bad_toml}", "bad.toml"),
+    case("identify compliant", "--data {cwalk} --plant {missing}", "missing.urdf"),
+    case("identify walk", "--data {io}", "io.csv"),
+    case("identify walk", "--data {missing_csv}", "missing.csv"),
+    // adapt
+    case("adapt", "--robot {km20} --tipover {json_bad} --total-mass 3.6", "bad.json"),
+    case("adapt", "--robot {km20} --tipover {missing} --total-mass 3.6", "missing.urdf"),
+    case("adapt", "--robot {km20} --tipover {empty} --total-mass -1", "--total-mass"),
+    case("adapt train", "--robot {km20} --samples 0 --out {out}", "--samples"),
+    case("adapt train", "--robot {trunc_urdf} --out {out}", "trunc.urdf"),
+    // validate
+    case("validate residual", "--robot {km20} --motion {state_nan} --out {out}", "q:l_knee"),
+    case("validate residual", "--robot {km20} --motion {state_typo} --out {out}", "q:l_kne"),
+    case("validate lean", "--robot-run {tau_nan} --sim-run {state}", "tau:l_knee"),
+    case("validate lean", "--robot-run {missing_csv} --sim-run {state}", "missing.csv"),
+    // ik
+    case("ik", "--robot {km20} --markers {bad_toml} --frames {state} --out {out}", "bad.toml"),
+    case("ik", "--robot {km20} --markers {missing} --frames {state} --out {out}", "missing.urdf"),
+    // gait
+    case("gait sequence", "--cycles 0 --out {out}", "--cycles"),
+    case("gait sequence", "--dt -1 --out {out}", "--dt"),
+    case("gait zmp", "--footsteps 0 --out {out}", "--footsteps"),
+    case("gait zmp", "--tss nan --out {out}", "--tss"),
+    // compliant
+    case("compliant stiffness", "--robot {trunc_urdf}", "trunc.urdf"),
+    case("compliant stiffness", "--robot {km20}", "km20"),
+    case("compliant simulate", "--reference {cwalk_nan} --plant {plant} --out {out}", "xr"),
+    case("compliant simulate", "--reference {cwalk} --plant {bad_toml} --out {out}", "bad.toml"),
+    case("compliant simulate", "--reference {cwalk} --plant {plant} --noise -1 --out {out}", "--noise"),
+    // link
+    case("link scan", "--port {gone}", "gone"),
+    case("link scan", "--port {gone} --timeout-ms 0", "--timeout-ms"),
+    case("link read", "--port {gone} --protocol 1 --id 3", "gone"),
+    case("link read", "--port {gone} --protocol 3 --id 3", "protocol"),
+    case("link record", "--port {gone} --map builtin:km20 --duration 1 --out {out}", "gone"),
+    case("link record", "--port {gone} --map {bad_toml} --duration 1 --out {out}", "bad.toml"),
+    case("link record", "--port {gone} --map builtin:km20 --duration -1 --out {out}", "--duration"),
+    case("link plan", "--protocol 2 --servos 0", "--servos"),
+    case("link plan", "--protocol 2 --return-delay-us -5", "--return-delay-us"),
+    // serve, demo, bench, view
+    case("serve", "--robot {trunc_urdf} --link {out}", "trunc.urdf"),
+    case("serve", "--robot {km20} --realtime-factor 0 --link {out}", "--realtime-factor"),
+    case("demo", "--realtime-factor -1", "--realtime-factor"),
+    case("demo", "--scenario nowhere", "nowhere"),
+    case("bench dynamics", "--robot {trunc_urdf}", "trunc.urdf"),
+    case("bench dynamics", "--robot {km20} --states {state_nan}", "state_nan.csv"),
+    case("bench sim", "--robot {csv_as_urdf}", "csv_as.urdf"),
+    case("bench link", "--port {gone}", "gone"),
+    case("view", "{trunc_urdf} --export {out}", "trunc.urdf"),
+    // A recording may hold NaN (a servo that did not answer): the viewer shows the gap.
+    case("view", "{km20} {empty} --export {out}", "empty.urdf"),
+];
+
+/// The time any one bad input may take to be refused.
+const LIMIT: Duration = Duration::from_secs(30);
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_twinloop")
+}
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The commands of the CLI, from its help: every path of subcommands, e.g. "model
+/// info"; a group that only holds subcommands (its usage is `<COMMAND>` alone) is not
+/// itself a command.
+fn cli_commands() -> Vec<String> {
+    let mut out = Vec::new();
+    let mut todo = vec![String::new()];
+    while let Some(path) = todo.pop() {
+        let mut args: Vec<&str> = path.split_whitespace().collect();
+        args.push("--help");
+        let help = Command::new(bin()).args(&args).output().unwrap();
+        let text = String::from_utf8(help.stdout).unwrap();
+        let usage = text.lines().find(|l| l.starts_with("Usage:")).unwrap_or("");
+        if !path.is_empty() && !usage.trim_end().ends_with(&format!("{path} <COMMAND>")) {
+            out.push(path.clone());
+        }
+        let mut in_commands = false;
+        for line in text.lines() {
+            if line.starts_with("Commands:") {
+                in_commands = true;
+                continue;
+            }
+            if in_commands && !line.starts_with("  ") {
+                in_commands = !line.trim().is_empty() && line.starts_with(' ');
+                if !in_commands {
+                    break;
+                }
+            }
+            // A command's name starts at column 2; wrapped descriptions are indented deeper.
+            if in_commands
+                && line.len() > 2
+                && !line[2..].starts_with(' ')
+                && let Some(name) = line.split_whitespace().next()
+                && name != "help"
+            {
+                todo.push(format!("{path} {name}").trim().to_string());
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// The fixture files, made once per test run.
+struct Fixtures {
+    dir: PathBuf,
+}
+
+fn fixtures() -> &'static Fixtures {
+    static F: OnceLock<Fixtures> = OnceLock::new();
+    F.get_or_init(|| {
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("adversarial");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        make_fixtures(&dir);
+        Fixtures { dir }
+    })
+}
+
+fn write(dir: &Path, name: &str, text: &str) {
+    std::fs::write(dir.join(name), text).unwrap();
+}
+
+/// A CSV text with column `col`'s cell in data row `row` replaced by `cell`.
+fn with_cell(csv: &str, col: &str, row: usize, cell: &str) -> String {
+    let mut lines: Vec<String> = csv.lines().map(String::from).collect();
+    let k = lines[0].split(',').position(|c| c == col).unwrap();
+    let mut cells: Vec<String> = lines[row + 1].split(',').map(String::from).collect();
+    cells[k] = cell.to_string();
+    lines[row + 1] = cells.join(",");
+    lines.join("\n") + "\n"
+}
+
+fn make_fixtures(dir: &Path) {
+    let export = Command::new(bin())
+        .args(["model", "export", "builtin:km20", "--out"])
+        .arg(dir.join("km20.urdf"))
+        .output()
+        .unwrap();
+    assert!(export.status.success());
+    let urdf = std::fs::read_to_string(dir.join("km20.urdf")).unwrap();
+    write(dir, "trunc.urdf", &urdf[..urdf.len() / 2]);
+    write(dir, "empty.urdf", "");
+    let state = std::fs::read_to_string(repo().join("examples/km20_swing.csv")).unwrap();
+    write(dir, "state.csv", &state);
+    write(dir, "csv_as.urdf", &state);
+    // Cut in the middle of the last row, as a copy interrupted would be.
+    let cut = state.trim_end().len() - 40;
+    write(dir, "state_trunc.csv", &state[..cut]);
+    write(
+        dir,
+        "state_nan.csv",
+        &with_cell(&state, "q:l_knee", 3, "NaN"),
+    );
+    write(
+        dir,
+        "state_inf.csv",
+        &with_cell(&state, "q:l_knee", 5, "inf"),
+    );
+    write(
+        dir,
+        "tau_nan.csv",
+        &with_cell(&state, "tau:l_knee", 2, "NaN"),
+    );
+    let (head, body) = state.split_once('\n').unwrap();
+    write(
+        dir,
+        "state_typo.csv",
+        &format!("{}\n{body}", head.replace("q:l_knee", "q:l_kne")),
+    );
+    write(
+        dir,
+        "state_dup.csv",
+        &format!("{}\n{body}", head.replace("q:l_hip_yaw", "q:l_knee")),
+    );
+    let goals = std::fs::read_to_string(repo().join("examples/km20_goals.csv")).unwrap();
+    let (gh, gb) = goals.split_once('\n').unwrap();
+    write(
+        dir,
+        "goals_typo.csv",
+        &format!("{}\n{gb}", gh.replace("q:l_knee", "q:l_kne")),
+    );
+    write(
+        dir,
+        "goals_nan.csv",
+        &with_cell(&goals, "q:l_knee", 2, "nan"),
+    );
+    // An input/output record: y(k) = 0.8 y(k-1) + 0.5 u(k-1), u a fixed pseudo-random +-1.
+    let mut io = String::from("t,u:a,y:b\n");
+    let (mut y, mut u, mut state_bits) = (0.0f64, 1.0f64, 0x2545f491u32);
+    for k in 0..400 {
+        io.push_str(&format!("{},{u},{y}\n", k as f64 * 0.01));
+        y = 0.8 * y + 0.5 * u;
+        state_bits ^= state_bits << 13;
+        state_bits ^= state_bits >> 17;
+        state_bits ^= state_bits << 5;
+        u = if state_bits & 1 == 0 { 1.0 } else { -1.0 };
+    }
+    write(dir, "io.csv", &io);
+    write(dir, "io_nan.csv", &with_cell(&io, "y:b", 7, "NaN"));
+    write(dir, "io_trunc.csv", &io[..io.len() / 2 - 3]);
+    let cwalk = (0..200)
+        .map(|k| {
+            let t = k as f64 * 0.001;
+            format!("{t},{},0.5,{},0.5,0\n", 0.01 * t, 0.01 * t)
+        })
+        .collect::<String>();
+    let cwalk = format!("t,xr,zr,x,z,phase\n{cwalk}");
+    write(dir, "cwalk.csv", &cwalk);
+    write(dir, "cwalk_nan.csv", &with_cell(&cwalk, "xr", 4, "NaN"));
+    let plant = std::fs::read_to_string(repo().join("examples/coman_plant.toml")).unwrap();
+    write(dir, "plant.toml", &plant);
+    write(dir, "bad.toml", "[[marker]\nname = \"x\"\nlink = ");
+    write(
+        dir,
+        "bad.json",
+        "{\"schema\": \"something else\", \"list\": [1, 2",
+    );
+}
+
+/// The arguments of a case with its placeholders filled in.
+fn fill(case: &Case, out: &Path) -> Vec<String> {
+    let f = fixtures();
+    let file = |name: &str| f.dir.join(name).to_str().unwrap().to_string();
+    case.args
+        .split_whitespace()
+        .map(|a| match a {
+            "{out}" => out.to_str().unwrap().to_string(),
+            "{km20}" => file("km20.urdf"),
+            "{empty}" => file("empty.urdf"),
+            "{missing}" => file("missing.urdf"),
+            "{missing_csv}" => file("missing.csv"),
+            "{trunc_urdf}" => file("trunc.urdf"),
+            "{csv_as_urdf}" => file("csv_as.urdf"),
+            "{gone}" => file("gone"),
+            "{json_bad}" => file("bad.json"),
+            "{bad_toml}" => file("bad.toml"),
+            "{plant}" => file("plant.toml"),
+            "{op3_mesh_urdf}" => repo()
+                .join("models/op3/robotis_op3.urdf")
+                .to_str()
+                .unwrap()
+                .to_string(),
+            s if s.starts_with('{') && s.ends_with('}') => {
+                file(&format!("{}.csv", &s[1..s.len() - 1]))
+            }
+            s => s.to_string(),
+        })
+        .collect()
+}
+
+/// Wait for `child` up to `limit`; its exit code, or None when it had to be killed.
+fn wait_for(child: &mut Child, limit: Duration) -> Option<i32> {
+    let start = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            return status.code();
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// What is wrong with how one case ended, if anything.
+fn check(case: &Case, k: usize) -> Option<String> {
+    let out = fixtures().dir.join(format!("out-{k}"));
+    let args = fill(case, &out);
+    let mut full: Vec<String> = case.cmd.split_whitespace().map(String::from).collect();
+    full.extend(args);
+    let err_path = fixtures().dir.join(format!("stderr-{k}"));
+    let mut child = Command::new(bin())
+        .args(&full)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(std::fs::File::create(&err_path).unwrap())
+        .spawn()
+        .unwrap();
+    let code = wait_for(&mut child, LIMIT);
+    let err = std::fs::read_to_string(&err_path).unwrap_or_default();
+    let what = format!("`twinloop {}`", full.join(" "));
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
+    let problem = if code.is_none() {
+        format!("still running after {} s", LIMIT.as_secs())
+    } else if err.contains("panicked") {
+        format!(
+            "panicked: {}",
+            err.lines().find(|l| l.contains("panicked")).unwrap()
+        )
+    } else if code != Some(2) {
+        format!("exit {code:?}, not 2; stderr: {}", err.trim())
+    } else if errors.len() != 1 {
+        format!("{} error lines, not 1: {}", errors.len(), err.trim())
+    } else if !errors[0].contains(case.names) {
+        format!("the error does not name `{}`: {}", case.names, errors[0])
+    } else if out.exists() {
+        format!("left an output file behind: {}", errors[0])
+    } else {
+        return None;
+    };
+    Some(format!("{what}: {problem}"))
+}
+
+#[test]
+fn every_command_has_bad_input_cases() {
+    let commands = cli_commands();
+    assert!(
+        commands.len() >= 30,
+        "only {} commands found: {commands:?}",
+        commands.len()
+    );
+    let missing: Vec<&String> = commands
+        .iter()
+        .filter(|c| !CASES.iter().any(|k| k.cmd == c.as_str()))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "commands without bad-input cases in CASES: {missing:?}"
+    );
+    let unknown: Vec<&str> = CASES
+        .iter()
+        .map(|k| k.cmd)
+        .filter(|c| !commands.iter().any(|k| k == c))
+        .collect();
+    assert!(
+        unknown.is_empty(),
+        "CASES name commands the CLI does not have: {unknown:?}"
+    );
+}
+
+#[test]
+fn every_bad_input_is_refused_with_exit_2_and_one_line() {
+    // Two at a time: CI has two cores and most cases take milliseconds.
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let failures = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..2 {
+            s.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(case) = CASES.get(k) else { break };
+                    if let Some(f) = check(case, k) {
+                        failures.lock().unwrap().push(f);
+                    }
+                }
+            });
+        }
+    });
+    let failures = failures.into_inner().unwrap();
+    assert!(
+        failures.is_empty(),
+        "{} of {} bad inputs were not refused cleanly:\n{}",
+        failures.len(),
+        CASES.len(),
+        failures.join("\n")
+    );
+}
+
+/// Outputs that say what limits them: `link plan` without --return-delay-us gives the
+/// factory delay's rate, the same as the table computed with it; the fixed-base help
+/// says the root's mass is left out and how to get the whole robot's CoM.
+#[test]
+fn answers_that_explain_themselves() {
+    let run = |args: &[&str]| {
+        let o = Command::new(bin()).args(args).output().unwrap();
+        assert!(o.status.success(), "{args:?}");
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let plain = run(&["link", "plan", "--protocol", "1", "--servos", "20"]);
+    let note = plain
+        .lines()
+        .find(|l| l.starts_with("return delay 0 assumed"))
+        .unwrap();
+    let hz_in_note: f64 = note
+        .split(" runs at ")
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let factory = run(&[
+        "link",
+        "plan",
+        "--protocol",
+        "1",
+        "--servos",
+        "20",
+        "--return-delay-us",
+        "500",
+    ]);
+    let first_row = factory
+        .lines()
+        .find(|l| l.starts_with("READ per servo"))
+        .unwrap();
+    let hz_in_table: f64 = first_row
+        .split_whitespace()
+        .nth(8)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(hz_in_note, hz_in_table, "{note}\n{first_row}");
+    assert!(!factory.contains("return delay 0 assumed"));
+    let help = run(&["dynamics", "kinematics", "--help"]);
+    assert!(
+        help.contains("Pinocchio") && help.contains("q:base.qw = 1"),
+        "{help}"
+    );
+}
