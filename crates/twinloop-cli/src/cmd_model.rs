@@ -169,6 +169,7 @@ struct JointsByKind {
     fixed: usize,
     floating: usize,
     planar: usize,
+    spherical: usize,
 }
 
 #[derive(Serialize)]
@@ -230,6 +231,7 @@ fn joint_order(robot: &Description, spec: &str) -> Result<JointOrder, crate::err
             name: model.joint_names[i].clone(),
             kind: match model.joint_types[i] {
                 JointType::Prismatic => "prismatic",
+                JointType::Spherical => "spherical",
                 _ => "revolute",
             },
             lower: model.lower_limits[i],
@@ -286,6 +288,7 @@ fn summarise(robot: &Description, args: &DescriptionArgs, format: common::Format
             JointKind::Fixed => &mut by_kind.fixed,
             JointKind::Floating => &mut by_kind.floating,
             JointKind::Planar => &mut by_kind.planar,
+            JointKind::Spherical => &mut by_kind.spherical,
         } += 1;
     }
     let mut heaviest: Vec<LinkMass> = robot

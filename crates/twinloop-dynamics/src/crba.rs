@@ -29,22 +29,32 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
         } else {
             data.ycrb[p].add(&yi);
         }
-        let col = off + i;
-        let f = yi.mul_motion(&data.s[i]);
-        m[(col, col)] = data.s[i].dot(&f) + model.armature[i];
-        let mut j = p;
-        while j != BASE {
-            m[(off + j, col)] = data.s[j].dot(&f);
-            j = model.parents[j];
-        }
-        if off == 6 {
-            // Base rows: the base's subspace is the identity in base coordinates.
-            m[(0, col)] = f.f.x;
-            m[(1, col)] = f.f.y;
-            m[(2, col)] = f.f.z;
-            m[(3, col)] = f.n.x;
-            m[(4, col)] = f.n.y;
-            m[(5, col)] = f.n.z;
+        let (iv, n) = (model.idx_v[i], model.joint_types[i].nv());
+        for k in 0..n {
+            let col = iv + k;
+            let f = yi.mul_motion(&data.s[col - off]);
+            // The joint's own block (the whole block for a spherical joint).
+            for r in 0..n {
+                m[(iv + r, col)] = data.s[iv + r - off].dot(&f);
+            }
+            m[(col, col)] += model.armature[i];
+            let mut j = p;
+            while j != BASE {
+                for r in 0..model.joint_types[j].nv() {
+                    let row = model.idx_v[j] + r;
+                    m[(row, col)] = data.s[row - off].dot(&f);
+                }
+                j = model.parents[j];
+            }
+            if off == 6 {
+                // Base rows: the base's subspace is the identity in base coordinates.
+                m[(0, col)] = f.f.x;
+                m[(1, col)] = f.f.y;
+                m[(2, col)] = f.f.z;
+                m[(3, col)] = f.n.x;
+                m[(4, col)] = f.n.y;
+                m[(5, col)] = f.n.z;
+            }
         }
     }
     if off == 6 {

@@ -19,7 +19,9 @@
 //! - A body's joints, in order: `hinge` becomes [`JointKind::Revolute`] when
 //!   limited (the `range`, converted from degrees unless `<compiler
 //!   angle="radian">`) and [`JointKind::Continuous`] otherwise; `slide` becomes
-//!   [`JointKind::Prismatic`]; `ball` is an error. MuJoCo applies a body's joints
+//!   [`JointKind::Prismatic`]; `ball` becomes [`JointKind::Spherical`] (its
+//!   `ref` ignored and its cone `range` not kept, as MuJoCo's qpos0 and the
+//!   dynamics have them). MuJoCo applies a body's joints
 //!   one after the other in the body frame as moved by the ones before; each
 //!   joint but the last gets a massless link `<body>_<joint>`. A body without a
 //!   joint is attached by a fixed joint named `<body>_fixed`. Joint names are
@@ -1126,14 +1128,10 @@ impl<'a, 'i> Reader<'a, 'i> {
                         ));
                     }
                 }
-                "ball" => {
-                    return Err(error_at(
-                        j,
-                        "ball joints are not supported: twinloop's dynamics has no spherical joint yet",
-                    ));
-                }
-                kind @ ("hinge" | "slide") => {
-                    let hinge = kind == "hinge";
+                kind @ ("hinge" | "slide" | "ball") => {
+                    // A ball turns about its anchor like a hinge (about every axis).
+                    let hinge = kind != "slide";
+                    let ball = kind == "ball";
                     if hinge {
                         anchor = match self.get(j, "joint", &class, "pos") {
                             Some((n, v)) => parse_array::<3>(n, "pos", v)?,
@@ -1145,11 +1143,25 @@ impl<'a, 'i> Reader<'a, 'i> {
                         None if out.is_empty() => format!("{name}_joint"),
                         None => format!("{name}_joint{}", out.len() + 1),
                     };
-                    let reference = self
-                        .number(self.get(j, "joint", &class, "ref"), "ref")?
-                        .unwrap_or(0.0);
+                    // MuJoCo ignores `ref` on a ball: its qpos0 is the unit quaternion.
+                    let reference = match ball {
+                        true => 0.0,
+                        false => self
+                            .number(self.get(j, "joint", &class, "ref"), "ref")?
+                            .unwrap_or(0.0),
+                    };
+                    let mut joint = self.joint(j, &class, jname, hinge)?;
+                    if ball {
+                        // q is a quaternion: no axis; MuJoCo's ball `range` is a cone
+                        // the dynamics leaves out, so it is not a 1-DoF position limit.
+                        joint.kind = JointKind::Spherical;
+                        joint.axis = None;
+                        if let Some(l) = &mut joint.limit {
+                            (l.lower, l.upper) = (None, None);
+                        }
+                    }
                     out.push(BodyJoint {
-                        joint: self.joint(j, &class, jname, hinge)?,
+                        joint,
                         node: j,
                         anchor,
                         hinge,
