@@ -114,6 +114,19 @@ fn check_quaternion(model: &Model, table: &Table, row: usize, q: &[f64]) -> Resu
             return Err(table.row_error(row, format!("base quaternion has norm {n}, not 1")));
         }
     }
+    for i in 0..model.nbodies {
+        if model.joint_types[i] == twinloop_dynamics::JointType::Spherical {
+            let iq = model.idx_q[i];
+            let n = q[iq..iq + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
+            if (n - 1.0).abs() > 1e-6 {
+                let joint = &model.joint_names[i];
+                return Err(table.row_error(
+                    row,
+                    format!("ball joint {joint}'s quaternion (q:{joint}.qx .. .qw) has norm {n}, not 1"),
+                ));
+            }
+        }
+    }
     Ok(())
 }
 
