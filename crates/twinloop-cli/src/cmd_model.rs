@@ -473,6 +473,7 @@ fn lint_command(args: &DescriptionArgs, strict: bool) -> CliResult {
     } else {
         lint(&robot)
     };
+    let report = with_singular_mass_matrix(&robot, report);
     let out = LintOutput {
         file: args.robot.clone(),
         format: format.as_str(),
@@ -483,6 +484,50 @@ fn lint_command(args: &DescriptionArgs, strict: bool) -> CliResult {
         Outcome::Problems
     } else {
         Outcome::Ok
+    })
+}
+
+/// `singular-mass-matrix`: the compiled model's (fixed base) mass matrix singular at
+/// both the neutral and a bent configuration, unless a lint error already names the
+/// joint's link.
+fn with_singular_mass_matrix(robot: &Description, report: LintReport) -> LintReport {
+    use twinloop_description::lint::{Finding, Subject, codes};
+    let Ok(model) = Model::from_description_with_base(robot, BaseKind::Fixed) else {
+        return report;
+    };
+    let mut data = twinloop_dynamics::Data::new(&model);
+    // A second, bent configuration: a singularity of the zero pose only (aligned
+    // axes that bending separates) is not reported.
+    let mut bent = model.neutral_configuration();
+    for i in 0..model.nbodies {
+        if model.joint_types[i].nq() == 1 {
+            bent[model.idx_q[i]] = 0.5;
+        }
+    }
+    let Some(e) = [model.neutral_configuration(), bent]
+        .iter()
+        .map(|q| twinloop_dynamics::check_mass_matrix(&model, &mut data, q).err())
+        .reduce(|a, b| a.and(b))
+        .flatten()
+    else {
+        return report;
+    };
+    let Some(joint) = e.joint.as_deref().and_then(|j| robot.joint(j)) else {
+        return report;
+    };
+    let explained = report
+        .findings
+        .iter()
+        .any(|f| f.severity == Severity::Error && f.name == joint.child);
+    if explained {
+        return report;
+    }
+    report.with_finding(Finding {
+        severity: Severity::Error,
+        code: codes::SINGULAR_MASS_MATRIX,
+        subject: Subject::Joint,
+        name: joint.name.clone(),
+        message: e.to_string(),
     })
 }
 

@@ -24,6 +24,7 @@
 //! | `zero-inertia-with-mass` | warning | mass > 0 with an all-zero tensor: a point mass, usually a dummy frame (1e-9 kg) |
 //! | `inertia-without-mass` | warning | mass 0 with a non-zero tensor |
 //! | `zero-mass-moving-link` | error / warning | a body moved by a non-fixed joint (the joint's child plus every link fixed to it) has no mass. Error when nothing with mass moves with that joint at all (the joint's row of the mass matrix is zero); warning when links further down carry mass |
+//! | `singular-mass-matrix` | error | added by the dynamics (`twinloop model lint`, [`LintReport::with_finding`]): the compiled model's mass matrix is singular at a joint that no other error explains (its mass on its axis, a point mass at a ball joint's centre, a massless link between two joints with one axis); forward dynamics refuses it |
 //! | `singular-floating-base` | warning | as a floating base (twinloop's default) the mass matrix is singular: the robot has no mass, or its rotational inertia about its CoM is singular (all mass on a line) |
 //! | `missing-limits` | warning | revolute or prismatic joint without lower/upper |
 //! | `limits-inverted` | error | lower > upper |
@@ -68,6 +69,7 @@ pub mod codes {
     pub const INERTIA_WITHOUT_MASS: &str = "inertia-without-mass";
     pub const ZERO_MASS_MOVING_LINK: &str = "zero-mass-moving-link";
     pub const SINGULAR_FLOATING_BASE: &str = "singular-floating-base";
+    pub const SINGULAR_MASS_MATRIX: &str = "singular-mass-matrix";
     pub const MISSING_LIMITS: &str = "missing-limits";
     pub const LIMITS_INVERTED: &str = "limits-inverted";
     pub const LIMITS_EMPTY_RANGE: &str = "limits-empty-range";
@@ -229,6 +231,18 @@ impl LintReport {
                 f.severity = Severity::Error;
             }
         }
+        self.recount()
+    }
+
+    /// The report with one more finding (e.g. from a check that needs the compiled
+    /// dynamics, which this crate cannot run), in severity order.
+    pub fn with_finding(mut self, f: Finding) -> LintReport {
+        self.findings.push(f);
+        self.recount()
+    }
+
+    /// Sort by severity (stable) and count each severity.
+    fn recount(mut self) -> LintReport {
         self.findings.sort_by_key(|f| std::cmp::Reverse(f.severity));
         let count = |s| self.findings.iter().filter(|f| f.severity == s).count();
         (self.errors, self.warnings, self.infos) = (

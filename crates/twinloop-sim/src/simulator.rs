@@ -468,6 +468,22 @@ impl Simulator {
         d
     }
 
+    /// Why the step matrix has no factor at velocity coordinate `k`: named by its
+    /// joint, and when the mass matrix itself is singular there, said so.
+    fn singular_step_message(&mut self, k: usize) -> String {
+        let at = if k < self.model.v_offset {
+            "the floating base".to_string()
+        } else {
+            let (i, _) = self.model.velocity_owner(k - self.model.v_offset);
+            format!("joint \"{}\"", self.model.joint_names[i])
+        };
+        let why = match twinloop_dynamics::check_mass_matrix(&self.model, &mut self.data, &self.q) {
+            Err(e) => format!(": {e}"),
+            Ok(()) => String::new(),
+        };
+        format!("the step matrix is not positive definite at {at} (velocity coordinate {k}){why}")
+    }
+
     /// A ball joint is passive: only the description's viscous damping acts on its
     /// three angular velocities (implicitly, like a 1-DoF joint's).
     fn damp_ball(&mut self, i: usize, dt: f64) {
@@ -528,9 +544,7 @@ impl Simulator {
         if let Err(k) = ltdl::factor(&mut self.h, &self.dof_parent) {
             return Err(SimError::Diverged {
                 time: self.time,
-                message: format!(
-                    "the step matrix is not positive definite at velocity coordinate {k}"
-                ),
+                message: self.singular_step_message(k),
             });
         }
         for x in self.rhs.iter_mut() {

@@ -99,3 +99,22 @@ fn a_conical_swing_keeps_a_unit_quaternion_and_its_vertical_momentum() {
     assert!((l1 - l0).abs() < 1e-3 * l0.abs(), "L_z {l0} -> {l1}");
     assert!((e1 - e0).abs() < 1e-2 * e0.abs(), "energy {e0} -> {e1}");
 }
+
+#[test]
+fn a_massless_ball_is_refused_naming_its_joint() {
+    // A point mass at the ball's centre: nothing resists the ball's rotation.
+    let xml = r#"<mujoco><worldbody><body name="bob">
+                   <joint name="pivot" type="ball"/>
+                   <inertial pos="0 0 0" mass="1" diaginertia="0 0 0"/>
+                 </body></worldbody></mujoco>"#;
+    let robot = twinloop_description::mjcf::from_str(xml).unwrap();
+    let model = Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap();
+    let config = SimConfig {
+        ground: false,
+        ..SimConfig::default()
+    };
+    let mut sim = Simulator::from_model(&robot, model, config).unwrap();
+    let e = sim.step().unwrap_err().to_string();
+    assert!(e.contains("joint \"pivot\""), "{e}");
+    assert!(e.contains("mass matrix is singular at joint \"pivot\""), "{e}");
+}
