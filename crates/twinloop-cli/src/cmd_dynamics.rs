@@ -77,10 +77,11 @@ pub fn run(cmd: DynamicsCommand) -> CliResult {
     match cmd {
         DynamicsCommand::Kinematics(a) => kinematics(&a),
         DynamicsCommand::Inverse(a) => per_row(&a, Quantity::A, Quantity::Tau, |m, d, q, v, x| {
-            twinloop_dynamics::rnea(m, d, q, v, x)
+            Ok(twinloop_dynamics::rnea(m, d, q, v, x))
         }),
         DynamicsCommand::Forward(a) => per_row(&a, Quantity::Tau, Quantity::A, |m, d, q, v, x| {
-            twinloop_dynamics::aba(m, d, q, v, x)
+            // A singular mass matrix is refused naming the joint, not written as NaN.
+            twinloop_dynamics::try_aba(m, d, q, v, x)
         }),
     }?;
     Ok(Outcome::Ok)
@@ -202,7 +203,10 @@ fn per_row(
         &[f64],
         &[f64],
         &[f64],
-    ) -> &'d nalgebra::DVector<f64>,
+    ) -> Result<
+        &'d nalgebra::DVector<f64>,
+        twinloop_dynamics::SingularJoint,
+    >,
 ) -> Result<(), CliError> {
     let (_, model) = load_model(&a.robot, base_kind(a.fixed_base))?;
     let table = read_table(&a.trajectory)?;
@@ -230,7 +234,9 @@ fn per_row(
         if let Some(t) = tcol {
             row.push(values[t]);
         }
-        row.extend(f(&model, &mut data, &q, &v, &x).iter());
+        let out = f(&model, &mut data, &q, &v, &x)
+            .map_err(|e| table.row_error(r, format!("{}: {e}", a.robot)))?;
+        row.extend(out.iter());
         w.write_row(&row)?;
         bar.inc(1);
     }
