@@ -75,6 +75,7 @@ use crate::description::*;
 pub(crate) mod include;
 mod inertia;
 mod mesh;
+mod hull;
 
 use crate::error::DescriptionError;
 use crate::xml::{
@@ -1506,26 +1507,33 @@ impl<'a, 'i> Reader<'a, 'i> {
         if let Some((n, v)) = self.get(g, "geom", class, "shellinertia")
             && bool_attr(n, "shellinertia", v)?
         {
-            return Err(bad("the shell inertia of a mesh is not computed".into()));
+            // MuJoCo's own rule: a mesh's shell is its asset's inertia="shell".
+            return Err(bad(
+                "for mesh geoms, shellinertia is not read: give the mesh asset inertia=\"shell\""
+                    .into(),
+            ));
         }
-        let signed = match asset.inertia.as_deref() {
-            None | Some("legacy") => mesh::Signed::Legacy,
-            Some("exact") => mesh::Signed::Exact,
-            Some(other) => {
-                return Err(bad(format!(
-                    "inertia=\"{other}\" is not computed (legacy and exact are)"
-                )));
-            }
-        };
+        let how = asset.inertia.as_deref().unwrap_or("legacy");
+        if !matches!(how, "legacy" | "exact" | "convex" | "shell") {
+            return Err(bad(format!(
+                "unknown inertia=\"{how}\" (expected legacy, exact, convex or shell)"
+            )));
+        }
         let path = match &self.dir {
             Some(d) => d.join(file),
             None => std::path::PathBuf::from(file),
         };
-        let props = mesh::read(&path)
+        let trimesh = mesh::read(&path)
             .map_err(&bad)?
-            .scaled(asset.scale.unwrap_or([1.0; 3]))
-            .mass_properties(signed)
-            .map_err(|e| bad(e.to_string()))?;
+            .scaled(asset.scale.unwrap_or([1.0; 3]));
+        let props = match how {
+            "shell" => trimesh.shell_properties(),
+            "convex" => hull::convex_hull(&trimesh.vertices)
+                .and_then(|h| h.mass_properties(mesh::Signed::Exact)),
+            "exact" => trimesh.mass_properties(mesh::Signed::Exact),
+            _ => trimesh.mass_properties(mesh::Signed::Legacy),
+        }
+        .map_err(|e| bad(e.to_string()))?;
         let density = match self.number(self.get(g, "geom", class, "mass"), "mass")? {
             Some(m) => m / props.volume,
             None => self
