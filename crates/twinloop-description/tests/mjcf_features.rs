@@ -496,10 +496,22 @@ fn errors_name_line_and_element() {
         "duplicate link name",
     );
     check(
+        &err(&with("<worldbody>", "<worldbody><attach/>")),
+        6,
+        "<attach>",
+        "not supported",
+    );
+    check(
         &err(&with("<worldbody>", "<worldbody><replicate/>")),
         6,
         "<replicate>",
-        "not supported",
+        "count",
+    );
+    check(
+        &err(&with("<worldbody>", "<worldbody><replicate count=\"0\"/>")),
+        6,
+        "<replicate",
+        "not a replica count",
     );
     // Truncated and not XML.
     let e = err(&GOOD[..GOOD.find("<geom").unwrap()]);
