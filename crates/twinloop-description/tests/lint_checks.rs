@@ -592,6 +592,7 @@ fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
   <equality><joint joint1="j1" joint2="j2"/></equality>
   <actuator><motor joint="j1"/><motor tendon="t"/><general site="s"/></actuator>
   <sensor><jointpos joint="j1"/><accelerometer site="s"/></sensor>
+  <deformable><flex name="cloth" dim="2" body="a a a" vertex="0 0 0 1 0 0 0 1 0" element="0 1 2"/></deformable>
 </mujoco>"#,
     )
     .unwrap();
@@ -608,6 +609,7 @@ fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
             ("<motor> in <actuator>", "line 9"),
             ("<general> in <actuator>", "line 9"),
             ("<accelerometer> in <sensor>", "line 10"),
+            (r#"<flex name="cloth">"#, "line 11"),
         ]
     );
     assert!(
@@ -617,7 +619,7 @@ fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
     );
     assert!(!report.has_errors());
     let strict = report.strict();
-    assert_eq!(strict.errors, 5);
+    assert_eq!(strict.errors, 6);
     assert_eq!(strict.findings[0].code, codes::UNMODELED_ELEMENT);
     assert!(strict.findings[0].message.contains("tendon"));
 }

@@ -556,8 +556,8 @@ impl<'a, 'i> Reader<'a, 'i> {
     }
 
     /// Elements of a section that act on the physics beyond the rigid-body tree:
-    /// tendons, equality constraints, actuators that do not drive a joint, and
-    /// sensors at sites.
+    /// tendons, equality constraints, actuators that do not drive a joint,
+    /// sensors at sites, and deformable flexes and skins.
     fn unmodeled(&mut self, section: Node<'a, 'i>) {
         for e in section.children().filter(Node::is_element) {
             let what = match (section.tag_name().name(), e.tag_name().name()) {
@@ -579,6 +579,10 @@ impl<'a, 'i> Reader<'a, 'i> {
                          torques in twinloop"
                     )
                 }
+                ("deformable", t) => format!(
+                    "{t} in <deformable>: a deformable body (flex or skin); twinloop's \
+                     rigid-body dynamics leave it out"
+                ),
                 ("sensor", t) if e.attribute("site").is_some() => {
                     format!("{t} sensor at a site: twinloop does not simulate it")
                 }
