@@ -58,7 +58,8 @@ warning: plausible, but the dynamics may differ from the robot or other tools;\n
 info: worth knowing (missing effort limits, mimic on a fixed joint, total mass)\n  \
 CODE      stable, scripts may match on it: negative-mass, inertia-not-positive-definite,\n            \
 triangle-inequality, zero-inertia-with-mass, inertia-without-mass,\n            \
-zero-mass-moving-link, singular-floating-base, missing-limits, limits-inverted, limits-empty-range,\n            \
+zero-mass-moving-link, singular-mass-matrix, singular-floating-base, missing-limits,\n            \
+limits-inverted, limits-empty-range,\n            \
 missing-effort-velocity, zero-effort-or-velocity, non-unit-axis, mimic-joint,\n            \
 unmodeled-element, ignored-detail, total-mass\n  \
 SUBJECT   the link or joint (or robot) by name, or the file's element\n  \

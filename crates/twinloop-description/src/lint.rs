@@ -32,7 +32,7 @@
 //! | `missing-effort-velocity` | info | revolute or prismatic joint without effort or velocity limit (all MJCF joints) |
 //! | `zero-effort-or-velocity` | warning | an effort or velocity limit <= 0 |
 //! | `non-unit-axis` | warning | a moving joint's axis norm differs from 1 by more than [`AXIS_NORM_TOLERANCE`] (twinloop normalises it; other tools may not) |
-//! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect) |
+//! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect); also a warning when it names a joint the file does not have |
 //! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites |
 //! | `ignored-detail` | warning | a visual-only detail the reader read past: a URDF `<texture/>` without a file, a mesh `scale` with a fourth number |
 //! | `total-mass` | info | the robot's total mass, as a scale would weigh it |
@@ -82,7 +82,7 @@ pub mod codes {
     pub const TOTAL_MASS: &str = "total-mass";
 
     /// Every code, in the order of the table in the module documentation.
-    pub const ALL: [&str; 17] = [
+    pub const ALL: [&str; 18] = [
         NEGATIVE_MASS,
         INERTIA_NOT_POSITIVE_DEFINITE,
         TRIANGLE_INEQUALITY,
@@ -90,6 +90,7 @@ pub mod codes {
         INERTIA_WITHOUT_MASS,
         ZERO_MASS_MOVING_LINK,
         SINGULAR_FLOATING_BASE,
+        SINGULAR_MASS_MATRIX,
         MISSING_LIMITS,
         LIMITS_INVERTED,
         LIMITS_EMPTY_RANGE,
@@ -265,6 +266,7 @@ pub fn lint(robot: &Description) -> LintReport {
     floating_base::check(robot, &mut out);
     for joint in &robot.joints {
         check_joint(joint, &mut out);
+        check_mimic_target(robot, joint, &mut out);
     }
     let notes = [
         (&robot.unmodeled, codes::UNMODELED_ELEMENT),
@@ -658,6 +660,24 @@ fn check_mimic(j: &Joint, out: &mut Vec<Finding>) {
                 format!("{how}; twinloop's dynamics treats it as an independent {kind} joint"),
             ));
         }
+    }
+}
+
+/// `mimic-joint` (warning): a mimic of a joint the file does not have.
+fn check_mimic_target(robot: &Description, j: &Joint, out: &mut Vec<Finding>) {
+    if let Some(m) = &j.mimic
+        && robot.joint(&m.joint).is_none()
+    {
+        out.push(joint_finding(
+            j,
+            Severity::Warning,
+            codes::MIMIC_JOINT,
+            format!(
+                "mimics \"{}\", which the file does not have: the mimic means nothing (twinloop's \
+                 dynamics treats every mimic joint as independent anyway)",
+                m.joint
+            ),
+        ));
     }
 }
 

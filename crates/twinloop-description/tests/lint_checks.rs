@@ -569,6 +569,32 @@ fn mimic_joint_is_a_warning_and_a_fixed_mimic_is_info() {
     assert_eq!(r.mimic_joints, 2);
 }
 
+/// A mimic of a joint the file does not have (example-robot-data's Alex hands):
+/// the file loads, lint warns.
+#[test]
+fn a_mimic_of_an_unknown_joint_is_a_warning() {
+    let robot = base()
+        .link("forearm")
+        .mass(0.3, [0.0; 3], good_inertia())
+        .done()
+        .revolute("elbow", "arm", "forearm", [0.0, 1.0, 0.0])
+        .limits(-1.0, 1.0, 5.0, 6.0)
+        .mimic("index_q1", 1.0, 0.0)
+        .done()
+        .build()
+        .unwrap();
+    robot.validate().unwrap();
+    let r = lint(&robot);
+    let unknown: Vec<_> = r
+        .with_code(codes::MIMIC_JOINT)
+        .filter(|f| f.message.contains("which the file does not have"))
+        .collect();
+    assert_eq!(unknown.len(), 1, "{:#?}", r.findings);
+    assert_eq!(unknown[0].severity, Severity::Warning);
+    assert_eq!(unknown[0].name, "elbow");
+    assert!(!r.has_errors());
+}
+
 #[test]
 fn every_code_is_listed_once() {
     let mut all = codes::ALL.to_vec();
