@@ -123,7 +123,9 @@ fn check_quaternion(model: &Model, table: &Table, row: usize, q: &[f64]) -> Resu
                 let joint = &model.joint_names[i];
                 return Err(table.row_error(
                     row,
-                    format!("ball joint {joint}'s quaternion (q:{joint}.qx .. .qw) has norm {n}, not 1"),
+                    format!(
+                        "ball joint {joint}'s quaternion (q:{joint}.qx .. .qw) has norm {n}, not 1"
+                    ),
                 ));
             }
         }
@@ -203,10 +205,8 @@ fn per_row(
         &[f64],
         &[f64],
         &[f64],
-    ) -> Result<
-        &'d nalgebra::DVector<f64>,
-        twinloop_dynamics::SingularJoint,
-    >,
+    )
+        -> Result<&'d nalgebra::DVector<f64>, twinloop_dynamics::SingularJoint>,
 ) -> Result<(), CliError> {
     let (_, model) = load_model(&a.robot, base_kind(a.fixed_base))?;
     let table = read_table(&a.trajectory)?;

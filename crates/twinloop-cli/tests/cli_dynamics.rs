@@ -240,7 +240,11 @@ fn forward_dynamics_of_ball_joints_matches_pinocchio() {
     }
     let tau_names: Vec<String> = v_names
         .iter()
-        .map(|n| n.replace(".wx", ".tx").replace(".wy", ".ty").replace(".wz", ".tz"))
+        .map(|n| {
+            n.replace(".wx", ".tx")
+                .replace(".wy", ".ty")
+                .replace(".wz", ".tz")
+        })
         .collect();
     let mut header = vec!["t".to_string()];
     header.extend(q_names.iter().map(|n| format!("q:{n}")));

@@ -393,10 +393,17 @@ fn ball_joint_is_spherical_without_axis_ref_or_cone_limit() {
     let hip = d.joints.iter().find(|j| j.name == "hip").unwrap();
     assert_eq!(hip.kind, twinloop_description::JointKind::Spherical);
     assert_eq!(hip.axis, None);
-    assert!(hip.limit.is_none_or(|l| l.lower.is_none() && l.upper.is_none()));
+    assert!(
+        hip.limit
+            .is_none_or(|l| l.lower.is_none() && l.upper.is_none())
+    );
     // The anchor moves the joint frame (pos 0 0 -0.1 plus the anchor 0 0 0.05), and
     // `ref` does not turn it.
-    assert!((hip.origin.xyz[2] - -0.05).abs() < 1e-15, "{:?}", hip.origin);
+    assert!(
+        (hip.origin.xyz[2] - -0.05).abs() < 1e-15,
+        "{:?}",
+        hip.origin
+    );
     assert!(hip.origin.rpy.iter().all(|a| a.abs() < 1e-15));
 }
 

@@ -3,8 +3,8 @@
 
 use crate::data::Data;
 use crate::joint::{joint_placement, subspace_in};
-use crate::model::JointType;
 use crate::kinematics::{base_placement, check_q, check_v};
+use crate::model::JointType;
 use crate::model::{BASE, Model};
 use nalgebra::{DVector, Matrix3, Vector3};
 use twinloop_spatial::{Force, Motion, Symmetric6};

@@ -78,7 +78,8 @@ pub fn difference(model: &Model, q0: &[f64], q1: &[f64], out: &mut [f64]) {
         let r0 = quaternion(&q0[3..7]);
         let r1 = quaternion(&q1[3..7]);
         let dr = r0.inverse() * r1;
-        let dp = r0.inverse() * (Vector3::new(q1[0], q1[1], q1[2]) - Vector3::new(q0[0], q0[1], q0[2]));
+        let dp =
+            r0.inverse() * (Vector3::new(q1[0], q1[1], q1[2]) - Vector3::new(q0[0], q0[1], q0[2]));
         let w = dr.scaled_axis();
         // Invert se3_exp's V(w): the linear part v with V(w) v = dp.
         let (_, vmat) = se3_exp_parts(&w);

@@ -401,7 +401,11 @@ impl Model {
             );
         }
         // A ball joint has no axis: it turns about its origin in every direction.
-        let axis = if spherical { Vector3::zeros() } else { axis / n };
+        let axis = if spherical {
+            Vector3::zeros()
+        } else {
+            axis / n
+        };
         let lim = joint.limit.unwrap_or_default();
         let new_body = self.parents.len();
         self.parents.push(parent_body);

@@ -85,7 +85,8 @@ fn singular_pivot(model: &Model, data: &Data) -> Result<(), SingularJoint> {
             dm[(0, 0)]
         };
         let floor = SINGULAR_RELATIVE_TOLERANCE * (scale + model.armature[i]);
-        if !(pivot > floor) {
+        // NaN (a non-finite model) counts as singular too.
+        if pivot.is_nan() || pivot <= floor {
             return Err(SingularJoint {
                 joint: Some(model.joint_names[i].clone()),
                 pivot,

@@ -84,8 +84,16 @@ fn model_of(name: &str, refd: &Value) -> Model {
     let model =
         Model::from_description_with_base(&robot, base).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert!(model.has_spherical_joints(), "{name}");
-    assert_eq!(model.nq, refd["nq"].as_u64().unwrap() as usize, "{name}: nq");
-    assert_eq!(model.nv, refd["nv"].as_u64().unwrap() as usize, "{name}: nv");
+    assert_eq!(
+        model.nq,
+        refd["nq"].as_u64().unwrap() as usize,
+        "{name}: nq"
+    );
+    assert_eq!(
+        model.nv,
+        refd["nv"].as_u64().unwrap() as usize,
+        "{name}: nv"
+    );
     // Same coordinate order as MuJoCo and Pinocchio (depth-first, file order).
     let names: Vec<String> = refd["v_names"]
         .as_array()
@@ -124,7 +132,11 @@ fn check_state(name: &str, model: &Model, data: &mut Data, s: &Value) {
         &vecf(&s["com"]),
     );
     let jc = jacobian_center_of_mass(model, data, &q).clone();
-    close_mat(&format!("{name} com jacobian"), &jc, &mat(&s["com_jacobian"]));
+    close_mat(
+        &format!("{name} com jacobian"),
+        &jc,
+        &mat(&s["com_jacobian"]),
+    );
     compute_joint_jacobians(model, data, &q);
     let mut j = DMatrix::zeros(6, model.nv);
     for (body, jref) in s["body_jacobians"].as_object().unwrap() {
@@ -135,7 +147,14 @@ fn check_state(name: &str, model: &Model, data: &mut Data, s: &Value) {
     let mut out = vec![0.0; model.nq];
     integrate(model, &q, &v, s["integrate_dt"].as_f64().unwrap(), &mut out);
     let pin_q = vecf(&s["integrate"]);
-    if model.is_floating() && out[3..7].iter().zip(&pin_q[3..7]).map(|(a, b)| a * b).sum::<f64>() < 0.0 {
+    if model.is_floating()
+        && out[3..7]
+            .iter()
+            .zip(&pin_q[3..7])
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            < 0.0
+    {
         // The base quaternion is twinloop's own (Shepperd, from the matrix); Pinocchio
         // keeps q's hemisphere. Same rotation; ball joints follow Pinocchio exactly.
         out[3..7].iter_mut().for_each(|x| *x = -*x);
@@ -145,7 +164,11 @@ fn check_state(name: &str, model: &Model, data: &mut Data, s: &Value) {
     difference(model, &q, &vecf(&s["q2"]), &mut dv);
     close(&format!("{name} difference"), &dv, &vecf(&s["difference"]));
     if let Some(full) = s.get("mujoco_mass_matrix") {
-        close_mat(&format!("{name} mj_fullM"), &data_m(model, data, &q), &mat(full));
+        close_mat(
+            &format!("{name} mj_fullM"),
+            &data_m(model, data, &q),
+            &mat(full),
+        );
         close(
             &format!("{name} qfrc_bias"),
             nonlinear_effects(model, data, &q, &v).as_slice(),

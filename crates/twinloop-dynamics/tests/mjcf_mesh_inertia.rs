@@ -22,14 +22,30 @@ fn transpose(a: &M3) -> M3 {
 fn rot_wxyz(q: &[f64]) -> M3 {
     let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
     [
-        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
-        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
-        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
     ]
 }
 
 fn nums(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 #[test]
@@ -46,7 +62,9 @@ fn shell_and_convex_meshes_weigh_what_mujoco_says() {
     for b in bodies {
         let name = b["name"].as_str().unwrap();
         let link = robot.links.iter().find(|l| l.name == name).unwrap();
-        let i = link.inertial.unwrap_or_else(|| panic!("{name}: no inertial"));
+        let i = link
+            .inertial
+            .unwrap_or_else(|| panic!("{name}: no inertial"));
         let mass = b["mass"].as_f64().unwrap();
         let rel = (i.mass - mass).abs() / mass;
         assert!(rel < 1e-9, "{name}: mass {} vs MuJoCo {mass}", i.mass);
@@ -54,7 +72,11 @@ fn shell_and_convex_meshes_weigh_what_mujoco_says() {
         let ipos = nums(&b["ipos"]);
         for k in 0..3 {
             let e = (i.origin.xyz[k] - ipos[k]).abs();
-            assert!(e < 1e-9, "{name}: CoM {:?} vs MuJoCo {ipos:?}", i.origin.xyz);
+            assert!(
+                e < 1e-9,
+                "{name}: CoM {:?} vs MuJoCo {ipos:?}",
+                i.origin.xyz
+            );
             worst = worst.max(e);
         }
         // Both tensors in the body frame: twinloop's through its inertial origin,
@@ -70,7 +92,10 @@ fn shell_and_convex_meshes_weigh_what_mujoco_says() {
             for c in 0..3 {
                 let e = (ours[r][c] - theirs[r][c]).abs() / scale;
                 // MuJoCo's mju_eig3 gives the axes to about 1e-8 (docs/mjcf.md).
-                assert!(e < 1e-7, "{name}: inertia[{r}][{c}] {ours:?} vs MuJoCo {theirs:?}");
+                assert!(
+                    e < 1e-7,
+                    "{name}: inertia[{r}][{c}] {ours:?} vs MuJoCo {theirs:?}"
+                );
                 worst = worst.max(e);
             }
         }

@@ -19,7 +19,11 @@ fn strings(v: &Value) -> Vec<String> {
 }
 
 fn nums(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 #[test]
@@ -29,13 +33,20 @@ fn replicate_expands_as_mujoco_does() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("replicate.json")).unwrap())
             .unwrap();
     let robot = load(dir.join("replicate.xml")).unwrap();
-    for (b, mass) in strings(&refd["bodies"]).iter().zip(nums(&refd["body_mass"])) {
+    for (b, mass) in strings(&refd["bodies"])
+        .iter()
+        .zip(nums(&refd["body_mass"]))
+    {
         let link = robot
             .links
             .iter()
             .find(|l| &l.name == b)
             .unwrap_or_else(|| panic!("no link {b}"));
-        assert!((link.mass() - mass).abs() <= 1e-12 * mass, "{b}: {} vs {mass}", link.mass());
+        assert!(
+            (link.mass() - mass).abs() <= 1e-12 * mass,
+            "{b}: {} vs {mass}",
+            link.mass()
+        );
     }
     for s in strings(&refd["sites"]) {
         assert!(robot.frames.iter().any(|f| f.name == s), "no site {s}");
@@ -48,7 +59,12 @@ fn replicate_expands_as_mujoco_does() {
         let (q, v) = (nums(&s["q"]), nums(&s["v"]));
         crba(&model, &mut data, &q);
         data.symmetrize_mass_matrix();
-        let rows: Vec<Vec<f64>> = s["mass_matrix"].as_array().unwrap().iter().map(nums).collect();
+        let rows: Vec<Vec<f64>> = s["mass_matrix"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(nums)
+            .collect();
         for (r, row) in rows.iter().enumerate() {
             for (c, want) in row.iter().enumerate() {
                 let e = (data.mass_matrix[(r, c)] - want).abs();
@@ -59,7 +75,11 @@ fn replicate_expands_as_mujoco_does() {
         let bias = nonlinear_effects(&model, &mut data, &q, &v).clone();
         for (k, want) in nums(&s["bias"]).iter().enumerate() {
             let e = (bias[k] - want).abs();
-            assert!(e <= 1e-9 * want.abs().max(1.0), "bias[{k}]: {} vs {want}", bias[k]);
+            assert!(
+                e <= 1e-9 * want.abs().max(1.0),
+                "bias[{k}]: {} vs {want}",
+                bias[k]
+            );
             worst = worst.max(e);
         }
     }

@@ -70,7 +70,12 @@ fn algorithms_do_not_allocate() {
             .link(&ball)
             .mass(0.4, [0.01, 0.0, -0.05], Inertia::solid_sphere(0.4, 0.04))
             .done()
-            .joint(format!("{ball}_joint"), JointKind::Spherical, &parent, &ball)
+            .joint(
+                format!("{ball}_joint"),
+                JointKind::Spherical,
+                &parent,
+                &ball,
+            )
             .origin(Pose::new([0.0, 0.0, -0.1], [0.0, 0.3, 0.0]))
             .done();
         parent = ball;

@@ -259,8 +259,13 @@ impl Simulator {
             } else {
                 last_dof(p)
             };
-            for d in first + 1..=last_dof(i) {
-                dof_parent[d] = d - 1;
+            for (d, p) in dof_parent
+                .iter_mut()
+                .enumerate()
+                .take(last_dof(i) + 1)
+                .skip(first + 1)
+            {
+                *p = d - 1;
             }
         }
         let mut chains = Vec::with_capacity(nb + 1);

@@ -36,7 +36,11 @@ fn simulator(dt: f64) -> Simulator {
 fn tilt_x(q: &[f64]) -> f64 {
     let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
     // Third column of R: (2(xz + wy), 2(yz - wx), 1 - 2(x^2 + y^2)).
-    let c = [2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)];
+    let c = [
+        2.0 * (x * z + w * y),
+        2.0 * (y * z - w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    ];
     (-c[1]).atan2(c[2])
 }
 
@@ -116,5 +120,8 @@ fn a_massless_ball_is_refused_naming_its_joint() {
     let mut sim = Simulator::from_model(&robot, model, config).unwrap();
     let e = sim.step().unwrap_err().to_string();
     assert!(e.contains("joint \"pivot\""), "{e}");
-    assert!(e.contains("mass matrix is singular at joint \"pivot\""), "{e}");
+    assert!(
+        e.contains("mass matrix is singular at joint \"pivot\""),
+        "{e}"
+    );
 }

@@ -59,9 +59,7 @@ impl Face {
 /// Four points spanning a tetrahedron of non-negligible volume: the extremes along
 /// x, the point farthest from their line, the point farthest from their plane.
 fn initial_simplex(p: &[Vec3], eps: f64) -> Option<[usize; 4]> {
-    let by = |f: &dyn Fn(usize) -> f64| {
-        (0..p.len()).max_by(|&a, &b| f(a).total_cmp(&f(b)))
-    };
+    let by = |f: &dyn Fn(usize) -> f64| (0..p.len()).max_by(|&a, &b| f(a).total_cmp(&f(b)));
     let a = by(&|i| -p[i][0])?;
     let b = by(&|i| norm(&sub(&p[i], &p[a])))?;
     let ab = sub(&p[b], &p[a]);
@@ -111,9 +109,10 @@ pub(crate) fn convex_hull(points: &[Vec3]) -> Result<TriMesh, &'static str> {
         for (f, _) in faces.iter().zip(&visible).filter(|(_, s)| **s) {
             for k in 0..3 {
                 let e = [f.v[k], f.v[(k + 1) % 3]];
-                let shared = faces.iter().zip(&visible).any(|(g, &s)| {
-                    s && (0..3).any(|m| g.v[m] == e[1] && g.v[(m + 1) % 3] == e[0])
-                });
+                let shared = faces
+                    .iter()
+                    .zip(&visible)
+                    .any(|(g, &s)| s && (0..3).any(|m| g.v[m] == e[1] && g.v[(m + 1) % 3] == e[0]));
                 if !shared {
                     horizon.push(e);
                 }
@@ -155,7 +154,9 @@ mod tests {
             .collect();
         let mut s = 12345u64;
         let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
         for k in 0..300 {

@@ -199,7 +199,11 @@ impl TriMesh {
         let (mut area, mut first) = (0.0, [0.0; 3]);
         let mut p = [0.0; 6];
         for t in &self.faces {
-            let (d, e, f) = (&self.vertices[t[0]], &self.vertices[t[1]], &self.vertices[t[2]]);
+            let (d, e, f) = (
+                &self.vertices[t[0]],
+                &self.vertices[t[1]],
+                &self.vertices[t[2]],
+            );
             let (a, _, cen) = triangle(d, e, f);
             area += a;
             for j in 0..3 {

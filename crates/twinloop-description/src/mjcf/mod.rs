@@ -74,10 +74,10 @@
 //!   frames inside it, and its `childclass` applies to them.
 
 use crate::description::*;
+mod hull;
 pub(crate) mod include;
 mod inertia;
 mod mesh;
-mod hull;
 
 use crate::error::DescriptionError;
 use crate::xml::{
@@ -498,7 +498,11 @@ impl<'a, 'i> Reader<'a, 'i> {
             .ok()
             .filter(|&n| (1..=MAX_REPLICAS).contains(&n))
             .ok_or_else(|| {
-                error_at_attr(r, "count", format!("\"{count}\" is not a replica count (1 or more)"))
+                error_at_attr(
+                    r,
+                    "count",
+                    format!("\"{count}\" is not a replica count (1 or more)"),
+                )
             })?;
         let offset = opt_array::<3>(r, "offset")?.unwrap_or([0.0; 3]);
         let rot = self.orientation(r, "frame", None)?;
