@@ -114,8 +114,10 @@ pub(crate) fn rnea_impl(
         let tau = &mut data.tau.as_mut_slice()[iv..iv + n];
         subspace_dot(model, i, &fi, tau);
         if let Some(a) = a {
-            for (t, ak) in tau.iter_mut().zip(&a[iv..iv + n]) {
-                *t += model.armature[i] * ak;
+            tau[0] += model.armature[i] * a[iv];
+            if n == 3 {
+                tau[1] += model.armature[i] * a[iv + 1];
+                tau[2] += model.armature[i] * a[iv + 2];
             }
         }
         let fp = data.li_m_i[i].act_force(&fi);
