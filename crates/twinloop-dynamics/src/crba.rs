@@ -34,10 +34,14 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
             let col = iv + k;
             let f = yi.mul_motion(&data.s[col - off]);
             // The joint's own block (the whole block for a spherical joint).
-            for r in 0..n {
-                m[(iv + r, col)] = data.s[iv + r - off].dot(&f);
+            if n == 1 {
+                m[(col, col)] = data.s[col - off].dot(&f) + model.armature[i];
+            } else {
+                for r in 0..n {
+                    m[(iv + r, col)] = data.s[iv + r - off].dot(&f);
+                }
+                m[(col, col)] += model.armature[i];
             }
-            m[(col, col)] += model.armature[i];
             let mut j = p;
             while j != BASE {
                 // Unrolled by joint type: a loop over nv here costs 25 % of CRBA.

@@ -11,10 +11,10 @@ use twinloop_spatial::{Force, Motion, Se3, axis_angle_sc, quaternion_xyzw_to_mat
 pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
     let p = &model.joint_placements[i];
     let r = &p.rotation;
-    let qi = &q[model.idx_q[i]..];
+    let iq = model.idx_q[i];
     match model.joint_types[i] {
         JointType::RevoluteX => {
-            let (s, c) = qi[0].sin_cos();
+            let (s, c) = q[iq].sin_cos();
             let c1 = r.column(1);
             let c2 = r.column(2);
             Se3::new(
@@ -23,7 +23,7 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
             )
         }
         JointType::RevoluteY => {
-            let (s, c) = qi[0].sin_cos();
+            let (s, c) = q[iq].sin_cos();
             let c0 = r.column(0);
             let c2 = r.column(2);
             Se3::new(
@@ -32,7 +32,7 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
             )
         }
         JointType::RevoluteZ => {
-            let (s, c) = qi[0].sin_cos();
+            let (s, c) = q[iq].sin_cos();
             let c0 = r.column(0);
             let c1 = r.column(1);
             Se3::new(
@@ -41,12 +41,12 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
             )
         }
         JointType::Revolute => {
-            let (s, c) = qi[0].sin_cos();
+            let (s, c) = q[iq].sin_cos();
             Se3::new(r * axis_angle_sc(&model.axes[i], s, c), p.translation)
         }
-        JointType::Prismatic => Se3::new(*r, p.translation + r * (model.axes[i] * qi[0])),
+        JointType::Prismatic => Se3::new(*r, p.translation + r * (model.axes[i] * q[iq])),
         JointType::Spherical => Se3::new(
-            r * quaternion_xyzw_to_matrix(qi[0], qi[1], qi[2], qi[3]),
+            r * quaternion_xyzw_to_matrix(q[iq], q[iq + 1], q[iq + 2], q[iq + 3]),
             p.translation,
         ),
     }
@@ -104,7 +104,9 @@ pub(crate) fn subspace_column(model: &Model, i: usize, k: usize, x: &Se3) -> Mot
 /// Every column of the joint's subspace through `x`, into `out[0..nv]`.
 #[inline(always)]
 pub(crate) fn subspace_in(model: &Model, i: usize, x: &Se3, out: &mut [Motion]) {
-    for (k, s) in out.iter_mut().enumerate().take(model.joint_types[i].nv()) {
-        *s = subspace_column(model, i, k, x);
+    out[0] = subspace_column(model, i, 0, x);
+    if model.joint_types[i] == JointType::Spherical {
+        out[1] = subspace_column(model, i, 1, x);
+        out[2] = subspace_column(model, i, 2, x);
     }
 }
