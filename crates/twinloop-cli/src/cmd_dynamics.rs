@@ -81,10 +81,11 @@ pub fn run(cmd: DynamicsCommand) -> CliResult {
     match cmd {
         DynamicsCommand::Kinematics(a) => kinematics(&a),
         DynamicsCommand::Inverse(a) => per_row(&a, Quantity::A, Quantity::Tau, |m, d, q, v, x| {
-            twinloop_dynamics::rnea(m, d, q, v, x)
+            Ok(twinloop_dynamics::rnea(m, d, q, v, x))
         }),
         DynamicsCommand::Forward(a) => per_row(&a, Quantity::Tau, Quantity::A, |m, d, q, v, x| {
-            twinloop_dynamics::aba(m, d, q, v, x)
+            // A singular mass matrix is refused naming the joint, not written as NaN.
+            twinloop_dynamics::try_aba(m, d, q, v, x)
         }),
     }?;
     Ok(Outcome::Ok)
@@ -116,6 +117,21 @@ fn check_quaternion(model: &Model, table: &Table, row: usize, q: &[f64]) -> Resu
         let n = (q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]).sqrt();
         if (n - 1.0).abs() > 1e-6 {
             return Err(table.row_error(row, format!("base quaternion has norm {n}, not 1")));
+        }
+    }
+    for i in 0..model.nbodies {
+        if model.joint_types[i] == twinloop_dynamics::JointType::Spherical {
+            let iq = model.idx_q[i];
+            let n = q[iq..iq + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
+            if (n - 1.0).abs() > 1e-6 {
+                let joint = &model.joint_names[i];
+                return Err(table.row_error(
+                    row,
+                    format!(
+                        "ball joint {joint}'s quaternion (q:{joint}.qx .. .qw) has norm {n}, not 1"
+                    ),
+                ));
+            }
         }
     }
     Ok(())
@@ -193,7 +209,8 @@ fn per_row(
         &[f64],
         &[f64],
         &[f64],
-    ) -> &'d nalgebra::DVector<f64>,
+    )
+        -> Result<&'d nalgebra::DVector<f64>, twinloop_dynamics::SingularJoint>,
 ) -> Result<(), CliError> {
     let (_, model) = load_model(&a.robot, base_kind(a.fixed_base))?;
     let table = read_table(&a.trajectory)?;
@@ -221,7 +238,9 @@ fn per_row(
         if let Some(t) = tcol {
             row.push(values[t]);
         }
-        row.extend(f(&model, &mut data, &q, &v, &x).iter());
+        let out = f(&model, &mut data, &q, &v, &x)
+            .map_err(|e| table.row_error(r, format!("{}: {e}", a.robot)))?;
+        row.extend(out.iter());
         w.write_row(&row)?;
         bar.inc(1);
     }

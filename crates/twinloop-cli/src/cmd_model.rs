@@ -58,7 +58,8 @@ warning: plausible, but the dynamics may differ from the robot or other tools;\n
 info: worth knowing (missing effort limits, mimic on a fixed joint, total mass)\n  \
 CODE      stable, scripts may match on it: negative-mass, inertia-not-positive-definite,\n            \
 triangle-inequality, zero-inertia-with-mass, inertia-without-mass,\n            \
-zero-mass-moving-link, singular-floating-base, missing-limits, limits-inverted, limits-empty-range,\n            \
+zero-mass-moving-link, singular-mass-matrix, singular-floating-base, missing-limits,\n            \
+limits-inverted, limits-empty-range,\n            \
 missing-effort-velocity, zero-effort-or-velocity, non-unit-axis, mimic-joint,\n            \
 unmodeled-element, ignored-detail, total-mass\n  \
 SUBJECT   the link or joint (or robot) by name, or the file's element\n  \
@@ -169,6 +170,7 @@ struct JointsByKind {
     fixed: usize,
     floating: usize,
     planar: usize,
+    spherical: usize,
 }
 
 #[derive(Serialize)]
@@ -230,6 +232,7 @@ fn joint_order(robot: &Description, spec: &str) -> Result<JointOrder, crate::err
             name: model.joint_names[i].clone(),
             kind: match model.joint_types[i] {
                 JointType::Prismatic => "prismatic",
+                JointType::Spherical => "spherical",
                 _ => "revolute",
             },
             lower: model.lower_limits[i],
@@ -286,6 +289,7 @@ fn summarise(robot: &Description, args: &DescriptionArgs, format: common::Format
             JointKind::Fixed => &mut by_kind.fixed,
             JointKind::Floating => &mut by_kind.floating,
             JointKind::Planar => &mut by_kind.planar,
+            JointKind::Spherical => &mut by_kind.spherical,
         } += 1;
     }
     let mut heaviest: Vec<LinkMass> = robot
@@ -470,6 +474,7 @@ fn lint_command(args: &DescriptionArgs, strict: bool) -> CliResult {
     } else {
         lint(&robot)
     };
+    let report = with_singular_mass_matrix(&robot, report);
     let out = LintOutput {
         file: args.robot.clone(),
         format: format.as_str(),
@@ -480,6 +485,50 @@ fn lint_command(args: &DescriptionArgs, strict: bool) -> CliResult {
         Outcome::Problems
     } else {
         Outcome::Ok
+    })
+}
+
+/// `singular-mass-matrix`: the compiled model's (fixed base) mass matrix singular at
+/// both the neutral and a bent configuration, unless a lint error already names the
+/// joint's link.
+fn with_singular_mass_matrix(robot: &Description, report: LintReport) -> LintReport {
+    use twinloop_description::lint::{Finding, Subject, codes};
+    let Ok(model) = Model::from_description_with_base(robot, BaseKind::Fixed) else {
+        return report;
+    };
+    let mut data = twinloop_dynamics::Data::new(&model);
+    // A second, bent configuration: a singularity of the zero pose only (aligned
+    // axes that bending separates) is not reported.
+    let mut bent = model.neutral_configuration();
+    for i in 0..model.nbodies {
+        if model.joint_types[i].nq() == 1 {
+            bent[model.idx_q[i]] = 0.5;
+        }
+    }
+    let Some(e) = [model.neutral_configuration(), bent]
+        .iter()
+        .map(|q| twinloop_dynamics::check_mass_matrix(&model, &mut data, q).err())
+        .reduce(|a, b| a.and(b))
+        .flatten()
+    else {
+        return report;
+    };
+    let Some(joint) = e.joint.as_deref().and_then(|j| robot.joint(j)) else {
+        return report;
+    };
+    let explained = report
+        .findings
+        .iter()
+        .any(|f| f.severity == Severity::Error && f.name == joint.child);
+    if explained {
+        return report;
+    }
+    report.with_finding(Finding {
+        severity: Severity::Error,
+        code: codes::SINGULAR_MASS_MATRIX,
+        subject: Subject::Joint,
+        name: joint.name.clone(),
+        message: e.to_string(),
     })
 }
 

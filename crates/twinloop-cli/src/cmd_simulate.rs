@@ -88,11 +88,14 @@ pub fn standing_simulator(
         let s = servo_for(servo, &robot.name, &sim.model, i);
         sim.actuators[i] = Actuator::Dynamixel(s);
     }
-    let n = sim.model.nbodies;
-    // Neutral pose, clamped into the joint ranges.
-    let q0: Vec<f64> = (0..n)
-        .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
-        .collect();
+    // Neutral pose (a ball joint's identity quaternion), clamped into the joint ranges.
+    let m = &sim.model;
+    let mut q0 = m.neutral_configuration().split_off(m.q_offset);
+    for i in 0..m.nbodies {
+        if m.joint_types[i].nq() == 1 {
+            q0[m.idx_q[i] - m.q_offset] = 0f64.clamp(m.lower_limits[i], m.upper_limits[i]);
+        }
+    }
     sim.place_on_ground(&q0)?;
     if sim.contact_points().is_empty() {
         return Err(CliError::new(format!(

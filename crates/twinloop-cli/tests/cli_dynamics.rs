@@ -214,3 +214,73 @@ fn missing_columns_and_bad_cells_are_named() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("bad.csv:3") && err.contains("\"t\""), "{err}");
 }
+
+/// A ball-joint model's CSV columns (`q:<joint>.qx .. .qw`, `v:<joint>.wx .. .wz`,
+/// `tau:<joint>.tx .. .tz`, `a:<joint>.wx ..`): forward dynamics of the dynamics
+/// crate's ball_0 reference states equals Pinocchio's ABA.
+#[test]
+fn forward_dynamics_of_ball_joints_matches_pinocchio() {
+    let dir = repo().join("crates/twinloop-dynamics/tests/data/ball");
+    let refd: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("ball_0.json")).unwrap()).unwrap();
+    assert_eq!(refd["free_root"], false);
+    let v_names: Vec<String> = refd["v_names"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_string())
+        .collect();
+    let mut q_names = Vec::new();
+    for n in &v_names {
+        match n.strip_suffix(".wx") {
+            Some(j) => q_names.extend(["qx", "qy", "qz", "qw"].map(|s| format!("{j}.{s}"))),
+            None if n.ends_with(".wy") || n.ends_with(".wz") => {}
+            None => q_names.push(n.clone()),
+        }
+    }
+    let tau_names: Vec<String> = v_names
+        .iter()
+        .map(|n| {
+            n.replace(".wx", ".tx")
+                .replace(".wy", ".ty")
+                .replace(".wz", ".tz")
+        })
+        .collect();
+    let mut header = vec!["t".to_string()];
+    header.extend(q_names.iter().map(|n| format!("q:{n}")));
+    header.extend(v_names.iter().map(|n| format!("v:{n}")));
+    header.extend(tau_names.iter().map(|n| format!("tau:{n}")));
+    let mut text = header.join(",") + "\n";
+    let states = refd["states"].as_array().unwrap();
+    for (k, s) in states.iter().enumerate() {
+        let mut row = vec![k as f64];
+        row.extend(nums(&s["q"]));
+        row.extend(nums(&s["v"]));
+        row.extend(nums(&s["tau"]));
+        let cells: Vec<String> = row.iter().map(|x| format!("{x:e}")).collect();
+        text += &(cells.join(",") + "\n");
+    }
+    let input = tmp("ball.csv");
+    std::fs::write(&input, text).unwrap();
+    let out = tmp("ball_acc.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["dynamics", "forward", "--fixed-base", "--robot"])
+        .arg(dir.join("ball_0.xml"))
+        .arg("--trajectory")
+        .arg(&input)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (h, rows) = read_csv(&out);
+    for (s, row) in states.iter().zip(&rows) {
+        for (n, want) in v_names.iter().zip(nums(&s["aba"])) {
+            let got = row[col(&h, &format!("a:{n}"))];
+            assert!(
+                (got - want).abs() <= 1e-9 * want.abs().max(1.0),
+                "a:{n}: {got} vs Pinocchio {want}"
+            );
+        }
+    }
+}

@@ -283,3 +283,29 @@ fn help_teaches_what_each_command_does() {
     assert!(s.contains("triangle-inequality"), "{s}");
     assert!(s.contains("Exit code 1 if any finding is an error"), "{s}");
 }
+
+#[test]
+fn lint_flags_a_singular_mass_matrix_naming_the_joint() {
+    // A point mass at a ball joint's centre: the ball's rows of M are zero.
+    let xml = "<mujoco><worldbody>\n\
+        <body name=\"arm\"><joint name=\"shoulder\" axis=\"1 0 0\"/>\
+        <inertial pos=\"0 0 -0.2\" mass=\"1\" diaginertia=\"0.01 0.01 0.01\"/>\n\
+        <body name=\"bob\" pos=\"0 0 -0.4\"><joint name=\"pivot\" type=\"ball\"/>\
+        <inertial pos=\"0 0 0\" mass=\"1\" diaginertia=\"0 0 0\"/></body>\n\
+        </body></worldbody></mujoco>\n";
+    let o = run_on(&["model", "lint", "--json", "-"], &scratch("ball.xml", xml));
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let v = json(&o);
+    let f = v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["code"] == "singular-mass-matrix")
+        .unwrap_or_else(|| panic!("{v}"));
+    assert_eq!(f["name"], "pivot");
+    assert_eq!(f["severity"], "error");
+    // With an inertia about the centre the same model is fine.
+    let ok = xml.replace("diaginertia=\"0 0 0\"", "diaginertia=\"0.001 0.001 0.001\"");
+    let o = run_on(&["model", "lint"], &scratch("ball_ok.xml", &ok));
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+}

@@ -105,3 +105,50 @@ fn bad_mass_and_unknown_robot_are_named() {
         "lists the known robots"
     );
 }
+
+/// A robot whose legs hang from ball joints: it stands, and its quaternion columns
+/// stay unit.
+#[test]
+fn simulate_writes_ball_joint_columns_with_unit_quaternions() {
+    let xml = tmp("ballbot.xml");
+    std::fs::write(
+        &xml,
+        r#"<mujoco model="ballbot"><worldbody>
+  <body name="torso" pos="0 0 0.6"><freejoint/>
+    <geom type="box" size="0.1 0.15 0.1" mass="5"/>
+    <body name="leg_l" pos="0 0.08 -0.1"><joint name="hip_l" type="ball" damping="2"/>
+      <geom type="capsule" fromto="0 0 0 0 0 -0.4" size="0.03" mass="1"/>
+      <geom type="box" pos="0.01 0 -0.42" size="0.08 0.04 0.02" mass="0.2"/></body>
+    <body name="leg_r" pos="0 -0.08 -0.1"><joint name="hip_r" type="ball" damping="2"/>
+      <geom type="capsule" fromto="0 0 0 0 0 -0.4" size="0.03" mass="1"/>
+      <geom type="box" pos="0.01 0 -0.42" size="0.08 0.04 0.02" mass="0.2"/></body>
+  </body></worldbody></mujoco>"#,
+    )
+    .unwrap();
+    let out = tmp("ballbot.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["simulate", "--robot"])
+        .arg(&xml)
+        .args(["--duration", "0.3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| {
+        header
+            .iter()
+            .position(|h| *h == n)
+            .unwrap_or_else(|| panic!("{n}"))
+    };
+    let quat = ["qx", "qy", "qz", "qw"].map(|s| col(&format!("q:hip_l.{s}")));
+    for c in ["v:hip_l.wx", "v:hip_r.wz"] {
+        col(c);
+    }
+    for line in text.lines().skip(1) {
+        let row: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let n: f64 = quat.iter().map(|&k| row[k] * row[k]).sum::<f64>().sqrt();
+        assert!((n - 1.0).abs() < 1e-12, "|q:hip_l| = {n}");
+    }
+}

@@ -269,6 +269,10 @@ pub enum JointKind {
     Fixed,
     Floating,
     Planar,
+    /// A ball joint (MJCF `type="ball"`): three rotational DoF about the joint's
+    /// origin, configured by a unit quaternion. Not part of the URDF standard; written
+    /// and read as `spherical` so a converted MJCF round-trips.
+    Spherical,
 }
 
 impl JointKind {
@@ -280,6 +284,7 @@ impl JointKind {
             JointKind::Fixed => "fixed",
             JointKind::Floating => "floating",
             JointKind::Planar => "planar",
+            JointKind::Spherical => "spherical",
         }
     }
 
@@ -291,6 +296,7 @@ impl JointKind {
             "fixed" => JointKind::Fixed,
             "floating" => JointKind::Floating,
             "planar" => JointKind::Planar,
+            "spherical" => JointKind::Spherical,
             _ => return None,
         })
     }
@@ -301,7 +307,7 @@ impl JointKind {
             JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic => 1,
             JointKind::Fixed => 0,
             JointKind::Floating => 6,
-            JointKind::Planar => 3,
+            JointKind::Planar | JointKind::Spherical => 3,
         }
     }
 }

@@ -24,6 +24,7 @@
 //! | `zero-inertia-with-mass` | warning | mass > 0 with an all-zero tensor: a point mass, usually a dummy frame (1e-9 kg) |
 //! | `inertia-without-mass` | warning | mass 0 with a non-zero tensor |
 //! | `zero-mass-moving-link` | error / warning | a body moved by a non-fixed joint (the joint's child plus every link fixed to it) has no mass. Error when nothing with mass moves with that joint at all (the joint's row of the mass matrix is zero); warning when links further down carry mass |
+//! | `singular-mass-matrix` | error | added by the dynamics (`twinloop model lint`, [`LintReport::with_finding`]): the compiled model's mass matrix is singular at a joint that no other error explains (its mass on its axis, a point mass at a ball joint's centre, a massless link between two joints with one axis); forward dynamics refuses it |
 //! | `singular-floating-base` | warning | as a floating base (twinloop's default) the mass matrix is singular: the robot has no mass, or its rotational inertia about its CoM is singular (all mass on a line) |
 //! | `missing-limits` | warning | revolute or prismatic joint without lower/upper |
 //! | `limits-inverted` | error | lower > upper |
@@ -31,7 +32,7 @@
 //! | `missing-effort-velocity` | info | revolute or prismatic joint without effort or velocity limit (all MJCF joints) |
 //! | `zero-effort-or-velocity` | warning | an effort or velocity limit <= 0 |
 //! | `non-unit-axis` | warning | a moving joint's axis norm differs from 1 by more than [`AXIS_NORM_TOLERANCE`] (twinloop normalises it; other tools may not) |
-//! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect) |
+//! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect); also a warning when it names a joint the file does not have |
 //! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites |
 //! | `ignored-detail` | warning | a visual-only detail the reader read past: a URDF `<texture/>` without a file, a mesh `scale` with a fourth number |
 //! | `total-mass` | info | the robot's total mass, as a scale would weigh it |
@@ -68,6 +69,7 @@ pub mod codes {
     pub const INERTIA_WITHOUT_MASS: &str = "inertia-without-mass";
     pub const ZERO_MASS_MOVING_LINK: &str = "zero-mass-moving-link";
     pub const SINGULAR_FLOATING_BASE: &str = "singular-floating-base";
+    pub const SINGULAR_MASS_MATRIX: &str = "singular-mass-matrix";
     pub const MISSING_LIMITS: &str = "missing-limits";
     pub const LIMITS_INVERTED: &str = "limits-inverted";
     pub const LIMITS_EMPTY_RANGE: &str = "limits-empty-range";
@@ -80,7 +82,7 @@ pub mod codes {
     pub const TOTAL_MASS: &str = "total-mass";
 
     /// Every code, in the order of the table in the module documentation.
-    pub const ALL: [&str; 17] = [
+    pub const ALL: [&str; 18] = [
         NEGATIVE_MASS,
         INERTIA_NOT_POSITIVE_DEFINITE,
         TRIANGLE_INEQUALITY,
@@ -88,6 +90,7 @@ pub mod codes {
         INERTIA_WITHOUT_MASS,
         ZERO_MASS_MOVING_LINK,
         SINGULAR_FLOATING_BASE,
+        SINGULAR_MASS_MATRIX,
         MISSING_LIMITS,
         LIMITS_INVERTED,
         LIMITS_EMPTY_RANGE,
@@ -229,6 +232,18 @@ impl LintReport {
                 f.severity = Severity::Error;
             }
         }
+        self.recount()
+    }
+
+    /// The report with one more finding (e.g. from a check that needs the compiled
+    /// dynamics, which this crate cannot run), in severity order.
+    pub fn with_finding(mut self, f: Finding) -> LintReport {
+        self.findings.push(f);
+        self.recount()
+    }
+
+    /// Sort by severity (stable) and count each severity.
+    fn recount(mut self) -> LintReport {
         self.findings.sort_by_key(|f| std::cmp::Reverse(f.severity));
         let count = |s| self.findings.iter().filter(|f| f.severity == s).count();
         (self.errors, self.warnings, self.infos) = (
@@ -251,6 +266,7 @@ pub fn lint(robot: &Description) -> LintReport {
     floating_base::check(robot, &mut out);
     for joint in &robot.joints {
         check_joint(joint, &mut out);
+        check_mimic_target(robot, joint, &mut out);
     }
     let notes = [
         (&robot.unmodeled, codes::UNMODELED_ELEMENT),
@@ -644,6 +660,24 @@ fn check_mimic(j: &Joint, out: &mut Vec<Finding>) {
                 format!("{how}; twinloop's dynamics treats it as an independent {kind} joint"),
             ));
         }
+    }
+}
+
+/// `mimic-joint` (warning): a mimic of a joint the file does not have.
+fn check_mimic_target(robot: &Description, j: &Joint, out: &mut Vec<Finding>) {
+    if let Some(m) = &j.mimic
+        && robot.joint(&m.joint).is_none()
+    {
+        out.push(joint_finding(
+            j,
+            Severity::Warning,
+            codes::MIMIC_JOINT,
+            format!(
+                "mimics \"{}\", which the file does not have: the mimic means nothing (twinloop's \
+                 dynamics treats every mimic joint as independent anyway)",
+                m.joint
+            ),
+        ));
     }
 }
 

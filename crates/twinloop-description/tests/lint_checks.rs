@@ -569,6 +569,32 @@ fn mimic_joint_is_a_warning_and_a_fixed_mimic_is_info() {
     assert_eq!(r.mimic_joints, 2);
 }
 
+/// A mimic of a joint the file does not have (example-robot-data's Alex hands):
+/// the file loads, lint warns.
+#[test]
+fn a_mimic_of_an_unknown_joint_is_a_warning() {
+    let robot = base()
+        .link("forearm")
+        .mass(0.3, [0.0; 3], good_inertia())
+        .done()
+        .revolute("elbow", "arm", "forearm", [0.0, 1.0, 0.0])
+        .limits(-1.0, 1.0, 5.0, 6.0)
+        .mimic("index_q1", 1.0, 0.0)
+        .done()
+        .build()
+        .unwrap();
+    robot.validate().unwrap();
+    let r = lint(&robot);
+    let unknown: Vec<_> = r
+        .with_code(codes::MIMIC_JOINT)
+        .filter(|f| f.message.contains("which the file does not have"))
+        .collect();
+    assert_eq!(unknown.len(), 1, "{:#?}", r.findings);
+    assert_eq!(unknown[0].severity, Severity::Warning);
+    assert_eq!(unknown[0].name, "elbow");
+    assert!(!r.has_errors());
+}
+
 #[test]
 fn every_code_is_listed_once() {
     let mut all = codes::ALL.to_vec();
@@ -592,6 +618,7 @@ fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
   <equality><joint joint1="j1" joint2="j2"/></equality>
   <actuator><motor joint="j1"/><motor tendon="t"/><general site="s"/></actuator>
   <sensor><jointpos joint="j1"/><accelerometer site="s"/></sensor>
+  <deformable><flex name="cloth" dim="2" body="a a a" vertex="0 0 0 1 0 0 0 1 0" element="0 1 2"/></deformable>
 </mujoco>"#,
     )
     .unwrap();
@@ -608,6 +635,7 @@ fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
             ("<motor> in <actuator>", "line 9"),
             ("<general> in <actuator>", "line 9"),
             ("<accelerometer> in <sensor>", "line 10"),
+            (r#"<flex name="cloth">"#, "line 11"),
         ]
     );
     assert!(
@@ -617,7 +645,7 @@ fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
     );
     assert!(!report.has_errors());
     let strict = report.strict();
-    assert_eq!(strict.errors, 5);
+    assert_eq!(strict.errors, 6);
     assert_eq!(strict.findings[0].code, codes::UNMODELED_ELEMENT);
     assert!(strict.findings[0].message.contains("tendon"));
 }

@@ -384,6 +384,29 @@ const GOOD: &str = r#"<mujoco model="t">
 </mujoco>
 "#;
 
+#[test]
+fn ball_joint_is_spherical_without_axis_ref_or_cone_limit() {
+    let d = ok(&with(
+        r#"<joint name="hip" axis="0 1 0" range="-1 1"/>"#,
+        r#"<joint name="hip" type="ball" pos="0 0 0.05" ref="0.3" range="0 1"/>"#,
+    ));
+    let hip = d.joints.iter().find(|j| j.name == "hip").unwrap();
+    assert_eq!(hip.kind, twinloop_description::JointKind::Spherical);
+    assert_eq!(hip.axis, None);
+    assert!(
+        hip.limit
+            .is_none_or(|l| l.lower.is_none() && l.upper.is_none())
+    );
+    // The anchor moves the joint frame (pos 0 0 -0.1 plus the anchor 0 0 0.05), and
+    // `ref` does not turn it.
+    assert!(
+        (hip.origin.xyz[2] - -0.05).abs() < 1e-15,
+        "{:?}",
+        hip.origin
+    );
+    assert!(hip.origin.rpy.iter().all(|a| a.abs() < 1e-15));
+}
+
 fn with(from: &str, to: &str) -> String {
     assert_eq!(GOOD.matches(from).count(), 1, "{from}");
     GOOD.replacen(from, to, 1)
@@ -392,15 +415,6 @@ fn with(from: &str, to: &str) -> String {
 #[test]
 fn errors_name_line_and_element() {
     assert_eq!(ok(GOOD).links.len(), 2);
-    check(
-        &err(&with(
-            r#"<joint name="hip""#,
-            r#"<joint name="hip" type="ball""#,
-        )),
-        11,
-        r#"<joint name="hip">"#,
-        "ball joints are not supported",
-    );
     check(
         &err(&with(
             r#"<joint name="hip""#,
@@ -489,10 +503,22 @@ fn errors_name_line_and_element() {
         "duplicate link name",
     );
     check(
+        &err(&with("<worldbody>", "<worldbody><attach/>")),
+        6,
+        "<attach>",
+        "not supported",
+    );
+    check(
         &err(&with("<worldbody>", "<worldbody><replicate/>")),
         6,
         "<replicate>",
-        "not supported",
+        "count",
+    );
+    check(
+        &err(&with("<worldbody>", "<worldbody><replicate count=\"0\"/>")),
+        6,
+        "<replicate",
+        "not a replica count",
     );
     // Truncated and not XML.
     let e = err(&GOOD[..GOOD.find("<geom").unwrap()]);

@@ -4,8 +4,9 @@
 use crate::data::Data;
 use crate::joint::{joint_placement, subspace_in};
 use crate::kinematics::{base_placement, check_q, check_v};
+use crate::model::JointType;
 use crate::model::{BASE, Model};
-use nalgebra::{DVector, Vector3};
+use nalgebra::{DVector, Matrix3, Vector3};
 use twinloop_spatial::{Force, Motion, Symmetric6};
 
 /// Accelerations `ddq = M^-1 (tau - C v - g)` (`data.ddq`). For a floating base,
@@ -72,8 +73,6 @@ fn velocity_pass(
 ) -> (Symmetric6, Force) {
     let floating = model.is_floating();
     let base = data.base_placement;
-    let qj = &q[model.q_offset..];
-    let vj = &v[model.v_offset..];
     let v0 = if floating {
         Motion::from_slice(&v[0..6])
     } else {
@@ -90,7 +89,7 @@ fn velocity_pass(
         (Symmetric6::ZERO, Force::ZERO)
     };
     for i in 0..model.nbodies {
-        let li = joint_placement(model, i, qj[i]);
+        let li = joint_placement(model, i, q);
         let p = model.parents[i];
         let (b, vp) = if p == BASE {
             (li, v0)
@@ -98,9 +97,13 @@ fn velocity_pass(
             (data.b_m_i[p] * li, data.v[p])
         };
         data.b_m_i[i] = b;
-        let s = subspace_in(model, i, &b);
-        data.s[i] = s;
-        let sv = s * vj[i];
+        let (iv, n) = (model.idx_v[i], model.joint_types[i].nv());
+        let d = iv - model.v_offset;
+        subspace_in(model, i, &b, &mut data.s[d..]);
+        let mut sv = Motion::ZERO;
+        for k in 0..n {
+            sv += data.s[d + k] * v[iv + k];
+        }
         let vi = vp + sv;
         data.v[i] = vi;
         data.c[i] = vi.cross(&sv);
@@ -126,19 +129,24 @@ fn articulated_pass(
     ia0: &mut Symmetric6,
     pa0: &mut Force,
 ) {
-    let tj = &tau[model.v_offset..];
     for i in (0..model.nbodies).rev() {
-        let s = data.s[i];
-        let ia = data.ia[i];
-        let ucol = ia.mul_motion(&s);
-        let d_inv = 1.0 / (s.dot(&ucol) + model.armature[i]);
-        let u = tj[i] - s.dot(&data.pa[i]);
-        data.u_col[i] = ucol;
-        data.d_inv[i] = d_inv;
-        data.u[i] = u;
-        let mut ia_a = ia;
-        ia_a.sub_rank1(&ucol, d_inv);
-        let pa_a = data.pa[i] + ia_a.mul_motion(&data.c[i]) + ucol * (d_inv * u);
+        let (ia_a, pa_a) = if model.joint_types[i] == JointType::Spherical {
+            articulate_spherical(model, data, i, tau)
+        } else {
+            let d = model.idx_v[i] - model.v_offset;
+            let s = data.s[d];
+            let ia = data.ia[i];
+            let ucol = ia.mul_motion(&s);
+            let d_inv = 1.0 / (s.dot(&ucol) + model.armature[i]);
+            let u = tau[model.idx_v[i]] - s.dot(&data.pa[i]);
+            data.u_col[d] = ucol;
+            data.d_inv[d] = d_inv;
+            data.u[d] = u;
+            let mut ia_a = ia;
+            ia_a.sub_rank1(&ucol, d_inv);
+            let pa_a = data.pa[i] + ia_a.mul_motion(&data.c[i]) + ucol * (d_inv * u);
+            (ia_a, pa_a)
+        };
         let p = model.parents[i];
         if p == BASE {
             *ia0 += ia_a;
@@ -148,6 +156,58 @@ fn articulated_pass(
             data.pa[p] += pa_a;
         }
     }
+}
+
+/// A spherical joint's step of the second pass (RBDA table 7.1 with a 6 x 3 `S`):
+/// `U = IA S`, `D = S^T U` (+ armature), `u = tau - S^T pA`; returns the articulated
+/// inertia `IA - U D^-1 U^T` and bias `pA + IA^a c + U D^-1 u` its parent receives.
+/// `U D^-1 U^T` is subtracted as three rank-1 terms through the Cholesky factor of D.
+#[inline(always)]
+fn articulate_spherical(
+    model: &Model,
+    data: &mut Data,
+    i: usize,
+    tau: &[f64],
+) -> (Symmetric6, Force) {
+    let iv = model.idx_v[i];
+    let d = iv - model.v_offset;
+    let ia = data.ia[i];
+    let mut dm = Matrix3::identity() * model.armature[i];
+    for k in 0..3 {
+        data.u_col[d + k] = ia.mul_motion(&data.s[d + k]);
+        data.u[d + k] = tau[iv + k] - data.s[d + k].dot(&data.pa[i]);
+    }
+    for r in 0..3 {
+        for c in 0..3 {
+            dm[(r, c)] += data.s[d + r].dot(&data.u_col[d + c]);
+        }
+    }
+    let mut ia_a = ia;
+    let (l_inv, d_inv) = match dm.cholesky() {
+        Some(ch) => {
+            let l_inv = ch
+                .l()
+                .try_inverse()
+                .unwrap_or_else(|| Matrix3::repeat(f64::NAN));
+            (l_inv, l_inv.tr_mul(&l_inv))
+        }
+        // A massless subtree: report NaN like a 1-DoF joint's 1/0 would.
+        None => (Matrix3::repeat(f64::NAN), Matrix3::repeat(f64::NAN)),
+    };
+    for j in 0..3 {
+        let mut w = Force::ZERO;
+        for a in 0..3 {
+            w += data.u_col[d + a] * l_inv[(j, a)];
+        }
+        ia_a.sub_rank1(&w, 1.0);
+    }
+    data.d_inv_ball[i] = d_inv;
+    let mut pa_a = data.pa[i] + ia_a.mul_motion(&data.c[i]);
+    for a in 0..3 {
+        let coef: f64 = (0..3).map(|b| d_inv[(a, b)] * data.u[d + b]).sum();
+        pa_a += data.u_col[d + a] * coef;
+    }
+    (ia_a, pa_a)
 }
 
 /// ABA's third pass, root to leaves: the base acceleration (solving the locked
@@ -178,8 +238,16 @@ fn acceleration_pass(model: &Model, data: &mut Data, tau: &[f64], ia0: &Symmetri
         let p = model.parents[i];
         let ap = if p == BASE { a0 } else { data.a[p] };
         let ai = ap + data.c[i];
-        let qdd = data.d_inv[i] * (data.u[i] - ai.dot(&data.u_col[i]));
-        data.ddq[off + i] = qdd;
-        data.a[i] = ai + data.s[i] * qdd;
+        let (iv, d) = (model.idx_v[i], model.idx_v[i] - off);
+        if model.joint_types[i] == JointType::Spherical {
+            let r = Vector3::from_fn(|k, _| data.u[d + k] - ai.dot(&data.u_col[d + k]));
+            let qdd = data.d_inv_ball[i] * r;
+            data.ddq.as_mut_slice()[iv..iv + 3].copy_from_slice(qdd.as_slice());
+            data.a[i] = ai + data.s[d] * qdd.x + data.s[d + 1] * qdd.y + data.s[d + 2] * qdd.z;
+        } else {
+            let qdd = data.d_inv[d] * (data.u[d] - ai.dot(&data.u_col[d]));
+            data.ddq[iv] = qdd;
+            data.a[i] = ai + data.s[d] * qdd;
+        }
     }
 }

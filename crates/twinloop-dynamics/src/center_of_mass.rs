@@ -1,7 +1,7 @@
 //! Centre of mass, its Jacobian, and the ground-projected CoM.
 
 use crate::data::Data;
-use crate::joint::subspace_in;
+use crate::joint::subspace_column;
 use crate::kinematics::forward_kinematics;
 use crate::model::{BASE, Model};
 use nalgebra::{DMatrix, Vector2, Vector3};
@@ -43,16 +43,17 @@ pub fn jacobian_center_of_mass<'a>(
         data.subtree_moment[i] = data.o_m_i[i].act_point(&y.com) * y.mass;
     }
     let total = model.total_mass;
-    let off = model.v_offset;
     // Leaves to root: subtree sums, and each joint's column from its subtree.
     for i in (0..nb).rev() {
         let (m, h) = (data.subtree_mass[i], data.subtree_moment[i]);
-        let s = subspace_in(model, i, &data.o_m_i[i]);
-        // A unit joint velocity moves the subtree's CoM at v + w x c.
-        let col = (s.v * m + s.w.cross(&h)) / total;
-        data.com_jacobian
-            .fixed_view_mut::<3, 1>(0, off + i)
-            .copy_from(&col);
+        for k in 0..model.joint_types[i].nv() {
+            let s = subspace_column(model, i, k, &data.o_m_i[i]);
+            // A unit joint velocity moves the subtree's CoM at v + w x c.
+            let col = (s.v * m + s.w.cross(&h)) / total;
+            data.com_jacobian
+                .fixed_view_mut::<3, 1>(0, model.idx_v[i] + k)
+                .copy_from(&col);
+        }
         let p = model.parents[i];
         if p != BASE {
             data.subtree_mass[p] += m;

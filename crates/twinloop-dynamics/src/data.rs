@@ -1,7 +1,7 @@
 //! The `Data` workspace: every buffer the algorithms write, allocated once per model.
 
 use crate::model::Model;
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use twinloop_spatial::{Force, LinearInertia, Motion, Se3, Symmetric6};
 
 /// Workspace and results. Create one per model (and per thread); algorithms reuse
@@ -18,7 +18,8 @@ pub struct Data {
     pub b_m_i: Vec<Se3>,
     /// World placement of every frame (`update_frame_placements`).
     pub o_m_f: Vec<Se3>,
-    /// Joint motion subspace of each body, in base coordinates.
+    /// Joint motion subspace, one column per joint velocity coordinate (`v_offset + k`
+    /// is column k; one per body unless a joint is spherical), in base coordinates.
     pub s: Vec<Motion>,
     /// Body velocities, accelerations and forces (RNEA: body frames; ABA: base coordinates).
     pub v: Vec<Motion>,
@@ -29,9 +30,13 @@ pub struct Data {
     /// Articulated-body inertias and bias forces (ABA).
     pub ia: Vec<Symmetric6>,
     pub pa: Vec<Force>,
+    /// ABA's `U = IA S`, `D^-1` (1-DoF joints) and `u = tau - S^T pA`, per joint
+    /// velocity coordinate like `s`.
     pub u_col: Vec<Force>,
     pub d_inv: Vec<f64>,
     pub u: Vec<f64>,
+    /// ABA's 3 x 3 `D^-1` of each spherical joint's body (unused for 1-DoF joints).
+    pub(crate) d_inv_ball: Vec<Matrix3<f64>>,
     /// Composite rigid-body inertias (CRBA), linear form about the base origin.
     pub(crate) ycrb: Vec<LinearInertia>,
     /// Subtree masses and first moments (CoM, CoM Jacobian).
@@ -59,22 +64,24 @@ impl Data {
     pub fn new(model: &Model) -> Data {
         let nb = model.nbodies;
         let nparam_bodies = nb + usize::from(model.is_floating());
+        let ndof = model.nv - model.v_offset;
         Data {
             base_placement: Se3::IDENTITY,
             li_m_i: vec![Se3::IDENTITY; nb],
             o_m_i: vec![Se3::IDENTITY; nb],
             b_m_i: vec![Se3::IDENTITY; nb],
             o_m_f: vec![Se3::IDENTITY; model.frames.len()],
-            s: vec![Motion::ZERO; nb],
+            s: vec![Motion::ZERO; ndof],
             v: vec![Motion::ZERO; nb],
             a: vec![Motion::ZERO; nb],
             f: vec![Force::ZERO; nb],
             c: vec![Motion::ZERO; nb],
             ia: vec![Symmetric6::ZERO; nb],
             pa: vec![Force::ZERO; nb],
-            u_col: vec![Force::ZERO; nb],
-            d_inv: vec![0.0; nb],
-            u: vec![0.0; nb],
+            u_col: vec![Force::ZERO; ndof],
+            d_inv: vec![0.0; ndof],
+            u: vec![0.0; ndof],
+            d_inv_ball: vec![Matrix3::zeros(); nb],
             ycrb: vec![LinearInertia::ZERO; nb],
             subtree_mass: vec![0.0; nb],
             subtree_moment: vec![Vector3::zeros(); nb],

@@ -1,17 +1,20 @@
-//! Joint transforms and motion subspaces of the 1-DoF joints.
+//! Joint transforms and motion subspaces: the 1-DoF joints and the spherical joint
+//! (Pinocchio's JointModelSpherical: q a unit quaternion (x, y, z, w), v the angular
+//! velocity in the child frame, motion subspace [0; I3]).
 
 use crate::model::{JointType, Model};
 use nalgebra::{Matrix3, Vector3};
-use twinloop_spatial::{Force, Motion, Se3, axis_angle_sc};
+use twinloop_spatial::{Force, Motion, Se3, axis_angle_sc, quaternion_xyzw_to_matrix};
 
-/// `liMi = jointPlacement * M_joint(q)`.
+/// `liMi = jointPlacement * M_joint(q)`; `q` is the whole configuration vector.
 #[inline(always)]
-pub(crate) fn joint_placement(model: &Model, i: usize, q: f64) -> Se3 {
+pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
     let p = &model.joint_placements[i];
     let r = &p.rotation;
+    let iq = model.idx_q[i];
     match model.joint_types[i] {
         JointType::RevoluteX => {
-            let (s, c) = q.sin_cos();
+            let (s, c) = q[iq].sin_cos();
             let c1 = r.column(1);
             let c2 = r.column(2);
             Se3::new(
@@ -20,7 +23,7 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: f64) -> Se3 {
             )
         }
         JointType::RevoluteY => {
-            let (s, c) = q.sin_cos();
+            let (s, c) = q[iq].sin_cos();
             let c0 = r.column(0);
             let c2 = r.column(2);
             Se3::new(
@@ -29,7 +32,7 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: f64) -> Se3 {
             )
         }
         JointType::RevoluteZ => {
-            let (s, c) = q.sin_cos();
+            let (s, c) = q[iq].sin_cos();
             let c0 = r.column(0);
             let c1 = r.column(1);
             Se3::new(
@@ -38,51 +41,72 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: f64) -> Se3 {
             )
         }
         JointType::Revolute => {
-            let (s, c) = q.sin_cos();
+            let (s, c) = q[iq].sin_cos();
             Se3::new(r * axis_angle_sc(&model.axes[i], s, c), p.translation)
         }
-        JointType::Prismatic => Se3::new(*r, p.translation + r * (model.axes[i] * q)),
+        JointType::Prismatic => Se3::new(*r, p.translation + r * (model.axes[i] * q[iq])),
+        JointType::Spherical => Se3::new(
+            r * quaternion_xyzw_to_matrix(q[iq], q[iq + 1], q[iq + 2], q[iq + 3]),
+            p.translation,
+        ),
     }
 }
 
-/// The joint's motion subspace in its own frame, times `x`.
+/// The joint velocity `S x` in the joint's own frame; `x` starts at the joint's
+/// first velocity coordinate.
 #[inline(always)]
-pub(crate) fn subspace_times(model: &Model, i: usize, x: f64) -> Motion {
+pub(crate) fn subspace_times(model: &Model, i: usize, x: &[f64]) -> Motion {
     match model.joint_types[i] {
-        JointType::RevoluteX => Motion::new(Vector3::zeros(), Vector3::new(x, 0.0, 0.0)),
-        JointType::RevoluteY => Motion::new(Vector3::zeros(), Vector3::new(0.0, x, 0.0)),
-        JointType::RevoluteZ => Motion::new(Vector3::zeros(), Vector3::new(0.0, 0.0, x)),
-        JointType::Revolute => Motion::new(Vector3::zeros(), model.axes[i] * x),
-        JointType::Prismatic => Motion::new(model.axes[i] * x, Vector3::zeros()),
+        JointType::RevoluteX => Motion::new(Vector3::zeros(), Vector3::new(x[0], 0.0, 0.0)),
+        JointType::RevoluteY => Motion::new(Vector3::zeros(), Vector3::new(0.0, x[0], 0.0)),
+        JointType::RevoluteZ => Motion::new(Vector3::zeros(), Vector3::new(0.0, 0.0, x[0])),
+        JointType::Revolute => Motion::new(Vector3::zeros(), model.axes[i] * x[0]),
+        JointType::Prismatic => Motion::new(model.axes[i] * x[0], Vector3::zeros()),
+        JointType::Spherical => Motion::new(Vector3::zeros(), Vector3::new(x[0], x[1], x[2])),
     }
 }
 
-/// `S^T f` in the joint's own frame.
+/// `S^T f` in the joint's own frame, written to `out[0..nv]`.
 #[inline(always)]
-pub(crate) fn subspace_dot(model: &Model, i: usize, f: &Force) -> f64 {
+pub(crate) fn subspace_dot(model: &Model, i: usize, f: &Force, out: &mut [f64]) {
     match model.joint_types[i] {
-        JointType::RevoluteX => f.n.x,
-        JointType::RevoluteY => f.n.y,
-        JointType::RevoluteZ => f.n.z,
-        JointType::Revolute => model.axes[i].dot(&f.n),
-        JointType::Prismatic => model.axes[i].dot(&f.f),
+        JointType::RevoluteX => out[0] = f.n.x,
+        JointType::RevoluteY => out[0] = f.n.y,
+        JointType::RevoluteZ => out[0] = f.n.z,
+        JointType::Revolute => out[0] = model.axes[i].dot(&f.n),
+        JointType::Prismatic => out[0] = model.axes[i].dot(&f.f),
+        JointType::Spherical => out[0..3].copy_from_slice(f.n.as_slice()),
     }
 }
 
-/// The joint's motion subspace expressed through the body placement `x` (e.g. in base
-/// or world coordinates).
+/// Column `k` of the joint's motion subspace expressed through the body placement
+/// `x` (e.g. in base or world coordinates). A spherical joint's columns are unit
+/// rotations about the body's own x, y and z axes.
 #[inline(always)]
-pub(crate) fn subspace_in(model: &Model, i: usize, x: &Se3) -> Motion {
+pub(crate) fn subspace_column(model: &Model, i: usize, k: usize, x: &Se3) -> Motion {
+    let about_body_axis = |a: usize| {
+        let w: Vector3<f64> = x.rotation.column(a).into();
+        Motion::new(x.translation.cross(&w), w)
+    };
     match model.joint_types[i] {
-        JointType::RevoluteX | JointType::RevoluteY | JointType::RevoluteZ => {
-            let k = model.joint_types[i] as usize; // X=0, Y=1, Z=2
-            let w: Vector3<f64> = x.rotation.column(k).into();
-            Motion::new(x.translation.cross(&w), w)
-        }
+        JointType::RevoluteX => about_body_axis(0),
+        JointType::RevoluteY => about_body_axis(1),
+        JointType::RevoluteZ => about_body_axis(2),
+        JointType::Spherical => about_body_axis(k),
         JointType::Revolute => {
             let w = x.rotation * model.axes[i];
             Motion::new(x.translation.cross(&w), w)
         }
         JointType::Prismatic => Motion::new(x.rotation * model.axes[i], Vector3::zeros()),
+    }
+}
+
+/// Every column of the joint's subspace through `x`, into `out[0..nv]`.
+#[inline(always)]
+pub(crate) fn subspace_in(model: &Model, i: usize, x: &Se3, out: &mut [Motion]) {
+    out[0] = subspace_column(model, i, 0, x);
+    if model.joint_types[i] == JointType::Spherical {
+        out[1] = subspace_column(model, i, 1, x);
+        out[2] = subspace_column(model, i, 2, x);
     }
 }

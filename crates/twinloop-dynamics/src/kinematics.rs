@@ -1,7 +1,7 @@
 //! Forward kinematics: body and frame placements, joint and frame Jacobians.
 
 use crate::data::Data;
-use crate::joint::{joint_placement, subspace_in};
+use crate::joint::{joint_placement, subspace_column, subspace_in};
 use crate::model::{BASE, Model};
 use nalgebra::{DMatrix, Vector3};
 use twinloop_spatial::{Motion, Se3, quaternion_xyzw_to_matrix};
@@ -46,9 +46,8 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) {
     check_q(model, q);
     let base = base_placement(model, q);
     data.base_placement = base;
-    let qj = &q[model.q_offset..];
-    for (i, &qi) in qj.iter().enumerate().take(model.nbodies) {
-        let li = joint_placement(model, i, qi);
+    for i in 0..model.nbodies {
+        let li = joint_placement(model, i, q);
         data.li_m_i[i] = li;
         let p = model.parents[i];
         data.o_m_i[i] = if p == BASE {
@@ -64,14 +63,14 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) {
 /// rather than the world saves transforming the free-flyer's quantities.
 #[inline]
 pub(crate) fn base_frame_pass(model: &Model, data: &mut Data, q: &[f64]) {
-    let qj = &q[model.q_offset..];
-    for (i, &qi) in qj.iter().enumerate().take(model.nbodies) {
-        let li = joint_placement(model, i, qi);
+    for i in 0..model.nbodies {
+        let li = joint_placement(model, i, q);
         data.li_m_i[i] = li;
         let p = model.parents[i];
         let b = if p == BASE { li } else { data.b_m_i[p] * li };
         data.b_m_i[i] = b;
-        data.s[i] = subspace_in(model, i, &b);
+        let d = model.idx_v[i] - model.v_offset;
+        subspace_in(model, i, &b, &mut data.s[d..]);
     }
 }
 
@@ -103,9 +102,10 @@ pub fn compute_joint_jacobians(model: &Model, data: &mut Data, q: &[f64]) {
         write_base_columns(&data.base_placement, j);
     }
     for i in 0..model.nbodies {
-        let s = subspace_in(model, i, &data.o_m_i[i]);
-        let col = model.v_offset + i;
-        write_motion(j, col, &s);
+        for k in 0..model.joint_types[i].nv() {
+            let s = subspace_column(model, i, k, &data.o_m_i[i]);
+            write_motion(j, model.idx_v[i] + k, &s);
+        }
     }
 }
 
@@ -184,7 +184,9 @@ pub fn frame_jacobian(
     }
     if f.body != BASE {
         for b in model.ancestors(f.body) {
-            put(model.v_offset + b);
+            for k in 0..model.joint_types[b].nv() {
+                put(model.idx_v[b] + k);
+            }
         }
     }
 }

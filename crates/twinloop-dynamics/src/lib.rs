@@ -4,7 +4,8 @@
 //! the algorithms write. After `Data::new`, none of the algorithms allocates.
 //!
 //! Conventions (docs/architecture.md, "Conventions"): q = [x, y, z, qx, qy, qz, qw, joints], v = [base
-//! linear, base angular (base frame), joints]; gravity (0, 0, -9.81) unless the
+//! linear, base angular (base frame), joints]; a ball joint has 4 q entries (its
+//! quaternion x, y, z, w) and 3 v entries (angular velocity in its child frame); gravity (0, 0, -9.81) unless the
 //! description sets one (MJCF `<option gravity>`); joint armature from the
 //! description on the mass-matrix diagonal; spatial vectors
 //! linear part first.
@@ -16,7 +17,8 @@
 //! | joint and frame Jacobians | [`compute_joint_jacobians`], [`frame_jacobian`] |
 //! | inverse dynamics (RNEA) | [`rnea`], [`nonlinear_effects`], [`generalized_gravity`] |
 //! | mass matrix (CRBA) | [`crba`] |
-//! | forward dynamics (ABA) | [`aba`] |
+//! | forward dynamics (ABA) | [`aba`], [`try_aba`] (refuses a singular mass matrix naming the joint) |
+//! | invertible mass matrix | [`check_mass_matrix`] |
 //! | regressors | [`joint_torque_regressor`], [`static_com_regressor`] |
 
 pub mod aba;
@@ -29,6 +31,7 @@ pub mod kinematics;
 pub mod model;
 pub mod regressor;
 pub mod rnea;
+pub mod singular;
 
 pub use aba::{aba, aba_with_forces};
 pub use center_of_mass::{center_of_mass, ground_projected_com, jacobian_center_of_mass};
@@ -44,3 +47,4 @@ pub use regressor::{
     link_to_body_parameter_map, parameter_block_of_link, static_com_regressor,
 };
 pub use rnea::{generalized_gravity, nonlinear_effects, rnea};
+pub use singular::{SingularJoint, check_mass_matrix, try_aba};

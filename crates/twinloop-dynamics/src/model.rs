@@ -16,8 +16,8 @@ pub const MAX_DATA_BYTES: usize = 4_000_000_000;
 /// Marks a body attached directly to the base (or to the world for a fixed base).
 pub const BASE: usize = usize::MAX;
 
-/// One-DoF joint types. Axis-aligned revolute joints get their own variants so the
-/// hot loops can skip the general Rodrigues rotation (most humanoid joints are).
+/// Joint types. Axis-aligned revolute joints get their own variants so the hot loops
+/// can skip the general Rodrigues rotation (most humanoid joints are).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum JointType {
     RevoluteX,
@@ -27,11 +27,26 @@ pub enum JointType {
     Revolute,
     /// Prismatic along a unit axis (`Model::axes`).
     Prismatic,
+    /// A ball joint (Pinocchio's JointModelSpherical): 4 configuration entries, a unit
+    /// quaternion (x, y, z, w) of the child frame in the joint frame; 3 velocity
+    /// entries, the angular velocity in the child frame. Its `Model::axes` entry is zero.
+    Spherical,
 }
 
 impl JointType {
+    /// A 1-DoF rotation (not a prismatic or a spherical joint).
     pub fn is_revolute(self) -> bool {
-        !matches!(self, JointType::Prismatic)
+        !matches!(self, JointType::Prismatic | JointType::Spherical)
+    }
+
+    /// Number of configuration entries (1, or 4 for a spherical joint).
+    pub fn nq(self) -> usize {
+        if self == JointType::Spherical { 4 } else { 1 }
+    }
+
+    /// Number of velocity entries (1, or 3 for a spherical joint).
+    pub fn nv(self) -> usize {
+        if self == JointType::Spherical { 3 } else { 1 }
     }
 }
 
@@ -78,13 +93,20 @@ pub struct Model {
     pub base_link: String,
     pub nq: usize,
     pub nv: usize,
-    /// Number of 1-DoF bodies (the floating base is not counted).
+    /// Number of jointed bodies (the floating base is not counted). Equal to the
+    /// number of joint velocity coordinates `nv - v_offset` unless the model has
+    /// spherical joints ([`Model::has_spherical_joints`]).
     pub nbodies: usize,
     /// Offsets of the first joint coordinate in q and in v (7 and 6 for a floating base).
     pub q_offset: usize,
     pub v_offset: usize,
     pub parents: Vec<usize>,
     pub joint_types: Vec<JointType>,
+    /// Index of each body's first configuration and velocity entry in q and v
+    /// (Pinocchio's `idx_q`, `idx_v`): `q_offset + i` and `v_offset + i` when every
+    /// joint has one DoF.
+    pub idx_q: Vec<usize>,
+    pub idx_v: Vec<usize>,
     /// Unit axis of each joint in its own frame.
     pub axes: Vec<Vector3<f64>>,
     /// Placement of each joint frame in its parent body frame (fixed chains folded in).
@@ -187,7 +209,9 @@ fn find_base_link(
 /// The joint type of a moving joint with unit axis `axis`: axis-aligned revolute
 /// joints get their own variants for the hot loops.
 fn joint_type(kind: JointKind, axis: &Vector3<f64>) -> JointType {
-    if kind == JointKind::Prismatic {
+    if kind == JointKind::Spherical {
+        JointType::Spherical
+    } else if kind == JointKind::Prismatic {
         JointType::Prismatic
     } else if *axis == Vector3::x() {
         JointType::RevoluteX
@@ -217,7 +241,10 @@ fn push_child_links(
         let here = || format!("<joint name=\"{}\">", joint.name);
         match joint.kind {
             JointKind::Fixed => stack.push((child, body, origin, None)),
-            JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic => {
+            JointKind::Revolute
+            | JointKind::Continuous
+            | JointKind::Prismatic
+            | JointKind::Spherical => {
                 stack.push((child, body, origin, Some(j)));
             }
             JointKind::Floating => {
@@ -292,6 +319,8 @@ impl Model {
             v_offset,
             parents: Vec::new(),
             joint_types: Vec::new(),
+            idx_q: Vec::new(),
+            idx_v: Vec::new(),
             axes: Vec::new(),
             joint_placements: Vec::new(),
             inertias: Vec::new(),
@@ -361,16 +390,22 @@ impl Model {
         parent_body: usize,
         placement: Se3,
     ) -> Result<usize, DescriptionError> {
+        let spherical = joint.kind == JointKind::Spherical;
         let a = joint.axis_or_default();
         let axis = Vector3::new(a[0], a[1], a[2]);
         let n = axis.norm();
-        if n.is_nan() || n <= 1e-12 {
+        if !spherical && (n.is_nan() || n <= 1e-12) {
             return Err(
                 DescriptionError::new("a moving joint needs a non-zero axis")
                     .at_element(format!("<joint name=\"{}\">", joint.name)),
             );
         }
-        let axis = axis / n;
+        // A ball joint has no axis: it turns about its origin in every direction.
+        let axis = if spherical {
+            Vector3::zeros()
+        } else {
+            axis / n
+        };
         let lim = joint.limit.unwrap_or_default();
         let new_body = self.parents.len();
         self.parents.push(parent_body);
@@ -381,7 +416,7 @@ impl Model {
         self.inertias.push(Inertia::ZERO);
         self.joint_names.push(joint.name.clone());
         self.body_names.push(joint.child.clone());
-        let continuous = joint.kind == JointKind::Continuous;
+        let continuous = joint.kind == JointKind::Continuous || spherical;
         self.lower_limits.push(if continuous {
             f64::NEG_INFINITY
         } else {
@@ -427,12 +462,16 @@ impl Model {
         }
     }
 
-    /// Count the bodies into `nq`, `nv` and `subtree_end`. Depth-first numbering makes
-    /// a subtree a contiguous range.
+    /// Count the bodies into `nq`, `nv`, `idx_q`, `idx_v` and `subtree_end`.
+    /// Depth-first numbering makes a subtree a contiguous range.
     fn number_subtrees(&mut self) {
         self.nbodies = self.parents.len();
-        self.nq += self.nbodies;
-        self.nv += self.nbodies;
+        for t in &self.joint_types {
+            self.idx_q.push(self.nq);
+            self.idx_v.push(self.nv);
+            self.nq += t.nq();
+            self.nv += t.nv();
+        }
         self.subtree_end = (0..self.nbodies).map(|i| i + 1).collect();
         for i in (0..self.nbodies).rev() {
             let p = self.parents[i];
@@ -484,6 +523,20 @@ impl Model {
         self.base == BaseKind::Floating
     }
 
+    /// Whether some joint is spherical: then a body's q and v entries are at
+    /// `idx_q[i]`, `idx_v[i]`, not `q_offset + i`, `v_offset + i`.
+    pub fn has_spherical_joints(&self) -> bool {
+        self.joint_types.contains(&JointType::Spherical)
+    }
+
+    /// The body owning each joint velocity coordinate `v_offset + k`, and the
+    /// coordinate's rank within its joint (0, 1, 2 for a spherical joint).
+    pub fn velocity_owner(&self, k: usize) -> (usize, usize) {
+        let v = self.v_offset + k;
+        let i = self.idx_v.partition_point(|&x| x <= v) - 1;
+        (i, v - self.idx_v[i])
+    }
+
     /// Index of a joint by name (into bodies; its v index is `v_offset + i`).
     pub fn joint_index(&self, name: &str) -> Option<usize> {
         self.joint_names.iter().position(|n| n == name)
@@ -507,10 +560,16 @@ impl Model {
         if self.is_floating() {
             q[6] = 1.0;
         }
+        for (i, t) in self.joint_types.iter().enumerate() {
+            if *t == JointType::Spherical {
+                q[self.idx_q[i] + 3] = 1.0;
+            }
+        }
         q
     }
 
-    /// Names of the configuration coordinates, in the CSV convention (`base.x`, ..., joint names).
+    /// Names of the configuration coordinates, in the CSV convention (`base.x`, ...,
+    /// joint names; a spherical joint's quaternion as `<joint>.qx` ... `<joint>.qw`).
     pub fn q_names(&self) -> Vec<String> {
         let mut out: Vec<String> = Vec::with_capacity(self.nq);
         if self.is_floating() {
@@ -521,11 +580,23 @@ impl Model {
                 .map(String::from),
             );
         }
-        out.extend(self.joint_names.iter().cloned());
+        self.extend_joint_names(&mut out, &["qx", "qy", "qz", "qw"]);
         out
     }
 
-    /// Names of the velocity coordinates (`base.vx`, ..., `base.wz`, joint names).
+    /// Joint names into `out`, a spherical joint's as `<joint>.<suffix>` per entry.
+    fn extend_joint_names(&self, out: &mut Vec<String>, spherical: &[&str]) {
+        for (name, t) in self.joint_names.iter().zip(&self.joint_types) {
+            if *t == JointType::Spherical {
+                out.extend(spherical.iter().map(|s| format!("{name}.{s}")));
+            } else {
+                out.push(name.clone());
+            }
+        }
+    }
+
+    /// Names of the velocity coordinates (`base.vx`, ..., `base.wz`, joint names; a
+    /// spherical joint's angular velocity as `<joint>.wx` ... `<joint>.wz`).
     pub fn v_names(&self) -> Vec<String> {
         let mut out: Vec<String> = Vec::with_capacity(self.nv);
         if self.is_floating() {
@@ -536,11 +607,12 @@ impl Model {
                 .map(String::from),
             );
         }
-        out.extend(self.joint_names.iter().cloned());
+        self.extend_joint_names(&mut out, &["wx", "wy", "wz"]);
         out
     }
 
-    /// Names of the generalised forces (`base.fx`, ..., `base.tz`, joint names).
+    /// Names of the generalised forces (`base.fx`, ..., `base.tz`, joint names; a
+    /// spherical joint's torque as `<joint>.tx` ... `<joint>.tz`).
     pub fn tau_names(&self) -> Vec<String> {
         let mut out: Vec<String> = Vec::with_capacity(self.nv);
         if self.is_floating() {
@@ -551,7 +623,7 @@ impl Model {
                 .map(String::from),
             );
         }
-        out.extend(self.joint_names.iter().cloned());
+        self.extend_joint_names(&mut out, &["tx", "ty", "tz"]);
         out
     }
 }

@@ -83,9 +83,12 @@ pub fn joint_torque_regressor<'a>(
         let col0 = 10 * (i + pb);
         let mut j = i;
         while j != BASE {
-            let s = data.s[j].to_vector6();
-            let row = s.transpose() * yb;
-            r.fixed_view_mut::<1, 10>(off + j, col0).copy_from(&row);
+            for k in 0..model.joint_types[j].nv() {
+                let row = model.idx_v[j] + k;
+                let s = data.s[row - off].to_vector6();
+                r.fixed_view_mut::<1, 10>(row, col0)
+                    .copy_from(&(s.transpose() * yb));
+            }
             j = model.parents[j];
         }
         if floating {

@@ -78,10 +78,8 @@ pub(crate) fn rnea_impl(
     } else {
         Force::ZERO
     };
-    let off = model.v_offset;
-    let qj = &q[model.q_offset..];
     for i in 0..model.nbodies {
-        let li = joint_placement(model, i, qj[i]);
+        let li = joint_placement(model, i, q);
         data.li_m_i[i] = li;
         let p = model.parents[i];
         let (vp, ap) = if p == BASE {
@@ -89,10 +87,11 @@ pub(crate) fn rnea_impl(
         } else {
             (data.v[p], data.a[p])
         };
-        let qdd = a.map_or(0.0, |a| a[off + i]);
-        let mut ai = li.act_inv_motion(&ap) + subspace_times(model, i, qdd);
+        let iv = model.idx_v[i];
+        let aj = a.map_or(Motion::ZERO, |a| subspace_times(model, i, &a[iv..]));
+        let mut ai = li.act_inv_motion(&ap) + aj;
         let vi = if with_velocity {
-            let vj = subspace_times(model, i, v[off + i]);
+            let vj = subspace_times(model, i, &v[iv..]);
             let vi = li.act_inv_motion(&vp) + vj;
             ai += vi.cross(&vj);
             vi
@@ -110,8 +109,17 @@ pub(crate) fn rnea_impl(
     }
     for i in (0..model.nbodies).rev() {
         let fi = data.f[i];
-        data.tau[off + i] =
-            subspace_dot(model, i, &fi) + model.armature[i] * a.map_or(0.0, |a| a[off + i]);
+        let iv = model.idx_v[i];
+        let n = model.joint_types[i].nv();
+        let tau = &mut data.tau.as_mut_slice()[iv..iv + n];
+        subspace_dot(model, i, &fi, tau);
+        if let Some(a) = a {
+            tau[0] += model.armature[i] * a[iv];
+            if n == 3 {
+                tau[1] += model.armature[i] * a[iv + 1];
+                tau[2] += model.armature[i] * a[iv + 2];
+            }
+        }
         let fp = data.li_m_i[i].act_force(&fi);
         let p = model.parents[i];
         if p == BASE {

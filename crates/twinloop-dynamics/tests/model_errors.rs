@@ -1,7 +1,7 @@
 //! Descriptions the dynamics cannot compile give an error naming the joint.
 
 use twinloop_description::{DescriptionBuilder, Inertia, JointKind, Pose};
-use twinloop_dynamics::Model;
+use twinloop_dynamics::{BaseKind, Data, Model, aba, check_mass_matrix, crba, try_aba};
 
 fn two_links(kind: JointKind, origin: Pose) -> twinloop_description::Description {
     DescriptionBuilder::new("r")
@@ -112,4 +112,57 @@ fn too_large_a_model_is_refused_before_allocating() {
     let e = Model::from_description(&robot).unwrap_err();
     assert!(e.message.contains("7999 moving joints"), "{e}");
     assert!(e.message.contains("5.6 GB"), "{e}");
+}
+
+/// A chain whose last link is `leaf` (mass, CoM, inertia) on a revolute joint about y.
+fn chain_with_leaf(mass: f64, com: [f64; 3], inertia: twinloop_description::Inertia) -> Model {
+    use twinloop_description::Inertia as I;
+    let robot = DescriptionBuilder::new("chain")
+        .link("root")
+        .mass(1.0, [0.0; 3], I::solid_sphere(1.0, 0.1))
+        .done()
+        .link("upper")
+        .mass(1.0, [0.0, 0.0, -0.2], I::solid_box(1.0, [0.05, 0.05, 0.4]))
+        .done()
+        .revolute("shoulder", "root", "upper", [1.0, 0.0, 0.0])
+        .done()
+        .link("leaf")
+        .mass(mass, com, inertia)
+        .done()
+        .revolute("wrist", "upper", "leaf", [0.0, 1.0, 0.0])
+        .origin(twinloop_description::Pose::new([0.0, 0.0, -0.4], [0.0; 3]))
+        .done()
+        .build()
+        .unwrap();
+    Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap()
+}
+
+#[test]
+fn a_singular_mass_matrix_is_refused_naming_the_joint() {
+    use twinloop_description::Inertia as I;
+    // Massless leaf; a point mass on the wrist's own axis: both leave the wrist's
+    // row of M zero.
+    for model in [
+        chain_with_leaf(0.0, [0.0; 3], I::diagonal(0.0, 0.0, 0.0)),
+        chain_with_leaf(0.5, [0.0, 0.1, 0.0], I::diagonal(0.0, 0.0, 0.0)),
+    ] {
+        let mut data = Data::new(&model);
+        let q = vec![0.3; model.nv];
+        // Without the check, ABA's accelerations are not finite.
+        aba(&model, &mut data, &q, &q, &q);
+        assert!(data.ddq.iter().any(|x| !x.is_finite() || x.abs() > 1e10));
+        let e = try_aba(&model, &mut data, &q, &q, &q).unwrap_err();
+        assert_eq!(e.joint.as_deref(), Some("wrist"), "{e}");
+        assert!(e.to_string().contains("singular at joint \"wrist\""), "{e}");
+        assert_eq!(check_mass_matrix(&model, &mut data, &q), Err(e));
+        // The mass matrix agrees: its wrist row is zero.
+        crba(&model, &mut data, &q);
+        assert!(data.mass_matrix[(1, 1)].abs() < 1e-15);
+    }
+    // The same chain with a real leaf is fine, and try_aba is aba.
+    let model = chain_with_leaf(0.5, [0.1, 0.0, -0.1], I::diagonal(1e-3, 1e-3, 1e-3));
+    let mut data = Data::new(&model);
+    let q = vec![0.3; model.nv];
+    let ddq = try_aba(&model, &mut data, &q, &q, &q).unwrap().clone();
+    assert_eq!(&ddq, aba(&model, &mut data, &q, &q, &q));
 }

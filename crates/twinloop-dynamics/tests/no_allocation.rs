@@ -30,7 +30,7 @@ static GLOBAL: Counting = Counting;
 
 #[test]
 fn algorithms_do_not_allocate() {
-    // A two-legged tree with every joint type, plus a fixed link.
+    // A two-legged tree with every joint type (ball included), plus a fixed link.
     let mut b = DescriptionBuilder::new("biped")
         .link("pelvis")
         .mass(
@@ -64,6 +64,21 @@ fn algorithms_do_not_allocate() {
                 .done();
             parent = name;
         }
+        // A ball joint (4 q, 3 v) between the leg and its slider.
+        let ball = format!("{side}_ball");
+        b = b
+            .link(&ball)
+            .mass(0.4, [0.01, 0.0, -0.05], Inertia::solid_sphere(0.4, 0.04))
+            .done()
+            .joint(
+                format!("{ball}_joint"),
+                JointKind::Spherical,
+                &parent,
+                &ball,
+            )
+            .origin(Pose::new([0.0, 0.0, -0.1], [0.0, 0.3, 0.0]))
+            .done();
+        parent = ball;
         let slider = format!("{side}_slider");
         b = b
             .link(&slider)
@@ -96,10 +111,14 @@ fn algorithms_do_not_allocate() {
     let q = random_configuration(&model, &mut rng);
     let v = random_tangent(&model, &mut rng);
     let a = random_tangent(&model, &mut rng);
+    assert!(model.has_spherical_joints());
     let mut jac = nalgebra::DMatrix::zeros(6, model.nv);
+    let (mut q_next, mut dq) = (vec![0.0; model.nq], vec![0.0; model.nv]);
     let foot = model.frame_index("l_foot").unwrap();
 
-    let run = |data: &mut Data, jac: &mut nalgebra::DMatrix<f64>| {
+    let mut run = |data: &mut Data, jac: &mut nalgebra::DMatrix<f64>| {
+        configuration::integrate(&model, &q, &v, 1e-3, &mut q_next);
+        configuration::difference(&model, &q, &q_next, &mut dq);
         frames_forward_kinematics(&model, data, &q);
         center_of_mass(&model, data, &q);
         ground_projected_com(&model, data, &q);

@@ -25,6 +25,8 @@ impl Quantity {
 
     /// Column names for coordinates named `coordinates` (a model's `q_names()` for
     /// [`Quantity::Q`], its `v_names()` or `tau_names()` for the others), in that order.
+    /// A ball joint `j` has four `q:j.qx` .. `q:j.qw` (its quaternion), three
+    /// `v:j.wx` .. `v:j.wz` (and `a:`), three `tau:j.tx` .. `tau:j.tz`.
     pub fn column_names(self, coordinates: &[String]) -> Vec<String> {
         coordinates
             .iter()

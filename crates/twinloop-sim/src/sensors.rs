@@ -92,7 +92,9 @@ fn imu_world_velocity(
     }
     if info.body != BASE {
         for b in model.ancestors(info.body) {
-            add(model.v_offset + b);
+            for k in 0..model.joint_types[b].nv() {
+                add(model.idx_v[b] + k);
+            }
         }
     }
     (lin, ang)
@@ -204,15 +206,17 @@ pub fn read(
 
 /// Encoder positions (quantised where a resolution is set), velocities and applied torques.
 fn read_joints(model: &Model, sensors: &SensorState, at: &SensedState, out: &mut RobotState) {
-    let nb = model.nbodies;
     let (qo, vo) = (model.q_offset, model.v_offset);
-    out.positions.resize(nb, 0.0);
-    for i in 0..nb {
-        let q = at.q[qo + i];
-        out.positions[i] = match sensors.encoder_resolution[i] {
-            Some(r) => quantize(q, r),
-            None => q,
-        };
+    // One position per 1-DoF joint; a ball joint's four quaternion entries as they are.
+    out.positions.clear();
+    out.positions.extend_from_slice(&at.q[qo..]);
+    for i in 0..model.nbodies {
+        if model.joint_types[i].nq() == 1 {
+            let k = model.idx_q[i] - qo;
+            if let Some(r) = sensors.encoder_resolution[i] {
+                out.positions[k] = quantize(out.positions[k], r);
+            }
+        }
     }
     let vel = out.velocities.get_or_insert_with(Vec::new);
     vel.clear();

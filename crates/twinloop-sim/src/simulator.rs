@@ -8,7 +8,9 @@ use nalgebra::{DMatrix, Vector3};
 use std::fmt;
 use twinloop_description::{Description, DescriptionError};
 use twinloop_dynamics::configuration::integrate;
-use twinloop_dynamics::{BASE, Data, Model, compute_joint_jacobians, crba, nonlinear_effects};
+use twinloop_dynamics::{
+    BASE, Data, JointType, Model, compute_joint_jacobians, crba, nonlinear_effects,
+};
 use twinloop_robot::RobotState;
 use twinloop_spatial::Se3;
 
@@ -247,13 +249,24 @@ impl Simulator {
         for (k, p) in dof_parent.iter_mut().enumerate().take(off).skip(1) {
             *p = k - 1;
         }
+        // A body's DOFs chain from its parent's last one (a ball joint's three in order).
+        let last_dof = |i: usize| model.idx_v[i] + model.joint_types[i].nv() - 1;
         for i in 0..nb {
             let p = model.parents[i];
-            dof_parent[off + i] = if p == BASE {
+            let first = model.idx_v[i];
+            dof_parent[first] = if p == BASE {
                 if off > 0 { off - 1 } else { ltdl::NONE }
             } else {
-                off + p
+                last_dof(p)
             };
+            for (d, p) in dof_parent
+                .iter_mut()
+                .enumerate()
+                .take(last_dof(i) + 1)
+                .skip(first + 1)
+            {
+                *p = d - 1;
+            }
         }
         let mut chains = Vec::with_capacity(nb + 1);
         for i in 0..=nb {
@@ -261,7 +274,7 @@ impl Simulator {
             let mut d = if i == nb {
                 if off > 0 { off - 1 } else { ltdl::NONE }
             } else {
-                off + i
+                last_dof(i)
             };
             while d != ltdl::NONE {
                 c.push(d);
@@ -339,22 +352,28 @@ impl Simulator {
         self.actuators.iter_mut().for_each(|x| *x = a);
     }
 
-    /// Set joint positions (model order), keep the base where it is, zero velocities.
+    /// Set joint positions (the joint part of q in model order: one per joint, four
+    /// (x, y, z, w) per ball joint, normalised here), keep the base where it is, zero
+    /// velocities.
     pub fn set_joint_positions(&mut self, joints: &[f64]) -> Result<(), SimError> {
-        if joints.len() != self.model.nbodies {
+        let o = self.model.q_offset;
+        if joints.len() != self.model.nq - o {
             return Err(SimError::Input(format!(
-                "{} joint positions given, the robot has {} joints",
+                "{} joint positions given, the robot has {} joints ({} coordinates)",
                 joints.len(),
-                self.model.nbodies
+                self.model.nbodies,
+                self.model.nq - o
             )));
         }
-        let o = self.model.q_offset;
         self.q[o..].copy_from_slice(joints);
-        self.friction_anchor.copy_from_slice(joints);
+        twinloop_dynamics::configuration::normalize(&self.model, &mut self.q);
+        for i in 0..self.model.nbodies {
+            self.friction_anchor[i] = self.q[self.model.idx_q[i]];
+        }
         self.v.iter_mut().for_each(|x| *x = 0.0);
         for (i, a) in self.actuators.iter_mut().enumerate() {
             if let Actuator::SeriesElastic(s) = a {
-                s.theta = joints[i];
+                s.theta = self.q[self.model.idx_q[i]];
                 s.theta_dot = 0.0;
             }
         }
@@ -383,7 +402,7 @@ impl Simulator {
         }
         for (i, a) in self.actuators.iter().enumerate() {
             if !matches!(a, Actuator::Torque | Actuator::Passive) {
-                self.goals[i] = joints[i];
+                self.goals[i] = self.q[self.model.idx_q[i]];
             }
         }
         self.sensors.reset();
@@ -400,8 +419,8 @@ impl Simulator {
     }
 
     fn joint_drive(&mut self, i: usize) -> Drive {
-        let dof = self.model.v_offset + i;
-        let (q, v) = (self.q[self.model.q_offset + i], self.v[dof]);
+        let dof = self.model.idx_v[i];
+        let (q, v) = (self.q[self.model.idx_q[i]], self.v[dof]);
         let mut d = match &self.actuators[i] {
             Actuator::Passive => Drive::default(),
             Actuator::Torque => Drive {
@@ -454,6 +473,33 @@ impl Simulator {
         d
     }
 
+    /// Why the step matrix has no factor at velocity coordinate `k`: named by its
+    /// joint, and when the mass matrix itself is singular there, said so.
+    fn singular_step_message(&mut self, k: usize) -> String {
+        let at = if k < self.model.v_offset {
+            "the floating base".to_string()
+        } else {
+            let (i, _) = self.model.velocity_owner(k - self.model.v_offset);
+            format!("joint \"{}\"", self.model.joint_names[i])
+        };
+        let why = match twinloop_dynamics::check_mass_matrix(&self.model, &mut self.data, &self.q) {
+            Err(e) => format!(": {e}"),
+            Ok(()) => String::new(),
+        };
+        format!("the step matrix is not positive definite at {at} (velocity coordinate {k}){why}")
+    }
+
+    /// A ball joint is passive: only the description's viscous damping acts on its
+    /// three angular velocities (implicitly, like a 1-DoF joint's).
+    fn damp_ball(&mut self, i: usize, dt: f64) {
+        let c = self.joint_damping[i];
+        self.applied[i] = 0.0;
+        for dof in self.model.idx_v[i]..self.model.idx_v[i] + 3 {
+            self.rhs[dof] -= c * self.v[dof];
+            self.h[(dof, dof)] += dt * c;
+        }
+    }
+
     /// Advance one time step.
     ///
     /// Linearly implicit Euler: with M the mass matrix (CRBA), b = C v + g (RNEA), and
@@ -468,7 +514,6 @@ impl Simulator {
     pub fn step(&mut self) -> Result<(), SimError> {
         let dt = self.config.dt;
         let nv = self.model.nv;
-        let off = self.model.v_offset;
         // Kinematics and world Jacobians, mass matrix, bias forces.
         compute_joint_jacobians(&self.model, &mut self.data, &self.q);
         self.sensors.observe(&self.model, &self.data, &self.v);
@@ -487,8 +532,12 @@ impl Simulator {
         }
         // Joint actuators, damping, limits.
         for i in 0..self.model.nbodies {
+            if self.model.joint_types[i] == JointType::Spherical {
+                self.damp_ball(i, dt);
+                continue;
+            }
             let d = self.joint_drive(i);
-            let dof = off + i;
+            let dof = self.model.idx_v[i];
             self.rhs[dof] += d.tau - dt * d.k * self.v[dof];
             // The armature is already on the diagonal: crba adds it.
             self.h[(dof, dof)] += dt * d.d + dt * dt * d.k;
@@ -500,9 +549,7 @@ impl Simulator {
         if let Err(k) = ltdl::factor(&mut self.h, &self.dof_parent) {
             return Err(SimError::Diverged {
                 time: self.time,
-                message: format!(
-                    "the step matrix is not positive definite at velocity coordinate {k}"
-                ),
+                message: self.singular_step_message(k),
             });
         }
         for x in self.rhs.iter_mut() {
@@ -515,10 +562,10 @@ impl Simulator {
         integrate(&self.model, &self.q, &self.v, dt, &mut self.q_next);
         std::mem::swap(&mut self.q, &mut self.q_next);
         // Series-elastic motors follow their goals with the link at its new state.
-        let qo = self.model.q_offset;
         for i in 0..self.model.nbodies {
             if let Actuator::SeriesElastic(s) = &mut self.actuators[i] {
-                s.advance_motor(self.goals[i], self.q[qo + i], self.v[off + i], dt);
+                let (iq, iv) = (self.model.idx_q[i], self.model.idx_v[i]);
+                s.advance_motor(self.goals[i], self.q[iq], self.v[iv], dt);
             }
         }
         self.time += dt;

@@ -6,7 +6,10 @@
 //! mass for the volume and the second moments (MuJoCo 4's order; the file's
 //! single-precision vertices, the arithmetic in double). `inertia="legacy"`
 //! (MuJoCo's default) counts every pyramid's volume as positive, `"exact"` signed
-//! (right for closed meshes).
+//! (right for closed meshes). `"shell"` puts the mass on the surface: the
+//! area-weighted centroid, and each triangle's exact second moments as a thin
+//! plate (`A/12 (sum v v^T + (sum v)(sum v)^T)`), density times area.
+//! `"convex"` is `"exact"` on the mesh's convex hull ([`super::hull`]).
 
 use super::inertia::{Mat, Vec3};
 use std::path::Path;
@@ -189,6 +192,49 @@ impl TriMesh {
     /// Volume, CoM and inertia about the CoM at unit density: pyramids from the
     /// area-weighted face centroid give the CoM; the mesh is moved there and the
     /// pyramids from the CoM give the volume and the second moments.
+    /// The shell (surface) mass properties at unit surface density: `volume` is the
+    /// area, the measure a density multiplies.
+    pub(crate) fn shell_properties(&self) -> Result<MeshProps, &'static str> {
+        const K: [[usize; 2]; 6] = [[0, 0], [1, 1], [2, 2], [0, 1], [0, 2], [1, 2]];
+        let (mut area, mut first) = (0.0, [0.0; 3]);
+        let mut p = [0.0; 6];
+        for t in &self.faces {
+            let (d, e, f) = (
+                &self.vertices[t[0]],
+                &self.vertices[t[1]],
+                &self.vertices[t[2]],
+            );
+            let (a, _, cen) = triangle(d, e, f);
+            area += a;
+            for j in 0..3 {
+                first[j] += a * cen[j];
+            }
+            let sum = [0, 1, 2].map(|i| d[i] + e[i] + f[i]);
+            for (j, &[x, y]) in K.iter().enumerate() {
+                let vv = d[x] * d[y] + e[x] * e[y] + f[x] * f[y];
+                p[j] += a / 12.0 * (vv + sum[x] * sum[y]);
+            }
+        }
+        if area < 1e-15 {
+            return Err("mesh surface area is too small");
+        }
+        let com = first.map(|c| c / area);
+        // Second moments about the CoM (parallel axes), then the inertia tensor.
+        for (j, &[x, y]) in K.iter().enumerate() {
+            p[j] -= area * com[x] * com[y];
+        }
+        let inertia = [
+            [p[1] + p[2], -p[3], -p[4]],
+            [-p[3], p[0] + p[2], -p[5]],
+            [-p[4], -p[5], p[0] + p[1]],
+        ];
+        Ok(MeshProps {
+            volume: area,
+            com,
+            inertia,
+        })
+    }
+
     pub(crate) fn mass_properties(&self, signed: Signed) -> Result<MeshProps, &'static str> {
         let count = |v: f64| if signed == Signed::Legacy { v.abs() } else { v };
         let tri = |t: &[usize; 3], vs: &[Vec3]| triangle(&vs[t[0]], &vs[t[1]], &vs[t[2]]);

@@ -19,7 +19,9 @@
 //! - A body's joints, in order: `hinge` becomes [`JointKind::Revolute`] when
 //!   limited (the `range`, converted from degrees unless `<compiler
 //!   angle="radian">`) and [`JointKind::Continuous`] otherwise; `slide` becomes
-//!   [`JointKind::Prismatic`]; `ball` is an error. MuJoCo applies a body's joints
+//!   [`JointKind::Prismatic`]; `ball` becomes [`JointKind::Spherical`] (its
+//!   `ref` ignored and its cone `range` not kept, as MuJoCo's qpos0 and the
+//!   dynamics have them). MuJoCo applies a body's joints
 //!   one after the other in the body frame as moved by the ones before; each
 //!   joint but the last gets a massless link `<body>_<joint>`. A body without a
 //!   joint is attached by a fixed joint named `<body>_fixed`. Joint names are
@@ -63,13 +65,16 @@
 //! - Read past, and listed in [`Description::unmodeled`] for `lint`: tendons,
 //!   equality constraints, actuators that drive no joint, sensors at sites.
 //!   Ignored: cameras, lights, other actuators and sensors, contact settings,
-//!   keyframes, and geoms and sites attached to the world. `<replicate>`,
+//!   keyframes, and geoms and sites attached to the world. `<replicate>` is
+//!   expanded as MuJoCo does (replica `i` at the offset and rotation applied `i`
+//!   times, names suffixed with `sep` and the padded index).
 //!   `<attach>`, composite objects and nested includes are errors rather than
 //!   silently dropped bodies.
 //! - `<frame>`: its placement is composed onto the bodies, geoms, sites and
 //!   frames inside it, and its `childclass` applies to them.
 
 use crate::description::*;
+mod hull;
 pub(crate) mod include;
 mod inertia;
 mod mesh;
@@ -114,9 +119,13 @@ fn compose(f: &Xf, pos: Vec3, rot: Mat) -> Xf {
     (add(&f.0, &mat_vec(&f.1, &pos)), mat_mul(&f.1, &rot))
 }
 
-/// An element seen through the `<frame>`s around it: the element, their
-/// placement and the `childclass` in force.
-type Framed<'a, 'i> = (Node<'a, 'i>, Xf, Option<String>);
+/// An element seen through the `<frame>`s and `<replicate>`s around it: the
+/// element, their placement, the `childclass` in force and the name suffix of
+/// its replica (`""` outside any `<replicate>`).
+type Framed<'a, 'i> = (Node<'a, 'i>, Xf, Option<String>, String);
+
+/// Most elements one body's or the world's `<replicate>`s may expand to.
+const MAX_REPLICAS: usize = 100_000;
 
 /// Deepest nesting of `<frame>` elements followed.
 const MAX_FRAME_DEPTH: usize = 1000;
@@ -132,6 +141,8 @@ struct Pending<'a, 'i> {
     childclass: Option<String>,
     /// Placement of the `<frame>`s around the body in its parent body.
     frame: Xf,
+    /// Name suffix of the replica the body is in (`<replicate>`).
+    suffix: String,
 }
 
 fn mat_mul(a: &Mat, b: &Mat) -> Mat {
@@ -277,6 +288,9 @@ struct Reader<'a, 'i> {
     robot: Description,
     places: Places,
     unnamed_bodies: usize,
+    /// The replica suffix of the body being read: appended to the names given in
+    /// the file (bodies, joints, sites, geoms), as MuJoCo's `<replicate>` does.
+    suffix: String,
 }
 
 /// Where an attribute's value came from: the element itself or a default class.
@@ -342,6 +356,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 joints: Vec::new(),
             },
             unnamed_bodies: 0,
+            suffix: String::new(),
         }
     }
 
@@ -376,10 +391,10 @@ impl<'a, 'i> Reader<'a, 'i> {
             if s.tag_name().name() != "worldbody" {
                 continue;
             }
-            for (c, xf, cc) in self.through_frames(s, None)? {
+            for (c, xf, cc, sfx) in self.through_frames(s, None, "")? {
                 match c.tag_name().name() {
-                    "body" => top.push((c, xf, cc)),
-                    t @ ("replicate" | "attach" | "include" | "composite" | "flexcomp") => {
+                    "body" => top.push((c, xf, cc, sfx)),
+                    t @ ("attach" | "include" | "composite" | "flexcomp") => {
                         return Err(error_at(c, format!("<{t}> is not supported")));
                     }
                     _ => {} // world geoms, sites, lights, cameras
@@ -400,11 +415,12 @@ impl<'a, 'i> Reader<'a, 'i> {
         let mut pending: Vec<Pending> = top
             .into_iter()
             .rev()
-            .map(|(node, frame, childclass)| Pending {
+            .map(|(node, frame, childclass, suffix)| Pending {
                 node,
                 parent: world.then(|| ("world".to_string(), [0.0; 3])),
                 childclass,
                 frame,
+                suffix,
             })
             .collect();
         while let Some(p) = pending.pop() {
@@ -419,37 +435,84 @@ impl<'a, 'i> Reader<'a, 'i> {
         validate_placed(doc, &self.robot, &self.places)
     }
 
-    /// The element children of `node` with every `<frame>` opened: each with the
-    /// placement of the frames around it (in `node`'s frame) and the
-    /// `childclass` in force (a frame's own, else `cc`).
+    /// The element children of `node` with every `<frame>` and `<replicate>`
+    /// opened: each with the placement of the frames around it (in `node`'s
+    /// frame), the `childclass` in force (a frame's own, else `cc`) and its name
+    /// suffix (`suffix`, the enclosing body's, after those of the replicas it is in).
     fn through_frames(
         &self,
         node: Node<'a, 'i>,
         cc: Option<&str>,
+        suffix: &str,
     ) -> Result<Vec<Framed<'a, 'i>>, DescriptionError> {
         let mut out = Vec::new();
-        // (element, enclosing placement, childclass, depth), in file order.
-        let mut stack: Vec<(Node, Xf, Option<String>, usize)> = node
+        // (element, enclosing placement, childclass, suffix, depth), in file order.
+        let mut stack: Vec<(Node, Xf, Option<String>, String, usize)> = node
             .children()
             .filter(Node::is_element)
-            .map(|c| (c, NO_FRAME, cc.map(str::to_string), 0))
+            .map(|c| (c, NO_FRAME, cc.map(str::to_string), suffix.to_string(), 0))
             .collect();
         stack.reverse();
-        while let Some((c, xf, cc, depth)) = stack.pop() {
-            if c.tag_name().name() != "frame" {
-                out.push((c, xf, cc));
+        while let Some((c, xf, cc, sfx, depth)) = stack.pop() {
+            let tag = c.tag_name().name();
+            if tag != "frame" && tag != "replicate" {
+                out.push((c, xf, cc, sfx));
                 continue;
             }
             if depth >= MAX_FRAME_DEPTH {
-                return Err(error_at(c, "<frame>s nested too deep"));
+                return Err(error_at(c, format!("<{tag}>s nested too deep")));
+            }
+            if stack.len() + out.len() > MAX_REPLICAS {
+                return Err(error_at(
+                    c,
+                    format!("<replicate>s expand to more than {MAX_REPLICAS} elements"),
+                ));
+            }
+            let children: Vec<Node> = c.children().filter(Node::is_element).collect();
+            if tag == "replicate" {
+                for (inner, name) in self.replicas(c, &xf)?.into_iter().rev() {
+                    for &k in children.iter().rev() {
+                        stack.push((k, inner, cc.clone(), format!("{name}{sfx}"), depth + 1));
+                    }
+                }
+                continue;
             }
             let pos = opt_array::<3>(c, "pos")?.unwrap_or([0.0; 3]);
             let inner = compose(&xf, pos, self.orientation(c, "frame", None)?);
             let cc = self.childclass(c, cc)?;
-            let children: Vec<Node> = c.children().filter(Node::is_element).collect();
             for k in children.into_iter().rev() {
-                stack.push((k, inner, cc.clone(), depth + 1));
+                stack.push((k, inner, cc.clone(), sfx.clone(), depth + 1));
             }
+        }
+        Ok(out)
+    }
+
+    /// MuJoCo's `<replicate count sep offset (orientation)>`: replica `i` (from 0)
+    /// is placed at `T^i` with `T` the offset and rotation, and its names get
+    /// `sep` and `i` padded to the digits of `count`.
+    fn replicas(&self, r: Node<'a, 'i>, xf: &Xf) -> Result<Vec<(Xf, String)>, DescriptionError> {
+        let count = required(r, "count")?;
+        let n: usize = count
+            .trim()
+            .parse()
+            .ok()
+            .filter(|&n| (1..=MAX_REPLICAS).contains(&n))
+            .ok_or_else(|| {
+                error_at_attr(
+                    r,
+                    "count",
+                    format!("\"{count}\" is not a replica count (1 or more)"),
+                )
+            })?;
+        let offset = opt_array::<3>(r, "offset")?.unwrap_or([0.0; 3]);
+        let rot = self.orientation(r, "frame", None)?;
+        let sep = r.attribute("sep").unwrap_or("");
+        let width = n.to_string().len();
+        let mut at = *xf;
+        let mut out = Vec::with_capacity(n);
+        for i in 0..n {
+            out.push((at, format!("{sep}{i:0width$}")));
+            at = compose(&at, offset, rot);
         }
         Ok(out)
     }
@@ -464,7 +527,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
                 .collect()
         };
-        if let [(only, frame, _)] = top {
+        if let [(only, frame, _, _)] = top {
             let (only, framed) = (*only, *frame != NO_FRAME);
             let js = joints(only);
             if js.len() == 1 && self.joint_type(js[0], None)? == "free" {
@@ -477,7 +540,8 @@ impl<'a, 'i> Reader<'a, 'i> {
                 return Ok(false);
             }
         }
-        for &(b, _, _) in top {
+        for (b, _, _, _) in top {
+            let b = *b;
             for j in joints(b) {
                 if self.joint_type(j, None)? == "free" && top.len() > 1 {
                     let other = if top[0].0 == b { top[1].0 } else { top[0].0 };
@@ -496,8 +560,8 @@ impl<'a, 'i> Reader<'a, 'i> {
     }
 
     /// Elements of a section that act on the physics beyond the rigid-body tree:
-    /// tendons, equality constraints, actuators that do not drive a joint, and
-    /// sensors at sites.
+    /// tendons, equality constraints, actuators that do not drive a joint,
+    /// sensors at sites, and deformable flexes and skins.
     fn unmodeled(&mut self, section: Node<'a, 'i>) {
         for e in section.children().filter(Node::is_element) {
             let what = match (section.tag_name().name(), e.tag_name().name()) {
@@ -519,6 +583,10 @@ impl<'a, 'i> Reader<'a, 'i> {
                          torques in twinloop"
                     )
                 }
+                ("deformable", t) => format!(
+                    "{t} in <deformable>: a deformable body (flex or skin); twinloop's \
+                     rigid-body dynamics leave it out"
+                ),
                 ("sensor", t) if e.attribute("site").is_some() => {
                     format!("{t} sensor at a site: twinloop does not simulate it")
                 }
@@ -939,7 +1007,9 @@ impl<'a, 'i> Reader<'a, 'i> {
             parent,
             childclass,
             frame,
+            suffix,
         } = todo;
+        self.suffix = suffix;
         let name = self.body_name(node);
         let childclass = self.childclass(node, childclass)?;
         let cc = childclass.as_deref();
@@ -1023,15 +1093,16 @@ impl<'a, 'i> Reader<'a, 'i> {
         pending: &mut Vec<Pending<'a, 'i>>,
     ) -> Result<(), DescriptionError> {
         let mut children = Vec::new();
-        for (c, frame, cc) in self.through_frames(node, childclass)? {
+        for (c, frame, cc, suffix) in self.through_frames(node, childclass, &self.suffix)? {
             match c.tag_name().name() {
                 "body" => children.push(Pending {
                     node: c,
                     parent: Some((name.to_string(), offset)),
                     childclass: cc,
                     frame,
+                    suffix,
                 }),
-                t @ ("replicate" | "attach" | "include" | "composite" | "flexcomp") => {
+                t @ ("attach" | "include" | "composite" | "flexcomp") => {
                     return Err(error_at(c, format!("<{t}> is not supported")));
                 }
                 _ => {}
@@ -1056,7 +1127,7 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// The body's name; an unnamed body is `body1`, `body2`, ... in reading order.
     fn body_name(&mut self, node: Node) -> String {
         match node.attribute("name") {
-            Some(n) => n.to_string(),
+            Some(n) => format!("{n}{}", self.suffix),
             None => {
                 self.unnamed_bodies += 1;
                 format!("body{}", self.unnamed_bodies)
@@ -1126,14 +1197,10 @@ impl<'a, 'i> Reader<'a, 'i> {
                         ));
                     }
                 }
-                "ball" => {
-                    return Err(error_at(
-                        j,
-                        "ball joints are not supported: twinloop's dynamics has no spherical joint yet",
-                    ));
-                }
-                kind @ ("hinge" | "slide") => {
-                    let hinge = kind == "hinge";
+                kind @ ("hinge" | "slide" | "ball") => {
+                    // A ball turns about its anchor like a hinge (about every axis).
+                    let hinge = kind != "slide";
+                    let ball = kind == "ball";
                     if hinge {
                         anchor = match self.get(j, "joint", &class, "pos") {
                             Some((n, v)) => parse_array::<3>(n, "pos", v)?,
@@ -1141,15 +1208,29 @@ impl<'a, 'i> Reader<'a, 'i> {
                         };
                     }
                     let jname = match j.attribute("name") {
-                        Some(n) => n.to_string(),
+                        Some(n) => format!("{n}{}", self.suffix),
                         None if out.is_empty() => format!("{name}_joint"),
                         None => format!("{name}_joint{}", out.len() + 1),
                     };
-                    let reference = self
-                        .number(self.get(j, "joint", &class, "ref"), "ref")?
-                        .unwrap_or(0.0);
+                    // MuJoCo ignores `ref` on a ball: its qpos0 is the unit quaternion.
+                    let reference = match ball {
+                        true => 0.0,
+                        false => self
+                            .number(self.get(j, "joint", &class, "ref"), "ref")?
+                            .unwrap_or(0.0),
+                    };
+                    let mut joint = self.joint(j, &class, jname, hinge)?;
+                    if ball {
+                        // q is a quaternion: no axis; MuJoCo's ball `range` is a cone
+                        // the dynamics leaves out, so it is not a 1-DoF position limit.
+                        joint.kind = JointKind::Spherical;
+                        joint.axis = None;
+                        if let Some(l) = &mut joint.limit {
+                            (l.lower, l.upper) = (None, None);
+                        }
+                    }
                     out.push(BodyJoint {
-                        joint: self.joint(j, &class, jname, hinge)?,
+                        joint,
                         node: j,
                         anchor,
                         hinge,
@@ -1277,7 +1358,9 @@ impl<'a, 'i> Reader<'a, 'i> {
             FromGeom::Auto => !node.children().any(|c| c.has_tag_name("inertial")),
         };
         let mut parts = Vec::new();
-        for (c, xf, cc) in self.through_frames(node, childclass)? {
+        // Sites and geoms in a body's own replicas: their suffixes (MuJoCo's
+        // names); the body's own suffix is `self.suffix`.
+        for (c, xf, cc, sfx) in self.through_frames(node, childclass, &self.suffix)? {
             let childclass = cc.as_deref();
             match c.tag_name().name() {
                 "inertial" => {
@@ -1289,7 +1372,9 @@ impl<'a, 'i> Reader<'a, 'i> {
                 "geom" => {
                     geoms += 1;
                     let default_name = format!("{name}_geom{geoms}");
-                    self.geom(c, childclass, offset, &xf, &default_name, &mut link)?;
+                    let named = c.attribute("name").map(|n| format!("{n}{sfx}"));
+                    let names = (named, default_name.as_str());
+                    self.geom(c, childclass, offset, &xf, names, &mut link)?;
                     if from_geoms && let Some(p) = self.geom_mass(c, childclass, &xf)? {
                         parts.push(p);
                     }
@@ -1300,7 +1385,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                     let (pos, rot) = compose(&xf, pos, rot);
                     frames.push(Frame {
                         name: match c.attribute("name") {
-                            Some(n) => n.to_string(),
+                            Some(n) => format!("{n}{sfx}"),
                             None => format!("{name}_site{}", frames.len() + 1),
                         },
                         link: name.to_string(),
@@ -1494,26 +1579,33 @@ impl<'a, 'i> Reader<'a, 'i> {
         if let Some((n, v)) = self.get(g, "geom", class, "shellinertia")
             && bool_attr(n, "shellinertia", v)?
         {
-            return Err(bad("the shell inertia of a mesh is not computed".into()));
+            // MuJoCo's own rule: a mesh's shell is its asset's inertia="shell".
+            return Err(bad(
+                "for mesh geoms, shellinertia is not read: give the mesh asset inertia=\"shell\""
+                    .into(),
+            ));
         }
-        let signed = match asset.inertia.as_deref() {
-            None | Some("legacy") => mesh::Signed::Legacy,
-            Some("exact") => mesh::Signed::Exact,
-            Some(other) => {
-                return Err(bad(format!(
-                    "inertia=\"{other}\" is not computed (legacy and exact are)"
-                )));
-            }
-        };
+        let how = asset.inertia.as_deref().unwrap_or("legacy");
+        if !matches!(how, "legacy" | "exact" | "convex" | "shell") {
+            return Err(bad(format!(
+                "unknown inertia=\"{how}\" (expected legacy, exact, convex or shell)"
+            )));
+        }
         let path = match &self.dir {
             Some(d) => d.join(file),
             None => std::path::PathBuf::from(file),
         };
-        let props = mesh::read(&path)
+        let trimesh = mesh::read(&path)
             .map_err(&bad)?
-            .scaled(asset.scale.unwrap_or([1.0; 3]))
-            .mass_properties(signed)
-            .map_err(|e| bad(e.to_string()))?;
+            .scaled(asset.scale.unwrap_or([1.0; 3]));
+        let props = match how {
+            "shell" => trimesh.shell_properties(),
+            "convex" => hull::convex_hull(&trimesh.vertices)
+                .and_then(|h| h.mass_properties(mesh::Signed::Exact)),
+            "exact" => trimesh.mass_properties(mesh::Signed::Exact),
+            _ => trimesh.mass_properties(mesh::Signed::Legacy),
+        }
+        .map_err(|e| bad(e.to_string()))?;
         let density = match self.number(self.get(g, "geom", class, "mass"), "mass")? {
             Some(m) => m / props.volume,
             None => self
@@ -1555,7 +1647,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         childclass: Option<&str>,
         offset: Vec3,
         frame: &Xf,
-        default_name: &str,
+        (name, default_name): (Option<String>, &str),
         link: &mut Link,
     ) -> Result<(), DescriptionError> {
         let class = self.class_of(g, childclass)?;
@@ -1583,7 +1675,6 @@ impl<'a, 'i> Reader<'a, 'i> {
         let contype = self.integer(self.get(g, "geom", &class, "contype"), "contype", 1)?;
         let conaffinity =
             self.integer(self.get(g, "geom", &class, "conaffinity"), "conaffinity", 1)?;
-        let name = g.attribute("name").map(str::to_string);
         if (0..=2).contains(&group) {
             let material =
                 self.geom_material(g, &class, name.as_deref().unwrap_or(default_name))?;
