@@ -4,7 +4,8 @@
 //! | column | meaning |
 //! |---|---|
 //! | `t` | s since the start, when the row's read was sent |
-//! | `goal` | Goal Position in force since the previous row, rad |
+//! | `goal` | Goal Position, rad, written at `t_goal` |
+//! | `t_goal` | s, when the row's goal (and registers) were sent: after the previous row's read |
 //! | `q`, `v` | Present Position (rad) and Present Speed/Velocity (rad/s) |
 //! | `load` | Present Load as a fraction of full (RX), NaN where the servo has none |
 //! | `current` | Present Current, A (MX(2.0), X), NaN where the servo has none |
@@ -22,9 +23,10 @@ use twinloop_io::Table;
 pub const LOG_PREFIX: &str = "# twinloop experiment servo:";
 
 /// The columns before the firmware registers.
-pub const LOG_COLUMNS: [&str; 8] = [
+pub const LOG_COLUMNS: [&str; 9] = [
     "t",
     "goal",
+    "t_goal",
     "q",
     "v",
     "load",
@@ -39,6 +41,9 @@ pub struct ServoLog {
     pub servo: Option<ServoType>,
     pub t: Vec<f64>,
     pub goal: Vec<f64>,
+    /// When each row's goal was sent (the previous row's time where the log has no
+    /// `t_goal` column).
+    pub t_goal: Vec<f64>,
     pub q: Vec<f64>,
     pub v: Vec<f64>,
     /// A per row where the servo senses current.
@@ -86,6 +91,12 @@ impl ServoLog {
             .iter()
             .map(|c| col(c))
             .collect::<Result<_, _>>()?;
+        let t_goal_col = table.column_index("t_goal");
+        if let Some(c) = t_goal_col {
+            table
+                .check_finite(&[c])
+                .map_err(|e| ActuatorError::new(&file, "", e.to_string()))?;
+        }
         let io = |e: twinloop_io::IoError| ActuatorError::new(&file, "", e.to_string());
         table.check_finite(&idx).map_err(io)?;
         let current_col = match servo.current_unit() {
@@ -121,6 +132,8 @@ impl ServoLog {
                     ),
                 ));
             }
+            let previous = log.t.last().copied().unwrap_or(row[idx[0]]);
+            log.t_goal.push(t_goal_col.map_or(previous, |c| row[c]));
             log.t.push(row[idx[0]]);
             log.goal.push(row[idx[1]]);
             log.q.push(row[idx[2]]);
@@ -163,7 +176,7 @@ impl LogWriter {
     }
 
     /// One row: the [`LOG_COLUMNS`] values then the three firmware registers.
-    pub fn write(&mut self, values: &[f64; 8], firmware: &[f64; 3]) -> std::io::Result<()> {
+    pub fn write(&mut self, values: &[f64; 9], firmware: &[f64; 3]) -> std::io::Result<()> {
         self.line.clear();
         for (k, x) in values.iter().chain(firmware).enumerate() {
             if k > 0 {

@@ -7,7 +7,7 @@ use crate::bench::{Bench, Pendulum};
 use crate::excitation::Excitation;
 use crate::log::ServoLog;
 use crate::params::ServoParams;
-use crate::replay::MAX_STEP;
+use crate::replay::advance;
 use twinloop_random::SplitMix64;
 
 /// Run `truth` on `load` through `excitation`, sampling every `period` s give or take
@@ -38,11 +38,13 @@ pub fn synthetic_log(
         ..Default::default()
     };
     let mut t = 0.0;
+    let mut t_goal = 0.0;
     let (mut goal, mut regs) = excitation.at(0.0).expect("a non-empty excitation");
     loop {
         // The row's read: what the servo measures now, with the goal in force.
         log.t.push(t);
         log.goal.push(goal);
+        log.t_goal.push(t_goal);
         log.firmware.push(regs);
         log.q.push(b.sensed_position());
         log.v.push((b.v / velocity_unit).round() * velocity_unit);
@@ -58,11 +60,9 @@ pub fn synthetic_log(
         regs = r;
         b.goal = goal;
         b.firmware.registers = regs;
+        t_goal = t;
         let span = period + jitter * (2.0 * rng.next_f64() - 1.0);
-        let n = (span / MAX_STEP).ceil().max(1.0);
-        for _ in 0..n as usize {
-            b.step(span / n);
-        }
+        advance(&mut b, span);
         t += span;
     }
     log

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU8, Ordering};
-use twinloop_actuator::replay::MAX_STEP;
+use twinloop_actuator::replay::advance;
 use twinloop_actuator::{Bench, LoopFamily, Pendulum, ServoParams, ServoType};
 use twinloop_link::servo::ServoMeasurement;
 use twinloop_link::{Item, ServoModel, VirtualServoBackend};
@@ -87,19 +87,16 @@ impl VirtualServoBackend for BenchBackend {
     }
 
     /// Advance the wall clock's `dt` (times the realtime factor) in equal steps of at
-    /// most [`MAX_STEP`], as the fit's replay does between two log rows.
+    /// most `replay::MAX_STEP`, as the fit's replay does between two log rows.
     fn step(&mut self, dt: f64) {
         let span = dt * self.realtime_factor;
         if span <= 0.0 {
             return;
         }
-        let n = (span / MAX_STEP).ceil().max(1.0);
-        let h = span / n;
         let stall = self.model.spec().stall_torque;
-        for _ in 0..n as usize {
-            self.bench.step(h);
-            self.temperature = thermal_step(self.temperature, self.bench.motor_torque / stall, h);
-        }
+        // The winding heats with the torque it carried over the span.
+        advance(&mut self.bench, span);
+        self.temperature = thermal_step(self.temperature, self.bench.motor_torque / stall, span);
         if self.temperature > 80.0
             && let Some(c) = &self.condition
         {

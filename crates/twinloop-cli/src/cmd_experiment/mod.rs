@@ -195,7 +195,8 @@ pub enum ExperimentCommand {
     ///   twinloop experiment servo --port /tmp/bench --id 1 --load load.toml --out rx28.csv
     ///
     /// Output: LOG.csv, its first line `# twinloop experiment servo: MODEL id N on PORT`,
-    /// then `t` (s), `goal` (rad, in force since the previous row), `q` (rad), `v`
+    /// then `t` (s, the read sent), `goal` (rad), `t_goal` (s, when that goal was sent),
+    /// `q` (rad), `v`
     /// (rad/s), `load` (fraction of full, RX; NaN otherwise), `current` (A, MX(2.0)
     /// and X; NaN otherwise), `voltage` (V), `temperature` (C), and the loop's three
     /// registers (`compliance_slope compliance_margin punch` or `p_gain i_gain

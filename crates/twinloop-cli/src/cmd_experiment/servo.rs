@@ -39,16 +39,20 @@ pub struct ServoArgs {
 
 /// Stop before the factory Temperature Limit (80 C) trips the servo.
 const MAX_TEMPERATURE_C: f64 = 75.0;
+/// Reads in a row without an answer before the servo is taken for gone.
+const MAX_MISSES: usize = 25;
 
 /// The registers read each cycle, as one block.
 struct Block {
     start: u16,
     len: usize,
-    regs: [Option<&'static Register>; 6],
+    regs: [Option<&'static Register>; 7],
 }
 
 impl Block {
-    /// Present Position, Velocity, Load, Current, Voltage, Temperature.
+    /// Present Position, Velocity, Load, Current, Voltage, Temperature, and Goal
+    /// Position (the goal the servo has: a write whose reply was lost may or may not
+    /// have reached it).
     fn new(model: ServoModel) -> Block {
         let t = model.table();
         let regs = [
@@ -58,6 +62,7 @@ impl Block {
             Item::PresentCurrent,
             Item::PresentVoltage,
             Item::PresentTemperature,
+            Item::GoalPosition,
         ]
         .map(|i| t.item(i));
         let start = regs.iter().flatten().map(|r| r.address).min().unwrap_or(0);
@@ -183,7 +188,7 @@ pub fn run(a: &ServoArgs) -> CliResult {
         .map_err(|e| CliError::new(format!("{}: {e}", a.out.display())))?;
     let stop = interrupt_flag();
     let protocol = model.protocol();
-    let (mut goal, mut regs) = exc.at(0.0).expect("the sequence starts at 0");
+    let (goal, mut regs) = exc.at(0.0).expect("the sequence starts at 0");
     write_firmware(&mut client, model, servo, a.id, regs)?;
     write_item(
         &mut client,
@@ -193,24 +198,38 @@ pub fn run(a: &ServoArgs) -> CliResult {
         goal_reg.from_si(goal),
     )?;
     write_item(&mut client, model, a.id, Item::TorqueEnable, 1)?;
-    goal = goal_reg.to_si(goal_reg.from_si(goal));
+    let mut t_goal = 0.0;
     let mut buf = vec![0u8; block.len];
+    // Time 0: the first goal was just written.
     let t0 = Instant::now();
     let mut abort = None;
     let mut last_q = 0.0;
+    // The goal the servo reports and when it was sent; the last write's time.
+    let mut row_goal = f64::NAN;
+    let mut last_write = 0.0;
+    let mut misses = 0;
     loop {
         let t = t0.elapsed().as_secs_f64() * a.realtime_factor;
-        let status = client.read(protocol, a.id, block.start, &mut buf);
-        let status = match status {
+        let status = match client.read(protocol, a.id, block.start, &mut buf) {
             Ok(s) => s,
             Err(e) => {
-                abort = Some(format!("servo id {}: {e}", a.id));
-                break;
+                // A lost reply now and then is the bus's way; a servo gone is not.
+                misses += 1;
+                if misses > MAX_MISSES {
+                    abort = Some(format!("servo id {}: {e} ({misses} times in a row)", a.id));
+                    break;
+                }
+                continue;
             }
         };
-        let m: [f64; 6] = std::array::from_fn(|k| block.value(k, &buf));
+        misses = 0;
+        let m: [f64; 7] = std::array::from_fn(|k| block.value(k, &buf));
         last_q = m[0];
-        let row = [t, goal, m[0], m[1], m[2], m[3], m[4], m[5]];
+        if m[6] != row_goal {
+            row_goal = m[6];
+            t_goal = last_write;
+        }
+        let row = [t, m[6], t_goal, m[0], m[1], m[2], m[3], m[4], m[5]];
         log.write(&row, &regs)
             .map_err(|e| CliError::new(format!("{}: {e}", a.out.display())))?;
         if status.hardware_fault() {
@@ -234,8 +253,9 @@ pub fn run(a: &ServoArgs) -> CliResult {
             regs = r;
         }
         let raw = goal_reg.from_si(g);
-        write_item(&mut client, model, a.id, Item::GoalPosition, raw)?;
-        goal = goal_reg.to_si(raw);
+        last_write = t0.elapsed().as_secs_f64() * a.realtime_factor;
+        // A lost reply: the next read tells whether the goal arrived.
+        let _ = write_item(&mut client, model, a.id, Item::GoalPosition, raw);
     }
     let rows = log.rows;
     log.finish()
