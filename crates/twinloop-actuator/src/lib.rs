@@ -23,6 +23,7 @@ pub mod lm;
 pub mod log;
 pub mod motor;
 pub mod params;
+pub mod params_file;
 pub mod replay;
 pub mod servo_type;
 pub mod synthetic;

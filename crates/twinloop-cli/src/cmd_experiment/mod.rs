@@ -190,8 +190,8 @@ pub enum ExperimentCommand {
     /// servo or Ctrl-C stops the run with the servo holding where it is (exit 2). On a
     /// serial port it asks first (--yes skips).
     ///
-    /// Example (a simulated bench):
-    ///   twinloop serve --bench RX-28 --load load.toml --link /tmp/bench &
+    /// Example (a simulated bench, `twinloop serve --bench RX-28 --load load.toml --link
+    /// /tmp/bench` running):
     ///   twinloop experiment servo --port /tmp/bench --id 1 --load load.toml --out rx28.csv
     ///
     /// Output: LOG.csv, its first line `# twinloop experiment servo: MODEL id N on PORT`,
