@@ -189,7 +189,7 @@ impl LogWriter {
         self.out.write_all(self.line.as_bytes())?;
         self.rows += 1;
         // Every 100 rows reach the disk: little cost, little lost if cut short.
-        if self.rows % 100 == 0 {
+        if self.rows.is_multiple_of(100) {
             self.out.flush()?;
         }
         Ok(())
