@@ -22,6 +22,7 @@ pub mod identify;
 pub mod lm;
 pub mod log;
 pub mod motor;
+pub mod mujoco;
 pub mod params;
 pub mod params_file;
 pub mod replay;

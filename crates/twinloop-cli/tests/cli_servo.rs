@@ -186,3 +186,70 @@ fn servo_parameters_recovered_over_a_pty() {
     let _ = std::fs::remove_dir_all(&dir);
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// `identify servo --defaults` writes the datasheet file; `model export
+/// --servo-params` turns it into URDF <dynamics> and an MJCF fragment whose numbers
+/// are the file's (damping = kt^2/R + viscous, frictionloss = Coulomb, forcerange =
+/// kt V/R); a bad file is exit 2 naming its field.
+#[test]
+fn defaults_and_export() {
+    let dir = std::env::temp_dir().join(format!("twinloop-servo-export-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let params = dir.join("xm.toml");
+    let ok = Command::new(bin())
+        .args(["identify", "servo", "--defaults", "XM430-W350", "--out"])
+        .arg(&params)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let p = ServoParams::read(&params).unwrap();
+    assert_eq!(p, defaults(ServoType::Xm430W350, ModelLevel::M1));
+    let (urdf, mjcf) = (dir.join("km20.urdf"), dir.join("servos.xml"));
+    let out = Command::new(bin())
+        .args(["model", "export", "builtin:km20", "--servo-params"])
+        .arg(&params)
+        .arg("--mjcf-actuators")
+        .arg(&mjcf)
+        .arg("--out")
+        .arg(&urdf)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let damping = p.kt() * p.kt() / p.resistance() + p.values[FRICTION_VISCOUS];
+    let text = std::fs::read_to_string(&urdf).unwrap();
+    let want = format!(
+        "<dynamics damping=\"{damping}\" friction=\"{}\"/>",
+        p.values[FRICTION_BASE]
+    );
+    assert_eq!(text.matches(&want).count(), 20, "{want}");
+    let frag = std::fs::read_to_string(&mjcf).unwrap();
+    let full = p.kt() / p.resistance() * p.voltage;
+    assert!(
+        frag.contains(&format!("forcerange=\"{:?} {full:?}\"", -full)),
+        "{frag}"
+    );
+    assert_eq!(frag.matches("<position name=").count(), 20);
+    std::fs::write(
+        &params,
+        "[servo]\nmodel = \"XM430-W350\"\n[params]\nresistance = 0\n",
+    )
+    .unwrap();
+    let out = Command::new(bin())
+        .args(["model", "export", "builtin:km20", "--servo-params"])
+        .arg(&params)
+        .arg("--out")
+        .arg(&urdf)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("xm.toml: [params] resistance: 0 must be > 0"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
