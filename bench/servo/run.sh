@@ -9,8 +9,8 @@ cd "$work"
 server=$!
 trap 'kill $server 2>/dev/null; rm -rf "$work"' EXIT
 sleep 1
-"$tw" experiment servo --port "$work/bus" --id 1 --load "$here/load.toml" --out log1.csv
-"$tw" experiment servo --port "$work/bus" --id 1 --load "$here/load.toml" --out log2.csv
+"$tw" experiment servo --port "$work/bus" --timeout-ms 50 --id 1 --load "$here/load.toml" --out log1.csv
+"$tw" experiment servo --port "$work/bus" --timeout-ms 50 --id 1 --load "$here/load.toml" --out log2.csv
 kill $server
 echo "twinloop:"
 taskset -c 0 "$tw" identify servo --data log1.csv log2.csv --load "$here/load.toml" --json - | grep -E '"(seconds|heldout_rms_mrad)"'

@@ -144,8 +144,15 @@ fn write_firmware(
             (Item::PositionDGain, 2),
         ],
     };
+    // A gain the log records must have arrived: a lost reply is tried again.
     for &(item, k) in items {
-        write_item(client, model, id, item, regs[k] as i32)?;
+        let mut tries = 0;
+        while let Err(e) = write_item(client, model, id, item, regs[k] as i32) {
+            tries += 1;
+            if tries >= 5 {
+                return Err(e);
+            }
+        }
     }
     Ok(())
 }
