@@ -53,7 +53,8 @@ def read_log(path):
     with open(path) as f:
         first = f.readline()
     servo = first.split(":", 1)[1].split()[0]
-    data = np.genfromtxt(path, delimiter=",", names=True, comments="#")
+    # The first line is the log's comment naming the servo; the header follows.
+    data = np.genfromtxt(path, delimiter=",", names=True, skip_header=1)
     return servo, data
 
 
