@@ -253,3 +253,51 @@ fn defaults_and_export() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Bad inputs are exit 2 naming the file and field, before any servo moves.
+#[test]
+fn bad_inputs_name_file_and_field() {
+    let dir = std::env::temp_dir().join(format!("twinloop-servo-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let load = dir.join("load.toml");
+    std::fs::write(
+        &load,
+        "mass = \"heavy\"\nlength = 0.1\narm_inertia = 0.001\n",
+    )
+    .unwrap();
+    let out = Command::new(bin())
+        .args([
+            "experiment",
+            "servo",
+            "--port",
+            "/nonexistent",
+            "--id",
+            "1",
+            "--load",
+        ])
+        .arg(&load)
+        .args(["--out", "/dev/null"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("load.toml: mass: must be a number"), "{err}");
+    std::fs::write(&load, "mass = 0.5\nlength = 0.1\narm_inertia = 0.001\n").unwrap();
+    let log = dir.join("log.csv");
+    std::fs::write(
+        &log,
+        "# twinloop experiment servo: RX-28 id 1\nt,goal,q\n0,0,0\n",
+    )
+    .unwrap();
+    let out = Command::new(bin())
+        .args(["identify", "servo", "--data"])
+        .arg(&log)
+        .arg("--load")
+        .arg(&load)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("log.csv: column \"v\": missing"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
