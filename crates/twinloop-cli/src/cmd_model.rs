@@ -2,7 +2,7 @@
 //! ones, write one as URDF.
 
 use crate::common::{self, JSON_HELP, emit, num};
-use crate::error::{CliResult, Outcome};
+use crate::error::{CliError, CliResult, Outcome};
 use clap::{Args, Subcommand};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -97,7 +97,9 @@ built-in robot gets links with the inertials of their primitive parts, one visua
 collision soles, joint limits with the servos' stall torque as effort and no-load speed as \
 velocity. The file reads back into an identical robot.",
         after_long_help = "Example:\n  twinloop model export builtin:km20 --out km20.urdf\n  \
-twinloop model info km20.urdf\n\n\
+twinloop model info km20.urdf\n  \
+twinloop identify servo --defaults RX-28 --out rx28.toml\n  \
+twinloop model export builtin:km20 --servo-params rx28.toml --mjcf-actuators km20-servos.xml --out km20.urdf\n\n\
 ROBOT is builtin:NAME (see `twinloop model list`) or a URDF or MJCF file.\n\n\
 Output: one line saying what was written, with the robot's DoF and mass.\n\n\
 Exit code 0, or 2 for an unknown robot, an unreadable description or a file that cannot be\n\
@@ -148,6 +150,15 @@ pub struct ExportArgs {
     /// The URDF file to write
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+    /// Servo parameters (`identify servo --out`) for every moving joint: each joint's
+    /// <dynamics damping friction> becomes the servo's back-EMF + viscous damping and
+    /// Coulomb friction (docs/servo-models.md)
+    #[arg(long, value_name = "FILE.toml")]
+    pub servo_params: Option<PathBuf>,
+    /// With --servo-params: also write an MJCF fragment (armature, damping,
+    /// frictionloss, one <position> actuator per moving joint with kp and forcerange)
+    #[arg(long, value_name = "FILE.xml", requires = "servo_params")]
+    pub mjcf_actuators: Option<PathBuf>,
 }
 
 pub fn run(cmd: ModelCommand) -> CliResult {
@@ -665,7 +676,10 @@ fn list(args: &ListArgs) -> CliResult {
 }
 
 fn export(args: &ExportArgs) -> CliResult {
-    let (robot, _) = common::load_description(&args.robot)?;
+    let (mut robot, _) = common::load_description(&args.robot)?;
+    if let Some(path) = &args.servo_params {
+        export_servos(&mut robot, path, args.mjcf_actuators.as_deref())?;
+    }
     twinloop_description::urdf::write_file(&robot, &args.out)?;
     common::print(&format!(
         "wrote {} ({} DoF, {} kg, {} links) to {}\n",
@@ -676,4 +690,31 @@ fn export(args: &ExportArgs) -> CliResult {
         args.out.display()
     ));
     Ok(Outcome::Ok)
+}
+
+/// `model export --servo-params`: the servo's MuJoCo terms on every moving joint
+/// (URDF <dynamics>), and with `mjcf` the MJCF fragment.
+fn export_servos(
+    robot: &mut twinloop_description::Description,
+    path: &std::path::Path,
+    mjcf: Option<&std::path::Path>,
+) -> Result<(), CliError> {
+    let params = twinloop_actuator::ServoParams::read(path)?;
+    let m = twinloop_actuator::mujoco::mujoco_servo(&params, params.servo.factory_firmware(), 1.0);
+    let mut joints = Vec::new();
+    for j in &mut robot.joints {
+        if matches!(j.kind, JointKind::Revolute | JointKind::Continuous) && j.mimic.is_none() {
+            j.dynamics = Some(twinloop_description::JointDynamics {
+                damping: Some(m.damping),
+                friction: Some(m.frictionloss),
+            });
+            j.armature = m.armature;
+            joints.push(j.name.clone());
+        }
+    }
+    if let Some(out) = mjcf {
+        let text = twinloop_actuator::mujoco::mjcf_fragment(&joints, params.servo.name(), &m);
+        std::fs::write(out, text).map_err(|e| CliError::io(out, e))?;
+    }
+    Ok(())
 }

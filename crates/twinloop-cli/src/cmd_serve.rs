@@ -74,6 +74,19 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     /// Simulated robot only (not --servo-model ideal).
     #[command(flatten)]
     pub view: crate::cmd_view::LiveViewArgs,
+    /// Serve one servo of this type (id 1: RX-28, RX-64, MX-64(2.0), XM430-W350)
+    /// swinging the pendulum of --load, moved by its servo model (docs/servo-models.md),
+    /// instead of a robot: the bench of `experiment servo`
+    #[arg(long, value_name = "MODEL", requires = "load")]
+    pub bench: Option<String>,
+    /// The bench's pendulum: a TOML file with mass (kg), length (m, axis to the mass)
+    /// and arm_inertia (kg m^2, the arm alone about the axis)
+    #[arg(long, value_name = "LOAD.toml")]
+    pub load: Option<PathBuf>,
+    /// The bench servo's parameters (`identify servo --out` or `--defaults`; default:
+    /// the datasheet's)
+    #[arg(long, value_name = "FILE.toml", requires = "bench")]
+    pub servo_params: Option<PathBuf>,
 }
 
 /// The mapping: --map, or the built-in robot's own.
@@ -127,6 +140,9 @@ fn serve_description(
 
 /// `twinloop serve`.
 pub fn run(a: ServeArgs) -> CliResult {
+    if let Some(model) = &a.bench {
+        return serve_bench(&a, model);
+    }
     let mapping = serve_mapping(&a)?;
     let robot = serve_description(&a, &mapping)?;
     // The joints' servos, then the mapping's boards (the CM-730 of the trunk IMU).
@@ -225,6 +241,49 @@ fn serve_watched<B: twinloop_link::VirtualServoBackend>(
         code
     })
     .inspect(|_| eprintln!("{}", live.summary()))
+}
+
+/// Serve one servo on the pendulum bench (id 1).
+fn serve_bench(a: &ServeArgs, model: &str) -> CliResult {
+    use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType, datasheet};
+    let servo = ServoType::parse(model).ok_or_else(|| {
+        CliError::new(format!(
+            "--bench {model:?}: no servo model for it (known: {})",
+            ServoType::known_names()
+        ))
+    })?;
+    let load = Pendulum::read(a.load.as_deref().expect("clap requires --load"))?;
+    let params = match &a.servo_params {
+        Some(path) => ServoParams::read(path)?,
+        None => datasheet::defaults(servo, ModelLevel::M1),
+    };
+    if params.servo != servo {
+        return Err(CliError::new(format!(
+            "--servo-params {}: parameters of {}, but --bench is {servo}",
+            a.servo_params
+                .as_deref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default(),
+            params.servo
+        )));
+    }
+    let mut backend = twinloop_virtual::BenchBackend::new(params, load, a.realtime_factor)
+        .ok_or_else(|| CliError::new(format!("--bench {servo}: no control table for it")))?;
+    let text = format!(
+        "[robot]\nname = \"bench\"\n[[joint]]\nname = \"pendulum\"\nid = 1\nmodel = \"{}\"\n",
+        backend.model()
+    );
+    let mapping = RobotMapping::parse(&text, "bench")?;
+    let servos = mapping.bus();
+    let condition = std::sync::Arc::new(std::sync::atomic::AtomicU8::new(0));
+    backend.condition = Some(condition.clone());
+    let mut bus = VirtualBus::new(&servos, backend);
+    bus.servos[0].condition = condition;
+    let what = format!(
+        "the servo model of docs/servo-models.md swinging a {} kg pendulum at {} m (real time x{})",
+        load.mass, load.length, a.realtime_factor
+    );
+    serve_on(a, &mapping, &servos, bus, &what)
 }
 
 fn serve_on<B: twinloop_link::VirtualServoBackend>(

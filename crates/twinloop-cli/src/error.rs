@@ -136,6 +136,7 @@ from_library_error!(
     twinloop_link::MappingError,
     twinloop_link::control_cycle::CycleError,
     serde_json::Error,
+    twinloop_actuator::ActuatorError,
 );
 
 /// The identification library names an option by its field in the options struct

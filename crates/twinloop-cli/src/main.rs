@@ -154,12 +154,15 @@ enum Command {
     /// wire time at --baud plus each servo's Return Delay Time are emulated. With a
     /// robot description (builtin:km20) the servos are the physics simulation of the
     /// robot standing on the ground, in real time; --servo-model ideal puts a stand-in
-    /// (each servo tracks its goal, 50 ms lag) for protocol-only work.
+    /// (each servo tracks its goal, 50 ms lag) for protocol-only work. --bench MODEL
+    /// --load LOAD.toml serves one servo (id 1) swinging a pendulum instead, moved by
+    /// the servo model of docs/servo-models.md (--servo-params FILE: its parameters).
     ///
     /// Example:
     ///   twinloop serve --robot builtin:km20 --link /tmp/km20
     ///   twinloop link scan --port /tmp/km20
     ///   twinloop serve --map builtin:op3 --port tcp:127.0.0.1:5555 --no-timing
+    ///   twinloop serve --bench XM430-W350 --load load.toml --link /tmp/bench
     ///
     /// Output: the first line on stdout is the device path (or tcp:ADDR) to hand to
     /// clients (`twinloop link`, the ROBOTIS SDK, Dynamixel Wizard via a pty bridge);

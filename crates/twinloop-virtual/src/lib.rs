@@ -24,6 +24,7 @@
 //! its time step, the simulator falls behind and says so ([`SimStatus::behind_s`]).
 
 mod backend;
+mod bench_backend;
 mod drive;
 mod pty_server;
 mod runner;
@@ -31,6 +32,7 @@ mod shared;
 mod virtual_robot;
 
 pub use backend::SimServoBackend;
+pub use bench_backend::{BenchBackend, link_model, servo_type};
 pub use drive::{DriveRegisters, servo_with_registers};
 pub use pty_server::PtyServer;
 pub use runner::{CATCH_DEG, SimStatus};

@@ -5,6 +5,7 @@
 mod bus;
 mod compliant_walk;
 mod lean;
+mod servo;
 mod squat;
 mod static_poses;
 mod tipover;
@@ -174,6 +175,34 @@ pub enum ExperimentCommand {
     /// --json writes it. Exit code 1 if the robot falls.
     #[command(verbatim_doc_comment)]
     CompliantWalk(compliant_walk::CompliantWalkArgs),
+    /// One servo swinging a pendulum through steps, a chirp, sinusoids at three gains and a slow back-and-forth
+    ///
+    /// The bench of docs/servo-models.md (after Rhoban's BAM): a mass on an arm on the
+    /// servo's horn, hanging at 0, free to swing to the horizontal both ways. The servo
+    /// (--id, found on either protocol; RX-28, RX-64, MX-64(2.0), XM430-W350) goes
+    /// through about 31 s: steps of 0.15, 0.4 and 0.8 rad, a 0.3-3 Hz chirp, 0.8 Hz
+    /// sinusoids at half, the factory and twice the factory loop stiffness (RX
+    /// compliance slope, MX/X P gain), and a slow triangle through zero load, all
+    /// scaled by --amplitude. Each cycle writes the goal and reads position, speed,
+    /// load or current, voltage and temperature in one READ, as fast as the bus
+    /// answers. A pendulum heavier than 60 % of the stall torque at the horizontal is
+    /// refused; a hardware fault (overload, overheating, voltage), 75 C, a silent
+    /// servo or Ctrl-C stops the run with the servo holding where it is (exit 2). On a
+    /// serial port it asks first (--yes skips).
+    ///
+    /// Example (a simulated bench, `twinloop serve --bench RX-28 --load load.toml --link
+    /// /tmp/bench` running):
+    ///   twinloop experiment servo --port /tmp/bench --id 1 --load load.toml --out rx28.csv
+    ///
+    /// Output: LOG.csv, its first line `# twinloop experiment servo: MODEL id N on PORT`,
+    /// then `t` (s, the read sent), `goal` (rad), `t_goal` (s, when that goal was sent),
+    /// `q` (rad), `v`
+    /// (rad/s), `load` (fraction of full, RX; NaN otherwise), `current` (A, MX(2.0)
+    /// and X; NaN otherwise), `voltage` (V), `temperature` (C), and the loop's three
+    /// registers (`compliance_slope compliance_margin punch` or `p_gain i_gain
+    /// d_gain`, raw): the input of `twinloop identify servo`.
+    #[command(verbatim_doc_comment)]
+    Servo(servo::ServoArgs),
 }
 
 pub fn run(cmd: ExperimentCommand) -> CliResult {
@@ -184,6 +213,7 @@ pub fn run(cmd: ExperimentCommand) -> CliResult {
         ExperimentCommand::Squat(a) => squat::run(&a),
         ExperimentCommand::Walk(a) => walk::run(&a),
         ExperimentCommand::CompliantWalk(a) => compliant_walk::run(&a),
+        ExperimentCommand::Servo(a) => servo::run(&a),
     }
 }
 

@@ -5,6 +5,7 @@
 #[macro_use]
 mod sysid;
 mod compliant;
+mod servo;
 mod static_ident;
 mod walk;
 
@@ -138,6 +139,31 @@ method. The prediction error never ends above the initial model's. The model is 
     /// their `fit_percent`, Hankel singular values and residual tests.
     #[command(verbatim_doc_comment)]
     Walk(walk::WalkIdArgs),
+    /// A servo model fitted to `experiment servo` logs: parameters, uncertainties, held-out error
+    ///
+    /// Runs the model of docs/servo-models.md (firmware loop, DC motor, friction rung
+    /// --model) against each log's goals and loop registers from its first measured
+    /// state, and fits the parameters by Levenberg-Marquardt over their logarithms
+    /// (central-difference Jacobian) to the logged positions, and currents where the
+    /// servo senses them (MX(2.0), X). Positions alone (RX) determine the motor only
+    /// through kt/resistance and kt^2/resistance + friction_viscous: friction_viscous
+    /// is held at 0 and both combinations are reported. --defaults MODEL --out FILE
+    /// writes the datasheet parameters instead.
+    ///
+    /// Example:
+    ///   twinloop identify servo --data rx28.csv --load load.toml --model m1 --out rx28.toml --json -
+    ///   twinloop identify servo --defaults XM430-W350 --out xm430.toml
+    ///
+    /// Output: --out the parameter file ([servo], [params], [uncertainty]); stdout each
+    /// parameter with one standard deviation, the fitted and held-out position error
+    /// (mrad RMS and mean absolute), the condition number and what the logs do not
+    /// determine; --json the same with fields servo, model, voltage, params
+    /// {NAME: {value, sd}}, fitted, correlation (matrix in `fitted` order),
+    /// combinations, fit_rms_mrad, heldout_rms_mrad, heldout_mae_mrad, heldout_rows,
+    /// singular_values, condition, undetermined, weakest_direction, iterations,
+    /// evaluations, seconds.
+    #[command(verbatim_doc_comment)]
+    Servo(servo::ServoIdArgs),
 }
 
 pub fn run(cmd: IdentifyCommand) -> CliResult {
@@ -147,5 +173,6 @@ pub fn run(cmd: IdentifyCommand) -> CliResult {
         IdentifyCommand::Ss(a) => sysid::ss(&a),
         IdentifyCommand::Compliant(a) => compliant::run(&a),
         IdentifyCommand::Walk(a) => walk::run(&a),
+        IdentifyCommand::Servo(a) => servo::run(&a),
     }
 }

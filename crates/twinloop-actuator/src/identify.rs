@@ -1,0 +1,377 @@
+//! Identification of one servo's parameters from logs on a known load: the model's
+//! positions (and currents, where the servo senses them) against the logged ones,
+//! by Levenberg-Marquardt over the logarithms of the parameters (they are positive,
+//! and their scales span five decades). Reports one standard deviation and the
+//! correlations from the Jacobian at the optimum, the held-out error in mrad, and
+//! what the data cannot determine (the Jacobian's weak directions).
+
+use crate::bench::Pendulum;
+use crate::error::ActuatorError;
+use crate::lm::{LmOptions, levenberg_marquardt};
+use crate::log::ServoLog;
+use crate::params::{FRICTION_VISCOUS, KT, PARAM_NAMES, RESISTANCE, ServoParams};
+use crate::replay::replay;
+use nalgebra::DMatrix;
+use std::ops::Range;
+
+/// Weight of a current residual: one standard deviation, A. Timing (when the servo
+/// samples its current against when the model does) dominates the register's
+/// quantisation (2.69-3.36 mA).
+pub const CURRENT_SD: f64 = 0.02;
+
+/// A parameter is reported as not determined when its standard deviation exceeds
+/// this fraction of its value.
+pub const UNDETERMINED_RELATIVE_SD: f64 = 0.25;
+
+#[derive(Debug, Clone)]
+pub struct Identification {
+    /// The fitted parameters with their standard deviations in `uncertainty`.
+    pub params: ServoParams,
+    /// Indices (into [`PARAM_NAMES`]) of the fitted parameters, in the order of
+    /// `correlation`.
+    pub fitted: Vec<usize>,
+    pub correlation: Vec<Vec<f64>>,
+    /// RMS of the fitted position residuals, mrad.
+    pub fit_rms_mrad: f64,
+    /// Held-out RMS and mean absolute position error, mrad, and its rows.
+    pub heldout_rms_mrad: f64,
+    pub heldout_mae_mrad: f64,
+    pub heldout_rows: usize,
+    /// Singular values of the Jacobian with respect to the log-parameters, largest
+    /// first, and their ratio (condition number).
+    pub singular_values: Vec<f64>,
+    pub condition: f64,
+    /// Parameters whose relative standard deviation exceeds
+    /// [`UNDETERMINED_RELATIVE_SD`].
+    pub undetermined: Vec<&'static str>,
+    /// The weakest direction in log-parameter space, as (name, weight) pairs.
+    pub weakest_direction: Vec<(&'static str, f64)>,
+    /// What the data determines where single parameters are not: (name, value,
+    /// standard deviation). Position logs of a servo that senses no current (RX)
+    /// determine the motor only through `kt/resistance` (N m/V: drive per volt) and
+    /// `kt^2/resistance + friction_viscous` (N m s/rad: all damping), so
+    /// `friction_viscous` is held at 0 (the back-EMF takes all the damping) and both
+    /// combinations are reported here.
+    pub combinations: Vec<(&'static str, f64, f64)>,
+    pub iterations: usize,
+    pub evaluations: usize,
+}
+
+/// Which rows of which log.
+#[derive(Debug, Clone)]
+struct Segment {
+    log: usize,
+    rows: Range<usize>,
+    /// Whether current residuals are used.
+    current: bool,
+}
+
+/// Fit `start`'s rung to the first `1 - holdout_fraction` of each of `logs` (all of
+/// them if `holdout` is not empty), held-out error on the rest and on `holdout`.
+pub fn identify(
+    logs: &[ServoLog],
+    holdout: &[ServoLog],
+    load: &Pendulum,
+    start: &ServoParams,
+    holdout_fraction: f64,
+) -> Result<Identification, ActuatorError> {
+    if logs.is_empty() {
+        return Err(ActuatorError::new("", "--data", "no log to fit"));
+    }
+    for l in logs.iter().chain(holdout) {
+        if l.servo != Some(start.servo) {
+            return Err(ActuatorError::new(
+                &l.file,
+                "line 1",
+                format!(
+                    "a log of {:?}, but the model is of {}",
+                    l.servo.map(|s| s.name()),
+                    start.servo
+                ),
+            ));
+        }
+    }
+    let mut fit_segments = Vec::new();
+    let mut held = Vec::new();
+    for (k, l) in logs.iter().enumerate() {
+        let split = if holdout.is_empty() {
+            ((l.len() as f64) * (1.0 - holdout_fraction)).round() as usize
+        } else {
+            l.len()
+        };
+        let split = split.clamp(2, l.len());
+        let current = l.current.is_some();
+        fit_segments.push(Segment {
+            log: k,
+            rows: 0..split,
+            current,
+        });
+        if split + 2 < l.len() {
+            held.push((l, split - 1..l.len()));
+        }
+    }
+    for l in holdout {
+        held.push((l, 0..l.len()));
+    }
+    let mut params = start.clone();
+    params.uncertainty = None;
+    let n_volt: usize = logs.iter().map(|l| l.voltage.len()).sum();
+    params.voltage = logs.iter().flat_map(|l| &l.voltage).sum::<f64>() / n_volt as f64;
+    let mut fitted = params.level.parameters();
+    let senses_current = logs.iter().all(|l| l.current.is_some());
+    if !senses_current {
+        // Viscous friction and back-EMF damping are one term to the position: the
+        // back-EMF (kt^2/R) takes it all, which any damping >= 0 allows.
+        fitted.retain(|&i| i != FRICTION_VISCOUS);
+        params.values[FRICTION_VISCOUS] = 0.0;
+    }
+    let x0: Vec<f64> = fitted
+        .iter()
+        .map(|&i| params.values[i].max(1e-6).ln())
+        .collect();
+    let sd_q = start.servo.resolution() / 12f64.sqrt();
+    let m: usize = fit_segments
+        .iter()
+        .map(|s| s.rows.len() * if s.current { 2 } else { 1 })
+        .sum();
+    let longest = logs
+        .iter()
+        .chain(holdout)
+        .map(ServoLog::len)
+        .max()
+        .unwrap_or(0);
+    let (mut qb, mut cb) = (vec![0.0; longest], vec![0.0; longest]);
+    let mut trial = params.clone();
+    let result = levenberg_marquardt(
+        &x0,
+        m,
+        |x, out| {
+            for (k, &i) in fitted.iter().enumerate() {
+                trial.values[i] = x[k].exp();
+            }
+            let mut o = 0;
+            for s in &fit_segments {
+                let l = &logs[s.log];
+                let n = s.rows.len();
+                replay(&trial, load, l, s.rows.clone(), &mut qb[..n], &mut cb[..n]);
+                for (j, r) in s.rows.clone().enumerate() {
+                    out[o] = (qb[j] - l.q[r]) / sd_q;
+                    o += 1;
+                }
+                if let (true, Some(c)) = (s.current, &l.current) {
+                    for (j, r) in s.rows.clone().enumerate() {
+                        // The first row has no model current yet.
+                        out[o] = if j == 0 {
+                            0.0
+                        } else {
+                            (cb[j] - c[r]) / CURRENT_SD
+                        };
+                        o += 1;
+                    }
+                }
+            }
+        },
+        &LmOptions::default(),
+    );
+    for (k, &i) in fitted.iter().enumerate() {
+        params.values[i] = result.x[k].exp();
+    }
+    // Position residual RMS, mrad.
+    let (mut sq, mut count, mut o) = (0.0, 0usize, 0usize);
+    for s in &fit_segments {
+        for _ in s.rows.clone() {
+            let e = result.residuals[o] * sd_q;
+            sq += e * e;
+            count += 1;
+            o += 1;
+        }
+        if s.current {
+            o += s.rows.len();
+        }
+    }
+    let fit_rms_mrad = 1e3 * (sq / count.max(1) as f64).sqrt();
+    let (heldout_rms_mrad, heldout_mae_mrad, heldout_rows) =
+        heldout_error(&params, load, &held, &mut qb, &mut cb);
+    let stats = uncertainty(&result.jacobian, &result.residuals, &result.x, fitted.len());
+    let mut sd = [0.0; 8];
+    let mut undetermined = Vec::new();
+    if !senses_current {
+        undetermined.extend(["kt", "resistance", "friction_viscous"]);
+    }
+    for (k, &i) in fitted.iter().enumerate() {
+        // d p = p d(ln p).
+        sd[i] = params.values[i] * stats.sd_log[k];
+        if stats.sd_log[k] > UNDETERMINED_RELATIVE_SD && !undetermined.contains(&PARAM_NAMES[i]) {
+            undetermined.push(PARAM_NAMES[i]);
+        }
+    }
+    params.uncertainty = Some(sd);
+    let weakest_direction = fitted
+        .iter()
+        .zip(&stats.weakest)
+        .filter(|(_, w)| w.abs() > 0.1)
+        .map(|(&i, &w)| (PARAM_NAMES[i], w))
+        .collect();
+    let combinations = motor_combinations(&params, &fitted, &stats.covariance);
+    Ok(Identification {
+        combinations,
+        params,
+        fitted,
+        correlation: stats.correlation,
+        fit_rms_mrad,
+        heldout_rms_mrad,
+        heldout_mae_mrad,
+        heldout_rows,
+        condition: stats.singular_values[0]
+            / stats
+                .singular_values
+                .last()
+                .copied()
+                .unwrap_or(0.0)
+                .max(1e-300),
+        singular_values: stats.singular_values,
+        undetermined,
+        weakest_direction,
+        iterations: result.iterations,
+        evaluations: result.evaluations,
+    })
+}
+
+/// Held-out RMS and MAE of the position, mrad, and the rows compared.
+fn heldout_error(
+    params: &ServoParams,
+    load: &Pendulum,
+    held: &[(&ServoLog, Range<usize>)],
+    qb: &mut [f64],
+    cb: &mut [f64],
+) -> (f64, f64, usize) {
+    let (mut sq, mut abs, mut n) = (0.0, 0.0, 0usize);
+    for (l, rows) in held {
+        let len = rows.len();
+        replay(
+            params,
+            load,
+            l,
+            rows.clone(),
+            &mut qb[..len],
+            &mut cb[..len],
+        );
+        for (j, r) in rows.clone().enumerate().skip(1) {
+            let e = qb[j] - l.q[r];
+            sq += e * e;
+            abs += e.abs();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return (f64::NAN, f64::NAN, 0);
+    }
+    (1e3 * (sq / n as f64).sqrt(), 1e3 * abs / n as f64, n)
+}
+
+/// `kt/resistance` and `kt^2/resistance + friction_viscous` with their standard
+/// deviations (first-order propagation of the log-parameter covariance).
+fn motor_combinations(
+    p: &ServoParams,
+    fitted: &[usize],
+    cov: &DMatrix<f64>,
+) -> Vec<(&'static str, f64, f64)> {
+    let (kt, r, b) = (
+        p.values[KT],
+        p.values[RESISTANCE],
+        p.values[FRICTION_VISCOUS],
+    );
+    let drive = kt / r;
+    let damping = kt * kt / r + b;
+    // Derivatives with respect to ln(parameter).
+    let grad = |d_kt: f64, d_r: f64, d_b: f64| -> Vec<f64> {
+        fitted
+            .iter()
+            .map(|&i| match i {
+                KT => d_kt,
+                RESISTANCE => d_r,
+                FRICTION_VISCOUS => d_b,
+                _ => 0.0,
+            })
+            .collect()
+    };
+    let sd = |g: Vec<f64>| {
+        let mut v = 0.0;
+        for a in 0..g.len() {
+            for c in 0..g.len() {
+                if g[a] != 0.0 && g[c] != 0.0 {
+                    v += g[a] * cov[(a, c)] * g[c];
+                }
+            }
+        }
+        v.max(0.0).sqrt()
+    };
+    vec![
+        ("kt/resistance", drive, sd(grad(drive, -drive, 0.0))),
+        (
+            "kt^2/resistance + friction_viscous",
+            damping,
+            sd(grad(2.0 * kt * kt / r, -kt * kt / r, b)),
+        ),
+    ]
+}
+
+struct Stats {
+    covariance: DMatrix<f64>,
+    sd_log: Vec<f64>,
+    correlation: Vec<Vec<f64>>,
+    singular_values: Vec<f64>,
+    weakest: Vec<f64>,
+}
+
+/// Covariance of the log-parameters `s^2 (J^T J)^-1` (s^2 the residual variance),
+/// through the SVD of J so a rank-deficient J gives infinite deviations along its
+/// null directions instead of a failed inverse.
+fn uncertainty(j: &DMatrix<f64>, r: &nalgebra::DVector<f64>, _x: &[f64], n: usize) -> Stats {
+    let m = j.nrows();
+    let s2 = r.norm_squared() / (m.saturating_sub(n)).max(1) as f64;
+    let svd = j.clone().svd(false, true);
+    let vt = svd.v_t.expect("asked for V^T");
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
+    let singular_values: Vec<f64> = order.iter().map(|&k| svd.singular_values[k]).collect();
+    let smax = singular_values[0].max(1e-300);
+    let mut cov = DMatrix::zeros(n, n);
+    for k in 0..n {
+        let s = svd.singular_values[k];
+        let inv = if s > 1e-10 * smax {
+            1.0 / (s * s)
+        } else {
+            f64::INFINITY
+        };
+        for a in 0..n {
+            for b in 0..n {
+                let w = vt[(k, a)] * vt[(k, b)];
+                if w != 0.0 {
+                    cov[(a, b)] += w * inv;
+                }
+            }
+        }
+    }
+    cov *= s2;
+    let sd_log: Vec<f64> = (0..n).map(|a| cov[(a, a)].max(0.0).sqrt()).collect();
+    let correlation = (0..n)
+        .map(|a| {
+            (0..n)
+                .map(|b| {
+                    let c = cov[(a, b)] / (sd_log[a] * sd_log[b]);
+                    if c.is_finite() { c } else { f64::NAN }
+                })
+                .collect()
+        })
+        .collect();
+    let weakest_k = *order.last().expect("n >= 1");
+    let weakest = (0..n).map(|a| vt[(weakest_k, a)]).collect();
+    Stats {
+        covariance: cov,
+        sd_log,
+        correlation,
+        singular_values,
+        weakest,
+    }
+}

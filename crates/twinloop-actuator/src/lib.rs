@@ -1,0 +1,37 @@
+//! twinloop-actuator: Dynamixel servo models as documented equation sets
+//! ([docs/servo-models.md](../../docs/servo-models.md)), with no dynamics of a robot.
+//!
+//! - [`servo_type`]: the servo types and their e-manual facts (encoder, PWM range,
+//!   factory gains), [`datasheet`]: their default parameters;
+//! - [`params`]: the parameter file (`[servo]`, `[params]`, `[uncertainty]`);
+//! - [`firmware`]: the position loop as the servo runs it (RX compliance, MX/X PID);
+//! - [`motor`]: the DC motor behind the gearbox; [`friction`]: the gearbox's friction
+//!   budget (Coulomb, viscous, Stribeck, load-dependent);
+//! - [`bench`]: a servo swinging a pendulum (BAM's bench), stepped in fixed time steps;
+//! - [`log`]: an `experiment servo` log as columns; [`replay`]: the model run against a
+//!   log's commands; [`lm`]: Levenberg-Marquardt; [`identify`]: the fit, its
+//!   uncertainties and what the data cannot determine.
+
+pub mod bench;
+pub mod datasheet;
+pub mod error;
+pub mod excitation;
+pub mod firmware;
+pub mod friction;
+pub mod identify;
+pub mod lm;
+pub mod log;
+pub mod motor;
+pub mod mujoco;
+pub mod params;
+pub mod params_file;
+pub mod replay;
+pub mod servo_type;
+pub mod synthetic;
+
+pub use bench::{Bench, Pendulum};
+pub use error::ActuatorError;
+pub use excitation::Excitation;
+pub use firmware::Firmware;
+pub use params::{ModelLevel, ServoParams};
+pub use servo_type::{LoopFamily, ServoType};

@@ -1,0 +1,201 @@
+//! An `experiment servo` log: CSV with a first comment line naming the servo
+//! (`# twinloop experiment servo: RX-28 id 1`), then the columns
+//!
+//! | column | meaning |
+//! |---|---|
+//! | `t` | s since the start, when the row's read was sent |
+//! | `goal` | Goal Position, rad, written at `t_goal` |
+//! | `t_goal` | s, when the row's goal (and registers) were sent: after the previous row's read |
+//! | `q`, `v` | Present Position (rad) and Present Speed/Velocity (rad/s) |
+//! | `load` | Present Load as a fraction of full (RX), NaN where the servo has none |
+//! | `current` | Present Current, A (MX(2.0), X), NaN where the servo has none |
+//! | `voltage`, `temperature` | Present Voltage (V) and Temperature (C) |
+//! | three firmware registers | `compliance_slope`, `compliance_margin`, `punch` (RX) or `p_gain`, `i_gain`, `d_gain` (MX(2.0), X), raw |
+
+use crate::error::ActuatorError;
+use crate::servo_type::ServoType;
+use std::fmt::Write as _;
+use std::io::Write;
+use std::path::Path;
+use twinloop_io::Table;
+
+/// The comment the first line of a log starts with.
+pub const LOG_PREFIX: &str = "# twinloop experiment servo:";
+
+/// The columns before the firmware registers.
+pub const LOG_COLUMNS: [&str; 9] = [
+    "t",
+    "goal",
+    "t_goal",
+    "q",
+    "v",
+    "load",
+    "current",
+    "voltage",
+    "temperature",
+];
+
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ServoLog {
+    pub file: String,
+    pub servo: Option<ServoType>,
+    pub t: Vec<f64>,
+    pub goal: Vec<f64>,
+    /// When each row's goal was sent (the previous row's time where the log has no
+    /// `t_goal` column).
+    pub t_goal: Vec<f64>,
+    pub q: Vec<f64>,
+    pub v: Vec<f64>,
+    /// A per row where the servo senses current.
+    pub current: Option<Vec<f64>>,
+    pub voltage: Vec<f64>,
+    pub firmware: Vec<[f64; 3]>,
+}
+
+impl ServoLog {
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// Read a log; `servo` overrides (or supplies) the type its first line names.
+    pub fn read(path: &Path, servo: Option<ServoType>) -> Result<ServoLog, ActuatorError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| ActuatorError::new(&file, "", format!("cannot read: {e}")))?;
+        let named = text
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix(LOG_PREFIX))
+            .and_then(|rest| rest.split_whitespace().next())
+            .and_then(ServoType::parse);
+        let servo = servo.or(named).ok_or_else(|| {
+            ActuatorError::new(
+                &file,
+                "line 1",
+                format!("no servo named (expected \"{LOG_PREFIX} MODEL ...\"); give --servo MODEL"),
+            )
+        })?;
+        let table =
+            Table::parse(&text).map_err(|e| ActuatorError::new(&file, "", e.to_string()))?;
+        let col = |name: &str| -> Result<usize, ActuatorError> {
+            table
+                .column_index(name)
+                .ok_or_else(|| ActuatorError::new(&file, format!("column \"{name}\""), "missing"))
+        };
+        let fw = servo.firmware_columns();
+        let idx: Vec<usize> = ["t", "goal", "q", "v", "voltage", fw[0], fw[1], fw[2]]
+            .iter()
+            .map(|c| col(c))
+            .collect::<Result<_, _>>()?;
+        let t_goal_col = table.column_index("t_goal");
+        if let Some(c) = t_goal_col {
+            table
+                .check_finite(&[c])
+                .map_err(|e| ActuatorError::new(&file, "", e.to_string()))?;
+        }
+        let io = |e: twinloop_io::IoError| ActuatorError::new(&file, "", e.to_string());
+        table.check_finite(&idx).map_err(io)?;
+        let current_col = match servo.current_unit() {
+            Some(_) => {
+                let c = col("current")?;
+                table.check_finite(&[c]).map_err(io)?;
+                Some(c)
+            }
+            None => None,
+        };
+        if table.rows.len() < 10 {
+            return Err(ActuatorError::new(
+                &file,
+                "",
+                format!("{} data rows: too few to fit", table.rows.len()),
+            ));
+        }
+        let mut log = ServoLog {
+            file: file.clone(),
+            servo: Some(servo),
+            current: current_col.map(|_| Vec::new()),
+            ..Default::default()
+        };
+        for (r, row) in table.rows.iter().enumerate() {
+            if r > 0 && row[idx[0]] <= log.t[r - 1] {
+                return Err(ActuatorError::new(
+                    &file,
+                    format!("data row {}, column \"t\"", r + 1),
+                    format!(
+                        "time {} does not increase (previous {})",
+                        row[idx[0]],
+                        log.t[r - 1]
+                    ),
+                ));
+            }
+            let previous = log.t.last().copied().unwrap_or(row[idx[0]]);
+            log.t_goal.push(t_goal_col.map_or(previous, |c| row[c]));
+            log.t.push(row[idx[0]]);
+            log.goal.push(row[idx[1]]);
+            log.q.push(row[idx[2]]);
+            log.v.push(row[idx[3]]);
+            log.voltage.push(row[idx[4]]);
+            log.firmware.push([row[idx[5]], row[idx[6]], row[idx[7]]]);
+            if let (Some(c), Some(cur)) = (current_col, log.current.as_mut()) {
+                cur.push(row[c]);
+            }
+        }
+        Ok(log)
+    }
+}
+
+/// Writes a log row by row, flushed as it goes (a run cut short keeps its rows).
+pub struct LogWriter {
+    out: std::io::BufWriter<std::fs::File>,
+    line: String,
+    pub rows: usize,
+}
+
+impl LogWriter {
+    pub fn create(path: &Path, servo: ServoType, what: &str) -> std::io::Result<LogWriter> {
+        let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+        writeln!(out, "{LOG_PREFIX} {} {what}", servo.name())?;
+        let fw = servo.firmware_columns();
+        writeln!(
+            out,
+            "{},{},{},{}",
+            LOG_COLUMNS.join(","),
+            fw[0],
+            fw[1],
+            fw[2]
+        )?;
+        Ok(LogWriter {
+            out,
+            line: String::with_capacity(256),
+            rows: 0,
+        })
+    }
+
+    /// One row: the [`LOG_COLUMNS`] values then the three firmware registers.
+    pub fn write(&mut self, values: &[f64; 9], firmware: &[f64; 3]) -> std::io::Result<()> {
+        self.line.clear();
+        for (k, x) in values.iter().chain(firmware).enumerate() {
+            if k > 0 {
+                self.line.push(',');
+            }
+            // f64's Display is the shortest text that reads back to the same number.
+            let _ = write!(self.line, "{x}");
+        }
+        self.line.push('\n');
+        self.out.write_all(self.line.as_bytes())?;
+        self.rows += 1;
+        // Every 100 rows reach the disk: little cost, little lost if cut short.
+        if self.rows.is_multiple_of(100) {
+            self.out.flush()?;
+        }
+        Ok(())
+    }
+
+    pub fn finish(mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
+}

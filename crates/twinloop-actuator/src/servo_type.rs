@@ -1,0 +1,153 @@
+//! The servo types the models know, with the e-manual facts the models need:
+//! encoder resolution, the firmware's loop family and factory gains, whether the
+//! servo senses its current, and the datasheet ratings.
+
+use std::f64::consts::PI;
+
+/// How the firmware closes the position loop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LoopFamily {
+    /// RX/AX: compliance margin and slope, punch (EM-RX28 "Compliance").
+    Compliance,
+    /// MX(2.0) and X: position PID on the encoder count, output as PWM (EM-XM430
+    /// "Position PID Gain": K_P = P/128, K_I = I/65536, K_D = D/16).
+    Pid,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ServoType {
+    Rx28,
+    Rx64,
+    Mx64V2,
+    Xm430W350,
+}
+
+/// Datasheet ratings (e-manual specification tables) at `voltage`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rating {
+    /// N m.
+    pub stall_torque: f64,
+    /// A.
+    pub stall_current: f64,
+    /// rad/s.
+    pub no_load_speed: f64,
+    /// V.
+    pub voltage: f64,
+    pub gear_ratio: f64,
+}
+
+const RPM: f64 = 2.0 * PI / 60.0;
+
+impl ServoType {
+    pub const ALL: [ServoType; 4] = [
+        ServoType::Rx28,
+        ServoType::Rx64,
+        ServoType::Mx64V2,
+        ServoType::Xm430W350,
+    ];
+
+    /// The e-manual name (as twinloop-link's `ServoModel::name`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ServoType::Rx28 => "RX-28",
+            ServoType::Rx64 => "RX-64",
+            ServoType::Mx64V2 => "MX-64(2.0)",
+            ServoType::Xm430W350 => "XM430-W350",
+        }
+    }
+
+    /// The name, case and punctuation aside ("rx28", "MX-64(2.0)", "xm430").
+    pub fn parse(text: &str) -> Option<ServoType> {
+        let key: String = text
+            .chars()
+            .filter(|c| c.is_ascii_alphanumeric())
+            .collect::<String>()
+            .to_ascii_lowercase();
+        match key.as_str() {
+            "rx28" => Some(ServoType::Rx28),
+            "rx64" => Some(ServoType::Rx64),
+            "mx6420" | "mx64v2" | "mx642" => Some(ServoType::Mx64V2),
+            "xm430w350" | "xm430" => Some(ServoType::Xm430W350),
+            _ => None,
+        }
+    }
+
+    pub fn known_names() -> String {
+        Self::ALL.map(ServoType::name).join(", ")
+    }
+
+    pub fn family(self) -> LoopFamily {
+        match self {
+            ServoType::Rx28 | ServoType::Rx64 => LoopFamily::Compliance,
+            ServoType::Mx64V2 | ServoType::Xm430W350 => LoopFamily::Pid,
+        }
+    }
+
+    /// One encoder count, rad: 300 deg / 1024 (RX), 360 deg / 4096 (MX(2.0), X).
+    pub fn resolution(self) -> f64 {
+        match self.family() {
+            LoopFamily::Compliance => 300.0 / 1024.0 * PI / 180.0,
+            LoopFamily::Pid => 2.0 * PI / 4096.0,
+        }
+    }
+
+    /// Full PWM in the firmware's units: 1023 (RX Torque Limit), 885 (PWM Limit).
+    pub fn pwm_max(self) -> f64 {
+        match self.family() {
+            LoopFamily::Compliance => 1023.0,
+            LoopFamily::Pid => 885.0,
+        }
+    }
+
+    /// Present Current's unit, A (`None`: the servo senses no current; RX reports
+    /// its PWM as Present Load).
+    pub fn current_unit(self) -> Option<f64> {
+        match self {
+            ServoType::Rx28 | ServoType::Rx64 => None,
+            ServoType::Mx64V2 => Some(0.00336),
+            ServoType::Xm430W350 => Some(0.00269),
+        }
+    }
+
+    /// Factory values of the three firmware registers the loop uses: RX compliance
+    /// slope, margin and punch (32, 1, 32); MX/X Position P, I, D gain (850 or 800,
+    /// 0, 0).
+    pub fn factory_firmware(self) -> [f64; 3] {
+        match self {
+            ServoType::Rx28 | ServoType::Rx64 => [32.0, 1.0, 32.0],
+            ServoType::Mx64V2 => [850.0, 0.0, 0.0],
+            ServoType::Xm430W350 => [800.0, 0.0, 0.0],
+        }
+    }
+
+    /// The log columns of the three firmware registers.
+    pub fn firmware_columns(self) -> [&'static str; 3] {
+        match self.family() {
+            LoopFamily::Compliance => ["compliance_slope", "compliance_margin", "punch"],
+            LoopFamily::Pid => ["p_gain", "i_gain", "d_gain"],
+        }
+    }
+
+    /// e-manual ratings (the same figures as twinloop-link's `ServoModel::spec`).
+    pub fn rating(self) -> Rating {
+        let r = |stall_torque, stall_current, rpm: f64, voltage, gear_ratio| Rating {
+            stall_torque,
+            stall_current,
+            no_load_speed: rpm * RPM,
+            voltage,
+            gear_ratio,
+        };
+        match self {
+            ServoType::Rx28 => r(3.7, 1.9, 85.0, 18.5, 193.0),
+            ServoType::Rx64 => r(5.3, 2.6, 64.0, 18.5, 200.0),
+            ServoType::Mx64V2 => r(6.0, 4.1, 63.0, 12.0, 200.0),
+            ServoType::Xm430W350 => r(4.1, 2.3, 46.0, 12.0, 353.5),
+        }
+    }
+}
+
+impl std::fmt::Display for ServoType {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}

@@ -1,0 +1,177 @@
+//! `twinloop identify servo`: a servo model fitted to `experiment servo` logs.
+
+use crate::common::{JSON_HELP, emit};
+use crate::error::{CliError, CliResult, Outcome};
+use clap::Args;
+use serde_json::json;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+use twinloop_actuator::identify::{Identification, identify};
+use twinloop_actuator::log::ServoLog;
+use twinloop_actuator::params::PARAM_NAMES;
+use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType, datasheet};
+
+#[derive(Args, Debug)]
+pub struct ServoIdArgs {
+    /// Logs to fit (`experiment servo --out`); with no --holdout, the last
+    /// --holdout-fraction of each is kept out of the fit and scored
+    #[arg(long, value_name = "LOG.csv", num_args = 1.., required_unless_present = "defaults")]
+    pub data: Vec<PathBuf>,
+    /// Logs scored but not fitted
+    #[arg(long, value_name = "LOG.csv", num_args = 1..)]
+    pub holdout: Vec<PathBuf>,
+    /// The pendulum the logs were recorded with (mass, length, arm_inertia)
+    #[arg(long, value_name = "LOAD.toml", required_unless_present = "defaults")]
+    pub load: Option<PathBuf>,
+    /// The model ladder's rung: m1 (Coulomb + viscous), m2 (+ Stribeck), m3 (+ load-dependent), m4 (both)
+    #[arg(long, default_value = "m1", value_name = "NAME")]
+    pub model: String,
+    /// The servo type, where the logs' first line does not name it
+    #[arg(long, value_name = "MODEL")]
+    pub servo: Option<String>,
+    /// Start from these parameters (default: the datasheet's)
+    #[arg(long, value_name = "FILE.toml")]
+    pub start: Option<PathBuf>,
+    /// Share of each log held out when no --holdout is given
+    #[arg(long, default_value_t = 0.25, value_parser = crate::common::positive)]
+    pub holdout_fraction: f64,
+    /// Write the datasheet parameters of MODEL to --out and stop
+    #[arg(long, value_name = "MODEL")]
+    pub defaults: Option<String>,
+    /// The parameter file written (`serve --servo-params` reads it)
+    #[arg(long, value_name = "FILE.toml")]
+    pub out: Option<PathBuf>,
+    #[arg(long, value_name = "FILE", help = JSON_HELP)]
+    pub json: Option<PathBuf>,
+}
+
+fn parse_servo(text: &str, option: &str) -> Result<ServoType, CliError> {
+    ServoType::parse(text).ok_or_else(|| {
+        CliError::new(format!(
+            "{option} {text:?}: no servo model (known: {})",
+            ServoType::known_names()
+        ))
+    })
+}
+
+pub fn run(a: &ServoIdArgs) -> CliResult {
+    let level = ModelLevel::parse(&a.model)
+        .ok_or_else(|| CliError::new(format!("--model {:?}: m1, m2, m3 or m4", a.model)))?;
+    if let Some(m) = &a.defaults {
+        let p = datasheet::defaults(parse_servo(m, "--defaults")?, level);
+        let out = a.out.as_ref().ok_or("--defaults needs --out FILE.toml")?;
+        let text = p.to_toml("datasheet values (twinloop identify servo --defaults): docs/servo-models.md says where each comes from");
+        std::fs::write(out, text).map_err(|e| CliError::io(out, e))?;
+        return Ok(Outcome::Ok);
+    }
+    if a.holdout_fraction >= 1.0 {
+        return Err(CliError::new("--holdout-fraction must be below 1"));
+    }
+    let servo = a
+        .servo
+        .as_deref()
+        .map(|s| parse_servo(s, "--servo"))
+        .transpose()?;
+    let load = Pendulum::read(a.load.as_deref().expect("clap requires --load"))?;
+    let read = |paths: &[PathBuf]| -> Result<Vec<ServoLog>, CliError> {
+        paths
+            .iter()
+            .map(|p| ServoLog::read(p, servo).map_err(CliError::from))
+            .collect()
+    };
+    let logs = read(&a.data)?;
+    let holdout = read(&a.holdout)?;
+    let servo = logs[0].servo.expect("read names it");
+    let start = match &a.start {
+        Some(p) => ServoParams::read(p)?.with_level(level),
+        None => datasheet::defaults(servo, level),
+    };
+    let t0 = Instant::now();
+    let id = identify(&logs, &holdout, &load, &start, a.holdout_fraction)?;
+    let seconds = t0.elapsed().as_secs_f64();
+    if let Some(out) = &a.out {
+        let comment = format!(
+            "fitted by twinloop identify servo ({} rows in {} logs); held-out error {:.3} mrad RMS",
+            logs.iter().map(ServoLog::len).sum::<usize>(),
+            logs.len(),
+            id.heldout_rms_mrad
+        );
+        std::fs::write(out, id.params.to_toml(&comment)).map_err(|e| CliError::io(out, e))?;
+    }
+    emit(&text(&id, seconds), a.json.as_ref(), &to_json(&id, seconds))?;
+    Ok(Outcome::Ok)
+}
+
+fn text(id: &Identification, seconds: f64) -> String {
+    let p = &id.params;
+    let sd = p.uncertainty.unwrap_or([f64::NAN; 8]);
+    let mut s = format!(
+        "{} model {} at {:.2} V, fitted in {seconds:.2} s ({} iterations)\n",
+        p.servo,
+        p.level.name(),
+        p.voltage,
+        id.iterations
+    );
+    for &i in &id.fitted {
+        let _ = writeln!(
+            s,
+            "  {:18} {:>12.6} +- {:.2e}",
+            PARAM_NAMES[i], p.values[i], sd[i]
+        );
+    }
+    for (name, v, sd) in &id.combinations {
+        let _ = writeln!(s, "  {name:34} {v:.6} +- {sd:.2e}");
+    }
+    let _ = writeln!(
+        s,
+        "position error: fitted {:.3} mrad RMS; held out {:.3} mrad RMS, {:.3} mrad mean absolute ({} rows)",
+        id.fit_rms_mrad, id.heldout_rms_mrad, id.heldout_mae_mrad, id.heldout_rows
+    );
+    let _ = writeln!(
+        s,
+        "condition number {:.3e}; not determined by these logs: {}",
+        id.condition,
+        if id.undetermined.is_empty() {
+            "nothing".to_string()
+        } else {
+            id.undetermined.join(", ")
+        }
+    );
+    s
+}
+
+fn to_json(id: &Identification, seconds: f64) -> serde_json::Value {
+    let p = &id.params;
+    let sd = p.uncertainty.unwrap_or([f64::NAN; 8]);
+    let params: serde_json::Map<String, serde_json::Value> = id
+        .fitted
+        .iter()
+        .map(|&i| {
+            (
+                PARAM_NAMES[i].to_string(),
+                json!({"value": p.values[i], "sd": sd[i]}),
+            )
+        })
+        .collect();
+    json!({
+        "servo": p.servo.name(),
+        "model": p.level.name(),
+        "voltage": p.voltage,
+        "params": params,
+        "fitted": id.fitted.iter().map(|&i| PARAM_NAMES[i]).collect::<Vec<_>>(),
+        "correlation": id.correlation,
+        "combinations": id.combinations.iter().map(|(n, v, s)| json!({"name": n, "value": v, "sd": s})).collect::<Vec<_>>(),
+        "fit_rms_mrad": id.fit_rms_mrad,
+        "heldout_rms_mrad": id.heldout_rms_mrad,
+        "heldout_mae_mrad": id.heldout_mae_mrad,
+        "heldout_rows": id.heldout_rows,
+        "singular_values": id.singular_values,
+        "condition": id.condition,
+        "undetermined": id.undetermined,
+        "weakest_direction": id.weakest_direction.iter().map(|(n, w)| json!({"name": n, "weight": w})).collect::<Vec<_>>(),
+        "iterations": id.iterations,
+        "evaluations": id.evaluations,
+        "seconds": seconds,
+    })
+}
