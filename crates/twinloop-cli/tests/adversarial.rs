@@ -148,6 +148,12 @@ const CASES: &[Case] = &[
     case("link record", "--port {gone} --map builtin:km20 --duration -1 --out {out}", "--duration"),
     case("link plan", "--protocol 2 --servos 0", "--servos"),
     case("link plan", "--protocol 2 --return-delay-us -5", "--return-delay-us"),
+    // servo bench
+    case("experiment servo", "--port {gone} --id 1 --load {bad_toml} --out {out}", "bad.toml"),
+    case("experiment servo", "--port {gone} --id 1 --load {plant} --out {out}", "plant.toml"),
+    case("identify servo", "--data {missing_csv} --load {plant} --out {out}", "plant.toml"),
+    case("identify servo", "--data {state} --load {bad_toml} --out {out}", "bad.toml"),
+    case("identify servo", "--defaults RX-99 --out {out}", "RX-99"),
     // serve, demo, bench, view
     case("serve", "--robot {trunc_urdf} --link {out}", "trunc.urdf"),
     case("serve", "--robot {km20} --realtime-factor 0 --link {out}", "--realtime-factor"),
