@@ -558,10 +558,9 @@ fn record(a: &RecordArgs) -> CliResult {
     for prefix in ["q", "v", "tau"] {
         columns.extend(names.iter().map(|n| format!("{prefix}:{n}")));
     }
-    let mut writer = CsvWriter::create(&a.out, &columns)?;
     // Every row reaches the file as soon as it is read: nothing is lost on Ctrl-C
     // or when the adapter is unplugged.
-    writer.flush_each_row = true;
+    let mut writer = CsvWriter::recording(&a.out, &columns)?;
     let stop = interrupt_flag();
     let rec = record_rows(&mut robot, &mut writer, a, &stop, live.as_mut());
     if let Some(live) = &live {

@@ -83,21 +83,30 @@ fn the_live_page_draws_what_simulate_view_streams() {
         return;
     };
     let out = tmp("browser.csv");
-    let (mut child, url, stderr) = simulate_view(&out, "4");
+    let (mut child, url, stderr) = simulate_view(&out, "8");
     let camera = "camera=0.9,-1.5,0.5,0,0,0.25&snapshot=1&overlays=com";
-    let dom = chromium::dump_dom(&browser, &format!("{url}?{camera}"));
-    let status = chromium::element_text(&dom, "status").expect("no #status");
-    let status: serde_json::Value = serde_json::from_str(&chromium::unescape_html(status)).unwrap();
+    // The first page starts the run; on a loaded machine headless Chromium's virtual
+    // time can run out before the first frame arrives, so a page that saw none looks
+    // again while the 8 s run goes on.
+    let mut status = serde_json::Value::Null;
+    for _ in 0..3 {
+        let dom = chromium::dump_dom(&browser, &format!("{url}?{camera}"));
+        let text = chromium::element_text(&dom, "status").expect("no #status");
+        status = serde_json::from_str(&chromium::unescape_html(text)).unwrap();
+        if status["live"]["frames"].as_u64().is_some_and(|f| f >= 1) {
+            break;
+        }
+    }
     assert_eq!(status["ready"], true, "{status}");
     assert_eq!(status["errors"].as_array().unwrap().len(), 0, "{status}");
-    let frames = status["live"]["frames"].as_u64().unwrap();
-    assert!(frames >= 1, "{status}");
+    let frames = status["live"]["frames"].as_u64().unwrap_or(0);
+    assert!(frames >= 1, "no live frames in three page loads: {status}");
     assert!(child.wait().unwrap().success());
     let stderr = stderr.join().unwrap();
-    // 4 s at 1 kHz, decimated on the server to 60 a second.
+    // 8 s at 1 kHz, decimated on the server to 60 a second.
     let (sent, offered) = states_sent(&stderr);
-    assert_eq!(offered, 4001, "{stderr}");
-    assert!((235..=245).contains(&sent), "{stderr}");
+    assert_eq!(offered, 8001, "{stderr}");
+    assert!((475..=485).contains(&sent), "{stderr}");
     // The page's CoM, from the pose it was sent, is the simulation's at that time.
     let t = status["live"]["t"].as_f64().unwrap();
     let (header, rows) = read_csv(&out);

@@ -40,10 +40,12 @@ fn expect(items: &[(Severity, &'static str, &[&str])]) -> Vec<(Severity, &'stati
 }
 
 /// The SOURCE.md summary of one file: `- key: value` lines under "### `file`".
-/// A `*.nomesh.urdf` shares the summary of its `*.urdf`.
+/// A `*.nomesh.urdf` or `*.decimated.urdf` shares the summary of its `*.urdf`.
 fn source_summary(rel: &str) -> BTreeMap<String, String> {
     let (folder, file) = rel.split_once('/').unwrap();
-    let file = file.replace(".nomesh.urdf", ".urdf");
+    let file = file
+        .replace(".nomesh.urdf", ".urdf")
+        .replace(".decimated.urdf", ".urdf");
     let text = std::fs::read_to_string(models_dir().join(folder).join("SOURCE.md")).unwrap();
     let header = format!("### `{file}`");
     let mut out = BTreeMap::new();
@@ -161,6 +163,7 @@ const URDFS: &[&str] = &[
     "sigmaban/sigmaban.nomesh.urdf",
     "unitree_g1/g1_29dof_rev_1_0.urdf",
     "unitree_g1/g1_29dof_rev_1_0.nomesh.urdf",
+    "unitree_g1/g1_29dof_rev_1_0.decimated.urdf",
     "unitree_g1/variants/g1_23dof_rev_1_0.urdf",
     "unitree_g1/variants/g1_23dof_rev_1_0.nomesh.urdf",
     "unitree_h1/h1.urdf",

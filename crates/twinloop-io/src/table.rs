@@ -211,36 +211,53 @@ pub fn format_f64(x: f64) -> String {
     format!("{x:?}")
 }
 
-/// A CSV writer that writes rows as they come; `flush_each_row` makes every row
-/// durable at once (recordings must survive an interrupted run).
+/// A CSV writer that writes rows as they come.
 ///
-/// The rows go to `FILE.partial` beside the file asked for, renamed to it by
-/// [`CsvWriter::finish`]: a command that fails half-way leaves no file that looks
-/// complete (the partial one is removed when the writer is dropped unfinished; a
-/// process killed outright leaves it under its `.partial` name).
+/// An output ([`CsvWriter::create`]) goes to `FILE.partial` beside the file asked for,
+/// renamed to it by [`CsvWriter::finish`]: a command that fails half-way leaves no file
+/// that looks complete (the partial one is removed when the writer is dropped
+/// unfinished; a process killed outright leaves it under its `.partial` name).
+///
+/// A recording ([`CsvWriter::recording`]) is written under its own name and flushed at
+/// every row, and is kept whatever happens: the rows read from a robot are never lost,
+/// and a viewer can follow the file as it grows.
 pub struct CsvWriter {
     path: PathBuf,
     partial: PathBuf,
     out: BufWriter<File>,
     ncols: usize,
-    pub flush_each_row: bool,
+    flush_each_row: bool,
     line: String,
     finished: bool,
 }
 
 impl CsvWriter {
+    /// An output file (see the type's documentation).
     pub fn create(path: &Path, columns: &[String]) -> Result<CsvWriter, IoError> {
         let mut partial = path.as_os_str().to_owned();
         partial.push(".partial");
-        let partial = PathBuf::from(partial);
-        let file = File::create(&partial)
+        CsvWriter::open(path, PathBuf::from(partial), columns, false)
+    }
+
+    /// A recording: every row durable at once, the file kept even if the run fails.
+    pub fn recording(path: &Path, columns: &[String]) -> Result<CsvWriter, IoError> {
+        CsvWriter::open(path, path.to_path_buf(), columns, true)
+    }
+
+    fn open(
+        path: &Path,
+        target: PathBuf,
+        columns: &[String],
+        recording: bool,
+    ) -> Result<CsvWriter, IoError> {
+        let file = File::create(&target)
             .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(path))?;
         let mut w = CsvWriter {
             path: path.to_path_buf(),
-            partial,
+            partial: target,
             out: BufWriter::new(file),
             ncols: columns.len(),
-            flush_each_row: false,
+            flush_each_row: recording,
             line: String::new(),
             finished: false,
         };
@@ -281,8 +298,10 @@ impl CsvWriter {
         self.out
             .flush()
             .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))?;
-        std::fs::rename(&self.partial, &self.path)
-            .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))?;
+        if self.partial != self.path {
+            std::fs::rename(&self.partial, &self.path)
+                .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))?;
+        }
         self.finished = true;
         Ok(())
     }
@@ -290,7 +309,8 @@ impl CsvWriter {
 
 impl Drop for CsvWriter {
     fn drop(&mut self) {
-        if !self.finished {
+        // A recording (written under its own name) is never removed.
+        if !self.finished && self.partial != self.path {
             let _ = std::fs::remove_file(&self.partial);
         }
     }

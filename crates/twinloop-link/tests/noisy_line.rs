@@ -196,8 +196,7 @@ fn recording_over_a_noisy_line_keeps_every_row_it_read() {
     let n = mapping.joints.len();
     let mut columns = vec!["t".to_string()];
     columns.extend(mapping.joints.iter().map(|j| format!("q:{}", j.name)));
-    let mut w = twinloop_io::CsvWriter::create(&path, &columns).unwrap();
-    w.flush_each_row = true;
+    let mut w = twinloop_io::CsvWriter::recording(&path, &columns).unwrap();
     let mut state = RobotState::default();
     let mut written: Vec<Vec<f64>> = Vec::new();
     let mut joint_failures = 0;

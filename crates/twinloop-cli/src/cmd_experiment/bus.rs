@@ -218,8 +218,7 @@ pub(super) fn record_writer(path: &Path, names: &[String]) -> Result<CsvWriter, 
     ] {
         cols.push(c.to_string());
     }
-    let mut w = CsvWriter::create(path, &cols)?;
-    w.flush_each_row = true;
+    let mut w = CsvWriter::recording(path, &cols)?;
     Ok(w)
 }
 

@@ -176,9 +176,10 @@ fn configure(
 }
 
 fn lean_writer(a: &LeanArgs, cfg: &LeanConfig) -> Result<CsvWriter, CliError> {
-    let mut w = CsvWriter::create(&a.out, &LeanRecord::columns(&cfg.recorded_names))?;
-    w.flush_each_row = true;
-    Ok(w)
+    Ok(CsvWriter::recording(
+        &a.out,
+        &LeanRecord::columns(&cfg.recorded_names),
+    )?)
 }
 
 fn write_row(w: &mut CsvWriter, row: &LeanRow<'_>, buf: &mut Vec<f64>) -> Result<(), RobotError> {

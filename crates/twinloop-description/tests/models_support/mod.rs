@@ -46,7 +46,9 @@ pub fn summary_for(file: &Path) -> Option<Json> {
         .strip_prefix(&folder)
         .ok()?
         .to_str()?
-        .replace(".nomesh.urdf", ".urdf");
+        // The mesh-less and decimated-mesh copies describe the same robot.
+        .replace(".nomesh.urdf", ".urdf")
+        .replace(".decimated.urdf", ".urdf");
     let text = std::fs::read_to_string(folder.join("summary.json")).ok()?;
     let json = Json::parse(&text).expect("summary.json parses");
     json.get(&key).cloned()
