@@ -218,7 +218,7 @@ pub(super) fn record_writer(path: &Path, names: &[String]) -> Result<CsvWriter, 
     ] {
         cols.push(c.to_string());
     }
-    let mut w = CsvWriter::recording(path, &cols)?;
+    let w = CsvWriter::recording(path, &cols)?;
     Ok(w)
 }
 
