@@ -64,7 +64,7 @@ pub struct AdaptArgs {
     #[arg(long)]
     pub merge: bool,
     /// Resolution of the measured angles, deg.
-    #[arg(long, default_value_t = 0.05, value_name = "DEG")]
+    #[arg(long, default_value_t = 0.05, value_name = "DEG", value_parser = crate::common::positive)]
     pub resolution: f64,
     /// The adapted URDF to write.
     #[arg(long, value_name = "ADAPTED.urdf")]
@@ -119,7 +119,7 @@ pub struct TrainArgs {
     #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
     pub robot: String,
     /// Random changes to draw.
-    #[arg(long, default_value_t = 10_000, value_name = "N")]
+    #[arg(long, default_value_t = 10_000, value_name = "N", value_parser = crate::common::count)]
     pub samples: usize,
     /// Seed of every random draw (changes, noise, weights, batch order).
     #[arg(long, default_value_t = 1)]
@@ -128,7 +128,7 @@ pub struct TrainArgs {
     #[arg(long, value_name = "NET.json")]
     pub out: PathBuf,
     /// One-sigma noise added to each fall angle, deg.
-    #[arg(long, default_value_t = 0.05, value_name = "DEG")]
+    #[arg(long, default_value_t = 0.05, value_name = "DEG", value_parser = crate::common::non_negative)]
     pub noise: f64,
     /// Smallest and largest added mass, kg.
     #[arg(long, default_value = "0.05,0.5", value_name = "LO,HI")]
@@ -137,7 +137,7 @@ pub struct TrainArgs {
     #[arg(long)]
     pub seed_inputs: bool,
     /// Most training epochs.
-    #[arg(long, default_value_t = 1000, value_name = "N")]
+    #[arg(long, default_value_t = 1000, value_name = "N", value_parser = crate::common::count)]
     pub epochs: usize,
     /// Worker threads (0: all cores).
     #[arg(long, default_value_t = 0, value_name = "N")]

@@ -103,7 +103,7 @@ const CASES: &[Case] = &[
     case("identify static", "--robot {km20} --poses {state} --total-mass -3", "--total-mass"),
     case("identify arx", "--data {io_nan} --inputs u:a --outputs y:b", "io_nan.csv"),
     case("identify arx", "--data {io} --inputs u:x --outputs y:b", "u:x"),
-    case("identify arx", "--data {io} --inputs u:a --outputs y:b --na 0 --nb 0", "na"),
+    case("identify arx", "--data {io} --inputs u:a --outputs y:b --na 0 --nb 0", "--nb"),
     case("identify arx", "--data {empty} --inputs u:a --outputs y:b", "empty.urdf"),
     case("identify ss", "--data {io_nan} --inputs u:a --outputs y:b --order 2", "io_nan.csv"),
     case("identify ss", "--data {io} --inputs u:a --outputs y:b --order 0", "order"),

@@ -45,12 +45,12 @@ pub struct LeanArgs {
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
     /// Lean amplitude, deg of ankle (default: --fraction of the model's static tip angle).
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", value_parser = crate::common::positive)]
     pub amplitude: Option<f64>,
     /// Amplitude as a fraction of the smaller of the model's static forward and backward
     /// tip angles (rigid model, feet flat). The servos' give adds to it: on km20 with
     /// factory RX settings the trunk leans 1.6-2.1 times the ankle command.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, value_parser = crate::common::positive)]
     pub fraction: f64,
     /// Ankle speed during the ramps, deg/s.
     #[arg(long, default_value_t = 2.0, value_name = "DEG/S", value_parser = crate::common::positive)]
@@ -77,7 +77,7 @@ pub struct LeanArgs {
     pub add_mass: Vec<String>,
     /// In the simulator: every servo's compliance slope, Dynamixel RX units (2 =
     /// stiffest), margin 0; default the factory settings `twinloop serve` runs with.
-    #[arg(long, value_name = "UNITS")]
+    #[arg(long, value_name = "UNITS", value_parser = crate::common::positive)]
     pub compliance_slope: Option<f64>,
 }
 

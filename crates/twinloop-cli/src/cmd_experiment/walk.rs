@@ -27,7 +27,7 @@ pub struct WalkArgs {
     #[arg(long, default_value_t = twinloop_experiments::walk::MPU6050_GYRO_NOISE_DEG_S, value_parser = crate::common::non_negative)]
     pub gyro_noise: f64,
     /// Two-loop servo position gain, 1/s (60: full speed beyond 6 degrees of error).
-    #[arg(long, default_value_t = twinloop_experiments::walk::LD2015_KP_POSITION)]
+    #[arg(long, default_value_t = twinloop_experiments::walk::LD2015_KP_POSITION, value_parser = crate::common::positive)]
     pub kp_position: f64,
     /// Output CSV.
     #[arg(long, value_name = "FILE.csv")]

@@ -50,7 +50,7 @@ pub struct CompliantFitArgs {
     #[arg(long, value_name = "P1,..,P10")]
     pub start: Option<String>,
     /// Budget of cost evaluations (default: lm 500, cmaes 25000, power 4000).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::common::count)]
     pub max_evaluations: Option<usize>,
     /// Initial step size (CMA-ES sigma, PoWER exploration std).
     #[arg(long, default_value_t = 0.05, value_parser = crate::common::positive)]
@@ -60,7 +60,7 @@ pub struct CompliantFitArgs {
     pub seed: u64,
     /// Noise standard deviation (m) for the Cramer-Rao bounds; default: estimated from
     /// the residuals.
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = crate::common::non_negative)]
     pub noise_std: Option<f64>,
     /// Validation data of other gaits (repeatable): MSE before and after on each.
     #[arg(long = "val", value_name = "FILE.csv")]

@@ -41,16 +41,16 @@ pub struct WalkIdArgs {
     #[arg(long, default_value_t = 24)]
     pub na: usize,
     /// ARX input lags (12: the largest full-rank order on the periodic walk inputs).
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = 12, value_parser = crate::common::count)]
     pub nb: usize,
     /// ARX input delay in samples.
     #[arg(long, default_value_t = 1)]
     pub nk: usize,
     /// States of the final model (default: from the ARX's Hankel singular values).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::common::count)]
     pub order: Option<usize>,
     /// Share of the Hankel-singular-value sum the default order keeps.
-    #[arg(long, default_value_t = 0.9)]
+    #[arg(long, default_value_t = 0.9, value_parser = crate::common::positive)]
     pub hsv_energy: f64,
     /// What the prediction-error search minimises.
     #[arg(long, value_enum, default_value = "simulation")]
@@ -66,11 +66,11 @@ pub struct WalkIdArgs {
     #[arg(long)]
     pub no_detrend: bool,
     /// Iteration limit of the prediction-error search.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = crate::common::count)]
     pub max_iter: usize,
     /// Largest pole radius the search may give A: a damping margin (0.999 at 40 ms: a 40 s
     /// time constant, longer than the record).
-    #[arg(long, default_value_t = 0.999)]
+    #[arg(long, default_value_t = 0.999, value_parser = crate::common::positive)]
     pub max_pole_radius: f64,
     /// Write both models and their evaluations as JSON to FILE (-: to stdout, in place
     /// of the text).
