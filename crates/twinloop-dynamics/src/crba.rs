@@ -21,6 +21,7 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
     let off = model.v_offset;
     let mut base = LinearInertia::from_inertia(&model.base_inertia);
     let m = &mut data.mass_matrix;
+    let one_dof = !model.has_spherical_joints();
     for i in (0..nb).rev() {
         let yi = data.ycrb[i];
         let p = model.parents[i];
@@ -28,6 +29,22 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
             base.add(&yi);
         } else {
             data.ycrb[p].add(&yi);
+        }
+        if one_dof {
+            // Every joint one column (no spherical joint): body i is column off + i.
+            // Kept apart from the general loop below, which costs 20 % more on OP3.
+            let col = off + i;
+            let f = yi.mul_motion(&data.s[i]);
+            m[(col, col)] = data.s[i].dot(&f) + model.armature[i];
+            let mut j = p;
+            while j != BASE {
+                m[(off + j, col)] = data.s[j].dot(&f);
+                j = model.parents[j];
+            }
+            if off == 6 {
+                base_rows(m, col, &f);
+            }
+            continue;
         }
         let (iv, n) = (model.idx_v[i], model.joint_types[i].nv());
         for k in 0..n {
@@ -54,13 +71,7 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
                 j = model.parents[j];
             }
             if off == 6 {
-                // Base rows: the base's subspace is the identity in base coordinates.
-                m[(0, col)] = f.f.x;
-                m[(1, col)] = f.f.y;
-                m[(2, col)] = f.f.z;
-                m[(3, col)] = f.n.x;
-                m[(4, col)] = f.n.y;
-                m[(5, col)] = f.n.z;
+                base_rows(m, col, &f);
             }
         }
     }
@@ -84,4 +95,16 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
         }
     }
     &data.mass_matrix
+}
+
+/// The base rows of column `col`: the base's subspace is the identity in base
+/// coordinates, so they are the column's force itself.
+#[inline]
+fn base_rows(m: &mut DMatrix<f64>, col: usize, f: &twinloop_spatial::Force) {
+    m[(0, col)] = f.f.x;
+    m[(1, col)] = f.f.y;
+    m[(2, col)] = f.f.z;
+    m[(3, col)] = f.n.x;
+    m[(4, col)] = f.n.y;
+    m[(5, col)] = f.n.z;
 }
