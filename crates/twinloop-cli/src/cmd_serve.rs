@@ -252,7 +252,7 @@ fn serve_bench(a: &ServeArgs, model: &str) -> CliResult {
             ServoType::known_names()
         ))
     })?;
-    let load = Pendulum::read(a.load.as_deref().expect("clap requires --load"))?;
+    let load = Pendulum::read(a.load.as_deref().ok_or("--bench needs --load LOAD.toml")?)?;
     let params = match &a.servo_params {
         Some(path) => ServoParams::read(path)?,
         None => datasheet::defaults(servo, ModelLevel::M1),

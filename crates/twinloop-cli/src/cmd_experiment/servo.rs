@@ -195,7 +195,7 @@ pub fn run(a: &ServoArgs) -> CliResult {
         .map_err(|e| CliError::new(format!("{}: {e}", a.out.display())))?;
     let stop = interrupt_flag();
     let protocol = model.protocol();
-    let (goal, mut regs) = exc.at(0.0).expect("the sequence starts at 0");
+    let (goal, mut regs) = exc.at(0.0).ok_or("the excitation is empty")?;
     write_firmware(&mut client, model, servo, a.id, regs)?;
     write_item(
         &mut client,

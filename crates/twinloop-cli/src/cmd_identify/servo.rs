@@ -73,7 +73,11 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         .as_deref()
         .map(|s| parse_servo(s, "--servo"))
         .transpose()?;
-    let load = Pendulum::read(a.load.as_deref().expect("clap requires --load"))?;
+    let load = Pendulum::read(
+        a.load
+            .as_deref()
+            .ok_or("identify servo needs --load LOAD.toml")?,
+    )?;
     let read = |paths: &[PathBuf]| -> Result<Vec<ServoLog>, CliError> {
         paths
             .iter()
@@ -82,7 +86,10 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     };
     let logs = read(&a.data)?;
     let holdout = read(&a.holdout)?;
-    let servo = logs[0].servo.expect("read names it");
+    let servo = logs
+        .first()
+        .and_then(|l| l.servo)
+        .ok_or("identify servo needs --data LOG.csv naming its servo (or --servo MODEL)")?;
     let start = match &a.start {
         Some(p) => ServoParams::read(p)?.with_level(level),
         None => datasheet::defaults(servo, level),
