@@ -3,9 +3,8 @@
 //! two compared; a run against itself, and the model with an added mass against the
 //! unchanged one; bad tables named by file, line and column; a silent servo.
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Output};
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_twinloop")
@@ -23,21 +22,9 @@ fn run(args: &[&str]) -> Output {
     Command::new(bin()).args(args).output().unwrap()
 }
 
-/// `twinloop serve` in the background; returns the child and the pty path.
-fn serve(args: &[&str]) -> (Child, String) {
-    let mut child = Command::new(bin())
-        .arg("serve")
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.as_mut().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    (child, line.trim().to_string())
-}
+#[path = "support/served.rs"]
+mod served;
+use served::serve;
 
 /// The lean's settings every run of these tests shares: 3 deg, 4 deg/s, 1 s holds.
 const LEAN: [&str; 8] = [

@@ -4,9 +4,8 @@
 //! answer stops it with exit 2, naming the servo, every row read in the record.
 
 use nalgebra::Vector3;
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Instant;
 use twinloop_experiments::tipover::{Direction, TipoverConfig, run_direction};
 use twinloop_sim::{Actuator, SimConfig, Simulator};
@@ -23,21 +22,9 @@ fn scratch(name: &str) -> PathBuf {
     Path::new(env!("CARGO_TARGET_TMPDIR")).join(name)
 }
 
-/// `twinloop serve` in the background; returns the child and the pty path.
-fn serve(args: &[&str]) -> (Child, String) {
-    let mut child = Command::new(bin())
-        .arg("serve")
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.as_mut().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    (child, line.trim().to_string())
-}
+#[path = "support/served.rs"]
+mod served;
+use served::serve;
 
 /// The forward tip of km20 on the simulator directly, with the CLI's settings
 /// (ramp 5 deg/s, 1 s settle, no tilt predictor).
