@@ -245,13 +245,15 @@ pub fn aba<'py>(
     {
         let mut d = data.borrow_mut();
         let c = check(model.get(), &d, q, &[(v, "v"), (tau, "tau")])?;
-        dy::aba(
+        // A singular mass matrix is refused naming the joint, never NaN accelerations.
+        dy::try_aba(
             &model.get().inner,
             &mut d.data,
             c.q.slice(),
             c.rest[0].slice(),
             c.rest[1].slice(),
-        );
+        )
+        .map_err(|e| value_error(e.to_string()))?;
     }
     Ok(vec_out(data, |d| d.data.ddq.as_slice()))
 }

@@ -196,3 +196,20 @@ def test_pickle_keeps_mjcf_gravity_and_armature():
     np.testing.assert_array_equal(m2.gravity, m.gravity)
     q = m.neutral()
     np.testing.assert_array_equal(tl.crba(m2, tl.Data(m2), q), tl.crba(m, tl.Data(m), q))
+
+
+def test_aba_refuses_a_singular_mass_matrix_naming_the_joint(tmp_path):
+    # A massless leaf on a hinge: M(q) has a zero row for that joint, and
+    # Pinocchio's ABA would divide by zero. The Rust check names the joint.
+    urdf = tmp_path / "massless_leaf.urdf"
+    urdf.write_text(
+        '<robot name="leaf"><link name="base"><inertial><mass value="1"/>'
+        '<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        '<link name="tip"/><joint name="spin" type="revolute"><parent link="base"/>'
+        '<child link="tip"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/>'
+        "</joint></robot>"
+    )
+    model = tl.Model.from_description(tl.load(urdf), floating=False)
+    data = tl.Data(model)
+    with pytest.raises(ValueError, match="spin"):
+        tl.aba(model, data, model.neutral(), np.zeros(model.nv), np.zeros(model.nv))

@@ -137,7 +137,7 @@ def compute_generalized_gravity(model: Model, data: Data, q: ArrayLike) -> F64: 
 def crba(model: Model, data: Data, q: ArrayLike) -> F64:
     """M [nv, nv] (view of data.M)."""
 def aba(model: Model, data: Data, q: ArrayLike, v: ArrayLike, tau: ArrayLike) -> F64:
-    """ddq [nv] (view of data.ddq)."""
+    """ddq [nv] (view of data.ddq); ValueError naming the joint if M(q) is singular."""
 def joint_torque_regressor(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> F64:
     """Y [nv, 10 * bodies]; rnea = Y @ body_parameters(model)."""
 def static_com_regressor(model: Model, data: Data, q: ArrayLike) -> F64:
