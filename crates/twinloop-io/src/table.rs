@@ -226,7 +226,8 @@ pub struct CsvWriter {
     partial: PathBuf,
     out: BufWriter<File>,
     ncols: usize,
-    flush_each_row: bool,
+    /// Written under its own name, flushed at every row, never removed.
+    recording: bool,
     line: String,
     finished: bool,
 }
@@ -236,20 +237,16 @@ impl CsvWriter {
     pub fn create(path: &Path, columns: &[String]) -> Result<CsvWriter, IoError> {
         let mut partial = path.as_os_str().to_owned();
         partial.push(".partial");
-        CsvWriter::open(path, PathBuf::from(partial), columns, false)
+        CsvWriter::open(path, PathBuf::from(partial), columns)
     }
 
     /// A recording: every row durable at once, the file kept even if the run fails.
     pub fn recording(path: &Path, columns: &[String]) -> Result<CsvWriter, IoError> {
-        CsvWriter::open(path, path.to_path_buf(), columns, true)
+        CsvWriter::open(path, path.to_path_buf(), columns)
     }
 
-    fn open(
-        path: &Path,
-        target: PathBuf,
-        columns: &[String],
-        recording: bool,
-    ) -> Result<CsvWriter, IoError> {
+    fn open(path: &Path, target: PathBuf, columns: &[String]) -> Result<CsvWriter, IoError> {
+        let partial_is_path = target == path;
         let file = File::create(&target)
             .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(path))?;
         let mut w = CsvWriter {
@@ -257,7 +254,7 @@ impl CsvWriter {
             partial: target,
             out: BufWriter::new(file),
             ncols: columns.len(),
-            flush_each_row: recording,
+            recording: partial_is_path,
             line: String::new(),
             finished: false,
         };
@@ -268,7 +265,7 @@ impl CsvWriter {
 
     fn write_line(&mut self, s: &str) -> Result<(), IoError> {
         let r = writeln!(self.out, "{s}").and_then(|_| {
-            if self.flush_each_row {
+            if self.recording {
                 self.out.flush()
             } else {
                 Ok(())
@@ -298,7 +295,7 @@ impl CsvWriter {
         self.out
             .flush()
             .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))?;
-        if self.partial != self.path {
+        if !self.recording {
             std::fs::rename(&self.partial, &self.path)
                 .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))?;
         }
@@ -310,7 +307,7 @@ impl CsvWriter {
 impl Drop for CsvWriter {
     fn drop(&mut self) {
         // A recording (written under its own name) is never removed.
-        if !self.finished && self.partial != self.path {
+        if !self.finished && !self.recording {
             let _ = std::fs::remove_file(&self.partial);
         }
     }
