@@ -724,3 +724,51 @@ fn links_between_the_joints_of_one_mjcf_body_are_not_massless_links() {
         r.findings
     );
 }
+
+/// `<composite>` and `<flexcomp>` expand into soft bodies twinloop does not hold:
+/// the rigid bodies around them load as written, and each is a lint warning
+/// naming its line and what the dynamics leave out.
+#[test]
+fn composite_and_flexcomp_load_as_unmodeled_warnings() {
+    let robot = twinloop_description::mjcf::from_str(
+        r#"<mujoco>
+  <worldbody>
+    <body name="a"><joint name="j1"/><geom size="0.1" mass="2"/>
+      <composite type="cable" count="10 1 1" curve="s" size="0.5"><geom type="capsule" size=".01"/></composite>
+      <body name="b" pos="0 0 -0.5"><joint name="j2"/><geom size="0.1" mass="3"/></body>
+    </body>
+    <flexcomp name="cloth" type="grid" count="4 4 1" spacing=".1 .1 .1" mass="1"/>
+  </worldbody>
+</mujoco>"#,
+    )
+    .unwrap();
+    let masses: Vec<(&str, f64)> = robot
+        .links
+        .iter()
+        .map(|l| (l.name.as_str(), l.inertial.as_ref().map_or(0.0, |i| i.mass)))
+        .collect();
+    assert_eq!(masses.len(), 3, "world, a, b: {masses:?}");
+    assert_eq!(masses[1], ("a", 2.0));
+    assert_eq!(masses[2], ("b", 3.0));
+    let report = lint(&robot);
+    let mut found: Vec<(&str, &str)> = report
+        .with_code(codes::UNMODELED_ELEMENT)
+        .map(|f| (f.name.as_str(), f.message.split(':').next().unwrap()))
+        .collect();
+    found.sort_by_key(|f| f.1);
+    assert_eq!(
+        found,
+        [
+            ("<composite> in <body name=\"a\">", "line 4"),
+            (r#"<flexcomp name="cloth">"#, "line 7"),
+        ]
+    );
+    let says = |name: &str, words: [&str; 2]| {
+        report
+            .with_code(codes::UNMODELED_ELEMENT)
+            .any(|f| f.name.contains(name) && words.iter().all(|w| f.message.contains(w)))
+    };
+    assert!(says("<composite>", ["\"cable\"", "mass"]));
+    assert!(says("flexcomp", ["\"grid\"", "deformable"]));
+    assert_eq!(report.strict().errors, 2);
+}

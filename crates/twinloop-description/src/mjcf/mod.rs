@@ -68,8 +68,9 @@
 //!   keyframes, and geoms and sites attached to the world. `<replicate>` is
 //!   expanded as MuJoCo does (replica `i` at the offset and rotation applied `i`
 //!   times, names suffixed with `sep` and the padded index).
-//!   `<attach>`, composite objects and nested includes are errors rather than
-//!   silently dropped bodies.
+//!   `<composite>` and `<flexcomp>` (soft bodies, cables, particle sets) are
+//!   read past and listed in [`Description::unmodeled`] too; `<attach>` and
+//!   nested includes are errors rather than silently dropped bodies.
 //! - `<frame>`: its placement is composed onto the bodies, geoms, sites and
 //!   frames inside it, and its `childclass` applies to them.
 
@@ -394,7 +395,8 @@ impl<'a, 'i> Reader<'a, 'i> {
             for (c, xf, cc, sfx) in self.through_frames(s, None, "")? {
                 match c.tag_name().name() {
                     "body" => top.push((c, xf, cc, sfx)),
-                    t @ ("attach" | "include" | "composite" | "flexcomp") => {
+                    "composite" | "flexcomp" => self.soft_body(c),
+                    t @ ("attach" | "include") => {
                         return Err(error_at(c, format!("<{t}> is not supported")));
                     }
                     _ => {} // world geoms, sites, lights, cameras
@@ -599,6 +601,32 @@ impl<'a, 'i> Reader<'a, 'i> {
                 what,
             });
         }
+    }
+
+    /// A `<composite>` or `<flexcomp>`: MuJoCo expands it into bodies (a cable,
+    /// a particle set, a deformable flex) that the rigid-body tree does not
+    /// hold, so it is read past and noted for `lint`, with what that leaves out.
+    fn soft_body(&mut self, e: Node<'a, 'i>) {
+        let tag = e.tag_name().name();
+        let kind = e.attribute("type").unwrap_or("unspecified");
+        let what = if tag == "composite" {
+            format!(
+                "composite of type \"{kind}\": MuJoCo generates its bodies, joints and \
+                 tendons; twinloop's rigid-body dynamics leave them out, with their mass \
+                 and their forces on the body that holds them"
+            )
+        } else {
+            format!(
+                "flexcomp of type \"{kind}\": a deformable body whose vertices MuJoCo \
+                 simulates; twinloop's rigid-body dynamics leave it out, with its mass"
+            )
+        };
+        let (line, _) = crate::xml::position(e.document(), e.range().start);
+        self.robot.unmodeled.push(FileNote {
+            element: crate::xml::element_path(e),
+            line,
+            what,
+        });
     }
 
     /// MuJoCo's `settotalmass`: every body's mass and inertia scaled by one factor.
@@ -1082,10 +1110,10 @@ impl<'a, 'i> Reader<'a, 'i> {
     }
 
     /// Queue a body's child bodies, `<frame>`s opened (in file order: pushed
-    /// reversed onto the stack); elements that would bring in bodies twinloop
-    /// cannot read are errors.
+    /// reversed onto the stack); soft bodies are noted, and elements that would
+    /// bring in rigid bodies twinloop cannot read are errors.
     fn queue_child_bodies(
-        &self,
+        &mut self,
         node: Node<'a, 'i>,
         name: &str,
         offset: Vec3,
@@ -1102,7 +1130,8 @@ impl<'a, 'i> Reader<'a, 'i> {
                     frame,
                     suffix,
                 }),
-                t @ ("attach" | "include" | "composite" | "flexcomp") => {
+                "composite" | "flexcomp" => self.soft_body(c),
+                t @ ("attach" | "include") => {
                     return Err(error_at(c, format!("<{t}> is not supported")));
                 }
                 _ => {}
