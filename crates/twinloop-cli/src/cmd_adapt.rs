@@ -3,6 +3,7 @@
 //! `--method ann` the three-mass LIPM comes from the seed's ANN (section V.C), which
 //! `twinloop adapt train` trains (`twinloop_ident::ann_adapt`).
 
+use crate::common::hinges_only;
 use crate::common::{JSON_HELP, ROBOT_HELP, emit, load_description};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::{Args, Subcommand, ValueEnum};
@@ -227,6 +228,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
         return Err(CliError::new("adapt needs --robot"));
     };
     let (prior, _) = load_description(robot)?;
+    hinges_only(&prior, robot, "adaptation")?;
     let tip = match (&a.bus.port, &a.tipover) {
         (Some(_), out) => tip_in_place(&a, robot, out.as_deref())?,
         (None, Some(path)) => read_tip(path)?,
@@ -399,6 +401,7 @@ fn mass_range(s: &str) -> Result<(f64, f64), CliError> {
 /// `adapt train`.
 fn run_train(a: TrainArgs) -> CliResult {
     let (prior, _) = load_description(&a.robot)?;
+    hinges_only(&prior, &a.robot, "adaptation")?;
     let opts = AnnTrainOptions {
         data: DataOptions {
             samples: a.samples,

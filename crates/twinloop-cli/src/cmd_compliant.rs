@@ -1,6 +1,7 @@
 //! `twinloop compliant stiffness|simulate`: the compact compliant model of seed 002
 //! (COMAN): its Cartesian stiffness and damping, and rolling it out.
 
+use crate::common::hinges_only;
 use crate::common::{emit, load_model, num, print, read_table};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::{Args, Subcommand, ValueEnum};
@@ -150,7 +151,8 @@ fn stiffness_pose(args: &StiffnessArgs, model: &Model) -> Result<Vec<f64>, CliEr
 }
 
 fn stiffness(args: &StiffnessArgs) -> CliResult {
-    let (_, model) = load_model(&args.robot, BaseKind::Floating)?;
+    let (robot, model) = load_model(&args.robot, BaseKind::Floating)?;
+    hinges_only(&robot, &args.robot, "the compliant model")?;
     let q = stiffness_pose(args, &model)?;
     let leg = SupportLeg::coman(args.support == Side::Left);
     let joints = JointCompliance {

@@ -1,6 +1,7 @@
 //! `twinloop gait sequence|zmp`: joint and CoM references for walking: seed 003's
 //! walking sequence as joint goals, and seed 002's ZMP and LIPM CoM reference.
 
+use crate::common::hinges_only;
 use crate::common::{load_description, num, print};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::{Args, Subcommand};
@@ -126,6 +127,7 @@ pub struct ZmpArgs {
 /// The robot of --robot, which must be lab17.
 pub fn lab17_only(spec: &str) -> Result<twinloop_description::Description, CliError> {
     let (robot, _) = load_description(spec).map_err(|e| e.context("--robot"))?;
+    hinges_only(&robot, spec, "walking generation")?;
     if robot.name != twinloop_description::builtin::lab17::NAME {
         return Err(CliError::new(format!(
             "--robot: seed 003's walking sequence is defined around lab17's Table 2 trims; \

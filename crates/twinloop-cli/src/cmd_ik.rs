@@ -1,5 +1,6 @@
 //! `twinloop ik`: joint angles and base pose from motion-capture markers (seed 004, eq 7).
 
+use crate::common::hinges_only;
 use crate::common::load_model;
 use crate::error::{CliResult, Outcome};
 use crate::progress;
@@ -27,7 +28,8 @@ pub struct IkArgs {
 }
 
 pub fn run(a: &IkArgs) -> CliResult {
-    let (_, model) = load_model(&a.robot, BaseKind::Floating)?;
+    let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
+    hinges_only(&robot, &a.robot, "marker IK")?;
     let markers = read_markers(&a.markers, &model)?;
     let frames = read_frames(&a.frames, &markers)?;
     let mut fitter = MarkerIk::new(&model, markers)?;

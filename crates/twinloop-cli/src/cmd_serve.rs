@@ -2,6 +2,7 @@
 //! Dynamixel program can talk to.
 
 use crate::cmd_link::interrupt_flag;
+use crate::common::hinges_only;
 use crate::common::{ROBOT_HELP, load_description, print};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
@@ -115,7 +116,9 @@ fn serve_description(
     mapping: &RobotMapping,
 ) -> Result<Option<Description>, CliError> {
     if let Some(spec) = &a.robot {
-        return Ok(Some(load_description(spec)?.0));
+        let (robot, _) = load_description(spec)?;
+        hinges_only(&robot, spec, "the virtual robot")?;
+        return Ok(Some(robot));
     }
     if a.map.is_none() {
         return Ok(Some(load_description(DEFAULT_ROBOT)?.0));

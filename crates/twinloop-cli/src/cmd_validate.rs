@@ -2,6 +2,7 @@
 //! measured motion (seed 004, section 3.4); `twinloop validate lean`: a robot's lean
 //! against a simulated one (seed 001, Figs 10-11).
 
+use crate::common::hinges_only;
 use crate::common::{JSON_HELP, emit, load_model, num, read_table};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::{Args, Subcommand};
@@ -237,7 +238,8 @@ fn lean_report(
 }
 
 fn residual(a: &ResidualArgs) -> CliResult {
-    let (_, model) = load_model(&a.robot, BaseKind::Floating)?;
+    let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
+    hinges_only(&robot, &a.robot, "validation")?;
     let motion = read_motion_and_plate(a, &model)?;
     let smoothing = (!a.no_smoothing).then_some(Smoothing {
         cutoff_hz: a.cutoff,
@@ -247,7 +249,8 @@ fn residual(a: &ResidualArgs) -> CliResult {
     let res = residual_wrench(&model, &motion, smoothing).map_err(|e| e.in_file(file))?;
     let cmp = match &a.compare {
         Some(c) => {
-            let (_, m2) = load_model(c, BaseKind::Floating)?;
+            let (r2, m2) = load_model(c, BaseKind::Floating)?;
+            hinges_only(&r2, c, "validation")?;
             Some(residual_wrench(&m2, &motion, smoothing).map_err(|e| e.in_file(file))?)
         }
         None => None,

@@ -124,6 +124,24 @@ pub fn load_model(spec: &str, base: BaseKind) -> Result<(Description, Model), Cl
     Ok((robot, model))
 }
 
+/// Refuse a robot with a ball joint for work that moves one coordinate per joint
+/// (servos, IK, identification, reduced models): its quaternion would be read as
+/// four hinges, a silent wrong answer. Names the first ball joint.
+pub fn hinges_only(robot: &Description, spec: &str, work: &str) -> Result<(), CliError> {
+    match robot
+        .joints
+        .iter()
+        .find(|j| j.kind == twinloop_description::JointKind::Spherical)
+    {
+        None => Ok(()),
+        Some(j) => Err(CliError::new(format!(
+            "{spec}: joint \"{}\" is a ball joint; {work} handles hinge and slide joints only \
+             (model, kinematics, dynamics, simulate and view take ball joints)",
+            j.name
+        ))),
+    }
+}
+
 /// Write to stdout; a closed pipe (`twinloop ... | head`) ends quietly instead of panicking.
 pub fn print(text: &str) {
     let mut out = std::io::stdout().lock();

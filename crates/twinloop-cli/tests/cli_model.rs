@@ -309,3 +309,62 @@ fn lint_flags_a_singular_mass_matrix_naming_the_joint() {
     let o = run_on(&["model", "lint"], &scratch("ball_ok.xml", &ok));
     assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
 }
+
+/// A ball joint loads for the dynamics, but work that moves one coordinate per
+/// joint (servos, IK, identification, adaptation) refuses the robot naming the
+/// joint, instead of reading its quaternion as four hinges.
+#[test]
+fn one_coordinate_work_refuses_a_ball_joint_by_name() {
+    let file = scratch(
+        "ball_arm.xml",
+        r#"<mujoco>
+  <worldbody>
+    <body name="torso" pos="0 0 1"><freejoint/><geom type="box" size="0.1 0.1 0.2" mass="5"/>
+      <body name="arm" pos="0 0.15 0.1"><joint name="shoulder" type="ball"/>
+        <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.03" mass="1"/>
+        <body name="fore" pos="0 0 -0.3"><joint name="elbow" axis="0 1 0"/>
+          <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.03" mass="0.5"/></body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>"#,
+    );
+    let empty = scratch("ball_arm_empty.csv", "");
+    let f = file.to_str().unwrap();
+    let e = empty.to_str().unwrap();
+    let info = twinloop(&["model", "info", f]);
+    assert!(info.status.success(), "{}", stderr(&info));
+    for args in [
+        vec!["experiment", "tipover", "--robot", f],
+        vec!["adapt", "--robot", f, "--tipover", e, "--total-mass", "7"],
+        vec![
+            "identify",
+            "static",
+            "--robot",
+            f,
+            "--poses",
+            e,
+            "--total-mass",
+            "7",
+        ],
+        vec![
+            "ik",
+            "--robot",
+            f,
+            "--markers",
+            e,
+            "--frames",
+            e,
+            "--out",
+            e,
+        ],
+    ] {
+        let o = twinloop(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("joint \"shoulder\" is a ball joint") && err.lines().count() == 1,
+            "{args:?}: {err}"
+        );
+    }
+}

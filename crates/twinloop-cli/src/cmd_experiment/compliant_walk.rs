@@ -1,6 +1,7 @@
 //! `twinloop experiment compliant-walk`: COMAN walking the ZMP gait in the full
 //! simulator, the "real robot" data of seed 002 section 4.
 
+use crate::common::hinges_only;
 use crate::common::{emit, load_description, num};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
@@ -58,6 +59,7 @@ struct DatasetReport {
 
 pub fn run(args: &CompliantWalkArgs) -> CliResult {
     let (robot, _) = load_description(&args.robot)?;
+    hinges_only(&robot, &args.robot, "the compliant walk")?;
     let config = WalkingConfig {
         step_length: args.steps.step_length,
         t_single: args.steps.tss,

@@ -5,6 +5,7 @@
 use super::bus::{Guarded, confirm, hold_standing, is_serial, record_writer, resolve};
 use super::tipover::parse_mass;
 use crate::cmd_link::{PortArgs, open_client};
+use crate::common::hinges_only;
 use crate::common::{JSON_HELP, emit, load_description};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
@@ -126,6 +127,7 @@ pub fn run(a: &LeanArgs) -> CliResult {
         ));
     };
     let (mut robot, _) = load_description(spec)?;
+    hinges_only(&robot, spec, "the lean experiment")?;
     for m in &a.add_mass {
         let (kg, link, xyz) = parse_mass(m)?;
         twinloop_description::builtin::add_point_mass(&mut robot, &link, kg, xyz)
@@ -251,6 +253,7 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
         "the lean's signs",
     )?;
     let (model, _) = load_description(&model_spec)?;
+    hinges_only(&model, &model_spec, "the lean experiment")?;
     let (tips, cfg) = model_config(a, &model, &mapping.joint_names(), names)?;
     let serial = is_serial(&port);
     let port_args = PortArgs {

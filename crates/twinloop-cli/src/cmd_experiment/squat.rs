@@ -2,6 +2,7 @@
 //! with force-plate readings, and optionally marker frames for `twinloop ik`.
 
 use super::check_noise;
+use crate::common::hinges_only;
 use crate::common::load_model;
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
@@ -56,6 +57,7 @@ pub struct SquatArgs {
 pub fn run(a: &SquatArgs) -> CliResult {
     check_noise(a.marker_noise, "--marker-noise")?;
     let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
+    hinges_only(&robot, &a.robot, "the squat experiment")?;
     let options = SquatOptions {
         rest: a.rest,
         duration: a.duration,

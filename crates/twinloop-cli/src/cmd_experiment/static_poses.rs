@@ -1,6 +1,7 @@
 //! `twinloop experiment static-poses`: the virtual force plate (seed 004, section 3.1).
 
 use super::check_noise;
+use crate::common::hinges_only;
 use crate::common::load_model;
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
@@ -87,6 +88,7 @@ pub fn run(a: &StaticPosesArgs) -> CliResult {
     check_noise(a.cop_noise, "--cop-noise")?;
     check_noise(a.joint_noise, "--joint-noise")?;
     let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
+    hinges_only(&robot, &a.robot, "the static-pose experiment")?;
     let options = PlateOptions {
         count: a.count,
         categories: parse_categories(&a.categories)?,

@@ -1,6 +1,7 @@
 //! `twinloop experiment tipover`: the tip-over experiment of seeds 000 and 001 on the
 //! simulator, with the CoM from the tip angles beside the model's.
 
+use crate::common::hinges_only;
 use crate::common::{JSON_HELP, emit, load_description};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
@@ -101,6 +102,7 @@ pub fn run(a: &TipoverArgs) -> CliResult {
         ));
     };
     let (mut robot, _) = load_description(spec)?;
+    hinges_only(&robot, spec, "the tip-over experiment")?;
     for m in &a.add_mass {
         let (kg, link, xyz) = parse_mass(m)?;
         twinloop_description::builtin::add_point_mass(&mut robot, &link, kg, xyz)

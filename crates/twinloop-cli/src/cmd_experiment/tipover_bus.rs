@@ -6,6 +6,7 @@
 
 use super::bus::{BusRobot, Guarded, confirm, hold_standing, is_serial, record_writer};
 use crate::cmd_link::{PortArgs, open_client};
+use crate::common::hinges_only;
 use crate::common::load_description;
 use crate::error::CliError;
 use serde::Serialize;
@@ -198,6 +199,7 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
         .or_else(|| mapping.port.clone())
         .ok_or_else(|| CliError::new("--map needs --port PORT (or the mapping's port)"))?;
     let (model, _) = load_description(&plan.model_spec)?;
+    hinges_only(&model, &plan.model_spec, "the tip-over experiment")?;
     let names = mapping.joint_names();
     let cfg = tipover_config(&model, &names, plan.ramp).map_err(|e| {
         CliError::from(e).context(format!("{} with {}", plan.model_spec, mapping.source))

@@ -2,6 +2,7 @@
 //! plate (seed 004, eq 8-9).
 
 use crate::cmd_validate::residual_table;
+use crate::common::hinges_only;
 use crate::common::{JSON_HELP, emit, load_model};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
@@ -78,6 +79,7 @@ type Validation = (ResidualSeries, ResidualSeries);
 
 pub fn run(a: &IdentifyStaticArgs) -> CliResult {
     let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
+    hinges_only(&robot, &a.robot, "static identification")?;
     let poses = read_static_poses(&a.poses, &model)?;
     let options = StaticOptions {
         links: (!a.links.is_empty()).then(|| a.links.clone()),
