@@ -2,7 +2,7 @@
 //! 7.1), in base coordinates: articulated inertias then add up without transforms.
 
 use crate::data::Data;
-use crate::joint::{joint_placement, subspace_in};
+use crate::joint::{joint_placement, subspace_column, subspace_in};
 use crate::kinematics::{base_placement, check_q, check_v};
 use crate::model::JointType;
 use crate::model::{BASE, Model};
@@ -88,6 +88,7 @@ fn velocity_pass(
     } else {
         (Symmetric6::ZERO, Force::ZERO)
     };
+    let one_dof = !model.has_spherical_joints();
     for i in 0..model.nbodies {
         let li = joint_placement(model, i, q);
         let p = model.parents[i];
@@ -97,13 +98,21 @@ fn velocity_pass(
             (data.b_m_i[p] * li, data.v[p])
         };
         data.b_m_i[i] = b;
-        let (iv, n) = (model.idx_v[i], model.joint_types[i].nv());
-        let d = iv - model.v_offset;
-        subspace_in(model, i, &b, &mut data.s[d..]);
-        let mut sv = Motion::ZERO;
-        for k in 0..n {
-            sv += data.s[d + k] * v[iv + k];
-        }
+        let sv = if one_dof {
+            // Body i owns coordinate i alone: no index lookups, no loop.
+            let s = subspace_column(model, i, 0, &b);
+            data.s[i] = s;
+            s * v[model.v_offset + i]
+        } else {
+            let (iv, n) = (model.idx_v[i], model.joint_types[i].nv());
+            let d = iv - model.v_offset;
+            subspace_in(model, i, &b, &mut data.s[d..]);
+            let mut sv = Motion::ZERO;
+            for k in 0..n {
+                sv += data.s[d + k] * v[iv + k];
+            }
+            sv
+        };
         let vi = vp + sv;
         data.v[i] = vi;
         data.c[i] = vi.cross(&sv);

@@ -526,7 +526,8 @@ impl Model {
     /// Whether some joint is spherical: then a body's q and v entries are at
     /// `idx_q[i]`, `idx_v[i]`, not `q_offset + i`, `v_offset + i`.
     pub fn has_spherical_joints(&self) -> bool {
-        self.joint_types.contains(&JointType::Spherical)
+        // Every other joint has one coordinate: O(1), asked in every CRBA.
+        self.nq - self.q_offset != self.nbodies
     }
 
     /// The body owning each joint velocity coordinate `v_offset + k`, and the
