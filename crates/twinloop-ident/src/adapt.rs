@@ -19,13 +19,17 @@
 //! model until the measured CoM moves by less than 1e-9 m (two or three iterations).
 
 use crate::error::IdentError;
+use crate::fall_angle_fit;
 use crate::tipover::{FeetMass, TipAngles, exact_method, feet_mass};
 use crate::tipover_study::{StudyReport, ankle_names, hip_roll_names};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use twinloop_description::builtin::FootGeometry;
-use twinloop_description::{Description, Inertia, Inertial, Joint, JointKind, Link, Pose};
+use twinloop_description::{
+    Description, Geometry, Inertia, Inertial, Joint, JointKind, Link, Pose,
+};
 use twinloop_dynamics::{BASE, Data, Model};
+use twinloop_experiments::tipover::Direction;
 use twinloop_spatial::Se3;
 
 /// What fixes the one-parameter family.
@@ -55,6 +59,11 @@ pub struct AddedMass {
     pub position_sigma: [f64; 3],
     /// One-sigma uncertainty of the mass (only with `--where`), kg.
     pub mass_sigma: Option<f64>,
+    /// With the total mass and the host link both given: how far the position was
+    /// moved to lie within the host's collision outline (its bounding box grown by
+    /// [`OUTLINE_MARGIN`]), m; 0 if it was inside already, absent otherwise.
+    #[serde(default)]
+    pub moved_into_outline: Option<f64>,
 }
 
 /// The LIPM and three-mass LIPM of a model.
@@ -100,6 +109,10 @@ pub struct AdaptReport {
     pub prior_model_deg: [f64; 4],
     /// The adapted model's simulated fall angles (with `--check`), deg.
     pub check_deg: Option<[f64; 4]>,
+    /// With the total mass known and the robot's onset postures in the tip-over file:
+    /// the position refined on the fall angles (see `fall_angle_fit`).
+    #[serde(default)]
+    pub fall_angle_fit: Option<FallAngleFitSummary>,
     /// The lean of seed 001 the robot did (`--lean`), replayed on the prior and the
     /// adapted model: RMS torque difference per joint, before and after.
     #[serde(default)]
@@ -111,6 +124,18 @@ pub struct AdaptReport {
     /// What is and is not well determined.
     pub notes: Vec<String>,
     pub files: Vec<String>,
+}
+
+/// How the fit of the added mass's position to the fall angles went.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FallAngleFitSummary {
+    /// Where the CoM inversion put the part (host frame, m): the fit's start.
+    pub from_com_inversion: [f64; 3],
+    /// The model's static angle minus the measured one at the robot's onsets
+    /// (forward, backward, left, right), deg: at the start and after the fit.
+    pub start_residual_deg: [f64; 4],
+    pub residual_deg: [f64; 4],
+    pub iterations: usize,
 }
 
 /// One joint of the lean check: RMS of robot minus model torque, N m.
@@ -449,7 +474,24 @@ pub fn adapt(
             (m0 * d.norm() / (t - d.norm()), p, host)
         };
         let pose = pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
-        let local = pose.inverse().act_point(&(p + pf.mid));
+        let mut local = pose.inverse().act_point(&(p + pf.mid));
+        let mut p = p;
+        let mut moved_into_outline = None;
+        // Both the mass and the link known: the part is somewhere on that link, so
+        // the point goes to the nearest point of the link's outline grown by
+        // `OUTLINE_MARGIN` (projecting onto a convex set that holds the truth never
+        // moves the point away from the truth, and the adapted CoM, which moves
+        // with the point times m_a / M, comes nearer the truth's too).
+        if opts.total_mass.is_some()
+            && opts.host.is_some()
+            && let Some((lo, hi)) = prior.link(&host).and_then(outline_box)
+        {
+            let margin = Vector3::repeat(OUTLINE_MARGIN);
+            let inside = local.sup(&(lo - margin)).inf(&(hi + margin));
+            moved_into_outline = Some((inside - local).norm());
+            local = inside;
+            p = pose.act_point(&local) - pf.mid;
+        }
         let merged = with_added_mass(prior, &host, ma, v3(local), true)?;
         frame_for_feet = standing(&merged)?;
         let out = with_added_mass(prior, &host, ma, v3(local), opts.merge)?;
@@ -462,6 +504,60 @@ pub fn adapt(
                 position: v3(p),
                 position_sigma: [0.0; 3],
                 mass_sigma: None,
+                moved_into_outline,
+            },
+        ));
+    }
+    // With the mass known, place it by the fall angles themselves (fall_angle_fit.rs:
+    // every link's part alike, feet and ankle crosses included), from the CoM
+    // inversion's point, when the tip-over kept the robot's onset postures.
+    let mut fit_summary = None;
+    if mode == "total-mass"
+        && let Some((_, added)) = &adapted
+        && Direction::ALL
+            .iter()
+            .all(|&d| !tip.direction(d).onset_positions.is_empty())
+    {
+        let host = added.host.clone();
+        let bounds = if opts.host.is_some() {
+            prior.link(&host).and_then(outline_box).map(|(lo, hi)| {
+                let margin = Vector3::repeat(OUTLINE_MARGIN);
+                (lo - margin, hi + margin)
+            })
+        } else {
+            None
+        };
+        let fit = fall_angle_fit::fit_position(
+            prior,
+            tip,
+            &host,
+            added.mass,
+            Vector3::from(added.position_host),
+            bounds,
+        )?;
+        let local = Vector3::from(fit.position_host);
+        let pose = pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
+        let p = pose.act_point(&local) - pf.mid;
+        let ma = added.mass;
+        let moved = added.moved_into_outline;
+        let out = with_added_mass(prior, &host, ma, v3(local), opts.merge)?;
+        frame_for_feet = standing(&with_added_mass(prior, &host, ma, v3(local), true)?)?;
+        fit_summary = Some(FallAngleFitSummary {
+            from_com_inversion: added.position_host,
+            start_residual_deg: fit.start_residual_deg,
+            residual_deg: fit.residual_deg,
+            iterations: fit.iterations,
+        });
+        adapted = Some((
+            out,
+            AddedMass {
+                mass: ma,
+                host,
+                position_host: v3(local),
+                position: v3(p),
+                position_sigma: [0.0; 3],
+                mass_sigma: None,
+                moved_into_outline: moved,
             },
         ));
     }
@@ -532,6 +628,7 @@ pub fn adapt(
         adapted_reduced: None,
         prior_model_deg: prior_model_angles(&pf, prior, c0, &foot)?,
         check_deg: None,
+        fall_angle_fit: fit_summary,
         lean: Vec::new(),
         outline: pf.outline(),
         notes,
@@ -562,6 +659,43 @@ pub fn adapt(
         }
     };
     Ok(Adapted { report, robot })
+}
+
+/// How far outside its host's collision outline an added part's CoM may lie, m: a
+/// battery or camera is bolted onto the link's surface, its centre about half its
+/// thickness outside.
+pub const OUTLINE_MARGIN: f64 = 0.01;
+
+/// The box (link frame: lowest and highest corner) around a link's primitive
+/// collision shapes, where a part bolted onto it can be; `None` without one.
+fn outline_box(link: &Link) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    for shape in &link.collisions {
+        let half = match shape.geometry {
+            Geometry::Box { size } => Vector3::from(size) * 0.5,
+            Geometry::Sphere { radius } => Vector3::repeat(radius),
+            Geometry::Cylinder { radius, length } => Vector3::new(radius, radius, 0.5 * length),
+            Geometry::Capsule { radius, length } => {
+                Vector3::new(radius, radius, 0.5 * length + radius)
+            }
+            Geometry::Mesh { .. } => continue,
+        };
+        let (r, o) = (shape.origin.rotation(), shape.origin.xyz);
+        for corner in 0..8 {
+            let c = Vector3::from_fn(|i, _| {
+                if corner >> i & 1 == 1 {
+                    half[i]
+                } else {
+                    -half[i]
+                }
+            });
+            let w = Vector3::from_fn(|i, _| o[i] + (0..3).map(|j| r[i][j] * c[j]).sum::<f64>());
+            lo = lo.inf(&w);
+            hi = hi.sup(&w);
+        }
+    }
+    lo.x.is_finite().then_some((lo, hi))
 }
 
 /// The link whose CoM (origin if massless) is nearest `p` (standing frame), any link

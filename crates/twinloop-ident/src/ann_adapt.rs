@@ -215,6 +215,7 @@ fn measured_report(robot: &str, deg: [f64; 4], foot: &FootGeometry) -> StudyRepo
         excess_deg: 0.0,
         rigid_static_deg: a,
         lean_deg: a,
+        onset_positions: Default::default(),
     };
     StudyReport {
         robot: robot.into(),

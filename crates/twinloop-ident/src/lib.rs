@@ -31,6 +31,7 @@ pub mod ann_data;
 pub mod ann_report;
 pub mod compliant_fit;
 pub mod error;
+pub mod fall_angle_fit;
 pub mod filter;
 pub mod html;
 pub mod markers;

@@ -17,11 +17,12 @@ use crate::tipover::{
 };
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use twinloop_description::Description;
 use twinloop_description::builtin::FootGeometry;
 use twinloop_dynamics::{BASE, Data};
 use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
-use twinloop_robot::RobotError;
+use twinloop_robot::{Robot, RobotError};
 use twinloop_sim::statics::{FlatFeet, hip_lean_signs, lean_signs};
 use twinloop_sim::{Actuator, ContactParams, SimConfig, Simulator, servo_for_joint};
 use twinloop_spatial::Se3;
@@ -78,6 +79,11 @@ pub struct DirectionReport {
     pub rigid_static_deg: f64,
     /// The trunk's lean from the standing pose at the onset (IMU), deg.
     pub lean_deg: f64,
+    /// Every joint's position at the onset, rad, by name: the posture the static
+    /// reference is taken at, which lets `adapt` recompute it for a candidate model
+    /// (empty in files written before it was kept).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub onset_positions: BTreeMap<String, f64>,
 }
 
 /// CoM estimates, m, relative to the midpoint of the ankle pitch joints in the
@@ -682,12 +688,17 @@ fn estimate_com(
     Ok((com, feet))
 }
 
-fn direction_report(results: &[DirectionRun], d: Direction) -> DirectionReport {
+fn direction_report(results: &[DirectionRun], d: Direction, names: &[String]) -> DirectionReport {
     let (r, s, rigid) = results
         .iter()
         .find(|r| r.0.direction == d)
         .expect("all four ran");
     DirectionReport {
+        onset_positions: names
+            .iter()
+            .cloned()
+            .zip(r.positions_at_onset.iter().copied())
+            .collect(),
         commanded_deg: r.commanded_deg,
         measured_deg: r.measured_deg,
         time_s: r.time_s,
@@ -770,6 +781,61 @@ pub fn report_for_runs(
     Ok(assemble(robot, &p, &results)?)
 }
 
+/// `robot`'s static tipping angle in each direction (forward, backward, left, right;
+/// deg) at the postures and feet rolls the robot had at its onsets in `report`: the
+/// angles this model says the robot should have measured (`static_deg` of a report
+/// made with this model). Needs the report's `onset_positions`.
+pub fn static_angles_at_onsets(
+    robot: &Description,
+    report: &StudyReport,
+) -> Result<[f64; 4], IdentError> {
+    let mut p = prepare(robot, &StudyOptions::default())?;
+    let mut runs = Vec::with_capacity(4);
+    for d in Direction::ALL {
+        let r = report.direction(d);
+        if r.onset_positions.is_empty() {
+            return Err(IdentError::new(format!(
+                "the {} run has no onset_positions (a tip-over file from before they were kept)",
+                d.name()
+            )));
+        }
+        let mut q = p.standing.clone();
+        for (name, &v) in &r.onset_positions {
+            if let Some(i) = p.sim.joint_index(name) {
+                q[i] = v;
+            }
+        }
+        runs.push(TipoverResult {
+            direction: d,
+            commanded_deg: r.commanded_deg,
+            measured_deg: r.measured_deg,
+            time_s: r.time_s,
+            excess_deg: r.excess_deg,
+            lean_deg: r.lean_deg,
+            fall_confirmed_s: r.time_s,
+            positions_at_onset: q,
+        });
+    }
+    let results = with_static_references(&mut p.sim, &p.standing, &p.j, &p.q0, runs)?;
+    let mut out = [0.0; 4];
+    for (k, (_, s, _)) in results.iter().enumerate() {
+        out[k] = *s;
+    }
+    Ok(out)
+}
+
+impl StudyReport {
+    /// One direction's outcome.
+    pub fn direction(&self, d: Direction) -> &DirectionReport {
+        match d {
+            Direction::Forward => &self.forward,
+            Direction::Backward => &self.backward,
+            Direction::Left => &self.left,
+            Direction::Right => &self.right,
+        }
+    }
+}
+
 fn assemble(
     robot: &Description,
     p: &Prepared,
@@ -784,12 +850,13 @@ fn assemble(
         &p.seed_constants,
     )?;
     let foot = &p.foot;
+    let names = p.sim.joint_names();
     Ok(StudyReport {
         robot: robot.name.clone(),
-        forward: direction_report(results, Direction::Forward),
-        backward: direction_report(results, Direction::Backward),
-        left: direction_report(results, Direction::Left),
-        right: direction_report(results, Direction::Right),
+        forward: direction_report(results, Direction::Forward, names),
+        backward: direction_report(results, Direction::Backward, names),
+        left: direction_report(results, Direction::Left, names),
+        right: direction_report(results, Direction::Right, names),
         com,
         seed_constants: p.label.to_string(),
         foot: FootReport {

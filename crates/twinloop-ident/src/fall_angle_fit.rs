@@ -1,0 +1,144 @@
+//! Placing an added mass of known size on a known link by the fall angles themselves
+//! (seed 000 section V.B's adaptation, refined): the position in the link's frame
+//! whose model, at the postures the robot had at its four onsets, has static tipping
+//! angles equal to the measured ones, in the least-squares sense.
+//!
+//! Why beside the CoM inversion of [`crate::adapt`]: that inversion treats the robot
+//! as one body turning about its ankles, with the feet (everything below the ankle
+//! pitch joints) apart. A part on a link between the ankle pitch and roll joints turns
+//! with the sideways lean but not with the fore-aft one, and one on a foot turns with
+//! neither; the CoM inversion places such parts centimetres off (a 0.36 kg part on
+//! km20's ankle cross 25 mm, with the CoM 2.5 mm off). The static tipping analysis of
+//! the whole model (`twinloop_sim::statics`) knows which link turns with which joint,
+//! so fitting the position to the angles it predicts places every link's part alike,
+//! and makes the adapted model's fall angles the measured ones as nearly as the
+//! measurement allows: the check the adaptation is judged by.
+//!
+//! Method: Levenberg-Marquardt on the four residuals `static_d(p) - measured_d`
+//! (deg) over the three coordinates of `p`, with forward-difference derivatives (each
+//! residual is a smooth function of `p`: a static analysis of a model whose one
+//! inertial changes smoothly), each step projected onto the box the part may be in
+//! (the host's outline, when the caller gives one). Four equations, three unknowns:
+//! the residual left over says how consistent the four angles are with one part on
+//! that link.
+
+use crate::error::IdentError;
+use crate::tipover_study::{StudyReport, static_angles_at_onsets};
+use nalgebra::{Matrix3, Vector3, Vector4};
+use twinloop_description::Description;
+
+/// Forward-difference step of the position, m: well above the static analysis's
+/// own resolution (its bisection ends at 1e-10 rad, 0.03 um of lever at km20's height)
+/// and small against any outline.
+const STEP: f64 = 5e-4;
+/// Stop when a step moves the part by less than this, m.
+const TOLERANCE: f64 = 1e-5;
+const MAX_ITERATIONS: usize = 12;
+
+/// The fitted position and how well the four angles agree.
+#[derive(Debug, Clone)]
+pub struct FallAngleFit {
+    /// The part's position in the host link's frame, m.
+    pub position_host: [f64; 3],
+    /// Static minus measured angle per direction (forward, backward, left, right) at
+    /// the start and at the end, deg.
+    pub start_residual_deg: [f64; 4],
+    pub residual_deg: [f64; 4],
+    pub iterations: usize,
+}
+
+/// The candidate model for a position: the prior with the part merged into its host.
+fn residuals(
+    prior: &Description,
+    report: &StudyReport,
+    host: &str,
+    mass: f64,
+    p: &Vector3<f64>,
+    measured: &Vector4<f64>,
+) -> Result<Vector4<f64>, IdentError> {
+    let robot = crate::adapt::with_added_mass(prior, host, mass, [p.x, p.y, p.z], true)
+        .map_err(IdentError::new)?;
+    let s = static_angles_at_onsets(&robot, report)?;
+    Ok(Vector4::from(s) - measured)
+}
+
+/// Fit the position (host frame) of a part of `mass` kg on `host`, starting from
+/// `start`, kept within `bounds` (lowest and highest corner, host frame) if given.
+pub fn fit_position(
+    prior: &Description,
+    report: &StudyReport,
+    host: &str,
+    mass: f64,
+    start: Vector3<f64>,
+    bounds: Option<(Vector3<f64>, Vector3<f64>)>,
+) -> Result<FallAngleFit, IdentError> {
+    let clamp = |p: Vector3<f64>| match bounds {
+        Some((lo, hi)) => p.sup(&lo).inf(&hi),
+        None => p,
+    };
+    let measured = Vector4::new(
+        report.forward.measured_deg,
+        report.backward.measured_deg,
+        report.left.measured_deg,
+        report.right.measured_deg,
+    );
+    let mut p = clamp(start);
+    let mut r = residuals(prior, report, host, mass, &p, &measured)?;
+    if r.iter().any(|v| !v.is_finite()) {
+        return Err(IdentError::new(format!(
+            "the static tipping analysis found no tip for the part on {host} at the start"
+        )));
+    }
+    let start_residual = r;
+    let mut lambda = 1e-3;
+    let mut iterations = 0;
+    while iterations < MAX_ITERATIONS {
+        iterations += 1;
+        // Jacobian d r / d p, deg per m, by forward differences.
+        let mut jac = nalgebra::Matrix4x3::zeros();
+        for i in 0..3 {
+            let mut q = p;
+            q[i] += STEP;
+            let rq = residuals(prior, report, host, mass, &q, &measured)?;
+            jac.set_column(i, &((rq - r) / STEP));
+        }
+        let jtj = jac.transpose() * jac;
+        let jtr = jac.transpose() * r;
+        // Damped Gauss-Newton; a step that does not lower the cost raises the damping.
+        let mut accepted = false;
+        for _ in 0..8 {
+            let a = jtj + Matrix3::from_diagonal(&jtj.diagonal()) * lambda;
+            let Some(step) = a.lu().solve(&(-jtr)) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let next = clamp(p + step);
+            let rn = residuals(prior, report, host, mass, &next, &measured)?;
+            if rn.iter().all(|v| v.is_finite()) && rn.norm_squared() < r.norm_squared() {
+                let moved = (next - p).norm();
+                p = next;
+                r = rn;
+                lambda = (lambda * 0.3).max(1e-7);
+                accepted = true;
+                if moved < TOLERANCE {
+                    return Ok(done(p, start_residual, r, iterations));
+                }
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !accepted {
+            break;
+        }
+    }
+    Ok(done(p, start_residual, r, iterations))
+}
+
+fn done(p: Vector3<f64>, start: Vector4<f64>, r: Vector4<f64>, iterations: usize) -> FallAngleFit {
+    FallAngleFit {
+        position_host: [p.x, p.y, p.z],
+        start_residual_deg: start.into(),
+        residual_deg: r.into(),
+        iterations,
+    }
+}
