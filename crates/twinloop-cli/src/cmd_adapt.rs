@@ -58,7 +58,8 @@ pub struct AdaptArgs {
     /// The changed robot's total mass, kg: the added mass is this minus the prior's.
     #[arg(long, value_name = "KG", value_parser = crate::common::positive)]
     pub total_mass: Option<f64>,
-    /// The link the mass was added to (with --total-mass it only names the host).
+    /// The link the mass was added to (with --total-mass: the host, and the part is
+    /// kept within 1 cm of that link's collision outline).
     #[arg(long = "where", value_name = "LINK")]
     pub host: Option<String>,
     /// Merge the mass into the host link's inertial instead of a fixed `added_mass` link.

@@ -42,6 +42,11 @@ pub struct DemoArgs {
     /// stiffness, as `serve --ground-sink`)
     #[arg(long, default_value_t = 1e-4, value_name = "M", value_parser = crate::common::positive)]
     pub ground_sink: f64,
+    /// Tell the adapting side which link the change is on, as `adapt --where` (a team
+    /// knows where it bolted the part): the position is then fitted inside that
+    /// link's outline. One change only (not with --scenario a)
+    #[arg(long)]
+    pub tell_where: bool,
     /// Folder for the files written: the adapted URDF, the tip-over and adaptation
     /// JSON, the HTML report and the CSV of every cycle read over the bus
     #[arg(long, default_value = "twinloop-demo", value_name = "DIR")]
@@ -206,6 +211,15 @@ pub fn run(a: DemoArgs) -> CliResult {
     let prior = km20::build()?;
     let mapping = RobotMapping::builtin("km20").ok_or("no built-in km20 mapping")?;
     let (truth_changes, how) = hidden_change(&a, &prior)?;
+    if a.tell_where
+        && truth_changes
+            .iter()
+            .any(|c| c.link != truth_changes[0].link)
+    {
+        return Err(CliError::new(
+            "--tell-where: the change is on more than one link (adapt --where takes one)",
+        ));
+    }
     let mut truth = prior.clone();
     for c in &truth_changes {
         truth = changed(&truth, c)?;
@@ -254,6 +268,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     write_json(&tip_json, &*study)?;
     let opts = AdaptOptions {
         total_mass: Some(scale),
+        host: a.tell_where.then(|| truth_changes[0].link.clone()),
         angle_resolution_deg: Some(0.05),
         ..Default::default()
     };

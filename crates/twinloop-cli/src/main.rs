@@ -90,8 +90,11 @@ enum Command {
     ///
     /// The exact method turns the measured fall angles (--tipover, the JSON of
     /// `twinloop experiment tipover`) into the CoM; one added point mass explains its
-    /// move from the prior model's CoM. --total-mass fixes it in 3-D; --where LINK alone
-    /// puts it on the ray from the prior CoM through the measured one, nearest the link.
+    /// move from the prior model's CoM. --total-mass fixes it in 3-D, and the part's
+    /// position is then fitted to the four fall angles at the robot's onset postures
+    /// (whatever link it is on, feet included), inside the link's outline if --where
+    /// names it; --where LINK alone puts it on the ray from the prior CoM through the
+    /// measured one, nearest the link.
     ///
     /// Example:
     ///   twinloop adapt --robot builtin:km20 --tipover tip.json --total-mass 3.636 \

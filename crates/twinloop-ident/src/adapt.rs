@@ -599,6 +599,32 @@ pub fn adapt(
         "z"
     };
     notes.push(format!("the poorest determined direction is {imax}"));
+    notes.push(
+        "the tip-over sees only the CoM: several parts added at once are found as the one equivalent part (their total mass at their common CoM)".into(),
+    );
+    if let Some(f) = &fit_summary {
+        let (k, worst) = f
+            .residual_deg
+            .iter()
+            .enumerate()
+            .fold(
+                (0, 0.0_f64),
+                |b, (k, v)| if v.abs() > b.1.abs() { (k, *v) } else { b },
+            );
+        let dirs = ["forward", "backward", "left", "right"];
+        notes.push(format!(
+            "the part's position was fitted to the four fall angles at the robot's onsets: the adapted model's static angles are within {:.2} deg of the measured ones (largest {}), {:.2} deg before the fit",
+            worst.abs(),
+            dirs[k],
+            f.start_residual_deg.iter().fold(0.0_f64, |m, v| m.max(v.abs()))
+        ));
+        if worst.abs() > 0.3 {
+            notes.push(format!(
+                "the four angles do not fit one part on this link to 0.3 deg: the change may be elsewhere or in several places, or the {} angle was measured poorly",
+                dirs[k]
+            ));
+        }
+    }
     let prior_reduced = reduced(&pf, prior, &foot)?;
     let mut report = AdaptReport {
         robot: prior.name.clone(),
@@ -659,6 +685,27 @@ pub fn adapt(
         }
     };
     Ok(Adapted { report, robot })
+}
+
+/// The ray of positions that explain the measured CoM with an unknown mass, in the
+/// view's coordinates (`i`: 0 side, 1 front; the other is z): `p(m) = c_meas +
+/// (M0 / m) (c_meas - c0)` for m from 2 kg down to 0.05 kg. Empty when the mass was
+/// known (then nothing trades off) or the CoM did not move.
+fn ambiguity_line(r: &AdaptReport, i: usize) -> (Vec<f64>, Vec<f64>) {
+    if r.mode == "total-mass" {
+        return (vec![], vec![]);
+    }
+    let (c, c0) = (Vector3::from(r.measured_com), Vector3::from(r.prior_com));
+    if (c - c0).norm() < 1e-9 {
+        return (vec![], vec![]);
+    }
+    [2.0, 1.0, 0.5, 0.3, 0.2, 0.1, 0.05]
+        .iter()
+        .map(|m| {
+            let p = c + (c - c0) * (r.prior_mass / m);
+            (p[i], p.z)
+        })
+        .unzip()
 }
 
 /// How far outside its host's collision outline an added part's CoM may lie, m: a
@@ -770,6 +817,9 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
         "robot (measured)".into(),
         "prior model".into(),
     ];
+    if r.fall_angle_fit.is_some() {
+        header.push("adapted model (static, at the robot's onsets)".into());
+    }
     if r.check_deg.is_some() {
         header.push("adapted model (simulated)".into());
     }
@@ -780,6 +830,9 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
                 format!("{:.3}", r.measured_deg[k]),
                 format!("{:.3}", r.prior_model_deg[k]),
             ];
+            if let Some(f) = &r.fall_angle_fit {
+                row.push(format!("{:.3}", r.measured_deg[k] + f.residual_deg[k]));
+            }
             if let Some(c) = r.check_deg {
                 row.push(format!("{:.3}", c[k]));
             }
@@ -872,6 +925,36 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
                 &[a.position[2]],
                 SeriesStyle::Points,
             );
+        }
+        // What the angles cannot tell apart, drawn rather than guessed: without the
+        // mass, every point of the ray from the measured CoM away from the prior's
+        // explains them (a lighter part further out); with it, the 1-sigma box.
+        let (line_x, line_z) = ambiguity_line(r, i);
+        if !line_x.is_empty() {
+            p = p.series(
+                "equally good (mass unknown: 0.05-2 kg along the ray)",
+                &line_x,
+                &line_z,
+                SeriesStyle::DashedLine,
+            );
+        }
+        if let (Some(a), "total-mass") = (&r.added, r.mode.as_str()) {
+            let (c, s) = (a.position, a.position_sigma);
+            let bx = [
+                c[i] - s[i],
+                c[i] + s[i],
+                c[i] + s[i],
+                c[i] - s[i],
+                c[i] - s[i],
+            ];
+            let bz = [
+                c[2] - s[2],
+                c[2] - s[2],
+                c[2] + s[2],
+                c[2] + s[2],
+                c[2] - s[2],
+            ];
+            p = p.series("added mass, 1 sigma", &bx, &bz, SeriesStyle::Line);
         }
         rep.plot(&p);
     }
