@@ -135,6 +135,10 @@ pub struct FallAngleFitSummary {
     /// (forward, backward, left, right), deg: at the start and after the fit.
     pub start_residual_deg: [f64; 4],
     pub residual_deg: [f64; 4],
+    /// The common part of the left and right residuals the fit set aside, deg (see
+    /// `fall_angle_fit`): how far the sideways pair disagrees with the fore-aft one.
+    #[serde(default)]
+    pub sideways_offset_deg: f64,
     pub iterations: usize,
 }
 
@@ -519,22 +523,23 @@ pub fn adapt(
             .all(|&d| !tip.direction(d).onset_positions.is_empty())
     {
         let host = added.host.clone();
-        let bounds = if opts.host.is_some() {
-            prior.link(&host).and_then(outline_box).map(|(lo, hi)| {
+        // The named link's outline; a link found as the nearest is a guess, so the fit
+        // stays within `FIT_REACH` of the inversion's point instead (what the angles
+        // cannot pin down is not sent decimetres away by noise).
+        let start = Vector3::from(added.position_host);
+        let reach = Vector3::repeat(FIT_REACH);
+        let bounds = match opts
+            .host
+            .as_ref()
+            .and_then(|_| prior.link(&host).and_then(outline_box))
+        {
+            Some((lo, hi)) => {
                 let margin = Vector3::repeat(OUTLINE_MARGIN);
                 (lo - margin, hi + margin)
-            })
-        } else {
-            None
+            }
+            None => (start - reach, start + reach),
         };
-        let fit = fall_angle_fit::fit_position(
-            prior,
-            tip,
-            &host,
-            added.mass,
-            Vector3::from(added.position_host),
-            bounds,
-        )?;
+        let fit = fall_angle_fit::fit_position(prior, tip, &host, added.mass, start, bounds)?;
         let local = Vector3::from(fit.position_host);
         let pose = pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
         let p = pose.act_point(&local) - pf.mid;
@@ -546,6 +551,7 @@ pub fn adapt(
             from_com_inversion: added.position_host,
             start_residual_deg: fit.start_residual_deg,
             residual_deg: fit.residual_deg,
+            sideways_offset_deg: fit.sideways_offset_deg,
             iterations: fit.iterations,
         });
         adapted = Some((
@@ -618,6 +624,13 @@ pub fn adapt(
             dirs[k],
             f.start_residual_deg.iter().fold(0.0_f64, |m, v| m.max(v.abs()))
         ));
+        if f.sideways_offset_deg.abs() > 0.05 {
+            notes.push(format!(
+                "the left and right angles share an error of {:+.2} deg against the fore-aft pair (both measured {} than one CoM explains): set aside, as the exact method's free frontal lever does; x and z come from the fore-aft angles",
+                f.sideways_offset_deg,
+                if f.sideways_offset_deg > 0.0 { "earlier" } else { "later" }
+            ));
+        }
         if worst.abs() > 0.3 {
             notes.push(format!(
                 "the four angles do not fit one part on this link to 0.3 deg: the change may be elsewhere or in several places, or the {} angle was measured poorly",
@@ -707,6 +720,10 @@ fn ambiguity_line(r: &AdaptReport, i: usize) -> (Vec<f64>, Vec<f64>) {
         })
         .unzip()
 }
+
+/// How far the fall-angle fit may move the part from the CoM inversion's point when
+/// the link is not named, m, per axis.
+pub const FIT_REACH: f64 = 0.03;
 
 /// How far outside its host's collision outline an added part's CoM may lie, m: a
 /// battery or camera is bolted onto the link's surface, its centre about half its
