@@ -24,8 +24,6 @@ import json
 import os
 import shutil
 
-import dm_control
-import gymnasium
 import mujoco
 import numpy as np
 
@@ -36,6 +34,11 @@ SKIP = {"dog.xml"}
 
 
 def sources():
+    # Imported here so that other scripts can use reference() without them
+    # (tools/oracle/robot_mjcf_reference.py).
+    import dm_control
+    import gymnasium
+
     dm = os.path.join(os.path.dirname(dm_control.__file__), "suite")
     gym = os.path.join(os.path.dirname(gymnasium.__file__), "envs", "mujoco", "assets")
     for f in sorted(glob.glob(os.path.join(dm, "*.xml"))):
