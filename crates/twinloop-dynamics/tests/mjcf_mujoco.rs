@@ -335,8 +335,10 @@ fn mjcf_corpus_agrees_with_mujoco() {
 /// rotated roots (some at pitch 90 deg), defaults, childclass and include,
 /// inertiafromgeom, inertiagrouprange, boundmass, boundinertia, balanceinertia,
 /// settotalmass and gravity; six of them (`framed_*`) with `<frame>`s around
-/// bodies, geoms and sites, and six (`ball_*`) with ball joints among the hinges
-/// and slides (a ball beside other joints in a body, anchored, with armature).
+/// bodies, geoms and sites, six (`ball_*`) with ball joints among the hinges
+/// and slides (a ball beside other joints in a body, anchored, with armature),
+/// and four (`nogeom_*`, also with balls) with `inertiafromgeom="false"`, each
+/// with a massless body whose geoms would weigh otherwise.
 /// Every one must load and agree.
 #[test]
 fn generated_corpus_agrees_with_mujoco() {
@@ -344,7 +346,7 @@ fn generated_corpus_agrees_with_mujoco() {
         .into_iter()
         .filter(|m| !m.0.starts_with("generated/mesh_"))
         .collect();
-    assert_eq!(models.len(), 36);
+    assert_eq!(models.len(), 40);
     let mut balls = 0;
     for (name, xml, refd) in models {
         let robot = load(&xml).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -352,7 +354,7 @@ fn generated_corpus_agrees_with_mujoco() {
         let model = Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap();
         balls += usize::from(model.has_spherical_joints());
     }
-    assert_eq!(balls, 6, "every ball_* tree has a ball joint");
+    assert_eq!(balls, 10, "every ball_* and nogeom_* tree has a ball joint");
     println!(
         "generated corpus: largest relative error {:.1e}",
         WORST.with(|w| w.get())
@@ -487,11 +489,14 @@ fn generated_corpus_covers_the_compiler() {
                         "boundmass",
                         "boundinertia",
                         "balanceinertia",
-                        "inertiafromgeom",
                         "inertiagrouprange",
                         "eulerseq",
                     ] {
                         count(a, attr(a));
+                    }
+                    for v in ["true", "auto", "false"] {
+                        let here = n.attribute("inertiafromgeom") == Some(v);
+                        count(&format!("inertiafromgeom {v}"), here);
                     }
                 }
                 "option" => count("gravity", attr("gravity")),
@@ -513,6 +518,6 @@ fn generated_corpus_covers_the_compiler() {
         missing.is_empty(),
         "not in the generated corpus: {missing:?}"
     );
-    assert_eq!(seen.len(), 24, "{seen:?}");
+    assert_eq!(seen.len(), 26, "{seen:?}");
     println!("generated corpus: {seen:?}");
 }
