@@ -284,3 +284,52 @@ fn forward_dynamics_of_ball_joints_matches_pinocchio() {
         }
     }
 }
+
+/// A model whose mass matrix is singular (a massless leaf on the wrist joint):
+/// forward dynamics refuses it naming the joint and the row (exit 2), where it
+/// used to write NaN rows and exit 0.
+#[test]
+fn forward_dynamics_refuses_a_singular_mass_matrix_naming_the_joint() {
+    let urdf = tmp("massless_leaf.urdf");
+    std::fs::write(
+        &urdf,
+        r#"<robot name="arm">
+  <link name="base"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="upper"><inertial><origin xyz="0 0 -0.2"/><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="leaf"/>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="1 0 0"/><limit lower="-2" upper="2" effort="10" velocity="5"/></joint>
+  <joint name="wrist" type="revolute"><parent link="upper"/><child link="leaf"/><origin xyz="0 0 -0.4"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="10" velocity="5"/></joint>
+</robot>
+"#,
+    )
+    .unwrap();
+    let input = tmp("massless_leaf.csv");
+    std::fs::write(
+        &input,
+        "t,q:shoulder,q:wrist,v:shoulder,v:wrist,tau:shoulder,tau:wrist\n\
+         0,0.1,0.2,0,0,0,0\n0.01,0.2,0.3,0.1,0.1,0.5,0.1\n",
+    )
+    .unwrap();
+    let out = tmp("massless_leaf_acc.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["dynamics", "forward", "--fixed-base", "--robot"])
+        .arg(&urdf)
+        .arg("--trajectory")
+        .arg(&input)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.starts_with("error: ")
+            && err.contains("massless_leaf.csv")
+            && err.contains("\"wrist\""),
+        "{err}"
+    );
+    assert!(err.contains("singular"), "{err}");
+    if let Ok(text) = std::fs::read_to_string(&out) {
+        assert!(!text.to_lowercase().contains("nan"), "{text}");
+    }
+}

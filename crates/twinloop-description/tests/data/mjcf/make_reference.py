@@ -9,7 +9,8 @@ installs them), this copies the file (and the files it includes) into
   body_inertia, body_iquat;
 - three seeded random states with the root fixed: qpos and qvel of the joints
   that twinloop models (a free joint on the root body is held at the identity
-  pose with zero velocity and left out), the joint-space mass matrix
+  pose with zero velocity and left out; a ball joint's quaternion is written
+  x, y, z, w, twinloop's order, where MuJoCo's qpos has w first), the joint-space mass matrix
   (`mj_fullM`, same rows), the bias forces (`qfrc_bias`) and every body's
   world pose (`xpos`, `xquat`); with a free root, also the mass matrix and bias
   forces with the root's six dofs first (`floating_mass_matrix`,
@@ -24,8 +25,6 @@ import json
 import os
 import shutil
 
-import dm_control
-import gymnasium
 import mujoco
 import numpy as np
 
@@ -36,6 +35,11 @@ SKIP = {"dog.xml"}
 
 
 def sources():
+    # Imported here so that other scripts can use reference() without them
+    # (tools/oracle/robot_mjcf_reference.py).
+    import dm_control
+    import gymnasium
+
     dm = os.path.join(os.path.dirname(dm_control.__file__), "suite")
     gym = os.path.join(os.path.dirname(gymnasium.__file__), "envs", "mujoco", "assets")
     for f in sorted(glob.glob(os.path.join(dm, "*.xml"))):
@@ -89,7 +93,8 @@ def state(m, seed, free):
             qr = rng.normal(size=4)
             d.qpos[qa + nq - 4:qa + nq] = qr / np.linalg.norm(qr)
             d.qvel[va:va + nv] = rng.uniform(-1.0, 1.0, nv)
-            keep_q.extend(range(qa, qa + nq))
+            # The quaternion x, y, z, w (twinloop's q; MuJoCo's qpos has w first).
+            keep_q.extend(list(range(qa, qa + nq - 4)) + [qa + nq - 3, qa + nq - 2, qa + nq - 1, qa + nq - 4])
             keep_v.extend(range(va, va + nv))
     mujoco.mj_forward(m, d)
     full = np.zeros((m.nv, m.nv))
@@ -190,22 +195,40 @@ def close_frame(opened, lines, indent):
         lines.append(f"{indent[:-2]}</frame>")
 
 
-def random_body(rng, depth, counter, degrees, group_hi, lines, indent, frames=False):
+def random_joint(rng, name, j, degrees, balls, indent, seen):
+    """A hinge or slide (or, in the ball trees, a ball) joint, maybe anchored,
+    with a ref and armature. A ball joint has no axis and no ref. `seen` is the
+    body's (dofs, ball so far): MuJoCo takes at most 6 dofs in a body and no
+    rotation after a ball, so after a ball only slides follow."""
+    dofs, ball = seen
+    if balls and not ball and dofs <= 3 and rng.random() < 0.4:
+        seen[:] = [dofs + 3, True]
+        extra = f' pos="{fmt(rng.uniform(-0.1, 0.1, 3))}"' if rng.random() < 0.6 else ""
+        extra += f' armature="{round(float(rng.uniform(0, 0.1)), 4)}"' if rng.random() < 0.3 else ""
+        return f'{indent}  <joint name="{name}_j{j}" type="ball"{extra}/>'
+    kind = "hinge" if rng.random() < 0.7 else "slide"
+    if ball:
+        kind = "slide"
+    seen[0] = dofs + 1
+    ref = rng.uniform(-40, 40) if degrees and kind == "hinge" else rng.uniform(-0.7, 0.7)
+    extra = f' pos="{fmt(rng.uniform(-0.1, 0.1, 3))}"' if rng.random() < 0.6 else ""
+    extra += f' ref="{round(float(ref), 4)}"' if rng.random() < 0.5 else ""
+    extra += f' armature="{round(float(rng.uniform(0, 0.1)), 4)}"' if rng.random() < 0.3 else ""
+    return f'{indent}  <joint name="{name}_j{j}" type="{kind}" axis="{fmt(rng.normal(size=3))}"{extra}/>'
+
+
+def random_body(rng, depth, counter, degrees, group_hi, lines, indent, frames=False, balls=False,
+                explicit=0.25):
     counter[0] += 1
     name = f"b{counter[0]}"
     cls = ' childclass="heavy"' if rng.random() < 0.2 else ""
     indent, framed = open_frame(rng, frames, lines, indent)
     lines.append(f'{indent}<body name="{name}" pos="{fmt(rng.uniform(-0.3, 0.3, 3))}" '
                  f'{random_orientation(rng)}{cls}>')
+    seen = [0, False]
     for j in range(rng.integers(0, 4)):
-        kind = "hinge" if rng.random() < 0.7 else "slide"
-        ref = rng.uniform(-40, 40) if degrees and kind == "hinge" else rng.uniform(-0.7, 0.7)
-        extra = f' pos="{fmt(rng.uniform(-0.1, 0.1, 3))}"' if rng.random() < 0.6 else ""
-        extra += f' ref="{round(float(ref), 4)}"' if rng.random() < 0.5 else ""
-        extra += f' armature="{round(float(rng.uniform(0, 0.1)), 4)}"' if rng.random() < 0.3 else ""
-        lines.append(f'{indent}  <joint name="{name}_j{j}" type="{kind}" '
-                     f'axis="{fmt(rng.normal(size=3))}"{extra}/>')
-    if rng.random() < 0.25:
+        lines.append(random_joint(rng, name, j, degrees, balls, indent, seen))
+    if rng.random() < explicit:
         if rng.random() < 0.5:
             inertia = f'diaginertia="{fmt(rng.uniform(0.01, 0.02, 3))}" {random_orientation(rng)}'
         else:
@@ -223,21 +246,30 @@ def random_body(rng, depth, counter, degrees, group_hi, lines, indent, frames=Fa
     close_frame(opened, lines, inner)
     if depth < 3:
         for _ in range(rng.integers(0, 3)):
-            random_body(rng, depth + 1, counter, degrees, group_hi, lines, indent + "  ", frames)
+            random_body(rng, depth + 1, counter, degrees, group_hi, lines, indent + "  ", frames, balls,
+                        explicit)
     lines.append(f"{indent}</body>")
     close_frame(framed, lines, indent)
 
 
-def generated_model(seed, frames=False):
+def generated_model(seed, frames=False, balls=False, nogeom=False):
     """A random tree exercising the compiler: geoms of every primitive type,
-    several joints per body with anchors and refs, rotated roots, defaults and
-    childclass, include, and the compiler's mass options."""
-    rng = np.random.default_rng(1000 + seed + (5000 if frames else 0))
+    several joints per body with anchors and refs (with `balls`, ball joints
+    among them), rotated roots, defaults and childclass, include, and the
+    compiler's mass options. With `nogeom` (and balls), `inertiafromgeom="false"`:
+    geoms never weigh, and most bodies get an <inertial> (MuJoCo refuses a
+    massless moving leaf), so a body without one is massless."""
+    rng = np.random.default_rng(1000 + seed + (5000 if frames else 0) + (9000 if balls else 0)
+                                + (4000 if nogeom else 0))
     degrees = rng.random() < 0.5
     group_hi = int(rng.integers(0, 5))
     comp = [f'angle="{"degree" if degrees else "radian"}"']
     if rng.random() < 0.5:
-        comp.append(f'inertiafromgeom="{["true", "auto"][rng.integers(2)]}"')
+        fromgeom = ["true", "auto"][rng.integers(2)]
+        if not nogeom:
+            comp.append(f'inertiafromgeom="{fromgeom}"')
+    if nogeom:
+        comp.append('inertiafromgeom="false"')
     if rng.random() < 0.3:
         comp.append(f'inertiagrouprange="0 {rng.integers(0, 4)}"')
     if rng.random() < 0.3:
@@ -258,7 +290,7 @@ def generated_model(seed, frames=False):
                 '    <joint armature="0.2"/>',
                 '  </default>',
                 '</default>']
-    prefix = "framed" if frames else "generated"
+    prefix = "nogeom" if nogeom else "ball" if balls else "framed" if frames else "generated"
     lines = [f'<mujoco model="{prefix}_{seed}">', f'  <compiler {" ".join(comp)}/>']
     include = None
     if rng.random() < 0.4:
@@ -274,7 +306,7 @@ def generated_model(seed, frames=False):
     lines.append('    <geom type="plane" size="5 5 0.1"/>')
     counter = [0]
     for _ in range(1 + (rng.random() < 0.3)):
-        random_body(rng, 0, counter, degrees, group_hi, lines, "    ", frames)
+        random_body(rng, 0, counter, degrees, group_hi, lines, "    ", frames, balls, 0.8 if nogeom else 0.25)
     lines.append("  </worldbody>")
     lines.append("</mujoco>")
     return "\n".join(lines) + "\n", include
@@ -282,7 +314,12 @@ def generated_model(seed, frames=False):
 
 GENERATED = 24
 FRAMED = 6
+BALLS = 6
+# Seeds (of the first 60) whose inertiafromgeom="false" tree MuJoCo loads and has a massless
+# body: most others leave a moving leaf massless, which MuJoCo refuses.
+NOGEOM_SEEDS = [17, 26, 30, 49]
 MESH_MODELS = 6
+SHELL_MESH_MODELS = 4
 
 
 def torus(R=0.1, r=0.04, n=16, m=8):
@@ -340,19 +377,28 @@ def write_obj(path, v, f):
             out.write(f"f {t[0] + 1} {t[1] + 1} {t[2] + 1}\n")
 
 
-def mesh_model(seed, out):
+def mesh_model(seed, out, shell=False):
     """Bodies whose mass comes from mesh geoms (STL and OBJ, scaled, legacy or
-    exact inertia, mass or density) beside primitive geoms."""
-    rng = np.random.default_rng(2000 + seed)
-    lines = [f'<mujoco model="mesh_{seed}">',
+    exact inertia, mass or density) beside primitive geoms. With `shell`
+    (`mesh_shell_*`), the meshes' inertia is "shell" (mass on the surface) or
+    "convex" (the convex hull's), scaled or not."""
+    rng = np.random.default_rng(2000 + seed + (1000 if shell else 0))
+    name = f"mesh_shell_{seed}" if shell else f"mesh_{seed}"
+    lines = [f'<mujoco model="{name}">',
              '  <compiler angle="radian" meshdir="meshes"/>',
-             '  <asset>',
-             f'    <mesh name="torus" file="torus.stl" scale="{fmt(rng.uniform(0.5, 2, 3))}"/>',
-             '    <mesh name="torus_exact" file="torus.stl" inertia="exact"/>',
-             f'    <mesh name="blob" file="blob.obj" scale="{fmt(rng.uniform(0.5, 2, 3))}"/>',
-             '    <mesh name="blob_exact" file="blob.obj" inertia="exact"/>',
-             '  </asset>',
-             '  <worldbody>']
+             '  <asset>']
+    if shell:
+        lines += [f'    <mesh name="torus" file="torus.stl" inertia="shell" scale="{fmt(rng.uniform(0.5, 2, 3))}"/>',
+                  '    <mesh name="torus_exact" file="torus.stl" inertia="convex"/>',
+                  f'    <mesh name="blob" file="blob.obj" inertia="convex" scale="{fmt(rng.uniform(0.5, 2, 3))}"/>',
+                  '    <mesh name="blob_exact" file="blob.obj" inertia="shell"/>']
+    else:
+        lines += [f'    <mesh name="torus" file="torus.stl" scale="{fmt(rng.uniform(0.5, 2, 3))}"/>',
+                  '    <mesh name="torus_exact" file="torus.stl" inertia="exact"/>',
+                  f'    <mesh name="blob" file="blob.obj" scale="{fmt(rng.uniform(0.5, 2, 3))}"/>',
+                  '    <mesh name="blob_exact" file="blob.obj" inertia="exact"/>']
+    lines += ['  </asset>',
+              '  <worldbody>']
     indent = "    "
     for b in range(3):
         lines.append(f'{indent}<body name="m{b}" pos="{fmt(rng.uniform(-0.2, 0.2, 3))}" {random_orientation(rng)}>')
@@ -369,7 +415,7 @@ def mesh_model(seed, out):
         indent = indent[:-2]
         lines.append(f"{indent}</body>")
     lines += ["  </worldbody>", "</mujoco>"]
-    path = os.path.join(out, f"mesh_{seed}.xml")
+    path = os.path.join(out, f"{name}.xml")
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
     return path
@@ -380,10 +426,12 @@ def write_generated():
     os.makedirs(out, exist_ok=True)
     for f in glob.glob(os.path.join(out, "*.xml")):
         os.remove(f)
-    for frames, count in [(False, GENERATED), (True, FRAMED)]:
-        prefix = "framed" if frames else "generated"
-        for seed in range(count):
-            text, include = generated_model(seed, frames)
+    families = [(False, False, False, range(GENERATED)), (True, False, False, range(FRAMED)),
+                (False, True, False, range(BALLS)), (False, True, True, NOGEOM_SEEDS)]
+    for frames, balls, nogeom, seeds in families:
+        prefix = "nogeom" if nogeom else "ball" if balls else "framed" if frames else "generated"
+        for seed in seeds:
+            text, include = generated_model(seed, frames, balls, nogeom)
             path = os.path.join(out, f"{prefix}_{seed}.xml")
             with open(path, "w") as f:
                 f.write(text)
@@ -397,10 +445,17 @@ def write_generated():
     write_obj(os.path.join(meshes, "blob.obj"), *blob(np.random.default_rng(7)))
     for seed in range(MESH_MODELS):
         yield "generated", out, mesh_model(seed, out)
+    for seed in range(SHELL_MESH_MODELS):
+        yield "generated", out, mesh_model(seed, out, shell=True)
 
 
 def main():
-    for package, src_dir, path in list(sources()) + list(write_generated()):
+    import sys
+
+    # --generated-only: rewrite the generated trees and their references alone
+    # (no dm_control or gymnasium needed; the copied corpus is left as it is).
+    packages = [] if "--generated-only" in sys.argv[1:] else list(sources())
+    for package, src_dir, path in packages + list(write_generated()):
         name = os.path.basename(path)
         if name in SKIP:
             continue

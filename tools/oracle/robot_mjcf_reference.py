@@ -1,0 +1,189 @@
+#!/usr/bin/env python3
+"""MuJoCo's compiled numbers for the robot MJCFs under models/ (OP3, TALOS, G1, H1).
+
+For each robot MJCF in models/*/mjcf/ (scene files only include them), this
+writes crates/twinloop-dynamics/tests/data/mujoco_models/<name>.json in the
+format of crates/twinloop-description/tests/data/mjcf/make_reference.py (whose
+`reference()` it calls): per body MuJoCo's `body_mass`, `body_ipos`,
+`body_inertia`, `body_iquat`; at three seeded states with the free root held at
+the identity, `mj_fullM` and `qfrc_bias` (also with the root free) and every
+body's world pose.
+
+The mesh files these MJCFs name are not in the repository (the Menagerie and
+Unitree asset folders are 17-22 MB each), and MuJoCo refuses a model whose mesh
+file is missing. So each model is compiled with its mesh assets and mesh geoms
+removed. That cannot change a body's mass, CoM or inertia when every body has
+an explicit `<inertial>` and the compiler does not say `inertiafromgeom="true"`
+(MuJoCo then ignores geoms for inertia); the script checks both, and checks
+that the stripped model's `body_mass` and `body_ipos` are the `<inertial>`
+`mass` and `pos` written in the file. Where mesh files of the same robot are
+available it also compiles the model with them and requires every number
+written (masses, inertias, mass matrices, bias forces) to be identical:
+
+- G1 (both MJCFs): the decimated meshes committed in models/unitree_g1/
+  meshes_decimated/ (same file names), and Unitree's full meshes in
+  shared/models/unitree_g1/meshes/ when that folder exists;
+- H1 (both MJCFs): Unitree's meshes in shared/models/unitree_h1/meshes/
+  h1_description/meshes/ when that folder exists (file names matched without
+  regard to case: the Menagerie file writes `pelvis.stl`, Unitree ships
+  `pelvis.STL`);
+- OP3 and TALOS: no mesh files are available (see their SOURCE.md).
+
+Which mesh sets were compiled and found equal is recorded in each JSON
+(`meshes`). Run from anywhere:
+
+    pip install mujoco==4.0.0 numpy
+    python3 tools/oracle/robot_mjcf_reference.py [--shared /work/shared/models]
+"""
+import argparse
+import glob
+import json
+import os
+import shutil
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+
+import mujoco
+import numpy as np
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+sys.path.insert(0, os.path.join(REPO, "crates", "twinloop-description", "tests", "data", "mjcf"))
+from make_reference import reference  # noqa: E402
+
+OUT = os.path.join(REPO, "crates", "twinloop-dynamics", "tests", "data", "mujoco_models")
+
+# Mesh folders of the same robot: (description, path relative to the repo or to --shared).
+MESH_SETS = {
+    "unitree_g1": [("decimated meshes committed in models/unitree_g1/meshes_decimated", "repo",
+                    "models/unitree_g1/meshes_decimated"),
+                   ("Unitree's meshes, shared/models/unitree_g1/meshes", "shared", "unitree_g1/meshes")],
+    "unitree_h1": [("Unitree's meshes, shared/models/unitree_h1/meshes/h1_description/meshes", "shared",
+                    "unitree_h1/meshes/h1_description/meshes")],
+}
+
+
+def robot_files():
+    files = sorted(glob.glob(os.path.join(REPO, "models", "*", "mjcf", "*.xml")))
+    return [f for f in files if os.path.basename(f) != "scene.xml"]
+
+
+def name_of(path):
+    robot = os.path.basename(os.path.dirname(os.path.dirname(path)))
+    return f"{robot}_{os.path.splitext(os.path.basename(path))[0]}"
+
+
+def strip_meshes(text):
+    """The MJCF without its mesh assets and without the geoms that use them."""
+    root = ET.fromstring(text)
+    for asset in root.iter("asset"):
+        for mesh in list(asset.findall("mesh")):
+            asset.remove(mesh)
+    removed = 0
+    for parent in root.find("worldbody").iter():
+        for geom in list(parent.findall("geom")):
+            if "mesh" in geom.attrib or geom.get("type") == "mesh":
+                parent.remove(geom)
+                removed += 1
+    # A default `<geom type="mesh">` would make a primitive geom without a type a
+    # mesh geom; no geom is left that relies on it, but drop it all the same.
+    for default in root.iter("default"):
+        for geom in default.findall("geom"):
+            if geom.get("type") == "mesh":
+                del geom.attrib["type"]
+    return ET.tostring(root, encoding="unicode"), removed
+
+
+def check_explicit_inertials(path, text, m):
+    """Every body has an <inertial>, geoms are not asked to override it, and the
+    compiled masses and CoMs are the file's: removing geoms changed nothing."""
+    root = ET.fromstring(text)
+    for comp in root.iter("compiler"):
+        assert comp.get("inertiafromgeom", "auto") != "true", f"{path}: inertiafromgeom=true"
+    bodies = list(root.find("worldbody").iter("body"))
+    assert len(bodies) == m.nbody - 1, f"{path}: {len(bodies)} bodies vs {m.nbody - 1}"
+    for b in bodies:
+        name = b.get("name")
+        inertial = b.find("inertial")
+        assert inertial is not None, f"{path}: body {name} has no <inertial>"
+        i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name)
+        assert i > 0, f"{path}: body {name}"
+        mass = float(inertial.get("mass"))
+        assert m.body_mass[i] == mass, f"{path}: {name} mass {m.body_mass[i]} vs {mass}"
+        pos = np.array([float(x) for x in inertial.get("pos").split()])
+        assert np.allclose(m.body_ipos[i], pos, rtol=0, atol=1e-15), f"{path}: {name} ipos"
+    return len(bodies)
+
+
+def mesh_dir(source, names):
+    """A folder holding each mesh file the model names (matched without regard to
+    case), or None when one is missing."""
+    present = {f.lower(): os.path.join(source, f) for f in os.listdir(source)}
+    tmp = tempfile.mkdtemp(prefix="twinloop_meshes_")
+    for f in names:
+        src = present.get(os.path.basename(f).lower())
+        if src is None:
+            shutil.rmtree(tmp)
+            return None
+        os.makedirs(os.path.dirname(os.path.join(tmp, f)), exist_ok=True)
+        os.symlink(src, os.path.join(tmp, f))
+    return tmp
+
+
+def with_meshes(text, meshes):
+    """Compile the original file with its meshdir pointed at `meshes`."""
+    spec = mujoco.MjSpec.from_string(text)
+    spec.meshdir = meshes
+    return spec.compile()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--shared", default=os.path.join(os.path.dirname(REPO), "shared", "models"),
+                    help="the shared model collection (for the full Unitree meshes), if present")
+    args = ap.parse_args()
+    os.makedirs(OUT, exist_ok=True)
+    for path in robot_files():
+        name = name_of(path)
+        robot = os.path.basename(os.path.dirname(os.path.dirname(path)))
+        text = open(path).read()
+        stripped, removed = strip_meshes(text)
+        m = mujoco.MjModel.from_xml_string(stripped)
+        nbodies = check_explicit_inertials(path, text, m)
+        ref = reference(m)
+        mesh_files = [el.get("file") for el in ET.fromstring(text).iter("mesh") if el.get("file")]
+        compiled = []
+        for what, where, rel in MESH_SETS.get(robot, []):
+            source = os.path.join(REPO if where == "repo" else args.shared, rel)
+            if not os.path.isdir(source):
+                print(f"{name}: {what}: not here, skipped")
+                continue
+            tmp = mesh_dir(source, mesh_files)
+            if tmp is None:
+                print(f"{name}: {what}: a mesh file is missing, skipped")
+                continue
+            try:
+                full = with_meshes(text, tmp)
+            finally:
+                shutil.rmtree(tmp)
+            assert full.nmesh == len(mesh_files) and full.nbody == m.nbody
+            assert full.ngeom == m.ngeom + removed, f"{name}: mesh geoms"
+            theirs = reference(full)
+            assert theirs == ref, f"{name}: the numbers with {what} differ from the stripped model's"
+            compiled.append(what)
+        ref["source_file"] = os.path.relpath(path, REPO)
+        ref["meshes"] = {
+            "mesh_assets_in_file": len(mesh_files),
+            "mesh_geoms_removed_to_compile": removed,
+            "every_body_has_inertial": True,
+            "compiled_with_meshes_and_identical": compiled,
+        }
+        with open(os.path.join(OUT, f"{name}.json"), "w") as f:
+            json.dump(ref, f, separators=(",", ":"))
+            f.write("\n")
+        print(f"{name}: {nbodies} bodies, nv {m.nv}, total mass {m.body_mass.sum():.6f} kg, "
+              f"{removed} mesh geoms removed; identical with meshes: {compiled or 'none available'}")
+
+
+if __name__ == "__main__":
+    main()
