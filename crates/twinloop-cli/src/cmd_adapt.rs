@@ -114,7 +114,7 @@ pub enum AdaptCommand {
     /// and fall angles, mean / 95th percentile / largest) and the report (seed Tables
     /// VI-VII style).
     #[command(verbatim_doc_comment)]
-    Train(TrainArgs),
+    Train(Box<TrainArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -233,7 +233,7 @@ fn replay_3d(
 
 pub fn run(a: AdaptArgs) -> CliResult {
     if let Some(AdaptCommand::Train(t)) = a.command {
-        return run_train(t);
+        return run_train(*t);
     }
     let Some(robot) = &a.robot else {
         return Err(CliError::new("adapt needs --robot"));
