@@ -180,11 +180,20 @@ def _tipover_each(robot, changes, threads=1, **kw):
     one error row (counted in the results), not a failed batch."""
     out = []
     for c in changes:
+        t0 = time.process_time()
         try:
-            out.append(tl.tipover_changes(robot, [c], threads=threads, **kw)[0])
+            row = tl.tipover_changes(robot, [c], threads=threads, **kw)[0]
         except ValueError as e:
-            out.append({"change": c, "error": str(e)})
+            row = {"change": c, "error": str(e)}
+        # CPU seconds of the job where it ran: on a shared machine wall time measures the
+        # scheduler's share, CPU time the work a cluster node would do.
+        row["cpu_s"] = time.process_time() - t0
+        out.append(row)
     return out
+
+
+def _without_cpu(rows):
+    return [{k: v for k, v in r.items() if k != "cpu_s"} for r in rows]
 
 
 def ray_sweep(results, quick, jobs=200, batch_size=10, simulate=False, serial_jobs=None):
@@ -201,10 +210,12 @@ def ray_sweep(results, quick, jobs=200, batch_size=10, simulate=False, serial_jo
     t0 = time.perf_counter()
     serial = _tipover_each(prior, changes[:ns], threads=1, **kw)
     per_job = (time.perf_counter() - t0) / ns
+    serial_cpu = sum(r["cpu_s"] for r in serial) / ns
+    serial = _without_cpu(serial)
     t_serial = per_job * jobs
     tasks = -(-jobs // batch_size)
     row = {"jobs": jobs, "batch_size": batch_size, "simulate": simulate, "serial_jobs_timed": ns,
-           "serial_s": t_serial, "per_job_s": per_job,
+           "serial_s": t_serial, "per_job_s": per_job, "per_job_cpu_s": serial_cpu,
            "description_pickle_bytes": len(pickle.dumps(prior)),
            "bytes_per_job": (len(pickle.dumps(changes[:ns])) + len(pickle.dumps(serial))) / ns,
            "load_before": os.getloadavg()[0]}
@@ -216,15 +227,18 @@ def ray_sweep(results, quick, jobs=200, batch_size=10, simulate=False, serial_jo
         t0 = time.perf_counter()
         outs[cpus] = td.map_batches(_tipover_each, prior, changes, batch_size=batch_size, progress=False, **kw)
         row[f"ray_{cpus}cpu_s"] = time.perf_counter() - t0
+        row[f"ray_{cpus}cpu_job_cpu_s"] = sum(r["cpu_s"] for r in outs[cpus]) / jobs
+        outs[cpus] = _without_cpu(outs[cpus])
         assert outs[cpus][:ns] == serial
         ray.shutdown()
     assert outs[1] == outs[2]
-    row["failed_jobs"] = sum("error" in r for r in outs[1])
+    row["failed_jobs"] = [i for i, r in enumerate(outs[1]) if "error" in r]
     row["load_after"] = os.getloadavg()[0]
     row["speedup_2_vs_1"] = row["ray_1cpu_s"] / row["ray_2cpu_s"]
     row["overhead_per_task_ms"] = (row["ray_1cpu_s"] - t_serial) / tasks * 1e3
     results[f"ray_sweep_{'simulated' if simulate else 'static'}"] = row
-    print(f"ray {jobs} {'simulated' if simulate else 'static'} tip-overs: " + ", ".join(f"{k} {v:.4g}" for k, v in row.items()))
+    print(f"ray {jobs} {'simulated' if simulate else 'static'} tip-overs: " + ", ".join(
+        f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()))
 
 
 def main():
