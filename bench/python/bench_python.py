@@ -87,8 +87,11 @@ def per_call(results, quick):
             "twinloop.aba": median_per_call(lambda: tl.aba(m, d, q, v, a), calls, repeats),
             "pinocchio.aba": median_per_call(lambda: pin.aba(pm, pd, qp, vp, ap), calls, repeats),
         }
-        results[f"per_call_{name}_us"] = {k: x * 1e6 for k, x in row.items()}
-        print(f"{name} per call (us): " + ", ".join(f"{k} {x * 1e6:.2f}" for k, x in row.items()))
+        row["rnea ratio (pin / twinloop)"] = row["pinocchio.rnea"] / row["twinloop.rnea"]
+        row["aba ratio (pin / twinloop)"] = row["pinocchio.aba"] / row["twinloop.aba"]
+        results[f"per_call_{name}_us"] = {k: x * (1 if "ratio" in k else 1e6) for k, x in row.items()}
+        results[f"per_call_{name}_us"]["load"] = os.getloadavg()[0]
+        print(f"{name} per call (us): " + ", ".join(f"{k} {x:.4g}" for k, x in results[f"per_call_{name}_us"].items()))
 
 
 def batched(results, quick):
@@ -113,8 +116,14 @@ def batched(results, quick):
             "aba_batch 1 thread": median_per_call(lambda: tl.aba_batch(m, Q, V, A, threads=1), 1, repeats),
             "aba_batch 2 threads": median_per_call(lambda: tl.aba_batch(m, Q, V, A, threads=2), 1, repeats),
         }
-        results[f"batch_{name}_ms"] = {k: x * 1e3 for k, x in row.items()}
-        print(f"{name} N=1000 (ms): " + ", ".join(f"{k} {x * 1e3:.2f}" for k, x in row.items()))
+        r = {k: x * 1e3 for k, x in row.items()}
+        r["rnea ratio (pin loop / 1 thread)"] = row["pinocchio.rnea loop"] / row["rnea_batch 1 thread"]
+        r["aba ratio (pin loop / 1 thread)"] = row["pinocchio.aba loop"] / row["aba_batch 1 thread"]
+        r["rnea 1 / 2 threads"] = row["rnea_batch 1 thread"] / row["rnea_batch 2 threads"]
+        r["aba 1 / 2 threads"] = row["aba_batch 1 thread"] / row["aba_batch 2 threads"]
+        r["load"] = os.getloadavg()[0]
+        results[f"batch_{name}_ms"] = r
+        print(f"{name} N=1000 (ms): " + ", ".join(f"{k} {x:.4g}" for k, x in r.items()))
 
 
 def rollouts(results, quick):
@@ -158,13 +167,38 @@ def rollouts(results, quick):
         "mujoco_steps_per_s_per_core": steps / theirs / threads,
         "twinloop_final_base_height_m": float(np.median(height)),
         "mujoco_final_base_height_m": float(np.median(mj_state[:, -1, 1 + 2])),
+        "ratio": theirs / ours,
+        "load": os.getloadavg()[0],
     }
     r = results["rollout_op3"]
     print(f"rollout {nroll} x {nstep} OP3 steps on {threads} threads: twinloop {r['twinloop_steps_per_s_per_core']:.0f}, "
           f"mujoco {r['mujoco_steps_per_s_per_core']:.0f} steps/s/core")
 
 
-def ray_sweep(results, quick, jobs=200, batch_size=10, simulate=False):
+def _tipover_each(robot, changes, threads=1, **kw):
+    """tipover_changes one change at a time, so a change whose simulated study fails is
+    one error row (counted in the results), not a failed batch."""
+    out = []
+    for c in changes:
+        t0 = time.process_time()
+        try:
+            row = tl.tipover_changes(robot, [c], threads=threads, **kw)[0]
+        except ValueError as e:
+            row = {"change": c, "error": str(e)}
+        # CPU seconds of the job where it ran: on a shared machine wall time measures the
+        # scheduler's share, CPU time the work a cluster node would do.
+        row["cpu_s"] = time.process_time() - t0
+        out.append(row)
+    return out
+
+
+def _without_cpu(rows):
+    return [{k: v for k, v in r.items() if k != "cpu_s"} for r in rows]
+
+
+def ray_sweep(results, quick, jobs=200, batch_size=10, simulate=False, serial_jobs=None):
+    """The sweep on a local Ray of 1 and 2 CPUs; the serial loop on `serial_jobs` of the
+    jobs (all by default) gives the time per job the overhead is counted against."""
     import ray
 
     import twinloop.distributed as td
@@ -172,26 +206,39 @@ def ray_sweep(results, quick, jobs=200, batch_size=10, simulate=False):
     prior = tl.load("builtin:km20")
     changes = tl.random_changes(prior, jobs, seed=1)
     kw = {"simulate": simulate, "ramp": 5.0, "slow_ramp": 1.0}
+    ns = serial_jobs or jobs
     t0 = time.perf_counter()
-    serial = tl.tipover_changes(prior, changes, threads=1, **kw)
-    t_serial = time.perf_counter() - t0
+    serial = _tipover_each(prior, changes[:ns], threads=1, **kw)
+    per_job = (time.perf_counter() - t0) / ns
+    serial_cpu = sum(r["cpu_s"] for r in serial) / ns
+    serial = _without_cpu(serial)
+    t_serial = per_job * jobs
     tasks = -(-jobs // batch_size)
-    row = {"jobs": jobs, "batch_size": batch_size, "simulate": simulate, "serial_s": t_serial,
+    row = {"jobs": jobs, "batch_size": batch_size, "simulate": simulate, "serial_jobs_timed": ns,
+           "serial_s": t_serial, "per_job_s": per_job, "per_job_cpu_s": serial_cpu,
            "description_pickle_bytes": len(pickle.dumps(prior)),
-           "bytes_per_job": (len(pickle.dumps(changes)) + len(pickle.dumps(serial))) / jobs}
+           "bytes_per_job": (len(pickle.dumps(changes[:ns])) + len(pickle.dumps(serial))) / ns,
+           "load_before": os.getloadavg()[0]}
+    outs = {}
     for cpus in (1, 2):
         ray.init(num_cpus=cpus, include_dashboard=False, log_to_driver=False)
         # Start the workers first: one task per CPU, so neither run pays for it.
         ray.get([ray.remote(lambda: None).remote() for _ in range(4 * cpus)])
         t0 = time.perf_counter()
-        out = td.tipover_sweep(prior, changes, batch_size=batch_size, progress=False, **kw)
+        outs[cpus] = td.map_batches(_tipover_each, prior, changes, batch_size=batch_size, progress=False, **kw)
         row[f"ray_{cpus}cpu_s"] = time.perf_counter() - t0
-        assert out == serial
+        row[f"ray_{cpus}cpu_job_cpu_s"] = sum(r["cpu_s"] for r in outs[cpus]) / jobs
+        outs[cpus] = _without_cpu(outs[cpus])
+        assert outs[cpus][:ns] == serial
         ray.shutdown()
+    assert outs[1] == outs[2]
+    row["failed_jobs"] = [i for i, r in enumerate(outs[1]) if "error" in r]
+    row["load_after"] = os.getloadavg()[0]
     row["speedup_2_vs_1"] = row["ray_1cpu_s"] / row["ray_2cpu_s"]
     row["overhead_per_task_ms"] = (row["ray_1cpu_s"] - t_serial) / tasks * 1e3
     results[f"ray_sweep_{'simulated' if simulate else 'static'}"] = row
-    print(f"ray {jobs} {'simulated' if simulate else 'static'} tip-overs: " + ", ".join(f"{k} {v:.4g}" for k, v in row.items()))
+    print(f"ray {jobs} {'simulated' if simulate else 'static'} tip-overs: " + ", ".join(
+        f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()))
 
 
 def main():
@@ -199,16 +246,20 @@ def main():
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--skip-ray", action="store_true")
     ap.add_argument("--only-ray", action="store_true")
+    ap.add_argument("--sim-jobs", type=int, default=200, help="simulated tip-overs in the Ray sweep")
     ap.add_argument("--json")
     a = ap.parse_args()
-    results = {"cpus": os.cpu_count()}
+    results = {"cpus": os.cpu_count(), "load_at_start": os.getloadavg()}
     if not a.only_ray:
         per_call(results, a.quick)
         batched(results, a.quick)
         rollouts(results, a.quick)
     if not a.skip_ray:
         ray_sweep(results, a.quick)
-        ray_sweep(results, a.quick, jobs=8 if a.quick else 16, batch_size=2, simulate=True)
+        # The issue's 200-job sweep of simulated tip-overs (about a second each); the
+        # serial time per job from the first 20.
+        ray_sweep(results, a.quick, jobs=8 if a.quick else a.sim_jobs, batch_size=2 if a.quick else 10,
+                  simulate=True, serial_jobs=None if a.quick else 20)
     if a.json:
         pathlib.Path(a.json).write_text(json.dumps(results, indent=2))
 

@@ -114,172 +114,112 @@ where
     new_array(py, values, &shape)
 }
 
-/// rnea over rows: Q (N, nq), V (N, nv), A (N, nv) -> tau (N, nv).
-#[pyfunction]
-#[pyo3(signature = (model, Q, V, A, threads = None))]
-#[allow(non_snake_case)]
-pub fn rnea_batch<'py>(
-    model: &Bound<'py, PyModel>,
-    Q: &Bound<'py, PyAny>,
-    V: &Bound<'py, PyAny>,
-    A: &Bound<'py, PyAny>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let nv = model.get().inner.nv;
-    batch(
-        model.py(),
-        model.get(),
-        Q,
-        &[(V, "V"), (A, "A")],
-        &[nv],
-        threads,
-        |m, d, _, x, o| {
-            o.copy_from_slice(dy::rnea(m, d, x[0], x[1], x[2]).as_slice());
-        },
-    )
+/// A batch function of `(model, Q, <arrays of nv columns>..., threads=None)`: its
+/// Python signature, the output shape per row (from the model) and the row's body.
+macro_rules! batch_fn {
+    (
+        $(#[$meta:meta])*
+        fn $name:ident($($arg:ident),*) -> |$sm:ident| $shape:expr,
+        |$m:ident, $d:ident, $scratch:pat_param, $x:ident, $o:ident| $row:block
+    ) => {
+        $(#[$meta])*
+        #[pyfunction]
+        #[pyo3(signature = (model, Q, $($arg,)* threads = None))]
+        #[allow(non_snake_case)]
+        pub fn $name<'py>(
+            model: &Bound<'py, PyModel>,
+            Q: &Bound<'py, PyAny>,
+            $($arg: &Bound<'py, PyAny>,)*
+            threads: Option<usize>,
+        ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+            let $sm = &*model.get().inner;
+            let shape = $shape;
+            batch(
+                model.py(),
+                model.get(),
+                Q,
+                &[$(($arg, stringify!($arg))),*],
+                &shape,
+                threads,
+                |$m, $d, $scratch, $x, $o| $row,
+            )
+        }
+    };
 }
 
-/// aba over rows: Q (N, nq), V (N, nv), TAU (N, nv) -> ddq (N, nv).
-#[pyfunction]
-#[pyo3(signature = (model, Q, V, TAU, threads = None))]
-#[allow(non_snake_case)]
-pub fn aba_batch<'py>(
-    model: &Bound<'py, PyModel>,
-    Q: &Bound<'py, PyAny>,
-    V: &Bound<'py, PyAny>,
-    TAU: &Bound<'py, PyAny>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let nv = model.get().inner.nv;
-    batch(
-        model.py(),
-        model.get(),
-        Q,
-        &[(V, "V"), (TAU, "TAU")],
-        &[nv],
-        threads,
-        |m, d, _, x, o| {
-            o.copy_from_slice(dy::aba(m, d, x[0], x[1], x[2]).as_slice());
-        },
-    )
+batch_fn! {
+    /// rnea over rows: Q (N, nq), V (N, nv), A (N, nv) -> tau (N, nv).
+    fn rnea_batch(V, A) -> |m| [m.nv],
+    |m, d, _, x, o| {
+        o.copy_from_slice(dy::rnea(m, d, x[0], x[1], x[2]).as_slice());
+    }
 }
 
-/// nonlinear_effects over rows: Q (N, nq), V (N, nv) -> (N, nv).
-#[pyfunction]
-#[pyo3(signature = (model, Q, V, threads = None))]
-#[allow(non_snake_case)]
-pub fn nonlinear_effects_batch<'py>(
-    model: &Bound<'py, PyModel>,
-    Q: &Bound<'py, PyAny>,
-    V: &Bound<'py, PyAny>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let nv = model.get().inner.nv;
-    batch(
-        model.py(),
-        model.get(),
-        Q,
-        &[(V, "V")],
-        &[nv],
-        threads,
-        |m, d, _, x, o| {
-            o.copy_from_slice(dy::nonlinear_effects(m, d, x[0], x[1]).as_slice());
-        },
-    )
+batch_fn! {
+    /// aba over rows: Q (N, nq), V (N, nv), TAU (N, nv) -> ddq (N, nv).
+    fn aba_batch(V, TAU) -> |m| [m.nv],
+    |m, d, _, x, o| {
+        o.copy_from_slice(dy::aba(m, d, x[0], x[1], x[2]).as_slice());
+    }
 }
 
-/// crba over rows: Q (N, nq) -> M (N, nv, nv), full.
-#[pyfunction]
-#[pyo3(signature = (model, Q, threads = None))]
-#[allow(non_snake_case)]
-pub fn crba_batch<'py>(
-    model: &Bound<'py, PyModel>,
-    Q: &Bound<'py, PyAny>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let nv = model.get().inner.nv;
-    batch(
-        model.py(),
-        model.get(),
-        Q,
-        &[],
-        &[nv, nv],
-        threads,
-        |m, d, _, x, o| {
-            dy::crba(m, d, x[0]);
-            d.symmetrize_mass_matrix();
-            write_matrix(&d.mass_matrix, o);
-        },
-    )
+batch_fn! {
+    /// nonlinear_effects over rows: Q (N, nq), V (N, nv) -> (N, nv).
+    fn nonlinear_effects_batch(V) -> |m| [m.nv],
+    |m, d, _, x, o| {
+        o.copy_from_slice(dy::nonlinear_effects(m, d, x[0], x[1]).as_slice());
+    }
 }
 
-/// center_of_mass over rows: Q (N, nq) -> (N, 3).
-#[pyfunction]
-#[pyo3(signature = (model, Q, threads = None))]
-#[allow(non_snake_case)]
-pub fn center_of_mass_batch<'py>(
-    model: &Bound<'py, PyModel>,
-    Q: &Bound<'py, PyAny>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    batch(
-        model.py(),
-        model.get(),
-        Q,
-        &[],
-        &[3],
-        threads,
-        |m, d, _, x, o| {
-            o.copy_from_slice(dy::center_of_mass(m, d, x[0]).as_slice());
-        },
-    )
+batch_fn! {
+    /// crba over rows: Q (N, nq) -> M (N, nv, nv), full.
+    fn crba_batch() -> |m| [m.nv, m.nv],
+    |m, d, _, x, o| {
+        dy::crba(m, d, x[0]);
+        d.symmetrize_mass_matrix();
+        write_matrix(&d.mass_matrix, o);
+    }
 }
 
-/// jacobian_center_of_mass over rows: Q (N, nq) -> (N, 3, nv).
-#[pyfunction]
-#[pyo3(signature = (model, Q, threads = None))]
-#[allow(non_snake_case)]
-pub fn jacobian_center_of_mass_batch<'py>(
-    model: &Bound<'py, PyModel>,
-    Q: &Bound<'py, PyAny>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let nv = model.get().inner.nv;
-    batch(
-        model.py(),
-        model.get(),
-        Q,
-        &[],
-        &[3, nv],
-        threads,
-        |m, d, _, x, o| {
-            write_matrix(dy::jacobian_center_of_mass(m, d, x[0]), o);
-        },
-    )
+batch_fn! {
+    /// center_of_mass over rows: Q (N, nq) -> (N, 3).
+    fn center_of_mass_batch() -> |_m| [3],
+    |m, d, _, x, o| {
+        o.copy_from_slice(dy::center_of_mass(m, d, x[0]).as_slice());
+    }
 }
 
-/// compute_joint_jacobians over rows: Q (N, nq) -> (N, 6, nv).
-#[pyfunction]
-#[pyo3(signature = (model, Q, threads = None))]
-#[allow(non_snake_case)]
-pub fn compute_joint_jacobians_batch<'py>(
-    model: &Bound<'py, PyModel>,
-    Q: &Bound<'py, PyAny>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let nv = model.get().inner.nv;
-    batch(
-        model.py(),
-        model.get(),
-        Q,
-        &[],
-        &[6, nv],
-        threads,
-        |m, d, _, x, o| {
-            dy::compute_joint_jacobians(m, d, x[0]);
-            write_matrix(&d.joint_jacobians, o);
-        },
-    )
+batch_fn! {
+    /// jacobian_center_of_mass over rows: Q (N, nq) -> (N, 3, nv).
+    fn jacobian_center_of_mass_batch() -> |m| [3, m.nv],
+    |m, d, _, x, o| {
+        write_matrix(dy::jacobian_center_of_mass(m, d, x[0]), o);
+    }
+}
+
+batch_fn! {
+    /// compute_joint_jacobians over rows: Q (N, nq) -> (N, 6, nv).
+    fn compute_joint_jacobians_batch() -> |m| [6, m.nv],
+    |m, d, _, x, o| {
+        dy::compute_joint_jacobians(m, d, x[0]);
+        write_matrix(&d.joint_jacobians, o);
+    }
+}
+
+batch_fn! {
+    /// joint_torque_regressor over rows: Q, V, A -> (N, nv, 10 * bodies).
+    fn joint_torque_regressor_batch(V, A) -> |m| [m.nv, 10 * (m.nbodies + usize::from(m.is_floating()))],
+    |m, d, _, x, o| {
+        write_matrix(dy::joint_torque_regressor(m, d, x[0], x[1], x[2]), o);
+    }
+}
+
+batch_fn! {
+    /// static_com_regressor over rows: Q (N, nq) -> (N, 3, 4 * links).
+    fn static_com_regressor_batch() -> |m| [3, 4 * m.links.len()],
+    |m, d, _, x, o| {
+        write_matrix(dy::static_com_regressor(m, d, x[0]), o);
+    }
 }
 
 /// frame_jacobian over rows: Q (N, nq) -> (N, 6, nv).
@@ -308,55 +248,6 @@ pub fn frame_jacobian_batch<'py>(
             dy::compute_joint_jacobians(m, d, x[0]);
             dy::frame_jacobian(m, d, k, rf, jf);
             write_matrix(jf, o);
-        },
-    )
-}
-
-/// joint_torque_regressor over rows: Q, V, A -> (N, nv, 10 * bodies).
-#[pyfunction]
-#[pyo3(signature = (model, Q, V, A, threads = None))]
-#[allow(non_snake_case)]
-pub fn joint_torque_regressor_batch<'py>(
-    model: &Bound<'py, PyModel>,
-    Q: &Bound<'py, PyAny>,
-    V: &Bound<'py, PyAny>,
-    A: &Bound<'py, PyAny>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let m = &model.get().inner;
-    let cols = 10 * (m.nbodies + usize::from(m.is_floating()));
-    batch(
-        model.py(),
-        model.get(),
-        Q,
-        &[(V, "V"), (A, "A")],
-        &[m.nv, cols],
-        threads,
-        |m, d, _, x, o| {
-            write_matrix(dy::joint_torque_regressor(m, d, x[0], x[1], x[2]), o);
-        },
-    )
-}
-
-/// static_com_regressor over rows: Q (N, nq) -> (N, 3, 4 * links).
-#[pyfunction]
-#[pyo3(signature = (model, Q, threads = None))]
-#[allow(non_snake_case)]
-pub fn static_com_regressor_batch<'py>(
-    model: &Bound<'py, PyModel>,
-    Q: &Bound<'py, PyAny>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let cols = 4 * model.get().inner.links.len();
-    batch(
-        model.py(),
-        model.get(),
-        Q,
-        &[],
-        &[3, cols],
-        threads,
-        |m, d, _, x, o| {
-            write_matrix(dy::static_com_regressor(m, d, x[0]), o);
         },
     )
 }

@@ -88,50 +88,63 @@ pub fn frames_forward_kinematics(
     Ok(())
 }
 
-/// Centre of mass (3,), world frame, m: `data.com`.
-#[pyfunction]
-pub fn center_of_mass<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[])?;
-        let com = dy::center_of_mass(&model.get().inner, &mut d.data, c.q.slice());
-        d.data.com = com;
-    }
-    Ok(vec_out(data, |d| d.data.com.as_slice()))
+/// A dynamics function of `(model, data, q, <arrays of length nv>...)` whose result
+/// lives in `data` and is returned as a read-only view of it: the Python signature,
+/// the computation on the checked slices, and the view (`vec_out` or `mat_out`).
+macro_rules! data_fn {
+    (
+        $(#[$meta:meta])*
+        fn $name:ident($($arg:ident),*) -> $out:ident $ret:ty,
+        |$m:ident, $d:ident, $q:ident| $body:block => |$dv:ident| $view:expr
+    ) => {
+        $(#[$meta])*
+        #[pyfunction]
+        pub fn $name<'py>(
+            model: &Bound<'py, PyModel>,
+            data: &Bound<'py, PyData>,
+            q: &Bound<'py, PyAny>,
+            $($arg: &Bound<'py, PyAny>,)*
+        ) -> PyResult<Bound<'py, $ret>> {
+            {
+                let mut data_ref = data.borrow_mut();
+                let c = check(model.get(), &data_ref, q, &[$(($arg, stringify!($arg))),*])?;
+                // `check` made one checked array per argument, in order.
+                let [$($arg),*] = &c.rest[..] else {
+                    return Err(value_error("internal: the checked arguments do not match"));
+                };
+                $(let $arg = $arg.slice();)*
+                let $m = &*model.get().inner;
+                let $d = &mut data_ref.data;
+                let $q = c.q.slice();
+                $body
+            }
+            Ok($out(data, |$dv| $view))
+        }
+    };
 }
 
-/// CoM Jacobian (3, nv), world frame: `data.Jcom` (also sets `data.com`).
-#[pyfunction]
-pub fn jacobian_center_of_mass<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[])?;
-        dy::jacobian_center_of_mass(&model.get().inner, &mut d.data, c.q.slice());
-    }
-    Ok(mat_out(data, |d| &d.data.com_jacobian))
+data_fn! {
+    /// Centre of mass (3,), world frame, m: `data.com`.
+    fn center_of_mass() -> vec_out PyArray1<f64>,
+    |m, d, q| {
+        d.com = dy::center_of_mass(m, d, q);
+    } => |x| x.data.com.as_slice()
 }
 
-/// World-frame joint Jacobians (6, nv), rows linear then angular: `data.J`.
-#[pyfunction]
-pub fn compute_joint_jacobians<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[])?;
-        dy::compute_joint_jacobians(&model.get().inner, &mut d.data, c.q.slice());
-    }
-    Ok(mat_out(data, |d| &d.data.joint_jacobians))
+data_fn! {
+    /// CoM Jacobian (3, nv), world frame: `data.Jcom` (also sets `data.com`).
+    fn jacobian_center_of_mass() -> mat_out PyArray2<f64>,
+    |m, d, q| {
+        dy::jacobian_center_of_mass(m, d, q);
+    } => |x| &x.data.com_jacobian
+}
+
+data_fn! {
+    /// World-frame joint Jacobians (6, nv), rows linear then angular: `data.J`.
+    fn compute_joint_jacobians() -> mat_out PyArray2<f64>,
+    |m, d, q| {
+        dy::compute_joint_jacobians(m, d, q);
+    } => |x| &x.data.joint_jacobians
 }
 
 /// Jacobian (6, nv) of a frame (name or index) in `reference` ("LOCAL", "WORLD" or
@@ -157,147 +170,67 @@ pub fn frame_jacobian<'py>(
     Ok(crate::arrays::matrix_copy(data.py(), &j))
 }
 
-/// Inverse dynamics (RNEA): tau (nv,) = M(q) a + C(q, v) v + g(q): `data.tau`.
-/// q: (nq,), v and a: (nv,) (rad/s, rad/s^2; base velocity in the base frame).
-#[pyfunction]
-pub fn rnea<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-    v: &Bound<'py, PyAny>,
-    a: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[(v, "v"), (a, "a")])?;
-        dy::rnea(
-            &model.get().inner,
-            &mut d.data,
-            c.q.slice(),
-            c.rest[0].slice(),
-            c.rest[1].slice(),
-        );
-    }
-    Ok(vec_out(data, |d| d.data.tau.as_slice()))
+data_fn! {
+    /// Inverse dynamics (RNEA): tau (nv,) = M(q) a + C(q, v) v + g(q): `data.tau`.
+    /// q: (nq,), v and a: (nv,) (rad/s, rad/s^2; base velocity in the base frame).
+    fn rnea(v, a) -> vec_out PyArray1<f64>,
+    |m, d, q| {
+        dy::rnea(m, d, q, v, a);
+    } => |x| x.data.tau.as_slice()
 }
 
-/// Nonlinear effects C(q, v) v + g(q) (nv,): `data.tau` (Pinocchio keeps it in `data.nle`).
-#[pyfunction]
-pub fn nonlinear_effects<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-    v: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[(v, "v")])?;
-        dy::nonlinear_effects(
-            &model.get().inner,
-            &mut d.data,
-            c.q.slice(),
-            c.rest[0].slice(),
-        );
-    }
-    Ok(vec_out(data, |d| d.data.tau.as_slice()))
+data_fn! {
+    /// Nonlinear effects C(q, v) v + g(q) (nv,): `data.tau` (Pinocchio keeps it in `data.nle`).
+    fn nonlinear_effects(v) -> vec_out PyArray1<f64>,
+    |m, d, q| {
+        dy::nonlinear_effects(m, d, q, v);
+    } => |x| x.data.tau.as_slice()
 }
 
-/// Generalized gravity g(q) (nv,): `data.tau`.
-#[pyfunction]
-pub fn compute_generalized_gravity<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[])?;
-        dy::generalized_gravity(&model.get().inner, &mut d.data, c.q.slice());
-    }
-    Ok(vec_out(data, |d| d.data.tau.as_slice()))
+data_fn! {
+    /// Generalized gravity g(q) (nv,): `data.tau`.
+    fn compute_generalized_gravity() -> vec_out PyArray1<f64>,
+    |m, d, q| {
+        dy::generalized_gravity(m, d, q);
+    } => |x| x.data.tau.as_slice()
 }
 
-/// Joint-space inertia matrix M(q) (nv, nv), full and symmetric: `data.M`.
-#[pyfunction]
-pub fn crba<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[])?;
-        dy::crba(&model.get().inner, &mut d.data, c.q.slice());
-        d.data.symmetrize_mass_matrix();
-    }
-    Ok(mat_out(data, |d| &d.data.mass_matrix))
+data_fn! {
+    /// Joint-space inertia matrix M(q) (nv, nv), full and symmetric: `data.M`.
+    fn crba() -> mat_out PyArray2<f64>,
+    |m, d, q| {
+        dy::crba(m, d, q);
+        d.symmetrize_mass_matrix();
+    } => |x| &x.data.mass_matrix
 }
 
-/// Forward dynamics (ABA): accelerations (nv,) under torques tau: `data.ddq`.
-#[pyfunction]
-pub fn aba<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-    v: &Bound<'py, PyAny>,
-    tau: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[(v, "v"), (tau, "tau")])?;
+data_fn! {
+    /// Forward dynamics (ABA): accelerations (nv,) under torques tau: `data.ddq`.
+    fn aba(v, tau) -> vec_out PyArray1<f64>,
+    |m, d, q| {
         // A singular mass matrix is refused naming the joint, never NaN accelerations.
-        dy::try_aba(
-            &model.get().inner,
-            &mut d.data,
-            c.q.slice(),
-            c.rest[0].slice(),
-            c.rest[1].slice(),
-        )
-        .map_err(|e| value_error(e.to_string()))?;
-    }
-    Ok(vec_out(data, |d| d.data.ddq.as_slice()))
+        dy::try_aba(m, d, q, v, tau).map_err(|e| value_error(e.to_string()))?;
+    } => |x| x.data.ddq.as_slice()
 }
 
-/// Inertial-parameter regressor Y (nv, 10 * bodies): rnea = Y @ body_parameters(model).
-/// Blocks: the floating base first, then the bodies in joint order; each block is
-/// Pinocchio's (m, mc_x, mc_y, mc_z, Ixx, Ixy, Iyy, Ixz, Iyz, Izz): `data.joint_torque_regressor`.
-#[pyfunction]
-pub fn joint_torque_regressor<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-    v: &Bound<'py, PyAny>,
-    a: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[(v, "v"), (a, "a")])?;
-        dy::joint_torque_regressor(
-            &model.get().inner,
-            &mut d.data,
-            c.q.slice(),
-            c.rest[0].slice(),
-            c.rest[1].slice(),
-        );
-    }
-    Ok(mat_out(data, |d| &d.data.regressor))
+data_fn! {
+    /// Inertial-parameter regressor Y (nv, 10 * bodies): rnea = Y @ body_parameters(model).
+    /// Blocks: the floating base first, then the bodies in joint order; each block is
+    /// Pinocchio's (m, mc_x, mc_y, mc_z, Ixx, Ixy, Iyy, Ixz, Iyz, Izz): `data.joint_torque_regressor`.
+    fn joint_torque_regressor(v, a) -> mat_out PyArray2<f64>,
+    |m, d, q| {
+        dy::joint_torque_regressor(m, d, q, v, a);
+    } => |x| &x.data.regressor
 }
 
-/// Static CoM regressor G (3, 4 * links): total_mass * com = G @ link_static_parameters(model),
-/// one block (m, m c_x, m c_y, m c_z) per description link (seed 004, eq 8).
-/// Pinocchio's computeStaticRegressor is this divided by the total mass, per joint.
-#[pyfunction]
-pub fn static_com_regressor<'py>(
-    model: &Bound<'py, PyModel>,
-    data: &Bound<'py, PyData>,
-    q: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    {
-        let mut d = data.borrow_mut();
-        let c = check(model.get(), &d, q, &[])?;
-        dy::static_com_regressor(&model.get().inner, &mut d.data, c.q.slice());
-    }
-    Ok(mat_out(data, |d| &d.data.static_regressor))
+data_fn! {
+    /// Static CoM regressor G (3, 4 * links): total_mass * com = G @ link_static_parameters(model),
+    /// one block (m, m c_x, m c_y, m c_z) per description link (seed 004, eq 8).
+    /// Pinocchio's computeStaticRegressor is this divided by the total mass, per joint.
+    fn static_com_regressor() -> mat_out PyArray2<f64>,
+    |m, d, q| {
+        dy::static_com_regressor(m, d, q);
+    } => |x| &x.data.static_regressor
 }
 
 /// Dynamic parameters of the bodies (10 * bodies,), the vector joint_torque_regressor multiplies.

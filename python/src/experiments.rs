@@ -80,17 +80,74 @@ fn change_arg(c: &Bound<'_, PyAny>, k: usize) -> PyResult<Change> {
 /// tipover --robot ... --json`): four directions, tip angles (deg), the CoM by the
 /// seed's and the exact method (m) beside the model's. `add_mass`: point masses
 /// (kg, link, (x, y, z) m in the link frame) added first, like `--add-mass`.
+///
+/// With `port` (and `map`, the servo mapping: builtin:km20 or a mapping TOML), the
+/// experiment runs on a robot over its Dynamixel bus instead, as `twinloop experiment
+/// tipover --port PORT --map MAP --json`: each direction of `directions` (default all
+/// four) twice, the servos left holding the standing pose; `robot` is then the model
+/// for the lean signs (default: the mapping's `urdf`). All four directions give the
+/// study's fields, fewer give `robot`, `port` and each direction's angles. `record`:
+/// every cycle read to that CSV; `realtime_factor`: a simulated robot served faster
+/// than real time; `ankle_slope`: the ramped ankles' RX Compliance Slope. On a serial
+/// port the robot moves only with `yes=True`. A silent or faulty servo, or Ctrl-C,
+/// stops the run with OSError (KeyboardInterrupt for Ctrl-C).
 #[pyfunction]
-#[pyo3(signature = (robot, ramp = 0.5, slow_ramp = 0.05, compliance_slope = 2.0, encoders = false, add_mass = None))]
+#[pyo3(signature = (robot = None, ramp = 0.5, slow_ramp = 0.05, compliance_slope = 2.0, encoders = false,
+    add_mass = None, *, port = None, map = None, directions = None, record = None, yes = false,
+    realtime_factor = 1.0, ankle_slope = 32.0, baud = 1_000_000, timeout_ms = 10.0, retries = 2))]
+#[allow(clippy::too_many_arguments)]
 pub fn tipover<'py>(
     py: Python<'py>,
-    robot: &Bound<'py, PyAny>,
+    robot: Option<&Bound<'py, PyAny>>,
     ramp: f64,
     slow_ramp: f64,
     compliance_slope: f64,
     encoders: bool,
     add_mass: Option<Vec<(f64, String, [f64; 3])>>,
+    port: Option<String>,
+    map: Option<String>,
+    directions: Option<Vec<String>>,
+    record: Option<std::path::PathBuf>,
+    yes: bool,
+    realtime_factor: f64,
+    ankle_slope: f64,
+    baud: u32,
+    timeout_ms: f64,
+    retries: u32,
 ) -> PyResult<Bound<'py, PyAny>> {
+    if port.is_some() || map.is_some() {
+        if encoders || add_mass.is_some() {
+            return Err(value_error(
+                "encoders, add_mass: only for the simulator (a robot on a bus has its own)",
+            ));
+        }
+        let plan = crate::tipover_bus::Plan {
+            port,
+            map,
+            directions: directions.unwrap_or_default(),
+            record,
+            yes,
+            ramp,
+            slow_ramp,
+            compliance_slope,
+            ankle_slope,
+            realtime_factor,
+            baud,
+            timeout_ms,
+            retries,
+        };
+        return crate::tipover_bus::run(py, robot, plan);
+    }
+    if directions.is_some() || record.is_some() {
+        return Err(value_error(
+            "directions, record: only over a bus (port= and map=)",
+        ));
+    }
+    let Some(robot) = robot else {
+        return Err(value_error(
+            "robot: give a robot (the simulator) or port= and map= (a robot over its bus)",
+        ));
+    };
     let mut d: Description = (*description_arg(robot)?).clone();
     for (kg, link, xyz) in add_mass.unwrap_or_default() {
         twinloop_description::builtin::add_point_mass(&mut d, &link, kg, xyz)
@@ -345,7 +402,9 @@ pub fn identify_static<'py>(
 
 /// ANN training samples `start..stop` of `twinloop adapt train`'s set (the same
 /// draws whatever the split, so ranges can run on different machines): per sample the
-/// change, its body part, the true and noisy static fall angles (deg), the CoM (m).
+/// change, its body part, the true and noisy static fall angles (deg), the CoM (m),
+/// total_mass (kg), feet (mass fraction, x, z), and the three-mass LIPM's masses (kg)
+/// and positions (m): what `twinloop adapt train --ray` trains on.
 #[pyfunction]
 #[pyo3(signature = (robot, start, stop, seed = 1, mass_range = (0.05, 0.5), noise_deg = 0.0, threads = None))]
 #[allow(clippy::too_many_arguments)]
@@ -358,7 +417,7 @@ pub fn training_samples<'py>(
     mass_range: (f64, f64),
     noise_deg: f64,
     threads: Option<usize>,
-) -> PyResult<Bound<'py, PyList>> {
+) -> PyResult<Bound<'py, PyAny>> {
     if stop < start {
         return Err(value_error(format!("stop: {stop} is before start {start}")));
     }
@@ -373,18 +432,7 @@ pub fn training_samples<'py>(
     let (_, samples) = py
         .detach(|| ann_data::generate_range(&d, &opts, start..stop, &|_| {}))
         .map_err(ident_error)?;
-    let out = PyList::empty(py);
-    for s in samples {
-        let row = PyDict::new(py);
-        row.set_item("change", to_py(py, &s.change)?)?;
-        row.set_item("part", s.part)?;
-        row.set_item("true_deg", s.true_deg.to_vec())?;
-        row.set_item("measured_deg", s.measured_deg.to_vec())?;
-        row.set_item("com", s.com.to_vec())?;
-        row.set_item("total_mass", s.total_mass)?;
-        out.append(row)?;
-    }
-    Ok(out)
+    to_py(py, &samples)
 }
 
 /// Adapt the model to a tip-over experiment (`twinloop adapt --tipover FILE --json`,

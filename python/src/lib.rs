@@ -8,6 +8,7 @@
 
 mod arrays;
 mod batch;
+mod compliant;
 mod dynamics;
 mod errors;
 mod experiments;
@@ -15,6 +16,7 @@ mod link;
 mod model;
 mod sim;
 mod sysid;
+mod tipover_bus;
 
 use pyo3::prelude::*;
 
@@ -64,6 +66,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(experiments::identify_static, m)?)?;
     m.add_function(wrap_pyfunction!(experiments::training_samples, m)?)?;
     m.add_function(wrap_pyfunction!(experiments::adapt, m)?)?;
+    m.add_function(wrap_pyfunction!(compliant::fit_compliant, m)?)?;
     m.add_function(wrap_pyfunction!(sysid::sysid_arx, m)?)?;
     m.add_function(wrap_pyfunction!(sysid::sysid_ss, m)?)?;
     Ok(())

@@ -10,7 +10,9 @@ use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use twinloop_ident::adapt::{AdaptOptions, adapt, check, html_report};
 use twinloop_ident::ann::TrainOptions;
-use twinloop_ident::ann_adapt::{AnnModel, AnnTrainOptions, TrainReport, adapt_ann, train_ann};
+use twinloop_ident::ann_adapt::{
+    AnnModel, AnnTrainOptions, TrainReport, adapt_ann, train_ann, train_ann_on,
+};
 use twinloop_ident::ann_data::{Change, DataOptions, check_against_simulation};
 use twinloop_ident::tipover_study::{StudyOptions, StudyReport};
 
@@ -113,7 +115,7 @@ pub enum AdaptCommand {
     /// and fall angles, mean / 95th percentile / largest) and the report (seed Tables
     /// VI-VII style).
     #[command(verbatim_doc_comment)]
-    Train(TrainArgs),
+    Train(Box<TrainArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -152,6 +154,15 @@ pub struct TrainArgs {
     /// angles with the static route's.
     #[arg(long, default_value_t = 0, value_name = "N")]
     pub check_sim: usize,
+    /// Make the changes' tip-overs as Ray tasks on the cluster at ADDRESS ("auto",
+    /// "ray://head:10001", or "local" for a Ray started here) through the Python
+    /// package (`python3 -m twinloop.adapt_train`; TWINLOOP_PYTHON names another
+    /// interpreter), then train here as without it: the same samples, the same network.
+    #[arg(long, value_name = "ADDRESS")]
+    pub ray: Option<String>,
+    /// With --ray local: the CPUs of the local Ray (default: all).
+    #[arg(long, value_name = "N", requires = "ray", value_parser = crate::common::count)]
+    pub ray_cpus: Option<usize>,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
     /// HTML report to write.
@@ -223,7 +234,7 @@ fn replay_3d(
 
 pub fn run(a: AdaptArgs) -> CliResult {
     if let Some(AdaptCommand::Train(t)) = a.command {
-        return run_train(t);
+        return run_train(*t);
     }
     let Some(robot) = &a.robot else {
         return Err(CliError::new("adapt needs --robot"));
@@ -419,11 +430,22 @@ fn run_train(a: TrainArgs) -> CliResult {
         mass_input: !a.seed_inputs,
         restarts: a.restarts,
     };
-    let bar = crate::progress::steps(a.samples);
-    bar.set_message("changes tipped (static route)");
-    let (model, mut report) =
-        train_ann(&prior, &opts, &|done| bar.set_position(done as u64)).map_err(train_flags)?;
-    bar.finish_and_clear();
+    let (model, mut report) = match &a.ray {
+        Some(address) => {
+            let started = std::time::Instant::now();
+            let samples = ray_training_set(&a, address)?;
+            train_ann_on(&prior, &opts, samples, started.elapsed().as_secs_f64())
+                .map_err(train_flags)?
+        }
+        None => {
+            let bar = crate::progress::steps(a.samples);
+            bar.set_message("changes tipped (static route)");
+            let r = train_ann(&prior, &opts, &|done| bar.set_position(done as u64))
+                .map_err(train_flags)?;
+            bar.finish_and_clear();
+            r
+        }
+    };
     if a.check_sim > 0 {
         let changes: Vec<Change> = validation_changes(&prior, &opts, a.check_sim)?;
         let bar = crate::progress::steps(changes.len());
@@ -448,6 +470,60 @@ fn run_train(a: TrainArgs) -> CliResult {
     }
     emit(&train_text(&report), a.json.as_ref(), &report)?;
     Ok(Outcome::Ok)
+}
+
+/// `--ray`: the training set made as Ray tasks by the Python package (its progress bar
+/// on stderr), read back from the JSON it writes. Python is a subprocess, not linked
+/// in: the command works without Python unless --ray is given.
+fn ray_training_set(
+    a: &TrainArgs,
+    address: &str,
+) -> Result<Vec<twinloop_ident::ann_data::Sample>, CliError> {
+    let python = std::env::var("TWINLOOP_PYTHON").unwrap_or_else(|_| "python3".into());
+    let out = std::env::temp_dir().join(format!("twinloop-train-{}.json", std::process::id()));
+    let mut cmd = std::process::Command::new(&python);
+    cmd.args(["-m", "twinloop.adapt_train", "--robot", &a.robot])
+        .args([
+            "--samples",
+            &a.samples.to_string(),
+            "--seed",
+            &a.seed.to_string(),
+        ])
+        .args([
+            "--mass-range",
+            &a.mass_range,
+            "--noise",
+            &a.noise.to_string(),
+        ])
+        .args(["--ray", address])
+        .arg("--out")
+        .arg(&out);
+    if let Some(n) = a.ray_cpus {
+        cmd.args(["--ray-cpus", &n.to_string()]);
+    }
+    eprintln!(
+        "making {} changes' tip-overs on Ray ({address}) ...",
+        a.samples
+    );
+    let status = cmd.status().map_err(|e| {
+        CliError::new(format!(
+            "--ray: cannot run {python}: {e} (set TWINLOOP_PYTHON to a Python with the twinloop \
+             package and ray: pip install ./python \"ray>=2.9\")"
+        ))
+    })?;
+    let text = std::fs::read_to_string(&out);
+    let _ = std::fs::remove_file(&out);
+    if !status.success() {
+        return Err(CliError::new(format!(
+            "--ray: {python} -m twinloop.adapt_train failed ({status}); its message is above"
+        )));
+    }
+    let text = text.map_err(|e| CliError::io(&out, e).context("--ray"))?;
+    serde_json::from_str(&text).map_err(|e| {
+        CliError::new(format!(
+            "--ray: the samples from {python} -m twinloop.adapt_train: {e}"
+        ))
+    })
 }
 
 /// The validation set's first `n` changes (drawn again: each sample's draw depends

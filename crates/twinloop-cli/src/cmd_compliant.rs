@@ -254,40 +254,9 @@ pub struct SimulateArgs {
     pub out: PathBuf,
 }
 
-/// The JSON written by `compliant stiffness --json`.
-fn read_plant_json(path: &Path) -> Result<SagittalCompliance, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    let get = |key: &str, v: &serde_json::Value| {
-        v.get(key)
-            .and_then(|x| x.as_f64())
-            .ok_or_else(|| format!("{}: missing number `{key}`", path.display()))
-    };
-    let s = v
-        .get("sagittal")
-        .ok_or_else(|| format!("{}: missing object `sagittal`", path.display()))?;
-    Ok(SagittalCompliance {
-        m: get("mass", &v)?,
-        g: get("gravity", &v)?,
-        Kxx: get("Kxx", s)?,
-        Kxz: get("Kxz", s)?,
-        Kzx: get("Kzx", s)?,
-        Kzz: get("Kzz", s)?,
-        Dxx: get("Dxx", s)?,
-        Dxz: get("Dxz", s)?,
-        Dzx: get("Dzx", s)?,
-        Dzz: get("Dzz", s)?,
-    })
-}
-
 /// PLANT.toml, or the JSON written by `compliant stiffness --json`.
 pub fn read_plant_any(path: &Path) -> Result<SagittalCompliance, CliError> {
-    if path.extension().is_some_and(|e| e == "json") {
-        Ok(read_plant_json(path)?)
-    } else {
-        Ok(twinloop_ident::compliant_fit::read_model_file(path)?)
-    }
+    Ok(twinloop_ident::compliant_fit::read_plant(path)?)
 }
 
 /// The corrections: --table1, --params, or all ones.

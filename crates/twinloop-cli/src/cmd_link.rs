@@ -15,8 +15,8 @@ use twinloop_io::CsvWriter;
 use twinloop_link::control_cycle::ReadMethod;
 use twinloop_link::transport::{self, SerialOptions, Transport};
 use twinloop_link::{
-    Client, ClientConfig, DynamixelRobot, FoundServo, JointMapping, Protocol, RobotMapping,
-    ServoModel, plan_cycle,
+    Client, ClientConfig, DynamixelRobot, FoundServo, Protocol, RobotMapping, ServoModel,
+    plan_cycle,
 };
 use twinloop_robot::{Robot, RobotState};
 
@@ -490,45 +490,6 @@ pub fn interrupt_flag() -> Arc<AtomicBool> {
     flag
 }
 
-/// A mapping for servos given by protocol and ids: joints `id<N>`, models by PING.
-fn mapping_from_ids(
-    c: &mut Client<Box<dyn Transport>>,
-    protocol: Protocol,
-    ids: &[u8],
-) -> Result<RobotMapping, String> {
-    let mut joints = Vec::new();
-    for &id in ids {
-        let s = c.ping(protocol, id).map_err(|e| e.to_string())?;
-        let model = s.model.ok_or_else(|| {
-            format!(
-                "servo id {id}: model number {} has no control table in twinloop",
-                s.model_number
-            )
-        })?;
-        let (min, max) = JointMapping::servo_range(model);
-        joints.push(JointMapping {
-            name: format!("id{id}"),
-            id,
-            protocol,
-            model,
-            zero: 0.0,
-            direction: 1.0,
-            min,
-            max,
-            line: 0,
-        });
-    }
-    Ok(RobotMapping {
-        name: "servos".into(),
-        urdf: None,
-        port: None,
-        baud: None,
-        joints,
-        boards: Vec::new(),
-        source: "--ids".into(),
-    })
-}
-
 fn record(a: &RecordArgs) -> CliResult {
     let mapping = a.map.as_deref().map(RobotMapping::resolve).transpose()?;
     let default_port = mapping.as_ref().and_then(|m| m.port.clone());
@@ -542,7 +503,7 @@ fn record(a: &RecordArgs) -> CliResult {
                 ));
             };
             let ids = parse_ids(ids)?;
-            mapping_from_ids(&mut c, protocol, &ids)?
+            RobotMapping::from_ids(&mut c, protocol, &ids)?
         }
     };
     let names = mapping.joint_names();

@@ -12,6 +12,7 @@
 
 pub mod compliant_walk;
 pub mod error;
+pub mod guarded;
 pub mod lean;
 pub mod lean_validation;
 pub mod tipover;

@@ -667,7 +667,38 @@ pub fn train_ann(
         .option("samples"));
     }
     let t0 = Instant::now();
-    let (parts, samples) = generate(prior, &opts.data, progress)?;
+    let (_, samples) = generate(prior, &opts.data, progress)?;
+    train_ann_on(prior, opts, samples, t0.elapsed().as_secs_f64())
+}
+
+/// [`train_ann`] on samples made elsewhere (`adapt train --ray`: as Ray tasks by
+/// `python -m twinloop.adapt_train`): `samples` must be [`generate`]'s for
+/// `opts.data`, in index order; `data_seconds` is the time they took.
+pub fn train_ann_on(
+    prior: &Description,
+    opts: &AnnTrainOptions,
+    samples: Vec<Sample>,
+    data_seconds: f64,
+) -> Result<(AnnModel, TrainReport), IdentError> {
+    if samples.len() != opts.data.samples || samples.len() < 20 {
+        return Err(IdentError::new(format!(
+            "needs the {} changes asked for (at least 20), got {}",
+            opts.data.samples,
+            samples.len()
+        ))
+        .option("samples"));
+    }
+    let parts = BodyParts::of(prior)?;
+    if let Some(s) = samples.iter().find(|s| s.part >= parts.names.len()) {
+        return Err(IdentError::new(format!(
+            "a change on \"{}\" names body part {} of {}'s {}",
+            s.change.link,
+            s.part,
+            prior.name,
+            parts.names.len()
+        ))
+        .option("samples"));
+    }
     let t1 = Instant::now();
     let n = samples.len();
     let (n_train, n_test) = (n * 70 / 100, n * 15 / 100);
@@ -714,7 +745,7 @@ pub fn train_ann(
         restart_fall_deg: fall_by_restart,
         restart_kept: pick,
         seconds: [
-            (t1 - t0).as_secs_f64(),
+            data_seconds,
             (t2 - t1).as_secs_f64(),
             (t3 - t2).as_secs_f64(),
         ],

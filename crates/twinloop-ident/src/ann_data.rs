@@ -144,8 +144,9 @@ impl BodyParts {
     }
 }
 
-/// One training or evaluation example.
-#[derive(Debug, Clone)]
+/// One training or evaluation example (serialised when it is made elsewhere: on Ray,
+/// `python -m twinloop.adapt_train`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Sample {
     pub change: Change,
     /// The body part of the change ([`BodyParts`]).

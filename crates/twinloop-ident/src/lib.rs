@@ -40,6 +40,7 @@ pub mod poses;
 pub mod qp;
 pub mod static_ident;
 pub mod tipover;
+pub mod tipover_bus;
 pub mod tipover_study;
 pub mod validate;
 pub mod walk_identification;

@@ -294,7 +294,7 @@ impl TipAngles {
 /// not, so the robot's CoM does not turn rigidly about the ankle axis: on km20 (feet
 /// 11 % of the mass) taking it as rigid puts the CoM 1.6 mm too high. The feet are part
 /// of the robot's fixed geometry, like their outline: weigh them once.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FeetMass {
     pub fraction: f64,
     pub x: f64,

@@ -618,6 +618,46 @@ impl RobotMapping {
             .collect()
     }
 
+    /// A mapping for servos given by protocol and ids (`link record --ids`): joints
+    /// named `id<N>`, models found by PING, zero 0, direction 1, the servo's range.
+    pub fn from_ids<T: crate::transport::Transport>(
+        c: &mut crate::Client<T>,
+        protocol: Protocol,
+        ids: &[u8],
+    ) -> Result<RobotMapping, String> {
+        let mut joints = Vec::new();
+        for &id in ids {
+            let s = c.ping(protocol, id).map_err(|e| e.to_string())?;
+            let model = s.model.ok_or_else(|| {
+                format!(
+                    "servo id {id}: model number {} has no control table in twinloop",
+                    s.model_number
+                )
+            })?;
+            let (min, max) = JointMapping::servo_range(model);
+            joints.push(JointMapping {
+                name: format!("id{id}"),
+                id,
+                protocol,
+                model,
+                zero: 0.0,
+                direction: 1.0,
+                min,
+                max,
+                line: 0,
+            });
+        }
+        Ok(RobotMapping {
+            name: "servos".into(),
+            urdf: None,
+            port: None,
+            baud: None,
+            joints,
+            boards: Vec::new(),
+            source: "--ids".into(),
+        })
+    }
+
     pub fn joint_names(&self) -> Vec<String> {
         self.joints.iter().map(|j| j.name.clone()).collect()
     }

@@ -34,6 +34,7 @@ from ._native import (
     crba,
     crba_batch,
     forward_kinematics,
+    fit_compliant,
     frame_jacobian,
     identify_static,
     random_changes,

@@ -192,9 +192,14 @@ class Simulator:
     def rollout(self, q0: ArrayLike, goals: ArrayLike, v0: Optional[ArrayLike] = None, threads: Optional[int] = None) -> F64:
         """q0 [nq] or [N, nq], goals [N, T, joints] -> states [N, T, nq + nv]."""
 
-def tipover(robot: RobotSpec, ramp: float = 0.5, slow_ramp: float = 0.05, compliance_slope: float = 2.0,
-            encoders: bool = False, add_mass: Optional[Sequence[tuple[float, str, Sequence[float]]]] = None) -> dict[str, Any]:
-    """`twinloop experiment tipover --json`'s fields."""
+def tipover(robot: Optional[RobotSpec] = None, ramp: float = 0.5, slow_ramp: float = 0.05, compliance_slope: float = 2.0,
+            encoders: bool = False, add_mass: Optional[Sequence[tuple[float, str, Sequence[float]]]] = None, *,
+            port: Optional[str] = None, map: Optional[str] = None, directions: Optional[Sequence[str]] = None,
+            record: Optional[Union[str, PathLike[str]]] = None, yes: bool = False, realtime_factor: float = 1.0,
+            ankle_slope: float = 32.0, baud: int = 1_000_000, timeout_ms: float = 10.0, retries: int = 2) -> dict[str, Any]:
+    """`twinloop experiment tipover --json`'s fields: on the simulator, or with `port` and `map` on a robot over its bus
+    (`experiment tipover --port --map`; fewer than four `directions` give robot, port and each direction's angles).
+    A serial port needs yes=True; a silent or faulty servo raises OSError, the servos left holding."""
 def random_changes(robot: RobotSpec, n: int, seed: int = 1, mass_range: tuple[float, float] = (0.05, 0.5)) -> list[dict[str, Any]]: ...
 def tipover_changes(robot: RobotSpec, changes: list[dict[str, Any]], simulate: bool = False, ramp: float = 0.5,
                     slow_ramp: float = 0.05, threads: Optional[int] = None) -> list[dict[str, Any]]: ...
@@ -208,6 +213,13 @@ def training_samples(robot: RobotSpec, start: int, stop: int, seed: int = 1, mas
 def adapt(prior: RobotSpec, tipover: dict[str, Any], total_mass: Optional[float] = None, host: Optional[str] = None,
           merge: bool = False, resolution: float = 0.05, check: bool = False) -> tuple[dict[str, Any], Optional[Description]]:
     """`twinloop adapt --tipover FILE --json`'s report and the adapted description (None if not fixed)."""
+def fit_compliant(data: Union[str, PathLike[str]], plant: Union[str, PathLike[str]],
+                  method: Literal["lm", "cmaes", "power"] = "lm", params: Optional[Union[str, Sequence[str]]] = None,
+                  start: Optional[Sequence[float]] = None, max_evaluations: Optional[int] = None, sigma: float = 0.05,
+                  seed: int = 2012, noise_std: Optional[float] = None,
+                  val: Sequence[Union[str, PathLike[str]]] = ()) -> dict[str, Any]:
+    """`twinloop identify compliant --json` (seed 002, section 4): the compact compliant model's corrections fitted
+    to a CSV of t, xr, zr, x, z, phase; returns the CLI's fields (params, mse_before/after in m^2, identifiability, ...)."""
 def sysid_arx(u: ArrayLike, y: ArrayLike, na: int = 2, nb: int = 2, nk: int = 1, u_val: Optional[ArrayLike] = None,
               y_val: Optional[ArrayLike] = None, sample_time: Optional[float] = None, input_names: Optional[list[str]] = None,
               output_names: Optional[list[str]] = None, kstep: int = 1, lags: int = 25) -> dict[str, Any]:
@@ -226,10 +238,21 @@ class Bus:
         """`twinloop link scan --json`: protocol, id, model, model_number, firmware."""
     def read(self, id: int, protocol: int, registers: Optional[list[str]] = None) -> dict[str, Any]:
         """`twinloop link read --json`: protocol, id, model, registers (address, name, size, access, raw, value)."""
+    def record(self, duration: float, map: Optional[str] = None, protocol: Optional[int] = None,
+               ids: Optional[Sequence[int]] = None, rate: float = 100.0,
+               method: Literal["auto", "read", "bulk", "sync", "fast"] = "auto",
+               out: Optional[Union[str, PathLike[str]]] = None, verified_reads: bool = False) -> dict[str, Any]:
+        """`twinloop link record`: read every joint for `duration` s at `rate` reads/s (0: as fast as the bus allows).
+
+        The robot is `map` (mapping TOML or builtin:NAME) or `protocol` and `ids`. Returns columns (t, q:*, v:*,
+        tau:*), data (rows, 1 + 3 joints) in s, rad, rad/s, N m with NaN where a servo did not answer, rows,
+        seconds, failures (per joint), interrupted (Ctrl-C). `out`: also write each row to that CSV as it is read.
+        """
 
 class VirtualRobotServer:
     """A simulated robot behind the servo protocol on a new pty (`twinloop serve`); a context manager."""
-    def __init__(self, robot: Optional[RobotSpec] = None, mapping: str = "builtin:km20") -> None: ...
+    def __init__(self, robot: Optional[RobotSpec] = None, mapping: str = "builtin:km20", realtime_factor: float = 1.0,
+                 catch_falls: bool = False, ground_sink: Optional[float] = None) -> None: ...
     @property
     def path(self) -> str: ...
     def close(self) -> None: ...

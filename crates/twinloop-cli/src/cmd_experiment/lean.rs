@@ -281,7 +281,12 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
         ))?;
     }
     let standing = vec![0.0; joints.len()];
-    let mut g = Guarded::new(&mut robot, raw, &standing);
+    let mut g = Guarded::new(
+        &mut robot,
+        raw,
+        &standing,
+        crate::cmd_link::interrupt_flag(),
+    );
     eprintln!(
         "leaning +-{:.2} deg over {port} ({:.1} s) ...",
         cfg.amplitude_deg,

@@ -25,7 +25,7 @@ pub mod synthetic;
 
 pub use dataset::Dataset;
 pub use identifiability::{Identifiability, identifiability};
-pub use model_file::{parse_model_file, read_model_file};
+pub use model_file::{parse_model_file, read_model_file, read_plant};
 
 use crate::error::{IdentError, err};
 use twinloop_reduced::{CompactModel, Corrections, SagittalCompliance, SagittalReference};

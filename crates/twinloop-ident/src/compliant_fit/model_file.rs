@@ -51,6 +51,42 @@ const URDF_KEYS: [&str; 9] = [
     "q",
 ];
 
+/// PLANT.toml, or the JSON `twinloop compliant stiffness --json` writes (`mass`,
+/// `gravity` and the `sagittal` block's Kxx .. Dzz); errors name the file and the key.
+pub fn read_plant(path: &Path) -> Result<SagittalCompliance, IdentError> {
+    if path.extension().is_some_and(|e| e == "json") {
+        read_plant_json(path).map_err(IdentError::new)
+    } else {
+        read_model_file(path)
+    }
+}
+
+fn read_plant_json(path: &Path) -> Result<SagittalCompliance, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let get = |key: &str, v: &serde_json::Value| {
+        v.get(key)
+            .and_then(|x| x.as_f64())
+            .ok_or_else(|| format!("{}: missing number `{key}`", path.display()))
+    };
+    let s = v
+        .get("sagittal")
+        .ok_or_else(|| format!("{}: missing object `sagittal`", path.display()))?;
+    Ok(SagittalCompliance {
+        m: get("mass", &v)?,
+        g: get("gravity", &v)?,
+        Kxx: get("Kxx", s)?,
+        Kxz: get("Kxz", s)?,
+        Kzx: get("Kzx", s)?,
+        Kzz: get("Kzz", s)?,
+        Dxx: get("Dxx", s)?,
+        Dxz: get("Dxz", s)?,
+        Dzx: get("Dzx", s)?,
+        Dzz: get("Dzz", s)?,
+    })
+}
+
 /// Reads PLANT.toml; errors name the file and the key.
 pub fn read_model_file(path: &Path) -> Result<SagittalCompliance, IdentError> {
     let text = std::fs::read_to_string(path)

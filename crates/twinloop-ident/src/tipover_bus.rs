@@ -1,0 +1,264 @@
+//! The tip-over experiment on a robot over its Dynamixel bus (`twinloop experiment
+//! tipover --port --map`, what `adapt --port` and `demo` run, and the Python package's
+//! `tipover(port=...)`): the study's protocol (each direction twice, the second time
+//! creeping up to the tip) through nothing but the servos' registers and the IMU
+//! board, on a [`Guarded`] robot; four directions give the same JSON as the
+//! simulator's study ([`report_for_runs`]).
+
+use crate::IdentError;
+use crate::tipover_study::{StudyReport, TiltModel, report_for_runs};
+use serde::Serialize;
+use twinloop_description::Description;
+use twinloop_experiments::guarded::Guarded;
+use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction, tilt};
+use twinloop_link::Item;
+use twinloop_robot::{Robot, RobotError, RobotState};
+
+/// How the experiment runs over the bus.
+#[derive(Debug, Clone)]
+pub struct BusTipoverOptions {
+    pub directions: Vec<Direction>,
+    /// The second run's creep over the last degrees, deg/s.
+    pub slow_ramp: f64,
+    /// RX Compliance Slope written to the servos that hold the pose (2: stiffest).
+    pub compliance_slope: i32,
+    /// RX Compliance Slope of the joints a direction ramps (see [`ANKLE_SLOPE`]).
+    pub ankle_slope: i32,
+}
+
+/// One direction over the bus.
+#[derive(Debug, Clone, Serialize)]
+pub struct BusDirection {
+    pub commanded_deg: f64,
+    pub measured_deg: f64,
+    pub time_s: f64,
+    pub excess_deg: f64,
+    pub lean_deg: f64,
+}
+
+/// The directions run when not all four were asked for.
+#[derive(Debug, Clone, Serialize)]
+pub struct BusReport {
+    pub robot: String,
+    pub port: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forward: Option<BusDirection>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub backward: Option<BusDirection>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub left: Option<BusDirection>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub right: Option<BusDirection>,
+}
+
+/// What a run over the bus gave.
+#[derive(Debug, Clone)]
+pub enum BusOutcome {
+    /// All four directions: the study's report (static references and CoM from the
+    /// model, `com.true` being the model's CoM).
+    Study(Box<StudyReport>),
+    Partial(Box<BusReport>),
+}
+
+/// The report of `runs`: the study's when all four directions ran, else each
+/// direction's angles.
+pub fn bus_outcome(
+    model: &Description,
+    model_spec: &str,
+    port: &str,
+    runs: &[TipoverResult],
+    joint_names: &[String],
+) -> Result<BusOutcome, IdentError> {
+    if runs.len() == 4 {
+        return Ok(BusOutcome::Study(Box::new(report_for_runs(
+            model,
+            runs,
+            joint_names,
+        )?)));
+    }
+    let mut r = BusReport {
+        robot: model_spec.to_string(),
+        port: port.to_string(),
+        forward: None,
+        backward: None,
+        left: None,
+        right: None,
+    };
+    for run in runs {
+        let d = Some(BusDirection {
+            commanded_deg: run.commanded_deg,
+            measured_deg: run.measured_deg,
+            time_s: run.time_s,
+            excess_deg: run.excess_deg,
+            lean_deg: run.lean_deg,
+        });
+        match run.direction {
+            Direction::Forward => r.forward = d,
+            Direction::Backward => r.backward = d,
+            Direction::Left => r.left = d,
+            Direction::Right => r.right = d,
+        }
+    }
+    Ok(BusOutcome::Partial(Box::new(r)))
+}
+
+/// Trunk tilt within which the robot counts as standing again, deg, and for how long
+/// it must stay there, s of robot time.
+const UPRIGHT_DEG: f64 = 3.0;
+const UPRIGHT_HOLD_S: f64 = 1.0;
+/// How far before the first run's tip the second run starts to creep, deg: more than
+/// the simulator's half degree, because over a bus the first run's detection lags by a
+/// cycle or more and the robot must not tip before the creep begins.
+const SLOW_MARGIN_DEG: f64 = 1.5;
+/// How long a person (or the virtual robot's operator) has to stand the robot up, s.
+const STAND_UP_TIMEOUT_S: f64 = 120.0;
+
+/// Direction names (forward, backward, left, right); all four when `list` is empty.
+pub fn parse_directions(list: &[String]) -> Result<Vec<Direction>, String> {
+    if list.is_empty() {
+        return Ok(Direction::ALL.to_vec());
+    }
+    list.iter()
+        .map(|s| {
+            Direction::ALL
+                .into_iter()
+                .find(|d| d.name() == s.trim())
+                .ok_or_else(|| format!("\"{s}\" is not forward, backward, left or right"))
+        })
+        .collect()
+}
+
+/// The trunk's (pitch, roll) from the IMU, rad.
+fn trunk_tilt(st: &RobotState) -> Option<(f64, f64)> {
+    st.imu.and_then(|i| i.orientation).map(tilt)
+}
+
+/// Hold the standing pose until the robot stands again: its trunk within
+/// [`UPRIGHT_DEG`] of `upright` for [`UPRIGHT_HOLD_S`]. A person stands a fallen
+/// robot up (the virtual robot's operator does it by itself); a robot caught before
+/// it fell is standing already.
+fn wait_upright(
+    g: &mut Guarded<'_>,
+    standing: &[f64],
+    upright: (f64, f64),
+    period: f64,
+) -> Result<(), RobotError> {
+    let mut st = RobotState::default();
+    let t0 = g.time();
+    let mut since: Option<f64> = None;
+    loop {
+        g.command_positions(standing)?;
+        g.advance(period)?;
+        g.read(&mut st)?;
+        let now = g.time();
+        let ok = trunk_tilt(&st).is_some_and(|(p, r)| {
+            (p - upright.0).abs().max((r - upright.1).abs()) < UPRIGHT_DEG.to_radians()
+        });
+        since = if ok { since.or(Some(now)) } else { None };
+        if since.is_some_and(|s| now - s >= UPRIGHT_HOLD_S) {
+            return Ok(());
+        }
+        if now - t0 > STAND_UP_TIMEOUT_S {
+            let (p, r) = trunk_tilt(&st).unwrap_or((f64::NAN, f64::NAN));
+            return Err(g.fail(format!(
+                "the robot did not stand up again within {STAND_UP_TIMEOUT_S} s (trunk pitch {:.1} deg, roll {:.1} deg)",
+                p.to_degrees(),
+                r.to_degrees()
+            )));
+        }
+    }
+}
+
+/// Stiffen every servo as the study does (RX compliance margin 0, slope
+/// `slope`): the CoM methods treat the robot as rigid. Servos without these
+/// registers are left as they are.
+fn stiffen(
+    robot: &mut twinloop_experiments::guarded::BusRobot,
+    slope: i32,
+    pick: impl Fn(usize) -> bool + Copy,
+) -> Result<(), RobotError> {
+    for (item, v) in [
+        (Item::CwComplianceMargin, 0),
+        (Item::CcwComplianceMargin, 0),
+        (Item::CwComplianceSlope, slope),
+        (Item::CcwComplianceSlope, slope),
+    ] {
+        robot.set_register_of(item, v, pick)?;
+    }
+    Ok(())
+}
+
+/// The ramped ankles' RX Compliance Slope over the bus: the factory value. Goal
+/// positions are whole counts (0.29 deg), so the ramp is a staircase; a servo at the
+/// stiffest slope takes each count as a jolt, and a robot on the edge of its soles
+/// tips up to a degree early (measured over the pty: forward and backward 1.1 deg
+/// early at slope 2, within the count at 32). The hip rolls that turn with the ankle
+/// rolls sideways stay stiff: soft, they let the legs' parallelogram shear and the
+/// robot tips 3-4 deg early.
+pub const ANKLE_SLOPE: i32 = 32;
+
+/// The ankle joints a lean in `d` ramps.
+fn ramped_ankles(cfg: &TipoverConfig, d: Direction) -> [usize; 2] {
+    if d.is_pitch() {
+        cfg.ankle_pitch
+    } else {
+        cfg.ankle_roll
+    }
+}
+
+/// Each direction twice, as the study: a first ramp finds the tip, a second comes up
+/// to [`SLOW_MARGIN_DEG`] before it and creeps; the robot stood up before each run.
+///
+/// `before(direction, k)` runs before each direction (the CLI asks a person on a
+/// serial port to stand the robot up after the first); `log` hears what happens. An
+/// error stops the run; the caller leaves the servos holding ([`hold_standing`]).
+pub fn run_directions(
+    g: &mut Guarded<'_>,
+    opts: &BusTipoverOptions,
+    cfg: &TipoverConfig,
+    tilt_model: &mut TiltModel,
+    before: &mut dyn FnMut(Direction, usize) -> Result<(), String>,
+    log: &mut dyn FnMut(&str),
+) -> Result<Vec<TipoverResult>, String> {
+    let standing = &vec![0.0; g.robot.mapping().joints.len()][..];
+    // Upright is the trunk's tilt the model gives standing with the feet flat (the
+    // robot's first readings may still rock from the stiffening).
+    // (`tilt` counts roll the other way: positive leaning right.)
+    let t = tilt_model.predict(Direction::Forward, standing);
+    let upright = (t[0], -t[1]);
+    let mut out = Vec::with_capacity(opts.directions.len());
+    for (k, &d) in opts.directions.iter().enumerate() {
+        before(d, k)?;
+        log(&format!("leaning {} ...", d.name()));
+        // Every servo stiff but the two ankles this direction ramps.
+        let ankles = ramped_ankles(cfg, d);
+        stiffen(g.robot, opts.compliance_slope, |k| !ankles.contains(&k))
+            .and_then(|()| stiffen(g.robot, opts.ankle_slope, |k| ankles.contains(&k)))
+            .map_err(|e| e.to_string())?;
+        let mut run =
+            |cfg: &TipoverConfig, g: &mut Guarded<'_>| -> Result<TipoverResult, RobotError> {
+                wait_upright(g, standing, upright, cfg.period_s)?;
+                let mut predict = |q: &[f64]| tilt_model.predict(d, q);
+                let r = run_direction(g, standing, d, cfg, Some(&mut predict));
+                // The ramp ends at the first sign of tipping (or a fault): the ankles go
+                // back to the standing pose at once.
+                let _ = g.robot.command_positions(standing);
+                r
+            };
+        let first = run(cfg, g).map_err(|e| e.message)?;
+        let mut slow = cfg.clone();
+        slow.slow_from_deg = Some((first.commanded_deg - SLOW_MARGIN_DEG).max(0.0));
+        slow.slow_ramp_deg_per_s = opts.slow_ramp;
+        let mut r = run(&slow, g).map_err(|e| e.message)?;
+        r.time_s = first.time_s;
+        log(&format!(
+            "  {}: tipped at {:.2} deg (first ramp {:.2} deg)",
+            d.name(),
+            r.measured_deg,
+            first.measured_deg
+        ));
+        out.push(r);
+    }
+    wait_upright(g, standing, upright, cfg.period_s).map_err(|e| e.message)?;
+    Ok(out)
+}
