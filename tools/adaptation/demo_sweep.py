@@ -8,7 +8,7 @@ adapted CoM's and the part's distance from the truth, and the four fall angles
 in docs/adaptation.md comes from it.
 
     python3 tools/adaptation/demo_sweep.py --seeds 1-12 [--tell-where] [--scenarios a,c,d,e,f]
-        [--twinloop target/release/twinloop] [--out sweep.json]
+        [--twinloop target/release/twinloop] [--out sweep.json] [--keep DIR]
 """
 import argparse, json, os, statistics, subprocess, sys, tempfile, time
 
@@ -31,12 +31,17 @@ def main():
     ap.add_argument("--tell-where", action="store_true")
     ap.add_argument("--twinloop", default="target/release/twinloop")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--keep", default=None, help="keep each run's files in DIR/<job>")
     a = ap.parse_args()
     jobs = [["--seed", str(s)] for s in seeds(a.seeds)]
     jobs += [["--scenario", c] for c in a.scenarios.split(",") if c]
     rows = []
     for job in jobs:
-        with tempfile.TemporaryDirectory() as d:
+        with tempfile.TemporaryDirectory() as tmp:
+            d = tmp
+            if a.keep:
+                d = os.path.join(a.keep, "-".join(x.lstrip("-") for x in job))
+                os.makedirs(d, exist_ok=True)
             cmd = [a.twinloop, "demo", *job, "--out", d, "--json", os.path.join(d, "demo.json")]
             if a.tell_where and job[0] == "--seed":
                 cmd.append("--tell-where")
