@@ -6,7 +6,7 @@
 //! from the four fall angles and the robot's weight; the adapted model is written and
 //! checked; then the truth is revealed beside what was found.
 
-use crate::cmd_experiment::tipover_bus::{ANKLE_SLOPE, BusOutcome, BusPlan, tipover_on_bus_timed};
+use crate::cmd_experiment::tipover_bus::{ANKLE_SLOPE, BusOutcome, BusPlan, tipover_on_bus};
 use crate::cmd_link::{PortArgs, open_client};
 use crate::common::{JSON_HELP, emit};
 use crate::error::{CliError, CliResult, Outcome};
@@ -257,10 +257,7 @@ pub fn run(a: DemoArgs) -> CliResult {
         clock_rate: a.realtime_factor,
         verbose: true,
     };
-    // The host counts the simulation's seconds (its own clock, as a host does a real
-    // robot's): on a loaded machine the simulation's thread falls behind its factor,
-    // and a host on the wall clock would then ramp faster than the robot moves.
-    let run = tipover_on_bus_timed(&plan, Some(Box::new(robot.sim().clock())))?;
+    let run = tipover_on_bus(&plan)?;
     drop(robot);
     let BusOutcome::Study(study) = run.outcome else {
         return Err(CliError::new(

@@ -42,21 +42,8 @@ pub struct DynamixelRobot<T: Transport> {
     next_tick: Option<Instant>,
     /// Robot seconds per host second (see [`DynamixelRobot::set_clock_rate`]).
     clock_rate: f64,
-    /// The robot's own clock and its reading at [`DynamixelRobot::set_clock`] (see
-    /// there); `None`: the host's clock times `clock_rate`.
-    clock: Option<(RobotClock, f64)>,
-    /// With a robot clock: the robot time the last `advance` waited for.
-    next_robot_tick: Option<f64>,
     imu: Option<BoardReader>,
 }
-
-/// A clock the robot keeps, robot seconds: a simulated robot's own time.
-pub type RobotClock = Box<dyn Fn() -> f64 + Send>;
-
-/// The longest [`Robot::advance`] waits for a robot clock, host seconds: a simulated
-/// robot may hold its time while its host is silent (the virtual robot's tether,
-/// 20 ms in the demo), so the host must come back to the bus before that.
-const CLOCK_WAIT_MAX: Duration = Duration::from_millis(8);
 
 fn link_to_robot(e: &LinkError, joint: &str) -> RobotError {
     match e.id() {
@@ -119,8 +106,6 @@ impl<T: Transport> DynamixelRobot<T> {
             start: Instant::now(),
             next_tick: None,
             clock_rate: 1.0,
-            clock: None,
-            next_robot_tick: None,
             imu,
         })
     }
@@ -138,19 +123,6 @@ impl<T: Transport> DynamixelRobot<T> {
         }
         self.clock_rate = rate;
         Ok(())
-    }
-
-    /// Count the robot's seconds by a clock the robot keeps instead of the host's
-    /// (a simulated robot in the same process: its simulated time). A simulation
-    /// that shares the machine with its host does not always keep its real-time
-    /// factor (on a loaded machine its thread waits its turn); by its own clock
-    /// the protocol's ramps, windows and filters stay in the robot's time whatever
-    /// the scheduler does, as they are on a real robot. [`Robot::advance`] then
-    /// waits for the robot's clock, at most 8 ms of the host's at a time.
-    pub fn set_clock(&mut self, clock: RobotClock) {
-        let t0 = clock();
-        self.clock = Some((clock, t0));
-        self.next_robot_tick = None;
     }
 
     /// The board the trunk IMU is read from, if the mapping has one.
@@ -287,10 +259,7 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
     }
 
     fn time(&self) -> f64 {
-        match &self.clock {
-            Some((clock, t0)) => clock() - t0,
-            None => self.start.elapsed().as_secs_f64() * self.clock_rate,
-        }
+        self.start.elapsed().as_secs_f64() * self.clock_rate
     }
 
     /// One read of every joint. Joints whose servo failed read NaN; the first such
@@ -367,19 +336,6 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
     fn advance(&mut self, dt: f64) -> Result<(), RobotError> {
         if dt.is_nan() || dt < 0.0 {
             return Err(RobotError::new(format!("advance by {dt} s")));
-        }
-        if self.clock.is_some() {
-            let now = self.time();
-            let target = match self.next_robot_tick {
-                Some(t) if t + dt > now => t + dt,
-                _ => now + dt,
-            };
-            let waited = Instant::now();
-            while self.time() < target && waited.elapsed() < CLOCK_WAIT_MAX {
-                std::thread::sleep(Duration::from_micros(200));
-            }
-            self.next_robot_tick = Some(target);
-            return Ok(());
         }
         let now = Instant::now();
         let step = Duration::from_secs_f64(dt / self.clock_rate);

@@ -235,10 +235,6 @@ impl Runner {
             .lock()
             .unwrap_or_else(|e| e.into_inner());
         out.copy_from(&self.snap);
-        drop(out);
-        self.shared
-            .time_bits
-            .store(self.sim.time.to_bits(), Ordering::Release);
     }
 
     /// The virtual operator (see [`crate::VirtualRobotOptions::catch_falls`]): if

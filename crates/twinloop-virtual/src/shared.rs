@@ -68,8 +68,6 @@ pub(crate) struct Shared {
     /// nanoseconds since `epoch`: the tether of [`crate::VirtualRobotOptions::tether_s`].
     pub epoch: Instant,
     pub last_heard_ns: AtomicU64,
-    /// The simulated time last published, s (f64 bits): the robot's own clock.
-    pub time_bits: AtomicU64,
 }
 
 impl Shared {
@@ -80,7 +78,6 @@ impl Shared {
             stop: AtomicBool::new(false),
             epoch: Instant::now(),
             last_heard_ns: AtomicU64::new(0),
-            time_bits: AtomicU64::new(0.0_f64.to_bits()),
         }
     }
 

@@ -318,15 +318,6 @@ impl SimHandle {
         }
     }
 
-    /// The simulation's clock: its time as last published, s. A host in the same
-    /// process that counts the robot's seconds by it (`DynamixelRobot::set_clock`)
-    /// runs its protocol in the simulation's time however the two threads are
-    /// scheduled, as a host does with a real robot, whose time is the wall clock's.
-    pub fn clock(&self) -> impl Fn() -> f64 + Send + Sync + 'static {
-        let shared = Arc::clone(&self.shared);
-        move || f64::from_bits(shared.time_bits.load(Ordering::Acquire))
-    }
-
     /// Whether the thread is running (it could not be started, or it panicked).
     pub fn is_running(&self) -> bool {
         self.thread.as_ref().is_some_and(|t| !t.is_finished())

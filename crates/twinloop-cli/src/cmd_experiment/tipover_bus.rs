@@ -55,16 +55,6 @@ pub fn parse_directions(list: &[String]) -> Result<Vec<Direction>, CliError> {
 
 /// Run the tip-over over the bus (see the module documentation).
 pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
-    tipover_on_bus_timed(plan, None)
-}
-
-/// [`tipover_on_bus`] counting the robot's seconds by `clock` (a simulated robot
-/// served in this process: see `DynamixelRobot::set_clock`) instead of the host's
-/// clock times `plan.clock_rate`.
-pub fn tipover_on_bus_timed(
-    plan: &BusPlan,
-    clock: Option<twinloop_link::RobotClock>,
-) -> Result<BusRun, CliError> {
     let mapping = RobotMapping::resolve(&plan.map)?;
     let port = plan
         .port
@@ -93,9 +83,6 @@ pub fn tipover_on_bus_timed(
     let client = open_client(&port_args, None)?;
     let mut robot = DynamixelRobot::new(client, mapping, ReadMethod::Auto)?;
     robot.set_clock_rate(plan.clock_rate)?;
-    if let Some(c) = clock {
-        robot.set_clock(c);
-    }
     let writer = match &plan.record {
         Some(path) => Some(record_writer(path, &names)?),
         None => None,
