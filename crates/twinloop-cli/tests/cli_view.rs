@@ -195,7 +195,16 @@ fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
     // the recording's span, with the base pose the bus recording lacks.
     let (rec_header, rec) = read_csv(&dir.join("tipover.csv"));
     assert!(!rec_header.iter().any(|c| c.starts_with("q:base.")));
-    for name in ["replay_adapted.csv", "replay_prior.csv"] {
+    let leans = leans_of(&rec_header, &rec);
+    assert_eq!(leans.len(), 8, "four directions, twice each");
+    // Each ghost's ankle angle at its fall, per lean, beside the static angles the
+    // demo prints for the same model ("model before", "model adapted").
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let mut tips = Vec::new();
+    for (name, line) in [
+        ("replay_prior.csv", "model before"),
+        ("replay_adapted.csv", "model adapted"),
+    ] {
         let (header, rows) = read_csv(&dir.join(name));
         assert!(header.iter().any(|c| c == "q:base.qw"), "{name}");
         let end = rows.last().unwrap()[0];
@@ -204,6 +213,36 @@ fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
             (end - rec_end).abs() < 0.05,
             "{name} ends at {end}, the recording at {rec_end}"
         );
+        let static_deg: Vec<f64> = stdout
+            .lines()
+            .find_map(|l| l.trim().strip_prefix(line))
+            .unwrap_or_else(|| panic!("no {line:?} in {stdout}"))
+            .split_whitespace()
+            .map(|w| w.parse().unwrap())
+            .collect();
+        tips.push((ghost_falls(name, &header, &rows, &leans), static_deg));
+    }
+    // Each model tips at its own angle: where the static analysis puts the adapted
+    // model's tip clearly before or after the prior's, its ghost tips before or after
+    // too, in both leans of that direction.
+    let (prior, adapted) = (&tips[0], &tips[1]);
+    for d in 0..4 {
+        let want = adapted.1[d] - prior.1[d];
+        if want.abs() < 0.5 {
+            continue;
+        }
+        for lean in [2 * d, 2 * d + 1] {
+            let got = adapted.0[lean] - prior.0[lean];
+            assert!(
+                got * want > 0.0,
+                "lean {lean}: the ghosts tip at {:.2} (adapted) and {:.2} (prior) deg of \
+                 ankle; statically {:.2} and {:.2}",
+                adapted.0[lean],
+                prior.0[lean],
+                adapted.1[d],
+                prior.1[d]
+            );
+        }
     }
     let Some(browser) = chromium::browser() else {
         return;
@@ -226,6 +265,109 @@ fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
     for r in recs {
         assert_eq!(r["missing"].as_array().unwrap().len(), 0, "{r}");
     }
+}
+
+/// One lean of a tip-over's bus recording: the rows from the last one commanding
+/// the standing pose (every `goal:` as in the first row) before the goals leave it,
+/// to the next lean's first; and the ankle joints it turned.
+struct Lean {
+    t0: f64,
+    t1: f64,
+    ankles: Vec<String>,
+}
+
+fn leans_of(header: &[String], rows: &[Vec<f64>]) -> Vec<Lean> {
+    let goals: Vec<usize> = (0..header.len())
+        .filter(|&i| header[i].starts_with("goal:"))
+        .collect();
+    let standing = |r: &Vec<f64>| goals.iter().all(|&i| r[i] == rows[0][i]);
+    let mut out: Vec<Lean> = Vec::new();
+    for k in 1..rows.len() {
+        if standing(&rows[k]) {
+            continue;
+        }
+        if standing(&rows[k - 1]) {
+            if let Some(l) = out.last_mut() {
+                l.t1 = rows[k - 1][0];
+            }
+            out.push(Lean {
+                t0: rows[k - 1][0],
+                t1: rows.last().unwrap()[0],
+                ankles: Vec::new(),
+            });
+        }
+        let l = out.last_mut().unwrap();
+        for &i in &goals {
+            let j = &header[i]["goal:".len()..];
+            if rows[k][i] != rows[0][i] && j.contains("ank") && !l.ankles.iter().any(|a| a == j) {
+                l.ankles.push(j.to_string());
+            }
+        }
+    }
+    out
+}
+
+/// A ghost's falls, one per lean (forward, backward, left, right; twice each, as
+/// the tip-over runs them): standing at the lean's start, fallen (trunk 30 deg off
+/// upright) towards the lean before the next starts; returns the mean ankle angle
+/// of the lean's ankles at the fall (the largest before the trunk passed 30 deg),
+/// deg.
+fn ghost_falls(name: &str, header: &[String], rows: &[Vec<f64>], leans: &[Lean]) -> Vec<f64> {
+    let col = |c: &str| header.iter().position(|h| h == c).unwrap();
+    let (qx, qy, qz, qw) = (
+        col("q:base.qx"),
+        col("q:base.qy"),
+        col("q:base.qz"),
+        col("q:base.qw"),
+    );
+    // Pitch (forward positive) and roll (right positive) of the trunk's up axis.
+    let tilt = |r: &[f64]| {
+        let (x, y, z, w) = (r[qx], r[qy], r[qz], r[qw]);
+        let up = [
+            2.0 * (x * z + w * y),
+            2.0 * (y * z - w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ];
+        (
+            up[0].atan2(up[2]).to_degrees(),
+            (-up[1]).atan2(up[2]).to_degrees(),
+            up[2].clamp(-1.0, 1.0).acos().to_degrees(),
+        )
+    };
+    let mut out = Vec::new();
+    for (i, lean) in leans.iter().enumerate() {
+        let part: Vec<&Vec<f64>> = rows
+            .iter()
+            .filter(|r| r[0] >= lean.t0 - 1e-9 && r[0] < lean.t1 - 1e-9)
+            .collect();
+        let (_, _, first) = tilt(part[0]);
+        assert!(
+            first < 3.0,
+            "{name}, lean {i}: starts {first:.1} deg off upright"
+        );
+        let fall = part
+            .iter()
+            .position(|r| tilt(r).2 > 30.0)
+            .unwrap_or_else(|| panic!("{name}, lean {i} ({} .. {} s): no fall", lean.t0, lean.t1));
+        let (pitch, roll, _) = tilt(part[fall]);
+        let towards = match i / 2 {
+            0 => pitch,
+            1 => -pitch,
+            2 => -roll,
+            _ => roll,
+        };
+        assert!(
+            towards > 25.0,
+            "{name}, lean {i}: fell pitch {pitch:.0} roll {roll:.0} deg"
+        );
+        let ankles: Vec<usize> = lean.ankles.iter().map(|a| col(&format!("q:{a}"))).collect();
+        let angle = part[..fall]
+            .iter()
+            .map(|r| ankles.iter().map(|&c| r[c].abs()).sum::<f64>() / ankles.len() as f64)
+            .fold(0.0, f64::max);
+        out.push(angle.to_degrees());
+    }
+    out
 }
 
 /// The first stderr line of `child` that starts with "live view: ": the page's URL.
