@@ -397,11 +397,45 @@ fn serve_view_and_link_record_view_stream_the_robot() {
         .read_line(&mut pty)
         .unwrap();
     let (url, serve_err) = live_url(&mut serve);
-    // The simulation behind the bus, as it runs: joint states in JSON frames.
+    // The simulation behind the bus, as it runs: joint states in JSON frames, with
+    // the floating base's pose: standing as `simulate` stands the same robot.
     let mut page = live_socket(&url, 400);
     let mut more = vec![0u8; 4000];
     page.read_exact(&mut more).unwrap();
-    assert!(String::from_utf8_lossy(&more).contains("\"q\":["));
+    let text = String::from_utf8_lossy(&more);
+    assert!(text.contains("\"q\":["));
+    let base: Vec<f64> = text
+        .split("\"base\":[")
+        .nth(1)
+        .and_then(|b| b.split(']').next())
+        .unwrap_or_else(|| panic!("no base pose in {text}"))
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(base.len(), 7, "{base:?}");
+    let norm = base[3..].iter().map(|v| v * v).sum::<f64>().sqrt();
+    assert!((norm - 1.0).abs() < 1e-6, "{base:?}");
+    let standing = tmp("standing.csv");
+    let ok = Command::new(bin)
+        .args([
+            "simulate",
+            "--robot",
+            "builtin:km20",
+            "--duration",
+            "0.01",
+            "--out",
+        ])
+        .arg(&standing)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let (header, rows) = read_csv(&standing);
+    let z = rows[0][header.iter().position(|c| c == "q:base.z").unwrap()];
+    assert!(
+        (base[2] - z).abs() < 0.005,
+        "served base at z = {}, simulate stands it at {z}",
+        base[2]
+    );
     drop(page);
     // What a recording reads over that bus, as it reads it.
     let out = tmp("record.csv");
