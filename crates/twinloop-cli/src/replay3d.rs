@@ -7,7 +7,7 @@ use crate::common;
 use crate::error::CliError;
 use std::path::{Path, PathBuf};
 use twinloop_description::Description;
-use twinloop_io::CsvWriter;
+use twinloop_io::{CsvWriter, Table};
 use twinloop_robot::{Robot, RobotState};
 use twinloop_view::{Content, Recording, Scene};
 
@@ -289,23 +289,96 @@ pub fn tipover_replay(
         })?;
         csvs.push(sim_out);
     }
-    let (robot, format) = common::load_description(prior_spec)?;
-    let source = (format != common::Format::Builtin).then(|| Path::new(prior_spec));
-    let scene = Scene::new(&robot, source, &[]);
-    let recordings = csvs
+    let tables = csvs
         .iter()
-        .map(|p| Recording::read(p, &scene.info))
+        .map(|p| Ok((p.clone(), common::read_table(p)?)))
+        .collect::<Result<Vec<_>, CliError>>()?;
+    export(prior_spec, &tables, out)?;
+    let mut files: Vec<PathBuf> = csvs.split_off(1);
+    files.push(out.to_path_buf());
+    Ok(files)
+}
+
+/// One self-contained viewer page (`out`): the robot `spec` (a description file, or
+/// `builtin:NAME`) with the recordings `tables` (each named by its file) replayed,
+/// the second and later as ghosts.
+fn export(spec: &str, tables: &[(PathBuf, Table)], out: &Path) -> Result<(), CliError> {
+    let (robot, format) = common::load_description(spec)?;
+    let source = (format != common::Format::Builtin).then(|| Path::new(spec));
+    let scene = Scene::new(&robot, source, &[]);
+    let recordings = tables
+        .iter()
+        .map(|(p, t)| Recording::from_table(t, p, &scene.info))
         .collect::<Result<Vec<_>, _>>()?;
+    if let Some(r) = recordings
+        .iter()
+        .find(|r| r.info.missing.len() == scene.info.joints.len() && !r.info.has_base)
+    {
+        return Err(CliError::new(format!(
+            "{}: no q:<joint> column names a joint of {}: nothing moves",
+            r.info.name, robot.name
+        )));
+    }
     let content = Content {
         scene,
         recordings,
         live: None,
     };
     let html = twinloop_view::export_html(&content).map_err(|e| CliError::new(e.to_string()))?;
-    std::fs::write(out, html).map_err(|e| CliError::io(out, e))?;
-    let mut files: Vec<PathBuf> = csvs.split_off(1);
-    files.push(out.to_path_buf());
-    Ok(files)
+    std::fs::write(out, html).map_err(|e| CliError::io(out, e))
+}
+
+/// The 3D replay of a `--report` page about a motion: `csvs` (the first drawn
+/// solid, the others as ghosts) on the robot `spec`, written beside the report as
+/// `<report's stem>_3d.html` (one file, works offline), and a section of `page`
+/// linking to it that says what is shown (`what`). A replay that cannot be made
+/// is a warning: the report does not depend on it. Returns the file written.
+pub fn motion_replay(
+    report: &Path,
+    spec: &str,
+    csvs: &[PathBuf],
+    what: &str,
+    page: &mut twinloop_report::Report,
+) -> Option<PathBuf> {
+    let tables: Result<Vec<_>, CliError> = csvs
+        .iter()
+        .map(|p| Ok((p.clone(), common::read_table(p)?)))
+        .collect();
+    match tables {
+        Ok(t) => replay_tables(report, spec, &t, what, page),
+        Err(e) => {
+            eprintln!("warning: no 3D replay: {e}");
+            None
+        }
+    }
+}
+
+/// [`motion_replay`] of recordings already read (or made: each named by `.0`).
+pub fn replay_tables(
+    report: &Path,
+    spec: &str,
+    tables: &[(PathBuf, Table)],
+    what: &str,
+    page: &mut twinloop_report::Report,
+) -> Option<PathBuf> {
+    let stem = report
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "report".into());
+    let out = report.with_file_name(format!("{stem}_3d.html"));
+    match export(spec, tables, &out) {
+        Ok(()) => {
+            let name = format!("{stem}_3d.html");
+            page.heading("In 3D");
+            page.paragraph(what);
+            page.link(format!("Open {name} (one file; works offline)"), name);
+            Some(out)
+        }
+        Err(e) => {
+            eprintln!("warning: no 3D replay: {e}");
+            None
+        }
+    }
 }
 
 /// A section of a `--report` page that links to the tip-over's 3D replay written

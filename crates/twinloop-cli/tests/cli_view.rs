@@ -478,3 +478,160 @@ fn serve_view_and_link_record_view_stream_the_robot() {
     BufReader::new(serve_err).read_to_string(&mut rest).unwrap();
     states_sent(&rest);
 }
+
+/// Run the binary with `args`; it must succeed and make no 3D replay warning.
+fn twinloop_ok(args: &[&str]) -> String {
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{args:?}: {err}");
+    assert!(!err.contains("no 3D replay"), "{args:?}: {err}");
+    err
+}
+
+/// The `--report` pages about a motion link to its 3D replay written beside them,
+/// which opens offline in Chromium with the recordings named and nothing wrong.
+#[test]
+fn motion_reports_link_their_3d_replay() {
+    let p = |n: &str| tmp(n).display().to_string();
+    // The lean, validated: the robot's run and the simulation's as a ghost.
+    twinloop_ok(&[
+        "experiment",
+        "lean",
+        "--robot",
+        "builtin:km20",
+        "--out",
+        &p("lean_a.csv"),
+    ]);
+    twinloop_ok(&[
+        "experiment",
+        "lean",
+        "--robot",
+        "builtin:km20",
+        "--amplitude",
+        "2",
+        "--out",
+        &p("lean_b.csv"),
+    ]);
+    twinloop_ok(&[
+        "validate",
+        "lean",
+        "--robot-run",
+        &p("lean_a.csv"),
+        "--sim-run",
+        &p("lean_b.csv"),
+        "--report",
+        &p("lean.html"),
+        "--robot",
+        "builtin:km20",
+    ]);
+    // The squat of seed 004 under the residual check, and the static poses.
+    let h1 = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/unitree_h1/h1.urdf"
+    );
+    twinloop_ok(&[
+        "experiment",
+        "squat",
+        "--robot",
+        h1,
+        "--out",
+        &p("squat.csv"),
+    ]);
+    twinloop_ok(&[
+        "validate",
+        "residual",
+        "--robot",
+        h1,
+        "--motion",
+        &p("squat.csv"),
+        "--out",
+        &p("res.csv"),
+        "--report",
+        &p("res.html"),
+    ]);
+    twinloop_ok(&[
+        "experiment",
+        "static-poses",
+        "--robot",
+        "builtin:km20",
+        "--count",
+        "60",
+        "--out",
+        &p("poses.csv"),
+    ]);
+    twinloop_ok(&[
+        "identify",
+        "static",
+        "--robot",
+        "builtin:km20",
+        "--poses",
+        &p("poses.csv"),
+        "--total-mass",
+        "3.336",
+        "--report",
+        &p("static.html"),
+    ]);
+    // The lab17 walk of seed 003, identified: its joints from the u: offsets.
+    twinloop_ok(&[
+        "experiment",
+        "walk",
+        "--robot",
+        "builtin:lab17",
+        "--out",
+        &p("walk.csv"),
+    ]);
+    twinloop_ok(&[
+        "identify",
+        "walk",
+        "--data",
+        &p("walk.csv"),
+        "--report-arx",
+        &p("walk.html"),
+        "--max-iter",
+        "2",
+    ]);
+    let browser = chromium::browser();
+    for (report, names, moving) in [
+        ("lean", vec!["lean_a.csv", "lean_b.csv"], "q:l_ank_pitch"),
+        ("res", vec!["squat.csv"], "q:left_knee_joint"),
+        ("static", vec!["poses.csv"], "q:l_knee"),
+        ("walk", vec!["walk.csv"], "q:l_ank_roll"),
+    ] {
+        let html = std::fs::read_to_string(tmp(&format!("{report}.html"))).unwrap();
+        let file = format!("{report}_3d.html");
+        assert!(
+            html.contains(&format!("<a href=\"{file}\">")),
+            "{report}: no link"
+        );
+        let Some(browser) = &browser else { continue };
+        let page = format!("file://{}?snapshot=1&t=1", tmp(&file).display());
+        let dom = chromium::dump_dom(browser, &page);
+        let status = chromium::element_text(&dom, "status").expect("no #status");
+        let status: serde_json::Value =
+            serde_json::from_str(&chromium::unescape_html(status)).unwrap();
+        assert_eq!(status["ready"], true, "{report}: {status}");
+        assert_eq!(
+            status["errors"].as_array().unwrap().len(),
+            0,
+            "{report}: {status}"
+        );
+        let recs = status["recordings"].as_array().unwrap();
+        let got: Vec<&str> = recs.iter().map(|r| r["name"].as_str().unwrap()).collect();
+        assert_eq!(got, names, "{report}");
+        for r in recs {
+            let missing: Vec<&str> = r["missing"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|m| m.as_str().unwrap())
+                .collect();
+            assert!(
+                !missing.contains(&moving),
+                "{report}: {moving} missing: {r}"
+            );
+        }
+    }
+}
