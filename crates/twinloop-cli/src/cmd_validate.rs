@@ -74,7 +74,8 @@ pub enum ValidateCommand {
     /// Output: stdout a table per joint; --json FILE (- for stdout): shift_s, samples,
     /// t_start, t_end and per joint torque_rms, torque_mean, torque_max_abs, torque_rms_robot (N m)
     /// and angle_rms (rad); --report FILE.html: the table and, per joint, both runs'
-    /// torque over time (the seed's Figs 10-11) and the ankle angles.
+    /// torque over time (the seed's Figs 10-11) and the ankle angles; with --robot,
+    /// OUT_3d.html beside it: the lean in 3D, the simulation as a ghost.
     #[command(verbatim_doc_comment)]
     Lean(LeanArgs),
 }
@@ -130,7 +131,7 @@ pub struct ResidualArgs {
     pub no_smoothing: bool,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
-    /// HTML report (the seed's Fig. 6) to write.
+    /// HTML report (the seed's Fig. 6) to write, and beside it OUT_3d.html: the motion in 3D.
     #[arg(long, value_name = "OUT.html")]
     pub report: Option<PathBuf>,
 }

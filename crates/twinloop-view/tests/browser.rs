@@ -844,3 +844,43 @@ fn a_click_on_the_plot_seeks_the_timeline_there() {
     assert_eq!(status["errors"].as_array().unwrap().len(), 0, "{status}");
     assert_no_misses(&misses);
 }
+
+#[test]
+fn a_missing_mesh_is_named_on_the_page_and_in_the_console() {
+    let Some(chromium) = browser() else { return };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mesh_robot/urdf/robot.urdf");
+    let robot = twinloop_description::load(&path).unwrap();
+    let scene = Scene::new(&robot, Some(&path), &[]);
+    let (url, _) = serve_with_misses(Content {
+        scene,
+        recordings: Vec::new(),
+        live: None,
+    });
+    let mut page = cdp::Browser::open(&chromium, &url);
+    page.wait_for("!!(window.twinloop && window.twinloop.ready)", 120);
+    // What a user sees: the warnings box of the page, as drawn.
+    let shown = page.eval("document.getElementById('warnings').innerText");
+    let shown = shown.as_str().unwrap_or_default().to_string();
+    assert!(
+        shown.contains("hand.stl") && shown.contains("file not found"),
+        "the page shows: {shown:?}"
+    );
+    let visible = page.eval(
+        "(() => { const r = document.getElementById('warnings').getBoundingClientRect(); \
+         return r.width > 0 && r.height > 0; })()",
+    );
+    assert_eq!(
+        visible,
+        Value::Bool(true),
+        "the warnings box is not visible"
+    );
+    // What a developer sees: a console warning naming the file.
+    page.eval("0"); // any answer flushes the console events before it
+    assert!(
+        page.console
+            .iter()
+            .any(|(level, text)| level == "warning" && text.contains("hand.stl")),
+        "console: {:?}",
+        page.console
+    );
+}

@@ -16,10 +16,12 @@ pub struct Browser {
     session: String,
     next_id: u64,
     profile: PathBuf,
+    /// What the page wrote to its console: (level, text), in order.
+    pub console: Vec<(String, String)>,
 }
 
 impl Browser {
-    /// Start `chromium` (software WebGL, 640x480) on `url`.
+    /// Start `chromium` (software WebGL, 640x480) on `url`, listening to its console.
     pub fn open(chromium: &Path, url: &str) -> Browser {
         let profile = super::chromium::tempdir("cdp-profile");
         let mut child = Command::new(chromium)
@@ -74,13 +76,17 @@ impl Browser {
             session: String::new(),
             next_id: 0,
             profile,
+            console: Vec::new(),
         };
-        let target = b.call("Target.createTarget", json!({ "url": url }));
+        let target = b.call("Target.createTarget", json!({ "url": "about:blank" }));
         let attached = b.call(
             "Target.attachToTarget",
             json!({ "targetId": target["targetId"], "flatten": true }),
         );
         b.session = attached["sessionId"].as_str().unwrap().to_string();
+        // The console is listened to before the page loads.
+        b.call("Runtime.enable", json!({}));
+        b.call("Page.navigate", json!({ "url": url }));
         b
     }
 
@@ -98,6 +104,20 @@ impl Browser {
                 continue;
             };
             let v: Value = serde_json::from_str(text.as_str()).unwrap();
+            if v["method"] == "Runtime.consoleAPICalled" {
+                let p = &v["params"];
+                let text: Vec<String> = p["args"]
+                    .as_array()
+                    .into_iter()
+                    .flatten()
+                    .map(|a| match &a["value"] {
+                        Value::String(s) => s.clone(),
+                        other => other.to_string(),
+                    })
+                    .collect();
+                self.console
+                    .push((p["type"].as_str().unwrap_or("").to_string(), text.join(" ")));
+            }
             if v["id"] == json!(id) {
                 assert!(v.get("error").is_none(), "{method}: {v}");
                 return v["result"].clone();
