@@ -1,6 +1,7 @@
-//! The tip-over in 3D for `demo` and `adapt --record --report`: the robot's bus
-//! recording with the adapted and prior models simulated on its joint commands as
-//! ghosts, exported as one viewer page beside the report (twinloop-view's export).
+//! 3D replays beside the `--report` pages, exported as one viewer page each
+//! (twinloop-view's export): the tip-over of `demo` and `adapt --record --report`
+//! (the robot's bus recording with the adapted and prior models simulated lean by
+//! lean as ghosts), and any other report about a motion ([`motion_replay`]).
 
 use crate::cmd_simulate::{ServoChoice, record_columns, standing_simulator, state_row};
 use crate::common;
@@ -391,9 +392,10 @@ pub fn link_replay(report: &mut twinloop_report::Report, replay: &Path) {
     report.heading("In 3D");
     report.paragraph(
         "The robot's tip-over as recorded over the bus (grey), and the adapted (blue) and \
-         prior (red) models simulated on the same joint commands: the model before and after \
-         adaptation beside the robot. The recording has no base pose (the bus does not measure \
-         it), so the robot stands where it started; the simulated ghosts fall.",
+         prior (red) models simulated lean by lean: each lean from standing, on the robot's \
+         joint commands and then its ramp going on until the model tips, so each tips at its \
+         own angle in every direction beside the robot. The recording has no base pose (the \
+         bus does not measure it), so the robot stands where it started; the ghosts fall.",
     );
     report.link(format!("Open {name} (one file; works offline)"), name);
 }
