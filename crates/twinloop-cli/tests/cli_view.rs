@@ -635,3 +635,56 @@ fn motion_reports_link_their_3d_replay() {
         }
     }
 }
+
+/// Every `"base":[x, y, z, qx, qy, qz, qw]` in a stretch of the live stream.
+fn base_poses(text: &str) -> Vec<Vec<f64>> {
+    text.split("\"base\":[")
+        .skip(1)
+        .filter_map(|b| {
+            let v: Vec<f64> = b
+                .split(']')
+                .next()?
+                .split(',')
+                .map(|v| v.parse().ok())
+                .collect::<Option<_>>()?;
+            (v.len() == 7).then_some(v)
+        })
+        .collect()
+}
+
+/// A served robot whose servos power on limp falls, and `serve --view` shows its
+/// base going down (the state sent is the simulator's, base pose and all).
+#[test]
+fn serve_view_shows_a_limp_robot_fall() {
+    let mut serve = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        // A quarter of real time: the fall lasts seconds, after the page is there.
+        .args(["serve", "--robot", "builtin:km20", "--torque-off", "--view"])
+        .args(["--realtime-factor", "0.25"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (url, _err) = live_url(&mut serve);
+    let mut page = live_socket(&url, 300);
+    let mut seen = Vec::new();
+    let start = std::time::Instant::now();
+    let mut buf = vec![0u8; 8192];
+    while start.elapsed() < Duration::from_secs(5) {
+        let n = page.read(&mut buf).unwrap();
+        seen.extend_from_slice(&buf[..n]);
+    }
+    let _ = Command::new("kill")
+        .args(["-INT", &serve.id().to_string()])
+        .status();
+    let _ = serve.wait();
+    let poses = base_poses(&String::from_utf8_lossy(&seen));
+    assert!(poses.len() > 30, "{} base poses in 5 s", poses.len());
+    let z: Vec<f64> = poses.iter().map(|p| p[2]).collect();
+    let (first, lowest) = (z[0], z.iter().copied().fold(f64::INFINITY, f64::min));
+    // km20's base stands at 0.27 m; limp, the robot folds to the ground.
+    assert!(first > 0.2, "the base starts at z = {first}");
+    assert!(
+        lowest < 0.6 * first,
+        "the base went from {first} only down to {lowest}"
+    );
+}
