@@ -193,7 +193,7 @@ fn serve_simulated(
         ..Default::default()
     };
     let mut vr = twinloop_virtual::VirtualRobot::new(robot, mapping, &options)?;
-    let names = vr.simulator().model.joint_names.clone();
+    let names = vr.simulator().model.q_names();
     let live = crate::cmd_view::start_live(&a.view, robot, a.robot.as_deref(), &names)?;
     if !vr.unmapped.is_empty() {
         eprintln!(

@@ -211,7 +211,7 @@ fn live_view(
 
 /// The column names of a simulation record: time, state, servo torques, CoM, IMU
 /// and feet.
-fn record_columns(sim: &Simulator) -> Vec<String> {
+pub(crate) fn record_columns(sim: &Simulator) -> Vec<String> {
     let names = &sim.model.joint_names;
     let mut cols = vec!["t".to_string()];
     cols.extend(sim.model.q_names().iter().map(|n| format!("q:{n}")));
@@ -229,6 +229,30 @@ fn record_columns(sim: &Simulator) -> Vec<String> {
         }
     }
     cols
+}
+
+/// The simulator's state as a row of [`record_columns`], with `time` in the `t` column.
+pub(crate) fn state_row(
+    sim: &mut Simulator,
+    st: &mut RobotState,
+    time: f64,
+    row: &mut Vec<f64>,
+) -> Result<(), CliError> {
+    sim.read(st)?;
+    row.clear();
+    row.push(time);
+    row.extend_from_slice(&sim.q);
+    row.extend_from_slice(&sim.v);
+    row.extend_from_slice(&sim.applied);
+    row.extend(sim.center_of_mass().iter());
+    let imu = st.imu.unwrap_or_default();
+    row.extend(imu.gyro);
+    row.extend(imu.accel);
+    for f in &st.feet {
+        let cop = f.cop.unwrap_or([f64::NAN, f64::NAN]);
+        row.extend([f.force, cop[0], cop[1]]);
+    }
+    Ok(())
 }
 
 /// Step the simulator for --duration, following the goals, writing every --every'th row.
@@ -249,20 +273,7 @@ fn record(
     let mut row = Vec::with_capacity(cols.len());
     for k in 0..=steps {
         if k % a.every.max(1) == 0 || k == steps {
-            sim.read(&mut st)?;
-            row.clear();
-            row.push(sim.time);
-            row.extend_from_slice(&sim.q);
-            row.extend_from_slice(&sim.v);
-            row.extend_from_slice(&sim.applied);
-            row.extend(sim.center_of_mass().iter());
-            let imu = st.imu.unwrap_or_default();
-            row.extend(imu.gyro);
-            row.extend(imu.accel);
-            for f in &st.feet {
-                let cop = f.cop.unwrap_or([f64::NAN, f64::NAN]);
-                row.extend([f.force, cop[0], cop[1]]);
-            }
+            state_row(sim, &mut st, sim.time, &mut row)?;
             w.write_row(&row)?;
         }
         if let Some(live) = live.as_deref_mut() {

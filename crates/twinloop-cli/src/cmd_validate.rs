@@ -74,7 +74,8 @@ pub enum ValidateCommand {
     /// Output: stdout a table per joint; --json FILE (- for stdout): shift_s, samples,
     /// t_start, t_end and per joint torque_rms, torque_mean, torque_max_abs, torque_rms_robot (N m)
     /// and angle_rms (rad); --report FILE.html: the table and, per joint, both runs'
-    /// torque over time (the seed's Figs 10-11) and the ankle angles.
+    /// torque over time (the seed's Figs 10-11) and the ankle angles; with --robot,
+    /// OUT_3d.html beside it: the lean in 3D, the simulation as a ghost.
     #[command(verbatim_doc_comment)]
     Lean(LeanArgs),
 }
@@ -92,6 +93,11 @@ pub struct LeanArgs {
     /// HTML report with a plot per joint.
     #[arg(long, value_name = "OUT.html")]
     pub report: Option<PathBuf>,
+    /// The robot both runs lean (a URDF or MJCF file, or builtin:NAME): with
+    /// --report, the lean in 3D beside it (OUT_3d.html: the robot's run, the
+    /// simulation as a ghost).
+    #[arg(long, value_name = "ROBOT", requires = "report")]
+    pub robot: Option<String>,
     /// Largest clock offset between the runs to look for, s (0: align on `t` as it is).
     #[arg(long, default_value_t = 0.5, value_name = "S", value_parser = crate::common::non_negative)]
     pub max_shift: f64,
@@ -125,7 +131,7 @@ pub struct ResidualArgs {
     pub no_smoothing: bool,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
-    /// HTML report (the seed's Fig. 6) to write.
+    /// HTML report (the seed's Fig. 6) to write, and beside it OUT_3d.html: the motion in 3D.
     #[arg(long, value_name = "OUT.html")]
     pub report: Option<PathBuf>,
 }
@@ -166,7 +172,20 @@ fn lean(a: &LeanArgs) -> CliResult {
         ));
     }
     if let Some(p) = &a.report {
-        lean_report(&c, &robot, &sim, &rn, &sn).write(p)?;
+        let mut page = lean_report(&c, &robot, &sim, &rn, &sn);
+        if let Some(spec) = &a.robot {
+            crate::replay3d::motion_replay(
+                p,
+                spec,
+                &[a.robot_run.clone(), a.sim_run.clone()],
+                "The lean in 3D: the robot's run (solid) and the simulation's (blue ghost), each \
+                 on its own clock (the ghost's offset slider lines them up; the comparison above \
+                 shifted the simulation by the amount it names). Both stand where they started: \
+                 the runs record the joints, not the base.",
+                &mut page,
+            );
+        }
+        page.write(p)?;
     }
     emit(&text, a.json.as_ref(), &c)?;
     Ok(Outcome::Ok)
@@ -265,6 +284,14 @@ fn residual(a: &ResidualArgs) -> CliResult {
     if let Some(p) = &a.report {
         let mut r = Report::new(format!("Residual base wrench of {}", model.name));
         residual_sections(&mut r, &runs);
+        crate::replay3d::motion_replay(
+            p,
+            &a.robot,
+            std::slice::from_ref(&a.motion),
+            "The motion in 3D, with the CoM, the support polygon and, when the motion file \
+             has the plate's columns, the centre of pressure and the ground reaction.",
+            &mut r,
+        );
         r.write(p)?;
     }
     let rows: Vec<(&str, &ResidualSummary)> = runs.iter().map(|(n, r)| (*n, &r.summary)).collect();

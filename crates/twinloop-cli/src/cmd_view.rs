@@ -151,7 +151,9 @@ pub fn start_live(
 }
 
 /// `serve --view`: read the simulation's snapshot `LIVE_RATE` times a second on this
-/// thread (the simulation's own thread is not touched) until `done`.
+/// thread (the simulation's own thread is not touched) until `done`; the state sent
+/// is the simulator's whole configuration, the floating base's pose with the joints
+/// (the live page is started with `Model::q_names`).
 pub fn watch_simulation(
     live: &mut twinloop_view::LivePublisher,
     sim: &twinloop_virtual::SimHandle,
@@ -161,7 +163,7 @@ pub fn watch_simulation(
     let period = std::time::Duration::from_secs_f64(0.5 / LIVE_RATE);
     while !done.load(std::sync::atomic::Ordering::Relaxed) {
         sim.snapshot(&mut snap);
-        live.offer(snap.time, &snap.state.positions);
+        live.offer(snap.time, &snap.q);
         std::thread::sleep(period);
     }
 }

@@ -195,7 +195,16 @@ fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
     // the recording's span, with the base pose the bus recording lacks.
     let (rec_header, rec) = read_csv(&dir.join("tipover.csv"));
     assert!(!rec_header.iter().any(|c| c.starts_with("q:base.")));
-    for name in ["replay_adapted.csv", "replay_prior.csv"] {
+    let leans = leans_of(&rec_header, &rec);
+    assert_eq!(leans.len(), 8, "four directions, twice each");
+    // Each ghost's ankle angle at its fall, per lean, beside the static angles the
+    // demo prints for the same model ("model before", "model adapted").
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let mut tips = Vec::new();
+    for (name, line) in [
+        ("replay_prior.csv", "model before"),
+        ("replay_adapted.csv", "model adapted"),
+    ] {
         let (header, rows) = read_csv(&dir.join(name));
         assert!(header.iter().any(|c| c == "q:base.qw"), "{name}");
         let end = rows.last().unwrap()[0];
@@ -204,6 +213,36 @@ fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
             (end - rec_end).abs() < 0.05,
             "{name} ends at {end}, the recording at {rec_end}"
         );
+        let static_deg: Vec<f64> = stdout
+            .lines()
+            .find_map(|l| l.trim().strip_prefix(line))
+            .unwrap_or_else(|| panic!("no {line:?} in {stdout}"))
+            .split_whitespace()
+            .map(|w| w.parse().unwrap())
+            .collect();
+        tips.push((ghost_falls(name, &header, &rows, &leans), static_deg));
+    }
+    // Each model tips at its own angle: where the static analysis puts the adapted
+    // model's tip clearly before or after the prior's, its ghost tips before or after
+    // too, in both leans of that direction.
+    let (prior, adapted) = (&tips[0], &tips[1]);
+    for d in 0..4 {
+        let want = adapted.1[d] - prior.1[d];
+        if want.abs() < 0.5 {
+            continue;
+        }
+        for lean in [2 * d, 2 * d + 1] {
+            let got = adapted.0[lean] - prior.0[lean];
+            assert!(
+                got * want > 0.0,
+                "lean {lean}: the ghosts tip at {:.2} (adapted) and {:.2} (prior) deg of \
+                 ankle; statically {:.2} and {:.2}",
+                adapted.0[lean],
+                prior.0[lean],
+                adapted.1[d],
+                prior.1[d]
+            );
+        }
     }
     let Some(browser) = chromium::browser() else {
         return;
@@ -226,6 +265,109 @@ fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
     for r in recs {
         assert_eq!(r["missing"].as_array().unwrap().len(), 0, "{r}");
     }
+}
+
+/// One lean of a tip-over's bus recording: the rows from the last one commanding
+/// the standing pose (every `goal:` as in the first row) before the goals leave it,
+/// to the next lean's first; and the ankle joints it turned.
+struct Lean {
+    t0: f64,
+    t1: f64,
+    ankles: Vec<String>,
+}
+
+fn leans_of(header: &[String], rows: &[Vec<f64>]) -> Vec<Lean> {
+    let goals: Vec<usize> = (0..header.len())
+        .filter(|&i| header[i].starts_with("goal:"))
+        .collect();
+    let standing = |r: &Vec<f64>| goals.iter().all(|&i| r[i] == rows[0][i]);
+    let mut out: Vec<Lean> = Vec::new();
+    for k in 1..rows.len() {
+        if standing(&rows[k]) {
+            continue;
+        }
+        if standing(&rows[k - 1]) {
+            if let Some(l) = out.last_mut() {
+                l.t1 = rows[k - 1][0];
+            }
+            out.push(Lean {
+                t0: rows[k - 1][0],
+                t1: rows.last().unwrap()[0],
+                ankles: Vec::new(),
+            });
+        }
+        let l = out.last_mut().unwrap();
+        for &i in &goals {
+            let j = &header[i]["goal:".len()..];
+            if rows[k][i] != rows[0][i] && j.contains("ank") && !l.ankles.iter().any(|a| a == j) {
+                l.ankles.push(j.to_string());
+            }
+        }
+    }
+    out
+}
+
+/// A ghost's falls, one per lean (forward, backward, left, right; twice each, as
+/// the tip-over runs them): standing at the lean's start, fallen (trunk 30 deg off
+/// upright) towards the lean before the next starts; returns the mean ankle angle
+/// of the lean's ankles at the fall (the largest before the trunk passed 30 deg),
+/// deg.
+fn ghost_falls(name: &str, header: &[String], rows: &[Vec<f64>], leans: &[Lean]) -> Vec<f64> {
+    let col = |c: &str| header.iter().position(|h| h == c).unwrap();
+    let (qx, qy, qz, qw) = (
+        col("q:base.qx"),
+        col("q:base.qy"),
+        col("q:base.qz"),
+        col("q:base.qw"),
+    );
+    // Pitch (forward positive) and roll (right positive) of the trunk's up axis.
+    let tilt = |r: &[f64]| {
+        let (x, y, z, w) = (r[qx], r[qy], r[qz], r[qw]);
+        let up = [
+            2.0 * (x * z + w * y),
+            2.0 * (y * z - w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ];
+        (
+            up[0].atan2(up[2]).to_degrees(),
+            (-up[1]).atan2(up[2]).to_degrees(),
+            up[2].clamp(-1.0, 1.0).acos().to_degrees(),
+        )
+    };
+    let mut out = Vec::new();
+    for (i, lean) in leans.iter().enumerate() {
+        let part: Vec<&Vec<f64>> = rows
+            .iter()
+            .filter(|r| r[0] >= lean.t0 - 1e-9 && r[0] < lean.t1 - 1e-9)
+            .collect();
+        let (_, _, first) = tilt(part[0]);
+        assert!(
+            first < 3.0,
+            "{name}, lean {i}: starts {first:.1} deg off upright"
+        );
+        let fall = part
+            .iter()
+            .position(|r| tilt(r).2 > 30.0)
+            .unwrap_or_else(|| panic!("{name}, lean {i} ({} .. {} s): no fall", lean.t0, lean.t1));
+        let (pitch, roll, _) = tilt(part[fall]);
+        let towards = match i / 2 {
+            0 => pitch,
+            1 => -pitch,
+            2 => -roll,
+            _ => roll,
+        };
+        assert!(
+            towards > 25.0,
+            "{name}, lean {i}: fell pitch {pitch:.0} roll {roll:.0} deg"
+        );
+        let ankles: Vec<usize> = lean.ankles.iter().map(|a| col(&format!("q:{a}"))).collect();
+        let angle = part[..fall]
+            .iter()
+            .map(|r| ankles.iter().map(|&c| r[c].abs()).sum::<f64>() / ankles.len() as f64)
+            .fold(0.0, f64::max);
+        out.push(angle.to_degrees());
+    }
+    out
 }
 
 /// The first stderr line of `child` that starts with "live view: ": the page's URL.
@@ -255,11 +397,45 @@ fn serve_view_and_link_record_view_stream_the_robot() {
         .read_line(&mut pty)
         .unwrap();
     let (url, serve_err) = live_url(&mut serve);
-    // The simulation behind the bus, as it runs: joint states in JSON frames.
+    // The simulation behind the bus, as it runs: joint states in JSON frames, with
+    // the floating base's pose: standing as `simulate` stands the same robot.
     let mut page = live_socket(&url, 400);
     let mut more = vec![0u8; 4000];
     page.read_exact(&mut more).unwrap();
-    assert!(String::from_utf8_lossy(&more).contains("\"q\":["));
+    let text = String::from_utf8_lossy(&more);
+    assert!(text.contains("\"q\":["));
+    let base: Vec<f64> = text
+        .split("\"base\":[")
+        .nth(1)
+        .and_then(|b| b.split(']').next())
+        .unwrap_or_else(|| panic!("no base pose in {text}"))
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(base.len(), 7, "{base:?}");
+    let norm = base[3..].iter().map(|v| v * v).sum::<f64>().sqrt();
+    assert!((norm - 1.0).abs() < 1e-6, "{base:?}");
+    let standing = tmp("standing.csv");
+    let ok = Command::new(bin)
+        .args([
+            "simulate",
+            "--robot",
+            "builtin:km20",
+            "--duration",
+            "0.01",
+            "--out",
+        ])
+        .arg(&standing)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let (header, rows) = read_csv(&standing);
+    let z = rows[0][header.iter().position(|c| c == "q:base.z").unwrap()];
+    assert!(
+        (base[2] - z).abs() < 0.005,
+        "served base at z = {}, simulate stands it at {z}",
+        base[2]
+    );
     drop(page);
     // What a recording reads over that bus, as it reads it.
     let out = tmp("record.csv");
@@ -301,4 +477,214 @@ fn serve_view_and_link_record_view_stream_the_robot() {
     let mut rest = String::new();
     BufReader::new(serve_err).read_to_string(&mut rest).unwrap();
     states_sent(&rest);
+}
+
+/// Run the binary with `args`; it must succeed and make no 3D replay warning.
+fn twinloop_ok(args: &[&str]) -> String {
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{args:?}: {err}");
+    assert!(!err.contains("no 3D replay"), "{args:?}: {err}");
+    err
+}
+
+/// The `--report` pages about a motion link to its 3D replay written beside them,
+/// which opens offline in Chromium with the recordings named and nothing wrong.
+#[test]
+fn motion_reports_link_their_3d_replay() {
+    let p = |n: &str| tmp(n).display().to_string();
+    // The lean, validated: the robot's run and the simulation's as a ghost.
+    twinloop_ok(&[
+        "experiment",
+        "lean",
+        "--robot",
+        "builtin:km20",
+        "--out",
+        &p("lean_a.csv"),
+    ]);
+    twinloop_ok(&[
+        "experiment",
+        "lean",
+        "--robot",
+        "builtin:km20",
+        "--amplitude",
+        "2",
+        "--out",
+        &p("lean_b.csv"),
+    ]);
+    twinloop_ok(&[
+        "validate",
+        "lean",
+        "--robot-run",
+        &p("lean_a.csv"),
+        "--sim-run",
+        &p("lean_b.csv"),
+        "--report",
+        &p("lean.html"),
+        "--robot",
+        "builtin:km20",
+    ]);
+    // The squat of seed 004 under the residual check, and the static poses.
+    let h1 = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/unitree_h1/h1.urdf"
+    );
+    twinloop_ok(&[
+        "experiment",
+        "squat",
+        "--robot",
+        h1,
+        "--out",
+        &p("squat.csv"),
+    ]);
+    twinloop_ok(&[
+        "validate",
+        "residual",
+        "--robot",
+        h1,
+        "--motion",
+        &p("squat.csv"),
+        "--out",
+        &p("res.csv"),
+        "--report",
+        &p("res.html"),
+    ]);
+    twinloop_ok(&[
+        "experiment",
+        "static-poses",
+        "--robot",
+        "builtin:km20",
+        "--count",
+        "60",
+        "--out",
+        &p("poses.csv"),
+    ]);
+    twinloop_ok(&[
+        "identify",
+        "static",
+        "--robot",
+        "builtin:km20",
+        "--poses",
+        &p("poses.csv"),
+        "--total-mass",
+        "3.336",
+        "--report",
+        &p("static.html"),
+    ]);
+    // The lab17 walk of seed 003, identified: its joints from the u: offsets.
+    twinloop_ok(&[
+        "experiment",
+        "walk",
+        "--robot",
+        "builtin:lab17",
+        "--out",
+        &p("walk.csv"),
+    ]);
+    twinloop_ok(&[
+        "identify",
+        "walk",
+        "--data",
+        &p("walk.csv"),
+        "--report-arx",
+        &p("walk.html"),
+        "--max-iter",
+        "2",
+    ]);
+    let browser = chromium::browser();
+    for (report, names, moving) in [
+        ("lean", vec!["lean_a.csv", "lean_b.csv"], "q:l_ank_pitch"),
+        ("res", vec!["squat.csv"], "q:left_knee_joint"),
+        ("static", vec!["poses.csv"], "q:l_knee"),
+        ("walk", vec!["walk.csv"], "q:l_ank_roll"),
+    ] {
+        let html = std::fs::read_to_string(tmp(&format!("{report}.html"))).unwrap();
+        let file = format!("{report}_3d.html");
+        assert!(
+            html.contains(&format!("<a href=\"{file}\">")),
+            "{report}: no link"
+        );
+        let Some(browser) = &browser else { continue };
+        let page = format!("file://{}?snapshot=1&t=1", tmp(&file).display());
+        let dom = chromium::dump_dom(browser, &page);
+        let status = chromium::element_text(&dom, "status").expect("no #status");
+        let status: serde_json::Value =
+            serde_json::from_str(&chromium::unescape_html(status)).unwrap();
+        assert_eq!(status["ready"], true, "{report}: {status}");
+        assert_eq!(
+            status["errors"].as_array().unwrap().len(),
+            0,
+            "{report}: {status}"
+        );
+        let recs = status["recordings"].as_array().unwrap();
+        let got: Vec<&str> = recs.iter().map(|r| r["name"].as_str().unwrap()).collect();
+        assert_eq!(got, names, "{report}");
+        for r in recs {
+            let missing: Vec<&str> = r["missing"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|m| m.as_str().unwrap())
+                .collect();
+            assert!(
+                !missing.contains(&moving),
+                "{report}: {moving} missing: {r}"
+            );
+        }
+    }
+}
+
+/// Every `"base":[x, y, z, qx, qy, qz, qw]` in a stretch of the live stream.
+fn base_poses(text: &str) -> Vec<Vec<f64>> {
+    text.split("\"base\":[")
+        .skip(1)
+        .filter_map(|b| {
+            let v: Vec<f64> = b
+                .split(']')
+                .next()?
+                .split(',')
+                .map(|v| v.parse().ok())
+                .collect::<Option<_>>()?;
+            (v.len() == 7).then_some(v)
+        })
+        .collect()
+}
+
+/// A served robot whose servos power on limp falls, and `serve --view` shows its
+/// base going down (the state sent is the simulator's, base pose and all).
+#[test]
+fn serve_view_shows_a_limp_robot_fall() {
+    let mut serve = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        // A quarter of real time: the fall lasts seconds, after the page is there.
+        .args(["serve", "--robot", "builtin:km20", "--torque-off", "--view"])
+        .args(["--realtime-factor", "0.25"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (url, _err) = live_url(&mut serve);
+    let mut page = live_socket(&url, 300);
+    let mut seen = Vec::new();
+    let start = std::time::Instant::now();
+    let mut buf = vec![0u8; 8192];
+    while start.elapsed() < Duration::from_secs(5) {
+        let n = page.read(&mut buf).unwrap();
+        seen.extend_from_slice(&buf[..n]);
+    }
+    let _ = Command::new("kill")
+        .args(["-INT", &serve.id().to_string()])
+        .status();
+    let _ = serve.wait();
+    let poses = base_poses(&String::from_utf8_lossy(&seen));
+    assert!(poses.len() > 30, "{} base poses in 5 s", poses.len());
+    let z: Vec<f64> = poses.iter().map(|p| p[2]).collect();
+    let (first, lowest) = (z[0], z.iter().copied().fold(f64::INFINITY, f64::min));
+    // km20's base stands at 0.27 m; limp, the robot folds to the ground.
+    assert!(first > 0.2, "the base starts at z = {first}");
+    assert!(
+        lowest < 0.6 * first,
+        "the base went from {first} only down to {lowest}"
+    );
 }

@@ -93,10 +93,31 @@ pub struct Server {
 /// How many requests are answered at once (the page loads meshes in parallel).
 const WORKERS: usize = 4;
 
+/// Send each live frame at once: without TCP_NODELAY a small frame waits for the
+/// ACK of the one before (Nagle), which a page that only reads sends late (delayed
+/// ACK, up to 40 ms on Linux): that was much of the tail of the live lag on arrival.
+/// Set on the listener: the connections tiny_http accepts inherit it on Linux. Best
+/// effort (without it frames still arrive, later).
+fn no_delay(listener: &std::net::TcpListener) {
+    #[cfg(unix)]
+    {
+        use std::os::fd::AsRawFd;
+        let _ = nix::sys::socket::setsockopt(
+            listener.as_raw_fd(),
+            nix::sys::socket::sockopt::TcpNoDelay,
+            &true,
+        );
+    }
+    #[cfg(not(unix))]
+    let _ = listener;
+}
+
 impl Server {
     /// Bind to `addr` (`127.0.0.1:0` picks a free port).
     pub fn bind(addr: &str, content: Content) -> io::Result<Server> {
-        let http = tiny_http::Server::http(addr).map_err(io::Error::other)?;
+        let listener = std::net::TcpListener::bind(addr)?;
+        no_delay(&listener);
+        let http = tiny_http::Server::from_listener(listener, None).map_err(io::Error::other)?;
         Ok(Server {
             http: Arc::new(http),
             content: Arc::new(content),

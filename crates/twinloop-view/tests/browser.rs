@@ -19,6 +19,8 @@ use twinloop_view::{Content, Recording, Scene, Server};
 
 // ---------- the browser ----------
 
+#[path = "support/cdp.rs"]
+mod cdp;
 #[path = "support/chromium.rs"]
 mod chromium;
 use chromium::{browser, dump_dom, element_text, tempdir, unescape_html};
@@ -763,4 +765,122 @@ fn the_joint_sliders_pose_the_robot_and_its_com() {
     let img = &page.image;
     let want = predicted_extent(&drawn, &q, img.width, img.height);
     assert_extent_close(silhouette(img), want, "km20 posed by sliders");
+}
+
+#[test]
+fn a_click_on_the_plot_seeks_the_timeline_there() {
+    let Some(chromium) = browser() else { return };
+    let (robot, model) = km20();
+    let scene = Scene::new(&robot, None, &[]);
+    // 8 s of km20 at 10 Hz, its first joint swinging, the rest standing.
+    let mut columns = vec!["t".to_string()];
+    columns.extend(model.q_names().iter().map(|n| format!("q:{n}")));
+    let mut table = Table::new(columns);
+    let (t0, t1) = (2.0, 10.0);
+    for k in 0..=80 {
+        let t = t0 + 0.1 * k as f64;
+        let mut q = pose_a(&model);
+        q[7] = 0.5 * (t * 0.8).sin();
+        table.rows.push(std::iter::once(t).chain(q).collect());
+    }
+    let rec = Recording::from_table(&table, Path::new("swing.csv"), &scene.info).unwrap();
+    let (url, misses) = serve_with_misses(Content {
+        scene,
+        recordings: vec![rec],
+        live: None,
+    });
+    let mut page = cdp::Browser::open(&chromium, &url);
+    page.wait_for(
+        "!!(window.twinloop && window.twinloop.ready && document.querySelector('#plot .u-over'))",
+        120,
+    );
+    let rect = page.eval(
+        "(() => { const r = document.querySelector('#plot .u-over').getBoundingClientRect(); \
+         return [r.left, r.top, r.width, r.height]; })()",
+    );
+    let r: Vec<f64> = rect
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!(r[2] > 100.0 && r[3] > 50.0, "plot area {r:?}");
+    for fraction in [0.7, 0.25] {
+        let x = (r[0] + fraction * r[2]).round();
+        page.click(x, r[1] + 0.5 * r[3]);
+        // The plot's x axis spans the recording's time: the pixel clicked is a time.
+        let want = t0 + (x - r[0]) / r[2] * (t1 - t0);
+        let px = (t1 - t0) / r[2];
+        page.wait_for(
+            &format!(
+                "Math.abs(Number(document.getElementById('scrub').value) - {want}) < {}",
+                2.0 * px
+            ),
+            20,
+        );
+        let clock = page.eval("document.getElementById('clock').textContent");
+        let shown: f64 = clock
+            .as_str()
+            .unwrap()
+            .trim_end_matches(" s")
+            .parse()
+            .unwrap();
+        assert!(
+            (shown - want).abs() < 2.0 * px,
+            "clicked at {want:.3} s, the clock says {clock}"
+        );
+        // The plot's cursor is drawn where the click was.
+        let cursor =
+            page.eval("parseFloat(document.querySelector('#plot .cursor-line').style.left)");
+        let cursor = cursor.as_f64().unwrap();
+        assert!(
+            (cursor - (x - r[0])).abs() < 2.0,
+            "cursor at {cursor} px, clicked at {} px",
+            x - r[0]
+        );
+    }
+    let status = page.eval("JSON.stringify(window.twinloop)");
+    let status: Value = serde_json::from_str(status.as_str().unwrap()).unwrap();
+    assert_eq!(status["errors"].as_array().unwrap().len(), 0, "{status}");
+    assert_no_misses(&misses);
+}
+
+#[test]
+fn a_missing_mesh_is_named_on_the_page_and_in_the_console() {
+    let Some(chromium) = browser() else { return };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mesh_robot/urdf/robot.urdf");
+    let robot = twinloop_description::load(&path).unwrap();
+    let scene = Scene::new(&robot, Some(&path), &[]);
+    let (url, _) = serve_with_misses(Content {
+        scene,
+        recordings: Vec::new(),
+        live: None,
+    });
+    let mut page = cdp::Browser::open(&chromium, &url);
+    page.wait_for("!!(window.twinloop && window.twinloop.ready)", 120);
+    // What a user sees: the warnings box of the page, as drawn.
+    let shown = page.eval("document.getElementById('warnings').innerText");
+    let shown = shown.as_str().unwrap_or_default().to_string();
+    assert!(
+        shown.contains("hand.stl") && shown.contains("file not found"),
+        "the page shows: {shown:?}"
+    );
+    let visible = page.eval(
+        "(() => { const r = document.getElementById('warnings').getBoundingClientRect(); \
+         return r.width > 0 && r.height > 0; })()",
+    );
+    assert_eq!(
+        visible,
+        Value::Bool(true),
+        "the warnings box is not visible"
+    );
+    // What a developer sees: a console warning naming the file.
+    page.eval("0"); // any answer flushes the console events before it
+    assert!(
+        page.console
+            .iter()
+            .any(|(level, text)| level == "warning" && text.contains("hand.stl")),
+        "console: {:?}",
+        page.console
+    );
 }

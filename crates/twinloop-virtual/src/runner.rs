@@ -223,6 +223,7 @@ impl Runner {
             m.temperature = self.temperature[k];
         }
         self.snap.time = self.sim.time;
+        self.snap.q.clone_from(&self.sim.q);
         self.snap.base_height = if self.sim.model.is_floating() {
             self.sim.q[2]
         } else {

@@ -21,6 +21,9 @@ pub struct Snapshot {
     pub state: RobotState,
     /// Height of the floating base above the ground, m.
     pub base_height: f64,
+    /// The simulator's whole configuration (`Model::q_names` order: the floating
+    /// base's pose first, when it has one): what a viewer draws.
+    pub q: Vec<f64>,
     /// Steps taken since the start.
     pub steps: u64,
     /// How far simulated time lags the wall clock, s (0 when the simulator keeps up).
@@ -37,6 +40,7 @@ impl Snapshot {
         self.time = src.time;
         self.servos.clone_from(&src.servos);
         self.base_height = src.base_height;
+        self.q.clone_from(&src.q);
         self.steps = src.steps;
         self.behind_s = src.behind_s;
         if src.error.is_some() && self.error.is_none() {

@@ -46,7 +46,7 @@ pub enum IdentifyCommand {
     /// determined and why; suggested poses), and on stdout a summary. With --squat, the
     /// residual base wrench of the prior and adapted models on that motion (seed 004,
     /// Table 1) is added. --report writes an HTML page with the seed's Fig. 5 (and
-    /// Fig. 6 with --squat).
+    /// Fig. 6 with --squat), and beside it OUT_3d.html: the poses in 3D, one a second.
     #[command(verbatim_doc_comment)]
     Static(static_ident::IdentifyStaticArgs),
 
@@ -136,7 +136,8 @@ method. The prediction error never ends above the initial model's. The model is 
     /// Output: a table of FIT per output (MATLAB compare: 100 (1 - |y - yhat| / |y - mean y|),
     /// simulation and one-step prediction, on --val when given) for both models beside the
     /// seed's; the JSON holds both models (ARX `A`, `B`; state space `A`, `B`, `C`, `D`, `K`),
-    /// their `fit_percent`, Hankel singular values and residual tests.
+    /// their `fit_percent`, Hankel singular values and residual tests; beside each
+    /// report, OUT_3d.html: lab17 walking the record's joint commands in 3D.
     #[command(verbatim_doc_comment)]
     Walk(walk::WalkIdArgs),
     /// A servo model fitted to `experiment servo` logs: parameters, uncertainties, held-out error

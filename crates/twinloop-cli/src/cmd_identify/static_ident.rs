@@ -7,7 +7,7 @@ use crate::common::{JSON_HELP, emit, load_model};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::Args;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 use twinloop_description::Description;
 use twinloop_dynamics::{BaseKind, Model};
@@ -138,11 +138,41 @@ pub fn run(a: &IdentifyStaticArgs) -> CliResult {
         if let Some((p0, p1)) = &validation {
             residual_sections(&mut r, &[("prior", p0), ("adapted", p1)]);
         }
+        poses_in_3d(p, a, &mut r)?;
         r.write(p)?;
     }
     let text = summary(&model, &result, &suggestions, validation.as_ref(), timing);
     emit(&text, a.json.as_ref(), &json)?;
     Ok(Outcome::Ok)
+}
+
+/// The poses in 3D beside the report (`OUT_3d.html`), one a second in the file's
+/// order, on the prior model: a slide show to look over what the plate saw.
+fn poses_in_3d(report: &Path, a: &IdentifyStaticArgs, page: &mut Report) -> Result<(), CliError> {
+    let poses = crate::common::read_table(&a.poses)?;
+    let mut columns = vec!["t".to_string()];
+    columns.extend(poses.columns.iter().filter(|c| *c != "t").cloned());
+    let keep: Vec<usize> = (0..poses.columns.len())
+        .filter(|&i| poses.columns[i] != "t")
+        .collect();
+    let mut shown = twinloop_io::Table::new(columns);
+    for (k, row) in poses.rows.iter().enumerate() {
+        shown.rows.push(
+            std::iter::once(k as f64)
+                .chain(keep.iter().map(|&i| row[i]))
+                .collect(),
+        );
+    }
+    crate::replay3d::replay_tables(
+        report,
+        &a.robot,
+        &[(a.poses.clone(), shown)],
+        "The poses on the prior model, one a second in the file's order (t is the pose's \
+         row, from 0): step through them with the timeline, with the CoM, its ground \
+         projection and the support polygon drawn.",
+        page,
+    );
+    Ok(())
 }
 
 /// Median time of the fit (regressor and constrained solve) over `n` repeats.

@@ -6,7 +6,7 @@ use crate::common::{emit, read_table};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use twinloop_ident::walk_identification::{WalkIdOptions, WalkIdentification, identify_walk};
 use twinloop_io::Table;
 use twinloop_sysid::ArxOrders;
@@ -155,14 +155,75 @@ pub fn run(a: &WalkIdArgs) -> CliResult {
     let refs = seed_reference_fits();
     let ev_arx = id.validation.as_ref().unwrap_or(&id.estimation);
     if let Some(p) = &a.report_arx {
-        arx_report(&id.arx, ev_arx, &command_line(), &refs[..1]).write(p)?;
+        let mut page = arx_report(&id.arx, ev_arx, &command_line(), &refs[..1]);
+        walk_in_3d(p, a, &mut page)?;
+        page.write(p)?;
     }
     if let Some(p) = &a.report {
-        state_space_report(&id.ss, ev_arx, &command_line(), &refs[1..]).write(p)?;
+        let mut page = state_space_report(&id.ss, ev_arx, &command_line(), &refs[1..]);
+        walk_in_3d(p, a, &mut page)?;
+        page.write(p)?;
     }
     let json = walk_json(a, &o, &id, &refs);
     emit(&summary(&o, &id, &refs), a.json.as_ref(), &json)?;
     Ok(Outcome::Ok)
+}
+
+/// The walk in 3D beside a report (`OUT_3d.html`): lab17 (the robot seed 003's
+/// walk is written for) at the joint angles the record's inputs command, seed 003
+/// eq 6 read backwards (joint = direction x `u:` offset, from the Table 2 trims),
+/// the estimation run solid and the validation run as a ghost. The record has no
+/// base pose: the robot walks in place.
+fn walk_in_3d(
+    report: &Path,
+    a: &WalkIdArgs,
+    page: &mut twinloop_report::Report,
+) -> Result<(), CliError> {
+    use twinloop_description::builtin::lab17;
+    let as_angles = |path: &PathBuf| -> Result<(PathBuf, twinloop_io::Table), CliError> {
+        let data = crate::common::read_table(path)?;
+        let mut columns = Vec::new();
+        let mut cols = Vec::new();
+        for (i, c) in data.columns.iter().enumerate() {
+            let angle = c
+                .strip_prefix("u:")
+                .and_then(|j| lab17::trim(j).map(|t| (j, t)));
+            match (c.as_str(), angle) {
+                ("t", _) => (columns.push(c.clone()), cols.push((i, None))),
+                (_, Some((j, t))) => (columns.push(format!("q:{j}")), cols.push((i, Some(t)))),
+                _ => (columns.push(c.clone()), cols.push((i, None))),
+            };
+        }
+        let mut out = twinloop_io::Table::new(columns);
+        for row in &data.rows {
+            out.rows.push(
+                cols.iter()
+                    .map(|&(i, t)| match t {
+                        Some(t) => {
+                            lab17::joint_angle(t.joint, t.servo_deg + row[i]).unwrap_or(f64::NAN)
+                        }
+                        None => row[i],
+                    })
+                    .collect(),
+            );
+        }
+        Ok((path.clone(), out))
+    };
+    let mut runs = vec![as_angles(&a.data)?];
+    if let Some(v) = &a.val {
+        runs.push(as_angles(v)?);
+    }
+    crate::replay3d::replay_tables(
+        report,
+        "builtin:lab17",
+        &runs,
+        "The walk in 3D on lab17: the joint angles its inputs command (seed 003 eq 6 read \
+         backwards from the u: offsets and the Table 2 trims; the joints without an input \
+         at 0), the estimation run solid, the validation run as a ghost. The record has \
+         no base pose, so the robot walks in place; the gyro rates are in the plots.",
+        page,
+    );
+    Ok(())
 }
 
 /// The table of FIT per output for both models beside the seed's.
