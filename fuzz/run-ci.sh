@@ -6,21 +6,26 @@
 #   FUZZ_SECONDS=300 bash fuzz/run-ci.sh decoder urdf
 #
 # Without cargo-fuzz: installing it costs CI 4.5 minutes on two cores, and all it adds
-# here is the flags below. The targets are built with `cargo +nightly` and the same
-# SanitizerCoverage flags cargo-fuzz passes (libFuzzer's inline 8-bit counters, the PC
-# table and compare tracing), `--cfg fuzzing`, debug assertions and overflow checks.
+# here is the flags below. The targets are built with the same SanitizerCoverage flags
+# cargo-fuzz passes (libFuzzer's inline 8-bit counters, the PC table and compare
+# tracing), `--cfg fuzzing`, debug assertions and overflow checks. None of them is a
+# `-Z` flag, so the machine's own toolchain builds them (FUZZ_TOOLCHAIN=nightly picks
+# another: the only thing nightly would add is a sanitizer).
 # No AddressSanitizer: the fuzzed code (twinloop-link's decoder and mapping,
 # twinloop-description, twinloop-dynamics) is safe Rust, so ASan would double the build
 # and halve the executions per second to find nothing a panic does not already show.
 # `--target` keeps the flags off build scripts and proc macros (serde_derive).
-# Measured times are in docs/testing.md ("Fuzzing in CI").
+# Measured: the cold build 198 CPU-seconds (about 2 min on two free cores) plus the
+# runs, 4 x 45 s: about 5 min; details in docs/architecture.md ("Layers", on fuzz/).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")"
 
 seconds=${FUZZ_SECONDS:-45}
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=(decoder urdf mjcf mapping)
-host=$(rustc +${FUZZ_TOOLCHAIN:-nightly} -vV | sed -n 's/^host: //p')
+toolchain=()
+[ -n "${FUZZ_TOOLCHAIN:-}" ] && toolchain=("+$FUZZ_TOOLCHAIN")
+host=$(rustc "${toolchain[@]}" -vV | sed -n 's/^host: //p')
 
 export RUSTFLAGS="-Cpasses=sancov-module \
  -Cllvm-args=-sanitizer-coverage-level=4 \
@@ -30,11 +35,11 @@ export RUSTFLAGS="-Cpasses=sancov-module \
  --cfg fuzzing -Cdebug-assertions -Coverflow-checks"
 
 start=$(date +%s)
-cargo +${FUZZ_TOOLCHAIN:-nightly} build --locked --profile fuzz --target "$host" \
+cargo "${toolchain[@]}" build --locked --profile fuzz --target "$host" \
     $(printf -- '--bin %s ' "${targets[@]}")
 echo "fuzz: built ${targets[*]} in $(($(date +%s) - start)) s"
 
-bin="target/$host/fuzz"
+bin="${CARGO_TARGET_DIR:-target}/$host/fuzz"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 for t in "${targets[@]}"; do

@@ -42,7 +42,7 @@ pub const MAX_MASS_RATIO: f64 = 10.0;
 /// like (1000x: grams; 1/1000: tonnes).
 pub fn total_mass(option: &str, kg: f64, robot: &Description) -> Result<(), CliError> {
     let model = robot.total_mass();
-    if !(model > 0.0) {
+    if model.is_nan() || model <= 0.0 {
         return Ok(());
     }
     let ratio = kg / model;

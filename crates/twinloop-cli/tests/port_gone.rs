@@ -166,6 +166,12 @@ const TIPOVER: &[&str] = &[
     "{port}",
     "--map",
     "builtin:km20",
+    // A loaded test machine can be slow to answer: this test is about the port
+    // going away, not about a servo's timeout.
+    "--timeout-ms",
+    "50",
+    "--retries",
+    "3",
     "--directions",
     "forward",
     "--ramp",
@@ -180,6 +186,12 @@ const LEAN: &[&str] = &[
     "{port}",
     "--map",
     "builtin:km20",
+    // A loaded test machine can be slow to answer: this test is about the port
+    // going away, not about a servo's timeout.
+    "--timeout-ms",
+    "50",
+    "--retries",
+    "3",
     "--amplitude",
     "3",
     "--ramp",
@@ -200,6 +212,12 @@ const RECORD: &[&str] = &[
     "{port}",
     "--map",
     "builtin:km20",
+    // A loaded test machine can be slow to answer: this test is about the port
+    // going away, not about a servo's timeout.
+    "--timeout-ms",
+    "50",
+    "--retries",
+    "3",
     "--duration",
     "60",
     "--out",

@@ -478,9 +478,19 @@ fn bundled_robots_pass_the_unit_scale_bounds_and_their_1000x_copies_do_not() {
             "{rel}: {:.3} kg, {size:.3} m, {density:.1} kg/m^3",
             robot.total_mass()
         );
+        let report = lint(&robot);
         assert!(
-            lint(&robot).with_code(codes::UNIT_SCALE).next().is_none(),
+            report.with_code(codes::UNIT_SCALE).next().is_none(),
             "{rel}"
+        );
+        // Every element of the bundled files is one MuJoCo's schema has.
+        assert!(
+            report
+                .findings
+                .iter()
+                .all(|f| !f.message.contains("not an MJCF element")),
+            "{rel}: {:#?}",
+            report.findings
         );
         // The margins: each model at least 10x below the density bound, its gram-scale
         // copy at least 5x above it, its millimetre-scale copy 10x beyond the size bound.

@@ -10,8 +10,10 @@
 //!   that of water ([`MAX_BULK_DENSITY`]): a robot is limbs and air, not a solid block
 //!   of its own size. The 31 bundled models are 9-62 kg/m^3 by that measure (SigmaBan
 //!   9, H1 12, TALOS 21, NAO 29, OP2 62); in grams they are 9000-62000, nine times the
-//!   bound at least. A robot smaller than [`MIN_EXTENT_FOR_DENSITY_M`] (a single link,
-//!   a test pendulum) has too little size to judge by.
+//!   bound at least. Only a robot over [`MIN_SUSPECT_MASS_KG`] is judged so: a compact
+//!   2 kg test model can be as dense as aluminium, while every robot in grams (from
+//!   0.1 kg up) weighs 100 kg or more; and one smaller than
+//!   [`MIN_EXTENT_FOR_DENSITY_M`] (a single link) has too little size to judge by.
 
 use super::{Finding, Severity, Subject, codes, num};
 use crate::description::{Description, Pose};
@@ -24,6 +26,10 @@ pub const MAX_EXTENT_M: f64 = 20.0;
 /// Water's density, kg/m^3: the upper bound of a robot's mass over the cube of its
 /// largest extent, sixteen times the densest bundled model (OP2, 62).
 pub const MAX_BULK_DENSITY: f64 = 1000.0;
+
+/// Below this total mass, kg, the density bound is not applied: a small model may be
+/// dense, and a robot written in grams is past it from 0.1 kg up.
+pub const MIN_SUSPECT_MASS_KG: f64 = 100.0;
 
 /// Below this extent, m, the density bound is not applied.
 pub const MIN_EXTENT_FOR_DENSITY_M: f64 = 0.05;
@@ -126,7 +132,7 @@ pub(super) fn check(robot: &Description, out: &mut Vec<Finding>) {
         return;
     }
     let mass = robot.total_mass();
-    if size < MIN_EXTENT_FOR_DENSITY_M || !mass.is_finite() {
+    if size < MIN_EXTENT_FOR_DENSITY_M || !mass.is_finite() || mass < MIN_SUSPECT_MASS_KG {
         return;
     }
     let density = mass / size.powi(3);
