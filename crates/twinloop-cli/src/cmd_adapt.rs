@@ -241,6 +241,9 @@ pub fn run(a: AdaptArgs) -> CliResult {
     };
     let (prior, _) = load_description(robot)?;
     hinges_only(&prior, robot, "adaptation")?;
+    if let Some(kg) = a.total_mass {
+        crate::units::total_mass("--total-mass", kg, &prior)?;
+    }
     let tip = match (&a.bus.port, &a.tipover) {
         (Some(_), out) => tip_in_place(&a, robot, out.as_deref())?,
         (None, Some(path)) => read_tip(path)?,

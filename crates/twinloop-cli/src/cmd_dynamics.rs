@@ -1,7 +1,7 @@
 //! `twinloop dynamics kinematics|inverse|forward`: batch rigid-body dynamics over a
 //! trajectory file. One output row per input row; the `t` column is carried over.
 
-use crate::common::{ROBOT_HELP, load_model, read_table};
+use crate::common::{ROBOT_HELP, load_model, read_trajectory};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::{Args, Subcommand};
@@ -160,7 +160,7 @@ fn report_frames(model: &Model, a: &KinematicsArgs) -> Result<Vec<usize>, CliErr
 fn kinematics(args: &KinematicsArgs) -> Result<(), CliError> {
     let a = &args.batch;
     let (_, model) = load_model(&a.robot, base_kind(a.fixed_base))?;
-    let table = read_table(&a.trajectory)?;
+    let table = read_trajectory(&a.trajectory, &model)?;
     let qc = StateColumns::find(&table, Quantity::Q, &model.q_names())?;
     let frames = report_frames(&model, args)?;
     let mut names = vec!["com.x".into(), "com.y".into(), "com.z".into()];
@@ -213,7 +213,7 @@ fn per_row(
         -> Result<&'d nalgebra::DVector<f64>, twinloop_dynamics::SingularJoint>,
 ) -> Result<(), CliError> {
     let (_, model) = load_model(&a.robot, base_kind(a.fixed_base))?;
-    let table = read_table(&a.trajectory)?;
+    let table = read_trajectory(&a.trajectory, &model)?;
     let find = |qty| crate::common::state_columns(&table, &model, qty);
     let (qc, vc, xc) = (find(Quantity::Q)?, find(Quantity::V)?, find(input)?);
     let (tcol, cols) = with_time(

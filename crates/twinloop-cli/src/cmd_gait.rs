@@ -60,7 +60,7 @@ pub struct TimingArgs {
     pub robot: String,
     /// Control tick and sample period, s (40 ms: two 20 ms servo PWM frames, and below
     /// the 57 ms the seed's 54.8 rad/s model bandwidth allows).
-    #[arg(long, default_value_t = SEED_SAMPLE_TIME, value_name = "S", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = SEED_SAMPLE_TIME, value_name = "S", value_parser = crate::units::time_step)]
     pub dt: f64,
     /// Duration of one step cycle (Step_State 0 to 100), s. Below ~3.5 s lab17 falls (seed
     /// 003 section 5: too fast a step cycle leaves the inertial forces undamped).
@@ -117,7 +117,7 @@ pub struct ZmpArgs {
     #[arg(long, default_value_t = twinloop_description::GRAVITY, value_parser = crate::common::positive)]
     pub gravity: f64,
     /// Sample period, s.
-    #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::units::time_step)]
     pub dt: f64,
     /// Output CSV.
     #[arg(long, value_name = "FILE.csv")]

@@ -258,8 +258,12 @@ pub fn open_client(
     let options = SerialOptions {
         low_latency: p.low_latency,
     };
-    let mut t = transport::open(port, p.baud, &options)
+    let t = transport::open(port, p.baud, &options)
         .map_err(|e| CliError::new(format!("{port}: {e}")))?;
+    let mut t: Box<dyn Transport> = Box::new(Named {
+        inner: t,
+        port: port.to_string(),
+    });
     t.set_spin(Duration::from_micros(p.spin_us));
     let config = ClientConfig {
         latency: Duration::from_secs_f64(p.timeout_ms.max(0.0) / 1000.0),
@@ -268,6 +272,45 @@ pub fn open_client(
         write_replies: true,
     };
     Ok(Client::with_config(t, config))
+}
+
+/// A transport whose failures name its port: an adapter unplugged or a peer gone in
+/// the middle of any command over the bus says which port went away.
+struct Named {
+    inner: Box<dyn Transport>,
+    port: String,
+}
+
+impl Named {
+    fn name(&self, e: std::io::Error) -> std::io::Error {
+        std::io::Error::new(e.kind(), format!("{}: {e}", self.port))
+    }
+}
+
+impl Transport for Named {
+    fn write_all(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.inner.write_all(bytes).map_err(|e| self.name(e))
+    }
+
+    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+        self.inner.read(buf, timeout).map_err(|e| self.name(e))
+    }
+
+    fn discard_input(&mut self) -> std::io::Result<()> {
+        self.inner.discard_input().map_err(|e| self.name(e))
+    }
+
+    fn baud(&self) -> Option<u32> {
+        self.inner.baud()
+    }
+
+    fn set_spin(&mut self, spin: Duration) {
+        self.inner.set_spin(spin)
+    }
+
+    fn describe(&self) -> String {
+        self.inner.describe()
+    }
 }
 
 pub fn run(cmd: LinkCommand) -> CliResult {

@@ -479,7 +479,7 @@ struct LintOutput<'a> {
 }
 
 fn lint_command(args: &DescriptionArgs, strict: bool) -> CliResult {
-    let (robot, format) = common::load_description(&args.robot)?;
+    let (robot, format) = common::read_description(&args.robot)?;
     let report = if strict {
         lint(&robot).strict()
     } else {

@@ -1,7 +1,7 @@
 //! `twinloop simulate`: a robot standing on its servos in the simulator. The
 //! standing simulator is shared with `twinloop bench sim`.
 
-use crate::common::{ROBOT_HELP, load_description, read_table};
+use crate::common::{ROBOT_HELP, load_description, read_trajectory};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::{Args, ValueEnum};
@@ -44,7 +44,7 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
     /// Time step, s.
-    #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::units::time_step)]
     pub dt: f64,
     /// Write one row every N steps.
     #[arg(long, default_value_t = 1, value_parser = crate::common::count)]
@@ -117,7 +117,7 @@ struct Goals {
 impl Goals {
     fn load(path: &Path, model: &twinloop_dynamics::Model) -> Result<Goals, CliError> {
         let joints = &model.joint_names;
-        let table = read_table(path)?;
+        let table = read_trajectory(path, model)?;
         StateColumns::check_known(&table, Quantity::Q, &model.q_names())?;
         let tc = table
             .column_index("t")

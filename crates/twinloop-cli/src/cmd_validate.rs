@@ -13,7 +13,7 @@ use twinloop_experiments::lean_validation::{LeanComparison, align_and_compare, r
 use twinloop_ident::IdentError;
 use twinloop_ident::html::residual_sections;
 use twinloop_ident::validate::{
-    Motion, ResidualSeries, ResidualSummary, Smoothing, read_motion, read_plate, residual_wrench,
+    Motion, ResidualSeries, ResidualSummary, Smoothing, parse_motion, read_plate, residual_wrench,
 };
 use twinloop_io::CsvWriter;
 use twinloop_report::{Plot, Report, SeriesStyle};
@@ -325,7 +325,14 @@ fn label(spec: &str) -> String {
 
 /// The motion, with the plate readings of --plate when given.
 fn read_motion_and_plate(a: &ResidualArgs, model: &Model) -> Result<Motion, CliError> {
-    let mut motion = read_motion(&a.motion, model)?;
+    let table = crate::common::read_trajectory(&a.motion, model)?;
+    let mut motion = parse_motion(&table, model).map_err(|e| {
+        if e.file.is_none() {
+            e.in_file(&a.motion)
+        } else {
+            e
+        }
+    })?;
     if let Some(p) = &a.plate {
         let table = read_table(p)?;
         motion.plate = read_plate(&table).map_err(|e| e.in_file(p))?;

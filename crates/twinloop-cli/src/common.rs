@@ -71,8 +71,25 @@ pub const ROBOT_HELP: &str =
     "Robot description: a URDF or MJCF file, or builtin:NAME (km20, lab17)";
 
 /// Load a robot description: `builtin:NAME` or a URDF or MJCF file (told apart by
-/// the root element). The error names the file, line and element at fault.
+/// the root element). The error names the file, line and element at fault. A file
+/// whose lengths are millimetres or masses grams (lint's `unit-scale`) is refused
+/// here, for every command, naming the joint or link and the unit it looks like.
 pub fn load_description(spec: &str) -> Result<(Description, Format), CliError> {
+    let (robot, format) = read_description(spec)?;
+    if let Some(f) = twinloop_description::lint::unit_scale::find(&robot) {
+        return Err(CliError::new(format!(
+            "{spec}: {} \"{}\" {}",
+            f.subject.as_str(),
+            f.name,
+            f.message
+        )));
+    }
+    Ok((robot, format))
+}
+
+/// [`load_description`] without the unit-scale refusal: for `model lint`, which
+/// reports it among its findings.
+pub fn read_description(spec: &str) -> Result<(Description, Format), CliError> {
     if spec.starts_with("builtin:") {
         let robot = twinloop_description::builtin::resolve(spec)?;
         return Ok((robot, Format::Builtin));
@@ -246,6 +263,19 @@ pub fn count(s: &str) -> Result<usize, String> {
 /// Read a CSV table; the error names the file (and line).
 pub fn read_table(path: &Path) -> Result<twinloop_io::Table, CliError> {
     Ok(twinloop_io::Table::read(path)?)
+}
+
+/// Read a CSV of configurations (`q:<joint>` columns) for `model`: [`read_table`], and
+/// every angle checked against its joint's limits, so a trajectory in degrees is an
+/// error naming the column ([`crate::units::check_angles`]) in every command that
+/// reads one.
+pub fn read_trajectory(
+    path: &Path,
+    model: &twinloop_dynamics::Model,
+) -> Result<twinloop_io::Table, CliError> {
+    let table = read_table(path)?;
+    crate::units::check_angles(&table, model)?;
+    Ok(table)
 }
 
 /// A number for people: 6 significant digits, no float noise (3.1474699999999998 -> 3.14747).

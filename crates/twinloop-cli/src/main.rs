@@ -24,6 +24,7 @@ mod common;
 mod error;
 mod progress;
 mod replay3d;
+mod units;
 
 use clap::{Parser, Subcommand};
 use error::CliResult;

@@ -18,7 +18,8 @@ use std::time::{Duration, Instant};
 
 /// One bad input: the command (as `twinloop help` lists it), its arguments (split at
 /// spaces; `{name}` is a fixture file of [`Fixtures`], `{out}` a fresh output path that
-/// must not exist afterwards), and a text the error line must contain: the place.
+/// must not exist afterwards), and a text the error line must contain: the place
+/// (several texts joined by `&&` must all be there: the place and the unit it suspects).
 struct Case {
     cmd: &'static str,
     args: &'static str,
@@ -38,6 +39,8 @@ const fn case(cmd: &'static str, args: &'static str, names: &'static str) -> Cas
 /// `{cwalk_nan}`; `{plant}` a good PLANT.toml, `{bad_toml}` broken TOML; `{json_bad}`
 /// JSON that is not the expected document; `{gone}` a port path with nothing behind it;
 /// `{op3_mesh_urdf}` the ROBOTIS OP3 URDF, whose feet collide only as meshes.
+/// Wrong units by 1000x: `{km20_mm}` (lengths in millimetres), `{km20_g}` (masses in
+/// grams), `{state_deg}` and `{goals_deg}` (every hinge angle in degrees).
 // One row per line, so that the table reads as one.
 #[rustfmt::skip]
 const CASES: &[Case] = &[
@@ -52,6 +55,10 @@ const CASES: &[Case] = &[
     case("model list", "extra", "extra"),
     case("model export", "{trunc_urdf} --out {out}", "trunc.urdf"),
     case("model export", "{csv_as_urdf} --out {out}", "csv_as.urdf"),
+    // Wrong units by 1000x: every command loads through the same check.
+    case("model info", "{km20_mm}", "km20_mm.urdf&&millimetres"),
+    case("model info", "{km20_g}", "km20_g.urdf&&torso&&grams"),
+    case("model export", "{km20_mm} --out {out}", "km20_mm.urdf&&millimetres"),
     // dynamics
     case("dynamics kinematics", "--robot {km20} --trajectory {missing_csv} --out {out}", "missing.csv"),
     case("dynamics kinematics", "--robot {km20} --trajectory {empty} --out {out}", "empty.urdf"),
@@ -61,6 +68,9 @@ const CASES: &[Case] = &[
     case("dynamics kinematics", "--robot {km20} --trajectory {state_dup} --out {out}", "q:l_knee"),
     case("dynamics kinematics", "--robot {km20} --trajectory {state_typo} --out {out}", "q:l_kne"),
     case("dynamics kinematics", "--robot {km20} --trajectory {state} --out {out} --frames nose", "nose"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state_deg} --out {out}", "state_deg.csv&&q:&&degrees"),
+    case("dynamics inverse", "--robot {km20} --trajectory {state_deg} --out {out}", "state_deg.csv&&q:&&degrees"),
+    case("dynamics forward", "--robot {km20_g} --trajectory {state} --out {out}", "km20_g.urdf&&grams"),
     case("dynamics inverse", "--robot {km20} --trajectory {state_nan} --out {out}", "q:l_knee"),
     case("dynamics inverse", "--robot {km20} --trajectory {state_typo} --out {out}", "q:l_kne"),
     case("dynamics inverse", "--robot {trunc_urdf} --trajectory {state} --out {out}", "trunc.urdf"),
@@ -73,17 +83,25 @@ const CASES: &[Case] = &[
     case("simulate", "--robot {km20} --duration 0 --out {out}", "--duration"),
     case("simulate", "--robot {km20} --duration nan --out {out}", "--duration"),
     case("simulate", "--robot {km20} --dt -0.001 --out {out}", "--dt"),
+    // A step in milliseconds.
+    case("simulate", "--robot {km20} --dt 1 --out {out}", "--dt&&0.001"),
+    case("simulate", "--robot {km20} --trajectory {goals_deg} --out {out}", "goals_deg.csv&&q:&&degrees"),
+    case("simulate", "--robot {km20_mm} --out {out}", "millimetres"),
     case("simulate", "--robot {missing} --out {out}", "missing.urdf"),
     // experiment
     case("experiment tipover", "--robot {km20} --ramp 0", "--ramp"),
     case("experiment tipover", "--robot {km20} --ramp inf", "--ramp"),
     case("experiment tipover", "--robot {km20} --add-mass 0.3@nolink:0,0,0", "nolink"),
     case("experiment tipover", "--robot {trunc_urdf}", "trunc.urdf"),
+    case("experiment tipover", "--robot {km20} --add-mass 300@torso:0.05,0,0", "--add-mass&&grams"),
+    case("experiment tipover", "--robot {km20_g}", "grams"),
     // The ROBOTIS OP3 URDF's feet are meshes: the tip-over names the foot, not "no fall".
     case("experiment tipover", "--robot {op3_mesh_urdf}", "l_ank_roll_link"),
     case("experiment tipover", "--port {gone} --map builtin:km20 --yes", "gone"),
     case("experiment lean", "--robot {km20} --amplitude -1 --out {out}", "--amplitude"),
     case("experiment lean", "--robot {missing} --out {out}", "missing.urdf"),
+    case("experiment lean", "--robot {km20} --add-mass 0.3@torso:0,0,50 --out {out}", "--add-mass&&millimetres"),
+    case("experiment lean", "--robot {km20} --dt 5 --out {out}", "--dt"),
     case("experiment lean", "--port {gone} --map builtin:km20 --yes --out {out}", "gone"),
     case("experiment static-poses", "--robot {km20} --count 0 --out {out}", "--count"),
     case("experiment static-poses", "--robot {csv_as_urdf} --out {out}", "csv_as.urdf"),
@@ -101,6 +119,9 @@ const CASES: &[Case] = &[
     case("identify static", "--robot {km20} --poses {state_nan} --total-mass 3", "state_nan.csv"),
     case("identify static", "--robot {km20} --poses {missing_csv} --total-mass 3", "missing.csv"),
     case("identify static", "--robot {km20} --poses {state} --total-mass -3", "--total-mass"),
+    // A mass in grams.
+    case("identify static", "--robot {km20} --poses {state} --total-mass 3336", "--total-mass&&grams"),
+    case("identify static", "--robot {km20} --poses {state_deg} --total-mass 3.3", "state_deg.csv&&degrees"),
     case("identify arx", "--data {io_nan} --inputs u:a --outputs y:b", "io_nan.csv"),
     case("identify arx", "--data {io} --inputs u:x --outputs y:b", "u:x"),
     case("identify arx", "--data {io} --inputs u:a --outputs y:b --na 0 --nb 0", "--nb"),
@@ -117,11 +138,13 @@ const CASES: &[Case] = &[
     case("adapt", "--robot {km20} --tipover {json_bad} --total-mass 3.6", "bad.json"),
     case("adapt", "--robot {km20} --tipover {missing} --total-mass 3.6", "missing.urdf"),
     case("adapt", "--robot {km20} --tipover {empty} --total-mass -1", "--total-mass"),
+    case("adapt", "--robot {km20} --tipover {json_bad} --total-mass 3600", "--total-mass&&grams"),
     case("adapt train", "--robot {km20} --samples 0 --out {out}", "--samples"),
     case("adapt train", "--robot {trunc_urdf} --out {out}", "trunc.urdf"),
     // validate
     case("validate residual", "--robot {km20} --motion {state_nan} --out {out}", "q:l_knee"),
     case("validate residual", "--robot {km20} --motion {state_typo} --out {out}", "q:l_kne"),
+    case("validate residual", "--robot {km20} --motion {state_deg} --out {out}", "state_deg.csv&&degrees"),
     case("validate lean", "--robot-run {tau_nan} --sim-run {state}", "tau:l_knee"),
     case("validate lean", "--robot-run {missing_csv} --sim-run {state}", "missing.csv"),
     // ik
@@ -132,6 +155,8 @@ const CASES: &[Case] = &[
     case("gait sequence", "--dt -1 --out {out}", "--dt"),
     case("gait zmp", "--footsteps 0 --out {out}", "--footsteps"),
     case("gait zmp", "--tss nan --out {out}", "--tss"),
+    case("gait zmp", "--dt 2 --out {out}", "--dt"),
+    case("gait sequence", "--dt 40 --out {out}", "--dt"),
     // compliant
     case("compliant stiffness", "--robot {trunc_urdf}", "trunc.urdf"),
     case("compliant stiffness", "--robot {km20}", "km20"),
@@ -161,7 +186,9 @@ const CASES: &[Case] = &[
     case("demo", "--scenario nowhere", "nowhere"),
     case("bench dynamics", "--robot {trunc_urdf}", "trunc.urdf"),
     case("bench dynamics", "--robot {km20} --states {state_nan}", "state_nan.csv"),
+    case("bench dynamics", "--robot {km20} --states {state_deg}", "state_deg.csv&&degrees"),
     case("bench sim", "--robot {csv_as_urdf}", "csv_as.urdf"),
+    case("bench sim", "--robot {km20} --dt 1", "--dt"),
     case("bench link", "--port {gone}", "gone"),
     case("view", "{trunc_urdf} --export {out}", "trunc.urdf"),
     // A recording may hold NaN (a servo that did not answer): the viewer shows the gap.
@@ -251,6 +278,53 @@ fn with_cell(csv: &str, col: &str, row: usize, cell: &str) -> String {
     lines.join("\n") + "\n"
 }
 
+/// A CSV with every hinge angle (a `q:` column other than the base's) in degrees.
+fn in_degrees(csv: &str) -> String {
+    let mut lines = csv.lines();
+    let head = lines.next().unwrap();
+    let deg: Vec<bool> = head
+        .split(',')
+        .map(|c| c.starts_with("q:") && !c.starts_with("q:base."))
+        .collect();
+    let mut out = format!("{head}\n");
+    for l in lines {
+        let cells: Vec<String> = l
+            .split(',')
+            .zip(&deg)
+            .map(|(c, &d)| {
+                if d {
+                    (c.parse::<f64>().unwrap().to_degrees()).to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect();
+        out.push_str(&cells.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// A URDF with every length (joint, inertial and shape origins, box sizes) times
+/// `length` and every mass times `mass`: what a CAD export in millimetres or grams
+/// writes.
+fn rescaled(urdf: &str, length: f64, mass: f64) -> String {
+    let mut robot = twinloop_description::urdf::from_str(urdf).unwrap();
+    for j in &mut robot.joints {
+        j.origin.xyz = j.origin.xyz.map(|v| v * length);
+    }
+    for l in &mut robot.links {
+        for s in l.collisions.iter_mut().chain(&mut l.visuals) {
+            s.origin.xyz = s.origin.xyz.map(|v| v * length);
+        }
+        if let Some(i) = &mut l.inertial {
+            i.origin.xyz = i.origin.xyz.map(|v| v * length);
+            i.mass *= mass;
+        }
+    }
+    twinloop_description::urdf::to_string(&robot)
+}
+
 fn make_fixtures(dir: &Path) {
     let export = Command::new(bin())
         .args(["model", "export", "builtin:km20", "--out"])
@@ -259,6 +333,8 @@ fn make_fixtures(dir: &Path) {
         .unwrap();
     assert!(export.status.success());
     let urdf = std::fs::read_to_string(dir.join("km20.urdf")).unwrap();
+    write(dir, "km20_mm.urdf", &rescaled(&urdf, 1000.0, 1.0));
+    write(dir, "km20_g.urdf", &rescaled(&urdf, 1.0, 1000.0));
     write(dir, "trunc.urdf", &urdf[..urdf.len() / 2]);
     write(dir, "empty.urdf", "");
     let state = std::fs::read_to_string(repo().join("examples/km20_swing.csv")).unwrap();
@@ -293,7 +369,10 @@ fn make_fixtures(dir: &Path) {
         "state_dup.csv",
         &format!("{}\n{body}", head.replace("q:l_hip_yaw", "q:l_knee")),
     );
+    write(dir, "state_deg.csv", &in_degrees(&state));
     let goals = std::fs::read_to_string(repo().join("examples/km20_goals.csv")).unwrap();
+    write(dir, "goals.csv", &goals);
+    write(dir, "goals_deg.csv", &in_degrees(&goals));
     let (gh, gb) = goals.split_once('\n').unwrap();
     write(
         dir,
@@ -347,6 +426,8 @@ fn fill(case: &Case, out: &Path) -> Vec<String> {
         .map(|a| match a {
             "{out}" => out.to_str().unwrap().to_string(),
             "{km20}" => file("km20.urdf"),
+            "{km20_mm}" => file("km20_mm.urdf"),
+            "{km20_g}" => file("km20_g.urdf"),
             "{empty}" => file("empty.urdf"),
             "{missing}" => file("missing.urdf"),
             "{missing_csv}" => file("missing.csv"),
@@ -414,7 +495,7 @@ fn check(case: &Case, k: usize) -> Option<String> {
         format!("exit {code:?}, not 2; stderr: {}", err.trim())
     } else if errors.len() != 1 {
         format!("{} error lines, not 1: {}", errors.len(), err.trim())
-    } else if !errors[0].contains(case.names) {
+    } else if !case.names.split("&&").all(|n| errors[0].contains(n)) {
         format!("the error does not name `{}`: {}", case.names, errors[0])
     } else if out.exists() {
         format!("left an output file behind: {}", errors[0])
@@ -477,6 +558,86 @@ fn every_bad_input_is_refused_with_exit_2_and_one_line() {
         CASES.len(),
         failures.join("\n")
     );
+}
+
+/// The unit checks refuse nothing legitimate: the 94 kg TALOS and the 0.3 kg-class
+/// OP3 load, a 1 ms step and a 40 ms sample period run, a trajectory in radians and
+/// an added 0.3 kg 5 cm from the torso are taken, and so is a measured mass 20 % off
+/// the model's (the rows above refuse the same inputs 1000x off).
+#[test]
+fn legitimate_units_are_taken() {
+    let f = fixtures();
+    let file = |n: &str| f.dir.join(n).to_str().unwrap().to_string();
+    let out = file("legit-out.csv");
+    let talos = repo().join("models/talos/mjcf/talos.xml");
+    let op3 = repo().join("models/op3/robotis_op3.nomesh.urdf");
+    let runs: Vec<Vec<String>> = vec![
+        vec![
+            "model".into(),
+            "info".into(),
+            talos.to_str().unwrap().into(),
+        ],
+        vec!["model".into(), "lint".into(), op3.to_str().unwrap().into()],
+        [
+            "simulate",
+            "--robot",
+            &file("km20.urdf"),
+            "--dt",
+            "0.001",
+            "--duration",
+            "0.05",
+            "--out",
+            &out,
+        ]
+        .map(String::from)
+        .to_vec(),
+        [
+            "simulate",
+            "--robot",
+            &file("km20.urdf"),
+            "--trajectory",
+            &file("goals.csv"),
+            "--duration",
+            "0.05",
+            "--out",
+            &out,
+        ]
+        .map(String::from)
+        .to_vec(),
+        ["gait", "sequence", "--dt", "0.04", "--out", &out]
+            .map(String::from)
+            .to_vec(),
+        [
+            "dynamics",
+            "inverse",
+            "--robot",
+            &file("km20.urdf"),
+            "--trajectory",
+            &file("state.csv"),
+            "--out",
+            &out,
+        ]
+        .map(String::from)
+        .to_vec(),
+        [
+            "experiment",
+            "tipover",
+            "--robot",
+            &file("km20.urdf"),
+            "--add-mass",
+            "0.3@torso:0.05,0,0",
+        ]
+        .map(String::from)
+        .to_vec(),
+    ];
+    for args in runs {
+        let o = Command::new(bin()).args(&args).output().unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
 }
 
 /// Outputs that say what limits them: `link plan` without --return-delay-us gives the

@@ -196,6 +196,12 @@ fn interrupted_and_unplugged_recordings_keep_every_row() {
     assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
     let err = text(&o.stderr);
     assert!(err.contains("(interrupted)"), "{err}");
+    // Below the 100 reads/s asked (20 servos, each waiting its Return Delay Time): the
+    // recording says what limits its rate and how to raise it (issue 17).
+    assert!(
+        err.contains("the bus limits the rate") && err.contains("Return Delay Time"),
+        "{err}"
+    );
     let table = twinloop_io::Table::read(&out).unwrap();
     assert!(table.rows.len() >= 5, "{} rows", table.rows.len());
     assert!(err.contains(&format!("{} rows", table.rows.len())), "{err}");

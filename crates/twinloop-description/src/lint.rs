@@ -33,14 +33,16 @@
 //! | `zero-effort-or-velocity` | warning | an effort or velocity limit <= 0 |
 //! | `non-unit-axis` | warning | a moving joint's axis norm differs from 1 by more than [`AXIS_NORM_TOLERANCE`] (twinloop normalises it; other tools may not) |
 //! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect); also a warning when it names a joint the file does not have |
-//! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites, composites and flexcomps |
+//! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites, composites and flexcomps, and elements MuJoCo's schema does not have (a misspelt `<geon>`) |
 //! | `ignored-detail` | warning | a visual-only detail the reader read past: a URDF `<texture/>` without a file, a mesh `scale` with a fourth number |
 //! | `total-mass` | info | the robot's total mass, as a scale would weigh it |
+//! | `unit-scale` | error | lengths in millimetres (the robot spans more than 20 m) or masses in grams (over 100 kg and denser than water over its size cubed): see [`unit_scale`] |
 //!
 //! Axes of fixed and floating joints are not checked: URDF ignores them (many
 //! files write `0 0 0` there).
 
 mod floating_base;
+pub mod unit_scale;
 
 use crate::description::{Description, Inertia, Joint, JointKind};
 use serde::Serialize;
@@ -80,9 +82,10 @@ pub mod codes {
     pub const UNMODELED_ELEMENT: &str = "unmodeled-element";
     pub const IGNORED_DETAIL: &str = "ignored-detail";
     pub const TOTAL_MASS: &str = "total-mass";
+    pub const UNIT_SCALE: &str = "unit-scale";
 
     /// Every code, in the order of the table in the module documentation.
-    pub const ALL: [&str; 18] = [
+    pub const ALL: [&str; 19] = [
         NEGATIVE_MASS,
         INERTIA_NOT_POSITIVE_DEFINITE,
         TRIANGLE_INEQUALITY,
@@ -101,6 +104,7 @@ pub mod codes {
         UNMODELED_ELEMENT,
         IGNORED_DETAIL,
         TOTAL_MASS,
+        UNIT_SCALE,
     ];
 }
 
@@ -264,6 +268,7 @@ pub fn lint(robot: &Description) -> LintReport {
     }
     check_moving_masses(robot, &mut out);
     floating_base::check(robot, &mut out);
+    unit_scale::check(robot, &mut out);
     for joint in &robot.joints {
         check_joint(joint, &mut out);
         check_mimic_target(robot, joint, &mut out);

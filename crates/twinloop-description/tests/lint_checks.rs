@@ -605,6 +605,43 @@ fn every_code_is_listed_once() {
 
 /// MJCF elements the dynamics leave out are warnings (errors when strict), each
 /// naming the element and its line.
+/// An element MuJoCo's schema does not have, as a section of `<mujoco>`, in the
+/// world body or in a body, is an unmodeled-element warning naming it and its line;
+/// every bundled MJCF has none.
+#[test]
+fn unknown_mjcf_elements_are_named_not_dropped() {
+    let robot = twinloop_description::mjcf::from_str(
+        r#"<mujoco>
+  <worldbody>
+    <lamp/>
+    <body name="a"><joint name="j1"/><geon size="0.1"/><geom size="0.1"/></body>
+  </worldbody>
+  <frobnicate/>
+</mujoco>"#,
+    )
+    .unwrap();
+    let report = lint(&robot);
+    let found: Vec<(&str, &str)> = report
+        .with_code(codes::UNMODELED_ELEMENT)
+        .map(|f| (f.name.as_str(), f.message.split(':').next().unwrap()))
+        .collect();
+    assert_eq!(
+        found,
+        [
+            ("<lamp> in <worldbody>", "line 3"),
+            (r#"<geon> in <body name="a">"#, "line 4"),
+            ("<frobnicate>", "line 6"),
+        ],
+        "{:#?}",
+        report.findings
+    );
+    assert!(
+        report
+            .with_code(codes::UNMODELED_ELEMENT)
+            .all(|f| f.message.contains("not an MJCF element"))
+    );
+}
+
 #[test]
 fn unmodeled_mjcf_elements_are_warnings_and_strict_makes_them_errors() {
     let robot = twinloop_description::mjcf::from_str(

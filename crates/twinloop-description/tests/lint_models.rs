@@ -463,3 +463,61 @@ fn op3_mjcf_and_urdf_weigh_the_same() {
     assert!((urdf.total_mass - mjcf.total_mass).abs() < 1e-12);
     assert_eq!(urdf.dof, mjcf.dof);
 }
+
+/// Every bundled robot, 0.3 kg to 100 kg, is in metres and kilograms by the
+/// `unit-scale` bounds (at most 20 m, less dense than water over its size cubed), and
+/// the same file with its masses in grams or its lengths in millimetres is not.
+#[test]
+fn bundled_robots_pass_the_unit_scale_bounds_and_their_1000x_copies_do_not() {
+    use twinloop_description::lint::unit_scale::{MAX_BULK_DENSITY, MAX_EXTENT_M, extent};
+    for rel in URDFS.iter().chain(MJCFS) {
+        let robot = twinloop_description::load(models_dir().join(rel)).unwrap();
+        let size = extent(&robot);
+        let density = robot.total_mass() / size.powi(3);
+        eprintln!(
+            "{rel}: {:.3} kg, {size:.3} m, {density:.1} kg/m^3",
+            robot.total_mass()
+        );
+        let report = lint(&robot);
+        assert!(
+            report.with_code(codes::UNIT_SCALE).next().is_none(),
+            "{rel}"
+        );
+        // Every element of the bundled files is one MuJoCo's schema has.
+        assert!(
+            report
+                .findings
+                .iter()
+                .all(|f| !f.message.contains("not an MJCF element")),
+            "{rel}: {:#?}",
+            report.findings
+        );
+        // The margins: each model at least 10x below the density bound, its gram-scale
+        // copy at least 5x above it, its millimetre-scale copy 10x beyond the size bound.
+        assert!(density * 10.0 < MAX_BULK_DENSITY, "{rel}: {density}");
+        assert!(
+            density * 1000.0 > 5.0 * MAX_BULK_DENSITY,
+            "{rel}: {density}"
+        );
+        assert!(size * 1000.0 > 10.0 * MAX_EXTENT_M, "{rel}: {size}");
+        let mut grams = robot.clone();
+        for l in &mut grams.links {
+            if let Some(i) = &mut l.inertial {
+                i.mass *= 1000.0;
+            }
+        }
+        let g = lint(&grams);
+        let f: Vec<_> = g.with_code(codes::UNIT_SCALE).collect();
+        assert_eq!(f.len(), 1, "{rel}");
+        assert_eq!(f[0].severity, Severity::Error);
+        assert!(f[0].message.contains("grams"), "{rel}: {}", f[0]);
+        let mut mm = robot.clone();
+        for j in &mut mm.joints {
+            j.origin.xyz = j.origin.xyz.map(|v| v * 1000.0);
+        }
+        let m = lint(&mm);
+        let f: Vec<_> = m.with_code(codes::UNIT_SCALE).collect();
+        assert_eq!(f.len(), 1, "{rel}");
+        assert!(f[0].message.contains("millimetres"), "{rel}: {}", f[0]);
+    }
+}

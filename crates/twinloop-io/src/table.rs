@@ -275,7 +275,16 @@ impl CsvWriter {
     }
 
     pub fn write_row(&mut self, row: &[f64]) -> Result<(), IoError> {
-        assert_eq!(row.len(), self.ncols, "row length must match the header");
+        if row.len() != self.ncols {
+            // A caller's bug, but a recording must not end in a panic: the rows
+            // written so far stay, and the error says what happened.
+            return Err(IoError::new(format!(
+                "a row of {} values for {} columns was not written",
+                row.len(),
+                self.ncols
+            ))
+            .in_file(&self.path));
+        }
         let mut line = std::mem::take(&mut self.line);
         line.clear();
         for (k, x) in row.iter().enumerate() {

@@ -267,11 +267,23 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
     /// and the state is filled either way.
     fn read(&mut self, state: &mut RobotState) -> Result<(), RobotError> {
         let n = self.names.len();
-        let summary = self
-            .cycle
-            .read(&mut self.client, &mut self.readings)
-            .map_err(|e| RobotError::new(e.to_string()))?;
+        let read = self.cycle.read(&mut self.client, &mut self.readings);
         state.time = self.time();
+        let summary = match read {
+            Ok(s) => s,
+            Err(e) => {
+                // The link failed: nothing was read, and the state says so (NaN),
+                // never the previous cycle's values as if read again.
+                state.positions.clear();
+                state.positions.resize(n, f64::NAN);
+                for v in [&mut state.velocities, &mut state.efforts] {
+                    let v = v.get_or_insert_with(Vec::new);
+                    v.clear();
+                    v.resize(n, f64::NAN);
+                }
+                return Err(RobotError::new(e.to_string()));
+            }
+        };
         state.positions.resize(n, f64::NAN);
         let velocities = state.velocities.get_or_insert_with(Vec::new);
         velocities.resize(n, f64::NAN);

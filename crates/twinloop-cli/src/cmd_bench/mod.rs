@@ -6,7 +6,7 @@
 mod link;
 mod sim;
 
-use crate::common::{ROBOT_HELP, emit, load_model, read_table};
+use crate::common::{ROBOT_HELP, emit, load_model, read_trajectory};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::{Args, Subcommand};
@@ -124,7 +124,7 @@ struct States {
 
 fn load_states(model: &Model, args: &DynamicsBenchArgs) -> Result<States, CliError> {
     if let Some(path) = &args.states {
-        let t = read_table(path)?;
+        let t = read_trajectory(path, model)?;
         let find = |qty| crate::common::state_columns(&t, model, qty);
         let cols = [
             find(Quantity::Q)?,

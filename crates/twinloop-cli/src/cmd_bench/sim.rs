@@ -13,7 +13,7 @@ pub struct SimBenchArgs {
     #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
     pub robot: String,
     /// Time step, s.
-    #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::units::time_step)]
     pub dt: f64,
     /// Steps per timed round.
     #[arg(long, default_value_t = 2000, value_parser = crate::common::count)]

@@ -3,7 +3,6 @@
 //! angles and torques written row by row.
 
 use super::bus::{Guarded, confirm, hold_standing, is_serial, record_writer, resolve};
-use super::tipover::parse_mass;
 use crate::cmd_link::{PortArgs, open_client};
 use crate::common::hinges_only;
 use crate::common::{JSON_HELP, emit, load_description};
@@ -63,7 +62,7 @@ pub struct LeanArgs {
     #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::common::non_negative)]
     pub settle: f64,
     /// Control (and row) period, s.
-    #[arg(long, default_value_t = 0.005, value_name = "S", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 0.005, value_name = "S", value_parser = crate::units::time_step)]
     pub dt: f64,
     /// Ankle pitch joints, left,right.
     #[arg(long, value_delimiter = ',', num_args = 2, value_names = ["LEFT", "RIGHT"],
@@ -128,11 +127,7 @@ pub fn run(a: &LeanArgs) -> CliResult {
     };
     let (mut robot, _) = load_description(spec)?;
     hinges_only(&robot, spec, "the lean experiment")?;
-    for m in &a.add_mass {
-        let (kg, link, xyz) = parse_mass(m)?;
-        twinloop_description::builtin::add_point_mass(&mut robot, &link, kg, xyz)
-            .map_err(|e| CliError::from(e).context(format!("--add-mass \"{m}\"")))?;
-    }
+    crate::units::add_masses(&mut robot, &a.add_mass)?;
     let (mut sim, standing) = lean_simulator(&robot, a.compliance_slope)?;
     let tips = sagittal_tip_angles(&mut sim, &standing, &names)?;
     let order = sim.model.joint_names.clone();

@@ -71,27 +71,6 @@ pub struct TipoverArgs {
 }
 
 /// Parse `KG@LINK:X,Y,Z`.
-pub(super) fn parse_mass(s: &str) -> Result<(f64, String, [f64; 3]), String> {
-    let bad = |why: &str| format!("--add-mass \"{s}\": {why} (expected KG@LINK:X,Y,Z)");
-    let (kg, rest) = s.split_once('@').ok_or_else(|| bad("no '@'"))?;
-    let (link, xyz) = rest
-        .rsplit_once(':')
-        .ok_or_else(|| bad("no ':' before the position"))?;
-    let kg: f64 = kg
-        .trim()
-        .parse()
-        .map_err(|_| bad("the mass is not a number"))?;
-    let v: Vec<f64> = xyz
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad("the position is not three numbers"))?;
-    if v.len() != 3 {
-        return Err(bad("the position needs three numbers"));
-    }
-    Ok((kg, link.to_string(), [v[0], v[1], v[2]]))
-}
-
 pub fn run(a: &TipoverArgs) -> CliResult {
     if a.bus.port.is_some() || a.map.is_some() {
         return bus::run(a);
@@ -103,11 +82,7 @@ pub fn run(a: &TipoverArgs) -> CliResult {
     };
     let (mut robot, _) = load_description(spec)?;
     hinges_only(&robot, spec, "the tip-over experiment")?;
-    for m in &a.add_mass {
-        let (kg, link, xyz) = parse_mass(m)?;
-        twinloop_description::builtin::add_point_mass(&mut robot, &link, kg, xyz)
-            .map_err(|e| CliError::from(e).context(format!("--add-mass \"{m}\"")))?;
-    }
+    crate::units::add_masses(&mut robot, &a.add_mass)?;
     let opts = StudyOptions {
         ramp_deg_per_s: a.ramp,
         dynamixel_encoders: a.encoders,

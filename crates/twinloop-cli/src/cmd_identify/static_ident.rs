@@ -15,9 +15,9 @@ use twinloop_ident::html::{residual_sections, static_sections};
 use twinloop_ident::static_ident::{
     StaticProblem, StaticWorkspace, Suggestion, assemble, candidate_poses, solve, suggest_poses,
 };
-use twinloop_ident::validate::{ResidualSeries, Smoothing, read_motion, residual_wrench};
+use twinloop_ident::validate::{ResidualSeries, Smoothing, parse_motion, residual_wrench};
 use twinloop_ident::{
-    StaticOptions, StaticPose, StaticResult, adapted_robot, identify_static, read_static_poses,
+    StaticOptions, StaticPose, StaticResult, adapted_robot, identify_static, parse_static_poses,
 };
 use twinloop_io::{CsvWriter, Quantity};
 use twinloop_report::Report;
@@ -80,7 +80,15 @@ type Validation = (ResidualSeries, ResidualSeries);
 pub fn run(a: &IdentifyStaticArgs) -> CliResult {
     let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
     hinges_only(&robot, &a.robot, "static identification")?;
-    let poses = read_static_poses(&a.poses, &model)?;
+    crate::units::total_mass("--total-mass", a.total_mass, &robot)?;
+    let table = crate::common::read_trajectory(&a.poses, &model)?;
+    let poses = parse_static_poses(&table, &model).map_err(|e| {
+        if e.file.is_none() {
+            e.in_file(&a.poses)
+        } else {
+            e
+        }
+    })?;
     let options = StaticOptions {
         links: (!a.links.is_empty()).then(|| a.links.clone()),
         cop_sigma: a.cop_sigma,
@@ -245,7 +253,14 @@ fn validate_on_motion(
     model: &Model,
     adapted: &Description,
 ) -> Result<Validation, CliError> {
-    let motion = read_motion(motion_file, model)?;
+    let table = crate::common::read_trajectory(motion_file, model)?;
+    let motion = parse_motion(&table, model).map_err(|e| {
+        if e.file.is_none() {
+            e.in_file(motion_file)
+        } else {
+            e
+        }
+    })?;
     let adapted_model = Model::from_description(adapted)?;
     let prior_res = residual_wrench(model, &motion, Some(Smoothing::default()))
         .map_err(|e| e.in_file(motion_file))?;

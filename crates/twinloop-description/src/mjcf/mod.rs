@@ -297,6 +297,47 @@ struct Reader<'a, 'i> {
 /// Where an attribute's value came from: the element itself or a default class.
 type Found<'a, 'i> = (Node<'a, 'i>, &'a str);
 
+/// The sections of `<mujoco>` in MuJoCo's schema (XML reference, "MJCF elements").
+const SECTIONS: &[&str] = &[
+    "compiler",
+    "option",
+    "size",
+    "visual",
+    "statistic",
+    "default",
+    "extension",
+    "custom",
+    "asset",
+    "worldbody",
+    "contact",
+    "deformable",
+    "equality",
+    "tendon",
+    "actuator",
+    "sensor",
+    "keyframe",
+    "include",
+];
+
+/// What a `<body>` (or `<worldbody>`) may hold in MuJoCo's schema.
+const BODY_CHILDREN: &[&str] = &[
+    "inertial",
+    "joint",
+    "freejoint",
+    "geom",
+    "site",
+    "camera",
+    "light",
+    "body",
+    "frame",
+    "replicate",
+    "composite",
+    "flexcomp",
+    "plugin",
+    "attach",
+    "include",
+];
+
 const ORIENTATIONS: [&str; 5] = ["quat", "axisangle", "euler", "xyaxes", "zaxis"];
 
 /// Read an MJCF document; `dir` is the directory `<include>` paths are relative to.
@@ -399,6 +440,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                     t @ ("attach" | "include") => {
                         return Err(error_at(c, format!("<{t}> is not supported")));
                     }
+                    t if !BODY_CHILDREN.contains(&t) => self.unknown(c),
                     _ => {} // world geoms, sites, lights, cameras
                 }
             }
@@ -433,6 +475,9 @@ impl<'a, 'i> Reader<'a, 'i> {
         }
         for &s in sections {
             self.unmodeled(s);
+            if !SECTIONS.contains(&s.tag_name().name()) {
+                self.unknown(s);
+            }
         }
         validate_placed(doc, &self.robot, &self.places)
     }
@@ -601,6 +646,22 @@ impl<'a, 'i> Reader<'a, 'i> {
                 what,
             });
         }
+    }
+
+    /// An element MuJoCo's schema does not have (a misspelt `<geon>`, a section of
+    /// another format): MuJoCo refuses the file; twinloop reads past it and notes it
+    /// for `lint`, so it is never dropped without a word.
+    fn unknown(&mut self, e: Node<'a, 'i>) {
+        let (line, _) = crate::xml::position(e.document(), e.range().start);
+        self.robot.unmodeled.push(FileNote {
+            element: crate::xml::element_path(e),
+            line,
+            what: format!(
+                "<{}> is not an MJCF element (MuJoCo refuses the file); twinloop reads past \
+                 it and whatever it meant: check its spelling",
+                e.tag_name().name()
+            ),
+        });
     }
 
     /// A `<composite>` or `<flexcomp>`: MuJoCo expands it into bodies (a cable,
@@ -1134,6 +1195,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 t @ ("attach" | "include") => {
                     return Err(error_at(c, format!("<{t}> is not supported")));
                 }
+                t if !BODY_CHILDREN.contains(&t) => self.unknown(c),
                 _ => {}
             }
         }

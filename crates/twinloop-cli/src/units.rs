@@ -1,0 +1,231 @@
+//! Inputs in the wrong units by 1000x (issue 17), caught where every command reads
+//! them: a `--dt` in milliseconds, a mass in grams on `--total-mass` or `--add-mass`,
+//! an offset in millimetres, a trajectory in degrees where radians are expected. (A
+//! description in millimetres or grams is lint's `unit-scale`, refused by
+//! [`crate::common::load_description`].)
+//!
+//! Each check is an error naming the option or column and the unit the value looks
+//! like, and each has a bound that legitimate input stays far from: a 0.001 s step, a
+//! 150 kg robot, a knee at 2.6 rad pass.
+
+use crate::error::CliError;
+use twinloop_description::Description;
+use twinloop_description::lint::unit_scale;
+use twinloop_dynamics::Model;
+use twinloop_io::{IoError, Table};
+
+/// The longest time step or sample period, s, of any command: 0.1 s is a 10 Hz
+/// control loop; a contact simulation diverges well before. `--dt 1` meant 1 ms.
+pub const MAX_STEP_S: f64 = 0.1;
+
+/// A time step or sample period, s: a finite number in (0, [`MAX_STEP_S`]]. As a clap
+/// value parser: `#[arg(long, value_parser = crate::units::time_step)]`.
+pub fn time_step(s: &str) -> Result<f64, String> {
+    let x = crate::common::positive(s)?;
+    if x <= MAX_STEP_S {
+        Ok(x)
+    } else {
+        Err(format!(
+            "{x} s is too long for a time step (at most {MAX_STEP_S} s); the step is in \
+             seconds: for {x} ms write {}",
+            x / 1000.0
+        ))
+    }
+}
+
+/// How far a robot's weight on a scale may be from its model's before the number is
+/// taken for another unit: a robot ten times its model is not the robot modelled.
+pub const MAX_MASS_RATIO: f64 = 10.0;
+
+/// A robot's measured total mass (`option`, kg) against its model's: a value
+/// [`MAX_MASS_RATIO`] times off is an error naming the option and the unit it looks
+/// like (1000x: grams; 1/1000: tonnes).
+pub fn total_mass(option: &str, kg: f64, robot: &Description) -> Result<(), CliError> {
+    let model = robot.total_mass();
+    if model.is_nan() || model <= 0.0 {
+        return Ok(());
+    }
+    let ratio = kg / model;
+    if (1.0 / MAX_MASS_RATIO..=MAX_MASS_RATIO).contains(&ratio) {
+        return Ok(());
+    }
+    let hint = if ratio > 1.0 {
+        format!("is it in grams? ({} kg)", crate::common::num(kg / 1000.0))
+    } else {
+        format!("is it in tonnes? ({} kg)", crate::common::num(kg * 1000.0))
+    };
+    Err(CliError::new(format!(
+        "{option} {} kg is {}x the model's {} kg; {option} is in kilograms: {hint}",
+        crate::common::num(kg),
+        crate::common::num(ratio),
+        crate::common::num(model)
+    )))
+}
+
+/// The heaviest point mass, as a multiple of the robot's mass, that `--add-mass` takes
+/// as kilograms (a 50 g payload in grams is 14x a 3.6 kg robot).
+pub const MAX_ADDED_MASS_RATIO: f64 = 5.0;
+
+/// How far from its link, as a multiple of the robot's extent, an added mass may sit
+/// (5 mm in millimetres is 11 extents of a 0.45 m robot).
+pub const MAX_OFFSET_EXTENTS: f64 = 5.0;
+
+/// Parse `KG@LINK:X,Y,Z` and add that point mass to `robot`, for each of `specs` (the
+/// values of `--add-mass`): a mass [`MAX_ADDED_MASS_RATIO`] times the robot's is taken
+/// for grams, an offset beyond [`MAX_OFFSET_EXTENTS`] of the robot's size for
+/// millimetres; both are errors naming the option.
+pub fn add_masses(robot: &mut Description, specs: &[String]) -> Result<(), CliError> {
+    let own = robot.total_mass();
+    let size = unit_scale::extent(robot).max(0.1);
+    for s in specs {
+        let (kg, link, xyz) = parse_added_mass(s)?;
+        let bad = |why: String| CliError::new(format!("--add-mass \"{s}\": {why}"));
+        if own > 0.0 && kg > MAX_ADDED_MASS_RATIO * own {
+            return Err(bad(format!(
+                "{} kg is {}x the robot's {} kg; the mass is in kilograms: is it in grams? \
+                 ({} kg)",
+                crate::common::num(kg),
+                (kg / own).round(),
+                crate::common::num(own),
+                crate::common::num(kg / 1000.0)
+            )));
+        }
+        let r = xyz.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if r > MAX_OFFSET_EXTENTS * size {
+            return Err(bad(format!(
+                "the position is {} m from the link, {}x the robot's {} m size; X,Y,Z are in \
+                 metres: are they in millimetres? ({})",
+                crate::common::num(r),
+                crate::common::num((r / size).round()),
+                crate::common::num(size),
+                xyz.map(|v| crate::common::num(v / 1000.0)).join(",")
+            )));
+        }
+        twinloop_description::builtin::add_point_mass(robot, &link, kg, xyz)
+            .map_err(|e| CliError::from(e).context(format!("--add-mass \"{s}\"")))?;
+    }
+    Ok(())
+}
+
+/// `KG@LINK:X,Y,Z` (X,Y,Z in metres in the link frame) as its three parts.
+pub fn parse_added_mass(s: &str) -> Result<(f64, String, [f64; 3]), CliError> {
+    let bad = |why: &str| {
+        CliError::new(format!(
+            "--add-mass \"{s}\": {why} (expected KG@LINK:X,Y,Z)"
+        ))
+    };
+    let (kg, rest) = s.split_once('@').ok_or_else(|| bad("no '@'"))?;
+    let (link, xyz) = rest
+        .rsplit_once(':')
+        .ok_or_else(|| bad("no ':' before the position"))?;
+    let kg: f64 = kg
+        .trim()
+        .parse()
+        .map_err(|_| bad("the mass is not a number"))?;
+    let v: Vec<f64> = xyz
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad("the position is not three numbers"))?;
+    if v.len() != 3 {
+        return Err(bad("the position needs three numbers"));
+    }
+    Ok((kg, link.to_string(), [v[0], v[1], v[2]]))
+}
+
+/// How far, rad, beyond its limits a hinge's angle may be before the column is taken
+/// for degrees (when its values in degrees fit the limits).
+pub const DEGREES_BEYOND_LIMIT_RAD: f64 = 1.0;
+
+/// The `q:` columns of `table` against the model's joint limits: an angle of a hinge
+/// with limits beyond a full turn, or more than [`DEGREES_BEYOND_LIMIT_RAD`] beyond
+/// its limits while the whole column read as degrees fits them, is an error naming
+/// the file, line, column and the unit it looks like. Hinges without limits
+/// (continuous joints: wheels, a turntable) may turn any number of times.
+pub fn check_angles(table: &Table, model: &Model) -> Result<(), IoError> {
+    for i in 0..model.nbodies {
+        if !model.joint_types[i].is_revolute() {
+            continue;
+        }
+        let (lo, hi) = (model.lower_limits[i], model.upper_limits[i]);
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            continue;
+        }
+        let name = &model.joint_names[i];
+        let Some(c) = table.column_index(&format!("q:{name}")) else {
+            continue;
+        };
+        let column = || table.rows.iter().map(move |r| r[c]);
+        let fits_as_degrees = column()
+            .filter(|x| x.is_finite())
+            .all(|x| (lo - 0.1..=hi + 0.1).contains(&x.to_radians()));
+        let beyond = |x: f64| (lo - x).max(x - hi);
+        let bad = table.rows.iter().position(|r| {
+            let x = r[c];
+            x.is_finite()
+                && (x.abs() > std::f64::consts::TAU
+                    || (fits_as_degrees && beyond(x) > DEGREES_BEYOND_LIMIT_RAD))
+        });
+        let Some(r) = bad else { continue };
+        let x = table.rows[r][c];
+        let hint = if fits_as_degrees {
+            format!(
+                "the column looks like degrees ({} deg = {} rad, within the limits)",
+                crate::common::num(x),
+                crate::common::num(x.to_radians())
+            )
+        } else {
+            "no hinge with limits turns that far".to_string()
+        };
+        return Err(IoError {
+            file: table.path.clone(),
+            line: table.line_of_row(r),
+            column: Some(format!("q:{name}")),
+            message: format!(
+                "data row {}: {} rad is beyond the joint's limits [{}, {}] rad by {} rad; \
+                 angles are radians: {hint}",
+                r + 1,
+                crate::common::num(x),
+                crate::common::num(lo),
+                crate::common::num(hi),
+                crate::common::num(beyond(x))
+            ),
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_in_seconds_pass_and_in_milliseconds_are_named() {
+        assert_eq!(time_step("0.001"), Ok(0.001));
+        assert_eq!(time_step("0.04"), Ok(0.04));
+        assert_eq!(time_step("0.1"), Ok(0.1));
+        let e = time_step("1").unwrap_err();
+        assert!(e.contains("0.001") && e.contains("seconds"), "{e}");
+        assert!(time_step("0").is_err() && time_step("nan").is_err());
+    }
+
+    #[test]
+    fn masses_in_grams_and_offsets_in_millimetres_are_named() {
+        let km20 = twinloop_description::builtin::resolve("builtin:km20").unwrap();
+        let m = km20.total_mass();
+        assert!(total_mass("--total-mass", m * 1.2, &km20).is_ok());
+        assert!(total_mass("--total-mass", m * 0.5, &km20).is_ok());
+        let e = total_mass("--total-mass", m * 1000.0, &km20).unwrap_err();
+        assert!(e.to_string().contains("grams"), "{e}");
+        let e = total_mass("--total-mass", m / 1000.0, &km20).unwrap_err();
+        assert!(e.to_string().contains("tonnes"), "{e}");
+        let link = km20.links[0].name.clone();
+        let mut r = km20.clone();
+        add_masses(&mut r, &[format!("0.3@{link}:0.05,0,0")]).unwrap();
+        assert!((r.total_mass() - m - 0.3).abs() < 1e-12);
+        let e = add_masses(&mut km20.clone(), &[format!("300@{link}:0.05,0,0")]).unwrap_err();
+        assert!(e.to_string().contains("grams"), "{e}");
+        let e = add_masses(&mut km20.clone(), &[format!("0.3@{link}:0,0,50")]).unwrap_err();
+        assert!(e.to_string().contains("millimetres"), "{e}");
+    }
+}
