@@ -1,6 +1,7 @@
 //! The parameter and load files: round trip, and errors naming file and field.
 
 use twinloop_actuator::datasheet::defaults;
+use twinloop_actuator::params::N_PARAMS;
 use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType};
 
 #[test]
@@ -8,7 +9,7 @@ fn files_round_trip_and_errors_name_the_field() {
     for servo in ServoType::ALL {
         for level in ModelLevel::ALL {
             let mut p = defaults(servo, level);
-            p.uncertainty = Some([0.5; 8].map(|x| x * 1e-3));
+            p.uncertainty = Some([0.5; N_PARAMS].map(|x| x * 1e-3));
             let back = ServoParams::parse(&p.to_toml("a comment"), "p.toml").unwrap();
             // Terms the rung lacks are neither written nor read back.
             let mut want = p.clone();

@@ -14,16 +14,19 @@
 //! real robot run on it unchanged.
 
 pub mod actuator;
+pub mod backlash;
 pub mod contact;
 pub mod ltdl;
 mod robot_impl;
 pub mod sensors;
+pub mod servo_params;
 pub mod simulator;
 pub mod statics;
 
 pub use actuator::{
     Actuator, DynamixelServo, SeriesElastic, TwoLoopServo, servo_for_joint, servo_from_limits,
 };
+pub use servo_params::servo_from_params;
 pub use contact::{ContactParams, ContactPoint, ContactState};
 pub use sensors::{SensorState, quantize};
 pub use simulator::{SimConfig, SimError, Simulator};

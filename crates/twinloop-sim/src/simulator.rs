@@ -198,6 +198,8 @@ pub struct Simulator {
     pub joint_damping: Vec<f64>,
     pub joint_friction: Vec<f64>,
     friction_anchor: Vec<f64>,
+    /// Per joint: the motor side of a servo with a backlash.
+    pub gears: Vec<crate::backlash::Gear>,
     /// Torque each actuator applied in the last step.
     pub applied: Vec<f64>,
     pub(crate) points: Vec<ContactPoint>,
@@ -312,6 +314,7 @@ impl Simulator {
             joint_damping,
             joint_friction,
             friction_anchor: vec![0.0; nb],
+            gears: vec![Default::default(); nb],
             applied: vec![0.0; nb],
             contacts: vec![ContactState::default(); points.len()],
             points,
@@ -376,6 +379,7 @@ impl Simulator {
                 s.theta = self.q[self.model.idx_q[i]];
                 s.theta_dot = 0.0;
             }
+            self.gears[i] = Default::default();
         }
         self.contacts
             .iter_mut()
@@ -428,6 +432,11 @@ impl Simulator {
                 k: 0.0,
                 d: 0.0,
             },
+            Actuator::Dynamixel(s) if s.backlash > 0.0 => {
+                let g = &mut self.gears[i];
+                g.sync(s, q, v);
+                crate::backlash::coupling(s, g, q, v)
+            }
             Actuator::Dynamixel(s) => s.drive(self.goals[i], q, v),
             Actuator::TwoLoop(s) => s.drive(self.goals[i], q, v),
             Actuator::SeriesElastic(s) => s.drive(q, v),
@@ -561,11 +570,23 @@ impl Simulator {
         }
         integrate(&self.model, &self.q, &self.v, dt, &mut self.q_next);
         std::mem::swap(&mut self.q, &mut self.q_next);
-        // Series-elastic motors follow their goals with the link at its new state.
+        // Series-elastic motors and the motor sides of servos with a backlash follow
+        // their goals with the link at its new state.
         for i in 0..self.model.nbodies {
-            if let Actuator::SeriesElastic(s) = &mut self.actuators[i] {
-                let (iq, iv) = (self.model.idx_q[i], self.model.idx_v[i]);
-                s.advance_motor(self.goals[i], self.q[iq], self.v[iv], dt);
+            let (iq, iv) = (self.model.idx_q[i], self.model.idx_v[i]);
+            match &mut self.actuators[i] {
+                Actuator::SeriesElastic(s) => {
+                    s.advance_motor(self.goals[i], self.q[iq], self.v[iv], dt)
+                }
+                Actuator::Dynamixel(s) if s.backlash > 0.0 => crate::backlash::advance_motor(
+                    s,
+                    &mut self.gears[i],
+                    self.goals[i],
+                    self.q[iq],
+                    self.v[iv],
+                    dt,
+                ),
+                _ => {}
             }
         }
         self.time += dt;
