@@ -57,6 +57,7 @@ pub struct Identification {
     /// `friction_viscous` is held at 0 (the back-EMF takes all the damping) and both
     /// combinations are reported here.
     pub combinations: Vec<(&'static str, f64, f64)>,
+    /// LM iterations and simulations, over every LM run of the fit.
     pub iterations: usize,
     pub evaluations: usize,
     /// Parameters fitted by CMA-ES (the backlash, when asked), not in `correlation`.
@@ -235,6 +236,8 @@ pub fn identify_with(
         load,
         segments: &fit_segments,
         sd_q,
+        iterations: 0,
+        evaluations: 0,
     };
     let mut result = fit.lm(&mut params, &fitted, &mut qb, &mut cb);
     let mut nonsmooth_evaluations = 0;
@@ -364,8 +367,8 @@ pub fn identify_with(
         singular_values: stats.singular_values,
         undetermined,
         weakest_direction,
-        iterations: result.iterations,
-        evaluations: result.evaluations,
+        iterations: fit.iterations,
+        evaluations: fit.evaluations,
         nonsmooth_evaluations,
         nonsmooth,
     })
@@ -377,6 +380,9 @@ struct Fit<'a> {
     load: &'a Pendulum,
     segments: &'a [Segment],
     sd_q: f64,
+    /// LM iterations and simulations over every LM run.
+    iterations: usize,
+    evaluations: usize,
 }
 
 impl Fit<'_> {
@@ -444,6 +450,8 @@ impl Fit<'_> {
         for (k, &i) in fitted.iter().enumerate() {
             params.values[i] = result.x[k].exp();
         }
+        self.iterations += result.iterations;
+        self.evaluations += result.evaluations;
         result
     }
 }

@@ -80,6 +80,7 @@ pub fn tipover_replay(
             // the file (a 3 min tip-over at every step would be 130 MB of CSV).
             every: 40,
             servo: ServoChoice::Auto,
+            servo_params: Vec::new(),
             view: LiveViewArgs::default(),
         })
         .map_err(|e| {

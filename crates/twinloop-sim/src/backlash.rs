@@ -74,16 +74,18 @@ pub fn coupling(servo: &DynamixelServo, gear: &Gear, q: f64, v: f64) -> Drive {
 }
 
 /// Advance the motor side `dt` with the output at its new `q`, `v`: the loop's
-/// torque (on the output's angle, back-EMF on the motor's speed) less the gap's
-/// reaction, linearly implicit in the back-EMF, the mesh's stiffness and damping;
-/// then the Coulomb friction takes what it can to stop it.
+/// torque (on the output's angle, back-EMF on the motor's speed, implicit in the
+/// back-EMF) less the gap's reaction, then the Coulomb friction takes what it can to
+/// stop it. The reaction is the torque the output received in the step just solved
+/// (the gap at the motor's old state and the output's new one, which the output's
+/// implicit step used): action and reaction are equal, so the pair keeps its
+/// momentum. The motor side is explicit in the mesh's stiffness, stable while
+/// `dt sqrt(GEAR_STIFFNESS / armature) < 2` (0.43 for an RX-28 at 1 ms).
 pub fn advance_motor(servo: &DynamixelServo, gear: &mut Gear, goal: f64, q: f64, v: f64, dt: f64) {
     let m = servo.drive(goal, q, gear.vm);
     let c = coupling(servo, gear, q, v);
-    let (k, d) = (c.k, c.d + m.d);
-    let force = m.tau - c.tau;
-    let h = servo.motor_inertia.max(1e-6) + dt * d + dt * dt * k;
-    let free = gear.vm + dt * (force - dt * k * gear.vm) / h;
+    let h = servo.motor_inertia.max(1e-6) + dt * m.d;
+    let free = gear.vm + dt * (m.tau - c.tau) / h;
     let stop = free * h / dt;
     let friction = stop.clamp(-servo.gear_friction, servo.gear_friction);
     gear.vm = free - dt * friction / h;

@@ -11,7 +11,9 @@
 use crate::actuator::{Actuator, DynamixelServo};
 use crate::simulator::Simulator;
 use twinloop_actuator::params::{BACKLASH, FRICTION_BASE, FRICTION_VISCOUS};
-use twinloop_actuator::{LoopFamily, ServoParams};
+use twinloop_actuator::ActuatorError;
+pub use twinloop_actuator::params_set::{ServoParamsSet, ServoSlot};
+use twinloop_actuator::{LoopFamily, ServoParams, ServoType};
 
 /// The simulator's servo for `p`: full drive `kt V / R` (stall torque), back-EMF
 /// damping `kt^2 / R` (so no-load speed `V / kt`), the loop's slope at the factory
@@ -56,6 +58,39 @@ impl Simulator {
             self.joint_friction[i] = p.values[FRICTION_BASE];
         }
         self.gears[i] = Default::default();
+    }
+
+    /// Give the joints of robot `robot_name` the servos of `set` (`option` names the
+    /// flag in errors): a file for one joint by its name, or for every joint whose
+    /// servo is of its type (the built-in robots' servo tables say which; on other
+    /// robots every joint). Returns how many joints took one.
+    pub fn apply_servo_params(
+        &mut self,
+        robot_name: &str,
+        set: &ServoParamsSet,
+        option: &str,
+    ) -> Result<usize, ActuatorError> {
+        let names = self.model.joint_names.clone();
+        let mut slots = Vec::with_capacity(names.len());
+        let mut n = 0;
+        for (i, name) in names.iter().enumerate() {
+            if self.model.joint_types[i].nv() != 1 {
+                continue;
+            }
+            let slot = ServoSlot {
+                id: None,
+                joint: name,
+                servo: twinloop_description::builtin::servo_of_joint(robot_name, name)
+                    .and_then(|s| ServoType::parse(s.name)),
+            };
+            if let Some(p) = set.for_servo(slot, option)? {
+                self.set_servo_params(i, p);
+                n += 1;
+            }
+            slots.push(slot);
+        }
+        set.check_used(&slots, option)?;
+        Ok(n)
     }
 }
 
