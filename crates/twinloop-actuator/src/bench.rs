@@ -175,7 +175,11 @@ impl Bench {
         let mut later = (self.t, self.q);
         for &(t, q) in self.history.iter().rev() {
             if t <= at {
-                let w = if later.0 > t { (at - t) / (later.0 - t) } else { 0.0 };
+                let w = if later.0 > t {
+                    (at - t) / (later.0 - t)
+                } else {
+                    0.0
+                };
                 return q + w * (later.1 - q);
             }
             later = (t, q);

@@ -110,10 +110,9 @@ pub fn cmaes(
         mean += sigma * &y_w;
         // C^(-1/2) y_w = B D^-1 B^T y_w.
         let c_inv_half_y = &b * (b.transpose() * &y_w).component_div(&d);
-        p_sigma = (1.0 - c_sigma) * &p_sigma
-            + (c_sigma * (2.0 - c_sigma) * mu_eff).sqrt() * c_inv_half_y;
-        let h_sigma = p_sigma.norm()
-            / (1.0 - (1.0 - c_sigma).powi(2 * generations as i32)).sqrt()
+        p_sigma =
+            (1.0 - c_sigma) * &p_sigma + (c_sigma * (2.0 - c_sigma) * mu_eff).sqrt() * c_inv_half_y;
+        let h_sigma = p_sigma.norm() / (1.0 - (1.0 - c_sigma).powi(2 * generations as i32)).sqrt()
             < (1.4 + 2.0 / (nf + 1.0)) * chi_n;
         let hs = if h_sigma { 1.0 } else { 0.0 };
         p_c = (1.0 - c_c) * &p_c + hs * (c_c * (2.0 - c_c) * mu_eff).sqrt() * &y_w;
@@ -123,9 +122,8 @@ pub fn cmaes(
             rank_mu += w[i] * y * y.transpose();
         }
         let delta = (1.0 - hs) * c_c * (2.0 - c_c);
-        cov = (1.0 - c_1 - c_mu + c_1 * delta) * &cov
-            + c_1 * &p_c * p_c.transpose()
-            + c_mu * rank_mu;
+        cov =
+            (1.0 - c_1 - c_mu + c_1 * delta) * &cov + c_1 * &p_c * p_c.transpose() + c_mu * rank_mu;
         sigma *= ((c_sigma / d_sigma) * (p_sigma.norm() / chi_n - 1.0)).exp();
         let sym = 0.5 * (&cov + cov.transpose());
         let eig = sym.clone().symmetric_eigen();

@@ -6,11 +6,11 @@
 //! what the data cannot determine (the Jacobian's weak directions).
 
 use crate::bench::Pendulum;
+use crate::cmaes::{CmaOptions, cmaes};
 use crate::error::ActuatorError;
+use crate::lm::LmResult;
 use crate::lm::{LmOptions, levenberg_marquardt};
 use crate::log::ServoLog;
-use crate::cmaes::{CmaOptions, cmaes};
-use crate::lm::LmResult;
 use crate::params::{
     BACKLASH, FRICTION_VISCOUS, KT, NONSMOOTH, PARAM_NAMES, RESISTANCE, ServoParams,
 };
@@ -393,7 +393,14 @@ impl Fit<'_> {
         for s in self.segments {
             let l = &self.logs[s.log];
             let n = s.rows.len();
-            replay(trial, self.load, l, s.rows.clone(), &mut qb[..n], &mut cb[..n]);
+            replay(
+                trial,
+                self.load,
+                l,
+                s.rows.clone(),
+                &mut qb[..n],
+                &mut cb[..n],
+            );
             for (j, r) in s.rows.clone().enumerate() {
                 out[o] = (qb[j] - l.q[r]) / self.sd_q;
                 o += 1;

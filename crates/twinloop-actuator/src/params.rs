@@ -171,10 +171,16 @@ impl ServoParams {
                 return Err(bad(name, format!("{v} must be > 0")));
             }
             if matches!(i, SENSING_DELAY | BUS_DELAY) && v > MAX_DELAY {
-                return Err(bad(name, format!("{v} s is above the {MAX_DELAY} s a servo allows")));
+                return Err(bad(
+                    name,
+                    format!("{v} s is above the {MAX_DELAY} s a servo allows"),
+                ));
             }
             if i == BACKLASH && v > 0.2 {
-                return Err(bad(name, format!("{v} rad of dead band: more than 11 deg, not a servo")));
+                return Err(bad(
+                    name,
+                    format!("{v} rad of dead band: more than 11 deg, not a servo"),
+                ));
             }
         }
         Ok(())
@@ -195,9 +201,11 @@ impl ServoParams {
         let _ = writeln!(s, "[params]\nvoltage = {:?}", self.voltage);
         let mut used = self.level.parameters();
         // Backlash and delays only where the servo has them (or a fit estimated them).
-        used.extend(NONSMOOTH.iter().filter(|&&i| {
-            self.values[i] != 0.0 || self.uncertainty.is_some_and(|u| u[i] != 0.0)
-        }));
+        used.extend(
+            NONSMOOTH.iter().filter(|&&i| {
+                self.values[i] != 0.0 || self.uncertainty.is_some_and(|u| u[i] != 0.0)
+            }),
+        );
         for &i in &used {
             let _ = writeln!(s, "{} = {:?}", PARAM_NAMES[i], self.values[i]);
         }

@@ -54,24 +54,27 @@ impl ServoParamsSet {
                     let key = match k.parse::<u8>() {
                         Ok(id) => ServoKey::Id(id),
                         Err(_) if k.chars().all(|c| c.is_ascii_digit()) => {
-                            return Err(ActuatorError::new(
-                                option,
-                                a,
-                                "a servo id is 0-253",
-                            ));
+                            return Err(ActuatorError::new(option, a, "a servo id is 0-253"));
                         }
                         Err(_) => ServoKey::Joint(k.to_string()),
                     };
                     if set.each.iter().any(|(q, _, _)| *q == key) {
-                        return Err(ActuatorError::new(option, a, "that servo has a file already"));
+                        return Err(ActuatorError::new(
+                            option,
+                            a,
+                            "that servo has a file already",
+                        ));
                     }
                     set.each.push((key, a.clone(), p));
                 }
             }
         }
-        if let Some(t) = set.all.iter().map(|(_, p)| p.servo).find(|t| {
-            set.all.iter().filter(|(_, p)| p.servo == *t).count() > 1
-        }) {
+        if let Some(t) = set
+            .all
+            .iter()
+            .map(|(_, p)| p.servo)
+            .find(|t| set.all.iter().filter(|(_, p)| p.servo == *t).count() > 1)
+        {
             return Err(ActuatorError::new(
                 option,
                 "",
@@ -125,18 +128,29 @@ impl ServoParamsSet {
                 ServoKey::Joint(j) => j == s.joint,
             });
             if !found {
-                return Err(ActuatorError::new(option, arg, "no servo of the robot has that id or joint"));
+                return Err(ActuatorError::new(
+                    option,
+                    arg,
+                    "no servo of the robot has that id or joint",
+                ));
             }
         }
         for (arg, p) in &self.all {
             if !slots.iter().any(|s| s.servo.is_none_or(|t| t == p.servo)) {
-                let mut types: Vec<&str> = slots.iter().filter_map(|s| s.servo.map(|t| t.name())).collect();
+                let mut types: Vec<&str> = slots
+                    .iter()
+                    .filter_map(|s| s.servo.map(|t| t.name()))
+                    .collect();
                 types.sort();
                 types.dedup();
                 return Err(ActuatorError::new(
                     option,
                     arg,
-                    format!("parameters of {}, but the robot has no such servo (its servos: {})", p.servo, types.join(", ")),
+                    format!(
+                        "parameters of {}, but the robot has no such servo (its servos: {})",
+                        p.servo,
+                        types.join(", ")
+                    ),
                 ));
             }
         }

@@ -187,7 +187,12 @@ fn backlash_and_delays_recovered() {
     let sd = id.params.uncertainty.unwrap();
     eprintln!(
         "{servo}: {took:.2} s ({} LM iterations, {} LM simulations, {} CMA-ES simulations), held-out {:.3} mrad (without backlash and delays {:.3}), undetermined {:?}",
-        id.iterations, id.evaluations, id.nonsmooth_evaluations, id.heldout_rms_mrad, plain.heldout_rms_mrad, id.undetermined
+        id.iterations,
+        id.evaluations,
+        id.nonsmooth_evaluations,
+        id.heldout_rms_mrad,
+        plain.heldout_rms_mrad,
+        id.undetermined
     );
     for i in ModelLevel::M1.parameters().into_iter().chain(NONSMOOTH) {
         eprintln!(

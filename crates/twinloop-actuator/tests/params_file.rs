@@ -22,7 +22,18 @@ fn files_round_trip_and_errors_name_the_field() {
             assert_eq!(back, want, "{servo} {level:?}");
         }
     }
+    // Backlash and delays: on any rung, written where not 0, read back.
+    let mut p = defaults(ServoType::Rx28, ModelLevel::M1);
+    p.values[twinloop_actuator::params::BACKLASH] = 0.0087;
+    p.values[twinloop_actuator::params::BUS_DELAY] = 0.002;
+    let text = p.to_toml("");
+    assert!(text.contains("backlash = 0.0087") && !text.contains("sensing_delay"));
+    assert_eq!(ServoParams::parse(&text, "p.toml").unwrap(), p);
     let err = |text: &str| ServoParams::parse(text, "p.toml").unwrap_err().to_string();
+    assert!(
+        err("[servo]\nmodel = \"RX-28\"\n[params]\nbus_delay = 0.5\n")
+            .starts_with("p.toml: [params] bus_delay: 0.5 s is above the 0.1 s")
+    );
     assert_eq!(
         err("[servo]\nmodel = \"RX-99\"\n[params]\n"),
         "p.toml: [servo] model: unknown servo \"RX-99\" (known: RX-28, RX-64, MX-64(2.0), XM430-W350)"

@@ -182,7 +182,8 @@ pub fn run(a: SimulateArgs) -> CliResult {
     let (robot, _) = load_description(&a.robot)?;
     let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
     if !a.servo_params.is_empty() {
-        let set = twinloop_sim::servo_params::ServoParamsSet::read(&a.servo_params, "--servo-params")?;
+        let set =
+            twinloop_sim::servo_params::ServoParamsSet::read(&a.servo_params, "--servo-params")?;
         let n = sim.apply_servo_params(&robot.name, &set, "--servo-params")?;
         eprintln!("{n} joints run the servo model of --servo-params");
     }

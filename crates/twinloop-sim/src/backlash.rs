@@ -21,6 +21,9 @@ pub const GEAR_STIFFNESS: f64 = 2000.0;
 pub struct Gear {
     pub qm: f64,
     pub vm: f64,
+    /// What the motor side felt beyond what the output received in the last step,
+    /// N m: the output takes it in the next ([`advance_motor`]).
+    pub owed: f64,
 }
 
 impl Default for Gear {
@@ -28,6 +31,7 @@ impl Default for Gear {
         Gear {
             qm: f64::NAN,
             vm: 0.0,
+            owed: 0.0,
         }
     }
 }
@@ -39,6 +43,7 @@ impl Gear {
         if !(self.qm - q).is_finite() || (self.qm - q).abs() > 0.5 * servo.backlash + 0.05 {
             self.qm = q;
             self.vm = v;
+            self.owed = 0.0;
         }
     }
 }
@@ -73,22 +78,35 @@ pub fn coupling(servo: &DynamixelServo, gear: &Gear, q: f64, v: f64) -> Drive {
     }
 }
 
+/// The torque on the output: the gap's ([`coupling`]) plus what the motor side
+/// felt beyond it in the last step.
+pub fn output_drive(servo: &DynamixelServo, gear: &mut Gear, q: f64, v: f64) -> Drive {
+    let mut d = coupling(servo, gear, q, v);
+    d.tau += gear.owed;
+    gear.owed = 0.0;
+    d
+}
+
 /// Advance the motor side `dt` with the output at its new `q`, `v`: the loop's
-/// torque (on the output's angle, back-EMF on the motor's speed, implicit in the
-/// back-EMF) less the gap's reaction, then the Coulomb friction takes what it can to
-/// stop it. The reaction is the torque the output received in the step just solved
-/// (the gap at the motor's old state and the output's new one, which the output's
-/// implicit step used): action and reaction are equal, so the pair keeps its
-/// momentum. The motor side is explicit in the mesh's stiffness, stable while
-/// `dt sqrt(GEAR_STIFFNESS / armature) < 2` (0.43 for an RX-28 at 1 ms).
+/// torque (on the output's angle; back-EMF on the motor's speed) less the gap's
+/// reaction, linearly implicit in the back-EMF and in the mesh's stiffness and
+/// damping (the output held at its new state), so a stiff mesh on a light armature
+/// stays stable; then the Coulomb friction takes what it can to stop it.
+///
+/// Staggered: the output's implicit step saw the gap at the motor's old state, the
+/// motor's sees it at its new one. The difference (`K dt vm' + D (vm' - vm)` where
+/// engaged) is owed to the output in the next step, so the pair keeps its momentum.
 pub fn advance_motor(servo: &DynamixelServo, gear: &mut Gear, goal: f64, q: f64, v: f64, dt: f64) {
     let m = servo.drive(goal, q, gear.vm);
     let c = coupling(servo, gear, q, v);
-    let h = servo.motor_inertia.max(1e-6) + dt * m.d;
-    let free = gear.vm + dt * (m.tau - c.tau) / h;
+    let (k, d) = (c.k, c.d);
+    let h = servo.motor_inertia.max(1e-6) + dt * (m.d + d) + dt * dt * k;
+    let free = gear.vm + dt * (m.tau - c.tau - dt * k * gear.vm) / h;
     let stop = free * h / dt;
     let friction = stop.clamp(-servo.gear_friction, servo.gear_friction);
-    gear.vm = free - dt * friction / h;
+    let vm = free - dt * friction / h;
+    gear.owed = k * dt * vm + d * (vm - gear.vm);
+    gear.vm = vm;
     gear.qm += dt * gear.vm;
 }
 
@@ -101,7 +119,11 @@ mod tests {
         let mut s = DynamixelServo::rx28();
         s.backlash = 0.01;
         s.motor_inertia = 0.01;
-        let mut g = Gear { qm: 0.004, vm: 0.0 };
+        let mut g = Gear {
+            qm: 0.004,
+            vm: 0.0,
+            owed: 0.0,
+        };
         assert_eq!(coupling(&s, &g, 0.0, 0.0).tau, 0.0);
         g.qm = 0.006;
         let c = coupling(&s, &g, 0.0, 0.0);

@@ -26,7 +26,7 @@ pub mod statics;
 pub use actuator::{
     Actuator, DynamixelServo, SeriesElastic, TwoLoopServo, servo_for_joint, servo_from_limits,
 };
-pub use servo_params::servo_from_params;
 pub use contact::{ContactParams, ContactPoint, ContactState};
 pub use sensors::{SensorState, quantize};
+pub use servo_params::servo_from_params;
 pub use simulator::{SimConfig, SimError, Simulator};

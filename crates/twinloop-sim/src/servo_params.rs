@@ -10,8 +10,8 @@
 
 use crate::actuator::{Actuator, DynamixelServo};
 use crate::simulator::Simulator;
-use twinloop_actuator::params::{BACKLASH, FRICTION_BASE, FRICTION_VISCOUS};
 use twinloop_actuator::ActuatorError;
+use twinloop_actuator::params::{BACKLASH, FRICTION_BASE, FRICTION_VISCOUS};
 pub use twinloop_actuator::params_set::{ServoParamsSet, ServoSlot};
 use twinloop_actuator::{LoopFamily, ServoParams, ServoType};
 

@@ -435,7 +435,7 @@ impl Simulator {
             Actuator::Dynamixel(s) if s.backlash > 0.0 => {
                 let g = &mut self.gears[i];
                 g.sync(s, q, v);
-                crate::backlash::coupling(s, g, q, v)
+                crate::backlash::output_drive(s, g, q, v)
             }
             Actuator::Dynamixel(s) => s.drive(self.goals[i], q, v),
             Actuator::TwoLoop(s) => s.drive(self.goals[i], q, v),

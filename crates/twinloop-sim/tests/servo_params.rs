@@ -23,7 +23,11 @@ fn pendulum_sim(dt: f64) -> Simulator {
         .mass(1.0, [0.0; 3], Inertia::solid_sphere(1.0, 0.05))
         .done()
         .link("arm")
-        .mass(MASS, [0.0, 0.0, -LENGTH], Inertia::solid_sphere(MASS, RADIUS))
+        .mass(
+            MASS,
+            [0.0, 0.0, -LENGTH],
+            Inertia::solid_sphere(MASS, RADIUS),
+        )
         .done()
         .revolute("servo", "base", "arm", [0.0, 1.0, 0.0])
         .origin(Pose::new([0.0; 3], [0.0; 3]))

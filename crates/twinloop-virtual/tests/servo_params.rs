@@ -51,7 +51,10 @@ fn the_files_drive_the_joints_they_name() {
             panic!("{} has no servo", j.name)
         };
         let (stall, backlash) = match j.model.name() {
-            "RX-28" => (rx28.kt() / rx28.resistance() * rx28.voltage, rx28.values[BACKLASH]),
+            "RX-28" => (
+                rx28.kt() / rx28.resistance() * rx28.voltage,
+                rx28.values[BACKLASH],
+            ),
             _ if j.id == rx64.id => (one.kt() / one.resistance() * one.voltage, 0.0),
             // The other RX-64: its datasheet's 5.3 N m.
             _ => (5.3, 0.0),
@@ -76,10 +79,15 @@ fn the_files_drive_the_joints_they_name() {
     .err()
     .unwrap();
     assert!(
-        e.contains(&format!("parameters of RX-28, but servo id {}", rx64.id)) && e.contains("RX-64"),
+        e.contains(&format!("parameters of RX-28, but servo id {}", rx64.id))
+            && e.contains("RX-64"),
         "{e}"
     );
-    let x = vec![write(&dir, "xm.toml", &defaults(ServoType::Xm430W350, ModelLevel::M1))];
+    let x = vec![write(
+        &dir,
+        "xm.toml",
+        &defaults(ServoType::Xm430W350, ModelLevel::M1),
+    )];
     let e = VirtualRobot::new(
         &robot,
         &mapping,
@@ -90,6 +98,9 @@ fn the_files_drive_the_joints_they_name() {
     )
     .err()
     .unwrap();
-    assert!(e.contains("the robot has no such servo (its servos: RX-28, RX-64)"), "{e}");
+    assert!(
+        e.contains("the robot has no such servo (its servos: RX-28, RX-64)"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

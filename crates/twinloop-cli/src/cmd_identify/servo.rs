@@ -129,7 +129,9 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
 
 fn text(id: &Identification, seconds: f64) -> String {
     let p = &id.params;
-    let sd = p.uncertainty.unwrap_or([f64::NAN; twinloop_actuator::params::N_PARAMS]);
+    let sd = p
+        .uncertainty
+        .unwrap_or([f64::NAN; twinloop_actuator::params::N_PARAMS]);
     let mut s = format!(
         "{} model {} at {:.2} V, fitted in {seconds:.2} s ({} iterations)\n",
         p.servo,
@@ -167,7 +169,9 @@ fn text(id: &Identification, seconds: f64) -> String {
 
 fn to_json(id: &Identification, seconds: f64) -> serde_json::Value {
     let p = &id.params;
-    let sd = p.uncertainty.unwrap_or([f64::NAN; twinloop_actuator::params::N_PARAMS]);
+    let sd = p
+        .uncertainty
+        .unwrap_or([f64::NAN; twinloop_actuator::params::N_PARAMS]);
     let params: serde_json::Map<String, serde_json::Value> = id
         .fitted
         .iter()
