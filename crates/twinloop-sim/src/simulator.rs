@@ -435,7 +435,7 @@ impl Simulator {
             Actuator::Dynamixel(s) if s.backlash > 0.0 => {
                 let g = &mut self.gears[i];
                 g.sync(s, q, v);
-                crate::backlash::output_drive(s, g, q, v)
+                crate::backlash::output_drive(s, self.goals[i], g, q, v, self.config.dt)
             }
             Actuator::Dynamixel(s) => s.drive(self.goals[i], q, v),
             Actuator::TwoLoop(s) => s.drive(self.goals[i], q, v),
@@ -449,7 +449,7 @@ impl Simulator {
         // friction cannot do.
         d.tau -= self.joint_damping[i] * v;
         d.d += self.joint_damping[i];
-        let fr = self.joint_friction[i];
+        let fr = self.joint_friction[i] + self.engaged_gear(i).1;
         if fr > 0.0 {
             // Full friction torque at 0.1 mrad of deflection; damping for a crisp stick.
             let kf = fr / 1e-4;
@@ -480,6 +480,17 @@ impl Simulator {
             d.d += self.joint_limit_damping;
         }
         d
+    }
+
+    /// The inertia and Coulomb friction of joint `i`'s motor side where it moves with
+    /// the joint (a servo with a backlash, gap closed and pushed), else zeros.
+    fn engaged_gear(&self, i: usize) -> (f64, f64) {
+        match &self.actuators[i] {
+            Actuator::Dynamixel(s) if s.backlash > 0.0 && self.gears[i].engaged != 0.0 => {
+                (s.motor_inertia, s.gear_friction)
+            }
+            _ => (0.0, 0.0),
+        }
     }
 
     /// Why the step matrix has no factor at velocity coordinate `k`: named by its
@@ -548,8 +559,9 @@ impl Simulator {
             let d = self.joint_drive(i);
             let dof = self.model.idx_v[i];
             self.rhs[dof] += d.tau - dt * d.k * self.v[dof];
-            // The armature is already on the diagonal: crba adds it.
-            self.h[(dof, dof)] += dt * d.d + dt * dt * d.k;
+            // The armature is already on the diagonal: crba adds it; an engaged
+            // motor side behind a backlash joins it.
+            self.h[(dof, dof)] += dt * d.d + dt * dt * d.k + self.engaged_gear(i).0;
         }
         if self.config.ground {
             self.add_contacts(dt);
