@@ -336,7 +336,8 @@ pub fn identify_with(
     }
     for (k, &i) in nonsmooth.iter().enumerate() {
         sd[i] = nonsmooth_sd[k];
-        if !(sd[i] < UNDETERMINED_RELATIVE_SD * params.values[i]) {
+        // An infinite or NaN deviation (a flat cost) counts as not determined.
+        if sd[i].is_nan() || sd[i] >= UNDETERMINED_RELATIVE_SD * params.values[i] {
             undetermined.push(PARAM_NAMES[i]);
         }
     }

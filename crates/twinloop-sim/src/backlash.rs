@@ -86,7 +86,11 @@ pub fn output_drive(
     } else {
         0.0
     };
-    if gear.engaged != 0.0 { m } else { Drive::default() }
+    if gear.engaged != 0.0 {
+        m
+    } else {
+        Drive::default()
+    }
 }
 
 /// After the step, with the output at its new `q`, `v`: an engaged motor side
