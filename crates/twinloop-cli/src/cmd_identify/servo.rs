@@ -70,6 +70,18 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         std::fs::write(out, text).map_err(|e| CliError::io(out, e))?;
         return Ok(Outcome::Ok);
     }
+    let mut options = IdentifyOptions::default();
+    for name in &a.fit {
+        let i = NONSMOOTH
+            .into_iter()
+            .find(|&i| PARAM_NAMES[i] == name.trim())
+            .ok_or_else(|| {
+                CliError::new(format!(
+                    "--fit {name:?}: backlash, sensing_delay or bus_delay"
+                ))
+            })?;
+        options.nonsmooth.push(i);
+    }
     if a.holdout_fraction >= 1.0 {
         return Err(CliError::new("--holdout-fraction must be below 1"));
     }
@@ -100,18 +112,6 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         None => datasheet::defaults(servo, level),
     };
     let t0 = Instant::now();
-    let mut options = IdentifyOptions::default();
-    for name in &a.fit {
-        let i = NONSMOOTH
-            .into_iter()
-            .find(|&i| PARAM_NAMES[i] == name.trim())
-            .ok_or_else(|| {
-                CliError::new(format!(
-                    "--fit {name:?}: backlash, sensing_delay or bus_delay"
-                ))
-            })?;
-        options.nonsmooth.push(i);
-    }
     let id = identify_with(&logs, &holdout, &load, &start, a.holdout_fraction, &options)?;
     let seconds = t0.elapsed().as_secs_f64();
     if let Some(out) = &a.out {
