@@ -6,7 +6,8 @@ use crate::error::ActuatorError;
 use crate::firmware::Firmware;
 use crate::friction::budget;
 use crate::motor::motor_torque;
-use crate::params::{FRICTION_VISCOUS, ServoParams};
+use crate::params::{BACKLASH, BUS_DELAY, FRICTION_VISCOUS, SENSING_DELAY, ServoParams};
+use std::collections::VecDeque;
 use std::path::Path;
 
 /// Standard gravity, m/s^2 (the workspace's one value, twinloop_description::GRAVITY).
@@ -86,21 +87,39 @@ impl Pendulum {
 }
 
 /// A servo on the bench: parameters, firmware, and the state.
+///
+/// With a `backlash` the gearbox's last gear (the motor side, angle `qm` at the
+/// output's scale, inertia the armature) and the output (angle `q`, the load) are two
+/// bodies: inside the dead band each moves on its own; at its edge they move as one
+/// while the motor side pushes the load, and meet in an inelastic impact. The encoder
+/// is on the output (as on the Dynamixels: potentiometer or magnet on the output
+/// shaft), so the loop sees the load's angle.
 #[derive(Debug, Clone)]
 pub struct Bench {
     pub params: ServoParams,
     pub load: Pendulum,
     pub firmware: Firmware,
-    /// Goal Position, rad (already a whole number of counts when it came over a bus).
+    /// Goal Position in force, rad (already a whole number of counts when it came over
+    /// a bus).
     pub goal: f64,
     pub torque_on: bool,
     /// Output angle (rad) and speed (rad/s).
     pub q: f64,
     pub v: f64,
+    /// The motor side's angle at the output's scale and speed (equal to `q`, `v`
+    /// where the gap is closed).
+    pub qm: f64,
+    pub vm: f64,
+    /// The bench's clock, s.
+    pub t: f64,
     /// Last step's PWM duty, motor current (A) and motor torque (N m).
     pub duty: f64,
     pub current: f64,
     pub motor_torque: f64,
+    /// (time, output angle) of the last `sensing_delay` seconds, oldest first.
+    history: VecDeque<(f64, f64)>,
+    /// Goals sent but not yet in force: (time they take effect, goal).
+    pending: VecDeque<(f64, f64)>,
 }
 
 impl Bench {
@@ -113,59 +132,192 @@ impl Bench {
             torque_on: false,
             q: 0.0,
             v: 0.0,
+            qm: 0.0,
+            vm: 0.0,
+            t: 0.0,
             duty: 0.0,
             current: 0.0,
             motor_torque: 0.0,
+            history: VecDeque::with_capacity(256),
+            pending: VecDeque::with_capacity(16),
         }
+    }
+
+    /// Put the output at `q`, `v` with the gap closed and no history (a log's first
+    /// row).
+    pub fn place(&mut self, q: f64, v: f64) {
+        self.q = q;
+        self.v = v;
+        self.qm = q;
+        self.vm = v;
+        self.history.clear();
+        self.pending.clear();
+    }
+
+    /// A Goal Position sent now: in force after the `bus_delay`.
+    pub fn send_goal(&mut self, goal: f64) {
+        let delay = self.params.values[BUS_DELAY];
+        if delay <= 0.0 {
+            self.goal = goal;
+        } else {
+            self.pending.push_back((self.t + delay, goal));
+        }
+    }
+
+    /// The output angle `sensing_delay` ago (linear between the bench's steps), rad:
+    /// what the loop and Present Position see before the encoder's counts.
+    pub fn sensed_angle(&self) -> f64 {
+        let delay = self.params.values[SENSING_DELAY];
+        if delay <= 0.0 {
+            return self.q;
+        }
+        let at = self.t - delay;
+        let mut later = (self.t, self.q);
+        for &(t, q) in self.history.iter().rev() {
+            if t <= at {
+                let w = if later.0 > t {
+                    (at - t) / (later.0 - t)
+                } else {
+                    0.0
+                };
+                return q + w * (later.1 - q);
+            }
+            later = (t, q);
+        }
+        // Younger than the delay: the oldest angle known.
+        later.1
     }
 
     /// Present Position as the encoder gives it: a whole number of counts, rad.
     pub fn sensed_position(&self) -> f64 {
         let r = self.params.servo.resolution();
-        (self.q / r).round() * r
+        (self.sensed_angle() / r).round() * r
     }
 
-    /// Advance `dt` seconds (one firmware cycle): the loop acts on the counts, the
-    /// motor drives through the back-EMF, friction takes what it can to stop the
-    /// output (`budget`), the rest moves the pendulum. Semi-implicit Euler, implicit
-    /// in the linear damping (back-EMF and viscous), so a stiff servo stays stable.
+    /// Advance `dt` seconds (one firmware cycle): goals whose bus delay has passed
+    /// come into force, the loop acts on the sensed counts, the motor drives through
+    /// the back-EMF, friction takes what it can to stop the motor side (`budget`),
+    /// and the load moves with it or, inside the backlash, on its own. Semi-implicit
+    /// Euler, implicit in the linear damping (back-EMF and viscous), so a stiff servo
+    /// stays stable.
     pub fn step(&mut self, dt: f64) {
-        let p = &self.params;
-        let r = p.servo.resolution();
-        let (kt, res, volts) = (p.kt(), p.resistance(), p.voltage);
+        // A goal coming into force inside the step splits it there, so the response
+        // moves continuously with the bus delay (LM fits it).
+        if let Some(&(t, _)) = self.pending.front() {
+            let into = t - self.t;
+            if into > 1e-9 && into < dt - 1e-9 {
+                self.cycle(into);
+                self.cycle(dt - into);
+                return;
+            }
+        }
+        self.cycle(dt);
+    }
+
+    fn cycle(&mut self, dt: f64) {
+        while let Some(&(t, g)) = self.pending.front() {
+            if t > self.t + 1e-9 {
+                break;
+            }
+            self.goal = g;
+            self.pending.pop_front();
+        }
+        let r = self.params.servo.resolution();
         self.duty = if self.torque_on {
-            let error = (self.goal / r).round() - (self.q / r).round();
+            let error = (self.goal / r).round() - (self.sensed_angle() / r).round();
             self.firmware.duty(error)
         } else {
             0.0
         };
-        // Torque off: the driver's bridge is open, no current flows, no back-EMF brake.
-        let emf_damping = if self.torque_on { kt * kt / res } else { 0.0 };
-        let drive = if self.torque_on {
-            kt / res * self.duty * volts
-        } else {
+        let half = 0.5 * self.params.values[BACKLASH];
+        let delta = self.qm - self.q;
+        // Engaged: the gap is closed on one side (within a nanoradian).
+        let side = if half <= 0.0 {
             0.0
-        };
-        let damping = emf_damping + p.values[FRICTION_VISCOUS];
-        let inertia = p.armature() + self.load.inertia();
-        let h = inertia + dt * damping;
-        let free = (inertia * self.v + dt * (drive + self.load.gravity_torque(self.q))) / h;
-        let (tau_m, _) = if self.torque_on {
-            motor_torque(kt, res, volts, self.duty, self.v)
+        } else if delta >= half - 1e-9 {
+            1.0
+        } else if delta <= -half + 1e-9 {
+            -1.0
         } else {
-            (0.0, 0.0)
+            f64::NAN
         };
-        let limit = budget(&p.values, self.v, tau_m);
-        let stop = free * h / dt;
-        let friction = stop.clamp(-limit, limit);
-        self.v = free - dt * friction / h;
-        self.q += dt * self.v;
+        let mut moved = false;
+        if !side.is_nan() {
+            let (v, vm) = (self.v, self.vm);
+            let inertia = self.params.armature() + self.load.inertia();
+            let v_new = self.motor_side_step(dt, inertia, self.load.gravity_torque(self.q));
+            // The torque the motor side puts on the load must push it, not pull.
+            let push = self.load.inertia() * (v_new - v) / dt - self.load.gravity_torque(self.q);
+            if side == 0.0 || push * side >= 0.0 {
+                self.v = v_new;
+                self.vm = v_new;
+                self.q += dt * v_new;
+                self.qm = self.q + side * half;
+                moved = true;
+            } else {
+                self.vm = vm; // undo: the gap opens this step
+            }
+        }
+        if !moved {
+            // Apart: the motor side alone on its armature, the load alone under gravity.
+            let vm_new = self.motor_side_step(dt, self.params.armature(), 0.0);
+            self.vm = vm_new;
+            self.v += dt * self.load.gravity_torque(self.q) / self.load.inertia();
+            self.qm += dt * self.vm;
+            self.q += dt * self.v;
+            let delta = self.qm - self.q;
+            if delta.abs() >= half {
+                // The gap closes: an inelastic impact.
+                let (jm, jl) = (self.params.armature(), self.load.inertia());
+                let common = (jm * self.vm + jl * self.v) / (jm + jl);
+                self.vm = common;
+                self.v = common;
+                self.qm = self.q + half * delta.signum();
+            }
+        }
         let (tau, current) = if self.torque_on {
-            motor_torque(kt, res, volts, self.duty, self.v)
+            let p = &self.params;
+            motor_torque(p.kt(), p.resistance(), p.voltage, self.duty, self.vm)
         } else {
             (0.0, 0.0)
         };
         self.motor_torque = tau;
         self.current = current;
+        self.t += dt;
+        if self.params.values[SENSING_DELAY] > 0.0 {
+            self.history.push_back((self.t, self.q));
+            let keep = self.t - self.params.values[SENSING_DELAY] - 2.0 * dt;
+            while self.history.len() > 2 && self.history[1].0 < keep {
+                self.history.pop_front();
+            }
+        }
+    }
+
+    /// The motor side's new speed after `dt` with `inertia` on it (armature, plus
+    /// the load where engaged) and an external torque `external`: the drive through
+    /// the back-EMF, the friction budget stopping what it can (BAM's formulation),
+    /// implicit in the linear damping. Writes `self.vm`.
+    fn motor_side_step(&mut self, dt: f64, inertia: f64, external: f64) -> f64 {
+        let p = &self.params;
+        let (kt, res, volts) = (p.kt(), p.resistance(), p.voltage);
+        // Torque off: the driver's bridge is open, no current flows, no back-EMF brake.
+        let (emf_damping, drive) = if self.torque_on {
+            (kt * kt / res, kt / res * self.duty * volts)
+        } else {
+            (0.0, 0.0)
+        };
+        let damping = emf_damping + p.values[FRICTION_VISCOUS];
+        let h = inertia + dt * damping;
+        let free = (inertia * self.vm + dt * (drive + external)) / h;
+        let tau_m = if self.torque_on {
+            motor_torque(kt, res, volts, self.duty, self.vm).0
+        } else {
+            0.0
+        };
+        let limit = budget(&p.values, self.vm, tau_m);
+        let stop = free * h / dt;
+        let friction = stop.clamp(-limit, limit);
+        self.vm = free - dt * friction / h;
+        self.vm
     }
 }

@@ -24,7 +24,7 @@ pub fn defaults(servo: ServoType, level: ModelLevel) -> ServoParams {
     let no_load_torque = kt / resistance * (r.voltage - kt * r.no_load_speed);
     let viscous = ((no_load_torque - friction_base) / r.no_load_speed).max(0.0);
     let armature = 0.012 * (r.gear_ratio / 200.0).powi(2);
-    let mut values = [0.0; 8];
+    let mut values = [0.0; N_PARAMS];
     values[KT] = kt;
     values[RESISTANCE] = resistance;
     values[ARMATURE] = armature;

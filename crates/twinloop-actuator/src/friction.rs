@@ -8,7 +8,7 @@ use crate::params::*;
 /// `F = friction_base + load_friction |tau_m| + friction_stribeck exp(-(v / stribeck_velocity)^2)`.
 /// Load and Stribeck terms only on the rungs that have them; the Stribeck shape's
 /// exponent is fixed at 2, where BAM fits it.
-pub fn budget(values: &[f64; 8], v: f64, motor_torque: f64) -> f64 {
+pub fn budget(values: &[f64; N_PARAMS], v: f64, motor_torque: f64) -> f64 {
     let mut f = values[FRICTION_BASE] + values[LOAD_FRICTION] * motor_torque.abs();
     let vs = values[STRIBECK_VELOCITY];
     if values[FRICTION_STRIBECK] > 0.0 && vs > 0.0 {

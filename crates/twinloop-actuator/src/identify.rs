@@ -6,10 +6,14 @@
 //! what the data cannot determine (the Jacobian's weak directions).
 
 use crate::bench::Pendulum;
+use crate::cmaes::{CmaOptions, cmaes};
 use crate::error::ActuatorError;
+use crate::lm::LmResult;
 use crate::lm::{LmOptions, levenberg_marquardt};
 use crate::log::ServoLog;
-use crate::params::{FRICTION_VISCOUS, KT, PARAM_NAMES, RESISTANCE, ServoParams};
+use crate::params::{
+    BACKLASH, FRICTION_VISCOUS, KT, NONSMOOTH, PARAM_NAMES, RESISTANCE, ServoParams,
+};
 use crate::replay::replay;
 use nalgebra::DMatrix;
 use std::ops::Range;
@@ -53,8 +57,51 @@ pub struct Identification {
     /// `friction_viscous` is held at 0 (the back-EMF takes all the damping) and both
     /// combinations are reported here.
     pub combinations: Vec<(&'static str, f64, f64)>,
+    /// LM iterations and simulations, over every LM run of the fit.
     pub iterations: usize,
     pub evaluations: usize,
+    /// Parameters fitted by CMA-ES (the backlash, when asked), not in `correlation`.
+    pub nonsmooth: Vec<usize>,
+    /// Simulations CMA-ES ran for them.
+    pub nonsmooth_evaluations: usize,
+}
+
+/// What [`identify_with`] fits beyond the rung's smooth parameters.
+#[derive(Debug, Clone)]
+pub struct IdentifyOptions {
+    /// Non-smooth parameters to fit by CMA-ES (of [`NONSMOOTH`]); the others keep
+    /// the start's values.
+    pub nonsmooth: Vec<usize>,
+    /// CMA-ES / LM alternations.
+    pub rounds: usize,
+    /// Simulations per CMA-ES round.
+    pub cma_evaluations: usize,
+}
+
+impl Default for IdentifyOptions {
+    fn default() -> Self {
+        IdentifyOptions {
+            nonsmooth: Vec::new(),
+            rounds: 2,
+            cma_evaluations: 120,
+        }
+    }
+}
+
+/// The typical size of a non-smooth parameter (CMA-ES works in units of it).
+fn nonsmooth_scale(i: usize) -> f64 {
+    match i {
+        BACKLASH => 0.01,
+        _ => 0.002,
+    }
+}
+
+/// The largest value the fit looks at.
+fn nonsmooth_bound(i: usize) -> f64 {
+    match i {
+        BACKLASH => 0.06,
+        _ => 0.02,
+    }
 }
 
 /// Which rows of which log.
@@ -68,6 +115,7 @@ struct Segment {
 
 /// Fit `start`'s rung to the first `1 - holdout_fraction` of each of `logs` (all of
 /// them if `holdout` is not empty), held-out error on the rest and on `holdout`.
+/// Backlash and delays keep the start's values.
 pub fn identify(
     logs: &[ServoLog],
     holdout: &[ServoLog],
@@ -75,6 +123,34 @@ pub fn identify(
     start: &ServoParams,
     holdout_fraction: f64,
 ) -> Result<Identification, ActuatorError> {
+    identify_with(
+        logs,
+        holdout,
+        load,
+        start,
+        holdout_fraction,
+        &IdentifyOptions::default(),
+    )
+}
+
+/// [`identify`], also fitting `options.nonsmooth` (of backlash and the delays): the
+/// backlash by CMA-ES, alternating with LM on the rest; the delays by LM with the
+/// rung's parameters (they move the response continuously).
+pub fn identify_with(
+    logs: &[ServoLog],
+    holdout: &[ServoLog],
+    load: &Pendulum,
+    start: &ServoParams,
+    holdout_fraction: f64,
+    options: &IdentifyOptions,
+) -> Result<Identification, ActuatorError> {
+    if let Some(&i) = options.nonsmooth.iter().find(|i| !NONSMOOTH.contains(i)) {
+        return Err(ActuatorError::new(
+            "",
+            PARAM_NAMES.get(i).copied().unwrap_or("?"),
+            "not a non-smooth parameter (backlash, sensing_delay, bus_delay)",
+        ));
+    }
     if logs.is_empty() {
         return Err(ActuatorError::new("", "--data", "no log to fit"));
     }
@@ -125,10 +201,23 @@ pub fn identify(
         fitted.retain(|&i| i != FRICTION_VISCOUS);
         params.values[FRICTION_VISCOUS] = 0.0;
     }
-    let x0: Vec<f64> = fitted
+    // The delays move the response continuously (the sensed angle is interpolated, a
+    // goal comes into force inside a step): LM fits them, from 1 ms where the start
+    // has none. The backlash's dead band and impacts are not smooth: CMA-ES.
+    let nonsmooth: Vec<usize> = options
+        .nonsmooth
         .iter()
-        .map(|&i| params.values[i].max(1e-6).ln())
+        .copied()
+        .filter(|&i| i == BACKLASH)
         .collect();
+    for &i in &options.nonsmooth {
+        if i != BACKLASH {
+            fitted.push(i);
+            if params.values[i] <= 0.0 {
+                params.values[i] = 1e-3;
+            }
+        }
+    }
     let sd_q = start.servo.resolution() / 12f64.sqrt();
     let m: usize = fit_segments
         .iter()
@@ -141,40 +230,80 @@ pub fn identify(
         .max()
         .unwrap_or(0);
     let (mut qb, mut cb) = (vec![0.0; longest], vec![0.0; longest]);
-    let mut trial = params.clone();
-    let result = levenberg_marquardt(
-        &x0,
-        m,
-        |x, out| {
-            for (k, &i) in fitted.iter().enumerate() {
-                trial.values[i] = x[k].exp();
-            }
-            let mut o = 0;
-            for s in &fit_segments {
-                let l = &logs[s.log];
-                let n = s.rows.len();
-                replay(&trial, load, l, s.rows.clone(), &mut qb[..n], &mut cb[..n]);
-                for (j, r) in s.rows.clone().enumerate() {
-                    out[o] = (qb[j] - l.q[r]) / sd_q;
-                    o += 1;
-                }
-                if let (true, Some(c)) = (s.current, &l.current) {
-                    for (j, r) in s.rows.clone().enumerate() {
-                        // The first row has no model current yet.
-                        out[o] = if j == 0 {
-                            0.0
-                        } else {
-                            (cb[j] - c[r]) / CURRENT_SD
-                        };
-                        o += 1;
+    let mut out = vec![0.0; m];
+    let mut fit = Fit {
+        logs,
+        load,
+        segments: &fit_segments,
+        sd_q,
+        iterations: 0,
+        evaluations: 0,
+    };
+    let mut result = fit.lm(&mut params, &fitted, &mut qb, &mut cb);
+    let mut nonsmooth_evaluations = 0;
+    let mut nonsmooth_sd = vec![0.0; nonsmooth.len()];
+    if !nonsmooth.is_empty() {
+        // Alternate: CMA-ES on the non-smooth parameters with the smooth ones held,
+        // then LM on the smooth ones with the non-smooth held.
+        for round in 0..options.rounds.max(1) {
+            let scale: Vec<f64> = nonsmooth.iter().map(|&i| nonsmooth_scale(i)).collect();
+            let x0: Vec<f64> = options
+                .nonsmooth
+                .iter()
+                .zip(&scale)
+                .map(|(&i, s)| params.values[i] / s)
+                .collect();
+            let upper: Vec<f64> = options
+                .nonsmooth
+                .iter()
+                .zip(&scale)
+                .map(|(&i, s)| nonsmooth_bound(i) / s)
+                .collect();
+            let lower = vec![0.0; x0.len()];
+            let mut trial = params.clone();
+            let r = cmaes(
+                |x| {
+                    for (k, &i) in nonsmooth.iter().enumerate() {
+                        trial.values[i] = x[k] * scale[k];
                     }
-                }
+                    fit.cost(&trial, &mut qb, &mut cb, &mut out)
+                },
+                &x0,
+                &lower,
+                &upper,
+                &CmaOptions {
+                    sigma: 0.3,
+                    max_evaluations: options.cma_evaluations,
+                    tolerance: 1e-3,
+                    seed: 1 + round as u64,
+                },
+            );
+            nonsmooth_evaluations += r.evaluations;
+            for (k, &i) in nonsmooth.iter().enumerate() {
+                params.values[i] = r.x[k] * scale[k];
             }
-        },
-        &LmOptions::default(),
-    );
-    for (k, &i) in fitted.iter().enumerate() {
-        params.values[i] = result.x[k].exp();
+            result = fit.lm(&mut params, &fitted, &mut qb, &mut cb);
+        }
+        // One standard deviation from the cost's curvature along each (the Gauss-Newton
+        // J^T J of a smooth model is the curvature of half the squared residuals).
+        let s2 = result.residuals.norm_squared() / m.saturating_sub(fitted.len()).max(1) as f64;
+        let c0 = fit.cost(&params, &mut qb, &mut cb, &mut out);
+        for (k, &i) in nonsmooth.iter().enumerate() {
+            let h = (0.1 * params.values[i]).max(0.02 * nonsmooth_scale(i));
+            let mut t = params.clone();
+            t.values[i] = params.values[i] + h;
+            let up = fit.cost(&t, &mut qb, &mut cb, &mut out);
+            t.values[i] = (params.values[i] - h).max(0.0);
+            let hd = params.values[i] - t.values[i];
+            let down = fit.cost(&t, &mut qb, &mut cb, &mut out);
+            // Second difference on a possibly uneven stencil.
+            let curvature = 2.0 * ((up - c0) / h + (down - c0) / hd.max(1e-300)) / (h + hd);
+            nonsmooth_sd[k] = if curvature > 0.0 && hd > 0.0 {
+                (s2 / curvature).sqrt()
+            } else {
+                f64::INFINITY
+            };
+        }
     }
     // Position residual RMS, mrad.
     let (mut sq, mut count, mut o) = (0.0, 0usize, 0usize);
@@ -193,7 +322,7 @@ pub fn identify(
     let (heldout_rms_mrad, heldout_mae_mrad, heldout_rows) =
         heldout_error(&params, load, &held, &mut qb, &mut cb);
     let stats = uncertainty(&result.jacobian, &result.residuals, &result.x, fitted.len());
-    let mut sd = [0.0; 8];
+    let mut sd = [0.0; crate::params::N_PARAMS];
     let mut undetermined = Vec::new();
     if !senses_current {
         undetermined.extend(["kt", "resistance", "friction_viscous"]);
@@ -202,6 +331,13 @@ pub fn identify(
         // d p = p d(ln p).
         sd[i] = params.values[i] * stats.sd_log[k];
         if stats.sd_log[k] > UNDETERMINED_RELATIVE_SD && !undetermined.contains(&PARAM_NAMES[i]) {
+            undetermined.push(PARAM_NAMES[i]);
+        }
+    }
+    for (k, &i) in nonsmooth.iter().enumerate() {
+        sd[i] = nonsmooth_sd[k];
+        // An infinite or NaN deviation (a flat cost) counts as not determined.
+        if sd[i].is_nan() || sd[i] >= UNDETERMINED_RELATIVE_SD * params.values[i] {
             undetermined.push(PARAM_NAMES[i]);
         }
     }
@@ -232,9 +368,100 @@ pub fn identify(
         singular_values: stats.singular_values,
         undetermined,
         weakest_direction,
-        iterations: result.iterations,
-        evaluations: result.evaluations,
+        iterations: fit.iterations,
+        evaluations: fit.evaluations,
+        nonsmooth_evaluations,
+        nonsmooth,
     })
+}
+
+/// The fit's data: what the residuals compare.
+struct Fit<'a> {
+    logs: &'a [ServoLog],
+    load: &'a Pendulum,
+    segments: &'a [Segment],
+    sd_q: f64,
+    /// LM iterations and simulations over every LM run.
+    iterations: usize,
+    evaluations: usize,
+}
+
+impl Fit<'_> {
+    /// The weighted residuals of `trial` into `out`: positions over the encoder's
+    /// quantisation deviation, currents over [`CURRENT_SD`].
+    fn residuals(&self, trial: &ServoParams, qb: &mut [f64], cb: &mut [f64], out: &mut [f64]) {
+        let mut o = 0;
+        for s in self.segments {
+            let l = &self.logs[s.log];
+            let n = s.rows.len();
+            replay(
+                trial,
+                self.load,
+                l,
+                s.rows.clone(),
+                &mut qb[..n],
+                &mut cb[..n],
+            );
+            for (j, r) in s.rows.clone().enumerate() {
+                out[o] = (qb[j] - l.q[r]) / self.sd_q;
+                o += 1;
+            }
+            if let (true, Some(c)) = (s.current, &l.current) {
+                for (j, r) in s.rows.clone().enumerate() {
+                    // The first row has no model current yet.
+                    out[o] = if j == 0 {
+                        0.0
+                    } else {
+                        (cb[j] - c[r]) / CURRENT_SD
+                    };
+                    o += 1;
+                }
+            }
+        }
+    }
+
+    /// Half the sum of squared residuals.
+    fn cost(&self, trial: &ServoParams, qb: &mut [f64], cb: &mut [f64], out: &mut [f64]) -> f64 {
+        self.residuals(trial, qb, cb, out);
+        0.5 * out.iter().map(|r| r * r).sum::<f64>()
+    }
+
+    /// LM over the logarithms of `fitted` from `params`' values, which it updates.
+    fn lm(
+        &mut self,
+        params: &mut ServoParams,
+        fitted: &[usize],
+        qb: &mut [f64],
+        cb: &mut [f64],
+    ) -> LmResult {
+        let m: usize = self
+            .segments
+            .iter()
+            .map(|s| s.rows.len() * if s.current { 2 } else { 1 })
+            .sum();
+        let x0: Vec<f64> = fitted
+            .iter()
+            .map(|&i| params.values[i].max(1e-6).ln())
+            .collect();
+        let mut trial = params.clone();
+        let result = levenberg_marquardt(
+            &x0,
+            m,
+            |x, out| {
+                for (k, &i) in fitted.iter().enumerate() {
+                    trial.values[i] = x[k].exp();
+                }
+                self.residuals(&trial, qb, cb, out);
+            },
+            &LmOptions::default(),
+        );
+        for (k, &i) in fitted.iter().enumerate() {
+            params.values[i] = result.x[k].exp();
+        }
+        self.iterations += result.iterations;
+        self.evaluations += result.evaluations;
+        result
+    }
 }
 
 /// Held-out RMS and MAE of the position, mrad, and the rows compared.

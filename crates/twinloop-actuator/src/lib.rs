@@ -13,6 +13,7 @@
 //!   uncertainties and what the data cannot determine.
 
 pub mod bench;
+pub mod cmaes;
 pub mod datasheet;
 pub mod error;
 pub mod excitation;
@@ -25,6 +26,7 @@ pub mod motor;
 pub mod mujoco;
 pub mod params;
 pub mod params_file;
+pub mod params_set;
 pub mod replay;
 pub mod servo_type;
 pub mod synthetic;

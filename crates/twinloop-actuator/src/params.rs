@@ -85,8 +85,14 @@ impl ModelLevel {
 /// - `friction_viscous`: viscous friction, N m s/rad;
 /// - `friction_stribeck`: extra friction at rest, N m (M2, M4);
 /// - `stribeck_velocity`: speed at which it has fallen to 1/e, rad/s (M2, M4);
-/// - `load_friction`: Coulomb friction per N m of motor torque, 1 (M3, M4).
-pub const PARAM_NAMES: [&str; 8] = [
+/// - `load_friction`: Coulomb friction per N m of motor torque, 1 (M3, M4);
+/// - `backlash`: the gearbox's dead band, full width at the output, rad (any rung; 0:
+///   none);
+/// - `sensing_delay`: how old the position is that the loop acts on and the bus
+///   reports, s (any rung);
+/// - `bus_delay`: from a Goal Position write's sending to the loop using it, s (any
+///   rung).
+pub const PARAM_NAMES: [&str; N_PARAMS] = [
     "kt",
     "resistance",
     "armature",
@@ -95,7 +101,13 @@ pub const PARAM_NAMES: [&str; 8] = [
     "friction_stribeck",
     "stribeck_velocity",
     "load_friction",
+    "backlash",
+    "sensing_delay",
+    "bus_delay",
 ];
+/// How many parameters a servo has (the friction ladder's eight, backlash and the two
+/// delays).
+pub const N_PARAMS: usize = 11;
 pub const KT: usize = 0;
 pub const RESISTANCE: usize = 1;
 pub const ARMATURE: usize = 2;
@@ -104,6 +116,15 @@ pub const FRICTION_VISCOUS: usize = 4;
 pub const FRICTION_STRIBECK: usize = 5;
 pub const STRIBECK_VELOCITY: usize = 6;
 pub const LOAD_FRICTION: usize = 7;
+pub const BACKLASH: usize = 8;
+pub const SENSING_DELAY: usize = 9;
+pub const BUS_DELAY: usize = 10;
+/// The parameters every rung may have (0: absent): the model is not smooth in them
+/// (a dead band, delays resolved to the model's step), so CMA-ES fits them.
+pub const NONSMOOTH: [usize; 3] = [BACKLASH, SENSING_DELAY, BUS_DELAY];
+/// Largest delay a file may give, s: beyond it the servo would be unusable, and the
+/// bench's history would grow without bound.
+pub const MAX_DELAY: f64 = 0.1;
 
 /// One servo's model: its type, rung, supply voltage and parameters.
 #[derive(Debug, Clone, PartialEq)]
@@ -113,9 +134,9 @@ pub struct ServoParams {
     /// Supply voltage, V (measured: Present Voltage).
     pub voltage: f64,
     /// [`PARAM_NAMES`] order; terms the rung lacks are 0.
-    pub values: [f64; 8],
+    pub values: [f64; N_PARAMS],
     /// One standard deviation per parameter, where a fit gave one.
-    pub uncertainty: Option<[f64; 8]>,
+    pub uncertainty: Option<[f64; N_PARAMS]>,
 }
 
 impl ServoParams {
@@ -149,6 +170,18 @@ impl ServoParams {
             if needs_positive && v <= 0.0 {
                 return Err(bad(name, format!("{v} must be > 0")));
             }
+            if matches!(i, SENSING_DELAY | BUS_DELAY) && v > MAX_DELAY {
+                return Err(bad(
+                    name,
+                    format!("{v} s is above the {MAX_DELAY} s a servo allows"),
+                ));
+            }
+            if i == BACKLASH && v > 0.2 {
+                return Err(bad(
+                    name,
+                    format!("{v} rad of dead band: more than 11 deg, not a servo"),
+                ));
+            }
         }
         Ok(())
     }
@@ -166,7 +199,13 @@ impl ServoParams {
             self.level.name()
         );
         let _ = writeln!(s, "[params]\nvoltage = {:?}", self.voltage);
-        let used = self.level.parameters();
+        let mut used = self.level.parameters();
+        // Backlash and delays only where the servo has them (or a fit estimated them).
+        used.extend(
+            NONSMOOTH.iter().filter(|&&i| {
+                self.values[i] != 0.0 || self.uncertainty.is_some_and(|u| u[i] != 0.0)
+            }),
+        );
         for &i in &used {
             let _ = writeln!(s, "{} = {:?}", PARAM_NAMES[i], self.values[i]);
         }

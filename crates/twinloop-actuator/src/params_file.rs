@@ -17,6 +17,9 @@ impl ServoParams {
         p.level = level;
         p.uncertainty = None;
         for i in 0..PARAM_NAMES.len() {
+            if crate::params::NONSMOOTH.contains(&i) {
+                continue; // every rung has them: kept
+            }
             let has = level.parameters().contains(&i);
             let had = self.level.parameters().contains(&i);
             p.values[i] = match (has, had) {
@@ -82,7 +85,8 @@ impl ServoParams {
             if key == "voltage" {
                 p.voltage = v;
             } else if let Some(i) = PARAM_NAMES.iter().position(|n| n == key) {
-                if !level.parameters().contains(&i) && v != 0.0 {
+                let any_rung = crate::params::NONSMOOTH.contains(&i);
+                if !any_rung && !level.parameters().contains(&i) && v != 0.0 {
                     return Err(ActuatorError::new(
                         file,
                         format!("[params] {key}"),
@@ -108,7 +112,7 @@ impl ServoParams {
             let u = u
                 .as_table()
                 .ok_or_else(|| ActuatorError::new(file, "[uncertainty]", "must be a table"))?;
-            let mut sd = [0.0; 8];
+            let mut sd = [0.0; crate::params::N_PARAMS];
             for (key, value) in u {
                 let i = PARAM_NAMES.iter().position(|n| n == key).ok_or_else(|| {
                     ActuatorError::new(file, format!("[uncertainty] {key}"), "unknown parameter")

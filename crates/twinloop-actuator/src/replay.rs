@@ -12,8 +12,9 @@ pub const MAX_STEP: f64 = 5e-4;
 
 /// Simulate rows `rows` of `log` with `params` on `load`: the state starts at the
 /// first row's measured position and speed; row `i`'s goal and registers act from
-/// its `t_goal` (between row `i-1`'s time and row `i`'s) on. Writes the model's position and current at each
-/// row into `q` and `current` (same length as `rows`).
+/// its `t_goal` (between row `i-1`'s time and row `i`'s) plus the bus delay on.
+/// Writes the model's sensed position (as old as the sensing delay, not yet rounded
+/// to counts) and current at each row into `q` and `current` (same length as `rows`).
 pub fn replay(
     params: &ServoParams,
     load: &Pendulum,
@@ -24,8 +25,7 @@ pub fn replay(
 ) {
     let mut b = Bench::new(params.clone(), *load);
     let start = rows.start;
-    b.q = log.q[start];
-    b.v = log.v[start];
+    b.place(log.q[start], log.v[start]);
     b.torque_on = true;
     b.goal = log.goal[start];
     b.firmware.registers = log.firmware[start];
@@ -34,10 +34,10 @@ pub fn replay(
     for (k, i) in rows.clone().enumerate().skip(1) {
         let switch = log.t_goal[i].clamp(log.t[i - 1], log.t[i]);
         advance(&mut b, switch - log.t[i - 1]);
-        b.goal = log.goal[i];
+        b.send_goal(log.goal[i]);
         b.firmware.registers = log.firmware[i];
         advance(&mut b, log.t[i] - switch);
-        q[k] = b.q;
+        q[k] = b.sensed_angle();
         current[k] = b.current;
     }
 }

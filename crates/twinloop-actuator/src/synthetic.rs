@@ -58,7 +58,7 @@ pub fn synthetic_log(
         };
         goal = q_units(g);
         regs = r;
-        b.goal = goal;
+        b.send_goal(goal);
         b.firmware.registers = regs;
         t_goal = t;
         let span = period + jitter * (2.0 * rng.next_f64() - 1.0);

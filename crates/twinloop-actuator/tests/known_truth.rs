@@ -2,7 +2,7 @@
 //! (sampled as a bus host samples), fitted from the datasheet values.
 
 use twinloop_actuator::datasheet::defaults;
-use twinloop_actuator::identify::identify;
+use twinloop_actuator::identify::{IdentifyOptions, identify, identify_with};
 use twinloop_actuator::params::*;
 use twinloop_actuator::synthetic::synthetic_log;
 use twinloop_actuator::{Excitation, ModelLevel, Pendulum, ServoType};
@@ -138,4 +138,88 @@ fn richer_rungs_are_needed_when_the_servo_has_their_friction() {
     // than twice as much (BAM: the richer models halve the error).
     assert!(heldout[3] < 1e3 * servo.resolution(), "{heldout:?}");
     assert!(heldout[0] > 2.0 * heldout[3], "{heldout:?}");
+}
+
+/// Backlash (non-smooth: CMA-ES, alternating with LM) and the two delays (LM, with
+/// the m1 parameters) come back from the excitation's slow back-and-forth through
+/// zero load and its steps, on an XM430 (position and current). On an RX-28
+/// (positions only, 5 mrad counts) the alternation stops in a local minimum
+/// (docs/servo-models.md): not asserted here.
+#[test]
+fn backlash_and_delays_recovered() {
+    let load = Pendulum {
+        mass: 0.5,
+        length: 0.15,
+        arm_inertia: 0.002,
+    };
+    let servo = ServoType::Xm430W350;
+    let mut truth = truth(servo, ModelLevel::M1, 40);
+    let mut rng = SplitMix64(90);
+    truth.values[BACKLASH] = rng.uniform(0.3, 0.8).to_radians();
+    truth.values[SENSING_DELAY] = rng.uniform(0.5e-3, 2e-3);
+    truth.values[BUS_DELAY] = rng.uniform(0.5e-3, 3e-3);
+    let log = synthetic_log(
+        &truth,
+        &load,
+        &Excitation::standard(servo, 1.0),
+        1e-3,
+        2e-4,
+        11,
+    );
+    let start = defaults(servo, ModelLevel::M1);
+    let t0 = std::time::Instant::now();
+    let options = IdentifyOptions {
+        nonsmooth: NONSMOOTH.to_vec(),
+        ..Default::default()
+    };
+    let id = identify_with(
+        std::slice::from_ref(&log),
+        &[],
+        &load,
+        &start,
+        0.25,
+        &options,
+    )
+    .unwrap();
+    let took = t0.elapsed().as_secs_f64();
+    // Without them, the same rung misses by more.
+    let plain = identify(&[log], &[], &load, &start, 0.25).unwrap();
+    let sd = id.params.uncertainty.unwrap();
+    eprintln!(
+        "{servo}: {took:.2} s ({} LM iterations, {} LM simulations, {} CMA-ES simulations), held-out {:.3} mrad (without backlash and delays {:.3}), undetermined {:?}",
+        id.iterations,
+        id.evaluations,
+        id.nonsmooth_evaluations,
+        id.heldout_rms_mrad,
+        plain.heldout_rms_mrad,
+        id.undetermined
+    );
+    for i in ModelLevel::M1.parameters().into_iter().chain(NONSMOOTH) {
+        eprintln!(
+            "  {:18} truth {:.6} fit {:.6} sd {:.6} err {:+.2} %",
+            PARAM_NAMES[i],
+            truth.values[i],
+            id.params.values[i],
+            sd[i],
+            100.0 * (id.params.values[i] / truth.values[i] - 1.0)
+        );
+    }
+    assert!(
+        id.heldout_rms_mrad < 1e3 * servo.resolution(),
+        "held-out {} mrad",
+        id.heldout_rms_mrad
+    );
+    assert!(id.heldout_rms_mrad < plain.heldout_rms_mrad);
+    assert!(id.undetermined.is_empty(), "{:?}", id.undetermined);
+    for i in ModelLevel::M1.parameters().into_iter().chain(NONSMOOTH) {
+        let err = (id.params.values[i] / truth.values[i] - 1.0).abs();
+        assert!(
+            err < 0.05 || (id.params.values[i] - truth.values[i]).abs() < 3.0 * sd[i],
+            "{}: {} vs {} (sd {})",
+            PARAM_NAMES[i],
+            id.params.values[i],
+            truth.values[i],
+            sd[i]
+        );
+    }
 }

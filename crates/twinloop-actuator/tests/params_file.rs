@@ -1,6 +1,7 @@
 //! The parameter and load files: round trip, and errors naming file and field.
 
 use twinloop_actuator::datasheet::defaults;
+use twinloop_actuator::params::N_PARAMS;
 use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType};
 
 #[test]
@@ -8,7 +9,7 @@ fn files_round_trip_and_errors_name_the_field() {
     for servo in ServoType::ALL {
         for level in ModelLevel::ALL {
             let mut p = defaults(servo, level);
-            p.uncertainty = Some([0.5; 8].map(|x| x * 1e-3));
+            p.uncertainty = Some([0.5; N_PARAMS].map(|x| x * 1e-3));
             let back = ServoParams::parse(&p.to_toml("a comment"), "p.toml").unwrap();
             // Terms the rung lacks are neither written nor read back.
             let mut want = p.clone();
@@ -21,7 +22,18 @@ fn files_round_trip_and_errors_name_the_field() {
             assert_eq!(back, want, "{servo} {level:?}");
         }
     }
+    // Backlash and delays: on any rung, written where not 0, read back.
+    let mut p = defaults(ServoType::Rx28, ModelLevel::M1);
+    p.values[twinloop_actuator::params::BACKLASH] = 0.0087;
+    p.values[twinloop_actuator::params::BUS_DELAY] = 0.002;
+    let text = p.to_toml("");
+    assert!(text.contains("backlash = 0.0087") && !text.contains("sensing_delay"));
+    assert_eq!(ServoParams::parse(&text, "p.toml").unwrap(), p);
     let err = |text: &str| ServoParams::parse(text, "p.toml").unwrap_err().to_string();
+    assert!(
+        err("[servo]\nmodel = \"RX-28\"\n[params]\nbus_delay = 0.5\n")
+            .starts_with("p.toml: [params] bus_delay: 0.5 s is above the 0.1 s")
+    );
     assert_eq!(
         err("[servo]\nmodel = \"RX-99\"\n[params]\n"),
         "p.toml: [servo] model: unknown servo \"RX-99\" (known: RX-28, RX-64, MX-64(2.0), XM430-W350)"

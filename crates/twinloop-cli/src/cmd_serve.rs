@@ -84,10 +84,13 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     /// and arm_inertia (kg m^2, the arm alone about the axis)
     #[arg(long, value_name = "LOAD.toml")]
     pub load: Option<PathBuf>,
-    /// The bench servo's parameters (`identify servo --out` or `--defaults`; default:
-    /// the datasheet's)
-    #[arg(long, value_name = "FILE.toml", requires = "bench")]
-    pub servo_params: Option<PathBuf>,
+    /// Servo model parameters (`identify servo --out` or `--defaults`;
+    /// docs/servo-models.md): FILE.toml for every servo of its type, or ID=FILE.toml
+    /// (bus id) or JOINT=FILE.toml for one servo, repeatable; the others keep their
+    /// datasheet's. The simulated robot's servos then run that model (drive,
+    /// back-EMF, armature, friction, backlash); with --bench, one FILE.toml
+    #[arg(long, value_name = "[ID=]FILE.toml")]
+    pub servo_params: Vec<String>,
 }
 
 /// The mapping: --map, or the built-in robot's own.
@@ -168,6 +171,11 @@ pub fn run(a: ServeArgs) -> CliResult {
     if let (true, Some(robot)) = (simulate, &robot) {
         return serve_simulated(&a, &mapping, &servos, robot);
     }
+    if !a.servo_params.is_empty() {
+        return Err(CliError::new(
+            "--servo-params sets the simulated servos: it needs --servo-model sim (or auto with a description)",
+        ));
+    }
     let bus = VirtualBus::with_tracking_model(&servos);
     serve_on(
         &a,
@@ -190,6 +198,10 @@ fn serve_simulated(
         realtime_factor: a.realtime_factor,
         catch_falls: a.catch_falls,
         ground_sink: a.ground_sink,
+        servo_params: twinloop_actuator::params_set::ServoParamsSet::read(
+            &a.servo_params,
+            "--servo-params",
+        )?,
         ..Default::default()
     };
     let mut vr = twinloop_virtual::VirtualRobot::new(robot, mapping, &options)?;
@@ -256,18 +268,19 @@ fn serve_bench(a: &ServeArgs, model: &str) -> CliResult {
         ))
     })?;
     let load = Pendulum::read(a.load.as_deref().ok_or("--bench needs --load LOAD.toml")?)?;
-    let params = match &a.servo_params {
-        Some(path) => ServoParams::read(path)?,
-        None => datasheet::defaults(servo, ModelLevel::M1),
+    let params = match a.servo_params.as_slice() {
+        [] => datasheet::defaults(servo, ModelLevel::M1),
+        [path] => ServoParams::read(Path::new(path))?,
+        _ => {
+            return Err(CliError::new(
+                "--bench serves one servo: give one --servo-params FILE.toml",
+            ));
+        }
     };
     if params.servo != servo {
         return Err(CliError::new(format!(
             "--servo-params {}: parameters of {}, but --bench is {servo}",
-            a.servo_params
-                .as_deref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default(),
-            params.servo
+            a.servo_params[0], params.servo
         )));
     }
     let mut backend = twinloop_virtual::BenchBackend::new(params, load, a.realtime_factor)

@@ -51,6 +51,12 @@ pub struct SimulateArgs {
     pub every: usize,
     #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
     pub servo: ServoChoice,
+    /// Servo model parameters (`identify servo --out` or `--defaults`;
+    /// docs/servo-models.md) in place of --servo's: FILE.toml for every joint whose
+    /// servo is of its type (a built-in robot's servo table says which; other robots:
+    /// every joint), or JOINT=FILE.toml for one joint, repeatable
+    #[arg(long, value_name = "[JOINT=]FILE.toml")]
+    pub servo_params: Vec<String>,
     /// With --view the run waits for the page to connect, then goes at real time.
     #[command(flatten)]
     pub view: crate::cmd_view::LiveViewArgs,
@@ -175,6 +181,12 @@ pub fn run(a: SimulateArgs) -> CliResult {
     }
     let (robot, _) = load_description(&a.robot)?;
     let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
+    if !a.servo_params.is_empty() {
+        let set =
+            twinloop_sim::servo_params::ServoParamsSet::read(&a.servo_params, "--servo-params")?;
+        let n = sim.apply_servo_params(&robot.name, &set, "--servo-params")?;
+        eprintln!("{n} joints run the servo model of --servo-params");
+    }
     let goals = a
         .trajectory
         .as_ref()

@@ -160,10 +160,12 @@ enum Command {
     /// robot standing on the ground, in real time; --servo-model ideal puts a stand-in
     /// (each servo tracks its goal, 50 ms lag) for protocol-only work. --bench MODEL
     /// --load LOAD.toml serves one servo (id 1) swinging a pendulum instead, moved by
-    /// the servo model of docs/servo-models.md (--servo-params FILE: its parameters).
+    /// the servo model of docs/servo-models.md. --servo-params FILE.toml (every servo
+    /// of its type) or ID=FILE.toml (one servo) runs the servos by identified models.
     ///
     /// Example:
     ///   twinloop serve --robot builtin:km20 --link /tmp/km20
+    ///   twinloop serve --robot builtin:km20 --servo-params rx28.toml --servo-params 3=knee.toml
     ///   twinloop link scan --port /tmp/km20
     ///   twinloop serve --map builtin:op3 --port tcp:127.0.0.1:5555 --no-timing
     ///   twinloop serve --bench XM430-W350 --load load.toml --link /tmp/bench

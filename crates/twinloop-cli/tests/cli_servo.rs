@@ -299,5 +299,36 @@ fn bad_inputs_name_file_and_field() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("log.csv: column \"v\": missing"), "{err}");
+    // A whole robot's files: an XM430 file for one of km20's RX servos is refused
+    // naming the servo, before anything is served; --fit names only what it knows.
+    let xm = dir.join("xm.toml");
+    let out = Command::new(bin())
+        .args(["identify", "servo", "--defaults", "XM430", "--out"])
+        .arg(&xm)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let out = Command::new(bin())
+        .args(["serve", "--robot", "builtin:km20", "--servo-params"])
+        .arg(format!("3={}", xm.display()))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("parameters of XM430-W350, but servo id 3") && err.contains("is RX-"),
+        "{err}"
+    );
+    let out = Command::new(bin())
+        .args(["identify", "servo", "--data"])
+        .arg(&log)
+        .arg("--load")
+        .arg(&load)
+        .args(["--fit", "stiction"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--fit \"stiction\""), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

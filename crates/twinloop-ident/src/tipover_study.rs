@@ -47,6 +47,9 @@ pub struct StudyOptions {
     /// protocol stiffens the servos first, as one would on the real robot: slope 2 (the
     /// stiffest RX setting) and margin 0. `None` keeps each servo's own setting.
     pub compliance_units: Option<(f64, f64)>,
+    /// Servo model parameters (docs/servo-models.md) in place of the datasheet
+    /// servos, where given.
+    pub servo_params: twinloop_sim::servo_params::ServoParamsSet,
 }
 
 impl Default for StudyOptions {
@@ -58,6 +61,7 @@ impl Default for StudyOptions {
             dt: 1e-3,
             dynamixel_encoders: false,
             compliance_units: Some((2.0, 0.0)),
+            servo_params: Default::default(),
         }
     }
 }
@@ -323,12 +327,19 @@ fn study_simulator(
     };
     let mut sim = Simulator::new(robot, cfg).map_err(err)?;
     for i in 0..sim.model.nbodies {
-        let mut servo = servo_for_joint(&robot.name, &sim.model, i);
-        if let Some((slope, margin)) = opts.compliance_units {
-            servo.compliance_slope = slope * twinloop_sim::actuator::RX_POSITION_UNIT;
-            servo.compliance_margin = margin * twinloop_sim::actuator::RX_POSITION_UNIT;
+        sim.actuators[i] = Actuator::Dynamixel(servo_for_joint(&robot.name, &sim.model, i));
+    }
+    if !opts.servo_params.is_empty() {
+        sim.apply_servo_params(&robot.name, &opts.servo_params, "--servo-params")
+            .map_err(err)?;
+    }
+    if let Some((slope, margin)) = opts.compliance_units {
+        for a in sim.actuators.iter_mut() {
+            if let Actuator::Dynamixel(servo) = a {
+                servo.compliance_slope = slope * twinloop_sim::actuator::RX_POSITION_UNIT;
+                servo.compliance_margin = margin * twinloop_sim::actuator::RX_POSITION_UNIT;
+            }
         }
-        sim.actuators[i] = Actuator::Dynamixel(servo);
     }
     if opts.dynamixel_encoders {
         sim.use_dynamixel_encoders();

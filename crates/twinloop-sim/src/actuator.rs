@@ -28,6 +28,16 @@ pub struct DynamixelServo {
     pub compliance_slope: f64,
     /// Dead band around the goal, rad (the compliance margin).
     pub compliance_margin: f64,
+    /// The gearbox's dead band, full width, rad (0: none). With one, the motor side
+    /// is a body of its own ([`crate::backlash`]).
+    pub backlash: f64,
+    /// The motor side's inertia at the output (the armature), kg m^2: used with a
+    /// backlash, where it sits on the motor side of the gap; without one the
+    /// armature is the joint's ([`crate::servo_params`]).
+    pub motor_inertia: f64,
+    /// The gearbox's Coulomb friction on the motor side, N m: used with a backlash
+    /// (without one it is the joint's friction).
+    pub gear_friction: f64,
 }
 
 /// One Dynamixel position unit of the 1024-count, 300-degree servos (RX, AX).
@@ -43,6 +53,9 @@ impl DynamixelServo {
             torque_limit: 1.0,
             compliance_slope: 32.0 * RX_POSITION_UNIT,
             compliance_margin: RX_POSITION_UNIT,
+            backlash: 0.0,
+            motor_inertia: 0.0,
+            gear_friction: 0.0,
         }
     }
 
@@ -64,6 +77,9 @@ impl DynamixelServo {
         }
     }
 
+    /// The loop's torque at output angle `q` and motor speed `v` (the same as the
+    /// output's without a backlash; with one, the torque is on the motor side and
+    /// `v` its speed: [`crate::backlash`]).
     pub fn drive(&self, goal: f64, q: f64, v: f64) -> Drive {
         let t = self.stall_torque * self.torque_limit;
         let b = self.stall_torque / self.no_load_speed;

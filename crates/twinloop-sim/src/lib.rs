@@ -14,10 +14,12 @@
 //! real robot run on it unchanged.
 
 pub mod actuator;
+pub mod backlash;
 pub mod contact;
 pub mod ltdl;
 mod robot_impl;
 pub mod sensors;
+pub mod servo_params;
 pub mod simulator;
 pub mod statics;
 
@@ -26,4 +28,5 @@ pub use actuator::{
 };
 pub use contact::{ContactParams, ContactPoint, ContactState};
 pub use sensors::{SensorState, quantize};
+pub use servo_params::servo_from_params;
 pub use simulator::{SimConfig, SimError, Simulator};

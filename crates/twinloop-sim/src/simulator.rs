@@ -198,6 +198,8 @@ pub struct Simulator {
     pub joint_damping: Vec<f64>,
     pub joint_friction: Vec<f64>,
     friction_anchor: Vec<f64>,
+    /// Per joint: the motor side of a servo with a backlash.
+    pub gears: Vec<crate::backlash::Gear>,
     /// Torque each actuator applied in the last step.
     pub applied: Vec<f64>,
     pub(crate) points: Vec<ContactPoint>,
@@ -312,6 +314,7 @@ impl Simulator {
             joint_damping,
             joint_friction,
             friction_anchor: vec![0.0; nb],
+            gears: vec![Default::default(); nb],
             applied: vec![0.0; nb],
             contacts: vec![ContactState::default(); points.len()],
             points,
@@ -376,6 +379,7 @@ impl Simulator {
                 s.theta = self.q[self.model.idx_q[i]];
                 s.theta_dot = 0.0;
             }
+            self.gears[i] = Default::default();
         }
         self.contacts
             .iter_mut()
@@ -428,6 +432,11 @@ impl Simulator {
                 k: 0.0,
                 d: 0.0,
             },
+            Actuator::Dynamixel(s) if s.backlash > 0.0 => {
+                let g = &mut self.gears[i];
+                g.sync(s, q, v);
+                crate::backlash::output_drive(s, self.goals[i], g, q, v, self.config.dt)
+            }
             Actuator::Dynamixel(s) => s.drive(self.goals[i], q, v),
             Actuator::TwoLoop(s) => s.drive(self.goals[i], q, v),
             Actuator::SeriesElastic(s) => s.drive(q, v),
@@ -440,7 +449,7 @@ impl Simulator {
         // friction cannot do.
         d.tau -= self.joint_damping[i] * v;
         d.d += self.joint_damping[i];
-        let fr = self.joint_friction[i];
+        let fr = self.joint_friction[i] + self.engaged_gear(i).1;
         if fr > 0.0 {
             // Full friction torque at 0.1 mrad of deflection; damping for a crisp stick.
             let kf = fr / 1e-4;
@@ -471,6 +480,17 @@ impl Simulator {
             d.d += self.joint_limit_damping;
         }
         d
+    }
+
+    /// The inertia and Coulomb friction of joint `i`'s motor side where it moves with
+    /// the joint (a servo with a backlash, gap closed and pushed), else zeros.
+    fn engaged_gear(&self, i: usize) -> (f64, f64) {
+        match &self.actuators[i] {
+            Actuator::Dynamixel(s) if s.backlash > 0.0 && self.gears[i].engaged != 0.0 => {
+                (s.motor_inertia, s.gear_friction)
+            }
+            _ => (0.0, 0.0),
+        }
     }
 
     /// Why the step matrix has no factor at velocity coordinate `k`: named by its
@@ -539,8 +559,9 @@ impl Simulator {
             let d = self.joint_drive(i);
             let dof = self.model.idx_v[i];
             self.rhs[dof] += d.tau - dt * d.k * self.v[dof];
-            // The armature is already on the diagonal: crba adds it.
-            self.h[(dof, dof)] += dt * d.d + dt * dt * d.k;
+            // The armature is already on the diagonal: crba adds it; an engaged
+            // motor side behind a backlash joins it.
+            self.h[(dof, dof)] += dt * d.d + dt * dt * d.k + self.engaged_gear(i).0;
         }
         if self.config.ground {
             self.add_contacts(dt);
@@ -561,11 +582,23 @@ impl Simulator {
         }
         integrate(&self.model, &self.q, &self.v, dt, &mut self.q_next);
         std::mem::swap(&mut self.q, &mut self.q_next);
-        // Series-elastic motors follow their goals with the link at its new state.
+        // Series-elastic motors and the motor sides of servos with a backlash follow
+        // their goals with the link at its new state.
         for i in 0..self.model.nbodies {
-            if let Actuator::SeriesElastic(s) = &mut self.actuators[i] {
-                let (iq, iv) = (self.model.idx_q[i], self.model.idx_v[i]);
-                s.advance_motor(self.goals[i], self.q[iq], self.v[iv], dt);
+            let (iq, iv) = (self.model.idx_q[i], self.model.idx_v[i]);
+            match &mut self.actuators[i] {
+                Actuator::SeriesElastic(s) => {
+                    s.advance_motor(self.goals[i], self.q[iq], self.v[iv], dt)
+                }
+                Actuator::Dynamixel(s) if s.backlash > 0.0 => crate::backlash::advance_motor(
+                    s,
+                    &mut self.gears[i],
+                    self.goals[i],
+                    self.q[iq],
+                    self.v[iv],
+                    dt,
+                ),
+                _ => {}
             }
         }
         self.time += dt;

@@ -61,7 +61,7 @@ impl VirtualServoBackend for BenchBackend {
     }
 
     fn set_goal_position(&mut self, _servo: usize, position: f64) {
-        self.bench.goal = position;
+        self.bench.send_goal(position);
     }
 
     /// Present Load is the RX's PWM (so the torque handed to the bus is the duty
@@ -78,7 +78,7 @@ impl VirtualServoBackend for BenchBackend {
             _ => self.bench.duty * spec.stall_torque,
         };
         ServoMeasurement {
-            position: self.bench.q,
+            position: self.bench.sensed_angle(),
             velocity: self.bench.v,
             torque,
             voltage: self.bench.params.voltage,

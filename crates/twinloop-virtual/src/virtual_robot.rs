@@ -41,6 +41,9 @@ pub struct VirtualRobotOptions {
     /// host share it) would otherwise find its robot moved on without it, which a
     /// real host on its own computer does not. `None`: the robot never waits.
     pub tether_s: Option<f64>,
+    /// The servos' model parameters (docs/servo-models.md): a file for every servo
+    /// of its type or one per servo; servos without one keep their datasheet's.
+    pub servo_params: twinloop_actuator::params_set::ServoParamsSet,
 }
 
 impl Default for VirtualRobotOptions {
@@ -53,6 +56,7 @@ impl Default for VirtualRobotOptions {
             catch_falls: false,
             ground_sink: None,
             tether_s: None,
+            servo_params: Default::default(),
         }
     }
 }
@@ -96,6 +100,7 @@ impl VirtualRobot {
         }
         let mut servos = Vec::with_capacity(mapping.joints.len());
         let mut on_bus = vec![false; nb];
+        let mut slots = Vec::with_capacity(mapping.joints.len());
         for j in &mapping.joints {
             let at = if j.line > 0 {
                 format!("{}:{}", mapping.source, j.line)
@@ -118,6 +123,19 @@ impl VirtualRobot {
                 ));
             }
             on_bus[i] = true;
+            let slot = twinloop_actuator::params_set::ServoSlot {
+                id: Some(j.id),
+                joint: &j.name,
+                servo: twinloop_actuator::ServoType::parse(j.model.name()),
+            };
+            if let Some(p) = options
+                .servo_params
+                .for_servo(slot, "--servo-params")
+                .map_err(|e| e.to_string())?
+            {
+                sim.set_servo_params(i, p);
+            }
+            slots.push(slot);
             let Actuator::Dynamixel(base) = sim.actuators[i] else {
                 unreachable!("every joint was given a servo above")
             };
@@ -131,6 +149,10 @@ impl VirtualRobot {
                 voltage: spec.voltage,
             });
         }
+        options
+            .servo_params
+            .check_used(&slots, "--servo-params")
+            .map_err(|e| e.to_string())?;
         let boards = place_boards(&mut sim, robot, mapping)?;
         let standing: Vec<f64> = (0..nb)
             .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))

@@ -68,11 +68,21 @@ pub struct TipoverArgs {
     /// Quantise the ankle readings like Dynamixel RX encoders (1024 counts over 300 deg).
     #[arg(long)]
     pub encoders: bool,
+    /// In the simulator: servo model parameters (`identify servo --out`;
+    /// docs/servo-models.md) in place of the datasheet servos: FILE.toml for every
+    /// joint whose servo is of its type, or JOINT=FILE.toml for one, repeatable
+    #[arg(long, value_name = "[JOINT=]FILE.toml")]
+    pub servo_params: Vec<String>,
 }
 
 /// Parse `KG@LINK:X,Y,Z`.
 pub fn run(a: &TipoverArgs) -> CliResult {
     if a.bus.port.is_some() || a.map.is_some() {
+        if !a.servo_params.is_empty() {
+            return Err(CliError::new(
+                "--servo-params sets the simulator's servos: over a bus, give it to `twinloop serve`",
+            ));
+        }
         return bus::run(a);
     }
     let Some(spec) = a.robot.as_deref() else {
@@ -88,6 +98,10 @@ pub fn run(a: &TipoverArgs) -> CliResult {
         dynamixel_encoders: a.encoders,
         slow_ramp_deg_per_s: a.slow_ramp,
         compliance_units: Some((a.compliance_slope, 0.0)),
+        servo_params: twinloop_sim::servo_params::ServoParamsSet::read(
+            &a.servo_params,
+            "--servo-params",
+        )?,
         ..Default::default()
     };
     eprintln!("running the four tip-overs in the simulator ...");

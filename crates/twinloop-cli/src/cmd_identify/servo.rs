@@ -7,9 +7,9 @@ use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
-use twinloop_actuator::identify::{Identification, identify};
+use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
 use twinloop_actuator::log::ServoLog;
-use twinloop_actuator::params::PARAM_NAMES;
+use twinloop_actuator::params::{NONSMOOTH, PARAM_NAMES};
 use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType, datasheet};
 
 #[derive(Args, Debug)]
@@ -36,6 +36,11 @@ pub struct ServoIdArgs {
     /// Share of each log held out when no --holdout is given
     #[arg(long, default_value_t = 0.25, value_parser = crate::common::positive)]
     pub holdout_fraction: f64,
+    /// Also fit these (comma list): backlash (by CMA-ES, alternating with LM: the dead
+    /// band is not smooth), sensing_delay, bus_delay (by LM with the rest). Needs the
+    /// excitation's slow back-and-forth through zero load (backlash) and its steps
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    pub fit: Vec<String>,
     /// Write the datasheet parameters of MODEL to --out and stop
     #[arg(long, value_name = "MODEL")]
     pub defaults: Option<String>,
@@ -64,6 +69,18 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         let text = p.to_toml("datasheet values (twinloop identify servo --defaults): docs/servo-models.md says where each comes from");
         std::fs::write(out, text).map_err(|e| CliError::io(out, e))?;
         return Ok(Outcome::Ok);
+    }
+    let mut options = IdentifyOptions::default();
+    for name in &a.fit {
+        let i = NONSMOOTH
+            .into_iter()
+            .find(|&i| PARAM_NAMES[i] == name.trim())
+            .ok_or_else(|| {
+                CliError::new(format!(
+                    "--fit {name:?}: backlash, sensing_delay or bus_delay"
+                ))
+            })?;
+        options.nonsmooth.push(i);
     }
     if a.holdout_fraction >= 1.0 {
         return Err(CliError::new("--holdout-fraction must be below 1"));
@@ -95,7 +112,7 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         None => datasheet::defaults(servo, level),
     };
     let t0 = Instant::now();
-    let id = identify(&logs, &holdout, &load, &start, a.holdout_fraction)?;
+    let id = identify_with(&logs, &holdout, &load, &start, a.holdout_fraction, &options)?;
     let seconds = t0.elapsed().as_secs_f64();
     if let Some(out) = &a.out {
         let comment = format!(
@@ -112,7 +129,9 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
 
 fn text(id: &Identification, seconds: f64) -> String {
     let p = &id.params;
-    let sd = p.uncertainty.unwrap_or([f64::NAN; 8]);
+    let sd = p
+        .uncertainty
+        .unwrap_or([f64::NAN; twinloop_actuator::params::N_PARAMS]);
     let mut s = format!(
         "{} model {} at {:.2} V, fitted in {seconds:.2} s ({} iterations)\n",
         p.servo,
@@ -120,7 +139,7 @@ fn text(id: &Identification, seconds: f64) -> String {
         p.voltage,
         id.iterations
     );
-    for &i in &id.fitted {
+    for &i in id.fitted.iter().chain(&id.nonsmooth) {
         let _ = writeln!(
             s,
             "  {:18} {:>12.6} +- {:.2e}",
@@ -150,10 +169,13 @@ fn text(id: &Identification, seconds: f64) -> String {
 
 fn to_json(id: &Identification, seconds: f64) -> serde_json::Value {
     let p = &id.params;
-    let sd = p.uncertainty.unwrap_or([f64::NAN; 8]);
+    let sd = p
+        .uncertainty
+        .unwrap_or([f64::NAN; twinloop_actuator::params::N_PARAMS]);
     let params: serde_json::Map<String, serde_json::Value> = id
         .fitted
         .iter()
+        .chain(&id.nonsmooth)
         .map(|&i| {
             (
                 PARAM_NAMES[i].to_string(),
@@ -179,6 +201,7 @@ fn to_json(id: &Identification, seconds: f64) -> serde_json::Value {
         "weakest_direction": id.weakest_direction.iter().map(|(n, w)| json!({"name": n, "weight": w})).collect::<Vec<_>>(),
         "iterations": id.iterations,
         "evaluations": id.evaluations,
+        "cmaes_evaluations": id.nonsmooth_evaluations,
         "seconds": seconds,
     })
 }
