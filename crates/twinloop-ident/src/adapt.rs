@@ -496,21 +496,9 @@ pub fn adapt(
             local = inside;
             p = pose.act_point(&local) - pf.mid;
         }
-        let merged = with_added_mass(prior, &host, ma, v3(local), true)?;
-        frame_for_feet = standing(&merged)?;
-        let out = with_added_mass(prior, &host, ma, v3(local), opts.merge)?;
-        adapted = Some((
-            out,
-            AddedMass {
-                mass: ma,
-                host,
-                position_host: v3(local),
-                position: v3(p),
-                position_sigma: [0.0; 3],
-                mass_sigma: None,
-                moved_into_outline,
-            },
-        ));
+        let placed = place(prior, host, ma, local, p, moved_into_outline, opts.merge)?;
+        frame_for_feet = placed.0;
+        adapted = Some(placed.1);
     }
     // With the mass known, place it by the fall angles themselves (fall_angle_fit.rs:
     // every link's part alike, feet and ankle crosses included), from the CoM
@@ -545,8 +533,6 @@ pub fn adapt(
         let p = pose.act_point(&local) - pf.mid;
         let ma = added.mass;
         let moved = added.moved_into_outline;
-        let out = with_added_mass(prior, &host, ma, v3(local), opts.merge)?;
-        frame_for_feet = standing(&with_added_mass(prior, &host, ma, v3(local), true)?)?;
         fit_summary = Some(FallAngleFitSummary {
             from_com_inversion: added.position_host,
             start_residual_deg: fit.start_residual_deg,
@@ -554,18 +540,9 @@ pub fn adapt(
             sideways_offset_deg: fit.sideways_offset_deg,
             iterations: fit.iterations,
         });
-        adapted = Some((
-            out,
-            AddedMass {
-                mass: ma,
-                host,
-                position_host: v3(local),
-                position: v3(p),
-                position_sigma: [0.0; 3],
-                mass_sigma: None,
-                moved_into_outline: moved,
-            },
-        ));
+        let placed = place(prior, host, ma, local, p, moved, opts.merge)?;
+        frame_for_feet = placed.0;
+        adapted = Some(placed.1);
     }
     // Uncertainty: each angle moved by the resolution, through the exact method.
     let (_, feet) = measured_com(&angles, &frame_for_feet, prior, &foot)?;
@@ -698,6 +675,32 @@ pub fn adapt(
         }
     };
     Ok(Adapted { report, robot })
+}
+
+/// The prior with `mass` at `local` on `host` (merged with `merge`), the standing
+/// frame of the merged model (the feet the exact method then uses) and the part as
+/// the report gives it (`p`: standing frame).
+fn place(
+    prior: &Description,
+    host: String,
+    mass: f64,
+    local: Vector3<f64>,
+    p: Vector3<f64>,
+    moved_into_outline: Option<f64>,
+    merge: bool,
+) -> Result<(Frame, (Description, AddedMass)), String> {
+    let frame = standing(&with_added_mass(prior, &host, mass, v3(local), true)?)?;
+    let out = with_added_mass(prior, &host, mass, v3(local), merge)?;
+    let added = AddedMass {
+        mass,
+        host,
+        position_host: v3(local),
+        position: v3(p),
+        position_sigma: [0.0; 3],
+        mass_sigma: None,
+        moved_into_outline,
+    };
+    Ok((frame, (out, added)))
 }
 
 /// The ray of positions that explain the measured CoM with an unknown mass, in the
