@@ -1,9 +1,10 @@
 //! `twinloop dynamics kinematics|inverse|forward`: batch rigid-body dynamics over a
 //! trajectory file. One output row per input row; the `t` column is carried over.
 
-use crate::common::{ROBOT_HELP, load_model, read_trajectory};
+use crate::common::{ROBOT_HELP, load_model};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
+use crate::units::read_trajectory;
 use clap::{Args, Subcommand};
 use std::path::PathBuf;
 use twinloop_dynamics::{BaseKind, Data, Model};

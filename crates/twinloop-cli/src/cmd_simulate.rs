@@ -1,9 +1,10 @@
 //! `twinloop simulate`: a robot standing on its servos in the simulator. The
 //! standing simulator is shared with `twinloop bench sim`.
 
-use crate::common::{ROBOT_HELP, load_description, read_trajectory};
+use crate::common::{ROBOT_HELP, load_description};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
+use crate::units::read_trajectory;
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use twinloop_io::{CsvWriter, Quantity, StateColumns, Table};

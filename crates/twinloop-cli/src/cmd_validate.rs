@@ -325,7 +325,7 @@ fn label(spec: &str) -> String {
 
 /// The motion, with the plate readings of --plate when given.
 fn read_motion_and_plate(a: &ResidualArgs, model: &Model) -> Result<Motion, CliError> {
-    let table = crate::common::read_trajectory(&a.motion, model)?;
+    let table = crate::units::read_trajectory(&a.motion, model)?;
     let mut motion = parse_motion(&table, model).map_err(|e| {
         if e.file.is_none() {
             e.in_file(&a.motion)

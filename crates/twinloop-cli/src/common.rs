@@ -265,19 +265,6 @@ pub fn read_table(path: &Path) -> Result<twinloop_io::Table, CliError> {
     Ok(twinloop_io::Table::read(path)?)
 }
 
-/// Read a CSV of configurations (`q:<joint>` columns) for `model`: [`read_table`], and
-/// every angle checked against its joint's limits, so a trajectory in degrees is an
-/// error naming the column ([`crate::units::check_angles`]) in every command that
-/// reads one.
-pub fn read_trajectory(
-    path: &Path,
-    model: &twinloop_dynamics::Model,
-) -> Result<twinloop_io::Table, CliError> {
-    let table = read_table(path)?;
-    crate::units::check_angles(&table, model)?;
-    Ok(table)
-}
-
 /// A number for people: 6 significant digits, no float noise (3.1474699999999998 -> 3.14747).
 pub use twinloop_report::number as num;
 

@@ -229,3 +229,16 @@ mod tests {
         assert!(e.to_string().contains("millimetres"), "{e}");
     }
 }
+
+/// Read a CSV of configurations (`q:<joint>` columns) for `model`:
+/// [`crate::common::read_table`], and every angle checked against its joint's limits
+/// ([`check_angles`]), so a trajectory in degrees is an error naming the column in
+/// every command that reads one.
+pub fn read_trajectory(
+    path: &std::path::Path,
+    model: &twinloop_dynamics::Model,
+) -> Result<Table, CliError> {
+    let table = crate::common::read_table(path)?;
+    check_angles(&table, model)?;
+    Ok(table)
+}

@@ -527,7 +527,10 @@ pub fn adapt(
             }
             None => (start - reach, start + reach),
         };
-        let fit = fall_angle_fit::fit_position(prior, tip, &host, added.mass, start, bounds)?;
+        let with_part = |p: Vector3<f64>| {
+            with_added_mass(prior, &host, added.mass, v3(p), true).map_err(IdentError::new)
+        };
+        let fit = fall_angle_fit::fit_position(&with_part, tip, start, bounds)?;
         let local = Vector3::from(fit.position_host);
         let pose = pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
         let p = pose.act_point(&local) - pf.mid;

@@ -62,28 +62,27 @@ pub struct FallAngleFit {
     pub iterations: usize,
 }
 
-/// The candidate model for a position: the prior with the part merged into its host.
+/// The model with the part at a position (host frame): the caller's (the prior with
+/// the part merged into its host).
+pub type ModelWithPart<'a> = &'a dyn Fn(Vector3<f64>) -> Result<Description, IdentError>;
+
+/// Static minus measured angles of the model with the part at `p`.
 fn residuals(
-    prior: &Description,
+    model_with_part: ModelWithPart<'_>,
     report: &StudyReport,
-    host: &str,
-    mass: f64,
     p: &Vector3<f64>,
     measured: &Vector4<f64>,
 ) -> Result<Vector4<f64>, IdentError> {
-    let robot = crate::adapt::with_added_mass(prior, host, mass, [p.x, p.y, p.z], true)
-        .map_err(IdentError::new)?;
+    let robot = model_with_part(*p)?;
     let s = static_angles_at_onsets(&robot, report)?;
     Ok(Vector4::from(s) - measured)
 }
 
-/// Fit the position (host frame) of a part of `mass` kg on `host`, starting from
-/// `start`, kept within `bounds` (lowest and highest corner, host frame).
+/// Fit the position (host frame) of the part `model_with_part` places, starting
+/// from `start`, kept within `bounds` (lowest and highest corner, host frame).
 pub fn fit_position(
-    prior: &Description,
+    model_with_part: ModelWithPart<'_>,
     report: &StudyReport,
-    host: &str,
-    mass: f64,
     start: Vector3<f64>,
     bounds: (Vector3<f64>, Vector3<f64>),
 ) -> Result<FallAngleFit, IdentError> {
@@ -96,11 +95,11 @@ pub fn fit_position(
     );
     let sideways = Vector4::new(0.0, 0.0, 1.0, 1.0);
     let mut p = clamp(start);
-    let mut s = residuals(prior, report, host, mass, &p, &measured)?;
+    let mut s = residuals(model_with_part, report, &p, &measured)?;
     if s.iter().any(|v| !v.is_finite()) {
-        return Err(IdentError::new(format!(
-            "the static tipping analysis found no tip for the part on {host} at the start"
-        )));
+        return Err(IdentError::new(
+            "the static tipping analysis found no tip for the part where the CoM puts it",
+        ));
     }
     let start_residual = s;
     let mut o = 0.0;
@@ -114,7 +113,7 @@ pub fn fit_position(
         for i in 0..3 {
             let mut q = p;
             q[i] += STEP;
-            let sq = residuals(prior, report, host, mass, &q, &measured)?;
+            let sq = residuals(model_with_part, report, &q, &measured)?;
             jac.fixed_view_mut::<4, 1>(0, i)
                 .copy_from(&((sq - s) / STEP));
         }
@@ -132,7 +131,7 @@ pub fn fit_position(
             };
             let next = clamp(p + step.fixed_rows::<3>(0));
             let on = o + step[3];
-            let sn = residuals(prior, report, host, mass, &next, &measured)?;
+            let sn = residuals(model_with_part, report, &next, &measured)?;
             let rn = stacked(&sn, on);
             if rn.iter().all(|v| v.is_finite()) && rn.norm_squared() < r.norm_squared() {
                 let moved = (next - p).norm();

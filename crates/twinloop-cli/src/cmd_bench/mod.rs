@@ -6,9 +6,10 @@
 mod link;
 mod sim;
 
-use crate::common::{ROBOT_HELP, emit, load_model, read_trajectory};
+use crate::common::{ROBOT_HELP, emit, load_model};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
+use crate::units::read_trajectory;
 use clap::{Args, Subcommand};
 use serde::Serialize;
 use std::hint::black_box;

@@ -81,7 +81,7 @@ pub fn run(a: &IdentifyStaticArgs) -> CliResult {
     let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
     hinges_only(&robot, &a.robot, "static identification")?;
     crate::units::total_mass("--total-mass", a.total_mass, &robot)?;
-    let table = crate::common::read_trajectory(&a.poses, &model)?;
+    let table = crate::units::read_trajectory(&a.poses, &model)?;
     let poses = parse_static_poses(&table, &model).map_err(|e| {
         if e.file.is_none() {
             e.in_file(&a.poses)
@@ -253,7 +253,7 @@ fn validate_on_motion(
     model: &Model,
     adapted: &Description,
 ) -> Result<Validation, CliError> {
-    let table = crate::common::read_trajectory(motion_file, model)?;
+    let table = crate::units::read_trajectory(motion_file, model)?;
     let motion = parse_motion(&table, model).map_err(|e| {
         if e.file.is_none() {
             e.in_file(motion_file)
