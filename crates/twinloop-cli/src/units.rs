@@ -195,6 +195,19 @@ pub fn check_angles(table: &Table, model: &Model) -> Result<(), IoError> {
     Ok(())
 }
 
+/// Read a CSV of configurations (`q:<joint>` columns) for `model`:
+/// [`crate::common::read_table`], and every angle checked against its joint's limits
+/// ([`check_angles`]), so a trajectory in degrees is an error naming the column in
+/// every command that reads one.
+pub fn read_trajectory(
+    path: &std::path::Path,
+    model: &twinloop_dynamics::Model,
+) -> Result<Table, CliError> {
+    let table = crate::common::read_table(path)?;
+    check_angles(&table, model)?;
+    Ok(table)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -228,17 +241,4 @@ mod tests {
         let e = add_masses(&mut km20.clone(), &[format!("0.3@{link}:0,0,50")]).unwrap_err();
         assert!(e.to_string().contains("millimetres"), "{e}");
     }
-}
-
-/// Read a CSV of configurations (`q:<joint>` columns) for `model`:
-/// [`crate::common::read_table`], and every angle checked against its joint's limits
-/// ([`check_angles`]), so a trajectory in degrees is an error naming the column in
-/// every command that reads one.
-pub fn read_trajectory(
-    path: &std::path::Path,
-    model: &twinloop_dynamics::Model,
-) -> Result<Table, CliError> {
-    let table = crate::common::read_table(path)?;
-    check_angles(&table, model)?;
-    Ok(table)
 }
