@@ -5,39 +5,14 @@ use crate::errors::value_error;
 use crate::experiments::to_py;
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
-use serde::Serialize;
 use std::path::{Path, PathBuf};
 use twinloop_ident::IdentError;
+use twinloop_ident::compliant_fit::summary::{FitInputs, FitSummary};
 use twinloop_ident::compliant_fit::{
-    self as fit, Dataset, FitOptions, FitProblem, Identifiability, Method, PARAMETER_NAMES,
-    SEED_PARAMETERS, Validation, read_plant,
+    self as fit, Dataset, FitOptions, FitProblem, Method, PARAMETER_NAMES, SEED_PARAMETERS,
+    read_plant,
 };
-use twinloop_reduced::{Corrections, SagittalCompliance};
-
-/// `identify compliant --json`'s fields (`timing` is the CLI's benchmark option: null).
-#[derive(Serialize)]
-struct FitReport<'a> {
-    data: String,
-    model: String,
-    samples: usize,
-    plant: SagittalCompliance,
-    method: Method,
-    free: Vec<&'static str>,
-    start: Corrections,
-    params: Corrections,
-    mse_before: f64,
-    mse_after: f64,
-    rms_before: f64,
-    rms_after: f64,
-    evaluations: usize,
-    iterations: usize,
-    stop: &'a str,
-    seconds: f64,
-    identifiability: Option<&'a Identifiability>,
-    identifiability_error: Option<String>,
-    validation: &'a [Validation],
-    timing: Option<()>,
-}
+use twinloop_reduced::Corrections;
 
 /// A file that cannot be read is an OSError, a bad one a ValueError (the CLI's message).
 fn input_error(path: &Path, e: IdentError) -> PyErr {
@@ -160,31 +135,21 @@ pub fn fit_compliant<'py>(
         })
         .map_err(|e| value_error(format!("{}: {e}", data.display())))?;
     let seconds = started.elapsed().as_secs_f64();
-    let (ident, identifiability_error) = match ident {
-        Ok(id) => (Some(id), None),
-        Err(e) => (None, Some(e.to_string())),
-    };
-    let report = FitReport {
-        data: data.display().to_string(),
-        model: plant.display().to_string(),
-        samples: dataset.len(),
-        plant: plant_model,
-        method,
-        free: free.iter().map(|&i| PARAMETER_NAMES[i]).collect(),
-        start,
-        params: result.params,
-        mse_before: result.mse_before,
-        mse_after: result.mse_after,
-        rms_before: result.mse_before.sqrt(),
-        rms_after: result.mse_after.sqrt(),
-        evaluations: result.evaluations,
-        iterations: result.iterations,
-        stop: &result.stop,
-        seconds,
-        identifiability: ident.as_ref(),
-        identifiability_error,
-        validation: &validation,
-        timing: None,
-    };
+    let ident = ident.map_err(|e| e.to_string());
+    let report: FitSummary<'_, ()> = FitSummary::new(
+        FitInputs {
+            data: data.display().to_string(),
+            model: plant.display().to_string(),
+            samples: dataset.len(),
+            plant: plant_model,
+            free: &free,
+            start,
+            seconds,
+        },
+        &result,
+        ident.as_ref().map_err(Clone::clone),
+        &validation,
+        None,
+    );
     to_py(py, &report)
 }

@@ -9,6 +9,7 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::path::PathBuf;
 use twinloop_ident::compliant_fit::report::fit_report;
+use twinloop_ident::compliant_fit::summary::{FitInputs, FitSummary};
 use twinloop_ident::compliant_fit::{
     self as fit, Dataset, FitOptions, FitProblem, FitResult, Identifiability, Method,
     PARAMETER_NAMES, SEED_PARAMETERS, Validation,
@@ -75,30 +76,6 @@ pub struct CompliantFitArgs {
     /// Write an HTML report (seed 002 Fig. 4: x and z before and after against the data).
     #[arg(long, value_name = "OUT.html")]
     pub report: Option<PathBuf>,
-}
-
-#[derive(Serialize)]
-struct FitReport<'a> {
-    data: String,
-    model: String,
-    samples: usize,
-    plant: SagittalCompliance,
-    method: Method,
-    free: Vec<&'static str>,
-    start: Corrections,
-    params: Corrections,
-    mse_before: f64,
-    mse_after: f64,
-    rms_before: f64,
-    rms_after: f64,
-    evaluations: usize,
-    iterations: usize,
-    stop: &'a str,
-    seconds: f64,
-    identifiability: Option<&'a Identifiability>,
-    identifiability_error: Option<String>,
-    validation: &'a [Validation],
-    timing: Option<Timing>,
 }
 
 /// Medians over rounds, seconds.
@@ -257,28 +234,23 @@ pub fn run(args: &CompliantFitArgs) -> CliResult {
         );
         html.write(path)?;
     }
-    let report = FitReport {
-        data: args.data.display().to_string(),
-        model: args.plant.display().to_string(),
-        samples: data.len(),
-        plant,
-        method,
-        free: free.iter().map(|&i| PARAMETER_NAMES[i]).collect(),
-        start,
-        params: result.params,
-        mse_before: result.mse_before,
-        mse_after: result.mse_after,
-        rms_before: result.mse_before.sqrt(),
-        rms_after: result.mse_after.sqrt(),
-        evaluations: result.evaluations,
-        iterations: result.iterations,
-        stop: &result.stop,
-        seconds,
-        identifiability: ident.as_ref(),
-        identifiability_error: ident_error.clone(),
-        validation: &validation,
+    let report = FitSummary::new(
+        FitInputs {
+            data: args.data.display().to_string(),
+            model: args.plant.display().to_string(),
+            samples: data.len(),
+            plant,
+            free: &free,
+            start,
+            seconds,
+        },
+        &result,
+        ident
+            .as_ref()
+            .ok_or_else(|| ident_error.clone().unwrap_or_default()),
+        &validation,
         timing,
-    };
+    );
     let text = summary(
         args,
         &data,

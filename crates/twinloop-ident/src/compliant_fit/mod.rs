@@ -21,6 +21,7 @@ pub mod model_file;
 pub mod power;
 pub mod report;
 pub mod sensitivity;
+pub mod summary;
 pub mod synthetic;
 
 pub use dataset::Dataset;
