@@ -184,6 +184,7 @@ const CASES: &[Case] = &[
     case("serve", "--robot {km20} --realtime-factor 0 --link {out}", "--realtime-factor"),
     case("demo", "--realtime-factor -1", "--realtime-factor"),
     case("demo", "--scenario nowhere", "nowhere"),
+    case("demo", "--scenario a --tell-where", "--tell-where"),
     case("bench dynamics", "--robot {trunc_urdf}", "trunc.urdf"),
     case("bench dynamics", "--robot {km20} --states {state_nan}", "state_nan.csv"),
     case("bench dynamics", "--robot {km20} --states {state_deg}", "state_deg.csv&&degrees"),

@@ -488,10 +488,9 @@ pub fn adapt(
         // with the point times m_a / M, comes nearer the truth's too).
         if opts.total_mass.is_some()
             && opts.host.is_some()
-            && let Some((lo, hi)) = prior.link(&host).and_then(outline_box)
+            && let Some((lo, hi)) = prior.link(&host).and_then(part_box)
         {
-            let margin = Vector3::repeat(OUTLINE_MARGIN);
-            let inside = local.sup(&(lo - margin)).inf(&(hi + margin));
+            let inside = local.sup(&lo).inf(&hi);
             moved_into_outline = Some((inside - local).norm());
             local = inside;
             p = pose.act_point(&local) - pf.mid;
@@ -516,15 +515,9 @@ pub fn adapt(
         // cannot pin down is not sent decimetres away by noise).
         let start = Vector3::from(added.position_host);
         let reach = Vector3::repeat(FIT_REACH);
-        let bounds = match opts
-            .host
-            .as_ref()
-            .and_then(|_| prior.link(&host).and_then(outline_box))
-        {
-            Some((lo, hi)) => {
-                let margin = Vector3::repeat(OUTLINE_MARGIN);
-                (lo - margin, hi + margin)
-            }
+        let named = opts.host.is_some();
+        let bounds = match prior.link(&host).filter(|_| named).and_then(part_box) {
+            Some(b) => b,
             None => (start - reach, start + reach),
         };
         let with_part = |p: Vector3<f64>| {
@@ -736,9 +729,10 @@ pub const FIT_REACH: f64 = 0.03;
 /// thickness outside.
 pub const OUTLINE_MARGIN: f64 = 0.01;
 
-/// The box (link frame: lowest and highest corner) around a link's primitive
-/// collision shapes, where a part bolted onto it can be; `None` without one.
-fn outline_box(link: &Link) -> Option<(Vector3<f64>, Vector3<f64>)> {
+/// Where a part bolted onto `link` can be: the box (link frame: lowest and highest
+/// corner) around its primitive collision shapes, grown by [`OUTLINE_MARGIN`];
+/// `None` without one.
+fn part_box(link: &Link) -> Option<(Vector3<f64>, Vector3<f64>)> {
     let mut lo = Vector3::repeat(f64::INFINITY);
     let mut hi = Vector3::repeat(f64::NEG_INFINITY);
     for shape in &link.collisions {
@@ -765,7 +759,8 @@ fn outline_box(link: &Link) -> Option<(Vector3<f64>, Vector3<f64>)> {
             hi = hi.sup(&w);
         }
     }
-    lo.x.is_finite().then_some((lo, hi))
+    let margin = Vector3::repeat(OUTLINE_MARGIN);
+    lo.x.is_finite().then_some((lo - margin, hi + margin))
 }
 
 /// The link whose CoM (origin if massless) is nearest `p` (standing frame), any link
