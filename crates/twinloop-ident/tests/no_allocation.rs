@@ -40,7 +40,6 @@ fn count(f: impl FnOnce()) -> usize {
     ALLOCATIONS.load(Ordering::SeqCst) - before
 }
 
-#[test]
 fn hot_loops_do_not_allocate() {
     let robot = twinloop_description::load(
         std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -157,4 +156,12 @@ fn hot_loops_do_not_allocate() {
         ik.project(&model, &mut data, &mut q, 20, 1e-12);
     });
     assert_eq!(n, 0, "ik");
+}
+
+/// Runs without libtest's harness (Cargo.toml: `harness = false`): the harness's own
+/// thread allocates while the test runs (its bookkeeping of running tests), and on a
+/// loaded CI machine those allocations landed inside the counted window.
+fn main() {
+    hot_loops_do_not_allocate();
+    println!("test hot_loops_do_not_allocate ... ok");
 }

@@ -29,7 +29,6 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-#[test]
 fn control_cycles_allocate_nothing() {
     let mut bus_servos = Vec::new();
     for id in 1..=10 {
@@ -98,4 +97,12 @@ fn control_cycles_allocate_nothing() {
             after - before
         );
     }
+}
+
+/// Runs without libtest's harness (Cargo.toml: `harness = false`): the harness's own
+/// thread allocates while the test runs (its bookkeeping of running tests), and on a
+/// loaded CI machine those allocations landed inside the counted window.
+fn main() {
+    control_cycles_allocate_nothing();
+    println!("test control_cycles_allocate_nothing ... ok");
 }

@@ -26,7 +26,6 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-#[test]
 fn stepping_and_reading_do_not_allocate() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/op3/mjcf/op3.xml");
     let robot = twinloop_description::load(path).unwrap();
@@ -52,4 +51,12 @@ fn stepping_and_reading_do_not_allocate() {
         "{} allocations in 200 steps",
         after - before
     );
+}
+
+/// Runs without libtest's harness (Cargo.toml: `harness = false`): the harness's own
+/// thread allocates while the test runs (its bookkeeping of running tests), and on a
+/// loaded CI machine those allocations landed inside the counted window.
+fn main() {
+    stepping_and_reading_do_not_allocate();
+    println!("test stepping_and_reading_do_not_allocate ... ok");
 }
