@@ -42,6 +42,9 @@ pub struct DemoArgs {
     /// stiffness, as `serve --ground-sink`)
     #[arg(long, default_value_t = 1e-4, value_name = "M", value_parser = crate::common::positive)]
     pub ground_sink: f64,
+    /// Creeping approaches per direction (as `experiment tipover --creeps`)
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..=5))]
+    pub creeps: u64,
     /// Tell the adapting side which link the change is on, as `adapt --where` (a team
     /// knows where it bolted the part): the position is then fitted inside that
     /// link's outline. One change only (not with --scenario a)
@@ -254,6 +257,7 @@ pub fn run(a: DemoArgs) -> CliResult {
         slow_ramp: 0.15,
         compliance_slope: 2,
         ankle_slope: ANKLE_SLOPE,
+        creeps: a.creeps as usize,
         clock_rate: a.realtime_factor,
         verbose: true,
     };
