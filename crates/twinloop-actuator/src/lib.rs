@@ -19,6 +19,7 @@ pub mod error;
 pub mod excitation;
 pub mod firmware;
 pub mod friction;
+pub mod group;
 pub mod identify;
 pub mod lm;
 pub mod log;
