@@ -575,11 +575,18 @@ pub fn compare(
     // The shared fit starts from the separate fits' geometric mean: few iterations.
     let starts: Vec<ServoParams> = each.servos.iter().map(|s| s.params.clone()).collect();
     let all_shared = identify_group(servos, &starts, &each.per_servo, holdout_fraction, threads)?;
+    // Tested: what every servo's fit determines (a position-only log's kt and
+    // resistance are, with friction_viscous held at 0).
     let tested: Vec<usize> = each
         .per_servo
         .iter()
         .copied()
-        .filter(|&i| !each.undetermined.contains(&PARAM_NAMES[i]))
+        .filter(|&i| {
+            each.servos.iter().all(|s| {
+                let sd = s.params.uncertainty.map_or(f64::NAN, |u| u[i]);
+                sd <= UNDETERMINED_RELATIVE_SD * s.params.values[i]
+            })
+        })
         .collect();
     let mut spreads = Vec::new();
     for &i in &each.per_servo {
@@ -623,4 +630,58 @@ pub fn compare(
         all_shared,
         spreads,
     })
+}
+
+/// A group identification: the comparison and the fit chosen from it (or with the
+/// shared parameters the user named).
+#[derive(Debug, Clone)]
+pub struct GroupIdentification {
+    pub comparison: Comparison,
+    /// The parameters the servos differ in own, the rest shared (or as asked).
+    pub chosen: GroupFit,
+}
+
+/// Fit `servos` alone and together, test which parameters differ, and fit the
+/// group with those per servo and the rest shared; `shared` (where given) names
+/// the shared ones instead of the test.
+pub fn identify_servos(
+    servos: &[ServoData],
+    start: &ServoParams,
+    shared: Option<&[usize]>,
+    holdout_fraction: f64,
+    threads: usize,
+) -> Result<GroupIdentification, ActuatorError> {
+    let comparison = compare(servos, start, holdout_fraction, threads)?;
+    let per_servo: Vec<usize> = match shared {
+        Some(shared) => comparison
+            .each
+            .per_servo
+            .iter()
+            .copied()
+            .filter(|i| !shared.contains(i))
+            .collect(),
+        None => comparison.differing(),
+    };
+    let chosen = if per_servo.is_empty() {
+        comparison.all_shared.clone()
+    } else if per_servo.len() == comparison.each.per_servo.len() {
+        comparison.each.clone()
+    } else {
+        let shared: Vec<usize> = comparison
+            .each
+            .per_servo
+            .iter()
+            .copied()
+            .filter(|i| !per_servo.contains(i))
+            .collect();
+        // From the separate fits: a per-servo parameter starts at its own value.
+        let starts: Vec<ServoParams> = comparison
+            .each
+            .servos
+            .iter()
+            .map(|s| s.params.clone())
+            .collect();
+        identify_group(servos, &starts, &shared, holdout_fraction, threads)?
+    };
+    Ok(GroupIdentification { comparison, chosen })
 }

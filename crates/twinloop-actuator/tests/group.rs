@@ -3,7 +3,7 @@
 //! (a) with one parameter different per servo, (b) identical.
 
 use twinloop_actuator::datasheet::defaults;
-use twinloop_actuator::group::{ServoData, compare, identify_group};
+use twinloop_actuator::group::{ServoData, compare, identify_servos};
 use twinloop_actuator::params::*;
 use twinloop_actuator::synthetic::synthetic_log;
 use twinloop_actuator::{Excitation, ModelLevel, Pendulum, ServoType};
@@ -92,23 +92,15 @@ fn one_parameter_that_differs_per_servo_is_found_and_recovered() {
     let data = servos(&truths);
     let start = defaults(servo, ModelLevel::M1);
     let t0 = std::time::Instant::now();
-    let c = compare(&data, &start, 0.25, 2).unwrap();
-    eprintln!("compare: {:.2} s", t0.elapsed().as_secs_f64());
-    print(&c);
-    assert_eq!(c.differing(), vec![FRICTION_BASE]);
-    let shared: Vec<usize> = ModelLevel::M1
-        .parameters()
-        .into_iter()
-        .filter(|&i| i != FRICTION_BASE)
-        .collect();
-    let starts: Vec<ServoParams> = c.each.servos.iter().map(|s| s.params.clone()).collect();
-    let t0 = std::time::Instant::now();
-    let mixed = identify_group(&data, &starts, &shared, 0.25, 2).unwrap();
+    let id = identify_servos(&data, &start, None, 0.25, 2).unwrap();
+    eprintln!("identify_servos: {:.2} s", t0.elapsed().as_secs_f64());
+    print(&id.comparison);
+    assert_eq!(id.comparison.differing(), vec![FRICTION_BASE]);
+    let mixed = id.chosen;
+    assert_eq!(mixed.per_servo, vec![FRICTION_BASE]);
     eprintln!(
-        "mixed: {:.2} s, {} iterations, {} simulations",
-        t0.elapsed().as_secs_f64(),
-        mixed.iterations,
-        mixed.simulations
+        "mixed: {} iterations, {} simulations",
+        mixed.iterations, mixed.simulations
     );
     for (s, t) in mixed.servos.iter().zip(&truths) {
         let sd = s.params.uncertainty.unwrap();
