@@ -533,9 +533,18 @@ pub struct Spread {
     pub chi2: f64,
     pub dof: usize,
     pub p_value: f64,
-    /// `p_value` below [`DIFFER_P`] / parameters tested (Bonferroni).
+    /// Whether every servo's fit determines it (relative deviation at most
+    /// [`UNDETERMINED_RELATIVE_SD`]); only those are tested.
+    pub tested: bool,
+    /// Tested, `p_value` below [`DIFFER_P`] / parameters tested (Bonferroni), and
+    /// `relative_spread` above [`MIN_SPREAD`].
     pub differs: bool,
 }
+
+/// Least relative spread called a difference: below it the servos' values are
+/// within what the fit recovers of a known truth over the bus (docs/servo-models.md:
+/// errors up to 2.5 %, from timing the deviations do not capture).
+pub const MIN_SPREAD: f64 = 0.03;
 
 /// Family-wise significance of "the servos differ" over the parameters tested.
 pub const DIFFER_P: f64 = 0.01;
@@ -617,7 +626,10 @@ pub fn compare(
             name: PARAM_NAMES[i],
             relative_spread: var.sqrt() / avg,
             relative_sd: rel[rel.len() / 2],
-            differs: tested.contains(&i) && p_value < DIFFER_P / tested.len().max(1) as f64,
+            tested: tested.contains(&i),
+            differs: tested.contains(&i)
+                && p_value < DIFFER_P / tested.len().max(1) as f64
+                && var.sqrt() / avg > MIN_SPREAD,
             values,
             sd,
             chi2,

@@ -139,3 +139,17 @@ fn identical_servos_share_their_parameters() {
         assert!(a.heldout_rms_mrad < 1.1 * e.heldout_rms_mrad + 0.05);
     }
 }
+
+/// (b) on position-only logs: six identical RX-28s (5 mrad counts, no current).
+#[test]
+fn identical_position_only_servos_share_their_parameters() {
+    let servo = ServoType::Rx28;
+    let truths = vec![truth(servo, 33); 6];
+    let data = servos(&truths);
+    let start = defaults(servo, ModelLevel::M1);
+    let t0 = std::time::Instant::now();
+    let c = compare(&data, &start, 0.25, 2).unwrap();
+    eprintln!("compare: {:.2} s", t0.elapsed().as_secs_f64());
+    print(&c);
+    assert!(c.differing().is_empty(), "{:?}", c.differing());
+}

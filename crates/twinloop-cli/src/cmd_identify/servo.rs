@@ -7,7 +7,9 @@ use serde_json::json;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use twinloop_actuator::group::{GroupFit, GroupIdentification, ServoData, identify_servos};
+use twinloop_actuator::group::{
+    DIFFER_P, GroupFit, GroupIdentification, MIN_SPREAD, ServoData, identify_servos,
+};
 use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
 use twinloop_actuator::log::ServoLog;
 use twinloop_actuator::params::{N_PARAMS, NONSMOOTH, PARAM_NAMES};
@@ -312,7 +314,8 @@ fn run_group(
                 names(&id.chosen.per_servo),
                 f.heldout_rms_mrad
             );
-            std::fs::write(&path, f.params.to_toml(&comment)).map_err(|e| CliError::io(&path, e))?;
+            std::fs::write(&path, f.params.to_toml(&comment))
+                .map_err(|e| CliError::io(&path, e))?;
             files.push(path);
         }
     }
@@ -351,12 +354,13 @@ fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> Stri
             .join(", "),
         c.each.simulations + c.all_shared.simulations + chosen.simulations
     );
-    let tested = c.spreads.iter().filter(|p| p.p_value < 1.0 || p.differs).count();
+    let tested = c.spreads.iter().filter(|p| p.tested).count();
     let _ = writeln!(
         s,
-        "do the servos differ? each fitted alone; chi-square of the values' spread against their deviations (robust to correlated residuals); differs where p < {:.0e} ({} over the parameters tested)",
-        twinloop_actuator::group::DIFFER_P / tested.max(1) as f64,
-        twinloop_actuator::group::DIFFER_P
+        "do the servos differ? each fitted alone; chi-square of the values' spread against their deviations (robust to correlated residuals); differs where p < {:.1e} ({} over the {tested} parameters tested) and the spread exceeds {} %",
+        DIFFER_P / tested.max(1) as f64,
+        DIFFER_P,
+        100.0 * MIN_SPREAD
     );
     let _ = writeln!(
         s,
@@ -374,8 +378,10 @@ fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> Stri
             p.p_value,
             if p.differs {
                 "differs: per servo"
-            } else if c.each.undetermined.contains(&p.name) && !(p.relative_sd <= 0.25) {
-                "not determined"
+            } else if !p.tested {
+                "not determined: not tested"
+            } else if p.p_value < DIFFER_P / tested.max(1) as f64 {
+                "differs by less than the fit's accuracy: shared"
             } else {
                 "alike: one shared value suffices"
             }
@@ -387,7 +393,13 @@ fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> Stri
         names(&chosen.shared),
         names(&chosen.per_servo)
     );
-    for ((e, a), f) in c.each.servos.iter().zip(&c.all_shared.servos).zip(&chosen.servos) {
+    for ((e, a), f) in c
+        .each
+        .servos
+        .iter()
+        .zip(&c.all_shared.servos)
+        .zip(&chosen.servos)
+    {
         let _ = writeln!(
             s,
             "  {:8} {:>8.3} {:>8.3} {:>8.3}",
@@ -483,8 +495,11 @@ fn group_json(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> serd
             "chi2": p.chi2,
             "dof": p.dof,
             "p_value": p.p_value,
+            "tested": p.tested,
             "differs": p.differs,
         })).collect::<Vec<_>>(),
+        "differ_p": DIFFER_P,
+        "min_spread": MIN_SPREAD,
         "differing": c.differing().iter().map(|&i| PARAM_NAMES[i]).collect::<Vec<_>>(),
         "each": group_fit_json(&c.each),
         "all_shared": group_fit_json(&c.all_shared),
