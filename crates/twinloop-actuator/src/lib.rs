@@ -22,6 +22,7 @@ pub mod friction;
 pub mod group;
 pub mod identify;
 pub mod lm;
+pub mod load_rule;
 pub mod log;
 pub mod motor;
 pub mod mujoco;
