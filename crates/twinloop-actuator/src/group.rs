@@ -414,7 +414,8 @@ pub fn identify_group(
             sd[i] = p.values[i] * sd_log;
             sd_independent[i] = p.values[i] * stats.sd_log[c];
             // NaN (a flat direction) counts as not determined.
-            if !(sd_log <= UNDETERMINED_RELATIVE_SD) && !undetermined.contains(&PARAM_NAMES[i]) {
+            let determined = sd_log <= UNDETERMINED_RELATIVE_SD;
+            if !determined && !undetermined.contains(&PARAM_NAMES[i]) {
                 undetermined.push(PARAM_NAMES[i]);
             }
         }
