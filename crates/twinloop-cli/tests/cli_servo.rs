@@ -469,3 +469,82 @@ fn servos_of_one_type_fitted_together_over_ptys() {
     let _ = std::fs::remove_dir_all(&dir);
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// A group's bad inputs are exit 2 naming the option or the log: an unknown
+/// --shared parameter, a servo id out of range, --fit with several servos, a
+/// --load ID=FILE for a servo with no log, a log naming no id among several.
+#[test]
+fn a_group_with_bad_inputs_names_the_fault() {
+    use twinloop_actuator::log::LogWriter;
+    use twinloop_actuator::synthetic::synthetic_log;
+    use twinloop_actuator::{Excitation, Pendulum};
+    let dir = std::env::temp_dir().join(format!("twinloop-servo-group-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let load = dir.join("load.toml");
+    std::fs::write(&load, "mass = 0.5\nlength = 0.15\narm_inertia = 0.002\n").unwrap();
+    let pendulum = Pendulum {
+        mass: 0.5,
+        length: 0.15,
+        arm_inertia: 0.002,
+    };
+    let servo = ServoType::Rx28;
+    let mut exc = Excitation::standard(servo, 1.0);
+    exc.parts.truncate(2);
+    let log = synthetic_log(
+        &defaults(servo, ModelLevel::M1),
+        &pendulum,
+        &exc,
+        5e-3,
+        0.0,
+        1,
+    );
+    let write = |name: &str, what: &str| {
+        let path = dir.join(name);
+        let mut w = LogWriter::create(&path, servo, what).unwrap();
+        for r in 0..log.len() {
+            let values = [
+                log.t[r],
+                log.goal[r],
+                log.t_goal[r],
+                log.q[r],
+                log.v[r],
+                f64::NAN,
+                f64::NAN,
+                log.voltage[r],
+                40.0,
+            ];
+            w.write(&values, &log.firmware[r]).unwrap();
+        }
+        w.finish().unwrap();
+        path.display().to_string()
+    };
+    let (a, b, none) = (
+        write("a.csv", "id 1 on test"),
+        write("b.csv", "id 2 on test"),
+        write("none.csv", "on test"),
+    );
+    let run = |args: &[&str]| {
+        let out = Command::new(bin())
+            .args(["identify", "servo", "--load"])
+            .arg(&load)
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let err = run(&["--data", &a, &b, "--shared", "stiction"]);
+    assert!(
+        err.contains("--shared \"stiction\": not a parameter of m1"),
+        "{err}"
+    );
+    let err = run(&["--data", &format!("300={a}"), &b]);
+    assert!(err.contains("a servo id is 0-253"), "{err}");
+    let err = run(&["--data", &a, &b, "--fit", "backlash"]);
+    assert!(err.contains("--fit: several servos"), "{err}");
+    let err = run(&["--data", &a, &b, "--load", &format!("7={}", load.display())]);
+    assert!(err.contains("no --data log is of servo id 7"), "{err}");
+    let err = run(&["--data", &a, &none]);
+    assert!(err.contains("none.csv: line 1: names no servo id"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
