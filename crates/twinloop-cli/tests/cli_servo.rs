@@ -470,12 +470,89 @@ fn servos_of_one_type_fitted_together_over_ptys() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// Write `log` as `experiment servo` does (no current or load columns).
+fn write_log(path: &Path, log: &twinloop_actuator::log::ServoLog, what: &str) {
+    let servo = log.servo.unwrap();
+    let mut w = twinloop_actuator::log::LogWriter::create(path, servo, what).unwrap();
+    for r in 0..log.len() {
+        let current = log.current.as_ref().map_or(f64::NAN, |c| c[r]);
+        let values = [
+            log.t[r],
+            log.goal[r],
+            log.t_goal[r],
+            log.q[r],
+            log.v[r],
+            f64::NAN,
+            current,
+            log.voltage[r],
+            40.0,
+        ];
+        w.write(&values, &log.firmware[r]).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+/// Identical servos, as the command answers them: three RX-28 logs of one drawn
+/// truth (made by the bench, sampled as over the bus at 2 ms +- 0.4 ms), one
+/// `identify servo`: nothing differs, one shared set, files for each id.
+#[test]
+fn identical_servos_are_told_one_shared_set_suffices() {
+    use twinloop_actuator::synthetic::synthetic_log;
+    use twinloop_actuator::{Excitation, Pendulum};
+    let dir = std::env::temp_dir().join(format!("twinloop-servo-alike-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let load = dir.join("load.toml");
+    std::fs::write(&load, "mass = 0.5\nlength = 0.15\narm_inertia = 0.002\n").unwrap();
+    let pendulum = Pendulum {
+        mass: 0.5,
+        length: 0.15,
+        arm_inertia: 0.002,
+    };
+    let t = truth(ServoType::Rx28, 42);
+    let mut cmd = Command::new(bin());
+    cmd.args(["identify", "servo"]);
+    for id in 1..=3u64 {
+        let log = synthetic_log(
+            &t,
+            &pendulum,
+            &Excitation::standard(t.servo, 1.0),
+            2e-3,
+            4e-4,
+            id,
+        );
+        let path = dir.join(format!("{id}.csv"));
+        write_log(&path, &log, &format!("id {id} on test"));
+        cmd.arg("--data").arg(&path);
+    }
+    let fits = dir.join("fits");
+    let out = cmd
+        .arg("--load")
+        .arg(&load)
+        .arg("--out")
+        .arg(&fits)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    eprintln!("{text}");
+    assert!(text.contains("answer: one shared set suffices"), "{text}");
+    for id in 1..=3 {
+        let p = ServoParams::read(&fits.join(format!("id-{id}.toml"))).unwrap();
+        let err = p.values[ARMATURE] / t.values[ARMATURE] - 1.0;
+        assert!(err.abs() < 0.05, "id {id} armature {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A group's bad inputs are exit 2 naming the option or the log: an unknown
 /// --shared parameter, a servo id out of range, --fit with several servos, a
 /// --load ID=FILE for a servo with no log, a log naming no id among several.
 #[test]
 fn a_group_with_bad_inputs_names_the_fault() {
-    use twinloop_actuator::log::LogWriter;
     use twinloop_actuator::synthetic::synthetic_log;
     use twinloop_actuator::{Excitation, Pendulum};
     let dir = std::env::temp_dir().join(format!("twinloop-servo-group-bad-{}", std::process::id()));
@@ -500,22 +577,7 @@ fn a_group_with_bad_inputs_names_the_fault() {
     );
     let write = |name: &str, what: &str| {
         let path = dir.join(name);
-        let mut w = LogWriter::create(&path, servo, what).unwrap();
-        for r in 0..log.len() {
-            let values = [
-                log.t[r],
-                log.goal[r],
-                log.t_goal[r],
-                log.q[r],
-                log.v[r],
-                f64::NAN,
-                f64::NAN,
-                log.voltage[r],
-                40.0,
-            ];
-            w.write(&values, &log.firmware[r]).unwrap();
-        }
-        w.finish().unwrap();
+        write_log(&path, &log, what);
         path.display().to_string()
     };
     let (a, b, none) = (

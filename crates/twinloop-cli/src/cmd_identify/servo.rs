@@ -387,6 +387,37 @@ fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> Stri
             }
         );
     }
+    let differing = c.differing();
+    let alike: Vec<usize> = c
+        .spreads
+        .iter()
+        .filter(|p| p.tested && !p.differs)
+        .map(|p| p.index)
+        .collect();
+    let worst = |g: &GroupFit| {
+        g.servos
+            .iter()
+            .zip(&c.each.servos)
+            .map(|(f, e)| 100.0 * (f.heldout_rms_mrad / e.heldout_rms_mrad - 1.0))
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let _ = writeln!(
+        s,
+        "answer: {}; held-out error against each servo's own fit: all shared up to {:+.1} %, chosen up to {:+.1} %",
+        if differing.is_empty() {
+            format!("one shared set suffices ({} alike)", names(&alike))
+        } else if alike.is_empty() {
+            format!("each servo needs its own {}", names(&differing))
+        } else {
+            format!(
+                "each servo needs its own {}; {} can be shared",
+                names(&differing),
+                names(&alike)
+            )
+        },
+        worst(&c.all_shared),
+        worst(chosen)
+    );
     let _ = writeln!(
         s,
         "held-out position error, mrad RMS: each alone / all shared / chosen (shared: {}; per servo: {})",
