@@ -49,7 +49,7 @@ pub struct ServoFit {
     pub residuals: usize,
     pub sum_squares: f64,
     /// The deviations the Jacobian states (residuals taken as independent);
-    /// `params.uncertainty` holds the robust ones ([`robust_covariance`]).
+    /// `params.uncertainty` holds the robust ones (the block sandwich, `robust_covariance`).
     pub sd_independent: [f64; N_PARAMS],
 }
 
