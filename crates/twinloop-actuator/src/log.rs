@@ -39,6 +39,8 @@ pub const LOG_COLUMNS: [&str; 9] = [
 pub struct ServoLog {
     pub file: String,
     pub servo: Option<ServoType>,
+    /// The servo's bus id, where the first line names it (`... RX-28 id 3`).
+    pub id: Option<u8>,
     pub t: Vec<f64>,
     pub goal: Vec<f64>,
     /// When each row's goal was sent (the previous row's time where the log has no
@@ -72,6 +74,17 @@ impl ServoLog {
             .and_then(|l| l.strip_prefix(LOG_PREFIX))
             .and_then(|rest| rest.split_whitespace().next())
             .and_then(ServoType::parse);
+        let id = text
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix(LOG_PREFIX))
+            .and_then(|rest| {
+                let words: Vec<&str> = rest.split_whitespace().collect();
+                words
+                    .windows(2)
+                    .find(|w| w[0] == "id")
+                    .and_then(|w| w[1].parse::<u8>().ok())
+            });
         let servo = servo.or(named).ok_or_else(|| {
             ActuatorError::new(
                 &file,
@@ -117,6 +130,7 @@ impl ServoLog {
         let mut log = ServoLog {
             file: file.clone(),
             servo: Some(servo),
+            id,
             current: current_col.map(|_| Vec::new()),
             ..Default::default()
         };
