@@ -21,10 +21,11 @@
 //! no network where they were copied).
 //!
 //! **Timing.** The recorder writes the goal, sleeps 1 ms, then reads five registers
-//! (position first) and stamps the middle of the reads. One bus transaction is taken
-//! as `a = (P - 1 ms) / 6` (one write and five reads per cycle of median period
-//! `P`): the position was read `2.5 a` before the stamp, and the goal sent `1 ms + a`
-//! before that. The fit's `sensing_delay` and `bus_delay` take what this estimate
+//! (position first) and stamps the middle of the reads; with the torque off it only
+//! reads. One bus transaction is taken as `a = (P - 1 ms) / 6` (one write and five
+//! reads per cycle of median period `P` with the torque on; `P / 5` where it is
+//! never on): the position was read `2.5 a` before the stamp, and the goal sent
+//! `1 ms + a` before that. The fit's `sensing_delay` and `bus_delay` take what this estimate
 //! misses.
 //!
 //! **What the logs lack** for our model: the I and D gains (taken as 0, the
@@ -177,13 +178,7 @@ pub fn parse(text: &str, file: &str, servo: Option<ServoType>) -> Result<BamLog,
             ));
         }
     }
-    let mut gaps: Vec<f64> = entries
-        .windows(2)
-        .map(|w| w[1].timestamp - w[0].timestamp)
-        .collect();
-    gaps.sort_by(f64::total_cmp);
-    let period = gaps[gaps.len() / 2];
-    let transaction = ((period - RECORDER_SLEEP) / 6.0).max(0.0);
+    let transaction = transaction_time(&entries);
     let mut log = ServoLog {
         file: file.to_string(),
         servo: Some(servo),
@@ -225,6 +220,25 @@ pub fn parse(text: &str, file: &str, servo: Option<ServoType>) -> Result<BamLog,
             .unwrap_or("")
             .to_string(),
     })
+}
+
+/// One bus transaction, s: from the median period of cycles with the torque on (a
+/// goal write, the sleep, five reads), else of cycles with it off (five reads).
+fn transaction_time(entries: &[Entry]) -> f64 {
+    let median = |torque: bool| {
+        let mut gaps: Vec<f64> = entries
+            .windows(2)
+            .filter(|w| w[0].torque == torque && w[1].torque == torque)
+            .map(|w| w[1].timestamp - w[0].timestamp)
+            .collect();
+        gaps.sort_by(f64::total_cmp);
+        gaps.get(gaps.len() / 2).copied()
+    };
+    match (median(true), median(false)) {
+        (Some(p), _) => ((p - RECORDER_SLEEP) / 6.0).max(0.0),
+        (None, Some(p)) => p / 5.0,
+        (None, None) => 0.0,
+    }
 }
 
 fn parse_json_entries(entries: &[Value], file: &str) -> Result<Vec<Entry>, ActuatorError> {
@@ -358,6 +372,23 @@ mod tests {
         assert!((a - 0.7e-3).abs() < 0.02e-3, "{a}");
         assert!((b.log.t[1] - b.log.t_goal[1] - (1e-3 + a)).abs() < 1e-12);
         assert!(b.log.torque.as_ref().unwrap().iter().all(|&t| t));
+    }
+
+    /// The XL330's loop drives `P/256` PWM units per count of error: the Present
+    /// PWM the servo reported (`load`, raw) in the excerpt's entries, against our
+    /// firmware at the logged goal and position (P/128 would give twice as much).
+    #[test]
+    fn xl330_pwm_is_p_over_256() {
+        let b = parse(EXCERPT, "x.json", None).unwrap();
+        let reported = [0.0, 2.0, 5.0, 7.0, 9.0, 12.0, 14.0, 17.0, 19.0, 21.0];
+        let r = ServoType::Xl330M288.resolution();
+        let mut fw = crate::firmware::Firmware::new(ServoType::Xl330M288);
+        fw.registers = b.log.firmware[0];
+        for k in 1..b.log.len() {
+            let error = (b.log.goal[k] / r).round() - (b.log.q[k] / r).round();
+            let pwm = fw.duty(error) * ServoType::Xl330M288.pwm_max();
+            assert!((pwm - reported[k]).abs() <= 1.6, "entry {}: {pwm} against {}", k + 1, reported[k]);
+        }
     }
 
     #[test]

@@ -96,6 +96,19 @@ impl ServoType {
         }
     }
 
+    /// The divisor of the Position P Gain register: the loop's PWM per count of
+    /// error is `P / divisor`. 128 for MX(2.0) and XM430 (EM-XM430 "Position PID
+    /// Gain": K_P = P/128). 256 for the XL330, measured: in BAM's XL330 logs the
+    /// Present PWM the servo reports is `P/256` times the count error (entries 6 and
+    /// 10 of the kp 100 sin_sin log: 12 and 21 against 12.1 and 21.9; at three
+    /// points under load in two logs the ratio to `P/128` is 0.51, 0.50, 0.50).
+    pub fn p_gain_divisor(self) -> f64 {
+        match self {
+            ServoType::Xl330M288 => 256.0,
+            _ => 128.0,
+        }
+    }
+
     /// Full PWM in the firmware's units: 1023 (RX Torque Limit), 885 (PWM Limit).
     pub fn pwm_max(self) -> f64 {
         match self.family() {
