@@ -56,7 +56,10 @@ pub struct BamLog {
 /// Whether `path` holds a BAM log: a `.json` file, or a first line that is a JSON
 /// object (the column form).
 pub fn is_bam_log(path: &Path) -> bool {
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+    {
         return true;
     }
     std::fs::read_to_string(path)
@@ -115,8 +118,9 @@ pub fn parse(text: &str, file: &str, servo: Option<ServoType>) -> Result<BamLog,
         }
         Some(_) => return Err(ActuatorError::new(file, "", "not a JSON object")),
         None => {
-            let header: Map<String, Value> = serde_json::from_str(first)
-                .map_err(|e| ActuatorError::new(file, "line 1", format!("not a JSON object: {e}")))?;
+            let header: Map<String, Value> = serde_json::from_str(first).map_err(|e| {
+                ActuatorError::new(file, "line 1", format!("not a JSON object: {e}"))
+            })?;
             (header, parse_columns(text, file)?)
         }
     };
@@ -198,7 +202,11 @@ pub fn parse(text: &str, file: &str, servo: Option<ServoType>) -> Result<BamLog,
         log.v.push(e.speed);
         log.goal.push(e.goal);
         let volts = e.volts.or(vin).ok_or_else(|| {
-            ActuatorError::new(file, format!("entry {}", k + 1), "no input_volts and no vin")
+            ActuatorError::new(
+                file,
+                format!("entry {}", k + 1),
+                "no input_volts and no vin",
+            )
         })?;
         log.voltage.push(volts);
         log.firmware.push([kp, 0.0, 0.0]);
@@ -249,13 +257,17 @@ fn parse_json_entries(entries: &[Value], file: &str) -> Result<Vec<Entry>, Actua
             let field = |key: &str| -> Result<Option<f64>, ActuatorError> {
                 match e.get(key) {
                     None | Some(Value::Null) => Ok(None),
-                    Some(v) => v.as_f64().filter(|x| x.is_finite()).map(Some).ok_or_else(|| {
-                        ActuatorError::new(
-                            file,
-                            format!("entry {}, {key}", k + 1),
-                            "not a finite number",
-                        )
-                    }),
+                    Some(v) => v
+                        .as_f64()
+                        .filter(|x| x.is_finite())
+                        .map(Some)
+                        .ok_or_else(|| {
+                            ActuatorError::new(
+                                file,
+                                format!("entry {}, {key}", k + 1),
+                                "not a finite number",
+                            )
+                        }),
                 }
             };
             let required = |key: &str| -> Result<f64, ActuatorError> {
@@ -295,10 +307,13 @@ fn parse_columns(text: &str, file: &str) -> Result<Vec<Entry>, ActuatorError> {
     };
     let col = |name: &str| names.iter().position(|n| *n == name);
     let need = |name: &str| {
-        col(name)
-            .ok_or_else(|| ActuatorError::new(file, format!("column \"{name}\""), "missing"))
+        col(name).ok_or_else(|| ActuatorError::new(file, format!("column \"{name}\""), "missing"))
     };
-    let (ts, pos, goal) = (need("timestamp")?, need("position")?, need("goal_position")?);
+    let (ts, pos, goal) = (
+        need("timestamp")?,
+        need("position")?,
+        need("goal_position")?,
+    );
     let (speed, volts, torque) = (col("speed"), col("input_volts"), col("torque_enable"));
     let mut out = Vec::new();
     for (n, line) in lines {
@@ -317,13 +332,17 @@ fn parse_columns(text: &str, file: &str) -> Result<Vec<Entry>, ActuatorError> {
             match cells[c] {
                 "true" => Ok(1.0),
                 "false" => Ok(0.0),
-                s => s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                    ActuatorError::new(
-                        file,
-                        format!("line {}, column \"{}\"", n + 1, names[c]),
-                        format!("{s:?} is not a finite number"),
-                    )
-                }),
+                s => s
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        ActuatorError::new(
+                            file,
+                            format!("line {}, column \"{}\"", n + 1, names[c]),
+                            format!("{s:?} is not a finite number"),
+                        )
+                    }),
             }
         };
         out.push(Entry {
@@ -384,10 +403,14 @@ mod tests {
         let r = ServoType::Xl330M288.resolution();
         let mut fw = crate::firmware::Firmware::new(ServoType::Xl330M288);
         fw.registers = b.log.firmware[0];
-        for k in 1..b.log.len() {
+        for (k, seen) in reported.iter().enumerate().skip(1) {
             let error = (b.log.goal[k] / r).round() - (b.log.q[k] / r).round();
             let pwm = fw.duty(error) * ServoType::Xl330M288.pwm_max();
-            assert!((pwm - reported[k]).abs() <= 1.6, "entry {}: {pwm} against {}", k + 1, reported[k]);
+            assert!(
+                (pwm - seen).abs() <= 1.6,
+                "entry {}: {pwm} against {seen}",
+                k + 1
+            );
         }
     }
 
@@ -424,14 +447,28 @@ mod tests {
 
     #[test]
     fn bad_input_names_the_place() {
-        let e = parse(&EXCERPT.replace("\"motor\": \"xl330\"", "\"motor\": \"mx106\""), "f.json", None)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("f.json") && e.contains("motor") && e.contains("mx106"), "{e}");
-        let e = parse(&EXCERPT.replacen("\"goal_position\": 0.008397", "\"goal\": 0.008397", 1), "f.json", None)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("entry 2, goal_position") && e.contains("missing"), "{e}");
+        let e = parse(
+            &EXCERPT.replace("\"motor\": \"xl330\"", "\"motor\": \"mx106\""),
+            "f.json",
+            None,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("f.json") && e.contains("motor") && e.contains("mx106"),
+            "{e}"
+        );
+        let e = parse(
+            &EXCERPT.replacen("\"goal_position\": 0.008397", "\"goal\": 0.008397", 1),
+            "f.json",
+            None,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("entry 2, goal_position") && e.contains("missing"),
+            "{e}"
+        );
         let e = parse(
             &EXCERPT.replace("0.00870513916015625", "0.001"),
             "f.json",
@@ -440,7 +477,9 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("entry 2, timestamp"), "{e}");
-        let e = parse("{\"mass\": 1}\nt\n1", "c.csv", None).unwrap_err().to_string();
+        let e = parse("{\"mass\": 1}\nt\n1", "c.csv", None)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("c.csv") && e.contains("timestamp"), "{e}");
     }
 }

@@ -40,9 +40,7 @@ pub fn mujoco_servo(params: &ServoParams, registers: [f64; 3], torque_limit: f64
     let full = params.kt() / params.resistance() * params.voltage;
     let counts_to_full = match servo.family() {
         LoopFamily::Compliance => rx_slope_units(registers[0]),
-        LoopFamily::Pid => {
-            servo.pwm_max() / (registers[0] / servo.p_gain_divisor()).max(1e-9)
-        }
+        LoopFamily::Pid => servo.pwm_max() / (registers[0] / servo.p_gain_divisor()).max(1e-9),
     };
     MujocoServo {
         kp: full / (counts_to_full * servo.resolution()),

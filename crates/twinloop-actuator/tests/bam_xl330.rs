@@ -109,7 +109,11 @@ fn ladder(train: &BamLog, held: &BamLog) -> Vec<(ModelLevel, Identification)> {
     };
     let m2 = rung(&m1, ModelLevel::M2);
     let m3 = rung(&m1, ModelLevel::M3);
-    let below = if m3.fit_rms_mrad <= m2.fit_rms_mrad { &m3 } else { &m2 };
+    let below = if m3.fit_rms_mrad <= m2.fit_rms_mrad {
+        &m3
+    } else {
+        &m2
+    };
     let m4 = rung(below, ModelLevel::M4);
     vec![
         (ModelLevel::M1, m1),
@@ -126,8 +130,8 @@ fn replay_error(params: &ServoParams, log: &BamLog) -> (f64, f64) {
     let (mut q, mut c) = (vec![0.0; n], vec![0.0; n]);
     replay(params, &log.load, &log.log, 0..n, &mut q, &mut c);
     let (mut sq, mut abs) = (0.0, 0.0);
-    for k in 1..n {
-        let e = q[k] - log.log.q[k];
+    for (model, measured) in q.iter().zip(&log.log.q).skip(1) {
+        let e = model - measured;
         sq += e * e;
         abs += e.abs();
     }
@@ -264,7 +268,10 @@ fn physical(p: &ServoParams) -> Result<(), String> {
     // below 1: more would lock the gearbox against any drive.
     let dry = p.values[FRICTION_BASE] + p.values[FRICTION_STRIBECK];
     if dry >= 0.76 || p.values[LOAD_FRICTION] >= 1.0 || p.values[STRIBECK_VELOCITY] > 10.0 {
-        return Err(format!("friction {dry} N m, load share {}", p.values[LOAD_FRICTION]));
+        return Err(format!(
+            "friction {dry} N m, load share {}",
+            p.values[LOAD_FRICTION]
+        ));
     }
     Ok(())
 }

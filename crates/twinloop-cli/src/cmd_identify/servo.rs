@@ -10,19 +10,21 @@ use std::time::Instant;
 use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
 use twinloop_actuator::log::ServoLog;
 use twinloop_actuator::params::{NONSMOOTH, PARAM_NAMES};
-use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType, datasheet};
+use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType, bam_log, datasheet};
 
 #[derive(Args, Debug)]
 pub struct ServoIdArgs {
-    /// Logs to fit (`experiment servo --out`); with no --holdout, the last
+    /// Logs to fit (`experiment servo --out`, or BAM's pendulum logs: `.json`, or its
+    /// column form, whose first line is a JSON object); with no --holdout, the last
     /// --holdout-fraction of each is kept out of the fit and scored
     #[arg(long, value_name = "LOG.csv", num_args = 1.., required_unless_present = "defaults")]
     pub data: Vec<PathBuf>,
     /// Logs scored but not fitted
     #[arg(long, value_name = "LOG.csv", num_args = 1..)]
     pub holdout: Vec<PathBuf>,
-    /// The pendulum the logs were recorded with (mass, length, arm_inertia)
-    #[arg(long, value_name = "LOAD.toml", required_unless_present = "defaults")]
+    /// The pendulum the logs were recorded with (mass, length, arm_inertia); BAM's
+    /// logs name theirs
+    #[arg(long, value_name = "LOAD.toml")]
     pub load: Option<PathBuf>,
     /// The model ladder's rung: m1 (Coulomb + viscous), m2 (+ Stribeck), m3 (+ load-dependent), m4 (both)
     #[arg(long, default_value = "m1", value_name = "NAME")]
@@ -90,19 +92,39 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         .as_deref()
         .map(|s| parse_servo(s, "--servo"))
         .transpose()?;
-    let load = Pendulum::read(
-        a.load
-            .as_deref()
-            .ok_or("identify servo needs --load LOAD.toml")?,
-    )?;
-    let read = |paths: &[PathBuf]| -> Result<Vec<ServoLog>, CliError> {
+    // BAM's logs (JSON, or its column form) carry their pendulum; ours name it in
+    // --load.
+    let mut bam_loads: Vec<(PathBuf, Pendulum)> = Vec::new();
+    let mut read = |paths: &[PathBuf]| -> Result<Vec<ServoLog>, CliError> {
         paths
             .iter()
-            .map(|p| ServoLog::read(p, servo).map_err(CliError::from))
+            .map(|p| {
+                if bam_log::is_bam_log(p) {
+                    let b = bam_log::read(p, servo)?;
+                    bam_loads.push((p.clone(), b.load));
+                    Ok(b.log)
+                } else {
+                    ServoLog::read(p, servo).map_err(CliError::from)
+                }
+            })
             .collect()
     };
     let logs = read(&a.data)?;
     let holdout = read(&a.holdout)?;
+    let load = match (&a.load, bam_loads.first()) {
+        (Some(path), _) => Pendulum::read(path)?,
+        (None, Some((first, load))) => {
+            if let Some((p, _)) = bam_loads.iter().find(|(_, l)| l != load) {
+                return Err(CliError::new(format!(
+                    "{}: a pendulum other than {}'s (one fit, one load); give --load LOAD.toml",
+                    p.display(),
+                    first.display()
+                )));
+            }
+            *load
+        }
+        (None, None) => return Err("identify servo needs --load LOAD.toml".into()),
+    };
     let servo = logs
         .first()
         .and_then(|l| l.servo)
