@@ -52,6 +52,9 @@ pub struct ServoLog {
     pub current: Option<Vec<f64>>,
     pub voltage: Vec<f64>,
     pub firmware: Vec<[f64; 3]>,
+    /// Torque Enable per row, where the log switches it (BAM's lift-and-drop lets
+    /// the load fall); `None`: on throughout, as `experiment servo` runs.
+    pub torque: Option<Vec<bool>>,
 }
 
 impl ServoLog {

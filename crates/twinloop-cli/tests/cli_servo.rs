@@ -99,8 +99,14 @@ fn run(dir: &Path, servo: ServoType, truth: &ServoParams) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
+/// The tests that serve three servos on ptys at once take turns: six servers and
+/// their hosts on a two-core machine starve the bus's timing (a run failed so under
+/// load 7 and passed alone).
+static PTYS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 #[test]
 fn servo_parameters_recovered_over_a_pty() {
+    let _turn = PTYS.lock().unwrap_or_else(|e| e.into_inner());
     let dir: PathBuf = std::env::temp_dir().join(format!("twinloop-servo-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(
@@ -340,6 +346,7 @@ fn bad_inputs_name_file_and_field() {
 /// within 5 %, the shared parameters too, and the per-servo files read back.
 #[test]
 fn servos_of_one_type_fitted_together_over_ptys() {
+    let _turn = PTYS.lock().unwrap_or_else(|e| e.into_inner());
     let dir = std::env::temp_dir().join(format!("twinloop-servo-group-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let load = dir.join("load.toml");

@@ -13,11 +13,12 @@ use twinloop_actuator::group::{
 use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
 use twinloop_actuator::log::ServoLog;
 use twinloop_actuator::params::{N_PARAMS, NONSMOOTH, PARAM_NAMES};
-use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType, datasheet};
+use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType, bam_log, datasheet};
 
 #[derive(Args, Debug)]
 pub struct ServoIdArgs {
-    /// Logs to fit (`experiment servo --out`); with no --holdout, the last
+    /// Logs to fit (`experiment servo --out`, or BAM's pendulum logs: `.json`, or its
+    /// column form, whose first line is a JSON object); with no --holdout, the last
     /// --holdout-fraction of each is kept out of the fit and scored. `ID=LOG.csv`
     /// says which servo a log is of (else the id its first line names): logs of
     /// several servos of one type are fitted together (see --shared)
@@ -27,8 +28,9 @@ pub struct ServoIdArgs {
     #[arg(long, value_name = "[ID=]LOG.csv", num_args = 1..)]
     pub holdout: Vec<String>,
     /// The pendulum the logs were recorded with (mass, length, arm_inertia); several
-    /// servos: `ID=LOAD.toml` for one servo's, repeatable, a plain file for the rest
-    #[arg(long, value_name = "[ID=]LOAD.toml", num_args = 1.., required_unless_present = "defaults")]
+    /// servos: `ID=LOAD.toml` for one servo's, repeatable, a plain file for the rest.
+    /// BAM's logs name theirs
+    #[arg(long, value_name = "[ID=]LOAD.toml", num_args = 1..)]
     pub load: Vec<String>,
     /// Several servos: the parameters held in common (comma list; `none`: every
     /// parameter per servo); the rest are fitted per servo. Default: the test
@@ -107,17 +109,42 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         .as_deref()
         .map(|s| parse_servo(s, "--servo"))
         .transpose()?;
-    let read = |args: &[String]| -> Result<Vec<(Option<u8>, ServoLog)>, CliError> {
+    // BAM's logs (JSON, or its column form) carry their pendulum; ours name it in
+    // --load.
+    let mut bam_loads: Vec<(String, Pendulum)> = Vec::new();
+    let mut read = |args: &[String]| -> Result<Vec<(Option<u8>, ServoLog)>, CliError> {
         args.iter()
             .map(|arg| {
                 let (key, path) = keyed(arg, "--data")?;
-                let log = ServoLog::read(Path::new(path), servo).map_err(CliError::from)?;
+                let path = Path::new(path);
+                let log = if bam_log::is_bam_log(path) {
+                    let b = bam_log::read(path, servo)?;
+                    bam_loads.push((path.display().to_string(), b.load));
+                    b.log
+                } else {
+                    ServoLog::read(path, servo).map_err(CliError::from)?
+                };
                 Ok((key.or(log.id), log))
             })
             .collect()
     };
     let logs = read(&a.data)?;
     let holdout = read(&a.holdout)?;
+    // The one pendulum BAM's logs name, when no --load is given.
+    let bam_load = match bam_loads.first() {
+        Some((first, load)) if a.load.is_empty() => {
+            if let Some((p, _)) = bam_loads.iter().find(|(_, l)| l != load) {
+                return Err(CliError::new(format!(
+                    "{p}: a pendulum other than {first}'s (one fit, one load); give --load LOAD.toml"
+                )));
+            }
+            Some(*load)
+        }
+        _ => None,
+    };
+    if a.load.is_empty() && bam_load.is_none() {
+        return Err("identify servo needs --load LOAD.toml".into());
+    }
     let servo = logs
         .first()
         .and_then(|(_, l)| l.servo)
@@ -130,9 +157,9 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     ids.sort();
     ids.dedup();
     if ids.len() > 1 {
-        return run_group(a, &ids, logs, holdout, &start, level);
+        return run_group(a, &ids, logs, holdout, &start, level, bam_load);
     }
-    if a.load.len() != 1 || keyed(&a.load[0], "--load")?.0.is_some() {
+    if bam_load.is_none() && (a.load.len() != 1 || keyed(&a.load[0], "--load")?.0.is_some()) {
         return Err(CliError::new(
             "--load: one servo's logs take one plain LOAD.toml",
         ));
@@ -142,7 +169,10 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
             "--shared: the logs are of one servo (several: ID=LOG.csv or logs naming different ids)",
         ));
     }
-    let load = Pendulum::read(Path::new(&a.load[0]))?;
+    let load = match bam_load {
+        Some(load) => load,
+        None => Pendulum::read(Path::new(&a.load[0]))?,
+    };
     let logs: Vec<ServoLog> = logs.into_iter().map(|(_, l)| l).collect();
     let holdout: Vec<ServoLog> = holdout.into_iter().map(|(_, l)| l).collect();
     let t0 = Instant::now();
@@ -189,6 +219,7 @@ fn run_group(
     holdout: Vec<(Option<u8>, ServoLog)>,
     start: &ServoParams,
     level: ModelLevel,
+    bam_load: Option<Pendulum>,
 ) -> CliResult {
     if let Some((_, l)) = logs.iter().find(|(k, _)| k.is_none()) {
         return Err(CliError::new(format!(
@@ -209,7 +240,7 @@ fn run_group(
         )));
     }
     // Loads: ID=FILE for one servo, a plain FILE for the others.
-    let mut plain = None;
+    let mut plain = bam_load;
     let mut own: Vec<(u8, Pendulum)> = Vec::new();
     for arg in &a.load {
         match keyed(arg, "--load")? {
