@@ -270,7 +270,16 @@ pub fn run(a: DemoArgs) -> CliResult {
         clock_rate: a.realtime_factor,
         verbose: true,
     };
-    let run = tipover_on_bus(&plan)?;
+    // A simulation that stopped (it diverged, or its operator could not stand the
+    // robot up) leaves the bus answering with its last state: say so rather than
+    // what the host made of the frozen robot.
+    let run = tipover_on_bus(&plan).map_err(|e| match robot.sim().status().error {
+        Some(why) => CliError::new(format!(
+            "the simulated robot stopped: {why} (the host saw: {})",
+            e.message
+        )),
+        None => e,
+    })?;
     drop(robot);
     let BusOutcome::Study(study) = run.outcome else {
         return Err(CliError::new(
