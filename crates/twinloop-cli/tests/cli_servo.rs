@@ -33,19 +33,24 @@ fn truth(servo: ServoType, seed: u64) -> ServoParams {
     p
 }
 
-/// Serve, drive, fit one servo type; the fit's JSON.
-fn run(dir: &Path, servo: ServoType, truth: &ServoParams) -> serde_json::Value {
-    let tag = servo.name().replace(['(', ')', '.'], "");
-    let params = dir.join(format!("{tag}-truth.toml"));
-    std::fs::write(&params, truth.to_toml("drawn truth")).unwrap();
-    let load = dir.join("load.toml");
+/// `serve --bench SERVO` with the truth `params` on a pty at `factor` times real
+/// time, and `experiment servo` over it: the log written, `DIR/TAG.csv`.
+fn bench_log(
+    dir: &Path,
+    tag: &str,
+    servo: &str,
+    params: &Path,
+    load: &Path,
+    factor: &str,
+) -> PathBuf {
     let link = dir.join(format!("{tag}-bus"));
     let _server = Server(
         Command::new(bin())
-            .args(["serve", "--bench", servo.name(), "--load"])
-            .arg(&load)
+            .args(["serve", "--bench", servo, "--realtime-factor", factor])
+            .arg("--load")
+            .arg(load)
             .arg("--servo-params")
-            .arg(&params)
+            .arg(params)
             .arg("--link")
             .arg(&link)
             .stdout(Stdio::null())
@@ -64,16 +69,9 @@ fn run(dir: &Path, servo: ServoType, truth: &ServoParams) -> serde_json::Value {
         .args(["experiment", "servo", "--port"])
         .arg(&link)
         // Six processes share the test machine's cores: allow for a late reply.
-        .args([
-            "--timeout-ms",
-            "100",
-            "--retries",
-            "5",
-            "--id",
-            "1",
-            "--load",
-        ])
-        .arg(&load)
+        .args(["--realtime-factor", factor, "--timeout-ms", "100"])
+        .args(["--retries", "5", "--id", "1", "--load"])
+        .arg(load)
         .arg("--out")
         .arg(&log)
         .output()
@@ -83,6 +81,16 @@ fn run(dir: &Path, servo: ServoType, truth: &ServoParams) -> serde_json::Value {
         "{servo}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
+    log
+}
+
+/// Serve, drive, fit one servo type; the fit's JSON.
+fn run(dir: &Path, servo: ServoType, truth: &ServoParams) -> serde_json::Value {
+    let tag = servo.name().replace(['(', ')', '.'], "");
+    let params = dir.join(format!("{tag}-truth.toml"));
+    std::fs::write(&params, truth.to_toml("drawn truth")).unwrap();
+    let load = dir.join("load.toml");
+    let log = bench_log(dir, &tag, servo.name(), &params, &load, "1");
     let out = Command::new(bin())
         .args(["identify", "servo", "--data"])
         .arg(&log)
@@ -369,43 +377,7 @@ fn servos_of_one_type_fitted_together_over_ptys() {
                 scope.spawn(move || {
                     let params = dir.join(format!("truth-{k}.toml"));
                     std::fs::write(&params, t.to_toml("drawn truth")).unwrap();
-                    let link = dir.join(format!("bus-{k}"));
-                    let _server = Server(
-                        Command::new(bin())
-                            .args(["serve", "--bench", "RX-28", "--realtime-factor", "2"])
-                            .arg("--load")
-                            .arg(load)
-                            .arg("--servo-params")
-                            .arg(&params)
-                            .arg("--link")
-                            .arg(&link)
-                            .stdout(Stdio::null())
-                            .stderr(Stdio::null())
-                            .spawn()
-                            .unwrap(),
-                    );
-                    let t0 = std::time::Instant::now();
-                    while !link.exists() && t0.elapsed().as_secs() < 20 {
-                        std::thread::sleep(std::time::Duration::from_millis(50));
-                    }
-                    std::thread::sleep(std::time::Duration::from_millis(300));
-                    let log = dir.join(format!("servo-{k}.csv"));
-                    let out = Command::new(bin())
-                        .args(["experiment", "servo", "--port"])
-                        .arg(&link)
-                        .args(["--realtime-factor", "2", "--timeout-ms", "100"])
-                        .args(["--retries", "5", "--id", "1", "--load"])
-                        .arg(load)
-                        .arg("--out")
-                        .arg(&log)
-                        .output()
-                        .unwrap();
-                    assert!(
-                        out.status.success(),
-                        "{}",
-                        String::from_utf8_lossy(&out.stderr)
-                    );
-                    log
+                    bench_log(dir, &format!("servo-{k}"), "RX-28", &params, load, "2")
                 })
             })
             .collect();
