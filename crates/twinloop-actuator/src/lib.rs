@@ -15,6 +15,7 @@
 pub mod bench;
 pub mod cmaes;
 pub mod datasheet;
+pub mod delay;
 pub mod error;
 pub mod excitation;
 pub mod firmware;
@@ -27,6 +28,7 @@ pub mod mujoco;
 pub mod params;
 pub mod params_file;
 pub mod params_set;
+pub mod profile;
 pub mod replay;
 pub mod servo_type;
 pub mod synthetic;

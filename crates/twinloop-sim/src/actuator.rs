@@ -38,6 +38,10 @@ pub struct DynamixelServo {
     /// The gearbox's Coulomb friction on the motor side, N m: used with a backlash
     /// (without one it is the joint's friction).
     pub gear_friction: f64,
+    /// The full model of a parameter file (`crate::servo_model`): the firmware on
+    /// encoder counts, the motor, BAM's friction budget, the delays. `None`: the
+    /// continuous loop above.
+    pub full: Option<crate::servo_model::FullServo>,
 }
 
 /// One Dynamixel position unit of the 1024-count, 300-degree servos (RX, AX).
@@ -56,6 +60,7 @@ impl DynamixelServo {
             backlash: 0.0,
             motor_inertia: 0.0,
             gear_friction: 0.0,
+            full: None,
         }
     }
 

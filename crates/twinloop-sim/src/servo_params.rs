@@ -9,6 +9,7 @@
 //! and bus delays.
 
 use crate::actuator::{Actuator, DynamixelServo};
+use crate::servo_model::{FullServo, ServoState};
 use crate::simulator::Simulator;
 use twinloop_actuator::ActuatorError;
 use twinloop_actuator::params::{BACKLASH, FRICTION_BASE, FRICTION_VISCOUS};
@@ -23,6 +24,7 @@ use twinloop_actuator::{LoopFamily, ServoParams, ServoType};
 pub fn servo_from_params(p: &ServoParams) -> DynamixelServo {
     let count = p.servo.resolution();
     let regs = p.servo.factory_firmware();
+    let rx = p.servo.family() == LoopFamily::Compliance;
     let (slope, margin) = match p.servo.family() {
         LoopFamily::Compliance => (
             twinloop_actuator::firmware::rx_slope_units(regs[0]) * count,
@@ -39,6 +41,16 @@ pub fn servo_from_params(p: &ServoParams) -> DynamixelServo {
         backlash: p.values[BACKLASH],
         motor_inertia: p.armature(),
         gear_friction: p.values[FRICTION_BASE],
+        full: Some(FullServo {
+            servo: p.servo,
+            voltage: p.voltage,
+            values: p.values,
+            punch: if rx { regs[2] } else { 0.0 },
+            i_gain: if rx { 0.0 } else { regs[1] },
+            d_gain: if rx { 0.0 } else { regs[2] },
+            profile_velocity: 0.0,
+            profile_acceleration: 0.0,
+        }),
     }
 }
 
@@ -51,13 +63,15 @@ impl Simulator {
         let s = servo_from_params(p);
         self.actuators[i] = Actuator::Dynamixel(s);
         self.joint_damping[i] = p.values[FRICTION_VISCOUS];
-        if s.backlash > 0.0 {
-            self.joint_friction[i] = 0.0;
-        } else {
+        // The gearbox's Coulomb friction is the full model's budget (per step).
+        self.joint_friction[i] = 0.0;
+        if s.backlash <= 0.0 {
             self.model.armature[i] = p.armature();
-            self.joint_friction[i] = p.values[FRICTION_BASE];
         }
         self.gears[i] = Default::default();
+        if let Some(full) = &s.full {
+            self.servo_states[i] = ServoState::new(full, self.config.dt);
+        }
     }
 
     /// Give the joints of robot `robot_name` the servos of `set` (`option` names the

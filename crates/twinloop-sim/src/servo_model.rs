@@ -1,0 +1,191 @@
+//! The full servo model of a parameter file on a joint: the equations of
+//! `twinloop-actuator`'s bench (docs/servo-models.md), through the same code where
+//! they are per servo: the bus delay and the sensing delay ([`Samples`]), the
+//! firmware's cycle on encoder counts with its punch, I and D terms and motion
+//! profile ([`Firmware::cycle`]), the DC motor ([`motor_torque`]) and BAM's friction
+//! budget ([`budget`]: Coulomb, Stribeck and load-dependent). What differs is only
+//! how the step moves the joint: the bench's one pendulum takes the friction that
+//! stops it exactly; a joint of a robot holds by the simulator's stick spring
+//! (`Simulator::joint_drive`) with the budget as its limit.
+//!
+//! The loop's torque is explicit in the step, as the firmware's is (it acts on the
+//! last sensed counts for a whole cycle); the back-EMF and viscous damping are
+//! implicit. The armature on the joint keeps that stable at a 1 ms step: the
+//! stiffest RX loop (slope 2 counts, 3.7 N m over 10 mrad) on an RX-28's 0.011
+//! kg m^2 gives `k dt^2 / J` = 0.03, far below the explicit limit of 4.
+
+use crate::actuator::DynamixelServo;
+use twinloop_actuator::delay::Samples;
+use twinloop_actuator::friction::budget;
+use twinloop_actuator::motor::motor_torque;
+use twinloop_actuator::params::{BUS_DELAY, N_PARAMS, SENSING_DELAY};
+use twinloop_actuator::{Firmware, LoopFamily, ServoType};
+
+/// What the file adds to a [`DynamixelServo`]: the servo type (encoder counts, loop
+/// family), the motor and gearbox parameters, and the loop's registers that the
+/// servo's `compliance_slope` and `compliance_margin` do not say.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FullServo {
+    pub servo: ServoType,
+    /// Supply voltage, V.
+    pub voltage: f64,
+    /// `twinloop_actuator::params::PARAM_NAMES` order.
+    pub values: [f64; N_PARAMS],
+    /// RX Punch, MX(2.0)/X Position I and D Gain: raw register values.
+    pub punch: f64,
+    pub i_gain: f64,
+    pub d_gain: f64,
+    /// Profile Velocity (rad/s, 0: none) and Acceleration (rad/s^2, 0: none); RX
+    /// Moving Speed as the velocity.
+    pub profile_velocity: f64,
+    pub profile_acceleration: f64,
+}
+
+impl FullServo {
+    pub fn kt(&self) -> f64 {
+        self.values[twinloop_actuator::params::KT]
+    }
+
+    pub fn resistance(&self) -> f64 {
+        self.values[twinloop_actuator::params::RESISTANCE]
+    }
+
+    /// Back-EMF damping `kt^2 / R`, N m s/rad.
+    pub fn emf_damping(&self) -> f64 {
+        self.kt() * self.kt() / self.resistance()
+    }
+
+    /// The motor torque at duty `duty` and motor speed `v`, N m.
+    pub fn torque(&self, duty: f64, v: f64) -> f64 {
+        motor_torque(self.kt(), self.resistance(), self.voltage, duty, v).0
+    }
+
+    /// The gearbox's Coulomb budget at motor speed `v` carrying `tau_m` (seed: BAM's
+    /// M1-M4 through `budget`).
+    pub fn friction(&self, v: f64, tau_m: f64) -> f64 {
+        budget(&self.values, v, tau_m)
+    }
+
+    /// The firmware's registers for `s`'s compliance slope and margin (RX) or the P
+    /// gain that reaches full PWM at `compliance_slope` (MX(2.0)/X), with the file's
+    /// punch or I and D gains.
+    pub fn registers(&self, s: &DynamixelServo) -> [f64; 3] {
+        let r = self.servo.resolution();
+        match self.servo.family() {
+            // The slope register in counts (a power of two; rounded, not truncated,
+            // so 32 counts stays 32 after the trip through radians).
+            LoopFamily::Compliance => [
+                (s.compliance_slope / r).round(),
+                (s.compliance_margin / r).round(),
+                self.punch,
+            ],
+            LoopFamily::Pid => [
+                self.servo.pwm_max() * 128.0 / (s.compliance_slope / r),
+                self.i_gain,
+                self.d_gain,
+            ],
+        }
+    }
+}
+
+/// A full-model servo's state on its joint: the firmware's, the goals on the bus,
+/// the angles the sensing delay still needs. The rings are sized when the servo is
+/// set, so a step allocates nothing.
+#[derive(Debug, Clone, Default)]
+pub struct ServoState {
+    pub firmware: Option<Firmware>,
+    /// The goal last written by the caller, and the one in force (NaN: none yet).
+    written: f64,
+    pub goal: f64,
+    /// Goals written but not in force: (time they take effect, goal).
+    pending: Samples,
+    /// (time, joint angle) of the last `sensing_delay`.
+    history: Samples,
+    /// The last step's duty and motor torque (N m).
+    pub duty: f64,
+    pub motor_torque: f64,
+}
+
+impl ServoState {
+    pub fn new(full: &FullServo, dt: f64) -> ServoState {
+        let mut firmware = Firmware::new(full.servo);
+        firmware.profile.velocity = full.profile_velocity;
+        firmware.profile.acceleration = full.profile_acceleration;
+        ServoState {
+            firmware: Some(firmware),
+            written: f64::NAN,
+            goal: f64::NAN,
+            pending: Samples::for_delay(full.values[BUS_DELAY], dt),
+            history: Samples::for_delay(full.values[SENSING_DELAY], dt),
+            duty: 0.0,
+            motor_torque: 0.0,
+        }
+    }
+
+    /// Forget the goals, the history and the loop's memory (the robot was placed).
+    pub fn reset(&mut self) {
+        self.written = f64::NAN;
+        self.goal = f64::NAN;
+        self.pending.clear();
+        self.history.clear();
+        if let Some(f) = &mut self.firmware {
+            f.reset();
+        }
+    }
+
+    /// The joint angle the servo senses at time `t` with the joint at `q`: the angle
+    /// `sensing_delay` ago, linear between steps (before the first step, the
+    /// oldest known), rad.
+    pub fn sensed(&self, full: &FullServo, t: f64, q: f64) -> f64 {
+        let delay = full.values[SENSING_DELAY];
+        if delay <= 0.0 {
+            q
+        } else {
+            self.history.value_at(t - delay, (t, q))
+        }
+    }
+
+    /// One firmware cycle at time `t` with the joint at `q` and `written` the goal
+    /// the caller has set: a new goal goes on the bus (in force `bus_delay` later),
+    /// the loop runs on the sensed counts. Returns the duty.
+    pub fn cycle(
+        &mut self,
+        s: &DynamixelServo,
+        full: &FullServo,
+        written: f64,
+        t: f64,
+        q: f64,
+        dt: f64,
+    ) -> f64 {
+        let bus = full.values[BUS_DELAY];
+        if written != self.written {
+            self.written = written;
+            if bus > 0.0 && self.goal.is_finite() {
+                self.pending.push_back(t + bus, written);
+            } else {
+                self.pending.clear();
+                self.goal = written;
+            }
+        }
+        while let Some((at, g)) = self.pending.front() {
+            if at > t + 1e-9 {
+                break;
+            }
+            self.goal = g;
+            self.pending.pop_front();
+        }
+        let sensed = self.sensed(full, t, q);
+        let delay = full.values[SENSING_DELAY];
+        if delay > 0.0 {
+            self.history.push_back(t, q);
+            self.history.forget_before(t - delay - 2.0 * dt);
+        }
+        let Some(f) = &mut self.firmware else {
+            return 0.0;
+        };
+        f.registers = full.registers(s);
+        f.torque_limit = s.torque_limit;
+        self.duty = f.cycle(self.goal, sensed, dt);
+        self.duty
+    }
+}
