@@ -185,6 +185,8 @@ impl ServoState {
         };
         f.registers = full.registers(s);
         f.torque_limit = s.torque_limit;
+        f.profile.velocity = full.profile_velocity;
+        f.profile.acceleration = full.profile_acceleration;
         self.duty = f.cycle(self.goal, sensed, dt);
         self.duty
     }
