@@ -509,6 +509,20 @@ impl Simulator {
         }
     }
 
+    /// Joint `i`'s angle as its servo senses it: for a full-model servo with a
+    /// sensing delay the angle that long ago (what its Present Position reads),
+    /// else the angle now, rad.
+    pub fn sensed_joint_angle(&self, i: usize) -> f64 {
+        let q = self.q[self.model.idx_q[i]];
+        match &self.actuators[i] {
+            Actuator::Dynamixel(s) => match s.full {
+                Some(full) => self.servo_states[i].sensed(&full, self.time, q),
+                None => q,
+            },
+            _ => q,
+        }
+    }
+
     /// Joint `i`'s full-model servo ([`crate::servo_model`]) at `q`, `v`: the
     /// firmware's cycle on the sensed counts, the motor's torque at the joint's
     /// speed (explicit in the duty, implicit in the back-EMF); behind a backlash, on
