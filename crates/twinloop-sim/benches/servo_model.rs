@@ -70,6 +70,12 @@ fn main() {
     let (s, f, e) = (median(simple), median(full), median(extras));
     println!("km20 standing, us/step (median of 9):");
     println!("  simple servo (datasheet)            {s:.2}");
-    println!("  full model (m4, counts, budget)     {f:.2}  ({:.3}x)", f / s);
-    println!("  + delays 2 ms and backlash 0.5 deg  {e:.2}  ({:.3}x)", e / s);
+    println!(
+        "  full model (m4, counts, budget)     {f:.2}  ({:.3}x)",
+        f / s
+    );
+    println!(
+        "  + delays 2 ms and backlash 0.5 deg  {e:.2}  ({:.3}x)",
+        e / s
+    );
 }
