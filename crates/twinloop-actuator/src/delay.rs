@@ -23,10 +23,12 @@ impl Samples {
         }
     }
 
-    /// The room for `delay` seconds of samples taken every `dt`, and a margin.
+    /// The room for `delay` seconds of samples taken every `dt`, and a margin: a
+    /// ring trimmed by [`Samples::forget_before`] at `delay + 2 dt` holds at most
+    /// `delay / dt + 5` samples just after a push.
     pub fn for_delay(delay: f64, dt: f64) -> Samples {
         let n = if delay > 0.0 && dt > 0.0 {
-            (delay / dt).ceil() as usize + 4
+            (delay / dt).ceil() as usize + 8
         } else {
             2
         };

@@ -71,7 +71,8 @@ impl Profile {
 
     /// The reference for this cycle of `dt` towards `goal`, starting from `present`
     /// the first time: speed at most `velocity`, changed by at most `acceleration dt`,
-    /// and braking so it stops at the goal (`|speed| <= sqrt(2 acceleration |left|)`).
+    /// and braking so it stops at the goal (`|speed|` at most what braking at
+    /// `acceleration` can stop within what is left).
     pub fn reference(&mut self, goal: f64, present: f64, dt: f64) -> f64 {
         if self.velocity <= 0.0 {
             self.position = goal;
@@ -85,7 +86,10 @@ impl Profile {
         let left = goal - self.position;
         let mut want = left.signum() * self.velocity;
         if self.acceleration > 0.0 {
-            let brake = (2.0 * self.acceleration * left.abs()).sqrt();
+            // The speed from which braking at `acceleration` stops at the goal, for
+            // steps that move by the new speed (`v^2 / 2a + v dt / 2 = |left|`).
+            let h = 0.5 * self.acceleration * dt;
+            let brake = -h + (h * h + 2.0 * self.acceleration * left.abs()).sqrt();
             want = left.signum() * self.velocity.min(brake);
             let dv = self.acceleration * dt;
             self.speed += (want - self.speed).clamp(-dv, dv);

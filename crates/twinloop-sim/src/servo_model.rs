@@ -104,6 +104,8 @@ pub struct ServoState {
     /// The last step's duty and motor torque (N m).
     pub duty: f64,
     pub motor_torque: f64,
+    /// When the firmware last ran (NaN: never).
+    last_cycle: f64,
 }
 
 impl ServoState {
@@ -119,11 +121,14 @@ impl ServoState {
             history: Samples::for_delay(full.values[SENSING_DELAY], dt),
             duty: 0.0,
             motor_torque: 0.0,
+            last_cycle: f64::NAN,
         }
     }
 
-    /// Forget the goals, the history and the loop's memory (the robot was placed).
+    /// Forget the goals, the history and the loop's memory (the robot was placed, or
+    /// the torque was off).
     pub fn reset(&mut self) {
+        self.last_cycle = f64::NAN;
         self.written = f64::NAN;
         self.goal = f64::NAN;
         self.pending.clear();
@@ -157,6 +162,12 @@ impl ServoState {
         q: f64,
         dt: f64,
     ) -> f64 {
+        // Skipped cycles: the torque was off (the virtual robot's servo was limp).
+        // The firmware starts afresh where the joint is.
+        if !(t - self.last_cycle < 1.5 * dt) {
+            self.reset();
+        }
+        self.last_cycle = t;
         let bus = full.values[BUS_DELAY];
         if written != self.written {
             self.written = written;
