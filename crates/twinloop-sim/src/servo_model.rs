@@ -164,7 +164,8 @@ impl ServoState {
     ) -> f64 {
         // Skipped cycles: the torque was off (the virtual robot's servo was limp).
         // The firmware starts afresh where the joint is.
-        if !(t - self.last_cycle < 1.5 * dt) {
+        let ran_last_step = t - self.last_cycle < 1.5 * dt; // false while NaN
+        if !ran_last_step {
             self.reset();
         }
         self.last_cycle = t;
