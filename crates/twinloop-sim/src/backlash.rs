@@ -9,7 +9,8 @@
 //! (its inertia joins the joint's in the step, its friction the joint's); open, or
 //! pulled, the output feels nothing and the motor side moves alone under the loop's
 //! torque and its friction; when it reaches the other edge the gap closes with an
-//! inelastic impact on the motor side (it takes the output's speed). A
+//! inelastic impact, momentum kept (the simulator's step resolves it against the
+//! joint's effective inertia). A
 //! simplification against the bench: the bench opens the gap when the contact
 //! torque would pull (after the step), here when the loop's torque does (before it:
 //! the contact torque of a multibody step is known only after it).
@@ -94,8 +95,10 @@ pub fn output_drive(
 
 /// After the step, with the output at its new `q`, `v`: an engaged motor side
 /// follows the output; a free one moves under the loop's torque `drive_at(vm)`
-/// (implicit in the back-EMF) and its Coulomb friction `friction`, and closes the
-/// gap on the output's speed.
+/// (implicit in the back-EMF) and its Coulomb friction `friction`. Where it reaches
+/// an edge moving into it the gap closes: it is put at the edge and its speed
+/// returned for the caller's impact (`Simulator` resolves it against the joint's
+/// effective inertia, momentum kept, as the bench does), which sets `gear.vm`.
 pub fn advance_motor(
     servo: &DynamixelServo,
     gear: &mut Gear,
@@ -104,12 +107,12 @@ pub fn advance_motor(
     q: f64,
     v: f64,
     dt: f64,
-) {
+) -> Option<f64> {
     let half = 0.5 * servo.backlash;
     if gear.engaged != 0.0 {
         gear.qm = q + gear.engaged * half;
         gear.vm = v;
-        return;
+        return None;
     }
     let m = drive_at(gear.vm);
     let h = servo.motor_inertia.max(1e-6) + dt * m.d;
@@ -123,8 +126,9 @@ pub fn advance_motor(
     let closing = (gear.vm - v) * delta.signum() > 0.0;
     if delta.abs() >= half && closing {
         gear.qm = q + half * delta.signum();
-        gear.vm = v;
+        return Some(gear.vm);
     }
+    None
 }
 
 #[cfg(test)]
@@ -154,7 +158,9 @@ mod tests {
         // The free motor side crosses the gap and closes it on the other side.
         for _ in 0..200 {
             let f = s.gear_friction;
-            advance_motor(&s, &mut g, |vm| s.drive(-1.0, 0.0, vm), f, 0.0, 0.0, 1e-3);
+            if advance_motor(&s, &mut g, |vm| s.drive(-1.0, 0.0, vm), f, 0.0, 0.0, 1e-3).is_some() {
+                g.vm = 0.0; // an output held still takes the impact
+            }
         }
         assert!((g.qm + 0.005).abs() < 1e-12 && g.vm == 0.0);
     }

@@ -562,6 +562,36 @@ impl Simulator {
         }
     }
 
+    /// The gap of joint `i`'s backlash closed with its motor side arriving at `vm`:
+    /// an inelastic impact, momentum kept, between the motor side (the armature) and
+    /// the joint, whose effective inertia `1 / (H^-1)_ii` and response to the
+    /// impulse `H^-1 e_i` come from the step matrix `H` still factorised (so the
+    /// rest of the robot takes its share of the blow). Both sides leave at the
+    /// common speed.
+    fn gear_impact(&mut self, i: usize, vm: f64) {
+        let jm = match &self.actuators[i] {
+            Actuator::Dynamixel(s) => s.motor_inertia,
+            _ => 0.0,
+        };
+        let iv = self.model.idx_v[i];
+        self.rhs.iter_mut().for_each(|x| *x = 0.0);
+        self.rhs[iv] = 1.0;
+        ltdl::solve(&self.h, &self.dof_parent, &mut self.rhs);
+        let x = self.rhs[iv];
+        let v = self.v[iv];
+        if !(x > 0.0 && x.is_finite()) || jm <= 0.0 {
+            self.gears[i].vm = v;
+            return;
+        }
+        let jj = 1.0 / x;
+        let common = (jm * vm + jj * v) / (jm + jj);
+        let p = jj * (common - v);
+        for (vk, xk) in self.v.iter_mut().zip(self.rhs.iter()) {
+            *vk += p * xk;
+        }
+        self.gears[i].vm = self.v[iv];
+    }
+
     /// Why the step matrix has no factor at velocity coordinate `k`: named by its
     /// joint, and when the mass matrix itself is singular there, said so.
     fn singular_step_message(&mut self, k: usize) -> String {
@@ -655,9 +685,10 @@ impl Simulator {
         // their goals with the link at its new state.
         for i in 0..self.model.nbodies {
             let (iq, iv) = (self.model.idx_q[i], self.model.idx_v[i]);
-            match &mut self.actuators[i] {
+            let closed = match &mut self.actuators[i] {
                 Actuator::SeriesElastic(s) => {
-                    s.advance_motor(self.goals[i], self.q[iq], self.v[iv], dt)
+                    s.advance_motor(self.goals[i], self.q[iq], self.v[iv], dt);
+                    None
                 }
                 Actuator::Dynamixel(s) if s.backlash > 0.0 => {
                     let (goal, q) = (self.goals[i], self.q[iq]);
@@ -681,7 +712,10 @@ impl Simulator {
                         }
                     }
                 }
-                _ => {}
+                _ => None,
+            };
+            if let Some(vm) = closed {
+                self.gear_impact(i, vm);
             }
         }
         self.time += dt;

@@ -159,8 +159,8 @@ fn the_simulators_servo_moves_as_the_bench() {
         (Term::Profile, 0.35),
         // A gap of 1e-7 rad: the contact test a step late, and the armature with
         // the joint only while the gap is closed and pushed.
-        (Term::Backlash(1e-7), 2.5),
-        (Term::Backlash(half_degree), 12.0),
+        (Term::Backlash(1e-7), 0.5),
+        (Term::Backlash(half_degree), 3.5),
     ];
     for servo in [ServoType::Xm430W350, ServoType::Rx28] {
         for (term, counts) in cases {
