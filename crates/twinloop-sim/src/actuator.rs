@@ -84,6 +84,22 @@ impl FullServo {
         self.kt() * self.kt() / self.resistance()
     }
 
+    /// The gearbox's viscous friction, N m s/rad.
+    pub fn viscous(&self) -> f64 {
+        self.values[twinloop_actuator::params::FRICTION_VISCOUS]
+    }
+
+    /// The motor side's drive behind a backlash at its speed `vm` for duty `duty`:
+    /// the motor's torque less the gearbox's viscous friction (both on the motor
+    /// side of the gap, as on the bench), implicit in both dampings.
+    pub fn motor_side_drive(&self, duty: f64, vm: f64) -> Drive {
+        Drive {
+            tau: self.torque(duty, vm) - self.viscous() * vm,
+            k: 0.0,
+            d: self.emf_damping() + self.viscous(),
+        }
+    }
+
     /// The motor torque at duty `duty` and motor speed `v`, N m.
     pub fn torque(&self, duty: f64, v: f64) -> f64 {
         motor_torque(self.kt(), self.resistance(), self.voltage, duty, v).0

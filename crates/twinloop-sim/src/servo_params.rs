@@ -53,18 +53,21 @@ pub fn servo_from_params(p: &ServoParams) -> DynamixelServo {
 
 impl Simulator {
     /// Drive joint `i` by the servo of `p` ([`servo_from_params`]). The file's
-    /// gearbox replaces the description's joint terms: viscous friction as the
-    /// joint's damping, the friction budget as its Coulomb friction (per step);
-    /// without a backlash the armature as the joint's, with one on the motor side.
+    /// gearbox replaces the description's joint terms: the friction budget as its
+    /// Coulomb friction (per step); without a backlash the armature as the joint's
+    /// and the viscous friction as its damping, with one both on the motor side.
     /// The servo's delay rings are sized here for the simulator's time step.
     pub fn set_servo_params(&mut self, i: usize, p: &ServoParams) {
         let s = servo_from_params(p);
         self.actuators[i] = Actuator::Dynamixel(s);
-        self.joint_damping[i] = p.values[FRICTION_VISCOUS];
         // The gearbox's Coulomb friction is the full model's budget (per step).
         self.joint_friction[i] = 0.0;
         if s.backlash <= 0.0 {
             self.model.armature[i] = p.armature();
+            self.joint_damping[i] = p.values[FRICTION_VISCOUS];
+        } else {
+            // Behind a dead band the gearbox's viscous friction is on the motor side.
+            self.joint_damping[i] = 0.0;
         }
         self.gears[i] = Default::default();
         if let Some(full) = &s.full {

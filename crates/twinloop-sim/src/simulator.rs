@@ -543,6 +543,8 @@ impl Simulator {
             let g = &mut self.gears[i];
             g.sync(s, q, v);
             st.motor_torque = full.torque(duty, g.vm);
+            // The viscous friction is on the motor side: with the joint while engaged.
+            let m = full.motor_side_drive(duty, v);
             crate::backlash::output_drive(s, m, g, q, v, dt)
         } else {
             st.motor_torque = m.tau;
@@ -698,11 +700,7 @@ impl Simulator {
                             let duty = self.servo_states[i].duty;
                             let tau_m = full.torque(duty, g.vm);
                             let friction = full.friction(g.vm, tau_m);
-                            let at = |vm: f64| Drive {
-                                tau: full.torque(duty, vm),
-                                k: 0.0,
-                                d: full.emf_damping(),
-                            };
+                            let at = |vm: f64| full.motor_side_drive(duty, vm);
                             crate::backlash::advance_motor(s, g, at, friction, q, self.v[iv], dt)
                         }
                         None => {

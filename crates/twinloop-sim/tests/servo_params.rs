@@ -160,7 +160,7 @@ fn the_simulators_servo_moves_as_the_bench() {
         // A gap of 1e-7 rad: the contact test a step late, and the armature with
         // the joint only while the gap is closed and pushed.
         (Term::Backlash(1e-7), 0.5),
-        (Term::Backlash(half_degree), 3.5),
+        (Term::Backlash(half_degree), 2.5),
     ];
     for servo in [ServoType::Xm430W350, ServoType::Rx28] {
         for (term, counts) in cases {
