@@ -304,3 +304,52 @@ impl Bench {
         self.vm
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::datasheet::defaults;
+    use crate::{ModelLevel, ServoType};
+
+    /// With Profile Velocity and Acceleration the servo follows the trapezoid: 1 rad
+    /// at 2 rad/s and 10 rad/s^2 takes 0.7 s (0.2 s up, 0.3 s cruising, 0.2 s
+    /// down), so halfway in time the reference is halfway there and the output
+    /// cruises at 2 rad/s (behind by the loop's velocity lag), and after the end it
+    /// is at the goal.
+    #[test]
+    fn the_servo_follows_its_profile() {
+        let p = defaults(ServoType::Xm430W350, ModelLevel::M1);
+        let load = Pendulum {
+            mass: 0.1,
+            length: 0.05,
+            arm_inertia: 0.0,
+        };
+        let mut b = Bench::new(p, load);
+        b.firmware.registers[0] = 3000.0; // stiff: small lag
+        b.firmware.profile.velocity = 2.0;
+        b.firmware.profile.acceleration = 10.0;
+        b.torque_on = true;
+        b.send_goal(1.0);
+        let dt = 2.5e-4;
+        let at = |b: &mut Bench, t: f64| {
+            while b.t < t - 1e-12 {
+                b.step(dt);
+            }
+            b.q
+        };
+        let count = ServoType::Xm430W350.resolution();
+        let half = at(&mut b, 0.35);
+        assert!((b.firmware.profile.position - 0.5).abs() < 2e-3);
+        assert!((b.v - 2.0).abs() < 0.05, "{}", b.v);
+        assert!(half < 0.5 && half > 0.5 - 30.0 * count, "{half}");
+        let end = at(&mut b, 0.75);
+        assert!((end - 1.0).abs() < 3.0 * count, "{end}");
+        // Without a profile the servo is nearly there at that time already.
+        let mut fast = Bench::new(defaults(ServoType::Xm430W350, ModelLevel::M1), load);
+        fast.firmware.registers[0] = 3000.0;
+        fast.torque_on = true;
+        fast.send_goal(1.0);
+        let q = at(&mut fast, 0.35);
+        assert!(q > 0.9, "{q}");
+    }
+}
