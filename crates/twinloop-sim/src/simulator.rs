@@ -908,5 +908,22 @@ impl Simulator {
             contacts: &self.contacts,
         };
         sensors::read(&self.model, &mut self.data, &mut self.sensors, &at, state);
+        // A full-model servo with a sensing delay reads the angle that long ago.
+        for i in 0..self.model.nbodies {
+            let delayed = match &self.actuators[i] {
+                Actuator::Dynamixel(s) => s
+                    .full
+                    .is_some_and(|f| f.values[twinloop_actuator::params::SENSING_DELAY] > 0.0),
+                _ => false,
+            };
+            if delayed {
+                let k = self.model.idx_q[i] - self.model.q_offset;
+                let q = self.sensed_joint_angle(i);
+                state.positions[k] = match self.sensors.encoder_resolution[i] {
+                    Some(r) => crate::sensors::quantize(q, r),
+                    None => q,
+                };
+            }
+        }
     }
 }

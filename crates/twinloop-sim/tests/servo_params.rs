@@ -189,3 +189,29 @@ fn the_simulators_servo_moves_as_the_bench() {
         }
     }
 }
+
+/// A servo with a sensing delay reports the joint angle that long ago (what its
+/// Present Position reads on the bus): through the `Robot` interface the reading
+/// is the angle recorded 2 ms (four 0.5 ms steps) before.
+#[test]
+fn the_reading_is_the_angle_a_sensing_delay_ago() {
+    use twinloop_robot::{Robot, RobotState};
+    let mut p = defaults(ServoType::Xm430W350, ModelLevel::M1);
+    p.values[SENSING_DELAY] = 0.002;
+    let mut sim = pendulum_sim(5e-4);
+    sim.set_servo_params(0, &p);
+    sim.goals[0] = 0.5;
+    let mut angles = Vec::new();
+    let mut st = RobotState::default();
+    for k in 0..400 {
+        angles.push(sim.q[0]);
+        sim.step().unwrap();
+        if k >= 4 {
+            sim.read(&mut st).unwrap();
+            let want = angles[k + 1 - 4];
+            assert!((st.positions[0] - want).abs() < 1e-12, "step {k}");
+        }
+    }
+    // The servo moved, so the delay is seen.
+    assert!((sim.q[0] - angles[396]).abs() > 1e-4);
+}
