@@ -8,10 +8,14 @@
 //! - [`motor`]: the DC motor behind the gearbox; [`friction`]: the gearbox's friction
 //!   budget (Coulomb, viscous, Stribeck, load-dependent);
 //! - [`bench`]: a servo swinging a pendulum (BAM's bench), stepped in fixed time steps;
-//! - [`log`]: an `experiment servo` log as columns; [`replay`]: the model run against a
+//! - [`log`]: an `experiment servo` log as columns; [`bam_log`]: BAM's pendulum
+//!   logs read as ours; [`replay`]: the model run against a
 //!   log's commands; [`lm`]: Levenberg-Marquardt; [`identify`]: the fit, its
-//!   uncertainties and what the data cannot determine.
+//!   uncertainties and what the data cannot determine; [`group`]: several servos of
+//!   one type fitted together (shared and per-servo parameters) and whether each
+//!   needs its own; [`load_rule`]: which pendulum a servo type needs.
 
+pub mod bam_log;
 pub mod bench;
 pub mod cmaes;
 pub mod datasheet;
@@ -20,8 +24,10 @@ pub mod error;
 pub mod excitation;
 pub mod firmware;
 pub mod friction;
+pub mod group;
 pub mod identify;
 pub mod lm;
+pub mod load_rule;
 pub mod log;
 pub mod motor;
 pub mod mujoco;

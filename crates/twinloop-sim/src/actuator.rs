@@ -125,7 +125,7 @@ impl FullServo {
                 self.punch,
             ],
             LoopFamily::Pid => [
-                self.servo.pwm_max() * 128.0 / (s.compliance_slope / r),
+                self.servo.pwm_max() * self.servo.p_gain_divisor() / (s.compliance_slope / r),
                 self.i_gain,
                 self.d_gain,
             ],

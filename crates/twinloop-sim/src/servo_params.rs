@@ -15,7 +15,7 @@ use twinloop_actuator::{LoopFamily, ServoParams, ServoType};
 /// The simulator's servo for `p`: the full model (`full`: the file's parameters and
 /// the factory punch, I and D gains, no profile), the loop's slope at the factory
 /// registers (RX: compliance slope 32 counts, margin 1 count; MX(2.0)/X: full PWM at
-/// `885 x 128 / P` counts, no margin), the backlash with the armature on its motor
+/// `885 x 128 / P` counts (XL330: 256), no margin), the backlash with the armature on its motor
 /// side. The rating fields (full drive `kt V / R`, no-load speed `V / kt`) say the
 /// same motor to code that reads them.
 pub fn servo_from_params(p: &ServoParams) -> DynamixelServo {
@@ -27,7 +27,10 @@ pub fn servo_from_params(p: &ServoParams) -> DynamixelServo {
             twinloop_actuator::firmware::rx_slope_units(regs[0]) * count,
             regs[1] * count,
         ),
-        LoopFamily::Pid => (p.servo.pwm_max() * 128.0 / regs[0].max(1.0) * count, 0.0),
+        LoopFamily::Pid => (
+            p.servo.pwm_max() * p.servo.p_gain_divisor() / regs[0].max(1.0) * count,
+            0.0,
+        ),
     };
     DynamixelServo {
         stall_torque: p.kt() / p.resistance() * p.voltage,

@@ -171,11 +171,14 @@ pub fn run(a: &ServoArgs) -> CliResult {
     })?;
     let stall = servo.rating().stall_torque;
     let gravity = load.mass * twinloop_actuator::bench::GRAVITY * load.length;
-    if gravity > 0.6 * stall {
+    if gravity > twinloop_actuator::load_rule::MAX_RATIO * stall {
         return Err(CliError::new(format!(
             "{}: the pendulum's weight takes {gravity:.2} N m at the horizontal, over 60 % of the {servo}'s {stall} N m stall torque: lighter or shorter",
             a.load.display()
         )));
+    }
+    if let Some(w) = twinloop_actuator::load_rule::too_light(servo, &load) {
+        eprintln!("warning: {}: {w}", a.load.display());
     }
     let exc = Excitation::standard(servo, a.amplitude);
     if is_serial(&port) && !a.yes {
