@@ -2,12 +2,12 @@
 //! down. [`Bench::step`] is the whole model in one place: sensing, firmware, motor,
 //! friction and the pendulum's motion.
 
+use crate::delay::Samples;
 use crate::error::ActuatorError;
 use crate::firmware::Firmware;
 use crate::friction::budget;
 use crate::motor::motor_torque;
 use crate::params::{BACKLASH, BUS_DELAY, FRICTION_VISCOUS, SENSING_DELAY, ServoParams};
-use std::collections::VecDeque;
 use std::path::Path;
 
 /// Standard gravity, m/s^2 (the workspace's one value, twinloop_description::GRAVITY).
@@ -117,9 +117,9 @@ pub struct Bench {
     pub current: f64,
     pub motor_torque: f64,
     /// (time, output angle) of the last `sensing_delay` seconds, oldest first.
-    history: VecDeque<(f64, f64)>,
+    history: Samples,
     /// Goals sent but not yet in force: (time they take effect, goal).
-    pending: VecDeque<(f64, f64)>,
+    pending: Samples,
 }
 
 impl Bench {
@@ -138,8 +138,8 @@ impl Bench {
             duty: 0.0,
             current: 0.0,
             motor_torque: 0.0,
-            history: VecDeque::with_capacity(256),
-            pending: VecDeque::with_capacity(16),
+            history: Samples::with_capacity(256),
+            pending: Samples::with_capacity(16),
         }
     }
 
@@ -160,7 +160,7 @@ impl Bench {
         if delay <= 0.0 {
             self.goal = goal;
         } else {
-            self.pending.push_back((self.t + delay, goal));
+            self.pending.push_back(self.t + delay, goal);
         }
     }
 
@@ -171,21 +171,7 @@ impl Bench {
         if delay <= 0.0 {
             return self.q;
         }
-        let at = self.t - delay;
-        let mut later = (self.t, self.q);
-        for &(t, q) in self.history.iter().rev() {
-            if t <= at {
-                let w = if later.0 > t {
-                    (at - t) / (later.0 - t)
-                } else {
-                    0.0
-                };
-                return q + w * (later.1 - q);
-            }
-            later = (t, q);
-        }
-        // Younger than the delay: the oldest angle known.
-        later.1
+        self.history.value_at(self.t - delay, (self.t, self.q))
     }
 
     /// Present Position as the encoder gives it: a whole number of counts, rad.
@@ -203,7 +189,7 @@ impl Bench {
     pub fn step(&mut self, dt: f64) {
         // A goal coming into force inside the step splits it there, so the response
         // moves continuously with the bus delay (LM fits it).
-        if let Some(&(t, _)) = self.pending.front() {
+        if let Some((t, _)) = self.pending.front() {
             let into = t - self.t;
             if into > 1e-9 && into < dt - 1e-9 {
                 self.cycle(into);
@@ -215,17 +201,16 @@ impl Bench {
     }
 
     fn cycle(&mut self, dt: f64) {
-        while let Some(&(t, g)) = self.pending.front() {
+        while let Some((t, g)) = self.pending.front() {
             if t > self.t + 1e-9 {
                 break;
             }
             self.goal = g;
             self.pending.pop_front();
         }
-        let r = self.params.servo.resolution();
         self.duty = if self.torque_on {
-            let error = (self.goal / r).round() - (self.sensed_angle() / r).round();
-            self.firmware.duty(error)
+            let sensed = self.sensed_angle();
+            self.firmware.cycle(self.goal, sensed, dt)
         } else {
             0.0
         };
@@ -285,11 +270,9 @@ impl Bench {
         self.current = current;
         self.t += dt;
         if self.params.values[SENSING_DELAY] > 0.0 {
-            self.history.push_back((self.t, self.q));
+            self.history.push_back(self.t, self.q);
             let keep = self.t - self.params.values[SENSING_DELAY] - 2.0 * dt;
-            while self.history.len() > 2 && self.history[1].0 < keep {
-                self.history.pop_front();
-            }
+            self.history.forget_before(keep);
         }
     }
 
@@ -320,5 +303,54 @@ impl Bench {
         let friction = stop.max(-limit).min(limit);
         self.vm = free - dt * friction / h;
         self.vm
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::datasheet::defaults;
+    use crate::{ModelLevel, ServoType};
+
+    /// With Profile Velocity and Acceleration the servo follows the trapezoid: 1 rad
+    /// at 2 rad/s and 10 rad/s^2 takes 0.7 s (0.2 s up, 0.3 s cruising, 0.2 s
+    /// down), so halfway in time the reference is halfway there and the output
+    /// cruises at 2 rad/s (behind by the loop's velocity lag), and after the end it
+    /// is at the goal.
+    #[test]
+    fn the_servo_follows_its_profile() {
+        let p = defaults(ServoType::Xm430W350, ModelLevel::M1);
+        let load = Pendulum {
+            mass: 0.1,
+            length: 0.05,
+            arm_inertia: 0.0,
+        };
+        let mut b = Bench::new(p, load);
+        b.firmware.registers[0] = 3000.0; // stiff: small lag
+        b.firmware.profile.velocity = 2.0;
+        b.firmware.profile.acceleration = 10.0;
+        b.torque_on = true;
+        b.send_goal(1.0);
+        let dt = 2.5e-4;
+        let at = |b: &mut Bench, t: f64| {
+            while b.t < t - 1e-12 {
+                b.step(dt);
+            }
+            b.q
+        };
+        let count = ServoType::Xm430W350.resolution();
+        let half = at(&mut b, 0.35);
+        assert!((b.firmware.profile.position - 0.5).abs() < 2e-3);
+        assert!((b.v - 2.0).abs() < 0.05, "{}", b.v);
+        assert!(half < 0.5 && half > 0.5 - 30.0 * count, "{half}");
+        let end = at(&mut b, 0.75);
+        assert!((end - 1.0).abs() < 3.0 * count, "{end}");
+        // Without a profile the servo is nearly there at that time already.
+        let mut fast = Bench::new(defaults(ServoType::Xm430W350, ModelLevel::M1), load);
+        fast.firmware.registers[0] = 3000.0;
+        fast.torque_on = true;
+        fast.send_goal(1.0);
+        let q = at(&mut fast, 0.35);
+        assert!(q > 0.9, "{q}");
     }
 }

@@ -1,5 +1,6 @@
 //! The servo's own position loop, as its firmware runs it on encoder counts.
 
+use crate::profile::Profile;
 use crate::servo_type::{LoopFamily, ServoType};
 
 /// The loop's registers and state. `registers` are the raw values of the three
@@ -14,6 +15,8 @@ pub struct Firmware {
     /// Sum of errors (counts x cycles) for the I term.
     pub integral: f64,
     pub previous_error: f64,
+    /// The motion profile (Profile Velocity and Acceleration, RX Moving Speed).
+    pub profile: Profile,
 }
 
 impl Firmware {
@@ -24,13 +27,24 @@ impl Firmware {
             torque_limit: 1.0,
             integral: 0.0,
             previous_error: 0.0,
+            profile: Profile::default(),
         }
     }
 
-    /// Forget the I and D history (torque off, a reboot).
+    /// Forget the I and D history and the profile's reference (torque off, a reboot).
     pub fn reset(&mut self) {
         self.integral = 0.0;
         self.previous_error = 0.0;
+        self.profile.restart();
+    }
+
+    /// One firmware cycle of `dt` as the servo runs it, shared by the bench and the
+    /// simulator: the profile's reference towards `goal`, the count error against
+    /// the `sensed` angle (both rad, rounded to the encoder's counts), the duty.
+    pub fn cycle(&mut self, goal: f64, sensed: f64, dt: f64) -> f64 {
+        let r = self.servo.resolution();
+        let reference = self.profile.reference(goal, sensed, dt);
+        self.duty((reference / r).round() - (sensed / r).round())
     }
 
     /// The PWM duty in [-1, 1] for an error of `error` counts (goal - present), one

@@ -87,8 +87,9 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     /// Servo model parameters (`identify servo --out` or `--defaults`;
     /// docs/servo-models.md): FILE.toml for every servo of its type, or ID=FILE.toml
     /// (bus id) or JOINT=FILE.toml for one servo, repeatable; the others keep their
-    /// datasheet's. The simulated robot's servos then run that model (drive,
-    /// back-EMF, armature, friction, backlash); with --bench, one FILE.toml
+    /// datasheet's. The simulated robot's servos then run that model (the bench's
+    /// equations: firmware on encoder counts, motor, friction, backlash, delays);
+    /// with --bench, one FILE.toml
     #[arg(long, value_name = "[ID=]FILE.toml")]
     pub servo_params: Vec<String>,
 }

@@ -1093,7 +1093,16 @@ fn table_v2(model: ServoModel) -> Vec<Register> {
             1023,
             velocity,
         ),
-        rw("Profile Acceleration", None, 108, 4, R, Some(0), 0, 32767),
+        rw(
+            "Profile Acceleration",
+            Some(Item::ProfileAcceleration),
+            108,
+            4,
+            R,
+            Some(0),
+            0,
+            32767,
+        ),
         with(
             rw(
                 "Profile Velocity",

@@ -95,6 +95,8 @@ pub enum Item {
     /// Moving Speed (1.0, joint mode: speed towards the goal) or Profile Velocity
     /// (2.0).
     MovingSpeed,
+    /// Profile Acceleration (2.0).
+    ProfileAcceleration,
     GoalVelocity,
     GoalCurrent,
     /// Torque Limit (1.0, RAM).

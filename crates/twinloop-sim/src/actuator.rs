@@ -2,6 +2,11 @@
 //! its local stiffness and damping, so the step can treat them implicitly: a stiff
 //! servo stays stable at a 1 ms step whatever the link inertia behind it.
 
+use twinloop_actuator::friction::budget;
+use twinloop_actuator::motor::motor_torque;
+use twinloop_actuator::params::N_PARAMS;
+use twinloop_actuator::{LoopFamily, ServoType};
+
 /// Torque `tau` at the current state and its linearisation: a small change `dq`, `dv`
 /// changes the torque by `-k dq - d dv`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -38,6 +43,94 @@ pub struct DynamixelServo {
     /// The gearbox's Coulomb friction on the motor side, N m: used with a backlash
     /// (without one it is the joint's friction).
     pub gear_friction: f64,
+    /// The full model of a parameter file (`crate::servo_model`): the firmware on
+    /// encoder counts, the motor, BAM's friction budget, the delays. `None`: the
+    /// continuous loop above.
+    pub full: Option<FullServo>,
+}
+
+/// What a parameter file adds to a [`DynamixelServo`] (`crate::servo_model` runs
+/// it): the servo type (encoder counts, loop family), the motor and gearbox
+/// parameters, and the loop's registers that the servo's `compliance_slope` and
+/// `compliance_margin` do not say.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FullServo {
+    pub servo: ServoType,
+    /// Supply voltage, V.
+    pub voltage: f64,
+    /// `twinloop_actuator::params::PARAM_NAMES` order.
+    pub values: [f64; N_PARAMS],
+    /// RX Punch, MX(2.0)/X Position I and D Gain: raw register values.
+    pub punch: f64,
+    pub i_gain: f64,
+    pub d_gain: f64,
+    /// Profile Velocity (rad/s, 0: none) and Acceleration (rad/s^2, 0: none); RX
+    /// Moving Speed as the velocity.
+    pub profile_velocity: f64,
+    pub profile_acceleration: f64,
+}
+
+impl FullServo {
+    pub fn kt(&self) -> f64 {
+        self.values[twinloop_actuator::params::KT]
+    }
+
+    pub fn resistance(&self) -> f64 {
+        self.values[twinloop_actuator::params::RESISTANCE]
+    }
+
+    /// Back-EMF damping `kt^2 / R`, N m s/rad.
+    pub fn emf_damping(&self) -> f64 {
+        self.kt() * self.kt() / self.resistance()
+    }
+
+    /// The gearbox's viscous friction, N m s/rad.
+    pub fn viscous(&self) -> f64 {
+        self.values[twinloop_actuator::params::FRICTION_VISCOUS]
+    }
+
+    /// The motor side's drive behind a backlash at its speed `vm` for duty `duty`:
+    /// the motor's torque less the gearbox's viscous friction (both on the motor
+    /// side of the gap, as on the bench), implicit in both dampings.
+    pub fn motor_side_drive(&self, duty: f64, vm: f64) -> Drive {
+        Drive {
+            tau: self.torque(duty, vm) - self.viscous() * vm,
+            k: 0.0,
+            d: self.emf_damping() + self.viscous(),
+        }
+    }
+
+    /// The motor torque at duty `duty` and motor speed `v`, N m.
+    pub fn torque(&self, duty: f64, v: f64) -> f64 {
+        motor_torque(self.kt(), self.resistance(), self.voltage, duty, v).0
+    }
+
+    /// The gearbox's Coulomb budget at motor speed `v` carrying `tau_m` (seed: BAM's
+    /// M1-M4 through `budget`).
+    pub fn friction(&self, v: f64, tau_m: f64) -> f64 {
+        budget(&self.values, v, tau_m)
+    }
+
+    /// The firmware's registers for `s`'s compliance slope and margin (RX) or the P
+    /// gain that reaches full PWM at `compliance_slope` (MX(2.0)/X), with the file's
+    /// punch or I and D gains.
+    pub fn registers(&self, s: &DynamixelServo) -> [f64; 3] {
+        let r = self.servo.resolution();
+        match self.servo.family() {
+            // The slope register in counts (a power of two; rounded, not truncated,
+            // so 32 counts stays 32 after the trip through radians).
+            LoopFamily::Compliance => [
+                (s.compliance_slope / r).round(),
+                (s.compliance_margin / r).round(),
+                self.punch,
+            ],
+            LoopFamily::Pid => [
+                self.servo.pwm_max() * self.servo.p_gain_divisor() / (s.compliance_slope / r),
+                self.i_gain,
+                self.d_gain,
+            ],
+        }
+    }
 }
 
 /// One Dynamixel position unit of the 1024-count, 300-degree servos (RX, AX).
@@ -56,6 +149,7 @@ impl DynamixelServo {
             backlash: 0.0,
             motor_inertia: 0.0,
             gear_friction: 0.0,
+            full: None,
         }
     }
 

@@ -9,7 +9,8 @@
 //! (its inertia joins the joint's in the step, its friction the joint's); open, or
 //! pulled, the output feels nothing and the motor side moves alone under the loop's
 //! torque and its friction; when it reaches the other edge the gap closes with an
-//! inelastic impact on the motor side (it takes the output's speed). A
+//! inelastic impact, momentum kept (the simulator's step resolves it against the
+//! joint's effective inertia). A
 //! simplification against the bench: the bench opens the gap when the contact
 //! torque would pull (after the step), here when the loop's torque does (before it:
 //! the contact torque of a multibody step is known only after it).
@@ -51,15 +52,15 @@ impl Gear {
     }
 }
 
-/// The torque on the output at `q`, `v` (time step `dt`): the loop's when the gap is
-/// closed and the motor side pushes into it (then `gear.engaged` is the closed side
-/// and the motor side's inertia and friction join the joint's), else none. Pushes:
-/// the loop's torque less what the motor side's inertia takes at the output's last
-/// acceleration, `tau - J_m a`, has the closed side's sign (the bench's contact test,
-/// a step late).
+/// The torque on the output at `q`, `v` (time step `dt`): the loop's, `m` (the
+/// motor's drive at the output's speed), when the gap is closed and the motor side
+/// pushes into it (then `gear.engaged` is the closed side and the motor side's
+/// inertia and friction join the joint's), else none. Pushes: the loop's torque less
+/// what the motor side's inertia takes at the output's last acceleration,
+/// `tau - J_m a`, has the closed side's sign (the bench's contact test, a step late).
 pub fn output_drive(
     servo: &DynamixelServo,
-    goal: f64,
+    m: Drive,
     gear: &mut Gear,
     q: f64,
     v: f64,
@@ -74,7 +75,6 @@ pub fn output_drive(
     } else {
         0.0
     };
-    let m = servo.drive(goal, q, v);
     let a = if gear.v_last.is_finite() {
         (v - gear.v_last) / dt
     } else {
@@ -94,20 +94,31 @@ pub fn output_drive(
 }
 
 /// After the step, with the output at its new `q`, `v`: an engaged motor side
-/// follows the output; a free one moves under the loop's torque (implicit in the
-/// back-EMF) and its Coulomb friction, and closes the gap on the output's speed.
-pub fn advance_motor(servo: &DynamixelServo, gear: &mut Gear, goal: f64, q: f64, v: f64, dt: f64) {
+/// follows the output; a free one moves under the loop's torque `drive_at(vm)`
+/// (implicit in the back-EMF) and its Coulomb friction `friction`. Where it reaches
+/// an edge moving into it the gap closes: it is put at the edge and its speed
+/// returned for the caller's impact (`Simulator` resolves it against the joint's
+/// effective inertia, momentum kept, as the bench does), which sets `gear.vm`.
+pub fn advance_motor(
+    servo: &DynamixelServo,
+    gear: &mut Gear,
+    drive_at: impl Fn(f64) -> Drive,
+    friction: f64,
+    q: f64,
+    v: f64,
+    dt: f64,
+) -> Option<f64> {
     let half = 0.5 * servo.backlash;
     if gear.engaged != 0.0 {
         gear.qm = q + gear.engaged * half;
         gear.vm = v;
-        return;
+        return None;
     }
-    let m = servo.drive(goal, q, gear.vm);
+    let m = drive_at(gear.vm);
     let h = servo.motor_inertia.max(1e-6) + dt * m.d;
     let free = gear.vm + dt * m.tau / h;
     let stop = free * h / dt;
-    let friction = stop.clamp(-servo.gear_friction, servo.gear_friction);
+    let friction = stop.clamp(-friction, friction);
     gear.vm = free - dt * friction / h;
     gear.qm += dt * gear.vm;
     // The gap closes where the motor side reaches an edge moving into it.
@@ -115,8 +126,9 @@ pub fn advance_motor(servo: &DynamixelServo, gear: &mut Gear, goal: f64, q: f64,
     let closing = (gear.vm - v) * delta.signum() > 0.0;
     if delta.abs() >= half && closing {
         gear.qm = q + half * delta.signum();
-        gear.vm = v;
+        return Some(gear.vm);
     }
+    None
 }
 
 #[cfg(test)]
@@ -134,17 +146,21 @@ mod tests {
             vm: 0.0,
             ..Default::default()
         };
-        assert_eq!(output_drive(&s, 1.0, &mut g, 0.0, 0.0, 1e-3).tau, 0.0);
+        let at = |goal: f64| s.drive(goal, 0.0, 0.0);
+        assert_eq!(output_drive(&s, at(1.0), &mut g, 0.0, 0.0, 1e-3).tau, 0.0);
         // Closed on the + side and the loop pushes +: the loop's torque.
         g.qm = 0.005;
-        let d = output_drive(&s, 1.0, &mut g, 0.0, 0.0, 1e-3);
+        let d = output_drive(&s, at(1.0), &mut g, 0.0, 0.0, 1e-3);
         assert!(d.tau > 0.0 && g.engaged == 1.0);
         // The loop pulls back (goal behind): the gap opens, nothing passes.
-        assert_eq!(output_drive(&s, -1.0, &mut g, 0.0, 0.0, 1e-3).tau, 0.0);
+        assert_eq!(output_drive(&s, at(-1.0), &mut g, 0.0, 0.0, 1e-3).tau, 0.0);
         assert_eq!(g.engaged, 0.0);
         // The free motor side crosses the gap and closes it on the other side.
         for _ in 0..200 {
-            advance_motor(&s, &mut g, -1.0, 0.0, 0.0, 1e-3);
+            let f = s.gear_friction;
+            if advance_motor(&s, &mut g, |vm| s.drive(-1.0, 0.0, vm), f, 0.0, 0.0, 1e-3).is_some() {
+                g.vm = 0.0; // an output held still takes the impact
+            }
         }
         assert!((g.qm + 0.005).abs() < 1e-12 && g.vm == 0.0);
     }

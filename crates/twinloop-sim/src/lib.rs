@@ -19,6 +19,7 @@ pub mod contact;
 pub mod ltdl;
 mod robot_impl;
 pub mod sensors;
+pub mod servo_model;
 pub mod servo_params;
 pub mod simulator;
 pub mod statics;

@@ -1,34 +1,36 @@
 //! A servo model's identified parameters (`twinloop-actuator`'s file, docs/servo-models.md)
-//! on a joint of the simulator: the firmware loop at its factory registers, the DC
-//! motor's drive and back-EMF, the armature, the gearbox's Coulomb and viscous
-//! friction and its backlash.
-//!
-//! What the simulator's servo leaves out of the file: the Stribeck and
-//! load-dependent friction (only `friction_base` is used), the RX punch, the PID's
-//! I and D terms, encoder counts (the simulator's encoders do that), and the sensing
-//! and bus delays.
+//! on a joint of the simulator: the full model of `crate::servo_model` (the firmware
+//! on encoder counts with its punch or I and D terms and profile, the DC motor, BAM's
+//! friction budget, the sensing and bus delays), the armature, the viscous friction
+//! as the joint's damping, and the backlash.
 
 use crate::actuator::{Actuator, DynamixelServo};
+use crate::servo_model::{FullServo, ServoState};
 use crate::simulator::Simulator;
 use twinloop_actuator::ActuatorError;
 use twinloop_actuator::params::{BACKLASH, FRICTION_BASE, FRICTION_VISCOUS};
 pub use twinloop_actuator::params_set::{ServoParamsSet, ServoSlot};
 use twinloop_actuator::{LoopFamily, ServoParams, ServoType};
 
-/// The simulator's servo for `p`: full drive `kt V / R` (stall torque), back-EMF
-/// damping `kt^2 / R` (so no-load speed `V / kt`), the loop's slope at the factory
+/// The simulator's servo for `p`: the full model (`full`: the file's parameters and
+/// the factory punch, I and D gains, no profile), the loop's slope at the factory
 /// registers (RX: compliance slope 32 counts, margin 1 count; MX(2.0)/X: full PWM at
-/// `885 x 128 / P` counts, no margin), the backlash with the armature on its motor
-/// side.
+/// `885 x 128 / P` counts (XL330: 256), no margin), the backlash with the armature on its motor
+/// side. The rating fields (full drive `kt V / R`, no-load speed `V / kt`) say the
+/// same motor to code that reads them.
 pub fn servo_from_params(p: &ServoParams) -> DynamixelServo {
     let count = p.servo.resolution();
     let regs = p.servo.factory_firmware();
+    let rx = p.servo.family() == LoopFamily::Compliance;
     let (slope, margin) = match p.servo.family() {
         LoopFamily::Compliance => (
             twinloop_actuator::firmware::rx_slope_units(regs[0]) * count,
             regs[1] * count,
         ),
-        LoopFamily::Pid => (p.servo.pwm_max() * 128.0 / regs[0].max(1.0) * count, 0.0),
+        LoopFamily::Pid => (
+            p.servo.pwm_max() * p.servo.p_gain_divisor() / regs[0].max(1.0) * count,
+            0.0,
+        ),
     };
     DynamixelServo {
         stall_torque: p.kt() / p.resistance() * p.voltage,
@@ -39,25 +41,41 @@ pub fn servo_from_params(p: &ServoParams) -> DynamixelServo {
         backlash: p.values[BACKLASH],
         motor_inertia: p.armature(),
         gear_friction: p.values[FRICTION_BASE],
+        full: Some(FullServo {
+            servo: p.servo,
+            voltage: p.voltage,
+            values: p.values,
+            punch: if rx { regs[2] } else { 0.0 },
+            i_gain: if rx { 0.0 } else { regs[1] },
+            d_gain: if rx { 0.0 } else { regs[2] },
+            profile_velocity: 0.0,
+            profile_acceleration: 0.0,
+        }),
     }
 }
 
 impl Simulator {
     /// Drive joint `i` by the servo of `p` ([`servo_from_params`]). The file's
-    /// gearbox replaces the description's joint terms: viscous friction as the
-    /// joint's damping; without a backlash the armature as the joint's and the
-    /// Coulomb friction as its friction; with one, both on the motor side.
+    /// gearbox replaces the description's joint terms: the friction budget as its
+    /// Coulomb friction (per step); without a backlash the armature as the joint's
+    /// and the viscous friction as its damping, with one both on the motor side.
+    /// The servo's delay rings are sized here for the simulator's time step.
     pub fn set_servo_params(&mut self, i: usize, p: &ServoParams) {
         let s = servo_from_params(p);
         self.actuators[i] = Actuator::Dynamixel(s);
-        self.joint_damping[i] = p.values[FRICTION_VISCOUS];
-        if s.backlash > 0.0 {
-            self.joint_friction[i] = 0.0;
-        } else {
+        // The gearbox's Coulomb friction is the full model's budget (per step).
+        self.joint_friction[i] = 0.0;
+        if s.backlash <= 0.0 {
             self.model.armature[i] = p.armature();
-            self.joint_friction[i] = p.values[FRICTION_BASE];
+            self.joint_damping[i] = p.values[FRICTION_VISCOUS];
+        } else {
+            // Behind a dead band the gearbox's viscous friction is on the motor side.
+            self.joint_damping[i] = 0.0;
         }
         self.gears[i] = Default::default();
+        if let Some(full) = &s.full {
+            self.servo_states[i] = ServoState::new(full, self.config.dt);
+        }
     }
 
     /// Give the joints of robot `robot_name` the servos of `set` (`option` names the

@@ -200,6 +200,8 @@ pub struct Simulator {
     friction_anchor: Vec<f64>,
     /// Per joint: the motor side of a servo with a backlash.
     pub gears: Vec<crate::backlash::Gear>,
+    /// Per joint: the state of a servo with the full model of a parameter file.
+    pub servo_states: Vec<crate::servo_model::ServoState>,
     /// Torque each actuator applied in the last step.
     pub applied: Vec<f64>,
     pub(crate) points: Vec<ContactPoint>,
@@ -315,6 +317,7 @@ impl Simulator {
             joint_friction,
             friction_anchor: vec![0.0; nb],
             gears: vec![Default::default(); nb],
+            servo_states: vec![Default::default(); nb],
             applied: vec![0.0; nb],
             contacts: vec![ContactState::default(); points.len()],
             points,
@@ -380,6 +383,7 @@ impl Simulator {
                 s.theta_dot = 0.0;
             }
             self.gears[i] = Default::default();
+            self.servo_states[i].reset();
         }
         self.contacts
             .iter_mut()
@@ -425,6 +429,7 @@ impl Simulator {
     fn joint_drive(&mut self, i: usize) -> Drive {
         let dof = self.model.idx_v[i];
         let (q, v) = (self.q[self.model.idx_q[i]], self.v[dof]);
+        let dt = self.config.dt;
         let mut d = match &self.actuators[i] {
             Actuator::Passive => Drive::default(),
             Actuator::Torque => Drive {
@@ -432,10 +437,15 @@ impl Simulator {
                 k: 0.0,
                 d: 0.0,
             },
+            Actuator::Dynamixel(s) if s.full.is_some() => {
+                let s = *s;
+                self.full_servo_drive(i, &s, q, v)
+            }
             Actuator::Dynamixel(s) if s.backlash > 0.0 => {
                 let g = &mut self.gears[i];
                 g.sync(s, q, v);
-                crate::backlash::output_drive(s, self.goals[i], g, q, v, self.config.dt)
+                let m = s.drive(self.goals[i], q, v);
+                crate::backlash::output_drive(s, m, g, q, v, dt)
             }
             Actuator::Dynamixel(s) => s.drive(self.goals[i], q, v),
             Actuator::TwoLoop(s) => s.drive(self.goals[i], q, v),
@@ -449,7 +459,7 @@ impl Simulator {
         // friction cannot do.
         d.tau -= self.joint_damping[i] * v;
         d.d += self.joint_damping[i];
-        let fr = self.joint_friction[i] + self.engaged_gear(i).1;
+        let fr = self.joint_friction[i] + self.engaged_gear(i).1 + self.full_servo_friction(i, v);
         if fr > 0.0 {
             // Full friction torque at 0.1 mrad of deflection; damping for a crisp stick.
             let kf = fr / 1e-4;
@@ -487,10 +497,101 @@ impl Simulator {
     fn engaged_gear(&self, i: usize) -> (f64, f64) {
         match &self.actuators[i] {
             Actuator::Dynamixel(s) if s.backlash > 0.0 && self.gears[i].engaged != 0.0 => {
-                (s.motor_inertia, s.gear_friction)
+                // A full model's gearbox friction is its budget (full_servo_friction).
+                let coulomb = if s.full.is_some() {
+                    0.0
+                } else {
+                    s.gear_friction
+                };
+                (s.motor_inertia, coulomb)
             }
             _ => (0.0, 0.0),
         }
+    }
+
+    /// Joint `i`'s angle as its servo senses it: for a full-model servo with a
+    /// sensing delay the angle that long ago (what its Present Position reads),
+    /// else the angle now, rad.
+    pub fn sensed_joint_angle(&self, i: usize) -> f64 {
+        let q = self.q[self.model.idx_q[i]];
+        match &self.actuators[i] {
+            Actuator::Dynamixel(s) => match s.full {
+                Some(full) => self.servo_states[i].sensed(&full, self.time, q),
+                None => q,
+            },
+            _ => q,
+        }
+    }
+
+    /// Joint `i`'s full-model servo ([`crate::servo_model`]) at `q`, `v`: the
+    /// firmware's cycle on the sensed counts, the motor's torque at the joint's
+    /// speed (explicit in the duty, implicit in the back-EMF); behind a backlash, on
+    /// the motor side.
+    fn full_servo_drive(&mut self, i: usize, s: &crate::DynamixelServo, q: f64, v: f64) -> Drive {
+        let Some(full) = s.full else {
+            return Drive::default();
+        };
+        let dt = self.config.dt;
+        let st = &mut self.servo_states[i];
+        let duty = st.cycle(s, &full, self.goals[i], self.time, q, dt);
+        let m = Drive {
+            tau: full.torque(duty, v),
+            k: 0.0,
+            d: full.emf_damping(),
+        };
+        if s.backlash > 0.0 {
+            let g = &mut self.gears[i];
+            g.sync(s, q, v);
+            st.motor_torque = full.torque(duty, g.vm);
+            // The viscous friction is on the motor side: with the joint while engaged.
+            let m = full.motor_side_drive(duty, v);
+            crate::backlash::output_drive(s, m, g, q, v, dt)
+        } else {
+            st.motor_torque = m.tau;
+            m
+        }
+    }
+
+    /// The Coulomb budget of joint `i`'s full-model gearbox where it acts on the
+    /// joint (no backlash, or the gap closed and pushed), at joint speed `v`
+    /// (BAM's budget: base, Stribeck and load-dependent), else 0.
+    fn full_servo_friction(&self, i: usize, v: f64) -> f64 {
+        match &self.actuators[i] {
+            Actuator::Dynamixel(s) if s.backlash <= 0.0 || self.gears[i].engaged != 0.0 => s
+                .full
+                .map_or(0.0, |f| f.friction(v, self.servo_states[i].motor_torque)),
+            _ => 0.0,
+        }
+    }
+
+    /// The gap of joint `i`'s backlash closed with its motor side arriving at `vm`:
+    /// an inelastic impact, momentum kept, between the motor side (the armature) and
+    /// the joint, whose effective inertia `1 / (H^-1)_ii` and response to the
+    /// impulse `H^-1 e_i` come from the step matrix `H` still factorised (so the
+    /// rest of the robot takes its share of the blow). Both sides leave at the
+    /// common speed.
+    fn gear_impact(&mut self, i: usize, vm: f64) {
+        let jm = match &self.actuators[i] {
+            Actuator::Dynamixel(s) => s.motor_inertia,
+            _ => 0.0,
+        };
+        let iv = self.model.idx_v[i];
+        self.rhs.iter_mut().for_each(|x| *x = 0.0);
+        self.rhs[iv] = 1.0;
+        ltdl::solve(&self.h, &self.dof_parent, &mut self.rhs);
+        let x = self.rhs[iv];
+        let v = self.v[iv];
+        if !(x > 0.0 && x.is_finite()) || jm <= 0.0 {
+            self.gears[i].vm = v;
+            return;
+        }
+        let jj = 1.0 / x;
+        let common = (jm * vm + jj * v) / (jm + jj);
+        let p = jj * (common - v);
+        for (vk, xk) in self.v.iter_mut().zip(self.rhs.iter()) {
+            *vk += p * xk;
+        }
+        self.gears[i].vm = self.v[iv];
     }
 
     /// Why the step matrix has no factor at velocity coordinate `k`: named by its
@@ -586,19 +687,33 @@ impl Simulator {
         // their goals with the link at its new state.
         for i in 0..self.model.nbodies {
             let (iq, iv) = (self.model.idx_q[i], self.model.idx_v[i]);
-            match &mut self.actuators[i] {
+            let closed = match &mut self.actuators[i] {
                 Actuator::SeriesElastic(s) => {
-                    s.advance_motor(self.goals[i], self.q[iq], self.v[iv], dt)
+                    s.advance_motor(self.goals[i], self.q[iq], self.v[iv], dt);
+                    None
                 }
-                Actuator::Dynamixel(s) if s.backlash > 0.0 => crate::backlash::advance_motor(
-                    s,
-                    &mut self.gears[i],
-                    self.goals[i],
-                    self.q[iq],
-                    self.v[iv],
-                    dt,
-                ),
-                _ => {}
+                Actuator::Dynamixel(s) if s.backlash > 0.0 => {
+                    let (goal, q) = (self.goals[i], self.q[iq]);
+                    let g = &mut self.gears[i];
+                    match s.full {
+                        Some(full) => {
+                            let duty = self.servo_states[i].duty;
+                            let tau_m = full.torque(duty, g.vm);
+                            let friction = full.friction(g.vm, tau_m);
+                            let at = |vm: f64| full.motor_side_drive(duty, vm);
+                            crate::backlash::advance_motor(s, g, at, friction, q, self.v[iv], dt)
+                        }
+                        None => {
+                            let at = |vm: f64| s.drive(goal, q, vm);
+                            let f = s.gear_friction;
+                            crate::backlash::advance_motor(s, g, at, f, q, self.v[iv], dt)
+                        }
+                    }
+                }
+                _ => None,
+            };
+            if let Some(vm) = closed {
+                self.gear_impact(i, vm);
             }
         }
         self.time += dt;
@@ -793,5 +908,22 @@ impl Simulator {
             contacts: &self.contacts,
         };
         sensors::read(&self.model, &mut self.data, &mut self.sensors, &at, state);
+        // A full-model servo with a sensing delay reads the angle that long ago.
+        for i in 0..self.model.nbodies {
+            let delayed = match &self.actuators[i] {
+                Actuator::Dynamixel(s) => s
+                    .full
+                    .is_some_and(|f| f.values[twinloop_actuator::params::SENSING_DELAY] > 0.0),
+                _ => false,
+            };
+            if delayed {
+                let k = self.model.idx_q[i] - self.model.q_offset;
+                let q = self.sensed_joint_angle(i);
+                state.positions[k] = match self.sensors.encoder_resolution[i] {
+                    Some(r) => crate::sensors::quantize(q, r),
+                    None => q,
+                };
+            }
+        }
     }
 }

@@ -123,6 +123,11 @@ impl VirtualServoBackend for BenchBackend {
                 f.torque_limit = (raw_f / 1023.0).clamp(0.0, 1.0)
             }
             (LoopFamily::Pid, Item::MaxTorque) => f.torque_limit = (raw_f / 885.0).clamp(0.0, 1.0),
+            // Moving Speed (RX) or Profile Velocity (X, MX(2.0)), Profile Acceleration.
+            (_, Item::MovingSpeed) => f.profile.set_velocity_register(f.servo, raw_f),
+            (LoopFamily::Pid, Item::ProfileAcceleration) => {
+                f.profile.set_acceleration_register(raw_f)
+            }
             _ => {}
         }
     }

@@ -25,6 +25,14 @@ pub struct DriveRegisters {
     pub moving_speed: f64,
     /// Torque Limit (RX) or PWM Limit (X) as a fraction of full torque.
     pub torque_limit: f64,
+    /// Profile Acceleration (MX(2.0), X), rad/s^2; 0: none.
+    pub profile_acceleration: f64,
+    /// Raw Punch (RX), Position I and D Gain (MX, X) as written; `None`: the file's
+    /// servo keeps its factory value. Only a full-model servo (a parameter file) has
+    /// them.
+    pub punch: Option<f64>,
+    pub i_gain: Option<f64>,
+    pub d_gain: Option<f64>,
 }
 
 impl DriveRegisters {
@@ -38,6 +46,10 @@ impl DriveRegisters {
             p_ratio: None,
             moving_speed: 0.0,
             torque_limit: 1.0,
+            profile_acceleration: 0.0,
+            punch: None,
+            i_gain: None,
+            d_gain: None,
         }
     }
 
@@ -64,6 +76,14 @@ impl DriveRegisters {
                 let factory = r.initial.unwrap_or(raw).max(1) as f64;
                 self.p_ratio = Some(raw.max(0) as f64 / factory);
             }
+            Item::ProfileAcceleration => {
+                let mut p = twinloop_actuator::profile::Profile::default();
+                p.set_acceleration_register(raw as f64);
+                self.profile_acceleration = p.acceleration;
+            }
+            Item::Punch => self.punch = Some(raw.max(0) as f64),
+            Item::PositionIGain => self.i_gain = Some(raw.max(0) as f64),
+            Item::PositionDGain => self.d_gain = Some(raw.max(0) as f64),
             Item::MovingSpeed => {
                 self.moving_speed = match r.unit {
                     Unit::AngularVelocity { rad_s_per_unit } => raw.max(0) as f64 * rad_s_per_unit,
@@ -96,10 +116,11 @@ pub fn rx_slope_units(raw: i32) -> f64 {
 
 /// The simulator's servo for one moment: `base` (the joint's servo, from its
 /// datasheet) with the registers applied. `ccw` says which way the servo turns to
-/// reach its goal: RX compliance differs per direction. The simulator's servo has
-/// one proportional position loop, so a P gain scales its slope (full torque at an
-/// error `p_ratio` times smaller); I and D gains and Punch have no counterpart in
-/// it and are kept in the table only.
+/// reach its goal: RX compliance differs per direction. A P gain scales the slope
+/// (full torque at an error `p_ratio` times smaller). The datasheet servo has one
+/// proportional loop: I and D gains, Punch and Profile Acceleration are kept in the
+/// table only; a servo from a parameter file (`--servo-params`, the full model) takes
+/// them, and its firmware runs the profile.
 pub fn servo_with_registers(
     base: &DynamixelServo,
     regs: &DriveRegisters,
@@ -122,6 +143,20 @@ pub fn servo_with_registers(
         };
     }
     s.torque_limit = regs.torque_limit;
+    // A full-model servo runs its own profile, punch and I and D terms.
+    if let Some(full) = &mut s.full {
+        full.profile_velocity = regs.moving_speed;
+        full.profile_acceleration = regs.profile_acceleration;
+        if let Some(p) = regs.punch {
+            full.punch = p;
+        }
+        if let Some(i) = regs.i_gain {
+            full.i_gain = i;
+        }
+        if let Some(d) = regs.d_gain {
+            full.d_gain = d;
+        }
+    }
     s
 }
 
@@ -174,5 +209,35 @@ mod tests {
         let s = servo_with_registers(&base, &x, true);
         assert!((s.compliance_slope - base.compliance_slope / 2.0).abs() < 1e-12);
         assert!((s.torque_limit - 177.0 / 885.0).abs() < 1e-12);
+    }
+}
+
+#[cfg(test)]
+mod full_model_tests {
+    use super::*;
+    use twinloop_actuator::datasheet::defaults;
+    use twinloop_actuator::{ModelLevel, ServoType};
+
+    #[test]
+    fn a_parameter_files_servo_takes_gains_punch_and_profile() {
+        let x = twinloop_sim::servo_from_params(&defaults(ServoType::Xm430W350, ModelLevel::M1));
+        let mut r = DriveRegisters::new(0.0);
+        r.set(ServoModel::Xm430W350, Item::PositionIGain, 300);
+        r.set(ServoModel::Xm430W350, Item::PositionDGain, 1200);
+        r.set(ServoModel::Xm430W350, Item::MovingSpeed, 100);
+        r.set(ServoModel::Xm430W350, Item::ProfileAcceleration, 10);
+        let s = servo_with_registers(&x, &r, true);
+        let f = s.full.unwrap();
+        assert_eq!((f.i_gain, f.d_gain), (300.0, 1200.0));
+        // EM-XM430: 0.229 rpm and 214.577 rev/min^2 per unit.
+        assert!((f.profile_velocity - 22.9 * std::f64::consts::TAU / 60.0).abs() < 1e-9);
+        assert!((f.profile_acceleration - 2145.77 * std::f64::consts::TAU / 3600.0).abs() < 1e-9);
+        let rx = twinloop_sim::servo_from_params(&defaults(ServoType::Rx28, ModelLevel::M1));
+        let mut r = DriveRegisters::new(0.0);
+        r.set(ServoModel::Rx28, Item::Punch, 100);
+        assert_eq!(
+            servo_with_registers(&rx, &r, true).full.unwrap().punch,
+            100.0
+        );
     }
 }

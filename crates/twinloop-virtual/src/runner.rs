@@ -162,8 +162,9 @@ impl Runner {
                 self.sim.actuators[s.joint] = Actuator::Passive;
                 continue;
             }
-            // Moving Speed: the servo heads for its goal no faster than that.
-            self.profile[k] = if r.moving_speed > 0.0 {
+            // Moving Speed: the servo heads for its goal no faster than that (a
+            // full-model servo's firmware runs its own profile).
+            self.profile[k] = if r.moving_speed > 0.0 && s.base.full.is_none() {
                 let d = r.moving_speed * dt;
                 self.profile[k] + (r.goal - self.profile[k]).clamp(-d, d)
             } else {
@@ -213,10 +214,11 @@ impl Runner {
             imu.gyro = [y[0], y[1], y[2]];
             imu.accel = [y[3], y[4], y[5]];
         }
-        let (qo, vo) = (self.sim.model.q_offset, self.sim.model.v_offset);
+        let vo = self.sim.model.v_offset;
         for (k, s) in self.servos.iter().enumerate() {
             let m = &mut self.snap.servos[k];
-            m.position = s.zero + s.direction * self.sim.q[qo + s.joint];
+            // The angle the servo senses: its sensing delay ago for a full model.
+            m.position = s.zero + s.direction * self.sim.sensed_joint_angle(s.joint);
             m.velocity = s.direction * self.sim.v[vo + s.joint];
             m.torque = s.direction * self.sim.applied[s.joint] * s.torque_scale;
             m.voltage = s.voltage;

@@ -1,0 +1,133 @@
+//! The servo's two delays as fixed rings of timed samples, shared by the bench and
+//! the simulator: the output angle's history (the sensing delay: the loop and Present
+//! Position see the angle `sensing_delay` ago) and the goals sent but not yet in
+//! force (the bus delay).
+
+/// A ring of (time, value) samples, oldest first, with its room reserved when it is
+/// made: pushing within that room never allocates (the simulator's step sizes it from
+/// the delay and its time step). Pushed past its room it grows (the bench's variable
+/// steps), so no sample a delay still needs is dropped.
+#[derive(Debug, Clone, Default)]
+pub struct Samples {
+    buf: Vec<(f64, f64)>,
+    start: usize,
+    len: usize,
+}
+
+impl Samples {
+    pub fn with_capacity(n: usize) -> Samples {
+        Samples {
+            buf: vec![(0.0, 0.0); n.max(1)],
+            start: 0,
+            len: 0,
+        }
+    }
+
+    /// The room for `delay` seconds of samples taken every `dt`, and a margin: a
+    /// ring trimmed by [`Samples::forget_before`] at `delay + 2 dt` holds at most
+    /// `delay / dt + 5` samples just after a push.
+    pub fn for_delay(delay: f64, dt: f64) -> Samples {
+        let n = if delay > 0.0 && dt > 0.0 {
+            (delay / dt).ceil() as usize + 8
+        } else {
+            2
+        };
+        Samples::with_capacity(n)
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub fn clear(&mut self) {
+        self.start = 0;
+        self.len = 0;
+    }
+
+    /// The `i`-th sample, oldest first.
+    pub fn get(&self, i: usize) -> (f64, f64) {
+        self.buf[(self.start + i) % self.buf.len()]
+    }
+
+    pub fn front(&self) -> Option<(f64, f64)> {
+        (self.len > 0).then(|| self.get(0))
+    }
+
+    pub fn pop_front(&mut self) -> Option<(f64, f64)> {
+        let s = self.front()?;
+        self.start = (self.start + 1) % self.buf.len();
+        self.len -= 1;
+        Some(s)
+    }
+
+    pub fn push_back(&mut self, t: f64, x: f64) {
+        if self.len == self.buf.len() {
+            // Out of room: lay the ring out in order in one twice the size.
+            let mut grown = Vec::with_capacity(2 * self.buf.len());
+            grown.extend((0..self.len).map(|i| self.get(i)));
+            grown.resize(2 * self.buf.len(), (0.0, 0.0));
+            self.buf = grown;
+            self.start = 0;
+        }
+        let n = self.buf.len();
+        self.buf[(self.start + self.len) % n] = (t, x);
+        self.len += 1;
+    }
+
+    /// Drop the samples older than the one at or before `keep` (two are always kept:
+    /// the interpolation at `keep` needs the one before it).
+    pub fn forget_before(&mut self, keep: f64) {
+        while self.len > 2 && self.get(1).0 < keep {
+            self.pop_front();
+        }
+    }
+
+    /// The value at time `at`, linear between samples, `now` being the newest
+    /// (time, value) not yet pushed; before the oldest sample, the oldest value.
+    pub fn value_at(&self, at: f64, now: (f64, f64)) -> f64 {
+        let mut later = now;
+        for k in (0..self.len).rev() {
+            let (t, x) = self.get(k);
+            if t <= at {
+                let w = if later.0 > t {
+                    (at - t) / (later.0 - t)
+                } else {
+                    0.0
+                };
+                return x + w * (later.1 - x);
+            }
+            later = (t, x);
+        }
+        later.1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ring_interpolates_and_grows_in_order() {
+        let mut s = Samples::with_capacity(3);
+        for k in 0..5 {
+            s.push_back(k as f64, 10.0 * k as f64);
+        }
+        assert_eq!(s.len(), 5);
+        assert_eq!(s.front(), Some((0.0, 0.0)));
+        assert!((s.value_at(2.25, (5.0, 50.0)) - 22.5).abs() < 1e-12);
+        assert!((s.value_at(4.5, (5.0, 50.0)) - 45.0).abs() < 1e-12);
+        assert_eq!(s.value_at(-1.0, (5.0, 50.0)), 0.0);
+        s.forget_before(3.0);
+        assert_eq!(s.front(), Some((2.0, 20.0)));
+        let mut r = Samples::with_capacity(4);
+        for k in 0..40 {
+            r.push_back(k as f64, k as f64);
+            r.forget_before(k as f64 - 1.0);
+        }
+        assert!(r.len() <= 3 && r.buf.len() == 4);
+    }
+}
