@@ -109,6 +109,10 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         .as_deref()
         .map(|s| parse_servo(s, "--servo"))
         .transpose()?;
+    // The load files first: small, typed by hand, and cheaper to get right than a log.
+    for arg in &a.load {
+        Pendulum::read(Path::new(keyed(arg, "--load")?.1))?;
+    }
     // BAM's logs (JSON, or its column form) carry their pendulum; ours name it in
     // --load.
     let mut bam_loads: Vec<(String, Pendulum)> = Vec::new();
