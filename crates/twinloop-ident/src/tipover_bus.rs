@@ -120,13 +120,6 @@ const REPEAT_MARGIN_DEG: f64 = 0.6;
 /// Two creeps that tip within this many degrees of each other agree: twice the ankle's
 /// encoder count (0.29 deg on an RX), about the scatter of creeps on the virtual robot.
 pub const CREEPS_AGREE_DEG: f64 = 0.6;
-/// The creeps' approach up to where they slow down is this many times faster than the
-/// first ramp: the first run found where the robot tips, and the approach stops at
-/// least [`REPEAT_MARGIN_DEG`] before it, so the creep's own seconds decide the angle.
-const APPROACH_SPEEDUP: f64 = 2.0;
-/// ... but no faster than this, deg/s (unless the first ramp was): a robot rushed up
-/// to its edge rocks on for seconds after the ramp slows.
-const APPROACH_MAX_DEG_PER_S: f64 = 4.0;
 /// How long a person (or the virtual robot's operator) has to stand the robot up, s.
 const STAND_UP_TIMEOUT_S: f64 = 120.0;
 
@@ -265,9 +258,6 @@ pub fn run_directions(
         let first = run(cfg, g).map_err(|e| e.message)?;
         let mut slow = cfg.clone();
         slow.slow_ramp_deg_per_s = opts.slow_ramp;
-        slow.ramp_deg_per_s = (cfg.ramp_deg_per_s * APPROACH_SPEEDUP)
-            .min(APPROACH_MAX_DEG_PER_S)
-            .max(cfg.ramp_deg_per_s);
         let wanted = opts.creeps.max(1);
         let mut creeps: Vec<TipoverResult> = Vec::with_capacity(wanted + 1);
         let start = first.commanded_deg - SLOW_MARGIN_DEG;
