@@ -1,10 +1,11 @@
-//! The pendulum bench (BAM's): one servo swinging a mass on an arm, angle 0 hanging
-//! down. [`Bench::step`] is the whole model in one place: sensing, firmware, motor,
-//! friction and the pendulum's motion.
+//! The bench: one servo turning a load ([`Load`]): BAM's pendulum (a mass on an arm,
+//! angle 0 hanging down) or a limb of a held robot. [`Bench::step`] is the whole
+//! model in one place: sensing, firmware, motor, friction and the load's motion.
 
 use crate::error::ActuatorError;
 use crate::firmware::Firmware;
 use crate::friction::budget;
+use crate::load::Load;
 use crate::motor::motor_torque;
 use crate::params::{BACKLASH, BUS_DELAY, FRICTION_VISCOUS, SENSING_DELAY, ServoParams};
 use std::collections::VecDeque;
@@ -97,7 +98,7 @@ impl Pendulum {
 #[derive(Debug, Clone)]
 pub struct Bench {
     pub params: ServoParams,
-    pub load: Pendulum,
+    pub load: Load,
     pub firmware: Firmware,
     /// Goal Position in force, rad (already a whole number of counts when it came over
     /// a bus).
@@ -123,11 +124,11 @@ pub struct Bench {
 }
 
 impl Bench {
-    pub fn new(params: ServoParams, load: Pendulum) -> Bench {
+    pub fn new(params: ServoParams, load: impl Into<Load>) -> Bench {
         Bench {
             firmware: Firmware::new(params.servo),
             params,
-            load,
+            load: load.into(),
             goal: 0.0,
             torque_on: false,
             q: 0.0,
@@ -244,10 +245,10 @@ impl Bench {
         let mut moved = false;
         if !side.is_nan() {
             let (v, vm) = (self.v, self.vm);
-            let inertia = self.params.armature() + self.load.inertia();
+            let inertia = self.params.armature() + self.load.inertia;
             let v_new = self.motor_side_step(dt, inertia, self.load.gravity_torque(self.q));
             // The torque the motor side puts on the load must push it, not pull.
-            let push = self.load.inertia() * (v_new - v) / dt - self.load.gravity_torque(self.q);
+            let push = self.load.inertia * (v_new - v) / dt - self.load.gravity_torque(self.q);
             if side == 0.0 || push * side >= 0.0 {
                 self.v = v_new;
                 self.vm = v_new;
@@ -262,13 +263,13 @@ impl Bench {
             // Apart: the motor side alone on its armature, the load alone under gravity.
             let vm_new = self.motor_side_step(dt, self.params.armature(), 0.0);
             self.vm = vm_new;
-            self.v += dt * self.load.gravity_torque(self.q) / self.load.inertia();
+            self.v += dt * self.load.gravity_torque(self.q) / self.load.inertia;
             self.qm += dt * self.vm;
             self.q += dt * self.v;
             let delta = self.qm - self.q;
             if delta.abs() >= half {
                 // The gap closes: an inelastic impact.
-                let (jm, jl) = (self.params.armature(), self.load.inertia());
+                let (jm, jl) = (self.params.armature(), self.load.inertia);
                 let common = (jm * self.vm + jl * self.v) / (jm + jl);
                 self.vm = common;
                 self.v = common;

@@ -10,7 +10,7 @@ use std::time::Instant;
 use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
 use twinloop_actuator::log::ServoLog;
 use twinloop_actuator::params::{NONSMOOTH, PARAM_NAMES};
-use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType, datasheet};
+use twinloop_actuator::{Load, ModelLevel, Pendulum, ServoParams, ServoType, datasheet};
 
 #[derive(Args, Debug)]
 pub struct ServoIdArgs {
@@ -21,9 +21,15 @@ pub struct ServoIdArgs {
     /// Logs scored but not fitted
     #[arg(long, value_name = "LOG.csv", num_args = 1..)]
     pub holdout: Vec<PathBuf>,
-    /// The pendulum the logs were recorded with (mass, length, arm_inertia)
-    #[arg(long, value_name = "LOAD.toml", required_unless_present = "defaults")]
+    /// The pendulum the logs were recorded with (mass, length, arm_inertia); without
+    /// it, the logs of a limb (`experiment servo --map --joint`) rebuild their load
+    /// from the robot, joint and held pose they record
+    #[arg(long, value_name = "LOAD.toml")]
     pub load: Option<PathBuf>,
+    /// Limb logs: compute the load from this description instead of the one the log
+    /// names (a file moved, or a corrected model)
+    #[arg(long, value_name = "ROBOT", conflicts_with = "load")]
+    pub robot: Option<String>,
     /// The model ladder's rung: m1 (Coulomb + viscous), m2 (+ Stribeck), m3 (+ load-dependent), m4 (both)
     #[arg(long, default_value = "m1", value_name = "NAME")]
     pub model: String,
@@ -90,11 +96,6 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         .as_deref()
         .map(|s| parse_servo(s, "--servo"))
         .transpose()?;
-    let load = Pendulum::read(
-        a.load
-            .as_deref()
-            .ok_or("identify servo needs --load LOAD.toml")?,
-    )?;
     let read = |paths: &[PathBuf]| -> Result<Vec<ServoLog>, CliError> {
         paths
             .iter()
@@ -103,6 +104,10 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     };
     let logs = read(&a.data)?;
     let holdout = read(&a.holdout)?;
+    let load = match &a.load {
+        Some(p) => Load::from(Pendulum::read(p)?),
+        None => limb_load(a.data.iter().chain(&a.holdout), a.robot.as_deref())?,
+    };
     let servo = logs
         .first()
         .and_then(|l| l.servo)
@@ -125,6 +130,42 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     }
     emit(&text(&id, seconds), a.json.as_ref(), &to_json(&id, seconds))?;
     Ok(Outcome::Ok)
+}
+
+/// The load of limb logs: each rebuilt from the robot (or `robot`), joint and held
+/// pose it records; all must be the same load (within 1e-6 relative).
+fn limb_load<'a>(
+    paths: impl Iterator<Item = &'a PathBuf>,
+    robot: Option<&str>,
+) -> Result<Load, CliError> {
+    let mut load: Option<(Load, String)> = None;
+    for p in paths {
+        let file = p.display().to_string();
+        let text = std::fs::read_to_string(p).map_err(|e| CliError::io(p, e))?;
+        let limb = crate::limb::Limb::from_log(&text, &file)?.ok_or_else(|| {
+            CliError::new(format!(
+                "{file}: a bench log (no \"# limb:\" lines): give --load LOAD.toml"
+            ))
+        })?;
+        let (l, _) = limb.load_from(robot)?;
+        match &load {
+            None => load = Some((l, file)),
+            Some((first, name)) => {
+                let same = |x: f64, y: f64| (x - y).abs() <= 1e-6 * (x.abs() + y.abs()).max(1e-9);
+                if !(same(l.inertia, first.inertia)
+                    && same(l.gravity_sin, first.gravity_sin)
+                    && same(l.gravity_cos, first.gravity_cos)
+                    && same(l.gravity_const, first.gravity_const))
+                {
+                    return Err(CliError::new(format!(
+                        "{file}: its limb load differs from {name}'s (another joint or pose): fit them separately"
+                    )));
+                }
+            }
+        }
+    }
+    load.map(|l| l.0)
+        .ok_or_else(|| CliError::new("identify servo needs --data LOG.csv"))
 }
 
 fn text(id: &Identification, seconds: f64) -> String {
