@@ -5,11 +5,11 @@
 //! correlations from the Jacobian at the optimum, the held-out error in mrad, and
 //! what the data cannot determine (the Jacobian's weak directions).
 
-use crate::load::Load;
 use crate::cmaes::{CmaOptions, cmaes};
 use crate::error::ActuatorError;
 use crate::lm::LmResult;
 use crate::lm::{LmOptions, levenberg_marquardt};
+use crate::load::Load;
 use crate::log::ServoLog;
 use crate::params::{
     BACKLASH, FRICTION_VISCOUS, KT, NONSMOOTH, PARAM_NAMES, RESISTANCE, ServoParams,

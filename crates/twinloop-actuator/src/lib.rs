@@ -35,8 +35,8 @@ pub mod synthetic;
 
 pub use bench::{Bench, Pendulum};
 pub use error::ActuatorError;
-pub use load::Load;
 pub use excitation::Excitation;
 pub use firmware::Firmware;
+pub use load::Load;
 pub use params::{ModelLevel, ServoParams};
 pub use servo_type::{LoopFamily, ServoType};

@@ -4,8 +4,8 @@
 //! goes through the real bus instead.
 
 use crate::bench::Bench;
-use crate::load::Load;
 use crate::excitation::Excitation;
+use crate::load::Load;
 use crate::log::ServoLog;
 use crate::params::ServoParams;
 use crate::replay::advance;

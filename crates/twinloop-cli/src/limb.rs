@@ -148,7 +148,7 @@ impl Limb {
                 }
                 "pose" => {
                     let w: Vec<&str> = value.split_whitespace().collect();
-                    if w.len() % 2 != 0 {
+                    if !w.len().is_multiple_of(2) {
                         return Err(bad("pose: expected pairs \"JOINT RAD\""));
                     }
                     let mut p = Vec::with_capacity(w.len() / 2);
@@ -157,9 +157,7 @@ impl Limb {
                             .parse::<f64>()
                             .ok()
                             .filter(|x| x.is_finite())
-                            .ok_or_else(|| {
-                                bad(&format!("pose: {:?} is not an angle", pair[1]))
-                            })?;
+                            .ok_or_else(|| bad(&format!("pose: {:?} is not an angle", pair[1])))?;
                         p.push((pair[0].to_string(), a));
                     }
                     pose = Some(p);

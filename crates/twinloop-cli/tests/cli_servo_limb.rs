@@ -49,7 +49,13 @@ fn limb_servo_parameters_recovered_over_a_pty() {
     spec.push(&params);
     let _server = Server(
         Command::new(bin())
-            .args(["serve", "--robot", "builtin:km20", "--held", "--servo-params"])
+            .args([
+                "serve",
+                "--robot",
+                "builtin:km20",
+                "--held",
+                "--servo-params",
+            ])
             .arg(&spec)
             .arg("--link")
             .arg(&link)
@@ -81,7 +87,11 @@ fn limb_servo_parameters_recovered_over_a_pty() {
         .arg(&log)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = std::fs::read_to_string(&log).unwrap();
     assert!(text.contains("# limb: joint r_hip_pitch zero 0 direction 1 trunk upright"));
     // The sequence stayed inside the joint's range (-100 to 30 deg) less 0.1 rad.
@@ -93,17 +103,29 @@ fn limb_servo_parameters_recovered_over_a_pty() {
         .collect();
     let (qmin, qmax) = q
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
-    eprintln!("{} rows, hip pitch from {qmin:.3} to {qmax:.3} rad", q.len());
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    eprintln!(
+        "{} rows, hip pitch from {qmin:.3} to {qmax:.3} rad",
+        q.len()
+    );
     assert!(qmin > lo && qmax < hi, "{qmin} {qmax} outside {lo} {hi}");
-    assert!(qmax - qmin > 0.8, "the sequence hardly moved: {qmin} to {qmax}");
+    assert!(
+        qmax - qmin > 0.8,
+        "the sequence hardly moved: {qmin} to {qmax}"
+    );
     let out = Command::new(bin())
         .args(["identify", "servo", "--data"])
         .arg(&log)
         .args(["--model", "m1", "--json", "-"])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let fit: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let heldout = fit["heldout_rms_mrad"].as_f64().unwrap();
     let res_mrad = 1e3 * servo.resolution();
@@ -161,7 +183,10 @@ fn limb_servo_parameters_recovered_over_a_pty() {
             c["sd"].as_f64().unwrap(),
         );
     }
-    assert_eq!(checked, 4, "armature, friction_base and the two motor combinations");
+    assert_eq!(
+        checked, 4,
+        "armature, friction_base and the two motor combinations"
+    );
     // The same fit with the description given again (--robot) and the load refused
     // for a bench log's missing limb lines.
     let again = Command::new(bin())
@@ -170,7 +195,11 @@ fn limb_servo_parameters_recovered_over_a_pty() {
         .args(["--robot", "builtin:km20", "--model", "m1", "--json", "-"])
         .output()
         .unwrap();
-    assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
+    assert!(
+        again.status.success(),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
     let fit2: serde_json::Value = serde_json::from_slice(&again.stdout).unwrap();
     assert_eq!(fit2["params"], fit["params"]);
     let _ = std::fs::remove_dir_all(&dir);
@@ -222,7 +251,10 @@ fn limb_route_refusals() {
     let mut text = String::from("# twinloop experiment servo: RX-28 id 1 on x\n");
     text.push_str("t,goal,t_goal,q,v,load,current,voltage,temperature,compliance_slope,compliance_margin,punch\n");
     for k in 0..20 {
-        text.push_str(&format!("{},0,0,0,0,0,NaN,12,30,32,1,32\n", k as f64 * 0.01));
+        text.push_str(&format!(
+            "{},0,0,0,0,0,NaN,12,30,32,1,32\n",
+            k as f64 * 0.01
+        ));
     }
     std::fs::write(&bench_log, text).unwrap();
     let out = Command::new(bin())

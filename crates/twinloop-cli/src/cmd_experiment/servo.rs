@@ -4,9 +4,9 @@
 //! the description, crate::limb).
 
 use super::bus::{confirm, is_serial, resolve};
-use crate::limb::Limb;
 use crate::cmd_link::{PortArgs, interrupt_flag, open_client};
 use crate::error::{CliError, CliResult, Outcome};
+use crate::limb::Limb;
 use clap::Args;
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;
@@ -169,6 +169,9 @@ fn write_firmware(
     Ok(())
 }
 
+/// The bus's client.
+type BusClient = Client<Box<dyn Transport>>;
+
 /// Where the limb's sequence stays away from the joint's limits, rad.
 const LIMIT_MARGIN: f64 = 0.1;
 /// How far beyond its goal a servo may swing (a step's overshoot), as a share of
@@ -201,7 +204,11 @@ pub fn run(a: &ServoArgs) -> CliResult {
     let (mut client, port, target) = match (&a.joint, a.id) {
         (Some(joint), _) => limb_target(a, joint)?,
         (None, Some(id)) => bench_target(a, id)?,
-        (None, None) => return Err(CliError::new("give --id N --load LOAD.toml (a bench) or --map MAP --joint NAME (a limb of a held robot)")),
+        (None, None) => {
+            return Err(CliError::new(
+                "give --id N --load LOAD.toml (a bench) or --map MAP --joint NAME (a limb of a held robot)",
+            ));
+        }
     };
     let exc = Excitation::standard(target.servo, target.amplitude);
     if is_serial(&port) && !a.yes {
@@ -215,11 +222,11 @@ pub fn run(a: &ServoArgs) -> CliResult {
 }
 
 /// The bench: --id swinging the pendulum of --load, hanging at 0.
-fn bench_target(
-    a: &ServoArgs,
-    id: u8,
-) -> Result<(Client<Box<dyn Transport>>, String, Target), CliError> {
-    let path = a.load.as_ref().ok_or("--id needs --load LOAD.toml (the pendulum)")?;
+fn bench_target(a: &ServoArgs, id: u8) -> Result<(BusClient, String, Target), CliError> {
+    let path = a
+        .load
+        .as_ref()
+        .ok_or("--id needs --load LOAD.toml (the pendulum)")?;
     let load = Pendulum::read(path)?;
     let mut client = open_client(&a.bus, None)?;
     let port = a.bus.port.clone().unwrap_or_default();
@@ -253,11 +260,13 @@ fn bench_target(
 /// The limb of a held robot: --joint's servo from --map, its load the subtree beyond
 /// the joint at the pose the other servos hold (read now), the sequence centred
 /// where the joint is and scaled to stay inside its limits.
-fn limb_target(
-    a: &ServoArgs,
-    joint: &str,
-) -> Result<(Client<Box<dyn Transport>>, String, Target), CliError> {
-    let (mapping, port, spec) = resolve(a.map.as_deref(), &a.bus, a.robot.as_deref(), "the limb's load")?;
+fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target), CliError> {
+    let (mapping, port, spec) = resolve(
+        a.map.as_deref(),
+        &a.bus,
+        a.robot.as_deref(),
+        "the limb's load",
+    )?;
     let spec = recorded_spec(&spec, &mapping);
     let (robot, _) = crate::common::load_description(&spec)?;
     crate::common::hinges_only(&robot, &spec, "a limb load")?;
@@ -269,15 +278,26 @@ fn limb_target(
             CliError::new(format!(
                 "--joint {joint:?}: not a joint of {} (its joints: {})",
                 mapping.source,
-                mapping.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>().join(", ")
+                mapping
+                    .joints
+                    .iter()
+                    .map(|j| j.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ))
         })?;
-    let model = twinloop_dynamics::Model::from_description_with_base(&robot, twinloop_dynamics::BaseKind::Fixed)
-        .map_err(|e| CliError::new(format!("{spec}: {e}")))?;
-    let k = model.joint_index(joint).ok_or_else(|| {
-        CliError::new(format!("--joint {joint:?}: not a joint of {spec}"))
-    })?;
-    let bus = PortArgs { port: Some(port.clone()), ..a.bus.clone() };
+    let model = twinloop_dynamics::Model::from_description_with_base(
+        &robot,
+        twinloop_dynamics::BaseKind::Fixed,
+    )
+    .map_err(|e| CliError::new(format!("{spec}: {e}")))?;
+    let k = model
+        .joint_index(joint)
+        .ok_or_else(|| CliError::new(format!("--joint {joint:?}: not a joint of {spec}")))?;
+    let bus = PortArgs {
+        port: Some(port.clone()),
+        ..a.bus.clone()
+    };
     let mut client = open_client(&bus, None)?;
     let found = find(&mut client, jm.id)?;
     if found != jm.model {
@@ -293,7 +313,12 @@ fn limb_target(
         .joint_names
         .iter()
         .enumerate()
-        .map(|(i, n)| (n.clone(), 0f64.clamp(model.lower_limits[i], model.upper_limits[i])))
+        .map(|(i, n)| {
+            (
+                n.clone(),
+                0f64.clamp(model.lower_limits[i], model.upper_limits[i]),
+            )
+        })
         .collect();
     let mut here = 0.0;
     for j in &mapping.joints {
@@ -388,7 +413,11 @@ fn hold_others(
 ) -> Result<(), CliError> {
     for j in mapping.joints.iter().filter(|j| j.id != moving) {
         let s = read_position(client, j.model, j.id)?;
-        let reg = j.model.table().item(Item::GoalPosition).ok_or("no Goal Position")?;
+        let reg = j
+            .model
+            .table()
+            .item(Item::GoalPosition)
+            .ok_or("no Goal Position")?;
         write_item(client, j.model, j.id, Item::GoalPosition, reg.from_si(s))?;
         write_item(client, j.model, j.id, Item::TorqueEnable, 1)?;
     }
@@ -459,7 +488,13 @@ fn drive(
     let protocol = model.protocol();
     let (goal, mut regs) = goal_at(0.0).ok_or("the excitation is empty")?;
     write_firmware(client, model, servo, id, regs)?;
-    write_item(client, model, id, Item::GoalPosition, goal_reg.from_si(goal))?;
+    write_item(
+        client,
+        model,
+        id,
+        Item::GoalPosition,
+        goal_reg.from_si(goal),
+    )?;
     write_item(client, model, id, Item::TorqueEnable, 1)?;
     let mut t_goal = 0.0;
     let mut buf = vec![0u8; block.len];
