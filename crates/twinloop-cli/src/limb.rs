@@ -1,6 +1,7 @@
 //! The load a servo turns when it moves one limb of a held robot: the subtree of
-//! links beyond its joint, with the robot's base fixed (trunk upright: the
-//! description's base frame with gravity along its -z) and every other joint
+//! links beyond its joint, with the robot's base fixed (gravity's direction in the
+//! base frame measured by the trunk's IMU board where the mapping has one, else the
+//! trunk assumed upright: gravity along the base frame's -z) and every other joint
 //! held at the pose read when the experiment began.
 //!
 //! Held so, the subtree is one rigid body turning about a fixed axis: its inertia
@@ -17,7 +18,8 @@
 //!
 //! ```text
 //! # limb: robot builtin:km20
-//! # limb: joint r_hip_pitch zero 0 direction 1 trunk upright
+//! # limb: joint r_hip_pitch zero 0 direction 1
+//! # limb: gravity 0 0 -9.81 (base frame, m/s^2; trunk assumed upright: no IMU board)
 //! # limb: pose l_hip_yaw 0 l_hip_roll 0.0031 ... (every joint, rad)
 //! # limb: load inertia 0.0123 gravity_sin -0.71 gravity_cos 0.002 gravity_const 0
 //! ```
@@ -43,9 +45,15 @@ pub struct Limb {
     pub direction: f64,
     /// Every joint of the robot and its angle in the held pose, rad.
     pub pose: Vec<(String, f64)>,
+    /// Gravity in the base (trunk) frame, m/s^2.
+    pub gravity: [f64; 3],
+    /// Where `gravity` comes from (words for the log).
+    pub trunk: String,
 }
 
 const PREFIX: &str = "# limb: ";
+/// Gravity in the base frame of an upright trunk, m/s^2.
+pub const UPRIGHT: [f64; 3] = [0.0, 0.0, -twinloop_description::GRAVITY];
 /// Angles around the circle at which gravity's torque is computed.
 const SAMPLES: usize = 12;
 
@@ -53,8 +61,9 @@ impl Limb {
     /// The load at the servo and the RMS (N m) left by the gravity fit.
     pub fn load(&self, robot: &Description) -> Result<(Load, f64), CliError> {
         hinges_only(robot, &self.robot, "a limb load")?;
-        let model = Model::from_description_with_base(robot, BaseKind::Fixed)
+        let mut model = Model::from_description_with_base(robot, BaseKind::Fixed)
             .map_err(|e| CliError::new(format!("{}: {e}", self.robot)))?;
+        model.gravity = nalgebra::Vector3::from(self.gravity);
         let j = model.joint_index(&self.joint).ok_or_else(|| {
             CliError::new(format!(
                 "joint \"{}\" is not a joint of {} (its joints: {})",
@@ -96,8 +105,14 @@ impl Limb {
         let mut s = format!("{PREFIX}robot {}\n", self.robot);
         let _ = writeln!(
             s,
-            "{PREFIX}joint {} zero {} direction {} trunk upright",
+            "{PREFIX}joint {} zero {} direction {}",
             self.joint, self.zero, self.direction
+        );
+        let g = self.gravity;
+        let _ = writeln!(
+            s,
+            "{PREFIX}gravity {} {} {} (base frame, m/s^2; {})",
+            g[0], g[1], g[2], self.trunk
         );
         s.push_str(PREFIX);
         s.push_str("pose");
@@ -118,6 +133,7 @@ impl Limb {
         let mut robot = None;
         let mut joint = None;
         let mut pose = None;
+        let mut gravity = None;
         for (n, line) in text.lines().enumerate() {
             if !line.starts_with('#') {
                 break;
@@ -146,6 +162,18 @@ impl Limb {
                     }
                     joint = Some((w[0].to_string(), num(2)?, direction));
                 }
+                "gravity" => {
+                    let (numbers, trunk) = value.split_once('(').unwrap_or((value, ""));
+                    let g: Vec<f64> = numbers
+                        .split_whitespace()
+                        .map(|x| x.parse::<f64>().ok().filter(|x| x.is_finite()))
+                        .collect::<Option<_>>()
+                        .filter(|g: &Vec<f64>| g.len() == 3)
+                        .ok_or_else(|| bad("expected \"gravity GX GY GZ\" (m/s^2)"))?;
+                    let trunk = trunk.trim_end().strip_suffix(')').unwrap_or(trunk);
+                    let trunk = trunk.rsplit_once("; ").map_or(trunk, |t| t.1);
+                    gravity = Some(([g[0], g[1], g[2]], trunk.to_string()));
+                }
                 "pose" => {
                     let w: Vec<&str> = value.split_whitespace().collect();
                     if !w.len().is_multiple_of(2) {
@@ -165,17 +193,21 @@ impl Limb {
                 _ => {}
             }
         }
-        match (robot, joint, pose) {
-            (None, None, None) => Ok(None),
-            (Some(robot), Some((joint, zero, direction)), Some(pose)) => Ok(Some(Limb {
-                robot,
-                joint,
-                zero,
-                direction,
-                pose,
-            })),
+        match (robot, joint, pose, gravity) {
+            (None, None, None, None) => Ok(None),
+            (Some(robot), Some((joint, zero, direction)), Some(pose), Some((gravity, trunk))) => {
+                Ok(Some(Limb {
+                    robot,
+                    joint,
+                    zero,
+                    direction,
+                    pose,
+                    gravity,
+                    trunk,
+                }))
+            }
             _ => Err(CliError::new(format!(
-                "{file}: the limb's comment lines need \"robot\", \"joint\" and \"pose\" (written by experiment servo --map --joint)"
+                "{file}: the limb's comment lines need \"robot\", \"joint\", \"gravity\" and \"pose\" (written by experiment servo --map --joint)"
             ))),
         }
     }
@@ -193,8 +225,8 @@ mod tests {
     use super::*;
     use twinloop_dynamics::forward_kinematics;
 
-    /// The subtree beyond r_hip_pitch of km20 upright, legs straight: gravity's
-    /// torque at the joint's zero is `-(r - p) x m g` about the axis, with `r` the
+    /// The subtree beyond r_hip_pitch of km20, trunk tilted, knee bent: gravity's
+    /// torque is `(c - p) x m g` about the axis, with `r` the
     /// subtree's centre of mass (from the links' own placements, not RNEA).
     #[test]
     fn km20_hip_pitch_load_matches_the_subtree_com() {
@@ -212,6 +244,13 @@ mod tests {
             zero: 0.1,
             direction: -1.0,
             pose: pose.clone(),
+            // The trunk pitched 10 deg and rolled 4: gravity off the base's -z.
+            gravity: {
+                let (p, r) = (10f64.to_radians(), 4f64.to_radians());
+                let g = twinloop_description::GRAVITY;
+                [g * p.sin(), -g * p.cos() * r.sin(), -g * p.cos() * r.cos()]
+            },
+            trunk: "test".into(),
         };
         let (load, rms) = limb.load(&robot).unwrap();
         assert!(rms < 1e-12, "{rms}");
@@ -236,7 +275,7 @@ mod tests {
         let c = mc / m;
         let axis = data.o_m_i[j].rotation * model.axes[j];
         let p = data.o_m_i[j].translation;
-        let gravity = nalgebra::Vector3::new(0.0, 0.0, -twinloop_description::GRAVITY * m);
+        let gravity = m * nalgebra::Vector3::from(limb.gravity);
         let tau_joint = axis.dot(&(c - p).cross(&gravity));
         let servo = limb.zero + limb.direction * jq;
         let tau_servo = limb.direction * tau_joint;
@@ -256,6 +295,8 @@ mod tests {
             zero: -0.25,
             direction: -1.0,
             pose: vec![("a".into(), 0.125), ("b".into(), -1.5)],
+            gravity: [0.5, -0.25, -9.7],
+            trunk: "from board \"trunk_imu\" (id 200)".into(),
         };
         let load = Load {
             inertia: 1.0,

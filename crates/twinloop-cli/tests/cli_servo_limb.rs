@@ -30,24 +30,13 @@ impl Drop for Server {
     }
 }
 
-#[test]
-fn limb_servo_parameters_recovered_over_a_pty() {
-    let t_start = std::time::Instant::now();
-    let dir: PathBuf =
-        std::env::temp_dir().join(format!("twinloop-servo-limb-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let servo = ServoType::Rx28;
-    let mut rng = SplitMix64(29);
-    let mut truth = defaults(servo, ModelLevel::M1);
-    for &i in &ModelLevel::M1.parameters() {
-        truth.values[i] *= rng.uniform(0.7, 1.4);
-    }
-    let params = dir.join("truth.toml");
-    std::fs::write(&params, truth.to_toml("drawn truth")).unwrap();
+/// Serve km20 held with `params` on r_hip_pitch, run the experiment into `log`;
+/// how far (s) the simulation fell behind the wall clock (0: it kept up).
+fn record(dir: &std::path::Path, params: &std::path::Path, log: &std::path::Path) -> f64 {
     let link = dir.join("bus");
     let mut spec = std::ffi::OsString::from("r_hip_pitch=");
-    spec.push(&params);
-    let _server = Server(
+    spec.push(params);
+    let server = Server(
         Command::new(bin())
             .args([
                 "serve",
@@ -60,7 +49,7 @@ fn limb_servo_parameters_recovered_over_a_pty() {
             .arg("--link")
             .arg(&link)
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(Stdio::piped())
             .spawn()
             .unwrap(),
     );
@@ -69,7 +58,6 @@ fn limb_servo_parameters_recovered_over_a_pty() {
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
     std::thread::sleep(std::time::Duration::from_millis(300));
-    let log = dir.join("hip.csv");
     let out = Command::new(bin())
         .args(["experiment", "servo", "--port"])
         .arg(&link)
@@ -84,7 +72,7 @@ fn limb_servo_parameters_recovered_over_a_pty() {
             "r_hip_pitch",
         ])
         .arg("--out")
-        .arg(&log)
+        .arg(log)
         .output()
         .unwrap();
     assert!(
@@ -92,8 +80,72 @@ fn limb_servo_parameters_recovered_over_a_pty() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // Ctrl-C: serve stops and says whether its simulation kept up.
+    let mut server = server;
+    let _ = Command::new("kill")
+        .args(["-INT", &server.0.id().to_string()])
+        .status();
+    let mut err = String::new();
+    if let Some(mut e) = server.0.stderr.take() {
+        use std::io::Read;
+        let _ = e.read_to_string(&mut err);
+    }
+    err.lines()
+        .find_map(|l| {
+            l.strip_prefix("the simulation fell ")
+                .and_then(|r| r.split_whitespace().next())
+                .and_then(|x| x.parse::<f64>().ok())
+        })
+        .unwrap_or(0.0)
+}
+
+#[test]
+fn limb_servo_parameters_recovered_over_a_pty() {
+    let t_start = std::time::Instant::now();
+    let dir: PathBuf =
+        std::env::temp_dir().join(format!("twinloop-servo-limb-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let servo = ServoType::Rx28;
+    let mut rng = SplitMix64(29);
+    let mut truth = defaults(servo, ModelLevel::M1);
+    for &i in &ModelLevel::M1.parameters() {
+        truth.values[i] *= rng.uniform(0.7, 1.4);
+    }
+    let params = dir.join("truth.toml");
+    std::fs::write(&params, truth.to_toml("drawn truth")).unwrap();
+    let log = dir.join("hip.csv");
+    // The virtual robot runs on the wall clock: on a loaded machine its simulation
+    // can fall behind (it then drops the time, and the log's clock no longer is the
+    // robot's). Such a run is recorded again, up to three times in all.
+    let mut attempts = 0;
+    loop {
+        attempts += 1;
+        let behind = record(&dir, &params, &log);
+        if behind == 0.0 {
+            break;
+        }
+        eprintln!("the simulation fell {behind} s behind the wall clock: recording again");
+        assert!(
+            attempts < 3,
+            "the simulation fell behind in each of {attempts} runs: the machine is too loaded"
+        );
+    }
     let text = std::fs::read_to_string(&log).unwrap();
-    assert!(text.contains("# limb: joint r_hip_pitch zero 0 direction 1 trunk upright"));
+    assert!(text.contains("# limb: joint r_hip_pitch zero 0 direction 1\n"));
+    // Gravity from the held trunk's IMU board: upright within the accelerometer's
+    // counts (4 g over 512).
+    let g: Vec<f64> = text
+        .lines()
+        .find_map(|l| l.strip_prefix("# limb: gravity "))
+        .expect("a gravity line")
+        .split_whitespace()
+        .take(3)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    eprintln!("gravity in the base frame {g:?}");
+    let tilt = (g[0].hypot(g[1]) / -g[2]).atan().to_degrees();
+    assert!(tilt < 1.0 && g[2] < 0.0, "trunk tilt {tilt} deg: {g:?}");
+    assert!(text.contains("from board"), "{}", &text[..400]);
     // The sequence stayed inside the joint's range (-100 to 30 deg) less 0.1 rad.
     let (lo, hi) = (-100f64.to_radians() + 0.1, 30f64.to_radians() - 0.1);
     let q: Vec<f64> = text

@@ -331,12 +331,24 @@ fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target)
             here = s;
         }
     }
+    let (gravity, trunk) = match mapping.boards.first() {
+        Some(b) => (
+            trunk_gravity(&mut client, b, &model, &pose)?,
+            format!("from board \"{}\" (id {})", b.name, b.id),
+        ),
+        None => (
+            crate::limb::UPRIGHT,
+            "trunk assumed upright: no IMU board in the mapping".to_string(),
+        ),
+    };
     let limb = Limb {
         robot: spec.clone(),
         joint: joint.to_string(),
         zero: jm.zero,
         direction: jm.direction,
         pose,
+        gravity,
+        trunk,
     };
     let (load, _) = limb.load(&robot)?;
     let stall = servo.rating().stall_torque;
@@ -370,7 +382,7 @@ fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target)
         )));
     }
     let what = format!(
-        "move {joint} (servo id {}, {servo}) of the held robot (trunk fixed upright, every other servo holding) by up to {:.2} rad from {here:.3} rad (range {lo:.3} to {hi:.3})",
+        "move {joint} (servo id {}, {servo}) of the held robot (trunk fixed, every other servo holding) by up to {:.2} rad from {here:.3} rad (range {lo:.3} to {hi:.3})",
         jm.id,
         REACH_FAR * amplitude
     );
@@ -387,6 +399,81 @@ fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target)
     };
     hold_others(&mut client, &mapping, jm.id)?;
     Ok((client, port, target))
+}
+
+/// Readings of the trunk's accelerometer averaged for gravity's direction.
+const GRAVITY_READS: usize = 20;
+
+/// Gravity in the base frame, m/s^2: the board's accelerometer (averaged; the robot
+/// held still reads +g along up) turned from its link into the base frame at the
+/// held pose, scaled to the description's g.
+fn trunk_gravity(
+    client: &mut BusClient,
+    board: &twinloop_link::mapping::BoardMapping,
+    model: &twinloop_dynamics::Model,
+    pose: &[(String, f64)],
+) -> Result<[f64; 3], CliError> {
+    use twinloop_link::board::{CM730_IMU_BLOCK, decode_imu};
+    let who = format!("board \"{}\" (id {})", board.name, board.id);
+    let (base, len) = CM730_IMU_BLOCK;
+    let mut block = vec![0u8; len as usize];
+    let mut sum = nalgebra::Vector3::zeros();
+    let mut n = 0;
+    let mut misses = 0;
+    while n < GRAVITY_READS {
+        let sample = client
+            .read(board.protocol, board.id, base, &mut block)
+            .ok()
+            .and_then(|_| decode_imu(board.model, base, &block));
+        match sample {
+            Some(s) => {
+                sum += nalgebra::Vector3::from(board.axes.board_to_link(s.accel));
+                n += 1;
+            }
+            None => {
+                misses += 1;
+                if misses > MAX_MISSES {
+                    return Err(CliError::new(format!(
+                        "{who}: no accelerometer reading ({misses} tries)"
+                    )));
+                }
+            }
+        }
+    }
+    let up = sum / n as f64;
+    let g = twinloop_description::GRAVITY;
+    if (up.norm() / g - 1.0).abs() > 0.2 {
+        return Err(CliError::new(format!(
+            "{who}: the accelerometer reads {:.2} m/s^2, not gravity's {g}: is the robot held still?",
+            up.norm()
+        )));
+    }
+    let link = model
+        .links
+        .iter()
+        .find(|l| l.name == board.link)
+        .ok_or_else(|| {
+            CliError::new(format!(
+                "{who}: link \"{}\" is not a link of the robot",
+                board.link
+            ))
+        })?;
+    let mut q = vec![0.0; model.nq];
+    for (name, angle) in pose {
+        if let Some(k) = model.joint_index(name) {
+            q[model.idx_q[k]] = *angle;
+        }
+    }
+    let mut data = twinloop_dynamics::Data::new(model);
+    twinloop_dynamics::forward_kinematics(model, &mut data, &q);
+    let body = if link.body == twinloop_dynamics::BASE {
+        nalgebra::Matrix3::identity()
+    } else {
+        data.o_m_i[link.body].rotation
+    };
+    let in_base = body * link.placement.rotation * up;
+    let gravity = -g * in_base / in_base.norm();
+    Ok([gravity.x, gravity.y, gravity.z])
 }
 
 /// The description as the log records it: a file given relative to the mapping
