@@ -87,6 +87,24 @@ impl Pendulum {
     }
 }
 
+impl From<Pendulum> for Load {
+    /// A point mass `mass` at `length` on an arm of `arm_inertia`, hanging down at 0.
+    fn from(p: Pendulum) -> Load {
+        Load {
+            inertia: p.inertia(),
+            gravity_sin: -p.mass * GRAVITY * p.length,
+            gravity_cos: 0.0,
+            gravity_const: 0.0,
+        }
+    }
+}
+
+impl From<&Pendulum> for Load {
+    fn from(p: &Pendulum) -> Load {
+        Load::from(*p)
+    }
+}
+
 /// A servo on the bench: parameters, firmware, and the state.
 ///
 /// With a `backlash` the gearbox's last gear (the motor side, angle `qm` at the
@@ -320,5 +338,24 @@ impl Bench {
         let friction = stop.clamp(-limit, limit);
         self.vm = free - dt * friction / h;
         self.vm
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pendulum_is_a_load() {
+        let p = Pendulum {
+            mass: 0.5,
+            length: 0.15,
+            arm_inertia: 0.001,
+        };
+        let l = Load::from(p);
+        for q in [-2.0, -0.3, 0.0, 0.7, 3.0] {
+            assert!((l.gravity_torque(q) - p.gravity_torque(q)).abs() < 1e-14);
+        }
+        assert_eq!(l.inertia, p.inertia());
     }
 }

@@ -10,8 +10,6 @@
 //! beyond the joint is one rigid body). `C` is kept for a constant torque (a spring
 //! preload, a cable); gravity alone leaves it 0.
 
-use crate::bench::{GRAVITY, Pendulum};
-
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Load {
     /// Inertia about the axis, without the servo's armature, kg m^2.
@@ -67,41 +65,9 @@ impl Load {
     }
 }
 
-impl From<Pendulum> for Load {
-    /// A point mass `mass` at `length` on an arm of `arm_inertia`, hanging down at 0.
-    fn from(p: Pendulum) -> Load {
-        Load {
-            inertia: p.inertia(),
-            gravity_sin: -p.mass * GRAVITY * p.length,
-            gravity_cos: 0.0,
-            gravity_const: 0.0,
-        }
-    }
-}
-
-impl From<&Pendulum> for Load {
-    fn from(p: &Pendulum) -> Load {
-        Load::from(*p)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_pendulum_is_a_load() {
-        let p = Pendulum {
-            mass: 0.5,
-            length: 0.15,
-            arm_inertia: 0.001,
-        };
-        let l = Load::from(p);
-        for q in [-2.0, -0.3, 0.0, 0.7, 3.0] {
-            assert!((l.gravity_torque(q) - p.gravity_torque(q)).abs() < 1e-14);
-        }
-        assert_eq!(l.inertia, p.inertia());
-    }
 
     #[test]
     fn gravity_fit_recovers_a_shifted_sine() {

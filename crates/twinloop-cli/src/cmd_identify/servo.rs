@@ -102,10 +102,12 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
             .map(|p| ServoLog::read(p, servo).map_err(CliError::from))
             .collect()
     };
+    // The pendulum is read first: a bad LOAD.toml is named before any log.
+    let pendulum = a.load.as_deref().map(Pendulum::read).transpose()?;
     let logs = read(&a.data)?;
     let holdout = read(&a.holdout)?;
-    let load = match &a.load {
-        Some(p) => Load::from(Pendulum::read(p)?),
+    let load = match pendulum {
+        Some(p) => Load::from(p),
         None => limb_load(a.data.iter().chain(&a.holdout), a.robot.as_deref())?,
     };
     let servo = logs
