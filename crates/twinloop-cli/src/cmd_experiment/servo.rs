@@ -492,7 +492,12 @@ fn recorded_spec(spec: &str, mapping: &RobotMapping) -> String {
         .unwrap_or_else(|_| spec.to_string())
 }
 
-/// Every other mapped servo holds where it is, torque on: the robot held still.
+/// The held servos' RX Compliance Slope (margin 0): the stiffest, as the tip-over
+/// study holds the robot, so the limb moves as one body as nearly as the servos allow.
+const HOLD_SLOPE: i32 = 2;
+
+/// Every other mapped servo holds where it is, torque on, RX servos at the stiffest
+/// compliance (MX/X keep their gains): the robot held still.
 fn hold_others(
     client: &mut Client<Box<dyn Transport>>,
     mapping: &RobotMapping,
@@ -506,6 +511,16 @@ fn hold_others(
             .item(Item::GoalPosition)
             .ok_or("no Goal Position")?;
         write_item(client, j.model, j.id, Item::GoalPosition, reg.from_si(s))?;
+        if servo_type(j.model, j.id).is_ok_and(|t| t.family() == LoopFamily::Compliance) {
+            for (item, v) in [
+                (Item::CwComplianceMargin, 0),
+                (Item::CcwComplianceMargin, 0),
+                (Item::CwComplianceSlope, HOLD_SLOPE),
+                (Item::CcwComplianceSlope, HOLD_SLOPE),
+            ] {
+                write_item(client, j.model, j.id, item, v)?;
+            }
+        }
         write_item(client, j.model, j.id, Item::TorqueEnable, 1)?;
     }
     Ok(())
