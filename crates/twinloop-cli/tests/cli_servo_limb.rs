@@ -4,14 +4,14 @@
 //! parameters (`--servo-params r_hip_pitch=FILE`), driven and logged by `experiment
 //! servo --map builtin:km20 --joint r_hip_pitch` and fitted by `identify servo`
 //! with no `--load` (the log rebuilds the limb's load from the description): every
-//! parameter the data determines within 8 % (or three stated standard deviations),
-//! the held-out error within the encoder's resolution.
+//! parameter the data determines within 5 % (friction_base 10 %; or three stated
+//! standard deviations), the held-out error within the encoder's resolution.
 //!
-//! Why 8 % and not the bench's 5 %: the truth runs in the simulator's servo
+//! Why 10 % for friction_base: the truth runs in the simulator's servo
 //! (twinloop-sim: 1 ms steps, its own friction and loop), the fit in the bench's
 //! equations (twinloop-actuator), and the leg's other joints give a little under
-//! the swing (the load is not exactly rigid), as on a real robot. Over six runs of
-//! this test friction_base came back 1.5 to 6.1 % high, the others within 3.2 %
+//! the swing (the load is not exactly rigid), as on a real robot. Over five runs of
+//! this test friction_base came back 2.6 to 6.1 % high, the others within 3.2 %
 //! (docs/servo-models.md); a systematic difference of the two implementations, not
 //! noise (its stated deviation is 0.4 %).
 
@@ -26,8 +26,9 @@ fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_twinloop")
 }
 
-/// Relative error allowed (module comment: why not 5 %).
-const TOLERANCE: f64 = 0.08;
+/// Relative error allowed; friction_base's (module comment: why).
+const TOLERANCE: f64 = 0.05;
+const FRICTION_BASE_TOLERANCE: f64 = 0.10;
 
 struct Server(Child);
 
@@ -206,7 +207,12 @@ fn limb_servo_parameters_recovered_over_a_pty() {
             "  {name:34} truth {want:.5} fit {got:.5} sd {sd:.1e} err {:+.2} %",
             100.0 * err
         );
-        if err.abs() > TOLERANCE && (got - want).abs() > 3.0 * sd {
+        let allowed = if name == "friction_base" {
+            FRICTION_BASE_TOLERANCE
+        } else {
+            TOLERANCE
+        };
+        if err.abs() > allowed && (got - want).abs() > 3.0 * sd {
             failures.push(format!("{name}: {got} vs {want} (sd {sd})"));
         }
     };

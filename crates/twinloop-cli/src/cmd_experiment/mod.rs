@@ -192,7 +192,8 @@ pub enum ExperimentCommand {
     ///
     /// A limb of a held robot instead (--map MAP --joint NAME, the robot's trunk fixed
     /// in a stand, feet off the ground): every other mapped servo is set to hold
-    /// where it is (torque on), their positions are the held pose, and the load is
+    /// where it is (torque on, its loop's registers as they were), their positions
+    /// are the held pose, and the load is
     /// the subtree of links beyond the joint computed from the description (--robot,
     /// default the mapping's `urdf`): its inertia about the axis and gravity's torque
     /// A sin q + B cos q, gravity's direction from the mapping's IMU board (averaged

@@ -492,12 +492,10 @@ fn recorded_spec(spec: &str, mapping: &RobotMapping) -> String {
         .unwrap_or_else(|_| spec.to_string())
 }
 
-/// The held servos' RX Compliance Slope (margin 0): the stiffest, as the tip-over
-/// study holds the robot, so the limb moves as one body as nearly as the servos allow.
-const HOLD_SLOPE: i32 = 2;
-
-/// Every other mapped servo holds where it is, torque on, RX servos at the stiffest
-/// compliance (MX/X keep their gains): the robot held still.
+/// Every other mapped servo holds where it is, torque on, its loop as it was: the
+/// robot held still. (Stiffened to RX slope 2, margin 0, the simulated km20's
+/// servos dither by a count and shake the limb: the fit's friction_base came back
+/// 7-8 % high instead of 2.6-6.1 %, docs/servo-models.md.)
 fn hold_others(
     client: &mut Client<Box<dyn Transport>>,
     mapping: &RobotMapping,
@@ -511,16 +509,6 @@ fn hold_others(
             .item(Item::GoalPosition)
             .ok_or("no Goal Position")?;
         write_item(client, j.model, j.id, Item::GoalPosition, reg.from_si(s))?;
-        if servo_type(j.model, j.id).is_ok_and(|t| t.family() == LoopFamily::Compliance) {
-            for (item, v) in [
-                (Item::CwComplianceMargin, 0),
-                (Item::CcwComplianceMargin, 0),
-                (Item::CwComplianceSlope, HOLD_SLOPE),
-                (Item::CcwComplianceSlope, HOLD_SLOPE),
-            ] {
-                write_item(client, j.model, j.id, item, v)?;
-            }
-        }
         write_item(client, j.model, j.id, Item::TorqueEnable, 1)?;
     }
     Ok(())
