@@ -10,8 +10,8 @@
 //! Why 10 % for friction_base: the truth runs in the simulator's servo
 //! (twinloop-sim: 1 ms steps, its own friction and loop), the fit in the bench's
 //! equations (twinloop-actuator), and the leg's other joints give a little under
-//! the swing (the load is not exactly rigid), as on a real robot. Over five runs of
-//! this test friction_base came back 2.6 to 6.1 % high, the others within 3.2 %
+//! the swing (the load is not exactly rigid), as on a real robot. Over seven runs of
+//! this test friction_base came back 2.6 to 6.4 % high, the others within 3.2 %
 //! (docs/servo-models.md); a systematic difference of the two implementations, not
 //! noise (its stated deviation is 0.4 %).
 

@@ -493,9 +493,9 @@ fn recorded_spec(spec: &str, mapping: &RobotMapping) -> String {
 }
 
 /// Every other mapped servo holds where it is, torque on, its loop as it was: the
-/// robot held still. (Stiffened to RX slope 2, margin 0, the simulated km20's
-/// servos dither by a count and shake the limb: the fit's friction_base came back
-/// 7-8 % high instead of 2.6-6.1 %, docs/servo-models.md.)
+/// robot held still. (Stiffened to RX slope 2, margin 0, the fit on the simulated
+/// km20 did no better: friction_base 7-8 % high against 2.6-6.4 %,
+/// docs/servo-models.md.)
 fn hold_others(
     client: &mut Client<Box<dyn Transport>>,
     mapping: &RobotMapping,
