@@ -88,13 +88,15 @@ fn change_arg(c: &Bound<'_, PyAny>, k: usize) -> PyResult<Change> {
 /// for the lean signs (default: the mapping's `urdf`). All four directions give the
 /// study's fields, fewer give `robot`, `port` and each direction's angles. `record`:
 /// every cycle read to that CSV; `realtime_factor`: a simulated robot served faster
-/// than real time; `ankle_slope`: the ramped ankles' RX Compliance Slope. On a serial
+/// than real time; `ankle_slope`: the ramped ankles' RX Compliance Slope; `creeps`:
+/// creeping approaches per direction (the closest two averaged, one more when they
+/// differ by over 0.6 deg). On a serial
 /// port the robot moves only with `yes=True`. A silent or faulty servo, or Ctrl-C,
 /// stops the run with OSError (KeyboardInterrupt for Ctrl-C).
 #[pyfunction]
 #[pyo3(signature = (robot = None, ramp = 0.5, slow_ramp = 0.05, compliance_slope = 2.0, encoders = false,
     add_mass = None, *, port = None, map = None, directions = None, record = None, yes = false,
-    realtime_factor = 1.0, ankle_slope = 32.0, baud = 1_000_000, timeout_ms = 10.0, retries = 2))]
+    realtime_factor = 1.0, ankle_slope = 32.0, creeps = 2, baud = 1_000_000, timeout_ms = 10.0, retries = 2))]
 #[allow(clippy::too_many_arguments)]
 pub fn tipover<'py>(
     py: Python<'py>,
@@ -111,6 +113,7 @@ pub fn tipover<'py>(
     yes: bool,
     realtime_factor: f64,
     ankle_slope: f64,
+    creeps: usize,
     baud: u32,
     timeout_ms: f64,
     retries: u32,
@@ -131,6 +134,7 @@ pub fn tipover<'py>(
             slow_ramp,
             compliance_slope,
             ankle_slope,
+            creeps,
             realtime_factor,
             baud,
             timeout_ms,

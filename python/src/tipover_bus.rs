@@ -34,6 +34,7 @@ pub struct Plan {
     pub slow_ramp: f64,
     pub compliance_slope: f64,
     pub ankle_slope: f64,
+    pub creeps: usize,
     pub realtime_factor: f64,
     pub baud: u32,
     pub timeout_ms: f64,
@@ -73,6 +74,7 @@ pub fn run<'py>(
         (plan.compliance_slope, "compliance_slope"),
         (plan.ankle_slope, "ankle_slope"),
         (plan.realtime_factor, "realtime_factor"),
+        (plan.creeps as f64, "creeps"),
         (plan.timeout_ms, "timeout_ms"),
     ] {
         if !(x > 0.0 && x.is_finite()) {
@@ -156,6 +158,7 @@ pub fn run<'py>(
         slow_ramp: plan.slow_ramp,
         compliance_slope: plan.compliance_slope.round() as i32,
         ankle_slope: plan.ankle_slope.round() as i32,
+        creeps: plan.creeps,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let watch = InterruptWatch::new(&stop);

@@ -335,7 +335,8 @@ impl Bench {
         };
         let limit = budget(&p.values, self.vm, tau_m);
         let stop = free * h / dt;
-        let friction = stop.clamp(-limit, limit);
+        // max/min, not clamp: a diverging trial's NaN reaches the fit's cost, not a panic.
+        let friction = stop.max(-limit).min(limit);
         self.vm = free - dt * friction / h;
         self.vm
     }

@@ -46,7 +46,9 @@ impl Firmware {
                 self.integral += error;
                 let de = error - self.previous_error;
                 self.previous_error = error;
-                let pwm = p / 128.0 * error + i / 65536.0 * self.integral + d / 16.0 * de;
+                let pwm = p / self.servo.p_gain_divisor() * error
+                    + i / 65536.0 * self.integral
+                    + d / 16.0 * de;
                 pwm / self.servo.pwm_max()
             }
         };

@@ -106,11 +106,11 @@ fn nonsmooth_bound(i: usize) -> f64 {
 
 /// Which rows of which log.
 #[derive(Debug, Clone)]
-struct Segment {
-    log: usize,
-    rows: Range<usize>,
+pub(crate) struct Segment {
+    pub(crate) log: usize,
+    pub(crate) rows: Range<usize>,
     /// Whether current residuals are used.
-    current: bool,
+    pub(crate) current: bool,
 }
 
 /// Fit `start`'s rung to the first `1 - holdout_fraction` of each of `logs` (all of
@@ -376,20 +376,26 @@ pub fn identify_with(
 }
 
 /// The fit's data: what the residuals compare.
-struct Fit<'a> {
-    logs: &'a [ServoLog],
-    load: &'a Load,
-    segments: &'a [Segment],
-    sd_q: f64,
+pub(crate) struct Fit<'a> {
+    pub(crate) logs: &'a [ServoLog],
+    pub(crate) load: &'a Load,
+    pub(crate) segments: &'a [Segment],
+    pub(crate) sd_q: f64,
     /// LM iterations and simulations over every LM run.
-    iterations: usize,
-    evaluations: usize,
+    pub(crate) iterations: usize,
+    pub(crate) evaluations: usize,
 }
 
 impl Fit<'_> {
     /// The weighted residuals of `trial` into `out`: positions over the encoder's
     /// quantisation deviation, currents over [`CURRENT_SD`].
-    fn residuals(&self, trial: &ServoParams, qb: &mut [f64], cb: &mut [f64], out: &mut [f64]) {
+    pub(crate) fn residuals(
+        &self,
+        trial: &ServoParams,
+        qb: &mut [f64],
+        cb: &mut [f64],
+        out: &mut [f64],
+    ) {
         let mut o = 0;
         for s in self.segments {
             let l = &self.logs[s.log];
@@ -465,7 +471,7 @@ impl Fit<'_> {
 }
 
 /// Held-out RMS and MAE of the position, mrad, and the rows compared.
-fn heldout_error(
+pub(crate) fn heldout_error(
     params: &ServoParams,
     load: &Load,
     held: &[(&ServoLog, Range<usize>)],
@@ -498,7 +504,7 @@ fn heldout_error(
 
 /// `kt/resistance` and `kt^2/resistance + friction_viscous` with their standard
 /// deviations (first-order propagation of the log-parameter covariance).
-fn motor_combinations(
+pub(crate) fn motor_combinations(
     p: &ServoParams,
     fitted: &[usize],
     cov: &DMatrix<f64>,
@@ -543,18 +549,23 @@ fn motor_combinations(
     ]
 }
 
-struct Stats {
-    covariance: DMatrix<f64>,
-    sd_log: Vec<f64>,
-    correlation: Vec<Vec<f64>>,
-    singular_values: Vec<f64>,
-    weakest: Vec<f64>,
+pub(crate) struct Stats {
+    pub(crate) covariance: DMatrix<f64>,
+    pub(crate) sd_log: Vec<f64>,
+    pub(crate) correlation: Vec<Vec<f64>>,
+    pub(crate) singular_values: Vec<f64>,
+    pub(crate) weakest: Vec<f64>,
 }
 
 /// Covariance of the log-parameters `s^2 (J^T J)^-1` (s^2 the residual variance),
 /// through the SVD of J so a rank-deficient J gives infinite deviations along its
 /// null directions instead of a failed inverse.
-fn uncertainty(j: &DMatrix<f64>, r: &nalgebra::DVector<f64>, _x: &[f64], n: usize) -> Stats {
+pub(crate) fn uncertainty(
+    j: &DMatrix<f64>,
+    r: &nalgebra::DVector<f64>,
+    _x: &[f64],
+    n: usize,
+) -> Stats {
     let m = j.nrows();
     let s2 = r.norm_squared() / (m.saturating_sub(n)).max(1) as f64;
     let svd = j.clone().svd(false, true);

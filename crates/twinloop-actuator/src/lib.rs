@@ -9,10 +9,14 @@
 //!   budget (Coulomb, viscous, Stribeck, load-dependent);
 //! - [`load`]: what the servo turns (inertia, gravity torque `A sin q + B cos q + C`);
 //!   [`bench`]: a servo turning it (BAM's pendulum bench), stepped in fixed time steps;
-//! - [`log`]: an `experiment servo` log as columns; [`replay`]: the model run against a
+//! - [`log`]: an `experiment servo` log as columns; [`bam_log`]: BAM's pendulum
+//!   logs read as ours; [`replay`]: the model run against a
 //!   log's commands; [`lm`]: Levenberg-Marquardt; [`identify`]: the fit, its
-//!   uncertainties and what the data cannot determine.
+//!   uncertainties and what the data cannot determine; [`group`]: several servos of
+//!   one type fitted together (shared and per-servo parameters) and whether each
+//!   needs its own; [`load_rule`]: which pendulum a servo type needs.
 
+pub mod bam_log;
 pub mod bench;
 pub mod cmaes;
 pub mod datasheet;
@@ -20,9 +24,11 @@ pub mod error;
 pub mod excitation;
 pub mod firmware;
 pub mod friction;
+pub mod group;
 pub mod identify;
 pub mod lm;
 pub mod load;
+pub mod load_rule;
 pub mod log;
 pub mod motor;
 pub mod mujoco;

@@ -39,6 +39,8 @@ pub const LOG_COLUMNS: [&str; 9] = [
 pub struct ServoLog {
     pub file: String,
     pub servo: Option<ServoType>,
+    /// The servo's bus id, where the first line names it (`... RX-28 id 3`).
+    pub id: Option<u8>,
     pub t: Vec<f64>,
     pub goal: Vec<f64>,
     /// When each row's goal was sent (the previous row's time where the log has no
@@ -50,6 +52,9 @@ pub struct ServoLog {
     pub current: Option<Vec<f64>>,
     pub voltage: Vec<f64>,
     pub firmware: Vec<[f64; 3]>,
+    /// Torque Enable per row, where the log switches it (BAM's lift-and-drop lets
+    /// the load fall); `None`: on throughout, as `experiment servo` runs.
+    pub torque: Option<Vec<bool>>,
 }
 
 impl ServoLog {
@@ -72,6 +77,17 @@ impl ServoLog {
             .and_then(|l| l.strip_prefix(LOG_PREFIX))
             .and_then(|rest| rest.split_whitespace().next())
             .and_then(ServoType::parse);
+        let id = text
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix(LOG_PREFIX))
+            .and_then(|rest| {
+                let words: Vec<&str> = rest.split_whitespace().collect();
+                words
+                    .windows(2)
+                    .find(|w| w[0] == "id")
+                    .and_then(|w| w[1].parse::<u8>().ok())
+            });
         let servo = servo.or(named).ok_or_else(|| {
             ActuatorError::new(
                 &file,
@@ -117,6 +133,7 @@ impl ServoLog {
         let mut log = ServoLog {
             file: file.clone(),
             servo: Some(servo),
+            id,
             current: current_col.map(|_| Vec::new()),
             ..Default::default()
         };

@@ -4,7 +4,7 @@
 //! the firmware. In MuJoCo terms:
 //! - the firmware's linear region is a `<position>` actuator of gain `kp` (N m/rad):
 //!   full drive `kt V / R` reached at the slope's error (RX: compliance slope counts;
-//!   MX/X: 885 / (P/128) counts), clamped by `forcerange` = +-`kt V / R` x torque
+//!   MX/X: 885 / (P/128) counts; XL330 P/256), clamped by `forcerange` = +-`kt V / R` x torque
 //!   limit, as the duty is;
 //! - the back-EMF `kt^2/R` and viscous friction act outside that clamp: joint
 //!   `damping`;
@@ -40,7 +40,7 @@ pub fn mujoco_servo(params: &ServoParams, registers: [f64; 3], torque_limit: f64
     let full = params.kt() / params.resistance() * params.voltage;
     let counts_to_full = match servo.family() {
         LoopFamily::Compliance => rx_slope_units(registers[0]),
-        LoopFamily::Pid => servo.pwm_max() / (registers[0] / 128.0).max(1e-9),
+        LoopFamily::Pid => servo.pwm_max() / (registers[0] / servo.p_gain_divisor()).max(1e-9),
     };
     MujocoServo {
         kp: full / (counts_to_full * servo.resolution()),

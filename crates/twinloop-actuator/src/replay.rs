@@ -12,8 +12,9 @@ use crate::params::ServoParams;
 pub const MAX_STEP: f64 = 5e-4;
 
 /// Simulate rows `rows` of `log` with `params` on `load`: the state starts at the
-/// first row's measured position and speed; row `i`'s goal and registers act from
-/// its `t_goal` (between row `i-1`'s time and row `i`'s) plus the bus delay on.
+/// first row's measured position and speed; row `i`'s goal, registers and Torque
+/// Enable act from its `t_goal` (between row `i-1`'s time and row `i`'s) plus the
+/// bus delay on.
 /// Writes the model's sensed position (as old as the sensing delay, not yet rounded
 /// to counts) and current at each row into `q` and `current` (same length as `rows`).
 pub fn replay(
@@ -27,7 +28,7 @@ pub fn replay(
     let mut b = Bench::new(params.clone(), *load);
     let start = rows.start;
     b.place(log.q[start], log.v[start]);
-    b.torque_on = true;
+    b.torque_on = log.torque.as_ref().is_none_or(|t| t[start]);
     b.goal = log.goal[start];
     b.firmware.registers = log.firmware[start];
     q[0] = b.q;
@@ -37,6 +38,13 @@ pub fn replay(
         advance(&mut b, switch - log.t[i - 1]);
         b.send_goal(log.goal[i]);
         b.firmware.registers = log.firmware[i];
+        if let Some(torque) = &log.torque {
+            // Torque Enable is written with the goal; off forgets the loop's history.
+            if b.torque_on && !torque[i] {
+                b.firmware.reset();
+            }
+            b.torque_on = torque[i];
+        }
         advance(&mut b, log.t[i] - switch);
         q[k] = b.sensed_angle();
         current[k] = b.current;

@@ -20,6 +20,8 @@ pub enum ServoType {
     Rx64,
     Mx64V2,
     Xm430W350,
+    /// XL330-M288-T (X series, Protocol 2.0): BAM's XL330 pendulum logs.
+    Xl330M288,
 }
 
 /// Datasheet ratings (e-manual specification tables) at `voltage`.
@@ -39,11 +41,12 @@ pub struct Rating {
 const RPM: f64 = 2.0 * PI / 60.0;
 
 impl ServoType {
-    pub const ALL: [ServoType; 4] = [
+    pub const ALL: [ServoType; 5] = [
         ServoType::Rx28,
         ServoType::Rx64,
         ServoType::Mx64V2,
         ServoType::Xm430W350,
+        ServoType::Xl330M288,
     ];
 
     /// The e-manual name (as twinloop-link's `ServoModel::name`).
@@ -53,6 +56,7 @@ impl ServoType {
             ServoType::Rx64 => "RX-64",
             ServoType::Mx64V2 => "MX-64(2.0)",
             ServoType::Xm430W350 => "XM430-W350",
+            ServoType::Xl330M288 => "XL330-M288-T",
         }
     }
 
@@ -68,6 +72,7 @@ impl ServoType {
             "rx64" => Some(ServoType::Rx64),
             "mx6420" | "mx64v2" | "mx642" => Some(ServoType::Mx64V2),
             "xm430w350" | "xm430" => Some(ServoType::Xm430W350),
+            "xl330m288t" | "xl330m288" | "xl330" => Some(ServoType::Xl330M288),
             _ => None,
         }
     }
@@ -79,7 +84,7 @@ impl ServoType {
     pub fn family(self) -> LoopFamily {
         match self {
             ServoType::Rx28 | ServoType::Rx64 => LoopFamily::Compliance,
-            ServoType::Mx64V2 | ServoType::Xm430W350 => LoopFamily::Pid,
+            ServoType::Mx64V2 | ServoType::Xm430W350 | ServoType::Xl330M288 => LoopFamily::Pid,
         }
     }
 
@@ -88,6 +93,19 @@ impl ServoType {
         match self.family() {
             LoopFamily::Compliance => 300.0 / 1024.0 * PI / 180.0,
             LoopFamily::Pid => 2.0 * PI / 4096.0,
+        }
+    }
+
+    /// The divisor of the Position P Gain register: the loop's PWM per count of
+    /// error is `P / divisor`. 128 for MX(2.0) and XM430 (EM-XM430 "Position PID
+    /// Gain": K_P = P/128). 256 for the XL330, measured: in BAM's XL330 logs the
+    /// Present PWM the servo reports is `P/256` times the count error (entries 6 and
+    /// 10 of the kp 100 sin_sin log: 12 and 21 against 12.1 and 21.9; at three
+    /// points under load in two logs the ratio to `P/128` is 0.51, 0.50, 0.50).
+    pub fn p_gain_divisor(self) -> f64 {
+        match self {
+            ServoType::Xl330M288 => 256.0,
+            _ => 128.0,
         }
     }
 
@@ -106,17 +124,19 @@ impl ServoType {
             ServoType::Rx28 | ServoType::Rx64 => None,
             ServoType::Mx64V2 => Some(0.00336),
             ServoType::Xm430W350 => Some(0.00269),
+            ServoType::Xl330M288 => Some(0.001),
         }
     }
 
     /// Factory values of the three firmware registers the loop uses: RX compliance
     /// slope, margin and punch (32, 1, 32); MX/X Position P, I, D gain (850 or 800,
-    /// 0, 0).
+    /// 0, 0; XL330: 400, 0, 0, the P gain BAM's XL330 model starts from).
     pub fn factory_firmware(self) -> [f64; 3] {
         match self {
             ServoType::Rx28 | ServoType::Rx64 => [32.0, 1.0, 32.0],
             ServoType::Mx64V2 => [850.0, 0.0, 0.0],
             ServoType::Xm430W350 => [800.0, 0.0, 0.0],
+            ServoType::Xl330M288 => [400.0, 0.0, 0.0],
         }
     }
 
@@ -142,6 +162,9 @@ impl ServoType {
             ServoType::Rx64 => r(5.3, 2.6, 64.0, 18.5, 200.0),
             ServoType::Mx64V2 => r(6.0, 4.1, 63.0, 12.0, 200.0),
             ServoType::Xm430W350 => r(4.1, 2.3, 46.0, 12.0, 353.5),
+            // EM-XL330-M288-T at its recommended 5.0 V (BAM ran it at 7.4 V, above
+            // the rated 6.0 V; the fit takes the measured voltage).
+            ServoType::Xl330M288 => r(0.52, 1.47, 103.0, 5.0, 288.4),
         }
     }
 }

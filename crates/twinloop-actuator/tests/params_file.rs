@@ -36,7 +36,7 @@ fn files_round_trip_and_errors_name_the_field() {
     );
     assert_eq!(
         err("[servo]\nmodel = \"RX-99\"\n[params]\n"),
-        "p.toml: [servo] model: unknown servo \"RX-99\" (known: RX-28, RX-64, MX-64(2.0), XM430-W350)"
+        "p.toml: [servo] model: unknown servo \"RX-99\" (known: RX-28, RX-64, MX-64(2.0), XM430-W350, XL330-M288-T)"
     );
     assert!(
         err("[servo]\nmodel = \"RX-28\"\n[params]\nkt = -1\n")

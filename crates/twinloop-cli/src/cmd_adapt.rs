@@ -197,6 +197,7 @@ fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyR
         slow_ramp: 0.15,
         compliance_slope: 2,
         ankle_slope: crate::cmd_experiment::tipover_bus::ANKLE_SLOPE,
+        creeps: 2,
         clock_rate: a.realtime_factor,
         verbose: true,
     };

@@ -42,6 +42,15 @@ pub struct DemoArgs {
     /// stiffness, as `serve --ground-sink`)
     #[arg(long, default_value_t = 1e-4, value_name = "M", value_parser = crate::common::positive)]
     pub ground_sink: f64,
+    /// The hidden robot's servos run these models (`identify servo --out`; the
+    /// grammar of `serve --servo-params`: FILE.toml for every servo of its type,
+    /// ID=FILE.toml or JOINT=FILE.toml for one, repeatable): the adapting side knows
+    /// only the datasheets, as with a real robot whose servos were never identified
+    #[arg(long, value_name = "[ID=]FILE.toml")]
+    pub servo_params: Vec<String>,
+    /// Creeping approaches per direction (as `experiment tipover --creeps`)
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..=5))]
+    pub creeps: u64,
     /// Tell the adapting side which link the change is on, as `adapt --where` (a team
     /// knows where it bolted the part): the position is then fitted inside that
     /// link's outline. One change only (not with --scenario a)
@@ -113,14 +122,17 @@ fn hidden_change(a: &DemoArgs, prior: &Description) -> Result<(Vec<Change>, Stri
 fn serve_truth(
     truth: &Description,
     mapping: &RobotMapping,
-    factor: f64,
-    ground_sink: f64,
+    a: &DemoArgs,
 ) -> Result<PtyServer, CliError> {
     let options = VirtualRobotOptions {
-        realtime_factor: factor,
+        realtime_factor: a.realtime_factor,
         catch_falls: true,
-        ground_sink: Some(ground_sink),
+        ground_sink: Some(a.ground_sink),
         tether_s: Some(0.02),
+        servo_params: twinloop_actuator::params_set::ServoParamsSet::read(
+            &a.servo_params,
+            "--servo-params",
+        )?,
         ..Default::default()
     };
     let vr = VirtualRobot::new(truth, mapping, &options)?;
@@ -224,7 +236,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     for c in &truth_changes {
         truth = changed(&truth, c)?;
     }
-    let robot = serve_truth(&truth, &mapping, a.realtime_factor, a.ground_sink)?;
+    let robot = serve_truth(&truth, &mapping, &a)?;
     let mut text = format!(
         "a km20 with a hidden change ({how}) answers on {} (simulated, x{} real time)\n",
         robot.path(),
@@ -254,10 +266,20 @@ pub fn run(a: DemoArgs) -> CliResult {
         slow_ramp: 0.15,
         compliance_slope: 2,
         ankle_slope: ANKLE_SLOPE,
+        creeps: a.creeps as usize,
         clock_rate: a.realtime_factor,
         verbose: true,
     };
-    let run = tipover_on_bus(&plan)?;
+    // A simulation that stopped (it diverged, or its operator could not stand the
+    // robot up) leaves the bus answering with its last state: say so rather than
+    // what the host made of the frozen robot.
+    let run = tipover_on_bus(&plan).map_err(|e| match robot.sim().status().error {
+        Some(why) => CliError::new(format!(
+            "the simulated robot stopped: {why} (the host saw: {})",
+            e.message
+        )),
+        None => e,
+    })?;
     drop(robot);
     let BusOutcome::Study(study) = run.outcome else {
         return Err(CliError::new(

@@ -7,7 +7,10 @@
 //! parameter the data determines within 5 % (friction_base 10 %; or three stated
 //! standard deviations), the held-out error within the encoder's resolution.
 //!
-//! Why 10 % for friction_base: the truth runs in the simulator's servo
+//! Why 10 % for friction_base: the leg is a light load for the RX-28 (21 % of its
+//! stall torque, below the 40 % docs/servo-models.md "Which load" finds a servo
+//! without current sensing needs: at 20 % on the bench friction_base missed by up
+//! to 8.3 %); and the truth runs in the simulator's servo
 //! (twinloop-sim: 1 ms steps, its own friction and loop), the fit in the bench's
 //! equations (twinloop-actuator), and the leg's other joints give a little under
 //! the swing (the load is not exactly rigid), as on a real robot. Over seven runs of

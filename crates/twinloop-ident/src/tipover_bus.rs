@@ -24,6 +24,10 @@ pub struct BusTipoverOptions {
     pub compliance_slope: i32,
     /// RX Compliance Slope of the joints a direction ramps (see [`ANKLE_SLOPE`]).
     pub ankle_slope: i32,
+    /// Creeping approaches per direction (at least 1); with two or more, the two that
+    /// agree best are averaged, and one more is made when they differ by more than
+    /// [`CREEPS_AGREE_DEG`] (see [`combine_creeps`]).
+    pub creeps: usize,
 }
 
 /// One direction over the bus.
@@ -110,6 +114,16 @@ const UPRIGHT_HOLD_S: f64 = 1.0;
 /// the simulator's half degree, because over a bus the first run's detection lags by a
 /// cycle or more and the robot must not tip before the creep begins.
 const SLOW_MARGIN_DEG: f64 = 1.5;
+/// How far before the last creep's tip a repeated creep starts, deg: that creep saw the
+/// tip within a fraction of a degree.
+const REPEAT_MARGIN_DEG: f64 = 0.6;
+/// Two creeps that tip within this many degrees of each other agree: twice the ankle's
+/// encoder count (0.29 deg on an RX), about the scatter of creeps on the virtual robot.
+pub const CREEPS_AGREE_DEG: f64 = 0.6;
+/// The creeps' approach up to where they slow down is this many times faster than the
+/// first ramp: the first run found where the robot tips, and the approach stops at
+/// least [`REPEAT_MARGIN_DEG`] before it, so the creep's own seconds decide the angle.
+const APPROACH_SPEEDUP: f64 = 2.0;
 /// How long a person (or the virtual robot's operator) has to stand the robot up, s.
 const STAND_UP_TIMEOUT_S: f64 = 120.0;
 
@@ -247,18 +261,116 @@ pub fn run_directions(
             };
         let first = run(cfg, g).map_err(|e| e.message)?;
         let mut slow = cfg.clone();
-        slow.slow_from_deg = Some((first.commanded_deg - SLOW_MARGIN_DEG).max(0.0));
         slow.slow_ramp_deg_per_s = opts.slow_ramp;
-        let mut r = run(&slow, g).map_err(|e| e.message)?;
+        slow.ramp_deg_per_s = cfg.ramp_deg_per_s * APPROACH_SPEEDUP;
+        let wanted = opts.creeps.max(1);
+        let mut creeps: Vec<TipoverResult> = Vec::with_capacity(wanted + 1);
+        let start = first.commanded_deg - SLOW_MARGIN_DEG;
+        loop {
+            // A repeat starts closer (the last creep saw the tip finely), never earlier
+            // than the first creep did.
+            let from = creeps
+                .last()
+                .map_or(start, |c| (c.commanded_deg - REPEAT_MARGIN_DEG).max(start));
+            slow.slow_from_deg = Some(from.max(0.0));
+            let r = run(&slow, g).map_err(|e| e.message)?;
+            log(&format!(
+                "  {}: creep {} tipped at {:.2} deg",
+                d.name(),
+                creeps.len() + 1,
+                r.measured_deg
+            ));
+            creeps.push(r);
+            let n = creeps.len();
+            let agree = n < 2 || combine_creeps(&creeps).1 <= CREEPS_AGREE_DEG;
+            if n >= wanted && (agree || n > wanted) {
+                break;
+            }
+        }
+        let (mut r, spread) = combine_creeps(&creeps);
+        if creeps.len() > 1 && spread > CREEPS_AGREE_DEG {
+            log(&format!(
+                "  {}: the creeps disagree by {spread:.2} deg at best; taking the closest two",
+                d.name()
+            ));
+        }
         r.time_s = first.time_s;
         log(&format!(
-            "  {}: tipped at {:.2} deg (first ramp {:.2} deg)",
+            "  {}: tipped at {:.2} deg (first ramp {:.2} deg, {} creep(s))",
             d.name(),
             r.measured_deg,
-            first.measured_deg
+            first.measured_deg,
+            creeps.len()
         ));
         out.push(r);
     }
     wait_upright(g, standing, upright, cfg.period_s).map_err(|e| e.message)?;
     Ok(out)
+}
+
+/// One result from a direction's creeps and how far apart the two that agree best
+/// are, deg (0 for one creep): the mean of that pair (angles, onset posture, lean),
+/// so that one creep spoiled by a jolt or a stalled cycle does not decide the angle.
+pub fn combine_creeps(creeps: &[TipoverResult]) -> (TipoverResult, f64) {
+    let mut best = (0, 0, f64::INFINITY);
+    for i in 0..creeps.len() {
+        for j in i + 1..creeps.len() {
+            let d = (creeps[i].measured_deg - creeps[j].measured_deg).abs();
+            if d < best.2 {
+                best = (i, j, d);
+            }
+        }
+    }
+    if creeps.len() < 2 {
+        return (creeps[0].clone(), 0.0);
+    }
+    let (a, b) = (&creeps[best.0], &creeps[best.1]);
+    let mean = |x: f64, y: f64| 0.5 * (x + y);
+    let r = TipoverResult {
+        direction: a.direction,
+        commanded_deg: mean(a.commanded_deg, b.commanded_deg),
+        measured_deg: mean(a.measured_deg, b.measured_deg),
+        time_s: mean(a.time_s, b.time_s),
+        fall_confirmed_s: mean(a.fall_confirmed_s, b.fall_confirmed_s),
+        excess_deg: mean(a.excess_deg, b.excess_deg),
+        lean_deg: mean(a.lean_deg, b.lean_deg),
+        positions_at_onset: a
+            .positions_at_onset
+            .iter()
+            .zip(&b.positions_at_onset)
+            .map(|(x, y)| mean(*x, *y))
+            .collect(),
+    };
+    (r, best.2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn creep(measured: f64, onset: f64) -> TipoverResult {
+        TipoverResult {
+            direction: Direction::Left,
+            commanded_deg: measured - 1.0,
+            measured_deg: measured,
+            time_s: 10.0,
+            fall_confirmed_s: 11.0,
+            excess_deg: 0.2,
+            lean_deg: 4.0,
+            positions_at_onset: vec![onset, -onset],
+        }
+    }
+
+    #[test]
+    fn the_two_creeps_that_agree_best_are_averaged() {
+        let (one, spread) = combine_creeps(&[creep(20.0, 0.3)]);
+        assert_eq!((one.measured_deg, spread), (20.0, 0.0));
+        // A jolt tipped the second creep 2.3 deg early: the other two count.
+        let (r, spread) = combine_creeps(&[creep(20.0, 0.3), creep(17.7, 0.1), creep(20.3, 0.5)]);
+        assert!((spread - 0.3).abs() < 1e-12, "{spread}");
+        assert!((r.measured_deg - 20.15).abs() < 1e-12);
+        assert!((r.commanded_deg - 19.15).abs() < 1e-12);
+        assert!((r.positions_at_onset[0] - 0.4).abs() < 1e-12);
+        assert!((r.positions_at_onset[1] + 0.4).abs() < 1e-12);
+    }
 }

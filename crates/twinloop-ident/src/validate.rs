@@ -755,15 +755,21 @@ fn central_state(
         };
         let (xm, x0, xp) = (x(qm), x(q), x(qp));
         let lin = |xx: &Se3| x0.rotation.tr_mul(&(xx.translation - x0.translation));
-        let ang = |xx: &Se3| {
-            let r = x0.rotation.tr_mul(&xx.rotation);
-            nalgebra::Rotation3::from_matrix_unchecked(r).scaled_axis()
+        // The rotation vector through the quaternions: a rotation matrix's angle is
+        // acos((trace - 1) / 2), NaN when rounding puts the trace of a near-identity
+        // rotation above 3 (seen at the squat's first and last moving frames).
+        let quat = |qq: &[f64]| {
+            nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                qq[6], qq[3], qq[4], qq[5],
+            ))
         };
+        let q0 = quat(q);
+        let ang = |qq: &[f64]| (q0.inverse() * quat(qq)).scaled_axis();
         // Body velocity components: v(t) = R^T p'(t), w(t) from R^T R'.
         // Second-order: v0 = (d+ - d-)/(2h) and the derivative of v = R^T p' is
         // R^T p'' - [w]x R^T p' (the frame turns).
         let (dp, dm) = (lin(&xp), lin(&xm));
-        let (rp, rm) = (ang(&xp), ang(&xm));
+        let (rp, rm) = (ang(qp), ang(qm));
         let vl = (dp - dm) / (2.0 * h);
         let w = (rp - rm) / (2.0 * h);
         let pdd = (dp + dm) / (h * h); // R^T p''

@@ -196,7 +196,7 @@ def tipover(robot: Optional[RobotSpec] = None, ramp: float = 0.5, slow_ramp: flo
             encoders: bool = False, add_mass: Optional[Sequence[tuple[float, str, Sequence[float]]]] = None, *,
             port: Optional[str] = None, map: Optional[str] = None, directions: Optional[Sequence[str]] = None,
             record: Optional[Union[str, PathLike[str]]] = None, yes: bool = False, realtime_factor: float = 1.0,
-            ankle_slope: float = 32.0, baud: int = 1_000_000, timeout_ms: float = 10.0, retries: int = 2) -> dict[str, Any]:
+            ankle_slope: float = 32.0, creeps: int = 2, baud: int = 1_000_000, timeout_ms: float = 10.0, retries: int = 2) -> dict[str, Any]:
     """`twinloop experiment tipover --json`'s fields: on the simulator, or with `port` and `map` on a robot over its bus
     (`experiment tipover --port --map`; fewer than four `directions` give robot, port and each direction's angles).
     A serial port needs yes=True; a silent or faulty servo raises OSError, the servos left holding."""

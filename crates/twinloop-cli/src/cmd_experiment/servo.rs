@@ -234,11 +234,14 @@ fn bench_target(a: &ServoArgs, id: u8) -> Result<(BusClient, String, Target), Cl
     let servo = servo_type(model, id)?;
     let stall = servo.rating().stall_torque;
     let gravity = load.mass * twinloop_actuator::bench::GRAVITY * load.length;
-    if gravity > 0.6 * stall {
+    if gravity > twinloop_actuator::load_rule::MAX_RATIO * stall {
         return Err(CliError::new(format!(
             "{}: the pendulum's weight takes {gravity:.2} N m at the horizontal, over 60 % of the {servo}'s {stall} N m stall torque: lighter or shorter",
             path.display()
         )));
+    }
+    if let Some(w) = twinloop_actuator::load_rule::too_light(servo, &load) {
+        eprintln!("warning: {}: {w}", path.display());
     }
     let target = Target {
         id,
@@ -353,10 +356,25 @@ fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target)
     let (load, _) = limb.load(&robot)?;
     let stall = servo.rating().stall_torque;
     let gravity = load.max_gravity_torque();
-    if gravity > 0.6 * stall {
+    let rule = twinloop_actuator::load_rule::MAX_RATIO;
+    if gravity > rule * stall {
         return Err(CliError::new(format!(
-            "--joint {joint}: the limb's weight takes up to {gravity:.2} N m, over 60 % of the {servo}'s {stall} N m stall torque"
+            "--joint {joint}: the limb's weight takes up to {gravity:.2} N m, over {:.0} % of the {servo}'s {stall} N m stall torque",
+            100.0 * rule
         )));
+    }
+    let min = twinloop_actuator::load_rule::min_ratio(servo);
+    if gravity < min * stall {
+        eprintln!(
+            "warning: --joint {joint}: the limb's weight takes up to {gravity:.2} N m, {:.0} % of the {servo}'s {stall} N m stall torque; {}friction and armature are poorly determined below {:.0} % (docs/servo-models.md, \"Which load\"): a bench with a heavier pendulum determines them better",
+            100.0 * gravity / stall,
+            if servo.current_unit().is_none() {
+                "it senses no current, so "
+            } else {
+                ""
+            },
+            100.0 * min
+        );
     }
     // The joint's range: the description's limits within the mapping's, as servo
     // angles, narrowed by the margin.

@@ -65,6 +65,12 @@ pub struct TipoverArgs {
     /// speed, so the tip is seen with less lag.
     #[arg(long, default_value_t = 0.05, value_parser = crate::common::positive)]
     pub slow_ramp: f64,
+    /// Over a bus: creeping approaches per direction. With 2 (the default) the two are
+    /// averaged when they tip within 0.6 deg of each other, and a third is made when
+    /// they do not (a jolt or a stalled cycle spoils a creep now and then); the closest
+    /// two count. 1: a single creep.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=5))]
+    pub creeps: u32,
     /// Quantise the ankle readings like Dynamixel RX encoders (1024 counts over 300 deg).
     #[arg(long)]
     pub encoders: bool,
@@ -192,6 +198,7 @@ mod bus {
             slow_ramp: a.slow_ramp,
             compliance_slope: a.compliance_slope.round() as i32,
             ankle_slope: a.ankle_slope.round() as i32,
+            creeps: a.creeps as usize,
             clock_rate: a.realtime_factor,
             verbose: true,
         };

@@ -34,6 +34,8 @@ pub struct BusPlan {
     pub compliance_slope: i32,
     /// RX Compliance Slope of the joints a direction ramps (see [`ANKLE_SLOPE`]).
     pub ankle_slope: i32,
+    /// Creeping approaches per direction (see `BusTipoverOptions::creeps`).
+    pub creeps: usize,
     /// Robot seconds per host second (a simulated robot served faster than real time).
     pub clock_rate: f64,
     /// Say on stderr what is happening.
@@ -104,6 +106,7 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
         slow_ramp: plan.slow_ramp,
         compliance_slope: plan.compliance_slope,
         ankle_slope: plan.ankle_slope,
+        creeps: plan.creeps,
     };
     let mut before = |d: Direction, k: usize| {
         if k > 0 && serial && !plan.yes {

@@ -154,10 +154,18 @@ method. The prediction error never ends above the initial model's. The model is 
     /// subtree beyond the joint, rebuilt from the robot (--robot overrides the one
     /// the log names), joint and held pose the log records.
     ///
+    /// Logs of several servos of one type (--data ID=LOG.csv, or logs naming
+    /// different ids) are fitted together: each alone, all with one set, a chi-square
+    /// per parameter of the servos' spread against their deviations (robust to
+    /// correlated residuals), then one fit with the parameters that differ (beyond
+    /// their deviations and by over 3 %) per servo and the rest shared (--shared LIST
+    /// chooses instead).
+    ///
     /// Example:
     ///   twinloop identify servo --data rx28.csv --load load.toml --model m1 --out rx28.toml --json -
     ///   twinloop identify servo --data hip.csv --model m1
     ///   twinloop identify servo --defaults XM430-W350 --out xm430.toml
+    ///   twinloop identify servo --data 1=a.csv --data 2=b.csv --data 3=c.csv --load load.toml --out fits
     ///
     /// Output: --out the parameter file ([servo], [params], [uncertainty]); stdout each
     /// parameter with one standard deviation, the fitted and held-out position error
@@ -166,7 +174,12 @@ method. The prediction error never ends above the initial model's. The model is 
     /// {NAME: {value, sd}}, fitted, correlation (matrix in `fitted` order),
     /// combinations, fit_rms_mrad, heldout_rms_mrad, heldout_mae_mrad, heldout_rows,
     /// singular_values, condition, undetermined, weakest_direction, iterations,
-    /// evaluations, seconds.
+    /// evaluations, seconds. Several servos: --out DIR gets one id-N.toml per servo
+    /// (`--servo-params N=DIR/id-N.toml`); stdout the verdict per parameter, held-out
+    /// error per servo (alone / all shared / chosen), the shared and per-servo values;
+    /// --json spreads [{name, values, sd, relative_spread, relative_sd, chi2, dof,
+    /// p_value, tested, differs}], differing, each, all_shared, chosen ({shared,
+    /// per_servo, servos [{name, params, combinations, heldout_rms_mrad, ...}]}), files.
     #[command(verbatim_doc_comment)]
     Servo(servo::ServoIdArgs),
 }

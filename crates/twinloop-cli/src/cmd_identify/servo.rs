@@ -5,31 +5,48 @@ use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
 use serde_json::json;
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
+use twinloop_actuator::group::{
+    DIFFER_P, GroupFit, GroupIdentification, MIN_SPREAD, ServoData, identify_servos,
+};
 use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
 use twinloop_actuator::log::ServoLog;
-use twinloop_actuator::params::{NONSMOOTH, PARAM_NAMES};
-use twinloop_actuator::{Load, ModelLevel, Pendulum, ServoParams, ServoType, datasheet};
+use twinloop_actuator::params::{N_PARAMS, NONSMOOTH, PARAM_NAMES};
+use twinloop_actuator::{Load, ModelLevel, Pendulum, ServoParams, ServoType, bam_log, datasheet};
 
 #[derive(Args, Debug)]
 pub struct ServoIdArgs {
-    /// Logs to fit (`experiment servo --out`); with no --holdout, the last
-    /// --holdout-fraction of each is kept out of the fit and scored
-    #[arg(long, value_name = "LOG.csv", num_args = 1.., required_unless_present = "defaults")]
-    pub data: Vec<PathBuf>,
-    /// Logs scored but not fitted
-    #[arg(long, value_name = "LOG.csv", num_args = 1..)]
-    pub holdout: Vec<PathBuf>,
-    /// The pendulum the logs were recorded with (mass, length, arm_inertia); without
-    /// it, the logs of a limb (`experiment servo --map --joint`) rebuild their load
-    /// from the robot, joint and held pose they record
-    #[arg(long, value_name = "LOAD.toml")]
-    pub load: Option<PathBuf>,
+    /// Logs to fit (`experiment servo --out`, or BAM's pendulum logs: `.json`, or its
+    /// column form, whose first line is a JSON object); with no --holdout, the last
+    /// --holdout-fraction of each is kept out of the fit and scored. `ID=LOG.csv`
+    /// says which servo a log is of (else the id its first line names): logs of
+    /// several servos of one type are fitted together (see --shared)
+    #[arg(long, value_name = "[ID=]LOG.csv", num_args = 1.., required_unless_present = "defaults")]
+    pub data: Vec<String>,
+    /// Logs scored but not fitted (`ID=LOG.csv` as for --data)
+    #[arg(long, value_name = "[ID=]LOG.csv", num_args = 1..)]
+    pub holdout: Vec<String>,
+    /// The pendulum the logs were recorded with (mass, length, arm_inertia); several
+    /// servos: `ID=LOAD.toml` for one servo's, repeatable, a plain file for the rest.
+    /// BAM's logs name theirs; without it, the logs of a limb (`experiment servo --map
+    /// --joint`) rebuild their load from the robot, joint and held pose they record
+    #[arg(long, value_name = "[ID=]LOAD.toml", num_args = 1..)]
+    pub load: Vec<String>,
     /// Limb logs: compute the load from this description instead of the one the log
     /// names (a file moved, or a corrected model)
     #[arg(long, value_name = "ROBOT", conflicts_with = "load")]
     pub robot: Option<String>,
+    /// Several servos: the parameters held in common (comma list; `none`: every
+    /// parameter per servo); the rest are fitted per servo. Default: the test
+    /// decides (each servo fitted alone; a parameter is per servo where the servos'
+    /// values differ beyond their deviations, chi-square p < 0.01 over the
+    /// parameters tested)
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    pub shared: Vec<String>,
+    /// Several servos: threads simulating servos at once (0: every core)
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub threads: usize,
     /// The model ladder's rung: m1 (Coulomb + viscous), m2 (+ Stribeck), m3 (+ load-dependent), m4 (both)
     #[arg(long, default_value = "m1", value_name = "NAME")]
     pub model: String,
@@ -50,8 +67,9 @@ pub struct ServoIdArgs {
     /// Write the datasheet parameters of MODEL to --out and stop
     #[arg(long, value_name = "MODEL")]
     pub defaults: Option<String>,
-    /// The parameter file written (`serve --servo-params` reads it)
-    #[arg(long, value_name = "FILE.toml")]
+    /// The parameter file written (`serve --servo-params` reads it); several servos:
+    /// a directory, one `id-N.toml` per servo (`--servo-params N=DIR/id-N.toml`)
+    #[arg(long, value_name = "FILE.toml|DIR")]
     pub out: Option<PathBuf>,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
@@ -96,28 +114,90 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         .as_deref()
         .map(|s| parse_servo(s, "--servo"))
         .transpose()?;
-    let read = |paths: &[PathBuf]| -> Result<Vec<ServoLog>, CliError> {
-        paths
-            .iter()
-            .map(|p| ServoLog::read(p, servo).map_err(CliError::from))
+    // BAM's logs (JSON, or its column form) carry their pendulum; ours name it in
+    // --load.
+    let mut bam_loads: Vec<(String, Pendulum)> = Vec::new();
+    let mut read = |args: &[String]| -> Result<Vec<(Option<u8>, ServoLog)>, CliError> {
+        args.iter()
+            .map(|arg| {
+                let (key, path) = keyed(arg, "--data")?;
+                let path = Path::new(path);
+                let log = if bam_log::is_bam_log(path) {
+                    let b = bam_log::read(path, servo)?;
+                    bam_loads.push((path.display().to_string(), b.load));
+                    b.log
+                } else {
+                    ServoLog::read(path, servo).map_err(CliError::from)?
+                };
+                Ok((key.or(log.id), log))
+            })
             .collect()
     };
-    // The pendulum is read first: a bad LOAD.toml is named before any log.
-    let pendulum = a.load.as_deref().map(Pendulum::read).transpose()?;
     let logs = read(&a.data)?;
     let holdout = read(&a.holdout)?;
-    let load = match pendulum {
-        Some(p) => Load::from(p),
-        None => limb_load(a.data.iter().chain(&a.holdout), a.robot.as_deref())?,
+    // The one pendulum BAM's logs name, when no --load is given.
+    let bam_load = match bam_loads.first() {
+        Some((first, load)) if a.load.is_empty() => {
+            if let Some((p, _)) = bam_loads.iter().find(|(_, l)| l != load) {
+                return Err(CliError::new(format!(
+                    "{p}: a pendulum other than {first}'s (one fit, one load); give --load LOAD.toml"
+                )));
+            }
+            Some(*load)
+        }
+        _ => None,
+    };
+    // Limb logs (`experiment servo --map --joint`) rebuild their load.
+    let limb = if a.load.is_empty() && bam_load.is_none() {
+        let paths = a
+            .data
+            .iter()
+            .chain(&a.holdout)
+            .map(|arg| keyed(arg, "--data").map(|(_, p)| PathBuf::from(p)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Some(limb_load(paths.iter(), a.robot.as_deref())?)
+    } else {
+        None
     };
     let servo = logs
         .first()
-        .and_then(|l| l.servo)
+        .and_then(|(_, l)| l.servo)
         .ok_or("identify servo needs --data LOG.csv naming its servo (or --servo MODEL)")?;
     let start = match &a.start {
         Some(p) => ServoParams::read(p)?.with_level(level),
         None => datasheet::defaults(servo, level),
     };
+    let mut ids: Vec<Option<u8>> = logs.iter().map(|(k, _)| *k).collect();
+    ids.sort();
+    ids.dedup();
+    if ids.len() > 1 {
+        if limb.is_some() {
+            return Err(CliError::new(
+                "limb logs of several servos: fit each servo's logs alone",
+            ));
+        }
+        return run_group(a, &ids, logs, holdout, &start, level, bam_load);
+    }
+    if bam_load.is_none()
+        && limb.is_none()
+        && (a.load.len() != 1 || keyed(&a.load[0], "--load")?.0.is_some())
+    {
+        return Err(CliError::new(
+            "--load: one servo's logs take one plain LOAD.toml",
+        ));
+    }
+    if !a.shared.is_empty() {
+        return Err(CliError::new(
+            "--shared: the logs are of one servo (several: ID=LOG.csv or logs naming different ids)",
+        ));
+    }
+    let load = match (bam_load, limb) {
+        (Some(load), _) => Load::from(load),
+        (None, Some(load)) => load,
+        (None, None) => Load::from(Pendulum::read(Path::new(&a.load[0]))?),
+    };
+    let logs: Vec<ServoLog> = logs.into_iter().map(|(_, l)| l).collect();
+    let holdout: Vec<ServoLog> = holdout.into_iter().map(|(_, l)| l).collect();
     let t0 = Instant::now();
     let id = identify_with(&logs, &holdout, &load, &start, a.holdout_fraction, &options)?;
     let seconds = t0.elapsed().as_secs_f64();
@@ -132,6 +212,386 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     }
     emit(&text(&id, seconds), a.json.as_ref(), &to_json(&id, seconds))?;
     Ok(Outcome::Ok)
+}
+
+/// `ID=PATH` (ID a servo id: digits before '=') or `PATH`.
+fn keyed<'a>(arg: &'a str, option: &str) -> Result<(Option<u8>, &'a str), CliError> {
+    match arg.split_once('=') {
+        Some((k, path)) if !k.is_empty() && k.chars().all(|c| c.is_ascii_digit()) => {
+            let id = k
+                .parse::<u8>()
+                .ok()
+                .filter(|&id| id <= 253)
+                .ok_or_else(|| CliError::new(format!("{option} {arg:?}: a servo id is 0-253")))?;
+            Ok((Some(id), path))
+        }
+        _ => Ok((None, arg)),
+    }
+}
+
+fn servo_name(id: Option<u8>) -> String {
+    id.map_or_else(|| "no id".to_string(), |i| format!("id {i}"))
+}
+
+/// Several servos of one type: fitted alone and together, the parameters that
+/// differ per servo and the rest shared (or as --shared says).
+fn run_group(
+    a: &ServoIdArgs,
+    ids: &[Option<u8>],
+    logs: Vec<(Option<u8>, ServoLog)>,
+    holdout: Vec<(Option<u8>, ServoLog)>,
+    start: &ServoParams,
+    level: ModelLevel,
+    bam_load: Option<Pendulum>,
+) -> CliResult {
+    if let Some((_, l)) = logs.iter().find(|(k, _)| k.is_none()) {
+        return Err(CliError::new(format!(
+            "{}: line 1: names no servo id, and the other logs are of several servos: give ID={}",
+            l.file, l.file
+        )));
+    }
+    if !a.fit.is_empty() {
+        return Err(CliError::new(
+            "--fit: several servos are fitted with the rung's parameters only (fit backlash and delays per servo)",
+        ));
+    }
+    if let Some((k, l)) = holdout.iter().find(|(k, _)| !ids.contains(k)) {
+        return Err(CliError::new(format!(
+            "--holdout {}: {} has no --data log",
+            l.file,
+            servo_name(*k)
+        )));
+    }
+    // Loads: ID=FILE for one servo, a plain FILE for the others.
+    let mut plain = bam_load;
+    let mut own: Vec<(u8, Pendulum)> = Vec::new();
+    for arg in &a.load {
+        match keyed(arg, "--load")? {
+            (None, path) => {
+                if plain.is_some() {
+                    return Err(CliError::new(
+                        "--load: two plain files; give ID=LOAD.toml for a servo's own",
+                    ));
+                }
+                plain = Some(Pendulum::read(Path::new(path))?);
+            }
+            (Some(id), path) => {
+                if !ids.contains(&Some(id)) {
+                    return Err(CliError::new(format!(
+                        "--load {arg}: no --data log is of servo id {id}"
+                    )));
+                }
+                own.push((id, Pendulum::read(Path::new(path))?));
+            }
+        }
+    }
+    let mut shared: Option<Vec<usize>> = None;
+    if !a.shared.is_empty() {
+        let mut list = Vec::new();
+        for name in &a.shared {
+            let name = name.trim();
+            if name == "none" {
+                continue;
+            }
+            let i = level
+                .parameters()
+                .into_iter()
+                .find(|&i| PARAM_NAMES[i] == name)
+                .ok_or_else(|| {
+                    CliError::new(format!(
+                        "--shared {name:?}: not a parameter of {} ({})",
+                        level.name(),
+                        level
+                            .parameters()
+                            .iter()
+                            .map(|&i| PARAM_NAMES[i])
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))
+                })?;
+            list.push(i);
+        }
+        shared = Some(list);
+    }
+    let mut servos = Vec::new();
+    for &id in ids {
+        let id = id.expect("checked above");
+        let load = own
+            .iter()
+            .find(|(k, _)| *k == id)
+            .map(|(_, l)| *l)
+            .or(plain)
+            .ok_or_else(|| {
+                CliError::new(format!(
+                    "--load: no file for servo id {id} (ID=LOAD.toml or a plain LOAD.toml)"
+                ))
+            })?;
+        servos.push(ServoData {
+            name: servo_name(Some(id)),
+            logs: logs
+                .iter()
+                .filter(|(k, _)| *k == Some(id))
+                .map(|(_, l)| l.clone())
+                .collect(),
+            holdout: holdout
+                .iter()
+                .filter(|(k, _)| *k == Some(id))
+                .map(|(_, l)| l.clone())
+                .collect(),
+            load,
+        });
+    }
+    let threads = match a.threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    };
+    let t0 = Instant::now();
+    let id = identify_servos(
+        &servos,
+        start,
+        shared.as_deref(),
+        a.holdout_fraction,
+        threads,
+    )?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let mut files = Vec::new();
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+        for (s, f) in servos.iter().zip(&id.chosen.servos) {
+            let path = dir.join(format!("{}.toml", f.name.replace(' ', "-")));
+            let comment = format!(
+                "fitted by twinloop identify servo with {} servos of one type ({} rows in {} logs of this one); shared: {}; own: {}; held-out error {:.3} mrad RMS",
+                servos.len(),
+                s.logs.iter().map(ServoLog::len).sum::<usize>(),
+                s.logs.len(),
+                names(&id.chosen.shared),
+                names(&id.chosen.per_servo),
+                f.heldout_rms_mrad
+            );
+            std::fs::write(&path, f.params.to_toml(&comment))
+                .map_err(|e| CliError::io(&path, e))?;
+            files.push(path);
+        }
+    }
+    emit(
+        &group_text(&id, &files, seconds),
+        a.json.as_ref(),
+        &group_json(&id, &files, seconds),
+    )?;
+    Ok(Outcome::Ok)
+}
+
+fn names(list: &[usize]) -> String {
+    if list.is_empty() {
+        return "none".into();
+    }
+    list.iter()
+        .map(|&i| PARAM_NAMES[i])
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> String {
+    let c = &id.comparison;
+    let chosen = &id.chosen;
+    let first = &chosen.servos[0].params;
+    let mut s = format!(
+        "{} model {}, {} servos ({}), fitted in {seconds:.2} s ({} servo simulations)\n",
+        first.servo,
+        first.level.name(),
+        chosen.servos.len(),
+        chosen
+            .servos
+            .iter()
+            .map(|f| f.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+        c.each.simulations + c.all_shared.simulations + chosen.simulations
+    );
+    let tested = c.spreads.iter().filter(|p| p.tested).count();
+    let _ = writeln!(
+        s,
+        "do the servos differ? each fitted alone; chi-square of the values' spread against their deviations (robust to correlated residuals); differs where p < {:.1e} ({} over the {tested} parameters tested) and the spread exceeds {} %",
+        DIFFER_P / tested.max(1) as f64,
+        DIFFER_P,
+        100.0 * MIN_SPREAD
+    );
+    let _ = writeln!(
+        s,
+        "  {:18} {:>9} {:>9} {:>10} {:>9}  verdict",
+        "parameter", "spread %", "sd %", "chi2 (dof)", "p"
+    );
+    for p in &c.spreads {
+        let _ = writeln!(
+            s,
+            "  {:18} {:>9.3} {:>9.3} {:>10} {:>9.1e}  {}",
+            p.name,
+            100.0 * p.relative_spread,
+            100.0 * p.relative_sd,
+            format!("{:.1} ({})", p.chi2, p.dof),
+            p.p_value,
+            if p.differs {
+                "differs: per servo"
+            } else if !p.tested {
+                "not determined: not tested"
+            } else if p.p_value < DIFFER_P / tested.max(1) as f64 {
+                "differs by less than the fit's accuracy: shared"
+            } else {
+                "alike: one shared value suffices"
+            }
+        );
+    }
+    let differing = c.differing();
+    let alike: Vec<usize> = c
+        .spreads
+        .iter()
+        .filter(|p| p.tested && !p.differs)
+        .map(|p| p.index)
+        .collect();
+    let worst = |g: &GroupFit| {
+        g.servos
+            .iter()
+            .zip(&c.each.servos)
+            .map(|(f, e)| 100.0 * (f.heldout_rms_mrad / e.heldout_rms_mrad - 1.0))
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let _ = writeln!(
+        s,
+        "answer: {}; held-out error against each servo's own fit: all shared up to {:+.1} %, chosen up to {:+.1} %",
+        if differing.is_empty() {
+            format!("one shared set suffices ({} alike)", names(&alike))
+        } else if alike.is_empty() {
+            format!("each servo needs its own {}", names(&differing))
+        } else {
+            format!(
+                "each servo needs its own {}; {} can be shared",
+                names(&differing),
+                names(&alike)
+            )
+        },
+        worst(&c.all_shared),
+        worst(chosen)
+    );
+    let _ = writeln!(
+        s,
+        "held-out position error, mrad RMS: each alone / all shared / chosen (shared: {}; per servo: {})",
+        names(&chosen.shared),
+        names(&chosen.per_servo)
+    );
+    for ((e, a), f) in c
+        .each
+        .servos
+        .iter()
+        .zip(&c.all_shared.servos)
+        .zip(&chosen.servos)
+    {
+        let _ = writeln!(
+            s,
+            "  {:8} {:>8.3} {:>8.3} {:>8.3}",
+            f.name, e.heldout_rms_mrad, a.heldout_rms_mrad, f.heldout_rms_mrad
+        );
+    }
+    let sd0 = first.uncertainty.unwrap_or([f64::NAN; N_PARAMS]);
+    for &i in &chosen.shared {
+        let _ = writeln!(
+            s,
+            "  shared {:18} {:>12.6} +- {:.2e}",
+            PARAM_NAMES[i], first.values[i], sd0[i]
+        );
+    }
+    for f in &chosen.servos {
+        let sd = f.params.uncertainty.unwrap_or([f64::NAN; N_PARAMS]);
+        for &i in &chosen.per_servo {
+            let _ = writeln!(
+                s,
+                "  {:6} {:18} {:>12.6} +- {:.2e}",
+                f.name, PARAM_NAMES[i], f.params.values[i], sd[i]
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "not determined by these logs: {}",
+        if chosen.undetermined.is_empty() {
+            "nothing".to_string()
+        } else {
+            chosen.undetermined.join(", ")
+        }
+    );
+    for (f, path) in chosen.servos.iter().zip(files) {
+        let _ = writeln!(
+            s,
+            "wrote {} (--servo-params {}={})",
+            path.display(),
+            f.name.trim_start_matches("id "),
+            path.display()
+        );
+    }
+    s
+}
+
+fn group_fit_json(g: &GroupFit) -> serde_json::Value {
+    json!({
+        "shared": g.shared.iter().map(|&i| PARAM_NAMES[i]).collect::<Vec<_>>(),
+        "per_servo": g.per_servo.iter().map(|&i| PARAM_NAMES[i]).collect::<Vec<_>>(),
+        "n_params": g.n_params,
+        "iterations": g.iterations,
+        "simulations": g.simulations,
+        "undetermined": g.undetermined,
+        "servos": g.servos.iter().map(|f| {
+            let sd = f.params.uncertainty.unwrap_or([f64::NAN; N_PARAMS]);
+            let params: serde_json::Map<String, serde_json::Value> = g
+                .shared
+                .iter()
+                .chain(&g.per_servo)
+                .map(|&i| {
+                    (
+                        PARAM_NAMES[i].to_string(),
+                        json!({"value": f.params.values[i], "sd": sd[i], "sd_independent": f.sd_independent[i]}),
+                    )
+                })
+                .collect();
+            json!({
+                "name": f.name,
+                "voltage": f.params.voltage,
+                "params": params,
+                "combinations": f.combinations.iter().map(|(n, v, s)| json!({"name": n, "value": v, "sd": s})).collect::<Vec<_>>(),
+                "fit_rms_mrad": f.fit_rms_mrad,
+                "heldout_rms_mrad": f.heldout_rms_mrad,
+                "heldout_mae_mrad": f.heldout_mae_mrad,
+                "heldout_rows": f.heldout_rows,
+            })
+        }).collect::<Vec<_>>(),
+    })
+}
+
+fn group_json(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> serde_json::Value {
+    let c = &id.comparison;
+    let first = &id.chosen.servos[0].params;
+    json!({
+        "servo": first.servo.name(),
+        "model": first.level.name(),
+        "spreads": c.spreads.iter().map(|p| json!({
+            "name": p.name,
+            "values": p.values,
+            "sd": p.sd,
+            "relative_spread": p.relative_spread,
+            "relative_sd": p.relative_sd,
+            "chi2": p.chi2,
+            "dof": p.dof,
+            "p_value": p.p_value,
+            "tested": p.tested,
+            "differs": p.differs,
+        })).collect::<Vec<_>>(),
+        "differ_p": DIFFER_P,
+        "min_spread": MIN_SPREAD,
+        "differing": c.differing().iter().map(|&i| PARAM_NAMES[i]).collect::<Vec<_>>(),
+        "each": group_fit_json(&c.each),
+        "all_shared": group_fit_json(&c.all_shared),
+        "chosen": group_fit_json(&id.chosen),
+        "files": files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        "seconds": seconds,
+    })
 }
 
 /// The load of limb logs: each rebuilt from the robot (or `robot`), joint and held

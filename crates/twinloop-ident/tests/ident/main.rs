@@ -6,4 +6,5 @@ mod markers;
 mod oracle;
 mod poses_format;
 mod recovery;
+mod squat;
 mod units;

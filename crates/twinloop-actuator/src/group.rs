@@ -1,0 +1,702 @@
+//! Several servos of one type fitted together: one Levenberg-Marquardt problem whose
+//! parameter vector holds the shared parameters once and the per-servo ones once per
+//! servo, over the logs of every servo (each on its own load). And the question
+//! the fit answers: does each servo need its own parameters?
+//!
+//! A per-servo parameter moves only its servo's residuals, so a Jacobian column
+//! of one costs one servo's simulations, not the group's: each servo keeps its
+//! last three residual blocks keyed by its parameters, and an evaluation
+//! simulates only the servos whose parameters changed (in threads).
+
+use crate::bench::Pendulum;
+use crate::error::ActuatorError;
+use crate::identify::{
+    Fit, Segment, UNDETERMINED_RELATIVE_SD, heldout_error, motor_combinations, uncertainty,
+};
+use crate::lm::{LmOptions, levenberg_marquardt};
+use crate::load::Load;
+use crate::log::ServoLog;
+use crate::params::{FRICTION_VISCOUS, N_PARAMS, PARAM_NAMES, ServoParams};
+use std::ops::Range;
+use twinloop_sysid::stats::chi2_sf;
+
+/// One servo's data: its logs (the last `holdout_fraction` of each held out when
+/// `holdout` is empty), logs only scored, and its load.
+#[derive(Debug, Clone)]
+pub struct ServoData {
+    /// How reports name it (`id 3`).
+    pub name: String,
+    pub logs: Vec<ServoLog>,
+    pub holdout: Vec<ServoLog>,
+    pub load: Pendulum,
+}
+
+/// One servo's share of a group fit.
+#[derive(Debug, Clone)]
+pub struct ServoFit {
+    pub name: String,
+    /// Its parameters (shared and own), with their standard deviations.
+    pub params: ServoParams,
+    /// `kt/resistance` and `kt^2/resistance + friction_viscous` with their
+    /// deviations, as [`crate::identify::Identification::combinations`].
+    pub combinations: Vec<(&'static str, f64, f64)>,
+    /// RMS of its fitted position residuals, mrad.
+    pub fit_rms_mrad: f64,
+    /// Held-out RMS and mean absolute position error, mrad, and its rows.
+    pub heldout_rms_mrad: f64,
+    pub heldout_mae_mrad: f64,
+    pub heldout_rows: usize,
+    /// Its weighted residuals: count and sum of squares.
+    pub residuals: usize,
+    pub sum_squares: f64,
+    /// The deviations the Jacobian states (residuals taken as independent);
+    /// `params.uncertainty` holds the robust ones (the block sandwich, `robust_covariance`).
+    pub sd_independent: [f64; N_PARAMS],
+}
+
+/// A group fit.
+#[derive(Debug, Clone)]
+pub struct GroupFit {
+    pub servos: Vec<ServoFit>,
+    /// Fitted parameters (indices into [`PARAM_NAMES`]) held in common, and per servo.
+    pub shared: Vec<usize>,
+    pub per_servo: Vec<usize>,
+    /// Parameters whose relative deviation exceeds [`UNDETERMINED_RELATIVE_SD`] for
+    /// some servo (and, in position-only logs, kt, resistance, friction_viscous).
+    pub undetermined: Vec<&'static str>,
+    /// Length of the parameter vector: shared + servos x per-servo.
+    pub n_params: usize,
+    pub iterations: usize,
+    /// Simulations of one servo's logs (a whole-group evaluation counts one per servo).
+    pub simulations: usize,
+}
+
+impl GroupFit {
+    /// Sum of the squared weighted residuals and their count, over every servo.
+    pub fn sum_squares(&self) -> (f64, usize) {
+        (
+            self.servos.iter().map(|s| s.sum_squares).sum(),
+            self.servos.iter().map(|s| s.residuals).sum(),
+        )
+    }
+}
+
+/// Length of the blocks of the robust covariance, s: longer than the time over
+/// which the residuals stay correlated (a step response, a sine period).
+pub const BLOCK_SECONDS: f64 = 1.0;
+
+/// Covariance of the log-parameters robust to residuals correlated in time: the
+/// sandwich `A+ S A+`, `A = J^T J`, `S = sum_b g_b g_b^T` with `g_b = J_b^T r_b`
+/// summed over the rows of time block `b` (the cluster-robust form of Newey and
+/// West's estimator, blocks as clusters), times `B/(B-1)` for `B` blocks. The
+/// Jacobian's own `s^2 A^-1` takes the residuals as independent; on these logs it
+/// is several times too small (quantisation and timing errors persist over a
+/// step), which the test of "do the servos differ" cannot afford.
+fn robust_covariance(
+    j: &nalgebra::DMatrix<f64>,
+    r: &nalgebra::DVector<f64>,
+    block: &[usize],
+) -> nalgebra::DMatrix<f64> {
+    let n = j.ncols();
+    let blocks = block.iter().copied().max().map_or(0, |b| b + 1);
+    let mut g = nalgebra::DMatrix::<f64>::zeros(n, blocks);
+    for (row, &b) in block.iter().enumerate() {
+        let e = r[row];
+        if e != 0.0 {
+            for k in 0..n {
+                g[(k, b)] += j[(row, k)] * e;
+            }
+        }
+    }
+    let s = &g * g.transpose() * (blocks as f64 / (blocks.max(2) - 1) as f64);
+    let a = j.transpose() * j;
+    let eig = a.symmetric_eigen();
+    let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+    let mut a_inv = nalgebra::DMatrix::<f64>::zeros(n, n);
+    for k in 0..n {
+        let l = eig.eigenvalues[k];
+        let inv = if l > 1e-20 * top {
+            1.0 / l
+        } else {
+            f64::INFINITY
+        };
+        let v = eig.eigenvectors.column(k);
+        for x in 0..n {
+            for y in 0..n {
+                let w = v[x] * v[y];
+                if w != 0.0 {
+                    a_inv[(x, y)] += w * inv;
+                }
+            }
+        }
+    }
+    &a_inv * s * &a_inv
+}
+
+/// A residual block kept for a servo, keyed by the parameters that made it.
+struct Cached {
+    values: [f64; N_PARAMS],
+    r: Vec<f64>,
+    used: u64,
+}
+
+/// Blocks kept per servo: the Jacobian's base point and its plus and minus steps.
+const CACHED: usize = 3;
+
+struct Group<'a> {
+    servos: &'a [ServoData],
+    base: Vec<ServoParams>,
+    segments: Vec<Vec<Segment>>,
+    offsets: Vec<Range<usize>>,
+    shared: Vec<usize>,
+    per: Vec<usize>,
+    sd_q: f64,
+    cache: Vec<Vec<Cached>>,
+    clock: u64,
+    /// One (positions, currents) scratch pair per thread.
+    buffers: Vec<(Vec<f64>, Vec<f64>)>,
+    simulations: usize,
+}
+
+impl Group<'_> {
+    /// Servo `s`'s parameters at the log-parameter vector `x`.
+    fn params_of(&self, x: &[f64], s: usize) -> ServoParams {
+        let mut p = self.base[s].clone();
+        let ns = self.shared.len();
+        for (k, &i) in self.shared.iter().enumerate() {
+            p.values[i] = x[k].exp();
+        }
+        let np = self.per.len();
+        for (k, &i) in self.per.iter().enumerate() {
+            p.values[i] = x[ns + s * np + k].exp();
+        }
+        p
+    }
+
+    fn residuals(&mut self, x: &[f64], out: &mut [f64]) {
+        self.clock += 1;
+        let clock = self.clock;
+        let mut jobs: Vec<(usize, ServoParams, Vec<f64>)> = Vec::new();
+        for s in 0..self.servos.len() {
+            let p = self.params_of(x, s);
+            let range = self.offsets[s].clone();
+            if let Some(c) = self.cache[s].iter_mut().find(|c| c.values == p.values) {
+                c.used = clock;
+                out[range].copy_from_slice(&c.r);
+                continue;
+            }
+            // Reuse the least recently used block's storage.
+            let r = if self.cache[s].len() == CACHED {
+                let k = (0..CACHED)
+                    .min_by_key(|&k| self.cache[s][k].used)
+                    .expect("CACHED > 0");
+                self.cache[s].swap_remove(k).r
+            } else {
+                vec![0.0; range.len()]
+            };
+            jobs.push((s, p, r));
+        }
+        self.simulations += jobs.len();
+        let per_thread = jobs.len().div_ceil(self.buffers.len()).max(1);
+        let (servos, segments, sd_q) = (self.servos, &self.segments, self.sd_q);
+        let run = |chunk: &mut [(usize, ServoParams, Vec<f64>)],
+                   (qb, cb): &mut (Vec<f64>, Vec<f64>)| {
+            for (s, p, r) in chunk {
+                let load = Load::from(servos[*s].load);
+                let fit = Fit {
+                    logs: &servos[*s].logs,
+                    load: &load,
+                    segments: &segments[*s],
+                    sd_q,
+                    iterations: 0,
+                    evaluations: 0,
+                };
+                fit.residuals(p, qb, cb, r);
+            }
+        };
+        if jobs.len() > 1 && self.buffers.len() > 1 {
+            std::thread::scope(|scope| {
+                for (chunk, buf) in jobs.chunks_mut(per_thread).zip(self.buffers.iter_mut()) {
+                    scope.spawn(|| run(chunk, buf));
+                }
+            });
+        } else {
+            run(&mut jobs, &mut self.buffers[0]);
+        }
+        for (s, p, r) in jobs {
+            out[self.offsets[s].clone()].copy_from_slice(&r);
+            self.cache[s].push(Cached {
+                values: p.values,
+                r,
+                used: clock,
+            });
+        }
+    }
+}
+
+/// Fit `servos` together: the rung's parameters named in `shared` once for all,
+/// the others once per servo, from `starts` (one per servo; a shared parameter
+/// starts at their geometric mean). Position-only logs hold friction_viscous at 0,
+/// as [`crate::identify::identify`] does. Backlash and delays keep the starts'
+/// values. `threads` simulate servos at once.
+pub fn identify_group(
+    servos: &[ServoData],
+    starts: &[ServoParams],
+    shared: &[usize],
+    holdout_fraction: f64,
+    threads: usize,
+) -> Result<GroupFit, ActuatorError> {
+    let Some(first) = starts.first() else {
+        return Err(ActuatorError::new("", "--data", "no servo to fit"));
+    };
+    if starts.len() != servos.len() {
+        return Err(ActuatorError::new("", "", "one start per servo"));
+    }
+    let servo_type = first.servo;
+    let level = first.level;
+    for (d, st) in servos.iter().zip(starts) {
+        if d.logs.is_empty() {
+            return Err(ActuatorError::new(&d.name, "--data", "no log to fit"));
+        }
+        if st.servo != servo_type || st.level != level {
+            return Err(ActuatorError::new(
+                &d.name,
+                "",
+                "every servo of a group fit is of one type and rung",
+            ));
+        }
+        for l in d.logs.iter().chain(&d.holdout) {
+            if l.servo != Some(servo_type) {
+                return Err(ActuatorError::new(
+                    &l.file,
+                    "line 1",
+                    format!(
+                        "a log of {:?}, but the group is of {servo_type}",
+                        l.servo.map(|s| s.name())
+                    ),
+                ));
+            }
+        }
+    }
+    let mut fitted = level.parameters();
+    let senses_current = servos
+        .iter()
+        .all(|d| d.logs.iter().all(|l| l.current.is_some()));
+    if !senses_current {
+        fitted.retain(|&i| i != FRICTION_VISCOUS);
+    }
+    let shared_f: Vec<usize> = fitted
+        .iter()
+        .copied()
+        .filter(|i| shared.contains(i))
+        .collect();
+    let per_f: Vec<usize> = fitted
+        .iter()
+        .copied()
+        .filter(|i| !shared.contains(i))
+        .collect();
+    let (ns, np) = (shared_f.len(), per_f.len());
+    let mut base = Vec::new();
+    let mut segments = Vec::new();
+    let mut held = Vec::new();
+    let mut offsets = Vec::new();
+    let mut m = 0;
+    let mut longest = 0;
+    // The time block of each residual row, for the robust covariance.
+    let mut block: Vec<usize> = Vec::new();
+    for (d, st) in servos.iter().zip(starts) {
+        let mut p = st.clone();
+        p.uncertainty = None;
+        let n_volt: usize = d.logs.iter().map(|l| l.voltage.len()).sum();
+        p.voltage = d.logs.iter().flat_map(|l| &l.voltage).sum::<f64>() / n_volt as f64;
+        if !senses_current {
+            p.values[FRICTION_VISCOUS] = 0.0;
+        }
+        base.push(p);
+        let mut segs = Vec::new();
+        let mut h = Vec::new();
+        for (k, l) in d.logs.iter().enumerate() {
+            let split = if d.holdout.is_empty() {
+                ((l.len() as f64) * (1.0 - holdout_fraction)).round() as usize
+            } else {
+                l.len()
+            };
+            let split = split.clamp(2, l.len());
+            segs.push(Segment {
+                log: k,
+                rows: 0..split,
+                current: senses_current,
+            });
+            if split + 2 < l.len() {
+                h.push((k, split - 1..l.len()));
+            }
+        }
+        for seg in &segs {
+            let l = &d.logs[seg.log];
+            let t0 = l.t[seg.rows.start];
+            let first = block.last().map_or(0, |b| b + 1);
+            let ids: Vec<usize> = seg
+                .rows
+                .clone()
+                .map(|r| first + ((l.t[r] - t0) / BLOCK_SECONDS) as usize)
+                .collect();
+            block.extend(&ids);
+            if seg.current {
+                block.extend(&ids);
+            }
+        }
+        let ms: usize = segs
+            .iter()
+            .map(|s| s.rows.len() * if s.current { 2 } else { 1 })
+            .sum();
+        offsets.push(m..m + ms);
+        m += ms;
+        longest = d
+            .logs
+            .iter()
+            .chain(&d.holdout)
+            .map(ServoLog::len)
+            .max()
+            .unwrap_or(0)
+            .max(longest);
+        segments.push(segs);
+        held.push(h);
+    }
+    let threads = threads.max(1);
+    let mut x0 = Vec::with_capacity(ns + servos.len() * np);
+    for &i in &shared_f {
+        let mean_ln =
+            base.iter().map(|p| p.values[i].max(1e-6).ln()).sum::<f64>() / base.len() as f64;
+        x0.push(mean_ln);
+    }
+    for p in &base {
+        for &i in &per_f {
+            x0.push(p.values[i].max(1e-6).ln());
+        }
+    }
+    let mut group = Group {
+        servos,
+        base,
+        segments,
+        offsets,
+        shared: shared_f.clone(),
+        per: per_f.clone(),
+        sd_q: servo_type.resolution() / 12f64.sqrt(),
+        cache: (0..servos.len()).map(|_| Vec::new()).collect(),
+        clock: 0,
+        buffers: (0..threads)
+            .map(|_| (vec![0.0; longest], vec![0.0; longest]))
+            .collect(),
+        simulations: 0,
+    };
+    let result = levenberg_marquardt(
+        &x0,
+        m,
+        |x, out| group.residuals(x, out),
+        &LmOptions::default(),
+    );
+    let n = x0.len();
+    let stats = uncertainty(&result.jacobian, &result.residuals, &result.x, n);
+    let robust = robust_covariance(&result.jacobian, &result.residuals, &block);
+    let mut undetermined: Vec<&'static str> = Vec::new();
+    if !senses_current {
+        undetermined.extend(["kt", "resistance", "friction_viscous"]);
+    }
+    let mut fits = Vec::new();
+    let (mut qb, mut cb) = (vec![0.0; longest], vec![0.0; longest]);
+    for (s, d) in servos.iter().enumerate() {
+        let mut p = group.params_of(&result.x, s);
+        // This servo's columns of the parameter vector, in `fitted_s`'s order.
+        let cols: Vec<usize> = (0..ns).chain(ns + s * np..ns + (s + 1) * np).collect();
+        let fitted_s: Vec<usize> = shared_f.iter().chain(&per_f).copied().collect();
+        let mut sd = [0.0; N_PARAMS];
+        let mut sd_independent = [0.0; N_PARAMS];
+        for (&c, &i) in cols.iter().zip(&fitted_s) {
+            let sd_log = robust[(c, c)].max(0.0).sqrt();
+            sd[i] = p.values[i] * sd_log;
+            sd_independent[i] = p.values[i] * stats.sd_log[c];
+            // NaN (a flat direction) counts as not determined.
+            let determined = sd_log <= UNDETERMINED_RELATIVE_SD;
+            if !determined && !undetermined.contains(&PARAM_NAMES[i]) {
+                undetermined.push(PARAM_NAMES[i]);
+            }
+        }
+        p.uncertainty = Some(sd);
+        let cov = robust.select_rows(&cols).select_columns(&cols);
+        let combinations = motor_combinations(&p, &fitted_s, &cov);
+        // Position residuals of this servo, segment by segment.
+        let r = &result.residuals.as_slice()[group.offsets[s].clone()];
+        let (mut sq, mut count, mut o) = (0.0, 0usize, 0usize);
+        for seg in &group.segments[s] {
+            let q = &r[o..o + seg.rows.len()];
+            sq += q.iter().map(|e| e * e).sum::<f64>();
+            count += q.len();
+            o += seg.rows.len() * if seg.current { 2 } else { 1 };
+        }
+        let held_s: Vec<(&ServoLog, Range<usize>)> = held[s]
+            .iter()
+            .map(|(k, rows)| (&d.logs[*k], rows.clone()))
+            .chain(d.holdout.iter().map(|l| (l, 0..l.len())))
+            .collect();
+        let (heldout_rms_mrad, heldout_mae_mrad, heldout_rows) =
+            heldout_error(&p, &Load::from(d.load), &held_s, &mut qb, &mut cb);
+        fits.push(ServoFit {
+            name: d.name.clone(),
+            params: p,
+            combinations,
+            fit_rms_mrad: 1e3 * group.sd_q * (sq / count.max(1) as f64).sqrt(),
+            heldout_rms_mrad,
+            heldout_mae_mrad,
+            heldout_rows,
+            residuals: r.len(),
+            sum_squares: r.iter().map(|e| e * e).sum(),
+            sd_independent,
+        });
+    }
+    Ok(GroupFit {
+        servos: fits,
+        shared: shared_f,
+        per_servo: per_f,
+        undetermined,
+        n_params: n,
+        iterations: result.iterations,
+        simulations: group.simulations,
+    })
+}
+
+/// Each servo fitted alone (every parameter its own), `threads` servos at once;
+/// as one [`GroupFit`] with nothing shared.
+pub fn identify_each(
+    servos: &[ServoData],
+    starts: &[ServoParams],
+    holdout_fraction: f64,
+    threads: usize,
+) -> Result<GroupFit, ActuatorError> {
+    let threads = threads.clamp(1, servos.len().max(1));
+    let mut results: Vec<Option<Result<GroupFit, ActuatorError>>> =
+        (0..servos.len()).map(|_| None).collect();
+    let per_thread = servos.len().div_ceil(threads).max(1);
+    std::thread::scope(|scope| {
+        for (k, out) in results.chunks_mut(per_thread).enumerate() {
+            let first = k * per_thread;
+            scope.spawn(move || {
+                for (j, slot) in out.iter_mut().enumerate() {
+                    let s = first + j;
+                    *slot = Some(identify_group(
+                        &servos[s..s + 1],
+                        &starts[s..s + 1],
+                        &[],
+                        holdout_fraction,
+                        1,
+                    ));
+                }
+            });
+        }
+    });
+    let mut all = GroupFit {
+        servos: Vec::new(),
+        shared: Vec::new(),
+        per_servo: Vec::new(),
+        undetermined: Vec::new(),
+        n_params: 0,
+        iterations: 0,
+        simulations: 0,
+    };
+    for r in results {
+        let g = r.expect("every servo ran")?;
+        all.per_servo = g.per_servo;
+        for u in g.undetermined {
+            if !all.undetermined.contains(&u) {
+                all.undetermined.push(u);
+            }
+        }
+        all.n_params += g.n_params;
+        all.iterations += g.iterations;
+        all.simulations += g.simulations;
+        all.servos.extend(g.servos);
+    }
+    Ok(all)
+}
+
+/// Whether the servos differ in one parameter, from their separate fits.
+#[derive(Debug, Clone)]
+pub struct Spread {
+    pub index: usize,
+    pub name: &'static str,
+    /// Each servo's value and its deviation as the Jacobian states it.
+    pub values: Vec<f64>,
+    pub sd: Vec<f64>,
+    /// Relative spread of the values (their sample standard deviation over their
+    /// mean) and the median relative (robust) deviation.
+    pub relative_spread: f64,
+    pub relative_sd: f64,
+    /// `sum ((ln p_s - mean)/sd_s)^2` over the servos with the robust relative
+    /// deviations (weighted mean), its degrees of freedom (servos - 1) and the chance of as
+    /// large a value if the servos were alike.
+    pub chi2: f64,
+    pub dof: usize,
+    pub p_value: f64,
+    /// Whether every servo's fit determines it (relative deviation at most
+    /// [`UNDETERMINED_RELATIVE_SD`]); only those are tested.
+    pub tested: bool,
+    /// Tested, `p_value` below [`DIFFER_P`] / parameters tested (Bonferroni), and
+    /// `relative_spread` above [`MIN_SPREAD`].
+    pub differs: bool,
+}
+
+/// Least relative spread called a difference: below it the servos' values are
+/// within what the fit recovers of a known truth over the bus (docs/servo-models.md:
+/// errors up to 2.5 %, from timing the deviations do not capture).
+pub const MIN_SPREAD: f64 = 0.03;
+
+/// Family-wise significance of "the servos differ" over the parameters tested.
+pub const DIFFER_P: f64 = 0.01;
+
+/// The answer to "does each servo need its own parameters?".
+#[derive(Debug, Clone)]
+pub struct Comparison {
+    /// Every servo fitted alone.
+    pub each: GroupFit,
+    /// One parameter set for all.
+    pub all_shared: GroupFit,
+    /// Per parameter, from `each`.
+    pub spreads: Vec<Spread>,
+}
+
+impl Comparison {
+    /// The parameters the servos differ in.
+    pub fn differing(&self) -> Vec<usize> {
+        self.spreads
+            .iter()
+            .filter(|s| s.differs)
+            .map(|s| s.index)
+            .collect()
+    }
+}
+
+/// Fit every servo alone and all with one set, and test per parameter whether the
+/// servos differ beyond their (inflated) uncertainty.
+pub fn compare(
+    servos: &[ServoData],
+    start: &ServoParams,
+    holdout_fraction: f64,
+    threads: usize,
+) -> Result<Comparison, ActuatorError> {
+    let starts = vec![start.clone(); servos.len()];
+    let each = identify_each(servos, &starts, holdout_fraction, threads)?;
+    // The shared fit starts from the separate fits' geometric mean: few iterations.
+    let starts: Vec<ServoParams> = each.servos.iter().map(|s| s.params.clone()).collect();
+    let all_shared = identify_group(servos, &starts, &each.per_servo, holdout_fraction, threads)?;
+    // Tested: what every servo's fit determines (a position-only log's kt and
+    // resistance are, with friction_viscous held at 0).
+    let tested: Vec<usize> = each
+        .per_servo
+        .iter()
+        .copied()
+        .filter(|&i| {
+            each.servos.iter().all(|s| {
+                let sd = s.params.uncertainty.map_or(f64::NAN, |u| u[i]);
+                sd <= UNDETERMINED_RELATIVE_SD * s.params.values[i]
+            })
+        })
+        .collect();
+    let mut spreads = Vec::new();
+    for &i in &each.per_servo {
+        let values: Vec<f64> = each.servos.iter().map(|s| s.params.values[i]).collect();
+        let sd: Vec<f64> = each
+            .servos
+            .iter()
+            .map(|s| s.params.uncertainty.map_or(f64::NAN, |u| u[i]))
+            .collect();
+        // Log scale (the fit's): relative deviations.
+        let sd_ln: Vec<f64> = values.iter().zip(&sd).map(|(v, d)| d / v).collect();
+        let ln: Vec<f64> = values.iter().map(|v| v.ln()).collect();
+        let w: Vec<f64> = sd_ln.iter().map(|d| 1.0 / (d * d)).collect();
+        let mean = ln.iter().zip(&w).map(|(l, w)| l * w).sum::<f64>() / w.iter().sum::<f64>();
+        let chi2: f64 = ln.iter().zip(&w).map(|(l, w)| (l - mean).powi(2) * w).sum();
+        let dof = values.len().saturating_sub(1);
+        let p_value = if dof > 0 && chi2.is_finite() {
+            chi2_sf(chi2, dof as f64)
+        } else {
+            1.0
+        };
+        let avg = values.iter().sum::<f64>() / values.len() as f64;
+        let var = values.iter().map(|v| (v - avg).powi(2)).sum::<f64>() / dof.max(1) as f64;
+        let mut rel: Vec<f64> = sd_ln.clone();
+        rel.sort_by(f64::total_cmp);
+        spreads.push(Spread {
+            index: i,
+            name: PARAM_NAMES[i],
+            relative_spread: var.sqrt() / avg,
+            relative_sd: rel[rel.len() / 2],
+            tested: tested.contains(&i),
+            differs: tested.contains(&i)
+                && p_value < DIFFER_P / tested.len().max(1) as f64
+                && var.sqrt() / avg > MIN_SPREAD,
+            values,
+            sd,
+            chi2,
+            dof,
+            p_value,
+        });
+    }
+    Ok(Comparison {
+        each,
+        all_shared,
+        spreads,
+    })
+}
+
+/// A group identification: the comparison and the fit chosen from it (or with the
+/// shared parameters the user named).
+#[derive(Debug, Clone)]
+pub struct GroupIdentification {
+    pub comparison: Comparison,
+    /// The parameters the servos differ in own, the rest shared (or as asked).
+    pub chosen: GroupFit,
+}
+
+/// Fit `servos` alone and together, test which parameters differ, and fit the
+/// group with those per servo and the rest shared; `shared` (where given) names
+/// the shared ones instead of the test.
+pub fn identify_servos(
+    servos: &[ServoData],
+    start: &ServoParams,
+    shared: Option<&[usize]>,
+    holdout_fraction: f64,
+    threads: usize,
+) -> Result<GroupIdentification, ActuatorError> {
+    let comparison = compare(servos, start, holdout_fraction, threads)?;
+    let per_servo: Vec<usize> = match shared {
+        Some(shared) => comparison
+            .each
+            .per_servo
+            .iter()
+            .copied()
+            .filter(|i| !shared.contains(i))
+            .collect(),
+        None => comparison.differing(),
+    };
+    let chosen = if per_servo.is_empty() {
+        comparison.all_shared.clone()
+    } else if per_servo.len() == comparison.each.per_servo.len() {
+        comparison.each.clone()
+    } else {
+        let shared: Vec<usize> = comparison
+            .each
+            .per_servo
+            .iter()
+            .copied()
+            .filter(|i| !per_servo.contains(i))
+            .collect();
+        // From the separate fits: a per-servo parameter starts at its own value.
+        let starts: Vec<ServoParams> = comparison
+            .each
+            .servos
+            .iter()
+            .map(|s| s.params.clone())
+            .collect();
+        identify_group(servos, &starts, &shared, holdout_fraction, threads)?
+    };
+    Ok(GroupIdentification { comparison, chosen })
+}
