@@ -133,6 +133,10 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
             })
             .collect()
     };
+    // The pendulum files are checked first: a bad LOAD.toml is named before any log.
+    for arg in &a.load {
+        Pendulum::read(Path::new(keyed(arg, "--load")?.1))?;
+    }
     let logs = read(&a.data)?;
     let holdout = read(&a.holdout)?;
     // The one pendulum BAM's logs name, when no --load is given.
