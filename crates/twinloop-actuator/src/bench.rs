@@ -1,11 +1,12 @@
-//! The pendulum bench (BAM's): one servo swinging a mass on an arm, angle 0 hanging
-//! down. [`Bench::step`] is the whole model in one place: sensing, firmware, motor,
-//! friction and the pendulum's motion.
+//! The bench: one servo turning a load ([`Load`]): BAM's pendulum (a mass on an arm,
+//! angle 0 hanging down) or a limb of a held robot. [`Bench::step`] is the whole
+//! model in one place: sensing, firmware, motor, friction and the load's motion.
 
 use crate::delay::Samples;
 use crate::error::ActuatorError;
 use crate::firmware::Firmware;
 use crate::friction::budget;
+use crate::load::Load;
 use crate::motor::motor_torque;
 use crate::params::{BACKLASH, BUS_DELAY, FRICTION_VISCOUS, SENSING_DELAY, ServoParams};
 use std::path::Path;
@@ -86,6 +87,24 @@ impl Pendulum {
     }
 }
 
+impl From<Pendulum> for Load {
+    /// A point mass `mass` at `length` on an arm of `arm_inertia`, hanging down at 0.
+    fn from(p: Pendulum) -> Load {
+        Load {
+            inertia: p.inertia(),
+            gravity_sin: -p.mass * GRAVITY * p.length,
+            gravity_cos: 0.0,
+            gravity_const: 0.0,
+        }
+    }
+}
+
+impl From<&Pendulum> for Load {
+    fn from(p: &Pendulum) -> Load {
+        Load::from(*p)
+    }
+}
+
 /// A servo on the bench: parameters, firmware, and the state.
 ///
 /// With a `backlash` the gearbox's last gear (the motor side, angle `qm` at the
@@ -97,7 +116,7 @@ impl Pendulum {
 #[derive(Debug, Clone)]
 pub struct Bench {
     pub params: ServoParams,
-    pub load: Pendulum,
+    pub load: Load,
     pub firmware: Firmware,
     /// Goal Position in force, rad (already a whole number of counts when it came over
     /// a bus).
@@ -123,11 +142,11 @@ pub struct Bench {
 }
 
 impl Bench {
-    pub fn new(params: ServoParams, load: Pendulum) -> Bench {
+    pub fn new(params: ServoParams, load: impl Into<Load>) -> Bench {
         Bench {
             firmware: Firmware::new(params.servo),
             params,
-            load,
+            load: load.into(),
             goal: 0.0,
             torque_on: false,
             q: 0.0,
@@ -229,10 +248,10 @@ impl Bench {
         let mut moved = false;
         if !side.is_nan() {
             let (v, vm) = (self.v, self.vm);
-            let inertia = self.params.armature() + self.load.inertia();
+            let inertia = self.params.armature() + self.load.inertia;
             let v_new = self.motor_side_step(dt, inertia, self.load.gravity_torque(self.q));
             // The torque the motor side puts on the load must push it, not pull.
-            let push = self.load.inertia() * (v_new - v) / dt - self.load.gravity_torque(self.q);
+            let push = self.load.inertia * (v_new - v) / dt - self.load.gravity_torque(self.q);
             if side == 0.0 || push * side >= 0.0 {
                 self.v = v_new;
                 self.vm = v_new;
@@ -247,13 +266,13 @@ impl Bench {
             // Apart: the motor side alone on its armature, the load alone under gravity.
             let vm_new = self.motor_side_step(dt, self.params.armature(), 0.0);
             self.vm = vm_new;
-            self.v += dt * self.load.gravity_torque(self.q) / self.load.inertia();
+            self.v += dt * self.load.gravity_torque(self.q) / self.load.inertia;
             self.qm += dt * self.vm;
             self.q += dt * self.v;
             let delta = self.qm - self.q;
             if delta.abs() >= half {
                 // The gap closes: an inelastic impact.
-                let (jm, jl) = (self.params.armature(), self.load.inertia());
+                let (jm, jl) = (self.params.armature(), self.load.inertia);
                 let common = (jm * self.vm + jl * self.v) / (jm + jl);
                 self.vm = common;
                 self.v = common;
@@ -352,5 +371,19 @@ mod tests {
         fast.send_goal(1.0);
         let q = at(&mut fast, 0.35);
         assert!(q > 0.9, "{q}");
+    }
+
+    #[test]
+    fn a_pendulum_is_a_load() {
+        let p = Pendulum {
+            mass: 0.5,
+            length: 0.15,
+            arm_inertia: 0.001,
+        };
+        let l = Load::from(p);
+        for q in [-2.0, -0.3, 0.0, 0.7, 3.0] {
+            assert!((l.gravity_torque(q) - p.gravity_torque(q)).abs() < 1e-14);
+        }
+        assert_eq!(l.inertia, p.inertia());
     }
 }

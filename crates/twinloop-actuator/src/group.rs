@@ -14,6 +14,7 @@ use crate::identify::{
     Fit, Segment, UNDETERMINED_RELATIVE_SD, heldout_error, motor_combinations, uncertainty,
 };
 use crate::lm::{LmOptions, levenberg_marquardt};
+use crate::load::Load;
 use crate::log::ServoLog;
 use crate::params::{FRICTION_VISCOUS, N_PARAMS, PARAM_NAMES, ServoParams};
 use std::ops::Range;
@@ -201,9 +202,10 @@ impl Group<'_> {
         let run = |chunk: &mut [(usize, ServoParams, Vec<f64>)],
                    (qb, cb): &mut (Vec<f64>, Vec<f64>)| {
             for (s, p, r) in chunk {
+                let load = Load::from(servos[*s].load);
                 let fit = Fit {
                     logs: &servos[*s].logs,
-                    load: &servos[*s].load,
+                    load: &load,
                     segments: &segments[*s],
                     sd_q,
                     iterations: 0,
@@ -437,7 +439,7 @@ pub fn identify_group(
             .chain(d.holdout.iter().map(|l| (l, 0..l.len())))
             .collect();
         let (heldout_rms_mrad, heldout_mae_mrad, heldout_rows) =
-            heldout_error(&p, &d.load, &held_s, &mut qb, &mut cb);
+            heldout_error(&p, &Load::from(d.load), &held_s, &mut qb, &mut cb);
         fits.push(ServoFit {
             name: d.name.clone(),
             params: p,

@@ -5,11 +5,11 @@
 //! correlations from the Jacobian at the optimum, the held-out error in mrad, and
 //! what the data cannot determine (the Jacobian's weak directions).
 
-use crate::bench::Pendulum;
 use crate::cmaes::{CmaOptions, cmaes};
 use crate::error::ActuatorError;
 use crate::lm::LmResult;
 use crate::lm::{LmOptions, levenberg_marquardt};
+use crate::load::Load;
 use crate::log::ServoLog;
 use crate::params::{
     BACKLASH, FRICTION_VISCOUS, KT, NONSMOOTH, PARAM_NAMES, RESISTANCE, ServoParams,
@@ -119,7 +119,7 @@ pub(crate) struct Segment {
 pub fn identify(
     logs: &[ServoLog],
     holdout: &[ServoLog],
-    load: &Pendulum,
+    load: &Load,
     start: &ServoParams,
     holdout_fraction: f64,
 ) -> Result<Identification, ActuatorError> {
@@ -139,7 +139,7 @@ pub fn identify(
 pub fn identify_with(
     logs: &[ServoLog],
     holdout: &[ServoLog],
-    load: &Pendulum,
+    load: &Load,
     start: &ServoParams,
     holdout_fraction: f64,
     options: &IdentifyOptions,
@@ -378,7 +378,7 @@ pub fn identify_with(
 /// The fit's data: what the residuals compare.
 pub(crate) struct Fit<'a> {
     pub(crate) logs: &'a [ServoLog],
-    pub(crate) load: &'a Pendulum,
+    pub(crate) load: &'a Load,
     pub(crate) segments: &'a [Segment],
     pub(crate) sd_q: f64,
     /// LM iterations and simulations over every LM run.
@@ -473,7 +473,7 @@ impl Fit<'_> {
 /// Held-out RMS and MAE of the position, mrad, and the rows compared.
 pub(crate) fn heldout_error(
     params: &ServoParams,
-    load: &Pendulum,
+    load: &Load,
     held: &[(&ServoLog, Range<usize>)],
     qb: &mut [f64],
     cb: &mut [f64],

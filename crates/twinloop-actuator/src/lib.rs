@@ -7,7 +7,8 @@
 //! - [`firmware`]: the position loop as the servo runs it (RX compliance, MX/X PID);
 //! - [`motor`]: the DC motor behind the gearbox; [`friction`]: the gearbox's friction
 //!   budget (Coulomb, viscous, Stribeck, load-dependent);
-//! - [`bench`]: a servo swinging a pendulum (BAM's bench), stepped in fixed time steps;
+//! - [`load`]: what the servo turns (inertia, gravity torque `A sin q + B cos q + C`);
+//!   [`bench`]: a servo turning it (BAM's pendulum bench), stepped in fixed time steps;
 //! - [`log`]: an `experiment servo` log as columns; [`bam_log`]: BAM's pendulum
 //!   logs read as ours; [`replay`]: the model run against a
 //!   log's commands; [`lm`]: Levenberg-Marquardt; [`identify`]: the fit, its
@@ -27,6 +28,7 @@ pub mod friction;
 pub mod group;
 pub mod identify;
 pub mod lm;
+pub mod load;
 pub mod load_rule;
 pub mod log;
 pub mod motor;
@@ -43,5 +45,6 @@ pub use bench::{Bench, Pendulum};
 pub use error::ActuatorError;
 pub use excitation::Excitation;
 pub use firmware::Firmware;
+pub use load::Load;
 pub use params::{ModelLevel, ServoParams};
 pub use servo_type::{LoopFamily, ServoType};

@@ -174,8 +174,21 @@ pub struct LogWriter {
 
 impl LogWriter {
     pub fn create(path: &Path, servo: ServoType, what: &str) -> std::io::Result<LogWriter> {
+        Self::create_with(path, servo, what, "")
+    }
+
+    /// [`LogWriter::create`] with `comments` (whole `#` lines, each ending in a
+    /// newline) after the first line: what the load was (a limb's robot, joint and
+    /// pose).
+    pub fn create_with(
+        path: &Path,
+        servo: ServoType,
+        what: &str,
+        comments: &str,
+    ) -> std::io::Result<LogWriter> {
         let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
         writeln!(out, "{LOG_PREFIX} {} {what}", servo.name())?;
+        out.write_all(comments.as_bytes())?;
         let fw = servo.firmware_columns();
         writeln!(
             out,

@@ -2,7 +2,8 @@
 //! [`Bench`] from the logged starting state, and the model's position (and current)
 //! is sampled at the logged times.
 
-use crate::bench::{Bench, Pendulum};
+use crate::bench::Bench;
+use crate::load::Load;
 use crate::log::ServoLog;
 use crate::params::ServoParams;
 
@@ -18,7 +19,7 @@ pub const MAX_STEP: f64 = 5e-4;
 /// to counts) and current at each row into `q` and `current` (same length as `rows`).
 pub fn replay(
     params: &ServoParams,
-    load: &Pendulum,
+    load: &Load,
     log: &ServoLog,
     rows: std::ops::Range<usize>,
     q: &mut [f64],

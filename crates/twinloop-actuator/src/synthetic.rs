@@ -3,8 +3,9 @@
 //! of the fit and for the benchmark against SciPy; the known-truth test over a pty
 //! goes through the real bus instead.
 
-use crate::bench::{Bench, Pendulum};
+use crate::bench::Bench;
 use crate::excitation::Excitation;
+use crate::load::Load;
 use crate::log::ServoLog;
 use crate::params::ServoParams;
 use crate::replay::advance;
@@ -15,7 +16,7 @@ use twinloop_random::SplitMix64;
 /// register units a bus would give.
 pub fn synthetic_log(
     truth: &ServoParams,
-    load: &Pendulum,
+    load: &Load,
     excitation: &Excitation,
     period: f64,
     jitter: f64,

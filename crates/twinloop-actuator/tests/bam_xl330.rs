@@ -14,7 +14,7 @@ use twinloop_actuator::datasheet::defaults;
 use twinloop_actuator::identify::{Identification, identify};
 use twinloop_actuator::params::*;
 use twinloop_actuator::replay::replay;
-use twinloop_actuator::{ModelLevel, ServoParams, ServoType};
+use twinloop_actuator::{Load, ModelLevel, ServoParams, ServoType};
 
 /// kp 100 sin_sin (stick-slip under a slow drive) and kp 200 lift_and_drop (lift to
 /// -90 deg in 2 s, torque off, free swing; first 2.6 s).
@@ -40,7 +40,7 @@ fn best_fit(train: &BamLog, held: &BamLog, starts: &[ServoParams]) -> Option<Ide
             identify(
                 std::slice::from_ref(&train.log),
                 std::slice::from_ref(&held.log),
-                &train.load,
+                &Load::from(train.load),
                 s,
                 0.25,
             )
@@ -128,7 +128,14 @@ fn ladder(train: &BamLog, held: &BamLog) -> Vec<(ModelLevel, Identification)> {
 fn replay_error(params: &ServoParams, log: &BamLog) -> (f64, f64) {
     let n = log.log.len();
     let (mut q, mut c) = (vec![0.0; n], vec![0.0; n]);
-    replay(params, &log.load, &log.log, 0..n, &mut q, &mut c);
+    replay(
+        params,
+        &Load::from(log.load),
+        &log.log,
+        0..n,
+        &mut q,
+        &mut c,
+    );
     let (mut sq, mut abs) = (0.0, 0.0);
     for (model, measured) in q.iter().zip(&log.log.q).skip(1) {
         let e = model - measured;

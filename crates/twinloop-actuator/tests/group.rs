@@ -6,7 +6,7 @@ use twinloop_actuator::datasheet::defaults;
 use twinloop_actuator::group::{ServoData, compare, identify_servos};
 use twinloop_actuator::params::*;
 use twinloop_actuator::synthetic::synthetic_log;
-use twinloop_actuator::{Excitation, ModelLevel, Pendulum, ServoType};
+use twinloop_actuator::{Excitation, Load, ModelLevel, Pendulum, ServoType};
 use twinloop_random::SplitMix64;
 
 fn truth(servo: ServoType, seed: u64) -> ServoParams {
@@ -33,7 +33,7 @@ fn servos(truths: &[ServoParams]) -> Vec<ServoData> {
             name: format!("id {}", k + 1),
             logs: vec![synthetic_log(
                 t,
-                &LOAD,
+                &Load::from(LOAD),
                 &Excitation::standard(t.servo, 1.0),
                 1e-3,
                 2e-4,

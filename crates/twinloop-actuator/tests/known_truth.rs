@@ -5,7 +5,7 @@ use twinloop_actuator::datasheet::defaults;
 use twinloop_actuator::identify::{IdentifyOptions, identify, identify_with};
 use twinloop_actuator::params::*;
 use twinloop_actuator::synthetic::synthetic_log;
-use twinloop_actuator::{Excitation, ModelLevel, Pendulum, ServoType};
+use twinloop_actuator::{Excitation, Load, ModelLevel, Pendulum, ServoType};
 use twinloop_random::SplitMix64;
 
 fn truth(servo: ServoType, level: ModelLevel, seed: u64) -> ServoParams {
@@ -19,11 +19,11 @@ fn truth(servo: ServoType, level: ModelLevel, seed: u64) -> ServoParams {
 
 #[test]
 fn m1_recovered_for_each_type() {
-    let load = Pendulum {
+    let load = Load::from(Pendulum {
         mass: 0.5,
         length: 0.15,
         arm_inertia: 0.002,
-    };
+    });
     for (k, servo) in [ServoType::Rx28, ServoType::Mx64V2, ServoType::Xm430W350]
         .into_iter()
         .enumerate()
@@ -99,11 +99,11 @@ fn m1_recovered_for_each_type() {
 /// and load-dependent friction) are fitted worse by m1 than by m4, held out.
 #[test]
 fn richer_rungs_are_needed_when_the_servo_has_their_friction() {
-    let load = Pendulum {
+    let load = Load::from(Pendulum {
         mass: 0.5,
         length: 0.15,
         arm_inertia: 0.002,
-    };
+    });
     let servo = ServoType::Xm430W350;
     let mut truth = truth(servo, ModelLevel::M4, 21);
     truth.values[LOAD_FRICTION] = 0.15;
@@ -147,11 +147,11 @@ fn richer_rungs_are_needed_when_the_servo_has_their_friction() {
 /// (docs/servo-models.md): not asserted here.
 #[test]
 fn backlash_and_delays_recovered() {
-    let load = Pendulum {
+    let load = Load::from(Pendulum {
         mass: 0.5,
         length: 0.15,
         arm_inertia: 0.002,
-    };
+    });
     let servo = ServoType::Xm430W350;
     let mut truth = truth(servo, ModelLevel::M1, 40);
     let mut rng = SplitMix64(90);

@@ -8,7 +8,7 @@ use twinloop_actuator::datasheet::defaults;
 use twinloop_actuator::identify::{IdentifyOptions, identify_with};
 use twinloop_actuator::params::*;
 use twinloop_actuator::synthetic::synthetic_log;
-use twinloop_actuator::{Excitation, ModelLevel, Pendulum, ServoType};
+use twinloop_actuator::{Excitation, Load, ModelLevel, Pendulum, ServoType};
 use twinloop_random::SplitMix64;
 
 fn truth(servo: ServoType, seed: u64) -> ServoParams {
@@ -26,7 +26,7 @@ fn worst_error(truth: &ServoParams, load: &Pendulum, backlash: bool) -> (f64, f6
     let servo = truth.servo;
     let log = synthetic_log(
         truth,
-        load,
+        &Load::from(load),
         &Excitation::standard(servo, 1.0),
         1.75e-3,
         4e-4,
@@ -37,7 +37,7 @@ fn worst_error(truth: &ServoParams, load: &Pendulum, backlash: bool) -> (f64, f6
         ..Default::default()
     };
     let start = defaults(servo, ModelLevel::M1);
-    let id = identify_with(&[log], &[], load, &start, 0.25, &options).unwrap();
+    let id = identify_with(&[log], &[], &Load::from(load), &start, 0.25, &options).unwrap();
     let p = &id.params;
     let rel = |got: f64, want: f64| 100.0 * (got / want - 1.0);
     let damping = |p: &ServoParams| p.kt().powi(2) / p.resistance() + p.values[FRICTION_VISCOUS];

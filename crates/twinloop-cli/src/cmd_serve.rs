@@ -49,6 +49,11 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     /// between the runs of `experiment tipover --port`
     #[arg(long)]
     pub catch_falls: bool,
+    /// Simulated robot: held in the air, its trunk fixed upright (base welded, no
+    /// ground), each servo holding its joint at 0: the rig of `experiment servo --map
+    /// MAP --joint NAME`, which moves one limb while the others hold
+    #[arg(long, conflicts_with_all = ["catch_falls", "ground_sink", "bench"])]
+    pub held: bool,
     /// Simulated robot: how far its weight sinks into the ground, m (the floor's
     /// stiffness; default 0.001). 1e-5 is the near-rigid floor of the simulated
     /// tip-over study (`experiment tipover --robot`), whose angles it then gives
@@ -172,6 +177,11 @@ pub fn run(a: ServeArgs) -> CliResult {
     if let (true, Some(robot)) = (simulate, &robot) {
         return serve_simulated(&a, &mapping, &servos, robot);
     }
+    if a.held {
+        return Err(CliError::new(
+            "--held holds the simulated robot: it needs --servo-model sim (or auto with a description)",
+        ));
+    }
     if !a.servo_params.is_empty() {
         return Err(CliError::new(
             "--servo-params sets the simulated servos: it needs --servo-model sim (or auto with a description)",
@@ -199,6 +209,7 @@ fn serve_simulated(
         realtime_factor: a.realtime_factor,
         catch_falls: a.catch_falls,
         ground_sink: a.ground_sink,
+        held: a.held,
         servo_params: twinloop_actuator::params_set::ServoParamsSet::read(
             &a.servo_params,
             "--servo-params",
@@ -217,8 +228,13 @@ fn serve_simulated(
     let bus = vr.bus();
     let sim = vr.spawn();
     let what = format!(
-        "the physics simulation of {} standing on the ground (real time x{}, servos {})",
+        "the physics simulation of {} {} (real time x{}, servos {})",
         robot.name,
+        if a.held {
+            "held in the air, trunk fixed upright"
+        } else {
+            "standing on the ground"
+        },
         a.realtime_factor,
         if a.torque_off { "limp" } else { "torque on" }
     );

@@ -22,6 +22,7 @@ mod cmd_validate;
 mod cmd_view;
 mod common;
 mod error;
+mod limb;
 mod progress;
 mod replay3d;
 mod units;

@@ -179,6 +179,8 @@ const CASES: &[Case] = &[
     case("identify servo", "--data {missing_csv} --load {plant} --out {out}", "plant.toml"),
     case("identify servo", "--data {state} --load {bad_toml} --out {out}", "bad.toml"),
     case("identify servo", "--defaults RX-99 --out {out}", "RX-99"),
+    case("experiment servo", "--port {gone} --map builtin:km20 --joint r_tail --out {out}", "r_tail"),
+    case("experiment servo", "--port {gone} --map {bad_toml} --joint r_knee --out {out}", "bad.toml"),
     // serve, demo, bench, view
     case("serve", "--robot {trunc_urdf} --link {out}", "trunc.urdf"),
     case("serve", "--robot {km20} --realtime-factor 0 --link {out}", "--realtime-factor"),

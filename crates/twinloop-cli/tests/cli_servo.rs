@@ -493,7 +493,7 @@ fn identical_servos_are_told_one_shared_set_suffices() {
     for id in 1..=3u64 {
         let log = synthetic_log(
             &t,
-            &pendulum,
+            &twinloop_actuator::Load::from(pendulum),
             &Excitation::standard(t.servo, 1.0),
             2e-3,
             4e-4,
@@ -548,7 +548,7 @@ fn a_group_with_bad_inputs_names_the_fault() {
     exc.parts.truncate(2);
     let log = synthetic_log(
         &defaults(servo, ModelLevel::M1),
-        &pendulum,
+        &twinloop_actuator::Load::from(pendulum),
         &exc,
         5e-3,
         0.0,

@@ -44,6 +44,9 @@ pub struct VirtualRobotOptions {
     /// The servos' model parameters (docs/servo-models.md): a file for every servo
     /// of its type or one per servo; servos without one keep their datasheet's.
     pub servo_params: twinloop_actuator::params_set::ServoParamsSet,
+    /// The robot held in the air: its base (trunk) fixed upright, no ground, as for
+    /// `experiment servo --map --joint` (one limb moved, the others holding).
+    pub held: bool,
 }
 
 impl Default for VirtualRobotOptions {
@@ -57,6 +60,7 @@ impl Default for VirtualRobotOptions {
             ground_sink: None,
             tether_s: None,
             servo_params: Default::default(),
+            held: false,
         }
     }
 }
@@ -74,8 +78,8 @@ pub struct VirtualRobot {
 }
 
 impl VirtualRobot {
-    /// `robot` standing upright on the ground with every joint at 0 (or the nearest
-    /// limit), each joint driven by its servo
+    /// `robot` standing upright on the ground (or held, [`VirtualRobotOptions::held`])
+    /// with every joint at 0 (or the nearest limit), each joint driven by its servo
     /// ([`twinloop_sim::servo_for_joint`]); the servos of `mapping` are the
     /// bus's, tied to joints by name.
     pub fn new(
@@ -90,9 +94,22 @@ impl VirtualRobot {
         let config = SimConfig {
             dt: options.dt,
             contact,
+            ground: !options.held,
             ..SimConfig::default()
         };
-        let mut sim = Simulator::new(robot, config).map_err(|e| e.to_string())?;
+        let mut sim = if options.held {
+            // The trunk welded upright where the description puts it (base frame =
+            // world frame); with no ground nothing else touches the robot.
+            let model = twinloop_dynamics::Model::from_description_with_base(
+                robot,
+                twinloop_dynamics::BaseKind::Fixed,
+            )
+            .map_err(|e| e.to_string())?;
+            Simulator::from_model(robot, model, config)
+        } else {
+            Simulator::new(robot, config)
+        }
+        .map_err(|e| e.to_string())?;
         let nb = sim.model.nbodies;
         for i in 0..nb {
             let s = twinloop_sim::servo_for_joint(&robot.name, &sim.model, i);

@@ -175,7 +175,7 @@ pub enum ExperimentCommand {
     /// --json writes it. Exit code 1 if the robot falls.
     #[command(verbatim_doc_comment)]
     CompliantWalk(compliant_walk::CompliantWalkArgs),
-    /// One servo swinging a pendulum through steps, a chirp, sinusoids at three gains and a slow back-and-forth
+    /// One servo (a pendulum bench, or one limb of a held robot) through steps, a chirp, sinusoids at three gains and a slow back-and-forth
     ///
     /// The bench of docs/servo-models.md (after Rhoban's BAM): a mass on an arm on the
     /// servo's horn, hanging at 0, free to swing to the horizontal both ways. The servo
@@ -190,11 +190,29 @@ pub enum ExperimentCommand {
     /// servo or Ctrl-C stops the run with the servo holding where it is (exit 2). On a
     /// serial port it asks first (--yes skips).
     ///
+    /// A limb of a held robot instead (--map MAP --joint NAME, the robot's trunk fixed
+    /// in a stand, feet off the ground): every other mapped servo is set to hold
+    /// where it is (torque on, its loop's registers as they were), their positions
+    /// are the held pose, and the load is
+    /// the subtree of links beyond the joint computed from the description (--robot,
+    /// default the mapping's `urdf`): its inertia about the axis and gravity's torque
+    /// A sin q + B cos q, gravity's direction from the mapping's IMU board (averaged
+    /// accelerometer), else the trunk taken as upright. The sequence is centred where the joint
+    /// is, its 0.8 rad step turned toward the wider side, and scaled down so that it
+    /// stays 0.1 rad inside the joint's limits (the description's within the
+    /// mapping's) with 20 % overshoot to spare; goals are clamped there, and a
+    /// position past the limits stops the run. The log's comment lines record the
+    /// robot, joint, gravity and held pose, from which `identify servo` (no --load)
+    /// rebuilds the load.
+    ///
     /// Example (a simulated bench, `twinloop serve --bench RX-28 --load load.toml --link
     /// /tmp/bench` running):
     ///   twinloop experiment servo --port /tmp/bench --id 1 --load load.toml --out rx28.csv
+    /// A limb (`twinloop serve --robot builtin:km20 --held --link /tmp/km20` running):
+    ///   twinloop experiment servo --port /tmp/km20 --map builtin:km20 --joint r_hip_pitch --out hip.csv
     ///
-    /// Output: LOG.csv, its first line `# twinloop experiment servo: MODEL id N on PORT`,
+    /// Output: LOG.csv, its first line `# twinloop experiment servo: MODEL id N on PORT`
+    /// (a limb's log then has `# limb:` lines: robot, joint, gravity, held pose, load),
     /// then `t` (s, the read sent), `goal` (rad), `t_goal` (s, when that goal was sent),
     /// `q` (rad), `v`
     /// (rad/s), `load` (fraction of full, RX; NaN otherwise), `current` (A, MX(2.0)

@@ -149,7 +149,10 @@ method. The prediction error never ends above the initial model's. The model is 
     /// servo senses them (MX(2.0), X). Positions alone (RX) determine the motor only
     /// through kt/resistance and kt^2/resistance + friction_viscous: friction_viscous
     /// is held at 0 and both combinations are reported. --defaults MODEL --out FILE
-    /// writes the datasheet parameters instead.
+    /// writes the datasheet parameters instead. The load is the pendulum of --load, or
+    /// for logs of a limb of a held robot (`experiment servo --map --joint`) the
+    /// subtree beyond the joint, rebuilt from the robot (--robot overrides the one
+    /// the log names), joint and held pose the log records.
     ///
     /// Logs of several servos of one type (--data ID=LOG.csv, or logs naming
     /// different ids) are fitted together: each alone, all with one set, a chi-square
@@ -160,6 +163,7 @@ method. The prediction error never ends above the initial model's. The model is 
     ///
     /// Example:
     ///   twinloop identify servo --data rx28.csv --load load.toml --model m1 --out rx28.toml --json -
+    ///   twinloop identify servo --data hip.csv --model m1
     ///   twinloop identify servo --defaults XM430-W350 --out xm430.toml
     ///   twinloop identify servo --data 1=a.csv --data 2=b.csv --data 3=c.csv --load load.toml --out fits
     ///

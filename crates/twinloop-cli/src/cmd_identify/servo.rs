@@ -13,7 +13,7 @@ use twinloop_actuator::group::{
 use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
 use twinloop_actuator::log::ServoLog;
 use twinloop_actuator::params::{N_PARAMS, NONSMOOTH, PARAM_NAMES};
-use twinloop_actuator::{ModelLevel, Pendulum, ServoParams, ServoType, bam_log, datasheet};
+use twinloop_actuator::{Load, ModelLevel, Pendulum, ServoParams, ServoType, bam_log, datasheet};
 
 #[derive(Args, Debug)]
 pub struct ServoIdArgs {
@@ -29,9 +29,14 @@ pub struct ServoIdArgs {
     pub holdout: Vec<String>,
     /// The pendulum the logs were recorded with (mass, length, arm_inertia); several
     /// servos: `ID=LOAD.toml` for one servo's, repeatable, a plain file for the rest.
-    /// BAM's logs name theirs
+    /// BAM's logs name theirs; without it, the logs of a limb (`experiment servo --map
+    /// --joint`) rebuild their load from the robot, joint and held pose they record
     #[arg(long, value_name = "[ID=]LOAD.toml", num_args = 1..)]
     pub load: Vec<String>,
+    /// Limb logs: compute the load from this description instead of the one the log
+    /// names (a file moved, or a corrected model)
+    #[arg(long, value_name = "ROBOT", conflicts_with = "load")]
+    pub robot: Option<String>,
     /// Several servos: the parameters held in common (comma list; `none`: every
     /// parameter per servo); the rest are fitted per servo. Default: the test
     /// decides (each servo fitted alone; a parameter is per servo where the servos'
@@ -146,9 +151,18 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         }
         _ => None,
     };
-    if a.load.is_empty() && bam_load.is_none() {
-        return Err("identify servo needs --load LOAD.toml".into());
-    }
+    // Limb logs (`experiment servo --map --joint`) rebuild their load.
+    let limb = if a.load.is_empty() && bam_load.is_none() {
+        let paths = a
+            .data
+            .iter()
+            .chain(&a.holdout)
+            .map(|arg| keyed(arg, "--data").map(|(_, p)| PathBuf::from(p)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Some(limb_load(paths.iter(), a.robot.as_deref())?)
+    } else {
+        None
+    };
     let servo = logs
         .first()
         .and_then(|(_, l)| l.servo)
@@ -161,9 +175,17 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     ids.sort();
     ids.dedup();
     if ids.len() > 1 {
+        if limb.is_some() {
+            return Err(CliError::new(
+                "limb logs of several servos: fit each servo's logs alone",
+            ));
+        }
         return run_group(a, &ids, logs, holdout, &start, level, bam_load);
     }
-    if bam_load.is_none() && (a.load.len() != 1 || keyed(&a.load[0], "--load")?.0.is_some()) {
+    if bam_load.is_none()
+        && limb.is_none()
+        && (a.load.len() != 1 || keyed(&a.load[0], "--load")?.0.is_some())
+    {
         return Err(CliError::new(
             "--load: one servo's logs take one plain LOAD.toml",
         ));
@@ -173,9 +195,10 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
             "--shared: the logs are of one servo (several: ID=LOG.csv or logs naming different ids)",
         ));
     }
-    let load = match bam_load {
-        Some(load) => load,
-        None => Pendulum::read(Path::new(&a.load[0]))?,
+    let load = match (bam_load, limb) {
+        (Some(load), _) => Load::from(load),
+        (None, Some(load)) => load,
+        (None, None) => Load::from(Pendulum::read(Path::new(&a.load[0]))?),
     };
     let logs: Vec<ServoLog> = logs.into_iter().map(|(_, l)| l).collect();
     let holdout: Vec<ServoLog> = holdout.into_iter().map(|(_, l)| l).collect();
@@ -573,6 +596,42 @@ fn group_json(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> serd
         "files": files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         "seconds": seconds,
     })
+}
+
+/// The load of limb logs: each rebuilt from the robot (or `robot`), joint and held
+/// pose it records; all must be the same load (within 1e-6 relative).
+fn limb_load<'a>(
+    paths: impl Iterator<Item = &'a PathBuf>,
+    robot: Option<&str>,
+) -> Result<Load, CliError> {
+    let mut load: Option<(Load, String)> = None;
+    for p in paths {
+        let file = p.display().to_string();
+        let text = std::fs::read_to_string(p).map_err(|e| CliError::io(p, e))?;
+        let limb = crate::limb::Limb::from_log(&text, &file)?.ok_or_else(|| {
+            CliError::new(format!(
+                "{file}: a bench log (no \"# limb:\" lines): give --load LOAD.toml"
+            ))
+        })?;
+        let (l, _) = limb.load_from(robot)?;
+        match &load {
+            None => load = Some((l, file)),
+            Some((first, name)) => {
+                let same = |x: f64, y: f64| (x - y).abs() <= 1e-6 * (x.abs() + y.abs()).max(1e-9);
+                if !(same(l.inertia, first.inertia)
+                    && same(l.gravity_sin, first.gravity_sin)
+                    && same(l.gravity_cos, first.gravity_cos)
+                    && same(l.gravity_const, first.gravity_const))
+                {
+                    return Err(CliError::new(format!(
+                        "{file}: its limb load differs from {name}'s (another joint or pose): fit them separately"
+                    )));
+                }
+            }
+        }
+    }
+    load.map(|l| l.0)
+        .ok_or_else(|| CliError::new("identify servo needs --data LOG.csv"))
 }
 
 fn text(id: &Identification, seconds: f64) -> String {
