@@ -4,6 +4,9 @@
 //! the data determines within 5 % (or three stated standard deviations), the
 //! held-out error within the encoder's resolution. The three benches run at once.
 
+#[path = "support/fit_check.rs"]
+mod fit_check;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use twinloop_actuator::datasheet::defaults;
@@ -150,52 +153,8 @@ fn servo_parameters_recovered_over_a_pty() {
         if heldout.is_nan() || heldout >= res_mrad {
             failures.push(format!("{servo}: held-out {heldout} mrad"));
         }
-        let undetermined: Vec<&str> = fit["undetermined"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_str().unwrap())
-            .collect();
-        let mut check = |name: &str, want: f64, got: f64, sd: f64| {
-            let err = got / want - 1.0;
-            eprintln!(
-                "  {name:34} truth {want:.5} fit {got:.5} sd {sd:.1e} err {:+.2} %",
-                100.0 * err
-            );
-            if err.abs() > 0.05 && (got - want).abs() > 3.0 * sd {
-                failures.push(format!("{servo} {name}: {got} vs {want} (sd {sd})"));
-            }
-        };
-        for (name, v) in fit["params"].as_object().unwrap() {
-            let i = PARAM_NAMES.iter().position(|n| n == name).unwrap();
-            if undetermined.contains(&name.as_str()) {
-                continue;
-            }
-            check(
-                name,
-                truth.values[i],
-                v["value"].as_f64().unwrap(),
-                v["sd"].as_f64().unwrap(),
-            );
-        }
-        for c in fit["combinations"].as_array().unwrap() {
-            let (kt, r, b) = (
-                truth.values[KT],
-                truth.values[RESISTANCE],
-                truth.values[FRICTION_VISCOUS],
-            );
-            let want = if c["name"] == "kt/resistance" {
-                kt / r
-            } else {
-                kt * kt / r + b
-            };
-            check(
-                c["name"].as_str().unwrap(),
-                want,
-                c["value"].as_f64().unwrap(),
-                c["sd"].as_f64().unwrap(),
-            );
-        }
+        let (more, _) = fit_check::check_fit(&format!("{servo} "), fit, truth, |_| 0.05);
+        failures.extend(more);
     }
     let _ = std::fs::remove_dir_all(&dir);
     assert!(failures.is_empty(), "{failures:#?}");

@@ -18,10 +18,12 @@
 //! (docs/servo-models.md); a systematic difference of the two implementations, not
 //! noise (its stated deviation is 0.4 %).
 
+#[path = "support/fit_check.rs"]
+mod fit_check;
+
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use twinloop_actuator::datasheet::defaults;
-use twinloop_actuator::params::*;
 use twinloop_actuator::{ModelLevel, ServoType};
 use twinloop_random::SplitMix64;
 
@@ -198,60 +200,14 @@ fn limb_servo_parameters_recovered_over_a_pty() {
     if heldout.is_nan() || heldout >= res_mrad {
         failures.push(format!("held-out {heldout} mrad"));
     }
-    let undetermined: Vec<&str> = fit["undetermined"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_str().unwrap())
-        .collect();
-    let mut check = |name: &str, want: f64, got: f64, sd: f64| {
-        let err = got / want - 1.0;
-        eprintln!(
-            "  {name:34} truth {want:.5} fit {got:.5} sd {sd:.1e} err {:+.2} %",
-            100.0 * err
-        );
-        let allowed = if name == "friction_base" {
+    let (more, checked) = fit_check::check_fit("", &fit, &truth, |name| {
+        if name == "friction_base" {
             FRICTION_BASE_TOLERANCE
         } else {
             TOLERANCE
-        };
-        if err.abs() > allowed && (got - want).abs() > 3.0 * sd {
-            failures.push(format!("{name}: {got} vs {want} (sd {sd})"));
         }
-    };
-    let mut checked = 0;
-    for (name, v) in fit["params"].as_object().unwrap() {
-        let i = PARAM_NAMES.iter().position(|n| n == name).unwrap();
-        if undetermined.contains(&name.as_str()) {
-            continue;
-        }
-        checked += 1;
-        check(
-            name,
-            truth.values[i],
-            v["value"].as_f64().unwrap(),
-            v["sd"].as_f64().unwrap(),
-        );
-    }
-    for c in fit["combinations"].as_array().unwrap() {
-        let (kt, r, b) = (
-            truth.values[KT],
-            truth.values[RESISTANCE],
-            truth.values[FRICTION_VISCOUS],
-        );
-        let want = if c["name"] == "kt/resistance" {
-            kt / r
-        } else {
-            kt * kt / r + b
-        };
-        checked += 1;
-        check(
-            c["name"].as_str().unwrap(),
-            want,
-            c["value"].as_f64().unwrap(),
-            c["sd"].as_f64().unwrap(),
-        );
-    }
+    });
+    failures.extend(more);
     assert_eq!(
         checked, 4,
         "armature, friction_base and the two motor combinations"
