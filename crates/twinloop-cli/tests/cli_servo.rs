@@ -8,7 +8,7 @@
 mod fit_check;
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use twinloop_actuator::datasheet::defaults;
 use twinloop_actuator::params::*;
 use twinloop_actuator::{ModelLevel, ServoType};
@@ -18,14 +18,9 @@ fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_twinloop")
 }
 
-struct Server(Child);
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
+#[path = "support/linked.rs"]
+mod linked;
+use linked::serve_linked;
 
 fn truth(servo: ServoType, seed: u64) -> ServoParams {
     let mut rng = SplitMix64(seed);
@@ -47,7 +42,7 @@ fn bench_log(
     factor: &str,
 ) -> PathBuf {
     let link = dir.join(format!("{tag}-bus"));
-    let _server = Server(
+    let _server = serve_linked(
         Command::new(bin())
             .args(["serve", "--bench", servo, "--realtime-factor", factor])
             .arg("--load")
@@ -57,16 +52,9 @@ fn bench_log(
             .arg("--link")
             .arg(&link)
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap(),
+            .stderr(Stdio::null()),
+        &link,
     );
-    let t0 = std::time::Instant::now();
-    while !link.exists() && t0.elapsed().as_secs() < 20 {
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    // The link is made just before the serve loop starts.
-    std::thread::sleep(std::time::Duration::from_millis(300));
     let log = dir.join(format!("{tag}.csv"));
     let out = Command::new(bin())
         .args(["experiment", "servo", "--port"])

@@ -22,7 +22,7 @@
 mod fit_check;
 
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use twinloop_actuator::datasheet::defaults;
 use twinloop_actuator::{ModelLevel, ServoType};
 use twinloop_random::SplitMix64;
@@ -35,14 +35,9 @@ fn bin() -> &'static str {
 const TOLERANCE: f64 = 0.05;
 const FRICTION_BASE_TOLERANCE: f64 = 0.10;
 
-struct Server(Child);
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
+#[path = "support/linked.rs"]
+mod linked;
+use linked::serve_linked;
 
 /// Serve km20 held with `params` on r_hip_pitch, run the experiment into `log`;
 /// how far (s) the simulation fell behind the wall clock (0: it kept up).
@@ -50,7 +45,7 @@ fn record(dir: &std::path::Path, params: &std::path::Path, log: &std::path::Path
     let link = dir.join("bus");
     let mut spec = std::ffi::OsString::from("r_hip_pitch=");
     spec.push(params);
-    let server = Server(
+    let server = serve_linked(
         Command::new(bin())
             .args([
                 "serve",
@@ -63,15 +58,9 @@ fn record(dir: &std::path::Path, params: &std::path::Path, log: &std::path::Path
             .arg("--link")
             .arg(&link)
             .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap(),
+            .stderr(Stdio::piped()),
+        &link,
     );
-    let t0 = std::time::Instant::now();
-    while !link.exists() && t0.elapsed().as_secs() < 20 {
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    std::thread::sleep(std::time::Duration::from_millis(300));
     let out = Command::new(bin())
         .args(["experiment", "servo", "--port"])
         .arg(&link)
@@ -240,20 +229,14 @@ fn limb_route_refusals() {
         std::env::temp_dir().join(format!("twinloop-servo-limb-bad-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let link = dir.join("bus");
-    let _server = Server(
+    let _server = serve_linked(
         Command::new(bin())
             .args(["serve", "--robot", "builtin:km20", "--held", "--link"])
             .arg(&link)
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap(),
+            .stderr(Stdio::null()),
+        &link,
     );
-    let t0 = std::time::Instant::now();
-    while !link.exists() && t0.elapsed().as_secs() < 20 {
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    std::thread::sleep(std::time::Duration::from_millis(300));
     let out = Command::new(bin())
         .args(["experiment", "servo", "--port"])
         .arg(&link)
