@@ -60,7 +60,8 @@ pub fn levenberg_marquardt(
     let (mut plus, mut minus) = (DVector::zeros(m), DVector::zeros(m));
     let mut trial = DVector::zeros(m);
     let mut fresh = false;
-    while iterations < options.max_iterations {
+    let mut done = false;
+    while !done && iterations < options.max_iterations {
         iterations += 1;
         if !fresh {
             jacobian(
@@ -98,9 +99,7 @@ pub fn levenberg_marquardt(
                 lambda = (lambda / 3.0).max(1e-12);
                 improved = true;
                 fresh = false;
-                if drop < options.tolerance {
-                    iterations = options.max_iterations;
-                }
+                done = drop < options.tolerance;
                 break;
             }
             lambda *= 10.0;
