@@ -5,7 +5,6 @@
 //! correlations from the Jacobian at the optimum, the held-out error in mrad, and
 //! what the data cannot determine (the Jacobian's weak directions).
 
-use crate::cmaes::{CmaOptions, cmaes};
 use crate::error::ActuatorError;
 use crate::lm::LmResult;
 use crate::lm::{LmOptions, levenberg_marquardt};
@@ -17,6 +16,7 @@ use crate::params::{
 use crate::replay::replay;
 use nalgebra::DMatrix;
 use std::ops::Range;
+use twinloop_optim::{CmaOptions, StepTolerance};
 
 /// Weight of a current residual: one standard deviation, A. Timing (when the servo
 /// samples its current against when the model does) dominates the register's
@@ -261,22 +261,23 @@ pub fn identify_with(
                 .collect();
             let lower = vec![0.0; x0.len()];
             let mut trial = params.clone();
-            let r = cmaes(
-                |x| {
+            let r = twinloop_optim::minimize(
+                &mut |x| {
                     for (k, &i) in nonsmooth.iter().enumerate() {
                         trial.values[i] = x[k] * scale[k];
                     }
                     fit.cost(&trial, &mut qb, &mut cb, &mut out)
                 },
                 &x0,
-                &lower,
-                &upper,
+                Some((&lower, &upper)),
                 &CmaOptions {
                     sigma: 0.3,
                     max_evaluations: options.cma_evaluations,
-                    tolerance: 1e-3,
+                    tolerance: StepTolerance::Absolute(1e-3),
+                    target: f64::NEG_INFINITY,
                     seed: 1 + round as u64,
                 },
+                &mut |_, _, _| {},
             );
             nonsmooth_evaluations += r.evaluations;
             for (k, &i) in nonsmooth.iter().enumerate() {

@@ -18,7 +18,6 @@
 
 pub mod bam_log;
 pub mod bench;
-pub mod cmaes;
 pub mod datasheet;
 pub mod delay;
 pub mod error;
