@@ -159,6 +159,7 @@ pub fn run<'py>(
         compliance_slope: plan.compliance_slope.round() as i32,
         ankle_slope: plan.ankle_slope.round() as i32,
         creeps: plan.creeps,
+        first_tips: None,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let watch = InterruptWatch::new(&stop);

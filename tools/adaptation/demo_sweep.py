@@ -8,7 +8,10 @@ adapted CoM's and the part's distance from the truth, and the four fall angles
 in docs/adaptation.md comes from it.
 
     python3 tools/adaptation/demo_sweep.py --seeds 1-12 [--tell-where] [--scenarios a,c,d,e,f]
-        [--twinloop target/release/twinloop] [--out sweep.json] [--keep DIR]
+        [--twinloop target/release/twinloop] [--out sweep.json] [--keep DIR] [--check]
+
+With --check each demo also measures the adapted model's simulation over the bus by
+the same protocol (`demo --check`), and the table gives it minus the robot's angles.
 """
 import argparse, json, os, statistics, subprocess, sys, tempfile, time
 
@@ -32,6 +35,7 @@ def main():
     ap.add_argument("--twinloop", default="target/release/twinloop")
     ap.add_argument("--out", default=None)
     ap.add_argument("--keep", default=None, help="keep each run's files in DIR/<job>")
+    ap.add_argument("--check", action="store_true", help="demo --check: the adapted simulation over the bus")
     a = ap.parse_args()
     jobs = [["--seed", str(s)] for s in seeds(a.seeds)]
     jobs += [["--scenario", c] for c in a.scenarios.split(",") if c]
@@ -45,6 +49,8 @@ def main():
             cmd = [a.twinloop, "demo", *job, "--out", d, "--json", os.path.join(d, "demo.json")]
             if a.tell_where and job[0] == "--seed":
                 cmd.append("--tell-where")
+            if a.check:
+                cmd.append("--check")
             load = os.getloadavg()[0]
             t0 = time.time()
             p = subprocess.run(cmd, capture_output=True, text=True)
@@ -57,12 +63,15 @@ def main():
         links = "+".join(c["link"] for c in r["truth"])
         dm = [r["adapted_model_deg"][k] - r["measured_deg"][k] for k in range(4)]
         dt = [r["true_model_deg"][k] - r["measured_deg"][k] for k in range(4)]
+        sim = r.get("adapted_simulation_deg")
+        ds = None if sim is None else [sim[k] - r["measured_deg"][k] for k in range(4)]
         row = {
             "job": " ".join(job), "mass": mass, "links": links,
             "com_error_mm": 1e3 * r["com_error"],
             "position_error_mm": None if r["position_error"] is None else 1e3 * r["position_error"],
             "found_host": (r.get("found") or {}).get("host"),
             "adapted_minus_measured_deg": dm, "true_minus_measured_deg": dt,
+            "simulated_minus_measured_deg": ds,
             "wall_s": time.time() - t0, "load": load,
         }
         rows.append(row)
@@ -70,7 +79,9 @@ def main():
         print(f"{row['job']:>14} {mass:.3f} kg {links:<18} CoM {row['com_error_mm']:5.2f} mm "
               f"part {'-' if pe is None else f'{pe:5.1f}'} mm  adapted-measured "
               + " ".join(f"{x:+.2f}" for x in dm) + "  true-measured "
-              + " ".join(f"{x:+.2f}" for x in dt) + f"  {row['wall_s']:.0f} s load {load:.1f}", flush=True)
+              + " ".join(f"{x:+.2f}" for x in dt)
+              + ("" if ds is None else "  simulated-measured " + " ".join(f"{x:+.2f}" for x in ds))
+              + f"  {row['wall_s']:.0f} s load {load:.1f}", flush=True)
     ok = [r for r in rows if "failed" not in r]
     if ok:
         ce = [r["com_error_mm"] for r in ok]
@@ -79,6 +90,12 @@ def main():
         worst = [max(abs(x) for x in r["adapted_minus_measured_deg"]) for r in ok]
         print(f"adapted model vs measured, worst direction: median {statistics.median(worst):.2f} deg, "
               f"max {max(worst):.2f} deg, {sum(w < 0.3 for w in worst)} of {len(worst)} within 0.3 deg")
+        checked = [r for r in ok if r["simulated_minus_measured_deg"] is not None]
+        if checked:
+            ws = [max(abs(x) for x in r["simulated_minus_measured_deg"]) for r in checked]
+            print(f"adapted simulation (over the bus) vs measured, worst direction: median "
+                  f"{statistics.median(ws):.2f} deg, max {max(ws):.2f} deg, "
+                  f"{sum(w <= 0.3 for w in ws)} of {len(ws)} within 0.3 deg")
         big = [r for r in ok if r["mass"] >= 0.3 and r["position_error_mm"] is not None]
         if big:
             pe = [r["position_error_mm"] for r in big]

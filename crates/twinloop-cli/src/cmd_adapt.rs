@@ -198,6 +198,7 @@ fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyR
         compliance_slope: 2,
         ankle_slope: crate::cmd_experiment::tipover_bus::ANKLE_SLOPE,
         creeps: 2,
+        first_tips: None,
         clock_rate: a.realtime_factor,
         verbose: true,
     };

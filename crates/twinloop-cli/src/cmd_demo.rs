@@ -56,6 +56,12 @@ pub struct DemoArgs {
     /// link's outline. One change only (not with --scenario a)
     #[arg(long)]
     pub tell_where: bool,
+    /// Check the adapted model as the robot was measured: serve its simulation on a
+    /// second pseudo-terminal (datasheet servos: what the adapting side knows) and run
+    /// the same protocol over the bus, creeping from 1.5 deg before each of the
+    /// robot's tips; prints its fall angles beside the robot's (about 30 s more)
+    #[arg(long)]
+    pub check: bool,
     /// Folder for the files written: the adapted URDF, the tip-over and adaptation
     /// JSON, the HTML report and the CSV of every cycle read over the bus
     #[arg(long, default_value = "twinloop-demo", value_name = "DIR")]
@@ -63,6 +69,10 @@ pub struct DemoArgs {
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
 }
+
+/// The first ramp's and the creeps' speeds, deg/s of robot time.
+const RAMP: f64 = 2.0;
+const SLOW_RAMP: f64 = 0.15;
 
 /// What the demo found, beside the truth (`--json`).
 #[derive(Debug, Serialize)]
@@ -76,6 +86,10 @@ struct DemoReport {
     prior_model_deg: [f64; 4],
     adapted_model_deg: [f64; 4],
     true_model_deg: [f64; 4],
+    /// With `--check`: the adapted model's simulation measured over the bus by the
+    /// same protocol, deg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    adapted_simulation_deg: Option<[f64; 4]>,
     found: Option<twinloop_ident::adapt::AddedMass>,
     true_com: [f64; 3],
     adapted_com: Option<[f64; 3]>,
@@ -123,6 +137,7 @@ fn serve_truth(
     truth: &Description,
     mapping: &RobotMapping,
     a: &DemoArgs,
+    servo_params: &[String],
 ) -> Result<PtyServer, CliError> {
     let options = VirtualRobotOptions {
         realtime_factor: a.realtime_factor,
@@ -130,7 +145,7 @@ fn serve_truth(
         ground_sink: Some(a.ground_sink),
         tether_s: Some(0.02),
         servo_params: twinloop_actuator::params_set::ServoParamsSet::read(
-            &a.servo_params,
+            servo_params,
             "--servo-params",
         )?,
         ..Default::default()
@@ -144,6 +159,45 @@ fn serve_truth(
         }
     })
     .map_err(|e| CliError::new(format!("cannot serve the robot on a pseudo-terminal: {e}")))
+}
+
+/// `--check`: the adapted `model` simulated behind a second pty as the robot was
+/// (datasheet servos, the same floor and clock) and measured over the bus by the
+/// same protocol, each direction creeping from 1.5 deg before the robot's own
+/// commanded tip (`commanded`, in `Direction::ALL`'s order); its fall angles, deg.
+fn check_on_bus(
+    model: &Description,
+    mapping: &RobotMapping,
+    a: &DemoArgs,
+    commanded: Vec<f64>,
+    record: &Path,
+) -> Result<[f64; 4], CliError> {
+    eprintln!("checking: the adapted model's simulation, over the bus, from near each tip");
+    let robot = serve_truth(model, mapping, a, &[])?;
+    let plan = BusPlan {
+        model_spec: "builtin:km20".into(),
+        map: "builtin:km20".into(),
+        port: demo_port(robot.path()),
+        record: Some(record.to_path_buf()),
+        yes: true,
+        directions: Direction::ALL.to_vec(),
+        ramp: RAMP,
+        slow_ramp: SLOW_RAMP,
+        compliance_slope: 2,
+        ankle_slope: ANKLE_SLOPE,
+        creeps: a.creeps as usize,
+        first_tips: Some(commanded),
+        clock_rate: a.realtime_factor,
+        verbose: true,
+    };
+    let run = tipover_on_bus(&plan)
+        .map_err(|e| e.context("checking the adapted model (its simulation over the bus)"))?;
+    let BusOutcome::Study(study) = run.outcome else {
+        return Err(CliError::new(
+            "checking the adapted model: the tip-over did not run all four directions",
+        ));
+    };
+    Ok(angles(&study, |d| d.measured_deg))
 }
 
 /// The bus as the demo's host opens it: a reply may wait 500 ms beyond its wire time
@@ -236,7 +290,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     for c in &truth_changes {
         truth = changed(&truth, c)?;
     }
-    let robot = serve_truth(&truth, &mapping, &a)?;
+    let robot = serve_truth(&truth, &mapping, &a, &a.servo_params)?;
     let mut text = format!(
         "a km20 with a hidden change ({how}) answers on {} (simulated, x{} real time)\n",
         robot.path(),
@@ -262,11 +316,12 @@ pub fn run(a: DemoArgs) -> CliResult {
         record: Some(record.clone()),
         yes: true,
         directions: Direction::ALL.to_vec(),
-        ramp: 2.0,
-        slow_ramp: 0.15,
+        ramp: RAMP,
+        slow_ramp: SLOW_RAMP,
         compliance_slope: 2,
         ankle_slope: ANKLE_SLOPE,
         creeps: a.creeps as usize,
+        first_tips: None,
         clock_rate: a.realtime_factor,
         verbose: true,
     };
@@ -307,6 +362,16 @@ pub fn run(a: DemoArgs) -> CliResult {
             .map_err(|e| CliError::new(format!("{}: {e}", urdf.display())))?;
         files.push(urdf.display().to_string());
     }
+    let simulated_deg = match (&adapted.robot, a.check) {
+        (Some(model), true) => {
+            let commanded: Vec<f64> = run.runs.iter().map(|r| r.commanded_deg).collect();
+            let check_csv = a.out.join("check.csv");
+            let deg = check_on_bus(model, &mapping, &a, commanded, &check_csv)?;
+            files.push(check_csv.display().to_string());
+            Some(deg)
+        }
+        _ => None,
+    };
     let html = a.out.join("report.html");
     let replay = replay_3d(&a.out, &record, adapted.robot.is_some(), &mut files);
     adapted.report.files = files.clone();
@@ -343,6 +408,19 @@ pub fn run(a: DemoArgs) -> CliResult {
     t += &format!("  model before       {}\n", join(prior_deg));
     t += &format!("  model adapted      {}\n", join(adapted_deg));
     t += &format!("  model true         {}\n", join(truth_deg));
+    if let Some(sim) = simulated_deg {
+        t += &format!("  adapted, simulated {}\n", join(sim));
+        let (k, worst) = (0..4).fold((0, 0.0_f64), |b, k| {
+            let d = sim[k] - measured[k];
+            if d.abs() > b.1.abs() { (k, d) } else { b }
+        });
+        t += &format!(
+            "the adapted simulation tips within {:.2} deg of the robot (largest {}: {:+.2})\n",
+            worst.abs(),
+            ["forward", "backward", "left", "right"][k],
+            worst
+        );
+    }
     match &r.added {
         Some(m) => {
             t += &format!(
@@ -394,6 +472,7 @@ pub fn run(a: DemoArgs) -> CliResult {
         prior_model_deg: prior_deg,
         adapted_model_deg: adapted_deg,
         true_model_deg: truth_deg,
+        adapted_simulation_deg: simulated_deg,
         found: r.added.clone(),
         true_com,
         adapted_com: r.adapted_com,

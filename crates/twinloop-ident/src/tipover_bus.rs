@@ -28,6 +28,11 @@ pub struct BusTipoverOptions {
     /// agree best are averaged, and one more is made when they differ by more than
     /// [`CREEPS_AGREE_DEG`] (see [`combine_creeps`]).
     pub creeps: usize,
+    /// Commanded tip angles known beforehand, deg, one per direction in `directions`'
+    /// order: no first ramp, the creeps start [`SLOW_MARGIN_DEG`] before each. How an
+    /// adapted model's simulation is checked against the robot's measurement: the
+    /// same protocol from the same start.
+    pub first_tips: Option<Vec<f64>>,
 }
 
 /// One direction over the bus.
@@ -255,12 +260,19 @@ pub fn run_directions(
                 let _ = g.robot.command_positions(standing);
                 r
             };
-        let first = run(cfg, g).map_err(|e| e.message)?;
+        let known = opts.first_tips.as_ref().and_then(|t| t.get(k)).copied();
+        let first = match known {
+            Some(_) => None,
+            None => Some(run(cfg, g).map_err(|e| e.message)?),
+        };
         let mut slow = cfg.clone();
         slow.slow_ramp_deg_per_s = opts.slow_ramp;
         let wanted = opts.creeps.max(1);
         let mut creeps: Vec<TipoverResult> = Vec::with_capacity(wanted + 1);
-        let start = first.commanded_deg - SLOW_MARGIN_DEG;
+        let start = first
+            .as_ref()
+            .map_or(known.unwrap_or(0.0), |f| f.commanded_deg)
+            - SLOW_MARGIN_DEG;
         loop {
             // A repeat starts closer (the last creep saw the tip finely), never earlier
             // than the first creep did.
@@ -289,12 +301,20 @@ pub fn run_directions(
                 d.name()
             ));
         }
-        r.time_s = first.time_s;
+        let whence = match &first {
+            Some(first) => {
+                r.time_s = first.time_s;
+                format!("first ramp {:.2} deg", first.measured_deg)
+            }
+            None => format!(
+                "creeping from the known tip, commanded {:.2} deg",
+                known.unwrap_or(0.0)
+            ),
+        };
         log(&format!(
-            "  {}: tipped at {:.2} deg (first ramp {:.2} deg, {} creep(s))",
+            "  {}: tipped at {:.2} deg ({whence}, {} creep(s))",
             d.name(),
             r.measured_deg,
-            first.measured_deg,
             creeps.len()
         ));
         out.push(r);

@@ -199,6 +199,7 @@ mod bus {
             compliance_slope: a.compliance_slope.round() as i32,
             ankle_slope: a.ankle_slope.round() as i32,
             creeps: a.creeps as usize,
+            first_tips: None,
             clock_rate: a.realtime_factor,
             verbose: true,
         };

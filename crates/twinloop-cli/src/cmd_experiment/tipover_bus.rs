@@ -36,6 +36,9 @@ pub struct BusPlan {
     pub ankle_slope: i32,
     /// Creeping approaches per direction (see `BusTipoverOptions::creeps`).
     pub creeps: usize,
+    /// Commanded tip angles known beforehand, one per direction: creeps only (see
+    /// `BusTipoverOptions::first_tips`).
+    pub first_tips: Option<Vec<f64>>,
     /// Robot seconds per host second (a simulated robot served faster than real time).
     pub clock_rate: f64,
     /// Say on stderr what is happening.
@@ -107,6 +110,7 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
         compliance_slope: plan.compliance_slope,
         ankle_slope: plan.ankle_slope,
         creeps: plan.creeps,
+        first_tips: plan.first_tips.clone(),
     };
     let mut before = |d: Direction, k: usize| {
         if k > 0 && serial && !plan.yes {
