@@ -727,3 +727,64 @@ fn boundmass_weighs_an_empty_body_where_mujoco_does() {
     assert_eq!(a.origin.xyz, [0.3, 0.2, 0.1]);
     assert!((a.inertia.ixx - 0.01).abs() < 1e-15 && (a.inertia.izz - 0.01).abs() < 1e-15);
 }
+
+/// Free-floating props beside a free-floating robot (dm_control's quadruped
+/// and dog with their ball): the robot is the top-level tree with the most
+/// bodies, the others are left out, each named by an `unmodeled-element` lint
+/// warning (an error with `--strict`). `settotalmass` counts them, as MuJoCo
+/// does (MuJoCo 4.0 on this file: 7 kg scaled to 10, so the torso's 2 kg
+/// becomes 20/7); unnamed bodies are numbered in file order across all trees.
+#[test]
+fn free_props_beside_a_free_robot_are_left_out() {
+    let text = r#"<mujoco><compiler settotalmass="10"/><worldbody>
+<body name="ball"><freejoint/><geom type="sphere" size="0.1" mass="1"/></body>
+<body name="torso" pos="0 0 1"><freejoint/><geom type="box" size="0.1 0.2 0.3" mass="2"/>
+  <body name="arm" pos="0 0 0.3"><joint axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 0.4" size="0.05" mass="1"/></body>
+  <body><joint axis="1 0 0"/><geom type="sphere" size="0.05" mass="1"/></body>
+</body>
+<body><freejoint/><geom type="sphere" size="0.1" mass="1"/><body><joint/><geom size="0.1" mass="1"/></body></body>
+</worldbody></mujoco>"#;
+    let r = ok(text);
+    assert_eq!(r.root_link(), Some("torso"));
+    let links: Vec<&str> = r.links.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(links, ["torso", "arm", "body1"]);
+    let mass = |l: &str| r.links.iter().find(|k| k.name == l).unwrap().mass();
+    assert!(close(mass("torso"), 20.0 / 7.0), "{}", mass("torso"));
+    assert!(close(mass("arm"), 10.0 / 7.0));
+    let notes: Vec<(&str, u32)> = r
+        .unmodeled
+        .iter()
+        .map(|n| (n.element.as_str(), n.line))
+        .collect();
+    assert_eq!(
+        notes,
+        [(r#"<body name="ball">"#, 2), ("<body> in <worldbody>", 7)]
+    );
+    assert!(r.unmodeled[0].what.contains(
+        "free-floating body \"ball\" (1 body, 1.428571 kg, 6 DoFs) is a separate body tree \
+         beside the robot \"torso\""
+    ));
+    assert!(
+        r.unmodeled[1]
+            .what
+            .contains("(2 bodies, 2.857143 kg, 7 DoFs)")
+    );
+    let report = twinloop_description::lint::lint(&r);
+    let code = twinloop_description::lint::codes::UNMODELED_ELEMENT;
+    assert_eq!(report.with_code(code).count(), 2);
+    assert!(!report.has_errors());
+    assert_eq!(report.strict().errors, 2);
+
+    // A jointless (welded) or hinged top-level body beside a free one is not a
+    // prop: still refused, naming it.
+    for other in [
+        "<body name=\"table\"/>",
+        "<body name=\"table\"><joint/></body>",
+    ] {
+        let e = err(&text.replace(
+            "<body name=\"ball\"><freejoint/><geom type=\"sphere\" size=\"0.1\" mass=\"1\"/></body>",
+            other,
+        ));
+        assert!(e.to_string().contains("second top-level body"), "{e}");
+    }
+}
