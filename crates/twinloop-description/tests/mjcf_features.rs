@@ -730,7 +730,8 @@ fn boundmass_weighs_an_empty_body_where_mujoco_does() {
 
 /// Free-floating props beside a free-floating robot (dm_control's quadruped
 /// and dog with their ball): the robot is the top-level tree with the most
-/// bodies, the others are left out, each named by an `unmodeled-element` lint
+/// bodies, the others are left out (and so are free trees beside a larger
+/// robot held by the world), each named by an `unmodeled-element` lint
 /// warning (an error with `--strict`). `settotalmass` counts them, as MuJoCo
 /// does (MuJoCo 4.0 on this file: 7 kg scaled to 10, so the torso's 2 kg
 /// becomes 20/7); unnamed bodies are numbered in file order across all trees.
@@ -775,8 +776,22 @@ fn free_props_beside_a_free_robot_are_left_out() {
     assert!(!report.has_errors());
     assert_eq!(report.strict().errors, 2);
 
-    // A jointless (welded) or hinged top-level body beside a free one is not a
-    // prop: still refused, naming it.
+    // An arm held by the world with more bodies than the free tree beside it
+    // (pybullet's striker and thrower): the arm is the robot, the free tree a prop.
+    let r = ok(r#"<mujoco><worldbody>
+<body name="base"><geom size="0.1"/><body name="link"><joint/><geom size="0.1"/></body></body>
+<body name="puck" pos="1 0 0"><freejoint/><geom size="0.05" mass="0.2"/></body>
+</worldbody></mujoco>"#);
+    assert_eq!(r.root_link(), Some("base"));
+    assert_eq!(r.links.len(), 2);
+    assert_eq!(r.unmodeled.len(), 1);
+    assert!(r.unmodeled[0].what.contains(
+        "\"puck\" (1 body, 0.200000 kg, 6 DoFs) is a separate body tree beside the robot \
+         (the bodies held by the world)"
+    ));
+
+    // A jointless (welded) or hinged top-level body beside a larger free one is
+    // not a prop: still refused, naming it.
     for other in [
         "<body name=\"table\"/>",
         "<body name=\"table\"><joint/></body>",

@@ -677,3 +677,91 @@ fn generated_corpus_covers_the_compiler() {
     assert_eq!(seen.len(), 26, "{seen:?}");
     println!("generated corpus: {seen:?}");
 }
+
+/// The panic message of a failed check.
+fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<String>()
+        .cloned()
+        .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_default()
+}
+
+/// A measurement, not a test: the MJCFs of the installed dm_control, gymnasium
+/// and pybullet_data packages, with MuJoCo's references written by
+/// tools/oracle/mjcf_corpus.py into the folder TWINLOOP_MJCF_CORPUS
+/// (`manifest.json`: name, file, reference). Each file is loaded and compared as
+/// above (per-body mass, CoM, inertia; M and bias with the root fixed, and as a
+/// floating base with a free root) to 1e-9, or if that fails to the mesh
+/// tolerance; the verdicts go to `results.json` for the script's table.
+#[test]
+#[ignore = "a measurement over installed packages: run by tools/oracle/mjcf_corpus.py"]
+fn installed_mjcf_corpus() {
+    let dir = PathBuf::from(
+        std::env::var_os("TWINLOOP_MJCF_CORPUS")
+            .expect("TWINLOOP_MJCF_CORPUS: the script's folder"),
+    );
+    let manifest: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap()).unwrap();
+    // Failed checks are recorded in the results, not printed.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let mut results = Vec::new();
+    for entry in manifest.as_array().unwrap() {
+        let name = entry["name"].as_str().unwrap();
+        let xml = PathBuf::from(entry["xml"].as_str().unwrap());
+        let refd: Value = serde_json::from_str(
+            &std::fs::read_to_string(entry["reference"].as_str().unwrap()).unwrap(),
+        )
+        .unwrap();
+        let result = match load(&xml) {
+            Err(e) => serde_json::json!({
+                "verdict": "refused",
+                "element": e.location.element,
+                "detail": e.to_string(),
+            }),
+            Ok(robot) => match Model::from_description_with_base(&robot, BaseKind::Fixed) {
+                Err(e) => serde_json::json!({"verdict": "refused", "detail": e.to_string()}),
+                Ok(_) => {
+                    let run = |tol: f64| {
+                        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                            WORST.with(|w| w.set(0.0));
+                            check_model(name, &robot, &refd, tol);
+                            if refd["root_free"] == true {
+                                check_floating(name, &robot, &refd, tol);
+                            }
+                            WORST.with(|w| w.get())
+                        }))
+                    };
+                    let notes: Vec<String> =
+                        robot.unmodeled.iter().map(|n| n.element.clone()).collect();
+                    match run(TOL) {
+                        Ok(worst) => serde_json::json!({
+                            "verdict": "agrees", "worst": worst, "notes": notes,
+                        }),
+                        Err(p) => {
+                            let first = panic_text(p.as_ref());
+                            match run(MESH_TOL) {
+                                Ok(worst) => serde_json::json!({
+                                    "verdict": "agrees to 1e-7", "worst": worst,
+                                    "detail": first, "notes": notes,
+                                }),
+                                Err(_) => {
+                                    serde_json::json!({"verdict": "differs", "detail": first})
+                                }
+                            }
+                        }
+                    }
+                }
+            },
+        };
+        let mut result = result;
+        result["name"] = name.into();
+        results.push(result);
+    }
+    std::panic::set_hook(hook);
+    std::fs::write(
+        dir.join("results.json"),
+        serde_json::to_string_pretty(&results).unwrap(),
+    )
+    .unwrap();
+}

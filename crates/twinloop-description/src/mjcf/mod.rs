@@ -450,7 +450,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         if top.is_empty() {
             return Err(error_at(root, "no <body> in <worldbody>"));
         }
-        let (robot_root, props) = self.props(&top)?;
+        let (robot_name, props) = self.props(&top)?;
         let trees: Vec<Framed> = top
             .iter()
             .filter(|t| !props.contains(&t.0))
@@ -501,7 +501,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             None => 1.0,
         };
         for (node, prop) in &aside {
-            self.note_prop(*node, prop, scale, robot_root);
+            self.note_prop(*node, prop, scale, &robot_name);
         }
         for &s in sections {
             self.unmodeled(s);
@@ -594,58 +594,70 @@ impl<'a, 'i> Reader<'a, 'i> {
         Ok(out)
     }
 
-    /// Free-floating props beside a free-floating robot: when every top-level body
-    /// is free (its only joint a free joint), the robot is the one with the most
-    /// bodies in its tree (the first in file order on a tie) and the others, such
-    /// as the ball of dm_control's quadruped and dog, are props left out of the
-    /// description. MuJoCo couples separate trees only through contact, so the
-    /// robot's mass matrix and bias forces do not depend on them. Returns the
-    /// robot's root (when there are props) and the props' bodies.
-    #[allow(clippy::type_complexity)]
+    /// Free-floating props beside the robot. When every top-level body is free
+    /// (its only joint a free joint), the robot is the one with the most bodies in
+    /// its tree (the first in file order on a tie) and the others, such as the
+    /// ball of dm_control's quadruped and dog, are props. When some are not free
+    /// (welded or jointed to the world: an arm on a table) and those have more
+    /// bodies together than the largest free tree, they are the robot and every
+    /// free tree is a prop (pybullet's striker and thrower with their objects);
+    /// otherwise nothing is a prop and `needs_world_link` refuses the file.
+    /// MuJoCo couples separate trees only through contact, so the robot's mass
+    /// matrix and bias forces do not depend on the props. Returns the robot's
+    /// name for the notes and the props' bodies.
     fn props(
         &self,
         top: &[Framed<'a, 'i>],
-    ) -> Result<(Option<Node<'a, 'i>>, Vec<Node<'a, 'i>>), DescriptionError> {
+    ) -> Result<(String, Vec<Node<'a, 'i>>), DescriptionError> {
+        let none = Ok((String::new(), Vec::new()));
         if top.len() < 2 {
-            return Ok((None, Vec::new()));
+            return none;
         }
+        let (mut free, mut fixed) = (Vec::new(), Vec::new());
         for (b, _, _, _) in top {
             let js: Vec<Node> = b
                 .children()
                 .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
                 .collect();
-            if js.len() != 1 || self.joint_type(js[0], None)? != "free" {
-                // A body fixed to the world or hinged to it: not a prop
-                // (`needs_world_link` refuses it beside a free body).
-                return Ok((None, Vec::new()));
+            if js.len() == 1 && self.joint_type(js[0], None)? == "free" {
+                free.push(*b);
+            } else {
+                fixed.push(*b);
             }
         }
-        let size = |b: Node| b.descendants().filter(|d| d.has_tag_name("body")).count();
-        let mut robot = top[0].0;
-        for (b, _, _, _) in top {
-            if size(*b) > size(robot) {
-                robot = *b;
-            }
+        let size = |b: &Node| b.descendants().filter(|d| d.has_tag_name("body")).count();
+        let Some(largest) = free
+            .iter()
+            .copied()
+            .reduce(|a, b| if size(&b) > size(&a) { b } else { a })
+        else {
+            return none;
+        };
+        if fixed.is_empty() {
+            let name = largest.attribute("name").unwrap_or("body").to_string();
+            let props = free.into_iter().filter(|b| *b != largest).collect();
+            return Ok((format!("the robot \"{name}\""), props));
         }
-        let props = top.iter().map(|t| t.0).filter(|b| *b != robot).collect();
-        Ok((Some(robot), props))
+        if fixed.iter().map(size).sum::<usize>() > size(&largest) {
+            return Ok(("the robot (the bodies held by the world)".to_string(), free));
+        }
+        none
     }
 
     /// The `unmodeled-element` note for a prop left out (see [`Self::props`]):
     /// what it is (its mass as compiled: `scale` is `settotalmass`'s factor) and
     /// what leaving it out changes.
-    fn note_prop(&mut self, node: Node, aside: &Description, scale: f64, robot: Option<Node>) {
+    fn note_prop(&mut self, node: Node, aside: &Description, scale: f64, robot: &str) {
         let bodies = aside.links.iter().filter(|l| !l.between_joints).count();
         let dofs: usize = 6 + aside.joints.iter().map(|j| j.kind.nv()).sum::<usize>();
         let name = aside.links.first().map_or("", |l| l.name.as_str());
-        let robot = robot.and_then(|r| r.attribute("name")).unwrap_or("robot");
         let (line, _) = crate::xml::position(node.document(), node.range().start);
         self.robot.unmodeled.push(FileNote {
             element: crate::xml::element_path(node),
             line,
             what: format!(
                 "free-floating body \"{name}\" ({bodies} bod{}, {:.6} kg, {dofs} DoFs) is a \
-                 separate body tree beside the robot \"{robot}\", not part of it: twinloop \
+                 separate body tree beside {robot}, not part of it: twinloop \
                  loads only the robot and leaves out its mass and DoFs. MuJoCo couples the \
                  two only through contact: the robot's mass matrix and bias forces are \
                  MuJoCo's, but the prop's contacts with the robot (pushing, carrying or \

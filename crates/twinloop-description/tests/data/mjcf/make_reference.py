@@ -18,7 +18,8 @@ installs them), this copies the file (and the files it includes) into
 
 When every top-level body is free-floating (dm_control's quadruped and dog with
 their ball), the robot is the one with the most bodies (the first on a tie) and
-the others are props, which twinloop leaves out: `"props"` names their top-level
+the others are props, which twinloop leaves out (as it leaves out free trees
+beside a larger robot held by the world): `"props"` names their top-level
 bodies, their bodies are written with `"left_out": true` and their dofs are held at MuJoCo's qpos0 and left out of the
 states. MuJoCo's mass matrix is block diagonal over separate trees and their bias
 forces are independent (they interact only through contact), so the robot's rows
@@ -80,18 +81,28 @@ def is_free(m, b):
 
 
 def props(m):
-    """Top-level trees twinloop leaves out: when every top-level body is free, all
-    but the robot (the one with the most bodies, the first on a tie). Returns the
-    set of the props' body ids (whole subtrees)."""
+    """Top-level trees twinloop leaves out (the reader's rule): when every top-level
+    body is free, all but the robot (the one with the most bodies, the first on a
+    tie); when some are not free and they have more bodies together than the
+    largest free tree, every free tree. Returns the set of the props' body ids
+    (whole subtrees)."""
     top = [b for b in range(1, m.nbody) if m.body_parentid[b] == 0]
-    if len(top) < 2 or not all(is_free(m, b) for b in top):
+    free = [b for b in top if is_free(m, b)]
+    fixed = [b for b in top if not is_free(m, b)]
+    if len(top) < 2 or not free:
         return set()
     size = {b: sum(1 for c in range(1, m.nbody) if m.body_rootid[c] == b) for b in top}
-    robot = top[0]
-    for b in top:
-        if size[b] > size[robot]:
-            robot = b
-    return {c for c in range(1, m.nbody) if m.body_rootid[c] != robot}
+    largest = free[0]
+    for b in free:
+        if size[b] > size[largest]:
+            largest = b
+    if not fixed:
+        robot = {largest}
+    elif sum(size[b] for b in fixed) > size[largest]:
+        robot = set(fixed)
+    else:
+        return set()
+    return {c for c in range(1, m.nbody) if m.body_rootid[c] not in robot}
 
 
 def root_free_dofs(m, left_out):
