@@ -25,7 +25,7 @@
 //! | `inertia-without-mass` | warning | mass 0 with a non-zero tensor |
 //! | `zero-mass-moving-link` | error / warning | a body moved by a non-fixed joint (the joint's child plus every link fixed to it) has no mass. Error when nothing with mass moves with that joint at all (the joint's row of the mass matrix is zero); warning when links further down carry mass |
 //! | `singular-mass-matrix` | error | added by the dynamics (`twinloop model lint`, [`LintReport::with_finding`]): the compiled model's mass matrix is singular at a joint that no other error explains (its mass on its axis, a point mass at a ball joint's centre, a massless link between two joints with one axis); forward dynamics refuses it |
-//! | `singular-floating-base` | warning | as a floating base (twinloop's default) the mass matrix is singular: the robot has no mass, or its rotational inertia about its CoM is singular (all mass on a line) |
+//! | `singular-floating-base` | warning | as a floating base (twinloop's default) the mass matrix is singular: the robot has no mass, or its rotational inertia about its CoM is singular (all mass on a line). A warning: the same file is sound with a fixed base, which lint cannot know, and floating-base forward dynamics refuses it with a message |
 //! | `missing-limits` | warning | revolute or prismatic joint without lower/upper |
 //! | `limits-inverted` | error | lower > upper |
 //! | `limits-empty-range` | warning | lower == upper: the joint cannot move |
