@@ -27,7 +27,7 @@ fn close3(a: [f64; 3], b: [f64; 3]) -> bool {
 }
 
 fn apply(p: &Pose, v: [f64; 3]) -> [f64; 3] {
-    let r = rpy_to_matrix(p.rpy);
+    let r = p.rotation();
     [
         r[0][0] * v[0] + r[0][1] * v[1] + r[0][2] * v[2] + p.xyz[0],
         r[1][0] * v[0] + r[1][1] * v[1] + r[1][2] * v[2] + p.xyz[1],
@@ -52,9 +52,9 @@ fn angles_are_degrees_unless_said_otherwise() {
     assert_eq!(j.kind, JointKind::Revolute);
     let l = j.limit.unwrap();
     assert!(close(l.lower.unwrap(), -PI / 2.0) && close(l.upper.unwrap(), PI / 4.0));
-    assert!(close(j.origin.rpy[2], PI / 2.0), "{:?}", j.origin);
+    assert!(close(j.origin.rpy()[2], PI / 2.0), "{:?}", j.origin);
     assert_eq!(j.axis, Some([0.0, 0.0, 1.0]));
-    assert!(close(r.joint("c_fixed").unwrap().origin.rpy[2].abs(), PI));
+    assert!(close(r.joint("c_fixed").unwrap().origin.rpy()[2].abs(), PI));
     let radian = text.replace(
         "<mujoco model=\"m\">",
         "<mujoco model=\"m\">\n  <compiler angle=\"radian\"/>",
@@ -71,7 +71,7 @@ fn euler_sequences() {
         r#"<mujoco><compiler angle="radian"/><worldbody><body name="a">
       <body name="b" euler="0.3 0.2 0.1"/></body></worldbody></mujoco>"#,
     );
-    let got = rpy_to_matrix(r.joints[0].origin.rpy);
+    let got = r.joints[0].origin.rotation();
     let rx = rpy_to_matrix([0.3, 0.0, 0.0]);
     let ry = rpy_to_matrix([0.0, 0.2, 0.0]);
     let rz = rpy_to_matrix([0.0, 0.0, 0.1]);
@@ -94,7 +94,7 @@ fn euler_sequences() {
       <body name="b" euler="0.3 0.2 0.1"/></body></worldbody></mujoco>"#,
     );
     assert!(
-        close3(r.joints[0].origin.rpy, [0.3, 0.2, 0.1]),
+        close3(r.joints[0].origin.rpy(), [0.3, 0.2, 0.1]),
         "{:?}",
         r.joints[0].origin
     );
@@ -108,13 +108,13 @@ fn quaternions_are_normalised_and_other_orientations_work() {
       <body name="xy" xyaxes="0 1 0 -1 0 0"/>
     </body></worldbody></mujoco>"#);
     assert!(close3(
-        r.joint("q_fixed").unwrap().origin.rpy,
+        r.joint("q_fixed").unwrap().origin.rpy(),
         [PI / 2.0, 0.0, 0.0]
     ));
-    let z = rpy_to_matrix(r.joint("z_fixed").unwrap().origin.rpy);
+    let z = r.joint("z_fixed").unwrap().origin.rotation();
     assert!(close(z[2][2], -1.0));
     assert!(close3(
-        r.joint("xy_fixed").unwrap().origin.rpy,
+        r.joint("xy_fixed").unwrap().origin.rpy(),
         [0.0, 0.0, PI / 2.0]
     ));
 }
@@ -232,7 +232,7 @@ fn geoms_sites_materials() {
             length: 0.4
         }
     );
-    assert!(close3(cap.origin.xyz, [0.0, 0.0, 0.2]) && close3(cap.origin.rpy, [0.0; 3]));
+    assert!(close3(cap.origin.xyz, [0.0, 0.0, 0.2]) && close3(cap.origin.rpy(), [0.0; 3]));
     let m = cap.material.as_ref().unwrap();
     assert_eq!(
         (m.name.as_str(), m.rgba),
@@ -260,7 +260,7 @@ fn geoms_sites_materials() {
             size: [0.02, 0.02, 0.2]
         }
     );
-    let z = rpy_to_matrix(bx.origin.rpy);
+    let z = bx.origin.rotation();
     assert!(close3([z[0][2], z[1][2], z[2][2]], [1.0, 0.0, 0.0]));
     assert!(close3(bx.origin.xyz, [0.1, 0.0, 0.0]));
     assert_eq!(r.frames.len(), 2);
@@ -404,7 +404,7 @@ fn ball_joint_is_spherical_without_axis_ref_or_cone_limit() {
         "{:?}",
         hip.origin
     );
-    assert!(hip.origin.rpy.iter().all(|a| a.abs() < 1e-15));
+    assert!(hip.origin.rpy().iter().all(|a| a.abs() < 1e-15));
 }
 
 fn with(from: &str, to: &str) -> String {

@@ -219,13 +219,9 @@ fn z_to(z: &Vec3) -> Mat {
     }
 }
 
-/// A pose from a translation and a rotation matrix, without negative zeros.
+/// A pose from a translation (without negative zeros) and a rotation matrix.
 fn pose(xyz: Vec3, r: &Mat) -> Pose {
-    let p = Pose::from_matrix(xyz, *r);
-    Pose {
-        xyz: p.xyz.map(|v| v + 0.0),
-        rpy: p.rpy.map(|v| v + 0.0),
-    }
+    Pose::from_matrix(xyz.map(|v| v + 0.0), *r)
 }
 
 /// A hinge or slide joint of a body: the joint (axis, limits, dynamics), its
