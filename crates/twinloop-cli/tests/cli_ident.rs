@@ -181,7 +181,7 @@ fn identify_static_matches_reference_and_writes_urdf() {
         }
         let p = prior.link(name).unwrap().inertial.unwrap();
         assert_eq!(a.inertia, p.inertia, "{name}: inertia must stay");
-        assert_eq!(a.origin.rpy, p.origin.rpy);
+        assert_eq!(a.origin.rpy(), p.origin.rpy());
         *restored.link_mut(name).unwrap().inertial.as_mut().unwrap() = p;
     }
     assert_eq!(

@@ -4,55 +4,106 @@
 //! distinct here so that identified masses and CoMs can be written back per link.
 //! `twinloop-dynamics` compiles a description into its own `Model`.
 
-/// A rigid placement given as URDF gives it: translation, then roll-pitch-yaw
-/// (fixed-axis X, then Y, then Z; R = Rz(yaw) Ry(pitch) Rx(roll)).
+/// A rigid placement: a translation and a rotation.
 ///
-/// Kept as rpy rather than a matrix so that a URDF written back carries the
-/// numbers the user wrote.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// The rotation is kept as a matrix (row-major), so an orientation given as a
+/// quaternion, an axis and angle or a frame (MJCF) is kept exactly as its matrix,
+/// with no detour through angles. A pose made from roll-pitch-yaw (URDF's
+/// `rpy`: fixed-axis X, then Y, then Z; R = Rz(yaw) Ry(pitch) Rx(roll)) also
+/// keeps those three numbers, so that a URDF written back carries the numbers
+/// the user wrote; otherwise [`Pose::rpy`] derives them from the matrix
+/// ([`matrix_to_rpy`], backward stable) when a URDF is written.
+#[derive(Debug, Clone, Copy)]
 pub struct Pose {
     pub xyz: [f64; 3],
-    pub rpy: [f64; 3],
+    rotation: [[f64; 3]; 3],
+    /// The roll-pitch-yaw the rotation was made from, if it was.
+    rpy: Option<[f64; 3]>,
 }
+
+/// Two poses are equal when they place the same: translation and rotation
+/// matrix (how the rotation was first written does not count).
+impl PartialEq for Pose {
+    fn eq(&self, other: &Pose) -> bool {
+        self.xyz == other.xyz && self.rotation == other.rotation
+    }
+}
+
+impl Default for Pose {
+    fn default() -> Self {
+        Pose::IDENTITY
+    }
+}
+
+const IDENTITY_MATRIX: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 impl Pose {
     pub const IDENTITY: Pose = Pose {
         xyz: [0.0; 3],
-        rpy: [0.0; 3],
+        rotation: IDENTITY_MATRIX,
+        rpy: Some([0.0; 3]),
     };
 
+    /// From a translation and roll-pitch-yaw (URDF's `<origin xyz rpy>`).
     pub fn new(xyz: [f64; 3], rpy: [f64; 3]) -> Self {
-        Pose { xyz, rpy }
+        Pose {
+            xyz,
+            rotation: rpy_to_matrix(rpy),
+            rpy: Some(rpy),
+        }
     }
 
     pub fn from_xyz(xyz: [f64; 3]) -> Self {
-        Pose { xyz, rpy: [0.0; 3] }
+        Pose {
+            xyz,
+            ..Pose::IDENTITY
+        }
     }
 
     pub fn is_identity(&self) -> bool {
-        self.xyz == [0.0; 3] && self.rpy == [0.0; 3]
+        self.xyz == [0.0; 3] && self.rotation == IDENTITY_MATRIX
     }
 
-    /// Rotation matrix (row-major) R = Rz(yaw) Ry(pitch) Rx(roll), as URDF defines it.
+    /// Rotation matrix (row-major), the pose's orientation as stored.
     pub fn rotation(&self) -> [[f64; 3]; 3] {
-        rpy_to_matrix(self.rpy)
+        self.rotation
+    }
+
+    /// Roll-pitch-yaw (R = Rz(yaw) Ry(pitch) Rx(roll), as URDF defines it): the
+    /// numbers the pose was made from, or else derived from the matrix (without
+    /// negative zeros), for writing a URDF.
+    pub fn rpy(&self) -> [f64; 3] {
+        self.rpy
+            .unwrap_or_else(|| matrix_to_rpy(self.rotation).map(|v| v + 0.0))
+    }
+
+    /// The same placement with the translation replaced.
+    pub fn with_xyz(self, xyz: [f64; 3]) -> Self {
+        Pose { xyz, ..self }
     }
 
     /// Pose from a translation and a unit quaternion (w, x, y, z); the quaternion
     /// is normalised first (MJCF files carry non-unit quaternions).
     pub fn from_quaternion(xyz: [f64; 3], wxyz: [f64; 4]) -> Self {
-        Pose {
-            xyz,
-            rpy: matrix_to_rpy(quaternion_to_matrix(wxyz)),
-        }
+        Pose::from_matrix(xyz, quaternion_to_matrix(wxyz))
     }
 
-    /// Pose from a translation and a rotation matrix (row-major).
+    /// Pose from a translation and a rotation matrix (row-major), kept as given.
     pub fn from_matrix(xyz: [f64; 3], r: [[f64; 3]; 3]) -> Self {
         Pose {
             xyz,
-            rpy: matrix_to_rpy(r),
+            rotation: r,
+            rpy: None,
         }
+    }
+
+    /// Whether every number is finite.
+    pub fn is_finite(&self) -> bool {
+        self.xyz
+            .iter()
+            .chain(self.rotation.iter().flatten())
+            .all(|v| v.is_finite())
+            && self.rpy.is_none_or(|r| r.iter().all(|v| v.is_finite()))
     }
 }
 

@@ -25,7 +25,7 @@
 //! | `inertia-without-mass` | warning | mass 0 with a non-zero tensor |
 //! | `zero-mass-moving-link` | error / warning | a body moved by a non-fixed joint (the joint's child plus every link fixed to it) has no mass. Error when nothing with mass moves with that joint at all (the joint's row of the mass matrix is zero); warning when links further down carry mass |
 //! | `singular-mass-matrix` | error | added by the dynamics (`twinloop model lint`, [`LintReport::with_finding`]): the compiled model's mass matrix is singular at a joint that no other error explains (its mass on its axis, a point mass at a ball joint's centre, a massless link between two joints with one axis); forward dynamics refuses it |
-//! | `singular-floating-base` | warning | as a floating base (twinloop's default) the mass matrix is singular: the robot has no mass, or its rotational inertia about its CoM is singular (all mass on a line) |
+//! | `singular-floating-base` | warning | as a floating base (twinloop's default) the mass matrix is singular: the robot has no mass, or its rotational inertia about its CoM is singular (all mass on a line). A warning: the same file is sound with a fixed base, which lint cannot know, and floating-base forward dynamics refuses it with a message |
 //! | `missing-limits` | warning | revolute or prismatic joint without lower/upper |
 //! | `limits-inverted` | error | lower > upper |
 //! | `limits-empty-range` | warning | lower == upper: the joint cannot move |
@@ -33,7 +33,7 @@
 //! | `zero-effort-or-velocity` | warning | an effort or velocity limit <= 0 |
 //! | `non-unit-axis` | warning | a moving joint's axis norm differs from 1 by more than [`AXIS_NORM_TOLERANCE`] (twinloop normalises it; other tools may not) |
 //! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect); also a warning when it names a joint the file does not have |
-//! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites, composites and flexcomps, and elements MuJoCo's schema does not have (a misspelt `<geon>`) |
+//! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites, composites and flexcomps, free-floating props beside a free-floating robot (a ball: loaded without it), and elements MuJoCo's schema does not have (a misspelt `<geon>`) |
 //! | `ignored-detail` | warning | a visual-only detail the reader read past: a URDF `<texture/>` without a file, a mesh `scale` with a fourth number |
 //! | `total-mass` | info | the robot's total mass, as a scale would weigh it |
 //! | `unit-scale` | error | lengths in millimetres (the robot spans more than 20 m) or masses in grams (over 100 kg and denser than water over its size cubed): see [`unit_scale`] |

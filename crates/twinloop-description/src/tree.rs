@@ -86,10 +86,8 @@ impl Description {
     /// a mimic names a joint that exists.
     fn check_joint_values(&self, j: &crate::Joint) -> Result<(), DescriptionError> {
         let here = || format!("<joint name=\"{}\">", j.name);
-        for v in j.origin.xyz.iter().chain(j.origin.rpy.iter()) {
-            if !v.is_finite() {
-                return Err(DescriptionError::new("origin is not finite").at_element(here()));
-            }
+        if !j.origin.is_finite() {
+            return Err(DescriptionError::new("origin is not finite").at_element(here()));
         }
         if let Some(a) = j.axis {
             if a.iter().any(|v| !v.is_finite()) {
@@ -125,12 +123,7 @@ impl Description {
                     i.inertia.iyz,
                     i.inertia.izz,
                 ];
-                if vals
-                    .iter()
-                    .chain(i.origin.xyz.iter())
-                    .chain(i.origin.rpy.iter())
-                    .any(|v| !v.is_finite())
-                {
+                if vals.iter().any(|v| !v.is_finite()) || !i.origin.is_finite() {
                     return Err(DescriptionError::new("inertial is not finite")
                         .at_element(format!("<link name=\"{}\">", l.name)));
                 }

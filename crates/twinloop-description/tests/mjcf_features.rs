@@ -27,7 +27,7 @@ fn close3(a: [f64; 3], b: [f64; 3]) -> bool {
 }
 
 fn apply(p: &Pose, v: [f64; 3]) -> [f64; 3] {
-    let r = rpy_to_matrix(p.rpy);
+    let r = p.rotation();
     [
         r[0][0] * v[0] + r[0][1] * v[1] + r[0][2] * v[2] + p.xyz[0],
         r[1][0] * v[0] + r[1][1] * v[1] + r[1][2] * v[2] + p.xyz[1],
@@ -52,9 +52,9 @@ fn angles_are_degrees_unless_said_otherwise() {
     assert_eq!(j.kind, JointKind::Revolute);
     let l = j.limit.unwrap();
     assert!(close(l.lower.unwrap(), -PI / 2.0) && close(l.upper.unwrap(), PI / 4.0));
-    assert!(close(j.origin.rpy[2], PI / 2.0), "{:?}", j.origin);
+    assert!(close(j.origin.rpy()[2], PI / 2.0), "{:?}", j.origin);
     assert_eq!(j.axis, Some([0.0, 0.0, 1.0]));
-    assert!(close(r.joint("c_fixed").unwrap().origin.rpy[2].abs(), PI));
+    assert!(close(r.joint("c_fixed").unwrap().origin.rpy()[2].abs(), PI));
     let radian = text.replace(
         "<mujoco model=\"m\">",
         "<mujoco model=\"m\">\n  <compiler angle=\"radian\"/>",
@@ -71,7 +71,7 @@ fn euler_sequences() {
         r#"<mujoco><compiler angle="radian"/><worldbody><body name="a">
       <body name="b" euler="0.3 0.2 0.1"/></body></worldbody></mujoco>"#,
     );
-    let got = rpy_to_matrix(r.joints[0].origin.rpy);
+    let got = r.joints[0].origin.rotation();
     let rx = rpy_to_matrix([0.3, 0.0, 0.0]);
     let ry = rpy_to_matrix([0.0, 0.2, 0.0]);
     let rz = rpy_to_matrix([0.0, 0.0, 0.1]);
@@ -94,7 +94,7 @@ fn euler_sequences() {
       <body name="b" euler="0.3 0.2 0.1"/></body></worldbody></mujoco>"#,
     );
     assert!(
-        close3(r.joints[0].origin.rpy, [0.3, 0.2, 0.1]),
+        close3(r.joints[0].origin.rpy(), [0.3, 0.2, 0.1]),
         "{:?}",
         r.joints[0].origin
     );
@@ -108,13 +108,13 @@ fn quaternions_are_normalised_and_other_orientations_work() {
       <body name="xy" xyaxes="0 1 0 -1 0 0"/>
     </body></worldbody></mujoco>"#);
     assert!(close3(
-        r.joint("q_fixed").unwrap().origin.rpy,
+        r.joint("q_fixed").unwrap().origin.rpy(),
         [PI / 2.0, 0.0, 0.0]
     ));
-    let z = rpy_to_matrix(r.joint("z_fixed").unwrap().origin.rpy);
+    let z = r.joint("z_fixed").unwrap().origin.rotation();
     assert!(close(z[2][2], -1.0));
     assert!(close3(
-        r.joint("xy_fixed").unwrap().origin.rpy,
+        r.joint("xy_fixed").unwrap().origin.rpy(),
         [0.0, 0.0, PI / 2.0]
     ));
 }
@@ -232,7 +232,7 @@ fn geoms_sites_materials() {
             length: 0.4
         }
     );
-    assert!(close3(cap.origin.xyz, [0.0, 0.0, 0.2]) && close3(cap.origin.rpy, [0.0; 3]));
+    assert!(close3(cap.origin.xyz, [0.0, 0.0, 0.2]) && close3(cap.origin.rpy(), [0.0; 3]));
     let m = cap.material.as_ref().unwrap();
     assert_eq!(
         (m.name.as_str(), m.rgba),
@@ -260,7 +260,7 @@ fn geoms_sites_materials() {
             size: [0.02, 0.02, 0.2]
         }
     );
-    let z = rpy_to_matrix(bx.origin.rpy);
+    let z = bx.origin.rotation();
     assert!(close3([z[0][2], z[1][2], z[2][2]], [1.0, 0.0, 0.0]));
     assert!(close3(bx.origin.xyz, [0.1, 0.0, 0.0]));
     assert_eq!(r.frames.len(), 2);
@@ -404,7 +404,7 @@ fn ball_joint_is_spherical_without_axis_ref_or_cone_limit() {
         "{:?}",
         hip.origin
     );
-    assert!(hip.origin.rpy.iter().all(|a| a.abs() < 1e-15));
+    assert!(hip.origin.rpy().iter().all(|a| a.abs() < 1e-15));
 }
 
 fn with(from: &str, to: &str) -> String {
@@ -726,4 +726,80 @@ fn boundmass_weighs_an_empty_body_where_mujoco_does() {
     assert_eq!(a.mass, 0.1);
     assert_eq!(a.origin.xyz, [0.3, 0.2, 0.1]);
     assert!((a.inertia.ixx - 0.01).abs() < 1e-15 && (a.inertia.izz - 0.01).abs() < 1e-15);
+}
+
+/// Free-floating props beside a free-floating robot (dm_control's quadruped
+/// and dog with their ball): the robot is the top-level tree with the most
+/// bodies, the others are left out (and so are free trees beside a larger
+/// robot held by the world), each named by an `unmodeled-element` lint
+/// warning (an error with `--strict`). `settotalmass` counts them, as MuJoCo
+/// does (MuJoCo 4.0 on this file: 7 kg scaled to 10, so the torso's 2 kg
+/// becomes 20/7); unnamed bodies are numbered in file order across all trees.
+#[test]
+fn free_props_beside_a_free_robot_are_left_out() {
+    let text = r#"<mujoco><compiler settotalmass="10"/><worldbody>
+<body name="ball"><freejoint/><geom type="sphere" size="0.1" mass="1"/></body>
+<body name="torso" pos="0 0 1"><freejoint/><geom type="box" size="0.1 0.2 0.3" mass="2"/>
+  <body name="arm" pos="0 0 0.3"><joint axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 0.4" size="0.05" mass="1"/></body>
+  <body><joint axis="1 0 0"/><geom type="sphere" size="0.05" mass="1"/></body>
+</body>
+<body><freejoint/><geom type="sphere" size="0.1" mass="1"/><body><joint/><geom size="0.1" mass="1"/></body></body>
+</worldbody></mujoco>"#;
+    let r = ok(text);
+    assert_eq!(r.root_link(), Some("torso"));
+    let links: Vec<&str> = r.links.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(links, ["torso", "arm", "body1"]);
+    let mass = |l: &str| r.links.iter().find(|k| k.name == l).unwrap().mass();
+    assert!(close(mass("torso"), 20.0 / 7.0), "{}", mass("torso"));
+    assert!(close(mass("arm"), 10.0 / 7.0));
+    let notes: Vec<(&str, u32)> = r
+        .unmodeled
+        .iter()
+        .map(|n| (n.element.as_str(), n.line))
+        .collect();
+    assert_eq!(
+        notes,
+        [(r#"<body name="ball">"#, 2), ("<body> in <worldbody>", 7)]
+    );
+    assert!(r.unmodeled[0].what.contains(
+        "free-floating body \"ball\" (1 body, 1.428571 kg, 6 DoFs) is a separate body tree \
+         beside the robot \"torso\""
+    ));
+    assert!(
+        r.unmodeled[1]
+            .what
+            .contains("(2 bodies, 2.857143 kg, 7 DoFs)")
+    );
+    let report = twinloop_description::lint::lint(&r);
+    let code = twinloop_description::lint::codes::UNMODELED_ELEMENT;
+    assert_eq!(report.with_code(code).count(), 2);
+    assert!(!report.has_errors());
+    assert_eq!(report.strict().errors, 2);
+
+    // An arm held by the world with more bodies than the free tree beside it
+    // (pybullet's striker and thrower): the arm is the robot, the free tree a prop.
+    let r = ok(r#"<mujoco><worldbody>
+<body name="base"><geom size="0.1"/><body name="link"><joint/><geom size="0.1"/></body></body>
+<body name="puck" pos="1 0 0"><freejoint/><geom size="0.05" mass="0.2"/></body>
+</worldbody></mujoco>"#);
+    assert_eq!(r.root_link(), Some("base"));
+    assert_eq!(r.links.len(), 2);
+    assert_eq!(r.unmodeled.len(), 1);
+    assert!(r.unmodeled[0].what.contains(
+        "\"puck\" (1 body, 0.200000 kg, 6 DoFs) is a separate body tree beside the robot \
+         (the bodies held by the world)"
+    ));
+
+    // A jointless (welded) or hinged top-level body beside a larger free one is
+    // not a prop: still refused, naming it.
+    for other in [
+        "<body name=\"table\"/>",
+        "<body name=\"table\"><joint/></body>",
+    ] {
+        let e = err(&text.replace(
+            "<body name=\"ball\"><freejoint/><geom type=\"sphere\" size=\"0.1\" mass=\"1\"/></body>",
+            other,
+        ));
+        assert!(e.to_string().contains("second top-level body"), "{e}");
+    }
 }

@@ -373,5 +373,5 @@ fn defaults_when_optional_parts_are_missing() {
         (l.lower, l.upper, l.effort, l.velocity),
         (None, None, Some(10.0), None)
     );
-    assert_eq!(r.links[1].inertial.unwrap().origin.rpy, [0.0; 3]);
+    assert_eq!(r.links[1].inertial.unwrap().origin.rpy(), [0.0; 3]);
 }

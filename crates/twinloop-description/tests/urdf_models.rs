@@ -280,7 +280,7 @@ fn icub_rotated_inertials_and_sensors() {
     let rotated = r
         .links
         .iter()
-        .filter(|l| l.inertial.is_some_and(|i| i.origin.rpy != [0.0; 3]))
+        .filter(|l| l.inertial.is_some_and(|i| i.origin.rpy() != [0.0; 3]))
         .count();
     assert_eq!(rotated, 19);
     assert_eq!(

@@ -10,7 +10,11 @@ use twinloop_description::{Inertial, Pose};
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct PlacedBox {
     pub xyz: [f64; 3],
+    /// The box's axes in the link frame, as roll-pitch-yaw for the browser.
     pub rpy: [f64; 3],
+    /// The same rotation as a matrix (row-major): what the Rust side places with.
+    #[serde(skip)]
+    pub rotation: [[f64; 3]; 3],
     /// Full edge lengths along the box's own x, y, z, m.
     pub size: [f64; 3],
 }
@@ -53,7 +57,8 @@ pub fn equivalent_box(inertial: &Inertial) -> Option<PlacedBox> {
     let pose = Pose::from_matrix(inertial.origin.xyz, rows);
     Some(PlacedBox {
         xyz: pose.xyz,
-        rpy: pose.rpy,
+        rpy: pose.rpy(),
+        rotation: rows,
         size,
     })
 }

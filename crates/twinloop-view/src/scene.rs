@@ -221,7 +221,7 @@ fn stand_in_shape(link: &twinloop_description::Link) -> Option<Shape> {
     let size = b.size.map(|s| s.max(0.005));
     Some(Shape {
         name: None,
-        origin: Pose::new(b.xyz, b.rpy),
+        origin: Pose::from_matrix(b.xyz, b.rotation),
         geometry: Geometry::Box { size },
         material,
     })

@@ -3,7 +3,7 @@
 //! theorem, through [`twinloop_spatial::Inertia`]'s `+`), and every part is also a
 //! visual, so what a viewer draws is what the dynamics weighs.
 
-use crate::{Geometry, Inertia, Inertial, Link, Material, Pose, Shape, rpy_to_matrix};
+use crate::{Geometry, Inertia, Inertial, Link, Material, Pose, Shape};
 use twinloop_spatial::{Inertia as SpatialInertia, Matrix3, Vector3};
 
 /// What a part is, for its colour in a viewer and for the mass tables in the docs.
@@ -90,8 +90,7 @@ impl Part {
 
 /// Rigid composition `a * b` of two placements (b given in a's frame).
 pub fn compose(a: &Pose, b: &Pose) -> Pose {
-    let ra = rpy_to_matrix(a.rpy);
-    let rb = rpy_to_matrix(b.rpy);
+    let (ra, rb) = (a.rotation(), b.rotation());
     let mut r = [[0.0; 3]; 3];
     let mut p = a.xyz;
     for i in 0..3 {
@@ -100,10 +99,11 @@ pub fn compose(a: &Pose, b: &Pose) -> Pose {
         }
         p[i] += (0..3).map(|k| ra[i][k] * b.xyz[k]).sum::<f64>();
     }
-    if b.rpy == [0.0; 3] {
-        Pose::new(clean3(p), a.rpy)
-    } else if a.rpy == [0.0; 3] {
-        Pose::new(clean3(p), b.rpy)
+    // With one side unrotated the other's rotation is kept as it was written.
+    if b.rotation() == Pose::IDENTITY.rotation() {
+        a.with_xyz(clean3(p))
+    } else if a.rotation() == Pose::IDENTITY.rotation() {
+        b.with_xyz(clean3(p))
     } else {
         Pose::from_matrix(clean3(p), r)
     }

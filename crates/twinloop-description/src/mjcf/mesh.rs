@@ -1,4 +1,4 @@
-//! The mass properties of a triangle mesh (STL or OBJ) as MuJoCo's compiler
+//! The mass properties of a triangle mesh (STL, OBJ or MuJoCo's MSH) as MuJoCo's compiler
 //! computes them for a mesh geom: volume, centre of mass and inertia.
 //!
 //! The mesh is a union of pyramids from a centre to each face: from the
@@ -37,7 +37,7 @@ pub(crate) struct MeshProps {
     pub inertia: Mat,
 }
 
-/// Read an STL (binary or ASCII) or OBJ file; the error says what is wrong.
+/// Read an STL (binary or ASCII), OBJ or MSH file; the error says what is wrong.
 pub(crate) fn read(path: &Path) -> Result<TriMesh, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let ext = path
@@ -47,7 +47,10 @@ pub(crate) fn read(path: &Path) -> Result<TriMesh, String> {
     let mesh = match ext.as_str() {
         "stl" => read_stl(&bytes),
         "obj" => read_obj(&String::from_utf8_lossy(&bytes)),
-        _ => Err(format!("mesh format .{ext} is not read (STL and OBJ are)")),
+        "msh" => read_msh(&bytes),
+        _ => Err(format!(
+            "mesh format .{ext} is not read (STL, OBJ and MSH are)"
+        )),
     }
     .map_err(|e| format!("{}: {e}", path.display()))?;
     if let Some(f) = mesh
@@ -108,6 +111,53 @@ fn read_stl(bytes: &[u8]) -> Result<TriMesh, String> {
     let faces = (0..vertices.len() / 3)
         .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
         .collect();
+    Ok(TriMesh { vertices, faces })
+}
+
+/// MuJoCo's binary MSH: four little-endian `i32` counts (vertices, normals,
+/// texture coordinates, faces), then the vertices (3 `f32` each), normals (3),
+/// texture coordinates (2) and faces (3 `i32` vertex indices, from 0). The file
+/// must be exactly that long. Without faces MuJoCo would take the convex hull
+/// of the points: refused here rather than guessed.
+fn read_msh(bytes: &[u8]) -> Result<TriMesh, String> {
+    let word = |k: usize| -> [u8; 4] { bytes[4 * k..4 * k + 4].try_into().unwrap() };
+    if bytes.len() < 16 {
+        return Err("MSH shorter than its 16-byte header".to_string());
+    }
+    let count = |k: usize| usize::try_from(i32::from_le_bytes(word(k))).ok();
+    let (Some(nv), Some(nn), Some(nt), Some(nf)) = (count(0), count(1), count(2), count(3)) else {
+        return Err("MSH header has a negative count".to_string());
+    };
+    let words = [
+        3 * nv as u128,
+        3 * nn as u128,
+        2 * nt as u128,
+        3 * nf as u128,
+    ];
+    let expected = 16 + 4 * words.iter().sum::<u128>();
+    if expected != bytes.len() as u128 {
+        return Err(format!(
+            "MSH of {nv} vertices, {nn} normals, {nt} texture coordinates and {nf} faces \
+             should be {expected} bytes, the file has {}",
+            bytes.len()
+        ));
+    }
+    if nf == 0 {
+        return Err("MSH without faces (MuJoCo takes the convex hull of its points)".to_string());
+    }
+    let vertices = (0..nv)
+        .map(|i| [0, 1, 2].map(|c| f32::from_le_bytes(word(4 + 3 * i + c)) as f64))
+        .collect();
+    let first = 4 + 3 * nv + 3 * nn + 2 * nt;
+    let mut faces = Vec::with_capacity(nf);
+    for f in 0..nf {
+        let mut t = [0; 3];
+        for (c, v) in t.iter_mut().enumerate() {
+            let i = i32::from_le_bytes(word(first + 3 * f + c));
+            *v = usize::try_from(i).map_err(|_| format!("face {f} has vertex index {i}"))?;
+        }
+        faces.push(t);
+    }
     Ok(TriMesh { vertices, faces })
 }
 
@@ -371,6 +421,40 @@ mod tests {
         }
         assert!(m.mass_properties(Signed::Exact).is_err());
         assert!((m.mass_properties(Signed::Legacy).unwrap().volume - 1.0).abs() < 1e-12);
+    }
+
+    /// The cube as MuJoCo's MSH (with 8 normals and no texture coordinates),
+    /// read back to the same mesh; a wrong length, no faces or a bad index is
+    /// refused with what is wrong.
+    #[test]
+    fn msh_reads_the_cube() {
+        let c = cube();
+        let mut b = Vec::new();
+        for n in [8, 8, 0, c.faces.len() as i32] {
+            b.extend(n.to_le_bytes());
+        }
+        for v in c.vertices.iter().chain(&c.vertices) {
+            for x in v {
+                b.extend((*x as f32).to_le_bytes());
+            }
+        }
+        for f in &c.faces {
+            for &i in f {
+                b.extend((i as i32).to_le_bytes());
+            }
+        }
+        let m = read_msh(&b).unwrap();
+        assert_eq!((m.vertices, m.faces), (c.vertices, c.faces));
+        let e = read_msh(&b[..b.len() - 1]).err().unwrap();
+        assert!(e.contains("should be 352 bytes, the file has 351"), "{e}");
+        let mut bad = b.clone();
+        bad[b.len() - 4..].copy_from_slice(&(-1i32).to_le_bytes());
+        assert_eq!(read_msh(&bad).err().unwrap(), "face 11 has vertex index -1");
+        let e = read_msh(&[8, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]).err();
+        assert!(e.unwrap().contains("should be 112 bytes"));
+        let mut pts = vec![1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
+        pts.extend([0; 12]);
+        assert!(read_msh(&pts).err().unwrap().contains("without faces"));
     }
 
     #[test]

@@ -14,8 +14,10 @@
 //!   floating base itself when it compiles the dynamics); its `pos`/`quat` are
 //!   MuJoCo's initial qpos and are dropped. One jointless body at the origin is
 //!   simply the root. Otherwise a link `world` is added and every top-level body
-//!   hangs from it at its `pos`/`quat`; a free joint beside other top-level bodies
-//!   is an error (one floating tree per file).
+//!   hangs from it at its `pos`/`quat`. When every top-level body is free, the
+//!   one with the most bodies is the robot and the others are props (a ball)
+//!   left out with an `unmodeled-element` note each; a free joint beside a
+//!   welded or hinged top-level body is an error (one floating tree per file).
 //! - A body's joints, in order: `hinge` becomes [`JointKind::Revolute`] when
 //!   limited (the `range`, converted from degrees unless `<compiler
 //!   angle="radian">`) and [`JointKind::Continuous`] otherwise; `slide` becomes
@@ -217,13 +219,9 @@ fn z_to(z: &Vec3) -> Mat {
     }
 }
 
-/// A pose from a translation and a rotation matrix, without negative zeros.
+/// A pose from a translation (without negative zeros) and a rotation matrix.
 fn pose(xyz: Vec3, r: &Mat) -> Pose {
-    let p = Pose::from_matrix(xyz, *r);
-    Pose {
-        xyz: p.xyz.map(|v| v + 0.0),
-        rpy: p.rpy.map(|v| v + 0.0),
-    }
+    Pose::from_matrix(xyz.map(|v| v + 0.0), *r)
 }
 
 /// A hinge or slide joint of a body: the joint (axis, limits, dynamics), its
@@ -448,30 +446,58 @@ impl<'a, 'i> Reader<'a, 'i> {
         if top.is_empty() {
             return Err(error_at(root, "no <body> in <worldbody>"));
         }
-        let world = self.needs_world_link(&top)?;
+        let (robot_name, props) = self.props(&top)?;
+        let trees: Vec<Framed> = top
+            .iter()
+            .filter(|t| !props.contains(&t.0))
+            .cloned()
+            .collect();
+        let world = self.needs_world_link(&trees)?;
         if world {
             self.robot.order.push(Item::Link(self.robot.links.len()));
             self.places.links.push(root.range().start);
             self.robot.links.push(Link::new("world"));
         }
-        // Depth first, children in file order, with an explicit stack: deep
-        // nesting must not become deep recursion.
-        let mut pending: Vec<Pending> = top
-            .into_iter()
-            .rev()
-            .map(|(node, frame, childclass, suffix)| Pending {
+        // One top-level tree after the other in file order (unnamed bodies are
+        // numbered in that order), each depth first, children in file order, with
+        // an explicit stack: deep nesting must not become deep recursion. A prop
+        // is read aside, for its mass and the note that it is left out.
+        let mut aside: Vec<(Node, Description)> = Vec::new();
+        for (node, frame, childclass, suffix) in top {
+            let prop = props.contains(&node);
+            let saved = prop.then(|| {
+                let places = Places {
+                    robot: self.places.robot,
+                    links: Vec::new(),
+                    joints: Vec::new(),
+                };
+                (
+                    std::mem::take(&mut self.robot),
+                    std::mem::replace(&mut self.places, places),
+                )
+            });
+            let mut pending = vec![Pending {
                 node,
-                parent: world.then(|| ("world".to_string(), [0.0; 3])),
+                parent: (world && !prop).then(|| ("world".to_string(), [0.0; 3])),
                 childclass,
                 frame,
                 suffix,
-            })
-            .collect();
-        while let Some(p) = pending.pop() {
-            self.body(p, &mut pending)?;
+            }];
+            while let Some(p) = pending.pop() {
+                self.body(p, &mut pending)?;
+            }
+            if let Some((robot, places)) = saved {
+                aside.push((node, std::mem::replace(&mut self.robot, robot)));
+                self.places = places;
+            }
         }
-        if let Some(total) = self.compiler.total_mass {
-            self.set_total_mass(total);
+        let prop_mass: f64 = aside.iter().map(|(_, d)| d.total_mass()).sum();
+        let scale = match self.compiler.total_mass {
+            Some(total) => self.set_total_mass(total, prop_mass),
+            None => 1.0,
+        };
+        for (node, prop) in &aside {
+            self.note_prop(*node, prop, scale, &robot_name);
         }
         for &s in sections {
             self.unmodeled(s);
@@ -562,6 +588,80 @@ impl<'a, 'i> Reader<'a, 'i> {
             at = compose(&at, offset, rot);
         }
         Ok(out)
+    }
+
+    /// Free-floating props beside the robot. When every top-level body is free
+    /// (its only joint a free joint), the robot is the one with the most bodies in
+    /// its tree (the first in file order on a tie) and the others, such as the
+    /// ball of dm_control's quadruped and dog, are props. When some are not free
+    /// (welded or jointed to the world: an arm on a table) and those have more
+    /// bodies together than the largest free tree, they are the robot and every
+    /// free tree is a prop (pybullet's striker and thrower with their objects);
+    /// otherwise nothing is a prop and `needs_world_link` refuses the file.
+    /// MuJoCo couples separate trees only through contact, so the robot's mass
+    /// matrix and bias forces do not depend on the props. Returns the robot's
+    /// name for the notes and the props' bodies.
+    fn props(
+        &self,
+        top: &[Framed<'a, 'i>],
+    ) -> Result<(String, Vec<Node<'a, 'i>>), DescriptionError> {
+        let none = Ok((String::new(), Vec::new()));
+        if top.len() < 2 {
+            return none;
+        }
+        let (mut free, mut fixed) = (Vec::new(), Vec::new());
+        for (b, _, _, _) in top {
+            let js: Vec<Node> = b
+                .children()
+                .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
+                .collect();
+            if js.len() == 1 && self.joint_type(js[0], None)? == "free" {
+                free.push(*b);
+            } else {
+                fixed.push(*b);
+            }
+        }
+        let size = |b: &Node| b.descendants().filter(|d| d.has_tag_name("body")).count();
+        let Some(largest) = free
+            .iter()
+            .copied()
+            .reduce(|a, b| if size(&b) > size(&a) { b } else { a })
+        else {
+            return none;
+        };
+        if fixed.is_empty() {
+            let name = largest.attribute("name").unwrap_or("body").to_string();
+            let props = free.into_iter().filter(|b| *b != largest).collect();
+            return Ok((format!("the robot \"{name}\""), props));
+        }
+        if fixed.iter().map(size).sum::<usize>() > size(&largest) {
+            return Ok(("the robot (the bodies held by the world)".to_string(), free));
+        }
+        none
+    }
+
+    /// The `unmodeled-element` note for a prop left out (see [`Self::props`]):
+    /// what it is (its mass as compiled: `scale` is `settotalmass`'s factor) and
+    /// what leaving it out changes.
+    fn note_prop(&mut self, node: Node, aside: &Description, scale: f64, robot: &str) {
+        let bodies = aside.links.iter().filter(|l| !l.between_joints).count();
+        let dofs: usize = 6 + aside.joints.iter().map(|j| j.kind.nv()).sum::<usize>();
+        let name = aside.links.first().map_or("", |l| l.name.as_str());
+        let (line, _) = crate::xml::position(node.document(), node.range().start);
+        self.robot.unmodeled.push(FileNote {
+            element: crate::xml::element_path(node),
+            line,
+            what: format!(
+                "free-floating body \"{name}\" ({bodies} bod{}, {:.6} kg, {dofs} DoFs) is a \
+                 separate body tree beside {robot}, not part of it: twinloop \
+                 loads only the robot and leaves out its mass and DoFs. MuJoCo couples the \
+                 two only through contact: the robot's mass matrix and bias forces are \
+                 MuJoCo's, but the prop's contacts with the robot (pushing, carrying or \
+                 hitting it) are not simulated",
+                if bodies == 1 { "y" } else { "ies" },
+                aside.total_mass() * scale
+            ),
+        });
     }
 
     /// Whether the top-level bodies hang from a `world` link. Not for one body
@@ -690,11 +790,14 @@ impl<'a, 'i> Reader<'a, 'i> {
         });
     }
 
-    /// MuJoCo's `settotalmass`: every body's mass and inertia scaled by one factor.
-    fn set_total_mass(&mut self, total: f64) {
-        let now = self.robot.total_mass();
+    /// MuJoCo's `settotalmass`: every body's mass and inertia scaled by one factor,
+    /// the props' (`aside`, their mass, left out of the description) counted in
+    /// the total as MuJoCo counts them.
+    /// Returns the factor.
+    fn set_total_mass(&mut self, total: f64, aside: f64) -> f64 {
+        let now = self.robot.total_mass() + aside;
         if now <= 0.0 {
-            return;
+            return 1.0;
         }
         let k = total / now;
         for l in &mut self.robot.links {
@@ -708,6 +811,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 }
             }
         }
+        k
     }
 
     /// `<option gravity>` and `<flag gravity="disable">`.

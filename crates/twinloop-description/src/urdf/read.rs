@@ -150,10 +150,10 @@ fn child<'a, 'i>(node: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
 fn read_origin(node: Node) -> Result<Pose, DescriptionError> {
     match child(node, "origin") {
         None => Ok(Pose::IDENTITY),
-        Some(o) => Ok(Pose {
-            xyz: opt_array::<3>(o, "xyz")?.unwrap_or([0.0; 3]),
-            rpy: opt_array::<3>(o, "rpy")?.unwrap_or([0.0; 3]),
-        }),
+        Some(o) => Ok(Pose::new(
+            opt_array::<3>(o, "xyz")?.unwrap_or([0.0; 3]),
+            opt_array::<3>(o, "rpy")?.unwrap_or([0.0; 3]),
+        )),
     }
 }
 

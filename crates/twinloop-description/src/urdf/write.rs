@@ -112,7 +112,7 @@ impl Writer {
             &format!(
                 "<origin xyz=\"{}\" rpy=\"{}\"/>",
                 nums(&p.xyz),
-                nums(&p.rpy)
+                nums(&p.rpy())
             ),
         );
     }

@@ -16,6 +16,20 @@ installs them), this copies the file (and the files it includes) into
   forces with the root's six dofs first (`floating_mass_matrix`,
   `floating_bias`).
 
+When every top-level body is free-floating (dm_control's quadruped and dog with
+their ball), the robot is the one with the most bodies (the first on a tie) and
+the others are props, which twinloop leaves out (as it leaves out free trees
+beside a larger robot held by the world): `"props"` names their top-level
+bodies, their bodies are written with `"left_out": true` and their dofs are held at MuJoCo's qpos0 and left out of the
+states. MuJoCo's mass matrix is block diagonal over separate trees and their bias
+forces are independent (they interact only through contact), so the robot's rows
+and columns are the robot's dynamics whatever the prop does; `state` checks that
+the cross blocks are exactly zero.
+
+dm_control's `dog.xml` needs 20 MB of STL bones: its reference is written (with
+`"installed": "suite/dog.xml"` and the dm_control version) but the file is not
+copied; the Rust test loads it from the installed package (TWINLOOP_DM_CONTROL).
+
 `cargo test` reads only the JSON. Rerun with `python3 make_reference.py`
 (needs `pip install mujoco dm_control gymnasium`); the MuJoCo version is
 recorded in each file.
@@ -30,8 +44,9 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SEEDS = [1, 2, 3]
-# dm_control's dog needs 20 MB of STL bone meshes: too large to commit here.
-SKIP = {"dog.xml"}
+# dm_control's dog needs 20 MB of STL bone meshes: too large to commit here, so
+# it is compared from the installed package (reference written, file not copied).
+INSTALLED_ONLY = {"dog.xml"}
 
 
 def sources():
@@ -61,17 +76,45 @@ def copy_tree(package, src_dir, path):
     return os.path.join(out, os.path.basename(path))
 
 
-def root_free_dofs(m):
-    """Dofs of a free joint on a top-level body that is the only one: held fixed."""
+def is_free(m, b):
+    return m.body_jntnum[b] == 1 and int(m.jnt_type[m.body_jntadr[b]]) == int(mujoco.mjtJoint.mjJNT_FREE)
+
+
+def props(m):
+    """Top-level trees twinloop leaves out (the reader's rule): when every top-level
+    body is free, all but the robot (the one with the most bodies, the first on a
+    tie); when some are not free and they have more bodies together than the
+    largest free tree, every free tree. Returns the set of the props' body ids
+    (whole subtrees)."""
     top = [b for b in range(1, m.nbody) if m.body_parentid[b] == 0]
-    if len(top) == 1 and m.body_jntnum[top[0]] >= 1:
+    free = [b for b in top if is_free(m, b)]
+    fixed = [b for b in top if not is_free(m, b)]
+    if len(top) < 2 or not free:
+        return set()
+    size = {b: sum(1 for c in range(1, m.nbody) if m.body_rootid[c] == b) for b in top}
+    largest = free[0]
+    for b in free:
+        if size[b] > size[largest]:
+            largest = b
+    if not fixed:
+        robot = {largest}
+    elif sum(size[b] for b in fixed) > size[largest]:
+        robot = set(fixed)
+    else:
+        return set()
+    return {c for c in range(1, m.nbody) if m.body_rootid[c] not in robot}
+
+
+def root_free_dofs(m, left_out):
+    """Dofs of a free joint on the robot's only top-level body: held fixed."""
+    top = [b for b in range(1, m.nbody) if m.body_parentid[b] == 0 and b not in left_out]
+    if len(top) == 1 and is_free(m, top[0]):
         j = m.body_jntadr[top[0]]
-        if int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE):
-            return j, m.jnt_qposadr[j], m.jnt_dofadr[j]
+        return j, m.jnt_qposadr[j], m.jnt_dofadr[j]
     return None
 
 
-def state(m, seed, free):
+def state(m, seed, free, left_out):
     rng = np.random.default_rng(seed)
     d = mujoco.MjData(m)
     d.qpos[:] = m.qpos0
@@ -79,6 +122,8 @@ def state(m, seed, free):
     for j in range(m.njnt):
         qa, va = m.jnt_qposadr[j], m.jnt_dofadr[j]
         t = int(m.jnt_type[j])
+        if m.jnt_bodyid[j] in left_out:
+            continue  # a prop: held at qpos0, at rest, left out
         if free is not None and j == free[0]:
             d.qpos[qa:qa + 7] = [0, 0, 0, 1, 0, 0, 0]
             continue
@@ -99,6 +144,10 @@ def state(m, seed, free):
     mujoco.mj_forward(m, d)
     full = np.zeros((m.nv, m.nv))
     mujoco.mj_fullM(m, d, full)
+    if left_out:
+        robot = [v for v in range(m.nv) if m.dof_bodyid[v] not in left_out]
+        prop = [v for v in range(m.nv) if m.dof_bodyid[v] in left_out]
+        assert not full[np.ix_(robot, prop)].any(), "a prop coupled to the robot"
     floating = {}
     if free is not None:
         # The root free too, at the identity pose and at rest: its dofs first.
@@ -118,7 +167,8 @@ def state(m, seed, free):
 
 
 def reference(m):
-    free = root_free_dofs(m)
+    left_out = props(m)
+    free = root_free_dofs(m, left_out)
     bodies = []
     for b in range(1, m.nbody):
         bodies.append({
@@ -127,15 +177,17 @@ def reference(m):
             "ipos": m.body_ipos[b].tolist(),
             "inertia": m.body_inertia[b].tolist(),
             "iquat": m.body_iquat[b].tolist(),
-        })
-    return {
+        } | ({"left_out": True} if b in left_out else {}))
+    tops = [b for b in sorted(left_out) if m.body_parentid[b] == 0]
+    named = {"props": [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) for b in tops]} if tops else {}
+    return named | {
         "mujoco": mujoco.__version__,
         "root_free": free is not None,
         "gravity": m.opt.gravity.tolist(),
         "gravity_disabled": bool(m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_GRAVITY),
         "nv": int(m.nv),
         "bodies": bodies,
-        "states": [state(m, s, free) for s in SEEDS],
+        "states": [state(m, s, free, left_out) for s in SEEDS],
     }
 
 
@@ -449,6 +501,11 @@ def write_generated():
         yield "generated", out, mesh_model(seed, out, shell=True)
 
 
+def dm_control_version():
+    from importlib.metadata import version
+    return version("dm_control")
+
+
 def main():
     import sys
 
@@ -457,19 +514,22 @@ def main():
     packages = [] if "--generated-only" in sys.argv[1:] else list(sources())
     for package, src_dir, path in packages + list(write_generated()):
         name = os.path.basename(path)
-        if name in SKIP:
-            continue
         try:
             m = mujoco.MjModel.from_xml_path(path)
         except Exception as e:  # noqa: BLE001 -- MuJoCo refuses it: not in the corpus
             print(f"{package}/{name}: MuJoCo does not load it: {e}")
             continue
-        if package != "generated":
+        refd = reference(m)
+        if name in INSTALLED_ONLY:
+            import dm_control
+            refd["installed"] = os.path.relpath(path, os.path.dirname(dm_control.__file__))
+            refd["dm_control"] = dm_control_version()
+        elif package != "generated":
             copy_tree(package, src_dir, path)
         out = os.path.join(HERE, "reference", package)
         os.makedirs(out, exist_ok=True)
         with open(os.path.join(out, name.replace(".xml", ".json")), "w") as f:
-            json.dump(reference(m), f, separators=(",", ":"))
+            json.dump(refd, f, separators=(",", ":"))
             f.write("\n")
         print(f"{package}/{name}: {m.nbody - 1} bodies, nv {m.nv}")
 
