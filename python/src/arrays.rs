@@ -18,11 +18,13 @@ pub struct Arg<'py> {
     copy: Option<Vec<f64>>,
 }
 
-/// One expected dimension: a fixed size named after what it counts (`nq`), or free.
+/// One expected dimension: a fixed size named after what it counts (`nq`), or free
+/// and named for the message (`N`, `nu`: each free dimension its own name, so that a
+/// shape reads "(N, nu)", never "(N, N)").
 #[derive(Clone, Copy)]
 pub enum Dim {
     Is(usize, &'static str),
-    Any,
+    Free(&'static str),
 }
 
 fn fmt_shape(shape: &[usize]) -> String {
@@ -45,7 +47,7 @@ fn fmt_expected(dims: &[Dim]) -> String {
         .map(|d| match d {
             Dim::Is(n, "") => n.to_string(),
             Dim::Is(n, what) => format!("{what} = {n}"),
-            Dim::Any => "N".to_string(),
+            Dim::Free(what) => what.to_string(),
         })
         .collect();
     if parts.len() == 1 {
@@ -66,7 +68,7 @@ impl<'py> Arg<'py> {
         let fits = shape.len() == dims.len()
             && shape.iter().zip(dims).all(|(&n, d)| match d {
                 Dim::Is(m, _) => n == *m,
-                Dim::Any => true,
+                Dim::Free(_) => true,
             });
         if !fits {
             return Err(PyValueError::new_err(format!(
@@ -132,8 +134,16 @@ fn as_f64_array<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py,
         return Ok(a.clone());
     }
     let py = obj.py();
-    let converted = py
-        .import("numpy")?
+    let numpy = py.import("numpy")?;
+    // numpy would drop the imaginary part of complex numbers with only a warning.
+    if let Ok(kind) = obj.getattr("dtype").and_then(|d| d.getattr("kind"))
+        && kind.extract::<String>().is_ok_and(|k| k == "c")
+    {
+        return Err(PyValueError::new_err(format!(
+            "{name}: complex numbers; expected real float64 values"
+        )));
+    }
+    let converted = numpy
         .call_method1("asarray", (obj, "float64"))
         .map_err(|e| {
             PyValueError::new_err(format!("{name}: cannot be read as float64 numbers ({e})"))

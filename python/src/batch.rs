@@ -75,7 +75,7 @@ fn batch_args<'py>(
     q: &Bound<'py, PyAny>,
     rest: &[(&Bound<'py, PyAny>, &'static str)],
 ) -> PyResult<(usize, Vec<Arg<'py>>)> {
-    let qa = Arg::new(q, "Q", &[Dim::Any, Dim::Is(model.nq, "nq")])?;
+    let qa = Arg::new(q, "Q", &[Dim::Free("N"), Dim::Is(model.nq, "nq")])?;
     let n = qa.rows();
     let mut args = vec![qa];
     for (x, name) in rest {

@@ -6,7 +6,7 @@ use crate::errors::{ModelError, description_error, value_error};
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyTuple};
+use pyo3::types::{PyDict, PyInt, PyList, PyTuple};
 use std::path::Path;
 use std::sync::Arc;
 use twinloop_description::{Description, DescriptionError, lint, urdf};
@@ -273,14 +273,15 @@ impl PyModel {
     /// Index of a frame given by name or index.
     pub fn frame_id(&self, frame: &Bound<'_, PyAny>) -> PyResult<usize> {
         let m = &self.inner;
-        if let Ok(k) = frame.extract::<usize>() {
-            if k < m.frames.len() {
-                return Ok(k);
-            }
-            return Err(value_error(format!(
-                "frame: index {k} out of range (the model has {} frames)",
-                m.frames.len()
-            )));
+        if frame.is_instance_of::<PyInt>() {
+            // Negative or huge ints too: Pinocchio's indices are never negative.
+            return match frame.extract::<usize>() {
+                Ok(k) if k < m.frames.len() => Ok(k),
+                _ => Err(value_error(format!(
+                    "frame: index {frame} out of range (the model has {} frames)",
+                    m.frames.len()
+                ))),
+            };
         }
         let name: String = frame
             .extract()

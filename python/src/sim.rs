@@ -298,13 +298,17 @@ impl PySimulator {
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let m = &self.sim.model;
         let nj = m.nbodies;
-        let g = Arg::new(goals, "goals", &[Dim::Any, Dim::Any, Dim::Is(nj, "joints")])?;
+        let g = Arg::new(
+            goals,
+            "goals",
+            &[Dim::Free("N"), Dim::Free("T"), Dim::Is(nj, "joints")],
+        )?;
         let shape = g.array_shape();
         let (n, t) = (shape[0], shape[1]);
-        let q = per_rollout(q0, "q0", n, m.nq)?;
+        let q = per_rollout(q0, "q0", n, (m.nq, "nq"))?;
         let zeros = vec![0.0; m.nv];
         let v = match v0 {
-            Some(v0) => Some(per_rollout(v0, "v0", n, m.nv)?),
+            Some(v0) => Some(per_rollout(v0, "v0", n, (m.nv, "nv"))?),
             None => None,
         };
         let threads = thread_count(threads)?;
@@ -341,17 +345,20 @@ fn per_rollout<'py>(
     x: &Bound<'py, PyAny>,
     name: &'static str,
     n: usize,
-    width: usize,
+    width: (usize, &'static str),
 ) -> PyResult<(Arg<'py>, bool)> {
     let ndim: usize = x.getattr("ndim").and_then(|d| d.extract()).unwrap_or(1);
     if ndim == 1 {
-        Ok((Arg::new(x, name, &[Dim::Is(width, "")])?, false))
+        Ok((Arg::new(x, name, &[Dim::Is(width.0, width.1)])?, false))
     } else {
         Ok((
             Arg::new(
                 x,
                 name,
-                &[Dim::Is(n, "N (rollouts in goals)"), Dim::Is(width, "")],
+                &[
+                    Dim::Is(n, "N (rollouts in goals)"),
+                    Dim::Is(width.0, width.1),
+                ],
             )?,
             true,
         ))

@@ -19,12 +19,21 @@ fn record(
     names: (Option<Vec<String>>, Option<Vec<String>>),
     sample_time: Option<f64>,
 ) -> PyResult<IoData> {
-    let ua = Arg::new(u, which.0, &[Dim::Any, Dim::Any])?;
+    let ua = Arg::new(u, which.0, &[Dim::Free("N"), Dim::Free("nu")])?;
     let (n, nu) = (ua.array_shape()[0], ua.array_shape()[1]);
-    let ya = Arg::new(y, which.1, &[Dim::Is(n, "N (rows of u)"), Dim::Any])?;
+    let ya = Arg::new(y, which.1, &[Dim::Is(n, "N (rows of u)"), Dim::Free("ny")])?;
     let ny = ya.array_shape()[1];
+    if ny == 0 {
+        return Err(value_error(format!(
+            "{}: no output channel (shape ({n}, 0))",
+            which.1
+        )));
+    }
+    // One row per sample even when a side has no channel (nu = 0: an output-only record).
     let rows = |a: &Arg, w: usize| -> Vec<Vec<f64>> {
-        a.slice().chunks(w.max(1)).map(<[f64]>::to_vec).collect()
+        (0..n)
+            .map(|k| a.slice()[k * w..(k + 1) * w].to_vec())
+            .collect()
     };
     let named = |given: Option<Vec<String>>,
                  prefix: &str,
