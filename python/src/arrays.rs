@@ -3,9 +3,10 @@
 //! or as read-only views into a `Data`.
 
 use nalgebra::DMatrix;
-use numpy::ndarray::{ArrayView1, ArrayView2, ShapeBuilder};
+use numpy::ndarray::{ArrayView1, ArrayView2, Dimension, ShapeBuilder};
 use numpy::{
-    PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods,
+    PyArray, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn,
+    PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -181,6 +182,21 @@ pub unsafe fn view_matrix<'py>(
     let array = unsafe { PyArray2::borrow_from_array(&view, owner.clone()) };
     array.readwrite().make_nonwriteable();
     array
+}
+
+/// `array` (a new copy) marked read-only: a property that hands out a copy must not
+/// look like state that a write would change (rust-numpy#408's trap). Writing to it
+/// raises ValueError; `np.array(x)` gives a writable copy.
+pub fn read_only<'py, D: Dimension>(
+    array: Bound<'py, PyArray<f64, D>>,
+) -> Bound<'py, PyArray<f64, D>> {
+    array.readwrite().make_nonwriteable();
+    array
+}
+
+/// A read-only copy of a slice: [`read_only`] of a new 1-D array.
+pub fn read_only_vector<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
+    read_only(PyArray1::from_slice(py, v))
 }
 
 /// A new (writable) numpy array of the given shape from row-major values.

@@ -2,7 +2,7 @@
 //! and `rollout`: many independent rollouts on all cores with the GIL released (the
 //! shape of `mujoco.rollout`).
 
-use crate::arrays::{Arg, Dim, new_array};
+use crate::arrays::{Arg, Dim, new_array, read_only_vector};
 use crate::batch::thread_count;
 use crate::errors::value_error;
 use crate::model::{PyDescription, load_description};
@@ -197,15 +197,17 @@ impl PySimulator {
     fn joint_names(&self) -> Vec<String> {
         self.sim.model.joint_names.clone()
     }
-    /// Configuration (nq,): [x, y, z, qx, qy, qz, qw, joints (rad)] (a copy).
+    /// Configuration (nq,): [x, y, z (m), qx, qy, qz, qw, joints (rad)]. A read-only
+    /// copy (writing raises ValueError); change it with set_state.
     #[getter]
     fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.sim.q)
+        read_only_vector(py, &self.sim.q)
     }
-    /// Velocity (nv,): [linear, angular (base frame), joints (rad/s)] (a copy).
+    /// Velocity (nv,): [linear (m/s), angular (rad/s, base frame), joints (rad/s)]. A
+    /// read-only copy; change it with set_state.
     #[getter]
     fn v<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.sim.v)
+        read_only_vector(py, &self.sim.v)
     }
     /// The state as one array (nq + nv,): q then v.
     fn get_state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -223,10 +225,11 @@ impl PySimulator {
         self.sim.time = t;
         Ok(())
     }
-    /// Joint goals (rad for servos, N m for torque actuators), one per joint (a copy).
+    /// Joint goals (joints,) (rad for servos, N m for torque actuators). A read-only
+    /// copy: assign the whole array (`sim.goals = g`) to change them.
     #[getter]
     fn goals<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.sim.goals)
+        read_only_vector(py, &self.sim.goals)
     }
     #[setter]
     fn set_goals(&mut self, goals: &Bound<'_, PyAny>) -> PyResult<()> {
@@ -234,10 +237,10 @@ impl PySimulator {
         self.sim.goals.copy_from_slice(g.slice());
         Ok(())
     }
-    /// Torque each actuator applied in the last step (N m).
+    /// Torque (joints,) each actuator applied in the last step (N m); read-only.
     #[getter]
     fn applied<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.sim.applied)
+        read_only_vector(py, &self.sim.applied)
     }
     /// Centre of mass (3,), world, m.
     fn center_of_mass<'py>(&mut self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {

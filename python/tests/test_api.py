@@ -81,6 +81,49 @@ def test_views_are_read_only_and_up_to_date(op3):
             getattr(d, name).flat[0] = 1.0
 
 
+def test_copies_are_read_only_so_a_write_cannot_be_silently_lost(op3):
+    # rust-numpy#408's trap: a property handing out a writable copy lets
+    # `sim.goals[0] = 1` succeed and change nothing. Every such copy is read-only.
+    d = tl.Data(op3)
+    tl.frames_forward_kinematics(op3, d, op3.neutral())
+    sim = tl.Simulator("builtin:km20")
+    desc = tl.load("builtin:km20")
+    copies = {
+        "Data.oMi[1]": lambda: d.oMi[1],
+        "Data.oMf[2]": lambda: d.oMf[2],
+        "Model.gravity": lambda: op3.gravity,
+        "Model.lower_position_limit": lambda: op3.lower_position_limit,
+        "Model.upper_position_limit": lambda: op3.upper_position_limit,
+        "Simulator.q": lambda: sim.q,
+        "Simulator.v": lambda: sim.v,
+        "Simulator.goals": lambda: sim.goals,
+        "Simulator.applied": lambda: sim.applied,
+        "Description.links com": lambda: desc.links[0]["com"],
+        "Description.links inertia": lambda: desc.links[0]["inertia"],
+    }
+    for what, get in copies.items():
+        x = get()
+        before = x.copy()
+        assert not x.flags.writeable, what
+        with pytest.raises(ValueError, match="read-only"):
+            x.flat[0] = 42.0
+        with pytest.raises(ValueError, match="read-only"):
+            x += 1.0
+        np.testing.assert_array_equal(get(), before, err_msg=what)
+    # The ways that do change the state still do.
+    goals = np.array(sim.goals)
+    goals[0] += 0.1
+    sim.goals = goals
+    np.testing.assert_array_equal(sim.goals, goals)
+    q = np.array(sim.q)
+    q[2] += 0.01
+    sim.set_state(q, sim.v)
+    assert sim.q[2] == q[2]
+    # A function's new result stays writable: it is the caller's array.
+    assert tl.frame_jacobian(op3, d, op3.neutral(), 2).flags.writeable
+    assert op3.neutral().flags.writeable and tl.body_parameters(op3).flags.writeable
+
+
 def test_view_keeps_data_alive(op3):
     d = tl.Data(op3)
     q = op3.neutral()
