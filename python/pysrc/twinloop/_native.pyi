@@ -147,7 +147,9 @@ def link_static_parameters(model: Model) -> F64: ...
 
 def rnea_batch(model: Model, Q: ArrayLike, V: ArrayLike, A: ArrayLike, threads: Optional[int] = None) -> F64:
     """[N, nq], [N, nv], [N, nv] -> [N, nv], GIL released, on `threads` threads (default all cores)."""
-def aba_batch(model: Model, Q: ArrayLike, V: ArrayLike, TAU: ArrayLike, threads: Optional[int] = None) -> F64: ...
+def aba_batch(model: Model, Q: ArrayLike, V: ArrayLike, TAU: ArrayLike, threads: Optional[int] = None) -> F64:
+    """Q [N, nq], V [N, nv] (rad/s), TAU [N, nv] (N m) -> ddq [N, nv] (rad/s^2); ValueError naming the lowest row
+    and the joint where M(q) is singular, as aba."""
 def nonlinear_effects_batch(model: Model, Q: ArrayLike, V: ArrayLike, threads: Optional[int] = None) -> F64: ...
 def crba_batch(model: Model, Q: ArrayLike, threads: Optional[int] = None) -> F64:
     """[N, nv, nv]."""
