@@ -346,7 +346,7 @@ pub fn run_direction<R: Robot + ?Sized>(
             let measured_deg = m.abs().to_degrees();
             // The command never exceeds max_deg: an ankle reading far beyond it is a
             // robot (or a simulation) gone unstable, not a tip angle to estimate from.
-            if !(measured_deg <= cfg.max_deg) {
+            if measured_deg.is_nan() || measured_deg > cfg.max_deg {
                 return Err(RobotError::new(format!(
                     "{} run: the ankles read {measured_deg:.1} deg at the onset of the fall, \
                      beyond the {} deg the ramp may command: the robot (or the simulation) \
