@@ -286,7 +286,12 @@ class SysidSweep:
 
     def best(self) -> int:
         """Index of the order with the highest mean simulation FIT."""
-        return int(np.nanargmax(np.nanmean(self.simulation_fit, axis=1)))
+        ok = ~np.isnan(self.simulation_fit).any(axis=1)
+        if not ok.any():
+            raise ValueError(f"no order succeeded: {self.errors[0]}")
+        means = np.full(len(ok), -np.inf)
+        means[ok] = self.simulation_fit[ok].mean(axis=1)
+        return int(np.argmax(means))
 
 
 def sysid_order_sweep(u: Any, y: Any, orders: Sequence, *, method: str = "arx", u_val: Any = None,
