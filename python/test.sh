@@ -18,8 +18,16 @@ export CARGO_TARGET_DIR="$target"
 
 rm -f "$target"/wheels/twinloop-*.whl
 "$py" -m maturin build --profile ci --manifest-path "$here/Cargo.toml" --interpreter "$py" --out "$target/wheels"
-"$py" -m pip install --quiet --disable-pip-version-check --root-user-action=ignore --force-reinstall --no-deps \
-    "$target"/wheels/twinloop-*.whl
+wheel="$(ls "$target"/wheels/twinloop-*.whl)"
+"$py" -m pip install --quiet --disable-pip-version-check --root-user-action=ignore --force-reinstall --no-deps "$wheel"
+# Then through its [ray] extra, as `pip install "twinloop[ray]"` does: pip resolves the
+# extra's requirements against what is installed (the pinned ray above). pip only warns
+# about an extra the package does not declare, so that warning fails the run.
+extra_log="$("$py" -m pip install --disable-pip-version-check --root-user-action=ignore "${wheel}[ray]" 2>&1)" || {
+    echo "$extra_log"; exit 1; }
+if grep -qi "does not provide the extra" <<<"$extra_log"; then
+    echo "$extra_log"; echo "the wheel has no [ray] extra" >&2; exit 1
+fi
 
 cargo build --quiet -p twinloop-cli --profile ci --manifest-path "$repo/Cargo.toml"
 

@@ -19,7 +19,7 @@ a = ap.parse_args()
 prior = tl.load("builtin:km20")
 changes = tl.random_changes(prior, a.jobs, seed=1, mass_range=(0.05, 0.5))
 t0 = time.perf_counter()
-rows = td.tipover_sweep(prior, changes, batch_size=50, address=a.address)
-print(f"{len(rows)} tip-overs in {time.perf_counter() - t0:.1f} s")
-angles = np.array([r["static_deg"] for r in rows])
+sweep = td.tipover_sweep(prior, changes, batch_size=50, address=a.address)  # arrays, one row per change
+print(f"{len(sweep)} tip-overs in {time.perf_counter() - t0:.1f} s")
+angles = sweep.static_deg  # (jobs, 4), deg
 print("fall angles (deg), forward/backward/left/right: min", angles.min(0).round(2), "max", angles.max(0).round(2))

@@ -3,9 +3,10 @@
 //! or as read-only views into a `Data`.
 
 use nalgebra::DMatrix;
-use numpy::ndarray::{ArrayView1, ArrayView2, ShapeBuilder};
+use numpy::ndarray::{ArrayView1, ArrayView2, Dimension, ShapeBuilder};
 use numpy::{
-    PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods,
+    PyArray, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn,
+    PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -18,11 +19,13 @@ pub struct Arg<'py> {
     copy: Option<Vec<f64>>,
 }
 
-/// One expected dimension: a fixed size named after what it counts (`nq`), or free.
+/// One expected dimension: a fixed size named after what it counts (`nq`), or free
+/// and named for the message (`N`, `nu`: each free dimension its own name, so that a
+/// shape reads "(N, nu)", never "(N, N)").
 #[derive(Clone, Copy)]
 pub enum Dim {
     Is(usize, &'static str),
-    Any,
+    Free(&'static str),
 }
 
 fn fmt_shape(shape: &[usize]) -> String {
@@ -45,7 +48,7 @@ fn fmt_expected(dims: &[Dim]) -> String {
         .map(|d| match d {
             Dim::Is(n, "") => n.to_string(),
             Dim::Is(n, what) => format!("{what} = {n}"),
-            Dim::Any => "N".to_string(),
+            Dim::Free(what) => what.to_string(),
         })
         .collect();
     if parts.len() == 1 {
@@ -66,7 +69,7 @@ impl<'py> Arg<'py> {
         let fits = shape.len() == dims.len()
             && shape.iter().zip(dims).all(|(&n, d)| match d {
                 Dim::Is(m, _) => n == *m,
-                Dim::Any => true,
+                Dim::Free(_) => true,
             });
         if !fits {
             return Err(PyValueError::new_err(format!(
@@ -132,8 +135,16 @@ fn as_f64_array<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py,
         return Ok(a.clone());
     }
     let py = obj.py();
-    let converted = py
-        .import("numpy")?
+    let numpy = py.import("numpy")?;
+    // numpy would drop the imaginary part of complex numbers with only a warning.
+    if let Ok(kind) = obj.getattr("dtype").and_then(|d| d.getattr("kind"))
+        && kind.extract::<String>().is_ok_and(|k| k == "c")
+    {
+        return Err(PyValueError::new_err(format!(
+            "{name}: complex numbers; expected real float64 values"
+        )));
+    }
+    let converted = numpy
         .call_method1("asarray", (obj, "float64"))
         .map_err(|e| {
             PyValueError::new_err(format!("{name}: cannot be read as float64 numbers ({e})"))
@@ -171,6 +182,21 @@ pub unsafe fn view_matrix<'py>(
     let array = unsafe { PyArray2::borrow_from_array(&view, owner.clone()) };
     array.readwrite().make_nonwriteable();
     array
+}
+
+/// `array` (a new copy) marked read-only: a property that hands out a copy must not
+/// look like state that a write would change (rust-numpy#408's trap). Writing to it
+/// raises ValueError; `np.array(x)` gives a writable copy.
+pub fn read_only<'py, D: Dimension>(
+    array: Bound<'py, PyArray<f64, D>>,
+) -> Bound<'py, PyArray<f64, D>> {
+    array.readwrite().make_nonwriteable();
+    array
+}
+
+/// A read-only copy of a slice: [`read_only`] of a new 1-D array.
+pub fn read_only_vector<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
+    read_only(PyArray1::from_slice(py, v))
 }
 
 /// A new (writable) numpy array of the given shape from row-major values.

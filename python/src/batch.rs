@@ -20,8 +20,14 @@ pub fn thread_count(threads: Option<usize>) -> PyResult<usize> {
     }
 }
 
+/// What one row computes: `Err` (a message) for a row it cannot, such as a singular
+/// mass matrix in `aba_batch`.
+pub type RowResult = Result<(), String>;
+
 /// Run `row` on every row of the inputs (row-major, `widths[k]` values per row of
-/// input k), writing `out_width` values per row, on `threads` threads.
+/// input k), writing `out_width` values per row, on `threads` threads. A row that
+/// fails stops its thread; the error of the lowest failing row is returned, as
+/// "row i: message" (the same row whatever the thread count).
 pub fn run_rows<F>(
     model: &Model,
     inputs: &[&[f64]],
@@ -30,33 +36,51 @@ pub fn run_rows<F>(
     out_width: usize,
     threads: usize,
     row: F,
-) -> Vec<f64>
+) -> Result<Vec<f64>, String>
 where
-    F: Fn(&Model, &mut Data, &mut DMatrix<f64>, &[&[f64]], &mut [f64]) + Sync,
+    F: Fn(&Model, &mut Data, &mut DMatrix<f64>, &[&[f64]], &mut [f64]) -> RowResult + Sync,
 {
     let mut out = vec![0.0; n * out_width];
     if n == 0 || out_width == 0 {
-        return out;
+        return Ok(out);
     }
     let per_thread = n.div_ceil(threads.min(n));
-    std::thread::scope(|s| {
-        for (c, chunk) in out.chunks_mut(per_thread * out_width).enumerate() {
-            let row = &row;
-            s.spawn(move || {
-                let mut data = Data::new(model);
-                let mut scratch = DMatrix::zeros(6, model.nv);
-                let mut args: Vec<&[f64]> = vec![&[]; inputs.len()];
-                for (k, o) in chunk.chunks_mut(out_width).enumerate() {
-                    let i = c * per_thread + k;
-                    for (a, (x, w)) in args.iter_mut().zip(inputs.iter().zip(widths)) {
-                        *a = &x[i * w..(i + 1) * w];
+    let failures: Vec<Option<(usize, String)>> = std::thread::scope(|s| {
+        let handles: Vec<_> = out
+            .chunks_mut(per_thread * out_width)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let row = &row;
+                s.spawn(move || {
+                    let mut data = Data::new(model);
+                    let mut scratch = DMatrix::zeros(6, model.nv);
+                    let mut args: Vec<&[f64]> = vec![&[]; inputs.len()];
+                    for (k, o) in chunk.chunks_mut(out_width).enumerate() {
+                        let i = c * per_thread + k;
+                        for (a, (x, w)) in args.iter_mut().zip(inputs.iter().zip(widths)) {
+                            *a = &x[i * w..(i + 1) * w];
+                        }
+                        if let Err(e) = row(model, &mut data, &mut scratch, &args, o) {
+                            return Some((i, e));
+                        }
                     }
-                    row(model, &mut data, &mut scratch, &args, o);
-                }
-            });
-        }
+                    None
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Some((0, "a batch thread failed unexpectedly".into())))
+            })
+            .collect()
     });
-    out
+    // Chunks are in row order: the first failing chunk holds the lowest failing row.
+    match failures.into_iter().flatten().next() {
+        Some((i, e)) => Err(format!("row {i}: {e}")),
+        None => Ok(out),
+    }
 }
 
 /// Copy a column-major matrix into row-major `out`.
@@ -75,7 +99,7 @@ fn batch_args<'py>(
     q: &Bound<'py, PyAny>,
     rest: &[(&Bound<'py, PyAny>, &'static str)],
 ) -> PyResult<(usize, Vec<Arg<'py>>)> {
-    let qa = Arg::new(q, "Q", &[Dim::Any, Dim::Is(model.nq, "nq")])?;
+    let qa = Arg::new(q, "Q", &[Dim::Free("N"), Dim::Is(model.nq, "nq")])?;
     let n = qa.rows();
     let mut args = vec![qa];
     for (x, name) in rest {
@@ -99,7 +123,7 @@ fn batch<'py, F>(
     row: F,
 ) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
 where
-    F: Fn(&Model, &mut Data, &mut DMatrix<f64>, &[&[f64]], &mut [f64]) + Sync + Send,
+    F: Fn(&Model, &mut Data, &mut DMatrix<f64>, &[&[f64]], &mut [f64]) -> RowResult + Sync + Send,
 {
     let m = &*model.inner;
     let threads = thread_count(threads)?;
@@ -108,7 +132,9 @@ where
     let mut widths = vec![m.nq];
     widths.extend(std::iter::repeat_n(m.nv, rest.len()));
     let out_width: usize = out_shape.iter().product();
-    let values = py.detach(|| run_rows(m, &slices, &widths, n, out_width, threads, row));
+    let values = py
+        .detach(|| run_rows(m, &slices, &widths, n, out_width, threads, row))
+        .map_err(value_error)?;
     let mut shape = vec![n];
     shape.extend_from_slice(out_shape);
     new_array(py, values, &shape)
@@ -141,7 +167,10 @@ macro_rules! batch_fn {
                 &[$(($arg, stringify!($arg))),*],
                 &shape,
                 threads,
-                |$m, $d, $scratch, $x, $o| $row,
+                |$m, $d, $scratch, $x, $o| {
+                    let () = $row;
+                    Ok(())
+                },
             )
         }
     };
@@ -156,10 +185,13 @@ batch_fn! {
 }
 
 batch_fn! {
-    /// aba over rows: Q (N, nq), V (N, nv), TAU (N, nv) -> ddq (N, nv).
+    /// aba over rows: Q (N, nq), V (N, nv), TAU (N, nv) -> ddq (N, nv). A singular
+    /// mass matrix raises ValueError naming the row and the joint, as `aba` does,
+    /// never NaN accelerations.
     fn aba_batch(V, TAU) -> |m| [m.nv],
     |m, d, _, x, o| {
-        o.copy_from_slice(dy::aba(m, d, x[0], x[1], x[2]).as_slice());
+        let ddq = dy::try_aba(m, d, x[0], x[1], x[2]).map_err(|e| e.to_string())?;
+        o.copy_from_slice(ddq.as_slice());
     }
 }
 
@@ -248,6 +280,7 @@ pub fn frame_jacobian_batch<'py>(
             dy::compute_joint_jacobians(m, d, x[0]);
             dy::frame_jacobian(m, d, k, rf, jf);
             write_matrix(jf, o);
+            Ok(())
         },
     )
 }

@@ -355,7 +355,7 @@ pub fn identify_static<'py>(
     let d = description_arg(robot)?;
     let model = twinloop_dynamics::Model::from_description_with_base(&d, BaseKind::Floating)
         .map_err(crate::errors::description_error)?;
-    let qa = Arg::new(q, "q", &[Dim::Any, Dim::Is(model.nq, "nq")])?;
+    let qa = Arg::new(q, "q", &[Dim::Free("P"), Dim::Is(model.nq, "nq")])?;
     let n = qa.rows();
     let ca = Arg::new(cop, "cop", &[Dim::Is(n, "P (rows of q)"), Dim::Is(2, "")])?;
     if !(total_mass > 0.0 && total_mass.is_finite()) {

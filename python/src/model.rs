@@ -1,12 +1,12 @@
 //! `Description`, `Model` and `Data`: what a robot file says, the compiled dynamics
 //! model, and the workspace whose results Python sees as read-only views.
 
-use crate::arrays::{matrix_copy, view_matrix, view_vector};
+use crate::arrays::{matrix_copy, read_only, read_only_vector, view_matrix, view_vector};
 use crate::errors::{ModelError, description_error, value_error};
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyTuple};
+use pyo3::types::{PyDict, PyInt, PyList, PyTuple};
 use std::path::Path;
 use std::sync::Arc;
 use twinloop_description::{Description, DescriptionError, lint, urdf};
@@ -116,7 +116,7 @@ fn se3_matrix<'py>(py: Python<'py>, x: &Se3) -> Bound<'py, PyArray2<f64>> {
     let mut m = nalgebra::DMatrix::<f64>::identity(4, 4);
     m.view_mut((0, 0), (3, 3)).copy_from(&x.rotation);
     m.view_mut((0, 3), (3, 1)).copy_from(&x.translation);
-    matrix_copy(py, &m)
+    read_only(matrix_copy(py, &m))
 }
 
 #[pymethods]
@@ -143,7 +143,8 @@ impl PyDescription {
 
     /// Links in file order: dicts with name, mass (kg), com (m, link frame) and
     /// inertia (3x3, kg m^2, about the CoM in the inertial frame), or None values
-    /// for a link without `<inertial>`.
+    /// for a link without `<inertial>`. The arrays are read-only copies (a changed
+    /// robot is made with `with_point_mass`).
     #[getter]
     fn links<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let list = PyList::empty(py);
@@ -153,12 +154,14 @@ impl PyDescription {
             match &l.inertial {
                 Some(i) => {
                     d.set_item("mass", i.mass)?;
-                    d.set_item("com", PyArray1::from_slice(py, &i.origin.xyz))?;
+                    d.set_item("com", read_only_vector(py, &i.origin.xyz))?;
                     let m = i.inertia.matrix();
                     d.set_item(
                         "inertia",
-                        PyArray2::from_vec2(py, &m.map(|r| r.to_vec()))
-                            .map_err(|e| value_error(e.to_string()))?,
+                        read_only(
+                            PyArray2::from_vec2(py, &m.map(|r| r.to_vec()))
+                                .map_err(|e| value_error(e.to_string()))?,
+                        ),
                     )?;
                 }
                 None => {
@@ -273,14 +276,15 @@ impl PyModel {
     /// Index of a frame given by name or index.
     pub fn frame_id(&self, frame: &Bound<'_, PyAny>) -> PyResult<usize> {
         let m = &self.inner;
-        if let Ok(k) = frame.extract::<usize>() {
-            if k < m.frames.len() {
-                return Ok(k);
-            }
-            return Err(value_error(format!(
-                "frame: index {k} out of range (the model has {} frames)",
-                m.frames.len()
-            )));
+        if frame.is_instance_of::<PyInt>() {
+            // Negative or huge ints too: Pinocchio's indices are never negative.
+            return match frame.extract::<usize>() {
+                Ok(k) if k < m.frames.len() => Ok(k),
+                _ => Err(value_error(format!(
+                    "frame: index {frame} out of range (the model has {} frames)",
+                    m.frames.len()
+                ))),
+            };
         }
         let name: String = frame
             .extract()
@@ -348,19 +352,20 @@ impl PyModel {
     fn total_mass(&self) -> f64 {
         self.inner.total_mass
     }
-    /// Gravity in the world frame (m/s^2).
+    /// Gravity (3,) in the world frame (m/s^2); read-only (the model is constant).
     #[getter]
     fn gravity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.inner.gravity.as_slice())
+        read_only_vector(py, self.inner.gravity.as_slice())
     }
-    /// Joint position limits (rad or m), one per joint.
+    /// Lower joint position limits (joints,) (rad or m), one per joint; read-only.
     #[getter]
     fn lower_position_limit<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.lower_limits)
+        read_only_vector(py, &self.inner.lower_limits)
     }
+    /// Upper joint position limits (joints,) (rad or m), one per joint; read-only.
     #[getter]
     fn upper_position_limit<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.upper_limits)
+        read_only_vector(py, &self.inner.upper_limits)
     }
     /// The description this model was compiled from.
     #[getter]
@@ -508,16 +513,17 @@ impl PyData {
         mat_view(slf, |d| &d.static_regressor)
     }
 
-    /// World placements of the bodies (list of 4x4 homogeneous matrices, copies),
-    /// after forward_kinematics; body i is the child of joint i.
+    /// World placements of the bodies (list of (4, 4) homogeneous matrices, m), after
+    /// forward_kinematics; body i is the child of joint i. Read-only copies: writing
+    /// to one raises ValueError (it would not move the body).
     #[getter]
     #[allow(non_snake_case)]
     fn oMi<'py>(&self, py: Python<'py>) -> Vec<Bound<'py, PyArray2<f64>>> {
         self.data.o_m_i.iter().map(|x| se3_matrix(py, x)).collect()
     }
 
-    /// World placements of the frames (list of 4x4, copies), after
-    /// frames_forward_kinematics.
+    /// World placements of the frames (list of (4, 4), m), after
+    /// frames_forward_kinematics. Read-only copies, as `oMi`.
     #[getter]
     #[allow(non_snake_case)]
     fn oMf<'py>(&self, py: Python<'py>) -> Vec<Bound<'py, PyArray2<f64>>> {

@@ -2,7 +2,7 @@
 //! and `rollout`: many independent rollouts on all cores with the GIL released (the
 //! shape of `mujoco.rollout`).
 
-use crate::arrays::{Arg, Dim, new_array};
+use crate::arrays::{Arg, Dim, new_array, read_only_vector};
 use crate::batch::thread_count;
 use crate::errors::value_error;
 use crate::model::{PyDescription, load_description};
@@ -197,15 +197,17 @@ impl PySimulator {
     fn joint_names(&self) -> Vec<String> {
         self.sim.model.joint_names.clone()
     }
-    /// Configuration (nq,): [x, y, z, qx, qy, qz, qw, joints (rad)] (a copy).
+    /// Configuration (nq,): [x, y, z (m), qx, qy, qz, qw, joints (rad)]. A read-only
+    /// copy (writing raises ValueError); change it with set_state.
     #[getter]
     fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.sim.q)
+        read_only_vector(py, &self.sim.q)
     }
-    /// Velocity (nv,): [linear, angular (base frame), joints (rad/s)] (a copy).
+    /// Velocity (nv,): [linear (m/s), angular (rad/s, base frame), joints (rad/s)]. A
+    /// read-only copy; change it with set_state.
     #[getter]
     fn v<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.sim.v)
+        read_only_vector(py, &self.sim.v)
     }
     /// The state as one array (nq + nv,): q then v.
     fn get_state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -223,10 +225,11 @@ impl PySimulator {
         self.sim.time = t;
         Ok(())
     }
-    /// Joint goals (rad for servos, N m for torque actuators), one per joint (a copy).
+    /// Joint goals (joints,) (rad for servos, N m for torque actuators). A read-only
+    /// copy: assign the whole array (`sim.goals = g`) to change them.
     #[getter]
     fn goals<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.sim.goals)
+        read_only_vector(py, &self.sim.goals)
     }
     #[setter]
     fn set_goals(&mut self, goals: &Bound<'_, PyAny>) -> PyResult<()> {
@@ -234,10 +237,10 @@ impl PySimulator {
         self.sim.goals.copy_from_slice(g.slice());
         Ok(())
     }
-    /// Torque each actuator applied in the last step (N m).
+    /// Torque (joints,) each actuator applied in the last step (N m); read-only.
     #[getter]
     fn applied<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.sim.applied)
+        read_only_vector(py, &self.sim.applied)
     }
     /// Centre of mass (3,), world, m.
     fn center_of_mass<'py>(&mut self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -298,13 +301,17 @@ impl PySimulator {
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let m = &self.sim.model;
         let nj = m.nbodies;
-        let g = Arg::new(goals, "goals", &[Dim::Any, Dim::Any, Dim::Is(nj, "joints")])?;
+        let g = Arg::new(
+            goals,
+            "goals",
+            &[Dim::Free("N"), Dim::Free("T"), Dim::Is(nj, "joints")],
+        )?;
         let shape = g.array_shape();
         let (n, t) = (shape[0], shape[1]);
-        let q = per_rollout(q0, "q0", n, m.nq)?;
+        let q = per_rollout(q0, "q0", n, (m.nq, "nq"))?;
         let zeros = vec![0.0; m.nv];
         let v = match v0 {
-            Some(v0) => Some(per_rollout(v0, "v0", n, m.nv)?),
+            Some(v0) => Some(per_rollout(v0, "v0", n, (m.nv, "nv"))?),
             None => None,
         };
         let threads = thread_count(threads)?;
@@ -341,17 +348,20 @@ fn per_rollout<'py>(
     x: &Bound<'py, PyAny>,
     name: &'static str,
     n: usize,
-    width: usize,
+    width: (usize, &'static str),
 ) -> PyResult<(Arg<'py>, bool)> {
     let ndim: usize = x.getattr("ndim").and_then(|d| d.extract()).unwrap_or(1);
     if ndim == 1 {
-        Ok((Arg::new(x, name, &[Dim::Is(width, "")])?, false))
+        Ok((Arg::new(x, name, &[Dim::Is(width.0, width.1)])?, false))
     } else {
         Ok((
             Arg::new(
                 x,
                 name,
-                &[Dim::Is(n, "N (rollouts in goals)"), Dim::Is(width, "")],
+                &[
+                    Dim::Is(n, "N (rollouts in goals)"),
+                    Dim::Is(width.0, width.1),
+                ],
             )?,
             true,
         ))

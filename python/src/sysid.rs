@@ -19,12 +19,21 @@ fn record(
     names: (Option<Vec<String>>, Option<Vec<String>>),
     sample_time: Option<f64>,
 ) -> PyResult<IoData> {
-    let ua = Arg::new(u, which.0, &[Dim::Any, Dim::Any])?;
+    let ua = Arg::new(u, which.0, &[Dim::Free("N"), Dim::Free("nu")])?;
     let (n, nu) = (ua.array_shape()[0], ua.array_shape()[1]);
-    let ya = Arg::new(y, which.1, &[Dim::Is(n, "N (rows of u)"), Dim::Any])?;
+    let ya = Arg::new(y, which.1, &[Dim::Is(n, "N (rows of u)"), Dim::Free("ny")])?;
     let ny = ya.array_shape()[1];
+    if ny == 0 {
+        return Err(value_error(format!(
+            "{}: no output channel (shape ({n}, 0))",
+            which.1
+        )));
+    }
+    // One row per sample even when a side has no channel (nu = 0: an output-only record).
     let rows = |a: &Arg, w: usize| -> Vec<Vec<f64>> {
-        a.slice().chunks(w.max(1)).map(<[f64]>::to_vec).collect()
+        (0..n)
+            .map(|k| a.slice()[k * w..(k + 1) * w].to_vec())
+            .collect()
     };
     let named = |given: Option<Vec<String>>,
                  prefix: &str,
@@ -54,10 +63,12 @@ fn eval_options(kstep: usize, lags: usize) -> EvaluationOptions {
     }
 }
 
-/// The estimation record and the optional validation record.
+/// The estimation record, the optional validation record, and the input and output
+/// means subtracted from both (when detrended).
 struct Records {
     est: IoData,
     val: Option<IoData>,
+    offsets: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -69,15 +80,16 @@ fn records(
     input_names: Option<Vec<String>>,
     output_names: Option<Vec<String>>,
     sample_time: Option<f64>,
+    detrend: bool,
 ) -> PyResult<Records> {
-    let est = record(
+    let mut est = record(
         u,
         y,
         ("u", "y"),
         (input_names.clone(), output_names.clone()),
         sample_time,
     )?;
-    let val = match (u_val, y_val) {
+    let mut val = match (u_val, y_val) {
         (Some(uv), Some(yv)) => Some(record(
             uv,
             yv,
@@ -88,7 +100,16 @@ fn records(
         (None, None) => None,
         _ => return Err(value_error("u_val, y_val: give both or neither")),
     };
-    Ok(Records { est, val })
+    // As the CLI does unless --no-detrend: the estimation record's means come off both.
+    let offsets = detrend.then(|| {
+        let (u0, y0) = est.means();
+        est.remove_offsets(&u0, &y0);
+        if let Some(v) = &mut val {
+            v.remove_offsets(&u0, &y0);
+        }
+        (u0, y0)
+    });
+    Ok(Records { est, val, offsets })
 }
 
 fn data_json(r: &Records) -> DataJson {
@@ -97,15 +118,17 @@ fn data_json(r: &Records) -> DataJson {
         r.val.as_ref().map(|_| "<python>".into()),
         &r.est,
         r.val.as_ref(),
-        None,
+        r.offsets.as_ref(),
     )
 }
 
 /// A MIMO ARX model (`twinloop identify arx --json`): u (N, nu), y (N, ny) samples;
 /// na output lags, nb input lags, nk input delay; evaluated on (u_val, y_val) when
-/// given. Returns the CLI JSON's fields (model, evaluation with FIT %, timing).
+/// given. `detrend` (the CLI's default; False is --no-detrend) subtracts the
+/// estimation record's means from both records. Returns the CLI JSON's fields (model,
+/// evaluation with FIT %, timing).
 #[pyfunction]
-#[pyo3(signature = (u, y, na = 2, nb = 2, nk = 1, u_val = None, y_val = None, sample_time = None, input_names = None, output_names = None, kstep = 1, lags = 25))]
+#[pyo3(signature = (u, y, na = 2, nb = 2, nk = 1, u_val = None, y_val = None, sample_time = None, input_names = None, output_names = None, kstep = 1, lags = 25, detrend = true))]
 #[allow(clippy::too_many_arguments)]
 pub fn sysid_arx<'py>(
     py: Python<'py>,
@@ -121,8 +144,18 @@ pub fn sysid_arx<'py>(
     output_names: Option<Vec<String>>,
     kstep: usize,
     lags: usize,
+    detrend: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let r = records(u, y, u_val, y_val, input_names, output_names, sample_time)?;
+    let r = records(
+        u,
+        y,
+        u_val,
+        y_val,
+        input_names,
+        output_names,
+        sample_time,
+        detrend,
+    )?;
     let orders = ArxOrders { na, nb, nk };
     let t0 = std::time::Instant::now();
     let id = py
@@ -133,9 +166,10 @@ pub fn sysid_arx<'py>(
 }
 
 /// A state-space model (`twinloop identify ss --json`) of `order` states by `method`
-/// ("n4sid", "pem", "arx-reduce-pem"); focus "prediction" or "simulation".
+/// ("n4sid", "pem", "arx-reduce-pem"); focus "prediction" or "simulation"; `detrend`
+/// and the channel names as in `sysid_arx`.
 #[pyfunction]
-#[pyo3(signature = (u, y, order, method = "pem", u_val = None, y_val = None, sample_time = None, na = 10, nb = 10, nk = 1, max_iter = 100, feedthrough = false, estimate_x0 = false, focus = "prediction", kstep = 1, lags = 25))]
+#[pyo3(signature = (u, y, order, method = "pem", u_val = None, y_val = None, sample_time = None, na = 10, nb = 10, nk = 1, max_iter = 100, feedthrough = false, estimate_x0 = false, focus = "prediction", kstep = 1, lags = 25, detrend = true, input_names = None, output_names = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn sysid_ss<'py>(
     py: Python<'py>,
@@ -155,6 +189,9 @@ pub fn sysid_ss<'py>(
     focus: &str,
     kstep: usize,
     lags: usize,
+    detrend: bool,
+    input_names: Option<Vec<String>>,
+    output_names: Option<Vec<String>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let method = match method {
         "n4sid" => SsMethod::N4sid,
@@ -175,7 +212,16 @@ pub fn sysid_ss<'py>(
             )));
         }
     };
-    let r = records(u, y, u_val, y_val, None, None, sample_time)?;
+    let r = records(
+        u,
+        y,
+        u_val,
+        y_val,
+        input_names,
+        output_names,
+        sample_time,
+        detrend,
+    )?;
     let opts = SsOptions {
         order,
         method,

@@ -81,6 +81,49 @@ def test_views_are_read_only_and_up_to_date(op3):
             getattr(d, name).flat[0] = 1.0
 
 
+def test_copies_are_read_only_so_a_write_cannot_be_silently_lost(op3):
+    # rust-numpy#408's trap: a property handing out a writable copy lets
+    # `sim.goals[0] = 1` succeed and change nothing. Every such copy is read-only.
+    d = tl.Data(op3)
+    tl.frames_forward_kinematics(op3, d, op3.neutral())
+    sim = tl.Simulator("builtin:km20")
+    desc = tl.load("builtin:km20")
+    copies = {
+        "Data.oMi[1]": lambda: d.oMi[1],
+        "Data.oMf[2]": lambda: d.oMf[2],
+        "Model.gravity": lambda: op3.gravity,
+        "Model.lower_position_limit": lambda: op3.lower_position_limit,
+        "Model.upper_position_limit": lambda: op3.upper_position_limit,
+        "Simulator.q": lambda: sim.q,
+        "Simulator.v": lambda: sim.v,
+        "Simulator.goals": lambda: sim.goals,
+        "Simulator.applied": lambda: sim.applied,
+        "Description.links com": lambda: desc.links[0]["com"],
+        "Description.links inertia": lambda: desc.links[0]["inertia"],
+    }
+    for what, get in copies.items():
+        x = get()
+        before = x.copy()
+        assert not x.flags.writeable, what
+        with pytest.raises(ValueError, match="read-only"):
+            x.flat[0] = 42.0
+        with pytest.raises(ValueError, match="read-only"):
+            x += 1.0
+        np.testing.assert_array_equal(get(), before, err_msg=what)
+    # The ways that do change the state still do.
+    goals = np.array(sim.goals)
+    goals[0] += 0.1
+    sim.goals = goals
+    np.testing.assert_array_equal(sim.goals, goals)
+    q = np.array(sim.q)
+    q[2] += 0.01
+    sim.set_state(q, sim.v)
+    assert sim.q[2] == q[2]
+    # A function's new result stays writable: it is the caller's array.
+    assert tl.frame_jacobian(op3, d, op3.neutral(), 2).flags.writeable
+    assert op3.neutral().flags.writeable and tl.body_parameters(op3).flags.writeable
+
+
 def test_view_keeps_data_alive(op3):
     d = tl.Data(op3)
     q = op3.neutral()
@@ -213,3 +256,44 @@ def test_aba_refuses_a_singular_mass_matrix_naming_the_joint(tmp_path):
     data = tl.Data(model)
     with pytest.raises(ValueError, match="spin"):
         tl.aba(model, data, model.neutral(), np.zeros(model.nv), np.zeros(model.nv))
+
+
+# A massless link turning about x carries a point mass on a slider along y: the
+# inertia about the hinge is m y^2, so M(q) is singular exactly when the slider is
+# at 0 (and only then).
+SLIDER_ON_HINGE = """<robot name="slider_on_hinge">
+  <link name="base"><inertial><mass value="1"/>
+    <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="arm"/>
+  <link name="bead"><inertial><mass value="0.5"/>
+    <inertia ixx="0" iyy="0" izz="0" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
+    <axis xyz="1 0 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="slide" type="prismatic"><parent link="arm"/><child link="bead"/>
+    <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+@pytest.mark.parametrize("threads", [1, 2, 4])
+def test_aba_batch_refuses_a_singular_row_naming_the_row_and_the_joint(threads):
+    model = tl.Model.from_description(tl.Description.from_urdf(SLIDER_ON_HINGE), floating=False)
+    data = tl.Data(model)
+    rng = np.random.default_rng(2)
+    Q = np.column_stack([rng.uniform(-1, 1, 6), rng.uniform(0.1, 0.5, 6)])
+    V, TAU = rng.normal(size=(6, 2)), rng.normal(size=(6, 2))
+    # Away from the singular pose the batch is the loop (and finite: the check is not
+    # refusing everything).
+    ddq = tl.aba_batch(model, Q, V, TAU, threads=threads)
+    assert np.isfinite(ddq).all()
+    for i in range(6):
+        np.testing.assert_array_equal(ddq[i], tl.aba(model, data, Q[i], V[i], TAU[i]))
+    # The mass matrix there is m y^2 about the hinge and m along the slide (analytic).
+    M = tl.crba(model, data, Q[0])
+    np.testing.assert_allclose(np.diag(M), [0.5 * Q[0, 1] ** 2, 0.5], rtol=1e-12)
+    Q[3, 1] = Q[5, 1] = 0.0  # rows 3 and 5 singular: the lowest is named
+    with pytest.raises(ValueError) as single:
+        tl.aba(model, data, Q[3], V[3], TAU[3])
+    assert '"hinge"' in str(single.value)
+    with pytest.raises(ValueError) as batch:
+        tl.aba_batch(model, Q, V, TAU, threads=threads)
+    assert str(batch.value) == f"row 3: {single.value}"

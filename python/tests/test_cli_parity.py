@@ -144,3 +144,114 @@ def test_tipover_over_a_serial_port_needs_yes():
         tl.tipover(port="/dev/pts/0")
     with pytest.raises(ValueError, match="^directions:"):
         tl.tipover(port="/dev/pts/0", map="builtin:km20", directions=["up"])
+
+
+def test_identify_static_json_matches_the_cli(tmp_path):
+    """`experiment static-poses` + `identify static --json` against `static_poses` + `identify_static`."""
+    exe = cli()
+    prior = tl.load("builtin:km20")
+    truth = prior.with_point_mass("torso", 0.3, [0.04, 0.01, 0.05])
+    truth_file = tmp_path / "truth.urdf"
+    truth_file.write_text(truth.to_urdf())
+    poses_file, out = tmp_path / "poses.csv", tmp_path / "static.json"
+    subprocess.run([exe, "experiment", "static-poses", "--robot", str(truth_file), "--count", "60", "--seed", "2",
+                    "--cop-noise", "0.0005", "--out", str(poses_file)], check=True, capture_output=True, timeout=300)
+    subprocess.run([exe, "identify", "static", "--robot", "builtin:km20", "--poses", str(poses_file),
+                    "--total-mass", repr(truth.total_mass), "--json", str(out)], check=True, capture_output=True,
+                   timeout=300)
+    theirs = json.loads(out.read_text())
+    poses = tl.static_poses(truth, count=60, seed=2, cop_noise=0.0005)
+    # The CLI's poses file is the package's poses, number for number.
+    table = np.loadtxt(poses_file, delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(table[:, 1:-2], poses["q"])
+    np.testing.assert_array_equal(table[:, -2:], poses["cop"])
+    ours = tl.identify_static(prior, poses["q"], poses["cop"], truth.total_mass, category=poses["category"])
+    # What only the command has: its input files' names, the fit's timing and the poses it
+    # suggests measuring next (--suggest) and the squat validation (--squat, none here).
+    assert set(theirs) - set(ours) == {"poses_file", "prior", "fit_seconds_median", "suggested_poses", "validation"}
+    assert_same("identify_static", ours, {k: theirs[k] for k in ours})
+    # Independent: the identified robot's ground CoM lands on the plate's CoPs within
+    # their noise (0.5 mm per axis), where the prior's misses by millimetres.
+    res = ours["result"]
+    assert np.median(res["gcom_distance_after"]) < 1e-3 < np.median(res["gcom_distance_before"])
+
+
+SYSID = REPO / "crates" / "twinloop-sysid" / "tests" / "data"
+
+
+def sysid_columns(path):
+    """The CSV's u* and y* columns as (N, nu), (N, ny) arrays, with their names."""
+    header = path.read_text().splitlines()[0].split(",")
+    table = np.loadtxt(path, delimiter=",", skiprows=1)
+    ui = [i for i, c in enumerate(header) if c.startswith("u")]
+    yi = [i for i, c in enumerate(header) if c.startswith("y")]
+    return table[:, ui], table[:, yi], [header[i] for i in ui], [header[i] for i in yi]
+
+
+def sysid_cli(exe, kind, out, extra):
+    est, val = SYSID / "synthetic_est.csv", SYSID / "synthetic_val.csv"
+    r = subprocess.run([exe, "identify", kind, "--data", str(est), "--val", str(val), "--inputs", "u*", "--outputs",
+                        "y*", "--json", str(out), *extra], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    return json.loads(out.read_text())
+
+
+def same_sysid(label, ours, theirs):
+    """Every field but the files' names (arrays in Python) and the wall-clock times."""
+    assert theirs["data"]["estimation"].endswith("synthetic_est.csv")
+    assert (ours["data"]["estimation"], ours["data"]["validation"]) == ("<python>", "<python>")
+    for d in (ours, theirs):
+        d["data"].pop("estimation"), d["data"].pop("validation"), d.pop("timing_seconds")
+    assert_same(label, ours, theirs)
+
+
+@pytest.mark.parametrize("detrend", [True, False])
+def test_sysid_arx_json_matches_the_cli(tmp_path, detrend):
+    exe = cli()
+    theirs = sysid_cli(exe, "arx", tmp_path / "arx.json",
+                       ["--na", "2", "--nb", "2", "--nk", "1"] + ([] if detrend else ["--no-detrend"]))
+    u, y, un, yn = sysid_columns(SYSID / "synthetic_est.csv")
+    uv, yv, _, _ = sysid_columns(SYSID / "synthetic_val.csv")
+    ours = tl.sysid.arx(u, y, na=2, nb=2, nk=1, u_val=uv, y_val=yv, sample_time=0.01, input_names=un,
+                        output_names=yn, detrend=detrend)
+    assert (theirs["data"]["offsets"] is not None) == detrend
+    same_sysid("arx", ours, theirs)
+    assert min(ours["fit_percent"]["simulation"]) > 50  # a model of the system, not noise
+
+
+def test_sysid_ss_json_matches_the_cli(tmp_path):
+    exe = cli()
+    theirs = sysid_cli(exe, "ss", tmp_path / "ss.json", ["--order", "4", "--method", "n4sid"])
+    u, y, un, yn = sysid_columns(SYSID / "synthetic_est.csv")
+    uv, yv, _, _ = sysid_columns(SYSID / "synthetic_val.csv")
+    ours = tl.sysid.ss(u, y, order=4, method="n4sid", u_val=uv, y_val=yv, sample_time=0.01, input_names=un,
+                       output_names=yn)
+    same_sysid("ss", ours, theirs)
+    assert np.all(np.abs(np.linalg.eigvals(np.array(ours["A"]))) < 1)  # a stable model
+
+
+def test_error_messages_are_the_clis(tmp_path):
+    """The same refusals, word for word."""
+    exe = cli()
+    # A broken description: the CLI's message names file, line and element, and so does
+    # the package's (a ModelError).
+    bad = tmp_path / "bad.urdf"
+    bad.write_text('<robot name="x">\n  <link name="a"/>\n  <joint name="j" type="revolute">\n'
+                   '    <parent link="a"/><child link="nope"/>\n  </joint>\n</robot>\n')
+    r = subprocess.run([exe, "experiment", "tipover", "--robot", str(bad)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2
+    with pytest.raises(tl.ModelError) as e:
+        tl.tipover(str(bad))
+    assert r.stderr.strip() == f"error: {e.value}"
+    assert str(e.value).startswith(f"{bad}:3:3: <joint name=\"j\">")
+    # ARX orders the record cannot support: the library's message, which the CLI puts
+    # after the file it read (arrays have none).
+    est = SYSID / "synthetic_est.csv"
+    r = subprocess.run([exe, "identify", "arx", "--data", str(est), "--inputs", "u*", "--outputs", "y*",
+                        "--na", "60", "--nb", "60", "--no-detrend"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2
+    u, y, un, yn = sysid_columns(est)
+    with pytest.raises(ValueError) as e:
+        tl.sysid.arx(u, y, na=60, nb=60, sample_time=0.01, input_names=un, output_names=yn, detrend=False)
+    assert "960 parameters per output" in str(e.value)
+    assert r.stderr.strip() == f"error: {est}: {e.value}"

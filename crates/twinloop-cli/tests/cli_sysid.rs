@@ -280,6 +280,25 @@ fn bad_columns_and_constant_inputs_are_clear_errors() {
         "{}",
         stderr(&o)
     );
+    // A record of one sample: refused by the record itself, naming the file.
+    let one_row: String = text.lines().take(2).map(|l| format!("{l}\n")).collect();
+    let short = scratch("one_row.csv");
+    std::fs::write(&short, one_row).unwrap();
+    let o = twinloop(&[
+        "identify",
+        "arx",
+        "--data",
+        path(&short),
+        "--inputs",
+        "u*",
+        "--outputs",
+        "y*",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(e.contains("one_row.csv: 1 samples"), "{e}");
+    assert!(e.contains("at least 2"), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
     // Fewer samples than parameters.
     let o = twinloop(&[
         "identify",

@@ -343,10 +343,22 @@ pub fn run_direction<R: Robot + ?Sized>(
         if excess > cfg.fall_deg.to_radians() {
             let onset = find_onset(&history, cfg);
             let (c, m, t, e, lean) = history[onset];
+            let measured_deg = m.abs().to_degrees();
+            // The command never exceeds max_deg: an ankle reading far beyond it is a
+            // robot (or a simulation) gone unstable, not a tip angle to estimate from.
+            if measured_deg.is_nan() || measured_deg > cfg.max_deg {
+                return Err(RobotError::new(format!(
+                    "{} run: the ankles read {measured_deg:.1} deg at the onset of the fall, \
+                     beyond the {} deg the ramp may command: the robot (or the simulation) \
+                     went unstable",
+                    direction.name(),
+                    cfg.max_deg
+                )));
+            }
             return Ok(TipoverResult {
                 direction,
                 commanded_deg: c.to_degrees(),
-                measured_deg: m.abs().to_degrees(),
+                measured_deg,
                 time_s: t,
                 excess_deg: e.to_degrees(),
                 lean_deg: lean.to_degrees(),
@@ -376,4 +388,94 @@ pub fn run_tipover<R: Robot + ?Sized>(
         out.push(run_direction(robot, standing, d, cfg, p)?);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use twinloop_robot::Imu;
+
+    /// Four ankle joints that follow their goals, until `blow_up_s`, when the readings
+    /// jump to 1000 rad and the trunk pitches 0.2 rad: a simulation gone unstable.
+    struct BlowsUp {
+        names: Vec<String>,
+        goals: Vec<f64>,
+        time: f64,
+        blow_up_s: f64,
+    }
+
+    impl Robot for BlowsUp {
+        fn joint_names(&self) -> &[String] {
+            &self.names
+        }
+        fn time(&self) -> f64 {
+            self.time
+        }
+        fn read(&mut self, st: &mut RobotState) -> Result<(), RobotError> {
+            let broken = self.time >= self.blow_up_s;
+            st.time = self.time;
+            st.positions = if broken {
+                vec![1e3; 4]
+            } else {
+                self.goals.clone()
+            };
+            let pitch: f64 = if broken { 0.2 } else { 0.0 };
+            st.imu = Some(Imu {
+                orientation: Some([0.0, (pitch / 2.0).sin(), 0.0, (pitch / 2.0).cos()]),
+                ..Default::default()
+            });
+            Ok(())
+        }
+        fn command_positions(&mut self, goals: &[f64]) -> Result<(), RobotError> {
+            self.goals.copy_from_slice(goals);
+            Ok(())
+        }
+        fn advance(&mut self, dt: f64) -> Result<(), RobotError> {
+            self.time += dt;
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn an_unstable_robot_is_an_error_not_a_tip_angle() {
+        let mut robot = BlowsUp {
+            names: ["lp", "rp", "lr", "rr"].map(String::from).to_vec(),
+            goals: vec![0.0; 4],
+            time: 0.0,
+            blow_up_s: 2.0,
+        };
+        let cfg = TipoverConfig::new([0, 1], [2, 3], [1.0, 1.0], [1.0, 1.0]);
+        let mut flat = |_: &[f64]| [0.0, 0.0];
+        let e = run_direction(
+            &mut robot,
+            &[0.0; 4],
+            Direction::Forward,
+            &cfg,
+            Some(&mut flat),
+        )
+        .unwrap_err();
+        assert!(
+            e.message
+                .starts_with("forward run: the ankles read 57295.8 deg"),
+            "{e}"
+        );
+        assert!(e.message.contains("went unstable"), "{e}");
+        // Without the blow-up, a trunk that leaves the model's prediction once the
+        // ankles pass 0.02 rad tips there: an ordinary angle, not an error.
+        robot.blow_up_s = f64::INFINITY;
+        robot.time = 0.0;
+        let mut tips = |q: &[f64]| [if q[0] > 0.02 { -0.2 } else { 0.0 }, 0.0];
+        let r = run_direction(
+            &mut robot,
+            &[0.0; 4],
+            Direction::Forward,
+            &cfg,
+            Some(&mut tips),
+        )
+        .unwrap();
+        assert!(
+            (r.measured_deg - 0.02f64.to_degrees()).abs() < 0.05,
+            "{r:?}"
+        );
+    }
 }

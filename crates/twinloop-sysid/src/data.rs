@@ -3,6 +3,9 @@
 use crate::error::{Result, SysidError};
 use nalgebra::DMatrix;
 
+/// Fewest samples a record may hold (a channel must be able to vary).
+pub const MIN_SAMPLES: usize = 2;
+
 /// A record of `N` samples of `nu` inputs and `ny` outputs, equally spaced.
 ///
 /// Stored one sample per column (`u` is `nu x N`, `y` is `ny x N`) so that the
@@ -93,6 +96,14 @@ impl IoData {
         }
         if output_names.is_empty() {
             return Err(SysidError::data("no output channel: name at least one"));
+        }
+        // Fewer than two samples cannot vary, and every estimator indexes the first
+        // sample: refused here so that no caller (CLI, Python, a library user) panics.
+        if u.ncols() < MIN_SAMPLES {
+            return Err(SysidError::data(format!(
+                "{} samples: an identification needs a record of at least {MIN_SAMPLES}",
+                u.ncols()
+            )));
         }
         if let Some(ts) = sample_time
             && !(ts.is_finite() && ts > 0.0)
@@ -241,6 +252,14 @@ impl IoData {
     /// Error unless every input and output varies: a constant channel carries no
     /// information about the dynamics (and makes the regressors rank-deficient).
     pub fn check_excitation(&self) -> Result<()> {
+        // The fields are public: a record shortened after construction is refused
+        // here too rather than indexed out of bounds.
+        if self.len() < MIN_SAMPLES {
+            return Err(SysidError::data(format!(
+                "{} samples: an identification needs a record of at least {MIN_SAMPLES}",
+                self.len()
+            )));
+        }
         for (names, m, what, advice) in [
             (
                 &self.input_names,
@@ -323,6 +342,7 @@ fn uniform_step(t: impl Iterator<Item = f64>) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::ErrorKind;
 
     fn names(p: &str, n: usize) -> Vec<String> {
         (1..=n).map(|i| format!("{p}{i}")).collect()
@@ -335,6 +355,29 @@ mod tests {
         let e = IoData::from_samples(names("u", 1), names("y", 1), &u, &y, None).unwrap_err();
         assert!(e.message.contains("data row 3"), "{e}");
         assert!(e.message.contains("\"u1\""), "{e}");
+    }
+
+    #[test]
+    fn too_few_samples_are_refused_not_indexed() {
+        for n in [0, 1] {
+            let u = vec![vec![1.0]; n];
+            let y = vec![vec![2.0]; n];
+            let e = IoData::from_samples(names("u", 1), names("y", 1), &u, &y, None).unwrap_err();
+            assert_eq!(e.kind, ErrorKind::Data);
+            assert!(e.message.starts_with(&format!("{n} samples")), "{e}");
+            assert!(e.message.contains("at least 2"), "{e}");
+        }
+        // A record emptied after construction (the fields are public) is an error too.
+        let u: Vec<Vec<f64>> = (0..3).map(|k| vec![k as f64]).collect();
+        let mut d = IoData::from_samples(names("u", 1), names("y", 1), &u, &u, None).unwrap();
+        d.u = DMatrix::zeros(1, 0);
+        d.y = DMatrix::zeros(1, 0);
+        assert!(
+            d.check_excitation()
+                .unwrap_err()
+                .message
+                .contains("0 samples")
+        );
     }
 
     #[test]

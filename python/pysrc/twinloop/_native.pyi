@@ -3,7 +3,7 @@
 Floating base (Pinocchio's JointModelFreeFlyer): q = [x, y, z, qx, qy, qz, qw, joints...]
 (nq = 7 + joints), v = [vx, vy, vz, wx, wy, wz, joints...] (nv = 6 + joints), linear then
 angular, both in the base frame. Arguments accept anything numpy converts to float64;
-a wrong shape or a non-finite entry raises ValueError naming the argument.
+a wrong shape, a non-finite entry or a complex array raises ValueError naming the argument.
 """
 
 from os import PathLike
@@ -29,81 +29,100 @@ def load(path_or_builtin: Union[str, PathLike[str]]) -> Description:
 class Description:
     """What a robot file says. Picklable (as URDF text from the lossless writer)."""
     @staticmethod
-    def from_urdf(text: str) -> Description: ...
+    def from_urdf(text: str) -> Description:
+        """A description from URDF text (ModelError naming line and element if invalid)."""
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """The robot's name (<robot name=...>)."""
     @property
     def total_mass(self) -> float:
         """Sum of link masses, kg."""
     @property
     def links(self) -> list[dict[str, Any]]:
-        """name, mass (kg), com [3] (m, link frame), inertia [3, 3] (kg m^2); None without <inertial>."""
+        """name, mass (kg), com [3] (m, link frame), inertia [3, 3] (kg m^2); None without <inertial>.
+        The arrays are read-only copies."""
     @property
     def joints(self) -> list[dict[str, Any]]:
-        """name, type, parent, child, axis, lower/upper (rad or m), effort, velocity, armature."""
+        """name, type, parent, child, axis, lower/upper (rad or m), effort (N m or N), velocity (rad/s or m/s),
+        armature (kg m^2 or kg)."""
     @property
     def findings(self) -> list[dict[str, Any]]:
         """Lint findings: severity, code, subject, name, message."""
     def lint(self) -> dict[str, Any]:
         """`twinloop model check --json`'s report."""
     def with_point_mass(self, link: str, mass: float, xyz: Sequence[float]) -> Description:
-        """A copy with mass (kg) added at xyz (m, link frame)."""
-    def to_urdf(self) -> str: ...
+        """A copy with mass (kg) added at xyz [3] (m, link frame), the link's inertial merged."""
+    def to_urdf(self) -> str:
+        """The description as URDF text (twinloop's lossless writer)."""
 
 class Model:
     """The compiled dynamics model (constant). Picklable."""
     @staticmethod
-    def from_description(description: Description, floating: bool = True) -> Model: ...
+    def from_description(description: Description, floating: bool = True) -> Model:
+        """Compile a description; floating=True gives it a free-flyer base (nq = 7 + joints, nv = 6 + joints),
+        False welds its root link to the world. ModelError for a description the dynamics cannot take."""
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """The robot's name."""
     @property
-    def nq(self) -> int: ...
+    def nq(self) -> int:
+        """Length of q (7 + joints for a floating base)."""
     @property
-    def nv(self) -> int: ...
+    def nv(self) -> int:
+        """Length of v (6 + joints for a floating base)."""
     @property
     def joint_names(self) -> list[str]:
         """Joint i has q index nq - len(joint_names) + i and v index nv - len(joint_names) + i."""
     @property
-    def frame_names(self) -> list[str]: ...
+    def frame_names(self) -> list[str]:
+        """Frames (description links, then extra frames), by index, for frame_jacobian."""
     @property
     def link_names(self) -> list[str]:
         """Description links: the blocks of static_com_regressor."""
     @property
-    def floating(self) -> bool: ...
+    def floating(self) -> bool:
+        """Whether the base is a free flyer."""
     @property
-    def total_mass(self) -> float: ...
+    def total_mass(self) -> float:
+        """Total mass, kg."""
     @property
     def gravity(self) -> F64:
-        """[3], m/s^2, world frame."""
+        """[3], m/s^2, world frame; read-only."""
     @property
-    def lower_position_limit(self) -> F64: ...
+    def lower_position_limit(self) -> F64:
+        """[joints] lower position limits, rad or m; read-only."""
     @property
-    def upper_position_limit(self) -> F64: ...
+    def upper_position_limit(self) -> F64:
+        """[joints] upper position limits, rad or m; read-only."""
     @property
-    def description(self) -> Description: ...
-    def joint_index(self, name: str) -> Optional[int]: ...
-    def frame_index(self, name: Union[str, int]) -> int: ...
+    def description(self) -> Description:
+        """The description this model was compiled from."""
+    def joint_index(self, name: str) -> Optional[int]:
+        """Index of a joint in joint_names, None if absent."""
+    def frame_index(self, name: Union[str, int]) -> int:
+        """Index of a frame (Pinocchio's getFrameId); ValueError if absent or out of range."""
     def neutral(self) -> F64:
-        """[nq]: base at the origin, identity orientation, joints 0."""
+        """[nq] (a new array): base at the origin, identity orientation, joints 0."""
 
 class Data:
     """Workspace of one model. Its arrays are read-only views (no copy), updated by every call."""
-    def __init__(self, model: Model) -> None: ...
+    def __init__(self, model: Model) -> None:
+        """A workspace for `model` (Pinocchio's Data(model)); it refuses any other model."""
     @property
     def tau(self) -> F64:
-        """[nv] from rnea / nonlinear_effects / compute_generalized_gravity."""
+        """[nv] N m (or N) from rnea / nonlinear_effects / compute_generalized_gravity."""
     @property
     def ddq(self) -> F64:
-        """[nv] from aba."""
+        """[nv] rad/s^2 (or m/s^2) from aba."""
     @property
     def M(self) -> F64:
-        """[nv, nv] from crba, symmetric."""
+        """[nv, nv] from crba, symmetric (kg m^2, kg, kg m)."""
     @property
     def J(self) -> F64:
-        """[6, nv] joint Jacobians (world) from compute_joint_jacobians."""
+        """[6, nv] joint Jacobians (world) from compute_joint_jacobians, rows linear then angular."""
     @property
     def Jcom(self) -> F64:
-        """[3, nv] from jacobian_center_of_mass."""
+        """[3, nv] from jacobian_center_of_mass (m/rad, world)."""
     @property
     def com(self) -> F64:
         """[3] m, world."""
@@ -115,25 +134,29 @@ class Data:
         """[3, 4 * links]."""
     @property
     def oMi(self) -> list[F64]:
-        """Body placements [4, 4] (copies)."""
+        """Body placements [4, 4] (homogeneous, m), after forward_kinematics; read-only copies."""
     @property
     def oMf(self) -> list[F64]:
-        """Frame placements [4, 4] (copies), after frames_forward_kinematics."""
+        """Frame placements [4, 4] (m), after frames_forward_kinematics; read-only copies."""
 
-def forward_kinematics(model: Model, data: Data, q: ArrayLike) -> None: ...
-def frames_forward_kinematics(model: Model, data: Data, q: ArrayLike) -> None: ...
+def forward_kinematics(model: Model, data: Data, q: ArrayLike) -> None:
+    """Body placements at q [nq] into data.oMi."""
+def frames_forward_kinematics(model: Model, data: Data, q: ArrayLike) -> None:
+    """Body and frame placements at q [nq] into data.oMi and data.oMf."""
 def center_of_mass(model: Model, data: Data, q: ArrayLike) -> F64:
     """[3] m, world (view of data.com)."""
 def jacobian_center_of_mass(model: Model, data: Data, q: ArrayLike) -> F64:
-    """[3, nv] (view of data.Jcom)."""
+    """[3, nv] (view of data.Jcom; also sets data.com)."""
 def compute_joint_jacobians(model: Model, data: Data, q: ArrayLike) -> F64:
     """[6, nv] (view of data.J)."""
 def frame_jacobian(model: Model, data: Data, q: ArrayLike, frame: Union[str, int], reference: Reference = "LOCAL") -> F64:
     """[6, nv], rows linear then angular (a new array)."""
 def rnea(model: Model, data: Data, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> F64:
-    """tau [nv] = M a + C v + g (view of data.tau)."""
-def nonlinear_effects(model: Model, data: Data, q: ArrayLike, v: ArrayLike) -> F64: ...
-def compute_generalized_gravity(model: Model, data: Data, q: ArrayLike) -> F64: ...
+    """tau [nv] = M a + C v + g (view of data.tau); q [nq], v [nv] (rad/s), a [nv] (rad/s^2)."""
+def nonlinear_effects(model: Model, data: Data, q: ArrayLike, v: ArrayLike) -> F64:
+    """C(q, v) v + g(q) [nv], N m (view of data.tau); q [nq], v [nv] rad/s."""
+def compute_generalized_gravity(model: Model, data: Data, q: ArrayLike) -> F64:
+    """g(q) [nv], N m (view of data.tau)."""
 def crba(model: Model, data: Data, q: ArrayLike) -> F64:
     """M [nv, nv] (view of data.M)."""
 def aba(model: Model, data: Data, q: ArrayLike, v: ArrayLike, tau: ArrayLike) -> F64:
@@ -142,51 +165,79 @@ def joint_torque_regressor(model: Model, data: Data, q: ArrayLike, v: ArrayLike,
     """Y [nv, 10 * bodies]; rnea = Y @ body_parameters(model)."""
 def static_com_regressor(model: Model, data: Data, q: ArrayLike) -> F64:
     """G [3, 4 * links]; total_mass * com = G @ link_static_parameters(model)."""
-def body_parameters(model: Model) -> F64: ...
-def link_static_parameters(model: Model) -> F64: ...
+def body_parameters(model: Model) -> F64:
+    """[10 * bodies] per body (m, m c_x, m c_y, m c_z, Ixx, Ixy, Iyy, Ixz, Iyz, Izz) (kg, kg m, kg m^2), the
+    vector joint_torque_regressor multiplies; the floating base first."""
+def link_static_parameters(model: Model) -> F64:
+    """[4 * links] per description link (m, m c_x, m c_y, m c_z) (kg, kg m), the vector static_com_regressor
+    multiplies."""
 
 def rnea_batch(model: Model, Q: ArrayLike, V: ArrayLike, A: ArrayLike, threads: Optional[int] = None) -> F64:
-    """[N, nq], [N, nv], [N, nv] -> [N, nv], GIL released, on `threads` threads (default all cores)."""
-def aba_batch(model: Model, Q: ArrayLike, V: ArrayLike, TAU: ArrayLike, threads: Optional[int] = None) -> F64: ...
-def nonlinear_effects_batch(model: Model, Q: ArrayLike, V: ArrayLike, threads: Optional[int] = None) -> F64: ...
+    """[N, nq], [N, nv], [N, nv] -> tau [N, nv], GIL released, on `threads` threads (default all cores)."""
+def aba_batch(model: Model, Q: ArrayLike, V: ArrayLike, TAU: ArrayLike, threads: Optional[int] = None) -> F64:
+    """Q [N, nq], V [N, nv] (rad/s), TAU [N, nv] (N m) -> ddq [N, nv] (rad/s^2); ValueError naming the lowest row
+    and the joint where M(q) is singular, as aba."""
+def nonlinear_effects_batch(model: Model, Q: ArrayLike, V: ArrayLike, threads: Optional[int] = None) -> F64:
+    """Q [N, nq], V [N, nv] (rad/s) -> C v + g [N, nv] (N m)."""
 def crba_batch(model: Model, Q: ArrayLike, threads: Optional[int] = None) -> F64:
-    """[N, nv, nv]."""
+    """Q [N, nq] -> M [N, nv, nv], full and symmetric."""
 def center_of_mass_batch(model: Model, Q: ArrayLike, threads: Optional[int] = None) -> F64:
-    """[N, 3]."""
-def jacobian_center_of_mass_batch(model: Model, Q: ArrayLike, threads: Optional[int] = None) -> F64: ...
-def compute_joint_jacobians_batch(model: Model, Q: ArrayLike, threads: Optional[int] = None) -> F64: ...
-def frame_jacobian_batch(model: Model, Q: ArrayLike, frame: Union[str, int], reference: Reference = "LOCAL", threads: Optional[int] = None) -> F64: ...
-def joint_torque_regressor_batch(model: Model, Q: ArrayLike, V: ArrayLike, A: ArrayLike, threads: Optional[int] = None) -> F64: ...
-def static_com_regressor_batch(model: Model, Q: ArrayLike, threads: Optional[int] = None) -> F64: ...
+    """Q [N, nq] -> CoM [N, 3], m, world."""
+def jacobian_center_of_mass_batch(model: Model, Q: ArrayLike, threads: Optional[int] = None) -> F64:
+    """Q [N, nq] -> Jcom [N, 3, nv], world."""
+def compute_joint_jacobians_batch(model: Model, Q: ArrayLike, threads: Optional[int] = None) -> F64:
+    """Q [N, nq] -> J [N, 6, nv], world, rows linear then angular."""
+def frame_jacobian_batch(model: Model, Q: ArrayLike, frame: Union[str, int], reference: Reference = "LOCAL", threads: Optional[int] = None) -> F64:
+    """Q [N, nq] -> the frame's Jacobian [N, 6, nv] in `reference`, rows linear then angular."""
+def joint_torque_regressor_batch(model: Model, Q: ArrayLike, V: ArrayLike, A: ArrayLike, threads: Optional[int] = None) -> F64:
+    """Q [N, nq], V, A [N, nv] -> Y [N, nv, 10 * bodies]."""
+def static_com_regressor_batch(model: Model, Q: ArrayLike, threads: Optional[int] = None) -> F64:
+    """Q [N, nq] -> G [N, 3, 4 * links]."""
 
 class Simulator:
     """config: dt (s, 1e-3), servo ("auto", "rx28", "rx64", "xm430", "passive", "torque"), ground, stand."""
-    def __init__(self, robot: RobotSpec, config: Optional[dict[str, Any]] = None) -> None: ...
-    def step(self, n: int = 1) -> None: ...
+    def __init__(self, robot: RobotSpec, config: Optional[dict[str, Any]] = None) -> None:
+        """A floating-base robot on its servos, standing on the ground at the neutral pose (stand=True);
+        ValueError for a bad config entry or a robot with nothing to stand on."""
+    def step(self, n: int = 1) -> None:
+        """Advance n steps of dt, GIL released; SimulationError if the state diverges."""
     @property
-    def time(self) -> float: ...
+    def time(self) -> float:
+        """Simulated time, s."""
     @property
-    def dt(self) -> float: ...
+    def dt(self) -> float:
+        """Time step, s."""
     @property
-    def nq(self) -> int: ...
+    def nq(self) -> int:
+        """Length of q (7 + joints)."""
     @property
-    def nv(self) -> int: ...
+    def nv(self) -> int:
+        """Length of v (6 + joints)."""
     @property
-    def joint_names(self) -> list[str]: ...
+    def joint_names(self) -> list[str]:
+        """Joints in the order of goals, applied and q[7:]."""
     @property
-    def q(self) -> F64: ...
+    def q(self) -> F64:
+        """[nq]: x, y, z (m), qx, qy, qz, qw, joints (rad); a read-only copy (set_state changes it)."""
     @property
-    def v(self) -> F64: ...
+    def v(self) -> F64:
+        """[nv]: linear (m/s), angular (rad/s, base frame), joints (rad/s); a read-only copy."""
     def get_state(self) -> F64:
-        """[nq + nv]."""
-    def set_state(self, q: ArrayLike, v: ArrayLike) -> None: ...
+        """[nq + nv]: q then v (a new array)."""
+    def set_state(self, q: ArrayLike, v: ArrayLike) -> None:
+        """Set q [nq] and v [nv], time kept; contacts released."""
     @property
-    def goals(self) -> F64: ...
+    def goals(self) -> F64:
+        """[joints] joint goals (rad for servos, N m for torque actuators); a read-only copy: assign the
+        whole array to change them."""
     @goals.setter
-    def goals(self, goals: ArrayLike) -> None: ...
+    def goals(self, goals: ArrayLike) -> None:
+        """Set every joint's goal, [joints] (rad, or N m for torque actuators)."""
     @property
-    def applied(self) -> F64: ...
-    def center_of_mass(self) -> F64: ...
+    def applied(self) -> F64:
+        """[joints] torque each actuator applied in the last step, N m; read-only."""
+    def center_of_mass(self) -> F64:
+        """[3] CoM now, m, world (a new array)."""
     def sensors(self) -> dict[str, Any]:
         """time, positions, velocities, efforts, imu_gyro, imu_accel, imu_orientation, foot_names, foot_force, foot_cop."""
     def rollout(self, q0: ArrayLike, goals: ArrayLike, v0: Optional[ArrayLike] = None, threads: Optional[int] = None) -> F64:
@@ -199,20 +250,29 @@ def tipover(robot: Optional[RobotSpec] = None, ramp: float = 0.5, slow_ramp: flo
             ankle_slope: float = 32.0, creeps: int = 2, baud: int = 1_000_000, timeout_ms: float = 10.0, retries: int = 2) -> dict[str, Any]:
     """`twinloop experiment tipover --json`'s fields: on the simulator, or with `port` and `map` on a robot over its bus
     (`experiment tipover --port --map`; fewer than four `directions` give robot, port and each direction's angles).
-    A serial port needs yes=True; a silent or faulty servo raises OSError, the servos left holding."""
-def random_changes(robot: RobotSpec, n: int, seed: int = 1, mass_range: tuple[float, float] = (0.05, 0.5)) -> list[dict[str, Any]]: ...
+    Ramps in deg/s; add_mass: (kg, link, xyz m in the link frame). A serial port needs yes=True; a silent or faulty
+    servo raises OSError, the servos left holding."""
+def random_changes(robot: RobotSpec, n: int, seed: int = 1, mass_range: tuple[float, float] = (0.05, 0.5)) -> list[dict[str, Any]]:
+    """n hardware changes {link, mass (kg, within mass_range), xyz [3] (m, link frame, inside its collision outline)}
+    drawn from seed."""
 def tipover_changes(robot: RobotSpec, changes: list[dict[str, Any]], simulate: bool = False, ramp: float = 0.5,
-                    slow_ramp: float = 0.05, threads: Optional[int] = None) -> list[dict[str, Any]]: ...
+                    slow_ramp: float = 0.05, threads: Optional[int] = None) -> list[dict[str, Any]]:
+    """Per change: change, static_deg [4] (deg: forward, backward, left, right), com [3] (m, standing frame),
+    total_mass (kg), simulated_deg [4] (deg, with simulate=True; ramps in deg/s) or None; GIL released."""
 def static_poses(robot: RobotSpec, count: int = 172, cop_noise: float = 0.0, joint_noise: float = 0.0, seed: int = 1) -> dict[str, Any]:
-    """q [P, nq], cop [P, 2] (m), category [P]."""
+    """q [P, nq], cop [P, 2] (m), category [P]; cop_noise m, joint_noise rad."""
 def identify_static(robot: RobotSpec, q: ArrayLike, cop: ArrayLike, total_mass: float, links: Optional[list[str]] = None,
                     cop_sigma: float = 1e-3, com_margin: float = 0.03, category: Optional[list[Optional[str]]] = None) -> dict[str, Any]:
-    """`twinloop identify static --json`'s schema, cop_sigma, com_margin and result."""
+    """`twinloop identify static --json`'s schema, cop_sigma, com_margin and result; q [P, nq], cop [P, 2] (m),
+    total_mass kg, cop_sigma and com_margin m."""
 def training_samples(robot: RobotSpec, start: int, stop: int, seed: int = 1, mass_range: tuple[float, float] = (0.05, 0.5),
-                     noise_deg: float = 0.0, threads: Optional[int] = None) -> list[dict[str, Any]]: ...
+                     noise_deg: float = 0.0, threads: Optional[int] = None) -> list[dict[str, Any]]:
+    """Samples start..stop of `twinloop adapt train`'s set (the same draws however split): change, part,
+    static fall angles (deg, true and noisy), CoM (m), total_mass (kg), feet and the three-mass LIPM."""
 def adapt(prior: RobotSpec, tipover: dict[str, Any], total_mass: Optional[float] = None, host: Optional[str] = None,
           merge: bool = False, resolution: float = 0.05, check: bool = False) -> tuple[dict[str, Any], Optional[Description]]:
-    """`twinloop adapt --tipover FILE --json`'s report and the adapted description (None if not fixed)."""
+    """`twinloop adapt --tipover FILE --json`'s report and the adapted description (None if not fixed);
+    total_mass kg, resolution deg."""
 def fit_compliant(data: Union[str, PathLike[str]], plant: Union[str, PathLike[str]],
                   method: Literal["lm", "cmaes", "power"] = "lm", params: Optional[Union[str, Sequence[str]]] = None,
                   start: Optional[Sequence[float]] = None, max_evaluations: Optional[int] = None, sigma: float = 0.05,
@@ -222,18 +282,22 @@ def fit_compliant(data: Union[str, PathLike[str]], plant: Union[str, PathLike[st
     to a CSV of t, xr, zr, x, z, phase; returns the CLI's fields (params, mse_before/after in m^2, identifiability, ...)."""
 def sysid_arx(u: ArrayLike, y: ArrayLike, na: int = 2, nb: int = 2, nk: int = 1, u_val: Optional[ArrayLike] = None,
               y_val: Optional[ArrayLike] = None, sample_time: Optional[float] = None, input_names: Optional[list[str]] = None,
-              output_names: Optional[list[str]] = None, kstep: int = 1, lags: int = 25) -> dict[str, Any]:
-    """u [N, nu], y [N, ny] -> `twinloop identify arx --json`'s fields."""
+              output_names: Optional[list[str]] = None, kstep: int = 1, lags: int = 25, detrend: bool = True) -> dict[str, Any]:
+    """u [N, nu], y [N, ny] (N >= 2), sample_time s -> `twinloop identify arx --json`'s fields; detrend as the CLI
+    (False: --no-detrend)."""
 def sysid_ss(u: ArrayLike, y: ArrayLike, order: int, method: Literal["n4sid", "pem", "arx-reduce-pem"] = "pem",
              u_val: Optional[ArrayLike] = None, y_val: Optional[ArrayLike] = None, sample_time: Optional[float] = None,
              na: int = 10, nb: int = 10, nk: int = 1, max_iter: int = 100, feedthrough: bool = False,
              estimate_x0: bool = False, focus: Literal["prediction", "simulation"] = "prediction", kstep: int = 1,
-             lags: int = 25) -> dict[str, Any]:
-    """u [N, nu], y [N, ny] -> `twinloop identify ss --json`'s fields."""
+             lags: int = 25, detrend: bool = True, input_names: Optional[list[str]] = None,
+             output_names: Optional[list[str]] = None) -> dict[str, Any]:
+    """u [N, nu], y [N, ny] (N >= 2), sample_time s -> `twinloop identify ss --json`'s fields."""
 
 class Bus:
     """A Dynamixel bus (serial device, pty path or tcp:HOST:PORT); OSError on port and servo errors."""
-    def __init__(self, port: str, baud: int = 1_000_000, timeout_ms: float = 10.0, retries: int = 2) -> None: ...
+    def __init__(self, port: str, baud: int = 1_000_000, timeout_ms: float = 10.0, retries: int = 2) -> None:
+        """Open the port at baud (bit/s); timeout_ms: the wait for a reply (ms); retries: resends of an
+        unanswered packet."""
     def scan(self, protocol: Optional[int] = None, ids: Optional[tuple[int, int]] = None) -> list[dict[str, Any]]:
         """`twinloop link scan --json`: protocol, id, model, model_number, firmware."""
     def read(self, id: int, protocol: int, registers: Optional[list[str]] = None) -> dict[str, Any]:
@@ -252,9 +316,15 @@ class Bus:
 class VirtualRobotServer:
     """A simulated robot behind the servo protocol on a new pty (`twinloop serve`); a context manager."""
     def __init__(self, robot: Optional[RobotSpec] = None, mapping: str = "builtin:km20", realtime_factor: float = 1.0,
-                 catch_falls: bool = False, ground_sink: Optional[float] = None) -> None: ...
+                 catch_falls: bool = False, ground_sink: Optional[float] = None) -> None:
+        """Serve `robot` (default km20) through `mapping`; realtime_factor: simulated s per wall-clock s;
+        catch_falls: stand a fallen robot up; ground_sink: the floor's give under the robot's weight, m (1 mm)."""
     @property
-    def path(self) -> str: ...
-    def close(self) -> None: ...
-    def __enter__(self) -> VirtualRobotServer: ...
-    def __exit__(self, *args: Any) -> None: ...
+    def path(self) -> str:
+        """The pty to open a Bus on."""
+    def close(self) -> None:
+        """Stop serving (OSError if the server failed)."""
+    def __enter__(self) -> VirtualRobotServer:
+        """The server itself."""
+    def __exit__(self, *args: Any) -> None:
+        """close()."""

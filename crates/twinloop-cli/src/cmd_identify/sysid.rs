@@ -192,13 +192,6 @@ fn load(path: &Path, a: &DataArgs) -> Result<IoData, CliError> {
         }
         d.sample_time = Some(dt);
     }
-    if d.len() < 2 {
-        return Err(CliError::new(format!(
-            "{}: {} data rows: identification needs a record",
-            path.display(),
-            d.len()
-        )));
-    }
     Ok(d)
 }
 
