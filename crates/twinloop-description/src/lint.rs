@@ -33,7 +33,7 @@
 //! | `zero-effort-or-velocity` | warning | an effort or velocity limit <= 0 |
 //! | `non-unit-axis` | warning | a moving joint's axis norm differs from 1 by more than [`AXIS_NORM_TOLERANCE`] (twinloop normalises it; other tools may not) |
 //! | `mimic-joint` | warning / info | a `<mimic>`: twinloop's dynamics treats the joint as independent (info when the joint is fixed: no effect); also a warning when it names a joint the file does not have |
-//! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites, composites and flexcomps, and elements MuJoCo's schema does not have (a misspelt `<geon>`) |
+//! | `unmodeled-element` | warning (error with [`LintReport::strict`]) | an element of the file that acts on the physics but that twinloop's rigid-body dynamics leave out: MJCF tendons, equality constraints, actuators that drive no joint, sensors at sites, composites and flexcomps, and elements MuJoCo's schema does not have (a misspelt `<geon>`); in a URDF every element the reader passes over (`urdf` module's `schema`: a misspelt `<colision>`, a second `<inertial>`) |
 //! | `ignored-detail` | warning | a visual-only detail the reader read past: a URDF `<texture/>` without a file, a mesh `scale` with a fourth number |
 //! | `total-mass` | info | the robot's total mass, as a scale would weigh it |
 //! | `unit-scale` | error | lengths in millimetres (the robot spans more than 20 m) or masses in grams (over 100 kg and denser than water over its size cubed): see [`unit_scale`] |
