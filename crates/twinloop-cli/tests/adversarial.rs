@@ -99,6 +99,9 @@ const CASES: &[Case] = &[
     // experiment
     case("experiment tipover", "--robot {km20} --ramp 0", "--ramp"),
     case("experiment tipover", "--robot {km20} --ramp inf", "--ramp"),
+    // Valid but hours of simulated time: refused, saying why and what to use.
+    case("experiment tipover", "--robot {km20} --ramp 0.001", "--ramp&&12.5 h&&--ramp 0.05"),
+    case("experiment tipover", "--robot {km20} --slow-ramp 0.0001", "--slow-ramp&&--slow-ramp 0.005"),
     case("experiment tipover", "--robot {km20} --add-mass 0.3@nolink:0,0,0", "nolink"),
     case("experiment tipover", "--robot {trunc_urdf}", "trunc.urdf"),
     case("experiment tipover", "--robot {km20} --add-mass 300@torso:0.05,0,0", "--add-mass&&grams"),
