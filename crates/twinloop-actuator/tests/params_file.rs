@@ -79,7 +79,10 @@ fn files_round_trip_and_errors_name_the_field() {
         "{e}"
     );
     assert_eq!(
-        err("[servo]\nmodel\n").split(": ").take(2).collect::<Vec<_>>(),
+        err("[servo]\nmodel\n")
+            .split(": ")
+            .take(2)
+            .collect::<Vec<_>>(),
         ["p.toml", "line 2, column 6"]
     );
 }

@@ -443,7 +443,8 @@ mod tests {
     fn every_numeric_option_refuses_nan_and_negatives() {
         use clap::error::ErrorKind;
         fn allow_negative(c: clap::Command) -> clap::Command {
-            c.allow_negative_numbers(true).mut_subcommands(allow_negative)
+            c.allow_negative_numbers(true)
+                .mut_subcommands(allow_negative)
         }
         let mut cli = allow_negative(Cli::command());
         cli.build();
@@ -471,10 +472,17 @@ mod tests {
                     words.push(format!("--{long}"));
                     words.push(value.to_string());
                     match cli.clone().try_get_matches_from(&words) {
-                        Err(e) if matches!(e.kind(), ErrorKind::ValueValidation | ErrorKind::InvalidValue) => {
+                        Err(e)
+                            if matches!(
+                                e.kind(),
+                                ErrorKind::ValueValidation | ErrorKind::InvalidValue
+                            ) =>
+                        {
                             let text = e.to_string();
                             if !text.contains(&format!("--{long}")) {
-                                failures.push(format!("{name} {value}: the error does not name the option: {text}"));
+                                failures.push(format!(
+                                    "{name} {value}: the error does not name the option: {text}"
+                                ));
                             }
                         }
                         Err(e) => failures.push(format!(
@@ -494,7 +502,12 @@ mod tests {
                 "NEGATIVE_ALLOWED names {c} --{o} ({why}), which the CLI does not have"
             );
         }
-        assert!(failures.is_empty(), "{} numeric option values taken that should not be:\n{}", failures.len(), failures.join("\n"));
+        assert!(
+            failures.is_empty(),
+            "{} numeric option values taken that should not be:\n{}",
+            failures.len(),
+            failures.join("\n")
+        );
     }
 
     #[test]

@@ -99,7 +99,7 @@ fn is_command(line: &str) -> bool {
     let line = line.strip_prefix("$ ").unwrap_or(line);
     let first = line
         .split_whitespace()
-        .find(|w| !(w.contains('=') && !w.starts_with('-')))
+        .find(|w| !w.contains('=') || w.starts_with('-'))
         .unwrap_or("");
     COMMANDS.contains(&first)
 }
@@ -418,7 +418,11 @@ fn command_lines_and_exit_codes_are_recognised() {
         unlabelled_command_blocks(md),
         [
             (1, String::new(), "twinloop a".to_string()),
-            (10, "text".to_string(), "WINDOW=1,2 python3 x.py".to_string()),
+            (
+                10,
+                "text".to_string(),
+                "WINDOW=1,2 python3 x.py".to_string()
+            ),
         ]
     );
     assert!(is_command("$ cargo test") && !is_command("twinloopish") && !is_command(""));

@@ -50,13 +50,32 @@ fn unknown_and_repeated_elements_are_reported_with_their_lines() {
     assert!(!notes[1].2.contains("did you mean"), "{}", notes[1].2);
     assert!(notes[2].2.contains("a second <inertial>"), "{}", notes[2].2);
     assert!(notes[3].2.contains("a second shape"), "{}", notes[3].2);
-    assert!(notes[4].2.contains("did you mean <origin>?"), "{}", notes[4].2);
-    assert!(notes[5].2.contains("did you mean <joint>?"), "{}", notes[5].2);
-    assert!(notes[6].2.contains("<frobnicate> is not a URDF element of <robot>"));
+    assert!(
+        notes[4].2.contains("did you mean <origin>?"),
+        "{}",
+        notes[4].2
+    );
+    assert!(
+        notes[5].2.contains("did you mean <joint>?"),
+        "{}",
+        notes[5].2
+    );
+    assert!(
+        notes[6]
+            .2
+            .contains("<frobnicate> is not a URDF element of <robot>")
+    );
     // The first inertial is the one read, and the second link's at the link origin.
     assert_eq!(robot.link("a").unwrap().mass(), 1.0);
     assert_eq!(
-        robot.link("b").unwrap().inertial.as_ref().unwrap().origin.xyz,
+        robot
+            .link("b")
+            .unwrap()
+            .inertial
+            .as_ref()
+            .unwrap()
+            .origin
+            .xyz,
         [0.0; 3]
     );
 

@@ -82,9 +82,10 @@ fn check(label: &str, report: &StudyReport) {
 fn km20_tips_where_the_model_says() {
     let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
     let mut told = Vec::new();
-    let report =
-        run_study_with_progress(&robot, &StudyOptions::default(), &mut |w| told.push(w.to_string()))
-            .unwrap();
+    let report = run_study_with_progress(&robot, &StudyOptions::default(), &mut |w| {
+        told.push(w.to_string())
+    })
+    .unwrap();
     check("km20", &report);
     assert_eq!(told.len(), STUDY_RUNS, "{told:?}");
     for (k, d) in ["forward", "backward", "left", "right"].iter().enumerate() {
@@ -98,7 +99,11 @@ fn km20_tips_where_the_model_says() {
             .unwrap();
         let tip = report.direction(twinloop_experiments::tipover::Direction::ALL[k]);
         let ahead = tip.commanded_deg - from;
-        assert!(ahead > 0.2 && ahead < 0.7, "{creep}: tip {}", tip.commanded_deg);
+        assert!(
+            ahead > 0.2 && ahead < 0.7,
+            "{creep}: tip {}",
+            tip.commanded_deg
+        );
     }
 }
 
