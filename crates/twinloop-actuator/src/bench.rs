@@ -48,7 +48,7 @@ impl Pendulum {
     pub fn parse(text: &str, file: &str) -> Result<Pendulum, ActuatorError> {
         let mut doc: toml::Table = text
             .parse()
-            .map_err(|e: toml::de::Error| ActuatorError::new(file, "", e.message().to_string()))?;
+            .map_err(|e: toml::de::Error| ActuatorError::toml(file, text, &e))?;
         let mut get = |key: &str| -> Result<f64, ActuatorError> {
             let v = doc.remove(key).ok_or_else(|| {
                 ActuatorError::new(file, key, "missing (mass kg, length m, arm_inertia kg m^2)")

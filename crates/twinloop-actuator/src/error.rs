@@ -22,6 +22,23 @@ impl ActuatorError {
     }
 }
 
+impl ActuatorError {
+    /// A TOML syntax error in `text` (the file `file`), placed at its line and
+    /// column (1-based) as the parser's span gives them.
+    pub fn toml(file: &str, text: &str, e: &toml::de::Error) -> Self {
+        let place = match e.span() {
+            Some(span) => {
+                let before = &text[..span.start.min(text.len())];
+                let line = before.matches('\n').count() + 1;
+                let column = before.rsplit('\n').next().unwrap_or("").chars().count() + 1;
+                format!("line {line}, column {column}")
+            }
+            None => String::new(),
+        };
+        ActuatorError::new(file, place, e.message().trim())
+    }
+}
+
 impl fmt::Display for ActuatorError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match (self.file.is_empty(), self.place.is_empty()) {

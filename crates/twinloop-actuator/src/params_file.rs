@@ -43,7 +43,7 @@ impl ServoParams {
     pub fn parse(text: &str, file: &str) -> Result<ServoParams, ActuatorError> {
         let doc: toml::Table = text
             .parse()
-            .map_err(|e: toml::de::Error| ActuatorError::new(file, "", e.message().to_string()))?;
+            .map_err(|e: toml::de::Error| ActuatorError::toml(file, text, &e))?;
         for key in doc.keys() {
             if !matches!(key.as_str(), "servo" | "params" | "uncertainty") {
                 return Err(ActuatorError::new(

@@ -70,4 +70,19 @@ fn files_round_trip_and_errors_name_the_field() {
             .to_string()
             .starts_with("load.toml: mass: must be a number")
     );
+    // Broken TOML: the line and column of the fault (the parser's span), not only
+    // what it is. Line 3 column 8 is the unterminated value; line 2 column 1 a key
+    // with no `=`.
+    let e = load("mass = 0.5\nlength = 0.1\narm_in = [0.001\n").unwrap_err();
+    assert!(
+        e.to_string().starts_with("load.toml: line 3, column "),
+        "{e}"
+    );
+    assert_eq!(
+        err("[servo]\nmodel\n")
+            .split(": ")
+            .take(2)
+            .collect::<Vec<_>>(),
+        ["p.toml", "line 2, column 6"]
+    );
 }

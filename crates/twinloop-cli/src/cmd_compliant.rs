@@ -67,7 +67,7 @@ pub struct StiffnessArgs {
     #[arg(long, value_enum, default_value_t = Side::Left)]
     pub support: Side,
     /// Knee bend of the crouched pose, rad.
-    #[arg(long, default_value_t = 0.5, value_parser = crate::common::finite)]
+    #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]
     pub knee_bend: f64,
     /// Joint value override, NAME=RAD (repeatable).
     #[arg(long = "q", value_name = "NAME=RAD")]

@@ -67,7 +67,7 @@ pub struct TimingArgs {
     #[arg(long, default_value_t = SEED_CYCLE_PERIOD, value_parser = crate::common::positive)]
     pub cycle_period: f64,
     /// Factor on every offset (1 = the seed's numbers).
-    #[arg(long, default_value_t = 1.0, value_parser = crate::common::finite)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::common::non_negative)]
     pub amplitude: f64,
 }
 
@@ -108,7 +108,7 @@ pub struct ZmpArgs {
     #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]
     pub com_height: f64,
     /// Lateral distance between the foot centres, m.
-    #[arg(long, default_value_t = 0.14, value_parser = crate::common::finite)]
+    #[arg(long, default_value_t = 0.14, value_parser = crate::common::positive)]
     pub step_width: f64,
     /// Standing time before the first and after the last step, s.
     #[arg(long, default_value_t = 1.0, value_parser = crate::common::non_negative)]

@@ -105,7 +105,7 @@ pub struct PortArgs {
     #[arg(long, value_name = "PORT")]
     pub port: Option<String>,
     /// Bit rate
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = crate::common::baud)]
     pub baud: u32,
     /// Allowance per reply on top of its wire time, ms (USB latency, return delay)
     #[arg(long, default_value_t = 10.0, value_parser = crate::common::positive)]
@@ -199,7 +199,7 @@ pub struct PlanArgs {
     #[arg(long, value_parser = parse_protocol)]
     pub protocol: Protocol,
     /// Bit rate
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = crate::common::baud)]
     pub baud: u32,
     /// Return Delay Time, us (register value x 2; factory setting 500)
     #[arg(long, default_value_t = 0.0, value_parser = crate::common::non_negative)]

@@ -66,7 +66,7 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     #[arg(long, value_name = "PATH")]
     pub link: Option<PathBuf>,
     /// Bit rate whose wire time (and each servo's Return Delay Time) is emulated
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = crate::common::baud)]
     pub baud: u32,
     /// Answer at once instead of emulating wire time
     #[arg(long)]

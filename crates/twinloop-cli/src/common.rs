@@ -246,6 +246,26 @@ pub fn finite(s: &str) -> Result<f64, String> {
     parse_number(s, |_| true, "a finite number is needed (not NaN or inf)")
 }
 
+/// A bus bit rate a Dynamixel servo can run at ([`twinloop_link::servo_model::BAUD_RANGE`]):
+/// 0 would plan a cycle of infinite length or serve a bus that never answers.
+pub fn baud(s: &str) -> Result<u32, String> {
+    let range = twinloop_link::servo_model::BAUD_RANGE;
+    let n: u32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a whole number of bit/s"))?;
+    if range.contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!(
+            "{n} is out of range: a Dynamixel bit rate, {} to {} bit/s (1000000 is the \
+             factory setting of most)",
+            range.start(),
+            range.end()
+        ))
+    }
+}
+
 /// A count of 1 or more (cycles, steps, rounds, samples): 0 would do nothing and
 /// say nothing.
 pub fn count(s: &str) -> Result<usize, String> {
@@ -317,6 +337,11 @@ mod tests {
         assert!(non_negative("-1e-9").is_err());
         assert_eq!(finite("-3"), Ok(-3.0));
         assert!(finite("nan").is_err() && finite("-inf").is_err());
+        assert_eq!(baud("1000000"), Ok(1_000_000));
+        assert_eq!(baud("57600"), Ok(57_600));
+        for bad in ["0", "-1", "7999", "10500001", "1e6", "nan"] {
+            assert!(baud(bad).is_err(), "{bad}");
+        }
         assert_eq!(count("3"), Ok(3));
         assert!(count("0").is_err() && count("-1").is_err() && count("1.5").is_err());
     }

@@ -387,6 +387,129 @@ mod tests {
         assert!(failures.is_empty(), "{}", failures.join("\n"));
     }
 
+    /// Numeric options that take a negative number on purpose (a signed quantity: an
+    /// offset, an angle either way), with why. Every other numeric option refuses one.
+    const NEGATIVE_ALLOWED: &[(&str, &str, &str)] = &[
+        ("gait zmp", "step-length", "a negative step walks backward"),
+        (
+            "experiment compliant-walk",
+            "step-length",
+            "a negative step walks backward",
+        ),
+    ];
+
+    /// Whether an option's values are numbers (its value parser gives a number type).
+    fn is_numeric(arg: &clap::Arg) -> bool {
+        use std::any::TypeId as Id;
+        let t = arg.get_value_parser().type_id();
+        [
+            Id::of::<f64>(),
+            Id::of::<f32>(),
+            Id::of::<u8>(),
+            Id::of::<u16>(),
+            Id::of::<u32>(),
+            Id::of::<u64>(),
+            Id::of::<usize>(),
+            Id::of::<i8>(),
+            Id::of::<i16>(),
+            Id::of::<i32>(),
+            Id::of::<i64>(),
+            Id::of::<isize>(),
+        ]
+        .iter()
+        .any(|id| t == *id)
+    }
+
+    /// Every leaf command's path (`["model", "info"]`) and its clap command.
+    fn leaves(cmd: &clap::Command, path: Vec<String>, out: &mut Vec<(Vec<String>, clap::Command)>) {
+        if !cmd.has_subcommands() {
+            out.push((path, cmd.clone()));
+            return;
+        }
+        for sub in cmd.get_subcommands() {
+            if sub.get_name() != "help" {
+                let mut p = path.clone();
+                p.push(sub.get_name().to_string());
+                leaves(sub, p, out);
+            }
+        }
+    }
+
+    /// Every option that takes a number refuses NaN and (unless [`NEGATIVE_ALLOWED`]
+    /// says why not) a negative number while the command line is parsed, before any
+    /// work: a new numeric option gets this check without a new test. The command line
+    /// is parsed as `main` parses it (`-1` taken as a value, see `parse_args`).
+    #[test]
+    fn every_numeric_option_refuses_nan_and_negatives() {
+        use clap::error::ErrorKind;
+        fn allow_negative(c: clap::Command) -> clap::Command {
+            c.allow_negative_numbers(true)
+                .mut_subcommands(allow_negative)
+        }
+        let mut cli = allow_negative(Cli::command());
+        cli.build();
+        let mut all = Vec::new();
+        leaves(&cli, vec![], &mut all);
+        let (mut failures, mut checked) = (Vec::new(), 0);
+        for (path, cmd) in &all {
+            for arg in cmd.get_arguments() {
+                if !arg.get_action().takes_values() || !is_numeric(arg) {
+                    continue;
+                }
+                let Some(long) = arg.get_long() else { continue };
+                checked += 1;
+                let name = format!("{} --{long}", path.join(" "));
+                let allowed = NEGATIVE_ALLOWED
+                    .iter()
+                    .any(|(c, o, _)| *c == path.join(" ") && *o == long);
+                let mut bad = vec!["nan", "NaN", "inf"];
+                if !allowed {
+                    bad.extend(["-1", "-0.5"]);
+                }
+                for value in bad {
+                    let mut words = vec!["twinloop".to_string()];
+                    words.extend(path.iter().cloned());
+                    words.push(format!("--{long}"));
+                    words.push(value.to_string());
+                    match cli.clone().try_get_matches_from(&words) {
+                        Err(e)
+                            if matches!(
+                                e.kind(),
+                                ErrorKind::ValueValidation | ErrorKind::InvalidValue
+                            ) =>
+                        {
+                            let text = e.to_string();
+                            if !text.contains(&format!("--{long}")) {
+                                failures.push(format!(
+                                    "{name} {value}: the error does not name the option: {text}"
+                                ));
+                            }
+                        }
+                        Err(e) => failures.push(format!(
+                            "{name} {value}: taken (then: {})",
+                            e.to_string().lines().next().unwrap_or("")
+                        )),
+                        Ok(_) => failures.push(format!("{name} {value}: taken")),
+                    }
+                }
+            }
+        }
+        assert!(checked > 100, "only {checked} numeric options found");
+        for (c, o, why) in NEGATIVE_ALLOWED {
+            assert!(
+                all.iter().any(|(p, cmd)| p.join(" ") == *c
+                    && cmd.get_arguments().any(|a| a.get_long() == Some(o))),
+                "NEGATIVE_ALLOWED names {c} --{o} ({why}), which the CLI does not have"
+            );
+        }
+        assert!(
+            failures.is_empty(),
+            "{} numeric option values taken that should not be:\n{}",
+            failures.len(),
+            failures.join("\n")
+        );
+    }
+
     #[test]
     fn shell_words_split_like_a_shell() {
         assert_eq!(

@@ -30,11 +30,15 @@ const fn case(cmd: &'static str, args: &'static str, names: &'static str) -> Cas
     Case { cmd, args, names }
 }
 
+/// The error a misspelt `q:l_kne` column must give: the column, and the joint meant.
+const TYPO: &str = "column \"q:l_kne\"&&did you mean q:l_knee";
+
 /// The table. Fixtures: `{km20}` a good URDF; `{empty}` an empty file; `{missing}` a
 /// path that does not exist; `{trunc_urdf}` half a URDF; `{csv_as_urdf}` a CSV named
 /// .urdf; `{state}` a good km20 state CSV (q, v, a, tau) and its broken copies
 /// `{state_trunc}` (cut mid-row), `{state_nan}`, `{state_inf}`, `{state_dup}` (a column
-/// twice), `{state_typo}` (q:l_kne), `{tau_nan}` (NaN in tau:l_knee); `{goals_typo}`, `{goals_nan}` joint goals; `{io}`
+/// twice), `{state_typo}` (q:l_kne for q:l_knee), `{state_extra}` (every column and q:l_kne too),
+/// `{tau_typo}` (tau:l_kne), `{tau_nan}` (NaN in tau:l_knee); `{goals_typo}`, `{goals_nan}` joint goals; `{io}`
 /// an input/output record and `{io_nan}`; `{cwalk}` a compact-model walk and
 /// `{cwalk_nan}`; `{plant}` a good PLANT.toml, `{bad_toml}` broken TOML; `{json_bad}`
 /// JSON that is not the expected document; `{gone}` a port path with nothing behind it;
@@ -66,18 +70,22 @@ const CASES: &[Case] = &[
     case("dynamics kinematics", "--robot {km20} --trajectory {state_nan} --out {out}", "q:l_knee"),
     case("dynamics kinematics", "--robot {km20} --trajectory {state_inf} --out {out}", "q:l_knee"),
     case("dynamics kinematics", "--robot {km20} --trajectory {state_dup} --out {out}", "q:l_knee"),
-    case("dynamics kinematics", "--robot {km20} --trajectory {state_typo} --out {out}", "q:l_kne"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state_typo} --out {out}", TYPO),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state_extra} --out {out}", TYPO),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state_extra} --out {out} --fixed-base", TYPO),
     case("dynamics kinematics", "--robot {km20} --trajectory {state} --out {out} --frames nose", "nose"),
     case("dynamics kinematics", "--robot {km20} --trajectory {state_deg} --out {out}", "state_deg.csv&&q:&&degrees"),
     case("dynamics inverse", "--robot {km20} --trajectory {state_deg} --out {out}", "state_deg.csv&&q:&&degrees"),
     case("dynamics forward", "--robot {km20_g} --trajectory {state} --out {out}", "km20_g.urdf&&grams"),
     case("dynamics inverse", "--robot {km20} --trajectory {state_nan} --out {out}", "q:l_knee"),
-    case("dynamics inverse", "--robot {km20} --trajectory {state_typo} --out {out}", "q:l_kne"),
+    case("dynamics inverse", "--robot {km20} --trajectory {state_typo} --out {out}", TYPO),
+    case("dynamics inverse", "--robot {km20} --trajectory {state_extra} --out {out}", TYPO),
+    case("dynamics forward", "--robot {km20} --trajectory {tau_typo} --out {out}", "column \"tau:l_kne\"&&did you mean tau:l_knee"),
     case("dynamics inverse", "--robot {trunc_urdf} --trajectory {state} --out {out}", "trunc.urdf"),
     case("dynamics forward", "--robot {km20} --trajectory {state_inf} --out {out}", "q:l_knee"),
     case("dynamics forward", "--robot {km20} --trajectory {state_dup} --out {out}", "q:l_knee"),
     // simulate
-    case("simulate", "--robot {km20} --trajectory {goals_typo} --out {out}", "q:l_kne"),
+    case("simulate", "--robot {km20} --trajectory {goals_typo} --out {out}", TYPO),
     case("simulate", "--robot {km20} --trajectory {goals_nan} --out {out}", "q:l_knee"),
     case("simulate", "--robot {km20} --trajectory {empty} --out {out}", "empty.urdf"),
     case("simulate", "--robot {km20} --duration 0 --out {out}", "--duration"),
@@ -91,6 +99,9 @@ const CASES: &[Case] = &[
     // experiment
     case("experiment tipover", "--robot {km20} --ramp 0", "--ramp"),
     case("experiment tipover", "--robot {km20} --ramp inf", "--ramp"),
+    // Valid but hours of simulated time: refused, saying why and what to use.
+    case("experiment tipover", "--robot {km20} --ramp 0.001", "--ramp&&12.5 h&&--ramp 0.05"),
+    case("experiment tipover", "--robot {km20} --slow-ramp 0.0001", "--slow-ramp&&--slow-ramp 0.005"),
     case("experiment tipover", "--robot {km20} --add-mass 0.3@nolink:0,0,0", "nolink"),
     case("experiment tipover", "--robot {trunc_urdf}", "trunc.urdf"),
     case("experiment tipover", "--robot {km20} --add-mass 300@torso:0.05,0,0", "--add-mass&&grams"),
@@ -143,7 +154,8 @@ const CASES: &[Case] = &[
     case("adapt train", "--robot {trunc_urdf} --out {out}", "trunc.urdf"),
     // validate
     case("validate residual", "--robot {km20} --motion {state_nan} --out {out}", "q:l_knee"),
-    case("validate residual", "--robot {km20} --motion {state_typo} --out {out}", "q:l_kne"),
+    case("validate residual", "--robot {km20} --motion {state_typo} --out {out}", TYPO),
+    case("validate residual", "--robot {km20} --motion {state_extra} --out {out}", TYPO),
     case("validate residual", "--robot {km20} --motion {state_deg} --out {out}", "state_deg.csv&&degrees"),
     case("validate lean", "--robot-run {tau_nan} --sim-run {state}", "tau:l_knee"),
     case("validate lean", "--robot-run {missing_csv} --sim-run {state}", "missing.csv"),
@@ -173,6 +185,8 @@ const CASES: &[Case] = &[
     case("link record", "--port {gone} --map builtin:km20 --duration -1 --out {out}", "--duration"),
     case("link plan", "--protocol 2 --servos 0", "--servos"),
     case("link plan", "--protocol 2 --return-delay-us -5", "--return-delay-us"),
+    case("link plan", "--protocol 2 --baud 0", "--baud&&bit rate"),
+    case("link scan", "--port {gone} --baud 11000000", "--baud&&bit rate"),
     // servo bench
     case("experiment servo", "--port {gone} --id 1 --load {bad_toml} --out {out}", "bad.toml"),
     case("experiment servo", "--port {gone} --id 1 --load {plant} --out {out}", "plant.toml"),
@@ -182,8 +196,9 @@ const CASES: &[Case] = &[
     case("experiment servo", "--port {gone} --map builtin:km20 --joint r_tail --out {out}", "r_tail"),
     case("experiment servo", "--port {gone} --map {bad_toml} --joint r_knee --out {out}", "bad.toml"),
     // serve, demo, bench, view
-    case("serve", "--robot {trunc_urdf} --link {out}", "trunc.urdf"),
+    case("serve", "--robot {trunc_urdf} --map builtin:km20 --link {out}", "trunc.urdf"),
     case("serve", "--robot {km20} --realtime-factor 0 --link {out}", "--realtime-factor"),
+    case("serve", "--robot {km20} --baud 0 --link {out}", "--baud&&bit rate"),
     case("demo", "--realtime-factor -1", "--realtime-factor"),
     case("demo", "--scenario nowhere", "nowhere"),
     case("demo", "--scenario a --tell-where", "--tell-where"),
@@ -367,6 +382,18 @@ fn make_fixtures(dir: &Path) {
         "state_typo.csv",
         &format!("{}\n{body}", head.replace("q:l_knee", "q:l_kne")),
     );
+    write(
+        dir,
+        "tau_typo.csv",
+        &format!("{}\n{body}", head.replace("tau:l_knee", "tau:l_kne")),
+    );
+    // Every column the model needs, and a misspelt one besides (a copy of q:l_knee).
+    let knee = head.split(',').position(|c| c == "q:l_knee").unwrap();
+    let extra: String = body
+        .lines()
+        .map(|l| format!("{l},{}\n", l.split(',').nth(knee).unwrap()))
+        .collect();
+    write(dir, "state_extra.csv", &format!("{head},q:l_kne\n{extra}"));
     write(
         dir,
         "state_dup.csv",

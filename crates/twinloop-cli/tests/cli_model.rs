@@ -368,3 +368,37 @@ fn one_coordinate_work_refuses_a_ball_joint_by_name() {
         );
     }
 }
+
+/// A misspelt `<colision>` in a URDF link: `model lint` warns with its line and the
+/// element meant (exit 0), `--strict` fails (exit 1); the same file without it is clean.
+#[test]
+fn a_misspelt_urdf_element_is_warned_and_strict_fails() {
+    let good = "<robot name=\"r\">\n  <link name=\"a\">\n    <inertial><mass value=\"1\"/>\
+                <inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial>\n\
+                  COLLISION\n  </link>\n</robot>\n";
+    let shape = "<geometry><box size=\"1 1 1\"/></geometry>";
+    let typo = scratch(
+        "typo.urdf",
+        &good.replace("COLLISION", &format!("<colision>{shape}</colision>")),
+    );
+    let clean = scratch(
+        "clean.urdf",
+        &good.replace("COLLISION", &format!("<collision>{shape}</collision>")),
+    );
+    let o = run_on(&["model", "lint"], &typo);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s = stdout(&o);
+    let line = s.lines().find(|l| l.contains("unmodeled-element")).unwrap();
+    assert!(
+        line.starts_with("warning")
+            && line.contains("<colision> in <link name=\"a\">")
+            && line.contains("line 4:")
+            && line.contains("did you mean <collision>?"),
+        "{line}"
+    );
+    let o = run_on(&["model", "lint", "--strict"], &typo);
+    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+    let o = run_on(&["model", "lint", "--strict"], &clean);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    assert!(!stdout(&o).contains("unmodeled"), "{}", stdout(&o));
+}

@@ -1,6 +1,6 @@
 //! A port that disappears mid-experiment (issue 17): the served virtual robot's pty or
 //! TCP socket goes away in the middle of `experiment tipover --port`, `experiment lean
-//! --port` and `link record`, as an unplugged USB adapter or a dropped network link
+//! --port`, `experiment servo` (a limb of the held robot) and `link record`, as an unplugged USB adapter or a dropped network link
 //! would. Each must end within a time limit with exit 2 and one `error:` line naming
 //! the port, and the CSV it was recording must parse and hold every row the message
 //! says was read.
@@ -27,11 +27,12 @@ enum Transport {
     Tcp,
 }
 
-/// `twinloop serve` km20 (the simulated robot) on a pty (behind the symlink `name`)
-/// or on a TCP port of the loopback; the child and the port to hand to clients.
-fn serve(transport: Transport, name: &str) -> (Child, String) {
+/// `twinloop serve` km20 (the simulated robot; `extra` flags such as `--held`) on a
+/// pty (behind the symlink `name`) or on a TCP port of the loopback; the child and
+/// the port to hand to clients.
+fn serve(transport: Transport, name: &str, extra: &[&str]) -> (Child, String) {
     let mut cmd = Command::new(bin());
-    cmd.args(["serve", "--robot", "builtin:km20"]);
+    cmd.args(["serve", "--robot", "builtin:km20"]).args(extra);
     match transport {
         Transport::Pty => {
             let link = scratch(name);
@@ -59,13 +60,25 @@ fn serve(transport: Transport, name: &str) -> (Child, String) {
 }
 
 /// Run `args` against a served robot, take the robot away after `after`, and check
-/// how the command ends; `record` is the CSV it records.
-fn unplug_mid_run(transport: Transport, what: &str, args: &[&str], after: Duration, record: &Path) {
+/// how the command ends; `record` is the CSV it records. The robot is served with
+/// `serve_extra` besides.
+fn unplug_mid_run(
+    transport: Transport,
+    what: &str,
+    serve_extra: &[&str],
+    args: &[&str],
+    after: Duration,
+    record: &Path,
+) {
     // One served robot at a time: each simulates km20 in real time, and two cores
     // running six would make "mid-experiment" a matter of luck.
     static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let (mut server, port) = serve(transport, &format!("{what}-{transport:?}-link"));
+    let (mut server, port) = serve(
+        transport,
+        &format!("{what}-{transport:?}-link"),
+        serve_extra,
+    );
     let _ = std::fs::remove_file(record);
     // A second output (the lean's own CSV beside its raw record).
     let out = scratch(&format!("gone-{what}-{transport:?}-out.csv"));
@@ -231,6 +244,7 @@ fn a_pty_that_disappears_mid_tipover_stops_it_naming_the_port() {
     unplug_mid_run(
         Transport::Pty,
         "tipover",
+        &[],
         TIPOVER,
         Duration::from_secs(3),
         &record,
@@ -243,6 +257,7 @@ fn a_socket_that_disappears_mid_tipover_stops_it_naming_the_port() {
     unplug_mid_run(
         Transport::Tcp,
         "tipover",
+        &[],
         TIPOVER,
         Duration::from_secs(3),
         &record,
@@ -255,6 +270,7 @@ fn a_pty_that_disappears_mid_lean_stops_it_naming_the_port() {
     unplug_mid_run(
         Transport::Pty,
         "lean",
+        &[],
         LEAN,
         Duration::from_secs(3),
         &record,
@@ -267,6 +283,7 @@ fn a_socket_that_disappears_mid_lean_stops_it_naming_the_port() {
     unplug_mid_run(
         Transport::Tcp,
         "lean",
+        &[],
         LEAN,
         Duration::from_secs(3),
         &record,
@@ -279,6 +296,7 @@ fn a_pty_that_disappears_mid_recording_stops_it_naming_the_port() {
     unplug_mid_run(
         Transport::Pty,
         "record",
+        &[],
         RECORD,
         Duration::from_millis(1500),
         &record,
@@ -291,8 +309,55 @@ fn a_socket_that_disappears_mid_recording_stops_it_naming_the_port() {
     unplug_mid_run(
         Transport::Tcp,
         "record",
+        &[],
         RECORD,
         Duration::from_millis(1500),
+        &record,
+    );
+}
+
+/// A limb of the held robot (`serve --held`): the right hip swings the leg.
+const SERVO: &[&str] = &[
+    "experiment",
+    "servo",
+    "--port",
+    "{port}",
+    "--map",
+    "builtin:km20",
+    "--joint",
+    "r_hip_pitch",
+    // A loaded test machine can be slow to answer: this test is about the port
+    // going away, not about a servo's timeout.
+    "--timeout-ms",
+    "50",
+    "--retries",
+    "3",
+    "--out",
+];
+
+// The servo sequence starts at once (its first step is 0.8 rad): 2 s in is mid-run.
+#[test]
+fn a_pty_that_disappears_mid_servo_run_stops_it_naming_the_port() {
+    let record = scratch("gone-servo-pty.csv");
+    unplug_mid_run(
+        Transport::Pty,
+        "servo",
+        &["--held"],
+        SERVO,
+        Duration::from_secs(2),
+        &record,
+    );
+}
+
+#[test]
+fn a_socket_that_disappears_mid_servo_run_stops_it_naming_the_port() {
+    let record = scratch("gone-servo-tcp.csv");
+    unplug_mid_run(
+        Transport::Tcp,
+        "servo",
+        &["--held"],
+        SERVO,
+        Duration::from_secs(2),
         &record,
     );
 }

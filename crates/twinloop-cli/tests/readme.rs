@@ -1,8 +1,9 @@
 //! The documentation's examples run as written (issue 17): every line of every ```sh
 //! block of README.md and docs/*.md runs, in order, each file in its own temporary
 //! folder holding the repository's `models/`, `examples/` (the small inputs the
-//! examples name) and `crates/`, with this build's `twinloop` first on PATH. A non-zero
-//! exit fails the test unless the line's comment announces it ("(exit 1)"). A line
+//! examples name) and `crates/`, with this build's `twinloop` first on PATH. A line
+//! must exit 0, or exactly the code its comment announces ("(exit 1)": then exit 0
+//! fails too, so an example of a failing check cannot pass by finding nothing). A line
 //! ending in `&` starts a server in the background: it runs until its first line of
 //! output (the address it serves) and is stopped after the file. `cd DIR` moves the
 //! later lines of the file. A `/tmp/NAME` path (the virtual bus of `twinloop serve`) is
@@ -13,7 +14,9 @@
 //! build` (the binary is built), other `cargo run` lines (they build another program),
 //! and a block right after an HTML comment `<!-- not run by tests: WHY -->` (a robot on a
 //! serial adapter, say). Every other block must run: a line that needs hardware and is
-//! not so marked fails here.
+//! not so marked fails here. A fenced block that is not labelled `sh` but holds a
+//! command line (`twinloop`, `cargo`, `python3`, `bash`, ...) fails
+//! `command_blocks_are_labelled_sh`: an unlabelled example would never run.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -81,6 +84,60 @@ fn sh_lines(markdown: &str) -> Vec<ShLine> {
         }
     }
     out
+}
+
+/// The programs a documented command line starts with (after any `NAME=VALUE`
+/// environment settings and a `$ ` prompt).
+const COMMANDS: &[&str] = &[
+    "twinloop", "cargo", "python3", "python", "bash", "sh", "pip", "pip3", "maturin", "cd",
+    "export", "git", "curl", "mkdir", "printf", "echo", "cp", "mv", "rm",
+];
+
+/// Whether a line of a fenced block reads as a command line.
+fn is_command(line: &str) -> bool {
+    let line = line.trim();
+    let line = line.strip_prefix("$ ").unwrap_or(line);
+    let first = line
+        .split_whitespace()
+        .find(|w| !w.contains('=') || w.starts_with('-'))
+        .unwrap_or("");
+    COMMANDS.contains(&first)
+}
+
+/// Fenced blocks not labelled `sh` that hold a command line: (1-based line of the
+/// fence, its label, the first command line).
+fn unlabelled_command_blocks(markdown: &str) -> Vec<(usize, String, String)> {
+    let mut out = Vec::new();
+    let mut open: Option<(usize, String)> = None;
+    let mut found = false;
+    for (i, line) in markdown.lines().enumerate() {
+        let trimmed = line.trim();
+        if let Some(label) = trimmed.strip_prefix("```") {
+            match open {
+                None => {
+                    open = Some((i + 1, label.trim().to_string()));
+                    found = false;
+                }
+                Some(_) => open = None,
+            }
+            continue;
+        }
+        if let Some((at, label)) = &open
+            && label != "sh"
+            && !found
+            && is_command(trimmed)
+        {
+            found = true;
+            out.push((*at, label.clone(), trimmed.to_string()));
+        }
+    }
+    out
+}
+
+/// The exit code a line's comment announces ("(exit 1)"), if any.
+fn announced_exit(comment: &str) -> Option<i32> {
+    let rest = comment.split("(exit ").nth(1)?;
+    rest.split(')').next()?.trim().parse().ok()
 }
 
 /// The command and its comment: the first ` #` outside quotes starts the comment.
@@ -234,11 +291,11 @@ fn run_file(file: &str, bin_dir: &Path) -> Run {
             run.slow.push((seconds, format!("{file}:{n}")));
         }
         let err = std::fs::read_to_string(&err_path).unwrap_or_default();
-        let announced = |c: i32| c == 0 || comment.contains(&format!("(exit {c})"));
+        let expected = announced_exit(&comment).unwrap_or(0);
         match code {
-            Some(c) if announced(c) => {}
+            Some(c) if c == expected => {}
             Some(c) => run.failures.push(format!(
-                "{file}:{n}: `{cmd}` exited {c}: {}",
+                "{file}:{n}: `{cmd}` exited {c}, not {expected}: {}",
                 err.lines()
                     .find(|l| l.starts_with("error"))
                     .or(err.lines().last())
@@ -334,6 +391,44 @@ fn every_documented_example_runs_as_written() {
     }
     assert!(ran >= 40, "only {ran} documented lines ran");
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Every example in the documentation is in a ```sh block, so that the test above
+/// runs it (or its block says why not).
+#[test]
+fn command_blocks_are_labelled_sh() {
+    let mut failures = Vec::new();
+    for file in documented_files() {
+        let text = std::fs::read_to_string(repo().join(&file)).unwrap();
+        for (at, label, line) in unlabelled_command_blocks(&text) {
+            failures.push(format!(
+                "{file}:{at}: a ```{label} block holds a command line, `{line}`: label it \
+                 ```sh (and mark it `{NOT_RUN} WHY -->` if it cannot run here)"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn command_lines_and_exit_codes_are_recognised() {
+    let md = "```\ntwinloop a\n```\n```text\nwarning: x\n```\n```toml\nk = 1\n```\n\
+              ```text\nsome output\nWINDOW=1,2 python3 x.py\n```\n```sh\ntwinloop b\n```\n";
+    assert_eq!(
+        unlabelled_command_blocks(md),
+        [
+            (1, String::new(), "twinloop a".to_string()),
+            (
+                10,
+                "text".to_string(),
+                "WINDOW=1,2 python3 x.py".to_string()
+            ),
+        ]
+    );
+    assert!(is_command("$ cargo test") && !is_command("twinloopish") && !is_command(""));
+    assert_eq!(announced_exit("finds it (exit 1)"), Some(1));
+    assert_eq!(announced_exit("a usage error (exit 2), named"), Some(2));
+    assert_eq!(announced_exit("no code here"), None);
 }
 
 #[test]

@@ -195,10 +195,18 @@ fn mutated_urdfs_never_panic() {
             let outcome = catch_unwind(AssertUnwindSafe(|| {
                 let result = urdf::from_str(&text);
                 if let Ok(robot) = &result {
-                    // What reads must write and read back the same.
-                    let again = urdf::from_str(&urdf::to_string(robot));
+                    // What reads must write and read back the same, but for the notes on
+                    // what the reader passed over: those name lines of the file read (the
+                    // written one differs) and parts it dropped (not written again).
+                    let without_notes = |r: &twinloop_description::Description| {
+                        let mut r = r.clone();
+                        r.unmodeled.clear();
+                        r.ignored.clear();
+                        r
+                    };
+                    let again = urdf::from_str(&urdf::to_string(robot)).map(|r| without_notes(&r));
                     assert!(
-                        again.as_ref() == Ok(robot),
+                        again == Ok(without_notes(robot)),
                         "round trip of an accepted mutation"
                     );
                 }

@@ -562,6 +562,7 @@ fn tip_all_directions(
     j: &StudyJoints,
     q0: &[f64],
     opts: &StudyOptions,
+    progress: &mut dyn FnMut(&str),
 ) -> Result<Vec<TipoverResult>, String> {
     let sm = StandingModel::new(sim, standing, j)?;
     let model = &sm.model;
@@ -581,10 +582,16 @@ fn tip_all_directions(
             run_direction(sim, standing, d, cfg, Some(&mut predict))
                 .map_err(|e: RobotError| e.to_string())
         };
+        progress(&format!("{}: ramp", d.name()));
         let first = run(&cfg, sim)?;
         let mut slow = cfg.clone();
         slow.slow_from_deg = Some((first.commanded_deg - 0.5).max(0.0));
         slow.slow_ramp_deg_per_s = opts.slow_ramp_deg_per_s;
+        progress(&format!(
+            "{}: creep from {:.1} deg",
+            d.name(),
+            slow.slow_from_deg.unwrap_or(0.0)
+        ));
         let mut r = run(&slow, sim)?;
         r.time_s = first.time_s;
         results.push(r);
@@ -753,8 +760,21 @@ fn prepare(robot: &Description, opts: &StudyOptions) -> Result<Prepared, String>
 
 /// Run the study on `robot` (a built-in robot gets its own servos and foot data).
 pub fn run_study(robot: &Description, opts: &StudyOptions) -> Result<StudyReport, IdentError> {
+    run_study_with_progress(robot, opts, &mut |_| {})
+}
+
+/// The simulated tip-overs the study makes: four directions, each a ramp and a creep.
+pub const STUDY_RUNS: usize = 8;
+
+/// [`run_study`], calling `progress` before each of its [`STUDY_RUNS`] simulated
+/// tip-overs with what it starts ("forward: ramp", "forward: creep from 7.4 deg").
+pub fn run_study_with_progress(
+    robot: &Description,
+    opts: &StudyOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<StudyReport, IdentError> {
     let mut p = prepare(robot, opts)?;
-    let runs = tip_all_directions(&mut p.sim, &p.standing, &p.j, &p.q0, opts)?;
+    let runs = tip_all_directions(&mut p.sim, &p.standing, &p.j, &p.q0, opts, progress)?;
     let results = with_static_references(&mut p.sim, &p.standing, &p.j, &p.q0, runs)?;
     Ok(assemble(robot, &p, &results)?)
 }

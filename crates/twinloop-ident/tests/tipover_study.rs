@@ -8,7 +8,9 @@
 //! runs the cases on parallel threads.
 
 use std::path::PathBuf;
-use twinloop_ident::tipover_study::{StudyOptions, StudyReport, run_study};
+use twinloop_ident::tipover_study::{
+    STUDY_RUNS, StudyOptions, StudyReport, run_study, run_study_with_progress,
+};
 
 /// Print one case's results in one piece (the cases run on parallel threads), then
 /// assert.
@@ -74,13 +76,35 @@ fn check(label: &str, report: &StudyReport) {
     );
 }
 
+/// Also: the progress callback is told of each of the eight simulated tip-overs
+/// before it starts, in order, each creep from half a degree before its ramp's tip.
 #[test]
 fn km20_tips_where_the_model_says() {
     let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
-    check(
-        "km20",
-        &run_study(&robot, &StudyOptions::default()).unwrap(),
-    );
+    let mut told = Vec::new();
+    let report = run_study_with_progress(&robot, &StudyOptions::default(), &mut |w| {
+        told.push(w.to_string())
+    })
+    .unwrap();
+    check("km20", &report);
+    assert_eq!(told.len(), STUDY_RUNS, "{told:?}");
+    for (k, d) in ["forward", "backward", "left", "right"].iter().enumerate() {
+        assert_eq!(told[2 * k], format!("{d}: ramp"));
+        let creep = &told[2 * k + 1];
+        let from: f64 = creep
+            .strip_prefix(&format!("{d}: creep from "))
+            .and_then(|r| r.strip_suffix(" deg"))
+            .unwrap()
+            .parse()
+            .unwrap();
+        let tip = report.direction(twinloop_experiments::tipover::Direction::ALL[k]);
+        let ahead = tip.commanded_deg - from;
+        assert!(
+            ahead > 0.2 && ahead < 0.7,
+            "{creep}: tip {}",
+            tip.commanded_deg
+        );
+    }
 }
 
 #[test]

@@ -44,15 +44,18 @@ pub struct StateColumns {
 
 impl StateColumns {
     /// Find the column of every coordinate in `coordinates` (see
-    /// [`Quantity::column_names`]); the error lists those missing, or names the
-    /// first cell of these columns that is NaN or infinite (file, line, column), so
-    /// every command that maps a table onto a model rejects non-finite input at read
-    /// time.
+    /// [`Quantity::column_names`]); the error names a column of this quantity that
+    /// no coordinate has (a misspelt `q:l_kne`, with the nearest names: see
+    /// [`StateColumns::check_known`]), lists those missing, or names the first cell
+    /// of these columns that is NaN or infinite (file, line, column), so every
+    /// command that maps a table onto a model rejects unknown columns and
+    /// non-finite input at read time.
     pub fn find(
         table: &Table,
         quantity: Quantity,
         coordinates: &[String],
     ) -> Result<StateColumns, IoError> {
+        Self::check_known(table, quantity, coordinates)?;
         let names = quantity.column_names(coordinates);
         let mut indices = Vec::with_capacity(names.len());
         let mut missing = Vec::new();
@@ -84,17 +87,22 @@ impl StateColumns {
 
     /// Every column of `table` with `quantity`'s prefix must name one of
     /// `coordinates`: a misspelt `q:l_kne` is an error naming the column and the
-    /// nearest coordinate names, never a column silently ignored.
+    /// nearest coordinate names, never a column silently ignored. The one exception:
+    /// `base.*` columns when the coordinates have no base (a fixed-base model reads
+    /// a floating-base trajectory's joints and, as documented, not its base).
     pub fn check_known(
         table: &Table,
         quantity: Quantity,
         coordinates: &[String],
     ) -> Result<(), IoError> {
         let names = quantity.column_names(coordinates);
-        let unknown = table
-            .columns
-            .iter()
-            .find(|c| c.starts_with(quantity.prefix()) && !names.contains(c));
+        let base = format!("{}base.", quantity.prefix());
+        let fixed_base = !names.iter().any(|n| n.starts_with(&base));
+        let unknown = table.columns.iter().find(|c| {
+            c.starts_with(quantity.prefix())
+                && !names.contains(c)
+                && !(fixed_base && c.starts_with(&base))
+        });
         let Some(c) = unknown else {
             return Ok(());
         };

@@ -80,3 +80,29 @@ fn a_misspelt_column_is_named_with_the_nearest_names() {
     let ok = Table::parse("t,q:l_knee,tau:x\n0,1,2\n").unwrap();
     assert!(StateColumns::check_known(&ok, Quantity::Q, &names).is_ok());
 }
+
+#[test]
+fn find_refuses_an_extra_column_the_model_does_not_have() {
+    use twinloop_io::{Quantity, StateColumns};
+    let names: Vec<String> = ["l_knee", "r_knee"].map(String::from).to_vec();
+    // Every column the model needs is there, plus a misspelt one: not ignored.
+    let t = Table::parse("t,q:l_knee,q:r_knee,q:l_kne\n0,1,2,3\n").unwrap();
+    let e = StateColumns::find(&t, Quantity::Q, &names).unwrap_err();
+    assert_eq!(e.column.as_deref(), Some("q:l_kne"), "{e}");
+    assert!(
+        e.to_string().contains("did you mean q:l_knee, q:r_knee"),
+        "{e}"
+    );
+    // A misspelt column in place of a needed one names the misspelling, not only
+    // the missing name.
+    let t = Table::parse("t,q:l_kne,q:r_knee\n0,1,2\n").unwrap();
+    let e = StateColumns::find(&t, Quantity::Q, &names).unwrap_err();
+    assert_eq!(e.column.as_deref(), Some("q:l_kne"), "{e}");
+    // A fixed-base model (no base coordinates) reads past a floating-base
+    // trajectory's base columns; a floating-base model refuses an unknown base one.
+    let t = Table::parse("t,q:base.x,q:base.qw,q:l_knee,q:r_knee\n0,0,1,1,2\n").unwrap();
+    assert!(StateColumns::find(&t, Quantity::Q, &names).is_ok());
+    let floating: Vec<String> = ["base.x", "l_knee", "r_knee"].map(String::from).to_vec();
+    let e = StateColumns::find(&t, Quantity::Q, &floating).unwrap_err();
+    assert_eq!(e.column.as_deref(), Some("q:base.qw"), "{e}");
+}

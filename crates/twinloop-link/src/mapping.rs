@@ -596,10 +596,15 @@ impl RobotMapping {
         self.port = robot.port;
         if let Some(b) = robot.baud {
             let v = *b.get_ref();
-            if !(1..=10_000_000).contains(&v) {
+            let range = crate::servo_model::BAUD_RANGE;
+            if !u32::try_from(v).is_ok_and(|v| range.contains(&v)) {
                 return Err(err_at(
                     b.span().start,
-                    format!("robot.baud: {v} is not a bit rate"),
+                    format!(
+                        "robot.baud: {v} is not a Dynamixel bit rate ({} to {})",
+                        range.start(),
+                        range.end()
+                    ),
                 ));
             }
             self.baud = Some(v as u32);

@@ -235,6 +235,12 @@ impl fmt::Display for ServoModel {
     }
 }
 
+/// The bit rates a Dynamixel bus can run at, bit/s: from 8000 (protocol 1.0's
+/// slowest, register 249: 2 000 000 / 250) to 10.5 M (the fastest register value
+/// of DYNAMIXEL-P, EM-PH54). A rate inside is taken as given (a serial adapter
+/// approximates it, as the servos do: 57 600 for RX register 34's 57 143).
+pub const BAUD_RANGE: std::ops::RangeInclusive<u32> = 8_000..=10_500_000;
+
 /// The bit rate a Baud Rate register value selects. 1.0: 2 000 000 / (value + 1)
 /// (EM-RX28: 1 -> 1 M, 34 -> 57 143 listed as 57 600), and for MX 250 -> 2.25 M,
 /// 251 -> 2.5 M, 252 -> 3 M. 2.0 (EM-XM): 0 -> 9600, 1 -> 57 600, 2 -> 115 200,

@@ -23,7 +23,7 @@ pub struct SquatArgs {
     #[arg(long, value_name = "squat.csv")]
     pub out: PathBuf,
     /// How far the pelvis goes down, m (default: 12 % of its standing height).
-    #[arg(long, value_name = "M", value_parser = crate::common::finite)]
+    #[arg(long, value_name = "M", value_parser = crate::common::positive)]
     pub depth: Option<f64>,
     /// Duration of the down-and-up motion, s.
     #[arg(long, default_value_t = 5.0, value_name = "S", value_parser = crate::common::positive)]
@@ -35,7 +35,7 @@ pub struct SquatArgs {
     #[arg(long, default_value_t = 150.0, value_name = "HZ", value_parser = crate::common::positive)]
     pub rate: f64,
     /// How far the arms swing forward at the bottom, fraction of their range.
-    #[arg(long, default_value_t = 0.35, value_parser = crate::common::finite)]
+    #[arg(long, default_value_t = 0.35, value_parser = crate::common::non_negative)]
     pub arm_swing: f64,
     /// The foot links, left then right, when they cannot be found from the geometry.
     #[arg(long, value_delimiter = ',', num_args = 2, value_name = "LEFT,RIGHT")]

@@ -6,7 +6,50 @@ use crate::common::{JSON_HELP, emit, load_description};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
 use std::path::PathBuf;
-use twinloop_ident::tipover_study::{StudyOptions, StudyReport, run_study};
+use twinloop_ident::tipover_study::{
+    STUDY_RUNS, StudyOptions, StudyReport, run_study_with_progress,
+};
+
+/// The slowest first ramp, deg/s: each direction's first run ramps until the robot
+/// tips or the ankles reach the 45 deg limit (900 s of robot time at this speed; the
+/// 0.001 deg/s once asked for would be 12.5 h per run, eight runs). The first ramp
+/// only finds where the robot tips; the creep at --slow-ramp makes the measurement.
+const MIN_RAMP: f64 = 0.05;
+
+/// The slowest creep, deg/s: the creep covers the last half degree or so before the
+/// tip, 100 s of robot time per direction at this speed.
+const MIN_SLOW_RAMP: f64 = 0.005;
+
+/// `--ramp`: a finite speed of at least [`MIN_RAMP`].
+fn first_ramp(s: &str) -> Result<f64, String> {
+    let x = crate::common::positive(s)?;
+    if x < MIN_RAMP {
+        return Err(format!(
+            "{x} deg/s is below {MIN_RAMP}: a ramp to the 45 deg limit would take {:.0} s \
+             ({:.1} h) of robot time per run; the first ramp only finds where the \
+             robot tips and --slow-ramp (default 0.05) creeps up to it, so use --ramp {MIN_RAMP} \
+             or more (default 0.5)",
+            45.0 / x,
+            45.0 / x / 3600.0
+        ));
+    }
+    Ok(x)
+}
+
+/// `--slow-ramp`: a finite speed of at least [`MIN_SLOW_RAMP`].
+fn creep_ramp(s: &str) -> Result<f64, String> {
+    let x = crate::common::positive(s)?;
+    if x < MIN_SLOW_RAMP {
+        return Err(format!(
+            "{x} deg/s is below {MIN_SLOW_RAMP}: the creep over the last half degree would \
+             take {:.0} s of robot time per direction, and a slower creep no longer shortens \
+             the lag of a tip's detection (about 0.2 s of fall: 0.001 deg at 0.005 deg/s); use \
+             --slow-ramp {MIN_SLOW_RAMP} or more (default 0.05)",
+            0.5 / x
+        ));
+    }
+    Ok(x)
+}
 
 #[derive(Args, Debug)]
 pub struct TipoverArgs {
@@ -47,8 +90,9 @@ pub struct TipoverArgs {
     pub add_mass: Vec<String>,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
-    /// Ankle ramp speed, deg/s.
-    #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]
+    /// Ankle ramp speed, deg/s, 0.05 or more (the first run of each direction: slower
+    /// would take hours and measure no better, the creep at --slow-ramp measures).
+    #[arg(long, default_value_t = 0.5, value_parser = first_ramp)]
     pub ramp: f64,
     /// Servo compliance slope during the experiment, Dynamixel RX units (2 = stiffest,
     /// the default). The CoM methods assume a rigid robot; stiffer servos bend less.
@@ -62,8 +106,8 @@ pub struct TipoverArgs {
     pub ankle_slope: f64,
     /// Ramp speed of the second run's slow final approach, deg/s: each direction is run
     /// twice, the second time up to half a degree before the first tip and then at this
-    /// speed, so the tip is seen with less lag.
-    #[arg(long, default_value_t = 0.05, value_parser = crate::common::positive)]
+    /// speed, so the tip is seen with less lag. 0.005 or more.
+    #[arg(long, default_value_t = 0.05, value_parser = creep_ramp)]
     pub slow_ramp: f64,
     /// Over a bus: creeping approaches per direction. With 2 (the default) the two are
     /// averaged when they tip within 0.6 deg of each other, and a third is made when
@@ -111,7 +155,18 @@ pub fn run(a: &TipoverArgs) -> CliResult {
         ..Default::default()
     };
     eprintln!("running the four tip-overs in the simulator ...");
-    let r = run_study(&robot, &opts)?;
+    // One step per simulated tip-over (each direction's ramp, then its creep).
+    let bar = crate::progress::steps(STUDY_RUNS);
+    let mut started = 0;
+    let r = run_study_with_progress(&robot, &opts, &mut |what| {
+        if started > 0 {
+            bar.inc(1);
+        }
+        started += 1;
+        bar.set_message(what.to_string());
+    });
+    bar.finish_and_clear();
+    let r = r?;
     emit(&summary(&r), a.json.as_ref(), &r)?;
     Ok(Outcome::Ok)
 }

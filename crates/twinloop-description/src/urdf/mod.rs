@@ -34,6 +34,7 @@
 //! ```
 
 mod read;
+mod schema;
 mod write;
 
 pub(crate) use read::from_document;

@@ -97,6 +97,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
         }
     }
     robot.ignored = notes;
+    robot.unmodeled = super::schema::check(root);
     validate_placed(doc, &robot, &places)?;
     Ok(robot)
 }
