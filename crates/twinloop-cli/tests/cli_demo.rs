@@ -55,9 +55,10 @@ fn the_demo_finds_a_hidden_mass_over_the_bus() {
         assert!((m - a).abs() < 0.3, "direction {k}: {a} vs {m}");
     }
     // `--check`: the adapted model behind a second pty, crept over the bus from 1.5 deg
-    // before each of the robot's tips. Within 0.3 deg (a count) in most sweep runs
-    // (docs/adaptation.md); the bound here catches a broken check (a wrong direction or
-    // a start past the tip is degrees off), not the goal, on a loaded machine.
+    // before each of the robot's tips. One to three counts (0.3-0.9 deg) apart in the
+    // sweeps (docs/adaptation.md), 1.2 deg once in this test at load 10: two bus
+    // measurements each scatter. The bound catches a broken check (a wrong direction,
+    // or a creep started past the tip, is many degrees off), not the goal.
     assert!(out.contains("adapted, simulated"), "{out}");
     for k in 0..4 {
         let (m, s) = (
