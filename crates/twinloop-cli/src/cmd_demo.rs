@@ -174,22 +174,7 @@ fn check_on_bus(
 ) -> Result<[f64; 4], CliError> {
     eprintln!("checking: the adapted model's simulation, over the bus, from near each tip");
     let robot = serve_truth(model, mapping, a, &[])?;
-    let plan = BusPlan {
-        model_spec: "builtin:km20".into(),
-        map: "builtin:km20".into(),
-        port: demo_port(robot.path()),
-        record: Some(record.to_path_buf()),
-        yes: true,
-        directions: Direction::ALL.to_vec(),
-        ramp: RAMP,
-        slow_ramp: SLOW_RAMP,
-        compliance_slope: 2,
-        ankle_slope: ANKLE_SLOPE,
-        creeps: a.creeps as usize,
-        first_tips: Some(commanded),
-        clock_rate: a.realtime_factor,
-        verbose: true,
-    };
+    let plan = plan(robot.path(), record, a, Some(commanded));
     let run = tipover_on_bus(&plan)
         .map_err(|e| e.context("checking the adapted model (its simulation over the bus)"))?;
     let BusOutcome::Study(study) = run.outcome else {
@@ -198,6 +183,27 @@ fn check_on_bus(
         ));
     };
     Ok(angles(&study, |d| d.measured_deg))
+}
+
+/// The demo's protocol on the robot at `port`, every read recorded to `record`; with
+/// `first_tips`, creeps only (the check).
+fn plan(port: &str, record: &Path, a: &DemoArgs, first_tips: Option<Vec<f64>>) -> BusPlan {
+    BusPlan {
+        model_spec: "builtin:km20".into(),
+        map: "builtin:km20".into(),
+        port: demo_port(port),
+        record: Some(record.to_path_buf()),
+        yes: true,
+        directions: Direction::ALL.to_vec(),
+        ramp: RAMP,
+        slow_ramp: SLOW_RAMP,
+        compliance_slope: 2,
+        ankle_slope: ANKLE_SLOPE,
+        creeps: a.creeps as usize,
+        first_tips,
+        clock_rate: a.realtime_factor,
+        verbose: true,
+    }
 }
 
 /// The bus as the demo's host opens it: a reply may wait 500 ms beyond its wire time
@@ -309,22 +315,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     );
     eprint!("{text}");
     let record = a.out.join("tipover.csv");
-    let plan = BusPlan {
-        model_spec: "builtin:km20".into(),
-        map: "builtin:km20".into(),
-        port: demo_port(robot.path()),
-        record: Some(record.clone()),
-        yes: true,
-        directions: Direction::ALL.to_vec(),
-        ramp: RAMP,
-        slow_ramp: SLOW_RAMP,
-        compliance_slope: 2,
-        ankle_slope: ANKLE_SLOPE,
-        creeps: a.creeps as usize,
-        first_tips: None,
-        clock_rate: a.realtime_factor,
-        verbose: true,
-    };
+    let plan = plan(robot.path(), &record, &a, None);
     // A simulation that stopped (it diverged, or its operator could not stand the
     // robot up) leaves the bus answering with its last state: say so rather than
     // what the host made of the frozen robot.
