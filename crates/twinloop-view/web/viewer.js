@@ -404,7 +404,7 @@
         box.quaternion.setFromEuler(new THREE.Euler(b.rpy[0], b.rpy[1], b.rpy[2], 'ZYX'));
         box.visible = false;
         link.add(box);
-        boxes.push({ link: l.name, size: b.size, obj: box });
+        boxes.push({ link: l.name, obj: box });
       }
     }
     const totalMass = massive.reduce((s, m) => s + m.mass, 0);
@@ -630,7 +630,11 @@
       limits: a.limited.filter((l) => l.atLimit).map((l) => l.name),
       limit_coloured: a.limited.filter((l) => l.link && (a.drawn.get(l.link) || []).some((d) => d.mesh.material === LIMIT_MATERIAL || (d.mesh.material.color && d.mesh.material.color.equals(LIMIT_COLOUR)))).map((l) => l.name),
       frames: o.frames.filter((f) => shown(f.obj)).map((f) => ({ link: f.link, at: world(f.obj) })),
-      inertia: o.boxes.filter((b) => shown(b.obj)).map((b) => ({ link: b.link, at: world(b.obj), size: b.size })),
+      inertia: o.boxes.filter((b) => shown(b.obj)).map((b) => {
+        const g = b.obj.geometry;
+        if (!g.boundingBox) g.computeBoundingBox();
+        return { link: b.link, at: world(b.obj), size: xyz(g.boundingBox.getSize(new THREE.Vector3())) };
+      }),
     };
   }
   function timelineReport() {
