@@ -19,6 +19,7 @@ use twinloop_view::{Content, Recording, Scene};
 
 // ---------- the browser ----------
 
+#[allow(dead_code)]
 #[path = "support/cdp.rs"]
 mod cdp;
 #[path = "support/chromium.rs"]

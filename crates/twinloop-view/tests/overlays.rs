@@ -17,6 +17,7 @@ use twinloop_dynamics::{Data, Model, center_of_mass, frames_forward_kinematics};
 use twinloop_io::Table;
 use twinloop_view::{Content, Recording, Scene};
 
+#[allow(dead_code)]
 #[path = "support/cdp.rs"]
 mod cdp;
 #[path = "support/chromium.rs"]
@@ -407,18 +408,9 @@ fn overlays_show_what_kinematics_and_the_columns_say_and_each_turns_off() {
 
 /// Click the checkbox of overlay `name` where the page draws it.
 fn click_overlay(page: &mut cdp::Browser, name: &str) {
-    let rect = page.eval(&format!(
-        "(() => {{ const e = document.querySelector('[data-overlay={name}]'); e.scrollIntoView(); \
-         const r = e.getBoundingClientRect(); return [r.left + r.width / 2, r.top + r.height / 2, r.width]; }})()"
-    ));
-    let r: Vec<f64> = rect
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    assert!(r[2] > 0.0, "the {name} checkbox is not drawn");
-    page.click(r[0], r[1]);
+    let (x, y, width) = page.centre(&format!("[data-overlay={name}]"));
+    assert!(width > 0.0, "the {name} checkbox is not drawn");
+    page.click(x, y);
 }
 
 #[test]

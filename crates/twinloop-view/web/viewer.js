@@ -645,7 +645,12 @@
         t: a.rec ? a.rec.cols.t[a.sample] : null,
         base: xyz(a.robot.position),
       })),
-      plot: plots.u ? plots.u.series.slice(1).map((s) => s.label) : [],
+      // When `now` was computed (the animation frame's time, ms).
+      frame_time: lastTime,
+      plot: plots.u ? plots.u.series.slice(1).map((s, k) => {
+        const ys = plots.u.data[k + 1];
+        return { label: s.label, n: ys.length, first: ys[0], last: ys[ys.length - 1] };
+      }) : [],
       clock: clock.textContent, scrub: Number(scrub.value),
     };
   }
