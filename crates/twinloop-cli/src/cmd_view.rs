@@ -33,8 +33,9 @@ pub struct ViewArgs {
     /// --out, link record --out): its newest row, --rate times a second
     #[arg(long, value_name = "FILE.csv")]
     pub live: Option<PathBuf>,
-    /// States per second sent to the page in --live
-    #[arg(long, value_name = "HZ", default_value_t = 60.0, value_parser = crate::common::positive)]
+    /// States per second sent to the page in --live (a little above a 60 Hz screen,
+    /// so that nearly every frame it draws has a new one)
+    #[arg(long, value_name = "HZ", default_value_t = LIVE_RATE, value_parser = crate::common::positive)]
     pub rate: f64,
 }
 
@@ -121,10 +122,17 @@ pub struct LiveViewArgs {
         default_missing_value = "127.0.0.1:0"
     )]
     pub view: Option<String>,
+    /// With --view: where package://NAME/ meshes are, as for `twinloop view` (repeat for
+    /// several packages)
+    #[arg(long = "package-dir", value_name = "NAME=DIR", value_parser = PackageDir::parse, requires = "view")]
+    pub package_dirs: Vec<PackageDir>,
 }
 
-/// States per second sent to the page by `--view`.
-const LIVE_RATE: f64 = 60.0;
+/// States per second sent to the page by `--view` and `view --live`: a little above
+/// a 60 Hz screen, so that the page, drawing every frame with the newest state, has a
+/// new one for nearly every frame (at exactly 60 the two clocks beat, and a frame in
+/// every few shows the state before again).
+const LIVE_RATE: f64 = 90.0;
 
 /// Start `--view`'s page for `robot` (`spec`: what --robot said, for meshes named
 /// relative to its file), fed with states whose coordinates are `names`.
@@ -138,8 +146,15 @@ pub fn start_live(
         return Ok(None);
     };
     let source = spec.filter(|s| !s.starts_with("builtin:")).map(Path::new);
-    let live = twinloop_view::LivePublisher::start(robot, source, &[], addr, names, LIVE_RATE)
-        .map_err(|e| CliError::new(format!("--view {addr}: {e}")))?;
+    let live = twinloop_view::LivePublisher::start(
+        robot,
+        source,
+        &args.package_dirs,
+        addr,
+        names,
+        LIVE_RATE,
+    )
+    .map_err(|e| CliError::new(format!("--view {addr}: {e}")))?;
     eprintln!("live view: {}", live.url());
     if !live.missing().is_empty() {
         eprintln!(

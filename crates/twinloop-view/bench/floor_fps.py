@@ -31,7 +31,7 @@ def main():
             chrome.terminate()
             chrome.wait()
     b = status["bench"]
-    print("floor %s: %d frames, median %.2f ms, p95 %.2f ms, %.1f fps" % (query, b["frames"], b["median_ms"], b["p95_ms"], b["fps"]))
+    print("floor %s: %d frames, median %.2f ms, p95 %.2f ms, %.1f fps; load %.1f" % (query, b["frames"], b["median_ms"], b["p95_ms"], b["fps"], os.getloadavg()[0]))
 
 
 if __name__ == "__main__":

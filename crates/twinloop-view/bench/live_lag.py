@@ -75,7 +75,9 @@ async def measure(ws_url, page_url, seconds):
         b, tb = await status(), time.time()
         if b.get("errors"):
             raise SystemExit("page errors: %s" % b["errors"])
-        return (b["frame"] - a["frame"]) / (tb - ta), (b["live"]["frames"] - a["live"]["frames"]) / (tb - ta), b["live"]
+        dt = tb - ta
+        return ((b["frame"] - a["frame"]) / dt, (b["live"]["frames"] - a["live"]["frames"]) / dt,
+                (b["live"]["fresh"] - a["live"]["fresh"]) / dt, b["live"])
 
 
 def main():
@@ -99,7 +101,7 @@ def main():
                 m = re.search(r"DevTools listening on (ws://\S+)", line)
                 if m:
                     break
-            drawn, received, live = asyncio.run(measure(m.group(1), url + os.environ.get("QUERY", ""), seconds))
+            drawn, received, fresh, live = asyncio.run(measure(m.group(1), url + os.environ.get("QUERY", ""), seconds))
         finally:
             chrome.terminate()
             chrome.wait()
@@ -107,10 +109,11 @@ def main():
             stop.set()
             if w.is_alive():
                 w.join()
-    print("live: %.1f frames drawn/s, %.1f states received/s; lag to the frame drawn: median %.1f ms, p95 %.1f, max %.1f; "
-          "lag on arrival: median %.1f, p95 %.1f, max %.1f (last 600 frames)" % (
-              drawn, received, live["lag_median_ms"], live["lag_p95_ms"], live["lag_max_ms"],
-              live["recv_lag_median_ms"], live["recv_lag_p95_ms"], live["recv_lag_max_ms"]))
+    print("live: %.1f frames drawn/s, %.1f of them with a new state; %.1f states received/s; "
+          "lag to the frame drawn: median %.1f ms, p95 %.1f, max %.1f; "
+          "lag on arrival: median %.1f, p95 %.1f, max %.1f (last 600 states); load %.1f" % (
+              drawn, fresh, received, live["lag_median_ms"], live["lag_p95_ms"], live["lag_max_ms"],
+              live["recv_lag_median_ms"], live["recv_lag_p95_ms"], live["recv_lag_max_ms"], os.getloadavg()[0]))
 
 
 if __name__ == "__main__":

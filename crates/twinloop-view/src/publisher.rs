@@ -4,7 +4,7 @@
 //!
 //! The producer calls [`LivePublisher::offer`] with every state it makes (1 kHz for
 //! a simulation). Most are decimated away by one comparison; the few let through
-//! (60 a second) are copied into the feed's slot if no page is copying it out at
+//! (90 a second from the CLI) are copied into the feed's slot if no page is copying it out at
 //! that instant, and skipped otherwise: the producer never waits for a page, never
 //! allocates, and never makes JSON (each page's own thread does).
 

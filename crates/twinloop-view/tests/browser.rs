@@ -1,338 +1,34 @@
 //! The page in a real headless browser (Chromium from the distribution): it loads
 //! without console errors, and the robot is drawn where the data put it: the
 //! silhouette in the rendered image spans what twinloop-dynamics' forward
-//! kinematics projects through the same camera, the CoM the page computes is
-//! twinloop-dynamics' CoM, a ghost appears where its recording puts it, and the
-//! exported file renders the same with no server.
+//! kinematics projects through the same camera (primitives, and the vertices of the
+//! mesh files read here), the CoM the page computes is twinloop-dynamics' CoM, a
+//! ghost appears where its recording puts it, OP3 is drawn with its meshes or, without
+//! them, with stand-ins and a warning each, and an exported file (meshes and all)
+//! renders the same with no server.
 //!
 //! Without Chromium these tests print why and pass, unless
 //! TWINLOOP_REQUIRE_ORACLES=1 (CI), where a missing browser fails them.
 
-use nalgebra::{Matrix3, Vector3};
 use serde_json::Value;
 use std::path::Path;
 use std::time::Duration;
-use twinloop_description::{Description, Geometry};
-use twinloop_dynamics::{Data, Model, center_of_mass, frames_forward_kinematics};
+use twinloop_dynamics::{Data, Model, center_of_mass};
 use twinloop_io::Table;
-use twinloop_view::{Content, Recording, Scene, Server};
+use twinloop_view::{Content, Recording, Scene};
 
 // ---------- the browser ----------
 
+#[allow(dead_code)]
 #[path = "support/cdp.rs"]
 mod cdp;
 #[path = "support/chromium.rs"]
 mod chromium;
-use chromium::{browser, dump_dom, element_text, tempdir, unescape_html};
-
-/// An RGB image.
-struct Image {
-    width: usize,
-    height: usize,
-    rgb: Vec<[u8; 3]>,
-}
-
-struct Page {
-    status: Value,
-    image: Image,
-}
-
-fn decode_png(bytes: &[u8]) -> Image {
-    let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-    let mut reader = decoder.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let channels = info.color_type.samples();
-    assert_eq!(info.bit_depth, png::BitDepth::Eight);
-    let rgb = buf[..info.buffer_size()]
-        .chunks(channels)
-        .map(|p| [p[0], p[1], p[2]])
-        .collect();
-    Image {
-        width: info.width as usize,
-        height: info.height as usize,
-        rgb,
-    }
-}
-
-/// Load `url` in headless Chromium (software WebGL) and read the page's status
-/// and its rendered image.
-fn load(chromium: &Path, url: &str) -> Page {
-    try_load(chromium, url).unwrap_or_else(|status| panic!("no #snapshot: {status}"))
-}
-
-/// [`load`], or the page's status when it drew no snapshot (a live page whose first
-/// frame had not arrived when headless Chromium's virtual time ran out).
-fn try_load(chromium: &Path, url: &str) -> Result<Page, Value> {
-    let dom = dump_dom(chromium, url);
-    let status = element_text(&dom, "status").unwrap_or_else(|| {
-        panic!(
-            "no #status in the page of {url}: {}",
-            &dom[..dom.len().min(400)]
-        )
-    });
-    let status: Value = serde_json::from_str(&unescape_html(status)).unwrap();
-    let Some(snapshot) = element_text(&dom, "snapshot") else {
-        return Err(status);
-    };
-    use base64::Engine;
-    let png = base64::engine::general_purpose::STANDARD
-        .decode(snapshot.trim().trim_start_matches("data:image/png;base64,"))
-        .unwrap();
-    Ok(Page {
-        status,
-        image: decode_png(&png),
-    })
-}
-
-/// Serve `content`; the URL, and the paths the page asked for and did not get.
-fn serve_with_misses(content: Content) -> (String, twinloop_view::server::Misses) {
-    let server = Server::bind("127.0.0.1:0", content).unwrap();
-    let (url, misses) = (server.url(), server.misses());
-    std::thread::spawn(move || server.run());
-    (url, misses)
-}
-
-/// No request of the page went unanswered (a 404 is a console error in the browser).
-fn assert_no_misses(misses: &twinloop_view::server::Misses) {
-    assert_eq!(
-        misses.list(),
-        Vec::<String>::new(),
-        "the page asked for missing files"
-    );
-}
-
-fn assert_clean(page: &Page) {
-    let s = &page.status;
-    assert_eq!(s["ready"], true, "the page did not finish loading: {s}");
-    assert_eq!(
-        s["errors"].as_array().unwrap().len(),
-        0,
-        "console errors: {s}"
-    );
-}
-
-// ---------- the camera and the silhouette ----------
-
-/// The test camera: where it is, where it looks, vertical field of view (deg).
-struct Camera {
-    eye: Vector3<f64>,
-    target: Vector3<f64>,
-    fov_deg: f64,
-}
-
-const CAMERA: Camera = Camera {
-    eye: Vector3::new(0.9, -1.5, 0.5),
-    target: Vector3::new(0.0, 0.0, 0.25),
-    fov_deg: 40.0,
-};
-
-/// Page parameters: the test camera, a magenta background, no overlays, the
-/// image in #snapshot.
-fn view_query(t: f64) -> String {
-    let (e, g) = (CAMERA.eye, CAMERA.target);
-    format!(
-        "?t={t}&bare=1&snapshot=1&bg=ff00ff&overlays=&fov={}&camera={},{},{},{},{},{}",
-        CAMERA.fov_deg, e.x, e.y, e.z, g.x, g.y, g.z
-    )
-}
-
-/// A world point in pixels (x right, y down), as three.js projects it: a
-/// perspective camera at `eye` looking at `target`, z up.
-fn project(p: &Vector3<f64>, width: usize, height: usize) -> (f64, f64) {
-    let f = (CAMERA.target - CAMERA.eye).normalize();
-    let r = f.cross(&Vector3::z()).normalize();
-    let u = r.cross(&f);
-    let d = p - CAMERA.eye;
-    let (x, y, z) = (d.dot(&r), d.dot(&u), d.dot(&f));
-    let t = (CAMERA.fov_deg.to_radians() / 2.0).tan();
-    let aspect = width as f64 / height as f64;
-    let (nx, ny) = (x / (z * t * aspect), y / (z * t));
-    (
-        (nx + 1.0) / 2.0 * width as f64,
-        (1.0 - ny) / 2.0 * height as f64,
-    )
-}
-
-/// Bounding box (x0, y0, x1, y1) of the pixels that are not the magenta background.
-fn silhouette(img: &Image) -> (f64, f64, f64, f64) {
-    let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-    for (k, p) in img.rgb.iter().enumerate() {
-        let off = (255 - p[0] as i32).abs() + p[1] as i32 + (255 - p[2] as i32).abs();
-        if off > 90 {
-            let (x, y) = ((k % img.width) as f64, (k / img.width) as f64);
-            x0 = x0.min(x);
-            y0 = y0.min(y);
-            x1 = x1.max(x + 1.0);
-            y1 = y1.max(y + 1.0);
-        }
-    }
-    assert!(x0 < x1, "nothing drawn");
-    (x0, y0, x1, y1)
-}
-
-/// Points on a link's visual geometry, in the link's visual frame. Meshes in these
-/// tests are the unit cube of tests/data/mesh_robot.
-fn geometry_points(g: &Geometry) -> Vec<Vector3<f64>> {
-    let circle = |r: f64, z: f64| {
-        (0..64).map(move |k| {
-            let a = k as f64 * std::f64::consts::TAU / 64.0;
-            Vector3::new(r * a.cos(), r * a.sin(), z)
-        })
-    };
-    let sphere = |r: f64, c: f64| {
-        (0..400).map(move |k| {
-            // Fibonacci sphere.
-            let z = 1.0 - 2.0 * (k as f64 + 0.5) / 400.0;
-            let a = k as f64 * 2.399_963;
-            let s = (1.0 - z * z).sqrt();
-            Vector3::new(r * s * a.cos(), r * s * a.sin(), c + r * z)
-        })
-    };
-    let corners = |h: [f64; 3]| {
-        (0..8).map(move |i| {
-            Vector3::new(
-                if i & 1 == 0 { -h[0] } else { h[0] },
-                if i & 2 == 0 { -h[1] } else { h[1] },
-                if i & 4 == 0 { -h[2] } else { h[2] },
-            )
-        })
-    };
-    match g {
-        Geometry::Box { size } => corners(size.map(|s| s / 2.0)).collect(),
-        Geometry::Cylinder { radius, length } => circle(*radius, -length / 2.0)
-            .chain(circle(*radius, length / 2.0))
-            .collect(),
-        Geometry::Sphere { radius } => sphere(*radius, 0.0).collect(),
-        // Drawn (by the URDF) as a cylinder.
-        Geometry::Capsule { radius, length } => circle(*radius, -length / 2.0)
-            .chain(circle(*radius, length / 2.0))
-            .collect(),
-        Geometry::Mesh { scale, .. } => {
-            let s = scale.unwrap_or([1.0; 3]);
-            corners([s[0] / 2.0, s[1] / 2.0, s[2] / 2.0]).collect()
-        }
-    }
-}
-
-fn matrix(r: [[f64; 3]; 3]) -> Matrix3<f64> {
-    Matrix3::from_fn(|i, j| r[i][j])
-}
-
-/// The projected extent of every visual of `drawn` (the served description) at
-/// configuration `q`, by twinloop-dynamics' frame placements.
-fn predicted_extent(
-    drawn: &Description,
-    q: &[f64],
-    width: usize,
-    height: usize,
-) -> (f64, f64, f64, f64) {
-    let model = Model::from_description(drawn).unwrap();
-    let mut data = Data::new(&model);
-    frames_forward_kinematics(&model, &mut data, q);
-    let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-    for link in &drawn.links {
-        let f = model.frame_index(&link.name).unwrap();
-        let o = &data.o_m_f[f];
-        for v in &link.visuals {
-            let r = matrix(v.origin.rotation());
-            let t = Vector3::from(v.origin.xyz);
-            for p in geometry_points(&v.geometry) {
-                let w = o.rotation * (r * p + t) + o.translation;
-                let (x, y) = project(&w, width, height);
-                x0 = x0.min(x);
-                y0 = y0.min(y);
-                x1 = x1.max(x);
-                y1 = y1.max(y);
-            }
-        }
-    }
-    (x0, y0, x1, y1)
-}
-
-fn assert_extent_close(seen: (f64, f64, f64, f64), want: (f64, f64, f64, f64), what: &str) {
-    // A pixel of rasterisation and one of antialiasing at each edge.
-    let tol = 2.5;
-    let (s, w) = (
-        [seen.0, seen.1, seen.2, seen.3],
-        [want.0, want.1, want.2, want.3],
-    );
-    for k in 0..4 {
-        assert!(
-            (s[k] - w[k]).abs() <= tol,
-            "{what}: silhouette {seen:?} vs forward kinematics {want:?} (edge {k})"
-        );
-    }
-}
-
-// ---------- recordings made for the tests ----------
-
-/// A table of two poses, at t = 0 and t = 1, for `model`'s coordinates.
-fn two_pose_table(model: &Model, a: &[f64], b: &[f64]) -> Table {
-    let mut columns = vec!["t".to_string()];
-    columns.extend(model.q_names().iter().map(|n| format!("q:{n}")));
-    let mut table = Table::new(columns);
-    for (t, q) in [(0.0, a), (1.0, b)] {
-        let mut row = vec![t];
-        row.extend_from_slice(q);
-        table.rows.push(row);
-    }
-    table
-}
-
-/// A configuration: base at `xyz` turned `yaw` about z, the named joints set, the
-/// others at zero. Values are f32-exact (the page receives f32).
-fn configuration(model: &Model, xyz: [f64; 3], yaw: f64, joints: &[(&str, f64)]) -> Vec<f64> {
-    let mut q = vec![0.0; model.nq];
-    let r = |x: f64| x as f32 as f64;
-    q[..3].copy_from_slice(&xyz.map(r));
-    let (s, c) = (yaw / 2.0).sin_cos();
-    q[5] = r(s);
-    q[6] = r(c);
-    let names = model.q_names();
-    for (name, v) in joints {
-        let k = names
-            .iter()
-            .position(|n| n == name)
-            .unwrap_or_else(|| panic!("{name}"));
-        q[k] = r(*v);
-    }
-    q
-}
-
-fn km20() -> (Description, Model) {
-    let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
-    let model = Model::from_description(&robot).unwrap();
-    (robot, model)
-}
-
-fn pose_a(model: &Model) -> Vec<f64> {
-    configuration(
-        model,
-        [0.05, -0.03, 0.30],
-        0.3,
-        &[
-            ("l_sho_pitch", -1.2),
-            ("r_sho_roll", -0.8),
-            ("l_knee", 0.7),
-            ("l_hip_pitch", -0.5),
-        ],
-    )
-}
-
-fn pose_b(model: &Model) -> Vec<f64> {
-    configuration(
-        model,
-        [-0.04, 0.02, 0.28],
-        -0.4,
-        &[
-            ("r_sho_pitch", 1.3),
-            ("l_sho_roll", 0.9),
-            ("head_pan", 0.5),
-            ("r_knee", 1.0),
-        ],
-    )
-}
+#[allow(dead_code)]
+#[path = "support/page.rs"]
+mod page;
+use chromium::{browser, tempdir};
+use page::*;
 
 // ---------- the tests ----------
 
@@ -342,7 +38,7 @@ fn km20_replay_draws_the_robot_where_forward_kinematics_puts_it() {
     let (robot, model) = km20();
     let (a, b) = (pose_a(&model), pose_b(&model));
     let scene = Scene::new(&robot, None, &[]);
-    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    let drawn = drawn(&scene);
     let rec = Recording::from_table(
         &two_pose_table(&model, &a, &b),
         Path::new("ab.csv"),
@@ -384,7 +80,7 @@ fn a_second_recording_is_drawn_as_a_ghost_where_its_data_put_it() {
     let Some(chromium) = browser() else { return };
     let (robot, model) = km20();
     let scene = Scene::new(&robot, None, &[]);
-    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    let drawn = drawn(&scene);
     let a = pose_a(&model);
     // The ghost: pose B moved 0.35 m to the side.
     let mut b = pose_b(&model);
@@ -439,7 +135,7 @@ fn meshes_load_and_a_missing_one_is_a_box_with_a_warning() {
     let robot = twinloop_description::load(&path).unwrap();
     let model = Model::from_description(&robot).unwrap();
     let scene = Scene::new(&robot, Some(&path), &[]);
-    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    let drawn = drawn(&scene);
     let q = configuration(&model, [0.0, 0.0, 0.0], 0.0, &[("shoulder", 0.7)]);
     let rec = Recording::from_table(
         &two_pose_table(&model, &q, &q),
@@ -474,7 +170,7 @@ fn a_collada_mesh_is_drawn_where_and_as_large_as_the_description_says() {
     let model = Model::from_description(&robot).unwrap();
     let scene = Scene::new(&robot, Some(&path), &[]);
     assert_eq!(scene.info.warnings, Vec::<String>::new());
-    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    let drawn = drawn(&scene);
     let q = configuration(&model, [0.0, 0.0, 0.0], 0.0, &[("shoulder", -0.9)]);
     let rec = Recording::from_table(
         &two_pose_table(&model, &q, &q),
@@ -516,6 +212,7 @@ fn g1_with_its_meshes_loads_and_its_com_follows_the_pose() {
         Vec::<String>::new(),
         "every mesh found"
     );
+    let drawn = drawn(&scene);
     assert!(scene.info.meshes.len() >= 30, "{}", scene.info.meshes.len());
     let q = configuration(
         &model,
@@ -539,7 +236,7 @@ fn g1_with_its_meshes_loads_and_its_com_follows_the_pose() {
         recordings: vec![rec],
         live: None,
     });
-    let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
+    let page = load(&chromium, &format!("{url}{}", TALL.query(0.0)));
     assert_clean(&page);
     assert_no_misses(&misses);
     assert_eq!(
@@ -548,7 +245,10 @@ fn g1_with_its_meshes_loads_and_its_com_follows_the_pose() {
         "{}",
         page.status
     );
-    silhouette(&page.image);
+    // The silhouette spans the mesh vertices placed by forward kinematics.
+    let img = &page.image;
+    let want = TALL.extent(&drawn, &q, img.width, img.height);
+    assert_extent_close(silhouette(img), want, "G1 with its meshes");
     let com = center_of_mass(&model, &mut Data::new(&model), &q);
     let seen: Vec<f64> = page.status["com"]
         .as_array()
@@ -564,28 +264,93 @@ fn g1_with_its_meshes_loads_and_its_com_follows_the_pose() {
     }
 }
 
+/// OP3's URDF and MJCF name 21 STL meshes each that are not in this repository.
+/// Without them each visual is drawn as a stand-in (the link's collision primitive or
+/// its inertia box, orange) with one warning per mesh, and the silhouette spans those
+/// stand-ins placed by forward kinematics. With them (`TWINLOOP_OP3_MESHES=DIR`, the
+/// ROBOTIS `op3_description` package folder holding `meshes/`, given as
+/// `--package-dir op3_description=DIR`; `TWINLOOP_OP3_MJCF_ASSETS=DIR`, MuJoCo
+/// Menagerie's `robotis_op3/assets`, put beside a copy of the MJCF) there is no
+/// warning and the silhouette spans the meshes' vertices.
 #[test]
-fn op3_urdf_and_mjcf_load_without_console_errors() {
+fn op3_urdf_and_mjcf_load_with_their_meshes_or_stand_ins() {
     let Some(chromium) = browser() else { return };
     let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/op3");
-    for file in ["robotis_op3.urdf", "mjcf/op3.xml"] {
-        let path = models.join(file);
+    let urdf_meshes = std::env::var_os("TWINLOOP_OP3_MESHES").map(std::path::PathBuf::from);
+    let mjcf_assets = std::env::var_os("TWINLOOP_OP3_MJCF_ASSETS").map(std::path::PathBuf::from);
+    let tmp = tempdir("op3");
+    for (file, meshes) in [
+        ("robotis_op3.urdf", urdf_meshes),
+        ("mjcf/op3.xml", mjcf_assets),
+    ] {
+        let mut path = models.join(file);
+        let mut packages = Vec::new();
+        match &meshes {
+            Some(dir) if file.ends_with(".urdf") => packages.push(twinloop_view::PackageDir {
+                name: "op3_description".into(),
+                dir: dir.clone(),
+            }),
+            Some(dir) => {
+                // The MJCF finds its meshes in `assets/` beside it.
+                let copy = tmp.join("op3.xml");
+                std::fs::copy(&path, &copy).unwrap();
+                std::os::unix::fs::symlink(dir, tmp.join("assets")).unwrap();
+                path = copy;
+            }
+            None => {}
+        }
         let robot = twinloop_description::load(&path).unwrap();
-        let scene = Scene::new(&robot, Some(&path), &[]);
-        let n_missing = scene.info.meshes.len();
-        assert!(n_missing > 0, "{file}: no meshes named?");
+        let model = Model::from_description(&robot).unwrap();
+        let scene = Scene::new(&robot, Some(&path), &packages);
+        let n_meshes = scene.info.meshes.len();
+        assert!(n_meshes > 0, "{file}: no meshes named?");
+        let drawn = drawn(&scene);
+        let names = model.q_names();
+        let q = configuration(
+            &model,
+            [0.0, 0.0, 0.3],
+            0.3,
+            &[(names[9].as_str(), 0.6), (names[20].as_str(), -0.7)],
+        );
+        let rec = Recording::from_table(
+            &two_pose_table(&model, &q, &q),
+            Path::new("op3.csv"),
+            &scene.info,
+        )
+        .unwrap();
         let (url, misses) = serve_with_misses(Content {
             scene,
-            recordings: vec![],
+            recordings: vec![rec],
             live: None,
         });
         let page = load(&chromium, &format!("{url}{}", view_query(0.0)));
         assert_clean(&page);
         assert_no_misses(&misses);
-        let warnings = page.status["warnings"].as_array().unwrap();
-        assert_eq!(warnings.len(), n_missing, "{file}: {warnings:?}");
-        silhouette(&page.image);
+        let warnings: Vec<&str> = page.status["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| w.as_str().unwrap())
+            .collect();
+        let what = if meshes.is_some() {
+            assert_eq!(warnings, Vec::<&str>::new(), "{file} with its meshes");
+            format!("{file} with its meshes")
+        } else {
+            assert_eq!(warnings.len(), n_meshes, "{file}: {warnings:?}");
+            for w in &warnings {
+                assert!(
+                    w.contains(".stl")
+                        && w.contains("drawn as its collision primitive or inertia box"),
+                    "{file}: {w}"
+                );
+            }
+            format!("{file} with stand-ins")
+        };
+        let img = &page.image;
+        let want = predicted_extent(&drawn, &q, img.width, img.height);
+        assert_extent_close(silhouette(img), want, &what);
     }
+    let _ = std::fs::remove_dir_all(tmp);
 }
 
 #[test]
@@ -646,13 +411,89 @@ fn the_exported_file_renders_the_same_without_a_server() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// An export carries its meshes: G1 (35 decimated STL meshes) and the COLLADA test
+/// robot, each written with `export_html` and opened from `file://` before any server
+/// for it exists, draw no warning, span what forward kinematics puts their mesh
+/// vertices at, and match the page served afterwards (silhouette and CoM).
+#[test]
+fn an_export_with_meshes_renders_with_no_server() {
+    let Some(chromium) = browser() else { return };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let g1 = root.join("../../models/unitree_g1/g1_29dof_rev_1_0.decimated.urdf");
+    let dae = root.join("tests/data/mesh_robot/urdf/dae_robot.urdf");
+    let dir = tempdir("export-meshes");
+    type Case<'a> = (&'a Path, &'a Camera, &'a [(&'a str, f64)]);
+    let cases: [Case; 2] = [
+        (
+            &g1,
+            &TALL,
+            &[
+                ("left_knee_joint", 0.9),
+                ("right_shoulder_roll_joint", -0.8),
+            ],
+        ),
+        (&dae, &CAMERA, &[("shoulder", -0.9)]),
+    ];
+    for (path, cam, joints) in cases {
+        let robot = twinloop_description::load(path).unwrap();
+        let model = Model::from_description(&robot).unwrap();
+        let scene = Scene::new(&robot, Some(path), &[]);
+        assert_eq!(
+            scene.info.warnings,
+            Vec::<String>::new(),
+            "{}",
+            path.display()
+        );
+        let drawn = drawn(&scene);
+        let q = configuration(&model, [0.05, -0.1, 0.4], 0.3, joints);
+        let rec = Recording::from_table(
+            &two_pose_table(&model, &q, &q),
+            Path::new("pose.csv"),
+            &scene.info,
+        )
+        .unwrap();
+        let content = Content {
+            scene,
+            recordings: vec![rec],
+            live: None,
+        };
+        let file = dir.join(format!("{}.html", robot.name));
+        std::fs::write(&file, twinloop_view::export_html(&content).unwrap()).unwrap();
+        let exported = load(
+            &chromium,
+            &format!("file://{}{}", file.display(), cam.query(0.0)),
+        );
+        assert_clean(&exported);
+        assert_eq!(
+            exported.status["warnings"].as_array().unwrap().len(),
+            0,
+            "{}",
+            exported.status
+        );
+        let img = &exported.image;
+        let what = format!("{} exported", robot.name);
+        assert_extent_close(
+            silhouette(img),
+            cam.extent(&drawn, &q, img.width, img.height),
+            &what,
+        );
+        let (url, misses) = serve_with_misses(content);
+        let served = load(&chromium, &format!("{url}{}", cam.query(0.0)));
+        assert_clean(&served);
+        assert_no_misses(&misses);
+        assert_extent_close(silhouette(img), silhouette(&served.image), &what);
+        assert_eq!(exported.status["com"], served.status["com"], "{what}");
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 #[test]
 fn the_live_page_draws_the_state_it_receives() {
     let Some(chromium) = browser() else { return };
     let (robot, model) = km20();
     let a = pose_a(&model);
     let scene = Scene::new(&robot, None, &[]);
-    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    let drawn = drawn(&scene);
     // The joints in the scene's order, from the model's configuration.
     let names = model.q_names();
     let joints: Vec<f64> = scene
@@ -719,7 +560,7 @@ fn the_joint_sliders_pose_the_robot_and_its_com() {
     let Some(chromium) = browser() else { return };
     let (robot, model) = km20();
     let scene = Scene::new(&robot, None, &[]);
-    let drawn = twinloop_description::urdf::from_str(&scene.urdf).unwrap();
+    let drawn = drawn(&scene);
     let (url, misses) = serve_with_misses(Content {
         scene,
         recordings: vec![],
@@ -728,18 +569,12 @@ fn the_joint_sliders_pose_the_robot_and_its_com() {
     // Without a recording the robot stands on the ground at its zero pose: the root
     // is lifted by the depth of the lowest visual point below it.
     let zero = configuration(&model, [0.0; 3], 0.0, &[]);
+    let lowest = drawn
+        .world_points(&zero)
+        .iter()
+        .map(|p| p.z)
+        .fold(f64::MAX, f64::min);
     let mut data = Data::new(&model);
-    frames_forward_kinematics(&model, &mut data, &zero);
-    let mut lowest = f64::MAX;
-    for link in &drawn.links {
-        let o = &data.o_m_f[model.frame_index(&link.name).unwrap()];
-        for v in &link.visuals {
-            let (r, t) = (matrix(v.origin.rotation()), Vector3::from(v.origin.xyz));
-            for p in geometry_points(&v.geometry) {
-                lowest = lowest.min((o.rotation * (r * p + t) + o.translation).z);
-            }
-        }
-    }
     let joints = [("l_sho_pitch", -1.0), ("r_knee", 0.9), ("head_pan", 0.6)];
     let q = configuration(&model, [0.0, 0.0, -lowest], 0.0, &joints);
     let pose: Vec<String> = joints.iter().map(|(j, v)| format!("{j}:{v}")).collect();

@@ -11,9 +11,16 @@
 //   bare=1         the 3D view alone, filling the window
 //   bg=RRGGBB      background colour; overlays=a,b,...  overlays on (grid, com, support, ...)
 //   snapshot=1     put the rendered image (PNG data URL) in #snapshot
-  //   pose=j:rad,... pose the robot by the joint sliders
-  //   aa=0|1         antialiasing off/on (default: off with software WebGL)
-  //   bench=S        play S seconds at 1x from the start and report frame times in #status
+//   pose=j:rad,... pose the robot by the joint sliders
+//   aa=0|1         antialiasing off/on (default: off with software WebGL)
+//   bench=S        play S seconds at 1x from the start and report frame times in #status
+//
+// Speed. A frame's work does not grow with the recording: the row shown is found
+// from the last one (a binary search after a jump), the robot is posed and its CoM
+// and support polygon computed only when that row changes, nothing is allocated per
+// frame, and the clock, scrub bar, plot cursor and sliders follow playback at 10 Hz
+// (each DOM change costs the browser a layout and a repaint). The visual meshes of
+// each link are merged into one draw call: software WebGL pays for every call.
 'use strict';
 (function () {
   const { THREE, OrbitControls, STLLoader, OBJLoader, ColladaLoader, URDFLoader, uPlot } = window.TL;
@@ -23,12 +30,24 @@
   const SWATCHES = ['#9e9e9e', '#1e88e5', '#e53935', '#43a047', '#8e24aa'];
   const GRAVITY = 9.81;
   const CONTACT_HEIGHT = 0.01; // m: geometry this close to the ground counts as touching it
-  const MAX_SUPPORT_POINTS = 256;
+  const UI_PERIOD_MS = 100; // the clock, scrub bar, plot cursor and sliders during playback
+  const COP_WEIGHT_LENGTH = 0.4; // m: the ground-reaction arrow of the robot's weight
 
   // ---- status for people (banner) and for tests (#status JSON) ----
-  const status = { ready: false, errors: [], warnings: [], recordings: [], com: null, frame: 0, antialias: null };
+  // `com`, `overlays` and `timeline` are computed when read (JSON.stringify reads
+  // them): nothing is built per frame for them.
+  const safe = (f) => { try { return f(); } catch (e) { return null; } };
+  const status = {
+    ready: false, errors: [], warnings: [], recordings: [], frame: 0, antialias: null,
+    get com() { return safe(() => comOf(0)); },
+    get overlays() { return safe(overlayReport); },
+    get timeline() { return safe(timelineReport); },
+  };
   window.twinloop = status;
   const statusEl = document.getElementById('status');
+  const scrub = document.getElementById('scrub');
+  const clock = document.getElementById('clock');
+  const sliderPanel = document.getElementById('sliders');
   function publish() { statusEl.textContent = JSON.stringify(status); }
   const consoleError = console.error.bind(console);
   console.error = function (...args) {
@@ -158,94 +177,210 @@
     });
   }
 
-  // Give a robot its own materials: the solid one keeps its colours, a ghost is
-  // translucent in one colour.
-  function paint(robot, colour) {
-    robot.traverse((c) => {
-      if (!c.isMesh) return;
-      const m = (Array.isArray(c.material) ? c.material[0] : c.material).clone();
-      if (colour !== null) {
-        m.color = new THREE.Color(colour);
-        m.transparent = true;
-        m.opacity = 0.35;
-        m.depthWrite = false;
+  // ---- one draw call per link ----
+  // Software WebGL pays for every draw call (measured in headless Chromium: km20's
+  // 133 visual meshes took 5 ms of CPU a frame), so each link's visual meshes are
+  // merged into one geometry in the link's frame, coloured per vertex. Meshes with
+  // a texture or a translucent material keep their own draw call.
+  const tmpMat = new THREE.Matrix4(), tmpInv = new THREE.Matrix4(), tmpNormalMat = new THREE.Matrix3();
+  const tmpV = new THREE.Vector3(), tmpN = new THREE.Vector3();
+
+  // The meshes drawn for `link` itself (not for the links below its joints).
+  function ownMeshes(link) {
+    const out = [];
+    const walk = (o) => {
+      for (const c of o.children) {
+        if (c.isURDFJoint || c.userData.overlay) continue;
+        if (c.isMesh) out.push(c);
+        walk(c);
       }
-      c.material = m;
-      c.userData.baseColour = m.color.clone();
+    };
+    walk(link);
+    return out;
+  }
+  function mergeable(m) {
+    const mat = m.material;
+    return !Array.isArray(mat) && !mat.map && !mat.transparent && !m.isSkinnedMesh && !m.isInstancedMesh &&
+      m.geometry.attributes.position && (m.geometry.index ? m.geometry.index.count : m.geometry.attributes.position.count) % 3 === 0;
+  }
+  // One geometry: the triangles of `parts`, placed by `toLink` (each part's pose in
+  // the link frame), with normals and the colour of each part's material. Indexed,
+  // as most parts are: shared corners are shaded once.
+  function mergeGeometry(parts, toLink) {
+    const geoms = parts.map((m) => {
+      let g = m.geometry;
+      if (!g.attributes.normal) { g = g.clone(); g.computeVertexNormals(); }
+      return g;
     });
+    let nv = 0, ni = 0;
+    for (const g of geoms) { nv += g.attributes.position.count; ni += g.index ? g.index.count : g.attributes.position.count; }
+    const pos = new Float32Array(3 * nv), nor = new Float32Array(3 * nv), col = new Float32Array(3 * nv);
+    const index = nv > 65535 ? new Uint32Array(ni) : new Uint16Array(ni);
+    let v0 = 0, k = 0;
+    parts.forEach((m, i) => {
+      const g = geoms[i], p = g.attributes.position, n = g.attributes.normal, c = m.material.color;
+      tmpMat.copy(toLink[i]);
+      tmpNormalMat.getNormalMatrix(tmpMat);
+      for (let v = 0; v < p.count; v++) {
+        const o = 3 * (v0 + v);
+        tmpV.fromBufferAttribute(p, v).applyMatrix4(tmpMat);
+        tmpN.fromBufferAttribute(n, v).applyMatrix3(tmpNormalMat).normalize();
+        pos[o] = tmpV.x; pos[o + 1] = tmpV.y; pos[o + 2] = tmpV.z;
+        nor[o] = tmpN.x; nor[o + 1] = tmpN.y; nor[o + 2] = tmpN.z;
+        col[o] = c.r; col[o + 1] = c.g; col[o + 2] = c.b;
+      }
+      // A mirroring placement turns the triangles inside out: swap two corners back.
+      const flip = tmpMat.determinant() < 0;
+      const idx = g.index, count = idx ? idx.count : p.count;
+      for (let t = 0; t < count; t += 3) {
+        const a = idx ? idx.getX(t) : t, b = idx ? idx.getX(t + 1) : t + 1, d = idx ? idx.getX(t + 2) : t + 2;
+        index[k++] = v0 + a; index[k++] = v0 + (flip ? d : b); index[k++] = v0 + (flip ? b : d);
+      }
+      v0 += p.count;
+    });
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+    g.setAttribute('normal', new THREE.BufferAttribute(nor, 3));
+    g.setAttribute('color', new THREE.BufferAttribute(col, 3));
+    g.setIndex(new THREE.BufferAttribute(index, 1));
+    g.computeBoundingBox();
+    g.computeBoundingSphere();
+    return g;
   }
 
-  // ---- geometry helpers ----
-  const tmpBox = new THREE.Box3();
-  const tmpV = new THREE.Vector3();
-  function visualMeshes(robot) {
-    const out = [];
-    robot.traverse((c) => { if (c.isMesh && !c.userData.overlay) out.push(c); });
-    return out;
+  // Make a robot ready to draw: its links' meshes merged (solid: coloured as the
+  // description says; a ghost, `colour` not null: translucent in that colour), and
+  // for each link the corners of its visuals' bounding boxes in the link frame (for
+  // the support polygon and to stand the robot on the ground).
+  function prepareRobot(robot, colour) {
+    robot.updateMatrixWorld(true);
+    const ghost = colour !== null;
+    const shared = ghost
+      ? new THREE.MeshPhongMaterial({ color: colour, transparent: true, opacity: 0.35, depthWrite: false })
+      : new THREE.MeshPhongMaterial({ vertexColors: true });
+    const links = [];
+    robot.traverse((o) => { if (o.isURDFLink) links.push(o); });
+    const drawn = new Map(); // link -> [{ mesh, base (material or colour) }]
+    const corners = [];      // { link, local: Float64Array of x, y, z }
+    for (const link of links) {
+      const meshes = ownMeshes(link);
+      if (!meshes.length) continue;
+      tmpInv.copy(link.matrixWorld).invert();
+      const toLink = meshes.map((m) => new THREE.Matrix4().multiplyMatrices(tmpInv, m.matrixWorld));
+      const local = new Float64Array(24 * meshes.length);
+      meshes.forEach((m, i) => {
+        if (!m.geometry.boundingBox) m.geometry.computeBoundingBox();
+        const b = m.geometry.boundingBox;
+        for (let c = 0; c < 8; c++) {
+          tmpV.set(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y, c & 4 ? b.max.z : b.min.z).applyMatrix4(toLink[i]);
+          local[24 * i + 3 * c] = tmpV.x; local[24 * i + 3 * c + 1] = tmpV.y; local[24 * i + 3 * c + 2] = tmpV.z;
+        }
+      });
+      corners.push({ link, local });
+      const merge = [], mergeTo = [], list = [];
+      meshes.forEach((m, i) => {
+        if (mergeable(m)) { merge.push(m); mergeTo.push(toLink[i]); m.parent.remove(m); return; }
+        // Kept as it is: its own material (translucent in the ghost's colour).
+        const mat = (Array.isArray(m.material) ? m.material[0] : m.material).clone();
+        if (ghost) Object.assign(mat, { transparent: true, opacity: 0.35, depthWrite: false }).color = new THREE.Color(colour);
+        m.material = mat;
+        list.push({ mesh: m, base: mat.color.clone() });
+      });
+      if (merge.length) {
+        const mesh = new THREE.Mesh(mergeGeometry(merge, mergeTo), shared);
+        mesh.userData.merged = true;
+        link.add(mesh);
+        list.push({ mesh, base: shared });
+      }
+      drawn.set(link, list);
+    }
+    robot.updateMatrixWorld(true);
+    return { drawn, corners };
   }
-  // World corners of each visual's bounding box, into `out` (reused frame to frame).
-  function visualCorners(meshes, out) {
-    while (out.length < 8 * meshes.length) out.push(new THREE.Vector3());
+  const LIMIT_MATERIAL = new THREE.MeshPhongMaterial({ color: 0xd32f2f });
+
+  // World corners of every visual's bounding box, into `out` (x, y, z; grown once).
+  function worldCorners(corners, out) {
     let k = 0;
-    for (const m of meshes) {
-      const g = m.geometry;
-      if (!g.boundingBox) g.computeBoundingBox();
-      const b = g.boundingBox;
-      for (let i = 0; i < 8; i++) {
-        out[k++].set(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z).applyMatrix4(m.matrixWorld);
+    for (const { link, local } of corners) {
+      const e = link.matrixWorld.elements;
+      for (let i = 0; i < local.length; i += 3) {
+        const x = local[i], y = local[i + 1], z = local[i + 2];
+        out[k++] = e[0] * x + e[4] * y + e[8] * z + e[12];
+        out[k++] = e[1] * x + e[5] * y + e[9] * z + e[13];
+        out[k++] = e[2] * x + e[6] * y + e[10] * z + e[14];
       }
     }
-    return out;
+    return k / 3;
   }
-  // The world bounding box of a robot's visual geometry (not its overlays).
-  const tmpMeshBox = new THREE.Box3();
-  function visualBox(robot, box) {
+  function cornerCount(corners) { return corners.reduce((n, c) => n + c.local.length / 3, 0); }
+  // The world bounding box of a robot's visual geometry (the corners of its visuals'
+  // boxes; not its overlays).
+  function visualBox(actor, box) {
     box.makeEmpty();
-    for (const m of visualMeshes(robot)) {
-      if (!m.geometry.boundingBox) m.geometry.computeBoundingBox();
-      box.union(tmpMeshBox.copy(m.geometry.boundingBox).applyMatrix4(m.matrixWorld));
-    }
+    const n = worldCorners(actor.corners, actor.cornerBuf);
+    for (let i = 0; i < n; i++) box.expandByPoint(tmpV.set(actor.cornerBuf[3 * i], actor.cornerBuf[3 * i + 1], actor.cornerBuf[3 * i + 2]));
     return box;
   }
-  // Andrew's monotone chain: the convex hull of 2-D points, counter-clockwise.
-  function convexHull(points) {
-    const p = points.slice().sort((a, b) => a.x - b.x || a.y - b.y);
-    if (p.length < 3) return p;
-    const cross = (o, a, b) => (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
-    const lower = [], upper = [];
-    for (const q of p) {
-      while (lower.length >= 2 && cross(lower[lower.length - 2], lower[lower.length - 1], q) <= 0) lower.pop();
-      lower.push(q);
+  const tmpBox = new THREE.Box3();
+
+  // Andrew's monotone chain: the convex hull of the points (hx[i], hy[i]) for i in
+  // `idx[0..n)`, counter-clockwise, as indices into `hull` (room for 2n); returns its
+  // length. Works in the arrays given (no allocation).
+  let hx = null, hy = null;
+  const byXY = (a, b) => hx[a] - hx[b] || hy[a] - hy[b];
+  const cross = (o, a, b) => (hx[a] - hx[o]) * (hy[b] - hy[o]) - (hy[a] - hy[o]) * (hx[b] - hx[o]);
+  function convexHull(xs, ys, idx, n, hull) {
+    hx = xs; hy = ys;
+    const sub = idx.subarray(0, n);
+    sub.sort(byXY);
+    if (n < 3) { for (let i = 0; i < n; i++) hull[i] = sub[i]; return n; }
+    let k = 0;
+    for (let i = 0; i < n; i++) {
+      while (k >= 2 && cross(hull[k - 2], hull[k - 1], sub[i]) <= 0) k--;
+      hull[k++] = sub[i];
     }
-    for (let i = p.length - 1; i >= 0; i--) {
-      const q = p[i];
-      while (upper.length >= 2 && cross(upper[upper.length - 2], upper[upper.length - 1], q) <= 0) upper.pop();
-      upper.push(q);
+    for (let i = n - 2, lower = k + 1; i >= 0; i--) {
+      while (k >= lower && cross(hull[k - 2], hull[k - 1], sub[i]) <= 0) k--;
+      hull[k++] = sub[i];
     }
-    upper.pop(); lower.pop();
-    return lower.concat(upper);
+    return k - 1;
   }
 
   // ---- overlays of one robot ----
-  function makeOverlays(robot, info, colour) {
+  // The CoM and support polygon are computed when the robot's pose changes, the
+  // visibility of each overlay when a checkbox changes: a frame that shows the same
+  // row again costs nothing here.
+  function makeOverlays(actor, info, colour) {
+    const robot = actor.robot;
     const group = new THREE.Group();
     scene.add(group);
     const tint = colour === null ? 0xd32f2f : colour;
     const com = new THREE.Mesh(new THREE.SphereGeometry(0.015, 16, 12), new THREE.MeshBasicMaterial({ color: tint }));
     const comGround = new THREE.Mesh(new THREE.CircleGeometry(0.012, 24), new THREE.MeshBasicMaterial({ color: tint }));
-    const comLineGeom = new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3()]);
+    // The plumb line from the CoM: positions and dash distances written in place.
+    const comLineGeom = new THREE.BufferGeometry();
+    const comLinePos = new THREE.BufferAttribute(new Float32Array(6), 3);
+    const comLineDist = new THREE.BufferAttribute(new Float32Array(2), 1);
+    comLineGeom.setAttribute('position', comLinePos);
+    comLineGeom.setAttribute('lineDistance', comLineDist);
     const comLine = new THREE.Line(comLineGeom, new THREE.LineDashedMaterial({ color: tint, dashSize: 0.01, gapSize: 0.01 }));
-    // One fixed buffer for the polygon (a new attribute each frame would leak GPU buffers).
+    // One fixed buffer for the polygon, room for every corner (a new attribute each
+    // time would leak GPU buffers).
+    const nCorners = Math.max(cornerCount(actor.corners), 1);
     const supportGeom = new THREE.BufferGeometry();
-    const supportPos = new THREE.BufferAttribute(new Float32Array(3 * MAX_SUPPORT_POINTS), 3);
+    const supportPos = new THREE.BufferAttribute(new Float32Array(3 * nCorners), 3);
     supportPos.setUsage(THREE.DynamicDrawUsage);
     supportGeom.setAttribute('position', supportPos);
     supportGeom.setDrawRange(0, 0);
     const support = new THREE.LineLoop(supportGeom, new THREE.LineBasicMaterial({ color: colour === null ? 0x2e7d32 : colour }));
     const comGroup = new THREE.Group();
     comGroup.add(com, comGround, comLine);
-    // Drawn over the robot: the CoM is inside the body.
+    // Drawn over the robot: the CoM is inside the body. Their geometry moves, so
+    // their bounding spheres would be stale: never culled.
     for (const o of [com, comGround, comLine, support]) { o.material.depthTest = false; o.renderOrder = 10; }
+    comLine.frustumCulled = false;
+    support.frustumCulled = false;
     group.add(comGroup, support);
     // Link frames and inertia boxes ride on their links.
     const frames = [], boxes = [];
@@ -258,7 +393,7 @@
       axes.userData.overlay = true;
       axes.visible = false;
       link.add(axes);
-      frames.push(axes);
+      frames.push({ link: l.name, obj: axes });
       if (l.inertia_box) {
         const b = l.inertia_box;
         const box = new THREE.LineSegments(
@@ -269,39 +404,52 @@
         box.quaternion.setFromEuler(new THREE.Euler(b.rpy[0], b.rpy[1], b.rpy[2], 'ZYX'));
         box.visible = false;
         link.add(box);
-        boxes.push(box);
+        boxes.push({ link: l.name, obj: box });
       }
     }
     const totalMass = massive.reduce((s, m) => s + m.mass, 0);
-    const meshes = visualMeshes(robot);
-    const corners = [];
     const comWorld = new THREE.Vector3();
+    // Scratch for the support polygon, sized once.
+    const buf = actor.cornerBuf;
+    const xs = new Float64Array(nCorners), ys = new Float64Array(nCorners);
+    const idx = new Uint32Array(nCorners), hull = new Uint32Array(2 * nCorners + 2);
+    let hullN = 0, supportStale = true, shownVersion = -1;
     return {
       group, comGroup, support, frames, boxes, comWorld,
-      update(show) {
-        comGroup.visible = show.com;
-        support.visible = show.support;
-        for (const f of frames) f.visible = show.frames;
-        for (const b of boxes) b.visible = show.inertia;
-        comWorld.set(0, 0, 0);
-        for (const m of massive) comWorld.addScaledVector(tmpV.copy(m.com).applyMatrix4(m.link.matrixWorld), m.mass);
-        if (totalMass > 0) comWorld.multiplyScalar(1 / totalMass);
-        com.position.copy(comWorld);
-        comGround.position.set(comWorld.x, comWorld.y, 0.001);
-        const pos = comLineGeom.attributes.position;
-        pos.setXYZ(0, comWorld.x, comWorld.y, comWorld.z);
-        pos.setXYZ(1, comWorld.x, comWorld.y, 0);
-        pos.needsUpdate = true;
-        comLine.computeLineDistances();
-        if (show.support) {
-          visualCorners(meshes, corners);
-          const touching = corners.filter((c) => c.z < CONTACT_HEIGHT);
-          const hull = convexHull(touching);
-          const n = Math.min(hull.length, MAX_SUPPORT_POINTS);
-          for (let i = 0; i < n; i++) supportPos.setXYZ(i, hull[i].x, hull[i].y, 0.002);
+      hull() { const out = []; for (let i = 0; i < hullN; i++) out.push([xs[hull[i]], ys[hull[i]]]); return out; },
+      // `posed`: the robot moved since the last call.
+      update(show, posed) {
+        if (shownVersion !== state.showVersion) {
+          shownVersion = state.showVersion;
+          comGroup.visible = show.com;
+          support.visible = show.support;
+          for (const f of frames) f.obj.visible = show.frames;
+          for (const b of boxes) b.obj.visible = show.inertia;
+        }
+        if (posed) {
+          comWorld.set(0, 0, 0);
+          for (const m of massive) comWorld.addScaledVector(tmpV.copy(m.com).applyMatrix4(m.link.matrixWorld), m.mass);
+          if (totalMass > 0) comWorld.multiplyScalar(1 / totalMass);
+          com.position.copy(comWorld);
+          comGround.position.set(comWorld.x, comWorld.y, 0.001);
+          comLinePos.setXYZ(0, comWorld.x, comWorld.y, comWorld.z);
+          comLinePos.setXYZ(1, comWorld.x, comWorld.y, 0);
+          comLinePos.needsUpdate = true;
+          comLineDist.setX(1, Math.abs(comWorld.z));
+          comLineDist.needsUpdate = true;
+          supportStale = true;
+        }
+        if (show.support && supportStale) {
+          supportStale = false;
+          const n = worldCorners(actor.corners, buf);
+          let m = 0;
+          for (let i = 0; i < n; i++) {
+            if (buf[3 * i + 2] < CONTACT_HEIGHT) { xs[m] = buf[3 * i]; ys[m] = buf[3 * i + 1]; idx[m] = m; m++; }
+          }
+          hullN = convexHull(xs, ys, idx, m, hull);
+          for (let i = 0; i < hullN; i++) supportPos.setXYZ(i, xs[hull[i]], ys[hull[i]], 0.002);
           supportPos.needsUpdate = true;
-          supportGeom.setDrawRange(0, n);
-          supportGeom.computeBoundingSphere();
+          supportGeom.setDrawRange(0, hullN);
         }
       },
     };
@@ -314,11 +462,18 @@
     info.columns.forEach((name, c) => { cols[name] = new Float32Array(buffer, c * info.rows * 4, info.rows); });
     return cols;
   }
-  // The last sample at or before time t (the first if t is earlier).
-  function sampleAt(t, times) {
-    let lo = 0, hi = times.length - 1;
+  // The last sample at or before time t (the first if t is earlier). Playback moves
+  // on by a row or a few from the last one found (`hint`): looked at first, so a
+  // frame costs the same for 100 rows or 100 000; a jump is a binary search.
+  function sampleAt(t, times, hint) {
+    const last = times.length - 1;
     if (t <= times[0]) return 0;
-    if (t >= times[hi]) return hi;
+    if (t >= times[last]) return last;
+    let lo = 0, hi = last;
+    if (hint > 0 && hint < last && times[hint] <= t) {
+      for (let k = 0; k < 8; k++, hint++) if (times[hint + 1] > t) return hint;
+      lo = hint;
+    }
     while (hi - lo > 1) {
       const mid = (lo + hi) >> 1;
       if (times[mid] <= t) lo = mid; else hi = mid;
@@ -326,55 +481,84 @@
     return lo;
   }
 
-  // ---- state ----
   const state = {
     info: null, urdf: null,
-    actors: [],          // {robot, overlays, rec|null, offset, colour, lift, visible}
+    actors: [],          // see main(): robot, rec|null, offset, colour, sample, joints, overlays, ...
     now: 0, t0: 0, t1: 0, playing: false, speed: 1, manual: false,
     show: { grid: true, com: true, support: true, cop: true, limits: true, frames: false, inertia: false },
+    showVersion: 0,
   };
   const LIMIT_COLOUR = new THREE.Color(0xd32f2f);
 
+  // Pose `actor` for the current time (its recording's row), the live state or the
+  // sliders; false when that is the pose it already has.
   function poseActor(actor) {
-    const { robot, rec } = actor;
-    const joints = state.info.joints;
+    const { robot, rec, joints } = actor;
+    const info = state.info.joints;
     if (rec && !state.manual) {
-      const i = sampleAt(state.now - actor.offset, rec.cols.t);
+      const i = sampleAt(state.now - actor.offset, rec.cols.t, actor.sample);
       actor.sample = i;
-      for (let j = 0; j < joints.length; j++) {
+      if (actor.posedBy === 'rec' && actor.posed === i) return false;
+      actor.posedBy = 'rec'; actor.posed = i;
+      for (let j = 0; j < info.length; j++) {
         const col = rec.jointCols[j];
-        robot.joints[joints[j].name] && robot.joints[joints[j].name].setJointValue(col ? col[i] : 0);
+        if (joints[j]) joints[j].setJointValue(col ? col[i] : 0);
       }
-      if (rec.info.has_base) {
-        const c = rec.cols;
-        robot.position.set(c['q:base.x'][i], c['q:base.y'][i], c['q:base.z'][i]);
-        robot.quaternion.set(c['q:base.qx'][i], c['q:base.qy'][i], c['q:base.qz'][i], c['q:base.qw'][i]).normalize();
+      if (rec.base) {
+        const b = rec.base;
+        robot.position.set(b[0][i], b[1][i], b[2][i]);
+        robot.quaternion.set(b[3][i], b[4][i], b[5][i], b[6][i]).normalize();
       }
     } else if (actor === state.actors[0] && live.frame && !state.manual) {
-      live.apply(robot);
+      if (actor.posedBy === 'live' && actor.posed === live.seq) return false;
+      actor.posedBy = 'live'; actor.posed = live.seq;
+      live.apply(actor);
     } else if (actor === state.actors[0]) {
-      sliders.apply(robot);
+      if (actor.posedBy === 'sliders' && actor.posed === sliders.version) return false;
+      actor.posedBy = 'sliders'; actor.posed = sliders.version;
+      sliders.apply(actor);
+    } else {
+      return false;
     }
     robot.updateMatrixWorld(true);
     if (state.show.limits && actor.colour === null) colourLimits(actor);
+    return true;
   }
 
-  function colourLimits(actor) {
-    for (const j of state.info.joints) {
-      const joint = actor.robot.joints[j.name];
-      if (!joint || j.lower === null || j.upper === null) continue;
-      const v = joint.angle;
-      const tol = Math.max(1e-3 * (j.upper - j.lower), 1e-4);
-      const atLimit = v <= j.lower + tol || v >= j.upper - tol;
-      if (atLimit === !!joint.userData.atLimit) continue;
-      joint.userData.atLimit = atLimit;
-      const link = joint.children.find((c) => c.isURDFLink);
-      if (!link) continue;
-      for (const c of link.children) {
-        if (!c.isURDFVisual) continue;
-        c.traverse((m) => { if (m.isMesh && m.userData.baseColour) m.material.color.copy(atLimit ? LIMIT_COLOUR : m.userData.baseColour); });
-      }
+  // A link's drawn meshes in the limit colour, or back in their own.
+  function paintLink(actor, link, red) {
+    const list = link && actor.drawn.get(link);
+    if (!list) return;
+    for (const d of list) {
+      if (d.mesh.userData.merged) d.mesh.material = red ? LIMIT_MATERIAL : d.base;
+      else d.mesh.material.color.copy(red ? LIMIT_COLOUR : d.base);
     }
+  }
+  function colourLimits(actor) {
+    for (const l of actor.limited) {
+      const v = l.joint.angle;
+      const atLimit = v <= l.lower + l.tol || v >= l.upper - l.tol;
+      if (atLimit === l.atLimit) continue;
+      l.atLimit = atLimit;
+      paintLink(actor, l.link, atLimit);
+    }
+  }
+  function clearLimits(actor) {
+    for (const l of actor.limited) if (l.atLimit) { l.atLimit = false; paintLink(actor, l.link, false); }
+  }
+  // The joints with both limits, and the link each moves.
+  function limitedJoints(robot) {
+    const out = [];
+    for (const j of state.info.joints) {
+      const joint = robot.joints[j.name];
+      if (!joint || j.lower === null || j.upper === null) continue;
+      out.push({
+        name: j.name, joint, lower: j.lower, upper: j.upper, atLimit: false,
+        tol: Math.max(1e-3 * (j.upper - j.lower), 1e-4),
+        link: joint.children.find((c) => c.isURDFLink) || null,
+      });
+    }
+    return out;
   }
 
   // Centre of pressure and ground reaction arrows from foot:* or grf/cop columns.
@@ -385,18 +569,19 @@
     for (const name of rec.info.columns) {
       const m = /^foot:(.+)\.fz$/.exec(name);
       if (m && rec.cols['foot:' + m[1] + '.cop.x'] && rec.cols['foot:' + m[1] + '.cop.y']) {
-        out.push({ fz: rec.cols[name], x: rec.cols['foot:' + m[1] + '.cop.x'], y: rec.cols['foot:' + m[1] + '.cop.y'] });
+        out.push({ name: 'foot:' + m[1], fz: rec.cols[name], x: rec.cols['foot:' + m[1] + '.cop.x'], y: rec.cols['foot:' + m[1] + '.cop.y'] });
       }
     }
     if (rec.cols['grf.fz'] && rec.cols['cop.x'] && rec.cols['cop.y']) {
-      out.push({ fz: rec.cols['grf.fz'], fx: rec.cols['grf.fx'], fy: rec.cols['grf.fy'], x: rec.cols['cop.x'], y: rec.cols['cop.y'] });
+      out.push({ name: 'grf', fz: rec.cols['grf.fz'], fx: rec.cols['grf.fx'], fy: rec.cols['grf.fy'], x: rec.cols['cop.x'], y: rec.cols['cop.y'] });
     }
     return out.map((s) => {
       const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 0.1, 0x00897b, 0.02, 0.012);
       // Drawn through the foot and leg it starts inside.
       for (const part of [arrow.line, arrow.cone]) { part.material.depthTest = false; part.renderOrder = 11; }
+      arrow.visible = false;
       copGroup.add(arrow);
-      return Object.assign(s, { arrow });
+      return Object.assign(s, { arrow, force: new THREE.Vector3() });
     });
   }
   function updateCop() {
@@ -404,71 +589,149 @@
     const main = state.actors[0];
     if (!main || !main.rec || !state.show.cop) return;
     const i = main.sample;
-    const scale = 0.4 / Math.max(state.info.total_mass * GRAVITY, 1); // body weight = 0.4 m
+    const scale = COP_WEIGHT_LENGTH / Math.max(state.info.total_mass * GRAVITY, 1);
     for (const s of main.rec.copSources) {
       const fz = s.fz[i];
-      const f = new THREE.Vector3(s.fx ? s.fx[i] : 0, s.fy ? s.fy[i] : 0, fz);
+      s.force.set(s.fx ? s.fx[i] : 0, s.fy ? s.fy[i] : 0, fz);
       const on = fz > 0.5 && Number.isFinite(s.x[i]) && Number.isFinite(s.y[i]);
       s.arrow.visible = on;
       if (!on) continue;
       s.arrow.position.set(s.x[i], s.y[i], 0.003);
-      s.arrow.setDirection(f.clone().normalize());
-      s.arrow.setLength(Math.max(f.length() * scale, 0.02), 0.02, 0.012);
+      s.arrow.setDirection(tmpN.copy(s.force).normalize());
+      s.arrow.setLength(Math.max(s.force.length() * scale, 0.02), 0.02, 0.012);
     }
   }
 
+  // ---- what the page shows, for tests (read when #status is written) ----
+  function shown(obj) {
+    for (let p = obj; p; p = p.parent) if (!p.visible) return false;
+    return true;
+  }
+  const xyz = (v) => [v.x, v.y, v.z];
+  function comOf(k) {
+    const a = state.actors[k];
+    return a ? xyz(a.overlays.comWorld) : null;
+  }
+  function overlayReport() {
+    const a = state.actors[0];
+    if (!a) return null;
+    const o = a.overlays;
+    const world = (obj) => xyz(obj.getWorldPosition(new THREE.Vector3()));
+    return {
+      on: Object.assign({}, state.show),
+      grid: shown(grid),
+      com: shown(o.comGroup) ? xyz(o.comWorld) : null,
+      support: shown(o.support) ? o.hull() : [],
+      cop: (a.rec ? a.rec.copSources : []).map((s) => ({
+        name: s.name, shown: shown(s.arrow), at: xyz(s.arrow.position), force: xyz(s.force),
+        direction: xyz(new THREE.Vector3(0, 1, 0).applyQuaternion(s.arrow.quaternion)),
+        length: s.arrow.cone.position.y,
+      })),
+      limits: a.limited.filter((l) => l.atLimit).map((l) => l.name),
+      limit_coloured: a.limited.filter((l) => l.link && (a.drawn.get(l.link) || []).some((d) => d.mesh.material === LIMIT_MATERIAL || (d.mesh.material.color && d.mesh.material.color.equals(LIMIT_COLOUR)))).map((l) => l.name),
+      frames: o.frames.filter((f) => shown(f.obj)).map((f) => ({ link: f.link, at: world(f.obj) })),
+      inertia: o.boxes.filter((b) => shown(b.obj)).map((b) => {
+        const g = b.obj.geometry;
+        if (!g.boundingBox) g.computeBoundingBox();
+        return { link: b.link, at: world(b.obj), size: xyz(g.boundingBox.getSize(new THREE.Vector3())) };
+      }),
+    };
+  }
+  function timelineReport() {
+    return {
+      now: state.now, t0: state.t0, t1: state.t1, playing: state.playing, speed: state.speed, manual: state.manual,
+      actors: state.actors.map((a) => ({
+        offset: a.offset, sample: a.sample,
+        t: a.rec ? a.rec.cols.t[a.sample] : null,
+        base: xyz(a.robot.position),
+      })),
+      // When `now` was computed (the animation frame's time, ms).
+      frame_time: lastTime,
+      plot: plots.u ? plots.u.series.slice(1).map((s, k) => {
+        const ys = plots.u.data[k + 1];
+        return { label: s.label, n: ys.length, first: ys[0], last: ys[ys.length - 1] };
+      }) : [],
+      clock: clock.textContent, scrub: Number(scrub.value),
+    };
+  }
+
   // ---- live: the newest state of a running source, over a websocket ----
+  // While connected the page draws on every animation frame with the newest state
+  // (the server sends a little faster than the screen, so almost every frame has a
+  // new one); lags are kept in fixed rings and summarised only when read.
+  const LAG_RING = 600;
   const live = {
-    frame: null, lags: [], recvLags: [], frames: 0,
+    frame: null, seq: 0, frames: 0, connected: false,
+    drawnSeq: 0, drawnT: null, drawnSent: 0, fresh: 0, drawnFrames: 0,
+    lags: new Float64Array(LAG_RING), nLags: 0,
+    recvLags: new Float64Array(LAG_RING), nRecv: 0,
+    scratch: new Float64Array(LAG_RING),
     connect() {
       const ws = new WebSocket((location.protocol === 'https:' ? 'wss://' : 'ws://') + location.host + '/live');
+      ws.onopen = () => { this.connected = true; requestRender(); };
       ws.onmessage = (e) => {
         this.frame = JSON.parse(e.data);
+        this.seq++;
         this.frames++;
         // Lag on arrival (server and network) apart from lag on screen (plus the
         // wait for the browser's next frame and the drawing).
-        this.recvLags.push(Date.now() - this.frame.sent_ms);
-        if (this.recvLags.length > 600) this.recvLags.shift();
-        this.pending = true;
+        this.recvLags[this.nRecv++ % LAG_RING] = Date.now() - this.frame.sent_ms;
         requestRender();
       };
-      ws.onclose = () => { warn('live view: the connection closed (the source stopped or the server ended)'); };
+      ws.onclose = () => {
+        this.connected = false;
+        warn('live view: the connection closed (the source stopped or the server ended)');
+      };
       document.getElementById('no-recordings').textContent = 'live';
     },
-    apply(robot) {
-      const f = this.frame;
-      const joints = state.info.joints;
+    apply(actor) {
+      const f = this.frame, joints = actor.joints;
       for (let j = 0; j < joints.length; j++) {
         const v = f.q[j];
-        if (v !== null && robot.joints[joints[j].name]) robot.joints[joints[j].name].setJointValue(v);
+        if (v !== null && v !== undefined && joints[j]) joints[j].setJointValue(v);
       }
-      if (f.base && f.base.every((v) => v !== null)) {
-        robot.position.set(f.base[0], f.base[1], f.base[2]);
-        robot.quaternion.set(f.base[3], f.base[4], f.base[5], f.base[6]).normalize();
+      const b = f.base;
+      if (b && b[0] !== null && b[1] !== null && b[2] !== null && b[3] !== null && b[4] !== null && b[5] !== null && b[6] !== null) {
+        actor.robot.position.set(b[0], b[1], b[2]);
+        actor.robot.quaternion.set(b[3], b[4], b[5], b[6]).normalize();
       }
     },
-    // Called once the frame is on screen: lag from the publisher's clock.
+    // Called once a frame is drawn: the lag of a state drawn for the first time,
+    // from the publisher's clock.
     drawn() {
-      if (!this.pending) return;
-      this.pending = false;
-      this.lags.push(Date.now() - this.frame.sent_ms);
-      if (this.lags.length > 600) this.lags.shift();
-      const sorted = this.lags.slice().sort((a, b) => a - b);
-      const recv = this.recvLags.slice().sort((a, b) => a - b);
-      const at = (a, p) => a[Math.min(a.length - 1, Math.floor(p * a.length))];
-      status.live = {
-        frames: this.frames, t: this.frame.t,
-        lag_median_ms: at(sorted, 0.5), lag_p95_ms: at(sorted, 0.95), lag_max_ms: sorted[sorted.length - 1],
-        recv_lag_median_ms: at(recv, 0.5), recv_lag_p95_ms: at(recv, 0.95), recv_lag_max_ms: recv[recv.length - 1],
-      };
-      if (this.frames % 30 === 0 || this.frames === 1) publish();
+      if (!this.frame) return;
+      this.drawnFrames++;
+      if (this.drawnSeq === this.seq) return;
+      this.drawnSeq = this.seq;
+      this.drawnT = this.frame.t;
+      this.fresh++;
+      this.lags[this.nLags++ % LAG_RING] = Date.now() - this.frame.sent_ms;
+      if (this.fresh === 1 || this.fresh % 30 === 0) publish();
       takeSnapshot();
     },
+    // Quantile p of the last LAG_RING values of a ring.
+    quantiles(ring, n) {
+      const m = Math.min(n, LAG_RING);
+      const s = this.scratch.subarray(0, m);
+      s.set(ring.subarray(0, m));
+      s.sort();
+      return (p) => m ? s[Math.min(m - 1, Math.floor(p * m))] : null;
+    },
+    report() {
+      if (!this.frame) return null;
+      const d = this.quantiles(this.lags, this.nLags);
+      const out = { frames: this.frames, t: this.drawnT, fresh: this.fresh, drawn: this.drawnFrames,
+        lag_median_ms: d(0.5), lag_p95_ms: d(0.95), lag_max_ms: d(1) };
+      const r = this.quantiles(this.recvLags, this.nRecv);
+      Object.assign(out, { recv_lag_median_ms: r(0.5), recv_lag_p95_ms: r(0.95), recv_lag_max_ms: r(1) });
+      return out;
+    },
   };
+  Object.defineProperty(status, 'live', { enumerable: true, get: () => safe(() => live.report()) });
 
   // ---- joint sliders ----
   const sliders = {
-    inputs: [],
+    inputs: [], version: 0,
     build(joints) {
       const list = document.getElementById('slider-list');
       for (const j of joints) {
@@ -481,8 +744,9 @@
         Object.assign(input, { type: 'range', min: lo, max: hi, step: 'any' });
         input.value = Math.min(Math.max(0, lo), hi);
         input.addEventListener('input', () => {
-          state.manual = true; state.playing = false; updatePlayButton();
+          state.manual = true; setPlaying(false);
           val.textContent = Number(input.value).toFixed(3);
+          this.version++;
           requestRender();
         });
         row.append(name, val, input);
@@ -500,13 +764,16 @@
         s.val.textContent = Number(value).toFixed(3);
       }
       state.manual = true;
+      this.version++;
     },
-    apply(robot) {
-      for (const s of this.inputs) if (robot.joints[s.joint]) robot.joints[s.joint].setJointValue(Number(s.input.value));
+    apply(actor) {
+      const joints = actor.robot.joints;
+      for (const s of this.inputs) if (joints[s.joint]) joints[s.joint].setJointValue(Number(s.input.value));
     },
-    follow(robot) {
+    // The sliders show the replayed pose (called at the UI rate, when open).
+    follow(actor) {
       for (const s of this.inputs) {
-        const j = robot.joints[s.joint];
+        const j = actor.robot.joints[s.joint];
         if (!j) continue;
         s.input.value = j.angle;
         s.val.textContent = Number(j.angle).toFixed(3);
@@ -520,7 +787,7 @@
     return Math.abs(v) < 1e-3 || Math.abs(v) >= 1e5 ? v.toExponential(1) : String(Number(v.toPrecision(3)));
   }
   const plots = {
-    u: null, cursor: null, xs: null,
+    u: null, cursor: null, xs: null, cursorPx: null,
     build() {
       const select = document.getElementById('plot-columns');
       const filter = document.getElementById('plot-filter');
@@ -550,6 +817,7 @@
       const el = document.getElementById('plot');
       if (this.u) { this.u.destroy(); this.u = null; }
       el.innerHTML = '';
+      this.cursorPx = null;
       const recs = state.actors.filter((a) => a.rec);
       const picked = [...document.getElementById('plot-columns').selectedOptions].map((o) => o.value.split('\u0000'));
       if (!picked.length) return;
@@ -561,7 +829,8 @@
       for (const [k, name] of picked) {
         const a = recs[Number(k)];
         const col = a.rec.cols[name];
-        const ys = a === base ? col : Float64Array.from(xs, (x) => col[sampleAt(x - a.offset, a.rec.cols.t)]);
+        let hint = 0;
+        const ys = a === base ? col : Float64Array.from(xs, (x) => col[hint = sampleAt(x - a.offset, a.rec.cols.t, hint)]);
         columns.push(ys);
         series.push({ label: (recs.length > 1 ? (Number(k) + 1) + ': ' : '') + name, stroke: SWATCHES[Number(k) % SWATCHES.length] === '#9e9e9e' ? '#333' : SWATCHES[Number(k) % SWATCHES.length], width: 1 });
       }
@@ -583,18 +852,25 @@
     },
     moveCursor() {
       if (!this.u) return;
-      this.cursor.style.left = this.u.valToPos(state.now, 'x') + 'px';
+      const px = Math.round(10 * this.u.valToPos(state.now, 'x')) / 10;
+      if (px === this.cursorPx) return;
+      this.cursorPx = px;
+      this.cursor.style.left = px + 'px';
     },
     resize() {
-      if (this.u) this.u.setSize({ width: Math.max(document.getElementById('plot').clientWidth, 300), height: 180 });
+      if (this.u) { this.u.setSize({ width: Math.max(document.getElementById('plot').clientWidth, 300), height: 180 }); this.cursorPx = null; }
     },
   };
 
   // ---- timeline ----
-  const scrub = document.getElementById('scrub');
-  const sliderPanel = document.getElementById('sliders');
-  const clock = document.getElementById('clock');
-  function updatePlayButton() { document.getElementById('play').innerHTML = state.playing ? '&#10074;&#10074;' : '&#9654;'; }
+  function setPlaying(on) {
+    if (state.playing === on) return;
+    state.playing = on;
+    // Time runs from the next frame on: a pause is not played through.
+    lastTime = null;
+    document.getElementById('play').innerHTML = on ? '&#10074;&#10074;' : '&#9654;';
+    uiStale = true;
+  }
   function span() {
     let t0 = Infinity, t1 = -Infinity;
     for (const a of state.actors) if (a.rec) { t0 = Math.min(t0, a.rec.info.t0 + a.offset); t1 = Math.max(t1, a.rec.info.t1 + a.offset); }
@@ -604,27 +880,28 @@
   function seek(t) {
     state.manual = false;
     state.now = Math.min(Math.max(t, state.t0), state.t1);
+    uiStale = true;
     requestRender();
   }
   function step(direction) {
     const main = state.actors.find((a) => a.rec);
     if (!main) return;
-    state.playing = false; updatePlayButton();
+    setPlaying(false);
     const times = main.rec.cols.t;
-    const i = sampleAt(state.now - main.offset, times);
+    const i = sampleAt(state.now - main.offset, times, main.sample);
     const j = Math.min(Math.max(i + direction, 0), times.length - 1);
     seek(times[j] + main.offset);
   }
   function bindTimeline() {
     document.getElementById('timeline').hidden = false;
     document.getElementById('play').addEventListener('click', () => {
-      if (state.now >= state.t1) state.now = state.t0;
-      state.manual = false; state.playing = !state.playing; updatePlayButton(); requestRender();
+      if (!state.playing && state.now >= state.t1) state.now = state.t0;
+      state.manual = false; setPlaying(!state.playing); requestRender();
     });
     document.getElementById('step-back').addEventListener('click', () => step(-1));
     document.getElementById('step-fwd').addEventListener('click', () => step(1));
     document.getElementById('speed').addEventListener('change', (e) => { state.speed = Number(e.target.value); });
-    scrub.addEventListener('input', () => { state.playing = false; updatePlayButton(); seek(Number(scrub.value)); });
+    scrub.addEventListener('input', () => { setPlaying(false); seek(Number(scrub.value)); });
     window.addEventListener('keydown', (e) => {
       if (e.target.tagName === 'INPUT' || e.target.tagName === 'SELECT') return;
       if (e.key === ' ') { document.getElementById('play').click(); e.preventDefault(); }
@@ -654,12 +931,13 @@
       const label = document.createElement('label');
       const out = document.createElement('span'); out.textContent = 'offset 0.000 s';
       const range = document.createElement('input');
+      range.className = 'offset';
       const len = Math.max(state.t1 - state.t0, 1);
       Object.assign(range, { type: 'range', min: -len, max: len, step: 'any', value: 0 });
       range.addEventListener('input', () => {
         actor.offset = Number(range.value);
         out.textContent = 'offset ' + actor.offset.toFixed(3) + ' s';
-        span(); plots.draw(); requestRender();
+        span(); plots.draw(); uiStale = true; requestRender();
       });
       label.append(out, range);
       box.appendChild(label);
@@ -672,43 +950,54 @@
   function requestRender() { if (!renderQueued) { renderQueued = true; requestAnimationFrame(frame); } }
   let lastTime = null;
   const bench = { seconds: Number(params.get('bench') || 0), times: [], work: [], render: [], start: null };
-
-  function renderNow() {
-    const w0 = performance.now();
-    for (const a of state.actors) poseActor(a);
-    for (const a of state.actors) a.overlays.update(state.show);
-    updateCop();
-    grid.visible = state.show.grid;
-    if (state.actors.length) {
-      const c = state.actors[0].overlays.comWorld;
-      status.com = [c.x, c.y, c.z];
-    }
-    if (sliderPanel.open && state.actors[0] && state.actors[0].rec && !state.manual && status.frame % 6 === 0) sliders.follow(state.actors[0].robot);
-    scrub.value = state.now;
-    clock.textContent = (live.frame && !state.t1 ? live.frame.t : state.now).toFixed(3) + ' s';
+  // The clock, scrub bar, plot cursor and sliders: at UI_PERIOD_MS while playing,
+  // at once after a seek, a step or a pause.
+  let uiStale = true, uiAt = -Infinity, clockText = '';
+  function updateUi(ts) {
+    if (!uiStale && ts - uiAt < UI_PERIOD_MS) return;
+    uiStale = false; uiAt = ts;
+    if (state.t1 > state.t0) scrub.value = state.now;
+    const text = (live.frame && !state.t1 ? live.drawnT || 0 : state.now).toFixed(3) + ' s';
+    if (text !== clockText) clock.textContent = clockText = text;
     plots.moveCursor();
+    const main = state.actors[0];
+    if (sliderPanel.open && main && (main.rec || live.frame) && !state.manual) sliders.follow(main);
+  }
+
+  function renderNow(ts) {
+    const w0 = performance.now();
+    let moved = false;
+    for (const a of state.actors) {
+      const posed = poseActor(a);
+      a.overlays.update(state.show, posed);
+      if (posed && a === state.actors[0]) moved = true;
+    }
+    if (moved || copShown !== state.showVersion) { copShown = state.showVersion; updateCop(); }
+    grid.visible = state.show.grid;
+    updateUi(ts);
     controls.update();
     const r0 = performance.now();
     renderer.render(scene, camera);
     if (bench.seconds > 0) { bench.render.push(performance.now() - r0); bench.work.push(performance.now() - w0); }
-    live.drawn();
     status.frame++;
+    live.drawn();
   }
+  let copShown = -1;
 
   function frame(ts) {
     renderQueued = false;
-    if (lastTime !== null && state.playing) {
-      state.now += (ts - lastTime) / 1000 * state.speed;
-      if (state.now >= state.t1) { state.now = state.t1; state.playing = bench.seconds > 0; if (!state.playing) updatePlayButton(); }
+    if (state.playing) {
+      if (lastTime !== null) state.now += (ts - lastTime) / 1000 * state.speed;
+      if (state.now >= state.t1) { state.now = state.t1; if (bench.seconds <= 0) setPlaying(false); }
     }
     lastTime = ts;
-    renderNow();
+    renderNow(ts);
     if (bench.seconds > 0 && state.playing) {
       if (bench.start === null) bench.start = ts;
       bench.times.push(ts);
       if (ts - bench.start >= bench.seconds * 1000) finishBench();
     }
-    if (state.playing) requestRender();
+    if (state.playing || live.connected) requestRender();
   }
 
   // The rendered image itself in #snapshot (URL parameter snapshot=1), for tests:
@@ -724,7 +1013,7 @@
   }
 
   function finishBench() {
-    state.playing = false;
+    setPlaying(false);
     const d = [];
     for (let i = 1; i < bench.times.length; i++) d.push(bench.times[i] - bench.times[i - 1]);
     d.sort((a, b) => a - b);
@@ -753,25 +1042,33 @@
       const [rinfo, buffer] = await Promise.all([data.recordingInfo(i), data.recordingData(i)]);
       const cols = columnViews(rinfo, buffer);
       const jointCols = info.joints.map((j) => cols['q:' + j.name] || null);
-      return { info: rinfo, cols, jointCols };
+      const base = rinfo.has_base ? ['x', 'y', 'z', 'qx', 'qy', 'qz', 'qw'].map((c) => cols['q:base.' + c]) : null;
+      return { info: rinfo, cols, jointCols, base };
     }));
     const count = Math.max(recs.length, 1);
     const robots = await Promise.all(Array.from({ length: count }, () => buildRobot(urdf)));
     robots.forEach((robot, k) => {
       const colour = k === 0 ? null : GHOST_COLOURS[k % GHOST_COLOURS.length] || 0x1e88e5;
-      paint(robot, colour);
+      const { drawn, corners } = prepareRobot(robot, colour);
       scene.add(robot);
       const rec = recs[k] || null;
       if (rec) rec.copSources = k === 0 ? copSources(rec) : [];
-      state.actors.push({ robot, rec, offset: 0, colour, sample: 0, overlays: makeOverlays(robot, info, colour) });
+      const actor = {
+        robot, rec, offset: 0, colour, sample: 0, posedBy: null, posed: null, drawn, corners,
+        cornerBuf: new Float64Array(3 * Math.max(cornerCount(corners), 1)),
+        joints: info.joints.map((j) => robot.joints[j.name] || null),
+        limited: colour === null ? limitedJoints(robot) : [],
+      };
+      actor.overlays = makeOverlays(actor, info, colour);
+      state.actors.push(actor);
     });
     // A recording without a base, or none at all: stand the robot on the ground at
     // its first pose.
     for (const a of state.actors) {
       poseActor(a);
-      if (a.rec && a.rec.info.has_base) continue;
-      visualBox(a.robot, tmpBox);
-      if (Number.isFinite(tmpBox.min.z)) a.robot.position.z = -tmpBox.min.z;
+      if (a.rec && a.rec.base) continue;
+      visualBox(a, tmpBox);
+      if (Number.isFinite(tmpBox.min.z)) { a.robot.position.z = -tmpBox.min.z; a.robot.updateMatrixWorld(true); a.posedBy = null; }
     }
     status.recordings = recs.map((r) => ({ name: r.info.name, rows: r.info.rows, missing: r.info.missing }));
     for (const r of recs) {
@@ -794,12 +1091,21 @@
     for (const input of document.querySelectorAll('[data-overlay]')) {
       if (params.has('overlays')) input.checked = params.get('overlays').split(',').includes(input.dataset.overlay);
       state.show[input.dataset.overlay] = input.checked;
-      input.addEventListener('change', () => { state.show[input.dataset.overlay] = input.checked; requestRender(); });
+      input.addEventListener('change', () => {
+        state.show[input.dataset.overlay] = input.checked;
+        state.showVersion++;
+        if (input.dataset.overlay === 'limits') {
+          for (const a of state.actors) if (input.checked) colourLimits(a); else clearLimits(a);
+        }
+        requestRender();
+      });
     }
+    state.showVersion++;
+    if (!state.show.limits) for (const a of state.actors) clearLimits(a);
     // Camera: from the URL, or framing the robot.
     if (params.has('t')) seek(Number(params.get('t')));
     poseActor(state.actors[0]);
-    visualBox(state.actors[0].robot, tmpBox);
+    visualBox(state.actors[0], tmpBox);
     const centre = tmpBox.getCenter(new THREE.Vector3());
     const size = tmpBox.getSize(new THREE.Vector3()).length() || 1;
     const cam = (params.get('camera') || '').split(',').map(Number);
@@ -815,8 +1121,10 @@
     }
     plots.build();
     resize(); plots.resize();
-    if (bench.seconds > 0 && recs.length) { state.now = state.t0; state.playing = true; }
-    renderNow();
+    if (bench.seconds > 0 && recs.length) { state.now = state.t0; setPlaying(true); }
+    // The first drawing poses every robot and computes its overlays anew.
+    for (const a of state.actors) a.posedBy = null;
+    renderNow(performance.now());
     status.ready = true;
     status.load_ms = performance.now();
     if (!info.live) takeSnapshot();

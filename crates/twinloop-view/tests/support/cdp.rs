@@ -149,12 +149,49 @@ impl Browser {
 
     /// A left click at (x, y), CSS pixels of the viewport: press and release.
     pub fn click(&mut self, x: f64, y: f64) {
+        self.click_with(x, y, 0);
+    }
+
+    /// A left click at (x, y) with modifier keys held (1 Alt, 2 Ctrl, 4 Meta, 8 Shift).
+    pub fn click_with(&mut self, x: f64, y: f64, modifiers: u32) {
         for kind in ["mouseMoved", "mousePressed", "mouseReleased"] {
             self.call(
                 "Input.dispatchMouseEvent",
-                json!({ "type": kind, "x": x, "y": y, "button": "left", "clickCount": 1 }),
+                json!({ "type": kind, "x": x, "y": y, "button": "left", "clickCount": 1, "modifiers": modifiers }),
             );
         }
+    }
+
+    /// A key pressed and released on the focused element: `key` as the DOM names it
+    /// (e.g. "ArrowDown"), `code` the physical key, `key_code` its Windows code.
+    pub fn key(&mut self, key: &str, code: &str, key_code: u32) {
+        for kind in ["rawKeyDown", "keyUp"] {
+            self.call(
+                "Input.dispatchKeyEvent",
+                json!({ "type": kind, "key": key, "code": code, "windowsVirtualKeyCode": key_code }),
+            );
+        }
+    }
+
+    /// Text typed into the focused element.
+    pub fn type_text(&mut self, text: &str) {
+        self.call("Input.insertText", json!({ "text": text }));
+    }
+
+    /// The centre (x, y) of the element `selector` and its width, after scrolling it
+    /// into view; the width is 0 when it is not drawn.
+    pub fn centre(&mut self, selector: &str) -> (f64, f64, f64) {
+        let r = self.eval(&format!(
+            "(() => {{ const e = document.querySelector({selector:?}); e.scrollIntoView({{ block: 'center' }}); \
+             const r = e.getBoundingClientRect(); return [r.left + r.width / 2, r.top + r.height / 2, r.width]; }})()"
+        ));
+        let v: Vec<f64> = r
+            .as_array()
+            .unwrap_or_else(|| panic!("no {selector}: {r}"))
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        (v[0], v[1], v[2])
     }
 }
 
