@@ -171,12 +171,20 @@ fn play_speed_step_offset_and_column_picking_do_what_they_say() {
     assert!(width > 20.0, "offset slider {width} px wide");
     page.click(x + 0.3 * width, y);
     page.wait_for("window.twinloop.timeline.actors[1].offset !== 0", 20);
-    let tl = timeline(&mut page);
-    let (now, offset) = (num(&tl["now"]), num(&tl["actors"][1]["offset"]));
-    assert!(offset > 1.0, "offset {offset} s");
-    let (main_row, ghost_row) = (row_at(&times, now), row_at(&times, now - offset));
-    assert_eq!(tl["actors"][0]["sample"], main_row, "{tl}");
-    assert_eq!(tl["actors"][1]["sample"], ghost_row, "{tl}");
+    // The robots are posed at the next frame drawn: look until it is there.
+    let start = Instant::now();
+    let (tl, main_row, ghost_row) = loop {
+        let tl = timeline(&mut page);
+        let (now, offset) = (num(&tl["now"]), num(&tl["actors"][1]["offset"]));
+        let (main_row, ghost_row) = (row_at(&times, now), row_at(&times, now - offset));
+        if tl["actors"][1]["sample"] == ghost_row || start.elapsed() > Duration::from_secs(20) {
+            assert!(offset > 1.0, "offset {offset} s");
+            assert_eq!(tl["actors"][0]["sample"], main_row, "{tl}");
+            assert_eq!(tl["actors"][1]["sample"], ghost_row, "{tl}");
+            break (tl, main_row, ghost_row);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
     assert!(main_row - ghost_row > 100, "{main_row} {ghost_row}");
     // The ghost is drawn there: its base where that row puts it.
     assert_eq!(num(&tl["actors"][1]["base"][0]), ghost_x[ghost_row], "{tl}");
