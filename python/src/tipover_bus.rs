@@ -160,6 +160,7 @@ pub fn run<'py>(
         ankle_slope: plan.ankle_slope.round() as i32,
         creeps: plan.creeps,
         first_tips: None,
+        dither: false,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let watch = InterruptWatch::new(&stop);

@@ -8,7 +8,7 @@ adapted CoM's and the part's distance from the truth, and the four fall angles
 in docs/adaptation.md comes from it.
 
     python3 tools/adaptation/demo_sweep.py --seeds 1-12 [--tell-where] [--scenarios a,c,d,e,f]
-        [--twinloop target/release/twinloop] [--out sweep.json] [--keep DIR] [--check]
+        [--twinloop target/release/twinloop] [--out sweep.json] [--keep DIR] [--check] [--dither]
 
 With --check each demo also measures the adapted model's simulation over the bus by
 the same protocol (`demo --check`), and the table gives it minus the robot's angles.
@@ -36,6 +36,7 @@ def main():
     ap.add_argument("--out", default=None)
     ap.add_argument("--keep", default=None, help="keep each run's files in DIR/<job>")
     ap.add_argument("--check", action="store_true", help="demo --check: the adapted simulation over the bus")
+    ap.add_argument("--dither", action="store_true", help="demo --dither: sigma-delta goal counts")
     a = ap.parse_args()
     jobs = [["--seed", str(s)] for s in seeds(a.seeds)]
     jobs += [["--scenario", c] for c in a.scenarios.split(",") if c]
@@ -51,6 +52,8 @@ def main():
                 cmd.append("--tell-where")
             if a.check:
                 cmd.append("--check")
+            if a.dither:
+                cmd.append("--dither")
             load = os.getloadavg()[0]
             t0 = time.time()
             p = subprocess.run(cmd, capture_output=True, text=True)

@@ -199,6 +199,7 @@ fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyR
         ankle_slope: crate::cmd_experiment::tipover_bus::ANKLE_SLOPE,
         creeps: 2,
         first_tips: None,
+        dither: false,
         clock_rate: a.realtime_factor,
         verbose: true,
     };

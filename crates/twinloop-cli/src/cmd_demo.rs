@@ -56,6 +56,10 @@ pub struct DemoArgs {
     /// link's outline. One change only (not with --scenario a)
     #[arg(long)]
     pub tell_where: bool,
+    /// Dither the goal counts of the joints a lean turns (sigma-delta: the counts
+    /// sent flip around the ramp so that their running mean is the ramp)
+    #[arg(long)]
+    pub dither: bool,
     /// Check the adapted model as the robot was measured: serve its simulation on a
     /// second pseudo-terminal (datasheet servos: what the adapting side knows) and run
     /// the same protocol over the bus, creeping from 1.5 deg before each of the
@@ -201,6 +205,7 @@ fn plan(port: &str, record: &Path, a: &DemoArgs, first_tips: Option<Vec<f64>>) -
         ankle_slope: ANKLE_SLOPE,
         creeps: a.creeps as usize,
         first_tips,
+        dither: a.dither,
         clock_rate: a.realtime_factor,
         verbose: true,
     }

@@ -33,6 +33,9 @@ pub struct BusTipoverOptions {
     /// adapted model's simulation is checked against the robot's measurement: the
     /// same protocol from the same start.
     pub first_tips: Option<Vec<f64>>,
+    /// Send the turned joints' goals dithered (`DynamixelRobot::set_dithered`): the
+    /// lean then grows smoothly instead of in whole-count steps.
+    pub dither: bool,
 }
 
 /// One direction over the bus.
@@ -250,6 +253,11 @@ pub fn run_directions(
         stiffen(g.robot, opts.compliance_slope, |k| !ankles.contains(&k))
             .and_then(|()| stiffen(g.robot, opts.ankle_slope, |k| ankles.contains(&k)))
             .map_err(|e| e.to_string())?;
+        if opts.dither {
+            let hips = if d.is_pitch() { None } else { cfg.hip_roll };
+            g.robot
+                .set_dithered(|k| ankles.contains(&k) || hips.is_some_and(|h| h.contains(&k)));
+        }
         let mut run =
             |cfg: &TipoverConfig, g: &mut Guarded<'_>| -> Result<TipoverResult, RobotError> {
                 wait_upright(g, standing, upright, cfg.period_s)?;
@@ -318,6 +326,7 @@ pub fn run_directions(
             creeps.len()
         ));
         out.push(r);
+        g.robot.set_dithered(|_| false);
     }
     wait_upright(g, standing, upright, cfg.period_s).map_err(|e| e.message)?;
     Ok(out)

@@ -105,12 +105,27 @@ impl JointMapping {
 
     /// Raw Goal Position for a joint angle, clamped to the joint limits first.
     pub fn goal_raw(&self, joint: f64) -> i32 {
-        let q = if joint.is_nan() {
+        self.goal_register()
+            .from_si(self.servo_angle(self.clamped(joint)))
+    }
+
+    /// The Goal Position a joint angle asks for before it is rounded to a whole
+    /// count (joint limits applied), and the register's range.
+    pub fn goal_raw_exact(&self, joint: f64) -> (f64, i32, i32) {
+        let r = self.goal_register();
+        (
+            r.from_si_exact(self.servo_angle(self.clamped(joint))),
+            r.min,
+            r.max,
+        )
+    }
+
+    fn clamped(&self, joint: f64) -> f64 {
+        if joint.is_nan() {
             0.0
         } else {
             joint.clamp(self.min, self.max)
-        };
-        self.goal_register().from_si(self.servo_angle(q))
+        }
     }
 
     /// Joint angle of a raw Present Position.

@@ -43,6 +43,9 @@ pub struct DynamixelRobot<T: Transport> {
     /// Robot seconds per host second (see [`DynamixelRobot::set_clock_rate`]).
     clock_rate: f64,
     imu: Option<BoardReader>,
+    /// Per joint: `Some(residual)` when its goals are dithered (see
+    /// [`DynamixelRobot::set_dithered`]), the part of a count not yet sent.
+    dither: Vec<Option<f64>>,
 }
 
 fn link_to_robot(e: &LinkError, joint: &str) -> RobotError {
@@ -107,6 +110,7 @@ impl<T: Transport> DynamixelRobot<T> {
             next_tick: None,
             clock_rate: 1.0,
             imu,
+            dither: vec![None; n],
         })
     }
 
@@ -209,6 +213,23 @@ impl<T: Transport> DynamixelRobot<T> {
     /// slopes and margins.
     pub fn set_register(&mut self, item: Item, value: i32) -> Result<usize, RobotError> {
         self.set_register_of(item, value, |_| true)
+    }
+
+    /// Dither the goals of the joints `pick` selects (indices in
+    /// [`Robot::joint_names`] order), and round the others' as before.
+    ///
+    /// A Goal Position is a whole count (0.29 deg on an RX), so a slow ramp sent
+    /// rounded is a staircase, and each step jolts the robot. Dithered, each goal
+    /// goes out as first-order sigma-delta modulation (error feedback, as in a
+    /// delta-sigma converter): the part of a count that rounding drops is carried
+    /// to the next command, so the counts sent flip between the two around the
+    /// goal and their running mean is the goal itself, finer than a count. Joints
+    /// whose goals change together by the same amount flip together. Selecting
+    /// again starts every residual from zero.
+    pub fn set_dithered(&mut self, pick: impl Fn(usize) -> bool) {
+        for (k, d) in self.dither.iter_mut().enumerate() {
+            *d = pick(k).then_some(0.0);
+        }
     }
 
     /// [`DynamixelRobot::set_register`] for the joints (indices in
@@ -335,7 +356,17 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
             )));
         }
         for (k, j) in self.mapping.joints.iter().enumerate() {
-            self.goals[k] = j.goal_raw(goals[k]);
+            self.goals[k] = match self.dither[k].as_mut() {
+                None => j.goal_raw(goals[k]),
+                Some(residual) => {
+                    let (exact, lo, hi) = j.goal_raw_exact(goals[k]);
+                    let want = exact + *residual;
+                    let raw = want.round().clamp(lo as f64, hi as f64);
+                    // A goal pinned at the register's end must not wind the residual up.
+                    *residual = (want - raw).clamp(-1.0, 1.0);
+                    raw as i32
+                }
+            };
         }
         self.cycle
             .write_goals(&mut self.client, &self.goals)

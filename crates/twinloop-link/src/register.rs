@@ -244,7 +244,17 @@ impl Register {
     /// The nearest raw value to an SI value, clamped to the register's range
     /// (NaN gives the range's lower end).
     pub fn from_si(&self, si: f64) -> i32 {
-        let raw = match self.unit {
+        let r = self.from_si_exact(si).round();
+        if r.is_nan() {
+            return self.min;
+        }
+        r.clamp(self.min as f64, self.max as f64) as i32
+    }
+
+    /// The raw value of an SI value before rounding (what [`Register::from_si`]
+    /// rounds), unclamped.
+    pub fn from_si_exact(&self, si: f64) -> f64 {
+        match self.unit {
             Unit::Raw | Unit::Celsius => si,
             Unit::Angle {
                 rad_per_unit,
@@ -266,11 +276,6 @@ impl Register {
                 m_s2_per_unit,
                 center,
             } => si / m_s2_per_unit + center as f64,
-        };
-        let r = raw.round();
-        if r.is_nan() {
-            return self.min;
         }
-        r.clamp(self.min as f64, self.max as f64) as i32
     }
 }

@@ -104,3 +104,54 @@ fn a_missing_servo_is_named_and_the_rest_still_read() {
     );
     assert!(robot.command_positions(&[0.0; 3]).is_err());
 }
+
+/// The Goal Position register of servo `k` as the servo holds it.
+fn goal_held(
+    robot: &DynamixelRobot<LoopbackTransport<VirtualBus<TrackingServoModel>>>,
+    k: usize,
+) -> i32 {
+    let j = &robot.mapping().joints[k];
+    let reg = j
+        .model
+        .table()
+        .item(twinloop_link::Item::GoalPosition)
+        .unwrap();
+    let bus = &robot.client.transport().responder;
+    reg.decode(bus.servos[k].read(reg.address, reg.size as u16))
+}
+
+#[test]
+fn dithered_goals_average_to_a_goal_between_counts() {
+    let m = RobotMapping::builtin("km20").unwrap();
+    let mut robot = robot_on_virtual_bus(&m, &servos_of(&m));
+    let count = (300.0f64 / 1024.0).to_radians(); // RX-28 and RX-64
+    let (a, b) = (m.joints[14].clone(), m.joints[15].clone());
+    // Goals 0.3 of a count past the count that 0.1 rad rounds to.
+    let base = |j: &twinloop_link::JointMapping| j.goal_raw(0.1);
+    let mut goals = vec![0.0; 20];
+    let e = a.goal_raw_exact(0.1).0;
+    goals[14] = 0.1 + a.direction * (e.floor() + 0.3 - e) * count;
+    goals[15] = 0.1;
+    robot.set_dithered(|k| k == 14);
+    let (mut sum, n) = (0.0, 1000);
+    let mut seen = std::collections::BTreeSet::new();
+    for _ in 0..n {
+        robot.command_positions(&goals).unwrap();
+        let g = goal_held(&robot, 14);
+        seen.insert(g);
+        sum += g as f64;
+        // The joint not dithered always gets the rounded goal.
+        assert_eq!(goal_held(&robot, 15), base(&b));
+    }
+    let exact = a.goal_raw_exact(goals[14]).0;
+    assert_eq!(seen.len(), 2, "two neighbouring counts: {seen:?}");
+    assert!(
+        (sum / n as f64 - exact).abs() < 2.0 / n as f64,
+        "{} vs {exact}",
+        sum / n as f64
+    );
+    // Off again: plain rounding.
+    robot.set_dithered(|_| false);
+    robot.command_positions(&goals).unwrap();
+    assert_eq!(goal_held(&robot, 14), exact.round() as i32);
+}

@@ -115,6 +115,10 @@ pub struct TipoverArgs {
     /// two count. 1: a single creep.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=5))]
     pub creeps: u32,
+    /// Over a bus: dither the goal counts of the joints a lean turns (sigma-delta:
+    /// the counts sent flip around the ramp so that their running mean is the ramp)
+    #[arg(long)]
+    pub dither: bool,
     /// Quantise the ankle readings like Dynamixel RX encoders (1024 counts over 300 deg).
     #[arg(long)]
     pub encoders: bool,
@@ -255,6 +259,7 @@ mod bus {
             ankle_slope: a.ankle_slope.round() as i32,
             creeps: a.creeps as usize,
             first_tips: None,
+            dither: a.dither,
             clock_rate: a.realtime_factor,
             verbose: true,
         };

@@ -39,6 +39,8 @@ pub struct BusPlan {
     /// Commanded tip angles known beforehand, one per direction: creeps only (see
     /// `BusTipoverOptions::first_tips`).
     pub first_tips: Option<Vec<f64>>,
+    /// Dither the turned joints' goal counts (see `BusTipoverOptions::dither`).
+    pub dither: bool,
     /// Robot seconds per host second (a simulated robot served faster than real time).
     pub clock_rate: f64,
     /// Say on stderr what is happening.
@@ -111,6 +113,7 @@ pub fn tipover_on_bus(plan: &BusPlan) -> Result<BusRun, CliError> {
         ankle_slope: plan.ankle_slope,
         creeps: plan.creeps,
         first_tips: plan.first_tips.clone(),
+        dither: plan.dither,
     };
     let mut before = |d: Direction, k: usize| {
         if k > 0 && serial && !plan.yes {
