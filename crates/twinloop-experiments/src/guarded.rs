@@ -169,8 +169,10 @@ pub fn is_serial(port: &str) -> bool {
     !real.starts_with("/dev/pts")
 }
 
-/// Leave the robot holding the standing pose: torque on, goal = standing.
+/// Leave the robot holding the standing pose: torque on, goal = standing, rounded
+/// (an experiment stopped while dithering must not leave a goal flipping).
 pub fn hold_standing(robot: &mut BusRobot, standing: &[f64]) {
+    robot.set_dithered(|_| false);
     let _ = robot.set_torque(true);
     let _ = robot.command_positions(standing);
 }

@@ -109,15 +109,11 @@ impl JointMapping {
             .from_si(self.servo_angle(self.clamped(joint)))
     }
 
-    /// The Goal Position a joint angle asks for before it is rounded to a whole
-    /// count (joint limits applied), and the register's range.
-    pub fn goal_raw_exact(&self, joint: f64) -> (f64, i32, i32) {
-        let r = self.goal_register();
-        (
-            r.from_si_exact(self.servo_angle(self.clamped(joint))),
-            r.min,
-            r.max,
-        )
+    /// [`JointMapping::goal_raw`] dithered: the part of a count rounding drops is
+    /// carried in `residual` to the next goal ([`Register::from_si_carrying`]).
+    pub fn goal_raw_carrying(&self, joint: f64, residual: &mut f64) -> i32 {
+        self.goal_register()
+            .from_si_carrying(self.servo_angle(self.clamped(joint)), residual)
     }
 
     fn clamped(&self, joint: f64) -> f64 {

@@ -358,14 +358,7 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
         for (k, j) in self.mapping.joints.iter().enumerate() {
             self.goals[k] = match self.dither[k].as_mut() {
                 None => j.goal_raw(goals[k]),
-                Some(residual) => {
-                    let (exact, lo, hi) = j.goal_raw_exact(goals[k]);
-                    let want = exact + *residual;
-                    let raw = want.round().clamp(lo as f64, hi as f64);
-                    // A goal pinned at the register's end must not wind the residual up.
-                    *residual = (want - raw).clamp(-1.0, 1.0);
-                    raw as i32
-                }
+                Some(residual) => j.goal_raw_carrying(goals[k], residual),
             };
         }
         self.cycle

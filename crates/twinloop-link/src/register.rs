@@ -244,7 +244,27 @@ impl Register {
     /// The nearest raw value to an SI value, clamped to the register's range
     /// (NaN gives the range's lower end).
     pub fn from_si(&self, si: f64) -> i32 {
-        let r = self.from_si_exact(si).round();
+        self.nearest(self.from_si_exact(si))
+    }
+
+    /// [`Register::from_si`] with the part of a unit that rounding drops carried in
+    /// `residual` to the next call (first-order sigma-delta modulation): called
+    /// again and again with one value, the raw values sent average to it.
+    pub fn from_si_carrying(&self, si: f64, residual: &mut f64) -> i32 {
+        let want = self.from_si_exact(si) + *residual;
+        let raw = self.nearest(want);
+        // A value pinned at the register's end must not wind the residual up.
+        *residual = if want.is_nan() {
+            0.0
+        } else {
+            (want - raw as f64).clamp(-1.0, 1.0)
+        };
+        raw
+    }
+
+    /// The nearest raw value in the register's range (NaN: the lower end).
+    fn nearest(&self, raw: f64) -> i32 {
+        let r = raw.round();
         if r.is_nan() {
             return self.min;
         }
@@ -253,7 +273,7 @@ impl Register {
 
     /// The raw value of an SI value before rounding (what [`Register::from_si`]
     /// rounds), unclamped.
-    pub fn from_si_exact(&self, si: f64) -> f64 {
+    fn from_si_exact(&self, si: f64) -> f64 {
         match self.unit {
             Unit::Raw | Unit::Celsius => si,
             Unit::Angle {

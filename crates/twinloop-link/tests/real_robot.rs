@@ -124,14 +124,17 @@ fn goal_held(
 fn dithered_goals_average_to_a_goal_between_counts() {
     let m = RobotMapping::builtin("km20").unwrap();
     let mut robot = robot_on_virtual_bus(&m, &servos_of(&m));
-    let count = (300.0f64 / 1024.0).to_radians(); // RX-28 and RX-64
+    // RX-28 and RX-64 (e-manual): 1024 counts over 300 deg, 512 at the centre.
+    let count = (300.0f64 / 1024.0).to_radians();
     let (a, b) = (m.joints[14].clone(), m.joints[15].clone());
-    // Goals 0.3 of a count past the count that 0.1 rad rounds to.
-    let base = |j: &twinloop_link::JointMapping| j.goal_raw(0.1);
+    let raw_of =
+        |j: &twinloop_link::JointMapping, q: f64| 512.0 + (j.zero + j.direction * q) / count;
+    // A goal 0.3 of a count past the count below 0.1 rad.
+    let e = raw_of(&a, 0.1);
     let mut goals = vec![0.0; 20];
-    let e = a.goal_raw_exact(0.1).0;
     goals[14] = 0.1 + a.direction * (e.floor() + 0.3 - e) * count;
     goals[15] = 0.1;
+    let base = |j: &twinloop_link::JointMapping| raw_of(j, 0.1).round() as i32;
     robot.set_dithered(|k| k == 14);
     let (mut sum, n) = (0.0, 1000);
     let mut seen = std::collections::BTreeSet::new();
@@ -143,7 +146,7 @@ fn dithered_goals_average_to_a_goal_between_counts() {
         // The joint not dithered always gets the rounded goal.
         assert_eq!(goal_held(&robot, 15), base(&b));
     }
-    let exact = a.goal_raw_exact(goals[14]).0;
+    let exact = raw_of(&a, goals[14]);
     assert_eq!(seen.len(), 2, "two neighbouring counts: {seen:?}");
     assert!(
         (sum / n as f64 - exact).abs() < 2.0 / n as f64,
