@@ -244,14 +244,14 @@ impl Register {
     /// The nearest raw value to an SI value, clamped to the register's range
     /// (NaN gives the range's lower end).
     pub fn from_si(&self, si: f64) -> i32 {
-        self.nearest(self.from_si_exact(si))
+        self.nearest(self.raw_exact(si))
     }
 
     /// [`Register::from_si`] with the part of a unit that rounding drops carried in
     /// `residual` to the next call (first-order sigma-delta modulation): called
     /// again and again with one value, the raw values sent average to it.
     pub fn from_si_carrying(&self, si: f64, residual: &mut f64) -> i32 {
-        let want = self.from_si_exact(si) + *residual;
+        let want = self.raw_exact(si) + *residual;
         let raw = self.nearest(want);
         // A value pinned at the register's end must not wind the residual up.
         *residual = if want.is_nan() {
@@ -273,7 +273,7 @@ impl Register {
 
     /// The raw value of an SI value before rounding (what [`Register::from_si`]
     /// rounds), unclamped.
-    fn from_si_exact(&self, si: f64) -> f64 {
+    fn raw_exact(&self, si: f64) -> f64 {
         match self.unit {
             Unit::Raw | Unit::Celsius => si,
             Unit::Angle {
