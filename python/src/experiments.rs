@@ -474,6 +474,7 @@ pub fn adapt<'py>(
         host,
         merge,
         angle_resolution_deg: Some(resolution),
+        protocol_bias_deg: None,
     };
     let adapted = py
         .detach(|| {

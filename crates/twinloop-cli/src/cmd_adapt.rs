@@ -265,6 +265,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
         host: a.host.clone(),
         merge: a.merge,
         angle_resolution_deg: Some(a.resolution),
+        protocol_bias_deg: None,
     };
     let mut adapted = adapt(&prior, &tip, &opts).map_err(where_flag)?;
     if a.check {

@@ -43,6 +43,11 @@ pub struct AdaptOptions {
     pub merge: bool,
     /// Resolution of the measured angles, deg (0.05 if unknown).
     pub angle_resolution_deg: Option<f64>,
+    /// How far the protocol that measured the angles reads past a model's static
+    /// tipping angles, deg per direction (forward, backward, left, right; from
+    /// simulating the protocol on a model, as `twinloop demo --protocol-passes` does):
+    /// the model is fitted to the measured angles minus this. `None`: zero.
+    pub protocol_bias_deg: Option<[f64; 4]>,
 }
 
 /// The added mass found.
@@ -416,7 +421,13 @@ pub fn adapt(
     opts: &AdaptOptions,
 ) -> Result<Adapted, IdentError> {
     let foot = foot_of(prior, tip);
-    let angles = angles_of(tip);
+    let bias = opts.protocol_bias_deg.unwrap_or([0.0; 4]);
+    let mut angles = angles_of(tip);
+    let r = std::f64::consts::PI / 180.0;
+    angles.forward -= bias[0] * r;
+    angles.backward -= bias[1] * r;
+    angles.left -= bias[2] * r;
+    angles.right -= bias[3] * r;
     let pf = standing(prior)?;
     let m0 = pf.model.total_mass;
     let c0 = pf.com(prior)?;
@@ -523,7 +534,7 @@ pub fn adapt(
         let with_part = |p: Vector3<f64>| {
             with_added_mass(prior, &host, added.mass, v3(p), true).map_err(IdentError::new)
         };
-        let fit = fall_angle_fit::fit_position(&with_part, tip, start, bounds)?;
+        let fit = fall_angle_fit::fit_position(&with_part, tip, start, bounds, bias)?;
         let local = Vector3::from(fit.position_host);
         let pose = pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
         let p = pose.act_point(&local) - pf.mid;

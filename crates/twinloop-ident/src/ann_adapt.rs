@@ -260,6 +260,7 @@ fn exact_model(
         host: Some(s.change.link.clone()),
         merge: true,
         angle_resolution_deg: None,
+        protocol_bias_deg: None,
     };
     let a = adapt(prior, &tip, &opts)?;
     let r = a

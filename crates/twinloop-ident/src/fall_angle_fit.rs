@@ -79,19 +79,22 @@ fn residuals(
 }
 
 /// Fit the position (host frame) of the part `model_with_part` places, starting
-/// from `start`, kept within `bounds` (lowest and highest corner, host frame).
+/// from `start`, kept within `bounds` (lowest and highest corner, host frame), to
+/// the measured angles less `bias` (deg per direction: how far the measuring
+/// protocol reads past a model's static angles; zeros for none).
 pub fn fit_position(
     model_with_part: ModelWithPart<'_>,
     report: &StudyReport,
     start: Vector3<f64>,
     bounds: (Vector3<f64>, Vector3<f64>),
+    bias: [f64; 4],
 ) -> Result<FallAngleFit, IdentError> {
     let clamp = |p: Vector3<f64>| p.sup(&bounds.0).inf(&bounds.1);
     let measured = Vector4::new(
-        report.forward.measured_deg,
-        report.backward.measured_deg,
-        report.left.measured_deg,
-        report.right.measured_deg,
+        report.forward.measured_deg - bias[0],
+        report.backward.measured_deg - bias[1],
+        report.left.measured_deg - bias[2],
+        report.right.measured_deg - bias[3],
     );
     let sideways = Vector4::new(0.0, 0.0, 1.0, 1.0);
     let mut p = clamp(start);

@@ -38,7 +38,7 @@ pub use link_error::{LinkError, Outcome};
 pub use mapping::{JointMapping, MappingError, RobotMapping};
 pub use packet::{EncodeError, PacketWriter};
 pub use protocol::{BROADCAST_ID, Protocol};
-pub use real_robot::DynamixelRobot;
+pub use real_robot::{DynamixelRobot, HostClock};
 pub use register::{Access, Area, Encoding, Item, Register, Unit};
 pub use servo::{BusServo, TrackingServoModel, VirtualBus, VirtualServoBackend};
 pub use servo_model::{ServoModel, ServoSpec, baud_from_register};

@@ -4,7 +4,8 @@
 //! mapping has a `[[board]]`, one READ of the board's gyro and accelerometer (the
 //! trunk IMU, with the host's tilt estimate); commanding sends one SYNC_WRITE per
 //! protocol, and time is the wall clock (times a clock rate for a simulated robot served
-//! faster than real time).
+//! faster than real time), or a [`HostClock`] of the caller's (a simulation stepped in
+//! lockstep with its host).
 
 use crate::board::{CM730_IMU_BLOCK, TiltFilter, decode_imu};
 use crate::client::Client;
@@ -27,6 +28,17 @@ struct BoardReader {
     last: Option<f64>,
 }
 
+/// The host's clock when it is not the wall clock: a simulated robot on an in-memory
+/// bus whose time moves only when the host waits (`twinloop_virtual::Lockstep`), so
+/// that the same protocol runs as fast as the simulation can and gives the same
+/// result every time.
+pub trait HostClock: Send {
+    /// Robot time, s.
+    fn now(&self) -> f64;
+    /// Let `dt` s of robot time pass (one control cycle's wait).
+    fn wait(&mut self, dt: f64) -> Result<(), RobotError>;
+}
+
 /// A physical robot on a Dynamixel bus.
 pub struct DynamixelRobot<T: Transport> {
     pub client: Client<T>,
@@ -42,6 +54,8 @@ pub struct DynamixelRobot<T: Transport> {
     next_tick: Option<Instant>,
     /// Robot seconds per host second (see [`DynamixelRobot::set_clock_rate`]).
     clock_rate: f64,
+    /// A clock of the caller's instead of the wall clock (see [`HostClock`]).
+    clock: Option<Box<dyn HostClock>>,
     imu: Option<BoardReader>,
     /// Per joint: `Some(residual)` when its goals are dithered (see
     /// [`DynamixelRobot::set_dithered`]), the part of a count not yet sent.
@@ -109,6 +123,7 @@ impl<T: Transport> DynamixelRobot<T> {
             start: Instant::now(),
             next_tick: None,
             clock_rate: 1.0,
+            clock: None,
             imu,
             dither: vec![None; n],
         })
@@ -127,6 +142,12 @@ impl<T: Transport> DynamixelRobot<T> {
         }
         self.clock_rate = rate;
         Ok(())
+    }
+
+    /// Count time on `clock` instead of the wall clock: [`Robot::time`] is its
+    /// `now`, [`Robot::advance`] its `wait` (see [`HostClock`]).
+    pub fn set_clock(&mut self, clock: Box<dyn HostClock>) {
+        self.clock = Some(clock);
     }
 
     /// The board the trunk IMU is read from, if the mapping has one.
@@ -280,7 +301,10 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
     }
 
     fn time(&self) -> f64 {
-        self.start.elapsed().as_secs_f64() * self.clock_rate
+        match &self.clock {
+            Some(c) => c.now(),
+            None => self.start.elapsed().as_secs_f64() * self.clock_rate,
+        }
     }
 
     /// One read of every joint. Joints whose servo failed read NaN; the first such
@@ -372,6 +396,9 @@ impl<T: Transport> Robot for DynamixelRobot<T> {
     fn advance(&mut self, dt: f64) -> Result<(), RobotError> {
         if dt.is_nan() || dt < 0.0 {
             return Err(RobotError::new(format!("advance by {dt} s")));
+        }
+        if let Some(c) = self.clock.as_mut() {
+            return c.wait(dt);
         }
         let now = Instant::now();
         let step = Duration::from_secs_f64(dt / self.clock_rate);

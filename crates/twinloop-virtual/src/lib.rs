@@ -26,6 +26,7 @@
 mod backend;
 mod bench_backend;
 mod drive;
+mod lockstep;
 mod pty_server;
 mod runner;
 mod shared;
@@ -34,6 +35,7 @@ mod virtual_robot;
 pub use backend::SimServoBackend;
 pub use bench_backend::{BenchBackend, link_model, servo_type};
 pub use drive::{DriveRegisters, servo_with_registers};
+pub use lockstep::Lockstep;
 pub use pty_server::PtyServer;
 pub use runner::{CATCH_DEG, SimStatus};
 pub use shared::{Snapshot, thermal_step};

@@ -251,6 +251,11 @@ impl VirtualRobot {
         Ok(())
     }
 
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.runner.sim.time
+    }
+
     /// Times the operator caught the robot (see [`VirtualRobotOptions::catch_falls`]).
     pub fn pick_ups(&self) -> u64 {
         self.runner.pick_ups
