@@ -9,6 +9,7 @@ in docs/adaptation.md comes from it.
 
     python3 tools/adaptation/demo_sweep.py --seeds 1-12 [--tell-where] [--scenarios a,c,d,e,f]
         [--twinloop target/release/twinloop] [--out sweep.json] [--keep DIR] [--check] [--dither]
+        [--protocol-passes N]
 
 With --check each demo also measures the adapted model's simulation over the bus by
 the same protocol (`demo --check`), and the table gives it minus the robot's angles.
@@ -37,6 +38,8 @@ def main():
     ap.add_argument("--keep", default=None, help="keep each run's files in DIR/<job>")
     ap.add_argument("--check", action="store_true", help="demo --check: the adapted simulation over the bus")
     ap.add_argument("--dither", action="store_true", help="demo --dither: sigma-delta goal counts")
+    ap.add_argument("--protocol-passes", type=int, default=None,
+                    help="demo --protocol-passes N (the demo's default when not given)")
     a = ap.parse_args()
     jobs = [["--seed", str(s)] for s in seeds(a.seeds)]
     jobs += [["--scenario", c] for c in a.scenarios.split(",") if c]
@@ -54,6 +57,8 @@ def main():
                 cmd.append("--check")
             if a.dither:
                 cmd.append("--dither")
+            if a.protocol_passes is not None:
+                cmd += ["--protocol-passes", str(a.protocol_passes)]
             load = os.getloadavg()[0]
             t0 = time.time()
             p = subprocess.run(cmd, capture_output=True, text=True)
@@ -68,9 +73,16 @@ def main():
         dt = [r["true_model_deg"][k] - r["measured_deg"][k] for k in range(4)]
         sim = r.get("adapted_simulation_deg")
         ds = None if sim is None else [sim[k] - r["measured_deg"][k] for k in range(4)]
+        # Pass 1 of the protocol's correction is the plain adaptation (no bias): the
+        # same measurement adapted without the correction, for a paired comparison.
+        cal = r.get("calibration")
+        plain = None
+        if cal and cal["passes"] and cal["passes"][0]["adapted_com"]:
+            c = cal["passes"][0]["adapted_com"]
+            plain = 1e3 * sum((c[i] - r["true_com"][i]) ** 2 for i in range(3)) ** 0.5
         row = {
             "job": " ".join(job), "mass": mass, "links": links,
-            "com_error_mm": 1e3 * r["com_error"],
+            "com_error_mm": 1e3 * r["com_error"], "plain_com_error_mm": plain,
             "position_error_mm": None if r["position_error"] is None else 1e3 * r["position_error"],
             "found_host": (r.get("found") or {}).get("host"),
             "adapted_minus_measured_deg": dm, "true_minus_measured_deg": dt,
@@ -84,12 +96,17 @@ def main():
               + " ".join(f"{x:+.2f}" for x in dm) + "  true-measured "
               + " ".join(f"{x:+.2f}" for x in dt)
               + ("" if ds is None else "  simulated-measured " + " ".join(f"{x:+.2f}" for x in ds))
+              + ("" if plain is None else f"  (plain {plain:.2f} mm)")
               + f"  {row['wall_s']:.0f} s load {load:.1f}", flush=True)
     ok = [r for r in rows if "failed" not in r]
     if ok:
         ce = [r["com_error_mm"] for r in ok]
         print(f"CoM error: median {statistics.median(ce):.2f} mm, max {max(ce):.2f} mm, "
               f"{sum(c < 3 for c in ce)} of {len(ce)} within 3 mm")
+        pl = [r["plain_com_error_mm"] for r in ok if r["plain_com_error_mm"] is not None]
+        if pl:
+            print(f"the same runs adapted without the protocol's bias: median {statistics.median(pl):.2f} mm, "
+                  f"max {max(pl):.2f} mm, {sum(c < 3 for c in pl)} of {len(pl)} within 3 mm")
         worst = [max(abs(x) for x in r["adapted_minus_measured_deg"]) for r in ok]
         print(f"adapted model vs measured, worst direction: median {statistics.median(worst):.2f} deg, "
               f"max {max(worst):.2f} deg, {sum(w < 0.3 for w in worst)} of {len(worst)} within 0.3 deg")

@@ -8,7 +8,7 @@ use crate::common::{JSON_HELP, ROBOT_HELP, emit, load_description};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
-use twinloop_ident::adapt::{AdaptOptions, adapt, check, html_report};
+use twinloop_ident::adapt::{AdaptOptions, check, html_report};
 use twinloop_ident::ann::TrainOptions;
 use twinloop_ident::ann_adapt::{
     AnnModel, AnnTrainOptions, TrainReport, adapt_ann, train_ann, train_ann_on,
@@ -81,6 +81,15 @@ pub struct AdaptArgs {
     /// Run the simulated tip-over study on the adapted model and compare its angles.
     #[arg(long)]
     pub check: bool,
+    /// For a tip-over measured over a bus (its JSON keeps the protocol, as
+    /// `experiment tipover --port` and `--port` here write it): passes of adapting to
+    /// the protocol's bias. Each pass runs the same protocol on the adapted model,
+    /// simulated in lockstep with a host at the robot run's cycle, and adapts again
+    /// to the measured angles less what that protocol read past the model's static
+    /// angles (about 1 s per pass). 0: adapt to the angles as measured. A tip-over
+    /// from the simulator has no protocol bias to take off
+    #[arg(long, default_value_t = 3, value_name = "N", value_parser = clap::value_parser!(u64).range(0..=5))]
+    pub protocol_passes: u64,
     /// The lean the robot did (`twinloop experiment lean --out`): replayed on the prior
     /// and the adapted model, the ankle and knee torques compared (seed 001 section F).
     #[arg(long, value_name = "LEAN.csv")]
@@ -267,7 +276,20 @@ pub fn run(a: AdaptArgs) -> CliResult {
         angle_resolution_deg: Some(a.resolution),
         protocol_bias_deg: None,
     };
-    let mut adapted = adapt(&prior, &tip, &opts).map_err(where_flag)?;
+    let replay_options = crate::protocol_bias::replay_options();
+    let replay = crate::protocol_bias::Replay {
+        model_spec: robot,
+        passes: a.protocol_passes as usize,
+        options: &replay_options,
+    };
+    let (mut adapted, _) = crate::protocol_bias::adapt_to_protocol(
+        &prior,
+        &tip,
+        &opts,
+        &replay,
+        &mut |line| eprintln!("{line}"),
+        &where_flag,
+    )?;
     if a.check {
         check(&mut adapted, &StudyOptions::default()).map_err(where_flag)?;
     }

@@ -6,12 +6,11 @@
 //! from the four fall angles and the robot's weight; the adapted model is written and
 //! checked; then the truth is revealed beside what was found.
 
-use crate::cmd_experiment::tipover_bus::{
-    ANKLE_SLOPE, BusOutcome, BusPlan, tipover_in_lockstep, tipover_on_bus,
-};
+use crate::cmd_experiment::tipover_bus::{ANKLE_SLOPE, BusOutcome, BusPlan, tipover_on_bus};
 use crate::cmd_link::{PortArgs, open_client};
 use crate::common::{JSON_HELP, emit};
 use crate::error::{CliError, CliResult, Outcome};
+use crate::protocol_bias::{Calibration, Replay, adapt_to_protocol};
 use clap::Args;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -19,7 +18,7 @@ use std::time::Instant;
 use twinloop_description::Description;
 use twinloop_description::builtin::km20;
 use twinloop_experiments::tipover::Direction;
-use twinloop_ident::adapt::{AdaptOptions, adapt, html_report, standing_com, standing_point};
+use twinloop_ident::adapt::{AdaptOptions, html_report, standing_com, standing_point};
 use twinloop_ident::ann_data::{Change, changed, outlined_links, random_change};
 use twinloop_ident::tipover_study::{StudyReport, report_for_runs};
 use twinloop_link::{Item, RobotMapping};
@@ -298,167 +297,6 @@ fn replay_3d(dir: &Path, record: &Path, adapted: bool, files: &mut Vec<String>) 
     crate::replay3d::replay_for_report(record, "builtin:km20", urdf.as_deref(), &out, files)
 }
 
-/// The median time between two rows of a bus record (column `t`), s: the host's
-/// control cycle in robot time.
-fn median_cycle(record: &Path) -> Result<f64, CliError> {
-    let text = std::fs::read_to_string(record).map_err(|e| CliError::io(record, e))?;
-    let mut t: Vec<f64> = text
-        .lines()
-        .skip(1)
-        .filter_map(|l| l.split(',').next()?.parse().ok())
-        .collect();
-    let mut d: Vec<f64> = t
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .filter(|x| *x > 0.0)
-        .collect();
-    t.clear();
-    if d.is_empty() {
-        return Err(CliError::new(format!(
-            "{}: fewer than two rows, no control cycle to measure",
-            record.display()
-        )));
-    }
-    d.sort_by(f64::total_cmp);
-    Ok(d[d.len() / 2])
-}
-
-/// How the protocol measured the adapted model (see [`adapt_to_protocol`]).
-#[derive(Debug, Clone, Serialize)]
-struct Calibration {
-    /// The host's control cycle the simulated protocol ran at, s of robot time.
-    cycle_s: f64,
-    /// Per pass (forward, backward, left, right, deg): the bias the model was fitted
-    /// with, its static angles at the robot's onsets, and what the protocol, simulated
-    /// on that pass's adapted model, measured.
-    passes: Vec<CalibrationPass>,
-    /// The pass kept: the last.
-    kept: usize,
-}
-
-#[derive(Debug, Clone, Serialize)]
-struct CalibrationPass {
-    /// The protocol bias the model was fitted with (the previous pass's).
-    bias_deg: [f64; 4],
-    /// The adapted model's static angles at the robot's onsets.
-    static_deg: [f64; 4],
-    protocol_deg: [f64; 4],
-    /// That pass's adapted CoM in the standing frame, m.
-    adapted_com: Option<[f64; 3]>,
-}
-
-/// Adapt to the protocol, not only to the statics: the bus protocol does not read a
-/// robot's static tipping angles exactly (each goal count is a jolt to soft ankles on
-/// the edge of their soles, the readings are whole counts), and how far it is off
-/// depends on the robot. So the adapted model's own measurement is simulated: the
-/// same protocol, from the same commanded starts, on the adapted model stepped in
-/// lockstep with a host whose cycle is the robot run's (`tipover_in_lockstep`); what
-/// it reads minus the model's static angles at the robot's onsets is the protocol's
-/// bias, and the model is adapted again to the robot's angles less that bias
-/// (`AdaptOptions::protocol_bias_deg`). The last pass is kept. With no passes
-/// (`--protocol-passes 0`), the plain adaptation to the measured angles.
-fn adapt_to_protocol(
-    prior: &Description,
-    study: &StudyReport,
-    opts: &AdaptOptions,
-    a: &DemoArgs,
-    runs: &[twinloop_experiments::tipover::TipoverResult],
-    joint_names: &[String],
-    cycle_s: f64,
-) -> Result<(twinloop_ident::adapt::Adapted, Option<Calibration>), CliError> {
-    let commanded: Vec<f64> = runs.iter().map(|r| r.commanded_deg).collect();
-    let measured = angles(study, |d| d.measured_deg);
-    let passes_wanted = a.protocol_passes as usize;
-    if passes_wanted == 0 {
-        return Ok((adapt(prior, study, opts)?, None));
-    }
-    let mut bias = [0.0; 4];
-    let mut best: Option<(f64, twinloop_ident::adapt::Adapted)> = None;
-    let mut passes = Vec::with_capacity(passes_wanted);
-    let mut kept = 0;
-    for pass in 0..passes_wanted {
-        let pass_opts = AdaptOptions {
-            protocol_bias_deg: Some(bias),
-            ..opts.clone()
-        };
-        let adapted = adapt(prior, study, &pass_opts)?;
-        let Some(model) = &adapted.robot else {
-            // Nothing placed (no --total-mass, nor --where): nothing to simulate.
-            return Ok((
-                adapted,
-                Some(Calibration {
-                    cycle_s,
-                    passes,
-                    kept,
-                }),
-            ));
-        };
-        let options = truth_options(a, &[])?;
-        let plan = BusPlan {
-            verbose: false,
-            ..plan("", Path::new(""), a, Some(commanded.clone()))
-        };
-        let run = tipover_in_lockstep(&plan, model, &options, cycle_s)
-            .map_err(|e| e.context("simulating the protocol on the adapted model"))?;
-        let BusOutcome::Study(sim) = run.outcome else {
-            return Err(CliError::new(
-                "simulating the protocol on the adapted model: not all four directions ran",
-            ));
-        };
-        let protocol = angles(&sim, |d| d.measured_deg);
-        // The adapted model's own static angles at the robot's onsets: the fit may not
-        // reach its targets (four angles, three coordinates, a bounded box).
-        let statics = angles(&report_for_runs(model, runs, joint_names)?, |d| {
-            d.static_deg
-        });
-        eprintln!(
-            "the protocol simulated on the adapted model (pass {}): {} (its statics {})",
-            pass + 1,
-            join(protocol),
-            join(statics)
-        );
-        let worst = (0..4).fold(0.0_f64, |w, k| w.max((protocol[k] - measured[k]).abs()));
-        passes.push(CalibrationPass {
-            bias_deg: bias,
-            static_deg: statics,
-            protocol_deg: protocol,
-            adapted_com: adapted.report.adapted_com,
-        });
-        // The last pass is kept: its bias comes from the model nearest the fixed
-        // point. (Keeping the pass whose protocol read nearest the robot was tried:
-        // the readings move in whole counts, and on seed 4 it kept 4.2 mm over 1.9.)
-        kept = pass;
-        best = Some((worst, adapted));
-        // Within a quarter of an encoder count (two ankles averaged): done.
-        if worst < 0.08 {
-            break;
-        }
-        // The protocol's bias on this model (what it reads minus its statics), taken
-        // off the robot's readings: the statics a model measured like the robot has.
-        for k in 0..4 {
-            bias[k] = protocol[k] - statics[k];
-        }
-    }
-    let (_, mut adapted) = best.ok_or_else(|| CliError::new("no pass of the adaptation ran"))?;
-    let b = passes[kept].bias_deg;
-    adapted.report.notes.push(format!(
-        "the model was fitted to the measured angles less the protocol's bias {} deg \
-         (forward, backward, left, right: the protocol simulated on the adapted model \
-         minus its static angles; pass {} of {})",
-        join(b),
-        kept + 1,
-        passes.len()
-    ));
-    Ok((
-        adapted,
-        Some(Calibration {
-            cycle_s,
-            passes,
-            kept,
-        }),
-    ))
-}
-
 /// `twinloop demo`.
 pub fn run(a: DemoArgs) -> CliResult {
     let t0 = Instant::now();
@@ -525,15 +363,19 @@ pub fn run(a: DemoArgs) -> CliResult {
     };
     let measured = angles(&study, |d| d.measured_deg);
     let commanded: Vec<f64> = run.runs.iter().map(|r| r.commanded_deg).collect();
-    let cycle_s = median_cycle(&record)?;
+    let replay_options = truth_options(&a, &[])?;
+    let replay = Replay {
+        model_spec: "builtin:km20",
+        passes: a.protocol_passes as usize,
+        options: &replay_options,
+    };
     let (mut adapted, calibration) = adapt_to_protocol(
         &prior,
         &study,
         &opts,
-        &a,
-        &run.runs,
-        &run.joint_names,
-        cycle_s,
+        &replay,
+        &mut |line| eprintln!("{line}"),
+        &|e| CliError::from(e),
     )?;
     let prior_deg = angles(&study, |d| d.static_deg);
     let mut files = vec![record.display().to_string(), tip_json.display().to_string()];

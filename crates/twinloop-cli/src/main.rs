@@ -24,6 +24,7 @@ mod common;
 mod error;
 mod limb;
 mod progress;
+mod protocol_bias;
 mod replay3d;
 mod units;
 

@@ -25,7 +25,15 @@ pub struct Guarded<'a> {
     pub abort: Option<String>,
     /// Rows written to the record.
     pub rows: usize,
+    /// The time between reads, in [`CYCLE_BIN_S`] bins (the last bin takes the
+    /// rest), and the previous read's time: the host's control cycle, allocation-free.
+    cycles: [u32; CYCLE_BINS],
+    last_read: Option<f64>,
 }
+
+/// Bins of the control-cycle histogram: 0.25 ms each, up to 100 ms.
+const CYCLE_BINS: usize = 400;
+const CYCLE_BIN_S: f64 = 2.5e-4;
 
 impl Guarded<'_> {
     /// Guard `robot`, recording to `writer` (columns [`record_columns`]), stopping
@@ -44,7 +52,26 @@ impl Guarded<'_> {
             stop,
             abort: None,
             rows: 0,
+            cycles: [0; CYCLE_BINS],
+            last_read: None,
         }
+    }
+
+    /// The median time between two reads so far, s of robot time (the centre of its
+    /// 0.25 ms bin); `None` before two reads.
+    pub fn median_cycle_s(&self) -> Option<f64> {
+        let n: u64 = self.cycles.iter().map(|&c| u64::from(c)).sum();
+        if n == 0 {
+            return None;
+        }
+        let mut seen = 0;
+        for (k, &c) in self.cycles.iter().enumerate() {
+            seen += u64::from(c);
+            if 2 * seen >= n {
+                return Some((k as f64 + 0.5) * CYCLE_BIN_S);
+            }
+        }
+        None
     }
 
     /// Stop the run with `message` (the first failure is the one reported).
@@ -126,6 +153,11 @@ impl Robot for Guarded<'_> {
 
     fn read(&mut self, state: &mut RobotState) -> Result<(), RobotError> {
         let r = self.robot.read(state);
+        let now = self.robot.time();
+        if let Some(t) = self.last_read.replace(now) {
+            let k = ((now - t).max(0.0) / CYCLE_BIN_S) as usize;
+            self.cycles[k.min(CYCLE_BINS - 1)] += 1;
+        }
         // Every read reaches the file, a failed one too (NaN where a servo was
         // silent).
         self.record(state)?;

@@ -88,6 +88,10 @@ pub struct AdaptReport {
     pub robot: String,
     /// `[forward, backward, left, right]`, deg.
     pub measured_deg: [f64; 4],
+    /// The measuring protocol's bias taken off the measured angles before fitting,
+    /// deg (`AdaptOptions::protocol_bias_deg`; absent when none was).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub protocol_bias_deg: Option<[f64; 4]>,
     /// The feet's roll at each tip (IMU excess), deg.
     pub excess_deg: [f64; 4],
     pub prior_mass: f64,
@@ -652,6 +656,7 @@ pub fn adapt(
         prior_model_deg: prior_model_angles(&pf, prior, c0, &foot)?,
         check_deg: None,
         fall_angle_fit: fit_summary,
+        protocol_bias_deg: opts.protocol_bias_deg,
         lean: Vec::new(),
         outline: pf.outline(),
         notes,

@@ -244,6 +244,7 @@ fn measured_report(robot: &str, deg: [f64; 4], foot: &FootGeometry) -> StudyRepo
             feet_mass_fraction: f64::NAN,
             feet_com: [f64::NAN; 2],
         },
+        protocol: None,
     }
 }
 

@@ -119,6 +119,29 @@ pub struct StudyReport {
     pub seed_constants: String,
     /// The foot geometry the estimators used.
     pub foot: FootReport,
+    /// How the angles were measured when over a bus (absent in the simulator's study
+    /// and in files written before it was kept): what it takes to run the same
+    /// protocol on a model and see how it reads that model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub protocol: Option<BusProtocol>,
+}
+
+/// The bus protocol a tip-over was measured by (`twinloop_ident::tipover_bus`):
+/// enough to run it again, the same way, on a simulated model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BusProtocol {
+    /// The servo mapping (`builtin:km20` or the mapping file's path).
+    pub map: String,
+    /// First ramp and creep, deg/s of robot time.
+    pub ramp_deg_per_s: f64,
+    pub slow_ramp_deg_per_s: f64,
+    /// RX Compliance Slope of the holding servos and of the ramped ankles.
+    pub compliance_slope: i32,
+    pub ankle_slope: i32,
+    pub creeps: usize,
+    pub dither: bool,
+    /// The host's control cycle, s of robot time (median over the run).
+    pub cycle_s: f64,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -901,6 +924,7 @@ fn assemble(
             feet_mass_fraction: feet.fraction,
             feet_com: [feet.x, feet.z],
         },
+        protocol: None,
     })
 }
 

@@ -13,7 +13,7 @@ use twinloop_experiments::guarded::BusRobot;
 use twinloop_experiments::tipover::{Direction, TipoverResult};
 pub use twinloop_ident::tipover_bus::{ANKLE_SLOPE, BusOutcome, BusReport};
 use twinloop_ident::tipover_bus::{BusTipoverOptions, bus_outcome, run_directions};
-use twinloop_ident::tipover_study::{TiltModel, tipover_config};
+use twinloop_ident::tipover_study::{BusProtocol, TiltModel, tipover_config};
 use twinloop_link::{DynamixelRobot, ReadMethod, RobotMapping};
 
 /// How the experiment runs over the bus.
@@ -46,6 +46,38 @@ pub struct BusPlan {
     pub clock_rate: f64,
     /// Say on stderr what is happening.
     pub verbose: bool,
+}
+
+impl BusPlan {
+    /// The plan that runs `protocol` again, creeping from `first_tips` (commanded,
+    /// deg, one per direction in `Direction::ALL`'s order), with `model_spec` as the
+    /// host's model; no port, no record (for [`tipover_in_lockstep`]).
+    pub fn replaying(protocol: &BusProtocol, model_spec: &str, first_tips: Vec<f64>) -> BusPlan {
+        BusPlan {
+            model_spec: model_spec.to_string(),
+            map: protocol.map.clone(),
+            port: PortArgs {
+                port: None,
+                baud: 1_000_000,
+                timeout_ms: 10.0,
+                retries: 0,
+                low_latency: false,
+                spin_us: 0,
+            },
+            record: None,
+            yes: true,
+            directions: Direction::ALL.to_vec(),
+            ramp: protocol.ramp_deg_per_s,
+            slow_ramp: protocol.slow_ramp_deg_per_s,
+            compliance_slope: protocol.compliance_slope,
+            ankle_slope: protocol.ankle_slope,
+            creeps: protocol.creeps,
+            first_tips: Some(first_tips),
+            dither: protocol.dither,
+            clock_rate: 1.0,
+            verbose: false,
+        }
+    }
 }
 
 /// The outcome, the runs behind it (the mapping's joint order), and the port.
@@ -163,6 +195,7 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
     };
     let runs = run_directions(&mut g, &opts, &cfg, &mut tilt_model, &mut before, &mut log);
     let rows = g.rows;
+    let cycle_s = g.median_cycle_s();
     let writer = g.writer.take();
     let abort = g.abort.take();
     hold_standing(&mut robot, &standing);
@@ -178,7 +211,19 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
             abort.unwrap_or(e)
         ))
     })?;
-    let outcome = bus_outcome(&model, &plan.model_spec, &port, &runs, &names)?;
+    let mut outcome = bus_outcome(&model, &plan.model_spec, &port, &runs, &names)?;
+    if let (BusOutcome::Study(study), Some(cycle_s)) = (&mut outcome, cycle_s) {
+        study.protocol = Some(BusProtocol {
+            map: plan.map.clone(),
+            ramp_deg_per_s: plan.ramp,
+            slow_ramp_deg_per_s: plan.slow_ramp,
+            compliance_slope: plan.compliance_slope,
+            ankle_slope: plan.ankle_slope,
+            creeps: plan.creeps,
+            dither: plan.dither,
+            cycle_s,
+        });
+    }
     Ok(BusRun {
         outcome,
         runs,
