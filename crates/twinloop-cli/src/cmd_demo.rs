@@ -358,7 +358,8 @@ pub fn run(a: DemoArgs) -> CliResult {
     let opts = AdaptOptions {
         total_mass: Some(scale),
         host: a.tell_where.then(|| truth_changes[0].link.clone()),
-        angle_resolution_deg: Some(0.05),
+        // The ankles' encoder count (RX: 0.29 deg), two ankles averaged.
+        angle_resolution_deg: Some(0.5 * twinloop_sim::actuator::RX_POSITION_UNIT.to_degrees()),
         ..Default::default()
     };
     let measured = angles(&study, |d| d.measured_deg);
