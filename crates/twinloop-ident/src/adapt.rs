@@ -538,7 +538,17 @@ pub fn adapt(
         let with_part = |p: Vector3<f64>| {
             with_added_mass(prior, &host, added.mass, v3(p), true).map_err(IdentError::new)
         };
-        let fit = fall_angle_fit::fit_position(&with_part, tip, start, bounds, bias)?;
+        let fit = fall_angle_fit::fit_position(
+            &with_part,
+            tip,
+            start,
+            bounds,
+            bias,
+            match opts.protocol_bias_deg {
+                Some(_) => fall_angle_fit::PROTOCOL_OFFSET_WEIGHT,
+                None => fall_angle_fit::OFFSET_WEIGHT,
+            },
+        )?;
         let local = Vector3::from(fit.position_host);
         let pose = pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
         let p = pose.act_point(&local) - pf.mid;

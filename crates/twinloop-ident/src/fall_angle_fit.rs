@@ -46,7 +46,14 @@ const MAX_ITERATIONS: usize = 12;
 /// sharply a fore-aft angle is measured (about 0.1 deg over a bus) to how far the
 /// sideways pair's common error goes (about 0.3 deg), so the offset takes what the
 /// sideways pair cannot share with the fore-aft one and no more.
-const OFFSET_WEIGHT: f64 = 1.0 / 3.0;
+pub const OFFSET_WEIGHT: f64 = 1.0 / 3.0;
+/// The same once the measuring protocol's bias is taken off the angles (simulated on
+/// the adapted model, `AdaptOptions::protocol_bias_deg`): the sideways pair's common
+/// error over a bus is then what the protocol reads past the statics, which the bias
+/// accounts for, so an offset costs as much as an angle's residual. Measured on six
+/// kept bus tip-overs (docs/adaptation.md): at 1/3 the sideways pair stayed 0.4-0.7
+/// deg off the robot on two of them; at 1 every direction came within a count.
+pub const PROTOCOL_OFFSET_WEIGHT: f64 = 1.0;
 
 /// The fitted position and how well the four angles agree.
 #[derive(Debug, Clone)]
@@ -81,13 +88,16 @@ fn residuals(
 /// Fit the position (host frame) of the part `model_with_part` places, starting
 /// from `start`, kept within `bounds` (lowest and highest corner, host frame), to
 /// the measured angles less `bias` (deg per direction: how far the measuring
-/// protocol reads past a model's static angles; zeros for none).
+/// protocol reads past a model's static angles; zeros for none), the sideways offset
+/// weighted by `offset_weight` ([`OFFSET_WEIGHT`], or [`PROTOCOL_OFFSET_WEIGHT`] once
+/// the protocol's bias is taken off).
 pub fn fit_position(
     model_with_part: ModelWithPart<'_>,
     report: &StudyReport,
     start: Vector3<f64>,
     bounds: (Vector3<f64>, Vector3<f64>),
     bias: [f64; 4],
+    offset_weight: f64,
 ) -> Result<FallAngleFit, IdentError> {
     let clamp = |p: Vector3<f64>| p.sup(&bounds.0).inf(&bounds.1);
     let measured = Vector4::new(
@@ -97,6 +107,10 @@ pub fn fit_position(
         report.right.measured_deg - bias[3],
     );
     let sideways = Vector4::new(0.0, 0.0, 1.0, 1.0);
+    let w = offset_weight;
+    // The four angles less the sideways offset, and the offset itself, weighted.
+    let stacked =
+        |s: &Vector4<f64>, o: f64| SVector::<f64, 5>::new(s[0], s[1], s[2] - o, s[3] - o, w * o);
     let mut p = clamp(start);
     let mut s = residuals(model_with_part, report, &p, &measured)?;
     if s.iter().any(|v| !v.is_finite()) {
@@ -121,7 +135,7 @@ pub fn fit_position(
                 .copy_from(&((sq - s) / STEP));
         }
         jac.fixed_view_mut::<4, 1>(0, 3).copy_from(&(-sideways));
-        jac[(4, 3)] = OFFSET_WEIGHT;
+        jac[(4, 3)] = w;
         let jtj = jac.transpose() * jac;
         let jtr = jac.transpose() * r;
         // Damped Gauss-Newton; a step that does not lower the cost raises the damping.
@@ -155,12 +169,6 @@ pub fn fit_position(
         }
     }
     Ok(done(p, start_residual, s, o, iterations))
-}
-
-/// The fit's residual: the four angles less the sideways offset, and the offset
-/// itself weighted by [`OFFSET_WEIGHT`].
-fn stacked(s: &Vector4<f64>, o: f64) -> SVector<f64, 5> {
-    SVector::<f64, 5>::new(s[0], s[1], s[2] - o, s[3] - o, OFFSET_WEIGHT * o)
 }
 
 fn done(
