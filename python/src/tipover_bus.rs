@@ -18,7 +18,7 @@ use twinloop_experiments::guarded::{Guarded, hold_standing, is_serial, record_co
 use twinloop_ident::tipover_bus::{
     BusOutcome, BusTipoverOptions, bus_outcome, parse_directions, run_directions,
 };
-use twinloop_ident::tipover_study::{TiltModel, tipover_config};
+use twinloop_ident::tipover_study::{BusProtocol, TiltModel, tipover_config};
 use twinloop_io::CsvWriter;
 use twinloop_link::transport::{self, SerialOptions};
 use twinloop_link::{Client, ClientConfig, DynamixelRobot, ReadMethod, RobotMapping};
@@ -165,7 +165,7 @@ pub fn run<'py>(
     let stop = Arc::new(AtomicBool::new(false));
     let watch = InterruptWatch::new(&stop);
     let standing = vec![0.0; names.len()];
-    let (runs, abort, finished) = py.detach(|| {
+    let (runs, abort, finished, cycle_s) = py.detach(|| {
         let mut g = Guarded::new(&mut bot, writer, &standing, stop.clone());
         let runs = run_directions(
             &mut g,
@@ -175,10 +175,16 @@ pub fn run<'py>(
             &mut |_, _| Ok(()),
             &mut |_| {},
         );
+        let cycle_s = g.median_cycle_s();
         let writer = g.writer.take();
         let abort = g.abort.take();
         hold_standing(&mut bot, &standing);
-        (runs, abort, writer.map(CsvWriter::finish).transpose())
+        (
+            runs,
+            abort,
+            writer.map(CsvWriter::finish).transpose(),
+            cycle_s,
+        )
     });
     drop(watch);
     finished.map_err(|e| os_error(format!("record: {e}")))?;
@@ -193,7 +199,20 @@ pub fn run<'py>(
     match bus_outcome(&model, &model_spec, &port, &runs, &names)
         .map_err(|e| value_error(e.to_string()))?
     {
-        BusOutcome::Study(r) => to_py(py, &*r),
+        BusOutcome::Study(mut r) => {
+            // How it was measured, as the CLI keeps it (`adapt --protocol-passes`).
+            r.protocol = cycle_s.map(|cycle_s| BusProtocol {
+                map: map.to_string(),
+                ramp_deg_per_s: plan.ramp,
+                slow_ramp_deg_per_s: plan.slow_ramp,
+                compliance_slope: opts.compliance_slope,
+                ankle_slope: opts.ankle_slope,
+                creeps: opts.creeps,
+                dither: opts.dither,
+                cycle_s,
+            });
+            to_py(py, &*r)
+        }
         BusOutcome::Partial(r) => to_py(py, &*r),
     }
 }
