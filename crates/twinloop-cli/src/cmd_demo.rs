@@ -435,6 +435,12 @@ pub fn run(a: DemoArgs) -> CliResult {
     t += &format!("  model before       {}\n", join(prior_deg));
     t += &format!("  model adapted      {}\n", join(adapted_deg));
     t += &format!("  model true         {}\n", join(truth_deg));
+    if let Some(c) = &calibration {
+        t += &format!(
+            "  protocol's bias    {} (read past the statics, simulated on the adapted model; the model adapted is the robot less it)\n",
+            join(c.passes[c.kept].bias_deg)
+        );
+    }
     if let Some(sim) = simulated_deg {
         t += &format!("  adapted, simulated {}\n", join(sim));
         let (k, worst) = (0..4).fold((0, 0.0_f64), |b, k| {
