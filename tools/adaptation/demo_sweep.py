@@ -73,8 +73,9 @@ def main():
         dt = [r["true_model_deg"][k] - r["measured_deg"][k] for k in range(4)]
         sim = r.get("adapted_simulation_deg")
         ds = None if sim is None else [sim[k] - r["measured_deg"][k] for k in range(4)]
-        # Pass 1 of the protocol's correction is the plain adaptation (no bias): the
-        # same measurement adapted without the correction, for a paired comparison.
+        # Pass 1 of the protocol's correction fits with zero bias (the sideways offset
+        # already weighted as once the bias is off: `adapt --protocol-passes 0` is the
+        # plain adaptation itself): the same measurement, for a paired comparison.
         cal = r.get("calibration")
         plain = None
         if cal and cal["passes"] and cal["passes"][0]["adapted_com"]:

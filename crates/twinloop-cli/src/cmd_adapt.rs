@@ -276,7 +276,8 @@ pub fn run(a: AdaptArgs) -> CliResult {
         angle_resolution_deg: Some(a.resolution),
         protocol_bias_deg: None,
     };
-    let replay_options = crate::protocol_bias::replay_options();
+    let replay_options =
+        crate::protocol_bias::replay_options(crate::protocol_bias::REPLAY_GROUND_SINK);
     let replay = crate::protocol_bias::Replay {
         model_spec: robot,
         passes: a.protocol_passes as usize,

@@ -10,7 +10,9 @@ use crate::cmd_experiment::tipover_bus::{ANKLE_SLOPE, BusOutcome, BusPlan, tipov
 use crate::cmd_link::{PortArgs, open_client};
 use crate::common::{JSON_HELP, emit};
 use crate::error::{CliError, CliResult, Outcome};
-use crate::protocol_bias::{Calibration, Replay, adapt_to_protocol};
+use crate::protocol_bias::{
+    Calibration, Replay, adapt_to_protocol, angles_of as angles, join, replay_options,
+};
 use clap::Args;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -20,7 +22,7 @@ use twinloop_description::builtin::km20;
 use twinloop_experiments::tipover::Direction;
 use twinloop_ident::adapt::{AdaptOptions, html_report, standing_com, standing_point};
 use twinloop_ident::ann_data::{Change, changed, outlined_links, random_change};
-use twinloop_ident::tipover_study::{StudyReport, report_for_runs};
+use twinloop_ident::tipover_study::report_for_runs;
 use twinloop_link::{Item, RobotMapping};
 use twinloop_virtual::{PtyServer, VirtualRobot, VirtualRobotOptions};
 
@@ -144,21 +146,6 @@ fn hidden_change(a: &DemoArgs, prior: &Description) -> Result<(Vec<Change>, Stri
     Ok((vec![c], format!("drawn from seed {}", a.seed)))
 }
 
-/// The simulated robot's settings (see [`serve_truth`]).
-fn truth_options(a: &DemoArgs, servo_params: &[String]) -> Result<VirtualRobotOptions, CliError> {
-    Ok(VirtualRobotOptions {
-        realtime_factor: a.realtime_factor,
-        catch_falls: true,
-        ground_sink: Some(a.ground_sink),
-        tether_s: Some(0.02),
-        servo_params: twinloop_actuator::params_set::ServoParamsSet::read(
-            servo_params,
-            "--servo-params",
-        )?,
-        ..Default::default()
-    })
-}
-
 /// Serve `truth` on a new pty, as `twinloop serve --catch-falls` does: the simulation
 /// runs `factor` times faster than real time, tethered to its host (a host held up by
 /// the scheduler finds the robot where it left it), and the servos answer without a
@@ -169,7 +156,15 @@ fn serve_truth(
     a: &DemoArgs,
     servo_params: &[String],
 ) -> Result<PtyServer, CliError> {
-    let options = truth_options(a, servo_params)?;
+    let options = VirtualRobotOptions {
+        realtime_factor: a.realtime_factor,
+        tether_s: Some(0.02),
+        servo_params: twinloop_actuator::params_set::ServoParamsSet::read(
+            servo_params,
+            "--servo-params",
+        )?,
+        ..replay_options(a.ground_sink)
+    };
     let vr = VirtualRobot::new(truth, mapping, &options)?;
     let devices = mapping.joints.len() + mapping.boards.len();
     PtyServer::start(vr, Some(1_000_000), |bus| {
@@ -257,17 +252,6 @@ fn find_robot(port: &str, mapping: &RobotMapping) -> Result<(usize, usize), CliE
         .filter(|b| client.ping(b.protocol, b.id).is_ok())
         .count();
     Ok((servos, boards))
-}
-
-fn angles(
-    r: &StudyReport,
-    f: fn(&twinloop_ident::tipover_study::DirectionReport) -> f64,
-) -> [f64; 4] {
-    [f(&r.forward), f(&r.backward), f(&r.left), f(&r.right)]
-}
-
-fn join(v: [f64; 4]) -> String {
-    v.map(|a| format!("{a:5.2}")).join(" ")
 }
 
 fn mm(v: [f64; 3]) -> String {
@@ -363,8 +347,8 @@ pub fn run(a: DemoArgs) -> CliResult {
         ..Default::default()
     };
     let measured = angles(&study, |d| d.measured_deg);
-    let commanded: Vec<f64> = run.runs.iter().map(|r| r.commanded_deg).collect();
-    let replay_options = truth_options(&a, &[])?;
+    // The check's floor and servos (datasheet): what the adapting side knows.
+    let replay_options = replay_options(a.ground_sink);
     let replay = Replay {
         model_spec: "builtin:km20",
         passes: a.protocol_passes as usize,
@@ -391,7 +375,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     }
     let simulated_deg = match (&adapted.robot, a.check) {
         (Some(model), true) => {
-            let commanded = commanded.clone();
+            let commanded: Vec<f64> = run.runs.iter().map(|r| r.commanded_deg).collect();
             let check_csv = a.out.join("check.csv");
             let deg = check_on_bus(model, &mapping, &a, commanded, &check_csv)?;
             files.push(check_csv.display().to_string());

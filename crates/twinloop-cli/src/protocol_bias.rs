@@ -24,8 +24,7 @@ use twinloop_virtual::VirtualRobotOptions;
 /// `calibration`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Calibration {
-    /// The host's control cycle the simulated protocol ran at, s of robot time.
-    pub cycle_s: f64,
+    /// The protocol ran at the host cycle the tip-over's `protocol.cycle_s` keeps.
     pub passes: Vec<CalibrationPass>,
     /// The pass kept (0-based): the last.
     pub kept: usize,
@@ -45,23 +44,29 @@ pub struct CalibrationPass {
 }
 
 /// The simulated robot the protocol runs on: the operator who stands it up between
-/// runs, the demo's floor (0.1 mm of sink under its weight).
-pub fn replay_options() -> VirtualRobotOptions {
+/// runs, a floor that sinks `ground_sink` m under the robot's weight (the demo's
+/// 0.1 mm when the floor is unknown); datasheet servos.
+pub fn replay_options(ground_sink: f64) -> VirtualRobotOptions {
     VirtualRobotOptions {
         catch_falls: true,
-        ground_sink: Some(1e-4),
+        ground_sink: Some(ground_sink),
         ..Default::default()
     }
 }
 
-fn angles_of(
+/// The floor `adapt` replays the protocol on: the demo's.
+pub const REPLAY_GROUND_SINK: f64 = 1e-4;
+
+/// One figure of each direction of `r` (forward, backward, left, right).
+pub(crate) fn angles_of(
     r: &StudyReport,
     f: fn(&twinloop_ident::tipover_study::DirectionReport) -> f64,
 ) -> [f64; 4] {
     Direction::ALL.map(|d| f(r.direction(d)))
 }
 
-fn join(v: [f64; 4]) -> String {
+/// Four angles, deg, as the demo and the log print them.
+pub(crate) fn join(v: [f64; 4]) -> String {
     v.map(|a| format!("{a:5.2}")).join(" ")
 }
 
@@ -154,13 +159,5 @@ pub fn adapt_to_protocol(
         kept + 1,
         done.len()
     ));
-    let cycle_s = protocol.cycle_s;
-    Ok((
-        adapted,
-        Some(Calibration {
-            cycle_s,
-            passes: done,
-            kept,
-        }),
-    ))
+    Ok((adapted, Some(Calibration { passes: done, kept })))
 }

@@ -235,32 +235,22 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cmd_link::PortArgs;
 
+    /// The demo's protocol, from the first ramp (no known tips), one creep.
     fn plan() -> BusPlan {
-        BusPlan {
-            model_spec: "builtin:km20".into(),
+        let protocol = BusProtocol {
             map: "builtin:km20".into(),
-            port: PortArgs {
-                port: None,
-                baud: 1_000_000,
-                timeout_ms: 10.0,
-                retries: 0,
-                low_latency: false,
-                spin_us: 0,
-            },
-            record: None,
-            yes: true,
-            directions: Direction::ALL.to_vec(),
-            ramp: 2.0,
-            slow_ramp: 0.15,
+            ramp_deg_per_s: 2.0,
+            slow_ramp_deg_per_s: 0.15,
             compliance_slope: 2,
             ankle_slope: ANKLE_SLOPE,
             creeps: 1,
-            first_tips: None,
             dither: false,
-            clock_rate: 1.0,
-            verbose: false,
+            cycle_s: 0.029,
+        };
+        BusPlan {
+            first_tips: None,
+            ..BusPlan::replaying(&protocol, "builtin:km20", Vec::new())
         }
     }
 
@@ -268,11 +258,7 @@ mod tests {
     /// time): the four angles it reads and the model's static angles at its onsets.
     fn lockstep_km20() -> ([f64; 4], [f64; 4]) {
         let model = twinloop_description::builtin::km20::build().unwrap();
-        let options = twinloop_virtual::VirtualRobotOptions {
-            catch_falls: true,
-            ground_sink: Some(1e-4),
-            ..Default::default()
-        };
+        let options = crate::protocol_bias::replay_options(1e-4);
         let run = tipover_in_lockstep(&plan(), &model, &options, 0.029).unwrap();
         let BusOutcome::Study(s) = run.outcome else {
             panic!("four directions ran, no study")
