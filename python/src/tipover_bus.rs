@@ -16,7 +16,7 @@ use std::time::Duration;
 use twinloop_description::{Description, JointKind};
 use twinloop_experiments::guarded::{Guarded, hold_standing, is_serial, record_columns};
 use twinloop_ident::tipover_bus::{
-    BusOutcome, BusTipoverOptions, bus_outcome, parse_directions, run_directions,
+    BusOutcome, BusTipoverOptions, ONSET_AVERAGE_S, bus_outcome, parse_directions, run_directions,
 };
 use twinloop_ident::tipover_study::{BusProtocol, TiltModel, tipover_config};
 use twinloop_io::CsvWriter;
@@ -161,6 +161,7 @@ pub fn run<'py>(
         creeps: plan.creeps,
         first_tips: None,
         dither: false,
+        onset_average_s: ONSET_AVERAGE_S,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let watch = InterruptWatch::new(&stop);
@@ -209,6 +210,7 @@ pub fn run<'py>(
                 ankle_slope: opts.ankle_slope,
                 creeps: opts.creeps,
                 dither: opts.dither,
+                onset_average_s: opts.onset_average_s,
                 cycle_s,
             });
             to_py(py, &*r)

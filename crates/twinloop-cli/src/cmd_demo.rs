@@ -6,7 +6,9 @@
 //! from the four fall angles and the robot's weight; the adapted model is written and
 //! checked; then the truth is revealed beside what was found.
 
-use crate::cmd_experiment::tipover_bus::{ANKLE_SLOPE, BusOutcome, BusPlan, tipover_on_bus};
+use crate::cmd_experiment::tipover_bus::{
+    ANKLE_SLOPE, BusOutcome, BusPlan, ONSET_AVERAGE_S, tipover_in_lockstep, tipover_on_bus,
+};
 use crate::cmd_link::{PortArgs, open_client};
 use crate::common::{JSON_HELP, emit};
 use crate::error::{CliError, CliResult, Outcome};
@@ -63,6 +65,11 @@ pub struct DemoArgs {
     /// sent flip around the ramp so that their running mean is the ramp)
     #[arg(long)]
     pub dither: bool,
+    /// Read each creep's tip as the mean of the ankle readings over this long up to
+    /// the onset, s of robot time (as `experiment tipover --onset-average`; 0: the
+    /// onset's sample alone)
+    #[arg(long, default_value_t = ONSET_AVERAGE_S, value_parser = crate::common::non_negative)]
+    pub onset_average: f64,
     /// Passes of adapting to the protocol (0: off): the tip-over protocol is simulated
     /// on the adapted model, on an in-memory bus stepped in lockstep with the host, and
     /// the static angles the model is fitted to move by that model's protocol bias
@@ -100,6 +107,10 @@ struct DemoReport {
     prior_model_deg: [f64; 4],
     adapted_model_deg: [f64; 4],
     true_model_deg: [f64; 4],
+    /// With `--protocol-passes`: the protocol simulated in lockstep on the true model
+    /// (what the robot's measurement would read with no bus noise), deg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    true_protocol_deg: Option<[f64; 4]>,
     /// With `--check`: the adapted model's simulation measured over the bus by the
     /// same protocol, deg.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -217,6 +228,7 @@ fn plan(port: &str, record: &Path, a: &DemoArgs, first_tips: Option<Vec<f64>>) -
         creeps: a.creeps as usize,
         first_tips,
         dither: a.dither,
+        onset_average_s: a.onset_average,
         clock_rate: a.realtime_factor,
         verbose: true,
     }
@@ -403,6 +415,20 @@ pub fn run(a: DemoArgs) -> CliResult {
         &report_for_runs(&truth, &run.runs, &run.joint_names)?,
         |d| d.static_deg,
     );
+    // The protocol on the truth, in lockstep: the pty measurement less its noise.
+    let true_protocol_deg = match (&study.protocol, calibration.is_some()) {
+        (Some(protocol), true) => {
+            let commanded = angles(&study, |d| d.commanded_deg).to_vec();
+            let plan = BusPlan::replaying(protocol, "builtin:km20", commanded);
+            let run = tipover_in_lockstep(&plan, &truth, &replay_options, protocol.cycle_s)
+                .map_err(|e| e.context("simulating the protocol on the true model"))?;
+            match run.outcome {
+                BusOutcome::Study(s) => Some(angles(&s, |d| d.measured_deg)),
+                BusOutcome::Partial(_) => None,
+            }
+        }
+        _ => None,
+    };
     let r = &adapted.report;
     let com_error = r.adapted_com.map(|c| dist(c, true_com));
     // One change: where it is in the standing frame (the found one's frame).
@@ -419,6 +445,12 @@ pub fn run(a: DemoArgs) -> CliResult {
     t += &format!("  model before       {}\n", join(prior_deg));
     t += &format!("  model adapted      {}\n", join(adapted_deg));
     t += &format!("  model true         {}\n", join(truth_deg));
+    if let Some(p) = true_protocol_deg {
+        t += &format!(
+            "  true, by protocol  {} (the protocol simulated on the true model)\n",
+            join(p)
+        );
+    }
     if let Some(c) = &calibration {
         t += &format!(
             "  protocol's bias    {} (read past the statics, simulated on the adapted model; the model adapted is the robot less it)\n",
@@ -489,6 +521,7 @@ pub fn run(a: DemoArgs) -> CliResult {
         prior_model_deg: prior_deg,
         adapted_model_deg: adapted_deg,
         true_model_deg: truth_deg,
+        true_protocol_deg,
         adapted_simulation_deg: simulated_deg,
         calibration,
         found: r.added.clone(),

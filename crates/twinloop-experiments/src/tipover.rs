@@ -103,6 +103,13 @@ pub struct TipoverConfig {
     /// the measured ankle rate, both over `onset_window_s`.
     pub onset_ratio: f64,
     pub onset_window_s: f64,
+    /// Read the tip as the mean over this long up to the onset, s (0: the onset's
+    /// sample alone). Over a bus the ankles read whole counts and flip between two
+    /// as the robot rocks on its sole edges, and the onset falls on the cycle either
+    /// side of the count step that starts the fall: one sample reads a count early or
+    /// late from run to run. The mean over a rocking period or so reads between the
+    /// counts and moves little when the onset moves by a cycle.
+    pub onset_average_s: f64,
     /// Give up beyond this ankle command, deg.
     pub max_deg: f64,
 }
@@ -129,6 +136,7 @@ impl TipoverConfig {
             fall_deg: 5.0,
             onset_ratio: 1.5,
             onset_window_s: 0.1,
+            onset_average_s: 0.0,
             max_deg: 45.0,
         }
     }
@@ -238,6 +246,37 @@ fn find_onset(history: &[Sample], cfg: &TipoverConfig) -> usize {
         .unwrap_or(0)
 }
 
+/// The first sample of the reading window that ends at `onset` and spans `average_s`
+/// of the robot's time (`onset` itself for 0).
+fn onset_window_start(history: &[Sample], onset: usize, average_s: f64) -> usize {
+    if average_s <= 0.0 {
+        return onset;
+    }
+    let t_onset = history[onset].2;
+    history[..onset].partition_point(|s| s.2 < t_onset - average_s)
+}
+
+/// The mean measured ankle angle, excess and lean of `window`'s samples.
+fn mean_reading(window: &[Sample]) -> (f64, f64, f64) {
+    let k = window.len() as f64;
+    let (m, e, l) = window
+        .iter()
+        .fold((0.0, 0.0, 0.0), |(m, e, l), s| (m + s.1, e + s.3, l + s.4));
+    (m / k, e / k, l / k)
+}
+
+/// The mean posture of `flat`'s rows of `n` joint positions.
+fn mean_posture(flat: &[f64], n: usize) -> Vec<f64> {
+    let rows = (flat.len() / n) as f64;
+    let mut mean = vec![0.0; n];
+    for row in flat.chunks_exact(n) {
+        for (m, q) in mean.iter_mut().zip(row) {
+            *m += q / rows;
+        }
+    }
+    mean
+}
+
 /// Trunk pitch and roll (rad; forward and left positive) predicted from joint positions
 /// with the feet flat on the ground.
 pub type TiltPredictor<'a> = &'a mut dyn FnMut(&[f64]) -> [f64; 2];
@@ -342,7 +381,9 @@ pub fn run_direction<R: Robot + ?Sized>(
         positions.extend_from_slice(&st.positions[..n]);
         if excess > cfg.fall_deg.to_radians() {
             let onset = find_onset(&history, cfg);
-            let (c, m, t, e, lean) = history[onset];
+            let (c, _, t, _, _) = history[onset];
+            let from = onset_window_start(&history, onset, cfg.onset_average_s);
+            let (m, e, lean) = mean_reading(&history[from..=onset]);
             let measured_deg = m.abs().to_degrees();
             // The command never exceeds max_deg: an ankle reading far beyond it is a
             // robot (or a simulation) gone unstable, not a tip angle to estimate from.
@@ -363,7 +404,7 @@ pub fn run_direction<R: Robot + ?Sized>(
                 excess_deg: e.to_degrees(),
                 lean_deg: lean.to_degrees(),
                 fall_confirmed_s: robot.time() - t_start,
-                positions_at_onset: positions[onset * n..(onset + 1) * n].to_vec(),
+                positions_at_onset: mean_posture(&positions[from * n..(onset + 1) * n], n),
             });
         }
     }
@@ -477,5 +518,43 @@ mod tests {
             (r.measured_deg - 0.02f64.to_degrees()).abs() < 0.05,
             "{r:?}"
         );
+    }
+
+    /// A reading that flips between two whole counts as the robot rocks: the onset's
+    /// sample reads whichever count it lands on; the window's mean reads the value
+    /// the flips dither around (here a known 0.4 of the way between the counts).
+    #[test]
+    fn the_windowed_reading_sees_between_the_counts() {
+        let count = 0.29_f64.to_radians();
+        let truth = 40.4 * count;
+        let period = 0.029;
+        // 2 s of samples; each reads the count below or above the truth, above with
+        // probability 0.4, spread evenly (a deterministic low-discrepancy sequence).
+        let history: Vec<Sample> = (0..69)
+            .map(|k| {
+                let up = ((k as f64 * 0.618_034).fract()) < 0.4;
+                let m = if up { 41.0 * count } else { 40.0 * count };
+                (m, m, k as f64 * period, 0.0, 0.0)
+            })
+            .collect();
+        let onset = history.len() - 1;
+        let one = onset_window_start(&history, onset, 0.0);
+        assert_eq!(one, onset);
+        let from = onset_window_start(&history, onset, 1.0);
+        // 1 s of robot time at 29 ms a cycle: 35 samples up to and with the onset.
+        assert_eq!(onset - from + 1, 35);
+        let (m, _, _) = mean_reading(&history[from..=onset]);
+        assert!(
+            (m - truth).abs() < 0.05 * count,
+            "mean {:.3} counts, truth 40.4",
+            m / count
+        );
+        // The posture is averaged over the same samples.
+        let flat: Vec<f64> = history[from..=onset]
+            .iter()
+            .flat_map(|s| [s.1, 2.0 * s.1])
+            .collect();
+        let q = mean_posture(&flat, 2);
+        assert!((q[0] - m).abs() < 1e-12 && (q[1] - 2.0 * m).abs() < 1e-12);
     }
 }

@@ -36,6 +36,9 @@ pub struct BusTipoverOptions {
     /// Send the turned joints' goals dithered (`DynamixelRobot::set_dithered`): the
     /// lean then grows smoothly instead of in whole-count steps.
     pub dither: bool,
+    /// A creep's tip is the mean reading over this long up to its onset, s of robot
+    /// time (`TipoverConfig::onset_average_s`; [`ONSET_AVERAGE_S`]).
+    pub onset_average_s: f64,
 }
 
 /// One direction over the bus.
@@ -128,6 +131,11 @@ const REPEAT_MARGIN_DEG: f64 = 0.6;
 /// Two creeps that tip within this many degrees of each other agree: twice the ankle's
 /// encoder count (0.29 deg on an RX), about the scatter of creeps on the virtual robot.
 pub const CREEPS_AGREE_DEG: f64 = 0.6;
+/// How long a creep's tip reading is averaged up to its onset, s of robot time: about
+/// a period of the rocking on the sole edges (1-1.5 s on km20), so that the ankles'
+/// flips between two counts average out. Measured over the pty (docs/adaptation.md):
+/// the onset sample alone read the same creep a count apart from run to run.
+pub const ONSET_AVERAGE_S: f64 = 1.0;
 /// How long a person (or the virtual robot's operator) has to stand the robot up, s.
 const STAND_UP_TIMEOUT_S: f64 = 120.0;
 
@@ -275,6 +283,7 @@ pub fn run_directions(
         };
         let mut slow = cfg.clone();
         slow.slow_ramp_deg_per_s = opts.slow_ramp;
+        slow.onset_average_s = opts.onset_average_s;
         let wanted = opts.creeps.max(1);
         let mut creeps: Vec<TipoverResult> = Vec::with_capacity(wanted + 1);
         let start = first

@@ -140,6 +140,10 @@ pub struct BusProtocol {
     pub ankle_slope: i32,
     pub creeps: usize,
     pub dither: bool,
+    /// A creep's tip read as the mean over this long up to its onset, s of robot time
+    /// (0, as before this was kept: the onset's sample).
+    #[serde(default)]
+    pub onset_average_s: f64,
     /// The host's control cycle, s of robot time (median over the run).
     pub cycle_s: f64,
 }

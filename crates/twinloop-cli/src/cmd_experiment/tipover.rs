@@ -119,6 +119,13 @@ pub struct TipoverArgs {
     /// the counts sent flip around the ramp so that their running mean is the ramp)
     #[arg(long)]
     pub dither: bool,
+    /// Over a bus: read each creep's tip as the mean of the ankle readings (and the
+    /// posture, the feet's roll and the lean) over this long up to the onset, s of
+    /// robot time. The ankles flip between two counts as the robot rocks on its sole
+    /// edges, and one sample reads a count early or late from run to run; 0: the
+    /// onset's sample alone
+    #[arg(long, default_value_t = super::tipover_bus::ONSET_AVERAGE_S, value_parser = crate::common::non_negative)]
+    pub onset_average: f64,
     /// Quantise the ankle readings like Dynamixel RX encoders (1024 counts over 300 deg).
     #[arg(long)]
     pub encoders: bool,
@@ -260,6 +267,7 @@ mod bus {
             creeps: a.creeps as usize,
             first_tips: None,
             dither: a.dither,
+            onset_average_s: a.onset_average,
             clock_rate: a.realtime_factor,
             verbose: true,
         };

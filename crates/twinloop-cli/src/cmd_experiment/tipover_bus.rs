@@ -11,7 +11,7 @@ use crate::error::CliError;
 use std::path::PathBuf;
 use twinloop_experiments::guarded::BusRobot;
 use twinloop_experiments::tipover::{Direction, TipoverResult};
-pub use twinloop_ident::tipover_bus::{ANKLE_SLOPE, BusOutcome, BusReport};
+pub use twinloop_ident::tipover_bus::{ANKLE_SLOPE, BusOutcome, BusReport, ONSET_AVERAGE_S};
 use twinloop_ident::tipover_bus::{BusTipoverOptions, bus_outcome, run_directions};
 use twinloop_ident::tipover_study::{BusProtocol, TiltModel, tipover_config};
 use twinloop_link::{DynamixelRobot, ReadMethod, RobotMapping};
@@ -42,6 +42,9 @@ pub struct BusPlan {
     pub first_tips: Option<Vec<f64>>,
     /// Dither the turned joints' goal counts (see `BusTipoverOptions::dither`).
     pub dither: bool,
+    /// A creep's tip is the mean reading over this long up to its onset, s of robot
+    /// time (see `BusTipoverOptions::onset_average_s`).
+    pub onset_average_s: f64,
     /// Robot seconds per host second (a simulated robot served faster than real time).
     pub clock_rate: f64,
     /// Say on stderr what is happening.
@@ -74,6 +77,7 @@ impl BusPlan {
             creeps: protocol.creeps,
             first_tips: Some(first_tips),
             dither: protocol.dither,
+            onset_average_s: protocol.onset_average_s,
             clock_rate: 1.0,
             verbose: false,
         }
@@ -177,6 +181,7 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
         creeps: plan.creeps,
         first_tips: plan.first_tips.clone(),
         dither: plan.dither,
+        onset_average_s: plan.onset_average_s,
     };
     let mut before = |d: Direction, k: usize| {
         if k > 0 && serial && !plan.yes {
@@ -221,6 +226,7 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
             ankle_slope: plan.ankle_slope,
             creeps: plan.creeps,
             dither: plan.dither,
+            onset_average_s: plan.onset_average_s,
             cycle_s,
         });
     }
@@ -246,6 +252,7 @@ mod tests {
             ankle_slope: ANKLE_SLOPE,
             creeps: 1,
             dither: false,
+            onset_average_s: ONSET_AVERAGE_S,
             cycle_s: 0.029,
         };
         BusPlan {
