@@ -90,13 +90,14 @@ fn change_arg(c: &Bound<'_, PyAny>, k: usize) -> PyResult<Change> {
 /// every cycle read to that CSV; `realtime_factor`: a simulated robot served faster
 /// than real time; `ankle_slope`: the ramped ankles' RX Compliance Slope; `creeps`:
 /// creeping approaches per direction (the closest two averaged, one more when they
-/// differ by over 0.6 deg). On a serial
+/// differ by over 0.2 deg); `dither`: sigma-delta goal counts for the joints a lean
+/// turns (False: whole counts, as `--goal-counts staircase`). On a serial
 /// port the robot moves only with `yes=True`. A silent or faulty servo, or Ctrl-C,
 /// stops the run with OSError (KeyboardInterrupt for Ctrl-C).
 #[pyfunction]
 #[pyo3(signature = (robot = None, ramp = 0.5, slow_ramp = 0.05, compliance_slope = 2.0, encoders = false,
     add_mass = None, *, port = None, map = None, directions = None, record = None, yes = false,
-    realtime_factor = 1.0, ankle_slope = 32.0, creeps = 2, baud = 1_000_000, timeout_ms = 10.0, retries = 2))]
+    realtime_factor = 1.0, ankle_slope = 32.0, creeps = 2, dither = true, baud = 1_000_000, timeout_ms = 10.0, retries = 2))]
 #[allow(clippy::too_many_arguments)]
 pub fn tipover<'py>(
     py: Python<'py>,
@@ -114,6 +115,7 @@ pub fn tipover<'py>(
     realtime_factor: f64,
     ankle_slope: f64,
     creeps: usize,
+    dither: bool,
     baud: u32,
     timeout_ms: f64,
     retries: u32,
@@ -135,6 +137,7 @@ pub fn tipover<'py>(
             compliance_slope,
             ankle_slope,
             creeps,
+            dither,
             realtime_factor,
             baud,
             timeout_ms,

@@ -35,6 +35,7 @@ pub struct Plan {
     pub compliance_slope: f64,
     pub ankle_slope: f64,
     pub creeps: usize,
+    pub dither: bool,
     pub realtime_factor: f64,
     pub baud: u32,
     pub timeout_ms: f64,
@@ -160,7 +161,7 @@ pub fn run<'py>(
         ankle_slope: plan.ankle_slope.round() as i32,
         creeps: plan.creeps,
         first_tips: None,
-        dither: false,
+        dither: plan.dither,
         onset_average_s: ONSET_AVERAGE_S,
     };
     let stop = Arc::new(AtomicBool::new(false));

@@ -8,7 +8,7 @@ adapted CoM's and the part's distance from the truth, and the four fall angles
 in docs/adaptation.md comes from it.
 
     python3 tools/adaptation/demo_sweep.py --seeds 1-12 [--tell-where] [--scenarios a,c,d,e,f]
-        [--twinloop target/release/twinloop] [--out sweep.json] [--keep DIR] [--check] [--dither]
+        [--twinloop target/release/twinloop] [--out sweep.json] [--keep DIR] [--check] [--goal-counts dithered|staircase]
         [--protocol-passes N]
 
 With --check each demo also measures the adapted model's simulation over the bus by
@@ -37,7 +37,8 @@ def main():
     ap.add_argument("--out", default=None)
     ap.add_argument("--keep", default=None, help="keep each run's files in DIR/<job>")
     ap.add_argument("--check", action="store_true", help="demo --check: the adapted simulation over the bus")
-    ap.add_argument("--dither", action="store_true", help="demo --dither: sigma-delta goal counts")
+    ap.add_argument("--goal-counts", choices=["dithered", "staircase"],
+                    help="demo --goal-counts (the demo's default when not given)")
     ap.add_argument("--protocol-passes", type=int, default=None,
                     help="demo --protocol-passes N (the demo's default when not given)")
     a = ap.parse_args()
@@ -55,8 +56,8 @@ def main():
                 cmd.append("--tell-where")
             if a.check:
                 cmd.append("--check")
-            if a.dither:
-                cmd.append("--dither")
+            if a.goal_counts:
+                cmd += ["--goal-counts", a.goal_counts]
             if a.protocol_passes is not None:
                 cmd += ["--protocol-passes", str(a.protocol_passes)]
             load = os.getloadavg()[0]
@@ -73,6 +74,9 @@ def main():
         dt = [r["true_model_deg"][k] - r["measured_deg"][k] for k in range(4)]
         sim = r.get("adapted_simulation_deg")
         ds = None if sim is None else [sim[k] - r["measured_deg"][k] for k in range(4)]
+        # The protocol on the true model in lockstep: the robot's reading less the bus's noise.
+        tp = r.get("true_protocol_deg")
+        dp = None if tp is None else [tp[k] - r["measured_deg"][k] for k in range(4)]
         # Pass 1 of the protocol's correction fits with zero bias (the sideways offset
         # already weighted as once the bias is off: `adapt --protocol-passes 0` is the
         # plain adaptation itself): the same measurement, for a paired comparison.
@@ -87,7 +91,7 @@ def main():
             "position_error_mm": None if r["position_error"] is None else 1e3 * r["position_error"],
             "found_host": (r.get("found") or {}).get("host"),
             "adapted_minus_measured_deg": dm, "true_minus_measured_deg": dt,
-            "simulated_minus_measured_deg": ds,
+            "simulated_minus_measured_deg": ds, "true_protocol_minus_measured_deg": dp,
             "wall_s": time.time() - t0, "load": load,
         }
         rows.append(row)
@@ -97,6 +101,7 @@ def main():
               + " ".join(f"{x:+.2f}" for x in dm) + "  true-measured "
               + " ".join(f"{x:+.2f}" for x in dt)
               + ("" if ds is None else "  simulated-measured " + " ".join(f"{x:+.2f}" for x in ds))
+              + ("" if dp is None else "  truth's protocol-measured " + " ".join(f"{x:+.2f}" for x in dp))
               + ("" if plain is None else f"  (plain {plain:.2f} mm)")
               + f"  {row['wall_s']:.0f} s load {load:.1f}", flush=True)
     ok = [r for r in rows if "failed" not in r]
@@ -117,6 +122,11 @@ def main():
             print(f"adapted simulation (over the bus) vs measured, worst direction: median "
                   f"{statistics.median(ws):.2f} deg, max {max(ws):.2f} deg, "
                   f"{sum(w <= 0.3 for w in ws)} of {len(ws)} within 0.3 deg")
+        noise = [abs(x) for r in ok if r["true_protocol_minus_measured_deg"] for x in r["true_protocol_minus_measured_deg"]]
+        if noise:
+            print(f"the robot's reading vs the protocol on the true model (the bus's noise), per direction: median "
+                  f"{statistics.median(noise):.3f} deg, max {max(noise):.2f} deg, "
+                  f"{sum(x <= 0.1 for x in noise)} of {len(noise)} within 0.1 deg")
         big = [r for r in ok if r["mass"] >= 0.3 and r["position_error_mm"] is not None]
         if big:
             pe = [r["position_error_mm"] for r in big]

@@ -7,7 +7,8 @@
 //! checked; then the truth is revealed beside what was found.
 
 use crate::cmd_experiment::tipover_bus::{
-    ANKLE_SLOPE, BusOutcome, BusPlan, ONSET_AVERAGE_S, tipover_in_lockstep, tipover_on_bus,
+    ANKLE_SLOPE, BusOutcome, BusPlan, GoalCounts, ONSET_AVERAGE_S, tipover_in_lockstep,
+    tipover_on_bus,
 };
 use crate::cmd_link::{PortArgs, open_client};
 use crate::common::{JSON_HELP, emit};
@@ -61,10 +62,13 @@ pub struct DemoArgs {
     /// link's outline. One change only (not with --scenario a)
     #[arg(long)]
     pub tell_where: bool,
-    /// Dither the goal counts of the joints a lean turns (sigma-delta: the counts
-    /// sent flip around the ramp so that their running mean is the ramp)
-    #[arg(long)]
-    pub dither: bool,
+    /// The goal positions sent to the joints a lean turns. dithered
+    /// (sigma-delta: the counts flip around the ramp so that their running mean is
+    /// the ramp) lets the robot tip where its lean takes it, between two counts;
+    /// staircase (whole counts) tips it on the jolt of a count step, a count early
+    /// or late from run to run (as `experiment tipover --goal-counts`)
+    #[arg(long, value_enum, default_value_t = GoalCounts::Dithered)]
+    pub goal_counts: GoalCounts,
     /// Read each creep's tip as the mean of the ankle readings over this long up to
     /// the onset, s of robot time (as `experiment tipover --onset-average`; 0: the
     /// onset's sample alone)
@@ -227,7 +231,7 @@ fn plan(port: &str, record: &Path, a: &DemoArgs, first_tips: Option<Vec<f64>>) -
         ankle_slope: ANKLE_SLOPE,
         creeps: a.creeps as usize,
         first_tips,
-        dither: a.dither,
+        dither: a.goal_counts.dithered(),
         onset_average_s: a.onset_average,
         clock_rate: a.realtime_factor,
         verbose: true,

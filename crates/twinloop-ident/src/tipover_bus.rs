@@ -26,7 +26,7 @@ pub struct BusTipoverOptions {
     pub ankle_slope: i32,
     /// Creeping approaches per direction (at least 1); with two or more, the two that
     /// agree best are averaged, and one more is made when they differ by more than
-    /// [`CREEPS_AGREE_DEG`] (see [`combine_creeps`]).
+    /// [`creeps_agree_deg`] (see [`combine_creeps`]).
     pub creeps: usize,
     /// Commanded tip angles known beforehand, deg, one per direction in `directions`'
     /// order: no first ramp, the creeps start [`SLOW_MARGIN_DEG`] before each. How an
@@ -128,9 +128,14 @@ const SLOW_MARGIN_DEG: f64 = 1.5;
 /// How far before the last creep's tip a repeated creep starts, deg: that creep saw the
 /// tip within a fraction of a degree.
 const REPEAT_MARGIN_DEG: f64 = 0.6;
-/// Two creeps that tip within this many degrees of each other agree: twice the ankle's
-/// encoder count (0.29 deg on an RX), about the scatter of creeps on the virtual robot.
-pub const CREEPS_AGREE_DEG: f64 = 0.6;
+/// Two creeps that tip within this many degrees of each other agree: about the
+/// scatter of creeps on the virtual robot. Read at one sample, twice the ankle's
+/// encoder count (0.29 deg on an RX); read over a window up to the onset
+/// (`onset_average_s` > 0), two creeps mostly read within 0.01-0.06 deg and now and
+/// then 0.15-0.4 apart, one of them spoiled (a stalled cycle, a jolt): 0.2 deg.
+pub fn creeps_agree_deg(onset_average_s: f64) -> f64 {
+    if onset_average_s > 0.0 { 0.2 } else { 0.6 }
+}
 /// How long a creep's tip reading is averaged up to its onset, s of robot time: about
 /// a period of the rocking on the sole edges (1-1.5 s on km20), so that the ankles'
 /// flips between two counts average out. Measured over the pty (docs/adaptation.md):
@@ -285,6 +290,7 @@ pub fn run_directions(
         slow.slow_ramp_deg_per_s = opts.slow_ramp;
         slow.onset_average_s = opts.onset_average_s;
         let wanted = opts.creeps.max(1);
+        let agree_deg = creeps_agree_deg(opts.onset_average_s);
         let mut creeps: Vec<TipoverResult> = Vec::with_capacity(wanted + 1);
         let start = first
             .as_ref()
@@ -306,13 +312,13 @@ pub fn run_directions(
             ));
             creeps.push(r);
             let n = creeps.len();
-            let agree = n < 2 || combine_creeps(&creeps).1 <= CREEPS_AGREE_DEG;
+            let agree = n < 2 || combine_creeps(&creeps).1 <= agree_deg;
             if n >= wanted && (agree || n > wanted) {
                 break;
             }
         }
         let (mut r, spread) = combine_creeps(&creeps);
-        if creeps.len() > 1 && spread > CREEPS_AGREE_DEG {
+        if creeps.len() > 1 && spread > agree_deg {
             log(&format!(
                 "  {}: the creeps disagree by {spread:.2} deg at best; taking the closest two",
                 d.name()

@@ -110,15 +110,18 @@ pub struct TipoverArgs {
     #[arg(long, default_value_t = 0.05, value_parser = creep_ramp)]
     pub slow_ramp: f64,
     /// Over a bus: creeping approaches per direction. With 2 (the default) the two are
-    /// averaged when they tip within 0.6 deg of each other, and a third is made when
-    /// they do not (a jolt or a stalled cycle spoils a creep now and then); the closest
-    /// two count. 1: a single creep.
+    /// averaged when they tip within 0.2 deg of each other (0.6 with --onset-average
+    /// 0), and a third is made when they do not (a jolt or a stalled cycle spoils a
+    /// creep now and then); the closest two count. 1: a single creep.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=5))]
     pub creeps: u32,
-    /// Over a bus: dither the goal counts of the joints a lean turns (sigma-delta:
-    /// the counts sent flip around the ramp so that their running mean is the ramp)
-    #[arg(long)]
-    pub dither: bool,
+    /// Over a bus: the goal positions sent to the joints a lean turns. dithered
+    /// (sigma-delta: the counts flip around the ramp so that their running mean is
+    /// the ramp) lets the robot tip where its lean takes it, between two counts;
+    /// staircase (whole counts) tips it on the jolt of a count step, a count early
+    /// or late from run to run (docs/adaptation.md)
+    #[arg(long, value_enum, default_value_t = super::tipover_bus::GoalCounts::Dithered)]
+    pub goal_counts: super::tipover_bus::GoalCounts,
     /// Over a bus: read each creep's tip as the mean of the ankle readings (and the
     /// posture, the feet's roll and the lean) over this long up to the onset, s of
     /// robot time. The ankles flip between two counts as the robot rocks on its sole
@@ -266,7 +269,7 @@ mod bus {
             ankle_slope: a.ankle_slope.round() as i32,
             creeps: a.creeps as usize,
             first_tips: None,
-            dither: a.dither,
+            dither: a.goal_counts.dithered(),
             onset_average_s: a.onset_average,
             clock_rate: a.realtime_factor,
             verbose: true,

@@ -16,6 +16,23 @@ use twinloop_ident::tipover_bus::{BusTipoverOptions, bus_outcome, run_directions
 use twinloop_ident::tipover_study::{BusProtocol, TiltModel, tipover_config};
 use twinloop_link::{DynamixelRobot, ReadMethod, RobotMapping};
 
+/// The goal positions a lean sends the joints it turns (`--goal-counts`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum GoalCounts {
+    /// First-order sigma-delta counts: the counts sent flip around the ramp so that
+    /// their running mean is the ramp, and the lean grows smoothly.
+    Dithered,
+    /// Whole counts, the ramp rounded: a staircase of 0.29 deg steps on an RX, each a
+    /// jolt to a robot on the edge of its soles.
+    Staircase,
+}
+
+impl GoalCounts {
+    pub fn dithered(self) -> bool {
+        self == GoalCounts::Dithered
+    }
+}
+
 /// How the experiment runs over the bus.
 #[derive(Debug, Clone)]
 pub struct BusPlan {
