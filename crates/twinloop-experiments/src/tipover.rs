@@ -108,7 +108,8 @@ pub struct TipoverConfig {
     /// as the robot rocks on its sole edges, and the onset falls on the cycle either
     /// side of the count step that starts the fall: one sample reads a count early or
     /// late from run to run. The mean over a rocking period or so reads between the
-    /// counts and moves little when the onset moves by a cycle.
+    /// counts and moves little when the onset moves by a cycle. With a slow final
+    /// approach the window starts no earlier than the creep.
     pub onset_average_s: f64,
     /// Give up beyond this ankle command, deg.
     pub max_deg: f64,
@@ -256,6 +257,16 @@ fn onset_window_start(history: &[Sample], onset: usize, average_s: f64) -> usize
     history[..onset].partition_point(|s| s.2 < t_onset - average_s)
 }
 
+/// The first sample of the slow final approach, if the run has one (`slow_from_deg`),
+/// else 0; `onset` if the robot tipped before it: the reading window stays within
+/// the creep, where the ankles move a hundredth of what they do on the approach.
+fn slow_start(history: &[Sample], onset: usize, cfg: &TipoverConfig) -> usize {
+    match cfg.slow_from_deg.map(f64::to_radians) {
+        Some(a) => history[..onset].partition_point(|s| s.0 <= a),
+        None => 0,
+    }
+}
+
 /// The mean measured ankle angle, excess and lean of `window`'s samples.
 fn mean_reading(window: &[Sample]) -> (f64, f64, f64) {
     let k = window.len() as f64;
@@ -382,7 +393,8 @@ pub fn run_direction<R: Robot + ?Sized>(
         if excess > cfg.fall_deg.to_radians() {
             let onset = find_onset(&history, cfg);
             let (c, _, t, _, _) = history[onset];
-            let from = onset_window_start(&history, onset, cfg.onset_average_s);
+            let from = onset_window_start(&history, onset, cfg.onset_average_s)
+                .max(slow_start(&history, onset, cfg));
             let (m, e, lean) = mean_reading(&history[from..=onset]);
             let measured_deg = m.abs().to_degrees();
             // The command never exceeds max_deg: an ankle reading far beyond it is a
@@ -534,7 +546,7 @@ mod tests {
             .map(|k| {
                 let up = ((k as f64 * 0.618_034).fract()) < 0.4;
                 let m = if up { 41.0 * count } else { 40.0 * count };
-                (m, m, k as f64 * period, 0.0, 0.0)
+                (k as f64 * 0.01, m, k as f64 * period, 0.0, 0.0)
             })
             .collect();
         let onset = history.len() - 1;
@@ -549,6 +561,13 @@ mod tests {
             "mean {:.3} counts, truth 40.4",
             m / count
         );
+        // With a slow final approach past the 60th sample's command, the window keeps
+        // to the creep (the fast approach before it would drag the mean back).
+        let mut cfg = TipoverConfig::new([0, 1], [2, 3], [1.0, 1.0], [1.0, 1.0]);
+        cfg.slow_from_deg = Some(history[59].0.to_degrees());
+        assert_eq!(slow_start(&history, onset, &cfg), 60);
+        cfg.slow_from_deg = None;
+        assert_eq!(slow_start(&history, onset, &cfg), 0);
         // The posture is averaged over the same samples.
         let flat: Vec<f64> = history[from..=onset]
             .iter()
