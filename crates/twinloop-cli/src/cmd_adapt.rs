@@ -208,7 +208,7 @@ fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyR
         ankle_slope: crate::cmd_experiment::tipover_bus::ANKLE_SLOPE,
         creeps: 2,
         first_tips: None,
-        dither: true,
+        dither: crate::cmd_experiment::tipover_bus::GoalCounts::default().dithered(),
         onset_average_s: crate::cmd_experiment::tipover_bus::ONSET_AVERAGE_S,
         clock_rate: a.realtime_factor,
         verbose: true,

@@ -7,14 +7,14 @@
 //! checked; then the truth is revealed beside what was found.
 
 use crate::cmd_experiment::tipover_bus::{
-    ANKLE_SLOPE, BusOutcome, BusPlan, GoalCounts, ONSET_AVERAGE_S, tipover_in_lockstep,
-    tipover_on_bus,
+    ANKLE_SLOPE, BusOutcome, BusPlan, GoalCounts, ONSET_AVERAGE_S, tipover_on_bus,
 };
 use crate::cmd_link::{PortArgs, open_client};
 use crate::common::{JSON_HELP, emit};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::protocol_bias::{
-    Calibration, Replay, adapt_to_protocol, angles_of as angles, join, replay_options,
+    Calibration, Replay, adapt_to_protocol, angles_of as angles, join, protocol_reading,
+    replay_options,
 };
 use clap::Args;
 use serde::Serialize;
@@ -67,7 +67,7 @@ pub struct DemoArgs {
     /// the ramp) lets the robot tip where its lean takes it, between two counts;
     /// staircase (whole counts) tips it on the jolt of a count step, a count early
     /// or late from run to run (as `experiment tipover --goal-counts`)
-    #[arg(long, value_enum, default_value_t = GoalCounts::Dithered)]
+    #[arg(long, value_enum, default_value_t)]
     pub goal_counts: GoalCounts,
     /// Read each creep's tip as the mean of the ankle readings over this long up to
     /// the onset, s of robot time (as `experiment tipover --onset-average`; 0: the
@@ -420,18 +420,12 @@ pub fn run(a: DemoArgs) -> CliResult {
         |d| d.static_deg,
     );
     // The protocol on the truth, in lockstep: the pty measurement less its noise.
-    let true_protocol_deg = match (&study.protocol, calibration.is_some()) {
-        (Some(protocol), true) => {
-            let commanded = angles(&study, |d| d.commanded_deg).to_vec();
-            let plan = BusPlan::replaying(protocol, "builtin:km20", commanded);
-            let run = tipover_in_lockstep(&plan, &truth, &replay_options, protocol.cycle_s)
-                .map_err(|e| e.context("simulating the protocol on the true model"))?;
-            match run.outcome {
-                BusOutcome::Study(s) => Some(angles(&s, |d| d.measured_deg)),
-                BusOutcome::Partial(_) => None,
-            }
-        }
-        _ => None,
+    let true_protocol_deg = match calibration {
+        Some(_) => Some(
+            protocol_reading(&study, "builtin:km20", &truth, &replay_options)
+                .map_err(|e| e.context("simulating the protocol on the true model"))?,
+        ),
+        None => None,
     };
     let r = &adapted.report;
     let com_error = r.adapted_com.map(|c| dist(c, true_com));

@@ -93,6 +93,29 @@ pub struct Replay<'a> {
     pub options: &'a VirtualRobotOptions,
 }
 
+/// What the protocol `study` was measured by (`study.protocol`, creeping from the
+/// robot's commanded tips, `model_spec` as the host's model) reads on `model`
+/// simulated in lockstep with its host at the robot run's cycle: the four fall angles,
+/// deg (forward, backward, left, right).
+pub fn protocol_reading(
+    study: &StudyReport,
+    model_spec: &str,
+    model: &Description,
+    options: &VirtualRobotOptions,
+) -> Result<[f64; 4], CliError> {
+    let protocol = study
+        .protocol
+        .as_ref()
+        .ok_or_else(|| CliError::new("the tip-over was not measured over a bus (no `protocol`)"))?;
+    let commanded = angles_of(study, |d| d.commanded_deg).to_vec();
+    let plan = BusPlan::replaying(protocol, model_spec, commanded);
+    let run = tipover_in_lockstep(&plan, model, options, protocol.cycle_s)?;
+    match run.outcome {
+        BusOutcome::Study(sim) => Ok(angles_of(&sim, |d| d.measured_deg)),
+        BusOutcome::Partial(_) => Err(CliError::new("not all four directions ran")),
+    }
+}
+
 /// Adapt `prior` to `study` in `replay.passes` passes (see the module
 /// documentation); with no passes, no model placed, or a tip-over not measured over
 /// a bus, the plain adaptation. `map_err` words the adaptation's errors for the
@@ -110,8 +133,6 @@ pub fn adapt_to_protocol(
         return Ok((adapt(prior, study, opts).map_err(map_err)?, None));
     };
     let measured = angles_of(study, |d| d.measured_deg);
-    let commanded = angles_of(study, |d| d.commanded_deg).to_vec();
-    let plan = BusPlan::replaying(protocol, replay.model_spec, commanded);
     let mut bias = [0.0; 4];
     let mut done: Vec<CalibrationPass> = Vec::with_capacity(passes);
     let mut last = None;
@@ -125,14 +146,8 @@ pub fn adapt_to_protocol(
             // Nothing placed (no --total-mass, nor --where): nothing to simulate.
             return Ok((adapted, None));
         };
-        let run = tipover_in_lockstep(&plan, model, options, protocol.cycle_s)
+        let read = protocol_reading(study, replay.model_spec, model, options)
             .map_err(|e| e.context("simulating the protocol on the adapted model"))?;
-        let BusOutcome::Study(sim) = run.outcome else {
-            return Err(CliError::new(
-                "simulating the protocol on the adapted model: not all four directions ran",
-            ));
-        };
-        let read = angles_of(&sim, |d| d.measured_deg);
         // The model's own static angles at the robot's onsets: the fit may not reach
         // its targets (four angles, three coordinates, a bounded box).
         let statics = static_angles_at_onsets(model, study)?;

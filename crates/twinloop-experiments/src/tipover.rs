@@ -247,24 +247,21 @@ fn find_onset(history: &[Sample], cfg: &TipoverConfig) -> usize {
         .unwrap_or(0)
 }
 
-/// The first sample of the reading window that ends at `onset` and spans `average_s`
-/// of the robot's time (`onset` itself for 0).
-fn onset_window_start(history: &[Sample], onset: usize, average_s: f64) -> usize {
-    if average_s <= 0.0 {
+/// The first sample of the reading window that ends at `onset`: `onset_average_s` of
+/// the robot's time (`onset` itself for 0), and no earlier than the slow final
+/// approach when the run has one (`slow_from_deg`; `onset` if the robot tipped before
+/// it), where the ankles move a hundredth of what they do on the approach.
+fn reading_window_start(history: &[Sample], onset: usize, cfg: &TipoverConfig) -> usize {
+    if cfg.onset_average_s <= 0.0 {
         return onset;
     }
     let t_onset = history[onset].2;
-    history[..onset].partition_point(|s| s.2 < t_onset - average_s)
-}
-
-/// The first sample of the slow final approach, if the run has one (`slow_from_deg`),
-/// else 0; `onset` if the robot tipped before it: the reading window stays within
-/// the creep, where the ankles move a hundredth of what they do on the approach.
-fn slow_start(history: &[Sample], onset: usize, cfg: &TipoverConfig) -> usize {
-    match cfg.slow_from_deg.map(f64::to_radians) {
+    let window = history[..onset].partition_point(|s| s.2 < t_onset - cfg.onset_average_s);
+    let creep = match cfg.slow_from_deg.map(f64::to_radians) {
         Some(a) => history[..onset].partition_point(|s| s.0 <= a),
         None => 0,
-    }
+    };
+    window.max(creep)
 }
 
 /// The mean measured ankle angle, excess and lean of `window`'s samples.
@@ -393,8 +390,7 @@ pub fn run_direction<R: Robot + ?Sized>(
         if excess > cfg.fall_deg.to_radians() {
             let onset = find_onset(&history, cfg);
             let (c, _, t, _, _) = history[onset];
-            let from = onset_window_start(&history, onset, cfg.onset_average_s)
-                .max(slow_start(&history, onset, cfg));
+            let from = reading_window_start(&history, onset, cfg);
             let (m, e, lean) = mean_reading(&history[from..=onset]);
             let measured_deg = m.abs().to_degrees();
             // The command never exceeds max_deg: an ankle reading far beyond it is a
@@ -550,9 +546,11 @@ mod tests {
             })
             .collect();
         let onset = history.len() - 1;
-        let one = onset_window_start(&history, onset, 0.0);
+        let mut cfg = TipoverConfig::new([0, 1], [2, 3], [1.0, 1.0], [1.0, 1.0]);
+        let one = reading_window_start(&history, onset, &cfg);
         assert_eq!(one, onset);
-        let from = onset_window_start(&history, onset, 1.0);
+        cfg.onset_average_s = 1.0;
+        let from = reading_window_start(&history, onset, &cfg);
         // 1 s of robot time at 29 ms a cycle: 35 samples up to and with the onset.
         assert_eq!(onset - from + 1, 35);
         let (m, _, _) = mean_reading(&history[from..=onset]);
@@ -563,11 +561,13 @@ mod tests {
         );
         // With a slow final approach past the 60th sample's command, the window keeps
         // to the creep (the fast approach before it would drag the mean back).
-        let mut cfg = TipoverConfig::new([0, 1], [2, 3], [1.0, 1.0], [1.0, 1.0]);
         cfg.slow_from_deg = Some(history[59].0.to_degrees());
-        assert_eq!(slow_start(&history, onset, &cfg), 60);
+        assert_eq!(reading_window_start(&history, onset, &cfg), 60);
+        // A creep that began before the window leaves the window as it was.
+        cfg.slow_from_deg = Some(history[10].0.to_degrees());
+        assert_eq!(reading_window_start(&history, onset, &cfg), from);
         cfg.slow_from_deg = None;
-        assert_eq!(slow_start(&history, onset, &cfg), 0);
+        assert_eq!(reading_window_start(&history, onset, &cfg), from);
         // The posture is averaged over the same samples.
         let flat: Vec<f64> = history[from..=onset]
             .iter()
@@ -575,5 +575,6 @@ mod tests {
             .collect();
         let q = mean_posture(&flat, 2);
         assert!((q[0] - m).abs() < 1e-12 && (q[1] - 2.0 * m).abs() < 1e-12);
+        assert!((q[0] - truth).abs() < 0.05 * count && (q[1] - 2.0 * truth).abs() < 0.1 * count);
     }
 }

@@ -120,7 +120,7 @@ pub struct TipoverArgs {
     /// the ramp) lets the robot tip where its lean takes it, between two counts;
     /// staircase (whole counts) tips it on the jolt of a count step, a count early
     /// or late from run to run (docs/adaptation.md)
-    #[arg(long, value_enum, default_value_t = super::tipover_bus::GoalCounts::Dithered)]
+    #[arg(long, value_enum, default_value_t)]
     pub goal_counts: super::tipover_bus::GoalCounts,
     /// Over a bus: read each creep's tip as the mean of the ankle readings (and the
     /// posture, the feet's roll and the lean) over this long up to the onset, s of

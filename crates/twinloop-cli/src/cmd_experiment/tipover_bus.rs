@@ -17,10 +17,12 @@ use twinloop_ident::tipover_study::{BusProtocol, TiltModel, tipover_config};
 use twinloop_link::{DynamixelRobot, ReadMethod, RobotMapping};
 
 /// The goal positions a lean sends the joints it turns (`--goal-counts`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum GoalCounts {
     /// First-order sigma-delta counts: the counts sent flip around the ramp so that
-    /// their running mean is the ramp, and the lean grows smoothly.
+    /// their running mean is the ramp, and the lean grows smoothly. The default
+    /// everywhere a tip-over runs over a bus.
+    #[default]
     Dithered,
     /// Whole counts, the ramp rounded: a staircase of 0.29 deg steps on an RX, each a
     /// jolt to a robot on the edge of its soles.
