@@ -301,7 +301,8 @@ pub fn run(a: AdaptArgs) -> CliResult {
         twinloop_ident::adapt::lean_check(&mut adapted, &prior, &table)
             .map_err(|e| CliError::from(e).context(format!("--lean {}", path.display())))?;
     }
-    if let (Some(out), Some(robot)) = (&a.out, &adapted.robot) {
+    let failed = adapted.report.failed_checks().next().is_some();
+    if let (Some(out), Some(robot), false) = (&a.out, &adapted.robot, failed) {
         twinloop_description::urdf::write_file(robot, out)
             .map_err(|e| CliError::new(format!("{}: {e}", out.display())).context("--out"))?;
         adapted.report.files.push(out.display().to_string());
@@ -340,8 +341,9 @@ pub fn run(a: AdaptArgs) -> CliResult {
     match &r.added {
         Some(m) => {
             t += &format!(
-                "added {:.3} kg on {} at {} in its frame ({} standing; sigma {}); {} iterations\n",
-                m.mass,
+                "{} {:.3} kg on {} at {} in its frame ({} standing; sigma {}); {} iterations\n",
+                if m.mass >= 0.0 { "added" } else { "taken off:" },
+                m.mass.abs(),
                 m.host,
                 mm(m.position_host),
                 mm(m.position),
@@ -367,11 +369,40 @@ pub fn run(a: AdaptArgs) -> CliResult {
             l.joint, l.before_rms, l.after_rms
         );
     }
+    t += &checks_text(r, a.out.as_deref());
     for f in &r.files {
         t += &format!("wrote {f}\n");
     }
     emit(&t, a.json.as_ref(), r)?;
-    Ok(Outcome::Ok)
+    Ok(if failed {
+        Outcome::Problems
+    } else {
+        Outcome::Ok
+    })
+}
+
+/// The checks as the terminal says them: each failed one with its reason, and the
+/// model not written.
+fn checks_text(r: &twinloop_ident::adapt::AdaptReport, out: Option<&Path>) -> String {
+    let mut t = String::new();
+    let failed: Vec<_> = r.failed_checks().collect();
+    if failed.is_empty() {
+        if !r.checks.is_empty() {
+            let names: Vec<&str> = r.checks.iter().map(|c| c.name.as_str()).collect();
+            t += &format!("checks passed: {}\n", names.join(", "));
+        }
+        return t;
+    }
+    for c in failed {
+        t += &format!("check FAILED: {}: {}\n", c.name, c.detail);
+    }
+    if let Some(out) = out {
+        t += &format!(
+            "{} not written: the result failed its checks (the JSON and report say which)\n",
+            out.display()
+        );
+    }
+    t
 }
 
 /// `adapt --method ann`.

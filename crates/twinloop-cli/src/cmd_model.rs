@@ -159,6 +159,8 @@ pub struct ExportArgs {
     /// frictionloss, one <position> actuator per moving joint with kp and forcerange)
     #[arg(long, value_name = "FILE.xml", requires = "servo_params")]
     pub mjcf_actuators: Option<PathBuf>,
+    #[command(flatten)]
+    pub added: crate::units::AddMassArgs,
 }
 
 pub fn run(cmd: ModelCommand) -> CliResult {
@@ -677,6 +679,7 @@ fn list(args: &ListArgs) -> CliResult {
 
 fn export(args: &ExportArgs) -> CliResult {
     let (mut robot, _) = common::load_description(&args.robot)?;
+    args.added.apply(&mut robot)?;
     if let Some(path) = &args.servo_params {
         export_servos(&mut robot, path, args.mjcf_actuators.as_deref())?;
     }

@@ -97,6 +97,11 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     /// with --bench, one FILE.toml
     #[arg(long, value_name = "[ID=]FILE.toml")]
     pub servo_params: Vec<String>,
+    /// The robot you have, not the one modelled: a part the description lacks
+    /// (a camera, a battery), or taken off with a negative mass; the virtual robot
+    /// carries it, the bus does not tell.
+    #[command(flatten)]
+    pub added: crate::units::AddMassArgs,
 }
 
 /// The mapping: --map, or the built-in robot's own.
@@ -125,26 +130,36 @@ fn serve_description(
     mapping: &RobotMapping,
 ) -> Result<Option<Description>, CliError> {
     if let Some(spec) = &a.robot {
-        let (robot, _) = load_description(spec)?;
+        let (mut robot, _) = load_description(spec)?;
         hinges_only(&robot, spec, "the virtual robot")?;
+        a.added.apply(&mut robot)?;
         return Ok(Some(robot));
     }
     if a.map.is_none() {
-        return Ok(Some(load_description(DEFAULT_ROBOT)?.0));
+        let mut robot = load_description(DEFAULT_ROBOT)?.0;
+        a.added.apply(&mut robot)?;
+        return Ok(Some(robot));
     }
     let Some(urdf) = &mapping.urdf else {
         return Ok(None);
     };
     let s = urdf.display().to_string();
     if let Some(name) = s.strip_prefix("builtin:") {
-        return Ok(twinloop_description::builtin::builtin(name));
+        let mut robot = twinloop_description::builtin::builtin(name);
+        if let Some(r) = robot.as_mut() {
+            a.added.apply(r)?;
+        }
+        return Ok(robot);
     }
     let path = match Path::new(&mapping.source).parent() {
         Some(d) if urdf.is_relative() => d.join(urdf),
         _ => urdf.clone(),
     };
     match load_description(&path.display().to_string()) {
-        Ok((r, _)) => Ok(Some(r)),
+        Ok((mut r, _)) => {
+            a.added.apply(&mut r)?;
+            Ok(Some(r))
+        }
         Err(e) if a.servo_model == "sim" => Err(e),
         Err(_) => Ok(None),
     }
@@ -157,6 +172,11 @@ pub fn run(a: ServeArgs) -> CliResult {
     }
     let mapping = serve_mapping(&a)?;
     let robot = serve_description(&a, &mapping)?;
+    if robot.is_none() && !a.added.add_mass.is_empty() {
+        return Err(CliError::new(
+            "--add-mass changes the simulated robot, and this bus serves servos with no description: give --robot",
+        ));
+    }
     // The joints' servos, then the mapping's boards (the CM-730 of the trunk IMU).
     let servos: Vec<BusServo> = mapping.bus();
     let simulate = match (a.servo_model.as_str(), &robot) {

@@ -29,6 +29,8 @@ pub enum ServoChoice {
 pub struct SimulateArgs {
     #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
     pub robot: String,
+    #[command(flatten)]
+    pub added: crate::units::AddMassArgs,
     /// Simulated time, s [default: the --trajectory's last time, else 2].
     #[arg(long, value_name = "S", value_parser = crate::common::positive)]
     pub duration: Option<f64>,
@@ -180,7 +182,8 @@ pub fn run(a: SimulateArgs) -> CliResult {
     if a.hold && a.trajectory.is_some() {
         return Err(CliError::new("--hold and --trajectory exclude each other"));
     }
-    let (robot, _) = load_description(&a.robot)?;
+    let (mut robot, _) = load_description(&a.robot)?;
+    a.added.apply(&mut robot)?;
     let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
     if !a.servo_params.is_empty() {
         let set =

@@ -70,6 +70,29 @@ pub const MAX_ADDED_MASS_RATIO: f64 = 5.0;
 /// (5 mm in millimetres is 11 extents of a 0.45 m robot).
 pub const MAX_OFFSET_EXTENTS: f64 = 5.0;
 
+/// `--add-mass`, as every command that builds a robot from a description takes it:
+/// `experiment tipover|lean`, `simulate`, `serve` and `model export`.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct AddMassArgs {
+    /// Add a point mass to the description first (seed 000's batteries, a camera the
+    /// model lacks), repeatable: KG@LINK:X,Y,Z with X,Y,Z in metres in the link
+    /// frame, e.g. 0.2@torso:0.05,0,0. A negative mass takes a part off (a battery
+    /// removed): -0.2@torso:0.05,0,0
+    #[arg(
+        long = "add-mass",
+        value_name = "KG@LINK:X,Y,Z",
+        allow_hyphen_values = true
+    )]
+    pub add_mass: Vec<String>,
+}
+
+impl AddMassArgs {
+    /// The changes applied to `robot` ([`add_masses`]).
+    pub fn apply(&self, robot: &mut Description) -> Result<(), CliError> {
+        add_masses(robot, &self.add_mass)
+    }
+}
+
 /// Parse `KG@LINK:X,Y,Z` and add that point mass to `robot`, for each of `specs` (the
 /// values of `--add-mass`): a mass [`MAX_ADDED_MASS_RATIO`] times the robot's is taken
 /// for grams, an offset beyond [`MAX_OFFSET_EXTENTS`] of the robot's size for
@@ -80,7 +103,7 @@ pub fn add_masses(robot: &mut Description, specs: &[String]) -> Result<(), CliEr
     for s in specs {
         let (kg, link, xyz) = parse_added_mass(s)?;
         let bad = |why: String| CliError::new(format!("--add-mass \"{s}\": {why}"));
-        if own > 0.0 && kg > MAX_ADDED_MASS_RATIO * own {
+        if own > 0.0 && kg.abs() > MAX_ADDED_MASS_RATIO * own {
             return Err(bad(format!(
                 "{} kg is {}x the robot's {} kg; the mass is in kilograms: is it in grams? \
                  ({} kg)",

@@ -529,7 +529,7 @@ pub fn sagittal_tip_angles(
         hi,
     );
     match (forward, backward) {
-        (Some(f), Some(b)) => Ok((f, b)),
+        (Ok(f), Ok(b)) => Ok((f, b)),
         _ => err(format!(
             "robot \"{}\": no static tipping angle within 60 deg of ankle lean (is the CoM \
              over the feet standing?)",

@@ -18,6 +18,7 @@
 //! lean), which changes with the added mass: the estimate is iterated with the adapted
 //! model until the measured CoM moves by less than 1e-9 m (two or three iterations).
 
+use crate::adapt_checks::{AdaptCheck, plausibility};
 use crate::error::IdentError;
 use crate::fall_angle_fit;
 use crate::tipover::{FeetMass, TipAngles, exact_method, feet_mass};
@@ -132,7 +133,18 @@ pub struct AdaptReport {
     pub outline: Vec<[f64; 3]>,
     /// What is and is not well determined.
     pub notes: Vec<String>,
+    /// What was held against what a real change can be before a model is written
+    /// ([`crate::adapt_checks`]); empty in files written before they were made.
+    #[serde(default)]
+    pub checks: Vec<AdaptCheck>,
     pub files: Vec<String>,
+}
+
+impl AdaptReport {
+    /// The checks that failed: a model is not written when there is one.
+    pub fn failed_checks(&self) -> impl Iterator<Item = &AdaptCheck> {
+        self.checks.iter().filter(|c| !c.passed)
+    }
 }
 
 /// How the fit of the added mass's position to the fall angles went.
@@ -249,6 +261,32 @@ pub fn standing_point(
 }
 
 impl Frame {
+    /// The box (lowest and highest corner, standing frame, m) around every link's
+    /// origin and primitive collision outline: where the robot is.
+    pub(crate) fn robot_box(&self, robot: &Description) -> (Vector3<f64>, Vector3<f64>) {
+        let mut lo = Vector3::repeat(f64::INFINITY);
+        let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+        for link in &robot.links {
+            let Some(pose) = self.link_pose(&link.name) else {
+                continue;
+            };
+            let mut take = |local: Vector3<f64>| {
+                let w = pose.act_point(&local) - self.mid;
+                lo = lo.inf(&w);
+                hi = hi.sup(&w);
+            };
+            take(Vector3::zeros());
+            if let Some((a, b)) = part_box(link) {
+                for corner in 0..8 {
+                    take(Vector3::from_fn(|i, _| {
+                        if corner >> i & 1 == 1 { b[i] } else { a[i] }
+                    }));
+                }
+            }
+        }
+        (lo, hi)
+    }
+
     /// Every link's origin in the standing frame, m.
     fn outline(&self) -> Vec<[f64; 3]> {
         self.model
@@ -378,7 +416,8 @@ pub fn with_added_mass(
     merge: bool,
 ) -> Result<Description, String> {
     let mut d = prior.clone();
-    if merge {
+    // A part taken off comes off its host's own inertial: no link has negative mass.
+    if merge || mass < 0.0 {
         twinloop_description::builtin::add_point_mass(&mut d, host, mass, xyz)
             .map_err(|e| e.to_string())?;
         return Ok(d);
@@ -444,10 +483,11 @@ pub fn adapt(
         );
     }
     if let Some(m) = opts.total_mass
-        && !(m.is_finite() && m > m0)
+        && !(m.is_finite() && m > 0.0 && (m - m0).abs() >= MIN_CHANGE_KG)
     {
         return Err(IdentError::new(format!(
-            "{m} kg must exceed the prior's {m0:.4} kg (an added mass)"
+            "{m} kg is within {MIN_CHANGE_KG} kg of the prior's {m0:.4} kg: no part was added or \
+             taken off that the scale can tell (more: added; less: taken off)"
         ))
         .option("total_mass"));
     }
@@ -474,7 +514,7 @@ pub fn adapt(
             let p = cm + d * (m0 / ma);
             let host = match &opts.host {
                 Some(h) => h.clone(),
-                None => nearest_link(&pf, prior, p)?,
+                None => nearest_link(&pf, prior, p, removable_from(ma))?,
             };
             (ma, p, host)
         } else {
@@ -670,6 +710,7 @@ pub fn adapt(
         lean: Vec::new(),
         outline: pf.outline(),
         notes,
+        checks: Vec::new(),
         files: vec![],
     };
     let robot = match adapted {
@@ -680,11 +721,11 @@ pub fn adapt(
             None
         }
         Some((d, mut added)) => {
-            let k = (m0 + added.mass) / added.mass;
+            let k = ((m0 + added.mass) / added.mass).abs();
             added.position_sigma = v3(sigma * k);
             if mode == "where" {
                 let dn = (cm - c0).norm();
-                added.mass_sigma = Some(added.mass * sigma.norm() / dn.max(1e-12));
+                added.mass_sigma = Some(added.mass.abs() * sigma.norm() / dn.max(1e-12));
                 report.notes.push(
                     "with only the host link given, the mass and the distance along the ray trade off: the mass is as uncertain as |c_meas - c0|".into(),
                 );
@@ -696,6 +737,7 @@ pub fn adapt(
             Some(d)
         }
     };
+    report.checks = plausibility(&report, prior, &pf);
     Ok(Adapted { report, robot })
 }
 
@@ -746,6 +788,10 @@ fn ambiguity_line(r: &AdaptReport, i: usize) -> (Vec<f64>, Vec<f64>) {
         .unzip()
 }
 
+/// The smallest change of the total mass `adapt` takes as a part added or taken off,
+/// kg: a kitchen scale's resolution (1 g) times ten.
+pub const MIN_CHANGE_KG: f64 = 0.01;
+
 /// How far the fall-angle fit may move the part from the CoM inversion's point when
 /// the link is not named, m, per axis.
 pub const FIT_REACH: f64 = 0.03;
@@ -789,12 +835,29 @@ fn part_box(link: &Link) -> Option<(Vector3<f64>, Vector3<f64>)> {
     lo.x.is_finite().then_some((lo - margin, hi + margin))
 }
 
-/// The link whose CoM (origin if massless) is nearest `p` (standing frame), any link
-/// of the description.
-fn nearest_link(frame: &Frame, robot: &Description, p: Vector3<f64>) -> Result<String, String> {
+/// The least mass a link must have to be where a part of `ma` kg was (negative: taken
+/// off): nothing for an added part; for a removed one, enough that the link keeps
+/// [`twinloop_description::builtin::MIN_REMAINING_FRACTION`] of its own.
+fn removable_from(ma: f64) -> f64 {
+    if ma >= 0.0 {
+        0.0
+    } else {
+        -ma / (1.0 - twinloop_description::builtin::MIN_REMAINING_FRACTION)
+    }
+}
+
+/// The link whose CoM (origin if massless) is nearest `p` (standing frame), among the
+/// links of at least `min_mass` kg.
+fn nearest_link(
+    frame: &Frame,
+    robot: &Description,
+    p: Vector3<f64>,
+    min_mass: f64,
+) -> Result<String, String> {
     robot
         .links
         .iter()
+        .filter(|l| min_mass <= 0.0 || l.inertial.as_ref().is_some_and(|i| i.mass >= min_mass))
         .filter_map(|l| {
             frame
                 .link_point(&l.name)
@@ -802,7 +865,9 @@ fn nearest_link(frame: &Frame, robot: &Description, p: Vector3<f64>) -> Result<S
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|x| x.0)
-        .ok_or("the model has no links".into())
+        .ok_or_else(|| {
+            format!("no link of the model weighs {min_mass:.3} kg: a part that heavy was not taken off one")
+        })
 }
 
 /// The prior's static fall angles, deg: [`crate::tipover::tip_angles`] of its CoM, feet
@@ -1005,6 +1070,24 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
     rep.heading("What is determined");
     for n in &r.notes {
         rep.paragraph(n.clone());
+    }
+    if !r.checks.is_empty() {
+        rep.heading("Checks before the model is written");
+        if r.failed_checks().next().is_some() {
+            rep.paragraph(
+                "FAILED: the adapted model was not written. Over a bus there is no truth to \
+                 compare with; what was found is not what a real change can be.",
+            );
+        }
+        let rows = r
+            .checks
+            .iter()
+            .map(|c| {
+                let verdict = if c.passed { "passed" } else { "FAILED" };
+                vec![c.name.clone(), verdict.into(), c.detail.clone()]
+            })
+            .collect();
+        rep.table(vec!["check".into(), "result".into(), "detail".into()], rows);
     }
     rep
 }

@@ -212,8 +212,10 @@ fn measured_report(robot: &str, deg: [f64; 4], foot: &FootGeometry) -> StudyRepo
         measured_deg: a,
         time_s: 0.0,
         static_deg: a,
+        static_note: None,
         excess_deg: 0.0,
         rigid_static_deg: a,
+        rigid_static_note: None,
         lean_deg: a,
         onset_positions: Default::default(),
     };

@@ -66,21 +66,40 @@ impl Default for StudyOptions {
     }
 }
 
+fn nan() -> f64 {
+    f64::NAN
+}
+
+/// JSON has no NaN (serde_json writes null, which no f64 reads back): an angle that
+/// does not exist is left out, and a note beside it says why.
+fn not_finite(v: &f64) -> bool {
+    !v.is_finite()
+}
+
 /// One direction's outcome with its static reference.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct DirectionReport {
     pub commanded_deg: f64,
     pub measured_deg: f64,
     pub time_s: f64,
-    /// The model's static tipping angle for the joints as they were at the onset, deg.
+    /// The model's static tipping angle for the joints as they were at the onset, deg;
+    /// absent (NaN in memory) when the posture has none, and `static_note` says why.
+    #[serde(default = "nan", skip_serializing_if = "not_finite")]
     pub static_deg: f64,
+    /// Why there is no `static_deg`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub static_note: Option<String>,
     /// The robot's lean beyond what its joints explain at the onset (feet rolled onto
     /// their edges), deg; the static angle accounts for it.
     pub excess_deg: f64,
     /// The static tipping angle of the rigid model (standing pose, feet flat, no joint
     /// giving under the load), deg: what the robot would do with infinitely stiff
-    /// servos.
+    /// servos. Absent when there is none, and `rigid_static_note` says why.
+    #[serde(default = "nan", skip_serializing_if = "not_finite")]
     pub rigid_static_deg: f64,
+    /// Why there is no `rigid_static_deg`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rigid_static_note: Option<String>,
     /// The trunk's lean from the standing pose at the onset (IMU), deg.
     pub lean_deg: f64,
     /// Every joint's position at the onset, rad, by name: the posture the static
@@ -335,7 +354,9 @@ struct LeanSigns {
 
 /// One direction's run: the result of the run with the creep, the static tipping
 /// angle at its onset, deg, and the rigid robot's, deg.
-type DirectionRun = (TipoverResult, f64, f64);
+/// A run, its static angle and the rigid model's (NaN where there is none), and why
+/// each is missing.
+type DirectionRun = (TipoverResult, f64, f64, [Option<String>; 2]);
 
 /// The simulator of the study: the robot's servos (stiffened to the protocol's
 /// compliance), optionally its encoders, standing on the ground at the zero pose
@@ -511,25 +532,31 @@ fn static_tipping_angles(
     helds: &[usize],
     turned: &[(usize, f64)],
     dir: Vector3<f64>,
-) -> (f64, f64) {
+) -> (f64, f64, [Option<String>; 2]) {
     let n_held = helds.len() as f64;
     let mut offset = 0.0;
+    let mut notes = [None, None];
     for &h in helds {
         flat.held = h;
         flat.tilt = r.excess_deg.to_radians();
-        offset += flat
-            .tipping_angle(data, &r.positions_at_onset, turned, dir, -0.2, 0.2)
-            .map(f64::to_degrees)
-            .unwrap_or(f64::NAN)
-            / n_held;
+        match flat.tipping_angle(data, &r.positions_at_onset, turned, dir, -0.2, 0.2) {
+            Ok(a) => offset += a.to_degrees() / n_held,
+            Err(e) => {
+                offset = f64::NAN;
+                notes[0] = Some(format!("at the onset's posture: {e}"));
+            }
+        }
     }
     flat.held = helds[0];
     flat.tilt = 0.0;
-    let rigid = flat
-        .tipping_angle(data, standing, turned, dir, 0.0, 1.2)
-        .map(f64::to_degrees)
-        .unwrap_or(f64::NAN);
-    (offset, rigid)
+    let rigid = match flat.tipping_angle(data, standing, turned, dir, 0.0, 1.2) {
+        Ok(a) => a.to_degrees(),
+        Err(e) => {
+            notes[1] = Some(format!("standing, feet flat: {e}"));
+            f64::NAN
+        }
+    };
+    (offset, rigid, notes)
 }
 
 /// The standing robot as the static analysis holds it: the model, its contact points
@@ -642,7 +669,7 @@ fn with_static_references(
     let mut out = Vec::with_capacity(runs.len());
     for r in runs {
         let (turned, dir) = turned_joints(r.direction, j, &signs);
-        let (offset, rigid) = static_tipping_angles(
+        let (offset, rigid, notes) = static_tipping_angles(
             &mut flat,
             &mut data,
             &r,
@@ -652,7 +679,7 @@ fn with_static_references(
             dir,
         );
         let s = r.measured_deg + offset;
-        out.push((r, s, rigid));
+        out.push((r, s, rigid, notes));
     }
     Ok(out)
 }
@@ -734,7 +761,7 @@ fn estimate_com(
 }
 
 fn direction_report(results: &[DirectionRun], d: Direction, names: &[String]) -> DirectionReport {
-    let (r, s, rigid) = results
+    let (r, s, rigid, notes) = results
         .iter()
         .find(|r| r.0.direction == d)
         .expect("all four ran");
@@ -748,7 +775,9 @@ fn direction_report(results: &[DirectionRun], d: Direction, names: &[String]) ->
         measured_deg: r.measured_deg,
         time_s: r.time_s,
         static_deg: *s,
+        static_note: notes[0].clone(),
         rigid_static_deg: *rigid,
+        rigid_static_note: notes[1].clone(),
         lean_deg: r.lean_deg,
         excess_deg: r.excess_deg,
     }
@@ -876,7 +905,7 @@ pub fn static_angles_at_onsets(
     }
     let results = with_static_references(&mut p.sim, &p.standing, &p.j, &p.q0, runs)?;
     let mut out = [0.0; 4];
-    for (k, (_, s, _)) in results.iter().enumerate() {
+    for (k, (_, s, _, _)) in results.iter().enumerate() {
         out[k] = *s;
     }
     Ok(out)

@@ -118,7 +118,8 @@ impl FlatFeet<'_> {
     /// The lean (rad) at which the margin along `dir` reaches zero, each joint of
     /// `turned` (index, sign) moved by `sign * theta` from `joints` (the ankles alone for
     /// a rigid lean, ankles and hips for the parallelogram sideways lean); bisection over
-    /// [lo, hi] (the margin must be positive at `lo` and negative at `hi`).
+    /// [lo, hi] (the margin must be positive at `lo` and negative at `hi`; otherwise
+    /// the error says which end is wrong).
     pub fn tipping_angle(
         &self,
         data: &mut Data,
@@ -127,7 +128,7 @@ impl FlatFeet<'_> {
         dir: Vector3<f64>,
         lo: f64,
         hi: f64,
-    ) -> Option<f64> {
+    ) -> Result<f64, NoTippingAngle> {
         let mut q = joints.to_vec();
         let mut at = |theta: f64, q: &mut Vec<f64>| {
             for &(j, sign) in turned {
@@ -136,8 +137,11 @@ impl FlatFeet<'_> {
             self.margin(data, q, dir)
         };
         let (mut lo, mut hi) = (lo, hi);
-        if at(lo, &mut q) <= 0.0 || at(hi, &mut q) > 0.0 {
-            return None;
+        if at(lo, &mut q) <= 0.0 {
+            return Err(NoTippingAngle::PastEdge { lean: lo });
+        }
+        if at(hi, &mut q) > 0.0 {
+            return Err(NoTippingAngle::StillInside { lean: hi });
         }
         for _ in 0..60 {
             let mid = 0.5 * (lo + hi);
@@ -147,9 +151,37 @@ impl FlatFeet<'_> {
                 hi = mid;
             }
         }
-        Some(0.5 * (lo + hi))
+        Ok(0.5 * (lo + hi))
     }
 }
+
+/// Why a posture has no static tipping angle in the range searched.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NoTippingAngle {
+    /// The CoM is already beyond the support's edge at the range's start (rad).
+    PastEdge { lean: f64 },
+    /// The CoM is still over the support at the range's end (rad).
+    StillInside { lean: f64 },
+}
+
+impl std::fmt::Display for NoTippingAngle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NoTippingAngle::PastEdge { lean } => write!(
+                f,
+                "no static tipping angle: the CoM is already beyond the support's edge at a lean of {:.1} deg",
+                lean.to_degrees()
+            ),
+            NoTippingAngle::StillInside { lean } => write!(
+                f,
+                "no static tipping angle: the CoM is still over the support at a lean of {:.1} deg",
+                lean.to_degrees()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for NoTippingAngle {}
 
 /// For each of two ankle joints, the sign of its angle that leans the robot towards
 /// `lean` (a horizontal world direction, e.g. +x forward, +y left) with the feet flat.

@@ -72,9 +72,8 @@ pub struct LeanArgs {
     #[arg(long, value_delimiter = ',', num_args = 2, value_names = ["LEFT", "RIGHT"],
           default_values_t = ["l_knee".to_string(), "r_knee".to_string()])]
     pub knees: Vec<String>,
-    /// In the simulator: add a point mass first, repeatable: KG@LINK:X,Y,Z (m, link frame).
-    #[arg(long = "add-mass", value_name = "KG@LINK:X,Y,Z")]
-    pub add_mass: Vec<String>,
+    #[command(flatten)]
+    pub added: crate::units::AddMassArgs,
     /// In the simulator: every servo's compliance slope, Dynamixel RX units (2 =
     /// stiffest), margin 0; default the factory settings `twinloop serve` runs with.
     #[arg(long, value_name = "UNITS", value_parser = crate::common::positive)]
@@ -113,7 +112,7 @@ pub fn run(a: &LeanArgs) -> CliResult {
         )));
     }
     if a.bus.port.is_some() || a.map.is_some() {
-        if !a.add_mass.is_empty() || a.compliance_slope.is_some() {
+        if !a.added.add_mass.is_empty() || a.compliance_slope.is_some() {
             return Err(CliError::new(
                 "--add-mass and --compliance-slope change the simulated robot; over --port the robot is what it is",
             ));
@@ -127,7 +126,7 @@ pub fn run(a: &LeanArgs) -> CliResult {
     };
     let (mut robot, _) = load_description(spec)?;
     hinges_only(&robot, spec, "the lean experiment")?;
-    crate::units::add_masses(&mut robot, &a.add_mass)?;
+    a.added.apply(&mut robot)?;
     let (mut sim, standing) = lean_simulator(&robot, a.compliance_slope)?;
     let tips = sagittal_tip_angles(&mut sim, &standing, &names)?;
     let order = sim.model.joint_names.clone();

@@ -84,10 +84,8 @@ pub struct TipoverArgs {
     /// by a person between directions.
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     pub directions: Vec<String>,
-    /// Add a point mass before the experiment (seed 000's batteries), repeatable:
-    /// KG@LINK:X,Y,Z with X,Y,Z in metres in the link frame, e.g. 0.2@torso:0.05,0,0.
-    #[arg(long = "add-mass", value_name = "KG@LINK:X,Y,Z")]
-    pub add_mass: Vec<String>,
+    #[command(flatten)]
+    pub added: crate::units::AddMassArgs,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
     /// Ankle ramp speed, deg/s, 0.05 or more (the first run of each direction: slower
@@ -147,6 +145,11 @@ pub fn run(a: &TipoverArgs) -> CliResult {
                 "--servo-params sets the simulator's servos: over a bus, give it to `twinloop serve`",
             ));
         }
+        if !a.added.add_mass.is_empty() {
+            return Err(CliError::new(
+                "--add-mass changes the simulated robot; over a bus the robot is what it is (give it to `twinloop serve`)",
+            ));
+        }
         return bus::run(a);
     }
     let Some(spec) = a.robot.as_deref() else {
@@ -156,7 +159,7 @@ pub fn run(a: &TipoverArgs) -> CliResult {
     };
     let (mut robot, _) = load_description(spec)?;
     hinges_only(&robot, spec, "the tip-over experiment")?;
-    crate::units::add_masses(&mut robot, &a.add_mass)?;
+    a.added.apply(&mut robot)?;
     let opts = StudyOptions {
         ramp_deg_per_s: a.ramp,
         dynamixel_encoders: a.encoders,
@@ -210,21 +213,37 @@ fn summary(r: &StudyReport) -> String {
             d.commanded_deg, d.measured_deg, d.static_deg, d.excess_deg, d.time_s
         );
     }
+    for (name, d) in [
+        ("forward", &r.forward),
+        ("backward", &r.backward),
+        ("left", &r.left),
+        ("right", &r.right),
+    ] {
+        for note in [&d.static_note, &d.rigid_static_note].into_iter().flatten() {
+            let _ = writeln!(s, "  {name}: {note}");
+        }
+    }
     let f = |c: [f64; 3]| format!("[{:+.4}, {:+.4}, {:+.4}]", c[0], c[1], c[2]);
     let _ = writeln!(
         s,
         "CoM relative to the ankle midpoint (m; x forward, y left, z up):"
     );
-    let _ = writeln!(s, "  true          {}", f(r.com.truth));
+    // Over a bus there is no truth: the reference is the model the robot was
+    // described by, and the distances say how far the robot is from it.
+    let (reference, apart) = match r.protocol {
+        None => ("true        ", "off by"),
+        Some(_) => ("model (prior)", "from the model by"),
+    };
+    let _ = writeln!(s, "  {reference} {}", f(r.com.truth));
     let _ = writeln!(
         s,
-        "  exact method  {}  (off by {:.1} mm)",
+        "  exact method  {}  ({apart} {:.1} mm)",
         f(r.com.exact_method),
         r.com.exact_error * 1e3
     );
     let _ = writeln!(
         s,
-        "  seed method   {}  (off by {:.1} mm; constants: {})",
+        "  seed method   {}  ({apart} {:.1} mm; constants: {})",
         f(r.com.seed_method),
         r.com.seed_error * 1e3,
         r.seed_constants

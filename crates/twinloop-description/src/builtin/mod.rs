@@ -152,9 +152,19 @@ pub fn foot_geometry(robot_name: &str) -> Option<FootGeometry> {
     }
 }
 
+/// The least share of its own mass a link keeps when a part is taken off it
+/// ([`add_point_mass`] with a negative mass): a part heavier than that was not on it.
+pub const MIN_REMAINING_FRACTION: f64 = 0.1;
+
 /// Add a point mass of `mass` kg at `xyz` (m, link frame) to `link`: its inertial
 /// becomes the rigid sum of what it had and the point (parallel-axis theorem), written
-/// in the link's axes. Errors name the link or the bad number.
+/// in the link's axes. A negative `mass` takes a part off (a battery removed, seed
+/// 000's scenario b): the point is subtracted the same way, and the link must keep a
+/// mass of its own ([`MIN_REMAINING_FRACTION`] of what it had). When the subtraction
+/// leaves a rotational inertia no body has (a negative principal moment or the
+/// triangle inequality broken: the part's own inertia was never in the link's), the
+/// link keeps its own rotational inertia scaled by the mass it keeps, about its new
+/// CoM. Errors name the link or the bad number.
 pub fn add_point_mass(
     robot: &mut Description,
     link: &str,
@@ -162,9 +172,9 @@ pub fn add_point_mass(
     xyz: [f64; 3],
 ) -> Result<(), DescriptionError> {
     use twinloop_spatial::{Inertia as Rigid, Matrix3, Vector3};
-    if !(mass.is_finite() && mass > 0.0) {
+    if !(mass.is_finite() && mass != 0.0) {
         return Err(DescriptionError::new(format!(
-            "added mass: must be a finite number > 0 kg, got {mass}"
+            "added mass: must be a finite number of kg, not 0 (negative: a part taken off), got {mass}"
         )));
     }
     if xyz.iter().any(|v| !v.is_finite()) {
@@ -193,7 +203,26 @@ pub fn add_point_mass(
         }
     };
     let point = Rigid::new(mass, Vector3::new(xyz[0], xyz[1], xyz[2]), Matrix3::zeros());
-    let sum = own + point;
+    let mut sum = own + point;
+    if mass < 0.0 {
+        if sum.mass < MIN_REMAINING_FRACTION * own.mass {
+            return Err(DescriptionError::new(format!(
+                "removed mass: {} kg taken off link \"{link}\" of {} kg would leave it {} kg \
+                 (it must keep at least {:.0} % of its own mass); the part sits on a heavier link",
+                -mass,
+                own.mass,
+                sum.mass,
+                MIN_REMAINING_FRACTION * 100.0
+            )));
+        }
+        let trial = crate::Inertia::from_matrix(std::array::from_fn(|a| {
+            std::array::from_fn(|b| sum.inertia[(a, b)])
+        }));
+        let [l1, l2, l3] = crate::lint::principal_moments(&trial);
+        if l1 < 0.0 || l1 + l2 < l3 {
+            sum.inertia = own.inertia * (sum.mass / own.mass);
+        }
+    }
     let i = sum.inertia;
     l.inertial = Some(crate::Inertial {
         origin: crate::Pose::from_xyz([sum.com.x, sum.com.y, sum.com.z]),

@@ -1,0 +1,169 @@
+//! What `adapt` checks before it writes a model: over a bus there is no truth to
+//! compare with, so the answer is held against what a real change can be. Four
+//! checks, each with its bound stated here:
+//!
+//! | check | passes when |
+//! |---|---|
+//! | `part-mass-plausible` | the part weighs at most [`MAX_PART_FRACTION`] of the model (a scale reading three times the model is a mistake, not a battery) |
+//! | `part-within-reach` | the part sits inside the robot: the box around every link's collision outline and origin, standing, grown by [`REACH_MARGIN`] |
+//! | `tips-near-model` | every measured tip (less the protocol's bias) is within [`MAX_TIP_SHIFT_DEG`] of the prior model's static angle |
+//! | `one-part-explains` | the fall-angle fit leaves every angle within [`one_part_bound_deg`] of the measured one |
+//!
+//! A check that cannot be made (no part placed, no fall-angle fit) is left out, and
+//! the notes say so.
+
+use crate::adapt::{AdaptReport, Frame};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use twinloop_description::Description;
+
+/// The heaviest part `adapt` believes, as a share of the prior's mass: a battery
+/// pack, a camera, a gripper are tenths of a kid-size robot; half the robot again is
+/// a misread scale.
+pub const MAX_PART_FRACTION: f64 = 0.5;
+
+/// How far outside the standing robot's outline a part may sit, m: a part bolted on
+/// sticks out by about its own size, and kid-size parts are a few centimetres.
+pub const REACH_MARGIN: f64 = 0.05;
+
+/// How far a measured tip may lie from the prior's static angle, deg. A part of
+/// [`MAX_PART_FRACTION`] on a kid-size robot moves its CoM by at most a few
+/// centimetres at a height of about 0.2 m: some 8 deg. Further is a robot that did
+/// not stand rigid (soft servos), a foot that slipped, or another robot.
+pub const MAX_TIP_SHIFT_DEG: f64 = 8.0;
+
+/// One check and how it came out.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct AdaptCheck {
+    /// Stable name: `part-mass-plausible`, `part-within-reach`, `tips-near-model`,
+    /// `one-part-explains`.
+    pub name: String,
+    pub passed: bool,
+    /// What was measured against what bound, in words.
+    pub detail: String,
+}
+
+/// How close the four angles must be to one part's: the fall-angle fit's residual,
+/// deg; three angle resolutions, not under 0.3 deg (the scatter of two real-time
+/// creeps on the bus).
+pub fn one_part_bound_deg(resolution_deg: f64) -> f64 {
+    (3.0 * resolution_deg).max(0.3)
+}
+
+/// Every check that can be made on `report` (the prior `robot`, its standing frame).
+pub(crate) fn plausibility(
+    report: &AdaptReport,
+    robot: &Description,
+    frame: &Frame,
+) -> Vec<AdaptCheck> {
+    let mut out = Vec::new();
+    if let Some(added) = &report.added {
+        out.push(part_mass(added.mass, report.prior_mass));
+        out.push(part_reach(Vector3::from(added.position), robot, frame));
+    }
+    out.push(tips_near_model(report));
+    if let Some(fit) = &report.fall_angle_fit {
+        let bound = one_part_bound_deg(report.angle_resolution_deg);
+        let (k, worst) = largest(&fit.residual_deg);
+        out.push(AdaptCheck {
+            name: "one-part-explains".into(),
+            passed: worst.abs() <= bound,
+            detail: format!(
+                "one part explains the four angles to {:.2} deg (largest {}; bound {bound:.2} deg)",
+                worst.abs(),
+                DIRECTIONS[k]
+            ),
+        });
+    }
+    out
+}
+
+const DIRECTIONS: [&str; 4] = ["forward", "backward", "left", "right"];
+
+fn largest(v: &[f64; 4]) -> (usize, f64) {
+    v.iter().copied().enumerate().fold(
+        (0, 0.0),
+        |b, (k, x)| if x.abs() > b.1.abs() { (k, x) } else { b },
+    )
+}
+
+fn part_mass(mass: f64, prior: f64) -> AdaptCheck {
+    let bound = MAX_PART_FRACTION * prior;
+    let what = if mass >= 0.0 { "added" } else { "taken off" };
+    let passed = mass.abs() <= bound;
+    let detail = if passed {
+        format!(
+            "{:.3} kg {what}, within {bound:.3} kg ({:.0} % of the model's {prior:.3} kg)",
+            mass.abs(),
+            MAX_PART_FRACTION * 100.0
+        )
+    } else {
+        format!(
+            "a part of {:.3} kg {what} is {:.0} % of the model's {prior:.3} kg (the scale read \
+             {:.3} kg): that is a mistake, not a battery; check the --total-mass reading (the \
+             unit, the robot alone on the scale)",
+            mass.abs(),
+            100.0 * mass.abs() / prior,
+            prior + mass
+        )
+    };
+    AdaptCheck {
+        name: "part-mass-plausible".into(),
+        passed,
+        detail,
+    }
+}
+
+fn part_reach(p: Vector3<f64>, robot: &Description, frame: &Frame) -> AdaptCheck {
+    let (lo, hi) = frame.robot_box(robot);
+    let m = Vector3::repeat(REACH_MARGIN);
+    let (lo, hi) = (lo - m, hi + m);
+    let outside = (lo - p).sup(&(p - hi)).sup(&Vector3::zeros());
+    let mm = |v: Vector3<f64>| format!("[{:.0}, {:.0}, {:.0}] mm", v.x * 1e3, v.y * 1e3, v.z * 1e3);
+    AdaptCheck {
+        name: "part-within-reach".into(),
+        passed: outside.norm() == 0.0,
+        detail: if outside.norm() == 0.0 {
+            format!(
+                "the part at {} is inside the robot's outline grown by {:.0} mm",
+                mm(p),
+                REACH_MARGIN * 1e3
+            )
+        } else {
+            format!(
+                "the part at {} lies {:.0} mm outside the robot (its outline {} to {} grown by {:.0} mm): \
+                 no part sits there; the angles were not measured on a rigid robot, or the change is not one part",
+                mm(p),
+                outside.norm() * 1e3,
+                mm(lo + m),
+                mm(hi - m),
+                REACH_MARGIN * 1e3
+            )
+        },
+    }
+}
+
+fn tips_near_model(report: &AdaptReport) -> AdaptCheck {
+    let bias = report.protocol_bias_deg.unwrap_or([0.0; 4]);
+    let shift: [f64; 4] =
+        std::array::from_fn(|k| report.measured_deg[k] - bias[k] - report.prior_model_deg[k]);
+    let (k, worst) = largest(&shift);
+    let passed = worst.abs() <= MAX_TIP_SHIFT_DEG && shift.iter().all(|s| s.is_finite());
+    AdaptCheck {
+        name: "tips-near-model".into(),
+        passed,
+        detail: if passed {
+            format!(
+                "the tips are within {:.2} deg of the model's static angles (largest {}; bound {MAX_TIP_SHIFT_DEG} deg)",
+                worst.abs(),
+                DIRECTIONS[k]
+            )
+        } else {
+            format!(
+                "the {} tip is {:+.2} deg from the model's static angle (bound {MAX_TIP_SHIFT_DEG} deg): \
+                 more than a plausible part moves it; were the servos soft, did a foot slip, is it this robot?",
+                DIRECTIONS[k], worst
+            )
+        },
+    }
+}
