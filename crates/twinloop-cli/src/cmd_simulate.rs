@@ -9,7 +9,7 @@ use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use twinloop_io::{CsvWriter, Quantity, StateColumns, Table};
 use twinloop_robot::{Robot, RobotState};
-use twinloop_sim::{Actuator, DynamixelServo, SimConfig, Simulator};
+use twinloop_sim::{DynamixelServo, SimConfig, Simulator};
 
 /// Which servo model drives every joint.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -92,27 +92,8 @@ pub fn standing_simulator(
         dt,
         ..Default::default()
     };
-    let mut sim = Simulator::new(robot, cfg)?;
-    for i in 0..sim.model.nbodies {
-        let s = servo_for(servo, &robot.name, &sim.model, i);
-        sim.actuators[i] = Actuator::Dynamixel(s);
-    }
-    // Neutral pose (a ball joint's identity quaternion), clamped into the joint ranges.
-    let m = &sim.model;
-    let mut q0 = m.neutral_configuration().split_off(m.q_offset);
-    for i in 0..m.nbodies {
-        if m.joint_types[i].nq() == 1 {
-            q0[m.idx_q[i] - m.q_offset] = 0f64.clamp(m.lower_limits[i], m.upper_limits[i]);
-        }
-    }
-    sim.place_on_ground(&q0)?;
-    if sim.contact_points().is_empty() {
-        return Err(CliError::new(format!(
-            "the robot has no collision primitives to stand on (mesh-only links: {}); \
-             add <collision> boxes to the feet",
-            sim.mesh_only_links.join(", ")
-        )));
-    }
+    let (sim, _) =
+        Simulator::standing_on_servos(robot, cfg, &|m, i| servo_for(servo, &robot.name, m, i))?;
     Ok(sim)
 }
 

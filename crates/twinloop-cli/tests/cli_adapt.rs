@@ -295,3 +295,73 @@ fn a_tip_over_read_between_the_counts_adapts_within_a_millimetre() {
     );
     assert!(j3["added"]["host"] == "l_pelvis", "{}", j3["added"]);
 }
+
+/// A part taken off (`--add-mass` with a negative mass on the simulated robot; the
+/// scale reads less than the model) is found by `adapt`; a scale reading three times
+/// the model is refused by its check: exit 1, the reason on the terminal, no URDF,
+/// the JSON marked.
+#[test]
+fn a_part_taken_off_is_found_and_an_impossible_scale_reading_writes_no_model() {
+    let tip = tmp("tip-removed.json");
+    let o = twinloop(&[
+        "experiment",
+        "tipover",
+        "--robot",
+        "builtin:km20",
+        "--add-mass",
+        "-0.15@torso:-0.025,0,0.082",
+        "--json",
+        tip.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = tmp("removed.urdf");
+    let o = twinloop(&[
+        "adapt",
+        "--robot",
+        "builtin:km20",
+        "--tipover",
+        tip.to_str().unwrap(),
+        "--total-mass",
+        &format!("{}", 3.336 - 0.15),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+        "-",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["added"]["host"], "torso");
+    assert!((j["added"]["mass"].as_f64().unwrap() + 0.15).abs() < 1e-3);
+    assert!(out.exists());
+
+    let bad = tmp("bad.urdf");
+    let json = tmp("bad.json");
+    let o = twinloop(&[
+        "adapt",
+        "--robot",
+        "builtin:km20",
+        "--tipover",
+        tip.to_str().unwrap(),
+        "--total-mass",
+        "10",
+        "--out",
+        bad.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(text.contains("check FAILED: part-mass-plausible"), "{text}");
+    assert!(text.contains("not written"), "{text}");
+    assert!(!bad.exists());
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let failed: Vec<&str> = j["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["passed"] == false)
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    assert!(failed.contains(&"part-mass-plausible"), "{failed:?}");
+}

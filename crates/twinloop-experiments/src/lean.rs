@@ -17,7 +17,7 @@ use twinloop_dynamics::{Data, Model};
 use twinloop_io::Table;
 use twinloop_robot::{Robot, RobotError, RobotState};
 use twinloop_sim::statics::{FlatFeet, lean_signs};
-use twinloop_sim::{Actuator, SimConfig, Simulator, servo_for_joint};
+use twinloop_sim::{SimConfig, Simulator, servo_for_joint};
 
 /// The joints the lean turns (ankle pitches) and records (ankle pitches and knees),
 /// by name, left first.
@@ -414,21 +414,15 @@ pub fn lean_simulator(
     robot: &Description,
     compliance_slope: Option<f64>,
 ) -> Result<(Simulator, Vec<f64>), ExperimentError> {
-    let mut sim =
-        Simulator::new(robot, SimConfig::default()).map_err(|e| ExperimentError(e.to_string()))?;
-    for i in 0..sim.model.nbodies {
-        let mut servo = servo_for_joint(&robot.name, &sim.model, i);
+    let servo = |m: &Model, i: usize| {
+        let mut servo = servo_for_joint(&robot.name, m, i);
         if let Some(slope) = compliance_slope {
             servo.compliance_slope = slope * twinloop_sim::actuator::RX_POSITION_UNIT;
             servo.compliance_margin = 0.0;
         }
-        sim.actuators[i] = Actuator::Dynamixel(servo);
-    }
-    let m = &sim.model;
-    let standing: Vec<f64> = (0..m.nbodies)
-        .map(|i| 0f64.clamp(m.lower_limits[i], m.upper_limits[i]))
-        .collect();
-    sim.place_on_ground(&standing)
+        servo
+    };
+    let (sim, standing) = Simulator::standing_on_servos(robot, SimConfig::default(), &servo)
         .map_err(|e| ExperimentError(e.to_string()))?;
     Ok((sim, standing))
 }

@@ -737,7 +737,7 @@ pub fn adapt(
             Some(d)
         }
     };
-    report.checks = plausibility(&report, prior, &pf);
+    report.checks = plausibility(&report, prior, &pf, tip.protocol.is_some());
     Ok(Adapted { report, robot })
 }
 

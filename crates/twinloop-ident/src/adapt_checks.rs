@@ -7,7 +7,7 @@
 //! | `part-mass-plausible` | the part weighs at most [`MAX_PART_FRACTION`] of the model (a scale reading three times the model is a mistake, not a battery) |
 //! | `part-within-reach` | the part sits inside the robot: the box around every link's collision outline and origin, standing, grown by [`REACH_MARGIN`] |
 //! | `tips-near-model` | every measured tip (less the protocol's bias) is within [`MAX_TIP_SHIFT_DEG`] of the prior model's static angle |
-//! | `one-part-explains` | the fall-angle fit leaves every angle within [`one_part_bound_deg`] of the measured one |
+//! | `one-part-explains` | the fall-angle fit leaves every angle within [`one_part_bound_deg`] of the measured one (less the protocol's bias) |
 //!
 //! A check that cannot be made (no part placed, no fall-angle fit) is left out, and
 //! the notes say so.
@@ -26,11 +26,11 @@ pub const MAX_PART_FRACTION: f64 = 0.5;
 /// sticks out by about its own size, and kid-size parts are a few centimetres.
 pub const REACH_MARGIN: f64 = 0.05;
 
-/// How far a measured tip may lie from the prior's static angle, deg. A part of
-/// [`MAX_PART_FRACTION`] on a kid-size robot moves its CoM by at most a few
-/// centimetres at a height of about 0.2 m: some 8 deg. Further is a robot that did
-/// not stand rigid (soft servos), a foot that slipped, or another robot.
-pub const MAX_TIP_SHIFT_DEG: f64 = 8.0;
+/// How far a measured tip may lie from the prior's static angle, deg. Measured: a
+/// 0.48 kg part at km20's left hip moves its left tip by 8.3 deg (a 14 % part, low and
+/// to the side, where the sideways lever is short); twice that is not a part the other
+/// checks would pass, but a robot that fell, slipped or is not the one described.
+pub const MAX_TIP_SHIFT_DEG: f64 = 16.0;
 
 /// One check and how it came out.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -45,16 +45,28 @@ pub struct AdaptCheck {
 
 /// How close the four angles must be to one part's: the fall-angle fit's residual,
 /// deg; three angle resolutions, not under 0.3 deg (the scatter of two real-time
-/// creeps on the bus).
-pub fn one_part_bound_deg(resolution_deg: f64) -> f64 {
-    (3.0 * resolution_deg).max(0.3)
+/// creeps on the bus). Angles read over a bus and fitted as read (the protocol's bias
+/// not taken off: `adapt --protocol-passes 0`) carry that bias, which reaches
+/// [`UNCORRECTED_PROTOCOL_BIAS_DEG`] (docs/adaptation.md): the bound is that.
+pub fn one_part_bound_deg(resolution_deg: f64, bias_left_in: bool) -> f64 {
+    let bound = (3.0 * resolution_deg).max(0.3);
+    if bias_left_in {
+        bound.max(UNCORRECTED_PROTOCOL_BIAS_DEG)
+    } else {
+        bound
+    }
 }
+
+/// How far the bus tip-over protocol reads past a model's static angles, at most
+/// (measured in lockstep on km20: up to 1.0 deg forward, docs/adaptation.md).
+pub const UNCORRECTED_PROTOCOL_BIAS_DEG: f64 = 1.0;
 
 /// Every check that can be made on `report` (the prior `robot`, its standing frame).
 pub(crate) fn plausibility(
     report: &AdaptReport,
     robot: &Description,
     frame: &Frame,
+    over_bus: bool,
 ) -> Vec<AdaptCheck> {
     let mut out = Vec::new();
     if let Some(added) = &report.added {
@@ -63,7 +75,8 @@ pub(crate) fn plausibility(
     }
     out.push(tips_near_model(report));
     if let Some(fit) = &report.fall_angle_fit {
-        let bound = one_part_bound_deg(report.angle_resolution_deg);
+        let bias_left_in = over_bus && report.protocol_bias_deg.is_none();
+        let bound = one_part_bound_deg(report.angle_resolution_deg, bias_left_in);
         let (k, worst) = largest(&fit.residual_deg);
         out.push(AdaptCheck {
             name: "one-part-explains".into(),

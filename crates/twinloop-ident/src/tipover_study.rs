@@ -24,7 +24,7 @@ use twinloop_dynamics::{BASE, Data};
 use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
 use twinloop_robot::{Robot, RobotError};
 use twinloop_sim::statics::{FlatFeet, hip_lean_signs, lean_signs};
-use twinloop_sim::{Actuator, ContactParams, SimConfig, Simulator, servo_for_joint};
+use twinloop_sim::{Actuator, ContactParams, SimConfig, Simulator};
 use twinloop_spatial::Se3;
 
 /// Settings of the study.
@@ -373,10 +373,7 @@ fn study_simulator(
         contact: Some(ContactParams::for_robot(mass, 8, opts.ground_sink)),
         ..Default::default()
     };
-    let mut sim = Simulator::new(robot, cfg).map_err(err)?;
-    for i in 0..sim.model.nbodies {
-        sim.actuators[i] = Actuator::Dynamixel(servo_for_joint(&robot.name, &sim.model, i));
-    }
+    let (mut sim, standing) = Simulator::standing_on_datasheet_servos(robot, cfg).map_err(err)?;
     if !opts.servo_params.is_empty() {
         sim.apply_servo_params(&robot.name, &opts.servo_params, "--servo-params")
             .map_err(err)?;
@@ -392,10 +389,7 @@ fn study_simulator(
     if opts.dynamixel_encoders {
         sim.use_dynamixel_encoders();
     }
-    let n = sim.model.nbodies;
-    let standing: Vec<f64> = (0..n)
-        .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
-        .collect();
+    // Placed again: the servos' goals follow the pose with their settings.
     sim.place_on_ground(&standing).map_err(err)?;
     Ok((sim, standing))
 }

@@ -22,6 +22,7 @@ pub mod sensors;
 pub mod servo_model;
 pub mod servo_params;
 pub mod simulator;
+pub mod standing;
 pub mod statics;
 
 pub use actuator::{
@@ -31,3 +32,4 @@ pub use contact::{ContactParams, ContactPoint, ContactState};
 pub use sensors::{SensorState, quantize};
 pub use servo_params::servo_from_params;
 pub use simulator::{SimConfig, SimError, Simulator};
+pub use standing::standing_pose;

@@ -171,9 +171,12 @@ impl VirtualRobot {
             .check_used(&slots, "--servo-params")
             .map_err(|e| e.to_string())?;
         let boards = place_boards(&mut sim, robot, mapping)?;
-        let standing: Vec<f64> = (0..nb)
-            .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
-            .collect();
+        if !options.held {
+            // A robot served "standing" on nothing would answer with zero load: refused
+            // with the words `simulate` uses.
+            sim.check_can_stand().map_err(|e| e.to_string())?;
+        }
+        let standing = twinloop_sim::standing_pose(&sim.model);
         sim.place_on_ground(&standing).map_err(|e| e.to_string())?;
         sim.run(options.settle_s.max(0.0))
             .map_err(|e| format!("the robot does not stand: {e}"))?;
