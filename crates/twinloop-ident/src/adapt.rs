@@ -457,12 +457,70 @@ fn measured_com(
     Ok((Vector3::new(e.com[0], e.com[1], e.com[2]), feet))
 }
 
-/// Adapt `prior` to the tip-over measurement `tip` (see the module documentation).
+/// Adapt `prior` to the tip-over measurement `tip` (see the module documentation), in
+/// four stages: measure (the angles less the protocol's bias, the prior's CoM), place
+/// (the CoM inversion, then the fall-angle fit), report (uncertainty and notes), and
+/// check ([`crate::adapt_checks`]).
 pub fn adapt(
     prior: &Description,
     tip: &StudyReport,
     opts: &AdaptOptions,
 ) -> Result<Adapted, IdentError> {
+    let m = measure(prior, tip, opts)?;
+    let mut placed = place_by_com(prior, &m, opts)?;
+    refine_by_fall_angles(prior, tip, &m, opts, &mut placed)?;
+    let mut report = report_of(prior, tip, &m, opts, &placed)?;
+    let robot = match placed.adapted {
+        None => {
+            report.notes.push(
+                "only m_a (p - c_meas) = M0 (c_meas - c0) is known: give the total mass or the link the mass is on to place it".into(),
+            );
+            None
+        }
+        Some((d, mut added)) => {
+            let k = ((m.m0 + added.mass) / added.mass).abs();
+            added.position_sigma = v3(m_sigma(&report) * k);
+            if m.mode == "where" {
+                let dn = (placed.cm - m.c0).norm();
+                let sigma = m_sigma(&report);
+                added.mass_sigma = Some(added.mass.abs() * sigma.norm() / dn.max(1e-12));
+                report.notes.push(
+                    "with only the host link given, the mass and the distance along the ray trade off: the mass is as uncertain as |c_meas - c0|".into(),
+                );
+            }
+            let af = standing(&d)?;
+            report.adapted_com = Some(v3(af.com(&d)?));
+            report.adapted_reduced = Some(reduced(&af, &d, &m.foot)?);
+            report.added = Some(added);
+            Some(d)
+        }
+    };
+    report.checks = plausibility(&report, prior, &m.pf, tip.protocol.is_some());
+    Ok(Adapted { report, robot })
+}
+
+fn m_sigma(report: &AdaptReport) -> Vector3<f64> {
+    Vector3::from(report.measured_com_sigma)
+}
+
+/// Stage 1: what was measured, in the prior's standing frame.
+struct Measured {
+    foot: FootGeometry,
+    /// The fall angles less the protocol's bias.
+    angles: TipAngles,
+    pf: Frame,
+    m0: f64,
+    c0: Vector3<f64>,
+    res: f64,
+    /// "total-mass", "where" or "family".
+    mode: &'static str,
+}
+
+fn measure(
+    prior: &Description,
+    tip: &StudyReport,
+    opts: &AdaptOptions,
+) -> Result<Measured, IdentError> {
     let foot = foot_of(prior, tip);
     let bias = opts.protocol_bias_deg.unwrap_or([0.0; 4]);
     let mut angles = angles_of(tip);
@@ -474,7 +532,6 @@ pub fn adapt(
     let pf = standing(prior)?;
     let m0 = pf.model.total_mass;
     let c0 = pf.com(prior)?;
-    let res = opts.angle_resolution_deg.unwrap_or(0.05);
     if let Some(h) = &opts.host
         && prior.link(h).is_none()
     {
@@ -496,42 +553,50 @@ pub fn adapt(
         (None, Some(_)) => "where",
         (None, None) => "family",
     };
-    let mut frame_for_feet = standing(prior)?;
-    let mut adapted: Option<(Description, AddedMass)> = None;
-    let mut cm = Vector3::zeros();
-    let mut iterations = 0;
+    Ok(Measured {
+        foot,
+        angles,
+        pf,
+        m0,
+        c0,
+        res: opts.angle_resolution_deg.unwrap_or(0.05),
+        mode,
+    })
+}
+
+/// Stage 2's result: the measured CoM and the part placed (if the options fix it).
+struct Placed {
+    cm: Vector3<f64>,
+    iterations: usize,
+    /// The standing frame of the model with the part merged: its feet.
+    frame_for_feet: Frame,
+    adapted: Option<(Description, AddedMass)>,
+    fit: Option<FallAngleFitSummary>,
+}
+
+/// Stage 2a: the CoM inversion, iterated with the adapted model's feet.
+fn place_by_com(
+    prior: &Description,
+    m: &Measured,
+    opts: &AdaptOptions,
+) -> Result<Placed, IdentError> {
+    let mut out = Placed {
+        cm: Vector3::zeros(),
+        iterations: 0,
+        frame_for_feet: standing(prior)?,
+        adapted: None,
+        fit: None,
+    };
     for it in 1..=20 {
-        iterations = it;
-        let (c, _) = measured_com(&angles, &frame_for_feet, prior, &foot)?;
-        let settled = (c - cm).norm() < 1e-9;
-        cm = c;
-        if mode == "family" || settled {
+        out.iterations = it;
+        let (c, _) = measured_com(&m.angles, &out.frame_for_feet, prior, &m.foot)?;
+        let settled = (c - out.cm).norm() < 1e-9;
+        out.cm = c;
+        if m.mode == "family" || settled {
             break;
         }
-        let d = cm - c0;
-        let (ma, p, host) = if let Some(m) = opts.total_mass {
-            let ma = m - m0;
-            let p = cm + d * (m0 / ma);
-            let host = match &opts.host {
-                Some(h) => h.clone(),
-                None => nearest_link(&pf, prior, p, removable_from(ma))?,
-            };
-            (ma, p, host)
-        } else {
-            let host = opts.host.clone().unwrap_or_default();
-            let h = pf.link_point(&host).ok_or(format!("no link \"{host}\""))?;
-            let u = d / d.norm();
-            let t = (h - c0).dot(&u);
-            if t <= d.norm() * 1.001 {
-                return Err(IdentError::new(format!(
-                    "{host}: the CoM moved away from that link (the ray from the prior CoM through the measured one passes it {:.1} mm before the measured CoM); give the total mass",
-                    (d.norm() - t) * 1e3
-                ))
-                .option("host"));
-            }
-            let p = c0 + u * t;
-            (m0 * d.norm() / (t - d.norm()), p, host)
-        };
+        let (ma, p, host) = part_on_its_ray(prior, m, opts, out.cm)?;
+        let pf = &m.pf;
         let pose = pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
         let mut local = pose.inverse().act_point(&(p + pf.mid));
         let mut p = p;
@@ -551,67 +616,123 @@ pub fn adapt(
             p = pose.act_point(&local) - pf.mid;
         }
         let placed = place(prior, host, ma, local, p, moved_into_outline, opts.merge)?;
-        frame_for_feet = placed.0;
-        adapted = Some(placed.1);
+        out.frame_for_feet = placed.0;
+        out.adapted = Some(placed.1);
     }
-    // With the mass known, place it by the fall angles themselves (fall_angle_fit.rs:
-    // every link's part alike, feet and ankle crosses included), from the CoM
-    // inversion's point, when the tip-over kept the robot's onset postures.
-    let mut fit_summary = None;
-    if mode == "total-mass"
-        && let Some((_, added)) = &adapted
-        && Direction::ALL
+    Ok(out)
+}
+
+/// The part's mass, its point (standing frame) and its link, from the measured CoM
+/// `cm`: with the total mass, `p = c_meas + M0 (c_meas - c0) / m_a`; with the link
+/// only, where the ray from `c0` through `c_meas` passes nearest the link.
+fn part_on_its_ray(
+    prior: &Description,
+    m: &Measured,
+    opts: &AdaptOptions,
+    cm: Vector3<f64>,
+) -> Result<(f64, Vector3<f64>, String), IdentError> {
+    let (m0, c0) = (m.m0, m.c0);
+    let d = cm - c0;
+    if let Some(total) = opts.total_mass {
+        let ma = total - m0;
+        let p = cm + d * (m0 / ma);
+        let host = match &opts.host {
+            Some(h) => h.clone(),
+            None => nearest_link(&m.pf, prior, p, removable_from(ma))?,
+        };
+        return Ok((ma, p, host));
+    }
+    let host = opts.host.clone().unwrap_or_default();
+    let h =
+        m.pf.link_point(&host)
+            .ok_or(format!("no link \"{host}\""))?;
+    let u = d / d.norm();
+    let t = (h - c0).dot(&u);
+    if t <= d.norm() * 1.001 {
+        return Err(IdentError::new(format!(
+            "{host}: the CoM moved away from that link (the ray from the prior CoM through the measured one passes it {:.1} mm before the measured CoM); give the total mass",
+            (d.norm() - t) * 1e3
+        ))
+        .option("host"));
+    }
+    Ok((m0 * d.norm() / (t - d.norm()), c0 + u * t, host))
+}
+
+/// Stage 2b: with the mass known, place it by the fall angles themselves
+/// (fall_angle_fit.rs: every link's part alike, feet and ankle crosses included), from
+/// the CoM inversion's point, when the tip-over kept the robot's onset postures.
+fn refine_by_fall_angles(
+    prior: &Description,
+    tip: &StudyReport,
+    m: &Measured,
+    opts: &AdaptOptions,
+    placed: &mut Placed,
+) -> Result<(), IdentError> {
+    let Some((_, added)) = &placed.adapted else {
+        return Ok(());
+    };
+    if m.mode != "total-mass"
+        || Direction::ALL
             .iter()
-            .all(|&d| !tip.direction(d).onset_positions.is_empty())
+            .any(|&d| tip.direction(d).onset_positions.is_empty())
     {
-        let host = added.host.clone();
-        // The named link's outline; a link found as the nearest is a guess, so the fit
-        // stays within `FIT_REACH` of the inversion's point instead (what the angles
-        // cannot pin down is not sent decimetres away by noise).
-        let start = Vector3::from(added.position_host);
-        let reach = Vector3::repeat(FIT_REACH);
-        let named = opts.host.is_some();
-        let bounds = match prior.link(&host).filter(|_| named).and_then(part_box) {
-            Some(b) => b,
-            None => (start - reach, start + reach),
-        };
-        let with_part = |p: Vector3<f64>| {
-            with_added_mass(prior, &host, added.mass, v3(p), true).map_err(IdentError::new)
-        };
-        let fit = fall_angle_fit::fit_position(
-            &with_part,
-            tip,
-            start,
-            bounds,
-            bias,
-            match opts.protocol_bias_deg {
-                Some(_) => fall_angle_fit::PROTOCOL_OFFSET_WEIGHT,
-                None => fall_angle_fit::OFFSET_WEIGHT,
-            },
-        )?;
-        let local = Vector3::from(fit.position_host);
-        let pose = pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
-        let p = pose.act_point(&local) - pf.mid;
-        let ma = added.mass;
-        let moved = added.moved_into_outline;
-        fit_summary = Some(FallAngleFitSummary {
-            from_com_inversion: added.position_host,
-            start_residual_deg: fit.start_residual_deg,
-            residual_deg: fit.residual_deg,
-            sideways_offset_deg: fit.sideways_offset_deg,
-            iterations: fit.iterations,
-        });
-        let placed = place(prior, host, ma, local, p, moved, opts.merge)?;
-        frame_for_feet = placed.0;
-        adapted = Some(placed.1);
+        return Ok(());
     }
-    // Uncertainty: each angle moved by the resolution, through the exact method.
-    let (_, feet) = measured_com(&angles, &frame_for_feet, prior, &foot)?;
-    let r = res.to_radians();
+    let host = added.host.clone();
+    // The named link's outline; a link found as the nearest is a guess, so the fit
+    // stays within `FIT_REACH` of the inversion's point instead (what the angles
+    // cannot pin down is not sent decimetres away by noise).
+    let start = Vector3::from(added.position_host);
+    let reach = Vector3::repeat(FIT_REACH);
+    let named = opts.host.is_some();
+    let bounds = match prior.link(&host).filter(|_| named).and_then(part_box) {
+        Some(b) => b,
+        None => (start - reach, start + reach),
+    };
+    let with_part = |p: Vector3<f64>| {
+        with_added_mass(prior, &host, added.mass, v3(p), true).map_err(IdentError::new)
+    };
+    let fit = fall_angle_fit::fit_position(
+        &with_part,
+        tip,
+        start,
+        bounds,
+        opts.protocol_bias_deg.unwrap_or([0.0; 4]),
+        match opts.protocol_bias_deg {
+            Some(_) => fall_angle_fit::PROTOCOL_OFFSET_WEIGHT,
+            None => fall_angle_fit::OFFSET_WEIGHT,
+        },
+    )?;
+    let local = Vector3::from(fit.position_host);
+    let pose = m.pf.link_pose(&host).ok_or(format!("no link \"{host}\""))?;
+    let p = pose.act_point(&local) - m.pf.mid;
+    let (ma, moved) = (added.mass, added.moved_into_outline);
+    placed.fit = Some(FallAngleFitSummary {
+        from_com_inversion: added.position_host,
+        start_residual_deg: fit.start_residual_deg,
+        residual_deg: fit.residual_deg,
+        sideways_offset_deg: fit.sideways_offset_deg,
+        iterations: fit.iterations,
+    });
+    let (frame, part) = place(prior, host, ma, local, p, moved, opts.merge)?;
+    placed.frame_for_feet = frame;
+    placed.adapted = Some(part);
+    Ok(())
+}
+
+/// The measured CoM's one-sigma uncertainty per axis: each angle moved by the
+/// resolution, through the exact method.
+fn com_sigma(
+    prior: &Description,
+    m: &Measured,
+    placed: &Placed,
+) -> Result<Vector3<f64>, IdentError> {
+    let (_, feet) = measured_com(&m.angles, &placed.frame_for_feet, prior, &m.foot)?;
+    let r = m.res.to_radians();
     let mut var = Vector3::zeros();
     for k in 0..4 {
-        let mut a = angles;
-        let mut b = angles;
+        let mut a = m.angles;
+        let mut b = m.angles;
         let (pa, pb) = match k {
             0 => (&mut a.forward, &mut b.forward),
             1 => (&mut a.backward, &mut b.backward),
@@ -620,12 +741,16 @@ pub fn adapt(
         };
         *pa += r;
         *pb -= r;
-        let ea = exact_method(&a, &feet, &foot).map_err(|e| e.to_string())?;
-        let eb = exact_method(&b, &feet, &foot).map_err(|e| e.to_string())?;
+        let ea = exact_method(&a, &feet, &m.foot).map_err(|e| e.to_string())?;
+        let eb = exact_method(&b, &feet, &m.foot).map_err(|e| e.to_string())?;
         let dc = (Vector3::from(ea.com) - Vector3::from(eb.com)) * 0.5;
         var += dc.component_mul(&dc);
     }
-    let sigma = var.map(f64::sqrt);
+    Ok(var.map(f64::sqrt))
+}
+
+/// What is and is not well determined, in words.
+fn notes_of(res: f64, sigma: Vector3<f64>, fit: Option<&FallAngleFitSummary>) -> Vec<String> {
     let mut notes = vec![
         "x and z come from the forward/backward pair alone, y from the left/right pair".into(),
         format!(
@@ -646,99 +771,84 @@ pub fn adapt(
     notes.push(
         "the tip-over sees only the CoM: several parts added at once are found as the one equivalent part (their total mass at their common CoM)".into(),
     );
-    if let Some(f) = &fit_summary {
-        let (k, worst) = f
-            .residual_deg
-            .iter()
-            .enumerate()
-            .fold(
-                (0, 0.0_f64),
-                |b, (k, v)| if v.abs() > b.1.abs() { (k, *v) } else { b },
-            );
-        let dirs = ["forward", "backward", "left", "right"];
-        notes.push(format!(
-            "the part's position was fitted to the four fall angles at the robot's onsets: the adapted model's static angles are within {:.2} deg of the measured ones (largest {}), {:.2} deg before the fit",
-            worst.abs(),
-            dirs[k],
-            f.start_residual_deg.iter().fold(0.0_f64, |m, v| m.max(v.abs()))
-        ));
-        if f.sideways_offset_deg.abs() > 0.05 {
-            notes.push(format!(
-                "the left and right angles share an error of {:+.2} deg against the fore-aft pair (both measured {} than one CoM explains): set aside, as the exact method's free frontal lever does; x and z come from the fore-aft angles",
-                f.sideways_offset_deg,
-                if f.sideways_offset_deg > 0.0 { "earlier" } else { "later" }
-            ));
-        }
-        if worst.abs() > 0.3 {
-            notes.push(format!(
-                "the four angles do not fit one part on this link to 0.3 deg: the change may be elsewhere or in several places, or the {} angle was measured poorly",
-                dirs[k]
-            ));
-        }
+    if let Some(f) = fit {
+        notes.extend(fit_notes(f));
     }
-    let prior_reduced = reduced(&pf, prior, &foot)?;
-    let mut report = AdaptReport {
+    notes
+}
+
+fn fit_notes(f: &FallAngleFitSummary) -> Vec<String> {
+    let mut notes = Vec::new();
+    let (k, worst) = f
+        .residual_deg
+        .iter()
+        .enumerate()
+        .fold(
+            (0, 0.0_f64),
+            |b, (k, v)| {
+                if v.abs() > b.1.abs() { (k, *v) } else { b }
+            },
+        );
+    let dirs = ["forward", "backward", "left", "right"];
+    notes.push(format!(
+        "the part's position was fitted to the four fall angles at the robot's onsets: the adapted model's static angles are within {:.2} deg of the measured ones (largest {}), {:.2} deg before the fit",
+        worst.abs(),
+        dirs[k],
+        f.start_residual_deg.iter().fold(0.0_f64, |m, v| m.max(v.abs()))
+    ));
+    if f.sideways_offset_deg.abs() > 0.05 {
+        notes.push(format!(
+            "the left and right angles share an error of {:+.2} deg against the fore-aft pair (both measured {} than one CoM explains): set aside, as the exact method's free frontal lever does; x and z come from the fore-aft angles",
+            f.sideways_offset_deg,
+            if f.sideways_offset_deg > 0.0 { "earlier" } else { "later" }
+        ));
+    }
+    if worst.abs() > 0.3 {
+        notes.push(format!(
+            "the four angles do not fit one part on this link to 0.3 deg: the change may be elsewhere or in several places, or the {} angle was measured poorly",
+            dirs[k]
+        ));
+    }
+    notes
+}
+
+/// Stage 3: the report of what was measured and placed (the part itself is added by
+/// the caller, with its uncertainty).
+fn report_of(
+    prior: &Description,
+    tip: &StudyReport,
+    m: &Measured,
+    opts: &AdaptOptions,
+    placed: &Placed,
+) -> Result<AdaptReport, IdentError> {
+    let sigma = com_sigma(prior, m, placed)?;
+    let dirs = Direction::ALL.map(|d| tip.direction(d));
+    Ok(AdaptReport {
         robot: prior.name.clone(),
-        measured_deg: [
-            tip.forward.measured_deg,
-            tip.backward.measured_deg,
-            tip.left.measured_deg,
-            tip.right.measured_deg,
-        ],
-        excess_deg: [
-            tip.forward.excess_deg,
-            tip.backward.excess_deg,
-            tip.left.excess_deg,
-            tip.right.excess_deg,
-        ],
-        prior_mass: m0,
-        prior_com: v3(c0),
-        measured_com: v3(cm),
+        measured_deg: dirs.map(|d| d.measured_deg),
+        excess_deg: dirs.map(|d| d.excess_deg),
+        prior_mass: m.m0,
+        prior_com: v3(m.c0),
+        measured_com: v3(placed.cm),
         measured_com_sigma: v3(sigma),
-        angle_resolution_deg: res,
-        mode: mode.into(),
-        family_moment: v3((cm - c0) * m0),
+        angle_resolution_deg: m.res,
+        mode: m.mode.into(),
+        family_moment: v3((placed.cm - m.c0) * m.m0),
         added: None,
         adapted_com: None,
-        iterations,
-        prior_reduced,
+        iterations: placed.iterations,
+        prior_reduced: reduced(&m.pf, prior, &m.foot)?,
         adapted_reduced: None,
-        prior_model_deg: prior_model_angles(&pf, prior, c0, &foot)?,
+        prior_model_deg: prior_model_angles(&m.pf, prior, m.c0, &m.foot)?,
         check_deg: None,
-        fall_angle_fit: fit_summary,
+        fall_angle_fit: placed.fit.clone(),
         protocol_bias_deg: opts.protocol_bias_deg,
         lean: Vec::new(),
-        outline: pf.outline(),
-        notes,
+        outline: m.pf.outline(),
+        notes: notes_of(m.res, sigma, placed.fit.as_ref()),
         checks: Vec::new(),
         files: vec![],
-    };
-    let robot = match adapted {
-        None => {
-            report.notes.push(
-                "only m_a (p - c_meas) = M0 (c_meas - c0) is known: give the total mass or the link the mass is on to place it".into(),
-            );
-            None
-        }
-        Some((d, mut added)) => {
-            let k = ((m0 + added.mass) / added.mass).abs();
-            added.position_sigma = v3(sigma * k);
-            if mode == "where" {
-                let dn = (cm - c0).norm();
-                added.mass_sigma = Some(added.mass.abs() * sigma.norm() / dn.max(1e-12));
-                report.notes.push(
-                    "with only the host link given, the mass and the distance along the ray trade off: the mass is as uncertain as |c_meas - c0|".into(),
-                );
-            }
-            let af = standing(&d)?;
-            report.adapted_com = Some(v3(af.com(&d)?));
-            report.adapted_reduced = Some(reduced(&af, &d, &foot)?);
-            report.added = Some(added);
-            Some(d)
-        }
-    };
-    report.checks = plausibility(&report, prior, &pf, tip.protocol.is_some());
-    Ok(Adapted { report, robot })
+    })
 }
 
 /// The prior with `mass` at `local` on `host` (merged with `merge`), the standing
