@@ -1038,7 +1038,16 @@ fn table_v2(model: ServoModel) -> Vec<Register> {
             },
         ),
         with(
-            rw("Moving Threshold", None, 24, 4, E, Some(10), 0, 1023),
+            rw(
+                "Moving Threshold",
+                Some(Item::MovingThreshold),
+                24,
+                4,
+                E,
+                Some(10),
+                0,
+                1023,
+            ),
             Encoding::Unsigned,
             velocity,
         ),

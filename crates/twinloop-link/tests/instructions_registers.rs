@@ -230,9 +230,17 @@ fn clear_reads_present_position_within_one_turn() {
         .unwrap();
     bus(&mut c).step(0.05);
     assert_eq!(number(c.clear_multi_turn(1)), ErrorNumberV2::ResultFail);
+    // What clear_multi_turn.py does: goal = present, 0.3 s with no traffic (one
+    // wall-clock step on a served bus), then CLEAR: the servo has stopped.
+    let present = read_i32(&mut c, Protocol::V2, 1, 132);
+    c.write(Protocol::V2, 1, 116, &(present - 30).to_le_bytes())
+        .unwrap();
+    bus(&mut c).step(0.3);
+    c.clear_multi_turn(1).unwrap();
+    // Extended Position Control Mode's 256 turns count from there (EM-XM).
     c.write(Protocol::V2, 1, 116, &12788i32.to_le_bytes())
         .unwrap();
-    wait(&mut c, 3.0);
+    wait(&mut c, 6.0);
     assert_eq!(read_i32(&mut c, Protocol::V2, 1, 132), 12788);
     c.clear_multi_turn(1).unwrap();
     assert_eq!(read_i32(&mut c, Protocol::V2, 1, 132), 500);

@@ -405,14 +405,21 @@ fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, 
         s.set_value(Item::PresentVoltage, r.from_si(m.voltage));
     }
     s.set_value(Item::PresentTemperature, m.temperature.round() as i32);
-    s.set_value(Item::Moving, moving(m.velocity) as i32);
+    let is_moving = moving(s, m.velocity);
+    s.set_value(Item::Moving, is_moving as i32);
     s.set_value(Item::RealtimeTick, ((time * 1000.0) as i64 % 32768) as i32);
 }
 
-/// Whether a servo turning at `velocity` rad/s is moving (the Moving register; a
-/// CLEAR is refused while it is).
-fn moving(velocity: f64) -> bool {
-    velocity.abs() > 0.01
+/// Whether servo `s`, turning at `velocity` rad/s, is moving (its Moving
+/// register; a CLEAR is refused while it is): faster than its Moving Threshold
+/// where it has one (EM-XM Moving(122): "If absolute value of Present
+/// Velocity(128) is greater than Moving Threshold(24)"), else than 0.01 rad/s.
+fn moving(s: &VirtualServo, velocity: f64) -> bool {
+    let threshold = match s.table().item(Item::MovingThreshold) {
+        Some(r) => r.to_si(s.value(Item::MovingThreshold)),
+        None => 0.01,
+    };
+    velocity.abs() > threshold
 }
 
 /// Tell the backend the value of every register with an item (other than Goal
@@ -773,7 +780,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
                 Err(Fault::Instruction)
             } else if self.servos[k].is_board() {
                 Ok(())
-            } else if moving(self.backend.measure(k).velocity) {
+            } else if moving(&self.servos[k], self.backend.measure(k).velocity) {
                 Err(Fault::ResultFail)
             } else {
                 unwind(&mut self.servos[k], self.backend, k);
