@@ -259,6 +259,7 @@ impl PyBus {
             .map(|j| CycleServo {
                 id: j.id,
                 model: j.model,
+                protocol: j.protocol,
             })
             .collect();
         ControlCycle::new(&servos, method)

@@ -15,11 +15,24 @@ use crate::status_error::StatusError;
 use crate::transport::Transport;
 use std::fmt;
 
-/// A servo in the cycle.
+/// A servo in the cycle and the protocol it talks (its model's, or 1.0 for an X or
+/// MX(2.0) servo whose Protocol Type register selects it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CycleServo {
     pub id: u8,
     pub model: ServoModel,
+    pub protocol: Protocol,
+}
+
+impl CycleServo {
+    /// A servo talking its model's own protocol.
+    pub fn new(id: u8, model: ServoModel) -> CycleServo {
+        CycleServo {
+            id,
+            model,
+            protocol: model.protocol(),
+        }
+    }
 }
 
 /// How a group of servos is read.
@@ -99,6 +112,8 @@ impl fmt::Display for CycleError {
 
 impl std::error::Error for CycleError {}
 
+/// Servos read and written together: one protocol and one register layout (a 1.0
+/// group of X servos set to Protocol 1.0 keeps the X addresses).
 struct Group {
     protocol: Protocol,
     method: ReadMethod,
@@ -141,10 +156,11 @@ pub struct ControlCycle {
     pub verify_v1: bool,
 }
 
-/// The register block every cycle reads: 1.0 Present Position..Present Load
-/// (36..42), 2.0 Present Current/Load..Present Position (126..136).
-fn block(protocol: Protocol) -> (u16, u16) {
-    match protocol {
+/// The register block every cycle reads, by the protocol of the model's table: 1.0
+/// Present Position..Present Load (36..42), 2.0 Present Current/Load..Present
+/// Position (126..136, within a 1.0 packet's one-byte addresses too).
+fn block(table: Protocol) -> (u16, u16) {
+    match table {
         Protocol::V1 => (36, 6),
         Protocol::V2 => (126, 10),
     }
@@ -175,23 +191,31 @@ impl ControlCycle {
             });
         }
         for (k, a) in servos.iter().enumerate() {
+            if !a.model.speaks(a.protocol) {
+                return Err(CycleError(format!(
+                    "servo id {}: {} cannot talk {}",
+                    a.id, a.model, a.protocol
+                )));
+            }
             if let Some(b) = servos[..k]
                 .iter()
-                .find(|b| b.id == a.id && b.model.protocol() == a.model.protocol())
+                .find(|b| b.id == a.id && b.protocol == a.protocol)
             {
                 return Err(CycleError(format!(
                     "servo id {} appears twice ({} and {}) on {}",
-                    a.id,
-                    b.model,
-                    a.model,
-                    a.model.protocol()
+                    a.id, b.model, a.model, a.protocol
                 )));
             }
         }
         let mut groups = Vec::new();
-        for protocol in [Protocol::V1, Protocol::V2] {
+        let kinds = [
+            (Protocol::V1, Protocol::V1),
+            (Protocol::V1, Protocol::V2),
+            (Protocol::V2, Protocol::V2),
+        ];
+        for (protocol, table) in kinds {
             let members: Vec<usize> = (0..servos.len())
-                .filter(|&i| servos[i].model.protocol() == protocol)
+                .filter(|&i| servos[i].protocol == protocol && servos[i].model.protocol() == table)
                 .collect();
             if members.is_empty() {
                 continue;
@@ -213,10 +237,15 @@ impl ControlCycle {
                     Protocol::V1 => ReadMethod::Read,
                 },
                 m => {
+                    // SYNC_READ and FAST_SYNC_READ are 2.0 instructions (EM-P1 has
+                    // neither), whatever the model.
+                    let never = |_: ServoModel| false;
+                    let v2 = protocol == Protocol::V2;
                     let check: Option<fn(ServoModel) -> bool> = match m {
                         ReadMethod::BulkRead => Some(ServoModel::has_bulk_read),
-                        ReadMethod::SyncRead => Some(ServoModel::has_sync_read),
-                        ReadMethod::FastSyncRead => Some(ServoModel::has_fast_sync_read),
+                        ReadMethod::SyncRead if v2 => Some(ServoModel::has_sync_read),
+                        ReadMethod::FastSyncRead if v2 => Some(ServoModel::has_fast_sync_read),
+                        ReadMethod::SyncRead | ReadMethod::FastSyncRead => Some(never),
                         _ => None,
                     };
                     if let Some(has) = check
@@ -239,7 +268,7 @@ impl ControlCycle {
                 .item(Item::GoalPosition)
                 .copied()
                 .ok_or_else(|| CycleError("no goal position register".into()))?;
-            let (block_address, block_len) = block(protocol);
+            let (block_address, block_len) = block(table);
             groups.push(Group {
                 protocol,
                 method: chosen,

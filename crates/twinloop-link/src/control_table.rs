@@ -2,8 +2,9 @@
 //! by item, name or address.
 //!
 //! Sources: EM-RX28/EM-RX64 (RX), e-manual MX-28/64/106 pages (MX 1.0 firmware),
-//! MX-28/64/106(2.0) pages, EM-XM (XM430-W350) and the XL430-W250 page. Indirect
-//! Address/Data blocks are not listed (nothing here uses them).
+//! MX-28/64/106(2.0) pages, EM-XM (XM430-W350) and the XL430-W250 page, the
+//! Protocol 2.0 tables with their Indirect Address / Indirect Data blocks
+//! ([`IndirectBlock`]).
 
 use crate::protocol::Protocol;
 use crate::register::{Access, Area, DEGREE, Encoding, Item, RPM, Register, Unit};
@@ -16,6 +17,53 @@ pub struct ControlTable {
     pub model: ServoModel,
     /// Registers in address order.
     pub registers: Vec<Register>,
+    /// Indirect Address / Indirect Data blocks (none on Protocol 1.0 tables).
+    pub indirect: Vec<IndirectBlock>,
+}
+
+/// One block of indirect addressing: `count` Indirect Address registers (2 bytes
+/// each) from `address`, and the `count` Indirect Data bytes they point from, from
+/// `data`. Indirect Data `n` reads and writes the byte whose address Indirect
+/// Address `n` holds, with that register's size, range and access (e-manual,
+/// "Indirect Address, Indirect Data" of EM-XM, the XL430-W250 and MX(2.0) pages).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct IndirectBlock {
+    pub address: u16,
+    pub data: u16,
+    pub count: u16,
+}
+
+/// The X series and MX(2.0) blocks: Indirect Address 1..28 at 168..222 with
+/// Indirect Data 1..28 at 224..251, and Indirect Address 29..56 at 578..632 with
+/// Indirect Data 29..56 at 634..661 (EM-XM, XL430-W250 and MX-28/64/106(2.0)
+/// control tables; the second block is out of Protocol 1.0's one-byte reach).
+pub const X_INDIRECT: [IndirectBlock; 2] = [
+    IndirectBlock {
+        address: 168,
+        data: 224,
+        count: 28,
+    },
+    IndirectBlock {
+        address: 578,
+        data: 634,
+        count: 28,
+    },
+];
+
+/// What an Indirect Address may hold: the RAM area, 64..661 ("EEPROM address can't
+/// be assigned to Indirect Address", e-manual Indirect Address range).
+pub const INDIRECT_TARGETS: std::ops::RangeInclusive<u16> = 64..=661;
+
+impl IndirectBlock {
+    /// Which Indirect Data byte of this block `address` is (0-based).
+    pub fn data_index(&self, address: u16) -> Option<u16> {
+        (address >= self.data && address < self.data + self.count).then(|| address - self.data)
+    }
+
+    /// Whether `address` lies in this block's Indirect Address registers.
+    pub fn holds_address_register(&self, address: u16) -> bool {
+        address >= self.address && address < self.address + 2 * self.count
+    }
 }
 
 /// The table of a servo model. Defined here rather than beside [`ServoModel`] so
@@ -23,6 +71,14 @@ pub struct ControlTable {
 impl ServoModel {
     pub fn table(self) -> &'static ControlTable {
         ControlTable::of(self)
+    }
+
+    /// Whether the servo can be set to talk `protocol`: its own, or either where its
+    /// table has a Protocol Type register (X series, MX(2.0): "X-series can switch
+    /// Protocol 2.0 into Protocol 1.0", e-manual Protocol Compatibility Table;
+    /// Protocol Type(13): 1 = Protocol 1.0, 2 = Protocol 2.0).
+    pub fn speaks(self, protocol: Protocol) -> bool {
+        protocol == self.protocol() || self.table().item(Item::ProtocolType).is_some()
     }
 }
 
@@ -64,11 +120,26 @@ impl ControlTable {
         self.registers.iter().find(|r| r.address == address)
     }
 
-    /// The register holding byte `address`.
+    /// The register holding byte `address` (registers are in address order and do
+    /// not overlap: a binary search).
     pub fn containing(&self, address: u16) -> Option<&Register> {
-        self.registers
+        let k = self.registers.partition_point(|r| r.end() <= address);
+        self.registers.get(k).filter(|r| r.address <= address)
+    }
+
+    /// The Indirect Address register that redirects Indirect Data byte `address`,
+    /// if `address` is one.
+    pub fn indirect_pointer(&self, address: u16) -> Option<u16> {
+        self.indirect
             .iter()
-            .find(|r| r.address <= address && address < r.end())
+            .find_map(|b| b.data_index(address).map(|i| b.address + 2 * i))
+    }
+
+    /// Whether `address` lies in an Indirect Address register.
+    pub fn is_indirect_address(&self, address: u16) -> bool {
+        self.indirect
+            .iter()
+            .any(|b| b.holds_address_register(address))
     }
 
     /// Bytes of memory the table spans (one past its last register).
@@ -212,8 +283,74 @@ fn build(model: ServoModel) -> ControlTable {
         _ => table_v2(model),
     };
     let mut registers = registers;
+    let indirect = if model.protocol() == Protocol::V2 {
+        X_INDIRECT.to_vec()
+    } else {
+        Vec::new()
+    };
+    for b in &indirect {
+        registers.extend(indirect_registers(b));
+    }
     registers.sort_by_key(|r| r.address);
-    ControlTable { model, registers }
+    ControlTable {
+        model,
+        registers,
+        indirect,
+    }
+}
+
+/// The names "Indirect Address 1..56" and "Indirect Data 1..56", made once and
+/// shared by every table.
+fn indirect_names() -> &'static [(String, String)] {
+    static NAMES: OnceLock<Vec<(String, String)>> = OnceLock::new();
+    NAMES.get_or_init(|| {
+        (1..=56)
+            .map(|n| {
+                (
+                    format!("Indirect Address {n}"),
+                    format!("Indirect Data {n}"),
+                )
+            })
+            .collect()
+    })
+}
+
+/// One block's registers: each Indirect Address (2 bytes, RAM, 64..661, initially
+/// the address of its own Indirect Data byte) and Indirect Data (1 byte, RAM,
+/// initially 0), as the e-manual's RAM tables list them.
+fn indirect_registers(b: &IndirectBlock) -> Vec<Register> {
+    // Numbering: the first block is 1..28, the second 29..56.
+    let first = if b.address == X_INDIRECT[0].address {
+        0
+    } else {
+        X_INDIRECT[0].count
+    };
+    let names = indirect_names();
+    let mut v = Vec::with_capacity(2 * b.count as usize);
+    for i in 0..b.count {
+        let (address_name, data_name) = &names[(first + i) as usize];
+        v.push(rw(
+            address_name.as_str(),
+            None,
+            b.address + 2 * i,
+            2,
+            R,
+            Some((b.data + i) as i32),
+            *INDIRECT_TARGETS.start() as i32,
+            *INDIRECT_TARGETS.end() as i32,
+        ));
+        v.push(rw(
+            data_name.as_str(),
+            None,
+            b.data + i,
+            1,
+            R,
+            Some(0),
+            0,
+            255,
+        ));
+    }
+    v
 }
 
 /// The CM-730 sub-controller, Protocol 1.0: addresses from the DARwIn-OP framework's
@@ -901,7 +1038,16 @@ fn table_v2(model: ServoModel) -> Vec<Register> {
             },
         ),
         with(
-            rw("Moving Threshold", None, 24, 4, E, Some(10), 0, 1023),
+            rw(
+                "Moving Threshold",
+                Some(Item::MovingThreshold),
+                24,
+                4,
+                E,
+                Some(10),
+                0,
+                1023,
+            ),
             Encoding::Unsigned,
             velocity,
         ),

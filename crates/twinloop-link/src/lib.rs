@@ -41,7 +41,7 @@ pub use protocol::{BROADCAST_ID, Protocol};
 pub use real_robot::{DynamixelRobot, HostClock};
 pub use register::{Access, Area, Encoding, Item, Register, Unit};
 pub use servo::{BusServo, TrackingServoModel, VirtualBus, VirtualServoBackend};
-pub use servo_model::{ServoModel, ServoSpec, baud_from_register};
+pub use servo_model::{ServoModel, ServoSpec, baud_from_register, baud_to_register};
 pub use status_error::{ErrorBitV1, ErrorNumberV2, StatusError};
 pub use transport::Transport;
 pub use wire_time::{CyclePlan, plan_cycle};

@@ -12,7 +12,8 @@
 //! [[joint]]
 //! name = "r_sho_pitch"     # URDF joint name
 //! id = 1                   # servo id
-//! model = "XM430-W350"     # protocol follows from the model; `protocol = 2` checks it
+//! model = "XM430-W350"     # protocol follows from the model; `protocol = 1` for an X or
+//!                          # MX(2.0) servo set to Protocol 1.0 (its Protocol Type register)
 //! zero = 0.0               # servo angle (rad from the servo's centre) at joint angle 0
 //! direction = 1            # +1: joint and servo turn the same way, -1: opposite
 //! min = -1.5               # joint limits, rad (default: the servo's range)
@@ -262,14 +263,18 @@ fn parse_joint(
     }
     let protocol = explicit_protocol(j.protocol.as_ref(), model, &at)?;
     let id = *j.id.get_ref();
-    if id < 0 || id > protocol.max_id() as i64 {
+    // The protocol's ids, within what the model's ID register holds (an X servo on
+    // 1.0 still stops at 252, EM-XM ID(7)).
+    let max_id = model
+        .table()
+        .item(Item::Id)
+        .map_or(protocol.max_id() as i64, |r| r.max as i64)
+        .min(protocol.max_id() as i64);
+    if id < 0 || id > max_id {
         return Err(at(
             j.id.span(),
             "id",
-            format!(
-                "servo id {id} outside 0..={} ({protocol})",
-                protocol.max_id()
-            ),
+            format!("servo id {id} outside 0..={max_id} ({model} on {protocol})"),
         ));
     }
     let id = id as u8;
@@ -323,8 +328,9 @@ fn parse_joint(
     })
 }
 
-/// A joint's or board's protocol: the model's, which an explicit `protocol` (1 or
-/// 2) must match.
+/// A joint's or board's protocol: the model's, or an explicit `protocol` (1 or 2)
+/// the model speaks: its own, or either for a model with a Protocol Type register
+/// ([`ServoModel::speaks`]: X series and MX(2.0) can be set to Protocol 1.0).
 fn explicit_protocol(
     protocol: Option<&Spanned<RawProtocol>>,
     model: ServoModel,
@@ -342,12 +348,12 @@ fn explicit_protocol(
                 _ => None,
             };
             let parsed = parsed.ok_or_else(|| at(p.span(), "protocol", "must be 1 or 2".into()))?;
-            if parsed != model.protocol() {
+            if !model.speaks(parsed) {
                 return Err(at(
                     p.span(),
                     "protocol",
                     format!(
-                        "{model} runs {}; for the other firmware name the model so (e.g. MX-28(2.0))",
+                        "{model} runs {} only (it has no Protocol Type register); for the other firmware name the model so (e.g. MX-28(2.0))",
                         model.protocol()
                     ),
                 ));

@@ -83,6 +83,7 @@ impl<T: Transport> DynamixelRobot<T> {
             .map(|j| CycleServo {
                 id: j.id,
                 model: j.model,
+                protocol: j.protocol,
             })
             .collect();
         let cycle = ControlCycle::new(&servos, method)

@@ -109,6 +109,8 @@ pub enum Item {
     PresentTemperature,
     Registered,
     Moving,
+    /// The speed above which Moving reads 1 (2.0: Moving Threshold(24)).
+    MovingThreshold,
     Lock,
     HardwareErrorStatus,
     RealtimeTick,

@@ -267,3 +267,19 @@ pub fn baud_from_register(protocol: Protocol, value: u8) -> Option<u32> {
         },
     }
 }
+
+/// The Baud Rate register value that selects `baud` on a model of `protocol`'s
+/// table: the code whose rate ([`baud_from_register`]) is nearest, if within 3 %
+/// of it (the e-manual's baud tables list margins of error up to about 2 %, e.g.
+/// RX register 34: 57 143 for 57 600, -0.79 %). 1 Mbps is 1 on the 1.0 tables
+/// (EM-RX28) and 3 on the 2.0 ones (EM-XM).
+pub fn baud_to_register(protocol: Protocol, baud: u32) -> Option<u8> {
+    let error = |v: u8| {
+        baud_from_register(protocol, v).map(|b| (b as f64 - baud as f64).abs() / baud.max(1) as f64)
+    };
+    (0..=u8::MAX)
+        .filter_map(|v| error(v).map(|e| (v, e)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .filter(|&(_, e)| e <= 0.03)
+        .map(|(v, _)| v)
+}

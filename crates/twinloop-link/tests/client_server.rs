@@ -153,7 +153,8 @@ fn every_error_status_both_protocols() {
     );
     let mut big = [0u8; 8];
     assert_eq!(
-        rejected_v2(c.read(Protocol::V2, 1, 145, &mut big)),
+        // The table ends with Indirect Data 56 at 661 (EM-XM).
+        rejected_v2(c.read(Protocol::V2, 1, 658, &mut big)),
         ErrorNumberV2::Access
     );
     // 1.0: range bit for read-only / out of range, angle limit bit for a goal
@@ -364,7 +365,7 @@ fn control_cycle_on_a_mixed_humanoid_bus() {
     let mut c = client(&servos);
     let cycle_servos: Vec<CycleServo> = servos
         .iter()
-        .map(|&(id, model)| CycleServo { id, model })
+        .map(|&(id, model)| CycleServo::new(id, model))
         .collect();
     let mut cycle = ControlCycle::new(&cycle_servos, ReadMethod::Auto).unwrap();
     assert_eq!(cycle.method(Protocol::V1), Some(ReadMethod::Read));
@@ -431,18 +432,9 @@ fn control_cycle_on_a_mixed_humanoid_bus() {
 fn missing_servo_is_reported_per_servo_and_others_still_read() {
     let mut c = client(&[(1, ServoModel::Xm430W350), (3, ServoModel::Xm430W350)]);
     let servos = [
-        CycleServo {
-            id: 1,
-            model: ServoModel::Xm430W350,
-        },
-        CycleServo {
-            id: 2,
-            model: ServoModel::Xm430W350,
-        },
-        CycleServo {
-            id: 3,
-            model: ServoModel::Xm430W350,
-        },
+        CycleServo::new(1, ServoModel::Xm430W350),
+        CycleServo::new(2, ServoModel::Xm430W350),
+        CycleServo::new(3, ServoModel::Xm430W350),
     ];
     let mut cycle = ControlCycle::new(&servos, ReadMethod::SyncRead).unwrap();
     let mut readings = vec![ServoReading::default(); 3];

@@ -108,9 +108,10 @@ fn errors_name_file_line_field_and_servo() {
         e.starts_with("robot.toml:17:6:") && e.contains("servo id 300"),
         "{e}"
     );
-    let e = error(&GOOD.replace("protocol = 2", "protocol = 1"));
+    // An RX-28 has no Protocol Type register: it talks 1.0 only (EM-RX28).
+    let e = error(&GOOD.replace("model = \"RX-28\"", "model = \"RX-28\"\nprotocol = 2"));
     assert!(
-        e.starts_with("robot.toml:9:12:") && e.contains("MX-28(2.0) runs Protocol 2.0"),
+        e.starts_with("robot.toml:19:12:") && e.contains("RX-28 runs Protocol 1.0 only"),
         "{e}"
     );
     let e = error(&GOOD.replace("direction = -1", "direction = 2"));

@@ -47,19 +47,10 @@ fn control_cycles_allocate_nothing() {
     // Servo id 11 of each protocol is missing: its failures must not allocate either.
     let mut servos: Vec<CycleServo> = bus_servos
         .iter()
-        .map(|s| CycleServo {
-            id: s.id,
-            model: s.model,
-        })
+        .map(|s| CycleServo::new(s.id, s.model))
         .collect();
-    servos.push(CycleServo {
-        id: 11,
-        model: ServoModel::Rx28,
-    });
-    servos.push(CycleServo {
-        id: 11,
-        model: ServoModel::Xm430W350,
-    });
+    servos.push(CycleServo::new(11, ServoModel::Rx28));
+    servos.push(CycleServo::new(11, ServoModel::Xm430W350));
     for method in [ReadMethod::Auto, ReadMethod::SyncRead, ReadMethod::Read] {
         let method = if method == ReadMethod::SyncRead {
             // SYNC_READ exists only on 2.0: build the 2.0 half alone.

@@ -63,10 +63,7 @@ fn run_with(
 ) -> Tally {
     let cs: Vec<CycleServo> = servos
         .iter()
-        .map(|s| CycleServo {
-            id: s.id,
-            model: s.model,
-        })
+        .map(|s| CycleServo::new(s.id, s.model))
         .collect();
     let mut cycle = ControlCycle::new(&cs, method).unwrap();
     configure(&mut cycle);

@@ -68,10 +68,7 @@ fn client_over_a_pty_with_emulated_wire_time() {
 
     let cs: Vec<CycleServo> = servos
         .iter()
-        .map(|s| CycleServo {
-            id: s.id,
-            model: s.model,
-        })
+        .map(|s| CycleServo::new(s.id, s.model))
         .collect();
     let mut cycle = ControlCycle::new(&cs, ReadMethod::Auto).unwrap();
     let mut readings = vec![ServoReading::default(); cs.len()];

@@ -70,6 +70,9 @@ pub struct VirtualRobot {
     runner: Runner,
     shared: Arc<Shared>,
     servos: Vec<BusServo>,
+    /// The protocol each servo talks, as its mapping names it (an X servo may be
+    /// set to Protocol 1.0).
+    protocols: Vec<twinloop_link::Protocol>,
     /// Sub-controller boards after the servos (the trunk IMU's CM-730).
     boards: Vec<(BusServo, BoardAxes)>,
     torque_on: bool,
@@ -208,6 +211,7 @@ impl VirtualRobot {
                     model: j.model,
                 })
                 .collect(),
+            protocols: mapping.joints.iter().map(|j| j.protocol).collect(),
             boards,
             torque_on: options.torque_on,
             unmapped,
@@ -226,6 +230,10 @@ impl VirtualRobot {
         let mut devices = self.servos.clone();
         devices.extend(self.boards.iter().map(|b| b.0));
         let mut bus = VirtualBus::new(&devices, backend);
+        for (k, &protocol) in self.protocols.iter().enumerate() {
+            // The mapping only names protocols its servos speak (checked on load).
+            let _ = bus.set_protocol(k, protocol);
+        }
         if self.torque_on {
             for k in 0..self.servos.len() {
                 // Torque Enable 1 is within every table's range: cannot fail.

@@ -102,7 +102,7 @@ fn median_us(seconds: f64, batch: usize, mut f: impl FnMut()) -> (f64, Option<f6
 
 fn cycle_servos(model: ServoModel, n: u8) -> Vec<twinloop_link::CycleServo> {
     (1..=n)
-        .map(|id| twinloop_link::CycleServo { id, model })
+        .map(|id| twinloop_link::CycleServo::new(id, model))
         .collect()
 }
 

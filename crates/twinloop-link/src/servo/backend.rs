@@ -165,7 +165,17 @@ impl VirtualServoBackend for TrackingServoModel {
             let max_step = s.spec.no_load_speed * dt;
             let step = (target - s.position).clamp(-max_step, max_step);
             let next = (s.position + step).clamp(s.min, s.max);
-            s.velocity = (next - s.position) / dt;
+            // The velocity at the end of the step, not its mean: a long step (a
+            // served bus steps by the wall-clock time between packets) that
+            // settles on the goal ends at rest. Speed-limited, it is the top speed.
+            let settling = (s.goal - next) / self.time_constant;
+            s.velocity = if next == s.min || next == s.max {
+                0.0
+            } else if step.abs() >= max_step {
+                step.signum() * s.spec.no_load_speed
+            } else {
+                settling.clamp(-s.spec.no_load_speed, s.spec.no_load_speed)
+            };
             s.position = next;
         }
     }

@@ -7,7 +7,9 @@
 //! BULK_READ (2.0 and MX 1.0), BULK_WRITE, FAST_BULK_READ. A packet whose checksum
 //! fails is answered with the checksum / CRC error by the servo it names, like a
 //! real servo. Status Return Level is honoured; broadcasts get no reply (except the
-//! read instructions, which name their responders).
+//! read instructions, which name their responders). A servo with a Protocol Type
+//! register talks the protocol it selects, from the instruction after the write
+//! that sets it (that write is answered in the protocol it came in).
 
 use super::backend::{TrackingServoModel, VirtualServoBackend};
 use super::virtual_servo::{Fault, VirtualServo, WriteEffects};
@@ -72,17 +74,28 @@ impl VirtualBus<TrackingServoModel> {
     /// A bus whose servos are moved by the stand-in [`TrackingServoModel`], each
     /// able to reach its Goal Position register's whole range, starting at rest at
     /// its centre. Boards (which must come after the servos) read level and still.
+    /// A 2.0 servo reaches twice that range: its Goal Position is counted from
+    /// where its Present Position was last unwound (CLEAR), which may be up to the
+    /// register's range away from the centre.
     pub fn with_tracking_model(servos: &[BusServo]) -> VirtualBus<TrackingServoModel> {
         let ranges: Vec<_> = servos
             .iter()
             .filter(|s| !s.model.is_board())
             .map(|s| {
-                let r = s
-                    .model
-                    .table()
+                let t = s.model.table();
+                let r = t
                     .item(Item::GoalPosition)
                     .expect("every table has a goal position");
-                (s.model.spec(), r.to_si(r.min), r.to_si(r.max))
+                let reach = if t.item(Item::OperatingMode).is_some() {
+                    2.0
+                } else {
+                    1.0
+                };
+                (
+                    s.model.spec(),
+                    reach * r.to_si(r.min),
+                    reach * r.to_si(r.max),
+                )
             })
             .collect();
         VirtualBus::new(servos, TrackingServoModel::new(&ranges))
@@ -107,13 +120,51 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
             marks: Vec::with_capacity(256),
         };
         for k in 0..bus.servos.len() {
-            announce_registers(&bus.servos[k], &mut bus.backend, k, 0, u16::MAX);
-            refresh(&mut bus.servos[k], &bus.backend, k, bus.time);
-            // At power-on the goal is where the servo is.
-            let p = bus.servos[k].value(Item::PresentPosition);
-            bus.servos[k].set_value(Item::GoalPosition, p);
+            power_on(&mut bus.servos[k], &mut bus.backend, k, bus.time);
         }
         bus
+    }
+
+    /// Make servo `k` talk `protocol`, as if its Protocol Type register (EEPROM)
+    /// had been set before power-on: [`Fault::Access`] if its model cannot
+    /// ([`ServoModel::speaks`]).
+    pub fn set_protocol(&mut self, k: usize, protocol: Protocol) -> Result<(), Fault> {
+        let s = &mut self.servos[k];
+        if protocol == s.protocol() {
+            return Ok(());
+        }
+        if !s.model.speaks(protocol) {
+            return Err(Fault::Access);
+        }
+        s.set_value(Item::ProtocolType, protocol.number() as i32);
+        Ok(())
+    }
+
+    /// Set every device's Baud Rate register (EEPROM) to the code of the line's
+    /// bit rate, as if set before power-on: a real servo answering on a 1 Mbps
+    /// line holds the code of 1 Mbps (X series 3, RX/MX(1.0) 1), not its factory
+    /// 57 600. A model with no code within 3 % of `baud` keeps its register.
+    pub fn set_line_baud(&mut self, baud: u32) {
+        for s in &mut self.servos {
+            if let Some(code) = crate::servo_model::baud_to_register(s.model.protocol(), baud) {
+                s.set_value(Item::BaudRate, code as i32);
+            }
+        }
+    }
+
+    /// Set up the served devices as `mapping` and the line describe them: each
+    /// joint's servo talks the protocol its mapping names (devices in
+    /// [`RobotMapping::bus`] order), every Baud Rate register holds the line's
+    /// code. A device the mapping cannot have (a bus not made from it) is left as
+    /// it is.
+    pub fn configure(&mut self, mapping: &crate::mapping::RobotMapping, line_baud: u32) {
+        let protocols = mapping.joints.iter().map(|j| j.protocol);
+        let protocols = protocols.chain(mapping.boards.iter().map(|b| b.protocol));
+        for (k, protocol) in protocols.enumerate().take(self.servos.len()) {
+            // A mapping only names protocols its models speak (checked on load).
+            let _ = self.set_protocol(k, protocol);
+        }
+        self.set_line_baud(line_baud);
     }
 
     /// Write `value` to `item` of servo `k` as a host's WRITE would (same checks,
@@ -239,7 +290,7 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
                             continue;
                         }
                         if let Some(k) = ctx.find(protocol, id) {
-                            ctx.status(k, Fault::Checksum.error_byte(protocol), &[]);
+                            ctx.status(k, protocol, Fault::Checksum.error_byte(protocol), &[]);
                         }
                     }
                 }
@@ -262,16 +313,53 @@ impl<B: VirtualServoBackend> Responder for VirtualBus<B> {
     }
 }
 
-fn homing_offset(s: &VirtualServo) -> i32 {
-    if s.protocol() == Protocol::V2 {
-        s.value(Item::HomingOffset)
-    } else {
-        0
+/// Homing Offset (0 on the 1.0 tables, which have none).
+fn homing_offset(s: &VirtualServo) -> i64 {
+    s.value(Item::HomingOffset) as i64
+}
+
+/// The position servo `k` measures, in Present Position counts (before Homing
+/// Offset and unwinding).
+fn measured_counts<B: VirtualServoBackend>(s: &VirtualServo, backend: &B, k: usize) -> i64 {
+    let r = s
+        .table()
+        .item(Item::PresentPosition)
+        .expect("every servo table has a present position");
+    r.from_si(backend.measure(k).position) as i64
+}
+
+/// Unwind servo `k`'s Present Position to within one turn
+/// ([`VirtualServo::unwind`]) and move its Goal Position by as much, so that the
+/// goal still names the place the servo is driven to.
+fn unwind<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize) {
+    if s.is_board() {
+        return;
+    }
+    let shift = s.unwind(measured_counts(s, backend, k));
+    if shift != 0 {
+        let goal = s.value(Item::GoalPosition) as i64 - shift;
+        s.set_value(
+            Item::GoalPosition,
+            goal.clamp(i32::MIN as i64, i32::MAX as i64) as i32,
+        );
     }
 }
 
+/// What a servo does when it starts (power-on, REBOOT, the reboot after
+/// FACTORY_RESET): the backend learns every register, Present Position is read
+/// within one turn (EM-XM Present Position note), and the goal is set where the
+/// servo is, so enabling torque does not move it.
+fn power_on<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &mut B, k: usize, time: f64) {
+    announce_registers(s, backend, k, 0, u16::MAX);
+    unwind(s, backend, k);
+    refresh(s, backend, k, time);
+    let p = s.value(Item::PresentPosition);
+    s.set_value(Item::GoalPosition, p);
+}
+
 /// Present values from the backend into the control table. 2.0 reports
-/// Present Position = actual position + Homing Offset (EM-XM). A board's
+/// Present Position = actual position + Homing Offset (EM-XM), less the turns
+/// unwound ([`VirtualServo::turn_offset`]). A board's
 /// gyroscope and accelerometer registers get the backend's IMU in counts (rounded,
 /// clamped to 10 bits as the board's converter would).
 fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, time: f64) {
@@ -295,7 +383,7 @@ fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, 
     let t = s.table();
     let spec = s.model.spec();
     if let Some(r) = t.item(Item::PresentPosition) {
-        let raw = r.from_si(m.position) as i64 + homing_offset(s) as i64;
+        let raw = r.from_si(m.position) as i64 + homing_offset(s) - s.turn_offset;
         s.set_value(
             Item::PresentPosition,
             raw.clamp(i32::MIN as i64, i32::MAX as i64) as i32,
@@ -317,8 +405,21 @@ fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, 
         s.set_value(Item::PresentVoltage, r.from_si(m.voltage));
     }
     s.set_value(Item::PresentTemperature, m.temperature.round() as i32);
-    s.set_value(Item::Moving, (m.velocity.abs() > 0.01) as i32);
+    let is_moving = moving(s, m.velocity);
+    s.set_value(Item::Moving, is_moving as i32);
     s.set_value(Item::RealtimeTick, ((time * 1000.0) as i64 % 32768) as i32);
+}
+
+/// Whether servo `s`, turning at `velocity` rad/s, is moving (its Moving
+/// register; a CLEAR is refused while it is): faster than its Moving Threshold
+/// where it has one (EM-XM Moving(122): "If absolute value of Present
+/// Velocity(128) is greater than Moving Threshold(24)"), else than 0.01 rad/s.
+fn moving(s: &VirtualServo, velocity: f64) -> bool {
+    let threshold = match s.table().item(Item::MovingThreshold) {
+        Some(r) => r.to_si(s.value(Item::MovingThreshold)),
+        None => 0.01,
+    };
+    velocity.abs() > threshold
 }
 
 /// Tell the backend the value of every register with an item (other than Goal
@@ -355,10 +456,10 @@ fn announce_registers<B: VirtualServoBackend>(
 
 /// A status packet's error byte with the servo's hardware condition added
 /// ([`VirtualServo::condition`]): 1.0 its bits, 2.0 the Alert bit.
-fn with_condition(s: &VirtualServo, error: u8) -> u8 {
+fn with_condition(s: &VirtualServo, protocol: Protocol, error: u8) -> u8 {
     match (
         s.condition.load(std::sync::atomic::Ordering::Relaxed),
-        s.protocol(),
+        protocol,
     ) {
         (0, _) => error,
         (c, Protocol::V1) => error | c,
@@ -443,11 +544,12 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
             .position(|s| s.protocol() == protocol && s.id() == id)
     }
 
-    /// Append a status packet from servo `k`.
-    fn status(&mut self, k: usize, error: u8, data: &[u8]) {
+    /// Append a status packet from servo `k` in `protocol` (the instruction's: a
+    /// write that switches the servo's protocol is answered in the old one).
+    fn status(&mut self, k: usize, protocol: Protocol, error: u8, data: &[u8]) {
         let s = &self.servos[k];
-        let error = with_condition(s, error);
-        let mut w = PacketWriter::status(self.out, s.protocol(), s.id(), error);
+        let error = with_condition(s, protocol, error);
+        let mut w = PacketWriter::status(self.out, protocol, s.id(), error);
         w.bytes(data);
         // A status packet of at most 4 + 1 + 65535 bytes always encodes.
         let _ = w.finish();
@@ -457,15 +559,15 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         });
     }
 
-    /// Reply to a unicast instruction if the Status Return Level allows.
-    fn reply(&mut self, k: usize, id: u8, instruction: u8, result: Result<(), Fault>, data: &[u8]) {
-        if id == BROADCAST_ID || self.servos[k].status_return_level() < level_needed(instruction) {
+    /// Reply to a unicast instruction `f` if the Status Return Level allows.
+    fn reply(&mut self, k: usize, f: &Frame<'_>, result: Result<(), Fault>, data: &[u8]) {
+        let level = level_needed(f.instruction);
+        if f.id == BROADCAST_ID || self.servos[k].status_return_level() < level {
             return;
         }
-        let protocol = self.servos[k].protocol();
         match result {
-            Ok(()) => self.status(k, 0, data),
-            Err(f) => self.status(k, f.error_byte(protocol), &[]),
+            Ok(()) => self.status(k, f.protocol, 0, data),
+            Err(e) => self.status(k, f.protocol, e.error_byte(f.protocol), &[]),
         }
     }
 
@@ -474,12 +576,19 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
     }
 
     fn apply_effects(&mut self, k: usize, fx: WriteEffects) {
-        let s = &self.servos[k];
+        let s = &mut self.servos[k];
         if s.is_board() {
             return;
         }
         if fx.end > fx.start {
             announce_registers(s, self.backend, k, fx.start, fx.end);
+        }
+        // Present Position is read within one turn again on a change to Position
+        // Control Mode and on torque on in it (EM-XM Present Position note).
+        let position_mode =
+            s.table().item(Item::OperatingMode).is_some() && s.value(Item::OperatingMode) == 3;
+        if position_mode && (fx.operating_mode || (fx.torque_enable && s.torque_enabled())) {
+            unwind(s, self.backend, k);
         }
         if fx.torque_enable {
             self.backend.set_torque_enabled(k, s.torque_enabled());
@@ -490,7 +599,8 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
                 .table()
                 .item(Item::GoalPosition)
                 .expect("every table has one");
-            let goal = r.to_si(s.value(Item::GoalPosition) - homing_offset(s));
+            let raw = s.value(Item::GoalPosition) as i64 - homing_offset(s) + s.turn_offset;
+            let goal = r.to_si(raw.clamp(i32::MIN as i64, i32::MAX as i64) as i32);
             self.backend.set_goal_position(k, goal);
         }
     }
@@ -527,7 +637,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         let Some(instruction) = instruction else {
             // Undefined here (e.g. SYNC_READ or REBOOT sent to a 1.0 servo).
             for &k in targets {
-                self.reply(k, f.id, code, Err(Fault::Instruction), &[]);
+                self.reply(k, f, Err(Fault::Instruction), &[]);
             }
             return;
         };
@@ -560,19 +670,18 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
             let model = s.model.model_number().to_le_bytes();
             let fw = s.firmware;
             match protocol {
-                Protocol::V1 => self.status(k, 0, &[]),
-                Protocol::V2 => self.status(k, 0, &[model[0], model[1], fw]),
+                Protocol::V1 => self.status(k, protocol, 0, &[]),
+                Protocol::V2 => self.status(k, protocol, 0, &[model[0], model[1], fw]),
             }
         }
     }
 
     /// READ: a status with the registers asked for (none to a broadcast).
     fn read(&mut self, f: &Frame<'_>, targets: &[usize]) {
-        let (protocol, code) = (f.protocol, f.instruction);
-        let mut p = Params::new(protocol, f.params);
+        let mut p = Params::new(f.protocol, f.params);
         let (Some(address), Some(len)) = (p.addr(), p.addr()) else {
             for &k in targets {
-                self.reply(k, f.id, code, Err(Fault::Instruction), &[]);
+                self.reply(k, f, Err(Fault::Instruction), &[]);
             }
             return;
         };
@@ -585,8 +694,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
 
     /// WRITE (applied now) or REG_WRITE (staged for ACTION).
     fn write_or_stage(&mut self, f: &Frame<'_>, instruction: Instruction, targets: &[usize]) {
-        let (protocol, code) = (f.protocol, f.instruction);
-        let mut p = Params::new(protocol, f.params);
+        let mut p = Params::new(f.protocol, f.params);
         let address = p.addr();
         let data = p.rest();
         for &k in targets {
@@ -597,13 +705,12 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
                     self.servos[k].stage(a, data);
                 }),
             };
-            self.reply(k, f.id, code, r, &[]);
+            self.reply(k, f, r, &[]);
         }
     }
 
     /// ACTION: apply the staged REG_WRITE of each target.
     fn action(&mut self, f: &Frame<'_>, targets: &[usize]) {
-        let code = f.instruction;
         for &k in targets {
             let r = match self.servos[k].take_staged() {
                 Some(fx) => {
@@ -612,59 +719,74 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
                 }
                 None => Err(Fault::Instruction),
             };
-            self.reply(k, f.id, code, r, &[]);
+            self.reply(k, f, r, &[]);
         }
     }
 
-    /// FACTORY_RESET: answer under the old id, then reset the control table.
+    /// The restart that follows REBOOT and FACTORY_RESET: torque off, then
+    /// [`power_on`] (the goal where the servo is, Present Position within one turn).
+    fn restart(&mut self, k: usize) {
+        if !self.servos[k].is_board() {
+            self.backend.set_torque_enabled(k, false);
+        }
+        power_on(&mut self.servos[k], self.backend, k, self.time);
+    }
+
+    /// FACTORY_RESET: answer under the old id (and protocol), reset the control
+    /// table, then reboot as the servo does. Its parameter (2.0): 0xFF all, 0x01
+    /// all but ID, 0x02 all but ID and Baud Rate (EM-P2 Factory Reset); a 1.0 reset
+    /// has none and resets all (EM-P1). An option EM-P2 does not list is refused
+    /// with an Instruction Error, resetting nothing (EM-P2 is silent on it).
     fn factory_reset(&mut self, f: &Frame<'_>, targets: &[usize]) {
-        let (protocol, code) = (f.protocol, f.instruction);
-        let option = f.params.first().copied().unwrap_or(0xFF);
-        if protocol == Protocol::V2 && f.id == BROADCAST_ID && option == 0xFF {
+        let option = match f.protocol {
+            Protocol::V1 => 0xFF,
+            Protocol::V2 => f.params.first().copied().unwrap_or(0xFF),
+        };
+        if f.protocol == Protocol::V2 && f.id == BROADCAST_ID && option == 0xFF {
             return; // Ignored since firmware 42 (EM-P2).
         }
+        let known = matches!(option, 0xFF | 0x01 | 0x02);
         for &k in targets {
-            // Answer first, under the old id.
-            self.reply(k, f.id, code, Ok(()), &[]);
+            if !known {
+                self.reply(k, f, Err(Fault::Instruction), &[]);
+                continue;
+            }
+            self.reply(k, f, Ok(()), &[]);
             self.servos[k].factory_reset(option);
-            if !self.servos[k].is_board() {
-                self.backend.set_torque_enabled(k, false);
-            }
-            announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
-            self.refresh(k);
+            self.restart(k);
         }
     }
 
-    /// REBOOT: answer, then restart with torque off and the goal at the present position.
+    /// REBOOT: answer, then restart with RAM at its initial values (torque off),
+    /// EEPROM kept, the goal at the present position.
     fn reboot(&mut self, f: &Frame<'_>, targets: &[usize]) {
-        let code = f.instruction;
         for &k in targets {
-            self.reply(k, f.id, code, Ok(()), &[]);
+            self.reply(k, f, Ok(()), &[]);
             self.servos[k].reboot();
-            if !self.servos[k].is_board() {
-                self.backend.set_torque_enabled(k, false);
-            }
-            announce_registers(&self.servos[k], self.backend, k, 0, u16::MAX);
-            self.refresh(k);
-            let s = &mut self.servos[k];
-            let p = s.value(Item::PresentPosition);
-            s.set_value(Item::GoalPosition, p);
+            self.restart(k);
         }
     }
 
-    /// CLEAR (multi-turn reset): refused while the servo moves.
+    /// CLEAR with P1 0x01 and the fixed P2..P5 0x44 0x58 0x4C 0x22: reset Present
+    /// Position to within one full rotation (0..4095, Homing Offset still added),
+    /// only while the servo is stopped: moving, it answers Result Fail (EM-P2
+    /// Clear, which names no operating mode it is limited to). Goal Position moves
+    /// by as much, so the servo holds where it is (EM-P2 does not say what Goal
+    /// Position reads after it). Other parameters are reserved: Instruction Error.
     fn clear(&mut self, f: &Frame<'_>, targets: &[usize]) {
-        let code = f.instruction;
         let valid = f.params == [0x01, 0x44, 0x58, 0x4C, 0x22];
         for &k in targets {
             let r = if !valid {
                 Err(Fault::Instruction)
-            } else if !self.servos[k].is_board() && self.backend.measure(k).velocity.abs() > 0.01 {
+            } else if self.servos[k].is_board() {
+                Ok(())
+            } else if moving(&self.servos[k], self.backend.measure(k).velocity) {
                 Err(Fault::ResultFail)
             } else {
+                unwind(&mut self.servos[k], self.backend, k);
                 Ok(())
             };
-            self.reply(k, f.id, code, r, &[]);
+            self.reply(k, f, r, &[]);
         }
     }
 
@@ -737,8 +859,10 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         match self.servos[k].check_read(address, len) {
             Ok(()) => {
                 self.refresh(k);
+                self.servos[k].load_indirect(address, len);
                 let s = &self.servos[k];
-                let mut w = PacketWriter::status(self.out, protocol, s.id(), with_condition(s, 0));
+                let error = with_condition(s, protocol, 0);
+                let mut w = PacketWriter::status(self.out, protocol, s.id(), error);
                 w.bytes(s.read(address, len));
                 let _ = w.finish();
                 self.marks.push(ReplyMark {
@@ -746,7 +870,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
                     delay: s.return_delay(),
                 });
             }
-            Err(fault) => self.status(k, fault.error_byte(protocol), &[]),
+            Err(fault) => self.status(k, protocol, fault.error_byte(protocol), &[]),
         }
     }
 
@@ -780,6 +904,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
             let check = self.servos[k].check_read(address, len);
             if check.is_ok() {
                 self.refresh(k);
+                self.servos[k].load_indirect(address, len);
             }
             let s = &self.servos[k];
             match check {

@@ -1,6 +1,8 @@
 //! One virtual servo: its control-table memory and the rules a real servo applies
-//! to reads and writes (ranges, read-only registers, EEPROM lock, position limits),
-//! with each violation answered by the error the e-manual names.
+//! to reads and writes (ranges, read-only registers, EEPROM lock, position limits,
+//! indirect addressing), with each violation answered by the error the e-manual
+//! names; the protocol it talks (Protocol Type) and the turns its Present Position
+//! has been unwound by (CLEAR, reboot).
 
 use crate::control_table::ControlTable;
 use crate::protocol::Protocol;
@@ -33,8 +35,15 @@ pub enum Fault {
 
 impl Fault {
     /// The error byte of a status packet for this fault. Protocol 1.0 has only
-    /// bits: range-type faults become the Range bit, a position outside the limits
-    /// the Angle Limit bit (EM-P1); 2.0 has a number for each (EM-P2).
+    /// bits (EM-P1 Status Packet: bit 6 Instruction, bit 4 Checksum, bit 3 Range,
+    /// bit 1 Angle Limit); 2.0 has a number for each (EM-P2).
+    ///
+    /// Where EM-P1 is silent: it names no bit for a write to a read-only, undefined
+    /// or locked address, nor for a bad length; those get the Range bit, as the
+    /// RX-64 manual's Example 20 shows for a write to a locked address (status
+    /// `FF FF 00 02 08 F5`). Malformed parameters (a READ without its length) get
+    /// the Instruction bit, like an undefined instruction. Result Fail has no 1.0
+    /// instruction that could raise it (CLEAR is 2.0 only).
     pub fn error_byte(self, protocol: Protocol) -> u8 {
         match protocol {
             Protocol::V1 => match self {
@@ -61,7 +70,9 @@ impl Fault {
 pub struct WriteEffects {
     pub goal_position: bool,
     pub torque_enable: bool,
-    /// Bytes written: `start..end` (empty if nothing was).
+    pub operating_mode: bool,
+    /// Bytes written, through Indirect Data too: within `start..end` (empty if
+    /// nothing was).
     pub start: u16,
     pub end: u16,
 }
@@ -81,11 +92,18 @@ pub struct VirtualServo {
     /// 0x01; on 2.0 any bit sets the Alert bit). Shared, so a test can make a
     /// served servo report a fault mid-run; 0 (the default) reports nothing.
     pub condition: Arc<AtomicU8>,
+    /// The protocol the servo talks: its model's, or what its Protocol Type
+    /// register selects (kept in step with the register by every write).
+    protocol: Protocol,
+    /// Whole turns, in counts, taken out of the measured position since the servo
+    /// was last unwound ([`VirtualServo::unwind`]): Present Position = measured
+    /// position + Homing Offset - `turn_offset`.
+    pub turn_offset: i64,
 }
 
 impl VirtualServo {
     pub fn new(id: u8, model: ServoModel, firmware: u8) -> VirtualServo {
-        VirtualServo {
+        let mut s = VirtualServo {
             model,
             firmware,
             memory: model.table().factory_memory(id, firmware),
@@ -93,15 +111,30 @@ impl VirtualServo {
             staged: Vec::with_capacity(64),
             has_staged: false,
             condition: Arc::new(AtomicU8::new(0)),
-        }
+            protocol: model.protocol(),
+            turn_offset: 0,
+        };
+        s.sync_protocol();
+        s
     }
 
     pub fn table(&self) -> &'static ControlTable {
         self.model.table()
     }
 
+    /// The protocol the servo answers now.
     pub fn protocol(&self) -> Protocol {
-        self.model.protocol()
+        self.protocol
+    }
+
+    /// Follow the Protocol Type register (1: Protocol 1.0, 2: Protocol 2.0; EM-XM
+    /// Protocol Type(13)); a model without one keeps its own protocol.
+    fn sync_protocol(&mut self) {
+        self.protocol = match self.register(Item::ProtocolType) {
+            Some(_) if self.value(Item::ProtocolType) == 1 => Protocol::V1,
+            Some(_) => Protocol::V2,
+            None => self.model.protocol(),
+        };
     }
 
     /// A sub-controller board (no motor: the backend does not move it).
@@ -126,6 +159,9 @@ impl VirtualServo {
         if let Some(r) = self.register(item) {
             let v = value.clamp(r.min, r.max);
             r.encode(v, &mut self.memory[r.address as usize..r.end() as usize]);
+            if item == Item::ProtocolType {
+                self.sync_protocol();
+            }
         }
     }
 
@@ -157,15 +193,69 @@ impl VirtualServo {
         Ok(())
     }
 
-    /// The bytes a READ returns.
+    /// The bytes a READ returns (after [`VirtualServo::load_indirect`] for reads
+    /// that may cover Indirect Data).
     pub fn read(&self, address: u16, len: u16) -> &[u8] {
         &self.memory[address as usize..address as usize + len as usize]
     }
 
+    /// Fill the Indirect Data bytes among `len` bytes at `address` with the bytes
+    /// their Indirect Address points at, so a READ there returns the addressed
+    /// registers (EM-XM Indirect Address, Indirect Data).
+    pub fn load_indirect(&mut self, address: u16, len: u16) {
+        let table = self.table();
+        for block in &table.indirect {
+            let lo = address.max(block.data);
+            let hi = (address as u32 + len as u32).min((block.data + block.count) as u32) as u16;
+            for a in lo..hi {
+                let pointer = block.address + 2 * (a - block.data);
+                let target = self.word(pointer, 0, &[]) as usize;
+                if target < self.memory.len() {
+                    self.memory[a as usize] = self.memory[target];
+                }
+            }
+        }
+    }
+
+    /// The 2-byte little-endian value at `address` as it is once `data` is written
+    /// at `start` (memory where the write does not reach).
+    fn word(&self, address: u16, start: usize, data: &[u8]) -> u16 {
+        let byte = |a: usize| {
+            if a >= start && a < start + data.len() {
+                data[a - start]
+            } else {
+                self.memory[a]
+            }
+        };
+        u16::from_le_bytes([byte(address as usize), byte(address as usize + 1)])
+    }
+
+    /// Where byte `address` of a write at `start` of `data` lands: itself, or the
+    /// byte its Indirect Address points at once the write's own bytes are in (a
+    /// write that also sets pointers below their data uses the new pointers, the
+    /// bytes being taken in address order). An Indirect Data byte pointing at
+    /// another Indirect Data byte reaches that byte's memory, not its target.
+    fn destination(&self, address: u16, start: usize, data: &[u8]) -> u16 {
+        match self.table().indirect_pointer(address) {
+            Some(pointer) => self.word(pointer, start, data),
+            None => address,
+        }
+    }
+
+    /// Whether EEPROM is locked: by Torque Enable on the 2.0 tables (EM-XM), by
+    /// Lock on the 1.0 ones (EM-RX28).
+    fn eeprom_locked(&self) -> bool {
+        match self.model.protocol() {
+            Protocol::V2 => self.torque_enabled(),
+            Protocol::V1 => self.value(Item::Lock) != 0,
+        }
+    }
+
     /// Check a WRITE of `data` at `address` against the servo's rules, without
-    /// changing anything.
+    /// changing anything. Bytes written through Indirect Data are checked against
+    /// the register they reach ("Indirect Address inherits features and
+    /// properties of the Data from the specific Address", EM-XM).
     pub fn check_write(&self, address: u16, data: &[u8]) -> Result<(), Fault> {
-        let protocol = self.protocol();
         let start = address as usize;
         let end = start + data.len();
         if data.is_empty() {
@@ -174,10 +264,6 @@ impl VirtualServo {
         if end > self.memory.len() {
             return Err(Fault::Access);
         }
-        let eeprom_locked = match protocol {
-            Protocol::V2 => self.torque_enabled(),
-            Protocol::V1 => self.value(Item::Lock) != 0,
-        };
         let table = self.table();
         let mut a = start;
         while a < end {
@@ -185,34 +271,94 @@ impl VirtualServo {
                 // A byte no register owns.
                 return Err(Fault::Access);
             };
-            let (rs, re) = (r.address as usize, r.end() as usize);
-            if protocol == Protocol::V2 && (rs < start || re > end) {
-                return Err(Fault::DataLength);
-            }
-            if r.access == Access::Read {
+            // The SDK's indirect_address.py: "Indirect address would not
+            // accessible when the torque is already enabled" (the e-manual lists
+            // the registers in RAM and says nothing of a lock).
+            if table.is_indirect_address(r.address) && self.torque_enabled() {
                 return Err(Fault::Access);
             }
-            if r.area == Area::Eeprom && eeprom_locked {
+            self.check_register(r, data, &|a| (a >= start && a < end).then(|| a - start))?;
+            a = r.end() as usize;
+        }
+        if !table.indirect.is_empty() {
+            self.check_indirect(start, data)?;
+        }
+        Ok(())
+    }
+
+    /// Check the registers that Indirect Data bytes of the write reach.
+    fn check_indirect(&self, start: usize, data: &[u8]) -> Result<(), Fault> {
+        let table = self.table();
+        for i in 0..data.len() {
+            let a = (start + i) as u16;
+            if table.indirect_pointer(a).is_none() {
+                continue;
+            }
+            let t = self.destination(a, start, data);
+            if table.indirect_pointer(t).is_some() {
+                continue; // plain memory: any byte goes
+            }
+            let Some(r) = table.containing(t) else {
                 return Err(Fault::Access);
+            };
+            // Each register once: skip it if an earlier byte already reached it.
+            let earlier = (0..i).any(|j| {
+                let b = (start + j) as u16;
+                table.indirect_pointer(b).is_some()
+                    && table.containing(self.destination(b, start, data)) == Some(r)
+            });
+            if earlier {
+                continue;
             }
-            // The register's value after the write (1.0 may write part of one).
-            let mut bytes = [0u8; 4];
-            for (k, b) in bytes.iter_mut().take(r.size as usize).enumerate() {
-                let addr = rs + k;
-                *b = if addr >= start && addr < end {
-                    data[addr - start]
-                } else {
-                    self.memory[addr]
-                };
-            }
-            let v = r.decode(&bytes[..r.size as usize]);
-            if v < r.min || v > r.max {
-                return Err(Fault::DataRange);
-            }
-            if r.item == Some(Item::GoalPosition) && !self.goal_within_limits(v) {
-                return Err(Fault::DataLimit);
-            }
-            a = re;
+            // Which byte of `data` lands on register byte `x`, if one does.
+            let source = |x: usize| {
+                (0..data.len()).find(|&j| {
+                    let b = (start + j) as u16;
+                    table.indirect_pointer(b).is_some()
+                        && self.destination(b, start, data) as usize == x
+                })
+            };
+            self.check_register(r, data, &source)?;
+        }
+        Ok(())
+    }
+
+    /// Check one register a write reaches: `source(x)` is the index in `data` of
+    /// the byte written to register byte `x`, if one is. A 2.0 write must cover the
+    /// whole register (Data Length error otherwise; 1.0 may write part of one).
+    fn check_register(
+        &self,
+        r: &Register,
+        data: &[u8],
+        source: &dyn Fn(usize) -> Option<usize>,
+    ) -> Result<(), Fault> {
+        let (rs, size) = (r.address as usize, r.size as usize);
+        let mut bytes = [0u8; 4];
+        let mut covered = 0;
+        for (k, b) in bytes.iter_mut().take(size).enumerate() {
+            *b = match source(rs + k) {
+                Some(j) => {
+                    covered += 1;
+                    data[j]
+                }
+                None => self.memory[rs + k],
+            };
+        }
+        if self.protocol == Protocol::V2 && covered < size {
+            return Err(Fault::DataLength);
+        }
+        if r.access == Access::Read {
+            return Err(Fault::Access);
+        }
+        if r.area == Area::Eeprom && self.eeprom_locked() {
+            return Err(Fault::Access);
+        }
+        let v = r.decode(&bytes[..size]);
+        if v < r.min || v > r.max {
+            return Err(Fault::DataRange);
+        }
+        if r.item == Some(Item::GoalPosition) && !self.goal_within_limits(v) {
+            return Err(Fault::DataLimit);
         }
         Ok(())
     }
@@ -223,25 +369,83 @@ impl VirtualServo {
     fn goal_within_limits(&self, goal: i32) -> bool {
         let lo = self.value(Item::MinPositionLimit);
         let hi = self.value(Item::MaxPositionLimit);
-        match self.protocol() {
+        match self.model.protocol() {
             Protocol::V1 => (lo == 0 && hi == 0) || (lo <= goal && goal <= hi),
             Protocol::V2 => self.value(Item::OperatingMode) != 3 || (lo <= goal && goal <= hi),
         }
     }
 
-    /// Apply a write already checked with [`VirtualServo::check_write`].
+    /// Apply a write already checked with [`VirtualServo::check_write`]: the bytes
+    /// at `address`, then each Indirect Data byte's copy at the byte it points at.
     pub fn apply_write(&mut self, address: u16, data: &[u8]) -> WriteEffects {
         let start = address as usize;
         self.memory[start..start + data.len()].copy_from_slice(data);
-        let end = (start + data.len()) as u16;
-        let touches =
-            |r: Option<&Register>| r.is_some_and(|r| r.address < end && r.end() > address);
-        WriteEffects {
-            goal_position: touches(self.register(Item::GoalPosition)),
-            torque_enable: touches(self.register(Item::TorqueEnable)),
+        let mut fx = WriteEffects {
             start: address,
-            end,
+            end: (start + data.len()) as u16,
+            ..WriteEffects::default()
+        };
+        let end = fx.end;
+        self.note_touched(&mut fx, address, end);
+        let table = self.table();
+        if !table.indirect.is_empty() {
+            for (i, &byte) in data.iter().enumerate() {
+                let a = (start + i) as u16;
+                if table.indirect_pointer(a).is_none() {
+                    continue;
+                }
+                let t = self.destination(a, 0, &[]);
+                if (t as usize) < self.memory.len() {
+                    self.memory[t as usize] = byte;
+                    fx.start = fx.start.min(t);
+                    fx.end = fx.end.max(t + 1);
+                    self.note_touched(&mut fx, t, t + 1);
+                }
+            }
         }
+        if self
+            .register(Item::ProtocolType)
+            .is_some_and(|r| r.address < fx.end && r.end() > fx.start)
+        {
+            self.sync_protocol();
+        }
+        fx
+    }
+
+    /// Mark in `fx` the registers with an effect that bytes `start..end` overlap.
+    fn note_touched(&self, fx: &mut WriteEffects, start: u16, end: u16) {
+        let touches = |r: Option<&Register>| r.is_some_and(|r| r.address < end && r.end() > start);
+        fx.goal_position |= touches(self.register(Item::GoalPosition));
+        fx.torque_enable |= touches(self.register(Item::TorqueEnable));
+        fx.operating_mode |= touches(self.register(Item::OperatingMode));
+    }
+
+    /// Counts per turn of the Present Position register where Present Position can
+    /// be unwound to within one turn (the 2.0 tables: 4096), else `None`.
+    fn counts_per_turn(&self) -> Option<i64> {
+        self.register(Item::OperatingMode)?;
+        match self.register(Item::PresentPosition)?.unit {
+            crate::register::Unit::Angle { rad_per_unit, .. } => {
+                Some((std::f64::consts::TAU / rad_per_unit).round() as i64)
+            }
+            _ => None,
+        }
+    }
+
+    /// Reset Present Position "to an absolute value within one full rotation"
+    /// (EM-P2 Clear; EM-XM Present Position note: also at power-on, reboot, a
+    /// change to Position Control Mode and torque on in it), Homing Offset still
+    /// added. `measured` is the position the servo measures, in register counts.
+    /// Returns the counts Present Position moved by (what the bus takes off the
+    /// Goal Position so the servo holds where it is); 0 for models without it.
+    pub fn unwind(&mut self, measured: i64) -> i64 {
+        let Some(turn) = self.counts_per_turn() else {
+            return 0;
+        };
+        let offset = measured.div_euclid(turn) * turn;
+        let shift = offset - self.turn_offset;
+        self.turn_offset = offset;
+        shift
     }
 
     /// Stage a REG_WRITE.
@@ -271,8 +475,9 @@ impl VirtualServo {
         Some(effects)
     }
 
-    /// FACTORY_RESET: 1.0 resets everything, id included; 2.0 `option` 0xFF all,
-    /// 0x01 all but id, 0x02 all but id and baud rate.
+    /// FACTORY_RESET: `option` 0xFF all, 0x01 all but ID, 0x02 all but ID and Baud
+    /// Rate (EM-P2 Factory Reset); a 1.0 reset has no parameter and resets all,
+    /// ID included (EM-P1), which the bus passes as 0xFF.
     pub fn factory_reset(&mut self, option: u8) {
         let id = self.id();
         let baud = self.value(Item::BaudRate);
@@ -286,14 +491,15 @@ impl VirtualServo {
             1
         };
         self.memory = self.table().factory_memory(factory_id, self.firmware);
-        if self.protocol() == Protocol::V2 {
-            if option == 0x01 || option == 0x02 {
-                self.set_value(Item::Id, id as i32);
-            }
-            if option == 0x02 {
-                self.set_value(Item::BaudRate, baud);
-            }
+        if option == 0x01 || option == 0x02 {
+            self.set_value(Item::Id, id as i32);
         }
+        if option == 0x02 {
+            self.set_value(Item::BaudRate, baud);
+        }
+        // Protocol Type is back at its factory value: an X servo switched to 1.0
+        // talks 2.0 again.
+        self.sync_protocol();
         self.has_staged = false;
     }
 
