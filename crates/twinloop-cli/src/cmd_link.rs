@@ -444,7 +444,7 @@ fn read(a: &ReadArgs) -> CliResult {
             Err(e) => return Err(e.into()),
         },
     };
-    if model.protocol() != a.protocol {
+    if !model.speaks(a.protocol) {
         return Err(CliError::from(format!(
             "servo id {}: {model} runs {}, not {}",
             a.id,
