@@ -18,10 +18,15 @@ pub struct ControlTable {
     pub registers: Vec<Register>,
 }
 
-/// The table of a servo model. Defined here rather than beside [`ServoModel`] so
-/// that the dependency runs one way: tables know servo models, not the reverse.
-impl ServoModel {
-    pub fn table(self) -> &'static ControlTable {
+/// The table of a servo model: `model.table()`. A trait because [`ServoModel`] is
+/// the catalogue's (`twinloop-servos`), which knows no control tables: the dependency
+/// runs one way, tables know servo models, not the reverse. Exported at the crate root.
+pub trait ModelTable {
+    fn table(self) -> &'static ControlTable;
+}
+
+impl ModelTable for ServoModel {
+    fn table(self) -> &'static ControlTable {
         ControlTable::of(self)
     }
 }

@@ -2,6 +2,7 @@
 //! compliance (RX), position gain (MX, X), moving speed and torque limit, turned
 //! into the parameters of the simulator's [`DynamixelServo`].
 
+use twinloop_link::ModelTable;
 use twinloop_link::{Item, ServoModel, Unit};
 use twinloop_sim::DynamixelServo;
 

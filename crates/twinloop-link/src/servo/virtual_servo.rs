@@ -3,6 +3,7 @@
 //! with each violation answered by the error the e-manual names.
 
 use crate::control_table::ControlTable;
+use crate::control_table::ModelTable;
 use crate::protocol::Protocol;
 use crate::register::{Access, Area, Item, Register};
 use crate::servo_model::ServoModel;
