@@ -122,6 +122,12 @@ pub struct TipoverArgs {
     /// or late from run to run (docs/adaptation.md)
     #[arg(long, value_enum, default_value_t)]
     pub goal_counts: super::tipover_bus::GoalCounts,
+    /// Leave the servos as they are instead of stiffening them (every servo is made
+    /// stiff through the servo catalogue, and put back afterwards; a servo model with
+    /// no known way to stiffen otherwise stops the run before anything moves). The
+    /// output then says the servos were soft: the angles include their give.
+    #[arg(long)]
+    pub soft_servos: bool,
     /// Over a bus: read each creep's tip as the mean of the ankle readings (and the
     /// posture, the feet's roll and the lean) over this long up to the onset, s of
     /// robot time. The ankles flip between two counts as the robot rocks on its sole
@@ -267,6 +273,7 @@ mod bus {
             slow_ramp: a.slow_ramp,
             compliance_slope: a.compliance_slope.round() as i32,
             ankle_slope: a.ankle_slope.round() as i32,
+            soft_servos: a.soft_servos,
             creeps: a.creeps as usize,
             first_tips: None,
             dither: a.goal_counts.dithered(),
@@ -277,13 +284,31 @@ mod bus {
         let run = tipover_on_bus(&plan)?;
         match run.outcome {
             BusOutcome::Study(r) => emit(
-                &format!("over {}\n{}", run.port, summary(&r)),
+                &format!(
+                    "over {}\n{}{}",
+                    run.port,
+                    soft_line(plan.soft_servos),
+                    summary(&r)
+                ),
                 a.json.as_ref(),
                 &*r,
             )?,
-            BusOutcome::Partial(r) => emit(&partial_summary(&r), a.json.as_ref(), &*r)?,
+            BusOutcome::Partial(r) => emit(
+                &format!("{}{}", soft_line(r.soft_servos), partial_summary(&r)),
+                a.json.as_ref(),
+                &*r,
+            )?,
         }
         Ok(Outcome::Ok)
+    }
+
+    /// The first line of the output when the servos were left soft.
+    fn soft_line(soft: bool) -> String {
+        if soft {
+            format!("{}\n", twinloop_ident::adapt::SOFT_SERVOS_NOTE)
+        } else {
+            String::new()
+        }
     }
 
     fn partial_summary(r: &BusReport) -> String {
