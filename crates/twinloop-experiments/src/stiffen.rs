@@ -10,7 +10,7 @@
 //! they are (`--soft-servos`), and then says so in its output.
 
 use crate::guarded::BusRobot;
-use twinloop_link::servos::LoopRegister;
+use twinloop_link::servos::{LoopFamily, LoopRegister};
 use twinloop_link::{Protocol, RobotMapping, ServoModel};
 use twinloop_robot::RobotError;
 
@@ -121,6 +121,36 @@ pub fn stiffen(
         }
     }
     write_grouped(robot, &writes)
+}
+
+/// The stiffness of a servo a lean ramps, as an RX Compliance Slope: `ankle` on an
+/// RX (whole goal counts of 0.29 deg jolt a stiff RX ankle and tip the robot early:
+/// `twinloop_ident::tipover_bus::ANKLE_SLOPE`), `hold` on MX and X, whose counts are
+/// 0.088 deg. Measured on the served OP3 (XM430-W350, dithered goals, ramp 2 deg/s,
+/// creep 0.15 deg/s, docs/adaptation.md): ramped ankles at the RX-32 equivalent (P
+/// 1062) tipped 2.4 deg (forward) to 1.4 deg (sideways) behind their goals and read
+/// sideways 21.2 deg; as stiff as the rest (P 16383), 23.9 deg, 2.7 deg nearer the
+/// simulator's 28.9, backward 0.3 deg nearer, forward 0.4 deg farther, the CoM as far
+/// off (16.7 and 17.2 mm).
+pub fn ramped_slope(model: ServoModel, hold: u8, ankle: u8) -> u8 {
+    match model.family() {
+        Some(LoopFamily::Compliance) => ankle,
+        _ => hold,
+    }
+}
+
+/// [`stiffen`] for a lean: the joints `ramped` selects at [`ramped_slope`], the
+/// others at `hold`.
+pub fn stiffen_for_lean(
+    robot: &mut BusRobot,
+    hold: u8,
+    ankle: u8,
+    ramped: impl Fn(usize) -> bool,
+) -> Result<(), RobotError> {
+    let models: Vec<ServoModel> = robot.mapping().joints.iter().map(|j| j.model).collect();
+    let soft_ankle = |k: usize| ramped(k) && ramped_slope(models[k], hold, ankle) != hold;
+    stiffen(robot, hold, |k| !soft_ankle(k))?;
+    stiffen(robot, ankle, soft_ankle)
 }
 
 /// Write back what [`save_loops`] read.

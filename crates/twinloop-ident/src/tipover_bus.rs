@@ -10,7 +10,9 @@ use crate::tipover_study::{StudyReport, TiltModel, report_for_runs};
 use serde::Serialize;
 use twinloop_description::Description;
 use twinloop_experiments::guarded::Guarded;
-use twinloop_experiments::stiffen::{check_stiffenable, restore_loops, save_loops, stiffen};
+use twinloop_experiments::stiffen::{
+    check_stiffenable, restore_loops, save_loops, stiffen_for_lean,
+};
 use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction, tilt};
 use twinloop_robot::{Robot, RobotError, RobotState};
 
@@ -211,7 +213,8 @@ fn wait_upright(
     }
 }
 
-/// The ramped ankles' RX Compliance Slope over the bus: the factory value. Goal
+/// The ramped ankles' RX Compliance Slope over the bus: the factory value (RX only:
+/// MX and X ankles are as stiff as the rest, `twinloop_experiments::stiffen::ramped_slope`). Goal
 /// positions are whole counts (0.29 deg), so the ramp is a staircase; a servo at the
 /// stiffest slope takes each count as a jolt, and a robot on the edge of its soles
 /// tips up to a degree early (measured over the pty: forward and backward 1.1 deg
@@ -292,10 +295,12 @@ fn lean_each(
         let ankles = ramped_ankles(cfg, d);
         if !opts.soft_servos {
             let slope = |s: i32| s.clamp(1, 255) as u8;
-            stiffen(g.robot, slope(opts.compliance_slope), |k| {
-                !ankles.contains(&k)
-            })
-            .and_then(|()| stiffen(g.robot, slope(opts.ankle_slope), |k| ankles.contains(&k)))
+            stiffen_for_lean(
+                g.robot,
+                slope(opts.compliance_slope),
+                slope(opts.ankle_slope),
+                |k| ankles.contains(&k),
+            )
             .map_err(|e| e.to_string())?;
         }
         if opts.dither {

@@ -96,12 +96,14 @@ pub struct TipoverArgs {
     pub ramp: f64,
     /// Servo compliance slope during the experiment, Dynamixel RX units (2 = stiffest,
     /// the default). The CoM methods assume a rigid robot; stiffer servos bend less.
+    /// Over a bus every servo family is made as stiff through the servo catalogue: MX
+    /// and X by their P gain (slope 2: the register's top, 254 or 16383).
     #[arg(long, default_value_t = 2.0, value_parser = crate::common::positive)]
     pub compliance_slope: f64,
-    /// Over a bus (--port), the slope of the two ankles a direction ramps, RX units
+    /// Over a bus (--port), the slope of the two RX ankles a direction ramps, RX units
     /// (default 32, the factory value): goal positions are whole counts, and a stiff
-    /// ankle takes each count as a jolt that tips the robot early. The other servos
-    /// hold the pose at --compliance-slope.
+    /// ankle takes each count as a jolt that tips the robot early. The other servos,
+    /// and MX and X ankles (counts a third as large), hold at --compliance-slope.
     #[arg(long, default_value_t = super::tipover_bus::ANKLE_SLOPE as f64, value_parser = crate::common::positive)]
     pub ankle_slope: f64,
     /// Ramp speed of the second run's slow final approach, deg/s: each direction is run
