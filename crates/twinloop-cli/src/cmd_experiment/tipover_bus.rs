@@ -298,6 +298,45 @@ mod tests {
         }
     }
 
+    #[test]
+    fn soft_servos_run_as_they_are_and_the_output_says_so() {
+        let model = twinloop_description::builtin::km20::build().unwrap();
+        let options = crate::protocol_bias::replay_options(1e-4);
+        let soft = BusPlan {
+            soft_servos: true,
+            directions: vec![Direction::Forward],
+            ..plan()
+        };
+        let run = tipover_in_lockstep(&soft, &model, &options, 0.029).unwrap();
+        let BusOutcome::Partial(r) = run.outcome else {
+            panic!("one direction ran, no partial report")
+        };
+        let json = serde_json::to_value(&*r).unwrap();
+        assert_eq!(json["soft_servos"], serde_json::Value::Bool(true));
+        // Soft (factory slope 32, margin 1 on every RX) the robot tips earlier than
+        // stiffened: the servos give under the lean.
+        let stiff = BusPlan {
+            directions: vec![Direction::Forward],
+            ..plan()
+        };
+        let BusOutcome::Partial(s) = tipover_in_lockstep(&stiff, &model, &options, 0.029)
+            .unwrap()
+            .outcome
+        else {
+            panic!("one direction ran, no partial report")
+        };
+        assert!(!s.soft_servos);
+        let (soft_deg, stiff_deg) = (
+            r.forward.as_ref().unwrap().measured_deg,
+            s.forward.as_ref().unwrap().measured_deg,
+        );
+        // Measured: 8.64 soft, 8.82 stiff.
+        assert!(
+            soft_deg < stiff_deg - 0.1,
+            "soft {soft_deg} deg, stiff {stiff_deg}"
+        );
+    }
+
     /// The protocol on km20 in lockstep, at the pty demo's host cycle (29 ms of robot
     /// time): the four angles it reads and the model's static angles at its onsets.
     fn lockstep_km20() -> ([f64; 4], [f64; 4]) {
