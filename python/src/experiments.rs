@@ -91,13 +91,17 @@ fn change_arg(c: &Bound<'_, PyAny>, k: usize) -> PyResult<Change> {
 /// than real time; `ankle_slope`: the ramped ankles' RX Compliance Slope; `creeps`:
 /// creeping approaches per direction (the closest two averaged, one more when they
 /// differ by over 0.2 deg); `dither`: sigma-delta goal counts for the joints a lean
-/// turns (False: whole counts, as `--goal-counts staircase`). On a serial
+/// turns (False: whole counts, as `--goal-counts staircase`); every servo is made
+/// stiff through the servo catalogue and put back afterwards, and a servo model with
+/// no known way to stiffen raises ValueError before anything moves unless
+/// `soft_servos=True` (as `--soft-servos`: the servos left as they are, the result's
+/// `soft_servos` true). On a serial
 /// port the robot moves only with `yes=True`. A silent or faulty servo, or Ctrl-C,
 /// stops the run with OSError (KeyboardInterrupt for Ctrl-C).
 #[pyfunction]
 #[pyo3(signature = (robot = None, ramp = 0.5, slow_ramp = 0.05, compliance_slope = 2.0, encoders = false,
     add_mass = None, *, port = None, map = None, directions = None, record = None, yes = false,
-    realtime_factor = 1.0, ankle_slope = 32.0, creeps = 2, dither = true, baud = 1_000_000, timeout_ms = 10.0, retries = 2))]
+    realtime_factor = 1.0, ankle_slope = 32.0, creeps = 2, dither = true, baud = 1_000_000, timeout_ms = 10.0, retries = 2, soft_servos = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn tipover<'py>(
     py: Python<'py>,
@@ -119,6 +123,7 @@ pub fn tipover<'py>(
     baud: u32,
     timeout_ms: f64,
     retries: u32,
+    soft_servos: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     if port.is_some() || map.is_some() {
         if encoders || add_mass.is_some() {
@@ -142,6 +147,7 @@ pub fn tipover<'py>(
             baud,
             timeout_ms,
             retries,
+            soft_servos,
         };
         return crate::tipover_bus::run(py, robot, plan);
     }

@@ -11,6 +11,7 @@ use pyo3::types::PyDict;
 use serde::Serialize;
 use std::time::{Duration, Instant};
 use twinloop_io::CsvWriter;
+use twinloop_link::ModelTable;
 use twinloop_link::transport::{self, SerialOptions, Transport};
 use twinloop_link::{
     Access, Client, ClientConfig, ControlCycle, CycleServo, DynamixelRobot, FoundServo, Item,

@@ -40,6 +40,8 @@ pub struct Plan {
     pub baud: u32,
     pub timeout_ms: f64,
     pub retries: u32,
+    /// Leave the servos as they are (`--soft-servos`).
+    pub soft_servos: bool,
 }
 
 fn os_error(e: impl std::fmt::Display) -> PyErr {
@@ -129,6 +131,10 @@ pub fn run<'py>(
     };
     let mut tilt_model =
         TiltModel::new(&model, &names, &board.link).map_err(|e| value_error(e.to_string()))?;
+    if !plan.soft_servos {
+        twinloop_experiments::stiffen::check_stiffenable(&mapping)
+            .map_err(|e| value_error(format!("{e}; or pass soft_servos=True")))?;
+    }
     if is_serial(&port) && !plan.yes {
         return Err(value_error(format!(
             "yes: {port} is a serial port: the robot will lean until it tips in each \
@@ -159,6 +165,7 @@ pub fn run<'py>(
         slow_ramp: plan.slow_ramp,
         compliance_slope: plan.compliance_slope.round() as i32,
         ankle_slope: plan.ankle_slope.round() as i32,
+        soft_servos: plan.soft_servos,
         creeps: plan.creeps,
         first_tips: None,
         dither: plan.dither,
@@ -198,7 +205,7 @@ pub fn run<'py>(
             abort.unwrap_or(e)
         ))
     })?;
-    match bus_outcome(&model, &model_spec, &port, &runs, &names)
+    match bus_outcome(&model, &model_spec, &port, &runs, &names, plan.soft_servos)
         .map_err(|e| value_error(e.to_string()))?
     {
         BusOutcome::Study(mut r) => {
@@ -213,6 +220,7 @@ pub fn run<'py>(
                 dither: opts.dither,
                 onset_average_s: opts.onset_average_s,
                 cycle_s,
+                soft_servos: opts.soft_servos,
             });
             to_py(py, &*r)
         }

@@ -2,17 +2,9 @@
 //! encoder resolution, the firmware's loop family and factory gains, whether the
 //! servo senses its current, and the datasheet ratings.
 
-use std::f64::consts::PI;
-
-/// How the firmware closes the position loop.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LoopFamily {
-    /// RX/AX: compliance margin and slope, punch (EM-RX28 "Compliance").
-    Compliance,
-    /// MX(2.0) and X: position PID on the encoder count, output as PWM (EM-XM430
-    /// "Position PID Gain": K_P = P/128, K_I = I/65536, K_D = D/16).
-    Pid,
-}
+/// How the firmware closes the position loop (the catalogue's).
+pub use twinloop_servos::LoopFamily;
+use twinloop_servos::ServoModel;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ServoType {
@@ -38,7 +30,7 @@ pub struct Rating {
     pub gear_ratio: f64,
 }
 
-const RPM: f64 = 2.0 * PI / 60.0;
+use twinloop_servos::RPM;
 
 impl ServoType {
     pub const ALL: [ServoType; 5] = [
@@ -51,13 +43,7 @@ impl ServoType {
 
     /// The e-manual name (as twinloop-link's `ServoModel::name`).
     pub fn name(self) -> &'static str {
-        match self {
-            ServoType::Rx28 => "RX-28",
-            ServoType::Rx64 => "RX-64",
-            ServoType::Mx64V2 => "MX-64(2.0)",
-            ServoType::Xm430W350 => "XM430-W350",
-            ServoType::Xl330M288 => "XL330-M288-T",
-        }
+        self.model().map_or("XL330-M288-T", ServoModel::name)
     }
 
     /// The name, case and punctuation aside ("rx28", "MX-64(2.0)", "xm430").
@@ -81,19 +67,29 @@ impl ServoType {
         Self::ALL.map(ServoType::name).join(", ")
     }
 
-    pub fn family(self) -> LoopFamily {
+    /// The catalogue's entry for this servo (`None`: the XL330, which twinloop does
+    /// not drive over a bus and so has no catalogue entry yet).
+    pub fn model(self) -> Option<ServoModel> {
         match self {
-            ServoType::Rx28 | ServoType::Rx64 => LoopFamily::Compliance,
-            ServoType::Mx64V2 | ServoType::Xm430W350 | ServoType::Xl330M288 => LoopFamily::Pid,
+            ServoType::Rx28 => Some(ServoModel::Rx28),
+            ServoType::Rx64 => Some(ServoModel::Rx64),
+            ServoType::Mx64V2 => Some(ServoModel::Mx64V2),
+            ServoType::Xm430W350 => Some(ServoModel::Xm430W350),
+            ServoType::Xl330M288 => None,
         }
     }
 
-    /// One encoder count, rad: 300 deg / 1024 (RX), 360 deg / 4096 (MX(2.0), X).
+    pub fn family(self) -> LoopFamily {
+        self.model()
+            .and_then(ServoModel::family)
+            .unwrap_or(LoopFamily::Pid)
+    }
+
+    /// One encoder count, rad: 300 deg / 1024 (RX), 360 deg / 4096 (MX(2.0), X;
+    /// EM-XL330 likewise).
     pub fn resolution(self) -> f64 {
-        match self.family() {
-            LoopFamily::Compliance => 300.0 / 1024.0 * PI / 180.0,
-            LoopFamily::Pid => 2.0 * PI / 4096.0,
-        }
+        self.model()
+            .map_or(std::f64::consts::TAU / 4096.0, ServoModel::resolution)
     }
 
     /// The divisor of the Position P Gain register: the loop's PWM per count of
@@ -103,18 +99,15 @@ impl ServoType {
     /// 10 of the kp 100 sin_sin log: 12 and 21 against 12.1 and 21.9; at three
     /// points under load in two logs the ratio to `P/128` is 0.51, 0.50, 0.50).
     pub fn p_gain_divisor(self) -> f64 {
-        match self {
-            ServoType::Xl330M288 => 256.0,
-            _ => 128.0,
+        match self.model() {
+            Some(m) => m.p_gain_divisor().unwrap_or(128.0),
+            None => 256.0,
         }
     }
 
     /// Full PWM in the firmware's units: 1023 (RX Torque Limit), 885 (PWM Limit).
     pub fn pwm_max(self) -> f64 {
-        match self.family() {
-            LoopFamily::Compliance => 1023.0,
-            LoopFamily::Pid => 885.0,
-        }
+        self.model().map_or(885.0, ServoModel::full_output)
     }
 
     /// Present Current's unit, A (`None`: the servo senses no current; RX reports
@@ -132,11 +125,9 @@ impl ServoType {
     /// slope, margin and punch (32, 1, 32); MX/X Position P, I, D gain (850 or 800,
     /// 0, 0; XL330: 400, 0, 0, the P gain BAM's XL330 model starts from).
     pub fn factory_firmware(self) -> [f64; 3] {
-        match self {
-            ServoType::Rx28 | ServoType::Rx64 => [32.0, 1.0, 32.0],
-            ServoType::Mx64V2 => [850.0, 0.0, 0.0],
-            ServoType::Xm430W350 => [800.0, 0.0, 0.0],
-            ServoType::Xl330M288 => [400.0, 0.0, 0.0],
+        match self.model().and_then(ServoModel::factory_gains) {
+            Some(g) => g.map(f64::from),
+            None => [400.0, 0.0, 0.0],
         }
     }
 
@@ -148,23 +139,29 @@ impl ServoType {
         }
     }
 
-    /// e-manual ratings (the same figures as twinloop-link's `ServoModel::spec`).
+    /// e-manual ratings: the catalogue's datasheet ([`ServoModel::spec`]), the XL330's
+    /// here.
     pub fn rating(self) -> Rating {
-        let r = |stall_torque, stall_current, rpm: f64, voltage, gear_ratio| Rating {
-            stall_torque,
-            stall_current,
-            no_load_speed: rpm * RPM,
-            voltage,
-            gear_ratio,
-        };
-        match self {
-            ServoType::Rx28 => r(3.7, 1.9, 85.0, 18.5, 193.0),
-            ServoType::Rx64 => r(5.3, 2.6, 64.0, 18.5, 200.0),
-            ServoType::Mx64V2 => r(6.0, 4.1, 63.0, 12.0, 200.0),
-            ServoType::Xm430W350 => r(4.1, 2.3, 46.0, 12.0, 353.5),
+        match self.model() {
+            Some(m) => {
+                let s = m.spec();
+                Rating {
+                    stall_torque: s.stall_torque,
+                    stall_current: s.stall_current.unwrap_or(0.0),
+                    no_load_speed: s.no_load_speed,
+                    voltage: s.voltage,
+                    gear_ratio: s.gear_ratio,
+                }
+            }
             // EM-XL330-M288-T at its recommended 5.0 V (BAM ran it at 7.4 V, above
             // the rated 6.0 V; the fit takes the measured voltage).
-            ServoType::Xl330M288 => r(0.52, 1.47, 103.0, 5.0, 288.4),
+            None => Rating {
+                stall_torque: 0.52,
+                stall_current: 1.47,
+                no_load_speed: 103.0 * RPM,
+                voltage: 5.0,
+                gear_ratio: 288.4,
+            },
         }
     }
 }

@@ -47,6 +47,12 @@ pub struct AdaptArgs {
     /// With --port on a serial device: do not ask before the first lean.
     #[arg(long, requires = "port")]
     pub yes: bool,
+    /// Leave the servos as they are instead of stiffening them (every servo is made
+    /// stiff through the servo catalogue, and put back afterwards; a servo model with
+    /// no known way to stiffen otherwise stops the run before anything moves). The
+    /// output then says the servos were soft: the angles include their give.
+    #[arg(long, requires = "port")]
+    pub soft_servos: bool,
     /// With --port, a simulated robot served faster than real time: its factor.
     #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::common::positive)]
     pub realtime_factor: f64,
@@ -206,6 +212,7 @@ fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyR
         slow_ramp: 0.15,
         compliance_slope: 2,
         ankle_slope: crate::cmd_experiment::tipover_bus::ANKLE_SLOPE,
+        soft_servos: a.soft_servos,
         creeps: 2,
         first_tips: None,
         dither: crate::cmd_experiment::tipover_bus::GoalCounts::default().dithered(),
@@ -326,7 +333,11 @@ pub fn run(a: AdaptArgs) -> CliResult {
             v[2] * 1e3
         )
     };
-    let mut t = format!(
+    let mut t = String::new();
+    if r.soft_servos {
+        t += &format!("{}\n", twinloop_ident::adapt::SOFT_SERVOS_NOTE);
+    }
+    t += &format!(
         "measured fall angles {} deg (forward, backward, left, right)\n\
          prior CoM {}, measured CoM {} (sigma {})\n",
         r.measured_deg

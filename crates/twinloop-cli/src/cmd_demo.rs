@@ -69,6 +69,12 @@ pub struct DemoArgs {
     /// or late from run to run (as `experiment tipover --goal-counts`)
     #[arg(long, value_enum, default_value_t)]
     pub goal_counts: GoalCounts,
+    /// Leave the servos as they are instead of stiffening them (every servo is made
+    /// stiff through the servo catalogue, and put back afterwards; a servo model with
+    /// no known way to stiffen otherwise stops the run before anything moves). The
+    /// output then says the servos were soft: the angles include their give.
+    #[arg(long)]
+    pub soft_servos: bool,
     /// Read each creep's tip as the mean of the ankle readings over this long up to
     /// the onset, s of robot time (as `experiment tipover --onset-average`; 0: the
     /// onset's sample alone)
@@ -104,6 +110,8 @@ const SLOW_RAMP: f64 = 0.15;
 struct DemoReport {
     /// The hidden change(s).
     truth: Vec<Change>,
+    /// The tip-over ran with the servos as they were (`--soft-servos`).
+    soft_servos: bool,
     /// `[forward, backward, left, right]`, deg: measured over the bus, the prior,
     /// adapted and true models' static tipping angles at the measured onsets (the
     /// true model's are what a perfect measurement would read).
@@ -229,6 +237,7 @@ fn plan(port: &str, record: &Path, a: &DemoArgs, first_tips: Option<Vec<f64>>) -
         slow_ramp: SLOW_RAMP,
         compliance_slope: 2,
         ankle_slope: ANKLE_SLOPE,
+        soft_servos: a.soft_servos,
         creeps: a.creeps as usize,
         first_tips,
         dither: a.goal_counts.dithered(),
@@ -438,6 +447,9 @@ pub fn run(a: DemoArgs) -> CliResult {
         _ => None,
     };
     let mut t = String::new();
+    if a.soft_servos {
+        t += &format!("{}\n", twinloop_ident::adapt::SOFT_SERVOS_NOTE);
+    }
     t += "fall angles, deg    forward backward  left right\n";
     t += &format!("  robot (bus)        {}\n", join(measured));
     t += &format!("  model before       {}\n", join(prior_deg));
@@ -515,6 +527,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     );
     let report = DemoReport {
         truth: truth_changes,
+        soft_servos: a.soft_servos,
         measured_deg: measured,
         prior_model_deg: prior_deg,
         adapted_model_deg: adapted_deg,

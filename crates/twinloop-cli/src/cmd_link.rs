@@ -12,6 +12,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use twinloop_io::CsvWriter;
+use twinloop_link::ModelTable;
 use twinloop_link::control_cycle::ReadMethod;
 use twinloop_link::transport::{self, SerialOptions, Transport};
 use twinloop_link::{

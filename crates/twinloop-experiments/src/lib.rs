@@ -15,6 +15,7 @@ pub mod error;
 pub mod guarded;
 pub mod lean;
 pub mod lean_validation;
+pub mod stiffen;
 pub mod tipover;
 pub mod walk;
 

@@ -87,6 +87,10 @@ pub struct ReducedSummary {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct AdaptReport {
     pub robot: String,
+    /// The tip-over was measured with the servos left soft (`--soft-servos`): the
+    /// angles include the servos' give, and so does the CoM found from them.
+    #[serde(default)]
+    pub soft_servos: bool,
     /// `[forward, backward, left, right]`, deg.
     pub measured_deg: [f64; 4],
     /// The measuring protocol's bias taken off the measured angles before fitting,
@@ -825,6 +829,7 @@ fn report_of(
     let dirs = Direction::ALL.map(|d| tip.direction(d));
     Ok(AdaptReport {
         robot: prior.name.clone(),
+        soft_servos: tip.protocol.as_ref().is_some_and(|p| p.soft_servos),
         measured_deg: dirs.map(|d| d.measured_deg),
         excess_deg: dirs.map(|d| d.excess_deg),
         prior_mass: m.m0,
@@ -1018,8 +1023,13 @@ pub fn check(
     Ok(())
 }
 
+/// What every output of a tip-over measured with soft servos says.
+pub const SOFT_SERVOS_NOTE: &str = "servos soft: the tip-over ran with the servos as they were \
+     (--soft-servos), not stiffened; the angles include the servos' give";
+
 /// The HTML report: fall angles robot vs model, the CoMs, side (x-z) and front (y-z)
 /// views with the prior CoM, the measured CoM and the added mass.
+
 pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
     use twinloop_report::{Plot, SeriesStyle, number};
     let mut rep =
@@ -1029,6 +1039,9 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
          the CoM; one added point mass explains its move from the prior model's CoM. Frame: \
          the midpoint of the ankle pitch joints in the standing pose, x forward, y left, z up.",
     );
+    if r.soft_servos {
+        rep.paragraph(SOFT_SERVOS_NOTE);
+    }
     rep.heading("Fall angles, deg");
     let dirs = ["forward", "backward", "left", "right"];
     let mut header = vec![

@@ -10,8 +10,10 @@ use crate::tipover_study::{StudyReport, TiltModel, report_for_runs};
 use serde::Serialize;
 use twinloop_description::Description;
 use twinloop_experiments::guarded::Guarded;
+use twinloop_experiments::stiffen::{
+    check_stiffenable, restore_loops, save_loops, stiffen_for_lean,
+};
 use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction, tilt};
-use twinloop_link::Item;
 use twinloop_robot::{Robot, RobotError, RobotState};
 
 /// How the experiment runs over the bus.
@@ -20,10 +22,16 @@ pub struct BusTipoverOptions {
     pub directions: Vec<Direction>,
     /// The second run's creep over the last degrees, deg/s.
     pub slow_ramp: f64,
-    /// RX Compliance Slope written to the servos that hold the pose (2: stiffest).
+    /// How stiff the servos that hold the pose are made, as an RX Compliance Slope
+    /// (2: stiffest); every family through the servo catalogue
+    /// (`twinloop_experiments::stiffen`).
     pub compliance_slope: i32,
-    /// RX Compliance Slope of the joints a direction ramps (see [`ANKLE_SLOPE`]).
+    /// The same for the joints a direction ramps (see [`ANKLE_SLOPE`]).
     pub ankle_slope: i32,
+    /// Leave every servo as it is (no stiffening, nothing restored): the run is
+    /// marked soft in every output. Without it a servo model with no known way to
+    /// stiffen stops the run before anything moves.
+    pub soft_servos: bool,
     /// Creeping approaches per direction (at least 1); with two or more, the two that
     /// agree best are averaged, and one more is made when they differ by more than
     /// [`creeps_agree_deg`] (see [`combine_creeps`]).
@@ -64,6 +72,9 @@ pub struct BusReport {
     pub left: Option<BusDirection>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub right: Option<BusDirection>,
+    /// The servos were left as they were (`--soft-servos`): not stiffened, the
+    /// angles include the servos' give.
+    pub soft_servos: bool,
 }
 
 /// What a run over the bus gave.
@@ -83,6 +94,7 @@ pub fn bus_outcome(
     port: &str,
     runs: &[TipoverResult],
     joint_names: &[String],
+    soft_servos: bool,
 ) -> Result<BusOutcome, IdentError> {
     if runs.len() == 4 {
         return Ok(BusOutcome::Study(Box::new(report_for_runs(
@@ -98,6 +110,7 @@ pub fn bus_outcome(
         backward: None,
         left: None,
         right: None,
+        soft_servos,
     };
     for run in runs {
         let d = Some(BusDirection {
@@ -200,26 +213,8 @@ fn wait_upright(
     }
 }
 
-/// Stiffen every servo as the study does (RX compliance margin 0, slope
-/// `slope`): the CoM methods treat the robot as rigid. Servos without these
-/// registers are left as they are.
-fn stiffen(
-    robot: &mut twinloop_experiments::guarded::BusRobot,
-    slope: i32,
-    pick: impl Fn(usize) -> bool + Copy,
-) -> Result<(), RobotError> {
-    for (item, v) in [
-        (Item::CwComplianceMargin, 0),
-        (Item::CcwComplianceMargin, 0),
-        (Item::CwComplianceSlope, slope),
-        (Item::CcwComplianceSlope, slope),
-    ] {
-        robot.set_register_of(item, v, pick)?;
-    }
-    Ok(())
-}
-
-/// The ramped ankles' RX Compliance Slope over the bus: the factory value. Goal
+/// The ramped ankles' RX Compliance Slope over the bus: the factory value (RX only:
+/// MX and X ankles are as stiff as the rest, `twinloop_experiments::stiffen::ramped_slope`). Goal
 /// positions are whole counts (0.29 deg), so the ramp is a staircase; a servo at the
 /// stiffest slope takes each count as a jolt, and a robot on the edge of its soles
 /// tips up to a degree early (measured over the pty: forward and backward 1.1 deg
@@ -243,7 +238,42 @@ fn ramped_ankles(cfg: &TipoverConfig, d: Direction) -> [usize; 2] {
 /// `before(direction, k)` runs before each direction (the CLI asks a person on a
 /// serial port to stand the robot up after the first); `log` hears what happens. An
 /// error stops the run; the caller leaves the servos holding ([`hold_standing`]).
+///
+/// Unless `opts.soft_servos`, every servo is made stiff through the catalogue, and
+/// the loop registers found before are written back at the end, on success and on
+/// error alike.
 pub fn run_directions(
+    g: &mut Guarded<'_>,
+    opts: &BusTipoverOptions,
+    cfg: &TipoverConfig,
+    tilt_model: &mut TiltModel,
+    before: &mut dyn FnMut(Direction, usize) -> Result<(), String>,
+    log: &mut dyn FnMut(&str),
+) -> Result<Vec<TipoverResult>, String> {
+    if opts.soft_servos {
+        log("servos soft: left at their present settings (--soft-servos)");
+        return lean_each(g, opts, cfg, tilt_model, before, log);
+    }
+    check_stiffenable(g.robot.mapping()).map_err(|e| e.message)?;
+    let saved = save_loops(g.robot).map_err(|e| e.message)?;
+    let out = lean_each(g, opts, cfg, tilt_model, before, log);
+    let restored = restore_loops(g.robot, &saved);
+    match (out, restored) {
+        (Ok(out), Ok(())) => Ok(out),
+        (Ok(_), Err(e)) => Err(format!(
+            "restoring the servos' loop registers: {}",
+            e.message
+        )),
+        (Err(e), Ok(())) => Err(e),
+        (Err(e), Err(r)) => Err(format!(
+            "{e} (and restoring the servos' loop registers failed: {})",
+            r.message
+        )),
+    }
+}
+
+/// [`run_directions`] after the stiffening.
+fn lean_each(
     g: &mut Guarded<'_>,
     opts: &BusTipoverOptions,
     cfg: &TipoverConfig,
@@ -263,9 +293,16 @@ pub fn run_directions(
         log(&format!("leaning {} ...", d.name()));
         // Every servo stiff but the two ankles this direction ramps.
         let ankles = ramped_ankles(cfg, d);
-        stiffen(g.robot, opts.compliance_slope, |k| !ankles.contains(&k))
-            .and_then(|()| stiffen(g.robot, opts.ankle_slope, |k| ankles.contains(&k)))
+        if !opts.soft_servos {
+            let slope = |s: i32| s.clamp(1, 255) as u8;
+            stiffen_for_lean(
+                g.robot,
+                slope(opts.compliance_slope),
+                slope(opts.ankle_slope),
+                |k| ankles.contains(&k),
+            )
             .map_err(|e| e.to_string())?;
+        }
         if opts.dither {
             let hips = if d.is_pitch() { None } else { cfg.hip_roll };
             g.robot

@@ -154,7 +154,8 @@ pub struct BusProtocol {
     /// First ramp and creep, deg/s of robot time.
     pub ramp_deg_per_s: f64,
     pub slow_ramp_deg_per_s: f64,
-    /// RX Compliance Slope of the holding servos and of the ramped ankles.
+    /// How stiff the holding servos and the ramped ankles were made, as RX Compliance
+    /// Slopes (every family through the servo catalogue).
     pub compliance_slope: i32,
     pub ankle_slope: i32,
     pub creeps: usize,
@@ -165,6 +166,11 @@ pub struct BusProtocol {
     pub onset_average_s: f64,
     /// The host's control cycle, s of robot time (median over the run).
     pub cycle_s: f64,
+    /// The servos were left as they were (`--soft-servos`), not stiffened: the
+    /// angles include the servos' give (false in records from before this was kept,
+    /// which only ran on RX robots, always stiffened).
+    #[serde(default)]
+    pub soft_servos: bool,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -31,6 +31,7 @@
 //! The OP3's OpenCR (id 200, Protocol 2.0) is not modelled: its control table was
 //! not in the material read.
 
+use crate::control_table::ModelTable;
 use crate::register::{DEGREE, Item};
 use crate::servo_model::ServoModel;
 

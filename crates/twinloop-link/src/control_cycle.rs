@@ -7,6 +7,7 @@
 //! Everything is laid out when the cycle is built; running it allocates nothing.
 
 use crate::client::{BulkRead, Client};
+use crate::control_table::ModelTable;
 use crate::link_error::{LinkError, Outcome};
 use crate::protocol::Protocol;
 use crate::register::{Item, Register};

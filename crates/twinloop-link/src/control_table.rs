@@ -66,18 +66,25 @@ impl IndirectBlock {
     }
 }
 
-/// The table of a servo model. Defined here rather than beside [`ServoModel`] so
-/// that the dependency runs one way: tables know servo models, not the reverse.
-impl ServoModel {
-    pub fn table(self) -> &'static ControlTable {
-        ControlTable::of(self)
-    }
+/// The table of a servo model: `model.table()`. A trait because [`ServoModel`] is
+/// the catalogue's (`twinloop-servos`), which knows no control tables: the dependency
+/// runs one way, tables know servo models, not the reverse. Exported at the crate root.
+pub trait ModelTable {
+    fn table(self) -> &'static ControlTable;
 
     /// Whether the servo can be set to talk `protocol`: its own, or either where its
     /// table has a Protocol Type register (X series, MX(2.0): "X-series can switch
     /// Protocol 2.0 into Protocol 1.0", e-manual Protocol Compatibility Table;
     /// Protocol Type(13): 1 = Protocol 1.0, 2 = Protocol 2.0).
-    pub fn speaks(self, protocol: Protocol) -> bool {
+    fn speaks(self, protocol: Protocol) -> bool;
+}
+
+impl ModelTable for ServoModel {
+    fn table(self) -> &'static ControlTable {
+        ControlTable::of(self)
+    }
+
+    fn speaks(self, protocol: Protocol) -> bool {
         protocol == self.protocol() || self.table().item(Item::ProtocolType).is_some()
     }
 }

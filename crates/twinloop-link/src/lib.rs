@@ -30,7 +30,7 @@ pub mod wire_time;
 pub use board::{BoardAxes, ImuSample, TiltFilter};
 pub use client::{BulkRead, Client, ClientConfig, ClientStats, FoundServo};
 pub use control_cycle::{ControlCycle, CycleServo, CycleSummary, ReadMethod, ServoReading};
-pub use control_table::ControlTable;
+pub use control_table::{ControlTable, ModelTable};
 pub use crc16::{checksum_v1, crc16, crc16_update};
 pub use decoder::{Accept, DecodeEvent, Decoder, DecoderStats, Frame};
 pub use instruction::Instruction;
@@ -44,4 +44,6 @@ pub use servo::{BusServo, TrackingServoModel, VirtualBus, VirtualServoBackend};
 pub use servo_model::{ServoModel, ServoSpec, baud_from_register, baud_to_register};
 pub use status_error::{ErrorBitV1, ErrorNumberV2, StatusError};
 pub use transport::Transport;
+/// The servo catalogue (models, datasheets, how to stiffen them).
+pub use twinloop_servos as servos;
 pub use wire_time::{CyclePlan, plan_cycle};

@@ -35,6 +35,7 @@
 //! ```
 
 use crate::board::BoardAxes;
+use crate::control_table::ModelTable;
 use crate::protocol::Protocol;
 use crate::register::{Item, Register};
 use crate::servo_model::ServoModel;

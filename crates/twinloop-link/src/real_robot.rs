@@ -10,6 +10,7 @@
 use crate::board::{CM730_IMU_BLOCK, TiltFilter, decode_imu};
 use crate::client::Client;
 use crate::control_cycle::{ControlCycle, CycleServo, ReadMethod, ServoReading};
+use crate::control_table::ModelTable;
 use crate::link_error::{LinkError, Outcome};
 use crate::mapping::{BoardMapping, RobotMapping};
 use crate::protocol::Protocol;

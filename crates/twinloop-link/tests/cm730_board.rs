@@ -3,6 +3,7 @@
 //! known tilt, PING and scan finding it at id 200, the mapping's `[[board]]`, and
 //! `DynamixelRobot` filling the trunk IMU from it.
 
+use twinloop_link::ModelTable;
 use twinloop_link::board::{CM730_ACCEL_M_S2_PER_COUNT, CM730_GYRO_RAD_S_PER_COUNT};
 use twinloop_link::servo::ServoMeasurement;
 use twinloop_link::transport::LoopbackTransport;

@@ -2,6 +2,7 @@
 //! and the e-manual model pages), and unit conversions against hand-computed values.
 
 use std::f64::consts::PI;
+use twinloop_link::ModelTable;
 use twinloop_link::{Encoding, Item, Protocol, ServoModel, baud_from_register};
 
 fn addr(model: ServoModel, item: Item) -> (u16, u8) {

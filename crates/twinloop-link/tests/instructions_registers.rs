@@ -5,6 +5,7 @@
 //! register's codes (EM-XM Baud Rate(8), EM-RX28 Baud Rate(4)) and the Protocol 1.0
 //! status error bits (EM-P1 Status Packet).
 
+use twinloop_link::ModelTable;
 use twinloop_link::transport::LoopbackTransport;
 use twinloop_link::{
     BusServo, Client, ControlCycle, CycleServo, ErrorNumberV2, Item, LinkError, PacketWriter,

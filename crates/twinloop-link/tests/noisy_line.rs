@@ -10,6 +10,7 @@
 //! what each defence on top leaves: reply checks (id, length, reserved error bit),
 //! range checks, and verified reads (two consecutive replies must agree).
 
+use twinloop_link::ModelTable;
 use twinloop_link::transport::{LoopbackTransport, NoisyTransport};
 use twinloop_link::{
     BusServo, Client, ClientConfig, ControlCycle, CycleServo, DynamixelRobot, Item, LinkError,

@@ -2,6 +2,7 @@
 //! radians reach the servos through zero offsets and directions, reads come back in
 //! joint radians, failures name the joint.
 
+use twinloop_link::ModelTable;
 use twinloop_link::transport::LoopbackTransport;
 use twinloop_link::{
     BusServo, Client, DynamixelRobot, ReadMethod, RobotMapping, TrackingServoModel, VirtualBus,

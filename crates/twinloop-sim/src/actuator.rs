@@ -137,12 +137,13 @@ impl FullServo {
 pub const RX_POSITION_UNIT: f64 = 300.0 / 1024.0 * std::f64::consts::PI / 180.0;
 
 impl DynamixelServo {
-    /// RX-28 at 18.5 V: stall 3.7 N m, no-load 85 rpm (ROBOTIS e-manual); default
+    /// RX-28 at 18.5 V: stall 3.7 N m, no-load 85 rpm (the catalogue's EM-RX28 datasheet); default
     /// compliance slope 32 units and margin 1 unit (RX control table defaults).
     pub fn rx28() -> Self {
+        let spec = twinloop_servos::ServoModel::Rx28.spec();
         DynamixelServo {
-            stall_torque: 3.7,
-            no_load_speed: 85.0 * std::f64::consts::TAU / 60.0,
+            stall_torque: spec.stall_torque,
+            no_load_speed: spec.no_load_speed,
             torque_limit: 1.0,
             compliance_slope: 32.0 * RX_POSITION_UNIT,
             compliance_margin: RX_POSITION_UNIT,
@@ -153,11 +154,12 @@ impl DynamixelServo {
         }
     }
 
-    /// RX-64 at 18.5 V: stall 5.3 N m, no-load 64 rpm (ROBOTIS e-manual).
+    /// RX-64 at 18.5 V: stall 5.3 N m, no-load 64 rpm (the catalogue's EM-RX64 datasheet).
     pub fn rx64() -> Self {
+        let spec = twinloop_servos::ServoModel::Rx64.spec();
         DynamixelServo {
-            stall_torque: 5.3,
-            no_load_speed: 64.0 * std::f64::consts::TAU / 60.0,
+            stall_torque: spec.stall_torque,
+            no_load_speed: spec.no_load_speed,
             ..Self::rx28()
         }
     }

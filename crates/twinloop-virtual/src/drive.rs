@@ -2,6 +2,8 @@
 //! compliance (RX), position gain (MX, X), moving speed and torque limit, turned
 //! into the parameters of the simulator's [`DynamixelServo`].
 
+use twinloop_link::ModelTable;
+use twinloop_link::servos::LoopFamily;
 use twinloop_link::{Item, ServoModel, Unit};
 use twinloop_sim::DynamixelServo;
 
@@ -18,8 +20,14 @@ pub struct DriveRegisters {
     /// Compliance slope as the error of full torque, clockwise and counter-clockwise,
     /// rad (RX only).
     pub slope: Option<[f64; 2]>,
-    /// Position P gain over its factory value (MX and X; `None` on RX).
+    /// Position P gain over its factory value (MX on Protocol 1.0, whose e-manual
+    /// gives the loop's output no unit; `None` on RX).
     pub p_ratio: Option<f64>,
+    /// The error at which the Position P Gain drives full PWM, rad (MX(2.0) and X:
+    /// EM-XM430's PWM = P/128 * error in counts, full PWM 885; the catalogue's
+    /// `ServoModel::full_output_error`): the loop's stiffness itself, not relative to
+    /// the joint's servo.
+    pub p_full_error: Option<f64>,
     /// Speed towards the goal, rad/s; 0: as fast as the motor goes (Moving Speed 0 on
     /// RX, Profile Velocity 0 on X).
     pub moving_speed: f64,
@@ -44,6 +52,7 @@ impl DriveRegisters {
             margin: None,
             slope: None,
             p_ratio: None,
+            p_full_error: None,
             moving_speed: 0.0,
             torque_limit: 1.0,
             profile_acceleration: 0.0,
@@ -51,6 +60,18 @@ impl DriveRegisters {
             i_gain: None,
             d_gain: None,
         }
+    }
+
+    /// At rest at `goal`, torque off, the factory values of `model`: an MX or X
+    /// servo starts as a PID loop (no dead band) at its factory P gain, on MX(2.0)
+    /// and X with that gain's stiffness (800 on an XM430-W350: full PWM at 141.6
+    /// counts, 12.4 deg).
+    pub fn for_model(goal: f64, model: ServoModel) -> DriveRegisters {
+        let mut r = DriveRegisters::new(goal);
+        if let (Some(LoopFamily::Pid), Some([p, _, _])) = (model.family(), model.factory_gains()) {
+            r.set(model, Item::PositionPGain, p);
+        }
+        r
     }
 
     /// Take a register's raw value (see
@@ -72,10 +93,13 @@ impl DriveRegisters {
                 let s = self.slope.get_or_insert([32.0 * unit; 2]);
                 s[usize::from(item == Item::CcwComplianceSlope)] = rx_slope_units(raw) * unit;
             }
-            Item::PositionPGain => {
-                let factory = r.initial.unwrap_or(raw).max(1) as f64;
-                self.p_ratio = Some(raw.max(0) as f64 / factory);
-            }
+            Item::PositionPGain => match model.full_output_error(raw) {
+                Some(e) => self.p_full_error = Some(e),
+                None => {
+                    let factory = r.initial.unwrap_or(raw).max(1) as f64;
+                    self.p_ratio = Some(raw.max(0) as f64 / factory);
+                }
+            },
             Item::ProfileAcceleration => {
                 let mut p = twinloop_actuator::profile::Profile::default();
                 p.set_acceleration_register(raw as f64);
@@ -134,7 +158,13 @@ pub fn servo_with_registers(
     if let Some(sl) = regs.slope {
         s.compliance_slope = sl[side].max(1e-6);
     }
+    if let Some(e) = regs.p_full_error {
+        // A PID loop has no dead band; P = 0 never reaches full PWM.
+        s.compliance_margin = 0.0;
+        s.compliance_slope = if e.is_finite() { e.max(1e-6) } else { f64::MAX };
+    }
     if let Some(p) = regs.p_ratio {
+        s.compliance_margin = 0.0;
         // P = 0: no position control at all (full torque at an error never reached).
         s.compliance_slope = if p > 0.0 {
             base.compliance_slope / p
@@ -201,14 +231,26 @@ mod tests {
         assert!((cw.torque_limit - 512.0 / 1023.0).abs() < 1e-12);
         // 100 units of 0.111 rpm.
         assert!((r.moving_speed - 100.0 * 0.111 * std::f64::consts::TAU / 60.0).abs() < 1e-9);
-        // X-series: P gain twice the factory value halves the slope; PWM Limit is the
-        // torque limit.
-        let mut x = DriveRegisters::new(0.0);
+        // X-series: the P gain is the loop's stiffness as EM-XM430 states it, PWM =
+        // P/128 * error (counts), full PWM 885: P 1600 reaches it at 70.8 counts; no
+        // dead band. PWM Limit is the torque limit.
+        let count = std::f64::consts::TAU / 4096.0;
+        let mut x = DriveRegisters::for_model(0.0, ServoModel::Xm430W350);
+        // Factory P 800: 141.6 counts.
+        let s = servo_with_registers(&base, &x, true);
+        assert!((s.compliance_slope - 141.6 * count).abs() < 1e-9);
         x.set(ServoModel::Xm430W350, Item::PositionPGain, 1600);
         x.set(ServoModel::Xm430W350, Item::MaxTorque, 885 / 5);
         let s = servo_with_registers(&base, &x, true);
-        assert!((s.compliance_slope - base.compliance_slope / 2.0).abs() < 1e-12);
+        assert!((s.compliance_slope - 70.8 * count).abs() < 1e-9);
+        assert_eq!(s.compliance_margin, 0.0);
         assert!((s.torque_limit - 177.0 / 885.0).abs() < 1e-12);
+        // MX (1.0): relative to the factory P 32.
+        let mut m = DriveRegisters::for_model(0.0, ServoModel::Mx28);
+        assert_eq!((m.p_full_error, m.p_ratio), (None, Some(1.0)));
+        m.set(ServoModel::Mx28, Item::PositionPGain, 64);
+        let s = servo_with_registers(&base, &m, true);
+        assert!((s.compliance_slope - base.compliance_slope / 2.0).abs() < 1e-12);
     }
 }
 

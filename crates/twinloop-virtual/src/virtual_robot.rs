@@ -187,11 +187,13 @@ impl VirtualRobot {
             .filter(|&i| !on_bus[i])
             .map(|i| sim.model.joint_names[i].clone())
             .collect();
+        // `servos` is in the mapping's joint order.
         let registers: Vec<DriveRegisters> = servos
             .iter()
-            .map(|s| {
+            .zip(&mapping.joints)
+            .map(|(s, j)| {
                 let q = sim.q[sim.model.q_offset + s.joint];
-                DriveRegisters::new(s.zero + s.direction * q)
+                DriveRegisters::for_model(s.zero + s.direction * q, j.model)
             })
             .collect();
         let shared = Arc::new(Shared::new(registers));

@@ -5,6 +5,7 @@
 //! is named.
 
 use std::time::Duration;
+use twinloop_link::ModelTable;
 use twinloop_link::board::{CM730_ACCEL_M_S2_PER_COUNT, CM730_GYRO_RAD_S_PER_COUNT};
 use twinloop_link::transport::{self, LoopbackTransport, SerialOptions};
 use twinloop_link::{BoardAxes, Client, ClientConfig, Item, Protocol, RobotMapping, ServoModel};

@@ -3,6 +3,7 @@
 //! robot stands.
 
 use std::time::{Duration, Instant};
+use twinloop_link::ModelTable;
 use twinloop_link::transport::{self, SerialOptions, Transport};
 use twinloop_link::{Client, ClientConfig, Item, Protocol, RobotMapping, ServoModel};
 use twinloop_virtual::{PtyServer, Snapshot, VirtualRobot, VirtualRobotOptions};

@@ -15,6 +15,7 @@ use twinloop_experiments::lean::{
     LeanConfig, LeanJointNames, LeanJointSummary, LeanRecord, LeanRow, lean_config, lean_simulator,
     run_lean, sagittal_tip_angles, summarize,
 };
+use twinloop_experiments::stiffen;
 use twinloop_io::CsvWriter;
 use twinloop_link::{DynamixelRobot, ReadMethod};
 use twinloop_robot::RobotError;
@@ -42,6 +43,12 @@ pub struct LeanArgs {
     /// Over a serial port: do not ask for confirmation before the lean.
     #[arg(long)]
     pub yes: bool,
+    /// Over the bus: leave the servos as they are instead of stiffening them (every
+    /// servo is made stiff through the servo catalogue and put back afterwards; a
+    /// servo model with no known way to stiffen otherwise stops the lean before
+    /// anything moves). The output then says the servos were soft.
+    #[arg(long)]
+    pub soft_servos: bool,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
     /// Lean amplitude, deg of ankle (default: --fraction of the model's static tip angle).
@@ -86,6 +93,8 @@ struct LeanReport {
     robot: String,
     #[serde(skip_serializing_if = "Option::is_none")]
     port: Option<String>,
+    /// Over the bus with `--soft-servos`: the servos were left as they were.
+    soft_servos: bool,
     out: String,
     amplitude_deg: f64,
     /// The model's static tip angles, deg (forward, backward).
@@ -194,6 +203,7 @@ fn report(
 ) -> CliResult {
     let r = LeanReport {
         robot,
+        soft_servos: port.is_some() && a.soft_servos,
         port,
         out: a.out.display().to_string(),
         amplitude_deg: cfg.amplitude_deg,
@@ -205,7 +215,11 @@ fn report(
         duration_s: record.t.last().copied().unwrap_or(0.0),
         joints: summarize(record, cfg),
     };
-    let mut text = format!(
+    let mut text = String::new();
+    if r.soft_servos {
+        text += &format!("{}\n", twinloop_ident::adapt::SOFT_SERVOS_NOTE);
+    }
+    text += &format!(
         "{}{}: lean +-{:.2} deg of ankle (static tip {:.2} forward, {:.2} backward), {} rows over {:.1} s to {}\n\
          mean torque in the holds, N m:\n  joint          forward  backward    centre   (angle, deg)\n",
         r.robot,
@@ -249,6 +263,9 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
     let (model, _) = load_description(&model_spec)?;
     hinges_only(&model, &model_spec, "the lean experiment")?;
     let (tips, cfg) = model_config(a, &model, &mapping.joint_names(), names)?;
+    if !a.soft_servos {
+        twinloop_experiments::stiffen::check_stiffenable(&mapping)?;
+    }
     let serial = is_serial(&port);
     let port_args = PortArgs {
         port: Some(port.clone()),
@@ -275,6 +292,16 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
         ))?;
     }
     let standing = vec![0.0; joints.len()];
+    // Every servo stiff (the lean's torques are read on a robot holding its pose),
+    // the loop registers found written back after.
+    let saved = match a.soft_servos {
+        true => None,
+        false => {
+            let saved = stiffen::save_loops(&mut robot)?;
+            stiffen::stiffen(&mut robot, 2, |_| true)?;
+            Some(saved)
+        }
+    };
     let mut g = Guarded::new(
         &mut robot,
         raw,
@@ -293,12 +320,20 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
     let (rows, abort) = (g.rows, g.abort.clone());
     let raw = g.writer.take();
     hold_standing(&mut robot, &standing);
+    let restored = saved.map(|s| stiffen::restore_loops(&mut robot, &s));
     writer.finish()?;
     if let Some(w) = raw {
         w.finish()?;
         if let Some(p) = &a.record {
             eprintln!("{rows} rows written to {}", p.display());
         }
+    }
+    if let Some(Err(e)) = restored {
+        let what = format!("restoring the servos' loop registers: {}", e.message);
+        if result.is_ok() {
+            return Err(CliError::new(what));
+        }
+        eprintln!("warning: {what}");
     }
     match result {
         Ok(record) => report(a, model_spec, Some(port), &cfg, tips, &record),

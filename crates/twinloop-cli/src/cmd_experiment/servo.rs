@@ -13,6 +13,7 @@ use std::sync::atomic::Ordering;
 use std::time::Instant;
 use twinloop_actuator::log::LogWriter;
 use twinloop_actuator::{Excitation, LoopFamily, Pendulum, ServoType};
+use twinloop_link::ModelTable;
 use twinloop_link::transport::Transport;
 use twinloop_link::{Client, Item, Protocol, Register, RobotMapping, ServoModel};
 

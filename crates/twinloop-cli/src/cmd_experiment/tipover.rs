@@ -94,12 +94,14 @@ pub struct TipoverArgs {
     pub ramp: f64,
     /// Servo compliance slope during the experiment, Dynamixel RX units (2 = stiffest,
     /// the default). The CoM methods assume a rigid robot; stiffer servos bend less.
+    /// Over a bus every servo family is made as stiff through the servo catalogue: MX
+    /// and X by their P gain (slope 2: the register's top, 254 or 16383).
     #[arg(long, default_value_t = 2.0, value_parser = crate::common::positive)]
     pub compliance_slope: f64,
-    /// Over a bus (--port), the slope of the two ankles a direction ramps, RX units
+    /// Over a bus (--port), the slope of the two RX ankles a direction ramps, RX units
     /// (default 32, the factory value): goal positions are whole counts, and a stiff
-    /// ankle takes each count as a jolt that tips the robot early. The other servos
-    /// hold the pose at --compliance-slope.
+    /// ankle takes each count as a jolt that tips the robot early. The other servos,
+    /// and MX and X ankles (counts a third as large), hold at --compliance-slope.
     #[arg(long, default_value_t = super::tipover_bus::ANKLE_SLOPE as f64, value_parser = crate::common::positive)]
     pub ankle_slope: f64,
     /// Ramp speed of the second run's slow final approach, deg/s: each direction is run
@@ -120,6 +122,12 @@ pub struct TipoverArgs {
     /// or late from run to run (docs/adaptation.md)
     #[arg(long, value_enum, default_value_t)]
     pub goal_counts: super::tipover_bus::GoalCounts,
+    /// Leave the servos as they are instead of stiffening them (every servo is made
+    /// stiff through the servo catalogue, and put back afterwards; a servo model with
+    /// no known way to stiffen otherwise stops the run before anything moves). The
+    /// output then says the servos were soft: the angles include their give.
+    #[arg(long)]
+    pub soft_servos: bool,
     /// Over a bus: read each creep's tip as the mean of the ankle readings (and the
     /// posture, the feet's roll and the lean) over this long up to the onset, s of
     /// robot time. The ankles flip between two counts as the robot rocks on its sole
@@ -286,6 +294,7 @@ mod bus {
             slow_ramp: a.slow_ramp,
             compliance_slope: a.compliance_slope.round() as i32,
             ankle_slope: a.ankle_slope.round() as i32,
+            soft_servos: a.soft_servos,
             creeps: a.creeps as usize,
             first_tips: None,
             dither: a.goal_counts.dithered(),
@@ -296,13 +305,31 @@ mod bus {
         let run = tipover_on_bus(&plan)?;
         match run.outcome {
             BusOutcome::Study(r) => emit(
-                &format!("over {}\n{}", run.port, summary(&r)),
+                &format!(
+                    "over {}\n{}{}",
+                    run.port,
+                    soft_line(plan.soft_servos),
+                    summary(&r)
+                ),
                 a.json.as_ref(),
                 &*r,
             )?,
-            BusOutcome::Partial(r) => emit(&partial_summary(&r), a.json.as_ref(), &*r)?,
+            BusOutcome::Partial(r) => emit(
+                &format!("{}{}", soft_line(r.soft_servos), partial_summary(&r)),
+                a.json.as_ref(),
+                &*r,
+            )?,
         }
         Ok(Outcome::Ok)
+    }
+
+    /// The first line of the output when the servos were left soft.
+    fn soft_line(soft: bool) -> String {
+        if soft {
+            format!("{}\n", twinloop_ident::adapt::SOFT_SERVOS_NOTE)
+        } else {
+            String::new()
+        }
     }
 
     fn partial_summary(r: &BusReport) -> String {

@@ -50,10 +50,14 @@ pub struct BusPlan {
     pub ramp: f64,
     /// The second run's creep over the last half degree, deg/s.
     pub slow_ramp: f64,
-    /// RX Compliance Slope written to the servos that hold the pose (2: stiffest).
+    /// How stiff the servos that hold the pose are made, as an RX Compliance Slope
+    /// (2: stiffest; every servo family through the catalogue).
     pub compliance_slope: i32,
-    /// RX Compliance Slope of the joints a direction ramps (see [`ANKLE_SLOPE`]).
+    /// The same for the joints a direction ramps (see [`ANKLE_SLOPE`]).
     pub ankle_slope: i32,
+    /// Leave the servos as they are (`--soft-servos`; see
+    /// `BusTipoverOptions::soft_servos`).
+    pub soft_servos: bool,
     /// Creeping approaches per direction (see `BusTipoverOptions::creeps`).
     pub creeps: usize,
     /// Commanded tip angles known beforehand, one per direction: creeps only (see
@@ -93,6 +97,7 @@ impl BusPlan {
             slow_ramp: protocol.slow_ramp_deg_per_s,
             compliance_slope: protocol.compliance_slope,
             ankle_slope: protocol.ankle_slope,
+            soft_servos: protocol.soft_servos,
             creeps: protocol.creeps,
             first_tips: Some(first_tips),
             dither: protocol.dither,
@@ -175,6 +180,9 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
         )));
     };
     let mut tilt_model = TiltModel::new(&model, &names, &board.link)?;
+    if !plan.soft_servos {
+        twinloop_experiments::stiffen::check_stiffenable(&mapping)?;
+    }
     let serial = is_serial(&port);
     let writer = match &plan.record {
         Some(path) => Some(record_writer(path, &names)?),
@@ -197,6 +205,7 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
         slow_ramp: plan.slow_ramp,
         compliance_slope: plan.compliance_slope,
         ankle_slope: plan.ankle_slope,
+        soft_servos: plan.soft_servos,
         creeps: plan.creeps,
         first_tips: plan.first_tips.clone(),
         dither: plan.dither,
@@ -235,7 +244,14 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
             abort.unwrap_or(e)
         ))
     })?;
-    let mut outcome = bus_outcome(&model, &plan.model_spec, &port, &runs, &names)?;
+    let mut outcome = bus_outcome(
+        &model,
+        &plan.model_spec,
+        &port,
+        &runs,
+        &names,
+        plan.soft_servos,
+    )?;
     if let (BusOutcome::Study(study), Some(cycle_s)) = (&mut outcome, cycle_s) {
         study.protocol = Some(BusProtocol {
             map: plan.map.clone(),
@@ -247,6 +263,7 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
             dither: plan.dither,
             onset_average_s: plan.onset_average_s,
             cycle_s,
+            soft_servos: plan.soft_servos,
         });
     }
     Ok(BusRun {
@@ -273,11 +290,51 @@ mod tests {
             dither: false,
             onset_average_s: ONSET_AVERAGE_S,
             cycle_s: 0.029,
+            soft_servos: false,
         };
         BusPlan {
             first_tips: None,
             ..BusPlan::replaying(&protocol, "builtin:km20", Vec::new())
         }
+    }
+
+    #[test]
+    fn soft_servos_run_as_they_are_and_the_output_says_so() {
+        let model = twinloop_description::builtin::km20::build().unwrap();
+        let options = crate::protocol_bias::replay_options(1e-4);
+        let soft = BusPlan {
+            soft_servos: true,
+            directions: vec![Direction::Forward],
+            ..plan()
+        };
+        let run = tipover_in_lockstep(&soft, &model, &options, 0.029).unwrap();
+        let BusOutcome::Partial(r) = run.outcome else {
+            panic!("one direction ran, no partial report")
+        };
+        let json = serde_json::to_value(&*r).unwrap();
+        assert_eq!(json["soft_servos"], serde_json::Value::Bool(true));
+        // Soft (factory slope 32, margin 1 on every RX) the robot tips earlier than
+        // stiffened: the servos give under the lean.
+        let stiff = BusPlan {
+            directions: vec![Direction::Forward],
+            ..plan()
+        };
+        let BusOutcome::Partial(s) = tipover_in_lockstep(&stiff, &model, &options, 0.029)
+            .unwrap()
+            .outcome
+        else {
+            panic!("one direction ran, no partial report")
+        };
+        assert!(!s.soft_servos);
+        let (soft_deg, stiff_deg) = (
+            r.forward.as_ref().unwrap().measured_deg,
+            s.forward.as_ref().unwrap().measured_deg,
+        );
+        // Measured: 8.64 soft, 8.82 stiff.
+        assert!(
+            soft_deg < stiff_deg - 0.1,
+            "soft {soft_deg} deg, stiff {stiff_deg}"
+        );
     }
 
     /// The protocol on km20 in lockstep, at the pty demo's host cycle (29 ms of robot

@@ -7,6 +7,8 @@
 
 use crate::builtin::parts::{Part, PartKind};
 use crate::{Geometry, Pose};
+// The catalogue's datasheets (stall torque, voltage, speed); mass and size are here.
+use twinloop_servos::ServoModel::{Rx28, Rx64};
 
 /// One servo model as its datasheet gives it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,10 +48,10 @@ pub const fn kgf_cm(v: f64) -> f64 {
 
 /// ROBOTIS Dynamixel RX-28 (18 of them in km20).
 pub const RX28: ServoSpec = ServoSpec {
-    name: "RX-28",
-    stall_torque: 3.7,
-    rated_voltage: 18.5,
-    no_load_speed: rpm(85.0),
+    name: Rx28.name(),
+    stall_torque: Rx28.spec().stall_torque,
+    rated_voltage: Rx28.spec().voltage,
+    no_load_speed: Rx28.spec().no_load_speed,
     mass: 0.072,
     size: [0.0356, 0.0506, 0.0355],
     travel: 300.0 * std::f64::consts::PI / 180.0,
@@ -60,10 +62,10 @@ pub const RX28: ServoSpec = ServoSpec {
 
 /// ROBOTIS Dynamixel RX-64 (2 of them in km20, at the knees).
 pub const RX64: ServoSpec = ServoSpec {
-    name: "RX-64",
-    stall_torque: 5.3,
-    rated_voltage: 18.5,
-    no_load_speed: rpm(64.0),
+    name: Rx64.name(),
+    stall_torque: Rx64.spec().stall_torque,
+    rated_voltage: Rx64.spec().voltage,
+    no_load_speed: Rx64.spec().no_load_speed,
     mass: 0.125,
     size: [0.0402, 0.0611, 0.041],
     travel: 300.0 * std::f64::consts::PI / 180.0,

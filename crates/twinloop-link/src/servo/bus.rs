@@ -13,6 +13,7 @@
 
 use super::backend::{TrackingServoModel, VirtualServoBackend};
 use super::virtual_servo::{Fault, VirtualServo, WriteEffects};
+use crate::control_table::ModelTable;
 use crate::crc16::crc16_update;
 use crate::decoder::{Accept, DecodeEvent, Decoder, Frame};
 use crate::instruction::Instruction;

@@ -5,6 +5,7 @@
 //! has been unwound by (CLEAR, reboot).
 
 use crate::control_table::ControlTable;
+use crate::control_table::ModelTable;
 use crate::protocol::Protocol;
 use crate::register::{Access, Area, Item, Register};
 use crate::servo_model::ServoModel;
