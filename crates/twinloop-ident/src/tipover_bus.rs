@@ -64,6 +64,9 @@ pub struct BusReport {
     pub left: Option<BusDirection>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub right: Option<BusDirection>,
+    /// How the bus held up (retries, discarded packets, reads repeated).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bus: Option<twinloop_experiments::guarded::BusHealth>,
 }
 
 /// What a run over the bus gave.
@@ -98,6 +101,7 @@ pub fn bus_outcome(
         backward: None,
         left: None,
         right: None,
+        bus: None,
     };
     for run in runs {
         let d = Some(BusDirection {
