@@ -95,8 +95,11 @@ pub struct Guarded<'a> {
     /// How long a servo may stay silent before the run stops ([`SILENCE_WINDOW_S`]
     /// by default).
     pub silence_window: Duration,
-    /// When each servo last answered (joints in order, then the IMU board).
-    heard: Vec<Instant>,
+    /// Since when each servo has not answered (joints in order, then the IMU
+    /// board): the start of the first read it missed since it last answered. Counted
+    /// from there, not from its last answer, a servo is not blamed for the time the
+    /// host spent waiting on the others.
+    silent_since: Vec<Option<Instant>>,
     reads: u64,
     reads_missed: u64,
     longest_silence: Duration,
@@ -131,7 +134,7 @@ impl Guarded<'_> {
         Guarded {
             robot,
             silence_window: Duration::from_secs_f64(SILENCE_WINDOW_S),
-            heard: vec![Instant::now(); n],
+            silent_since: vec![None; n],
             reads: 0,
             reads_missed: 0,
             longest_silence: Duration::ZERO,
@@ -198,9 +201,9 @@ impl Guarded<'_> {
         .with_client(&self.robot.client.stats)
     }
 
-    /// Note who answered the last read; the servo (or board) silent the longest,
-    /// named, with how long, if any is silent. Allocates only then.
-    fn silences(&mut self, now: Instant) -> Option<(String, Duration)> {
+    /// Note who answered the read started at `asked`; the servo (or board) silent
+    /// the longest, named, with how long, if any is silent. Allocates only then.
+    fn silences(&mut self, asked: Instant, now: Instant) -> Option<(String, Duration)> {
         let mut worst: Option<(usize, Duration)> = None;
         let outcomes = self
             .robot
@@ -209,10 +212,10 @@ impl Guarded<'_> {
             .chain(self.robot.imu_outcome());
         for (k, o) in outcomes.enumerate() {
             if o.is_ok() {
-                self.heard[k] = now;
+                self.silent_since[k] = None;
                 continue;
             }
-            let silent = now.duration_since(self.heard[k]);
+            let silent = now.duration_since(*self.silent_since[k].get_or_insert(asked));
             if worst.is_none_or(|w| silent > w.1) {
                 worst = Some((k, silent));
             }
@@ -241,6 +244,7 @@ impl Guarded<'_> {
     /// longer than the window, a link error, a fault or a stop request ends it.
     fn read_within_window(&mut self, state: &mut RobotState) -> Result<(), RobotError> {
         loop {
+            let asked = Instant::now();
             let r = self.robot.read(state);
             let now = self.robot.time();
             if let Some(t) = self.last_read.replace(now) {
@@ -263,10 +267,11 @@ impl Guarded<'_> {
             if self.stop.load(Ordering::Relaxed) {
                 return Err(self.fail("interrupted (Ctrl-C)".into()));
             }
-            let Some((who, silent)) = self.silences(Instant::now()) else {
+            let Some((who, silent)) = self.silences(asked, Instant::now()) else {
                 return r;
             };
             self.longest_silence = self.longest_silence.max(silent);
+            self.reads_missed += 1;
             if silent >= self.silence_window {
                 return Err(self.fail(format!(
                     "{who}; silent for {:.2} s, longer than the silence window ({} s)",
@@ -274,7 +279,6 @@ impl Guarded<'_> {
                     self.silence_window.as_secs_f64()
                 )));
             }
-            self.reads_missed += 1;
         }
     }
 
