@@ -20,9 +20,10 @@ use twinloop_link::{ClientStats, DynamixelRobot};
 use twinloop_robot::{Robot, RobotError, RobotState};
 
 /// How long a servo may stay silent (wall time) before it is declared lost, by
-/// default: long enough to ride out a host or server descheduled on a loaded
-/// machine (stalls of 0.2 s measured on a 2-core machine at load 8), short enough
-/// that a robot whose bus is gone is left holding within about a second.
+/// default: long enough to ride out a host or server descheduled on a busy machine
+/// (a served robot stalled 0.2 s at a time on a 2-core machine at load 8, at worst
+/// 2.2 s: there a window of 3 s is needed), short enough that a robot whose bus is
+/// gone is left holding within about a second.
 pub const SILENCE_WINDOW_S: f64 = 1.0;
 
 /// How a bus held up over a run: the client's retries and discarded packets, and
