@@ -253,14 +253,7 @@ fn plan(port: &str, record: &Path, a: &DemoArgs, first_tips: Option<Vec<f64>>) -
 /// most runs to a timeout). The simulation holds while its host waits (the tether),
 /// so a late reply costs time, not accuracy.
 fn demo_port(path: &str) -> PortArgs {
-    PortArgs {
-        port: Some(path.to_string()),
-        baud: 1_000_000,
-        timeout_ms: 500.0,
-        retries: 3,
-        low_latency: false,
-        spin_us: 0,
-    }
+    PortArgs::quick(Some(path.to_string()), 500.0, 3)
 }
 
 /// Ping every id of the mapping: how many servos and boards answer.

@@ -121,6 +121,32 @@ pub struct PortArgs {
     /// waiting for a reply: shorter round trips, one busy core meanwhile
     #[arg(long, default_value_t = 0, value_name = "US")]
     pub spin_us: u64,
+    /// How long a servo may stay silent, s of wall time, before it is declared lost:
+    /// a read it misses is recorded (NaN) and taken again until it answers or this
+    /// window has passed. Experiments then stop naming it (servos left holding);
+    /// `link record` stops when every servo has been silent this long
+    #[arg(long, default_value_t = twinloop_experiments::guarded::SILENCE_WINDOW_S, value_name = "S", value_parser = crate::common::positive)]
+    pub silence_window: f64,
+}
+
+impl PortArgs {
+    /// The options of a port opened by a program rather than a person: the
+    /// defaults but `port`, `timeout_ms` and `retries`.
+    pub fn quick(port: Option<String>, timeout_ms: f64, retries: u32) -> PortArgs {
+        PortArgs {
+            port,
+            baud: 1_000_000,
+            timeout_ms,
+            retries,
+            low_latency: false,
+            spin_us: 0,
+            silence_window: twinloop_experiments::guarded::SILENCE_WINDOW_S,
+        }
+    }
+
+    pub fn silence_window(&self) -> Duration {
+        Duration::from_secs_f64(self.silence_window)
+    }
 }
 
 #[derive(Args)]
@@ -259,8 +285,11 @@ pub fn open_client(
     let options = SerialOptions {
         low_latency: p.low_latency,
     };
-    let t = transport::open(port, p.baud, &options)
-        .map_err(|e| CliError::new(format!("{port}: {e}")))?;
+    let t = transport::open(port, p.baud, &options).map_err(|e| match e.kind() {
+        // The message names the port and who has it.
+        std::io::ErrorKind::ResourceBusy => CliError::new(e.to_string()),
+        _ => CliError::new(format!("{port}: {e}")),
+    })?;
     let mut t: Box<dyn Transport> = Box::new(Named {
         inner: t,
         port: port.to_string(),
@@ -284,6 +313,10 @@ struct Named {
 
 impl Named {
     fn name(&self, e: std::io::Error) -> std::io::Error {
+        if e.kind() == std::io::ErrorKind::ResourceBusy {
+            // A refusal names the port already.
+            return e;
+        }
         std::io::Error::new(e.kind(), format!("{}: {e}", self.port))
     }
 }
@@ -297,7 +330,7 @@ impl Transport for Named {
         self.inner.read(buf, timeout).map_err(|e| self.name(e))
     }
 
-    fn discard_input(&mut self) -> std::io::Result<()> {
+    fn discard_input(&mut self) -> std::io::Result<usize> {
         self.inner.discard_input().map_err(|e| self.name(e))
     }
 
@@ -606,6 +639,15 @@ fn record(a: &RecordArgs) -> CliResult {
             eprintln!("  joint {}: {f} failed reads (NaN in those rows)", names[k]);
         }
     }
+    let health = twinloop_experiments::guarded::BusHealth {
+        reads: rec.rows as u64,
+        reads_missed: rec.failed_rows as u64,
+        longest_silence_s: rec.longest_silence.as_secs_f64(),
+        silence_window_s: a.port.silence_window,
+        ..Default::default()
+    }
+    .with_client(&robot.client.stats);
+    eprintln!("{}", health.line());
     finished?;
     match rec.link_error {
         Some(e) => Err(CliError::new(format!(
@@ -651,6 +693,10 @@ struct Recording {
     failures: Vec<usize>,
     /// Why the recording stopped early: the link or the file failed.
     link_error: Option<String>,
+    /// The longest time no servo answered.
+    longest_silence: Duration,
+    /// Rows with a servo that did not answer.
+    failed_rows: usize,
 }
 
 /// Read the robot and write a row, at --rate, until --duration ran out, Ctrl-C set
@@ -670,9 +716,13 @@ fn record_rows<T: Transport>(
         seconds: 0.0,
         failures: vec![0usize; n],
         link_error: None,
+        longest_silence: Duration::ZERO,
+        failed_rows: 0,
     };
     let start = Instant::now();
     let dt = if a.rate > 0.0 { 1.0 / a.rate } else { 0.0 };
+    // When any servo last answered: a bus silent for the window is gone.
+    let mut heard = start;
     while start.elapsed().as_secs_f64() < a.duration && !stop.load(Ordering::Relaxed) {
         let r = robot.read(&mut state);
         if let Err(e) = &r
@@ -681,11 +731,22 @@ fn record_rows<T: Transport>(
             rec.link_error = Some(e.to_string());
             break;
         }
+        let mut answered = false;
+        let mut missed = false;
         for (k, (_, o)) in robot.outcomes().enumerate() {
             if o.is_err() {
                 rec.failures[k] += 1;
+                missed = true;
+            } else {
+                answered = true;
             }
         }
+        rec.failed_rows += usize::from(missed);
+        let now = Instant::now();
+        if answered {
+            heard = now;
+        }
+        rec.longest_silence = rec.longest_silence.max(now - heard);
         row[0] = state.time;
         row[1..1 + n].copy_from_slice(&state.positions);
         row[1 + n..1 + 2 * n].copy_from_slice(state.velocities.as_deref().unwrap_or(&[]));
@@ -699,6 +760,19 @@ fn record_rows<T: Transport>(
             live.offer(state.time, &state.positions);
         }
         if rec.rows == FIRST_CYCLES && never_answered(robot, &rec.failures, rec.rows) {
+            break;
+        }
+        if now - heard >= a.port.silence_window() {
+            rec.link_error = Some(format!(
+                "no servo answered for {:.2} s, longer than the silence window ({} s); \
+                 the last: {}",
+                (now - heard).as_secs_f64(),
+                a.port.silence_window,
+                robot
+                    .outcomes()
+                    .find_map(|(name, o)| o.as_ref().err().map(|e| format!("joint {name}: {e}")))
+                    .unwrap_or_default()
+            ));
             break;
         }
         if dt > 0.0 {

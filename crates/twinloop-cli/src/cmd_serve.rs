@@ -258,7 +258,13 @@ fn serve_simulated(
         a.realtime_factor,
         if a.torque_off { "limp" } else { "torque on" }
     );
-    let code = serve_watched(a, mapping, servos, bus, &what, &sim, live);
+    let done = std::sync::atomic::AtomicBool::new(false);
+    let code = std::thread::scope(|s| {
+        s.spawn(|| warn_when_behind(&sim, &done));
+        let code = serve_watched(a, mapping, servos, bus, &what, &sim, live);
+        done.store(true, Ordering::Relaxed);
+        code
+    });
     let status = sim.status();
     if let Some(e) = &status.error {
         eprintln!("the simulation stopped: {e}");
@@ -270,6 +276,29 @@ fn serve_simulated(
         );
     }
     code
+}
+
+/// Say on stderr when the simulation falls behind the wall clock (at most once a
+/// second): the host then reads a robot that moves slower than real time, and its
+/// timing no longer says anything about a real one.
+fn warn_when_behind(sim: &twinloop_virtual::SimHandle, done: &std::sync::atomic::AtomicBool) {
+    let mut told = 0.0;
+    while !done.load(Ordering::Relaxed) {
+        std::thread::sleep(Duration::from_millis(200));
+        let status = sim.status();
+        if status.behind_s > told {
+            eprintln!(
+                "warning: the simulation fell {:.3} s behind the wall clock at simulated \
+                 time {:.1} s ({:.3} s in all): the machine is too busy for this real-time \
+                 factor",
+                status.behind_s - told,
+                status.time,
+                status.behind_s
+            );
+            told = status.behind_s;
+            std::thread::sleep(Duration::from_millis(800));
+        }
+    }
 }
 
 /// `serve_on`, with `--view`'s page reading the simulation on its own thread.
@@ -351,6 +380,7 @@ fn serve_on<B: twinloop_link::VirtualServoBackend>(
     let options = ServeOptions {
         emulate_baud: (!a.no_timing).then_some(a.baud),
         stop_on_eof: true,
+        warn_stalls: true,
     };
     let banner = Banner {
         mapping,
@@ -446,7 +476,8 @@ fn serve_pty<B: twinloop_link::VirtualServoBackend>(
     Ok(Outcome::Ok)
 }
 
-/// Serve one TCP client at a time on `addr` until Ctrl-C.
+/// Serve one TCP client at a time on `addr` until Ctrl-C; a second client is
+/// refused with a line saying who has the bus (a bus has one host).
 fn serve_tcp<B: twinloop_link::VirtualServoBackend>(
     addr: &str,
     bus: &mut VirtualBus<B>,
@@ -463,28 +494,78 @@ fn serve_tcp<B: twinloop_link::VirtualServoBackend>(
     print(&format!("tcp:{local}\n"));
     eprint!("{}", banner.text(&format!("tcp:{local}")));
     let _ = listener.set_nonblocking(true);
+    // The client being served, if any: the acceptor refuses others while it is set.
+    let serving: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+    let (hand, take) = std::sync::mpsc::channel();
+    std::thread::scope(|s| {
+        s.spawn(|| accept_clients(&listener, &serving, &hand, &stop));
+        while !stop.load(Ordering::Relaxed) {
+            let Ok((stream, peer)) = take.recv_timeout(Duration::from_millis(100)) else {
+                continue;
+            };
+            serve_client(stream, peer, bus, options, &stop);
+            *serving.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        }
+    });
+    Ok(Outcome::Ok)
+}
+
+/// Accept connections on `listener` until `stop`: the first while none is served
+/// goes to the serving thread through `hand`, the others are refused.
+fn accept_clients(
+    listener: &std::net::TcpListener,
+    serving: &std::sync::Mutex<Option<String>>,
+    hand: &std::sync::mpsc::Sender<(std::net::TcpStream, std::net::SocketAddr)>,
+    stop: &std::sync::atomic::AtomicBool,
+) {
     while !stop.load(Ordering::Relaxed) {
-        match listener.accept() {
-            Ok((stream, peer)) => {
-                let _ = stream.set_nonblocking(false);
-                eprintln!("client {peer} connected");
-                let mut t = match TcpTransport::from_stream(stream) {
-                    Ok(t) => t,
-                    Err(e) => {
-                        eprintln!("client {peer}: {e}");
-                        continue;
-                    }
-                };
-                if let Err(e) = serve_bus(bus, &mut t, options, &stop) {
-                    eprintln!("client {peer}: {e}");
-                }
-                eprintln!("client {peer} left");
-            }
+        let (stream, peer) = match listener.accept() {
+            Ok(c) => c,
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
-                std::thread::sleep(Duration::from_millis(50));
+                std::thread::sleep(Duration::from_millis(20));
+                continue;
             }
-            Err(e) => return Err(CliError::new(format!("accept on {addr}: {e}"))),
+            Err(e) => {
+                eprintln!("accept: {e}");
+                std::thread::sleep(Duration::from_millis(200));
+                continue;
+            }
+        };
+        let mut current = serving.lock().unwrap_or_else(|e| e.into_inner());
+        match current.as_ref() {
+            None => {
+                *current = Some(peer.to_string());
+                let _ = hand.send((stream, peer));
+            }
+            Some(other) => {
+                let why = format!("another client ({other}) is connected");
+                eprintln!("client {peer} refused: {why}");
+                // Off this thread: the refusal waits for the client to leave.
+                std::thread::spawn(move || twinloop_link::transport::refuse(stream, &why));
+            }
         }
     }
-    Ok(Outcome::Ok)
+}
+
+/// Serve one accepted client until it leaves (or Ctrl-C).
+fn serve_client<B: twinloop_link::VirtualServoBackend>(
+    stream: std::net::TcpStream,
+    peer: std::net::SocketAddr,
+    bus: &mut VirtualBus<B>,
+    options: &ServeOptions,
+    stop: &std::sync::atomic::AtomicBool,
+) {
+    let _ = stream.set_nonblocking(false);
+    eprintln!("client {peer} connected");
+    let mut t = match TcpTransport::from_stream(stream) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("client {peer}: {e}");
+            return;
+        }
+    };
+    if let Err(e) = serve_bus(bus, &mut t, options, stop) {
+        eprintln!("client {peer}: {e}");
+    }
+    eprintln!("client {peer} left");
 }

@@ -173,6 +173,7 @@ fn a_servo_that_reports_overload_mid_ramp_stops_the_tipover_with_exit_2_naming_i
         let o = ServeOptions {
             emulate_baud: None,
             stop_on_eof: false,
+            warn_stalls: false,
         };
         let _ = serve(&mut bus, &mut pty, &o, &stop2);
     });

@@ -247,6 +247,7 @@ fn measured_report(robot: &str, deg: [f64; 4], foot: &FootGeometry) -> StudyRepo
             feet_com: [f64::NAN; 2],
         },
         protocol: None,
+        bus: None,
     }
 }
 

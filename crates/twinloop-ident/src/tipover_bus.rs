@@ -75,6 +75,9 @@ pub struct BusReport {
     /// The servos were left as they were (`--soft-servos`): not stiffened, the
     /// angles include the servos' give.
     pub soft_servos: bool,
+    /// How the bus held up (retries, discarded packets, reads repeated).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bus: Option<twinloop_experiments::guarded::BusHealth>,
 }
 
 /// What a run over the bus gave.
@@ -111,6 +114,7 @@ pub fn bus_outcome(
         left: None,
         right: None,
         soft_servos,
+        bus: None,
     };
     for run in runs {
         let d = Some(BusDirection {

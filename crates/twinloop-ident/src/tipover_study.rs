@@ -143,6 +143,9 @@ pub struct StudyReport {
     /// protocol on a model and see how it reads that model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub protocol: Option<BusProtocol>,
+    /// Over a bus: how it held up (retries, discarded packets, reads repeated).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bus: Option<twinloop_experiments::guarded::BusHealth>,
 }
 
 /// The bus protocol a tip-over was measured by (`twinloop_ident::tipover_bus`):
@@ -958,6 +961,7 @@ fn assemble(
             feet_com: [feet.x, feet.z],
         },
         protocol: None,
+        bus: None,
     })
 }
 

@@ -55,6 +55,12 @@ pub struct ClientStats {
     pub wrong_replies: u64,
     pub implausible: u64,
     pub rejected: u64,
+    /// Valid packets that answered no request being waited for (another servo's,
+    /// the wrong length, a late reply to a request given up): dropped.
+    pub discarded: u64,
+    /// Bytes dropped from the input before a request (late replies of an earlier,
+    /// failed exchange), so that none is taken for the new request's reply.
+    pub stale_bytes: u64,
 }
 
 /// A servo found by ping or scan.
@@ -94,6 +100,9 @@ pub struct Client<T: Transport> {
     decoder: Decoder,
     pub config: ClientConfig,
     pub stats: ClientStats,
+    /// An exchange failed or a packet was dropped since the last request: the input
+    /// may hold late replies, so it is emptied before the next request goes out.
+    dirty: bool,
 }
 
 impl<T: Transport> Client<T> {
@@ -109,6 +118,7 @@ impl<T: Transport> Client<T> {
             decoder: Decoder::new(Accept::Both),
             config,
             stats: ClientStats::default(),
+            dirty: false,
         }
     }
 
@@ -137,21 +147,33 @@ impl<T: Transport> Client<T> {
         self.config.latency + self.wire_time(self.tx.len() + reply_bytes)
     }
 
+    /// Send `self.tx`, first dropping whatever a failed exchange may have left in
+    /// the input (as the ROBOTIS SDK's txPacket clears the port before every
+    /// request, protocol1_packet_handler.py): a late reply to a request given up
+    /// is never taken for this request's.
     fn send(&mut self) -> Result<(), LinkError> {
+        if self.dirty {
+            self.recover()?;
+        }
         self.stats.requests += 1;
         self.transport.write_all(&self.tx)?;
         Ok(())
     }
 
-    /// After a failed exchange late bytes may still arrive: drop what is buffered so
-    /// they cannot be taken for the next reply.
+    /// Drop what is buffered, counting it.
     fn recover(&mut self) -> Result<(), LinkError> {
+        let buffered = self.decoder.buffered();
         self.decoder.clear();
-        self.transport.discard_input()?;
+        let dropped = self.transport.discard_input()?;
+        self.stats.stale_bytes += (buffered + dropped) as u64;
+        self.dirty = false;
         Ok(())
     }
 
     fn count(&mut self, e: &LinkError) {
+        if e.is_transient() {
+            self.dirty = true;
+        }
         match e {
             LinkError::Timeout { .. } => self.stats.timeouts += 1,
             LinkError::Corrupt { .. } => self.stats.corrupt += 1,
@@ -181,15 +203,22 @@ impl<T: Transport> Client<T> {
                     self.decoder.next_frame()
                 };
                 let Some(f) = frame else { break };
-                if f.protocol != protocol || f.id != id || f.raw == &self.tx[..] {
-                    // Another protocol's traffic, another servo's late reply, or our
-                    // own request echoed by the adapter.
+                if f.raw == &self.tx[..] {
+                    // Our own request echoed by the adapter.
+                    continue;
+                }
+                if f.protocol != protocol || f.id != id {
+                    // Another protocol's traffic or another servo's late reply.
+                    self.stats.discarded += 1;
+                    self.dirty = true;
                     continue;
                 }
                 let (error, data): (u8, &[u8]) = match protocol {
                     Protocol::V1 => (f.instruction, f.params),
                     Protocol::V2 => {
                         if f.instruction != Instruction::Status.code() || f.params.is_empty() {
+                            self.stats.discarded += 1;
+                            self.dirty = true;
                             continue;
                         }
                         (f.params[0], &f.params[1..])
@@ -198,6 +227,7 @@ impl<T: Transport> Client<T> {
                 if protocol == Protocol::V1 && error & 0x80 != 0 {
                     // Bit 7 is always 0 in a real 1.0 status (EM-P1).
                     wrong = Some(LinkError::Corrupt { id });
+                    self.stats.discarded += 1;
                     continue;
                 }
                 let status = StatusError::new(protocol, error);
@@ -208,6 +238,7 @@ impl<T: Transport> Client<T> {
                 match expect {
                     Expect::Status { len, .. } => {
                         if data.len() != len {
+                            self.stats.discarded += 1;
                             wrong = Some(LinkError::WrongReply {
                                 id,
                                 expected_len: len,
@@ -220,6 +251,7 @@ impl<T: Transport> Client<T> {
                     }
                     Expect::Fast { total } => {
                         if f.raw.len() != total {
+                            self.stats.discarded += 1;
                             wrong = Some(LinkError::WrongReply {
                                 id,
                                 expected_len: total,
@@ -230,6 +262,11 @@ impl<T: Transport> Client<T> {
                         self.rx.clear();
                         self.rx.extend_from_slice(f.raw);
                     }
+                }
+                if wrong.is_some() {
+                    // Something that did not belong came first: drop the rest before
+                    // the next request.
+                    self.dirty = true;
                 }
                 return Ok(status);
             }
@@ -273,19 +310,21 @@ impl<T: Transport> Client<T> {
             let r = self.receive(protocol, Expect::Status { id, len }, timeout);
             match &r {
                 Err(e) => {
+                    // `count` marks the input for emptying before the next request.
                     self.count(e);
                     if e.is_transient() && attempt < self.config.retries {
                         attempt += 1;
                         self.stats.retries += 1;
-                        self.recover()?;
                         continue;
-                    }
-                    if e.is_transient() {
-                        self.recover()?;
                     }
                     return r;
                 }
-                Ok(_) => return r,
+                Ok(_) => {
+                    // After a retry the reply to the attempt given up may still be
+                    // on its way: the next request starts from an empty input.
+                    self.dirty |= attempt > 0 || self.decoder.buffered() > 0;
+                    return r;
+                }
             }
         }
     }
@@ -657,16 +696,11 @@ impl<T: Transport> Client<T> {
             outcomes[k] = r;
             offset += l;
         }
-        // Lost replies: one READ each.
+        // Lost replies: one READ each (the input emptied before it).
         let mut offset = 0;
-        let mut first_failure = true;
         for (k, it) in items.iter().enumerate() {
             let l = it.len as usize;
             if outcomes[k].as_ref().is_err_and(|e| e.is_transient()) {
-                if first_failure {
-                    self.recover()?;
-                    first_failure = false;
-                }
                 self.stats.retries += 1;
                 outcomes[k] = self.read(protocol, it.id, it.address, &mut out[offset..offset + l]);
             }
@@ -685,13 +719,8 @@ impl<T: Transport> Client<T> {
         outcomes: &mut [Outcome],
     ) -> Result<(), LinkError> {
         let l = len as usize;
-        let mut recovered = false;
         for (k, &id) in ids.iter().enumerate() {
             if outcomes[k].as_ref().is_err_and(|e| e.is_transient()) && self.config.retries > 0 {
-                if !recovered {
-                    self.recover()?;
-                    recovered = true;
-                }
                 self.stats.retries += 1;
                 outcomes[k] = self.read(protocol, id, address, &mut out[k * l..(k + 1) * l]);
                 if let Err(LinkError::Io(e)) = &outcomes[k] {

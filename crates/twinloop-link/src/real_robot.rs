@@ -27,6 +27,8 @@ struct BoardReader {
     filter: TiltFilter,
     /// Robot time of the previous good reading, s.
     last: Option<f64>,
+    /// The last read's outcome.
+    outcome: Outcome,
 }
 
 /// The host's clock when it is not the wall clock: a simulated robot on an in-memory
@@ -113,6 +115,7 @@ impl<T: Transport> DynamixelRobot<T> {
             block: [0; CM730_IMU_BLOCK.1 as usize],
             filter: TiltFilter::default(),
             last: None,
+            outcome: Err(LinkError::Timeout { id: b.id }),
         });
         Ok(DynamixelRobot {
             client,
@@ -157,6 +160,11 @@ impl<T: Transport> DynamixelRobot<T> {
         self.imu.as_ref().map(|b| &b.board)
     }
 
+    /// The IMU board's outcome in the last read, if the mapping has a board.
+    pub fn imu_outcome(&self) -> Option<&Outcome> {
+        self.imu.as_ref().map(|b| &b.outcome)
+    }
+
     /// The host's tilt estimate (its time constant can be changed).
     pub fn tilt_filter_mut(&mut self) -> Option<&mut TiltFilter> {
         self.imu.as_mut().map(|b| &mut b.filter)
@@ -175,12 +183,17 @@ impl<T: Transport> DynamixelRobot<T> {
         // A board that does not answer is named like a joint (the link itself is
         // alive): `board "trunk_imu": ...`; only a dead port is a link error.
         let who = format!("board {:?}", b.board.name);
+        b.outcome = outcome.clone();
         if let Err(e) = outcome {
             state.imu = None;
             return Err(link_to_robot(&e, &who));
         }
         let Some(sample) = decode_imu(b.board.model, base, &b.block) else {
             state.imu = None;
+            b.outcome = Err(LinkError::Implausible {
+                id: b.board.id,
+                register: "gyro or accelerometer",
+            });
             return Err(RobotError::at_joint(
                 who,
                 format!(

@@ -74,6 +74,7 @@ fn official_sdk_examples_against_a_served_bus() {
         let options = ServeOptions {
             emulate_baud: Some(1_000_000),
             stop_on_eof: false,
+            ..Default::default()
         };
         serve(&mut bus, &mut pty, &options, &flag).unwrap();
     });

@@ -33,6 +33,7 @@ fn client_over_a_pty_with_emulated_wire_time() {
         let options = ServeOptions {
             emulate_baud: Some(57_600),
             stop_on_eof: false,
+            warn_stalls: false,
         };
         serve(&mut bus, &mut pty, &options, &stop2).unwrap();
     });

@@ -34,6 +34,7 @@ fn dynamixel2_drives_the_virtual_bus() {
         let options = ServeOptions {
             emulate_baud: None,
             stop_on_eof: false,
+            warn_stalls: false,
         };
         serve(&mut bus, &mut pty, &options, &stop2).unwrap();
     });

@@ -42,6 +42,7 @@ impl PtyServer {
                 let options = ServeOptions {
                     emulate_baud,
                     stop_on_eof: false,
+                    warn_stalls: false,
                 };
                 serve(&mut bus, &mut pty, &options, &flag)
             })?;

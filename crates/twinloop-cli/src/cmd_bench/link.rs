@@ -293,12 +293,8 @@ fn port_cases(a: &LinkBenchArgs, port: &str, cases: &mut Vec<BenchCase>) -> Resu
     let n = a.servos;
     {
         let p = PortArgs {
-            port: Some(port.to_string()),
-            baud: 1_000_000,
-            timeout_ms: 50.0,
-            retries: 0,
-            low_latency: false,
             spin_us: a.spin_us,
+            ..PortArgs::quick(Some(port.to_string()), 50.0, 0)
         };
         let mut c = open_client(&p, None)?;
         if !transaction_cases(&mut c, n, a.seconds, "pty", cases) {

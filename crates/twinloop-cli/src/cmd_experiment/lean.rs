@@ -308,6 +308,7 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
         &standing,
         crate::cmd_link::interrupt_flag(),
     );
+    g.silence_window = a.bus.silence_window();
     eprintln!(
         "leaning +-{:.2} deg over {port} ({:.1} s) ...",
         cfg.amplitude_deg,
@@ -317,10 +318,11 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
     let result = run_lean(&mut g, &standing, &cfg, &mut |row| {
         write_row(&mut writer, row, &mut buf)
     });
-    let (rows, abort) = (g.rows, g.abort.clone());
+    let (rows, abort, health) = (g.rows, g.abort.clone(), g.health());
     let raw = g.writer.take();
     hold_standing(&mut robot, &standing);
     let restored = saved.map(|s| stiffen::restore_loops(&mut robot, &s));
+    eprintln!("{}", health.line());
     writer.finish()?;
     if let Some(w) = raw {
         w.finish()?;

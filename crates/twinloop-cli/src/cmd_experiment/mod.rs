@@ -41,9 +41,12 @@ pub enum ExperimentCommand {
     /// registers (stiffened first), the tilt from the mapping's IMU board; between runs it
     /// waits for the robot to be stood up again (`serve --catch-falls` does that for a
     /// simulated one); with all four directions the JSON is the simulator's. On a serial
-    /// port it asks first (--yes skips); a silent or overloaded/overheated/undervolted servo,
-    /// or Ctrl-C, stops it with the servos holding the standing pose (exit 2); --record
-    /// FILE.csv keeps every cycle read. See docs/adaptation.md.
+    /// port it asks first (--yes skips); a servo silent for longer than --silence-window
+    /// (a missed read is recorded and read again until then), an overloaded/overheated/
+    /// undervolted servo, or Ctrl-C, stops it with the servos holding the standing pose
+    /// (exit 2); --record FILE.csv keeps every cycle read; stderr's `bus:` line (and the
+    /// JSON's `bus`) counts retries, discarded packets and missed reads. See
+    /// docs/adaptation.md and docs/link.md.
     ///   twinloop experiment tipover --port /tmp/km20 --map builtin:km20 --directions forward --record tip.csv
     ///
     /// Output: on stdout the four directions' commanded and measured angles, the model's
@@ -67,9 +70,10 @@ pub enum ExperimentCommand {
     /// torque per count) times the datasheet stall torque of its model (RX-28 3.7 N m,
     /// RX-64 5.3 N m at 18.5 V; X series from Present Current by the stall torque over
     /// the stall current): see docs/lean-validation.md for what that conversion is worth.
-    /// On a serial port it asks first (--yes skips); a silent or overloaded, overheated
-    /// or undervolted servo, or Ctrl-C, stops it with the servos holding the standing
-    /// pose (exit 2), and --record keeps every cycle read, as the tip-over does.
+    /// On a serial port it asks first (--yes skips); a servo silent for longer than
+    /// --silence-window, an overloaded, overheated or undervolted servo, or Ctrl-C, stops
+    /// it with the servos holding the standing pose (exit 2), and --record keeps every
+    /// cycle read, as the tip-over does.
     ///
     /// Example:
     ///   twinloop experiment lean --robot builtin:km20 --out sim.csv --json -

@@ -82,14 +82,7 @@ impl BusPlan {
         BusPlan {
             model_spec: model_spec.to_string(),
             map: protocol.map.clone(),
-            port: PortArgs {
-                port: None,
-                baud: 1_000_000,
-                timeout_ms: 10.0,
-                retries: 0,
-                low_latency: false,
-                spin_us: 0,
-            },
+            port: PortArgs::quick(None, 10.0, 0),
             record: None,
             yes: true,
             directions: Direction::ALL.to_vec(),
@@ -200,6 +193,7 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
         &standing,
         crate::cmd_link::interrupt_flag(),
     );
+    g.silence_window = plan.port.silence_window();
     let opts = BusTipoverOptions {
         directions: plan.directions.clone(),
         slow_ramp: plan.slow_ramp,
@@ -228,10 +222,14 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
     };
     let runs = run_directions(&mut g, &opts, &cfg, &mut tilt_model, &mut before, &mut log);
     let rows = g.rows;
+    let health = g.health();
     let cycle_s = g.median_cycle_s();
     let writer = g.writer.take();
     let abort = g.abort.take();
     hold_standing(&mut robot, &standing);
+    if plan.verbose {
+        eprintln!("{}", health.line());
+    }
     if let Some(w) = writer {
         w.finish()?;
         if let Some(p) = &plan.record {
@@ -252,6 +250,10 @@ fn tipover_with(plan: &BusPlan, mut robot: BusRobot, port: String) -> Result<Bus
         &names,
         plan.soft_servos,
     )?;
+    match &mut outcome {
+        BusOutcome::Study(study) => study.bus = Some(health),
+        BusOutcome::Partial(partial) => partial.bus = Some(health),
+    }
     if let (BusOutcome::Study(study), Some(cycle_s)) = (&mut outcome, cycle_s) {
         study.protocol = Some(BusProtocol {
             map: plan.map.clone(),

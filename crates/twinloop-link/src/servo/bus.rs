@@ -47,6 +47,9 @@ pub struct BusStats {
     pub instructions: u64,
     pub replies: u64,
     pub bad_checksums: u64,
+    /// Requests left unanswered because a later one in the same burst needed a reply
+    /// too (see [`VirtualBus::latest_reply_only`]).
+    pub superseded: u64,
 }
 
 /// A servo to put on a virtual bus.
@@ -66,6 +69,15 @@ pub struct VirtualBus<B: VirtualServoBackend> {
     pub stats: BusStats,
     /// Reply packets of the last [`VirtualBus::handle`] call.
     pub marks: Vec<ReplyMark>,
+    /// Answer only the last request of a burst that needs a reply. A host on a
+    /// half-duplex bus waits for each reply before its next request; several such
+    /// requests read at once mean the server was stalled (descheduled) while the
+    /// host gave up on the earlier ones and retried or moved on. Real servos would
+    /// have answered each on time, so those replies are past: sent now they would
+    /// answer the wrong transactions. Writes and other instructions in the burst
+    /// still take effect, in order. Off by default (an in-memory bus is never
+    /// stalled); `serve` turns it on.
+    pub latest_reply_only: bool,
 }
 
 /// Firmware version the virtual servos report.
@@ -119,6 +131,7 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
             time: 0.0,
             stats: BusStats::default(),
             marks: Vec::with_capacity(256),
+            latest_reply_only: false,
         };
         for k in 0..bus.servos.len() {
             power_on(&mut bus.servos[k], &mut bus.backend, k, bus.time);
@@ -251,6 +264,10 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
         self.marks.clear();
         self.advance_clock();
         let mut rest = input;
+        // Where the replies of the last request answered in this call begin (in
+        // `reply`, in `marks`), for `latest_reply_only`.
+        let mut last: Option<(usize, usize)> = None;
+        let latest_only = self.latest_reply_only;
         loop {
             let n = self.decoder.push(rest);
             rest = &rest[n..];
@@ -271,6 +288,7 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
                 out: reply,
             };
             while let Some(ev) = decoder.next_event() {
+                let before = (ctx.out.len(), ctx.marks.len());
                 match ev {
                     DecodeEvent::Frame(f) => {
                         // 2.0 status packets from other servos are not for us.
@@ -295,12 +313,36 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
                         }
                     }
                 }
+                if ctx.marks.len() > before.1 {
+                    if latest_only && let Some(prev) = last {
+                        drop_replies(&mut ctx, prev, before);
+                        stats.superseded += 1;
+                        last = Some(prev);
+                    } else {
+                        last = Some(before);
+                    }
+                }
             }
             if rest.is_empty() {
                 break;
             }
         }
         self.stats.replies += self.marks.len() as u64;
+    }
+}
+
+/// Remove the replies between `from` and `to` (offsets into the reply buffer and
+/// the marks) and shift the marks after them.
+fn drop_replies<B: VirtualServoBackend>(
+    ctx: &mut Ctx<'_, B>,
+    from: (usize, usize),
+    to: (usize, usize),
+) {
+    let bytes = to.0 - from.0;
+    ctx.out.drain(from.0..to.0);
+    ctx.marks.drain(from.1..to.1);
+    for m in &mut ctx.marks[from.1..] {
+        m.end -= bytes;
     }
 }
 

@@ -16,6 +16,9 @@ pub struct ServeOptions {
     /// Stop when the transport reports end-of-file (a TCP client left). A pty
     /// never does: clients come and go.
     pub stop_on_eof: bool,
+    /// Say on stderr (at most once a second) when requests piled up while the
+    /// server was not running and only the last was answered.
+    pub warn_stalls: bool,
 }
 
 impl Default for ServeOptions {
@@ -23,12 +26,36 @@ impl Default for ServeOptions {
         ServeOptions {
             emulate_baud: Some(1_000_000),
             stop_on_eof: true,
+            warn_stalls: false,
         }
     }
 }
 
 fn wire(bytes: usize, baud: u32) -> Duration {
     Duration::from_nanos(bytes as u64 * 10 * 1_000_000_000 / baud.max(1) as u64)
+}
+
+/// Requests left unanswered after stalls, told on stderr at most once a second.
+#[derive(Default)]
+struct StallNotes {
+    told: u64,
+    last: Option<Instant>,
+}
+
+impl StallNotes {
+    fn note(&mut self, superseded: u64) {
+        if superseded == self.told || self.last.is_some_and(|t| t.elapsed().as_secs() < 1) {
+            return;
+        }
+        eprintln!(
+            "warning: the server was stalled: {} request(s) waited past their reply and were \
+             left unanswered (the host had given up on them), the last one answered; {} so far",
+            superseded - self.told,
+            superseded
+        );
+        self.told = superseded;
+        self.last = Some(Instant::now());
+    }
 }
 
 /// Sleep until `until`, the last stretch spinning: thread sleeps overshoot by tens of
@@ -50,6 +77,11 @@ fn wait_until(until: Instant) {
 
 /// Serve `bus` on `transport` until `stop` is set (or, with `stop_on_eof`, the peer
 /// leaves). Time on the bus follows the wall clock.
+///
+/// A served bus answers as a real one would after the server was descheduled:
+/// of the requests that piled up meanwhile only the last that needs a reply is
+/// answered (see [`VirtualBus::latest_reply_only`]); the others' writes still
+/// take effect.
 pub fn serve<T: Transport, B: VirtualServoBackend>(
     bus: &mut VirtualBus<B>,
     transport: &mut T,
@@ -59,6 +91,8 @@ pub fn serve<T: Transport, B: VirtualServoBackend>(
     bus.clock = BusClock::Wall {
         last: Instant::now(),
     };
+    bus.latest_reply_only = true;
+    let mut stalls = StallNotes::default();
     let mut input = vec![0u8; 4096];
     let mut reply = Vec::with_capacity(8192);
     while !stop.load(Ordering::Relaxed) {
@@ -79,6 +113,9 @@ pub fn serve<T: Transport, B: VirtualServoBackend>(
             bus.line_idle(&mut reply);
         } else {
             bus.handle(&input[..n], &mut reply);
+        }
+        if options.warn_stalls {
+            stalls.note(bus.stats.superseded);
         }
         if reply.is_empty() {
             continue;

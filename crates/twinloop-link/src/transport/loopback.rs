@@ -53,10 +53,11 @@ impl<R: Responder> Transport for LoopbackTransport<R> {
         Ok(n)
     }
 
-    fn discard_input(&mut self) -> io::Result<()> {
+    fn discard_input(&mut self) -> io::Result<usize> {
+        let n = self.queue.len() - self.read_pos;
         self.queue.clear();
         self.read_pos = 0;
-        Ok(())
+        Ok(n)
     }
 
     fn describe(&self) -> String {

@@ -3,6 +3,7 @@
 //! robot), a pseudo-terminal (a virtual robot that looks like a serial port to any
 //! program, the official SDK included), and in-memory loopbacks for tests.
 
+mod lock;
 mod loopback;
 mod noisy;
 mod pty;
@@ -13,7 +14,7 @@ pub use loopback::{LoopbackTransport, Responder};
 pub use noisy::{NoiseStats, NoisyTransport};
 pub use pty::{PtyTransport, TtyTransport};
 pub use serial::{SerialOptions, SerialTransport};
-pub use tcp::TcpTransport;
+pub use tcp::{REFUSAL, TcpTransport, refuse};
 
 use std::io;
 use std::time::Duration;
@@ -28,8 +29,9 @@ pub trait Transport: Send {
     /// (adapter unplugged, peer closed).
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize>;
 
-    /// Drop bytes received but not yet read (late replies of an earlier exchange).
-    fn discard_input(&mut self) -> io::Result<()>;
+    /// Drop bytes received but not yet read (late replies of an earlier exchange);
+    /// returns how many were dropped (as far as the transport can tell).
+    fn discard_input(&mut self) -> io::Result<usize>;
 
     /// The line's bit rate, where there is one (wire-time estimates use it).
     fn baud(&self) -> Option<u32> {
@@ -56,7 +58,7 @@ impl<T: Transport + ?Sized> Transport for Box<T> {
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
         (**self).read(buf, timeout)
     }
-    fn discard_input(&mut self) -> io::Result<()> {
+    fn discard_input(&mut self) -> io::Result<usize> {
         (**self).discard_input()
     }
     fn baud(&self) -> Option<u32> {
@@ -71,13 +73,16 @@ impl<T: Transport + ?Sized> Transport for Box<T> {
 }
 
 /// Open a transport from a user's port string: `tcp:HOST:PORT` for TCP, anything
-/// else a serial device path (a pty path from `twinloop serve` works too).
+/// else a serial device path (a pty path from `twinloop serve` works too). A device
+/// is opened for this process alone; one another process has is refused with an
+/// error of kind `ResourceBusy` naming it (see `lock`).
 pub fn open(port: &str, baud: u32, options: &SerialOptions) -> io::Result<Box<dyn Transport>> {
     if let Some(addr) = port.strip_prefix("tcp:") {
         return Ok(Box::new(TcpTransport::connect(addr)?));
     }
     match SerialTransport::open(port, baud, options) {
         Ok(s) => Ok(Box::new(s)),
+        Err(e) if e.kind() == io::ErrorKind::ResourceBusy => Err(e),
         // A pseudo-terminal refuses some serial ioctls; talk to it as a plain tty.
         Err(e) if is_pty_path(port) => TtyTransport::open(port)
             .map(|t| Box::new(t) as Box<dyn Transport>)

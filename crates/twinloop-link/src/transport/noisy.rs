@@ -92,10 +92,11 @@ impl<T: Transport> Transport for NoisyTransport<T> {
         Ok(n)
     }
 
-    fn discard_input(&mut self) -> io::Result<()> {
+    fn discard_input(&mut self) -> io::Result<usize> {
+        let n = self.pending.len() - self.pending_pos;
         self.pending.clear();
         self.pending_pos = 0;
-        self.inner.discard_input()
+        Ok(n + self.inner.discard_input()?)
     }
 
     fn baud(&self) -> Option<u32> {

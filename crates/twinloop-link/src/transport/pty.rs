@@ -74,14 +74,17 @@ fn read_with_timeout(
     }
 }
 
-fn drain(file: &mut File) -> io::Result<()> {
+fn drain(file: &mut File) -> io::Result<usize> {
     let mut scratch = [0u8; 512];
+    let mut dropped = 0;
     while wait_readable(file.as_raw_fd(), Duration::ZERO)? {
-        if file.read(&mut scratch)? == 0 {
+        let n = file.read(&mut scratch)?;
+        if n == 0 {
             break;
         }
+        dropped += n;
     }
-    Ok(())
+    Ok(dropped)
 }
 
 /// The master side of a new pseudo-terminal. Programs open [`PtyTransport::path`]
@@ -133,7 +136,7 @@ impl Transport for PtyTransport {
         self.spin = spin;
     }
 
-    fn discard_input(&mut self) -> io::Result<()> {
+    fn discard_input(&mut self) -> io::Result<usize> {
         drain(&mut self.master)
     }
 
@@ -143,7 +146,7 @@ impl Transport for PtyTransport {
 }
 
 /// A tty opened by path in raw mode, without the serial ioctls a pseudo-terminal
-/// may refuse.
+/// may refuse; taken for this process alone (flock and TIOCEXCL).
 pub struct TtyTransport {
     spin: Duration,
     file: File,
@@ -158,9 +161,12 @@ impl TtyTransport {
             .write(true)
             .custom_flags(nix::libc::O_NOCTTY)
             .open(&path)
-            .map_err(|e| {
-                io::Error::new(e.kind(), format!("cannot open {}: {e}", path.display()))
+            .map_err(|e| match e.raw_os_error() {
+                // TIOCEXCL set by the process that has it.
+                Some(nix::libc::EBUSY) => super::lock::busy(&path),
+                _ => io::Error::new(e.kind(), format!("cannot open {}: {e}", path.display())),
             })?;
+        super::lock::claim(file.as_raw_fd(), &path)?;
         make_raw(file.as_raw_fd())?;
         Ok(TtyTransport {
             spin: Duration::ZERO,
@@ -183,7 +189,7 @@ impl Transport for TtyTransport {
         self.spin = spin;
     }
 
-    fn discard_input(&mut self) -> io::Result<()> {
+    fn discard_input(&mut self) -> io::Result<usize> {
         drain(&mut self.file)
     }
 

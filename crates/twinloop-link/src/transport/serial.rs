@@ -35,8 +35,15 @@ impl SerialTransport {
             .stop_bits(serialport::StopBits::One)
             .flow_control(serialport::FlowControl::None)
             .timeout(timeout)
+            // Exclusive (the default, said for the reader): TIOCEXCL and a flock.
+            .exclusive(true)
             .open_native()
-            .map_err(|e| io::Error::other(format!("cannot open serial port {path}: {e}")))?;
+            .map_err(|e| match e.kind() {
+                // serialport's word for "already in use" (EBUSY from TIOCEXCL, or
+                // the flock taken).
+                serialport::ErrorKind::NoDevice => super::lock::busy(std::path::Path::new(path)),
+                _ => io::Error::other(format!("cannot open serial port {path}: {e}")),
+            })?;
         let low_latency_note = options.low_latency.then(|| set_low_latency(path));
         Ok(SerialTransport {
             port,
@@ -92,10 +99,14 @@ impl Transport for SerialTransport {
         }
     }
 
-    fn discard_input(&mut self) -> io::Result<()> {
+    fn discard_input(&mut self) -> io::Result<usize> {
+        // What the driver holds, counted before it is flushed (a byte arriving in
+        // between is flushed uncounted).
+        let held = self.port.bytes_to_read().unwrap_or(0) as usize;
         self.port
             .clear(ClearBuffer::Input)
-            .map_err(|e| io::Error::other(e.to_string()))
+            .map_err(|e| io::Error::other(e.to_string()))?;
+        Ok(held)
     }
 
     fn baud(&self) -> Option<u32> {

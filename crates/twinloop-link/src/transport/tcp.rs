@@ -10,6 +10,40 @@ pub struct TcpTransport {
     stream: TcpStream,
     peer: String,
     timeout: Option<Duration>,
+    /// Bytes received so far (a refusal comes first or not at all).
+    received: u64,
+}
+
+/// What `twinloop serve` sends a client it cannot serve (another one has the bus)
+/// before it closes the connection: this, then the reason, then a newline.
+pub const REFUSAL: &[u8] = b"twinloop serve: busy: ";
+
+/// Refuse a connection: send [`REFUSAL`] and `why`, close our side, and read until
+/// the client leaves (closing with its request unread would reset the connection
+/// and could drop the refusal before the client reads it).
+pub fn refuse(mut stream: TcpStream, why: &str) -> io::Result<()> {
+    stream.set_nonblocking(false)?;
+    stream.write_all(REFUSAL)?;
+    stream.write_all(why.as_bytes())?;
+    stream.write_all(b"\n")?;
+    stream.shutdown(std::net::Shutdown::Write)?;
+    stream.set_read_timeout(Some(Duration::from_secs(2)))?;
+    let mut scratch = [0u8; 256];
+    while matches!(stream.read(&mut scratch), Ok(n) if n > 0) {}
+    Ok(())
+}
+
+/// `buf`, the first bytes from the server, as the error of a refusal, if it is one.
+fn refusal(buf: &[u8], peer: &str) -> Option<io::Error> {
+    let rest = buf.strip_prefix(REFUSAL)?;
+    let line = rest.split(|&b| b == b'\n').next().unwrap_or(rest);
+    Some(io::Error::new(
+        io::ErrorKind::ResourceBusy,
+        format!(
+            "tcp:{peer} is busy: {} (one program at a time talks to a bus)",
+            String::from_utf8_lossy(line)
+        ),
+    ))
 }
 
 impl TcpTransport {
@@ -38,6 +72,7 @@ impl TcpTransport {
             stream,
             peer,
             timeout: None,
+            received: 0,
         })
     }
 }
@@ -59,7 +94,15 @@ impl Transport for TcpTransport {
                 io::ErrorKind::UnexpectedEof,
                 format!("tcp peer {} closed the connection", self.peer),
             )),
-            Ok(n) => Ok(n),
+            Ok(n) => {
+                if self.received == 0
+                    && let Some(e) = refusal(&buf[..n], &self.peer)
+                {
+                    return Err(e);
+                }
+                self.received += n as u64;
+                Ok(n)
+            }
             Err(e)
                 if matches!(
                     e.kind(),
@@ -74,14 +117,15 @@ impl Transport for TcpTransport {
         }
     }
 
-    fn discard_input(&mut self) -> io::Result<()> {
+    fn discard_input(&mut self) -> io::Result<usize> {
         self.stream.set_nonblocking(true)?;
         let mut scratch = [0u8; 256];
+        let mut dropped = 0;
         let result = loop {
             match self.stream.read(&mut scratch) {
-                Ok(0) => break Ok(()),
-                Ok(_) => continue,
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break Ok(()),
+                Ok(0) => break Ok(dropped),
+                Ok(n) => dropped += n,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break Ok(dropped),
                 Err(e) => break Err(e),
             }
         };
