@@ -53,6 +53,13 @@ pub struct BusServo {
     pub model: ServoModel,
 }
 
+/// A board to put on a virtual bus, after the servos.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BusBoard {
+    pub id: u8,
+    pub board: &'static crate::board_type::BoardType,
+}
+
 pub struct VirtualBus<B: VirtualServoBackend> {
     pub servos: Vec<VirtualServo>,
     pub backend: B,
@@ -73,6 +80,15 @@ impl VirtualBus<TrackingServoModel> {
     /// able to reach its Goal Position register's whole range, starting at rest at
     /// its centre. Boards (which must come after the servos) read level and still.
     pub fn with_tracking_model(servos: &[BusServo]) -> VirtualBus<TrackingServoModel> {
+        VirtualBus::with_tracking_model_and_boards(servos, &[])
+    }
+
+    /// [`VirtualBus::with_tracking_model`] with boards of their own table after the
+    /// servos ([`VirtualBus::with_boards`]).
+    pub fn with_tracking_model_and_boards(
+        servos: &[BusServo],
+        boards: &[BusBoard],
+    ) -> VirtualBus<TrackingServoModel> {
         let ranges: Vec<_> = servos
             .iter()
             .filter(|s| !s.model.is_board())
@@ -85,7 +101,7 @@ impl VirtualBus<TrackingServoModel> {
                 (s.model.spec(), r.to_si(r.min), r.to_si(r.max))
             })
             .collect();
-        VirtualBus::new(servos, TrackingServoModel::new(&ranges))
+        VirtualBus::with_boards(servos, boards, TrackingServoModel::new(&ranges))
     }
 }
 
@@ -94,11 +110,23 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
     /// moves no motor of theirs, it only feeds their sensors,
     /// [`VirtualServoBackend::board_imu`]).
     pub fn new(servos: &[BusServo], backend: B) -> VirtualBus<B> {
+        VirtualBus::with_boards(servos, &[], backend)
+    }
+
+    /// [`VirtualBus::new`] with boards of a [`BoardType`](crate::board_type::BoardType)
+    /// after the servos (the OpenCR, a profile's custom board), each answering from
+    /// its type's table: bus index `servos.len() + k` is `boards[k]`.
+    pub fn with_boards(servos: &[BusServo], boards: &[BusBoard], backend: B) -> VirtualBus<B> {
+        let devices = servos
+            .iter()
+            .map(|s| VirtualServo::new(s.id, s.model, VIRTUAL_FIRMWARE))
+            .chain(
+                boards
+                    .iter()
+                    .map(|b| VirtualServo::new_board(b.id, b.board)),
+            );
         let mut bus = VirtualBus {
-            servos: servos
-                .iter()
-                .map(|s| VirtualServo::new(s.id, s.model, VIRTUAL_FIRMWARE))
-                .collect(),
+            servos: devices.collect(),
             backend,
             decoder: Decoder::new(Accept::Both),
             clock: BusClock::Manual,
@@ -120,7 +148,7 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
     /// same effect on the backend): how a served robot is prepared before a
     /// client arrives (e.g. torque on, so a simulated robot stands).
     pub fn host_write(&mut self, k: usize, item: Item, value: i32) -> Result<(), Fault> {
-        let Some(r) = self.servos[k].table().item(item) else {
+        let Some(r) = self.servos[k].register(item) else {
             return Err(Fault::Access);
         };
         let mut bytes = [0u8; 4];
@@ -279,21 +307,23 @@ fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, 
         let Some(imu) = backend.board_imu(k) else {
             return;
         };
-        let t = s.table();
         let items = crate::board::gyro_items()
             .into_iter()
             .zip(imu.gyro)
             .chain(crate::board::accel_items().into_iter().zip(imu.accel));
         for (item, si) in items {
-            if let Some(r) = t.item(item) {
+            if let Some(r) = s.register(item) {
                 s.set_value(item, r.from_si(si));
             }
         }
         return;
     }
+    let Some(model) = s.model else {
+        return;
+    };
     let m = backend.measure(k);
-    let t = s.table();
-    let spec = s.model.spec();
+    let t = model.table();
+    let spec = model.spec();
     if let Some(r) = t.item(Item::PresentPosition) {
         let raw = r.from_si(m.position) as i64 + homing_offset(s) as i64;
         s.set_value(
@@ -334,7 +364,7 @@ fn announce_registers<B: VirtualServoBackend>(
     if s.is_board() {
         return; // nothing of a board's moves the backend
     }
-    for r in &s.table().registers {
+    for r in s.registers() {
         if r.address >= end {
             break; // registers are in address order
         }
@@ -487,9 +517,8 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         // Torque on drives the servo to the Goal Position register, written or not.
         if fx.goal_position || (fx.torque_enable && s.torque_enabled()) {
             let r = s
-                .table()
-                .item(Item::GoalPosition)
-                .expect("every table has one");
+                .register(Item::GoalPosition)
+                .expect("every servo table has one");
             let goal = r.to_si(s.value(Item::GoalPosition) - homing_offset(s));
             self.backend.set_goal_position(k, goal);
         }
@@ -557,7 +586,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         }
         for &k in targets {
             let s = &self.servos[k];
-            let model = s.model.model_number().to_le_bytes();
+            let model = s.model_number().to_le_bytes();
             let fw = s.firmware;
             match protocol {
                 Protocol::V1 => self.status(k, 0, &[]),
@@ -721,7 +750,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
             let Some(k) = self.find(protocol, id) else {
                 continue;
             };
-            if !self.servos[k].model.has_bulk_read() {
+            if !self.servos[k].has_bulk_read() {
                 continue; // RX: no BULK_READ.
             }
             self.read_reply(k, address, len);

@@ -2,7 +2,7 @@
 //! to reads and writes (ranges, read-only registers, EEPROM lock, position limits),
 //! with each violation answered by the error the e-manual names.
 
-use crate::control_table::ControlTable;
+use crate::board_type::BoardType;
 use crate::protocol::Protocol;
 use crate::register::{Access, Area, Item, Register};
 use crate::servo_model::ServoModel;
@@ -69,7 +69,11 @@ pub struct WriteEffects {
 /// A servo's memory and identity.
 #[derive(Debug, Clone)]
 pub struct VirtualServo {
-    pub model: ServoModel,
+    /// The servo's model (or the catalogue model of a board: the CM-730); `None`
+    /// for a board whose table is its [`BoardType`] ([`VirtualServo::board`]).
+    pub model: Option<ServoModel>,
+    /// A board type with a table of its own (the OpenCR, a profile's custom board).
+    pub board: Option<&'static BoardType>,
     pub firmware: u8,
     pub memory: Vec<u8>,
     /// REG_WRITE staged for the next ACTION: address and data.
@@ -86,7 +90,8 @@ pub struct VirtualServo {
 impl VirtualServo {
     pub fn new(id: u8, model: ServoModel, firmware: u8) -> VirtualServo {
         VirtualServo {
-            model,
+            model: Some(model),
+            board: None,
             firmware,
             memory: model.table().factory_memory(id, firmware),
             staged_address: 0,
@@ -96,21 +101,82 @@ impl VirtualServo {
         }
     }
 
-    pub fn table(&self) -> &'static ControlTable {
-        self.model.table()
+    /// A board of type `board` at `id`, served from the type's own table (a type
+    /// with a catalogue model, the CM-730, is served as that model).
+    pub fn new_board(id: u8, board: &'static BoardType) -> VirtualServo {
+        if let Some(model) = board.catalogue {
+            return VirtualServo::new(id, model, board.firmware);
+        }
+        VirtualServo {
+            model: None,
+            board: Some(board),
+            firmware: board.firmware,
+            memory: board.factory_memory(id),
+            staged_address: 0,
+            staged: Vec::with_capacity(64),
+            has_staged: false,
+            condition: Arc::new(AtomicU8::new(0)),
+        }
+    }
+
+    /// Registers in address order.
+    pub fn registers(&self) -> &'static [Register] {
+        match (self.board, self.model) {
+            (Some(b), _) => &b.registers,
+            (None, Some(m)) => &m.table().registers,
+            (None, None) => &[],
+        }
     }
 
     pub fn protocol(&self) -> Protocol {
-        self.model.protocol()
+        match (self.board, self.model) {
+            (Some(b), _) => b.protocol,
+            (None, Some(m)) => m.protocol(),
+            (None, None) => Protocol::V2,
+        }
+    }
+
+    /// What PING reports.
+    pub fn model_number(&self) -> u16 {
+        match (self.board, self.model) {
+            (Some(b), _) => b.model_number,
+            (None, Some(m)) => m.model_number(),
+            (None, None) => 0,
+        }
+    }
+
+    /// Whether the device answers BULK_READ on Protocol 1.0 (MX and the CM-730 do;
+    /// every 2.0 device does).
+    pub fn has_bulk_read(&self) -> bool {
+        match self.model {
+            Some(m) => m.has_bulk_read(),
+            None => self.protocol() == Protocol::V2,
+        }
     }
 
     /// A sub-controller board (no motor: the backend does not move it).
     pub fn is_board(&self) -> bool {
-        self.model.is_board()
+        self.board.is_some() || self.model.is_some_and(|m| m.is_board())
     }
 
-    fn register(&self, item: Item) -> Option<&'static Register> {
-        self.table().item(item)
+    /// The register playing `item`, if the table has one.
+    pub fn register(&self, item: Item) -> Option<&'static Register> {
+        self.registers().iter().find(|r| r.item == Some(item))
+    }
+
+    fn containing(&self, address: u16) -> Option<&'static Register> {
+        self.registers()
+            .iter()
+            .find(|r| r.address <= address && address < r.end())
+    }
+
+    /// The memory at power-on with `id`.
+    fn fresh_memory(&self, id: u8) -> Vec<u8> {
+        match (self.board, self.model) {
+            (Some(b), _) => b.factory_memory(id),
+            (None, Some(m)) => m.table().factory_memory(id, self.firmware),
+            (None, None) => Vec::new(),
+        }
     }
 
     /// The decoded value of `item` (0 if the model lacks it).
@@ -178,10 +244,9 @@ impl VirtualServo {
             Protocol::V2 => self.torque_enabled(),
             Protocol::V1 => self.value(Item::Lock) != 0,
         };
-        let table = self.table();
         let mut a = start;
         while a < end {
-            let Some(r) = table.containing(a as u16) else {
+            let Some(r) = self.containing(a as u16) else {
                 // A byte no register owns.
                 return Err(Fault::Access);
             };
@@ -278,14 +343,14 @@ impl VirtualServo {
         let baud = self.value(Item::BaudRate);
         // Servos come back as id 1; a board as its own id (the CM-730: 200).
         let factory_id = if self.is_board() {
-            self.table()
-                .item(Item::Id)
+            self.register(Item::Id)
                 .and_then(|r| r.initial)
-                .unwrap_or(1) as u8
+                .filter(|&v| v > 0)
+                .unwrap_or(id as i32) as u8
         } else {
             1
         };
-        self.memory = self.table().factory_memory(factory_id, self.firmware);
+        self.memory = self.fresh_memory(factory_id);
         if self.protocol() == Protocol::V2 {
             if option == 0x01 || option == 0x02 {
                 self.set_value(Item::Id, id as i32);
@@ -299,8 +364,8 @@ impl VirtualServo {
 
     /// REBOOT: RAM back to its initial values, EEPROM kept.
     pub fn reboot(&mut self) {
-        let fresh = self.table().factory_memory(self.id(), self.firmware);
-        for r in &self.table().registers {
+        let fresh = self.fresh_memory(self.id());
+        for r in self.registers() {
             if r.area == Area::Ram {
                 let (s, e) = (r.address as usize, r.end() as usize);
                 self.memory[s..e].copy_from_slice(&fresh[s..e]);
