@@ -452,7 +452,7 @@ fn parse_board(
         return Err(at(
             p.span(),
             "protocol",
-            format!("the {} board runs {protocol}", kind.name),
+            format!("{} runs {protocol}", kind.name),
         ));
     }
     let id = *b.id.get_ref();
