@@ -1,16 +1,23 @@
-//! The robot mapping file: which servo moves which URDF joint, and how a joint
-//! angle becomes a servo angle. It is the per-robot calibration users keep across
-//! tools.
+//! The robot profile (mapping file): which servo moves which description joint, how
+//! a joint angle becomes a servo angle, the IMU boards on the bus, and which joints
+//! play the roles experiments need. It is the per-robot calibration users keep
+//! across tools.
 //!
 //! ```toml
 //! [robot]
 //! name = "op3"
-//! urdf = "models/op3/robotis_op3.urdf"   # optional: the robot (a URDF/MJCF path or builtin:NAME)
-//! port = "/dev/ttyUSB0"                  # optional defaults for the CLI
+//! description = "op3.xml"   # optional: a URDF/MJCF path, relative to this file's
+//!                           # folder (never the current one), or builtin:NAME;
+//!                           # `urdf = ...` is the same field's older name
+//! port = "/dev/ttyUSB0"     # optional defaults for the CLI
 //! baud = 1000000
 //!
+//! [roles]                   # optional: role = joint, each one of the [[joint]]s
+//! left_ankle_pitch = "l_ank_pitch"    # also right_ankle_pitch, left/right_ankle_roll,
+//! left_hip_roll = "l_hip_roll"        # left/right_hip_roll, left/right_knee
+//!
 //! [[joint]]
-//! name = "r_sho_pitch"     # URDF joint name
+//! name = "r_sho_pitch"     # description joint name
 //! id = 1                   # servo id
 //! model = "XM430-W350"     # protocol follows from the model; `protocol = 2` checks it
 //! zero = 0.0               # servo angle (rad from the servo's centre) at joint angle 0
@@ -21,17 +28,35 @@
 //!
 //! servo angle = zero + direction * joint angle. Joint order is file order.
 //!
-//! A sub-controller on the same bus (the CM-730's gyroscope and accelerometer) is a
-//! `[[board]]`:
+//! A sub-controller on the same bus (the trunk IMU) is a `[[board]]` of a
+//! [`BoardType`]: `CM-730` (Protocol 1.0), `OpenCR` (2.0, as the OP3 runs it) or
+//! `custom`, described by its own fields:
 //!
 //! ```toml
 //! [[board]]
 //! name = "trunk_imu"       # a name for messages
-//! id = 200                 # the board's id (CM-730: 200)
-//! model = "CM-730"         # the protocol follows from the model; `protocol = 1` checks it
-//! link = "torso"           # the description link carrying the board
-//! axes = ["x", "y", "z"]   # optional: the link axis board X, Y, Z point along (default as here)
+//! id = 200                 # the board's id (CM-730 and OpenCR: 200)
+//! model = "OpenCR"         # the protocol follows from the model; `protocol = 2` checks it
+//! link = "body_link"       # the description link carrying the board
+//! axes = ["-x", "-y", "z"] # optional: the link axis board X, Y, Z point along
+//!
+//! [[board]]                # a team's own board
+//! name = "imu"
+//! id = 120
+//! model = "custom"
+//! protocol = 2             # required
+//! model_number = 4660      # required: what PING answers
+//! gyro = [100, 104, 108]   # required: register addresses of board X, Y, Z
+//! accel = [112, 116, 120]  # required
+//! size = 4                 # bytes per axis (default 2)
+//! signed = true            # default true
+//! gyro_deg_s_per_count = 0.01   # required
+//! accel_g_per_count = 0.0001    # required
+//! center = 0               # the count reading zero (default 0)
+//! link = "torso"
 //! ```
+//!
+//! Every error names the file, line, column and field.
 
 use crate::board::BoardAxes;
 use crate::board_type::{BoardType, CustomBoard};
