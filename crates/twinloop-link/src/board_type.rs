@@ -252,7 +252,9 @@ impl BoardType {
                 name: m.name().into(),
                 protocol: m.protocol(),
                 model_number: m.model_number(),
-                firmware: crate::servo::VIRTUAL_FIRMWARE,
+                // No source gives one; a virtual bus serves the catalogue model with
+                // its own firmware number.
+                firmware: 0,
                 catalogue: Some(m),
                 registers: m.table().registers.clone(),
             })

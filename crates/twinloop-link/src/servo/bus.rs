@@ -120,11 +120,10 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
         let devices = servos
             .iter()
             .map(|s| VirtualServo::new(s.id, s.model, VIRTUAL_FIRMWARE))
-            .chain(
-                boards
-                    .iter()
-                    .map(|b| VirtualServo::new_board(b.id, b.board)),
-            );
+            .chain(boards.iter().map(|b| match b.board.catalogue {
+                Some(model) => VirtualServo::new(b.id, model, VIRTUAL_FIRMWARE),
+                None => VirtualServo::new_board(b.id, b.board),
+            }));
         let mut bus = VirtualBus {
             servos: devices.collect(),
             backend,
