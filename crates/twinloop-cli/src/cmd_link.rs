@@ -161,6 +161,14 @@ pub struct ScanArgs {
     pub ids: Option<String>,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
+    /// Write a draft robot profile of what answered (servos and IMU boards) to FILE,
+    /// matched to --robot's joints where a built-in profile has exactly these
+    /// servos, else listing the joints to fill in; it says what it guessed
+    #[arg(long, value_name = "PROFILE.toml", requires = "robot")]
+    pub out: Option<PathBuf>,
+    /// The robot the draft profile describes (builtin:NAME, URDF/MJCF, profile)
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: Option<String>,
 }
 
 #[derive(Args)]
@@ -423,6 +431,15 @@ fn scan(a: &ScanArgs) -> CliResult {
     }
     out += &format!("{} servo(s) found\n", found.len());
     emit(&out, a.json.as_ref(), &v)?;
+    if let (Some(path), Some(robot)) = (&a.out, &a.robot) {
+        let d = crate::draft_profile::draft(&found, robot)?;
+        std::fs::write(path, &d.toml)
+            .map_err(|e| CliError::new(format!("--out {}: {e}", path.display())))?;
+        for n in &d.notes {
+            eprintln!("guessed: {n}");
+        }
+        eprintln!("wrote the draft profile {} (check it)", path.display());
+    }
     Ok(Outcome::Ok)
 }
 

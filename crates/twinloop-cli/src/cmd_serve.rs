@@ -140,25 +140,13 @@ fn serve_description(
         a.added.apply(&mut robot)?;
         return Ok(Some(robot));
     }
-    let Some(urdf) = &mapping.urdf else {
-        return Ok(None);
-    };
-    let s = urdf.display().to_string();
-    if let Some(name) = s.strip_prefix("builtin:") {
-        let mut robot = twinloop_description::builtin::builtin(name);
-        if let Some(r) = robot.as_mut() {
-            a.added.apply(r)?;
-        }
-        return Ok(robot);
-    }
-    let path = match Path::new(&mapping.source).parent() {
-        Some(d) if urdf.is_relative() => d.join(urdf),
-        _ => urdf.clone(),
-    };
-    match load_description(&path.display().to_string()) {
-        Ok((mut r, _)) => {
-            a.added.apply(&mut r)?;
-            Ok(Some(r))
+    match crate::common::profile_description(mapping) {
+        Ok(r) => {
+            let mut robot = r.map(|(robot, _)| robot);
+            if let Some(r) = robot.as_mut() {
+                a.added.apply(r)?;
+            }
+            Ok(robot)
         }
         Err(e) if a.servo_model == "sim" => Err(e),
         Err(_) => Ok(None),
@@ -195,7 +183,7 @@ pub fn run(a: ServeArgs) -> CliResult {
         ));
     }
     if let (true, Some(robot)) = (simulate, &robot) {
-        return serve_simulated(&a, &mapping, &servos, robot);
+        return serve_simulated(&a, &mapping, robot);
     }
     if a.held {
         return Err(CliError::new(
@@ -207,23 +195,17 @@ pub fn run(a: ServeArgs) -> CliResult {
             "--servo-params sets the simulated servos: it needs --servo-model sim (or auto with a description)",
         ));
     }
-    let bus = VirtualBus::with_tracking_model(&servos);
+    let bus = VirtualBus::with_tracking_model_and_boards(&servos, &mapping.bus_boards());
     serve_on(
         &a,
         &mapping,
-        &servos,
         bus,
         "stand-in servos (each tracks its goal, 50 ms lag; no physics)",
     )
 }
 
 /// Serve the physics simulation of the robot standing on the ground.
-fn serve_simulated(
-    a: &ServeArgs,
-    mapping: &RobotMapping,
-    servos: &[BusServo],
-    robot: &Description,
-) -> CliResult {
+fn serve_simulated(a: &ServeArgs, mapping: &RobotMapping, robot: &Description) -> CliResult {
     let options = twinloop_virtual::VirtualRobotOptions {
         torque_on: !a.torque_off,
         realtime_factor: a.realtime_factor,
@@ -261,7 +243,7 @@ fn serve_simulated(
     let done = std::sync::atomic::AtomicBool::new(false);
     let code = std::thread::scope(|s| {
         s.spawn(|| warn_when_behind(&sim, &done));
-        let code = serve_watched(a, mapping, servos, bus, &what, &sim, live);
+        let code = serve_watched(a, mapping, bus, &what, &sim, live);
         done.store(true, Ordering::Relaxed);
         code
     });
@@ -305,19 +287,18 @@ fn warn_when_behind(sim: &twinloop_virtual::SimHandle, done: &std::sync::atomic:
 fn serve_watched<B: twinloop_link::VirtualServoBackend>(
     a: &ServeArgs,
     mapping: &RobotMapping,
-    servos: &[BusServo],
     bus: VirtualBus<B>,
     what: &str,
     sim: &twinloop_virtual::SimHandle,
     live: Option<twinloop_view::LivePublisher>,
 ) -> CliResult {
     let Some(mut live) = live else {
-        return serve_on(a, mapping, servos, bus, what);
+        return serve_on(a, mapping, bus, what);
     };
     let done = std::sync::atomic::AtomicBool::new(false);
     std::thread::scope(|s| {
         s.spawn(|| crate::cmd_view::watch_simulation(&mut live, sim, &done));
-        let code = serve_on(a, mapping, servos, bus, what);
+        let code = serve_on(a, mapping, bus, what);
         done.store(true, Ordering::Relaxed);
         code
     })
@@ -365,13 +346,12 @@ fn serve_bench(a: &ServeArgs, model: &str) -> CliResult {
         "the servo model of docs/servo-models.md swinging a {} kg pendulum at {} m (real time x{})",
         load.mass, load.length, a.realtime_factor
     );
-    serve_on(a, &mapping, &servos, bus, &what)
+    serve_on(a, &mapping, bus, &what)
 }
 
 fn serve_on<B: twinloop_link::VirtualServoBackend>(
     a: &ServeArgs,
     mapping: &RobotMapping,
-    servos: &[BusServo],
     mut bus: VirtualBus<B>,
     what: &str,
 ) -> CliResult {
@@ -384,7 +364,7 @@ fn serve_on<B: twinloop_link::VirtualServoBackend>(
     };
     let banner = Banner {
         mapping,
-        servos: servos.len() - mapping.boards.len(),
+        servos: mapping.joints.len(),
         what,
         emulate_baud: options.emulate_baud,
     };
@@ -418,7 +398,10 @@ impl Banner<'_> {
             }
         }
         for b in &self.mapping.boards {
-            models.push(format!("{} board at id {} ({})", b.model, b.id, b.protocol));
+            models.push(format!(
+                "{} board at id {} ({})",
+                b.kind.name, b.id, b.protocol
+            ));
         }
         format!(
             "serving {} ({} servos: {}) on {place}\nmoved by {}\n{}\nCtrl-C stops.\n",

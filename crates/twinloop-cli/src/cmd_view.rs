@@ -200,12 +200,6 @@ pub fn start_live_for_mapping(
         )));
     };
     let spec = urdf.display().to_string();
-    let spec = match Path::new(&mapping.source).parent() {
-        Some(dir) if !spec.starts_with("builtin:") && urdf.is_relative() => {
-            dir.join(urdf).display().to_string()
-        }
-        _ => spec,
-    };
     let (robot, _) = common::load_description(&spec)?;
     start_live(args, &robot, Some(&spec), &mapping.joint_names())
 }

@@ -67,8 +67,53 @@ pub fn sniff_format(text: &str) -> Format {
 }
 
 /// The help text of every `--robot` option.
-pub const ROBOT_HELP: &str =
-    "Robot description: a URDF or MJCF file, or builtin:NAME (km20, lab17)";
+pub const ROBOT_HELP: &str = "Robot description: a URDF or MJCF file, a robot profile (.toml: its \
+     description, with its joint roles), or builtin:NAME (km20, lab17, op3, darwin_op)";
+
+/// Whether `spec` names a robot profile (a mapping TOML) rather than a description.
+pub fn is_profile(spec: &str) -> bool {
+    Path::new(spec)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+}
+
+/// The description a profile names (`[robot] description`, relative to the profile
+/// already), with the profile's `[roles]`; `None` if it names none.
+pub fn profile_description(
+    mapping: &twinloop_link::RobotMapping,
+) -> Result<Option<(Description, Format)>, CliError> {
+    let Some(d) = &mapping.urdf else {
+        return Ok(None);
+    };
+    let spec = d.display().to_string();
+    if is_profile(&spec) {
+        return Err(CliError::new(format!(
+            "{}: robot.description {spec:?} is a profile; name a URDF or MJCF file or builtin:NAME",
+            mapping.source
+        )));
+    }
+    let (mut robot, format) = read_description(&spec)?;
+    attach_roles(&mut robot, mapping)?;
+    Ok(Some((robot, format)))
+}
+
+/// Put a profile's `[roles]` on its description, each role's joint checked to be one
+/// of the description's.
+pub fn attach_roles(
+    robot: &mut Description,
+    mapping: &twinloop_link::RobotMapping,
+) -> Result<(), CliError> {
+    for (role, joint) in &mapping.roles {
+        if robot.joint(joint).is_none() {
+            return Err(CliError::new(format!(
+                "{}: roles.{role}: \"{joint}\" is not a joint of \"{}\"",
+                mapping.source, robot.name
+            )));
+        }
+        robot.roles.set(role, joint.clone());
+    }
+    Ok(())
+}
 
 /// Load a robot description: `builtin:NAME` or a URDF or MJCF file (told apart by
 /// the root element). The error names the file, line and element at fault. A file
@@ -90,9 +135,21 @@ pub fn load_description(spec: &str) -> Result<(Description, Format), CliError> {
 /// [`load_description`] without the unit-scale refusal: for `model lint`, which
 /// reports it among its findings.
 pub fn read_description(spec: &str) -> Result<(Description, Format), CliError> {
-    if spec.starts_with("builtin:") {
-        let robot = twinloop_description::builtin::resolve(spec)?;
+    if let Some(name) = spec.strip_prefix("builtin:") {
+        let mut robot = twinloop_description::builtin::resolve(spec)?;
+        // A built-in profile of the same name gives the joint roles.
+        if let Some(profile) = twinloop_link::RobotMapping::builtin(name) {
+            attach_roles(&mut robot, &profile)?;
+        }
         return Ok((robot, Format::Builtin));
+    }
+    if is_profile(spec) {
+        let mapping = twinloop_link::RobotMapping::load(spec)?;
+        return profile_description(&mapping)?.ok_or_else(|| {
+            CliError::new(format!(
+                "{spec}: the profile names no description; add description = \"FILE\" to its [robot]"
+            ))
+        });
     }
     let path = Path::new(spec);
     let format = std::fs::read_to_string(path)

@@ -21,6 +21,7 @@ mod cmd_simulate;
 mod cmd_validate;
 mod cmd_view;
 mod common;
+mod draft_profile;
 mod error;
 mod limb;
 mod progress;

@@ -87,7 +87,13 @@ fn plan_prints_the_wiretime_budget() {
 
 #[test]
 fn scan_read_and_record_a_served_robot() {
-    let (mut server, pty) = serve(&["--map", "builtin:op3"], &["--no-timing"]);
+    // Stand-in servos, resting exactly at their centres (builtin:op3's description is
+    // compiled in, so without this the robot would be simulated standing, its knees
+    // bent a few counts by its weight).
+    let (mut server, pty) = serve(
+        &["--map", "builtin:op3", "--servo-model", "ideal"],
+        &["--no-timing"],
+    );
     let o = twinloop(&[
         "link",
         "scan",
@@ -100,8 +106,13 @@ fn scan_read_and_record_a_served_robot() {
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(v.as_array().unwrap().len(), 20);
+    // 20 XM430-W350 and the OpenCR at id 200 (model number 0x7400, no servo model).
+    assert_eq!(v.as_array().unwrap().len(), 21);
     assert_eq!(v[0]["model"], "XM430-W350");
+    assert_eq!(
+        (v[20]["id"].as_u64(), v[20]["model_number"].as_u64()),
+        (Some(200), Some(0x7400))
+    );
     // The scan says what it does before the seconds it takes.
     assert!(
         text(&o.stderr).contains("scanning protocol 2.0, ids 0-252"),

@@ -512,6 +512,52 @@ pub struct Description {
     /// Gravity in the world frame when the file sets it (MJCF `<option gravity>`,
     /// zero with `<flag gravity="disable">`); `None` means (0, 0, -[`crate::GRAVITY`]).
     pub gravity: Option<[f64; 3]>,
+    /// Which joints play the parts experiments need, from a robot profile's `[roles]`
+    /// (no URDF or MJCF holds them: empty for a description read from one).
+    pub roles: JointRoles,
+}
+
+/// The joint roles an experiment asks for, by the names a robot profile's `[roles]`
+/// table uses ([`JointRoles::NAMES`]), each a joint of the description.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct JointRoles {
+    /// Joint names, in the order of [`JointRoles::NAMES`].
+    pub joints: [Option<String>; 8],
+}
+
+impl JointRoles {
+    /// The roles: ankle pitch and roll, hip roll and knee, each left and right.
+    pub const NAMES: [&'static str; 8] = [
+        "left_ankle_pitch",
+        "right_ankle_pitch",
+        "left_ankle_roll",
+        "right_ankle_roll",
+        "left_hip_roll",
+        "right_hip_roll",
+        "left_knee",
+        "right_knee",
+    ];
+
+    /// The joint playing `role` (one of [`JointRoles::NAMES`]), if named.
+    pub fn get(&self, role: &str) -> Option<&str> {
+        let k = JointRoles::NAMES.iter().position(|n| *n == role)?;
+        self.joints[k].as_deref()
+    }
+
+    /// Name the joint playing `role`; `false` if `role` is not one of the names.
+    pub fn set(&mut self, role: &str, joint: impl Into<String>) -> bool {
+        match JointRoles::NAMES.iter().position(|n| *n == role) {
+            Some(k) => {
+                self.joints[k] = Some(joint.into());
+                true
+            }
+            None => false,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.joints.iter().all(|j| j.is_none())
+    }
 }
 
 impl Description {

@@ -45,6 +45,7 @@ fn source_summary(rel: &str) -> BTreeMap<String, String> {
     let (folder, file) = rel.split_once('/').unwrap();
     let file = file
         .replace(".nomesh.urdf", ".urdf")
+        .replace(".feet.urdf", ".urdf")
         .replace(".decimated.urdf", ".urdf");
     let text = std::fs::read_to_string(models_dir().join(folder).join("SOURCE.md")).unwrap();
     let header = format!("### `{file}`");
@@ -148,6 +149,8 @@ const URDFS: &[&str] = &[
     "coman/coman.nomesh.urdf",
     "darwin_op/robotis_op.urdf",
     "darwin_op/robotis_op.nomesh.urdf",
+    // The nomesh file with sole boxes (SOURCE.md): the same inertials.
+    "darwin_op/robotis_op.feet.urdf",
     "icub/iCubGazeboV2_5.urdf",
     "icub/iCubGazeboV2_5.nomesh.urdf",
     "icub/variants/iCubErzelli02.urdf",
@@ -276,6 +279,7 @@ fn models_without_findings() {
         "op3/robotis_op3.nomesh.urdf",
         "darwin_op/robotis_op.urdf",
         "darwin_op/robotis_op.nomesh.urdf",
+        "darwin_op/robotis_op.feet.urdf",
         "icub/iCubGazeboV2_5.urdf",
         "icub/iCubGazeboV2_5.nomesh.urdf",
         "icub/variants/iCubErzelli02.urdf",

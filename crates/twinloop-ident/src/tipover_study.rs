@@ -195,11 +195,21 @@ fn err(e: impl std::fmt::Display) -> String {
     e.to_string()
 }
 
-/// Ankle and foot names: the built-in robot's, or found by name in a description
-/// (`*ank*pitch*` and `*ank*roll*` joints with a left/right prefix; the feet are the
-/// roll joints' child links).
+/// Ankle and foot names: a profile's `[roles]` (on the description,
+/// [`Description::roles`]), else the built-in robot's, else found by name
+/// (`*ank*pitch*` and `*ank*roll*` joints with a left/right prefix, said on stderr);
+/// the feet are the roll joints' child links.
 pub(crate) fn ankle_names(robot: &Description) -> Result<[String; 6], String> {
-    if let Some(f) = twinloop_description::builtin::foot_geometry(&robot.name) {
+    let roles = [
+        "left_ankle_pitch",
+        "right_ankle_pitch",
+        "left_ankle_roll",
+        "right_ankle_roll",
+    ];
+    let from_roles = roles.map(|r| robot.roles.get(r).map(str::to_string));
+    let [lp, rp, lr, rr] = if let [Some(a), Some(b), Some(c), Some(d)] = from_roles {
+        [a, b, c, d]
+    } else if let Some(f) = twinloop_description::builtin::foot_geometry(&robot.name) {
         return Ok([
             f.left_ankle_pitch,
             f.right_ankle_pitch,
@@ -208,73 +218,99 @@ pub(crate) fn ankle_names(robot: &Description) -> Result<[String; 6], String> {
             f.left_foot,
             f.right_foot,
         ]);
-    }
-    let find = |kind: &str, left: bool| -> Result<String, String> {
-        let hits: Vec<&str> = robot
-            .joints
-            .iter()
-            .map(|j| j.name.as_str())
-            .filter(|n| {
-                let l = n.to_lowercase();
-                let side = if left {
-                    l.starts_with('l') || l.contains("left")
-                } else {
-                    l.starts_with('r') || l.contains("right")
-                };
-                (l.contains("ank") || l.contains("ankle")) && l.contains(kind) && side
-            })
-            .collect();
-        match hits.as_slice() {
-            [one] => Ok(one.to_string()),
-            _ => Err(format!(
-                "cannot tell the {} ankle {kind} joint of \"{}\" by name (candidates: {:?})",
-                if left { "left" } else { "right" },
-                robot.name,
-                hits
-            )),
-        }
+    } else {
+        let found = [
+            guess_joint(robot, &["ank", "pitch"], true, "left ankle pitch")?,
+            guess_joint(robot, &["ank", "pitch"], false, "right ankle pitch")?,
+            guess_joint(robot, &["ank", "roll"], true, "left ankle roll")?,
+            guess_joint(robot, &["ank", "roll"], false, "right ankle roll")?,
+        ];
+        say_guessed(robot, &roles, &found);
+        found
     };
-    let (lp, rp, lr, rr) = (
-        find("pitch", true)?,
-        find("pitch", false)?,
-        find("roll", true)?,
-        find("roll", false)?,
-    );
-    let child = |j: &str| robot.joint(j).map(|j| j.child.clone()).unwrap_or_default();
-    let (lf, rf) = (child(&lr), child(&rr));
+    let child = |j: &str| -> Result<String, String> {
+        robot
+            .joint(j)
+            .map(|j| j.child.clone())
+            .ok_or_else(|| format!("no joint \"{j}\" in \"{}\" (a role names it)", robot.name))
+    };
+    let (lf, rf) = (child(&lr)?, child(&rr)?);
     Ok([lp, rp, lr, rr, lf, rf])
 }
 
-/// The hip roll joints (left, right), found by name: `*hip*roll*` with a left/right
-/// prefix.
+/// The one joint of `robot` whose lower-cased name holds every word of `words` and
+/// starts with the side's letter (or holds "left"/"right"); else an error naming
+/// the candidates and how to name the joint in a profile.
+fn guess_joint(
+    robot: &Description,
+    words: &[&str],
+    left: bool,
+    what: &str,
+) -> Result<String, String> {
+    let hits: Vec<&str> = robot
+        .joints
+        .iter()
+        .map(|j| j.name.as_str())
+        .filter(|n| {
+            let l = n.to_lowercase();
+            let side = if left {
+                l.starts_with('l') || l.contains("left")
+            } else {
+                l.starts_with('r') || l.contains("right")
+            };
+            side && words.iter().all(|w| l.contains(w))
+        })
+        .collect();
+    match hits.as_slice() {
+        [one] => Ok(one.to_string()),
+        _ => Err(format!(
+            "cannot tell the {what} joint of \"{}\" by name (candidates: {:?}); \
+             name it in a robot profile's [roles] ({} = \"JOINT\", docs/link.md) and pass the profile as --robot",
+            robot.name,
+            hits,
+            what.replace(' ', "_")
+        )),
+    }
+}
+
+/// Say on stderr which joints were guessed by name, once per robot and role set, so
+/// a wrong guess is seen before an experiment's numbers are trusted.
+fn say_guessed(robot: &Description, roles: &[&str], joints: &[String]) {
+    use std::sync::Mutex;
+    static SAID: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    let list: Vec<String> = roles
+        .iter()
+        .zip(joints)
+        .map(|(r, j)| format!("{r} = \"{j}\""))
+        .collect();
+    let key = format!("{}: {}", robot.name, list.join(", "));
+    let mut said = SAID.lock().unwrap_or_else(|p| p.into_inner());
+    if !said.contains(&key) {
+        eprintln!(
+            "note: \"{}\" has no [roles] for these joints; guessed by name: {} (name them in a robot profile to be sure)",
+            robot.name,
+            list.join(", ")
+        );
+        said.push(key);
+    }
+}
+
+/// The hip roll joints (left, right): a profile's `[roles]`, else found by name
+/// (`*hip*roll*` with a left/right prefix, said on stderr).
 pub(crate) fn hip_roll_names(robot: &Description) -> Result<[String; 2], String> {
-    let find = |left: bool| -> Result<String, String> {
-        let hits: Vec<&str> = robot
-            .joints
-            .iter()
-            .map(|j| j.name.as_str())
-            .filter(|n| {
-                let l = n.to_lowercase();
-                let side = if left {
-                    l.starts_with('l') || l.contains("left")
-                } else {
-                    l.starts_with('r') || l.contains("right")
-                };
-                l.contains("hip") && l.contains("roll") && side
-            })
-            .collect();
-        match hits.as_slice() {
-            [one] => Ok(one.to_string()),
-            _ => Err(format!(
-                "cannot tell the {} hip roll joint of \"{}\" by name (candidates: {:?}); \
-                 the sideways lean turns the hip rolls with the ankle rolls",
-                if left { "left" } else { "right" },
-                robot.name,
-                hits
-            )),
-        }
-    };
-    Ok([find(true)?, find(false)?])
+    let roles = ["left_hip_roll", "right_hip_roll"];
+    if let [Some(l), Some(r)] = roles.map(|k| robot.roles.get(k)) {
+        return Ok([l.to_string(), r.to_string()]);
+    }
+    let why = " (the sideways lean turns the hip rolls with the ankle rolls)";
+    let found = [
+        guess_joint(robot, &["hip", "roll"], true, "left hip roll").map_err(|e| e + why)?,
+        guess_joint(robot, &["hip", "roll"], false, "right hip roll").map_err(|e| e + why)?,
+    ];
+    if twinloop_description::builtin::foot_geometry(&robot.name).is_none() {
+        say_guessed(robot, &roles, &found);
+    }
+    Ok(found)
 }
 
 /// The foot geometry measured on the model in the standing pose: sole points of the feet

@@ -28,10 +28,9 @@
 //!   CM730 register map (its firmware, derived from ROBOTIS's, reports 0x7301)
 //!   agree on it.
 //!
-//! The OP3's OpenCR (id 200, Protocol 2.0) is not modelled: its control table was
-//! not in the material read.
+//! Other boards (the OP3's OpenCR, a profile's own) and the one decoder of every
+//! board's inertial registers are in [`crate::board_type`].
 
-use crate::control_table::ModelTable;
 use crate::register::{DEGREE, Item};
 use crate::servo_model::ServoModel;
 
@@ -160,29 +159,6 @@ pub fn gyro_items() -> [Item; 3] {
 
 pub fn accel_items() -> [Item; 3] {
     [Item::AccelX, Item::AccelY, Item::AccelZ]
-}
-
-/// Decode a board's inertial block (read from [`CM730_IMU_BLOCK`]'s address) into
-/// SI units along the board's axes. `None` if the model has no such registers or
-/// a value is outside its 10 bits (a damaged reply).
-pub fn decode_imu(model: ServoModel, base: u16, block: &[u8]) -> Option<ImuSample> {
-    let t = model.table();
-    let mut out = ImuSample::default();
-    for (k, item) in gyro_items().into_iter().chain(accel_items()).enumerate() {
-        let r = t.item(item)?;
-        let o = r.address.checked_sub(base)? as usize;
-        let bytes = block.get(o..o + r.size as usize)?;
-        if !r.plausible(bytes) {
-            return None;
-        }
-        let v = r.to_si(r.decode(bytes));
-        if k < 3 {
-            out.gyro[k] = v;
-        } else {
-            out.accel[k - 3] = v;
-        }
-    }
-    Some(out)
 }
 
 /// The host's trunk tilt estimate from a board's gyro and accelerometer: a

@@ -9,6 +9,7 @@
 //! a simulator plugs into the virtual robot through [`VirtualServoBackend`].
 
 pub mod board;
+pub mod board_type;
 pub mod client;
 pub mod control_cycle;
 pub mod control_table;
@@ -28,6 +29,7 @@ pub mod transport;
 pub mod wire_time;
 
 pub use board::{BoardAxes, ImuSample, TiltFilter};
+pub use board_type::{BoardType, CustomBoard};
 pub use client::{BulkRead, Client, ClientConfig, ClientStats, FoundServo};
 pub use control_cycle::{ControlCycle, CycleServo, CycleSummary, ReadMethod, ServoReading};
 pub use control_table::{ControlTable, ModelTable};
@@ -40,7 +42,7 @@ pub use packet::{EncodeError, PacketWriter};
 pub use protocol::{BROADCAST_ID, Protocol};
 pub use real_robot::{DynamixelRobot, HostClock};
 pub use register::{Access, Area, Encoding, Item, Register, Unit};
-pub use servo::{BusServo, TrackingServoModel, VirtualBus, VirtualServoBackend};
+pub use servo::{BusBoard, BusServo, TrackingServoModel, VirtualBus, VirtualServoBackend};
 pub use servo_model::{ServoModel, ServoSpec, baud_from_register, baud_to_register};
 pub use status_error::{ErrorBitV1, ErrorNumberV2, StatusError};
 pub use transport::Transport;

@@ -1,16 +1,23 @@
-//! The robot mapping file: which servo moves which URDF joint, and how a joint
-//! angle becomes a servo angle. It is the per-robot calibration users keep across
-//! tools.
+//! The robot profile (mapping file): which servo moves which description joint, how
+//! a joint angle becomes a servo angle, the IMU boards on the bus, and which joints
+//! play the roles experiments need. It is the per-robot calibration users keep
+//! across tools.
 //!
 //! ```toml
 //! [robot]
 //! name = "op3"
-//! urdf = "models/op3/robotis_op3.urdf"   # optional: the robot (a URDF/MJCF path or builtin:NAME)
-//! port = "/dev/ttyUSB0"                  # optional defaults for the CLI
+//! description = "op3.xml"   # optional: a URDF/MJCF path, relative to this file's
+//!                           # folder (never the current one), or builtin:NAME;
+//!                           # `urdf = ...` is the same field's older name
+//! port = "/dev/ttyUSB0"     # optional defaults for the CLI
 //! baud = 1000000
 //!
+//! [roles]                   # optional: role = joint, each one of the [[joint]]s
+//! left_ankle_pitch = "l_ank_pitch"    # also right_ankle_pitch, left/right_ankle_roll,
+//! left_hip_roll = "l_hip_roll"        # left/right_hip_roll, left/right_knee
+//!
 //! [[joint]]
-//! name = "r_sho_pitch"     # URDF joint name
+//! name = "r_sho_pitch"     # description joint name
 //! id = 1                   # servo id
 //! model = "XM430-W350"     # protocol follows from the model; `protocol = 1` for an X or
 //!                          # MX(2.0) servo set to Protocol 1.0 (its Protocol Type register)
@@ -22,24 +29,44 @@
 //!
 //! servo angle = zero + direction * joint angle. Joint order is file order.
 //!
-//! A sub-controller on the same bus (the CM-730's gyroscope and accelerometer) is a
-//! `[[board]]`:
+//! A sub-controller on the same bus (the trunk IMU) is a `[[board]]` of a
+//! [`BoardType`]: `CM-730` (Protocol 1.0), `OpenCR` (2.0, as the OP3 runs it) or
+//! `custom`, described by its own fields:
 //!
 //! ```toml
 //! [[board]]
 //! name = "trunk_imu"       # a name for messages
-//! id = 200                 # the board's id (CM-730: 200)
-//! model = "CM-730"         # the protocol follows from the model; `protocol = 1` checks it
-//! link = "torso"           # the description link carrying the board
-//! axes = ["x", "y", "z"]   # optional: the link axis board X, Y, Z point along (default as here)
+//! id = 200                 # the board's id (CM-730 and OpenCR: 200)
+//! model = "OpenCR"         # the protocol follows from the model; `protocol = 2` checks it
+//! link = "body_link"       # the description link carrying the board
+//! axes = ["-x", "-y", "z"] # optional: the link axis board X, Y, Z point along
+//!
+//! [[board]]                # a team's own board
+//! name = "imu"
+//! id = 120
+//! model = "custom"
+//! protocol = 2             # required
+//! model_number = 4660      # required: what PING answers
+//! gyro = [100, 104, 108]   # required: register addresses of board X, Y, Z
+//! accel = [112, 116, 120]  # required
+//! size = 4                 # bytes per axis (default 2)
+//! signed = true            # default true
+//! gyro_deg_s_per_count = 0.01   # required
+//! accel_g_per_count = 0.0001    # required
+//! center = 0               # the count reading zero (default 0)
+//! link = "torso"
 //! ```
+//!
+//! Every error names the file, line, column and field.
 
 use crate::board::BoardAxes;
+use crate::board_type::{BoardType, CustomBoard};
 use crate::control_table::ModelTable;
 use crate::protocol::Protocol;
 use crate::register::{Item, Register};
 use crate::servo_model::ServoModel;
 use serde::Deserialize;
+use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
@@ -146,13 +173,15 @@ impl JointMapping {
     }
 }
 
-/// A sub-controller board on the bus (the CM-730) and where it sits.
+/// A sub-controller board on the bus (the CM-730, the OpenCR, a custom one) and
+/// where it sits.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BoardMapping {
     pub name: String,
     pub id: u8,
     pub protocol: Protocol,
-    pub model: ServoModel,
+    /// What it answers as and where its IMU registers are.
+    pub kind: &'static BoardType,
     /// The description link the board is fixed to.
     pub link: String,
     /// The link axis each board axis points along.
@@ -165,7 +194,11 @@ pub struct BoardMapping {
 #[derive(Debug, Clone, PartialEq)]
 pub struct RobotMapping {
     pub name: String,
+    /// The robot's description (`[robot] description`, or `urdf`): a path, relative
+    /// to the profile file's folder once loaded, or `builtin:NAME`.
     pub urdf: Option<PathBuf>,
+    /// `[roles]`: (role, joint) in [`RobotMapping::ROLES`] order, the roles named.
+    pub roles: Vec<(String, String)>,
     pub port: Option<String>,
     pub baud: Option<u32>,
     pub joints: Vec<JointMapping>,
@@ -179,6 +212,7 @@ pub struct RobotMapping {
 #[serde(deny_unknown_fields)]
 struct RawFile {
     robot: Option<Spanned<RawRobot>>,
+    roles: Option<BTreeMap<String, Spanned<String>>>,
     #[serde(default)]
     joint: Vec<Spanned<RawJoint>>,
     #[serde(default)]
@@ -194,13 +228,23 @@ struct RawBoard {
     protocol: Option<Spanned<RawProtocol>>,
     link: Spanned<String>,
     axes: Option<Spanned<Vec<String>>>,
+    // A `model = "custom"` board's own description.
+    model_number: Option<Spanned<i64>>,
+    gyro: Option<Spanned<Vec<i64>>>,
+    accel: Option<Spanned<Vec<i64>>>,
+    size: Option<Spanned<i64>>,
+    signed: Option<bool>,
+    gyro_deg_s_per_count: Option<Spanned<f64>>,
+    accel_g_per_count: Option<Spanned<f64>>,
+    center: Option<Spanned<i64>>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRobot {
     name: Option<String>,
-    urdf: Option<String>,
+    description: Option<Spanned<String>>,
+    urdf: Option<Spanned<String>>,
     port: Option<String>,
     baud: Option<Spanned<i64>>,
 }
@@ -340,15 +384,7 @@ fn explicit_protocol(
     Ok(match protocol {
         None => model.protocol(),
         Some(p) => {
-            let parsed = match p.get_ref() {
-                RawProtocol::Int(1) => Some(Protocol::V1),
-                RawProtocol::Int(2) => Some(Protocol::V2),
-                RawProtocol::Float(v) if *v == 1.0 => Some(Protocol::V1),
-                RawProtocol::Float(v) if *v == 2.0 => Some(Protocol::V2),
-                RawProtocol::Text(t) => Protocol::parse(t),
-                _ => None,
-            };
-            let parsed = parsed.ok_or_else(|| at(p.span(), "protocol", "must be 1 or 2".into()))?;
+            let parsed = parse_protocol(p, at)?;
             if !model.speaks(parsed) {
                 return Err(at(
                     p.span(),
@@ -362,6 +398,19 @@ fn explicit_protocol(
             parsed
         }
     })
+}
+
+/// A `protocol` field: 1 or 2 (or "1.0", "2.0").
+fn parse_protocol(p: &Spanned<RawProtocol>, at: &JointError) -> Result<Protocol, MappingError> {
+    let parsed = match p.get_ref() {
+        RawProtocol::Int(1) => Some(Protocol::V1),
+        RawProtocol::Int(2) => Some(Protocol::V2),
+        RawProtocol::Float(v) if *v == 1.0 => Some(Protocol::V1),
+        RawProtocol::Float(v) if *v == 2.0 => Some(Protocol::V2),
+        RawProtocol::Text(t) => Protocol::parse(t),
+        _ => None,
+    };
+    parsed.ok_or_else(|| at(p.span(), "protocol", "must be 1 or 2".into()))
 }
 
 /// The joint's limits: `min` and `max` where given (within what the servo reaches
@@ -427,20 +476,17 @@ fn parse_board(
     if name.is_empty() {
         return Err(at(b.name.span(), "name", "empty".into()));
     }
-    let model = ServoModel::parse(b.model.get_ref())
-        .filter(|m| m.is_board())
-        .ok_or_else(|| {
-            at(
-                b.model.span(),
-                "model",
-                format!(
-                    "unknown board {:?}; known: {}",
-                    b.model.get_ref(),
-                    ServoModel::known_boards()
-                ),
-            )
-        })?;
-    let protocol = explicit_protocol(b.protocol.as_ref(), model, &at)?;
+    let kind = board_kind(&b, &name, &at)?;
+    let protocol = kind.protocol;
+    if let Some(p) = &b.protocol
+        && parse_protocol(p, &at)? != protocol
+    {
+        return Err(at(
+            p.span(),
+            "protocol",
+            format!("{} runs {protocol}", kind.name),
+        ));
+    }
     let id = *b.id.get_ref();
     if id < 0 || id > protocol.max_id() as i64 {
         return Err(at(
@@ -492,11 +538,177 @@ fn parse_board(
         name,
         id,
         protocol,
-        model,
+        kind,
         link,
         axes,
         line,
     })
+}
+
+/// A board's type: a built-in one by `model`, or `model = "custom"` described by
+/// the entry's own fields (which a built-in board refuses).
+fn board_kind(
+    b: &RawBoard,
+    name: &str,
+    at: &JointError,
+) -> Result<&'static BoardType, MappingError> {
+    let model = b.model.get_ref().trim();
+    if !model.eq_ignore_ascii_case("custom") {
+        let own = [
+            ("model_number", b.model_number.as_ref().map(|v| v.span())),
+            ("gyro", b.gyro.as_ref().map(|v| v.span())),
+            ("accel", b.accel.as_ref().map(|v| v.span())),
+            ("size", b.size.as_ref().map(|v| v.span())),
+            (
+                "gyro_deg_s_per_count",
+                b.gyro_deg_s_per_count.as_ref().map(|v| v.span()),
+            ),
+            (
+                "accel_g_per_count",
+                b.accel_g_per_count.as_ref().map(|v| v.span()),
+            ),
+            ("center", b.center.as_ref().map(|v| v.span())),
+        ];
+        if let Some((field, Some(span))) = own.into_iter().find(|(_, s)| s.is_some()) {
+            return Err(at(
+                span,
+                field,
+                format!("only a model = \"custom\" board takes this ({model} has its own table)"),
+            ));
+        }
+        return BoardType::builtin(model).ok_or_else(|| {
+            at(
+                b.model.span(),
+                "model",
+                format!(
+                    "unknown board {model:?}; known: {}, or \"custom\" with its registers",
+                    BoardType::BUILTIN.join(", ")
+                ),
+            )
+        });
+    }
+    let missing = |field: &str| at(b.model.span(), field, "a custom board needs it".into());
+    let protocol = match &b.protocol {
+        Some(p) => parse_protocol(p, at)?,
+        None => return Err(missing("protocol")),
+    };
+    let model_number = b
+        .model_number
+        .as_ref()
+        .ok_or_else(|| missing("model_number"))?;
+    let model_number = u16::try_from(*model_number.get_ref()).map_err(|_| {
+        at(
+            model_number.span(),
+            "model_number",
+            "must be 0..=65535".into(),
+        )
+    })?;
+    let addresses =
+        |field: &str, v: &Option<Spanned<Vec<i64>>>| -> Result<[u16; 3], MappingError> {
+            let v = v.as_ref().ok_or_else(|| missing(field))?;
+            let a: Vec<u16> = v
+                .get_ref()
+                .iter()
+                .filter_map(|&x| u16::try_from(x).ok())
+                .collect();
+            <[u16; 3]>::try_from(a).map_err(|_| {
+                at(
+                    v.span(),
+                    field,
+                    "three register addresses (board X, Y, Z), each 0..=65535".into(),
+                )
+            })
+        };
+    let scale = |field: &str, v: &Option<Spanned<f64>>| -> Result<f64, MappingError> {
+        Ok(*v.as_ref().ok_or_else(|| missing(field))?.get_ref())
+    };
+    let size = b.size.as_ref().map(|v| *v.get_ref()).unwrap_or(2);
+    let center = b.center.as_ref().map(|v| *v.get_ref()).unwrap_or(0);
+    let custom = CustomBoard {
+        name: name.to_string(),
+        protocol,
+        model_number,
+        gyro: addresses("gyro", &b.gyro)?,
+        accel: addresses("accel", &b.accel)?,
+        size: u8::try_from(size).unwrap_or(0),
+        signed: b.signed.unwrap_or(true),
+        gyro_deg_s_per_count: scale("gyro_deg_s_per_count", &b.gyro_deg_s_per_count)?,
+        accel_g_per_count: scale("accel_g_per_count", &b.accel_g_per_count)?,
+        center: i32::try_from(center).unwrap_or(i32::MAX),
+    };
+    BoardType::custom(&custom).map_err(|m| at(b.model.span(), "model", m))
+}
+
+/// The `[roles]` table: each key one of [`RobotMapping::ROLES`], each value one of
+/// the profile's `[[joint]]` names. Kept in [`RobotMapping::ROLES`] order.
+fn read_roles(
+    roles: BTreeMap<String, Spanned<String>>,
+    joints: &[JointMapping],
+    err_at: &dyn Fn(usize, String) -> MappingError,
+) -> Result<Vec<(String, String)>, MappingError> {
+    let mut out = Vec::with_capacity(roles.len());
+    for (role, joint) in &roles {
+        if !RobotMapping::ROLES.contains(&role.as_str()) {
+            return Err(err_at(
+                joint.span().start,
+                format!(
+                    "roles.{role}: not a role; roles: {}",
+                    RobotMapping::ROLES.join(", ")
+                ),
+            ));
+        }
+        let name = joint.get_ref().trim();
+        if name.is_empty() {
+            return Err(err_at(joint.span().start, format!("roles.{role}: empty")));
+        }
+        if !joints.is_empty() && !joints.iter().any(|j| j.name == name) {
+            return Err(err_at(
+                joint.span().start,
+                format!("roles.{role}: {name:?} is no [[joint]] of this profile"),
+            ));
+        }
+    }
+    for role in RobotMapping::ROLES {
+        if let Some(j) = roles.get(role) {
+            out.push((role.to_string(), j.get_ref().trim().to_string()));
+        }
+    }
+    Ok(out)
+}
+
+/// The fields of a custom board's entry, as [`board_kind`] reads them.
+fn custom_board_toml(b: &BoardType) -> String {
+    use crate::board::{accel_items, gyro_items};
+    use crate::register::{Encoding, Unit};
+    let addr = |items: [crate::register::Item; 3]| {
+        items.map(|i| b.register(i).map(|r| r.address).unwrap_or(0))
+    };
+    let Some(g) = b.register(crate::register::Item::GyroX) else {
+        return String::new();
+    };
+    let a = b.register(crate::register::Item::AccelX).unwrap_or(g);
+    let (gyro_scale, center) = match g.unit {
+        Unit::Gyro {
+            rad_s_per_unit,
+            center,
+        } => (rad_s_per_unit / crate::register::DEGREE, center),
+        _ => (0.0, 0),
+    };
+    let accel_scale = match a.unit {
+        Unit::Accel { m_s2_per_unit, .. } => m_s2_per_unit / crate::board::STANDARD_GRAVITY,
+        _ => 0.0,
+    };
+    format!(
+        "model_number = {}\ngyro = {:?}\naccel = {:?}\nsize = {}\nsigned = {}\ngyro_deg_s_per_count = {:?}\naccel_g_per_count = {:?}\ncenter = {}\n",
+        b.model_number,
+        addr(gyro_items()),
+        addr(accel_items()),
+        g.size,
+        g.encoding == Encoding::Signed,
+        gyro_scale,
+        accel_scale,
+        center
+    )
 }
 
 /// 1-based line and column of byte `offset` in `text`.
@@ -509,10 +721,24 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
 
 const BUILTIN_KM20: &str = include_str!("mappings/km20.toml");
 const BUILTIN_OP3: &str = include_str!("mappings/op3.toml");
+const BUILTIN_DARWIN_OP: &str = include_str!("mappings/darwin_op.toml");
 
 impl RobotMapping {
     /// Names after `builtin:`.
-    pub const BUILTINS: [&'static str; 2] = ["km20", "op3"];
+    pub const BUILTINS: [&'static str; 3] = ["km20", "op3", "darwin_op"];
+
+    /// The roles a `[roles]` table may name (the same names as
+    /// `twinloop_description::JointRoles::NAMES`, which a CLI test holds equal).
+    pub const ROLES: [&'static str; 8] = [
+        "left_ankle_pitch",
+        "right_ankle_pitch",
+        "left_ankle_roll",
+        "right_ankle_roll",
+        "left_hip_roll",
+        "right_hip_roll",
+        "left_knee",
+        "right_knee",
+    ];
 
     /// A mapping from `builtin:NAME` or a TOML file path.
     pub fn resolve(spec: &str) -> Result<RobotMapping, MappingError> {
@@ -530,18 +756,23 @@ impl RobotMapping {
         }
     }
 
-    /// A built-in mapping: `km20` (the FIBO KM kid-size robot of the seed papers: 20
-    /// joints, RX-64 legs and RX-28 arms and head on Protocol 1.0) or `op3` (ROBOTIS
-    /// OP3: 20 XM430-W350 on Protocol 2.0). Both use the OP3 URDF's joint names.
+    /// A built-in profile: `km20` (the FIBO KM kid-size robot of the seed papers: 20
+    /// joints, RX-64 knees and RX-28 elsewhere on Protocol 1.0, a CM-730), `op3`
+    /// (ROBOTIS OP3: 20 XM430-W350 on Protocol 2.0, the OpenCR) or `darwin_op`
+    /// (ROBOTIS Darwin-OP: 20 MX-28 on Protocol 1.0, the CM-730). Each names its
+    /// description as `builtin:NAME` (built into twinloop-description).
     pub fn builtin(name: &str) -> Option<RobotMapping> {
         let text = match name {
             "km20" => BUILTIN_KM20,
             "op3" => BUILTIN_OP3,
+            "darwin_op" => BUILTIN_DARWIN_OP,
             _ => return None,
         };
         Some(RobotMapping::parse(text, &format!("builtin:{name}")).expect("built-ins are valid"))
     }
 
+    /// A profile file. A relative description path in it is relative to the file's
+    /// folder (not the current one), so a profile works from anywhere.
     pub fn load(path: impl AsRef<Path>) -> Result<RobotMapping, MappingError> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path).map_err(|e| MappingError {
@@ -550,7 +781,15 @@ impl RobotMapping {
             column: 0,
             message: format!("cannot read: {e}"),
         })?;
-        RobotMapping::parse(&text, &path.display().to_string())
+        let mut m = RobotMapping::parse(&text, &path.display().to_string())?;
+        if let Some(d) = &m.urdf
+            && d.is_relative()
+            && !d.to_string_lossy().starts_with("builtin:")
+        {
+            let folder = path.parent().unwrap_or(Path::new(""));
+            m.urdf = Some(folder.join(d));
+        }
+        Ok(m)
     }
 
     /// Parse mapping text; `source` names it in errors.
@@ -572,6 +811,7 @@ impl RobotMapping {
         let mut mapping = RobotMapping {
             name: String::new(),
             urdf: None,
+            roles: Vec::new(),
             port: None,
             baud: None,
             joints: Vec::with_capacity(raw.joint.len()),
@@ -581,6 +821,7 @@ impl RobotMapping {
         if let Some(robot) = raw.robot {
             mapping.read_robot(robot.into_inner(), &err_at)?;
         }
+        let roles = raw.roles.unwrap_or_default();
         if raw.joint.is_empty() {
             return Err(err_at(0, "no [[joint]] entries".into()));
         }
@@ -600,6 +841,7 @@ impl RobotMapping {
             )?;
             mapping.boards.push(board);
         }
+        mapping.roles = read_roles(roles, &mapping.joints, &err_at)?;
         Ok(mapping)
     }
 
@@ -610,7 +852,21 @@ impl RobotMapping {
         err_at: &dyn Fn(usize, String) -> MappingError,
     ) -> Result<(), MappingError> {
         self.name = robot.name.unwrap_or_default();
-        self.urdf = robot.urdf.map(PathBuf::from);
+        if let (Some(d), Some(u)) = (&robot.description, &robot.urdf) {
+            return Err(err_at(
+                u.span().start,
+                format!(
+                    "robot.urdf: the description is already given (robot.description = {:?}); keep one",
+                    d.get_ref()
+                ),
+            ));
+        }
+        if let Some(d) = robot.description.or(robot.urdf) {
+            if d.get_ref().trim().is_empty() {
+                return Err(err_at(d.span().start, "robot.description: empty".into()));
+            }
+            self.urdf = Some(PathBuf::from(d.into_inner()));
+        }
         self.port = robot.port;
         if let Some(b) = robot.baud {
             let v = *b.get_ref();
@@ -632,13 +888,40 @@ impl RobotMapping {
 
     /// Everything on the bus, in bus order: the joints' servos, then the boards
     /// (what a virtual bus serves for this mapping).
+    ///
+    /// Boards whose type has a table of its own (the OpenCR, a custom board) are not
+    /// servo catalogue models: they come from [`RobotMapping::bus_boards`], and a bus
+    /// with all of them is `VirtualBus::with_boards(&m.bus(), &m.bus_boards(), ..)`.
     pub fn bus(&self) -> Vec<crate::servo::BusServo> {
         let joints = self.joints.iter().map(|j| (j.id, j.model));
-        let boards = self.boards.iter().map(|b| (b.id, b.model));
+        let boards = self
+            .boards
+            .iter()
+            .filter_map(|b| b.kind.catalogue.map(|m| (b.id, m)));
         joints
             .chain(boards)
             .map(|(id, model)| crate::servo::BusServo { id, model })
             .collect()
+    }
+
+    /// The boards [`RobotMapping::bus`] leaves out: those with a table of their own.
+    pub fn bus_boards(&self) -> Vec<crate::servo::BusBoard> {
+        self.boards
+            .iter()
+            .filter(|b| b.kind.catalogue.is_none())
+            .map(|b| crate::servo::BusBoard {
+                id: b.id,
+                board: b.kind,
+            })
+            .collect()
+    }
+
+    /// The joint playing `role` (one of [`RobotMapping::ROLES`]), if `[roles]` names it.
+    pub fn role(&self, role: &str) -> Option<&str> {
+        self.roles
+            .iter()
+            .find(|(r, _)| r == role)
+            .map(|(_, j)| j.as_str())
     }
 
     /// A mapping for servos given by protocol and ids (`link record --ids`): joints
@@ -673,6 +956,7 @@ impl RobotMapping {
         Ok(RobotMapping {
             name: "servos".into(),
             urdf: None,
+            roles: Vec::new(),
             port: None,
             baud: None,
             joints,
@@ -690,13 +974,19 @@ impl RobotMapping {
         let mut s = String::from("[robot]\n");
         s += &format!("name = {:?}\n", self.name);
         if let Some(u) = &self.urdf {
-            s += &format!("urdf = {:?}\n", u.display().to_string());
+            s += &format!("description = {:?}\n", u.display().to_string());
         }
         if let Some(p) = &self.port {
             s += &format!("port = {p:?}\n");
         }
         if let Some(b) = self.baud {
             s += &format!("baud = {b}\n");
+        }
+        if !self.roles.is_empty() {
+            s += "\n[roles]\n";
+            for (role, joint) in &self.roles {
+                s += &format!("{role} = {joint:?}\n");
+            }
         }
         for j in &self.joints {
             s += &format!(
@@ -712,15 +1002,23 @@ impl RobotMapping {
             );
         }
         for b in &self.boards {
+            let custom = b.kind.catalogue.is_none() && BoardType::builtin(&b.kind.name).is_none();
             s += &format!(
                 "\n[[board]]\nname = {:?}\nid = {}\nmodel = {:?}\nprotocol = {}\nlink = {:?}\naxes = {:?}\n",
                 b.name,
                 b.id,
-                b.model.name(),
+                if custom {
+                    "custom"
+                } else {
+                    b.kind.name.as_str()
+                },
                 b.protocol.number(),
                 b.link,
                 b.axes.names()
             );
+            if custom {
+                s += &custom_board_toml(b.kind);
+            }
         }
         s
     }

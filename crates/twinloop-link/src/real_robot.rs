@@ -7,7 +7,7 @@
 //! faster than real time), or a [`HostClock`] of the caller's (a simulation stepped in
 //! lockstep with its host).
 
-use crate::board::{CM730_IMU_BLOCK, TiltFilter, decode_imu};
+use crate::board::TiltFilter;
 use crate::client::Client;
 use crate::control_cycle::{ControlCycle, CycleServo, ReadMethod, ServoReading};
 use crate::control_table::ModelTable;
@@ -23,7 +23,9 @@ use twinloop_robot::{Imu, Robot, RobotError, RobotState};
 /// cycle, decoded into the link frame, and the tilt filter.
 struct BoardReader {
     board: BoardMapping,
-    block: [u8; CM730_IMU_BLOCK.1 as usize],
+    /// The inertial registers' span ([`crate::BoardType::imu_span`]), read in one.
+    base: u16,
+    block: Vec<u8>,
     filter: TiltFilter,
     /// Robot time of the previous good reading, s.
     last: Option<f64>,
@@ -112,7 +114,8 @@ impl<T: Transport> DynamixelRobot<T> {
         // The first board is the trunk IMU.
         let imu = mapping.boards.first().map(|b| BoardReader {
             board: b.clone(),
-            block: [0; CM730_IMU_BLOCK.1 as usize],
+            base: b.kind.imu_span().0,
+            block: vec![0; b.kind.imu_span().1 as usize],
             filter: TiltFilter::default(),
             last: None,
             outcome: Err(LinkError::Timeout { id: b.id }),
@@ -176,7 +179,7 @@ impl<T: Transport> DynamixelRobot<T> {
         let Some(b) = self.imu.as_mut() else {
             return Ok(());
         };
-        let (base, _) = CM730_IMU_BLOCK;
+        let base = b.base;
         let outcome = self
             .client
             .read(b.board.protocol, b.board.id, base, &mut b.block);
@@ -188,7 +191,7 @@ impl<T: Transport> DynamixelRobot<T> {
             state.imu = None;
             return Err(link_to_robot(&e, &who));
         }
-        let Some(sample) = decode_imu(b.board.model, base, &b.block) else {
+        let Some(sample) = b.board.kind.decode_imu(base, &b.block) else {
             state.imu = None;
             b.outcome = Err(LinkError::Implausible {
                 id: b.board.id,
@@ -197,8 +200,8 @@ impl<T: Transport> DynamixelRobot<T> {
             return Err(RobotError::at_joint(
                 who,
                 format!(
-                    "id {}: gyro or accelerometer value outside 10 bits",
-                    b.board.id
+                    "id {}: gyro or accelerometer value outside its register's range ({})",
+                    b.board.id, b.board.kind.name
                 ),
             ));
         };

@@ -167,8 +167,8 @@ fn the_km20_mapping_declares_a_cm730_on_the_torso() {
     assert_eq!(m.boards.len(), 1);
     let b = &m.boards[0];
     assert_eq!(
-        (b.name.as_str(), b.id, b.model, b.link.as_str()),
-        ("trunk_imu", 200, ServoModel::Cm730, "torso")
+        (b.name.as_str(), b.id, b.kind.catalogue, b.link.as_str()),
+        ("trunk_imu", 200, Some(ServoModel::Cm730), "torso")
     );
     assert_eq!(m.bus().len(), 21);
     let back = RobotMapping::parse(&m.to_toml(), "round trip").unwrap();

@@ -13,7 +13,8 @@ fn robot_on_virtual_bus(
     mapping: &RobotMapping,
     bus_servos: &[BusServo],
 ) -> DynamixelRobot<LoopbackTransport<VirtualBus<TrackingServoModel>>> {
-    let bus = VirtualBus::with_tracking_model(bus_servos);
+    // The mapping's boards with a table of their own (the OP3's OpenCR) after them.
+    let bus = VirtualBus::with_tracking_model_and_boards(bus_servos, &mapping.bus_boards());
     DynamixelRobot::new(
         Client::new(LoopbackTransport::new(bus)),
         mapping.clone(),
@@ -101,7 +102,9 @@ fn a_missing_servo_is_named_and_the_rest_still_read() {
             .positions
             .iter()
             .enumerate()
-            .all(|(k, p)| k == 12 || p.abs() < 1e-9)
+            // Each servo rests at its centre: the joint angle is minus its zero offset
+            // (op3's offsets are ROBOTIS's offset.yaml).
+            .all(|(k, p)| k == 12 || (p + m.joints[k].zero * m.joints[k].direction).abs() < 1e-9)
     );
     assert!(robot.command_positions(&[0.0; 3]).is_err());
 }

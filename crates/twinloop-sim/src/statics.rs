@@ -62,13 +62,21 @@ impl FlatFeet<'_> {
         // The soles: on each foot, the points lowest in the foot's own frame (the bottom
         // corners of its boxes), wherever the foot is; projected to the ground they are
         // the support polygon. (Selecting by world height instead would lose a foot that
-        // is tilted by a fraction of a degree by unequal servo deflection.)
+        // is tilted by a fraction of a degree by unequal servo deflection.) "Lowest" is
+        // along the foot frame's axis nearest to world down: a URDF's foot frame need
+        // not have z up (Darwin-OP's points x down).
         let mut support = Vec::new();
         for &foot in &self.feet {
             let info = &m.links[foot];
             let on_foot: Vec<&ContactPoint> =
                 self.points.iter().filter(|p| p.body == info.body).collect();
-            let local_z = |p: &ContactPoint| info.placement.act_inv_point(&p.local).z - p.radius;
+            let up = Self::link_in_world(m, data, foot).rotation.transpose() * Vector3::z();
+            let axis = (0..3)
+                .max_by(|&a, &b| up[a].abs().total_cmp(&up[b].abs()))
+                .unwrap_or(2);
+            let sign = up[axis].signum();
+            let local_z =
+                |p: &ContactPoint| sign * info.placement.act_inv_point(&p.local)[axis] - p.radius;
             let zmin = on_foot
                 .iter()
                 .map(|p| local_z(p))

@@ -9,7 +9,7 @@ use crate::shared::{Shared, Snapshot};
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::thread::JoinHandle;
-use twinloop_link::{BoardAxes, BusServo, Item, RobotMapping, VirtualBus};
+use twinloop_link::{BoardAxes, BusBoard, BusServo, Item, RobotMapping, VirtualBus};
 use twinloop_sim::{Actuator, SimConfig, Simulator};
 
 /// Settings of a virtual robot.
@@ -74,7 +74,7 @@ pub struct VirtualRobot {
     /// set to Protocol 1.0).
     protocols: Vec<twinloop_link::Protocol>,
     /// Sub-controller boards after the servos (the trunk IMU's CM-730).
-    boards: Vec<(BusServo, BoardAxes)>,
+    boards: Vec<(BusBoard, BoardAxes)>,
     torque_on: bool,
     /// Joints the mapping leaves off the bus (they hold their standing pose).
     pub unmapped: Vec<String>,
@@ -229,9 +229,8 @@ impl VirtualRobot {
             models: self.servos.iter().map(|s| s.model).collect(),
             boards: self.boards.iter().map(|b| b.1).collect(),
         };
-        let mut devices = self.servos.clone();
-        devices.extend(self.boards.iter().map(|b| b.0));
-        let mut bus = VirtualBus::new(&devices, backend);
+        let boards: Vec<BusBoard> = self.boards.iter().map(|b| b.0).collect();
+        let mut bus = VirtualBus::with_boards(&self.servos, &boards, backend);
         for (k, &protocol) in self.protocols.iter().enumerate() {
             // The mapping only names protocols its servos speak (checked on load).
             let _ = bus.set_protocol(k, protocol);
@@ -303,7 +302,7 @@ fn place_boards(
     sim: &mut Simulator,
     robot: &twinloop_description::Description,
     mapping: &RobotMapping,
-) -> Result<Vec<(BusServo, BoardAxes)>, String> {
+) -> Result<Vec<(BusBoard, BoardAxes)>, String> {
     let mut imu_link: Option<(usize, &str)> = None;
     let mut out = Vec::with_capacity(mapping.boards.len());
     for b in &mapping.boards {
@@ -333,9 +332,9 @@ fn place_boards(
         imu_link = Some((link, &b.name));
         sim.sensors_mut().imu_link = link;
         out.push((
-            BusServo {
+            BusBoard {
                 id: b.id,
-                model: b.model,
+                board: b.kind,
             },
             b.axes,
         ));

@@ -58,19 +58,16 @@ pub(super) fn resolve(
         .clone()
         .or_else(|| mapping.port.clone())
         .ok_or_else(|| CliError::new("--map needs --port PORT (or the mapping's port)"))?;
-    let model_spec = robot
-        .map(str::to_string)
-        .or_else(|| {
-            mapping
-                .urdf
-                .as_ref()
-                .map(|p| p.to_string_lossy().into_owned())
-        })
-        .ok_or_else(|| {
-            CliError::new(format!(
-                "{}: no `urdf` in [robot]; give --robot ROBOT for {what}",
+    // Without --robot, the profile itself: its description with its joint roles.
+    let model_spec = match robot {
+        Some(r) => r.to_string(),
+        None if mapping.urdf.is_some() => map.to_string(),
+        None => {
+            return Err(CliError::new(format!(
+                "{}: no `description` in [robot]; give --robot ROBOT for {what}",
                 mapping.source
-            ))
-        })?;
+            )));
+        }
+    };
     Ok((mapping, port, model_spec))
 }

@@ -432,9 +432,8 @@ fn trunk_gravity(
     model: &twinloop_dynamics::Model,
     pose: &[(String, f64)],
 ) -> Result<[f64; 3], CliError> {
-    use twinloop_link::board::{CM730_IMU_BLOCK, decode_imu};
     let who = format!("board \"{}\" (id {})", board.name, board.id);
-    let (base, len) = CM730_IMU_BLOCK;
+    let (base, len) = board.kind.imu_span();
     let mut block = vec![0u8; len as usize];
     let mut sum = nalgebra::Vector3::zeros();
     let mut n = 0;
@@ -443,7 +442,7 @@ fn trunk_gravity(
         let sample = client
             .read(board.protocol, board.id, base, &mut block)
             .ok()
-            .and_then(|_| decode_imu(board.model, base, &block));
+            .and_then(|_| board.kind.decode_imu(base, &block));
         match sample {
             Some(s) => {
                 sum += nalgebra::Vector3::from(board.axes.board_to_link(s.accel));

@@ -53,11 +53,13 @@ fn creep_ramp(s: &str) -> Result<f64, String> {
 
 #[derive(Args, Debug)]
 pub struct TipoverArgs {
-    /// Robot description: builtin:km20, builtin:lab17, or a URDF/MJCF file whose ankle and hip roll
-    /// joints are named like l_ank_pitch / r_ank_roll / l_hip_roll and whose feet have
-    /// collision boxes. Sideways, the hip rolls turn with the ankle rolls (the legs lean
-    /// as a parallelogram, feet flat, pelvis level).
-    /// With --port, the model for the lean signs (default: the mapping's `urdf`).
+    /// Robot description: builtin:km20, builtin:lab17, builtin:op3, builtin:darwin_op, a
+    /// robot profile (.toml: its description, its [roles] naming the ankle and hip roll
+    /// joints), or a URDF/MJCF file whose joints are named like l_ank_pitch / r_ank_roll /
+    /// l_hip_roll (guessed, said on stderr); the feet need collision boxes. Sideways, the
+    /// hip rolls turn with the ankle rolls (the legs lean as a parallelogram, feet flat,
+    /// pelvis level). With --port, the model for the lean signs (default: the --map
+    /// profile's description, with its roles).
     #[arg(long, value_name = "ROBOT")]
     pub robot: Option<String>,
     /// With --port (needs --map), the experiment runs on a robot over its bus instead

@@ -5,6 +5,11 @@
 //! - [`lab17`]: the 17-DoF hobby-servo lab humanoid of seed 003 (0.365 m, 0.215 m wide,
 //!   1.65 kg, LD-2015 servos), with the trim angles of its Table 2.
 //!
+//! - `op3`: ROBOTIS OP3, the MuJoCo Menagerie MJCF the repository ships
+//!   (models/op3/mjcf/op3.xml), compiled into the binary ([`vendored`]);
+//! - `darwin_op`: ROBOTIS Darwin-OP, models/darwin_op's URDF with sole boxes
+//!   (models/darwin_op/robotis_op.feet.urdf), compiled in likewise.
+//!
 //! Each is a plain [`crate::Description`] (write it with
 //! `crate::urdf::write_file`); what a URDF cannot hold is kept here as data
 //! beside it: which servo drives each joint ([`servo_of_joint`]), the foot geometry the
@@ -24,27 +29,29 @@ pub mod km20;
 pub mod lab17;
 pub mod parts;
 pub mod servo;
+pub mod vendored;
 
 pub use servo::{LD2015, RX28, RX64, ServoSpec};
 
 use crate::{Description, DescriptionError};
 
 /// The names `builtin:NAME` accepts.
-pub const BUILTIN_NAMES: [&str; 2] = [km20::NAME, lab17::NAME];
+pub const BUILTIN_NAMES: [&str; 4] = [km20::NAME, lab17::NAME, vendored::OP3, vendored::DARWIN_OP];
 
-/// A built-in robot by name (`km20`, `lab17`), `None` for any other name.
+/// A built-in robot by name (`km20`, `lab17`, `op3`, `darwin_op`), `None` for any
+/// other name.
 pub fn builtin(name: &str) -> Option<Description> {
     let built = match name {
         km20::NAME => km20::build(),
         lab17::NAME => lab17::build(),
-        _ => return None,
+        _ => vendored::read(name)?,
     };
     // The builders only combine constants; a failure is a bug here, not bad input.
     Some(built.unwrap_or_else(|e| panic!("built-in robot {name} is invalid: {e}")))
 }
 
 /// One line per built-in robot: name and what it is.
-pub fn builtin_summaries() -> [(&'static str, &'static str); 2] {
+pub fn builtin_summaries() -> [(&'static str, &'static str); 4] {
     [
         (
             km20::NAME,
@@ -53,6 +60,14 @@ pub fn builtin_summaries() -> [(&'static str, &'static str); 2] {
         (
             lab17::NAME,
             "17-DoF lab humanoid (seed 003): 0.365 m tall, 0.215 m wide, 1.65 kg, LD-2015 hobby servos",
+        ),
+        (
+            vendored::OP3,
+            "ROBOTIS OP3 (MuJoCo Menagerie MJCF, models/op3/mjcf): 20 XM430-W350, OpenCR IMU; profile builtin:op3",
+        ),
+        (
+            vendored::DARWIN_OP,
+            "ROBOTIS Darwin-OP (models/darwin_op URDF with sole boxes): 20 MX-28, CM-730 IMU; profile builtin:darwin_op",
         ),
     ]
 }

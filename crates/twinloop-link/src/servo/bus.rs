@@ -59,6 +59,13 @@ pub struct BusServo {
     pub model: ServoModel,
 }
 
+/// A board to put on a virtual bus, after the servos.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BusBoard {
+    pub id: u8,
+    pub board: &'static crate::board_type::BoardType,
+}
+
 pub struct VirtualBus<B: VirtualServoBackend> {
     pub servos: Vec<VirtualServo>,
     pub backend: B,
@@ -91,6 +98,15 @@ impl VirtualBus<TrackingServoModel> {
     /// where its Present Position was last unwound (CLEAR), which may be up to the
     /// register's range away from the centre.
     pub fn with_tracking_model(servos: &[BusServo]) -> VirtualBus<TrackingServoModel> {
+        VirtualBus::with_tracking_model_and_boards(servos, &[])
+    }
+
+    /// [`VirtualBus::with_tracking_model`] with boards of their own table after the
+    /// servos ([`VirtualBus::with_boards`]).
+    pub fn with_tracking_model_and_boards(
+        servos: &[BusServo],
+        boards: &[BusBoard],
+    ) -> VirtualBus<TrackingServoModel> {
         let ranges: Vec<_> = servos
             .iter()
             .filter(|s| !s.model.is_board())
@@ -111,7 +127,7 @@ impl VirtualBus<TrackingServoModel> {
                 )
             })
             .collect();
-        VirtualBus::new(servos, TrackingServoModel::new(&ranges))
+        VirtualBus::with_boards(servos, boards, TrackingServoModel::new(&ranges))
     }
 }
 
@@ -120,11 +136,22 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
     /// moves no motor of theirs, it only feeds their sensors,
     /// [`VirtualServoBackend::board_imu`]).
     pub fn new(servos: &[BusServo], backend: B) -> VirtualBus<B> {
+        VirtualBus::with_boards(servos, &[], backend)
+    }
+
+    /// [`VirtualBus::new`] with boards of a [`BoardType`](crate::board_type::BoardType)
+    /// after the servos (the OpenCR, a profile's custom board), each answering from
+    /// its type's table: bus index `servos.len() + k` is `boards[k]`.
+    pub fn with_boards(servos: &[BusServo], boards: &[BusBoard], backend: B) -> VirtualBus<B> {
+        let devices = servos
+            .iter()
+            .map(|s| VirtualServo::new(s.id, s.model, VIRTUAL_FIRMWARE))
+            .chain(boards.iter().map(|b| match b.board.catalogue {
+                Some(model) => VirtualServo::new(b.id, model, VIRTUAL_FIRMWARE),
+                None => VirtualServo::new_board(b.id, b.board),
+            }));
         let mut bus = VirtualBus {
-            servos: servos
-                .iter()
-                .map(|s| VirtualServo::new(s.id, s.model, VIRTUAL_FIRMWARE))
-                .collect(),
+            servos: devices.collect(),
             backend,
             decoder: Decoder::new(Accept::Both),
             clock: BusClock::Manual,
@@ -147,7 +174,7 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
         if protocol == s.protocol() {
             return Ok(());
         }
-        if !s.model.speaks(protocol) {
+        if !s.model.is_some_and(|m| m.speaks(protocol)) {
             return Err(Fault::Access);
         }
         s.set_value(Item::ProtocolType, protocol.number() as i32);
@@ -160,7 +187,9 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
     /// 57 600. A model with no code within 3 % of `baud` keeps its register.
     pub fn set_line_baud(&mut self, baud: u32) {
         for s in &mut self.servos {
-            if let Some(code) = crate::servo_model::baud_to_register(s.model.protocol(), baud) {
+            // A board with a table of its own keeps what its profile gives it.
+            let Some(model) = s.model else { continue };
+            if let Some(code) = crate::servo_model::baud_to_register(model.protocol(), baud) {
                 s.set_value(Item::BaudRate, code as i32);
             }
         }
@@ -185,7 +214,7 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
     /// same effect on the backend): how a served robot is prepared before a
     /// client arrives (e.g. torque on, so a simulated robot stands).
     pub fn host_write(&mut self, k: usize, item: Item, value: i32) -> Result<(), Fault> {
-        let Some(r) = self.servos[k].table().item(item) else {
+        let Some(r) = self.servos[k].register(item) else {
             return Err(Fault::Access);
         };
         let mut bytes = [0u8; 4];
@@ -365,8 +394,7 @@ fn homing_offset(s: &VirtualServo) -> i64 {
 /// Offset and unwinding).
 fn measured_counts<B: VirtualServoBackend>(s: &VirtualServo, backend: &B, k: usize) -> i64 {
     let r = s
-        .table()
-        .item(Item::PresentPosition)
+        .register(Item::PresentPosition)
         .expect("every servo table has a present position");
     r.from_si(backend.measure(k).position) as i64
 }
@@ -410,21 +438,23 @@ fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, 
         let Some(imu) = backend.board_imu(k) else {
             return;
         };
-        let t = s.table();
         let items = crate::board::gyro_items()
             .into_iter()
             .zip(imu.gyro)
             .chain(crate::board::accel_items().into_iter().zip(imu.accel));
         for (item, si) in items {
-            if let Some(r) = t.item(item) {
+            if let Some(r) = s.register(item) {
                 s.set_value(item, r.from_si(si));
             }
         }
         return;
     }
+    let Some(model) = s.model else {
+        return;
+    };
     let m = backend.measure(k);
-    let t = s.table();
-    let spec = s.model.spec();
+    let t = model.table();
+    let spec = model.spec();
     if let Some(r) = t.item(Item::PresentPosition) {
         let raw = r.from_si(m.position) as i64 + homing_offset(s) - s.turn_offset;
         s.set_value(
@@ -458,7 +488,7 @@ fn refresh<B: VirtualServoBackend>(s: &mut VirtualServo, backend: &B, k: usize, 
 /// where it has one (EM-XM Moving(122): "If absolute value of Present
 /// Velocity(128) is greater than Moving Threshold(24)"), else than 0.01 rad/s.
 fn moving(s: &VirtualServo, velocity: f64) -> bool {
-    let threshold = match s.table().item(Item::MovingThreshold) {
+    let threshold = match s.register(Item::MovingThreshold) {
         Some(r) => r.to_si(s.value(Item::MovingThreshold)),
         None => 0.01,
     };
@@ -478,7 +508,7 @@ fn announce_registers<B: VirtualServoBackend>(
     if s.is_board() {
         return; // nothing of a board's moves the backend
     }
-    for r in &s.table().registers {
+    for r in s.registers() {
         if r.address >= end {
             break; // registers are in address order
         }
@@ -629,7 +659,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         // Present Position is read within one turn again on a change to Position
         // Control Mode and on torque on in it (EM-XM Present Position note).
         let position_mode =
-            s.table().item(Item::OperatingMode).is_some() && s.value(Item::OperatingMode) == 3;
+            s.register(Item::OperatingMode).is_some() && s.value(Item::OperatingMode) == 3;
         if position_mode && (fx.operating_mode || (fx.torque_enable && s.torque_enabled())) {
             unwind(s, self.backend, k);
         }
@@ -639,9 +669,8 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         // Torque on drives the servo to the Goal Position register, written or not.
         if fx.goal_position || (fx.torque_enable && s.torque_enabled()) {
             let r = s
-                .table()
-                .item(Item::GoalPosition)
-                .expect("every table has one");
+                .register(Item::GoalPosition)
+                .expect("every servo table has one");
             let raw = s.value(Item::GoalPosition) as i64 - homing_offset(s) + s.turn_offset;
             let goal = r.to_si(raw.clamp(i32::MIN as i64, i32::MAX as i64) as i32);
             self.backend.set_goal_position(k, goal);
@@ -710,7 +739,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
         }
         for &k in targets {
             let s = &self.servos[k];
-            let model = s.model.model_number().to_le_bytes();
+            let model = s.model_number().to_le_bytes();
             let fw = s.firmware;
             match protocol {
                 Protocol::V1 => self.status(k, protocol, 0, &[]),
@@ -886,7 +915,7 @@ impl<B: VirtualServoBackend> Ctx<'_, B> {
             let Some(k) = self.find(protocol, id) else {
                 continue;
             };
-            if !self.servos[k].model.has_bulk_read() {
+            if !self.servos[k].has_bulk_read() {
                 continue; // RX: no BULK_READ.
             }
             self.read_reply(k, address, len);

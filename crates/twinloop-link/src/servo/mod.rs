@@ -9,6 +9,6 @@ mod serve;
 mod virtual_servo;
 
 pub use backend::{ServoMeasurement, TrackingServoModel, VirtualServoBackend};
-pub use bus::{BusClock, BusServo, BusStats, ReplyMark, VIRTUAL_FIRMWARE, VirtualBus};
+pub use bus::{BusBoard, BusClock, BusServo, BusStats, ReplyMark, VIRTUAL_FIRMWARE, VirtualBus};
 pub use serve::{ServeOptions, serve};
 pub use virtual_servo::{Fault, VirtualServo, WriteEffects};

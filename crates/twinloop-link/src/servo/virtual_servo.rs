@@ -4,8 +4,8 @@
 //! names; the protocol it talks (Protocol Type) and the turns its Present Position
 //! has been unwound by (CLEAR, reboot).
 
-use crate::control_table::ControlTable;
-use crate::control_table::ModelTable;
+use crate::board_type::BoardType;
+use crate::control_table::{IndirectBlock, ModelTable};
 use crate::protocol::Protocol;
 use crate::register::{Access, Area, Item, Register};
 use crate::servo_model::ServoModel;
@@ -81,7 +81,11 @@ pub struct WriteEffects {
 /// A servo's memory and identity.
 #[derive(Debug, Clone)]
 pub struct VirtualServo {
-    pub model: ServoModel,
+    /// The servo's model (or the catalogue model of a board: the CM-730); `None`
+    /// for a board whose table is its [`BoardType`] ([`VirtualServo::board`]).
+    pub model: Option<ServoModel>,
+    /// A board type with a table of its own (the OpenCR, a profile's custom board).
+    pub board: Option<&'static BoardType>,
     pub firmware: u8,
     pub memory: Vec<u8>,
     /// REG_WRITE staged for the next ACTION: address and data.
@@ -105,7 +109,8 @@ pub struct VirtualServo {
 impl VirtualServo {
     pub fn new(id: u8, model: ServoModel, firmware: u8) -> VirtualServo {
         let mut s = VirtualServo {
-            model,
+            model: Some(model),
+            board: None,
             firmware,
             memory: model.table().factory_memory(id, firmware),
             staged_address: 0,
@@ -119,8 +124,56 @@ impl VirtualServo {
         s
     }
 
-    pub fn table(&self) -> &'static ControlTable {
-        self.model.table()
+    /// A board of type `board` at `id`, served from the type's own table (a type
+    /// with a catalogue model, the CM-730, is served as that model).
+    pub fn new_board(id: u8, board: &'static BoardType) -> VirtualServo {
+        if let Some(model) = board.catalogue {
+            return VirtualServo::new(id, model, board.firmware);
+        }
+        VirtualServo {
+            model: None,
+            board: Some(board),
+            firmware: board.firmware,
+            memory: board.factory_memory(id),
+            staged_address: 0,
+            staged: Vec::with_capacity(64),
+            has_staged: false,
+            condition: Arc::new(AtomicU8::new(0)),
+            protocol: board.protocol,
+            turn_offset: 0,
+        }
+    }
+
+    /// The indirect-addressing blocks of the servo's table (a board with a table of
+    /// its own has none).
+    fn indirect_blocks(&self) -> &'static [IndirectBlock] {
+        match (self.board, self.model) {
+            (None, Some(m)) => &m.table().indirect,
+            _ => &[],
+        }
+    }
+
+    /// The Indirect Address register that redirects Indirect Data byte `address`.
+    fn indirect_pointer(&self, address: u16) -> Option<u16> {
+        self.indirect_blocks()
+            .iter()
+            .find_map(|b| b.data_index(address).map(|i| b.address + 2 * i))
+    }
+
+    /// Whether `address` lies in an Indirect Address register.
+    fn is_indirect_address(&self, address: u16) -> bool {
+        self.indirect_blocks()
+            .iter()
+            .any(|b| b.holds_address_register(address))
+    }
+
+    /// Registers in address order.
+    pub fn registers(&self) -> &'static [Register] {
+        match (self.board, self.model) {
+            (Some(b), _) => &b.registers,
+            (None, Some(m)) => &m.table().registers,
+            (None, None) => &[],
+        }
     }
 
     /// The protocol the servo answers now.
@@ -129,22 +182,65 @@ impl VirtualServo {
     }
 
     /// Follow the Protocol Type register (1: Protocol 1.0, 2: Protocol 2.0; EM-XM
-    /// Protocol Type(13)); a model without one keeps its own protocol.
+    /// Protocol Type(13)); a device without one keeps its own protocol.
     fn sync_protocol(&mut self) {
         self.protocol = match self.register(Item::ProtocolType) {
             Some(_) if self.value(Item::ProtocolType) == 1 => Protocol::V1,
             Some(_) => Protocol::V2,
-            None => self.model.protocol(),
+            None => self.own_protocol(),
         };
+    }
+
+    /// The protocol of the device's model or board type.
+    fn own_protocol(&self) -> Protocol {
+        match (self.board, self.model) {
+            (Some(b), _) => b.protocol,
+            (None, Some(m)) => m.protocol(),
+            (None, None) => Protocol::V2,
+        }
+    }
+
+    /// What PING reports.
+    pub fn model_number(&self) -> u16 {
+        match (self.board, self.model) {
+            (Some(b), _) => b.model_number,
+            (None, Some(m)) => m.model_number(),
+            (None, None) => 0,
+        }
+    }
+
+    /// Whether the device answers BULK_READ on Protocol 1.0 (MX and the CM-730 do;
+    /// every 2.0 device does).
+    pub fn has_bulk_read(&self) -> bool {
+        match self.model {
+            Some(m) => m.has_bulk_read(),
+            None => self.protocol() == Protocol::V2,
+        }
     }
 
     /// A sub-controller board (no motor: the backend does not move it).
     pub fn is_board(&self) -> bool {
-        self.model.is_board()
+        self.board.is_some() || self.model.is_some_and(|m| m.is_board())
     }
 
-    fn register(&self, item: Item) -> Option<&'static Register> {
-        self.table().item(item)
+    /// The register playing `item`, if the table has one.
+    pub fn register(&self, item: Item) -> Option<&'static Register> {
+        self.registers().iter().find(|r| r.item == Some(item))
+    }
+
+    fn containing(&self, address: u16) -> Option<&'static Register> {
+        self.registers()
+            .iter()
+            .find(|r| r.address <= address && address < r.end())
+    }
+
+    /// The memory at power-on with `id`.
+    fn fresh_memory(&self, id: u8) -> Vec<u8> {
+        match (self.board, self.model) {
+            (Some(b), _) => b.factory_memory(id),
+            (None, Some(m)) => m.table().factory_memory(id, self.firmware),
+            (None, None) => Vec::new(),
+        }
     }
 
     /// The decoded value of `item` (0 if the model lacks it).
@@ -204,8 +300,7 @@ impl VirtualServo {
     /// their Indirect Address points at, so a READ there returns the addressed
     /// registers (EM-XM Indirect Address, Indirect Data).
     pub fn load_indirect(&mut self, address: u16, len: u16) {
-        let table = self.table();
-        for block in &table.indirect {
+        for block in self.indirect_blocks() {
             let lo = address.max(block.data);
             let hi = (address as u32 + len as u32).min((block.data + block.count) as u32) as u16;
             for a in lo..hi {
@@ -237,7 +332,7 @@ impl VirtualServo {
     /// bytes being taken in address order). An Indirect Data byte pointing at
     /// another Indirect Data byte reaches that byte's memory, not its target.
     fn destination(&self, address: u16, start: usize, data: &[u8]) -> u16 {
-        match self.table().indirect_pointer(address) {
+        match self.indirect_pointer(address) {
             Some(pointer) => self.word(pointer, start, data),
             None => address,
         }
@@ -246,7 +341,7 @@ impl VirtualServo {
     /// Whether EEPROM is locked: by Torque Enable on the 2.0 tables (EM-XM), by
     /// Lock on the 1.0 ones (EM-RX28).
     fn eeprom_locked(&self) -> bool {
-        match self.model.protocol() {
+        match self.own_protocol() {
             Protocol::V2 => self.torque_enabled(),
             Protocol::V1 => self.value(Item::Lock) != 0,
         }
@@ -265,23 +360,22 @@ impl VirtualServo {
         if end > self.memory.len() {
             return Err(Fault::Access);
         }
-        let table = self.table();
         let mut a = start;
         while a < end {
-            let Some(r) = table.containing(a as u16) else {
+            let Some(r) = self.containing(a as u16) else {
                 // A byte no register owns.
                 return Err(Fault::Access);
             };
             // The SDK's indirect_address.py: "Indirect address would not
             // accessible when the torque is already enabled" (the e-manual lists
             // the registers in RAM and says nothing of a lock).
-            if table.is_indirect_address(r.address) && self.torque_enabled() {
+            if self.is_indirect_address(r.address) && self.torque_enabled() {
                 return Err(Fault::Access);
             }
             self.check_register(r, data, &|a| (a >= start && a < end).then(|| a - start))?;
             a = r.end() as usize;
         }
-        if !table.indirect.is_empty() {
+        if !self.indirect_blocks().is_empty() {
             self.check_indirect(start, data)?;
         }
         Ok(())
@@ -289,24 +383,23 @@ impl VirtualServo {
 
     /// Check the registers that Indirect Data bytes of the write reach.
     fn check_indirect(&self, start: usize, data: &[u8]) -> Result<(), Fault> {
-        let table = self.table();
         for i in 0..data.len() {
             let a = (start + i) as u16;
-            if table.indirect_pointer(a).is_none() {
+            if self.indirect_pointer(a).is_none() {
                 continue;
             }
             let t = self.destination(a, start, data);
-            if table.indirect_pointer(t).is_some() {
+            if self.indirect_pointer(t).is_some() {
                 continue; // plain memory: any byte goes
             }
-            let Some(r) = table.containing(t) else {
+            let Some(r) = self.containing(t) else {
                 return Err(Fault::Access);
             };
             // Each register once: skip it if an earlier byte already reached it.
             let earlier = (0..i).any(|j| {
                 let b = (start + j) as u16;
-                table.indirect_pointer(b).is_some()
-                    && table.containing(self.destination(b, start, data)) == Some(r)
+                self.indirect_pointer(b).is_some()
+                    && self.containing(self.destination(b, start, data)) == Some(r)
             });
             if earlier {
                 continue;
@@ -315,7 +408,7 @@ impl VirtualServo {
             let source = |x: usize| {
                 (0..data.len()).find(|&j| {
                     let b = (start + j) as u16;
-                    table.indirect_pointer(b).is_some()
+                    self.indirect_pointer(b).is_some()
                         && self.destination(b, start, data) as usize == x
                 })
             };
@@ -370,7 +463,7 @@ impl VirtualServo {
     fn goal_within_limits(&self, goal: i32) -> bool {
         let lo = self.value(Item::MinPositionLimit);
         let hi = self.value(Item::MaxPositionLimit);
-        match self.model.protocol() {
+        match self.own_protocol() {
             Protocol::V1 => (lo == 0 && hi == 0) || (lo <= goal && goal <= hi),
             Protocol::V2 => self.value(Item::OperatingMode) != 3 || (lo <= goal && goal <= hi),
         }
@@ -388,11 +481,10 @@ impl VirtualServo {
         };
         let end = fx.end;
         self.note_touched(&mut fx, address, end);
-        let table = self.table();
-        if !table.indirect.is_empty() {
+        if !self.indirect_blocks().is_empty() {
             for (i, &byte) in data.iter().enumerate() {
                 let a = (start + i) as u16;
-                if table.indirect_pointer(a).is_none() {
+                if self.indirect_pointer(a).is_none() {
                     continue;
                 }
                 let t = self.destination(a, 0, &[]);
@@ -484,14 +576,14 @@ impl VirtualServo {
         let baud = self.value(Item::BaudRate);
         // Servos come back as id 1; a board as its own id (the CM-730: 200).
         let factory_id = if self.is_board() {
-            self.table()
-                .item(Item::Id)
+            self.register(Item::Id)
                 .and_then(|r| r.initial)
-                .unwrap_or(1) as u8
+                .filter(|&v| v > 0)
+                .unwrap_or(id as i32) as u8
         } else {
             1
         };
-        self.memory = self.table().factory_memory(factory_id, self.firmware);
+        self.memory = self.fresh_memory(factory_id);
         if option == 0x01 || option == 0x02 {
             self.set_value(Item::Id, id as i32);
         }
@@ -506,8 +598,8 @@ impl VirtualServo {
 
     /// REBOOT: RAM back to its initial values, EEPROM kept.
     pub fn reboot(&mut self) {
-        let fresh = self.table().factory_memory(self.id(), self.firmware);
-        for r in &self.table().registers {
+        let fresh = self.fresh_memory(self.id());
+        for r in self.registers() {
             if r.area == Area::Ram {
                 let (s, e) = (r.address as usize, r.end() as usize);
                 self.memory[s..e].copy_from_slice(&fresh[s..e]);
