@@ -1029,7 +1029,6 @@ pub const SOFT_SERVOS_NOTE: &str = "servos soft: the tip-over ran with the servo
 
 /// The HTML report: fall angles robot vs model, the CoMs, side (x-z) and front (y-z)
 /// views with the prior CoM, the measured CoM and the added mass.
-
 pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
     use twinloop_report::{Plot, SeriesStyle, number};
     let mut rep =
