@@ -356,7 +356,7 @@ fn serve_on<B: twinloop_link::VirtualServoBackend>(
     what: &str,
 ) -> CliResult {
     // Protocol Type as the mapping says, Baud Rate registers at the line's code.
-    bus.configure(mapping, a.baud);
+    mapping.configure(&mut bus, a.baud);
     let options = ServeOptions {
         emulate_baud: (!a.no_timing).then_some(a.baud),
         stop_on_eof: true,

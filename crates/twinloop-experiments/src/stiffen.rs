@@ -10,6 +10,7 @@
 //! they are (`--soft-servos`), and then says so in its output.
 
 use crate::guarded::BusRobot;
+use std::time::{Duration, Instant};
 use twinloop_link::servos::{LoopFamily, LoopRegister};
 use twinloop_link::{Protocol, RobotMapping, ServoModel};
 use twinloop_robot::RobotError;
@@ -65,8 +66,11 @@ pub fn check_stiffenable(mapping: &RobotMapping) -> Result<(), RobotError> {
     )))
 }
 
-/// Read every joint's loop registers (one READ per servo and register).
-pub fn save_loops(robot: &mut BusRobot) -> Result<SavedLoops, RobotError> {
+/// Read every joint's loop registers (one READ per servo and register), each read
+/// taken again while the servo stays silent for less than `window` (wall time: a
+/// host or served robot descheduled on a busy machine, as [`crate::guarded`] rides
+/// out in the experiment's reads).
+pub fn save_loops(robot: &mut BusRobot, window: Duration) -> Result<SavedLoops, RobotError> {
     let joints: Vec<(u8, Protocol, ServoModel)> = robot
         .mapping()
         .joints
@@ -78,15 +82,12 @@ pub fn save_loops(robot: &mut BusRobot) -> Result<SavedLoops, RobotError> {
         for &reg in model.loop_registers() {
             let mut buf = [0u8; 4];
             let bytes = &mut buf[..reg.size as usize];
-            robot
-                .client
-                .read(protocol, id, reg.address, bytes)
-                .map_err(|e| {
-                    RobotError::new(format!(
-                        "reading {} of servo id {id} ({model}): {e}",
-                        reg.name
-                    ))
-                })?;
+            read_within(robot, protocol, id, reg.address, bytes, window).map_err(|e| {
+                RobotError::new(format!(
+                    "reading {} of servo id {id} ({model}): {e}",
+                    reg.name
+                ))
+            })?;
             let value = bytes
                 .iter()
                 .rev()
@@ -100,6 +101,26 @@ pub fn save_loops(robot: &mut BusRobot) -> Result<SavedLoops, RobotError> {
         }
     }
     Ok(SavedLoops { entries })
+}
+
+/// One READ, taken again on a transient failure (no reply, a damaged one) until it
+/// succeeds or the servo has been silent for `window`.
+fn read_within(
+    robot: &mut BusRobot,
+    protocol: Protocol,
+    id: u8,
+    address: u16,
+    out: &mut [u8],
+    window: Duration,
+) -> Result<(), twinloop_link::LinkError> {
+    let start = Instant::now();
+    loop {
+        match robot.client.read(protocol, id, address, out) {
+            Ok(_) => return Ok(()),
+            Err(e) if e.is_transient() && start.elapsed() < window => continue,
+            Err(e) => return Err(e),
+        }
+    }
 }
 
 /// Write the stiff values for Compliance Slope `rx_slope` (RX units: 2 the

@@ -71,7 +71,7 @@ fn raise_and_restore(model: &str, factory: i32, stiff: i32) -> (f64, f64) {
     check_stiffenable(bot.mapping()).unwrap();
     bot.set_torque(true).unwrap();
     let soft = sag_deg(&mut bot, 1.5);
-    let saved = save_loops(&mut bot).unwrap();
+    let saved = save_loops(&mut bot, std::time::Duration::from_secs(1)).unwrap();
     assert!(saved.values().all(|(_, _, v)| v == factory));
     assert_eq!(saved.values().count(), 20);
     stiffen(&mut bot, 2, |_| true).unwrap();

@@ -18,7 +18,7 @@
 //! lean), which changes with the added mass: the estimate is iterated with the adapted
 //! model until the measured CoM moves by less than 1e-9 m (two or three iterations).
 
-use crate::adapt_checks::{AdaptCheck, plausibility};
+use crate::adapt_checks::{AdaptCheck, Found, plausibility};
 use crate::error::IdentError;
 use crate::fall_angle_fit;
 use crate::tipover::{FeetMass, TipAngles, exact_method, feet_mass};
@@ -499,7 +499,18 @@ pub fn adapt(
             Some(d)
         }
     };
-    report.checks = plausibility(&report, prior, &m.pf, tip.protocol.is_some());
+    let (lo, hi) = m.pf.robot_box(prior);
+    report.checks = plausibility(&Found {
+        part: report.added.as_ref().map(|a| (a.mass, a.position)),
+        prior_mass: report.prior_mass,
+        robot_box: (v3(lo), v3(hi)),
+        measured_deg: report.measured_deg,
+        protocol_bias_deg: report.protocol_bias_deg,
+        prior_model_deg: report.prior_model_deg,
+        fit_residual_deg: report.fall_angle_fit.as_ref().map(|f| f.residual_deg),
+        angle_resolution_deg: report.angle_resolution_deg,
+        over_bus: tip.protocol.is_some(),
+    });
     Ok(Adapted { report, robot })
 }
 

@@ -12,10 +12,8 @@
 //! A check that cannot be made (no part placed, no fall-angle fit) is left out, and
 //! the notes say so.
 
-use crate::adapt::{AdaptReport, Frame};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
-use twinloop_description::Description;
 
 /// The heaviest part `adapt` believes, as a share of the prior's mass: a battery
 /// pack, a camera, a gripper are tenths of a kid-size robot; half the robot again is
@@ -61,23 +59,38 @@ pub fn one_part_bound_deg(resolution_deg: f64, bias_left_in: bool) -> f64 {
 /// (measured in lockstep on km20: up to 1.0 deg forward, docs/adaptation.md).
 pub const UNCORRECTED_PROTOCOL_BIAS_DEG: f64 = 1.0;
 
-/// Every check that can be made on `report` (the prior `robot`, its standing frame).
-pub(crate) fn plausibility(
-    report: &AdaptReport,
-    robot: &Description,
-    frame: &Frame,
-    over_bus: bool,
-) -> Vec<AdaptCheck> {
+/// What `adapt` found, as the checks need it (all angles deg, forward, backward,
+/// left, right; lengths m in the standing frame).
+#[derive(Debug, Clone)]
+pub struct Found {
+    /// The part: its mass (negative: taken off) and where it is, if placed.
+    pub part: Option<(f64, [f64; 3])>,
+    pub prior_mass: f64,
+    /// The standing robot's outline: lowest and highest corner of the box around
+    /// every link's origin and collision primitives.
+    pub robot_box: ([f64; 3], [f64; 3]),
+    pub measured_deg: [f64; 4],
+    pub protocol_bias_deg: Option<[f64; 4]>,
+    pub prior_model_deg: [f64; 4],
+    /// The fall-angle fit's residual, if it ran.
+    pub fit_residual_deg: Option<[f64; 4]>,
+    pub angle_resolution_deg: f64,
+    /// The angles were read over a bus.
+    pub over_bus: bool,
+}
+
+/// Every check that can be made on what was found.
+pub fn plausibility(f: &Found) -> Vec<AdaptCheck> {
     let mut out = Vec::new();
-    if let Some(added) = &report.added {
-        out.push(part_mass(added.mass, report.prior_mass));
-        out.push(part_reach(Vector3::from(added.position), robot, frame));
+    if let Some((mass, position)) = f.part {
+        out.push(part_mass(mass, f.prior_mass));
+        out.push(part_reach(Vector3::from(position), f.robot_box));
     }
-    out.push(tips_near_model(report));
-    if let Some(fit) = &report.fall_angle_fit {
-        let bias_left_in = over_bus && report.protocol_bias_deg.is_none();
-        let bound = one_part_bound_deg(report.angle_resolution_deg, bias_left_in);
-        let (k, worst) = largest(&fit.residual_deg);
+    out.push(tips_near_model(f));
+    if let Some(residual) = &f.fit_residual_deg {
+        let bias_left_in = f.over_bus && f.protocol_bias_deg.is_none();
+        let bound = one_part_bound_deg(f.angle_resolution_deg, bias_left_in);
+        let (k, worst) = largest(residual);
         out.push(AdaptCheck {
             name: "one-part-explains".into(),
             passed: worst.abs() <= bound,
@@ -127,8 +140,8 @@ fn part_mass(mass: f64, prior: f64) -> AdaptCheck {
     }
 }
 
-fn part_reach(p: Vector3<f64>, robot: &Description, frame: &Frame) -> AdaptCheck {
-    let (lo, hi) = frame.robot_box(robot);
+fn part_reach(p: Vector3<f64>, robot_box: ([f64; 3], [f64; 3])) -> AdaptCheck {
+    let (lo, hi) = (Vector3::from(robot_box.0), Vector3::from(robot_box.1));
     let m = Vector3::repeat(REACH_MARGIN);
     let (lo, hi) = (lo - m, hi + m);
     let outside = (lo - p).sup(&(p - hi)).sup(&Vector3::zeros());
@@ -156,10 +169,10 @@ fn part_reach(p: Vector3<f64>, robot: &Description, frame: &Frame) -> AdaptCheck
     }
 }
 
-fn tips_near_model(report: &AdaptReport) -> AdaptCheck {
-    let bias = report.protocol_bias_deg.unwrap_or([0.0; 4]);
+fn tips_near_model(f: &Found) -> AdaptCheck {
+    let bias = f.protocol_bias_deg.unwrap_or([0.0; 4]);
     let shift: [f64; 4] =
-        std::array::from_fn(|k| report.measured_deg[k] - bias[k] - report.prior_model_deg[k]);
+        std::array::from_fn(|k| f.measured_deg[k] - bias[k] - f.prior_model_deg[k]);
     let (k, worst) = largest(&shift);
     let passed = worst.abs() <= MAX_TIP_SHIFT_DEG && shift.iter().all(|s| s.is_finite());
     AdaptCheck {

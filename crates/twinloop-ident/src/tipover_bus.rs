@@ -259,7 +259,7 @@ pub fn run_directions(
         return lean_each(g, opts, cfg, tilt_model, before, log);
     }
     check_stiffenable(g.robot.mapping()).map_err(|e| e.message)?;
-    let saved = save_loops(g.robot).map_err(|e| e.message)?;
+    let saved = save_loops(g.robot, g.silence_window).map_err(|e| e.message)?;
     let out = lean_each(g, opts, cfg, tilt_model, before, log);
     let restored = restore_loops(g.robot, &saved);
     match (out, restored) {

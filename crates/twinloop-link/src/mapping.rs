@@ -892,6 +892,24 @@ impl RobotMapping {
     /// Boards whose type has a table of its own (the OpenCR, a custom board) are not
     /// servo catalogue models: they come from [`RobotMapping::bus_boards`], and a bus
     /// with all of them is `VirtualBus::with_boards(&m.bus(), &m.bus_boards(), ..)`.
+    /// Set up a served bus as this mapping and the line describe it: each joint's
+    /// servo talks the protocol the mapping names (devices in [`RobotMapping::bus`]
+    /// order), every Baud Rate register holds the line's code. A device the mapping
+    /// cannot have (a bus not made from it) is left as it is.
+    pub fn configure<B: crate::servo::VirtualServoBackend>(
+        &self,
+        bus: &mut crate::servo::VirtualBus<B>,
+        line_baud: u32,
+    ) {
+        let protocols = self.joints.iter().map(|j| j.protocol);
+        let protocols = protocols.chain(self.boards.iter().map(|b| b.protocol));
+        for (k, protocol) in protocols.enumerate().take(bus.servos.len()) {
+            // A mapping only names protocols its models speak (checked on load).
+            let _ = bus.set_protocol(k, protocol);
+        }
+        bus.set_line_baud(line_baud);
+    }
+
     pub fn bus(&self) -> Vec<crate::servo::BusServo> {
         let joints = self.joints.iter().map(|j| (j.id, j.model));
         let boards = self

@@ -468,7 +468,7 @@ fn mapping_declares_protocol_1_for_x_servos_and_the_cycle_uses_it() {
     assert!(e.to_string().contains("outside 0..=252"), "{e}");
 
     let mut bus = VirtualBus::with_tracking_model(&m.bus());
-    bus.configure(&m, 1_000_000);
+    m.configure(&mut bus, 1_000_000);
     let mut c = Client::new(LoopbackTransport::new(bus));
     assert!(c.ping(Protocol::V1, 1).is_ok());
     assert!(c.ping(Protocol::V2, 4).is_ok());

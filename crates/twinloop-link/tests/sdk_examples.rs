@@ -70,7 +70,7 @@ fn official_sdk_examples_against_a_served_bus() {
     let flag = stop.clone();
     let server = std::thread::spawn(move || {
         let mut bus = VirtualBus::with_tracking_model(&mapping.bus());
-        bus.configure(&mapping, 1_000_000);
+        mapping.configure(&mut bus, 1_000_000);
         let options = ServeOptions {
             emulate_baud: Some(1_000_000),
             stop_on_eof: false,

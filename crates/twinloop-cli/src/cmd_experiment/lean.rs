@@ -297,7 +297,7 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
     let saved = match a.soft_servos {
         true => None,
         false => {
-            let saved = stiffen::save_loops(&mut robot)?;
+            let saved = stiffen::save_loops(&mut robot, a.bus.silence_window())?;
             stiffen::stiffen(&mut robot, 2, |_| true)?;
             Some(saved)
         }

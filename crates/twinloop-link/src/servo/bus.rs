@@ -195,21 +195,6 @@ impl<B: VirtualServoBackend> VirtualBus<B> {
         }
     }
 
-    /// Set up the served devices as `mapping` and the line describe them: each
-    /// joint's servo talks the protocol its mapping names (devices in
-    /// [`RobotMapping::bus`] order), every Baud Rate register holds the line's
-    /// code. A device the mapping cannot have (a bus not made from it) is left as
-    /// it is.
-    pub fn configure(&mut self, mapping: &crate::mapping::RobotMapping, line_baud: u32) {
-        let protocols = mapping.joints.iter().map(|j| j.protocol);
-        let protocols = protocols.chain(mapping.boards.iter().map(|b| b.protocol));
-        for (k, protocol) in protocols.enumerate().take(self.servos.len()) {
-            // A mapping only names protocols its models speak (checked on load).
-            let _ = self.set_protocol(k, protocol);
-        }
-        self.set_line_baud(line_baud);
-    }
-
     /// Write `value` to `item` of servo `k` as a host's WRITE would (same checks,
     /// same effect on the backend): how a served robot is prepared before a
     /// client arrives (e.g. torque on, so a simulated robot stands).
