@@ -5,6 +5,7 @@
 //! Every command returns `Result<Outcome, CliError>`; `main` alone prints
 //! `error: ...` and picks the exit code (see `error.rs`).
 
+mod adapt_text;
 mod cmd_adapt;
 mod cmd_bench;
 mod cmd_compliant;

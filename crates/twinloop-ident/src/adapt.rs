@@ -1029,7 +1029,6 @@ pub const SOFT_SERVOS_NOTE: &str = "servos soft: the tip-over ran with the servo
 
 /// The HTML report: fall angles robot vs model, the CoMs, side (x-z) and front (y-z)
 /// views with the prior CoM, the measured CoM and the added mass.
-
 pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
     use twinloop_report::{Plot, SeriesStyle, number};
     let mut rep =
@@ -1063,7 +1062,13 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
                 format!("{:.3}", r.prior_model_deg[k]),
             ];
             if let Some(f) = &r.fall_angle_fit {
-                row.push(format!("{:.3}", r.measured_deg[k] + f.residual_deg[k]));
+                // The residual is against the angles fitted: the measured ones less
+                // the protocol's bias, when one was taken off.
+                let bias = r.protocol_bias_deg.map_or(0.0, |b| b[k]);
+                row.push(format!(
+                    "{:.3}",
+                    r.measured_deg[k] - bias + f.residual_deg[k]
+                ));
             }
             if let Some(c) = r.check_deg {
                 row.push(format!("{:.3}", c[k]));
