@@ -94,8 +94,9 @@ fn the_demo_finds_a_hidden_mass_over_the_bus() {
 
 /// `demo --robot op3`: the same story on the ROBOTIS OP3 profile (20 XM430-W350 on
 /// Protocol 2.0, the OpenCR), checked against the truth the demo reveals. Measured
-/// with seed 2 (0.206 kg on l_ank_roll_link) at load 6-7 on two cores: adapted CoM
-/// 1.8 mm from the truth, all four checks passed, 76 s (docs/adaptation.md). The
+/// with seed 2 (0.206 kg on l_ank_roll_link) on two cores: adapted CoM 1.8 mm from
+/// the truth in 76 s at load 6-7, 2.7 mm in 73 s beside the km20 test; all four
+/// checks passed both times (docs/adaptation.md). The
 /// bound (10 mm) catches a robot measured with another's model or protocol, not the
 /// issue's goal.
 #[test]
