@@ -380,7 +380,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
             l.joint, l.before_rms, l.after_rms
         );
     }
-    t += &checks_text(r, a.out.as_deref());
+    t += &crate::adapt_text::checks_text(r, a.out.as_deref());
     for f in &r.files {
         t += &format!("wrote {f}\n");
     }
@@ -390,30 +390,6 @@ pub fn run(a: AdaptArgs) -> CliResult {
     } else {
         Outcome::Ok
     })
-}
-
-/// The checks as the terminal says them: each failed one with its reason, and the
-/// model not written.
-fn checks_text(r: &twinloop_ident::adapt::AdaptReport, out: Option<&Path>) -> String {
-    let mut t = String::new();
-    let failed: Vec<_> = r.failed_checks().collect();
-    if failed.is_empty() {
-        if !r.checks.is_empty() {
-            let names: Vec<&str> = r.checks.iter().map(|c| c.name.as_str()).collect();
-            t += &format!("checks passed: {}\n", names.join(", "));
-        }
-        return t;
-    }
-    for c in failed {
-        t += &format!("check FAILED: {}: {}\n", c.name, c.detail);
-    }
-    if let Some(out) = out {
-        t += &format!(
-            "{} not written: the result failed its checks (the JSON and report say which)\n",
-            out.display()
-        );
-    }
-    t
 }
 
 /// `adapt --method ann`.

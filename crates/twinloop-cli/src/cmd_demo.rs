@@ -1,7 +1,8 @@
 //! `twinloop demo`: the adaptation loop of seed 000 end to end, with no hardware. A
-//! simulated km20 with a hardware change the adapting side is not told (a random
-//! one, `--seed`, or one of seed 000's battery scenarios, `--scenario`) answers on a
-//! pseudo-terminal as a real robot does on its USB adapter; the tip-over runs over
+//! simulated robot (a built-in profile, `--robot`: km20, op3 or darwin_op) with a
+//! hardware change the adapting side is not told (a random one, `--seed`, or on km20
+//! one of seed 000's battery scenarios, `--scenario`) answers on a pseudo-terminal as
+//! a real robot does on its USB adapter; the tip-over runs over
 //! that bus exactly as on a real robot (faster than real time); the change is found
 //! from the four fall angles and the robot's weight; the adapted model is written and
 //! checked; then the truth is revealed beside what was found.
@@ -26,18 +27,23 @@ use twinloop_experiments::tipover::Direction;
 use twinloop_ident::adapt::{AdaptOptions, html_report, standing_com, standing_point};
 use twinloop_ident::ann_data::{Change, changed, outlined_links, random_change};
 use twinloop_ident::tipover_study::report_for_runs;
-use twinloop_link::{Item, RobotMapping};
+use twinloop_link::Item;
+use twinloop_link::RobotMapping;
 use twinloop_virtual::{PtyServer, VirtualRobot, VirtualRobotOptions};
 
 #[derive(Args, Debug)]
 pub struct DemoArgs {
+    /// The robot: a built-in profile (its description, servos and IMU board, served
+    /// and measured as they are)
+    #[arg(long, default_value = "km20", value_name = "NAME", value_parser = RobotMapping::BUILTINS)]
+    pub robot: String,
     /// Draw the hidden change from this seed: one mass of 0.05-0.5 kg on a random link
-    /// of km20, at a random point inside its outline
+    /// of the robot, at a random point inside its outline
     #[arg(long, default_value_t = 7, conflicts_with = "scenario")]
     pub seed: u64,
-    /// Instead of a random change, one of seed 000's battery scenarios (0.2 kg): a
-    /// (both legs: two masses at once), c (front of the hip), d (left arm), e (right
-    /// arm), f (shoulders)
+    /// Instead of a random change, one of seed 000's battery scenarios on km20 (0.2
+    /// kg; km20 only, they name its links): a (both legs: two masses at once), c
+    /// (front of the hip), d (left arm), e (right arm), f (shoulders)
     #[arg(long, value_name = "LABEL", value_parser = ["a", "c", "d", "e", "f"])]
     pub scenario: Option<String>,
     /// Simulated seconds per wall-clock second of the robot behind the bus (and the
@@ -108,13 +114,16 @@ const SLOW_RAMP: f64 = 0.15;
 /// What the demo found, beside the truth (`--json`).
 #[derive(Debug, Serialize)]
 struct DemoReport {
+    /// The built-in profile measured (`--robot`).
+    robot: String,
     /// The hidden change(s).
     truth: Vec<Change>,
     /// The tip-over ran with the servos as they were (`--soft-servos`).
     soft_servos: bool,
-    /// `[forward, backward, left, right]`, deg: measured over the bus, the prior,
-    /// adapted and true models' static tipping angles at the measured onsets (the
-    /// true model's are what a perfect measurement would read).
+    /// `[forward, backward, left, right]`, deg: the robot measured over the bus (the
+    /// report's "robot (measured)"), the prior, adapted and true models' static tipping
+    /// angles at the measured onsets (the report's "adapted model (static, at the
+    /// robot's onsets)"; the true model's are what a perfect measurement would read).
     measured_deg: [f64; 4],
     prior_model_deg: [f64; 4],
     adapted_model_deg: [f64; 4],
@@ -138,6 +147,8 @@ struct DemoReport {
     /// Distance of the found mass from the true one (one change), m, in the standing
     /// frame.
     position_error: Option<f64>,
+    /// What `adapt` held the answer against (`adapt.json`'s `checks`).
+    checks: Vec<twinloop_ident::adapt_checks::AdaptCheck>,
     files: Vec<String>,
     wall_s: f64,
 }
@@ -145,6 +156,12 @@ struct DemoReport {
 /// The hidden change: a battery scenario's masses, or one random mass.
 fn hidden_change(a: &DemoArgs, prior: &Description) -> Result<(Vec<Change>, String), CliError> {
     if let Some(label) = &a.scenario {
+        if a.robot != km20::NAME {
+            return Err(CliError::new(format!(
+                "--scenario {label}: seed 000's battery scenarios are km20's (they name its links); on {} the change is drawn from --seed",
+                a.robot
+            )));
+        }
         let s = km20::BATTERY_SCENARIOS
             .iter()
             .find(|s| s.label == label)
@@ -227,8 +244,8 @@ fn check_on_bus(
 /// `first_tips`, creeps only (the check).
 fn plan(port: &str, record: &Path, a: &DemoArgs, first_tips: Option<Vec<f64>>) -> BusPlan {
     BusPlan {
-        model_spec: "builtin:km20".into(),
-        map: "builtin:km20".into(),
+        model_spec: spec(a),
+        map: spec(a),
         port: demo_port(port),
         record: Some(record.to_path_buf()),
         yes: true,
@@ -245,6 +262,28 @@ fn plan(port: &str, record: &Path, a: &DemoArgs, first_tips: Option<Vec<f64>>) -
         clock_rate: a.realtime_factor,
         verbose: true,
     }
+}
+
+/// The robot's built-in description and profile: `builtin:NAME`.
+fn spec(a: &DemoArgs) -> String {
+    format!("builtin:{}", a.robot)
+}
+
+/// The measured fall angles' resolution, deg: half a count of the left ankle pitch's
+/// servo (the tip is read on both ankles, averaged; every built-in's ankles are one
+/// model): RX 0.29 deg (EM-RX28 Goal Position: 300 deg / 1024), MX and X 0.088 deg
+/// (EM-MX28, EM-XM430: 360 deg / 4096).
+fn ankle_resolution_deg(mapping: &RobotMapping) -> Result<f64, CliError> {
+    let ankle = mapping
+        .role("left_ankle_pitch")
+        .and_then(|joint| mapping.joints.iter().find(|j| j.name == joint))
+        .ok_or_else(|| {
+            CliError::new(format!(
+                "{}: no [[joint]] for roles.left_ankle_pitch",
+                mapping.source
+            ))
+        })?;
+    Ok(0.5 * ankle.model.resolution().to_degrees())
 }
 
 /// The bus as the demo's host opens it: a reply may wait 500 ms beyond its wire time
@@ -293,19 +332,35 @@ fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<(), CliError> {
 /// The tip-over in 3D (`replay.html` in `dir`, beside the report): the robot's
 /// recording with the adapted and prior models as ghosts. A replay that cannot be
 /// made is a warning: the demo's result does not depend on it.
-fn replay_3d(dir: &Path, record: &Path, adapted: bool, files: &mut Vec<String>) -> Option<PathBuf> {
-    let urdf = adapted.then(|| dir.join("km20_adapted.urdf"));
-    let out = dir.join("replay.html");
-    crate::replay3d::replay_for_report(record, "builtin:km20", urdf.as_deref(), &out, files)
+fn replay_3d(
+    a: &DemoArgs,
+    record: &Path,
+    adapted: Option<&Path>,
+    files: &mut Vec<String>,
+) -> Option<PathBuf> {
+    let out = a.out.join("replay.html");
+    crate::replay3d::replay_for_report(record, &spec(a), adapted, &out, files)
 }
 
-/// `twinloop demo`.
-pub fn run(a: DemoArgs) -> CliResult {
-    let t0 = Instant::now();
-    std::fs::create_dir_all(&a.out).map_err(|e| CliError::io(&a.out, e).context("--out"))?;
-    let prior = km20::build()?;
-    let mapping = RobotMapping::builtin("km20").ok_or("no built-in km20 mapping")?;
-    let (truth_changes, how) = hidden_change(&a, &prior)?;
+/// The robot with its hidden change, served and measured over the bus: what the
+/// adapting side has (the tip-over and the scale's reading) and what it is not told.
+struct Measured {
+    prior: Description,
+    mapping: RobotMapping,
+    truth: Description,
+    truth_changes: Vec<Change>,
+    run: crate::cmd_experiment::tipover_bus::BusRun,
+    study: Box<twinloop_ident::tipover_study::StudyReport>,
+    scale: f64,
+    record: PathBuf,
+}
+
+/// Serve the robot with its hidden change and run the tip-over on it over the bus.
+fn measure(a: &DemoArgs) -> Result<Measured, CliError> {
+    let (prior, _) = crate::common::load_description(&spec(a))?;
+    let mapping = RobotMapping::builtin(&a.robot)
+        .ok_or_else(|| CliError::new(format!("no built-in profile {}", a.robot)))?;
+    let (truth_changes, how) = hidden_change(a, &prior)?;
     if a.tell_where
         && truth_changes
             .iter()
@@ -319,9 +374,10 @@ pub fn run(a: DemoArgs) -> CliResult {
     for c in &truth_changes {
         truth = changed(&truth, c)?;
     }
-    let robot = serve_truth(&truth, &mapping, &a, &a.servo_params)?;
+    let robot = serve_truth(&truth, &mapping, a, &a.servo_params)?;
     let mut text = format!(
-        "a km20 with a hidden change ({how}) answers on {} (simulated, x{} real time)\n",
+        "robot {} with a hidden change ({how}) answers on {} (simulated, x{} real time)\n",
+        a.robot,
         robot.path(),
         a.realtime_factor
     );
@@ -338,7 +394,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     );
     eprint!("{text}");
     let record = a.out.join("tipover.csv");
-    let plan = plan(robot.path(), &record, &a, None);
+    let plan = plan(robot.path(), &record, a, None);
     // A simulation that stopped (it diverged, or its operator could not stand the
     // robot up) leaves the bus answering with its last state: say so rather than
     // what the host made of the frozen robot.
@@ -350,59 +406,83 @@ pub fn run(a: DemoArgs) -> CliResult {
         None => e,
     })?;
     drop(robot);
-    let BusOutcome::Study(study) = run.outcome else {
+    let BusOutcome::Study(study) = &run.outcome else {
         return Err(CliError::new(
             "the tip-over did not run all four directions",
         ));
     };
+    let study = study.clone();
+    Ok(Measured {
+        prior,
+        mapping,
+        truth,
+        truth_changes,
+        run,
+        study,
+        scale,
+        record,
+    })
+}
+
+/// `twinloop demo`.
+pub fn run(a: DemoArgs) -> CliResult {
+    let t0 = Instant::now();
+    std::fs::create_dir_all(&a.out).map_err(|e| CliError::io(&a.out, e).context("--out"))?;
+    let m = measure(&a)?;
+    let (prior, study, run) = (&m.prior, &m.study, &m.run);
     let tip_json = a.out.join("tipover.json");
-    write_json(&tip_json, &*study)?;
+    write_json(&tip_json, &**study)?;
     let opts = AdaptOptions {
-        total_mass: Some(scale),
-        host: a.tell_where.then(|| truth_changes[0].link.clone()),
-        // The ankles' encoder count (RX: 0.29 deg), two ankles averaged.
-        angle_resolution_deg: Some(0.5 * twinloop_sim::actuator::RX_POSITION_UNIT.to_degrees()),
+        total_mass: Some(m.scale),
+        host: a.tell_where.then(|| m.truth_changes[0].link.clone()),
+        angle_resolution_deg: Some(ankle_resolution_deg(&m.mapping)?),
         ..Default::default()
     };
-    let measured = angles(&study, |d| d.measured_deg);
+    let measured = angles(study, |d| d.measured_deg);
     // The check's floor and servos (datasheet): what the adapting side knows.
     let replay_options = replay_options(a.ground_sink);
+    let model_spec = spec(&a);
     let replay = Replay {
-        model_spec: "builtin:km20",
+        model_spec: &model_spec,
         passes: a.protocol_passes as usize,
         options: &replay_options,
     };
     let (mut adapted, calibration) = adapt_to_protocol(
-        &prior,
-        &study,
+        prior,
+        study,
         &opts,
         &replay,
         &mut |line| eprintln!("{line}"),
         &|e| CliError::from(e),
     )?;
-    let prior_deg = angles(&study, |d| d.static_deg);
-    let mut files = vec![record.display().to_string(), tip_json.display().to_string()];
+    let prior_deg = angles(study, |d| d.static_deg);
+    let mut files = vec![
+        m.record.display().to_string(),
+        tip_json.display().to_string(),
+    ];
     let mut adapted_deg = [f64::NAN; 4];
+    let mut urdf = None;
     if let Some(model) = &adapted.robot {
         let after = report_for_runs(model, &run.runs, &run.joint_names)?;
         adapted_deg = angles(&after, |d| d.static_deg);
-        let urdf = a.out.join("km20_adapted.urdf");
-        twinloop_description::urdf::write_file(model, &urdf)
-            .map_err(|e| CliError::new(format!("{}: {e}", urdf.display())))?;
-        files.push(urdf.display().to_string());
+        let path = a.out.join(format!("{}_adapted.urdf", a.robot));
+        twinloop_description::urdf::write_file(model, &path)
+            .map_err(|e| CliError::new(format!("{}: {e}", path.display())))?;
+        files.push(path.display().to_string());
+        urdf = Some(path);
     }
     let simulated_deg = match (&adapted.robot, a.check) {
         (Some(model), true) => {
             let commanded: Vec<f64> = run.runs.iter().map(|r| r.commanded_deg).collect();
             let check_csv = a.out.join("check.csv");
-            let deg = check_on_bus(model, &mapping, &a, commanded, &check_csv)?;
+            let deg = check_on_bus(model, &m.mapping, &a, commanded, &check_csv)?;
             files.push(check_csv.display().to_string());
             Some(deg)
         }
         _ => None,
     };
     let html = a.out.join("report.html");
-    let replay = replay_3d(&a.out, &record, adapted.robot.is_some(), &mut files);
+    let replay = replay_3d(&a, &m.record, urdf.as_deref(), &mut files);
     adapted.report.files = files.clone();
     let mut page = html_report(&adapted.report);
     if let Some(replay) = &replay {
@@ -415,111 +495,32 @@ pub fn run(a: DemoArgs) -> CliResult {
     write_json(&adapt_json, &adapted.report)?;
     files.push(adapt_json.display().to_string());
 
-    let true_com = standing_com(&truth)?;
+    let true_com = standing_com(&m.truth)?;
     // The truth's static angles at the robot's onsets: what a perfect measurement reads.
     let truth_deg = angles(
-        &report_for_runs(&truth, &run.runs, &run.joint_names)?,
+        &report_for_runs(&m.truth, &run.runs, &run.joint_names)?,
         |d| d.static_deg,
     );
     // The protocol on the truth, in lockstep: the pty measurement less its noise.
     let true_protocol_deg = match calibration {
         Some(_) => Some(
-            protocol_reading(&study, "builtin:km20", &truth, &replay_options)
+            protocol_reading(study, &model_spec, &m.truth, &replay_options)
                 .map_err(|e| e.context("simulating the protocol on the true model"))?,
         ),
         None => None,
     };
     let r = &adapted.report;
-    let com_error = r.adapted_com.map(|c| dist(c, true_com));
     // One change: where it is in the standing frame (the found one's frame).
-    let position_error = match (&r.added, truth_changes.as_slice()) {
+    let position_error = match (&r.added, m.truth_changes.as_slice()) {
         (Some(found), [one]) => Some(dist(
             found.position,
-            standing_point(&prior, &one.link, one.xyz)?,
+            standing_point(prior, &one.link, one.xyz)?,
         )),
         _ => None,
     };
-    let mut t = String::new();
-    if a.soft_servos {
-        t += &format!("{}\n", twinloop_ident::adapt::SOFT_SERVOS_NOTE);
-    }
-    t += "fall angles, deg    forward backward  left right\n";
-    t += &format!("  robot (bus)        {}\n", join(measured));
-    t += &format!("  model before       {}\n", join(prior_deg));
-    t += &format!("  model adapted      {}\n", join(adapted_deg));
-    t += &format!("  model true         {}\n", join(truth_deg));
-    if let Some(p) = true_protocol_deg {
-        t += &format!(
-            "  true, by protocol  {} (the protocol simulated on the true model)\n",
-            join(p)
-        );
-    }
-    if let Some(c) = &calibration {
-        t += &format!(
-            "  protocol's bias    {} (read past the statics, simulated on the adapted model; the model adapted is the robot less it)\n",
-            join(c.passes[c.kept].bias_deg)
-        );
-    }
-    if let Some(sim) = simulated_deg {
-        t += &format!("  adapted, simulated {}\n", join(sim));
-        let (k, worst) = (0..4).fold((0, 0.0_f64), |b, k| {
-            let d = sim[k] - measured[k];
-            if d.abs() > b.1.abs() { (k, d) } else { b }
-        });
-        t += &format!(
-            "the adapted simulation tips within {:.2} deg of the robot (largest {}: {:+.2})\n",
-            worst.abs(),
-            ["forward", "backward", "left", "right"][k],
-            worst
-        );
-    }
-    match &r.added {
-        Some(m) => {
-            t += &format!(
-                "found: {:.3} kg on {} at {} in its frame\n",
-                m.mass,
-                m.host,
-                mm(m.position_host)
-            );
-        }
-        None => t += "found: no placement (see the report)\n",
-    }
-    for c in &truth_changes {
-        t += &format!(
-            "truth: {:.3} kg on {} at {} in its frame\n",
-            c.mass,
-            c.link,
-            mm(c.xyz)
-        );
-    }
-    if truth_changes.len() > 1 {
-        t += "  (two changes at once are found as the one equivalent change)\n";
-    }
-    t += &format!(
-        "CoM: model {} -> adapted {}, true {}: off by {:.1} mm\n",
-        mm(r.prior_com),
-        r.adapted_com.map(mm).unwrap_or_else(|| "-".into()),
-        mm(true_com),
-        com_error.unwrap_or(f64::NAN) * 1e3
-    );
-    if let Some(e) = position_error {
-        t += &format!(
-            "the mass is {:.1} mm from where it really is (CoM sigma x mass ratio: {})\n",
-            e * 1e3,
-            r.added
-                .as_ref()
-                .map(|m| mm(m.position_sigma))
-                .unwrap_or_default()
-        );
-    }
-    let wall_s = t0.elapsed().as_secs_f64();
-    t += &format!("wrote {} ({wall_s:.0} s)\n", files.join(", "));
-    t += &format!(
-        "see the robot's run in 3D: twinloop view builtin:km20 {}\n",
-        record.display()
-    );
-    let report = DemoReport {
-        truth: truth_changes,
+    let mut report = DemoReport {
+        robot: a.robot.clone(),
+        truth: m.truth_changes.clone(),
         soft_servos: a.soft_servos,
         measured_deg: measured,
         prior_model_deg: prior_deg,
@@ -531,11 +532,123 @@ pub fn run(a: DemoArgs) -> CliResult {
         found: r.added.clone(),
         true_com,
         adapted_com: r.adapted_com,
-        com_error,
+        com_error: r.adapted_com.map(|c| dist(c, true_com)),
         position_error,
+        checks: r.checks.clone(),
         files,
-        wall_s,
+        wall_s: 0.0,
     };
+    report.wall_s = t0.elapsed().as_secs_f64();
+    let t = terminal_text(&a, &report, r, &m.record);
     emit(&t, a.json.as_ref(), &report)?;
     Ok(Outcome::Ok)
+}
+
+/// The demo's result as the terminal says it: the fall angles in the adapt report's
+/// names (`html_report`'s columns, the JSON's fields), what was found beside the
+/// truth, and the checks `adapt` would hold the answer against.
+fn terminal_text(
+    a: &DemoArgs,
+    d: &DemoReport,
+    r: &twinloop_ident::adapt::AdaptReport,
+    record: &Path,
+) -> String {
+    let mut t = String::new();
+    if a.soft_servos {
+        t += &format!("{}\n", twinloop_ident::adapt::SOFT_SERVOS_NOTE);
+    }
+    // Each row in the adapt report's words (`html_report`'s columns).
+    let row = |label: &str, v: [f64; 4]| format!("  {label:46}{}", join(v));
+    t += &format!("{:48}forward backward  left right\n", "fall angles, deg");
+    t += &(row("robot (measured)", d.measured_deg) + "\n");
+    for (label, v) in [
+        (
+            "prior model (static, at the robot's onsets)",
+            d.prior_model_deg,
+        ),
+        (
+            "adapted model (static, at the robot's onsets)",
+            d.adapted_model_deg,
+        ),
+        (
+            "true model (static, at the robot's onsets)",
+            d.true_model_deg,
+        ),
+    ] {
+        t += &(row(label, v) + "\n");
+    }
+    if let Some(p) = d.true_protocol_deg {
+        t += &(row("true model (protocol, simulated)", p) + "\n");
+    }
+    if let Some(c) = &d.calibration {
+        t += &row("protocol's bias", c.passes[c.kept].bias_deg);
+        t += " (read past the statics, simulated on the adapted model; the adapted model is the robot less it)\n";
+    }
+    if let Some(sim) = d.adapted_simulation_deg {
+        t += &(row("adapted model (simulated, over the bus)", sim) + "\n");
+        let (k, worst) = (0..4).fold((0, 0.0_f64), |b, k| {
+            let e = sim[k] - d.measured_deg[k];
+            if e.abs() > b.1.abs() { (k, e) } else { b }
+        });
+        t += &format!(
+            "the adapted simulation tips within {:.2} deg of the robot (largest {}: {:+.2})\n",
+            worst.abs(),
+            ["forward", "backward", "left", "right"][k],
+            worst
+        );
+    }
+    t += &found_text(d, r);
+    t += &crate::adapt_text::checks_text(r, None);
+    t += &format!("wrote {} ({:.0} s)\n", d.files.join(", "), d.wall_s);
+    t += &format!(
+        "see the robot's run in 3D: twinloop view {} {}\n",
+        spec(a),
+        record.display()
+    );
+    t
+}
+
+/// What was found beside the truth: the part, the CoM, the part's distance.
+fn found_text(d: &DemoReport, r: &twinloop_ident::adapt::AdaptReport) -> String {
+    let mut t = String::new();
+    match &r.added {
+        Some(m) => {
+            t += &format!(
+                "found: {:.3} kg on {} at {} in its frame\n",
+                m.mass,
+                m.host,
+                mm(m.position_host)
+            );
+        }
+        None => t += "found: no placement (see the report)\n",
+    }
+    for c in &d.truth {
+        t += &format!(
+            "truth: {:.3} kg on {} at {} in its frame\n",
+            c.mass,
+            c.link,
+            mm(c.xyz)
+        );
+    }
+    if d.truth.len() > 1 {
+        t += "  (two changes at once are found as the one equivalent change)\n";
+    }
+    t += &format!(
+        "CoM: prior {} -> adapted model {}, true {}: off by {:.1} mm\n",
+        mm(r.prior_com),
+        r.adapted_com.map(mm).unwrap_or_else(|| "-".into()),
+        mm(d.true_com),
+        d.com_error.unwrap_or(f64::NAN) * 1e3
+    );
+    if let Some(e) = d.position_error {
+        t += &format!(
+            "the mass is {:.1} mm from where it really is (CoM sigma x mass ratio: {})\n",
+            e * 1e3,
+            r.added
+                .as_ref()
+                .map(|m| mm(m.position_sigma))
+                .unwrap_or_default()
+        );
+    }
+    t
 }

@@ -5,6 +5,7 @@
 //! Every command returns `Result<Outcome, CliError>`; `main` alone prints
 //! `error: ...` and picks the exit code (see `error.rs`).
 
+mod adapt_text;
 mod cmd_adapt;
 mod cmd_bench;
 mod cmd_compliant;
@@ -178,20 +179,22 @@ enum Command {
     /// stderr describes what is served. Ctrl-C stops.
     #[command(verbatim_doc_comment)]
     Serve(cmd_serve::ServeArgs),
-    /// The adaptation loop with no hardware: a km20 with a hidden change, found over its bus
+    /// The adaptation loop with no hardware: a robot with a hidden change, found over its bus
     ///
-    /// A simulated km20 with a change the adapting side is not told (a random mass,
-    /// --seed, or a seed 000 battery scenario, --scenario) answers on a pseudo-terminal as
-    /// a real robot does on its USB adapter, faster than real time. Over that bus, exactly
-    /// as on a real robot: the servos are found, the robot leans until it tips in four
+    /// A simulated robot (a built-in profile, --robot: km20, op3 or darwin_op) with a
+    /// change the adapting side is not told (a random mass, --seed, or on km20 a seed 000
+    /// battery scenario, --scenario) answers on a pseudo-terminal as a real robot does on
+    /// its USB adapter, faster than real time. Over that bus, exactly as on a real robot: the servos are found, the robot leans until it tips in four
     /// directions (each twice, the second time creeping up to the tip; the robot's own
     /// IMU board gives the tilt), the change is found from the fall angles and the
     /// weight (seed 000's exact inversion), the adapted URDF is written and its fall
-    /// angles checked against the robot's. Then the truth is shown beside what was found.
+    /// angles checked against the robot's, with the checks `adapt` makes. Then the truth
+    /// is shown beside what was found.
     ///
     /// Example:
     ///   twinloop demo --seed 3 --json demo.json
     ///   twinloop demo --scenario a
+    ///   twinloop demo --robot op3 --seed 2
     #[command(verbatim_doc_comment)]
     Demo(cmd_demo::DemoArgs),
     /// Benchmarks against peers (median time per call): dynamics, simulator, servo link

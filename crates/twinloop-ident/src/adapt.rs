@@ -1073,7 +1073,13 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
                 format!("{:.3}", r.prior_model_deg[k]),
             ];
             if let Some(f) = &r.fall_angle_fit {
-                row.push(format!("{:.3}", r.measured_deg[k] + f.residual_deg[k]));
+                // The residual is against the angles fitted: the measured ones less
+                // the protocol's bias, when one was taken off.
+                let bias = r.protocol_bias_deg.map_or(0.0, |b| b[k]);
+                row.push(format!(
+                    "{:.3}",
+                    r.measured_deg[k] - bias + f.residual_deg[k]
+                ));
             }
             if let Some(c) = r.check_deg {
                 row.push(format!("{:.3}", c[k]));
