@@ -174,7 +174,7 @@ pub fn run<'py>(
     let stop = Arc::new(AtomicBool::new(false));
     let watch = InterruptWatch::new(&stop);
     let standing = vec![0.0; names.len()];
-    let (runs, abort, finished, cycle_s) = py.detach(|| {
+    let (runs, abort, finished, cycle_s, health) = py.detach(|| {
         let mut g = Guarded::new(&mut bot, writer, &standing, stop.clone());
         let runs = run_directions(
             &mut g,
@@ -185,6 +185,7 @@ pub fn run<'py>(
             &mut |_| {},
         );
         let cycle_s = g.median_cycle_s();
+        let health = g.health();
         let writer = g.writer.take();
         let abort = g.abort.take();
         hold_standing(&mut bot, &standing);
@@ -193,6 +194,7 @@ pub fn run<'py>(
             abort,
             writer.map(CsvWriter::finish).transpose(),
             cycle_s,
+            health,
         )
     });
     drop(watch);
@@ -205,9 +207,14 @@ pub fn run<'py>(
             abort.unwrap_or(e)
         ))
     })?;
-    match bus_outcome(&model, &model_spec, &port, &runs, &names, plan.soft_servos)
-        .map_err(|e| value_error(e.to_string()))?
-    {
+    // How the bus held up, as the CLI's JSON has it.
+    let mut outcome = bus_outcome(&model, &model_spec, &port, &runs, &names, plan.soft_servos)
+        .map_err(|e| value_error(e.to_string()))?;
+    match &mut outcome {
+        BusOutcome::Study(study) => study.bus = Some(health),
+        BusOutcome::Partial(partial) => partial.bus = Some(health),
+    }
+    match outcome {
         BusOutcome::Study(mut r) => {
             // How it was measured, as the CLI keeps it (`adapt --protocol-passes`).
             r.protocol = cycle_s.map(|cycle_s| BusProtocol {

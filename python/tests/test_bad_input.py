@@ -214,7 +214,8 @@ def test_experiments_refuse_bad_numbers():
     value_error(lambda: tl.random_changes(KM20, 1, mass_range=(np.nan, 1.0)), "mass_range")
     for change in ({"link": "torso", "mass": np.nan, "xyz": [0, 0, 0]},
                    {"link": "torso", "mass": 0.1, "xyz": [0, np.inf, 0]},
-                   {"link": "torso", "mass": -0.1, "xyz": [0, 0, 0]},
+                   {"link": "torso", "mass": 0.0, "xyz": [0, 0, 0]},  # negative: a part taken off
+                   {"link": "torso", "mass": -50.0, "xyz": [0, 0, 0]},  # more than the torso has
                    {"link": "torso", "mass": 0.1}):
         value_error(lambda: tl.tipover_changes(KM20, [change]), "changes[0]")
     for key in ("ramp", "slow_ramp"):

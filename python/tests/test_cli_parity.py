@@ -121,7 +121,7 @@ def test_tipover_over_a_bus_matches_the_cli(tmp_path):
         ours = tl.tipover(port=srv.path, map="builtin:km20", directions=["forward"], ramp=5.0, slow_ramp=0.2,
                           realtime_factor=4.0, record=record, timeout_ms=100.0, retries=5)
         port = srv.path
-    assert set(ours) == set(theirs) == {"robot", "port", "forward"}
+    assert set(ours) == set(theirs) == {"robot", "port", "forward", "soft_servos", "bus"}
     assert set(ours["forward"]) == set(theirs["forward"])
     assert ours["robot"] == theirs["robot"] == "builtin:km20" and ours["port"] == port
     # Two runs on a robot served in real time are not bit-equal: they tip within a degree.

@@ -23,9 +23,11 @@ pub const REFUSAL: &[u8] = b"twinloop serve: busy: ";
 /// and could drop the refusal before the client reads it).
 pub fn refuse(mut stream: TcpStream, why: &str) -> io::Result<()> {
     stream.set_nonblocking(false)?;
-    stream.write_all(REFUSAL)?;
-    stream.write_all(why.as_bytes())?;
-    stream.write_all(b"\n")?;
+    // One write: the client reads the line whole when it arrives in one segment.
+    let mut line = REFUSAL.to_vec();
+    line.extend_from_slice(why.as_bytes());
+    line.push(b'\n');
+    stream.write_all(&line)?;
     stream.shutdown(std::net::Shutdown::Write)?;
     stream.set_read_timeout(Some(Duration::from_secs(2)))?;
     let mut scratch = [0u8; 256];
@@ -47,6 +49,27 @@ fn refusal(buf: &[u8], peer: &str) -> Option<io::Error> {
 }
 
 impl TcpTransport {
+    /// `first` and what follows it up to the newline (a refusal split over two
+    /// segments), waiting at most half a second for the rest.
+    fn rest_of_line(&mut self, first: &[u8]) -> Vec<u8> {
+        let mut line = first.to_vec();
+        let until = std::time::Instant::now() + Duration::from_millis(500);
+        let mut more = [0u8; 256];
+        while !line.contains(&b'\n') && std::time::Instant::now() < until {
+            let _ = self
+                .stream
+                .set_read_timeout(Some(Duration::from_millis(50)));
+            match self.stream.read(&mut more) {
+                Ok(0) => break,
+                Ok(k) => line.extend_from_slice(&more[..k]),
+                // A read timeout: the loop's deadline decides.
+                Err(_) => continue,
+            }
+        }
+        self.timeout = None;
+        line
+    }
+
     pub fn connect(addr: &str) -> io::Result<TcpTransport> {
         let mut last = None;
         for a in addr.to_socket_addrs()? {
@@ -95,10 +118,11 @@ impl Transport for TcpTransport {
                 format!("tcp peer {} closed the connection", self.peer),
             )),
             Ok(n) => {
-                if self.received == 0
-                    && let Some(e) = refusal(&buf[..n], &self.peer)
-                {
-                    return Err(e);
+                if self.received == 0 && buf[..n].starts_with(REFUSAL) {
+                    let line = self.rest_of_line(&buf[..n]);
+                    if let Some(e) = refusal(&line, &self.peer) {
+                        return Err(e);
+                    }
                 }
                 self.received += n as u64;
                 Ok(n)
