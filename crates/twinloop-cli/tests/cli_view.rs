@@ -225,12 +225,18 @@ fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
         );
     }
     // Each ghost's ankle angle at its fall, per lean, beside the static angles the
-    // demo prints for the same model ("model before", "model adapted").
+    // demo prints for the same model ("prior model (static, ...)", "adapted model (static, ...)").
     let stdout = String::from_utf8_lossy(&o.stdout);
     let mut tips = Vec::new();
     for (name, line) in [
-        ("replay_prior.csv", "model before"),
-        ("replay_adapted.csv", "model adapted"),
+        (
+            "replay_prior.csv",
+            "prior model (static, at the robot's onsets)",
+        ),
+        (
+            "replay_adapted.csv",
+            "adapted model (static, at the robot's onsets)",
+        ),
     ] {
         let (header, rows) = read_csv(&dir.join(name));
         assert!(header.iter().any(|c| c == "q:base.qw"), "{name}");

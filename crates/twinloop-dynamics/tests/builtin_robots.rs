@@ -603,9 +603,13 @@ fn battery_scenarios_add_0_2_kg_where_they_say() {
         e.to_string().contains("l_tigh") && e.to_string().contains("l_thigh"),
         "{e}"
     );
-    let e = twinloop_description::builtin::add_point_mass(&mut r, "l_thigh", -0.1, [0.0; 3])
+    // Zero is no part; a negative mass is a part taken off, at most what the link has.
+    let e = twinloop_description::builtin::add_point_mass(&mut r, "l_thigh", 0.0, [0.0; 3])
         .unwrap_err();
-    assert!(e.to_string().contains("-0.1"), "{e}");
+    assert!(e.to_string().contains("not 0"), "{e}");
+    let e = twinloop_description::builtin::add_point_mass(&mut r, "l_thigh", -10.0, [0.0; 3])
+        .unwrap_err();
+    assert!(e.to_string().contains("l_thigh"), "{e}");
     assert!(
         twinloop_description::builtin::add_point_mass(&mut r, "l_thigh", 0.1, [f64::NAN, 0.0, 0.0])
             .is_err()
