@@ -8,8 +8,13 @@
 use std::path::Path;
 use std::process::Command;
 
+/// One demo at a time: each serves a robot in real time (4x) on a pty and its host
+/// keeps a control cycle; two at once on two cores starve each other's bus.
+static ONE_DEMO: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 #[test]
 fn the_demo_finds_a_hidden_mass_over_the_bus() {
+    let _one = ONE_DEMO.lock().unwrap_or_else(|e| e.into_inner());
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("demo-seed-2");
     let _ = std::fs::remove_dir_all(&dir);
     let json = dir.with_extension("json");
@@ -101,6 +106,7 @@ fn the_demo_finds_a_hidden_mass_over_the_bus() {
 /// issue's goal.
 #[test]
 fn the_demo_finds_a_hidden_mass_on_the_op3() {
+    let _one = ONE_DEMO.lock().unwrap_or_else(|e| e.into_inner());
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("demo-op3-seed-2");
     let _ = std::fs::remove_dir_all(&dir);
     let json = dir.with_extension("json");
