@@ -1,10 +1,11 @@
 //! `link record` over a damaged line (issue 28's acceptance check, short form): a
 //! served km20 on a pty with `serve --line-noise 1e-3`, recorded for 20 s. No row is
-//! lost (every cycle is a row, the time stamps rise with no gap past the silence
-//! window, the count is what the rate and the duration give), no damaged or stale
-//! reply is accepted (each joint's reading stays within what a servo can move between
-//! two rows), the client counted the damaged replies it refused, and the server says how many
-//! bytes the noise hit. The hour-long run is in docs/link.md.
+//! lost (every cycle is a row, the time stamps rise, the bus is never silent for the
+//! silence window, the count is what the rate and the duration give); no damaged or
+//! stale reply is accepted with `--verified-reads` (each joint's reading stays within
+//! what a servo can move between two rows); the client counted the damaged replies it
+//! refused; the server says how many bytes the noise hit. The hour-long run without
+//! `--verified-reads` is in docs/link.md.
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -65,7 +66,7 @@ fn twenty_seconds_recorded_through_line_noise_lose_no_row_and_take_no_damaged_re
             "builtin:km20",
         ])
         .args(["--duration", &DURATION.to_string()])
-        .args(["--rate", &RATE.to_string(), "--out"])
+        .args(["--rate", &RATE.to_string(), "--verified-reads", "--out"])
         .arg(&out)
         .output()
         .unwrap();
@@ -118,11 +119,16 @@ fn twenty_seconds_recorded_through_line_noise_lose_no_row_and_take_no_damaged_re
         "{} rows of {full}",
         rows.len()
     );
-    let window = 2.0; // --silence-window's default
+    // The bus never fell silent for the window (2 s, --silence-window's default)
+    // by the recorder's own measure. Rows may be further apart: in the hour-long run
+    // the whole machine stalled for up to 4.8 s (both processes, docs/link.md).
+    let silence = bus.split("longest silence ").nth(1).expect(bus);
+    let silence: f64 = silence.split(' ').next().unwrap().parse().expect(bus);
+    assert!(silence < 2.0, "{bus}");
     for w in rows.windows(2) {
         let dt = w[1][0] - w[0][0];
         assert!(
-            dt > 0.0 && dt < window,
+            dt > 0.0 && dt < 10.0,
             "rows at {} and {} s",
             w[0][0],
             w[1][0]
@@ -130,7 +136,10 @@ fn twenty_seconds_recorded_through_line_noise_lose_no_row_and_take_no_damaged_re
     }
     assert!(rows[rows.len() - 1][0] > DURATION - 1.0);
 
-    // No damaged or stale reply taken: between two rows a joint moves at most what
+    // No damaged or stale reply taken (--verified-reads: Protocol 1.0's 8-bit
+    // checksum passes about one damaged reply in 1e6 at this rate, docs/link.md,
+    // which would fail this test one run in a few hundred; reads as they are were
+    // run for an hour). Between two rows a joint moves at most what
     // the fastest RX servo turns in that time, plus a count either side; a standing
     // robot holds its pose, within 4 counts. A damaged byte of a position moves it
     // by 1, 2, 4, ... 128 counts or a multiple of 256; another servo's stands apart.
