@@ -11,8 +11,16 @@ use std::sync::atomic::Ordering;
 use std::time::Duration;
 use twinloop_description::Description;
 use twinloop_link::servo::{ServeOptions, serve as serve_bus};
-use twinloop_link::transport::{PtyTransport, TcpTransport, Transport};
+use twinloop_link::transport::{NoisyTransport, PtyTransport, TcpTransport, Transport};
 use twinloop_link::{BusServo, RobotMapping, VirtualBus};
+
+/// A probability per byte, 0..=1.
+fn probability(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(p) if (0.0..=1.0).contains(&p) => Ok(p),
+        _ => Err(format!("{s:?} is not a probability (0 to 1)")),
+    }
+}
 
 /// The robot served when neither --robot nor --map is given.
 const DEFAULT_ROBOT: &str = "builtin:km20";
@@ -77,6 +85,15 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     /// the spinning steals the client's CPU and round trips get slower)
     #[arg(long, default_value_t = 0, value_name = "US")]
     pub spin_us: u64,
+    /// Damage the line: each byte, both ways, is hit with this probability (a bit
+    /// flipped, the byte dropped or a random byte inserted after it, equally likely),
+    /// as a bad cable or a noisy supply would; the counts are told on exit. Tests
+    /// that no corrupted or stale reply is accepted (docs/link.md)
+    #[arg(long, default_value_t = 0.0, value_name = "RATE", value_parser = probability)]
+    pub line_noise: f64,
+    /// The random draw of --line-noise
+    #[arg(long, default_value_t = 1, requires = "line_noise")]
+    pub seed: u64,
     /// Simulated robot only (not --servo-model ideal).
     #[command(flatten)]
     pub view: crate::cmd_view::LiveViewArgs,
@@ -377,7 +394,35 @@ fn serve_on<B: twinloop_link::VirtualServoBackend>(
             a.port
         )));
     };
-    serve_tcp(addr, &mut bus, &options, &banner)
+    serve_tcp(addr, a, &mut bus, &options, &banner)
+}
+
+/// Serve on `t`, through its noise only with --line-noise: without, the line is
+/// exactly the transport's (no re-chunking of what it reads).
+fn serve_maybe_noisy<T: Transport, B: twinloop_link::VirtualServoBackend>(
+    bus: &mut VirtualBus<B>,
+    t: &mut NoisyTransport<T>,
+    options: &ServeOptions,
+    stop: &std::sync::atomic::AtomicBool,
+) -> std::io::Result<()> {
+    if t.rate > 0.0 {
+        serve_bus(bus, t, options, stop)
+    } else {
+        serve_bus(bus, &mut t.inner, options, stop)
+    }
+}
+
+/// What --line-noise did, on stderr (nothing without it).
+fn tell_noise<T: Transport>(t: &NoisyTransport<T>, seed: u64) {
+    if t.rate == 0.0 {
+        return;
+    }
+    let s = t.stats;
+    eprintln!(
+        "line noise (rate {}, seed {seed}): {} bytes through, {} bits flipped, {} bytes \
+         dropped, {} bytes inserted",
+        t.rate, s.bytes, s.flipped, s.dropped, s.inserted
+    );
 }
 
 /// What stderr says when serving starts.
@@ -433,7 +478,8 @@ fn serve_pty<B: twinloop_link::VirtualServoBackend>(
     let mut pty = PtyTransport::open()
         .map_err(|e| CliError::new(format!("cannot open a pseudo-terminal: {e}")))?;
     pty.set_spin(Duration::from_micros(a.spin_us));
-    let path = pty.path().to_path_buf();
+    let mut pty = NoisyTransport::new(pty, a.line_noise, a.seed);
+    let path = pty.inner.path().to_path_buf();
     if let Some(link) = &a.link {
         let _ = std::fs::remove_file(link);
         std::os::unix::fs::symlink(&path, link).map_err(|e| {
@@ -451,10 +497,11 @@ fn serve_pty<B: twinloop_link::VirtualServoBackend>(
         stop_on_eof: false,
         ..*options
     };
-    let r = serve_bus(bus, &mut pty, &options, &stop);
+    let r = serve_maybe_noisy(bus, &mut pty, &options, &stop);
     if let Some(link) = &a.link {
         let _ = std::fs::remove_file(link);
     }
+    tell_noise(&pty, a.seed);
     r.map_err(|e| CliError::new(format!("{}: {e}", path.display())))?;
     Ok(Outcome::Ok)
 }
@@ -463,6 +510,7 @@ fn serve_pty<B: twinloop_link::VirtualServoBackend>(
 /// refused with a line saying who has the bus (a bus has one host).
 fn serve_tcp<B: twinloop_link::VirtualServoBackend>(
     addr: &str,
+    a: &ServeArgs,
     bus: &mut VirtualBus<B>,
     options: &ServeOptions,
     banner: &Banner,
@@ -486,7 +534,7 @@ fn serve_tcp<B: twinloop_link::VirtualServoBackend>(
             let Ok((stream, peer)) = take.recv_timeout(Duration::from_millis(100)) else {
                 continue;
             };
-            serve_client(stream, peer, bus, options, &stop);
+            serve_client(stream, peer, a, bus, options, &stop);
             *serving.lock().unwrap_or_else(|e| e.into_inner()) = None;
         }
     });
@@ -534,21 +582,24 @@ fn accept_clients(
 fn serve_client<B: twinloop_link::VirtualServoBackend>(
     stream: std::net::TcpStream,
     peer: std::net::SocketAddr,
+    a: &ServeArgs,
     bus: &mut VirtualBus<B>,
     options: &ServeOptions,
     stop: &std::sync::atomic::AtomicBool,
 ) {
     let _ = stream.set_nonblocking(false);
     eprintln!("client {peer} connected");
-    let mut t = match TcpTransport::from_stream(stream) {
+    let t = match TcpTransport::from_stream(stream) {
         Ok(t) => t,
         Err(e) => {
             eprintln!("client {peer}: {e}");
             return;
         }
     };
-    if let Err(e) = serve_bus(bus, &mut t, options, stop) {
+    let mut t = NoisyTransport::new(t, a.line_noise, a.seed);
+    if let Err(e) = serve_maybe_noisy(bus, &mut t, options, stop) {
         eprintln!("client {peer}: {e}");
     }
+    tell_noise(&t, a.seed);
     eprintln!("client {peer} left");
 }
