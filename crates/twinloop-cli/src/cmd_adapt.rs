@@ -325,6 +325,18 @@ pub fn run(a: AdaptArgs) -> CliResult {
             .map_err(|e| CliError::new(e).context("--report"))?;
     }
     let r = &adapted.report;
+    let t = summary_text(r, a.out.as_deref());
+    emit(&t, a.json.as_ref(), r)?;
+    Ok(if failed {
+        Outcome::Problems
+    } else {
+        Outcome::Ok
+    })
+}
+
+/// What the terminal says of an adaptation: the angles, the CoMs, the part, the
+/// checks and the files written.
+fn summary_text(r: &twinloop_ident::adapt::AdaptReport, out: Option<&Path>) -> String {
     let mm = |v: [f64; 3]| {
         format!(
             "[{:.1}, {:.1}, {:.1}] mm",
@@ -380,16 +392,11 @@ pub fn run(a: AdaptArgs) -> CliResult {
             l.joint, l.before_rms, l.after_rms
         );
     }
-    t += &crate::adapt_text::checks_text(r, a.out.as_deref());
+    t += &crate::adapt_text::checks_text(r, out);
     for f in &r.files {
         t += &format!("wrote {f}\n");
     }
-    emit(&t, a.json.as_ref(), r)?;
-    Ok(if failed {
-        Outcome::Problems
-    } else {
-        Outcome::Ok
-    })
+    t
 }
 
 /// `adapt --method ann`.
