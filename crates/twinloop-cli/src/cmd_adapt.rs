@@ -96,6 +96,12 @@ pub struct AdaptArgs {
     /// from the simulator has no protocol bias to take off
     #[arg(long, default_value_t = 3, value_name = "N", value_parser = clap::value_parser!(u64).range(0..=5))]
     pub protocol_passes: u64,
+    /// The passes replay the protocol on a floor that sinks this far under the
+    /// robot's weight, m (`serve --ground-sink`'s meaning). Default: the floor on
+    /// which the adapted model tips sideways as the robot did, found by
+    /// up to 4 replays (a floor that gives lets a robot tip degrees earlier)
+    #[arg(long, value_name = "M", value_parser = crate::common::positive)]
+    pub ground_sink: Option<f64>,
     /// The lean the robot did (`twinloop experiment lean --out`): replayed on the prior
     /// and the adapted model, the ankle and knee torques compared (seed 001 section F).
     #[arg(long, value_name = "LEAN.csv")]
@@ -284,12 +290,15 @@ pub fn run(a: AdaptArgs) -> CliResult {
         angle_resolution_deg: Some(a.resolution),
         protocol_bias_deg: None,
     };
-    let replay_options =
-        crate::protocol_bias::replay_options(crate::protocol_bias::REPLAY_GROUND_SINK);
+    let replay_options = crate::protocol_bias::replay_options(
+        a.ground_sink
+            .unwrap_or(crate::protocol_bias::REPLAY_GROUND_SINK),
+    );
     let replay = crate::protocol_bias::Replay {
         model_spec: robot,
         passes: a.protocol_passes as usize,
         options: &replay_options,
+        fit_floor: a.ground_sink.is_none(),
     };
     let (mut adapted, _) = crate::protocol_bias::adapt_to_protocol(
         &prior,

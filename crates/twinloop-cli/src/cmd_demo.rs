@@ -446,6 +446,8 @@ pub fn run(a: DemoArgs) -> CliResult {
         model_spec: &model_spec,
         passes: a.protocol_passes as usize,
         options: &replay_options,
+        // The adapting side does not know the floor the robot stands on.
+        fit_floor: true,
     };
     let (mut adapted, calibration) = adapt_to_protocol(
         prior,

@@ -24,6 +24,7 @@ mod cmd_view;
 mod common;
 mod draft_profile;
 mod error;
+mod floor_fit;
 mod limb;
 mod progress;
 mod protocol_bias;

@@ -12,6 +12,7 @@
 
 use crate::cmd_experiment::tipover_bus::{BusOutcome, BusPlan, tipover_in_lockstep};
 use crate::error::CliError;
+use crate::floor_fit::{FloorFit, fit_floor, sideways_mean};
 use serde::Serialize;
 use twinloop_description::Description;
 use twinloop_experiments::tipover::Direction;
@@ -28,6 +29,9 @@ pub struct Calibration {
     pub passes: Vec<CalibrationPass>,
     /// The pass kept (0-based): the last.
     pub kept: usize,
+    /// The floor the passes replayed on, found from the robot's sideways tips.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub floor: Option<FloorFit>,
 }
 
 /// One pass (forward, backward, left, right, deg).
@@ -89,8 +93,11 @@ pub struct Replay<'a> {
     pub model_spec: &'a str,
     /// Passes (0: the plain adaptation).
     pub passes: usize,
-    /// The simulated robot.
+    /// The simulated robot (its floor the first guess when `fit_floor`).
     pub options: &'a VirtualRobotOptions,
+    /// Find the floor the robot stood on from its sideways tips (`floor_fit`), rather
+    /// than replay on `options`' floor.
+    pub fit_floor: bool,
 }
 
 /// What the protocol `study` was measured by (`study.protocol`, creeping from the
@@ -128,10 +135,12 @@ pub fn adapt_to_protocol(
     log: &mut dyn FnMut(&str),
     map_err: &dyn Fn(IdentError) -> CliError,
 ) -> Result<(Adapted, Option<Calibration>), CliError> {
-    let (passes, options) = (replay.passes, replay.options);
+    let passes = replay.passes;
     let Some(protocol) = study.protocol.as_ref().filter(|_| passes > 0) else {
         return Ok((adapt(prior, study, opts).map_err(map_err)?, None));
     };
+    let mut options = replay.options.clone();
+    let mut floor = None;
     let measured = angles_of(study, |d| d.measured_deg);
     let mut bias = [0.0; 4];
     let mut done: Vec<CalibrationPass> = Vec::with_capacity(passes);
@@ -146,8 +155,23 @@ pub fn adapt_to_protocol(
             // Nothing placed (no --total-mass, nor --where): nothing to simulate.
             return Ok((adapted, None));
         };
-        let read = protocol_reading(study, replay.model_spec, model, options)
-            .map_err(|e| e.context("simulating the protocol on the adapted model"))?;
+        let read = if replay.fit_floor && floor.is_none() {
+            let (fit, read) = replay_on_robots_floor(study, replay.model_spec, model, &options)?;
+            log(&format!(
+                "the floor: the replay tips sideways at {:.2} deg (the robot at {:.2}) on a \
+                 floor sinking {:.3} mm ({} replays)",
+                sideways_mean(&read),
+                fit.measured_sideways_deg,
+                fit.sink_m * 1e3,
+                fit.tries.len()
+            ));
+            options.ground_sink = Some(fit.sink_m);
+            floor = Some(fit);
+            read
+        } else {
+            protocol_reading(study, replay.model_spec, model, &options)
+                .map_err(|e| e.context("simulating the protocol on the adapted model"))?
+        };
         // The model's own static angles at the robot's onsets: the fit may not reach
         // its targets (four angles, three coordinates, a bounded box).
         let statics = static_angles_at_onsets(model, study)?;
@@ -185,5 +209,48 @@ pub fn adapt_to_protocol(
         kept + 1,
         done.len()
     ));
-    Ok((adapted, Some(Calibration { passes: done, kept })))
+    if let Some(fit) = &floor {
+        let tries: Vec<String> = fit
+            .tries
+            .iter()
+            .map(|t| format!("{:.3} mm: {:.2} deg", t.sink_m * 1e3, t.sideways_deg))
+            .collect();
+        adapted.report.notes.push(format!(
+            "the protocol was replayed on a floor sinking {:.3} mm under the robot's weight: \
+             the one on which the adapted model tips sideways as the robot did (left and \
+             right mean {:.2} deg; tried {})",
+            fit.sink_m * 1e3,
+            fit.measured_sideways_deg,
+            tries.join(", ")
+        ));
+    }
+    Ok((
+        adapted,
+        Some(Calibration {
+            passes: done,
+            kept,
+            floor,
+        }),
+    ))
+}
+
+/// The protocol on `model` on the floor its feet roll as the robot's did
+/// ([`fit_floor`], from `options`' floor): the fit and that replay's angles.
+fn replay_on_robots_floor(
+    study: &StudyReport,
+    model_spec: &str,
+    model: &Description,
+    options: &VirtualRobotOptions,
+) -> Result<(FloorFit, [f64; 4]), CliError> {
+    let measured = sideways_mean(&angles_of(study, |d| d.measured_deg));
+    let start = options.ground_sink.unwrap_or(REPLAY_GROUND_SINK);
+    let (fit, read) = fit_floor(measured, start, &mut |sink| {
+        let on = VirtualRobotOptions {
+            ground_sink: Some(sink),
+            ..options.clone()
+        };
+        protocol_reading(study, model_spec, model, &on)
+            .map_err(|e| e.context("simulating the protocol on the adapted model"))
+    })?;
+    Ok((fit, read))
 }

@@ -177,6 +177,23 @@ pub fn tilt(q: [f64; 4]) -> (f64, f64) {
     (r02.atan2(r22), (-r12).atan2(r22))
 }
 
+/// Trunk tilt from the vertical in any direction (rad) past which a run counts the
+/// robot as fallen whatever its joints say. The lean-direction tilt of [`tilt`] is
+/// meaningless there: a robot that fell while the host was held up (a stalled bus,
+/// a busy machine) lies past 90 deg, where pitch and roll flip sign, and its next
+/// reading would otherwise enter the run's history as a huge negative excess.
+pub const FALLEN_TILT_DEG: f64 = 60.0;
+
+/// How far the trunk's up axis is from the vertical, rad (0 to pi), from an IMU
+/// orientation (x, y, z, w).
+pub fn tilt_from_vertical(q: [f64; 4]) -> f64 {
+    let [x, y, ..] = q;
+    let norm2: f64 = q.iter().map(|c| c * c).sum();
+    (1.0 - 2.0 * (x * x + y * y) / norm2)
+        .clamp(-1.0, 1.0)
+        .acos()
+}
+
 /// Run one direction from `standing` (joint positions). The robot must be standing
 /// still in that pose when called.
 /// One sample of a run: ankle command, measured ankle angle (rad), time (s), the
@@ -381,13 +398,29 @@ pub fn run_direction<R: Robot + ?Sized>(
             gyro_tilt += cfg.period_s * if direction.is_pitch() { g[1] } else { -g[0] };
         }
         let ankle = ankle_now(&st) - a0;
-        // Tilt beyond what the joints explain, in the lean direction.
-        let body = tilt_now(&st, gyro_tilt)? - t0_tilt;
-        let expect = predicted(&st, ankle) - p0;
-        let excess = (body - expect) * lean_sign;
-        history.push((cmd, ankle, robot.time() - t_start, excess, body * lean_sign));
-        positions.extend_from_slice(&st.positions[..n]);
+        // A robot found lying down fell between two readings: the history so far
+        // holds the onset; this reading's lean-direction tilt means nothing.
+        let fallen = st
+            .imu
+            .and_then(|i| i.orientation)
+            .is_some_and(|q| tilt_from_vertical(q) > FALLEN_TILT_DEG.to_radians());
+        let mut excess = f64::INFINITY;
+        if !fallen {
+            // Tilt beyond what the joints explain, in the lean direction.
+            let body = tilt_now(&st, gyro_tilt)? - t0_tilt;
+            let expect = predicted(&st, ankle) - p0;
+            excess = (body - expect) * lean_sign;
+            history.push((cmd, ankle, robot.time() - t_start, excess, body * lean_sign));
+            positions.extend_from_slice(&st.positions[..n]);
+        }
         if excess > cfg.fall_deg.to_radians() {
+            if history.is_empty() {
+                return Err(RobotError::new(format!(
+                    "{} run: the robot was lying down (trunk over {FALLEN_TILT_DEG} deg from \
+                     the vertical) at its first reading",
+                    direction.name()
+                )));
+            }
             let onset = find_onset(&history, cfg);
             let (c, _, t, _, _) = history[onset];
             let from = reading_window_start(&history, onset, cfg);

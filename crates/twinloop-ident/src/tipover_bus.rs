@@ -134,6 +134,13 @@ pub fn bus_outcome(
     Ok(BusOutcome::Partial(Box::new(r)))
 }
 
+/// The feet's roll at a creep's onset beyond which the creep is spoiled (a reading
+/// taken across a fall the host did not see, a jolt), deg: a foot rolls onto its
+/// edge by a few degrees before the robot tips; the exact method refuses 0.2 rad.
+const SPOILED_EXCESS_DEG: f64 = 10.0;
+/// Spoiled creeps in one direction after which the run stops.
+const MAX_SPOILED_CREEPS: usize = 3;
+
 /// Trunk tilt within which the robot counts as standing again, deg, and for how long
 /// it must stay there, s of robot time.
 const UPRIGHT_DEG: f64 = 3.0;
@@ -333,6 +340,7 @@ fn lean_each(
         let wanted = opts.creeps.max(1);
         let agree_deg = creeps_agree_deg(opts.onset_average_s);
         let mut creeps: Vec<TipoverResult> = Vec::with_capacity(wanted + 1);
+        let mut spoiled = 0;
         let start = first
             .as_ref()
             .map_or(known.unwrap_or(0.0), |f| f.commanded_deg)
@@ -345,6 +353,24 @@ fn lean_each(
                 .map_or(start, |c| (c.commanded_deg - REPEAT_MARGIN_DEG).max(start));
             slow.slow_from_deg = Some(from.max(0.0));
             let r = run(&slow, g).map_err(|e| e.message)?;
+            if r.excess_deg.abs() > SPOILED_EXCESS_DEG {
+                spoiled += 1;
+                log(&format!(
+                    "  {}: a creep read the feet rolled {:.1} deg at its onset, beyond the \
+                     {SPOILED_EXCESS_DEG} deg a foot can roll standing: spoiled ({spoiled} of at most \
+                     {MAX_SPOILED_CREEPS}), repeated",
+                    d.name(),
+                    r.excess_deg
+                ));
+                if spoiled >= MAX_SPOILED_CREEPS {
+                    return Err(format!(
+                        "{}: {spoiled} creeps spoiled (feet rolled beyond {SPOILED_EXCESS_DEG} \
+                         deg at the onset): the IMU or the bus is not giving usable readings",
+                        d.name()
+                    ));
+                }
+                continue;
+            }
             log(&format!(
                 "  {}: creep {} tipped at {:.2} deg",
                 d.name(),
