@@ -561,6 +561,92 @@ mod tests {
         );
     }
 
+    /// Ankles that follow their goals and a trunk that leans with them, until the
+    /// ankles pass `fall_at` rad: from then the trunk lies 115 deg from the vertical
+    /// (a fall the host did not see, held up between two readings).
+    struct FallsUnseen {
+        names: Vec<String>,
+        goals: Vec<f64>,
+        time: f64,
+        fall_at: f64,
+        pitch_lying: f64,
+    }
+
+    impl Robot for FallsUnseen {
+        fn joint_names(&self) -> &[String] {
+            &self.names
+        }
+        fn time(&self) -> f64 {
+            self.time
+        }
+        fn read(&mut self, st: &mut RobotState) -> Result<(), RobotError> {
+            st.time = self.time;
+            st.positions = self.goals.clone();
+            let pitch = if self.goals[0] > self.fall_at {
+                self.pitch_lying
+            } else {
+                self.goals[0]
+            };
+            st.imu = Some(Imu {
+                orientation: Some([0.0, (pitch / 2.0).sin(), 0.0, (pitch / 2.0).cos()]),
+                ..Default::default()
+            });
+            Ok(())
+        }
+        fn command_positions(&mut self, goals: &[f64]) -> Result<(), RobotError> {
+            self.goals.copy_from_slice(goals);
+            Ok(())
+        }
+        fn advance(&mut self, dt: f64) -> Result<(), RobotError> {
+            self.time += dt;
+            Ok(())
+        }
+    }
+
+    /// A robot first seen lying down fell between two readings: the run ends there
+    /// with the onset from the readings before, whichever way the lying trunk's
+    /// pitch reads (past 90 deg it flips sign, which once entered the history as a
+    /// -61 deg feet roll and a run that never saw its fall).
+    #[test]
+    fn a_fall_between_two_readings_ends_the_run_at_the_readings_before() {
+        let cfg = TipoverConfig::new([0, 1], [2, 3], [1.0, 1.0], [1.0, 1.0]);
+        for pitch_lying in [2.0, -2.0, std::f64::consts::PI] {
+            let mut robot = FallsUnseen {
+                names: ["lp", "rp", "lr", "rr"].map(String::from).to_vec(),
+                goals: vec![0.0; 4],
+                time: 0.0,
+                fall_at: 0.1,
+                pitch_lying,
+            };
+            let mut leans_with_the_ankles = |q: &[f64]| [q[0], 0.0];
+            let r = run_direction(
+                &mut robot,
+                &[0.0; 4],
+                Direction::Forward,
+                &cfg,
+                Some(&mut leans_with_the_ankles),
+            )
+            .unwrap();
+            assert!(
+                (r.measured_deg - 0.1f64.to_degrees()).abs() < 0.1,
+                "{pitch_lying}: {r:?}"
+            );
+            assert!(r.excess_deg.abs() < 1e-9, "{pitch_lying}: {r:?}");
+        }
+        assert!((tilt_from_vertical([0.0, 0.0, 0.0, 1.0])).abs() < 1e-12);
+        let q = |a: f64| {
+            [
+                (a / 2.0).sin() * 0.6,
+                (a / 2.0).sin() * 0.8,
+                0.0,
+                (a / 2.0).cos(),
+            ]
+        };
+        for a in [0.3, 1.2, 2.5] {
+            assert!((tilt_from_vertical(q(a)) - a).abs() < 1e-12);
+        }
+    }
+
     /// A reading that flips between two whole counts as the robot rocks: the onset's
     /// sample reads whichever count it lands on; the window's mean reads the value
     /// the flips dither around (here a known 0.4 of the way between the counts).
