@@ -1,7 +1,7 @@
 //! `twinloop serve`: put a virtual robot on a pseudo-terminal or TCP port that any
 //! Dynamixel program can talk to.
 
-use crate::cmd_link::interrupt_flag;
+use crate::bus_args::interrupt_flag;
 use crate::common::hinges_only;
 use crate::common::{ROBOT_HELP, load_description, print};
 use crate::error::{CliError, CliResult, Outcome};

@@ -6,6 +6,7 @@
 //! `error: ...` and picks the exit code (see `error.rs`).
 
 mod adapt_text;
+mod bus_args;
 mod cmd_adapt;
 mod cmd_bench;
 mod cmd_compliant;
@@ -26,7 +27,6 @@ mod draft_profile;
 mod error;
 mod limb;
 mod progress;
-mod protocol_bias;
 mod replay3d;
 mod units;
 

@@ -10,8 +10,9 @@
 //! to the robot's angles less that bias (`AdaptOptions::protocol_bias_deg`), and the
 //! last pass is kept. docs/adaptation.md has the measurements.
 
-use crate::cmd_experiment::tipover_bus::{BusOutcome, BusPlan, tipover_in_lockstep};
-use crate::error::CliError;
+use crate::LoopError;
+use crate::bus_plan::BusPlan;
+use crate::tipover_bus::{BusOutcome, tipover_in_lockstep};
 use serde::Serialize;
 use twinloop_description::Description;
 use twinloop_experiments::tipover::Direction;
@@ -70,7 +71,7 @@ fn converged_deg(protocol: &BusProtocol) -> f64 {
 }
 
 /// One figure of each direction of `r` (forward, backward, left, right).
-pub(crate) fn angles_of(
+pub fn angles_of(
     r: &StudyReport,
     f: fn(&twinloop_ident::tipover_study::DirectionReport) -> f64,
 ) -> [f64; 4] {
@@ -78,7 +79,7 @@ pub(crate) fn angles_of(
 }
 
 /// Four angles, deg, as the demo and the log print them.
-pub(crate) fn join(v: [f64; 4]) -> String {
+pub fn join(v: [f64; 4]) -> String {
     v.map(|a| format!("{a:5.2}")).join(" ")
 }
 
@@ -102,17 +103,16 @@ pub fn protocol_reading(
     model_spec: &str,
     model: &Description,
     options: &VirtualRobotOptions,
-) -> Result<[f64; 4], CliError> {
-    let protocol = study
-        .protocol
-        .as_ref()
-        .ok_or_else(|| CliError::new("the tip-over was not measured over a bus (no `protocol`)"))?;
+) -> Result<[f64; 4], LoopError> {
+    let protocol = study.protocol.as_ref().ok_or_else(|| {
+        LoopError::new("the tip-over was not measured over a bus (no `protocol`)")
+    })?;
     let commanded = angles_of(study, |d| d.commanded_deg).to_vec();
     let plan = BusPlan::replaying(protocol, model_spec, commanded);
     let run = tipover_in_lockstep(&plan, model, options, protocol.cycle_s)?;
     match run.outcome {
         BusOutcome::Study(sim) => Ok(angles_of(&sim, |d| d.measured_deg)),
-        BusOutcome::Partial(_) => Err(CliError::new("not all four directions ran")),
+        BusOutcome::Partial(_) => Err(LoopError::new("not all four directions ran")),
     }
 }
 
@@ -126,8 +126,8 @@ pub fn adapt_to_protocol(
     opts: &AdaptOptions,
     replay: &Replay<'_>,
     log: &mut dyn FnMut(&str),
-    map_err: &dyn Fn(IdentError) -> CliError,
-) -> Result<(Adapted, Option<Calibration>), CliError> {
+    map_err: &dyn Fn(IdentError) -> LoopError,
+) -> Result<(Adapted, Option<Calibration>), LoopError> {
     let (passes, options) = (replay.passes, replay.options);
     let Some(protocol) = study.protocol.as_ref().filter(|_| passes > 0) else {
         return Ok((adapt(prior, study, opts).map_err(map_err)?, None));
@@ -175,7 +175,7 @@ pub fn adapt_to_protocol(
     // The last pass is kept: its bias comes from the model nearest the fixed point.
     // (Keeping the pass whose protocol read nearest the robot was tried: the readings
     // move in whole counts, and on seed 4 it kept 4.2 mm of CoM error over 1.9.)
-    let mut adapted = last.ok_or_else(|| CliError::new("no pass of the adaptation ran"))?;
+    let mut adapted = last.ok_or_else(|| LoopError::new("no pass of the adaptation ran"))?;
     let kept = done.len() - 1;
     adapted.report.notes.push(format!(
         "the model was fitted to the measured angles less the protocol's bias {} deg \
