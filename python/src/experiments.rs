@@ -448,6 +448,19 @@ pub fn training_samples<'py>(
     to_py(py, &samples)
 }
 
+/// `tipover`: `tipover()`'s dict (or a JSON file's contents) as the report it is.
+pub fn study_arg(
+    py: Python<'_>,
+    tipover: &Bound<'_, PyAny>,
+) -> PyResult<twinloop_ident::tipover_study::StudyReport> {
+    let text: String = py
+        .import("json")?
+        .call_method1("dumps", (tipover,))?
+        .extract()?;
+    serde_json::from_str(&text)
+        .map_err(|e| value_error(format!("tipover: not a tip-over report ({e})")))
+}
+
 /// Adapt the model to a tip-over experiment (`twinloop adapt --tipover FILE --json`,
 /// seed 000 sections III and V.B): `tipover` is `tipover()`'s dict (or a JSON file's
 /// contents). `total_mass` (kg) or `host` (the link the mass went on) fixes the added
@@ -467,12 +480,7 @@ pub fn adapt<'py>(
     check: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Option<crate::model::PyDescription>)> {
     let d = description_arg(prior)?;
-    let text: String = py
-        .import("json")?
-        .call_method1("dumps", (tipover,))?
-        .extract()?;
-    let tip: twinloop_ident::tipover_study::StudyReport = serde_json::from_str(&text)
-        .map_err(|e| value_error(format!("tipover: not a tip-over report ({e})")))?;
+    let tip = study_arg(py, tipover)?;
     if !(resolution > 0.0 && resolution.is_finite()) {
         return Err(value_error(format!(
             "resolution: must be positive, got {resolution}"

@@ -275,6 +275,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
     let replay_options = twinloop_loop::protocol_bias::replay_options(REPLAY_GROUND_SINK);
     let replay = Replay {
         model_spec: robot,
+        host: &prior,
         passes: a.protocol_passes as usize,
         options: &replay_options,
     };

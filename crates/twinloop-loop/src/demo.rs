@@ -401,6 +401,7 @@ pub fn adapt_measured(
     let model_spec = spec(s);
     let replay = Replay {
         model_spec: &model_spec,
+        host: &m.prior,
         passes: s.protocol_passes,
         options: &replay_options,
     };
@@ -443,8 +444,14 @@ pub fn reveal(
     // The protocol on the truth, in lockstep: the pty measurement less its noise.
     let true_protocol_deg = match found.calibration {
         Some(_) => Some(
-            protocol_reading(study, &spec(s), &m.truth, &replay_options(s.ground_sink))
-                .map_err(|e| e.context("simulating the protocol on the true model"))?,
+            protocol_reading(
+                study,
+                &spec(s),
+                prior,
+                &m.truth,
+                &replay_options(s.ground_sink),
+            )
+            .map_err(|e| e.context("simulating the protocol on the true model"))?,
         ),
         None => None,
     };

@@ -5,14 +5,14 @@
 //! depends on the robot. So the adapted model's own measurement is simulated: the
 //! protocol the robot was measured by (`StudyReport::protocol`), from the same
 //! commanded starts, on the adapted model stepped in lockstep with its host
-//! ([`tipover_in_lockstep`], the robot run's host cycle). What it reads minus the
+//! ([`crate::tipover_bus::tipover_in_lockstep`], the robot run's host cycle). What it reads minus the
 //! model's static angles at the robot's onsets is the bias; the model is adapted again
 //! to the robot's angles less that bias (`AdaptOptions::protocol_bias_deg`), and the
 //! last pass is kept. docs/adaptation.md has the measurements.
 
 use crate::LoopError;
 use crate::bus_plan::BusPlan;
-use crate::tipover_bus::{BusOutcome, tipover_in_lockstep};
+use crate::tipover_bus::{BusOutcome, tipover_in_lockstep_with};
 use serde::Serialize;
 use twinloop_description::Description;
 use twinloop_experiments::tipover::Direction;
@@ -88,6 +88,8 @@ pub struct Replay<'a> {
     /// The host's model of the robot (the prior's spec: the lean signs and the tilt
     /// reference, as on the robot's run).
     pub model_spec: &'a str,
+    /// That model, as `model_spec` reads (the prior).
+    pub host: &'a Description,
     /// Passes (0: the plain adaptation).
     pub passes: usize,
     /// The simulated robot.
@@ -95,12 +97,13 @@ pub struct Replay<'a> {
 }
 
 /// What the protocol `study` was measured by (`study.protocol`, creeping from the
-/// robot's commanded tips, `model_spec` as the host's model) reads on `model`
+/// robot's commanded tips, `host` read from `model_spec` as the host's model) reads on `model`
 /// simulated in lockstep with its host at the robot run's cycle: the four fall angles,
 /// deg (forward, backward, left, right).
 pub fn protocol_reading(
     study: &StudyReport,
     model_spec: &str,
+    host: &Description,
     model: &Description,
     options: &VirtualRobotOptions,
 ) -> Result<[f64; 4], LoopError> {
@@ -109,7 +112,7 @@ pub fn protocol_reading(
     })?;
     let commanded = angles_of(study, |d| d.commanded_deg).to_vec();
     let plan = BusPlan::replaying(protocol, model_spec, commanded);
-    let run = tipover_in_lockstep(&plan, model, options, protocol.cycle_s)?;
+    let run = tipover_in_lockstep_with(&plan, host.clone(), model, options, protocol.cycle_s)?;
     match run.outcome {
         BusOutcome::Study(sim) => Ok(angles_of(&sim, |d| d.measured_deg)),
         BusOutcome::Partial(_) => Err(LoopError::new("not all four directions ran")),
@@ -146,7 +149,7 @@ pub fn adapt_to_protocol(
             // Nothing placed (no --total-mass, nor --where): nothing to simulate.
             return Ok((adapted, None));
         };
-        let read = protocol_reading(study, replay.model_spec, model, options)
+        let read = protocol_reading(study, replay.model_spec, replay.host, model, options)
             .map_err(|e| e.context("simulating the protocol on the adapted model"))?;
         // The model's own static angles at the robot's onsets: the fit may not reach
         // its targets (four angles, three coordinates, a bounded box).

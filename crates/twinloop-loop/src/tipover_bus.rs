@@ -106,7 +106,8 @@ pub fn tipover_on_bus_with(
         )?;
     }
     let client = plan.port.open(Some(&port))?;
-    let mut robot = DynamixelRobot::new(client, mapping, ReadMethod::Auto)?;
+    let mut robot = DynamixelRobot::new(client, mapping, ReadMethod::Auto)
+        .map_err(|e| LoopError::io(e.to_string()))?;
     robot
         .set_clock_rate(plan.clock_rate)
         .map_err(|e| LoopError::from(e).at("realtime_factor"))?;
