@@ -6,9 +6,9 @@ use crate::batch::thread_count;
 use crate::errors::value_error;
 use crate::model::PyModel;
 use crate::sim::description_arg;
+use crate::values::{study_arg, to_py};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use serde::Serialize;
 use twinloop_description::Description;
 use twinloop_dynamics::BaseKind;
 use twinloop_ident::ann_data::{self, Change, DataOptions};
@@ -17,15 +17,6 @@ use twinloop_ident::static_ident::StaticOptions;
 use twinloop_ident::tipover_study::{StudyOptions, run_study};
 use twinloop_ident::{IdentError, PoseCategory, StaticPose, identify_static as ident_static};
 use twinloop_random::SplitMix64;
-
-/// A serde value as Python objects (dicts, lists, floats), through `json`.
-pub fn to_py<'py, T: Serialize + ?Sized>(
-    py: Python<'py>,
-    value: &T,
-) -> PyResult<Bound<'py, PyAny>> {
-    let text = serde_json::to_string(value).map_err(|e| value_error(e.to_string()))?;
-    py.import("json")?.call_method1("loads", (text,))
-}
 
 fn ident_error(e: IdentError) -> PyErr {
     value_error(e.to_string())
@@ -446,19 +437,6 @@ pub fn training_samples<'py>(
         .detach(|| ann_data::generate_range(&d, &opts, start..stop, &|_| {}))
         .map_err(ident_error)?;
     to_py(py, &samples)
-}
-
-/// `tipover`: `tipover()`'s dict (or a JSON file's contents) as the report it is.
-pub fn study_arg(
-    py: Python<'_>,
-    tipover: &Bound<'_, PyAny>,
-) -> PyResult<twinloop_ident::tipover_study::StudyReport> {
-    let text: String = py
-        .import("json")?
-        .call_method1("dumps", (tipover,))?
-        .extract()?;
-    serde_json::from_str(&text)
-        .map_err(|e| value_error(format!("tipover: not a tip-over report ({e})")))
 }
 
 /// Adapt the model to a tip-over experiment (`twinloop adapt --tipover FILE --json`,

@@ -18,6 +18,7 @@ mod protocol_passes;
 mod sim;
 mod sysid;
 mod tipover_bus;
+mod values;
 
 use pyo3::prelude::*;
 

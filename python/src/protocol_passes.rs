@@ -3,9 +3,9 @@
 //! keywords mapped onto `twinloop_loop::protocol_bias`, which runs the passes.
 
 use crate::errors::value_error;
-use crate::experiments::{study_arg, to_py};
 use crate::sim::description_arg;
 use crate::tipover_bus::loop_error;
+use crate::values::{study_arg, to_py};
 use pyo3::prelude::*;
 use twinloop_ident::adapt::AdaptOptions;
 use twinloop_loop::LoopError;

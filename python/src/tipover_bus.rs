@@ -5,8 +5,8 @@
 //! `twinloop_loop::tipover_bus`.
 
 use crate::errors::value_error;
-use crate::experiments::to_py;
 use crate::sim::description_arg;
+use crate::values::to_py;
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use std::path::PathBuf;

@@ -1,6 +1,6 @@
 //! `twinloop link ...`: talk to the servos of a robot on a bus: scan, read,
-//! record, plan a control cycle. The port options and the Ctrl-C flag are shared
-//! with `serve` and `bench link`.
+//! record, plan a control cycle. The port options and the Ctrl-C flag are
+//! `bus_args`'s, shared with every command that talks to a bus.
 
 use crate::bus_args::{PortArgs, interrupt_flag, open_client};
 use crate::common::{JSON_HELP, emit, num};
@@ -170,7 +170,7 @@ pub struct RecordArgs {
     pub verified_reads: bool,
     /// The robot comes from the mapping's `urdf`.
     #[command(flatten)]
-    pub view: crate::cmd_view::LiveViewArgs,
+    pub view: crate::live_view::LiveViewArgs,
 }
 
 #[derive(Args)]
@@ -468,7 +468,7 @@ fn record(a: &RecordArgs) -> CliResult {
         .iter()
         .map(|j| format!("{} (protocol {}.0)", j.id, j.protocol.number()))
         .collect();
-    let mut live = crate::cmd_view::start_live_for_mapping(&a.view, &mapping)?;
+    let mut live = crate::live_view::start_live_for_mapping(&a.view, &mapping)?;
     let mut robot = DynamixelRobot::new(c, mapping, a.method)?;
     robot.cycle_mut().verify_v1 = a.verified_reads;
     let mut columns = vec!["t".to_string()];

@@ -25,9 +25,13 @@ mod cmd_view;
 mod common;
 mod draft_profile;
 mod error;
+mod gait_args;
 mod limb;
+mod live_view;
 mod progress;
 mod replay3d;
+mod residual_text;
+mod sim_args;
 mod units;
 
 use clap::{Parser, Subcommand};
