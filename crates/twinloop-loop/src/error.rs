@@ -20,7 +20,7 @@ pub struct LoopError {
     /// the file.
     pub setting: Option<&'static str>,
     /// The estimator's error, as it came (its `option` is named by the caller).
-    pub ident: Option<IdentError>,
+    pub ident: Option<Box<IdentError>>,
     message: String,
     /// What was being done, innermost first.
     context: Vec<String>,
@@ -85,7 +85,7 @@ impl std::error::Error for LoopError {}
 impl From<IdentError> for LoopError {
     fn from(e: IdentError) -> LoopError {
         LoopError {
-            ident: Some(e),
+            ident: Some(Box::new(e)),
             ..LoopError::new(String::new())
         }
     }
