@@ -305,7 +305,7 @@ fn scan(a: &ScanArgs) -> CliResult {
     out += &format!("{} servo(s) found\n", found.len());
     emit(&out, a.json.as_ref(), &v)?;
     if let (Some(path), Some(robot)) = (&a.out, &a.robot) {
-        let d = crate::draft_profile::draft(&found, robot)?;
+        let d = twinloop_loop::draft_profile::draft(&found, robot)?;
         std::fs::write(path, &d.toml)
             .map_err(|e| CliError::new(format!("--out {}: {e}", path.display())))?;
         for n in &d.notes {

@@ -12,7 +12,7 @@ use twinloop_dynamics::{BaseKind, Model};
 pub const ROBOT_HELP: &str = "Robot description: a URDF or MJCF file, a robot profile (.toml: its \
      description, with its joint roles), or builtin:NAME (km20, lab17, op3, darwin_op)";
 
-pub use twinloop_loop::profile::{Format, is_profile};
+pub use twinloop_loop::profile::Format;
 
 /// Load a robot description: `builtin:NAME`, a robot profile or a URDF or MJCF file
 /// (`twinloop_loop::profile::load_description`).

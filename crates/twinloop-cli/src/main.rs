@@ -23,7 +23,6 @@ mod cmd_simulate;
 mod cmd_validate;
 mod cmd_view;
 mod common;
-mod draft_profile;
 mod error;
 mod gait_args;
 mod limb;

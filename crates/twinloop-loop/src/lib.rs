@@ -4,6 +4,7 @@
 //! | piece | module |
 //! |---|---|
 //! | a robot spec (`builtin:NAME`, a profile TOML, a URDF or MJCF) resolved into a description with its joint roles | [`profile`] |
+//! | a draft profile from what answers on a bus (`link scan --out`) | [`draft_profile`] |
 //! | the bus a plan opens (port, timeouts, silence window) | [`port`] |
 //! | the plan of the tip-over over a robot's bus | [`bus_plan`] |
 //! | the plan run: on a port, or in lockstep with a simulated model | [`tipover_bus`] |
@@ -13,6 +14,7 @@
 
 pub mod bus_plan;
 pub mod demo;
+pub mod draft_profile;
 pub mod error;
 pub mod port;
 pub mod profile;
