@@ -161,8 +161,6 @@ fn bus_plan(robot: Option<&Bound<'_, PyAny>>, plan: Plan) -> PyResult<(BusPlan, 
             map,
             BusPort {
                 baud: plan.baud,
-                timeout_ms: plan.timeout_ms,
-                retries: plan.retries,
                 ..BusPort::quick(Some(port), plan.timeout_ms, plan.retries)
             },
         )
