@@ -2,7 +2,7 @@
 //! compliant --json` runs it: the same inputs, the same fields.
 
 use crate::errors::value_error;
-use crate::experiments::to_py;
+use crate::values::to_py;
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};

@@ -6,9 +6,9 @@ use crate::batch::thread_count;
 use crate::errors::value_error;
 use crate::model::PyModel;
 use crate::sim::description_arg;
+use crate::values::{study_arg, to_py};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use serde::Serialize;
 use twinloop_description::Description;
 use twinloop_dynamics::BaseKind;
 use twinloop_ident::ann_data::{self, Change, DataOptions};
@@ -17,15 +17,6 @@ use twinloop_ident::static_ident::StaticOptions;
 use twinloop_ident::tipover_study::{StudyOptions, run_study};
 use twinloop_ident::{IdentError, PoseCategory, StaticPose, identify_static as ident_static};
 use twinloop_random::SplitMix64;
-
-/// A serde value as Python objects (dicts, lists, floats), through `json`.
-pub fn to_py<'py, T: Serialize + ?Sized>(
-    py: Python<'py>,
-    value: &T,
-) -> PyResult<Bound<'py, PyAny>> {
-    let text = serde_json::to_string(value).map_err(|e| value_error(e.to_string()))?;
-    py.import("json")?.call_method1("loads", (text,))
-}
 
 fn ident_error(e: IdentError) -> PyErr {
     value_error(e.to_string())
@@ -467,12 +458,7 @@ pub fn adapt<'py>(
     check: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Option<crate::model::PyDescription>)> {
     let d = description_arg(prior)?;
-    let text: String = py
-        .import("json")?
-        .call_method1("dumps", (tipover,))?
-        .extract()?;
-    let tip: twinloop_ident::tipover_study::StudyReport = serde_json::from_str(&text)
-        .map_err(|e| value_error(format!("tipover: not a tip-over report ({e})")))?;
+    let tip = study_arg(py, tipover)?;
     if !(resolution > 0.0 && resolution.is_finite()) {
         return Err(value_error(format!(
             "resolution: must be positive, got {resolution}"

@@ -14,9 +14,11 @@ mod errors;
 mod experiments;
 mod link;
 mod model;
+mod protocol_passes;
 mod sim;
 mod sysid;
 mod tipover_bus;
+mod values;
 
 use pyo3::prelude::*;
 
@@ -66,6 +68,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(experiments::identify_static, m)?)?;
     m.add_function(wrap_pyfunction!(experiments::training_samples, m)?)?;
     m.add_function(wrap_pyfunction!(experiments::adapt, m)?)?;
+    m.add_function(wrap_pyfunction!(protocol_passes::adapt_to_protocol, m)?)?;
     m.add_function(wrap_pyfunction!(compliant::fit_compliant, m)?)?;
     m.add_function(wrap_pyfunction!(sysid::sysid_arx, m)?)?;
     m.add_function(wrap_pyfunction!(sysid::sysid_ss, m)?)?;

@@ -3,8 +3,8 @@
 
 use crate::arrays::new_array;
 use crate::errors::value_error;
-use crate::experiments::to_py;
 use crate::sim::description_arg;
+use crate::values::to_py;
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

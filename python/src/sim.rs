@@ -96,18 +96,14 @@ pub fn build(robot: &Description, s: &Settings) -> Result<Simulator, String> {
         sim.actuators[i] = actuator(&s.servo, &robot.name, &sim.model, i);
     }
     if s.stand {
-        let n = sim.model.nbodies;
-        let q0: Vec<f64> = (0..n)
-            .map(|i| 0f64.clamp(sim.model.lower_limits[i], sim.model.upper_limits[i]))
-            .collect();
-        sim.place_on_ground(&q0).map_err(|e| e.to_string())?;
-        if s.ground && sim.contact_points().is_empty() {
-            return Err(format!(
-                "the robot has no collision primitives to stand on (mesh-only links: {}); \
-                 add <collision> boxes to the feet",
-                sim.mesh_only_links.join(", ")
-            ));
+        // The simulator's own standing: its pose, and its refusal of a robot with
+        // nothing to stand on (as `Simulator::standing_on_servos`, whose servos are
+        // Dynamixels only; here a joint may be passive or torque-driven).
+        if s.ground {
+            sim.check_can_stand().map_err(|e| e.to_string())?;
         }
+        let pose = twinloop_sim::standing_pose(&sim.model);
+        sim.place_on_ground(&pose).map_err(|e| e.to_string())?;
     }
     Ok(sim)
 }

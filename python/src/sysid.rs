@@ -3,7 +3,7 @@
 
 use crate::arrays::{Arg, Dim};
 use crate::errors::value_error;
-use crate::experiments::to_py;
+use crate::values::to_py;
 use pyo3::prelude::*;
 use twinloop_sysid::json::{ArxJson, DataJson, SsOrdersJson, StateSpaceJson};
 use twinloop_sysid::pem::{OutputWeight, PemOptions};

@@ -36,7 +36,7 @@ pub struct AdaptArgs {
     /// tipover --port`: it asks before moving a robot on a serial port), then adapt
     /// to what it measured; the bus flags mean what they mean for `twinloop link`.
     #[command(flatten)]
-    pub bus: crate::cmd_link::PortArgs,
+    pub bus: crate::bus_args::PortArgs,
     /// With --port: the servo mapping (builtin:km20 or a mapping TOML; it must have the
     /// IMU [[board]]).
     #[arg(long, value_name = "MAP", requires = "port")]
@@ -200,33 +200,20 @@ fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
 
 /// The tip-over run in place over the bus (`--port`), written to `out` if given.
 fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyReport, CliError> {
-    use crate::cmd_experiment::tipover_bus::{BusOutcome, BusPlan, tipover_on_bus};
-    use twinloop_experiments::tipover::Direction;
+    use twinloop_loop::tipover_bus::BusOutcome;
     let Some(map) = a.map.clone() else {
         return Err(CliError::new(
             "--port needs --map MAP (the robot's servos and IMU board)",
         ));
     };
-    let plan = BusPlan {
-        model_spec: robot.to_string(),
-        map,
-        port: a.bus.clone(),
+    let plan = twinloop_loop::BusPlan {
         record: a.record.clone(),
         yes: a.yes,
-        directions: Direction::ALL.to_vec(),
-        ramp: 2.0,
-        slow_ramp: 0.15,
-        compliance_slope: 2,
-        ankle_slope: crate::cmd_experiment::tipover_bus::ANKLE_SLOPE,
         soft_servos: a.soft_servos,
-        creeps: 2,
-        first_tips: None,
-        dither: crate::cmd_experiment::tipover_bus::GoalCounts::default().dithered(),
-        onset_average_s: crate::cmd_experiment::tipover_bus::ONSET_AVERAGE_S,
         clock_rate: a.realtime_factor,
-        verbose: true,
+        ..twinloop_loop::BusPlan::standard(robot, &map, a.bus.bus_port())
     };
-    let run = tipover_on_bus(&plan)?;
+    let run = crate::bus_args::tipover_on_bus(&plan)?;
     let BusOutcome::Study(study) = run.outcome else {
         return Err(CliError::new(
             "the tip-over did not run all four directions",
@@ -290,23 +277,23 @@ pub fn run(a: AdaptArgs) -> CliResult {
         angle_resolution_deg: Some(a.resolution),
         protocol_bias_deg: None,
     };
-    let replay_options = crate::protocol_bias::replay_options(
-        a.ground_sink
-            .unwrap_or(crate::protocol_bias::REPLAY_GROUND_SINK),
-    );
-    let replay = crate::protocol_bias::Replay {
+    use twinloop_loop::protocol_bias::{REPLAY_GROUND_SINK, Replay, adapt_to_protocol};
+    let replay_options =
+        twinloop_loop::protocol_bias::replay_options(a.ground_sink.unwrap_or(REPLAY_GROUND_SINK));
+    let replay = Replay {
         model_spec: robot,
+        host: &prior,
         passes: a.protocol_passes as usize,
         options: &replay_options,
         fit_floor: a.ground_sink.is_none(),
     };
-    let (mut adapted, _) = crate::protocol_bias::adapt_to_protocol(
+    let (mut adapted, _) = adapt_to_protocol(
         &prior,
         &tip,
         &opts,
         &replay,
         &mut |line| eprintln!("{line}"),
-        &where_flag,
+        &|e| twinloop_loop::LoopError::from(where_option(e)),
     )?;
     if a.check {
         check(&mut adapted, &StudyOptions::default()).map_err(where_flag)?;
@@ -669,9 +656,14 @@ fn train_flags(mut e: twinloop_ident::IdentError) -> CliError {
 
 /// The library's `host` option is the `--where` flag (the seed's word for the general
 /// location of the change; `where` cannot name a field).
-fn where_flag(mut e: twinloop_ident::IdentError) -> CliError {
+fn where_flag(e: twinloop_ident::IdentError) -> CliError {
+    CliError::from(where_option(e))
+}
+
+/// The adaptation's `host` option is `--where` here.
+fn where_option(mut e: twinloop_ident::IdentError) -> twinloop_ident::IdentError {
     if e.option.as_deref() == Some("host") {
         e.option = Some("where".into());
     }
-    CliError::from(e)
+    e
 }

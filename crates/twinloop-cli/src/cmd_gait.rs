@@ -1,15 +1,12 @@
 //! `twinloop gait sequence|zmp`: joint and CoM references for walking: seed 003's
 //! walking sequence as joint goals, and seed 002's ZMP and LIPM CoM reference.
 
-use crate::common::hinges_only;
-use crate::common::{load_description, num, print};
+use crate::common::{num, print};
 use crate::error::{CliError, CliResult, Outcome};
+use crate::gait_args::{StepTiming, TimingArgs, lab17_only, option_names, sequence_options};
 use clap::{Args, Subcommand};
 use std::path::PathBuf;
-use twinloop_gait::{
-    GaitPlan, SEED_CYCLE_PERIOD, SEED_SAMPLE_TIME, SequenceOptions, ZmpReference,
-    walking_sequence_with,
-};
+use twinloop_gait::{GaitPlan, ZmpReference, walking_sequence_with};
 use twinloop_io::{CsvWriter, Table};
 
 #[derive(Subcommand, Debug)]
@@ -54,24 +51,6 @@ pub fn run(cmd: GaitCommand) -> CliResult {
 }
 
 #[derive(Args, Debug)]
-pub struct TimingArgs {
-    /// Robot description: only builtin:lab17 carries seed 003's trims.
-    #[arg(long, default_value = "builtin:lab17", value_name = "ROBOT")]
-    pub robot: String,
-    /// Control tick and sample period, s (40 ms: two 20 ms servo PWM frames, and below
-    /// the 57 ms the seed's 54.8 rad/s model bandwidth allows).
-    #[arg(long, default_value_t = SEED_SAMPLE_TIME, value_name = "S", value_parser = crate::units::time_step)]
-    pub dt: f64,
-    /// Duration of one step cycle (Step_State 0 to 100), s. Below ~3.5 s lab17 falls (seed
-    /// 003 section 5: too fast a step cycle leaves the inertial forces undamped).
-    #[arg(long, default_value_t = SEED_CYCLE_PERIOD, value_parser = crate::common::positive)]
-    pub cycle_period: f64,
-    /// Factor on every offset (1 = the seed's numbers).
-    #[arg(long, default_value_t = 1.0, value_parser = crate::common::non_negative)]
-    pub amplitude: f64,
-}
-
-#[derive(Args, Debug)]
 pub struct SequenceArgs {
     #[command(flatten)]
     pub timing: TimingArgs,
@@ -81,20 +60,6 @@ pub struct SequenceArgs {
     /// Output CSV.
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
-}
-
-/// The footstep timing of seed 002's ZMP gait, shared by every command that plans one.
-#[derive(Args, Debug, Clone, Copy)]
-pub struct StepTiming {
-    /// Step length sl, m.
-    #[arg(long, default_value_t = 0.03, value_parser = crate::common::finite)]
-    pub step_length: f64,
-    /// Single-support duration Tss, s.
-    #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]
-    pub tss: f64,
-    /// Double-support duration Tdb, s.
-    #[arg(long, default_value_t = 0.2, value_parser = crate::common::non_negative)]
-    pub tdb: f64,
 }
 
 #[derive(Args, Debug)]
@@ -122,50 +87,6 @@ pub struct ZmpArgs {
     /// Output CSV.
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
-}
-
-/// The robot of --robot, which must be lab17.
-pub fn lab17_only(spec: &str) -> Result<twinloop_description::Description, CliError> {
-    let (robot, _) = load_description(spec).map_err(|e| e.context("--robot"))?;
-    hinges_only(&robot, spec, "walking generation")?;
-    if robot.name != twinloop_description::builtin::lab17::NAME {
-        return Err(CliError::new(format!(
-            "--robot: seed 003's walking sequence is defined around lab17's Table 2 trims; \
-             \"{}\" is not lab17 (use builtin:lab17)",
-            robot.name
-        )));
-    }
-    Ok(robot)
-}
-
-pub fn sequence_options(t: &TimingArgs, cycles: usize) -> SequenceOptions {
-    SequenceOptions {
-        cycles,
-        sample_time: t.dt,
-        cycle_period: t.cycle_period,
-        amplitude: t.amplitude,
-    }
-}
-
-/// A library error about one of its fields (`sample_time must be ...`), with the
-/// option that sets that field in front: `--dt: sample_time must be ...`.
-pub fn option_names(e: impl std::fmt::Display) -> CliError {
-    let m = e.to_string();
-    for (field, opt) in [
-        ("sample_time", "--dt"),
-        ("cycle_period", "--cycle-period"),
-        ("cycles", "--cycles"),
-        ("amplitude", "--amplitude"),
-        ("samples", "--samples"),
-        ("gyro_noise", "--gyro-noise"),
-        ("kp_position", "--kp-position"),
-        ("skip_samples", "--skip-samples"),
-    ] {
-        if m.starts_with(field) {
-            return CliError::new(m).context(opt);
-        }
-    }
-    CliError::new(m)
 }
 
 fn sequence(a: &SequenceArgs) -> CliResult {

@@ -1,24 +1,21 @@
 //! `twinloop link ...`: talk to the servos of a robot on a bus: scan, read,
-//! record, plan a control cycle. The port options and the Ctrl-C flag are shared
-//! with `serve` and `bench link`.
+//! record, plan a control cycle. The port options and the Ctrl-C flag are
+//! `bus_args`'s, shared with every command that talks to a bus.
 
+use crate::bus_args::{PortArgs, interrupt_flag, open_client};
 use crate::common::{JSON_HELP, emit, num};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::{Args, Subcommand};
 use serde::Serialize;
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use twinloop_io::CsvWriter;
 use twinloop_link::ModelTable;
 use twinloop_link::control_cycle::ReadMethod;
-use twinloop_link::transport::{self, SerialOptions, Transport};
-use twinloop_link::{
-    Client, ClientConfig, DynamixelRobot, FoundServo, Protocol, RobotMapping, ServoModel,
-    plan_cycle,
-};
+use twinloop_link::transport::Transport;
+use twinloop_link::{DynamixelRobot, FoundServo, Protocol, RobotMapping, ServoModel, plan_cycle};
 use twinloop_robot::{Robot, RobotState};
 
 #[derive(Subcommand)]
@@ -100,55 +97,6 @@ TRIPS         request/reply round trips (each also pays the USB adapter's latenc
     Plan(PlanArgs),
 }
 
-#[derive(Args, Clone, Debug)]
-pub struct PortArgs {
-    /// The bus: a serial device (/dev/ttyUSB0), a pty path from `twinloop serve`, or tcp:HOST:PORT
-    #[arg(long, value_name = "PORT")]
-    pub port: Option<String>,
-    /// Bit rate
-    #[arg(long, default_value_t = 1_000_000, value_parser = crate::common::baud)]
-    pub baud: u32,
-    /// Allowance per reply on top of its wire time, ms (USB latency, return delay)
-    #[arg(long, default_value_t = 10.0, value_parser = crate::common::positive)]
-    pub timeout_ms: f64,
-    /// Extra attempts after a lost or damaged reply
-    #[arg(long, default_value_t = 2)]
-    pub retries: u32,
-    /// Set the USB adapter's latency timer to 1 ms (FTDI, via sysfs)
-    #[arg(long)]
-    pub low_latency: bool,
-    /// Busy-check the port for up to this many microseconds before sleeping while
-    /// waiting for a reply: shorter round trips, one busy core meanwhile
-    #[arg(long, default_value_t = 0, value_name = "US")]
-    pub spin_us: u64,
-    /// How long a servo may stay silent, s of wall time, before it is declared lost:
-    /// a read it misses is recorded (NaN) and taken again until it answers or this
-    /// window has passed. Experiments then stop naming it (servos left holding);
-    /// `link record` stops when every servo has been silent this long
-    #[arg(long, default_value_t = twinloop_experiments::guarded::SILENCE_WINDOW_S, value_name = "S", value_parser = crate::common::positive)]
-    pub silence_window: f64,
-}
-
-impl PortArgs {
-    /// The options of a port opened by a program rather than a person: the
-    /// defaults but `port`, `timeout_ms` and `retries`.
-    pub fn quick(port: Option<String>, timeout_ms: f64, retries: u32) -> PortArgs {
-        PortArgs {
-            port,
-            baud: 1_000_000,
-            timeout_ms,
-            retries,
-            low_latency: false,
-            spin_us: 0,
-            silence_window: twinloop_experiments::guarded::SILENCE_WINDOW_S,
-        }
-    }
-
-    pub fn silence_window(&self) -> Duration {
-        Duration::from_secs_f64(self.silence_window)
-    }
-}
-
 #[derive(Args)]
 pub struct ScanArgs {
     #[command(flatten)]
@@ -222,7 +170,7 @@ pub struct RecordArgs {
     pub verified_reads: bool,
     /// The robot comes from the mapping's `urdf`.
     #[command(flatten)]
-    pub view: crate::cmd_view::LiveViewArgs,
+    pub view: crate::live_view::LiveViewArgs,
 }
 
 #[derive(Args)]
@@ -278,81 +226,6 @@ fn parse_ids(s: &str) -> Result<Vec<u8>, String> {
     ids.sort_unstable();
     ids.dedup();
     Ok(ids)
-}
-
-/// Open the bus --port names (or the mapping's port).
-pub fn open_client(
-    p: &PortArgs,
-    default_port: Option<&str>,
-) -> Result<Client<Box<dyn Transport>>, CliError> {
-    let Some(port) = p.port.as_deref().or(default_port) else {
-        return Err(CliError::new(
-            "--port is required (a serial device, a pty path or tcp:HOST:PORT)",
-        ));
-    };
-    let options = SerialOptions {
-        low_latency: p.low_latency,
-    };
-    let t = transport::open(port, p.baud, &options).map_err(|e| match e.kind() {
-        // The message names the port and who has it.
-        std::io::ErrorKind::ResourceBusy => CliError::new(e.to_string()),
-        _ => CliError::new(format!("{port}: {e}")),
-    })?;
-    let mut t: Box<dyn Transport> = Box::new(Named {
-        inner: t,
-        port: port.to_string(),
-    });
-    t.set_spin(Duration::from_micros(p.spin_us));
-    let config = ClientConfig {
-        latency: Duration::from_secs_f64(p.timeout_ms.max(0.0) / 1000.0),
-        retries: p.retries,
-        baud: p.baud,
-        write_replies: true,
-    };
-    Ok(Client::with_config(t, config))
-}
-
-/// A transport whose failures name its port: an adapter unplugged or a peer gone in
-/// the middle of any command over the bus says which port went away.
-struct Named {
-    inner: Box<dyn Transport>,
-    port: String,
-}
-
-impl Named {
-    fn name(&self, e: std::io::Error) -> std::io::Error {
-        if e.kind() == std::io::ErrorKind::ResourceBusy {
-            // A refusal names the port already.
-            return e;
-        }
-        std::io::Error::new(e.kind(), format!("{}: {e}", self.port))
-    }
-}
-
-impl Transport for Named {
-    fn write_all(&mut self, bytes: &[u8]) -> std::io::Result<()> {
-        self.inner.write_all(bytes).map_err(|e| self.name(e))
-    }
-
-    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
-        self.inner.read(buf, timeout).map_err(|e| self.name(e))
-    }
-
-    fn discard_input(&mut self) -> std::io::Result<usize> {
-        self.inner.discard_input().map_err(|e| self.name(e))
-    }
-
-    fn baud(&self) -> Option<u32> {
-        self.inner.baud()
-    }
-
-    fn set_spin(&mut self, spin: Duration) {
-        self.inner.set_spin(spin)
-    }
-
-    fn describe(&self) -> String {
-        self.inner.describe()
-    }
 }
 
 pub fn run(cmd: LinkCommand) -> CliResult {
@@ -432,7 +305,7 @@ fn scan(a: &ScanArgs) -> CliResult {
     out += &format!("{} servo(s) found\n", found.len());
     emit(&out, a.json.as_ref(), &v)?;
     if let (Some(path), Some(robot)) = (&a.out, &a.robot) {
-        let d = crate::draft_profile::draft(&found, robot)?;
+        let d = twinloop_loop::draft_profile::draft(&found, robot)?;
         std::fs::write(path, &d.toml)
             .map_err(|e| CliError::new(format!("--out {}: {e}", path.display())))?;
         for n in &d.notes {
@@ -573,17 +446,6 @@ fn read(a: &ReadArgs) -> CliResult {
     Ok(Outcome::Ok)
 }
 
-/// Set by SIGINT/SIGTERM; a second Ctrl-C ends the process at once.
-pub fn interrupt_flag() -> Arc<AtomicBool> {
-    let flag = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        // Order matters: the conditional shutdown fires only if the flag is already set.
-        let _ = signal_hook::flag::register_conditional_shutdown(sig, 130, flag.clone());
-        let _ = signal_hook::flag::register(sig, flag.clone());
-    }
-    flag
-}
-
 fn record(a: &RecordArgs) -> CliResult {
     let mapping = a.map.as_deref().map(RobotMapping::resolve).transpose()?;
     let default_port = mapping.as_ref().and_then(|m| m.port.clone());
@@ -606,7 +468,7 @@ fn record(a: &RecordArgs) -> CliResult {
         .iter()
         .map(|j| format!("{} (protocol {}.0)", j.id, j.protocol.number()))
         .collect();
-    let mut live = crate::cmd_view::start_live_for_mapping(&a.view, &mapping)?;
+    let mut live = crate::live_view::start_live_for_mapping(&a.view, &mapping)?;
     let mut robot = DynamixelRobot::new(c, mapping, a.method)?;
     robot.cycle_mut().verify_v1 = a.verified_reads;
     let mut columns = vec!["t".to_string()];

@@ -1,7 +1,7 @@
 //! `twinloop serve`: put a virtual robot on a pseudo-terminal or TCP port that any
 //! Dynamixel program can talk to.
 
-use crate::cmd_link::interrupt_flag;
+use crate::bus_args::interrupt_flag;
 use crate::common::hinges_only;
 use crate::common::{ROBOT_HELP, load_description, print};
 use crate::error::{CliError, CliResult, Outcome};
@@ -96,7 +96,7 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     pub seed: u64,
     /// Simulated robot only (not --servo-model ideal).
     #[command(flatten)]
-    pub view: crate::cmd_view::LiveViewArgs,
+    pub view: crate::live_view::LiveViewArgs,
     /// Serve one servo of this type (id 1: RX-28, RX-64, MX-64(2.0), XM430-W350)
     /// swinging the pendulum of --load, moved by its servo model (docs/servo-models.md),
     /// instead of a robot: the bench of `experiment servo`
@@ -237,7 +237,7 @@ fn serve_simulated(a: &ServeArgs, mapping: &RobotMapping, robot: &Description) -
     };
     let mut vr = twinloop_virtual::VirtualRobot::new(robot, mapping, &options)?;
     let names = vr.simulator().model.q_names();
-    let live = crate::cmd_view::start_live(&a.view, robot, a.robot.as_deref(), &names)?;
+    let live = crate::live_view::start_live(&a.view, robot, a.robot.as_deref(), &names)?;
     if !vr.unmapped.is_empty() {
         eprintln!(
             "joints without a servo on the bus (they hold their pose): {}",
@@ -314,7 +314,7 @@ fn serve_watched<B: twinloop_link::VirtualServoBackend>(
     };
     let done = std::sync::atomic::AtomicBool::new(false);
     std::thread::scope(|s| {
-        s.spawn(|| crate::cmd_view::watch_simulation(&mut live, sim, &done));
+        s.spawn(|| crate::live_view::watch_simulation(&mut live, sim, &done));
         let code = serve_on(a, mapping, bus, what);
         done.store(true, Ordering::Relaxed);
         code

@@ -5,6 +5,7 @@
 use crate::common::hinges_only;
 use crate::common::{JSON_HELP, emit, load_model, num, read_table};
 use crate::error::{CliError, CliResult, Outcome};
+use crate::residual_text::residual_table;
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use twinloop_dynamics::{BaseKind, Model};
@@ -17,21 +18,6 @@ use twinloop_ident::validate::{
 };
 use twinloop_io::CsvWriter;
 use twinloop_report::{Plot, Report, SeriesStyle};
-
-/// The seed's Table 1: mean [std] of |Fx| .. |Tz| per model.
-pub fn residual_table(rows: &[(&str, &ResidualSummary)]) -> String {
-    let mut t = String::from(
-        "model          |Fx| N         |Fy| N         |Fz| N         |Tx| Nm        |Ty| Nm        |Tz| Nm\n",
-    );
-    for (name, s) in rows {
-        t.push_str(&format!("{name:<10}"));
-        for k in 0..6 {
-            t.push_str(&format!(" {:>7.3} [{:>5.3}]", s.mean_abs[k], s.std_abs[k]));
-        }
-        t.push('\n');
-    }
-    t
-}
 
 #[derive(Subcommand, Debug)]
 pub enum ValidateCommand {

@@ -5,184 +5,37 @@
 use crate::error::CliError;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use twinloop_description::{Description, DescriptionError};
+use twinloop_description::Description;
 use twinloop_dynamics::{BaseKind, Model};
-
-/// Description file formats, told apart by the root element.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Format {
-    Urdf,
-    Mjcf,
-    /// `builtin:NAME`: built from primitives in code.
-    Builtin,
-    Unknown,
-}
-
-impl Format {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Format::Urdf => "URDF",
-            Format::Mjcf => "MJCF",
-            Format::Builtin => "built-in",
-            Format::Unknown => "unknown",
-        }
-    }
-}
-
-/// The format of a description from its root element (`<robot>`: URDF,
-/// `<mujoco>`: MJCF) without parsing the whole file.
-pub fn sniff_format(text: &str) -> Format {
-    let mut rest = text.trim_start_matches('\u{feff}');
-    loop {
-        rest = rest.trim_start();
-        if let Some(r) = rest.strip_prefix("<?") {
-            let Some(end) = r.find("?>") else {
-                return Format::Unknown;
-            };
-            rest = &r[end + 2..];
-        } else if let Some(r) = rest.strip_prefix("<!--") {
-            let Some(end) = r.find("-->") else {
-                return Format::Unknown;
-            };
-            rest = &r[end + 3..];
-        } else if let Some(r) = rest.strip_prefix("<!") {
-            let Some(end) = r.find('>') else {
-                return Format::Unknown;
-            };
-            rest = &r[end + 1..];
-        } else if let Some(r) = rest.strip_prefix('<') {
-            let name: String = r
-                .chars()
-                .take_while(|c| !c.is_whitespace() && *c != '>' && *c != '/')
-                .collect();
-            return match name.as_str() {
-                "robot" => Format::Urdf,
-                "mujoco" => Format::Mjcf,
-                _ => Format::Unknown,
-            };
-        } else {
-            return Format::Unknown;
-        }
-    }
-}
 
 /// The help text of every `--robot` option.
 pub const ROBOT_HELP: &str = "Robot description: a URDF or MJCF file, a robot profile (.toml: its \
      description, with its joint roles), or builtin:NAME (km20, lab17, op3, darwin_op)";
 
-/// Whether `spec` names a robot profile (a mapping TOML) rather than a description.
-pub fn is_profile(spec: &str) -> bool {
-    Path::new(spec)
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
-}
+pub use twinloop_loop::profile::Format;
 
-/// The description a profile names (`[robot] description`, relative to the profile
-/// already), with the profile's `[roles]`; `None` if it names none.
-pub fn profile_description(
-    mapping: &twinloop_link::RobotMapping,
-) -> Result<Option<(Description, Format)>, CliError> {
-    let Some(d) = &mapping.urdf else {
-        return Ok(None);
-    };
-    let spec = d.display().to_string();
-    if is_profile(&spec) {
-        return Err(CliError::new(format!(
-            "{}: robot.description {spec:?} is a profile; name a URDF or MJCF file or builtin:NAME",
-            mapping.source
-        )));
-    }
-    let (mut robot, format) = read_description(&spec)?;
-    attach_roles(&mut robot, mapping)?;
-    Ok(Some((robot, format)))
-}
-
-/// Put a profile's `[roles]` on its description, each role's joint checked to be one
-/// of the description's.
-pub fn attach_roles(
-    robot: &mut Description,
-    mapping: &twinloop_link::RobotMapping,
-) -> Result<(), CliError> {
-    for (role, joint) in &mapping.roles {
-        if robot.joint(joint).is_none() {
-            return Err(CliError::new(format!(
-                "{}: roles.{role}: \"{joint}\" is not a joint of \"{}\"",
-                mapping.source, robot.name
-            )));
-        }
-        robot.roles.set(role, joint.clone());
-    }
-    Ok(())
-}
-
-/// Load a robot description: `builtin:NAME` or a URDF or MJCF file (told apart by
-/// the root element). The error names the file, line and element at fault. A file
-/// whose lengths are millimetres or masses grams (lint's `unit-scale`) is refused
-/// here, for every command, naming the joint or link and the unit it looks like.
+/// Load a robot description: `builtin:NAME`, a robot profile or a URDF or MJCF file
+/// (`twinloop_loop::profile::load_description`).
 pub fn load_description(spec: &str) -> Result<(Description, Format), CliError> {
-    let (robot, format) = read_description(spec)?;
-    if let Some(f) = twinloop_description::lint::unit_scale::find(&robot) {
-        return Err(CliError::new(format!(
-            "{spec}: {} \"{}\" {}",
-            f.subject.as_str(),
-            f.name,
-            f.message
-        )));
-    }
-    Ok((robot, format))
+    Ok(twinloop_loop::profile::load_description(spec)?)
 }
 
 /// [`load_description`] without the unit-scale refusal: for `model lint`, which
 /// reports it among its findings.
 pub fn read_description(spec: &str) -> Result<(Description, Format), CliError> {
-    if let Some(name) = spec.strip_prefix("builtin:") {
-        let mut robot = twinloop_description::builtin::resolve(spec)?;
-        // A built-in profile of the same name gives the joint roles.
-        if let Some(profile) = twinloop_link::RobotMapping::builtin(name) {
-            attach_roles(&mut robot, &profile)?;
-        }
-        return Ok((robot, Format::Builtin));
-    }
-    if is_profile(spec) {
-        let mapping = twinloop_link::RobotMapping::load(spec)?;
-        return profile_description(&mapping)?.ok_or_else(|| {
-            CliError::new(format!(
-                "{spec}: the profile names no description; add description = \"FILE\" to its [robot]"
-            ))
-        });
-    }
-    let path = Path::new(spec);
-    let format = std::fs::read_to_string(path)
-        .map(|t| sniff_format(&t))
-        .unwrap_or(Format::Unknown);
-    // A reader bug must not turn into a panic trace for the user: report it as
-    // unreadable input, naming the file.
-    let previous_hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let loaded = std::panic::catch_unwind(|| twinloop_description::load(path));
-    std::panic::set_hook(previous_hook);
-    let result = match loaded {
-        Ok(r) => r,
-        Err(payload) => {
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown cause".to_string());
-            Err(DescriptionError::new(format!(
-                "the reader failed unexpectedly ({what}); please report this file"
-            )))
-        }
-    };
-    match result {
-        Ok(robot) => Ok((robot, format)),
-        Err(mut e) => {
-            if e.location.file.is_none() {
-                e.location.file = Some(path.to_path_buf());
-            }
-            Err(e.into())
-        }
-    }
+    Ok(twinloop_loop::profile::read_description(spec)?)
+}
+
+/// A profile's description with its roles (`twinloop_loop::profile::profile_description`).
+pub fn profile_description(
+    mapping: &twinloop_link::RobotMapping,
+) -> Result<Option<(Description, Format)>, CliError> {
+    Ok(twinloop_loop::profile::profile_description(mapping)?)
+}
+
+/// Refuse a robot with a ball joint (`twinloop_loop::profile::hinges_only`).
+pub fn hinges_only(robot: &Description, spec: &str, work: &str) -> Result<(), CliError> {
+    Ok(twinloop_loop::profile::hinges_only(robot, spec, work)?)
 }
 
 /// Load a description and compile it for the dynamics, with a floating base (or
@@ -196,24 +49,6 @@ pub fn load_model(spec: &str, base: BaseKind) -> Result<(Description, Model), Cl
         CliError::from(e)
     })?;
     Ok((robot, model))
-}
-
-/// Refuse a robot with a ball joint for work that moves one coordinate per joint
-/// (servos, IK, identification, reduced models): its quaternion would be read as
-/// four hinges, a silent wrong answer. Names the first ball joint.
-pub fn hinges_only(robot: &Description, spec: &str, work: &str) -> Result<(), CliError> {
-    match robot
-        .joints
-        .iter()
-        .find(|j| j.kind == twinloop_description::JointKind::Spherical)
-    {
-        None => Ok(()),
-        Some(j) => Err(CliError::new(format!(
-            "{spec}: joint \"{}\" is a ball joint; {work} handles hinge and slide joints only \
-             (model, kinematics, dynamics, simulate and view take ball joints)",
-            j.name
-        ))),
-    }
 }
 
 /// Write to stdout; a closed pipe (`twinloop ... | head`) ends quietly instead of panicking.
@@ -370,19 +205,6 @@ pub fn state_columns(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn format_from_root_element() {
-        assert_eq!(
-            sniff_format("<?xml version=\"1.0\"?>\n<!-- c -->\n<robot name=\"x\">"),
-            Format::Urdf
-        );
-        assert_eq!(sniff_format("\u{feff}<mujoco model=\"op3\">"), Format::Mjcf);
-        assert_eq!(sniff_format("<!DOCTYPE x><robot/>"), Format::Urdf);
-        assert_eq!(sniff_format("<sdf>"), Format::Unknown);
-        assert_eq!(sniff_format("not xml"), Format::Unknown);
-        assert_eq!(sniff_format("<!-- unterminated"), Format::Unknown);
-    }
 
     #[test]
     fn numeric_options_are_range_checked() {

@@ -155,6 +155,13 @@ impl From<twinloop_ident::IdentError> for CliError {
     }
 }
 
+impl From<twinloop_loop::LoopError> for CliError {
+    /// The estimator's error worded with the CLI's flags, as from `IdentError`.
+    fn from(e: twinloop_loop::LoopError) -> CliError {
+        CliError::new(e.worded(&|i| CliError::from(i.clone()).message))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,6 +6,7 @@
 //! `error: ...` and picks the exit code (see `error.rs`).
 
 mod adapt_text;
+mod bus_args;
 mod cmd_adapt;
 mod cmd_bench;
 mod cmd_compliant;
@@ -22,13 +23,14 @@ mod cmd_simulate;
 mod cmd_validate;
 mod cmd_view;
 mod common;
-mod draft_profile;
 mod error;
-mod floor_fit;
+mod gait_args;
 mod limb;
+mod live_view;
 mod progress;
-mod protocol_bias;
 mod replay3d;
+mod residual_text;
+mod sim_args;
 mod units;
 
 use clap::{Parser, Subcommand};

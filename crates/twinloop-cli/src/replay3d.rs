@@ -3,9 +3,9 @@
 //! (the robot's bus recording with the adapted and prior models simulated lean by
 //! lean as ghosts), and any other report about a motion ([`motion_replay`]).
 
-use crate::cmd_simulate::{ServoChoice, record_columns, standing_simulator, state_row};
 use crate::common;
 use crate::error::CliError;
+use crate::sim_args::{ServoChoice, record_columns, standing_simulator, state_row};
 use std::path::{Path, PathBuf};
 use twinloop_description::Description;
 use twinloop_io::{CsvWriter, Table};

@@ -1,7 +1,11 @@
 //! The layering of docs/architecture.md, checked against the code: every crate's
 //! dependencies (normal and dev) point only to crates listed above it in the page's
 //! crate table, the "depends on" column lists exactly its normal twinloop
-//! dependencies, and no crate has an import cycle between its source files.
+//! dependencies, and no crate has an import cycle between its source files. The two
+//! front ends on top, the CLI and the Python package (python/src), are held to the
+//! same: their dependencies are crates of the table, their files have no import
+//! cycle, and both stay thin (the loop's workflows are called there, not written);
+//! no CLI command module imports another.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -95,10 +99,8 @@ fn crates_depend_only_on_crates_below_them_as_the_architecture_page_says() {
     }
 }
 
-/// Modules of one crate and the modules each one uses (`crate::m`, `super::m` from a
-/// top-level module), by file: `src/a.rs` and `src/a/mod.rs` are module `a`, files
-/// under `src/a/` belong to `a`.
-fn module_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
+/// Every `.rs` file under `dir`.
+fn rust_files(dir: &Path) -> Vec<PathBuf> {
     fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
@@ -110,7 +112,28 @@ fn module_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
         }
     }
     let mut files = Vec::new();
-    walk(src, &mut files);
+    walk(dir, &mut files);
+    files.sort();
+    files
+}
+
+/// A source file's code: comment lines dropped, and nothing from its first
+/// `#[cfg(test)]` on (tests may reach anywhere in their crate).
+fn code_of(file: &Path) -> String {
+    let text = std::fs::read_to_string(file).unwrap();
+    let text: String = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("//"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    text.split("#[cfg(test)]").next().unwrap().to_string()
+}
+
+/// Modules of one crate and the modules each one uses (`crate::m`, `super::m` from a
+/// top-level module), by file: `src/a.rs` and `src/a/mod.rs` are module `a`, files
+/// under `src/a/` belong to `a`.
+fn module_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
+    let files = rust_files(src);
     let top = |p: &Path| -> Option<String> {
         let rel = p.strip_prefix(src).unwrap();
         let first = rel
@@ -126,14 +149,8 @@ fn module_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
     let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     for f in &files {
         let Some(from) = top(f) else { continue };
-        let text = std::fs::read_to_string(f).unwrap();
-        let text: String = text
-            .lines()
-            .filter(|l| !l.trim_start().starts_with("//"))
-            .collect::<Vec<_>>()
-            .join("\n");
-        // Tests may reach anywhere in their crate.
-        let text = text.split("#[cfg(test)]").next().unwrap();
+        let text = code_of(f);
+        let text = text.as_str();
         let nested = f.strip_prefix(src).unwrap().components().count() > 1;
         for m in &modules {
             if *m == from {
@@ -218,4 +235,115 @@ fn the_cycle_finder_finds_a_cycle() {
     let mut acyclic = g.clone();
     acyclic.get_mut("c").unwrap().clear();
     assert!(find_cycle(&acyclic).is_none());
+}
+
+#[test]
+fn the_python_package_depends_on_documented_crates_and_has_no_import_cycle() {
+    let listed: BTreeSet<String> = documented_layers().into_iter().map(|(n, _)| n).collect();
+    let (normal, dev) = manifest_dependencies(&repo().join("python/Cargo.toml"));
+    for d in normal.iter().chain(&dev) {
+        assert!(
+            listed.contains(d),
+            "python depends on {d}, which docs/architecture.md does not list"
+        );
+    }
+    assert!(normal.contains("twinloop-loop"), "{normal:?}");
+    let graph = module_graph(&repo().join("python/src"));
+    assert!(!graph.is_empty(), "python/src: no module uses another");
+    if let Some(cycle) = find_cycle(&graph) {
+        panic!("python/src: import cycle {}", cycle.join(" -> "));
+    }
+}
+
+/// What a front end must not write itself, and where it is written instead: the
+/// steps of the tip-over over a bus, the protocol passes and standing a robot up.
+const WORKFLOW_STEPS: [(&str, &str); 7] = [
+    (
+        "run_directions(",
+        "fill a twinloop_loop::BusPlan and run it",
+    ),
+    (
+        "bus_outcome(",
+        "twinloop_loop::tipover_bus makes the report",
+    ),
+    ("BusTipoverOptions {", "fill a twinloop_loop::BusPlan"),
+    (
+        "BusProtocol {",
+        "BusPlan::protocol keeps how a run measured",
+    ),
+    (
+        "static_angles_at_onsets(",
+        "twinloop_loop::protocol_bias runs the passes",
+    ),
+    (
+        "Lockstep::new(",
+        "twinloop_loop::tipover_bus::tipover_in_lockstep",
+    ),
+    (
+        "contact_points().is_empty()",
+        "Simulator::check_can_stand / standing_on_servos",
+    ),
+];
+
+/// The workflow steps `files` write themselves, as `path: step (where it belongs)`.
+fn workflow_steps_in(files: &[PathBuf]) -> Vec<String> {
+    let mut found = Vec::new();
+    for f in files {
+        let code = code_of(f);
+        for (step, instead) in WORKFLOW_STEPS {
+            if code.contains(step) {
+                found.push(format!("{}: {step} ({instead})", f.display()));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn the_cli_and_python_are_thin() {
+    let mut files = rust_files(&repo().join("crates/twinloop-cli/src"));
+    files.extend(rust_files(&repo().join("python/src")));
+    assert!(files.len() > 20, "{files:?}");
+    let found = workflow_steps_in(&files);
+    assert!(
+        found.is_empty(),
+        "workflow written in a front end:\n{}",
+        found.join("\n")
+    );
+    // The check sees a step where one is written.
+    let probe = std::env::temp_dir().join(format!("twinloop-arch-probe-{}.rs", std::process::id()));
+    std::fs::write(
+        &probe,
+        "fn f() { let o = BusTipoverOptions { creeps: 2 }; }\n",
+    )
+    .unwrap();
+    let seen = workflow_steps_in(std::slice::from_ref(&probe));
+    std::fs::remove_file(&probe).unwrap();
+    assert_eq!(seen.len(), 1, "{seen:?}");
+}
+
+#[test]
+fn no_cli_command_module_imports_another() {
+    let graph = module_graph(&repo().join("crates/twinloop-cli/src"));
+    let command = |m: &str| m.starts_with("cmd_");
+    let crossing: Vec<String> = graph
+        .iter()
+        .filter(|(from, _)| command(from))
+        .flat_map(|(from, to)| {
+            to.iter()
+                .filter(|m| command(m))
+                .map(move |m| format!("{from} -> {m}"))
+        })
+        .collect();
+    assert!(
+        crossing.is_empty(),
+        "CLI command modules importing one another (move the shared code to twinloop-loop \
+         or a non-command module): {crossing:?}"
+    );
+    // The graph does see command modules' imports of shared modules.
+    assert!(
+        graph["cmd_demo"].contains("bus_args"),
+        "{:?}",
+        graph["cmd_demo"]
+    );
 }

@@ -24,6 +24,7 @@ from ._native import (
     Simulator,
     aba,
     adapt,
+    adapt_to_protocol,
     aba_batch,
     body_parameters,
     center_of_mass,

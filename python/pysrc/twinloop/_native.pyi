@@ -275,6 +275,12 @@ def adapt(prior: RobotSpec, tipover: dict[str, Any], total_mass: Optional[float]
           merge: bool = False, resolution: float = 0.05, check: bool = False) -> tuple[dict[str, Any], Optional[Description]]:
     """`twinloop adapt --tipover FILE --json`'s report and the adapted description (None if not fixed);
     total_mass kg, resolution deg."""
+def adapt_to_protocol(prior: RobotSpec, tipover: dict[str, Any], passes: int = 3, total_mass: Optional[float] = None,
+                      host: Optional[str] = None, merge: bool = False, resolution: float = 0.05,
+                      ground_sink: Optional[float] = None) -> tuple[dict[str, Any], Optional[Description], Optional[dict[str, Any]]]:
+    """`twinloop adapt --tipover FILE --protocol-passes N --json`'s report, the adapted description (None if not
+    fixed) and the passes (`demo --json`'s calibration: passes [{bias_deg, static_deg, protocol_deg, adapted_com}],
+    kept; None when none ran); total_mass kg, resolution deg, ground_sink m (None: found from the sideways tips, as the CLI); GIL released."""
 def fit_compliant(data: Union[str, PathLike[str]], plant: Union[str, PathLike[str]],
                   method: Literal["lm", "cmaes", "power"] = "lm", params: Optional[Union[str, Sequence[str]]] = None,
                   start: Optional[Sequence[float]] = None, max_evaluations: Optional[int] = None, sigma: float = 0.05,

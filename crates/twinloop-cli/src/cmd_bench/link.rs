@@ -2,7 +2,7 @@
 //! (replies replayed from memory) and, with --port, transactions per second against
 //! a served robot.
 
-use crate::cmd_link::{PortArgs, open_client};
+use crate::bus_args::{PortArgs, open_client};
 use crate::common::emit;
 use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;

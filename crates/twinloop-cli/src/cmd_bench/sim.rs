@@ -1,8 +1,8 @@
 //! `twinloop bench sim`: microseconds per simulator step of a robot standing on its servos.
 
-use crate::cmd_simulate::{ServoChoice, standing_simulator};
 use crate::common::{ROBOT_HELP, emit, load_description};
 use crate::error::{CliResult, Outcome};
+use crate::sim_args::{ServoChoice, standing_simulator};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;

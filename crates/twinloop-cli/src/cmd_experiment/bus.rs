@@ -3,35 +3,14 @@
 //! guarded robot itself (Ctrl-C and faults stop the run; servos left holding) is
 //! `twinloop_experiments::guarded`.
 
-use crate::cmd_link::PortArgs;
+use crate::bus_args::PortArgs;
+pub(super) use crate::bus_args::confirm;
 use crate::error::CliError;
-use std::io::{BufRead, IsTerminal, Write};
 use std::path::Path;
 use twinloop_experiments::guarded::record_columns;
 pub(super) use twinloop_experiments::guarded::{Guarded, hold_standing, is_serial};
 use twinloop_io::CsvWriter;
 use twinloop_link::RobotMapping;
-
-pub(super) fn confirm(question: &str) -> Result<(), CliError> {
-    let stdin = std::io::stdin();
-    if !stdin.is_terminal() {
-        return Err(CliError::new(format!(
-            "{question}: no terminal to ask on; pass --yes to run without asking"
-        )));
-    }
-    eprint!("{question} [y/N] ");
-    let _ = std::io::stderr().flush();
-    let mut line = String::new();
-    stdin
-        .lock()
-        .read_line(&mut line)
-        .map_err(|e| CliError::new(format!("reading the answer: {e}")))?;
-    if matches!(line.trim(), "y" | "Y" | "yes") {
-        Ok(())
-    } else {
-        Err(CliError::new("not confirmed; the robot was not moved"))
-    }
-}
 
 /// The raw record of `--record` (columns [`record_columns`]), flushed row by row.
 pub(super) fn record_writer(path: &Path, names: &[String]) -> Result<CsvWriter, CliError> {

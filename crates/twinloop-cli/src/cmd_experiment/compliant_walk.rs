@@ -15,7 +15,7 @@ pub struct CompliantWalkArgs {
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     #[command(flatten)]
-    pub steps: crate::cmd_gait::StepTiming,
+    pub steps: crate::gait_args::StepTiming,
     /// Recorded duration, s (1 kHz samples).
     #[arg(long, default_value_t = 30.0, value_parser = crate::common::positive)]
     pub duration: f64,

@@ -3,7 +3,7 @@
 //! angles and torques written row by row.
 
 use super::bus::{Guarded, confirm, hold_standing, is_serial, record_writer, resolve};
-use crate::cmd_link::{PortArgs, open_client};
+use crate::bus_args::{PortArgs, open_client};
 use crate::common::hinges_only;
 use crate::common::{JSON_HELP, emit, load_description};
 use crate::error::{CliError, CliResult, Outcome};
@@ -306,7 +306,7 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
         &mut robot,
         raw,
         &standing,
-        crate::cmd_link::interrupt_flag(),
+        crate::bus_args::interrupt_flag(),
     );
     g.silence_window = a.bus.silence_window();
     eprintln!(

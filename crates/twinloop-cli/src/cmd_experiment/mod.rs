@@ -9,7 +9,6 @@ mod servo;
 mod squat;
 mod static_poses;
 mod tipover;
-pub mod tipover_bus;
 mod walk;
 
 use crate::error::{CliError, CliResult};

@@ -4,7 +4,7 @@
 //! the description, crate::limb).
 
 use super::bus::{confirm, is_serial, resolve};
-use crate::cmd_link::{PortArgs, interrupt_flag, open_client};
+use crate::bus_args::{PortArgs, interrupt_flag, open_client};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::limb::Limb;
 use clap::Args;

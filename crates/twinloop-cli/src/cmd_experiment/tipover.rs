@@ -65,7 +65,7 @@ pub struct TipoverArgs {
     /// With --port (needs --map), the experiment runs on a robot over its bus instead
     /// of the simulator; the bus flags mean what they mean for `twinloop link`.
     #[command(flatten)]
-    pub bus: crate::cmd_link::PortArgs,
+    pub bus: crate::bus_args::PortArgs,
     /// Servo mapping of the robot on --port: builtin:km20 or a mapping TOML.
     #[arg(long, value_name = "MAP")]
     pub map: Option<String>,
@@ -104,7 +104,7 @@ pub struct TipoverArgs {
     /// (default 32, the factory value): goal positions are whole counts, and a stiff
     /// ankle takes each count as a jolt that tips the robot early. The other servos,
     /// and MX and X ankles (counts a third as large), hold at --compliance-slope.
-    #[arg(long, default_value_t = super::tipover_bus::ANKLE_SLOPE as f64, value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = twinloop_loop::tipover_bus::ANKLE_SLOPE as f64, value_parser = crate::common::positive)]
     pub ankle_slope: f64,
     /// Ramp speed of the second run's slow final approach, deg/s: each direction is run
     /// twice, the second time up to half a degree before the first tip and then at this
@@ -123,7 +123,7 @@ pub struct TipoverArgs {
     /// staircase (whole counts) tips it on the jolt of a count step, a count early
     /// or late from run to run (docs/adaptation.md)
     #[arg(long, value_enum, default_value_t)]
-    pub goal_counts: super::tipover_bus::GoalCounts,
+    pub goal_counts: crate::bus_args::GoalCounts,
     /// Leave the servos as they are instead of stiffening them (every servo is made
     /// stiff through the servo catalogue, and put back afterwards; a servo model with
     /// no known way to stiffen otherwise stops the run before anything moves). The
@@ -135,7 +135,7 @@ pub struct TipoverArgs {
     /// robot time. The ankles flip between two counts as the robot rocks on its sole
     /// edges, and one sample reads a count early or late from run to run; 0: the
     /// onset's sample alone
-    #[arg(long, default_value_t = super::tipover_bus::ONSET_AVERAGE_S, value_parser = crate::common::non_negative)]
+    #[arg(long, default_value_t = twinloop_loop::tipover_bus::ONSET_AVERAGE_S, value_parser = crate::common::non_negative)]
     pub onset_average: f64,
     /// Quantise the ankle readings like Dynamixel RX encoders (1024 counts over 300 deg).
     #[arg(long)]
@@ -270,12 +270,13 @@ fn summary(r: &StudyReport) -> String {
 /// simulator's when all four directions ran.
 mod bus {
     use super::{TipoverArgs, summary};
+    use crate::bus_args::tipover_on_bus;
     use crate::cmd_experiment::bus::resolve;
-    use crate::cmd_experiment::tipover_bus::{
-        BusOutcome, BusPlan, BusReport, parse_directions, tipover_on_bus,
-    };
     use crate::common::emit;
+    use crate::error::CliError;
     use crate::error::{CliResult, Outcome};
+    use twinloop_loop::BusPlan;
+    use twinloop_loop::tipover_bus::{BusOutcome, BusReport};
 
     pub fn run(a: &TipoverArgs) -> CliResult {
         let (_, _, model_spec) = resolve(
@@ -288,10 +289,11 @@ mod bus {
         let plan = BusPlan {
             model_spec,
             map,
-            port: a.bus.clone(),
+            port: a.bus.bus_port(),
             record: a.record.clone(),
             yes: a.yes,
-            directions: parse_directions(&a.directions)?,
+            directions: twinloop_ident::tipover_bus::parse_directions(&a.directions)
+                .map_err(|e| CliError::new(format!("--directions: {e}")))?,
             ramp: a.ramp,
             slow_ramp: a.slow_ramp,
             compliance_slope: a.compliance_slope.round() as i32,

@@ -1,8 +1,8 @@
 //! `twinloop experiment walk`: seed 003's identification dataset, lab17 walking the
 //! 13-stage sequence in the simulator with a gyro on each foot.
 
-use crate::cmd_gait::{TimingArgs, lab17_only, option_names, sequence_options};
 use crate::error::{CliError, CliResult, Outcome};
+use crate::gait_args::{TimingArgs, lab17_only, option_names, sequence_options};
 use clap::Args;
 use std::path::PathBuf;
 use twinloop_experiments::{DatasetOptions, record_walk};

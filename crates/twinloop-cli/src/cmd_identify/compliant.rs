@@ -1,13 +1,13 @@
 //! `twinloop identify compliant`: fit the compact compliant model's corrections to a
 //! recorded CoM (seed 002, section 4).
 
-use crate::cmd_compliant::read_plant_any;
 use crate::common::{emit, num, print};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::path::PathBuf;
+use twinloop_ident::compliant_fit::read_plant as read_plant_any;
 use twinloop_ident::compliant_fit::report::fit_report;
 use twinloop_ident::compliant_fit::summary::{FitInputs, FitSummary};
 use twinloop_ident::compliant_fit::{

@@ -1,11 +1,11 @@
 //! `twinloop identify static`: link masses and CoMs from static poses on a force
 //! plate (seed 004, eq 8-9).
 
-use crate::cmd_validate::residual_table;
 use crate::common::hinges_only;
 use crate::common::{JSON_HELP, emit, load_model};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
+use crate::residual_text::residual_table;
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::time::Instant;

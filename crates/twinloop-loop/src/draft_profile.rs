@@ -3,8 +3,8 @@
 //! found, else listing the description's joints for the user to fill in. The draft
 //! says what it guessed (on stderr and in its header) and loads back as it is.
 
-use crate::common::{is_profile, load_description};
-use crate::error::CliError;
+use crate::LoopError;
+use crate::profile::{is_profile, load_description};
 use twinloop_link::mapping::{BoardMapping, JointMapping};
 use twinloop_link::{BoardAxes, BoardType, FoundServo, RobotMapping};
 
@@ -16,7 +16,7 @@ pub struct Draft {
 
 /// A draft profile for the devices `found`, describing the robot `robot_spec`
 /// (builtin:NAME, a URDF/MJCF file or a profile).
-pub fn draft(found: &[FoundServo], robot_spec: &str) -> Result<Draft, CliError> {
+pub fn draft(found: &[FoundServo], robot_spec: &str) -> Result<Draft, LoopError> {
     let (robot, _) = load_description(robot_spec)?;
     let boards: Vec<(&FoundServo, &'static BoardType)> = found
         .iter()

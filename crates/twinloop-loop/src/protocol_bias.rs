@@ -5,14 +5,15 @@
 //! depends on the robot. So the adapted model's own measurement is simulated: the
 //! protocol the robot was measured by (`StudyReport::protocol`), from the same
 //! commanded starts, on the adapted model stepped in lockstep with its host
-//! ([`tipover_in_lockstep`], the robot run's host cycle). What it reads minus the
+//! ([`crate::tipover_bus::tipover_in_lockstep`], the robot run's host cycle). What it reads minus the
 //! model's static angles at the robot's onsets is the bias; the model is adapted again
 //! to the robot's angles less that bias (`AdaptOptions::protocol_bias_deg`), and the
 //! last pass is kept. docs/adaptation.md has the measurements.
 
-use crate::cmd_experiment::tipover_bus::{BusOutcome, BusPlan, tipover_in_lockstep};
-use crate::error::CliError;
+use crate::LoopError;
+use crate::bus_plan::BusPlan;
 use crate::floor_fit::{FloorFit, fit_floor, sideways_mean};
+use crate::tipover_bus::{BusOutcome, tipover_in_lockstep_with};
 use serde::Serialize;
 use twinloop_description::Description;
 use twinloop_experiments::tipover::Direction;
@@ -74,7 +75,7 @@ fn converged_deg(protocol: &BusProtocol) -> f64 {
 }
 
 /// One figure of each direction of `r` (forward, backward, left, right).
-pub(crate) fn angles_of(
+pub fn angles_of(
     r: &StudyReport,
     f: fn(&twinloop_ident::tipover_study::DirectionReport) -> f64,
 ) -> [f64; 4] {
@@ -82,7 +83,7 @@ pub(crate) fn angles_of(
 }
 
 /// Four angles, deg, as the demo and the log print them.
-pub(crate) fn join(v: [f64; 4]) -> String {
+pub fn join(v: [f64; 4]) -> String {
     v.map(|a| format!("{a:5.2}")).join(" ")
 }
 
@@ -91,6 +92,8 @@ pub struct Replay<'a> {
     /// The host's model of the robot (the prior's spec: the lean signs and the tilt
     /// reference, as on the robot's run).
     pub model_spec: &'a str,
+    /// That model, as `model_spec` reads (the prior).
+    pub host: &'a Description,
     /// Passes (0: the plain adaptation).
     pub passes: usize,
     /// The simulated robot (its floor the first guess when `fit_floor`).
@@ -101,25 +104,25 @@ pub struct Replay<'a> {
 }
 
 /// What the protocol `study` was measured by (`study.protocol`, creeping from the
-/// robot's commanded tips, `model_spec` as the host's model) reads on `model`
+/// robot's commanded tips, `host` read from `model_spec` as the host's model) reads on `model`
 /// simulated in lockstep with its host at the robot run's cycle: the four fall angles,
 /// deg (forward, backward, left, right).
 pub fn protocol_reading(
     study: &StudyReport,
     model_spec: &str,
+    host: &Description,
     model: &Description,
     options: &VirtualRobotOptions,
-) -> Result<[f64; 4], CliError> {
-    let protocol = study
-        .protocol
-        .as_ref()
-        .ok_or_else(|| CliError::new("the tip-over was not measured over a bus (no `protocol`)"))?;
+) -> Result<[f64; 4], LoopError> {
+    let protocol = study.protocol.as_ref().ok_or_else(|| {
+        LoopError::new("the tip-over was not measured over a bus (no `protocol`)")
+    })?;
     let commanded = angles_of(study, |d| d.commanded_deg).to_vec();
     let plan = BusPlan::replaying(protocol, model_spec, commanded);
-    let run = tipover_in_lockstep(&plan, model, options, protocol.cycle_s)?;
+    let run = tipover_in_lockstep_with(&plan, host.clone(), model, options, protocol.cycle_s)?;
     match run.outcome {
         BusOutcome::Study(sim) => Ok(angles_of(&sim, |d| d.measured_deg)),
-        BusOutcome::Partial(_) => Err(CliError::new("not all four directions ran")),
+        BusOutcome::Partial(_) => Err(LoopError::new("not all four directions ran")),
     }
 }
 
@@ -133,8 +136,8 @@ pub fn adapt_to_protocol(
     opts: &AdaptOptions,
     replay: &Replay<'_>,
     log: &mut dyn FnMut(&str),
-    map_err: &dyn Fn(IdentError) -> CliError,
-) -> Result<(Adapted, Option<Calibration>), CliError> {
+    map_err: &dyn Fn(IdentError) -> LoopError,
+) -> Result<(Adapted, Option<Calibration>), LoopError> {
     let passes = replay.passes;
     let Some(protocol) = study.protocol.as_ref().filter(|_| passes > 0) else {
         return Ok((adapt(prior, study, opts).map_err(map_err)?, None));
@@ -156,7 +159,7 @@ pub fn adapt_to_protocol(
             return Ok((adapted, None));
         };
         let read = if replay.fit_floor && floor.is_none() {
-            let (fit, read) = replay_on_robots_floor(study, replay.model_spec, model, &options)?;
+            let (fit, read) = replay_on_robots_floor(study, replay, model, &options)?;
             log(&format!(
                 "the floor: the replay tips sideways at {:.2} deg (the robot at {:.2}) on a \
                  floor sinking {:.3} mm ({} replays)",
@@ -169,7 +172,7 @@ pub fn adapt_to_protocol(
             floor = Some(fit);
             read
         } else {
-            protocol_reading(study, replay.model_spec, model, &options)
+            protocol_reading(study, replay.model_spec, replay.host, model, &options)
                 .map_err(|e| e.context("simulating the protocol on the adapted model"))?
         };
         // The model's own static angles at the robot's onsets: the fit may not reach
@@ -199,7 +202,7 @@ pub fn adapt_to_protocol(
     // The last pass is kept: its bias comes from the model nearest the fixed point.
     // (Keeping the pass whose protocol read nearest the robot was tried: the readings
     // move in whole counts, and on seed 4 it kept 4.2 mm of CoM error over 1.9.)
-    let mut adapted = last.ok_or_else(|| CliError::new("no pass of the adaptation ran"))?;
+    let mut adapted = last.ok_or_else(|| LoopError::new("no pass of the adaptation ran"))?;
     let kept = done.len() - 1;
     adapted.report.notes.push(format!(
         "the model was fitted to the measured angles less the protocol's bias {} deg \
@@ -238,10 +241,10 @@ pub fn adapt_to_protocol(
 /// ([`fit_floor`], from `options`' floor): the fit and that replay's angles.
 fn replay_on_robots_floor(
     study: &StudyReport,
-    model_spec: &str,
+    replay: &Replay<'_>,
     model: &Description,
     options: &VirtualRobotOptions,
-) -> Result<(FloorFit, [f64; 4]), CliError> {
+) -> Result<(FloorFit, [f64; 4]), LoopError> {
     let measured = sideways_mean(&angles_of(study, |d| d.measured_deg));
     let start = options.ground_sink.unwrap_or(REPLAY_GROUND_SINK);
     let (fit, read) = fit_floor(measured, start, &mut |sink| {
@@ -249,7 +252,7 @@ fn replay_on_robots_floor(
             ground_sink: Some(sink),
             ..options.clone()
         };
-        protocol_reading(study, model_spec, model, &on)
+        protocol_reading(study, replay.model_spec, replay.host, model, &on)
             .map_err(|e| e.context("simulating the protocol on the adapted model"))
     })?;
     Ok((fit, read))

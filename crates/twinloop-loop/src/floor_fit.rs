@@ -12,7 +12,7 @@
 //! onsets was tried as the floor's reading first: it is a tenth of a degree noisy
 //! where the floor is firm, and put a 0.1 mm floor at 0.3 mm.)
 
-use crate::error::CliError;
+use crate::LoopError;
 use serde::Serialize;
 
 /// The sinks the search may try, m: from a near-rigid floor to a mattress.
@@ -62,8 +62,8 @@ pub fn sideways_mean(angles: &[f64; 4]) -> f64 {
 pub fn fit_floor(
     measured_deg: f64,
     start_m: f64,
-    replay: &mut dyn FnMut(f64) -> Result<[f64; 4], CliError>,
-) -> Result<(FloorFit, [f64; 4]), CliError> {
+    replay: &mut dyn FnMut(f64) -> Result<[f64; 4], LoopError>,
+) -> Result<(FloorFit, [f64; 4]), LoopError> {
     let (lo, hi) = (SINK_RANGE_M.0.log10(), SINK_RANGE_M.1.log10());
     let mut tries: Vec<(f64, [f64; 4])> = Vec::with_capacity(MAX_TRIES);
     let err = |a: &[f64; 4]| sideways_mean(a) - measured_deg;

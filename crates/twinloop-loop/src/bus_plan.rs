@@ -1,0 +1,120 @@
+//! The plan of the tip-over over a robot's bus: one struct that the CLI (`experiment
+//! tipover --port`, `adapt --port`, `demo`) and Python (`tipover(port=...)`) fill from
+//! their arguments, and the protocol passes replay; [`crate::tipover_bus`] runs it.
+
+use crate::port::BusPort;
+use std::path::PathBuf;
+use twinloop_experiments::tipover::Direction;
+use twinloop_ident::tipover_bus::{ANKLE_SLOPE, ONSET_AVERAGE_S};
+use twinloop_ident::tipover_study::BusProtocol;
+
+/// How the experiment runs over the bus.
+#[derive(Debug, Clone)]
+pub struct BusPlan {
+    /// The host's model: lean signs, the tilt reference and the static references (a
+    /// spec [`crate::profile::load_description`] reads; the report names it).
+    pub model_spec: String,
+    /// The servo mapping: builtin:NAME or a profile TOML (its IMU `[[board]]`).
+    pub map: String,
+    pub port: BusPort,
+    /// Every cycle read, as a CSV written row by row.
+    pub record: Option<PathBuf>,
+    /// Do not ask before moving a robot on a serial port.
+    pub yes: bool,
+    pub directions: Vec<Direction>,
+    /// First ramp of each direction, deg/s of robot time.
+    pub ramp: f64,
+    /// The second run's creep over the last half degree, deg/s.
+    pub slow_ramp: f64,
+    /// How stiff the servos that hold the pose are made, as an RX Compliance Slope
+    /// (2: stiffest; every servo family through the catalogue).
+    pub compliance_slope: i32,
+    /// The same for the joints a direction ramps (see [`ANKLE_SLOPE`]).
+    pub ankle_slope: i32,
+    /// Leave the servos as they are (see `BusTipoverOptions::soft_servos`).
+    pub soft_servos: bool,
+    /// Creeping approaches per direction (see `BusTipoverOptions::creeps`).
+    pub creeps: usize,
+    /// Commanded tip angles known beforehand, one per direction: creeps only (see
+    /// `BusTipoverOptions::first_tips`).
+    pub first_tips: Option<Vec<f64>>,
+    /// Dither the turned joints' goal counts (see `BusTipoverOptions::dither`).
+    pub dither: bool,
+    /// A creep's tip is the mean reading over this long up to its onset, s of robot
+    /// time (see `BusTipoverOptions::onset_average_s`).
+    pub onset_average_s: f64,
+    /// Robot seconds per host second (a simulated robot served faster than real time).
+    pub clock_rate: f64,
+    /// Say through the run's log what is happening.
+    pub verbose: bool,
+}
+
+impl BusPlan {
+    /// The protocol `adapt --port` and `demo` run: four directions, a first ramp of
+    /// 2 deg/s and creeps of 0.15 deg/s, two creeps, the stiffest servos (ankles at
+    /// [`ANKLE_SLOPE`]), dithered goals, tips averaged over [`ONSET_AVERAGE_S`]; a
+    /// robot in real time, asked about on a serial port, nothing recorded.
+    pub fn standard(model_spec: &str, map: &str, port: BusPort) -> BusPlan {
+        BusPlan {
+            model_spec: model_spec.to_string(),
+            map: map.to_string(),
+            port,
+            record: None,
+            yes: false,
+            directions: Direction::ALL.to_vec(),
+            ramp: 2.0,
+            slow_ramp: 0.15,
+            compliance_slope: 2,
+            ankle_slope: ANKLE_SLOPE,
+            soft_servos: false,
+            creeps: 2,
+            first_tips: None,
+            dither: true,
+            onset_average_s: ONSET_AVERAGE_S,
+            clock_rate: 1.0,
+            verbose: true,
+        }
+    }
+
+    /// The plan that runs `protocol` again, creeping from `first_tips` (commanded,
+    /// deg, one per direction in `Direction::ALL`'s order), with `model_spec` as the
+    /// host's model; no port, no record (for [`crate::tipover_bus::tipover_in_lockstep`]).
+    pub fn replaying(protocol: &BusProtocol, model_spec: &str, first_tips: Vec<f64>) -> BusPlan {
+        BusPlan {
+            model_spec: model_spec.to_string(),
+            map: protocol.map.clone(),
+            port: BusPort::quick(None, 10.0, 0),
+            record: None,
+            yes: true,
+            directions: Direction::ALL.to_vec(),
+            ramp: protocol.ramp_deg_per_s,
+            slow_ramp: protocol.slow_ramp_deg_per_s,
+            compliance_slope: protocol.compliance_slope,
+            ankle_slope: protocol.ankle_slope,
+            soft_servos: protocol.soft_servos,
+            creeps: protocol.creeps,
+            first_tips: Some(first_tips),
+            dither: protocol.dither,
+            onset_average_s: protocol.onset_average_s,
+            clock_rate: 1.0,
+            verbose: false,
+        }
+    }
+
+    /// How the run was measured, as the report keeps it (`StudyReport::protocol`; the
+    /// protocol passes replay it), at the run's median host cycle `cycle_s`.
+    pub fn protocol(&self, cycle_s: f64) -> BusProtocol {
+        BusProtocol {
+            map: self.map.clone(),
+            ramp_deg_per_s: self.ramp,
+            slow_ramp_deg_per_s: self.slow_ramp,
+            compliance_slope: self.compliance_slope,
+            ankle_slope: self.ankle_slope,
+            creeps: self.creeps,
+            dither: self.dither,
+            onset_average_s: self.onset_average_s,
+            cycle_s,
+            soft_servos: self.soft_servos,
+        }
+    }
+}
