@@ -72,7 +72,7 @@ fn finish(mut child: Child, limit: Duration) -> (Option<i32>, String, Duration) 
     (code, err, took)
 }
 
-/// The silence window (2 s by default) plus one read of km20's 21 servos that all
+/// The silence window (2 s, given: the default is 5) plus one read of km20's 21 servos that all
 /// time out with their retries (21 x 3 x 10.2 ms): how long the host may take to
 /// stop once the bus is silent. Checked against, with 0.5 s for a loaded machine.
 const STOP_WITHIN: Duration = Duration::from_millis(2000 + 643 + 500);
@@ -87,7 +87,7 @@ fn a_server_stopped_for_3_s_stops_the_tipover_naming_a_servo_with_every_row_kept
     let child = Command::new(bin())
         .args(["experiment", "tipover", "--port", link.to_str().unwrap()])
         .args(["--map", "builtin:km20", "--directions", "forward"])
-        .args(["--ramp", "5", "--record"])
+        .args(["--ramp", "5", "--silence-window", "2", "--record"])
         .arg(&record)
         .stdin(Stdio::null())
         .stdout(Stdio::null())

@@ -119,7 +119,7 @@ fn twenty_seconds_recorded_through_line_noise_lose_no_row_and_take_no_damaged_re
         "{} rows of {full}",
         rows.len()
     );
-    // The bus never fell silent for the window (2 s, --silence-window's default)
+    // The bus never fell silent for 2 s (--silence-window's default is 5)
     // by the recorder's own measure. Rows may be further apart: in the hour-long run
     // the whole machine stalled for up to 4.8 s (both processes, docs/link.md).
     let silence = bus.split("longest silence ").nth(1).expect(bus);
