@@ -6,6 +6,7 @@
 //! `error: ...` and picks the exit code (see `error.rs`).
 
 mod adapt_text;
+mod bounds;
 mod cmd_adapt;
 mod cmd_bench;
 mod cmd_compliant;
@@ -25,6 +26,7 @@ mod common;
 mod draft_profile;
 mod error;
 mod limb;
+mod outputs;
 mod progress;
 mod protocol_bias;
 mod replay3d;

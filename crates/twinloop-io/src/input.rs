@@ -12,46 +12,66 @@ use std::path::Path;
 /// largest description in models/, TALOS's MJCF with its meshes, 12 MB).
 pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 
-/// The bytes of the regular file `path`, at most `max` of them; errors name the file.
-pub fn read_bounded(path: &Path, max: u64) -> Result<Vec<u8>, IoError> {
-    let err = |m: String| IoError::new(m).in_file(path);
-    let meta = std::fs::metadata(path).map_err(|e| err(format!("cannot read: {e}")))?;
+/// The bytes of the regular file `path`, at most `max` of them: `std::fs::read` with
+/// the bound (the error keeps its kind; a file that is not regular or too big is
+/// `InvalidInput`, its message saying which).
+pub fn read_limited(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
+    let invalid = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidInput, m);
+    let meta = std::fs::metadata(path)?;
     if !meta.is_file() {
         let kind = if meta.is_dir() {
             "a folder"
         } else {
             "a device, FIFO or socket"
         };
-        return Err(err(format!("is {kind}, not a regular file")));
+        return Err(invalid(format!("is {kind}, not a regular file")));
     }
     if meta.len() > max {
-        return Err(err(format!(
+        return Err(invalid(format!(
             "is {} bytes, more than the {max} bytes an input may have",
             meta.len()
         )));
     }
-    let file = std::fs::File::open(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    let file = std::fs::File::open(path)?;
     let mut bytes = Vec::with_capacity(meta.len() as usize);
     // The file may grow while it is read: never more than `max`.
-    file.take(max + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| err(format!("cannot read: {e}")))?;
+    file.take(max + 1).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > max {
-        return Err(err(format!("grew past the {max} bytes an input may have")));
+        return Err(invalid(format!(
+            "grew past the {max} bytes an input may have"
+        )));
     }
     Ok(bytes)
 }
 
-/// [`read_bounded`] with [`MAX_INPUT_BYTES`], as UTF-8 text.
-pub fn read_text(path: &Path) -> Result<String, IoError> {
-    let bytes = read_bounded(path, MAX_INPUT_BYTES)?;
+/// `std::fs::read_to_string` for input files: regular files of at most
+/// [`MAX_INPUT_BYTES`] (a drop-in for it, with the same error type).
+pub fn read_to_string(path: &Path) -> std::io::Result<String> {
+    let bytes = read_limited(path, MAX_INPUT_BYTES)?;
     String::from_utf8(bytes).map_err(|e| {
-        IoError::new(format!(
-            "is not UTF-8 text (byte {})",
-            e.utf8_error().valid_up_to()
-        ))
-        .in_file(path)
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("is not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        )
     })
+}
+
+/// [`read_limited`] with errors naming the file.
+pub fn read_bounded(path: &Path, max: u64) -> Result<Vec<u8>, IoError> {
+    read_limited(path, max).map_err(|e| read_error(path, e))
+}
+
+/// [`read_to_string`] with errors naming the file.
+pub fn read_text(path: &Path) -> Result<String, IoError> {
+    read_to_string(path).map_err(|e| read_error(path, e))
+}
+
+fn read_error(path: &Path, e: std::io::Error) -> IoError {
+    let m = match e.kind() {
+        std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => e.to_string(),
+        _ => format!("cannot read: {e}"),
+    };
+    IoError::new(m).in_file(path)
 }
 
 #[cfg(test)]

@@ -162,6 +162,8 @@ pub struct AtomicFile<W: Write + Durable = File> {
     on_drop: OnDrop,
     /// Newlines written: a recording with only its header holds nothing recorded.
     lines: u64,
+    /// The lines of the header (1 unless [`AtomicFile::header_written`] says more).
+    header: u64,
     /// Flush at every newline, so a viewer following the partial file sees each row.
     flush_lines: bool,
 }
@@ -220,6 +222,7 @@ impl<W: Write + Durable> AtomicFile<W> {
             out: Some(BufWriter::new(w)),
             on_drop,
             lines: 0,
+            header: 1,
             flush_lines: on_drop == OnDrop::KeepRecorded,
         }
     }
@@ -227,6 +230,12 @@ impl<W: Write + Durable> AtomicFile<W> {
     /// An I/O error as an [`IoError`] naming the file.
     pub fn error(&self, e: std::io::Error) -> IoError {
         IoError::new(format!("cannot write: {e}")).in_file(&self.shown)
+    }
+
+    /// The lines written so far are the header: a recording with nothing after them
+    /// holds nothing recorded and is not kept.
+    pub fn header_written(&mut self) {
+        self.header = self.lines;
     }
 
     /// The file the bytes go to (the path the user gave).
@@ -289,7 +298,7 @@ impl<W: Write + Durable> Drop for AtomicFile<W> {
         if self.out.is_none() {
             return;
         }
-        if self.on_drop == OnDrop::KeepRecorded && self.lines > 1 {
+        if self.on_drop == OnDrop::KeepRecorded && self.lines > self.header {
             // What was recorded is kept: nothing a user recorded is ever lost.
             let _ = self.finish();
         } else {
