@@ -31,7 +31,7 @@ const OUTPUTS_OF: &[(&str, &str, &str)] = &[
 ];
 
 /// Options named like outputs that are folders (checked by their command).
-const FOLDER_OUTPUTS: &[(&str, &str)] = &[("identify servo", "out")];
+const FOLDER_OUTPUTS: &[(&str, &str)] = &[("identify servo", "out"), ("demo", "out")];
 
 /// Refuse the command line's outputs that break a rule (exit 2, naming the option).
 pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> {

@@ -209,6 +209,10 @@ impl AtomicFile<File> {
             .create_new(true)
             .open(&partial)
             .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(&out.path))?;
+        // The file keeps its permissions when it is replaced.
+        if let Ok(m) = std::fs::metadata(&out.target) {
+            let _ = file.set_permissions(m.permissions());
+        }
         Ok(AtomicFile::with_writer(out, partial, file, on_drop))
     }
 }
