@@ -292,7 +292,14 @@ impl PyBus {
         robot.cycle_mut().verify_v1 = verified_reads;
         let rec = record_rows(py, &mut robot, writer.as_mut(), duration, rate);
         self.client = Some(robot.client);
-        let finished = writer.map(CsvWriter::finish).transpose();
+        // Nothing measured: the file is given up, an older recording of the name stays.
+        let finished = match writer {
+            Some(w) if rec.silent && rec.error.is_none() => {
+                w.discard();
+                Ok(None)
+            }
+            w => w.map(CsvWriter::finish).transpose(),
+        };
         let n = names.len();
         let rows = rec.data.len() / (1 + 3 * n);
         if let Some(e) = rec.error {
@@ -303,10 +310,7 @@ impl PyBus {
         }
         finished.map_err(|e| PyOSError::new_err(e.to_string()))?;
         if rec.silent {
-            // A file of NaN must not look like a recording.
-            if let Some(path) = &out {
-                let _ = std::fs::remove_file(path);
-            }
+            // A file of NaN must not look like a recording: none was written.
             return Err(link_error(format!(
                 "no servo of the mapping answered in the first {FIRST_CYCLES} cycles (ids {}); \
                  check the mapping, the port and the baud rate (Bus.scan lists what answers)",

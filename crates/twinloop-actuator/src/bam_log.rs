@@ -62,7 +62,7 @@ pub fn is_bam_log(path: &Path) -> bool {
     {
         return true;
     }
-    std::fs::read_to_string(path)
+    twinloop_io::input::read_to_string(path)
         .ok()
         .and_then(|t| t.lines().next().map(|l| l.trim_start().starts_with('{')))
         .unwrap_or(false)
@@ -80,7 +80,7 @@ pub fn servo_of_motor(motor: &str) -> Option<ServoType> {
 /// names.
 pub fn read(path: &Path, servo: Option<ServoType>) -> Result<BamLog, ActuatorError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path)
+    let text = twinloop_io::input::read_to_string(path)
         .map_err(|e| ActuatorError::new(&file, "", format!("cannot read: {e}")))?;
     parse(&text, &file, servo)
 }

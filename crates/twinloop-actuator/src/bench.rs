@@ -40,7 +40,7 @@ impl Pendulum {
     /// Read a LOAD.toml: `mass` (kg), `length` (m), `arm_inertia` (kg m^2).
     pub fn read(path: &Path) -> Result<Pendulum, ActuatorError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path)
+        let text = twinloop_io::input::read_to_string(path)
             .map_err(|e| ActuatorError::new(&file, "", format!("cannot read: {e}")))?;
         Self::parse(&text, &file)
     }

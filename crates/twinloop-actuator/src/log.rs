@@ -69,7 +69,7 @@ impl ServoLog {
     /// Read a log; `servo` overrides (or supplies) the type its first line names.
     pub fn read(path: &Path, servo: Option<ServoType>) -> Result<ServoLog, ActuatorError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path)
+        let text = twinloop_io::input::read_to_string(path)
             .map_err(|e| ActuatorError::new(&file, "", format!("cannot read: {e}")))?;
         let named = text
             .lines()
@@ -165,9 +165,12 @@ impl ServoLog {
     }
 }
 
-/// Writes a log row by row, flushed as it goes (a run cut short keeps its rows).
+/// Writes a log row by row, flushed as it goes, as a recording of
+/// `twinloop_io::output` (written beside the file and given its name however the
+/// run ends, when it holds a row: a run cut short keeps its rows, a run that
+/// recorded nothing leaves an older log in place).
 pub struct LogWriter {
-    out: std::io::BufWriter<std::fs::File>,
+    out: twinloop_io::output::AtomicFile,
     line: String,
     pub rows: usize,
 }
@@ -186,7 +189,10 @@ impl LogWriter {
         what: &str,
         comments: &str,
     ) -> std::io::Result<LogWriter> {
-        let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+        let place =
+            twinloop_io::output::Output::resolve("", path).map_err(std::io::Error::other)?;
+        let mut out =
+            twinloop_io::output::AtomicFile::recording(&place).map_err(std::io::Error::other)?;
         writeln!(out, "{LOG_PREFIX} {} {what}", servo.name())?;
         out.write_all(comments.as_bytes())?;
         let fw = servo.firmware_columns();
@@ -198,6 +204,7 @@ impl LogWriter {
             fw[1],
             fw[2]
         )?;
+        out.header_written();
         Ok(LogWriter {
             out,
             line: String::with_capacity(256),
@@ -218,14 +225,10 @@ impl LogWriter {
         self.line.push('\n');
         self.out.write_all(self.line.as_bytes())?;
         self.rows += 1;
-        // Every 100 rows reach the disk: little cost, little lost if cut short.
-        if self.rows.is_multiple_of(100) {
-            self.out.flush()?;
-        }
         Ok(())
     }
 
-    pub fn finish(mut self) -> std::io::Result<()> {
-        self.out.flush()
+    pub fn finish(self) -> std::io::Result<()> {
+        self.out.commit().map_err(std::io::Error::other)
     }
 }

@@ -34,7 +34,7 @@ impl ServoParams {
     /// Read a parameter file.
     pub fn read(path: &Path) -> Result<ServoParams, ActuatorError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path)
+        let text = twinloop_io::input::read_to_string(path)
             .map_err(|e| ActuatorError::new(&file, "", format!("cannot read: {e}")))?;
         Self::parse(&text, &file)
     }

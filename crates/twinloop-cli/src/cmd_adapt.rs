@@ -192,8 +192,8 @@ pub struct TrainArgs {
 }
 
 fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| CliError::io(path, e).context("--tipover"))?;
+    let text = twinloop_io::input::read_to_string(path)
+        .map_err(|e| CliError::io(path, e).context("--tipover"))?;
     serde_json::from_str(&text)
         .map_err(|e| CliError::new(format!("{}: {e}", path.display())).context("--tipover"))
 }
@@ -222,8 +222,8 @@ fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyR
     if let Some(path) = out {
         let text =
             serde_json::to_string_pretty(&*study).map_err(|e| CliError::new(e.to_string()))?;
-        std::fs::write(path, text + "\n")
-            .map_err(|e| CliError::io(path, e).context("--tipover"))?;
+        twinloop_io::output::write_atomic(path, text + "\n")
+            .map_err(|e| CliError::from(e).context("--tipover"))?;
     }
     Ok(*study)
 }
@@ -413,7 +413,8 @@ fn run_ann(
     let host = a.host.as_ref().ok_or_else(|| {
         CliError::new("--method ann needs --where LINK: the general location of the change is the network's input")
     })?;
-    let text = std::fs::read_to_string(net).map_err(|e| CliError::io(net, e).context("--net"))?;
+    let text = twinloop_io::input::read_to_string(net)
+        .map_err(|e| CliError::io(net, e).context("--net"))?;
     let model = AnnModel::from_json(&text)
         .map_err(|e| CliError::new(format!("{}: {e}", net.display())).context("--net"))?;
     let r = adapt_ann(prior, tip, &model, host, a.total_mass).map_err(where_flag)?;
@@ -511,8 +512,8 @@ fn run_train(a: TrainArgs) -> CliResult {
         )?;
         bar.finish_and_clear();
     }
-    std::fs::write(&a.out, model.to_json())
-        .map_err(|e| CliError::io(&a.out, e).context("--out"))?;
+    twinloop_io::output::write_atomic(&a.out, model.to_json())
+        .map_err(|e| CliError::from(e).context("--out"))?;
     report.files.push(a.out.display().to_string());
     if let Some(p) = &a.report {
         report.files.push(p.display().to_string());

@@ -184,7 +184,7 @@ fn mm(v: [f64; 3]) -> String {
 
 fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<(), CliError> {
     let text = serde_json::to_string_pretty(v).map_err(|e| CliError::new(e.to_string()))?;
-    std::fs::write(path, text + "\n").map_err(|e| CliError::io(path, e))
+    Ok(twinloop_io::output::write_atomic(path, text + "\n")?)
 }
 
 /// The tip-over in 3D (`replay.html` in `dir`, beside the report): the robot's

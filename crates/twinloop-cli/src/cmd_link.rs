@@ -306,8 +306,8 @@ fn scan(a: &ScanArgs) -> CliResult {
     emit(&out, a.json.as_ref(), &v)?;
     if let (Some(path), Some(robot)) = (&a.out, &a.robot) {
         let d = twinloop_loop::draft_profile::draft(&found, robot)?;
-        std::fs::write(path, &d.toml)
-            .map_err(|e| CliError::new(format!("--out {}: {e}", path.display())))?;
+        twinloop_io::output::write_atomic(path, &d.toml)
+            .map_err(|e| CliError::from(e).context("--out"))?;
         for n in &d.notes {
             eprintln!("guessed: {n}");
         }
@@ -447,6 +447,13 @@ fn read(a: &ReadArgs) -> CliResult {
 }
 
 fn record(a: &RecordArgs) -> CliResult {
+    // The rows it will write: --rate a second (--rate 0: taken as 1 kHz).
+    let rate = if a.rate > 0.0 { a.rate } else { 1000.0 };
+    crate::bounds::steps(
+        a.duration,
+        1.0 / rate,
+        &format!("--duration {} s at {rate} rows/s", a.duration),
+    )?;
     let mapping = a.map.as_deref().map(RobotMapping::resolve).transpose()?;
     let default_port = mapping.as_ref().and_then(|m| m.port.clone());
     let mut c = open_client(&a.port, default_port.as_deref())?;
@@ -483,13 +490,13 @@ fn record(a: &RecordArgs) -> CliResult {
     if let Some(live) = &live {
         eprintln!("{}", live.summary());
     }
-    let finished = writer.finish();
     let nothing_measured = rec.link_error.is_none()
         && (1..=FIRST_CYCLES).contains(&rec.rows)
         && rec.failures.iter().all(|&f| f == rec.rows);
     if nothing_measured {
-        // Nothing was measured: a file of NaN must not look like a recording.
-        let _ = std::fs::remove_file(&a.out);
+        // Nothing was measured: a file of NaN must not look like a recording, and an
+        // older recording of the same name stays as it was.
+        writer.discard();
         return Err(CliError::new(format!(
             "no servo of the mapping answered in the first {} cycles (ids {}); \
              check --map, the port and the baud rate (`twinloop link scan --port ...` \
@@ -498,6 +505,7 @@ fn record(a: &RecordArgs) -> CliResult {
             ids.join(", ")
         )));
     }
+    let finished = writer.finish();
     let mut summary = format!(
         "{} rows in {:.3} s ({:.1} reads/s) written to {}",
         rec.rows,

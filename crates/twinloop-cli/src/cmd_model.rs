@@ -717,7 +717,7 @@ fn export_servos(
     }
     if let Some(out) = mjcf {
         let text = twinloop_actuator::mujoco::mjcf_fragment(&joints, params.servo.name(), &m);
-        std::fs::write(out, text).map_err(|e| CliError::io(out, e))?;
+        twinloop_io::output::write_atomic(out, text)?;
     }
     Ok(())
 }

@@ -481,6 +481,8 @@ fn serve_pty<B: twinloop_link::VirtualServoBackend>(
     let mut pty = NoisyTransport::new(pty, a.line_noise, a.seed);
     let path = pty.inner.path().to_path_buf();
     if let Some(link) = &a.link {
+        // Only an old link is replaced, never a file (checked again: it may have appeared).
+        crate::outputs::check_pty_link(link)?;
         let _ = std::fs::remove_file(link);
         std::os::unix::fs::symlink(&path, link).map_err(|e| {
             CliError::new(format!(
@@ -498,8 +500,10 @@ fn serve_pty<B: twinloop_link::VirtualServoBackend>(
         ..*options
     };
     let r = serve_maybe_noisy(bus, &mut pty, &options, &stop);
-    if let Some(link) = &a.link {
-        let _ = std::fs::remove_file(link);
+    if let Some(link) = &a.link
+        && std::fs::read_link(link).is_ok_and(|to| to == path)
+    {
+        let _ = std::fs::remove_file(link); // ours: a link to this pty
     }
     tell_noise(&pty, a.seed);
     r.map_err(|e| CliError::new(format!("{}: {e}", path.display())))?;

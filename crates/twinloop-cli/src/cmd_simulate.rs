@@ -120,6 +120,11 @@ pub fn run(a: SimulateArgs) -> CliResult {
     if a.hold && a.trajectory.is_some() {
         return Err(CliError::new("--hold and --trajectory exclude each other"));
     }
+    // Bounded before any work: a second of simulation at --dt, and --duration.
+    crate::bounds::steps(1.0, a.dt, &format!("one second at --dt {} s", a.dt))?;
+    if let Some(d) = a.duration {
+        crate::bounds::steps(d, a.dt, &format!("--duration {d} s at --dt {} s", a.dt))?;
+    }
     let (mut robot, _) = load_description(&a.robot)?;
     a.added.apply(&mut robot)?;
     let mut sim = standing_simulator(&robot, a.dt, a.servo)?;
@@ -138,6 +143,26 @@ pub fn run(a: SimulateArgs) -> CliResult {
     let duration = a
         .duration
         .unwrap_or_else(|| goals.as_ref().map_or(2.0, Goals::end));
+    let what = match (&a.duration, &goals) {
+        (None, Some(g)) => {
+            let first = g.t.first().copied().unwrap_or(0.0);
+            format!(
+                "{}: the last goal, t = {} s, at --dt {} s{}",
+                a.trajectory
+                    .as_ref()
+                    .map_or(String::new(), |p| p.display().to_string()),
+                g.end(),
+                a.dt,
+                if first > 1e6 {
+                    format!(" (its times start at {first} s: Unix times? they count from 0)")
+                } else {
+                    String::new()
+                }
+            )
+        }
+        _ => format!("--duration {duration} s at --dt {} s", a.dt),
+    };
+    crate::bounds::steps(duration, a.dt, &what)?;
     let cols = record_columns(&sim);
     let mut live = live_view(&a, &robot, &sim)?;
     record(&a, duration, &mut sim, goals.as_ref(), &cols, live.as_mut())?;

@@ -65,7 +65,8 @@ pub fn run(args: ViewArgs) -> CliResult {
     if let Some(out) = &args.export {
         let html =
             twinloop_view::export_html(&content).map_err(|e| CliError::new(e.to_string()))?;
-        std::fs::write(out, html).map_err(|e| CliError::io(out, e).context("--export"))?;
+        twinloop_io::output::write_atomic(out, html)
+            .map_err(|e| CliError::from(e).context("--export"))?;
         common::print(&format!("wrote {}\n", out.display()));
         return Ok(Outcome::Ok);
     }

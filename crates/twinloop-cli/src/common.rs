@@ -73,7 +73,9 @@ pub fn write_json<T: serde::Serialize + ?Sized>(target: &Path, value: &T) -> Res
         print(&text);
         Ok(())
     } else {
-        std::fs::write(target, text).map_err(|e| CliError::io(target, e).context("--json"))
+        Ok(twinloop_io::output::write_atomic(target, text)
+            .map_err(CliError::from)
+            .map_err(|e| e.context("--json"))?)
     }
 }
 
@@ -102,7 +104,13 @@ pub fn parse_args<C: clap::Parser>() -> C {
         c.allow_negative_numbers(true)
             .mut_subcommands(allow_negative)
     }
-    let matches = allow_negative(C::command()).get_matches();
+    let cli = allow_negative(C::command());
+    let matches = cli.clone().get_matches();
+    // The outputs are checked before any work (crate::outputs): exit 2, one line.
+    if let Err(e) = crate::outputs::check(&cli, &matches) {
+        eprintln!("error: {e}");
+        std::process::exit(2);
+    }
     C::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
 }
 
@@ -165,10 +173,15 @@ pub fn count(s: &str) -> Result<usize, String> {
         .trim()
         .parse()
         .map_err(|_| format!("\"{s}\" is not a whole number"))?;
-    if n >= 1 {
+    if (1..=crate::bounds::MAX_COUNT).contains(&n) {
         Ok(n)
-    } else {
+    } else if n == 0 {
         Err(format!("{n} is out of range: a count >= 1 is needed"))
+    } else {
+        Err(format!(
+            "{n} is more than the {} one command does (crate::bounds)",
+            crate::bounds::MAX_COUNT
+        ))
     }
 }
 

@@ -6,6 +6,7 @@
 //! `error: ...` and picks the exit code (see `error.rs`).
 
 mod adapt_text;
+mod bounds;
 mod bus_args;
 mod cmd_adapt;
 mod cmd_bench;
@@ -27,6 +28,7 @@ mod error;
 mod gait_args;
 mod limb;
 mod live_view;
+mod outputs;
 mod progress;
 mod replay3d;
 mod residual_text;

@@ -326,7 +326,7 @@ fn export(spec: &str, tables: &[(PathBuf, Table)], out: &Path) -> Result<(), Cli
         live: None,
     };
     let html = twinloop_view::export_html(&content).map_err(|e| CliError::new(e.to_string()))?;
-    std::fs::write(out, html).map_err(|e| CliError::io(out, e))
+    Ok(twinloop_io::output::write_atomic(out, html)?)
 }
 
 /// The 3D replay of a `--report` page about a motion: `csvs` (the first drawn

@@ -11,6 +11,7 @@
 //! `every_command_has_bad_input_cases` fails for a command with no row in [`CASES`]:
 //! a new command gets its cases by adding rows to the table (placeholders below).
 
+use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::OnceLock;
@@ -403,6 +404,31 @@ fn make_fixtures(dir: &Path) {
     let goals = std::fs::read_to_string(repo().join("examples/km20_goals.csv")).unwrap();
     write(dir, "goals.csv", &goals);
     write(dir, "goals_deg.csv", &in_degrees(&goals));
+    // Goal times as Unix epoch seconds: t + 1.7e9.
+    let epoch: String = goals
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match l.split_once(',') {
+            Some((t, rest)) if i > 0 => {
+                format!("{},{rest}\n", t.parse::<f64>().unwrap() + 1.7e9)
+            }
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    write(dir, "goals_epoch.csv", &epoch);
+    write(
+        dir,
+        "include_zero.xml",
+        "<mujoco><include file=\"/dev/zero\"/><worldbody><body name=\"b\"><freejoint/>\
+         <geom size=\"0.1\" mass=\"1\"/></body></worldbody></mujoco>\n",
+    );
+    write(
+        dir,
+        "replicate.xml",
+        "<mujoco><worldbody><body name=\"b\"><freejoint/><geom size=\"0.1\" mass=\"1\"/>\
+         <replicate count=\"100000\" offset=\"0.0001 0 0\"><body name=\"r\"><joint/>\
+         <geom size=\"0.01\" mass=\"0.001\"/></body></replicate></body></worldbody></mujoco>\n",
+    );
     let (gh, gb) = goals.split_once('\n').unwrap();
     write(
         dir,
@@ -464,6 +490,8 @@ fn fill(case: &Case, out: &Path) -> Vec<String> {
             "{trunc_urdf}" => file("trunc.urdf"),
             "{csv_as_urdf}" => file("csv_as.urdf"),
             "{gone}" => file("gone"),
+            "{include_zero}" => file("include_zero.xml"),
+            "{replicate}" => file("replicate.xml"),
             "{json_bad}" => file("bad.json"),
             "{bad_toml}" => file("bad.toml"),
             "{plant}" => file("plant.toml"),
@@ -498,6 +526,11 @@ fn wait_for(child: &mut Child, limit: Duration) -> Option<i32> {
 
 /// What is wrong with how one case ended, if anything.
 fn check(case: &Case, k: usize) -> Option<String> {
+    check_within(case, &format!("{k}"), LIMIT)
+}
+
+/// [`check`] with its own time limit; `k` names the case's output and stderr files.
+fn check_within(case: &Case, k: &str, limit: Duration) -> Option<String> {
     let out = fixtures().dir.join(format!("out-{k}"));
     let args = fill(case, &out);
     let mut full: Vec<String> = case.cmd.split_whitespace().map(String::from).collect();
@@ -510,12 +543,12 @@ fn check(case: &Case, k: usize) -> Option<String> {
         .stderr(std::fs::File::create(&err_path).unwrap())
         .spawn()
         .unwrap();
-    let code = wait_for(&mut child, LIMIT);
+    let code = wait_for(&mut child, limit);
     let err = std::fs::read_to_string(&err_path).unwrap_or_default();
     let what = format!("`twinloop {}`", full.join(" "));
     let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
     let problem = if code.is_none() {
-        format!("still running after {} s", LIMIT.as_secs())
+        format!("still running after {:.1} s", limit.as_secs_f64())
     } else if err.contains("panicked") {
         format!(
             "panicked: {}",
@@ -721,4 +754,212 @@ fn answers_that_explain_themselves() {
         help.contains("Pinocchio") && help.contains("q:base.qw = 1"),
         "{help}"
     );
+}
+
+/// Issue 29, class 2: work that never ends or eats the machine. A step count, a count,
+/// a file or a description that would make a command run for hours, fill the memory
+/// or never end is refused before the work starts: exit 2, one line naming the option
+/// or the file and the bound, in well under a second each (the bound: 10 million time
+/// steps or rows, a million of anything counted, regular files of bounded size).
+#[rustfmt::skip]
+const UNBOUNDED: &[Case] = &[
+    case("simulate", "--robot {km20} --dt 1e-300 --out {out}", "--dt&&time steps"),
+    case("simulate", "--robot {km20} --duration 1e12 --out {out}", "--duration&&time steps"),
+    // Goal times given as Unix epoch seconds: 1.7e12 steps of 1 ms.
+    case("simulate", "--robot {km20} --trajectory {goals_epoch} --out {out}", "goals_epoch.csv&&Unix"),
+    case("gait sequence", "--cycles 4000000000 --out {out}", "--cycles&&1000000"),
+    case("gait sequence", "--cycles 1000000 --dt 0.001 --out {out}", "--cycles&&ticks"),
+    case("experiment static-poses", "--robot {km20} --count 4000000000 --out {out}", "--count&&1000000"),
+    case("adapt train", "--robot {km20} --samples 4000000000 --out {out}", "--samples&&1000000"),
+    case("experiment squat", "--robot {km20} --duration 1e12 --out {out}", "--duration&&time steps"),
+    case("experiment compliant-walk", "--robot {km20} --duration 1e12 --out {out}", "--duration&&time steps"),
+    case("link record", "--port {gone} --map builtin:km20 --duration 1e12 --out {out}", "--duration&&time steps"),
+    // A control period shorter than the simulator's step: rows at t = 0 forever.
+    case("experiment lean", "--robot {km20} --dt 0.0004 --out {out}", "--dt 0.0004"),
+    // Only regular files are read: /dev/zero never ends.
+    case("model info", "/dev/zero", "/dev/zero&&not a regular file"),
+    case("simulate", "--robot {km20} --trajectory /dev/zero --out {out}", "/dev/zero&&not a regular file"),
+    case("model info", "{include_zero}", "include_zero.xml&&/dev/zero"),
+];
+
+#[test]
+fn work_that_would_never_end_is_refused_at_once_naming_its_bound() {
+    // Well under a second each on an idle machine; the limit leaves room for CI's load.
+    let limit = Duration::from_secs(3);
+    let failures: Vec<String> = UNBOUNDED
+        .iter()
+        .enumerate()
+        .filter_map(|(k, c)| check_within(c, &format!("bound-{k}"), limit))
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Loaders are linear in their input: a 20 000-link chain (13.5 s before issue 29,
+/// quadratic in the tree walks) and 100 000 replicated bodies load in seconds.
+#[test]
+fn a_long_chain_and_many_replicas_load_in_linear_time() {
+    let dir = fixtures().dir.join("chain");
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 20_000;
+    let inertial = "<inertial><mass value=\"0.001\"/><inertia ixx=\"1e-6\" iyy=\"1e-6\" \
+                    izz=\"1e-6\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>";
+    let mut urdf = format!("<robot name=\"chain\"><link name=\"l0\">{inertial}</link>\n");
+    for i in 1..n {
+        urdf += &format!(
+            "<link name=\"l{i}\">{inertial}</link><joint name=\"j{i}\" type=\"revolute\">\
+             <parent link=\"l{}\"/><child link=\"l{i}\"/><origin xyz=\"0 0 0.00001\"/>\
+             <axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>\
+             </joint>\n",
+            i - 1
+        );
+    }
+    urdf += "</robot>\n";
+    let chain = dir.join("chain.urdf");
+    std::fs::write(&chain, urdf).unwrap();
+    let replicas = fixtures().dir.join("replicate.xml");
+    for file in [&chain, &replicas] {
+        let start = Instant::now();
+        let o = Command::new(bin())
+            .args(["model", "info"])
+            .arg(file)
+            .output()
+            .unwrap();
+        let took = start.elapsed();
+        assert!(
+            o.status.success(),
+            "{}: {}",
+            file.display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        // Seconds on an idle machine (0.7 s of CPU each); quadratic, it was minutes.
+        assert!(
+            took < Duration::from_secs(30),
+            "{}: {took:?}",
+            file.display()
+        );
+    }
+}
+
+/// Issue 29, class 1: a user's files are never destroyed. An output that is a device,
+/// a FIFO, one of the command's own inputs, in a folder that does not exist, or (for
+/// `serve --link`) a file that is not a link is refused before any work: exit 2, one
+/// line naming the option and the path, the file as it was. `{victim:NAME}` is a copy of
+/// fixture NAME in the case's own folder (the same path wherever it appears), `{fifo}` a
+/// FIFO there, `{nodir}` a folder that does not exist.
+#[rustfmt::skip]
+const DESTROYS: &[Case] = &[
+    case("model export", "{km20} --out /dev/null", "--out /dev/null&&device"),
+    case("simulate", "--robot {km20} --duration 0.01 --out {fifo}", "--out&&FIFO"),
+    case("gait sequence", "--out {fifo}", "--out&&FIFO"),
+    case("simulate", "--robot {km20} --trajectory {victim:goals.csv} --out {victim:goals.csv}", "--out&&--trajectory"),
+    case("adapt", "--robot {km20} --tipover {victim:bad.json} --total-mass 3.6 --json {victim:bad.json}", "--json&&--tipover"),
+    case("model export", "{victim:km20.urdf} --out {victim:km20.urdf}", "--out&&ROBOT"),
+    case("dynamics inverse", "--robot {km20} --trajectory {victim:state.csv} --out {victim:state.csv}", "--out&&--trajectory"),
+    case("experiment tipover", "--robot {km20} --json {nodir}/tip.json", "--json&&does not exist"),
+    case("model export", "{km20} --out {nodir}/km20.urdf", "--out&&does not exist"),
+    case("validate residual", "--robot {victim:km20.urdf} --motion {state} --out {victim:km20.urdf}", "--out&&--robot"),
+    case("serve", "--robot {km20} --link {victim:goals.csv}", "--link&&goals.csv"),
+    // No servo answers (the port is gone): the older recording stays.
+    case("link record", "--port {gone} --map builtin:km20 --duration 1 --out {victim:state.csv}", "gone"),
+];
+
+/// A case's arguments with `{victim:NAME}`, `{fifo}` and `{nodir}` made in `dir`.
+fn fill_victims(case: &Case, dir: &Path) -> (Case, Vec<(PathBuf, Vec<u8>)>) {
+    let mut victims = Vec::new();
+    let mut args = Vec::new();
+    for a in case.args.split_whitespace() {
+        let word = if let Some(name) = a.strip_prefix("{victim:").and_then(|r| r.strip_suffix('}'))
+        {
+            let p = dir.join(name);
+            if !p.exists() {
+                std::fs::copy(fixtures().dir.join(name), &p).unwrap();
+                victims.push((p.clone(), std::fs::read(&p).unwrap()));
+            }
+            p.to_str().unwrap().to_string()
+        } else if a == "{fifo}" {
+            let p = dir.join("fifo");
+            let made = Command::new("mkfifo").arg(&p).status().unwrap();
+            assert!(made.success(), "mkfifo");
+            p.to_str().unwrap().to_string()
+        } else if let Some(rest) = a.strip_prefix("{nodir}") {
+            format!("{}{rest}", dir.join("no/such/folder").display())
+        } else {
+            a.to_string()
+        };
+        args.push(word);
+    }
+    // The filled words go back through `fill` (which splits at spaces): leak them, a test.
+    let args: &'static str = Box::leak(args.join(" ").into_boxed_str());
+    (
+        Case {
+            cmd: case.cmd,
+            args,
+            names: case.names,
+        },
+        victims,
+    )
+}
+
+#[test]
+fn outputs_that_would_destroy_a_users_file_are_refused_and_the_file_kept() {
+    let limit = Duration::from_secs(10);
+    let mut failures = Vec::new();
+    for (k, c) in DESTROYS.iter().enumerate() {
+        let dir = fixtures().dir.join(format!("destroys-{k}"));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let (filled, victims) = fill_victims(c, &dir);
+        if let Some(f) = check_within(&filled, &format!("destroys-{k}"), limit) {
+            failures.push(f);
+        }
+        for (p, before) in victims {
+            let now = std::fs::symlink_metadata(&p);
+            if !now.as_ref().is_ok_and(|m| m.is_file()) || std::fs::read(&p).unwrap() != before {
+                failures.push(format!(
+                    "`twinloop {} {}`: {} was changed",
+                    c.cmd,
+                    filled.args,
+                    p.display()
+                ));
+            }
+        }
+        if c.args.contains("{fifo}") && !dir.join("fifo").metadata().unwrap().file_type().is_fifo()
+        {
+            failures.push(format!(
+                "`twinloop {} {}`: the FIFO was replaced",
+                c.cmd, filled.args
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A symlink as an output is written through (what a shell's `>` does): the link
+/// stays a link and its target gets the new content.
+#[test]
+fn an_output_through_a_symlink_keeps_the_link() {
+    let dir = fixtures().dir.join("symlink");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let (target, link) = (dir.join("run-42.urdf"), dir.join("latest.urdf"));
+    std::fs::write(&target, "old").unwrap();
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let o = Command::new(bin())
+        .args(["model", "export", "builtin:km20", "--out"])
+        .arg(&link)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert!(std::fs::read_to_string(&target).unwrap().contains("<robot"));
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "no partial file left: {names:?}");
 }

@@ -153,17 +153,27 @@ impl Description {
                 )
             }));
         }
-        // Every link must reach the root: otherwise it sits on a cycle.
+        // Every link must reach the root: otherwise it sits on a cycle. Each walk up
+        // stops at a link already known to reach it, so every link is walked once
+        // (a walk from every link to the root is quadratic on a long chain).
+        let mut reaches = vec![false; self.links.len()];
+        let mut path = Vec::new();
         for start in 0..self.links.len() {
             let mut at = start;
-            let mut steps = 0;
-            while let Some(p) = parent_of[at] {
-                at = p;
-                steps += 1;
-                if steps > self.links.len() {
-                    return Err(DescriptionError::new("the joints form a cycle")
-                        .at_element(format!("<link name=\"{}\">", self.links[start].name)));
+            path.clear();
+            while !reaches[at] {
+                path.push(at);
+                match parent_of[at] {
+                    Some(p) if path.len() <= self.links.len() => at = p,
+                    Some(_) => {
+                        return Err(DescriptionError::new("the joints form a cycle")
+                            .at_element(format!("<link name=\"{}\">", self.links[start].name)));
+                    }
+                    None => break,
                 }
+            }
+            for &l in &path {
+                reaches[l] = true;
             }
         }
         Ok(())

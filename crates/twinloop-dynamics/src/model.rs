@@ -165,16 +165,14 @@ fn link_inertia(link: &twinloop_description::Link) -> Inertia {
 /// is still to be made).
 type Pending = (usize, usize, Se3, Option<usize>);
 
-/// Index of a link of a validated description.
-fn link_ix(robot: &Description, name: &str) -> usize {
-    robot.link_index(name).expect("validated")
-}
-
-/// The joints below each link, in file order.
-fn child_joints(robot: &Description) -> Vec<Vec<usize>> {
-    let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
+/// The joints below each link, in file order, each with its child link: from one
+/// index of the links by name (a search per joint is quadratic in the robot's size).
+fn child_joints(robot: &Description) -> Vec<Vec<(usize, usize)>> {
+    let index = robot.links_by_name();
+    let ix = |name: &str| *index.get(name).expect("validated");
+    let mut children: Vec<Vec<(usize, usize)>> = vec![Vec::new(); robot.links.len()];
     for (j, joint) in robot.joints.iter().enumerate() {
-        children[link_ix(robot, &joint.parent)].push(j);
+        children[ix(&joint.parent)].push((j, ix(&joint.child)));
     }
     children
 }
@@ -184,15 +182,17 @@ fn child_joints(robot: &Description) -> Vec<Vec<usize>> {
 /// dropped.
 fn find_base_link(
     robot: &Description,
-    children: &[Vec<usize>],
+    children: &[Vec<(usize, usize)>],
 ) -> Result<(usize, Option<usize>), DescriptionError> {
     let root = robot
         .root_link()
         .ok_or_else(|| DescriptionError::new("no single root link"))?;
-    let root = link_ix(robot, root);
+    let root = robot.link_index(root).expect("validated");
     let root_children = &children[root];
-    if root_children.len() == 1 && robot.joints[root_children[0]].kind == JointKind::Floating {
-        let fj = &robot.joints[root_children[0]];
+    if let [(j, child)] = root_children[..]
+        && robot.joints[j].kind == JointKind::Floating
+    {
+        let fj = &robot.joints[j];
         if !fj.origin.is_identity() {
             // q would then not be the base link's pose; refuse rather than mislead.
             return Err(DescriptionError::new(
@@ -201,7 +201,7 @@ fn find_base_link(
             )
             .at_element(format!("<joint name=\"{}\">", fj.name)));
         }
-        return Ok((link_ix(robot, &fj.child), Some(root)));
+        return Ok((child, Some(root)));
     }
     Ok((root, None))
 }
@@ -229,14 +229,13 @@ fn joint_type(kind: JointKind, axis: &Vector3<f64>) -> JointType {
 /// children are visited in file order.
 fn push_child_links(
     robot: &Description,
-    children: &[usize],
+    children: &[(usize, usize)],
     body: usize,
     placement: Se3,
     stack: &mut Vec<Pending>,
 ) -> Result<(), DescriptionError> {
-    for &j in children.iter().rev() {
+    for &(j, child) in children.iter().rev() {
         let joint = &robot.joints[j];
-        let child = link_ix(robot, &joint.child);
         let origin = placement * pose_to_se3(&joint.origin);
         let here = || format!("<joint name=\"{}\">", joint.name);
         match joint.kind {
@@ -351,7 +350,7 @@ impl Model {
     fn add_bodies(
         &mut self,
         robot: &Description,
-        children: &[Vec<usize>],
+        children: &[Vec<(usize, usize)>],
         base_link: usize,
         link_info: &mut [Option<LinkInfo>],
     ) -> Result<(), DescriptionError> {

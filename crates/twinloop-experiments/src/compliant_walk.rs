@@ -1237,20 +1237,15 @@ fn foot_centre_offset(
 /// Writes the dataset as CSV with columns `t, xr, zr, x, z, phase` (phase an integer:
 /// 0 single, 1 double support; numbers in shortest round-trip form).
 pub fn write_csv(path: &std::path::Path, rows: &[DatasetRow]) -> Result<(), ExperimentError> {
-    use std::io::Write as _;
-    let fail =
-        |e: std::io::Error| ExperimentError(format!("{}: cannot write: {e}", path.display()));
-    let file = std::fs::File::create(path)
-        .map_err(|e| ExperimentError(format!("{}: cannot create: {e}", path.display())))?;
-    let mut out = std::io::BufWriter::new(file);
-    writeln!(out, "t,xr,zr,x,z,phase").map_err(fail)?;
+    use std::fmt::Write as _;
+    let mut text = String::from("t,xr,zr,x,z,phase\n");
     for r in rows {
-        writeln!(
-            out,
+        let _ = writeln!(
+            text,
             "{:?},{:?},{:?},{:?},{:?},{}",
             r.t, r.xr, r.zr, r.x, r.z, r.phase
-        )
-        .map_err(fail)?;
+        );
     }
-    out.flush().map_err(fail)
+    // Beside the file, renamed when complete: a failure keeps the old file.
+    twinloop_io::output::write_atomic(path, text).map_err(|e| ExperimentError(e.to_string()))
 }

@@ -303,7 +303,17 @@ fn command_loop<R: Robot + ?Sized>(
             return Ok(record);
         }
         robot.command_positions(goals)?;
+        let before = robot.time();
         robot.advance(cfg.period_s)?;
+        if robot.time() <= before {
+            // A period shorter than the robot's step (a simulator rounds it to no step):
+            // the lean would write rows at one time forever.
+            return Err(RobotError::new(format!(
+                "the robot's clock did not move over a control period of {} s (shorter than \
+                 its time step?); give a longer period",
+                cfg.period_s
+            )));
+        }
         robot.read(&mut st)?;
         let efforts = st.efforts.as_deref().ok_or_else(|| {
             RobotError::new("the lean experiment needs joint torques; the robot reports none")

@@ -332,8 +332,20 @@ fn samples_for(o: &SequenceOptions) -> Result<usize, GaitError> {
     if o.cycles == 0 {
         return Err(GaitError("cycles must be at least 1".into()));
     }
+    let ticks = o.cycles as f64 * o.cycle_period / o.sample_time;
+    if ticks > MAX_TICKS {
+        return Err(GaitError(format!(
+            "cycles: {} cycles of {} s every {} s are {ticks:.3e} ticks, more than the {MAX_TICKS:.0e} \
+             one sequence has",
+            o.cycles, o.cycle_period, o.sample_time
+        )));
+    }
     Ok((o.cycles as f64 * o.cycle_period / o.sample_time).round() as usize)
 }
+
+/// The most ticks one sequence has: 10 million (the CLI's bound on the rows of one
+/// command, docs/architecture.md), so a huge count or a tiny step is refused at once.
+pub const MAX_TICKS: f64 = 1e7;
 
 fn check_timing(o: &SequenceOptions) -> Result<(), GaitError> {
     if !(o.sample_time.is_finite() && o.sample_time > 0.0) {
@@ -352,6 +364,12 @@ fn check_timing(o: &SequenceOptions) -> Result<(), GaitError> {
         return Err(GaitError(format!(
             "amplitude must be between 0 and 1.5 (1 = the seed's offsets), got {}",
             o.amplitude
+        )));
+    }
+    if o.cycle_period / o.sample_time > MAX_TICKS {
+        return Err(GaitError(format!(
+            "sample_time {} s is more than {MAX_TICKS:.0e} ticks per cycle of {} s",
+            o.sample_time, o.cycle_period
         )));
     }
     // Every window must hold at least one tick of every cycle, or its stage is skipped.

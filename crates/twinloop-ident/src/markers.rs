@@ -114,7 +114,7 @@ pub fn parse_markers(text: &str, model: &Model) -> Result<Vec<Marker>, IdentErro
 
 /// Read a marker set file.
 pub fn read_markers(path: &Path, model: &Model) -> Result<Vec<Marker>, IdentError> {
-    let text = std::fs::read_to_string(path)
+    let text = twinloop_io::input::read_to_string(path)
         .map_err(|e| IdentError::new(format!("cannot read: {e}")).in_file(path))?;
     parse_markers(&text, model).map_err(|e| e.in_file(path))
 }

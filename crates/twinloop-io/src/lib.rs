@@ -7,8 +7,14 @@
 //! (given the model's coordinate names, so this crate needs no dynamics).
 //! Numbers are written with Rust's shortest round-trip formatting, so a value read
 //! back is bit-for-bit the value computed.
+//!
+//! Every file a command writes goes through [`output`] (checked before any work,
+//! written beside its place and renamed when complete), and input files are read
+//! through [`input`] (regular files only, with a size bound).
 
 mod columns;
+pub mod input;
+pub mod output;
 mod table;
 
 pub use columns::{Quantity, StateColumns, nearest};

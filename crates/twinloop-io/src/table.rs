@@ -1,6 +1,6 @@
+use crate::output::{AtomicFile, Output};
 use std::fmt;
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// An error in a data file: names the file, the line and the column at fault.
@@ -71,8 +71,7 @@ impl Table {
 
     pub fn read(path: impl AsRef<Path>) -> Result<Table, IoError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| IoError::new(format!("cannot read: {e}")).in_file(path))?;
+        let text = crate::input::read_text(path)?;
         let mut t = Table::parse(&text).map_err(|e| e.in_file(path))?;
         t.path = Some(path.to_path_buf());
         Ok(t)
@@ -211,52 +210,42 @@ pub fn format_f64(x: f64) -> String {
     format!("{x:?}")
 }
 
-/// A CSV writer that writes rows as they come.
+/// A CSV writer that writes rows as they come, through [`crate::output`].
 ///
 /// An output ([`CsvWriter::create`]) goes to `FILE.partial` beside the file asked for,
 /// renamed to it by [`CsvWriter::finish`]: a command that fails half-way leaves no file
-/// that looks complete (the partial one is removed when the writer is dropped
-/// unfinished; a process killed outright leaves it under its `.partial` name).
+/// that looks complete and the old file as it was (the partial one is removed when the
+/// writer is dropped unfinished; a process killed outright leaves it under its
+/// `.partial` name).
 ///
-/// A recording ([`CsvWriter::recording`]) is written under its own name and flushed at
-/// every row, and is kept whatever happens: the rows read from a robot are never lost,
-/// and a viewer can follow the file as it grows.
+/// A recording ([`CsvWriter::recording`]) is flushed at every row into `FILE.partial`
+/// (a viewer can follow it as it grows) and given its name however the run ends, when
+/// it holds a row: the rows read from a robot are never lost, and a run that read
+/// nothing leaves an older recording of the same name in place.
 pub struct CsvWriter {
-    path: PathBuf,
-    partial: PathBuf,
-    out: BufWriter<File>,
+    out: AtomicFile,
     ncols: usize,
-    /// Written under its own name, flushed at every row, never removed.
-    recording: bool,
     line: String,
-    finished: bool,
 }
 
 impl CsvWriter {
     /// An output file (see the type's documentation).
     pub fn create(path: &Path, columns: &[String]) -> Result<CsvWriter, IoError> {
-        let mut partial = path.as_os_str().to_owned();
-        partial.push(".partial");
-        CsvWriter::open(path, PathBuf::from(partial), columns)
+        let out = AtomicFile::create(&Output::resolve("", path)?)?;
+        CsvWriter::open(out, columns)
     }
 
-    /// A recording: every row durable at once, the file kept even if the run fails.
+    /// A recording: every row on disk at once, the file kept even if the run fails.
     pub fn recording(path: &Path, columns: &[String]) -> Result<CsvWriter, IoError> {
-        CsvWriter::open(path, path.to_path_buf(), columns)
+        let out = AtomicFile::recording(&Output::resolve("", path)?)?;
+        CsvWriter::open(out, columns)
     }
 
-    fn open(path: &Path, target: PathBuf, columns: &[String]) -> Result<CsvWriter, IoError> {
-        let partial_is_path = target == path;
-        let file = File::create(&target)
-            .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(path))?;
+    fn open(out: AtomicFile, columns: &[String]) -> Result<CsvWriter, IoError> {
         let mut w = CsvWriter {
-            path: path.to_path_buf(),
-            partial: target,
-            out: BufWriter::new(file),
+            out,
             ncols: columns.len(),
-            recording: partial_is_path,
             line: String::new(),
-            finished: false,
         };
         let header = columns.join(",");
         w.write_line(&header)?;
@@ -264,14 +253,8 @@ impl CsvWriter {
     }
 
     fn write_line(&mut self, s: &str) -> Result<(), IoError> {
-        let r = writeln!(self.out, "{s}").and_then(|_| {
-            if self.recording {
-                self.out.flush()
-            } else {
-                Ok(())
-            }
-        });
-        r.map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))
+        let r = writeln!(self.out, "{s}");
+        r.map_err(|e| self.out.error(e))
     }
 
     pub fn write_row(&mut self, row: &[f64]) -> Result<(), IoError> {
@@ -283,7 +266,7 @@ impl CsvWriter {
                 row.len(),
                 self.ncols
             ))
-            .in_file(&self.path));
+            .in_file(self.out.path()));
         }
         let mut line = std::mem::take(&mut self.line);
         line.clear();
@@ -299,25 +282,13 @@ impl CsvWriter {
         r
     }
 
-    /// Flush the rows and give the file its name.
-    pub fn finish(mut self) -> Result<(), IoError> {
-        self.out
-            .flush()
-            .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))?;
-        if !self.recording {
-            std::fs::rename(&self.partial, &self.path)
-                .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(&self.path))?;
-        }
-        self.finished = true;
-        Ok(())
+    /// Flush the rows, make them durable and give the file its name.
+    pub fn finish(self) -> Result<(), IoError> {
+        self.out.commit()
     }
-}
 
-impl Drop for CsvWriter {
-    fn drop(&mut self) {
-        // A recording (written under its own name) is never removed.
-        if !self.finished && !self.recording {
-            let _ = std::fs::remove_file(&self.partial);
-        }
+    /// Give up the file: nothing is written, an older file of the name stays.
+    pub fn discard(self) {
+        self.out.discard()
     }
 }

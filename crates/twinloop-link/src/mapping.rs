@@ -775,7 +775,7 @@ impl RobotMapping {
     /// folder (not the current one), so a profile works from anywhere.
     pub fn load(path: impl AsRef<Path>) -> Result<RobotMapping, MappingError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| MappingError {
+        let text = twinloop_io::input::read_to_string(path).map_err(|e| MappingError {
             file: path.display().to_string(),
             line: 0,
             column: 0,

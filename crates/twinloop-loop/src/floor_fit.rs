@@ -69,7 +69,8 @@ pub fn fit_floor(
     let err = |a: &[f64; 4]| sideways_mean(a) - measured_deg;
     // The bracket: a firmer floor where the replay tips later (error > 0), a softer
     // one where it tips earlier, each (log10 sink, error as weighted).
-    let (mut firm, mut soft): (Option<(f64, f64)>, Option<(f64, f64)>) = (None, None);
+    let mut firm: Option<(f64, f64)> = None;
+    let mut soft: Option<(f64, f64)> = None;
     let mut kept_side = 0i8;
     let mut x = start_m.log10().clamp(lo, hi);
     loop {

@@ -146,7 +146,7 @@ pub fn read_description(spec: &str) -> Result<(Description, Format), LoopError> 
         });
     }
     let path = Path::new(spec);
-    let format = std::fs::read_to_string(path)
+    let format = twinloop_io::input::read_to_string(path)
         .map(|t| sniff_format(&t))
         .unwrap_or(Format::Unknown);
     // A reader bug must not turn into a panic trace for the user: report it as

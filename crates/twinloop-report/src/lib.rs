@@ -159,7 +159,8 @@ impl Report {
     }
 
     pub fn write(&self, path: &Path) -> Result<(), String> {
-        std::fs::write(path, self.to_html())
-            .map_err(|e| format!("{}: cannot write the report: {e}", path.display()))
+        // Beside the file, renamed when complete (docs/architecture.md, "Outputs").
+        twinloop_io::output::write_atomic(path, self.to_html())
+            .map_err(|e| format!("cannot write the report: {e}"))
     }
 }

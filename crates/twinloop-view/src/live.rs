@@ -223,8 +223,11 @@ pub fn follow_csv(
     stop: &dyn Fn() -> bool,
 ) -> std::io::Result<()> {
     let poll = Duration::from_millis(2);
+    // A recording is written under its in-progress name until it ends
+    // (twinloop_io::output): follow that while it is there.
+    let growing = twinloop_io::output::in_progress(path);
     let file = loop {
-        match std::fs::File::open(path) {
+        match std::fs::File::open(&growing).or_else(|_| std::fs::File::open(path)) {
             Ok(f) => break f,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound && !stop() => {
                 std::thread::sleep(Duration::from_millis(50))

@@ -58,6 +58,12 @@ struct DatasetReport {
 }
 
 pub fn run(args: &CompliantWalkArgs) -> CliResult {
+    // 1 kHz samples, each --substeps simulation steps.
+    crate::bounds::steps(
+        (args.duration + args.settle) * args.substeps as f64,
+        1e-3,
+        &format!("--duration {} s at 1 kHz", args.duration),
+    )?;
     let (robot, _) = load_description(&args.robot)?;
     hinges_only(&robot, &args.robot, "the compliant walk")?;
     let config = WalkingConfig {

@@ -137,9 +137,21 @@ pub fn run(a: &LeanArgs) -> CliResult {
     hinges_only(&robot, spec, "the lean experiment")?;
     a.added.apply(&mut robot)?;
     let (mut sim, standing) = lean_simulator(&robot, a.compliance_slope)?;
+    if a.dt < sim.config.dt {
+        // The simulator cannot advance less than its step: rows at one time forever.
+        return Err(CliError::new(format!(
+            "--dt {} s is shorter than the simulator's step, {} s: give --dt {} or more",
+            a.dt, sim.config.dt, sim.config.dt
+        )));
+    }
     let tips = sagittal_tip_angles(&mut sim, &standing, &names)?;
     let order = sim.model.joint_names.clone();
     let cfg = configure(a, &sim.model, &order, &names, tips)?;
+    crate::bounds::steps(
+        cfg.duration_s(),
+        a.dt,
+        &format!("the lean of {:.0} s at --dt {} s", cfg.duration_s(), a.dt),
+    )?;
     let mut writer = lean_writer(a, &cfg)?;
     let mut buf = Vec::new();
     eprintln!(

@@ -56,6 +56,14 @@ pub struct SquatArgs {
 
 pub fn run(a: &SquatArgs) -> CliResult {
     check_noise(a.marker_noise, "--marker-noise")?;
+    crate::bounds::steps(
+        a.duration + 2.0 * a.rest,
+        1.0 / a.rate,
+        &format!(
+            "--duration {} s and --rest {} s at --rate {} Hz",
+            a.duration, a.rest, a.rate
+        ),
+    )?;
     let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
     hinges_only(&robot, &a.robot, "the squat experiment")?;
     let options = SquatOptions {

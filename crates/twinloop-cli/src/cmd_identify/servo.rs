@@ -91,7 +91,7 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         let p = datasheet::defaults(parse_servo(m, "--defaults")?, level);
         let out = a.out.as_ref().ok_or("--defaults needs --out FILE.toml")?;
         let text = p.to_toml("datasheet values (twinloop identify servo --defaults): docs/servo-models.md says where each comes from");
-        std::fs::write(out, text).map_err(|e| CliError::io(out, e))?;
+        twinloop_io::output::write_atomic(out, text)?;
         return Ok(Outcome::Ok);
     }
     let mut options = IdentifyOptions::default();
@@ -212,7 +212,7 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
             logs.len(),
             id.heldout_rms_mrad
         );
-        std::fs::write(out, id.params.to_toml(&comment)).map_err(|e| CliError::io(out, e))?;
+        twinloop_io::output::write_atomic(out, id.params.to_toml(&comment))?;
     }
     emit(&text(&id, seconds), a.json.as_ref(), &to_json(&id, seconds))?;
     Ok(Outcome::Ok)
@@ -372,8 +372,7 @@ fn run_group(
                 names(&id.chosen.per_servo),
                 f.heldout_rms_mrad
             );
-            std::fs::write(&path, f.params.to_toml(&comment))
-                .map_err(|e| CliError::io(&path, e))?;
+            twinloop_io::output::write_atomic(&path, f.params.to_toml(&comment))?;
             files.push(path);
         }
     }
@@ -607,7 +606,7 @@ fn limb_load<'a>(
     let mut load: Option<(Load, String)> = None;
     for p in paths {
         let file = p.display().to_string();
-        let text = std::fs::read_to_string(p).map_err(|e| CliError::io(p, e))?;
+        let text = twinloop_io::input::read_to_string(p).map_err(|e| CliError::io(p, e))?;
         let limb = crate::limb::Limb::from_log(&text, &file)?.ok_or_else(|| {
             CliError::new(format!(
                 "{file}: a bench log (no \"# limb:\" lines): give --load LOAD.toml"

@@ -19,7 +19,12 @@ fn se3(p: &Pose) -> Se3 {
 /// The whole robot's spatial inertia in the frame of its root link(s), at the
 /// zero configuration.
 fn whole_robot(robot: &Description) -> twinloop_spatial::Inertia {
-    let index = |name: &str| robot.link_index(name);
+    let links = robot.links_by_name();
+    let index = |name: &str| links.get(name).copied();
+    let mut children: std::collections::HashMap<&str, Vec<&crate::Joint>> = Default::default();
+    for j in &robot.joints {
+        children.entry(j.parent.as_str()).or_default().push(j);
+    }
     let mut total = twinloop_spatial::Inertia::ZERO;
     let mut seen = vec![false; robot.links.len()];
     let mut stack: Vec<(usize, Se3)> = robot
@@ -41,8 +46,11 @@ fn whole_robot(robot: &Description) -> twinloop_spatial::Inertia {
             );
             total += own.transformed(&(at * se3(&i.origin)));
         }
-        let name = &robot.links[l].name;
-        for j in robot.joints.iter().filter(|j| &j.parent == name) {
+        for j in children
+            .get(robot.links[l].name.as_str())
+            .into_iter()
+            .flatten()
+        {
             if let Some(c) = index(&j.child) {
                 stack.push((c, at * se3(&j.origin)));
             }

@@ -18,6 +18,7 @@
 use super::{Finding, Severity, Subject, codes, num};
 use crate::description::{Description, Pose};
 use nalgebra::{Matrix3, Vector3};
+use std::collections::HashMap;
 
 /// The largest extent, m, of any robot description: beyond it the lengths are
 /// millimetres (or centimetres).
@@ -50,11 +51,22 @@ fn link_frames(robot: &Description) -> Vec<Option<(Vector3<f64>, Matrix3<f64>)>>
     for &r in &stack {
         at[r] = Some((Vector3::zeros(), Matrix3::identity()));
     }
+    // Links and children by name, once: a search per link is quadratic in its size.
+    let index: HashMap<&str, usize> = robot
+        .links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (l.name.as_str(), i))
+        .collect();
+    let mut children: HashMap<&str, Vec<&crate::Joint>> = HashMap::new();
+    for j in &robot.joints {
+        children.entry(j.parent.as_str()).or_default().push(j);
+    }
     while let Some(l) = stack.pop() {
         let Some((p, r)) = at[l] else { continue };
-        let name = &robot.links[l].name;
-        for j in robot.joints.iter().filter(|j| &j.parent == name) {
-            if let Some(c) = robot.link_index(&j.child)
+        let name = robot.links[l].name.as_str();
+        for j in children.get(name).into_iter().flatten() {
+            if let Some(&c) = index.get(j.child.as_str())
                 && at[c].is_none()
             {
                 at[c] = Some((p + r * Vector3::from(j.origin.xyz), r * rot(&j.origin)));

@@ -45,8 +45,25 @@ fn collect(
                 format!("{} includes itself (or nests too deep)", path.display()),
             ));
         }
-        let text = read_text(&path)
-            .map_err(|e| error_at(inc, format!("cannot read the included file: {}", e.message)))?;
+        let text = read_text(&path).map_err(|e| {
+            let what = format!(
+                "cannot read the included file {}: {}",
+                path.display(),
+                e.message
+            );
+            error_at(inc, what)
+        })?;
+        // A file included many times over is bounded as one file is.
+        let total: usize = text.len() + out.iter().map(|(_, t)| t.len()).sum::<usize>();
+        if total as u64 > crate::xml::MAX_DESCRIPTION_BYTES {
+            return Err(error_at(
+                inc,
+                format!(
+                    "the included files add up to more than {} bytes",
+                    crate::xml::MAX_DESCRIPTION_BYTES
+                ),
+            ));
+        }
         let slot = out.len();
         out.push((path.clone(), String::new()));
         {

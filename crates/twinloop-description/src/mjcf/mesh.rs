@@ -39,7 +39,8 @@ pub(crate) struct MeshProps {
 
 /// Read an STL (binary or ASCII), OBJ or MSH file; the error says what is wrong.
 pub(crate) fn read(path: &Path) -> Result<TriMesh, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let bytes = twinloop_io::input::read_bounded(path, twinloop_io::input::MAX_INPUT_BYTES)
+        .map_err(|e| e.to_string())?;
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())

@@ -46,8 +46,9 @@ pub fn to_string(robot: &Description) -> String {
 /// Write a robot as URDF to a file; an I/O error names the path.
 pub fn write_file(robot: &Description, path: impl AsRef<Path>) -> Result<(), DescriptionError> {
     let path = path.as_ref();
-    std::fs::write(path, to_string(robot))
-        .map_err(|e| DescriptionError::new(format!("cannot write the file: {e}")).in_file(path))
+    // Written beside the file and renamed when complete: a full disk keeps the old one.
+    twinloop_io::output::write_atomic(path, to_string(robot))
+        .map_err(|e| DescriptionError::new(e.message).in_file(path))
 }
 
 /// A number written so that it parses back to the same `f64`.

@@ -26,7 +26,7 @@ pub struct Dataset {
 impl Dataset {
     /// Reads a CSV file; errors name the file, line and column.
     pub fn read(path: &Path) -> Result<Dataset, IdentError> {
-        let text = std::fs::read_to_string(path)
+        let text = twinloop_io::input::read_to_string(path)
             .map_err(|e| IdentError::new(format!("{}: cannot read: {e}", path.display())))?;
         Dataset::parse(&text, &path.display().to_string())
     }

@@ -62,7 +62,8 @@ pub fn read_plant(path: &Path) -> Result<SagittalCompliance, IdentError> {
 }
 
 fn read_plant_json(path: &Path) -> Result<SagittalCompliance, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text =
+        twinloop_io::input::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let v: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
     let get = |key: &str, v: &serde_json::Value| {
@@ -89,7 +90,7 @@ fn read_plant_json(path: &Path) -> Result<SagittalCompliance, String> {
 
 /// Reads PLANT.toml; errors name the file and the key.
 pub fn read_model_file(path: &Path) -> Result<SagittalCompliance, IdentError> {
-    let text = std::fs::read_to_string(path)
+    let text = twinloop_io::input::read_to_string(path)
         .map_err(|e| IdentError::new(format!("{}: cannot read: {e}", path.display())))?;
     let base = path.parent().unwrap_or(Path::new("."));
     parse_model_file(&text, base).map_err(|e| IdentError::new(format!("{}: {e}", path.display())))

@@ -1,0 +1,114 @@
+//! The files a command will write, checked against the rules of
+//! `twinloop_io::output` as soon as the command line is parsed, before any work: a
+//! 92 s tip-over on a bus must not be thrown away at the end because its `--json`
+//! folder does not exist, and `simulate --trajectory G.csv --out G.csv` must not
+//! destroy its own input. One place for every command: an option is an output by its
+//! name ([`OUTPUT_OPTIONS`]), every other value that names an existing file is an
+//! input. The writes themselves go through `twinloop_io::output` (atomic).
+
+use crate::error::CliError;
+use clap::ArgMatches;
+use std::path::{Path, PathBuf};
+use twinloop_io::output::Output;
+
+/// Options whose value is a file the command writes, wherever they appear.
+pub const OUTPUT_OPTIONS: &[&str] = &[
+    "out",
+    "json",
+    "report",
+    "report-arx",
+    "export",
+    "frames-out",
+    "record",
+    "suggest-out",
+];
+
+/// Outputs that only some commands have, or that are outputs only sometimes:
+/// (command, option, when another option is given or "" for always).
+const OUTPUTS_OF: &[(&str, &str, &str)] = &[
+    // adapt --port runs the tip-over and writes it to --tipover; without, it reads it.
+    ("adapt", "tipover", "port"),
+];
+
+/// Options named like outputs that are folders (checked by their command).
+const FOLDER_OUTPUTS: &[(&str, &str)] = &[("identify servo", "out"), ("demo", "out")];
+
+/// Refuse the command line's outputs that break a rule (exit 2, naming the option).
+pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> {
+    let (mut cmd, mut m, mut path) = (cli, matches, Vec::new());
+    while let Some((name, sub)) = m.subcommand() {
+        let Some(next) = cmd.find_subcommand(name) else {
+            return Ok(());
+        };
+        path.push(name);
+        (cmd, m) = (next, sub);
+    }
+    let path = path.join(" ");
+    let given = |id: &str| m.try_contains_id(id).unwrap_or(false);
+    let (mut outputs, mut inputs) = (Vec::new(), Vec::new());
+    for arg in cmd.get_arguments() {
+        let id = arg.get_id().as_str();
+        let Ok(Some(values)) = m.try_get_raw(id) else {
+            continue;
+        };
+        let long = arg.get_long().unwrap_or(id);
+        let flag = match arg.get_long() {
+            Some(l) => format!("--{l}"),
+            None => id.to_uppercase(),
+        };
+        let is_output = OUTPUT_OPTIONS.contains(&long)
+            || OUTPUTS_OF
+                .iter()
+                .any(|(c, o, when)| *c == path && *o == long && (when.is_empty() || given(when)));
+        if FOLDER_OUTPUTS.contains(&(path.as_str(), long)) {
+            continue;
+        }
+        for v in values {
+            let p = PathBuf::from(v);
+            if is_output {
+                outputs.push((flag.clone(), p));
+            } else if path_names_a_file(&p) {
+                inputs.push((flag.clone(), p));
+            }
+        }
+    }
+    for (flag, p) in &outputs {
+        if p.as_os_str() != "-" {
+            Output::check(flag, p, &inputs)?;
+        }
+    }
+    if path == "serve"
+        && let Some(link) = m
+            .try_get_raw("link")
+            .ok()
+            .flatten()
+            .and_then(|mut v| v.next())
+    {
+        check_pty_link(Path::new(link))?;
+    }
+    Ok(())
+}
+
+fn path_names_a_file(p: &Path) -> bool {
+    std::fs::metadata(p).is_ok_and(|m| m.is_file())
+}
+
+/// `serve --link PATH` puts a symlink to its pseudo-terminal at PATH, replacing an
+/// old link there (a stale one from an earlier serve): never a file or anything
+/// else, which it would delete.
+pub fn check_pty_link(link: &Path) -> Result<(), CliError> {
+    let place = |why: &str| CliError::new(format!("--link {}: {why}", link.display()));
+    match std::fs::symlink_metadata(link) {
+        Ok(m) if !m.file_type().is_symlink() => Err(place(
+            "something that is not a symlink is there; serve puts a link to its \
+             pseudo-terminal at --link and replaces only an old link: give another path",
+        )),
+        _ => match link.parent() {
+            Some(d) if !d.as_os_str().is_empty() && !d.is_dir() => Err(place(&format!(
+                "the folder {} does not exist; create it first",
+                d.display()
+            ))),
+            _ => Ok(()),
+        },
+    }
+}

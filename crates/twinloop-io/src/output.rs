@@ -1,0 +1,454 @@
+//! Every file twinloop writes goes through here (issue 29: nothing a user has is lost).
+//!
+//! - [`Output::check`] runs before a command does any work: the place must be a
+//!   regular file or nothing, in a folder that exists, and not one of the command's
+//!   inputs (same device and inode). A device, FIFO, socket or folder is refused. A
+//!   symlink is written through: its target gets the new content and the link stays a
+//!   link (what a shell's `>` does), so `latest.csv -> run-42.csv` keeps working; a
+//!   link to nothing is refused.
+//! - The bytes go to a temporary file beside the target (`FILE.partial`), are flushed
+//!   and fsynced, and only then renamed over the target: a full disk, an error or a
+//!   crash leaves the old file as it was.
+//! - A recording ([`AtomicFile::recording`]) is streamed into `FILE.partial` and
+//!   renamed at the end whatever ends it (an error, Ctrl-C, a dropped writer), as long
+//!   as one data line reached it; with none, the old file stays untouched. A process
+//!   killed outright leaves its rows under `FILE.partial`.
+
+use crate::IoError;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::os::unix::fs::{FileTypeExt, MetadataExt};
+use std::path::{Path, PathBuf};
+
+/// An output place, checked: where the bytes finally go (a symlink resolved).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Output {
+    /// The path as the user gave it (for messages).
+    pub path: PathBuf,
+    /// The file that gets the bytes (the symlink's target for a symlink).
+    pub target: PathBuf,
+}
+
+/// The name a file is written under until it is complete: `FILE.partial`.
+pub fn in_progress(path: &Path) -> PathBuf {
+    let mut p = path.as_os_str().to_owned();
+    p.push(".partial");
+    PathBuf::from(p)
+}
+
+fn kind_of(t: &std::fs::FileType) -> Option<&'static str> {
+    if t.is_dir() {
+        Some("a folder")
+    } else if t.is_fifo() {
+        Some("a FIFO (named pipe)")
+    } else if t.is_socket() {
+        Some("a socket")
+    } else if t.is_char_device() || t.is_block_device() {
+        Some("a device")
+    } else {
+        None
+    }
+}
+
+fn refused(flag: &str, path: &Path, why: impl std::fmt::Display) -> IoError {
+    let place = if flag.is_empty() {
+        path.display().to_string()
+    } else {
+        format!("{flag} {}", path.display())
+    };
+    IoError::new(format!("{place}: {why}"))
+}
+
+impl Output {
+    /// Where `path` may be written (see the module's rules), without comparing it to
+    /// inputs. `flag` names the option in the message (`--out`), or is empty.
+    pub fn resolve(flag: &str, path: &Path) -> Result<Output, IoError> {
+        let mut target = path.to_path_buf();
+        if let Ok(m) = std::fs::symlink_metadata(path)
+            && m.file_type().is_symlink()
+        {
+            target = std::fs::canonicalize(path).map_err(|_| {
+                refused(
+                    flag,
+                    path,
+                    "is a symlink to nothing; give the file to write, not a dangling link",
+                )
+            })?;
+        }
+        if let Ok(m) = std::fs::metadata(&target)
+            && let Some(kind) = kind_of(&m.file_type())
+        {
+            return Err(refused(
+                flag,
+                path,
+                format!("is {kind}, not a regular file; twinloop writes only regular files"),
+            ));
+        }
+        let folder = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        if !folder.is_dir() {
+            return Err(refused(
+                flag,
+                path,
+                format!(
+                    "the folder {} does not exist; create it first",
+                    folder.display()
+                ),
+            ));
+        }
+        Ok(Output {
+            path: path.to_path_buf(),
+            target,
+        })
+    }
+
+    /// [`Output::resolve`], and refused when it is the same file as one of `inputs`
+    /// (`(flag, path)` pairs): writing it would destroy what the command reads.
+    pub fn check(flag: &str, path: &Path, inputs: &[(String, PathBuf)]) -> Result<Output, IoError> {
+        let out = Output::resolve(flag, path)?;
+        let Ok(me) = std::fs::metadata(&out.target) else {
+            return Ok(out); // a new file is no input
+        };
+        for (what, input) in inputs {
+            if let Ok(m) = std::fs::metadata(input)
+                && m.dev() == me.dev()
+                && m.ino() == me.ino()
+            {
+                let what = if what.is_empty() {
+                    "an input".to_string()
+                } else {
+                    format!("the {what} input")
+                };
+                return Err(refused(
+                    flag,
+                    path,
+                    format!("is also {what} of this command; write the result to another file"),
+                ));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Write `bytes` as the whole new content: all of it, or the old file untouched.
+    pub fn write_atomic(&self, bytes: &[u8]) -> Result<(), IoError> {
+        let mut f = AtomicFile::create(self)?;
+        f.write_all(bytes).map_err(|e| f.error(e))?;
+        f.commit()
+    }
+}
+
+/// [`Output::resolve`] then [`Output::write_atomic`]: the one way to write a whole file.
+pub fn write_atomic(path: &Path, bytes: impl AsRef<[u8]>) -> Result<(), IoError> {
+    Output::resolve("", path)?.write_atomic(bytes.as_ref())
+}
+
+/// What a partial file leaves when it is dropped unfinished.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum OnDrop {
+    /// Removed: an output that is not complete must not look complete.
+    Remove,
+    /// Renamed over the target if it holds more than its first line (a recording).
+    KeepRecorded,
+}
+
+/// A file being written under its in-progress name (see the module's rules).
+pub struct AtomicFile<W: Write + Durable = File> {
+    target: PathBuf,
+    shown: PathBuf,
+    partial: PathBuf,
+    out: Option<BufWriter<W>>,
+    on_drop: OnDrop,
+    /// Newlines written: a recording with only its header holds nothing recorded.
+    lines: u64,
+    /// The lines of the header (1 unless [`AtomicFile::header_written`] says more).
+    header: u64,
+    /// Flush at every newline, so a viewer following the partial file sees each row.
+    flush_lines: bool,
+}
+
+/// A writer that can make its bytes durable (fsync); a test writer says it did.
+pub trait Durable {
+    fn sync(&mut self) -> std::io::Result<()>;
+}
+
+impl Durable for File {
+    fn sync(&mut self) -> std::io::Result<()> {
+        self.sync_all()
+    }
+}
+
+impl AtomicFile<File> {
+    /// An output, removed if dropped before [`AtomicFile::commit`].
+    pub fn create(out: &Output) -> Result<Self, IoError> {
+        AtomicFile::open(out, OnDrop::Remove)
+    }
+
+    /// A recording: every line flushed as written, and kept (renamed to its name)
+    /// however the run ends, when it holds at least one line after the first.
+    pub fn recording(out: &Output) -> Result<Self, IoError> {
+        AtomicFile::open(out, OnDrop::KeepRecorded)
+    }
+
+    fn open(out: &Output, on_drop: OnDrop) -> Result<Self, IoError> {
+        let partial = in_progress(&out.target);
+        // A partial file left by a killed run is replaced; anything else there is not.
+        if let Ok(m) = std::fs::symlink_metadata(&partial) {
+            if !m.file_type().is_file() {
+                return Err(refused(
+                    "",
+                    &partial,
+                    "is in the way of the file being written (not a regular file)",
+                ));
+            }
+            let _ = std::fs::remove_file(&partial);
+        }
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&partial)
+            .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(&out.path))?;
+        // The file keeps its permissions when it is replaced.
+        if let Ok(m) = std::fs::metadata(&out.target) {
+            let _ = file.set_permissions(m.permissions());
+        }
+        Ok(AtomicFile::with_writer(out, partial, file, on_drop))
+    }
+}
+
+impl<W: Write + Durable> AtomicFile<W> {
+    fn with_writer(out: &Output, partial: PathBuf, w: W, on_drop: OnDrop) -> Self {
+        AtomicFile {
+            target: out.target.clone(),
+            shown: out.path.clone(),
+            partial,
+            out: Some(BufWriter::new(w)),
+            on_drop,
+            lines: 0,
+            header: 1,
+            flush_lines: on_drop == OnDrop::KeepRecorded,
+        }
+    }
+
+    /// An I/O error as an [`IoError`] naming the file.
+    pub fn error(&self, e: std::io::Error) -> IoError {
+        IoError::new(format!("cannot write: {e}")).in_file(&self.shown)
+    }
+
+    /// The lines written so far are the header: a recording with nothing after them
+    /// holds nothing recorded and is not kept.
+    pub fn header_written(&mut self) {
+        self.header = self.lines;
+    }
+
+    /// The file the bytes go to (the path the user gave).
+    pub fn path(&self) -> &Path {
+        &self.shown
+    }
+
+    /// Flush, fsync, rename over the target: the new content, complete, in its place.
+    pub fn commit(mut self) -> Result<(), IoError> {
+        self.finish()
+    }
+
+    /// Give up: the partial file is removed, the old file stays as it was.
+    pub fn discard(mut self) {
+        self.out = None;
+        let _ = std::fs::remove_file(&self.partial);
+    }
+
+    fn finish(&mut self) -> Result<(), IoError> {
+        let Some(out) = self.out.take() else {
+            return Ok(());
+        };
+        let synced = out
+            .into_inner()
+            .map_err(|e| e.into_error())
+            .and_then(|mut w| w.sync());
+        if let Err(e) = synced {
+            let _ = std::fs::remove_file(&self.partial);
+            return Err(self.error(e));
+        }
+        std::fs::rename(&self.partial, &self.target).map_err(|e| {
+            let _ = std::fs::remove_file(&self.partial);
+            self.error(e)
+        })
+    }
+}
+
+impl<W: Write + Durable> Write for AtomicFile<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let out = self
+            .out
+            .as_mut()
+            .ok_or_else(|| std::io::Error::other("the file is already closed"))?;
+        let n = out.write(buf)?;
+        let newlines = buf[..n].iter().filter(|&&b| b == b'\n').count() as u64;
+        self.lines += newlines;
+        if self.flush_lines && newlines > 0 {
+            out.flush()?;
+        }
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.as_mut().map_or(Ok(()), |o| o.flush())
+    }
+}
+
+impl<W: Write + Durable> Drop for AtomicFile<W> {
+    fn drop(&mut self) {
+        if self.out.is_none() {
+            return;
+        }
+        if self.on_drop == OnDrop::KeepRecorded && self.lines > self.header {
+            // What was recorded is kept: nothing a user recorded is ever lost.
+            let _ = self.finish();
+        } else {
+            self.out = None;
+            let _ = std::fs::remove_file(&self.partial);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("twinloop-output-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir.join(name)
+    }
+
+    /// A disk that fills after `room` bytes: ENOSPC, as `write(2)` says it.
+    struct FullDisk {
+        room: usize,
+    }
+
+    impl Write for FullDisk {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if self.room == 0 {
+                return Err(std::io::Error::from_raw_os_error(28));
+            }
+            let n = buf.len().min(self.room);
+            self.room -= n;
+            Ok(n)
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    impl Durable for FullDisk {
+        fn sync(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_full_disk_leaves_the_old_file_whole_and_no_partial_one() {
+        let path = scratch("model.urdf");
+        std::fs::write(&path, "<robot name=\"old\"/>\n").unwrap();
+        let out = Output::resolve("--out", &path).unwrap();
+        let partial = in_progress(&path);
+        std::fs::write(&partial, "").unwrap();
+        let mut f =
+            AtomicFile::with_writer(&out, partial.clone(), FullDisk { room: 10 }, OnDrop::Remove);
+        let big = vec![b'x'; 64 * 1024];
+        let e = f.write_all(&big).map_err(|e| f.error(e)).unwrap_err();
+        drop(f);
+        assert!(e.to_string().contains("model.urdf"), "{e}");
+        assert!(e.to_string().contains("No space left on device"), "{e}");
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "<robot name=\"old\"/>\n"
+        );
+        assert!(!partial.exists());
+        // Full at the final flush (the bytes fit the buffer): commit fails the same way.
+        std::fs::write(&partial, "").unwrap();
+        let mut f =
+            AtomicFile::with_writer(&out, partial.clone(), FullDisk { room: 3 }, OnDrop::Remove);
+        f.write_all(b"<robot name=\"new\"/>\n").unwrap();
+        assert!(
+            f.commit()
+                .unwrap_err()
+                .to_string()
+                .contains("No space left")
+        );
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "<robot name=\"old\"/>\n"
+        );
+        assert!(!partial.exists());
+    }
+
+    #[test]
+    fn a_complete_write_replaces_the_file_and_a_symlink_stays_a_link() {
+        let target = scratch("run-42.csv");
+        let link = scratch("latest.csv");
+        std::fs::write(&target, "old\n").unwrap();
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        write_atomic(&link, "t\n1\n").unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "t\n1\n");
+        let dangling = scratch("dangling.csv");
+        let _ = std::fs::remove_file(&dangling);
+        std::os::unix::fs::symlink(scratch("nowhere"), &dangling).unwrap();
+        let e = write_atomic(&dangling, "x").unwrap_err().to_string();
+        assert!(e.contains("dangling.csv") && e.contains("symlink"), "{e}");
+    }
+
+    #[test]
+    fn special_files_missing_folders_and_inputs_are_refused() {
+        for dev in ["/dev/null", "/dev/zero"] {
+            let e = Output::check("--out", Path::new(dev), &[]).unwrap_err();
+            assert!(
+                e.to_string().contains(&format!("--out {dev}: is a device")),
+                "{e}"
+            );
+        }
+        let e = Output::check("--json", &scratch("no/such/folder/x.json"), &[]).unwrap_err();
+        assert!(e.to_string().contains("does not exist"), "{e}");
+        let input = scratch("goals.csv");
+        std::fs::write(&input, "t\n0\n").unwrap();
+        let inputs = vec![("--trajectory".to_string(), input.clone())];
+        let e = Output::check("--out", &input, &inputs)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--out") && e.contains("--trajectory"), "{e}");
+        // The same file by another name is the same file.
+        let other = input.parent().unwrap().join(".").join("goals.csv");
+        assert!(Output::check("--out", &other, &inputs).is_err());
+    }
+
+    #[test]
+    fn a_recording_is_kept_when_dropped_but_not_when_nothing_was_recorded() {
+        let path = scratch("rec.csv");
+        std::fs::write(&path, "t\n1\n2\n").unwrap();
+        let out = Output::resolve("", &path).unwrap();
+        {
+            let mut r = AtomicFile::recording(&out).unwrap();
+            r.write_all(b"t,q\n").unwrap();
+        }
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "t\n1\n2\n");
+        {
+            let mut r = AtomicFile::recording(&out).unwrap();
+            r.write_all(b"t,q\n0,1\n").unwrap();
+            // While it runs, the rows are on disk under the partial name.
+            assert_eq!(
+                std::fs::read_to_string(in_progress(&path)).unwrap(),
+                "t,q\n0,1\n"
+            );
+        }
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "t,q\n0,1\n");
+        assert!(!in_progress(&path).exists());
+    }
+}
