@@ -198,6 +198,21 @@ fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
         .map_err(|e| CliError::new(format!("{}: {e}", path.display())).context("--tipover"))
 }
 
+/// Refuse a tip-over measured on another robot: its angles say nothing of this
+/// one's centre of mass (the file's `robot` is the description's name).
+fn same_robot(tip: &StudyReport, name: &str, spec: &str, path: &Path) -> Result<(), CliError> {
+    if tip.robot.is_empty() || tip.robot == name {
+        return Ok(());
+    }
+    Err(CliError::new(format!(
+        "{}: field `robot`: this tip-over was measured on {:?}, not on {spec} ({name:?}); \
+         adapt a robot with its own tip-over",
+        path.display(),
+        tip.robot
+    ))
+    .context("--tipover"))
+}
+
 /// The tip-over run in place over the bus (`--port`), written to `out` if given.
 fn tip_in_place(a: &AdaptArgs, robot: &str, out: Option<&Path>) -> Result<StudyReport, CliError> {
     use twinloop_loop::tipover_bus::BusOutcome;
@@ -259,7 +274,11 @@ pub fn run(a: AdaptArgs) -> CliResult {
     }
     let tip = match (&a.bus.port, &a.tipover) {
         (Some(_), out) => tip_in_place(&a, robot, out.as_deref())?,
-        (None, Some(path)) => read_tip(path)?,
+        (None, Some(path)) => {
+            let tip = read_tip(path)?;
+            same_robot(&tip, &prior.name, robot, path)?;
+            tip
+        }
         (None, None) => return Err(CliError::new("adapt needs --tipover or --port")),
     };
     if a.method == Method::Ann {

@@ -207,7 +207,9 @@ fn parse_ids(s: &str) -> Result<Vec<u8>, String> {
         let num = |t: &str| {
             t.trim()
                 .parse::<u8>()
-                .map_err(|_| format!("--ids: {t:?} is not an id (0..253)"))
+                .ok()
+                .filter(|&id| id <= 253)
+                .ok_or_else(|| format!("--ids: {t:?} is not an id (0..253)"))
         };
         match part.split_once('-') {
             Some((a, b)) => {
@@ -255,30 +257,27 @@ fn scan(a: &ScanArgs) -> CliResult {
     };
     let mut found: Vec<FoundServo> = Vec::new();
     for p in protocols {
-        let (lo, hi) = match &ids {
-            None => (0, p.max_id()),
-            // The span of the ids asked for, in whatever order they were given.
-            Some(ids) => match (ids.iter().min(), ids.iter().max()) {
-                (Some(&lo), Some(&hi)) => (lo, hi),
-                _ => (0, p.max_id()),
-            },
+        // Exactly the ids asked for (`1,200` is two ids, not the span between).
+        let pinged: Vec<u8> = match &ids {
+            None => (0..=p.max_id()).collect(),
+            Some(ids) => ids.iter().copied().filter(|&id| id <= p.max_id()).collect(),
         };
         // A scan takes seconds: say what it does, then count the ids pinged.
         eprintln!(
-            "scanning protocol {}.0, ids {lo}-{hi}, at {} baud ...",
+            "scanning protocol {}.0, {} id(s) ({}), at {} baud ...",
             p.number(),
+            pinged.len(),
+            a.ids.as_deref().unwrap_or("all"),
             a.port.baud
         );
-        let bar = progress::steps(usize::from(hi - lo) + 1);
-        let result = c.scan_with_progress(p, lo..=hi, |id| {
-            bar.set_position(u64::from(id - lo));
+        let bar = progress::steps(pinged.len());
+        let mut done = 0u64;
+        let result = c.scan_ids_with_progress(p, &pinged, |id| {
+            bar.set_position(done);
             bar.set_message(format!("id {id}"));
+            done += 1;
         });
         bar.finish_and_clear();
-        let result = result.map(|v: Vec<FoundServo>| match &ids {
-            None => v,
-            Some(ids) => v.into_iter().filter(|s| ids.contains(&s.id)).collect(),
-        });
         found.extend(result?);
     }
     let v: Vec<ServoJson> = found
@@ -303,6 +302,15 @@ fn scan(a: &ScanArgs) -> CliResult {
         );
     }
     out += &format!("{} servo(s) found\n", found.len());
+    if found.is_empty() {
+        // Nothing answered: a check that found a problem (exit 1), said plainly.
+        emit(&out, a.json.as_ref(), &v)?;
+        eprintln!(
+            "error: no servo answered on {} (check the port, --baud and --protocol)",
+            a.port.port.as_deref().unwrap_or("?")
+        );
+        return Ok(Outcome::Problems);
+    }
     emit(&out, a.json.as_ref(), &v)?;
     if let (Some(path), Some(robot)) = (&a.out, &a.robot) {
         let d = twinloop_loop::draft_profile::draft(&found, robot)?;
@@ -536,6 +544,15 @@ fn record(a: &RecordArgs) -> CliResult {
     .with_client(&robot.client.stats);
     eprintln!("{}", health.line());
     finished?;
+    if let Some(why) = rec.silent {
+        // The bus froze: the rows read before are a recording, but an incomplete one.
+        eprintln!(
+            "error: recording stopped: {why}; the {} rows read before are in {}",
+            rec.rows,
+            a.out.display()
+        );
+        return Ok(Outcome::Problems);
+    }
     match rec.link_error {
         Some(e) => Err(CliError::new(format!(
             "recording stopped: {e}; the {} rows read before are in the file",
@@ -580,6 +597,9 @@ struct Recording {
     failures: Vec<usize>,
     /// Why the recording stopped early: the link or the file failed.
     link_error: Option<String>,
+    /// Why it stopped when every servo went silent past the silence window (the
+    /// servos named): the rows before are kept and the command exits 1.
+    silent: Option<String>,
     /// The longest time no servo answered.
     longest_silence: Duration,
     /// Rows with a servo that did not answer.
@@ -603,6 +623,7 @@ fn record_rows<T: Transport>(
         seconds: 0.0,
         failures: vec![0usize; n],
         link_error: None,
+        silent: None,
         longest_silence: Duration::ZERO,
         failed_rows: 0,
     };
@@ -650,16 +671,7 @@ fn record_rows<T: Transport>(
             break;
         }
         if now - heard >= a.port.silence_window() {
-            rec.link_error = Some(format!(
-                "no servo answered for {:.2} s, longer than the silence window ({} s); \
-                 the last: {}",
-                (now - heard).as_secs_f64(),
-                a.port.silence_window,
-                robot
-                    .outcomes()
-                    .find_map(|(name, o)| o.as_ref().err().map(|e| format!("joint {name}: {e}")))
-                    .unwrap_or_default()
-            ));
+            rec.silent = Some(silent_servos(robot, (now - heard).as_secs_f64(), a));
             break;
         }
         if dt > 0.0 {
@@ -668,6 +680,28 @@ fn record_rows<T: Transport>(
     }
     rec.seconds = start.elapsed().as_secs_f64();
     rec
+}
+
+/// Which servos went silent, for a recording stopped by the silence window.
+fn silent_servos<T: Transport>(robot: &DynamixelRobot<T>, silent_s: f64, a: &RecordArgs) -> String {
+    let servos: Vec<String> = robot
+        .mapping()
+        .joints
+        .iter()
+        .zip(robot.outcomes())
+        .filter(|(_, (_, o))| o.is_err())
+        .map(|(j, _)| format!("id {} ({})", j.id, j.name))
+        .collect();
+    let last = robot
+        .outcomes()
+        .find_map(|(name, o)| o.as_ref().err().map(|e| format!("joint {name}: {e}")))
+        .unwrap_or_default();
+    format!(
+        "every servo went silent for {silent_s:.2} s, longer than the silence window \
+         (--silence-window {} s): {}; the last: {last}",
+        a.port.silence_window,
+        servos.join(", ")
+    )
 }
 
 /// After the first cycles: true when no servo has answered (the recording stops);

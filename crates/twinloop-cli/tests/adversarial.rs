@@ -963,3 +963,207 @@ fn an_output_through_a_symlink_keeps_the_link() {
         .collect();
     assert_eq!(names.len(), 2, "no partial file left: {names:?}");
 }
+
+/// `twinloop serve ARGS` on TCP in the background; its `tcp:ADDR`. Killed on drop.
+struct Served(Child, String);
+
+impl Served {
+    fn start(args: &[&str]) -> Served {
+        use std::io::{BufRead, BufReader};
+        let mut child = Command::new(bin())
+            .args(["serve", "--port", "tcp:127.0.0.1:0"])
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let mut line = String::new();
+        BufReader::new(child.stdout.as_mut().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        Served(child, line.trim().to_string())
+    }
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = Command::new("kill")
+            .args(["-CONT", &self.0.id().to_string()])
+            .status();
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// A fresh folder for one test, under Cargo's target temp folder.
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Run `twinloop ARGS`: exit code and stderr.
+fn exit_and_stderr(args: &[&str]) -> (Option<i32>, String) {
+    let o = Command::new(bin()).args(args).output().unwrap();
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// The km20 mapping with one field of servo id 2's entry changed (its `model =
+/// "RX-28"` line replaced by `replace`), written to `dir/name`.
+fn km20_mapping_with(dir: &Path, name: &str, replace: &str) -> String {
+    let good = std::fs::read_to_string(repo().join("crates/twinloop-link/src/mappings/km20.toml"))
+        .unwrap();
+    let entry = "name = \"l_sho_pitch\"\nid = 2\nmodel = \"RX-28\"";
+    assert!(good.contains(entry));
+    let text = good.replacen(
+        entry,
+        &format!("name = \"l_sho_pitch\"\nid = 2\n{replace}"),
+        1,
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+/// Class 4 of issue 29: the bus is checked, not trusted. A served km20 (RX-28s on
+/// Protocol 1.0, the model numbers of the e-manual) meets a mapping naming the wrong
+/// model (refused, exit 2, naming id, joint and both models), a zero offset the servo
+/// cannot take (exit 2, file:line and field), an id list (exactly those ids pinged),
+/// a scan that finds nothing (exit 1), ten scans over TCP that each find every servo
+/// (a fresh connection's first requests are not lost), and a bus frozen mid-recording (SIGSTOP on the
+/// server: exit 1 naming the silent servos, rows kept).
+#[test]
+fn the_bus_is_checked_not_trusted() {
+    let dir = scratch("bus_checked");
+    let served = Served::start(&["--robot", "builtin:km20", "--servo-model", "ideal"]);
+    let port = served.1.as_str();
+    let out = dir.join("rec.csv");
+    let out = out.to_str().unwrap();
+    let record = |map: &str, extra: &[&str]| {
+        let mut args = vec!["link", "record", "--port", port, "--map", map, "--out", out];
+        args.extend_from_slice(extra);
+        exit_and_stderr(&args)
+    };
+    let wrong = km20_mapping_with(&dir, "wrong.toml", "model = \"MX-28\"");
+    let (code, err) = record(&wrong, &["--duration", "0.5"]);
+    assert_eq!(code, Some(2), "{err}");
+    for place in ["servo id 2", "l_sho_pitch", "RX-28", "MX-28", "wrong.toml"] {
+        assert!(err.contains(place), "{place} not in {err}");
+    }
+    let zero = km20_mapping_with(&dir, "zero.toml", "model = \"RX-28\"\nzero = 10.0");
+    let (code, err) = record(&zero, &["--duration", "0.5"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("zero.toml:32") && err.contains("zero"),
+        "{err}"
+    );
+
+    let scan = |ids: &str| {
+        let o = Command::new(bin())
+            .args([
+                "link",
+                "scan",
+                "--port",
+                port,
+                "--protocol",
+                "1",
+                "--ids",
+                ids,
+            ])
+            .output()
+            .unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+        )
+    };
+    let (code, listed) = scan("1,200");
+    assert_eq!(code, Some(0), "{listed}");
+    let ids: Vec<&str> = listed
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split_whitespace().nth(1))
+        .filter(|t| t.parse::<u8>().is_ok())
+        .collect();
+    assert_eq!(ids, ["1", "200"], "{listed}");
+    // Each scan a fresh connection whose first requests must not be lost.
+    for k in 0..10 {
+        let (code, listed) = scan("1-20,200");
+        assert_eq!(code, Some(0), "scan {k}: {listed}");
+        assert!(listed.contains("21 servo(s) found"), "scan {k}: {listed}");
+    }
+    let (code, listed) = scan("30-40");
+    assert_eq!(code, Some(1), "nothing at 30-40: {listed}");
+
+    let good = repo().join("crates/twinloop-link/src/mappings/km20.toml");
+    let pid = served.0.id().to_string();
+    let freezer = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(700));
+        Command::new("kill").args(["-STOP", &pid]).status().unwrap();
+    });
+    let (code, err) = record(
+        good.to_str().unwrap(),
+        &["--duration", "5", "--silence-window", "0.4"],
+    );
+    freezer.join().unwrap();
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("silence window") && err.contains("id 13 (r_knee)"),
+        "{err}"
+    );
+    let rows = std::fs::read_to_string(out).unwrap().lines().count();
+    assert!(
+        rows > 2,
+        "the rows read before the freeze are kept: {rows} lines"
+    );
+}
+
+/// Class 5 of issue 29: messages that help. An include cycle is named as its chain,
+/// a replicate count past the bound says the bound, a CSV written with a UTF-8 byte
+/// order mark is read as without one.
+#[test]
+fn messages_name_the_chain_the_bound_and_take_a_bom() {
+    let dir = scratch("messages_help");
+    let d = dir.as_path();
+    write(
+        d,
+        "a.xml",
+        "<mujoco model=\"a\"><include file=\"b.xml\"/><worldbody/></mujoco>",
+    );
+    write(d, "b.xml", "<mujoco><include file=\"a.xml\"/></mujoco>");
+    let (code, err) = exit_and_stderr(&["model", "info", d.join("a.xml").to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("b.xml -> ") && err.contains("a.xml -> "),
+        "{err}"
+    );
+    write(
+        d,
+        "rep.xml",
+        "<mujoco><worldbody><replicate count=\"1000000\"><body name=\"b\"><geom size=\"0.1\"/></body></replicate></worldbody></mujoco>",
+    );
+    let (code, err) = exit_and_stderr(&["model", "info", d.join("rep.xml").to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("100000") && err.contains("rep.xml"), "{err}");
+    let state = fixtures().dir.join("state.csv");
+    let text = std::fs::read_to_string(&state).unwrap();
+    write(d, "bom.csv", &format!("\u{feff}{text}"));
+    let o = Command::new(bin())
+        .args([
+            "dynamics",
+            "kinematics",
+            "--robot",
+            "builtin:km20",
+            "--trajectory",
+        ])
+        .arg(d.join("bom.csv"))
+        .arg("--out")
+        .arg(d.join("tau.csv"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -115,7 +115,7 @@ fn scan_read_and_record_a_served_robot() {
     );
     // The scan says what it does before the seconds it takes.
     assert!(
-        text(&o.stderr).contains("scanning protocol 2.0, ids 0-252"),
+        text(&o.stderr).contains("scanning protocol 2.0, 253 id(s) (all)"),
         "{}",
         text(&o.stderr)
     );

@@ -656,7 +656,8 @@ pub fn exact_method(
     ] {
         if !(v.is_finite() && v > 0.0 && v < std::f64::consts::FRAC_PI_2) {
             return Err(IdentError::new(format!(
-                "a tip angle must be in (0, 90) degrees, got {v} rad"
+                "a tip angle must be in (0, 90) degrees, got {}",
+                degrees_text(v)
             ))
             .field(f));
         }
@@ -704,4 +705,17 @@ pub fn exact_method(
         com: [x, y, z],
         frontal_lever: s,
     })
+}
+
+/// An angle in radians as degrees with sensible digits for a message (a value of
+/// 1e300 rad is not worth 300 digits).
+fn degrees_text(rad: f64) -> String {
+    let deg = rad.to_degrees();
+    if !deg.is_finite() {
+        format!("{rad} rad")
+    } else if deg.abs() < 1e6 {
+        format!("{deg:.2} deg")
+    } else {
+        format!("{deg:.3e} deg")
+    }
 }

@@ -80,6 +80,9 @@ impl Table {
     /// Parse CSV text: a header row, then rows of numbers (empty lines and lines
     /// starting with `#` are skipped). Every row must have as many cells as the header.
     pub fn parse(text: &str) -> Result<Table, IoError> {
+        // A UTF-8 byte order mark (spreadsheets on Windows write one) is not part of
+        // the first column's name.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut lines = text.lines().enumerate().filter(|(_, l)| {
             let l = l.trim();
             !l.is_empty() && !l.starts_with('#')

@@ -103,6 +103,9 @@ pub struct Client<T: Transport> {
     /// An exchange failed or a packet was dropped since the last request: the input
     /// may hold late replies, so it is emptied before the next request goes out.
     dirty: bool,
+    /// The address and length the request being exchanged names (READ, WRITE),
+    /// for the message of a servo that rejects it.
+    register: Option<(u16, u16)>,
 }
 
 impl<T: Transport> Client<T> {
@@ -119,6 +122,7 @@ impl<T: Transport> Client<T> {
             config,
             stats: ClientStats::default(),
             dirty: false,
+            register: None,
         }
     }
 
@@ -233,7 +237,11 @@ impl<T: Transport> Client<T> {
                 let status = StatusError::new(protocol, error);
                 if status.rejected_instruction() && matches!(expect, Expect::Status { .. }) {
                     // A refusal carries no data, whatever length was asked.
-                    return Err(LinkError::Rejected { id, error: status });
+                    return Err(LinkError::Rejected {
+                        id,
+                        error: status,
+                        register: self.register,
+                    });
                 }
                 match expect {
                     Expect::Status { len, .. } => {
@@ -331,6 +339,7 @@ impl<T: Transport> Client<T> {
 
     fn begin(&mut self, protocol: Protocol, id: u8, instruction: Instruction) -> PacketWriter<'_> {
         self.tx.clear();
+        self.register = None;
         PacketWriter::instruction(&mut self.tx, protocol, id, instruction)
     }
 
@@ -420,9 +429,26 @@ impl<T: Transport> Client<T> {
         &mut self,
         protocol: Protocol,
         ids: RangeInclusive<u8>,
+        progress: impl FnMut(u8),
+    ) -> Result<Vec<FoundServo>, LinkError> {
+        let ids: Vec<u8> = (*ids.start()..=(*ids.end()).min(protocol.max_id())).collect();
+        self.scan_ids_with_progress(protocol, &ids, progress)
+    }
+
+    /// [`Client::scan_with_progress`] of exactly the ids in `ids` (a list such as
+    /// `1,200` pings those two, not the span between them); ids past the
+    /// protocol's last are skipped.
+    pub fn scan_ids_with_progress(
+        &mut self,
+        protocol: Protocol,
+        ids: &[u8],
         mut progress: impl FnMut(u8),
     ) -> Result<Vec<FoundServo>, LinkError> {
-        let ids = *ids.start()..=(*ids.end()).min(protocol.max_id());
+        let ids: Vec<u8> = ids
+            .iter()
+            .copied()
+            .filter(|&id| id <= protocol.max_id())
+            .collect();
         if protocol == Protocol::V2 {
             // The SDK's window: 14 bytes per possible servo plus 3 ms each, + 16 ms.
             let listen = self.wire_time(14 * 253)
@@ -457,6 +483,7 @@ impl<T: Transport> Client<T> {
         let mut w = self.begin(protocol, id, Instruction::Read);
         w.address(address).address(out.len() as u16);
         w.finish()?;
+        self.register = Some((address, out.len() as u16));
         let status = self.exchange(protocol, id, out.len())?;
         out.copy_from_slice(&self.rx);
         Ok(status)
@@ -473,6 +500,7 @@ impl<T: Transport> Client<T> {
         let mut w = self.begin(protocol, id, instruction);
         w.address(address).bytes(data);
         w.finish()?;
+        self.register = Some((address, data.len() as u16));
         self.finish_command(protocol, id)
     }
 
@@ -627,7 +655,11 @@ impl<T: Transport> Client<T> {
                     } else {
                         let status = StatusError::new(Protocol::V2, err);
                         if status.rejected_instruction() {
-                            Err(LinkError::Rejected { id, error: status })
+                            Err(LinkError::Rejected {
+                                id,
+                                error: status,
+                                register: None,
+                            })
                         } else {
                             out[k * l..(k + 1) * l].copy_from_slice(&raw[pos + 2..crc_at]);
                             Ok(status)

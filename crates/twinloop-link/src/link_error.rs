@@ -32,7 +32,12 @@ pub enum LinkError {
     Unverified { id: u8 },
     /// The servo answered with an error that means it did not execute the
     /// instruction.
-    Rejected { id: u8, error: StatusError },
+    /// `register`: the address and length the request named, when it named one.
+    Rejected {
+        id: u8,
+        error: StatusError,
+        register: Option<(u16, u16)>,
+    },
     /// The request could not be encoded (e.g. an instruction the protocol lacks).
     Encode(EncodeError),
 }
@@ -104,7 +109,15 @@ impl fmt::Display for LinkError {
                 f,
                 "servo id {id}: repeated reads disagreed (verified read), discarded"
             ),
-            LinkError::Rejected { id, error } => write!(f, "servo id {id}: {error}"),
+            LinkError::Rejected {
+                id,
+                error,
+                register: Some((address, len)),
+            } => write!(
+                f,
+                "servo id {id}, register at address {address} ({len} bytes): {error}"
+            ),
+            LinkError::Rejected { id, error, .. } => write!(f, "servo id {id}: {error}"),
             LinkError::Encode(e) => write!(f, "cannot encode request: {e}"),
         }
     }

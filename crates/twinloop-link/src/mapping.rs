@@ -339,6 +339,19 @@ fn parse_joint(
             "not a finite number".into(),
         ));
     }
+    // The joint's zero is a servo angle: one the servo cannot take (10 rad on a
+    // 300-degree RX) would put every joint angle off by the difference.
+    let (smin, smax) = JointMapping::servo_range(model);
+    if zero < smin - 1e-9 || zero > smax + 1e-9 {
+        return Err(at(
+            j.zero.as_ref().unwrap().span(),
+            "zero",
+            format!(
+                "{zero} rad ({:.1} deg) is outside servo id {id}'s range ({model}): {smin:.4}..{smax:.4} rad",
+                zero.to_degrees()
+            ),
+        ));
+    }
     let (lo, hi) = joint_limits(&j, model, id, zero, direction, &at)?;
     if let Some(other) = earlier.iter().find(|o| o.name == name) {
         return Err(at(

@@ -74,6 +74,51 @@ fn link_to_robot(e: &LinkError, joint: &str) -> RobotError {
     }
 }
 
+/// The Model Number a servo answers at address 0 (2 bytes on both protocols: the
+/// e-manual control tables of every Dynamixel, EM-RX28 and EM-XM430), if it answers.
+fn answered_model<T: Transport>(client: &mut Client<T>, protocol: Protocol, id: u8) -> Option<u16> {
+    let mut b = [0u8; 2];
+    client.read(protocol, id, 0, &mut b).ok()?;
+    Some(u16::from_le_bytes(b))
+}
+
+/// Refuse a mapping whose servos are not the models it names: an MX-28 (4096
+/// counts per turn) read as an RX-28 (1024 per 300 deg) puts the joint 135 deg off.
+/// A servo that does not answer is left to the reads (a silent servo is their
+/// business); a mismatch is read twice so that a damaged reply that passed its
+/// checksum does not refuse a right mapping.
+fn check_models<T: Transport>(
+    client: &mut Client<T>,
+    mapping: &RobotMapping,
+) -> Result<(), RobotError> {
+    for j in &mapping.joints {
+        let expected = j.model.model_number();
+        let Some(got) = answered_model(client, j.protocol, j.id) else {
+            continue;
+        };
+        if got == expected || answered_model(client, j.protocol, j.id) != Some(got) {
+            continue;
+        }
+        let answered = match twinloop_servos::ServoModel::from_model_number(got) {
+            Some(m) => format!("{m} (model number {got})"),
+            None => format!("model number {got}, not in the catalogue"),
+        };
+        let line = if j.line > 0 {
+            format!(" line {}", j.line)
+        } else {
+            String::new()
+        };
+        return Err(RobotError::at_joint(
+            &j.name,
+            format!(
+                "servo id {} answers as {answered}, but the mapping ({}{line}) says {} (model number {expected}): fix the mapping's model",
+                j.id, mapping.source, j.model
+            ),
+        ));
+    }
+    Ok(())
+}
+
 impl<T: Transport> DynamixelRobot<T> {
     /// Build the backend; `method` picks how servos are read (`Auto`: the cheapest
     /// each protocol's servos support).
@@ -82,6 +127,8 @@ impl<T: Transport> DynamixelRobot<T> {
         mapping: RobotMapping,
         method: ReadMethod,
     ) -> Result<DynamixelRobot<T>, RobotError> {
+        let mut client = client;
+        check_models(&mut client, &mapping)?;
         let servos: Vec<CycleServo> = mapping
             .joints
             .iter()

@@ -56,6 +56,26 @@ impl ErrorBitV1 {
     }
 }
 
+impl ErrorBitV1 {
+    /// What the bit means, in words (EM-P1 "Error" and the RX-28 e-manual's
+    /// status packet table); the range error is what a servo of another model than
+    /// the one assumed answers to a register its table does not have.
+    pub const fn meaning(self) -> &'static str {
+        match self {
+            ErrorBitV1::InputVoltage => "supply voltage outside the voltage limits",
+            ErrorBitV1::AngleLimit => "goal position outside the CW/CCW angle limits",
+            ErrorBitV1::Overheating => "temperature above the temperature limit",
+            ErrorBitV1::Range => {
+                "an instruction or value out of range: an address, length or value this \
+                 servo's control table does not have; is the servo the model assumed?"
+            }
+            ErrorBitV1::Checksum => "the instruction packet's checksum was wrong",
+            ErrorBitV1::Overload => "the load cannot be held with the set torque",
+            ErrorBitV1::Instruction => "an undefined instruction, or ACTION without REG_WRITE",
+        }
+    }
+}
+
 /// A Protocol 2.0 error number (EM-P2 "Error").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum ErrorNumberV2 {
@@ -225,7 +245,7 @@ impl fmt::Display for StatusError {
             Protocol::V1 => {
                 for b in self.bits_v1() {
                     sep(f)?;
-                    f.write_str(b.name())?;
+                    write!(f, "{} ({})", b.name(), b.meaning())?;
                 }
                 if self.raw & 0x80 != 0 {
                     sep(f)?;

@@ -39,10 +39,25 @@ fn collect(
             ));
         };
         let path = dir.join(file);
-        if chain.contains(&path) || chain.len() >= MAX_DEPTH {
+        if let Some(first) = chain.iter().position(|p| *p == path) {
+            // Name the whole cycle: a.xml -> b.xml -> a.xml.
+            let cycle: Vec<String> = chain[first..]
+                .iter()
+                .chain([&path])
+                .map(|p| p.display().to_string())
+                .collect();
             return Err(error_at(
                 inc,
-                format!("{} includes itself (or nests too deep)", path.display()),
+                format!("include cycle: {}", cycle.join(" -> ")),
+            ));
+        }
+        if chain.len() >= MAX_DEPTH {
+            return Err(error_at(
+                inc,
+                format!(
+                    "{} is included {MAX_DEPTH} files deep, past the limit of {MAX_DEPTH}",
+                    path.display()
+                ),
             ));
         }
         let text = read_text(&path).map_err(|e| {

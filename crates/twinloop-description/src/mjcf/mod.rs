@@ -574,7 +574,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 error_at_attr(
                     r,
                     "count",
-                    format!("\"{count}\" is not a replica count (1 or more)"),
+                    format!("\"{count}\" is not a replica count: a whole number from 1 to {MAX_REPLICAS}"),
                 )
             })?;
         let offset = opt_array::<3>(r, "offset")?.unwrap_or([0.0; 3]);

@@ -12,7 +12,18 @@ pub struct TcpTransport {
     timeout: Option<Duration>,
     /// Bytes received so far (a refusal comes first or not at all).
     received: u64,
+    /// When the connection was made (see [`FRESH`]).
+    opened: std::time::Instant,
 }
+
+/// How long a fresh connection's first reply may take. A server accepts a
+/// connection and starts reading it some time after the client's connect returns
+/// (`twinloop serve` hands it to its serving thread): the first requests sit unread
+/// meanwhile, a client waiting only a reply's allowance (10 ms) gives them up, and
+/// the server, finding them piled up, answers only the last (a scan's first servos
+/// "not found"). Until the first byte arrives, a read waits until the connection is
+/// this old: once per connection, at most this long.
+pub const FRESH: Duration = Duration::from_millis(300);
 
 /// What `twinloop serve` sends a client it cannot serve (another one has the bus)
 /// before it closes the connection: this, then the reason, then a newline.
@@ -96,6 +107,7 @@ impl TcpTransport {
             peer,
             timeout: None,
             received: 0,
+            opened: std::time::Instant::now(),
         })
     }
 }
@@ -107,7 +119,11 @@ impl Transport for TcpTransport {
 
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
         // A zero timeout means "block forever" to the socket API.
-        let timeout = timeout.max(Duration::from_micros(1));
+        let mut timeout = timeout.max(Duration::from_micros(1));
+        if self.received == 0 {
+            let fresh_until = self.opened + FRESH;
+            timeout = timeout.max(fresh_until.saturating_duration_since(std::time::Instant::now()));
+        }
         if self.timeout != Some(timeout) {
             self.stream.set_read_timeout(Some(timeout))?;
             self.timeout = Some(timeout);
