@@ -5,7 +5,7 @@ use crate::arrays::{Arg, Dim, new_array};
 use crate::batch::thread_count;
 use crate::errors::value_error;
 use crate::model::PyModel;
-use crate::sim::description_arg;
+use crate::sim::{description_arg, description_arg_ordered};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use serde::Serialize;
@@ -314,8 +314,8 @@ pub fn static_poses<'py>(
             return Err(value_error(format!("{name}: must be >= 0, got {x}")));
         }
     }
-    let d = description_arg(robot)?;
-    let model = PyModel::build(d.clone(), true)?;
+    let (d, order) = description_arg_ordered(robot)?;
+    let model = PyModel::build(d.clone(), order, true)?;
     let options = PlateOptions {
         count,
         cop_noise,
@@ -361,8 +361,8 @@ pub fn identify_static<'py>(
     com_margin: f64,
     category: Option<Vec<Option<String>>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let d = description_arg(robot)?;
-    let model = twinloop_dynamics::Model::from_description_with_base(&d, BaseKind::Floating)
+    let (d, order) = description_arg_ordered(robot)?;
+    let model = twinloop_dynamics::Model::from_description_ordered(&d, BaseKind::Floating, order)
         .map_err(crate::errors::description_error)?;
     let qa = Arg::new(q, "q", &[Dim::Free("P"), Dim::Is(model.nq, "nq")])?;
     let n = qa.rows();
@@ -494,8 +494,6 @@ pub fn adapt<'py>(
             Ok::<_, IdentError>(a)
         })
         .map_err(ident_error)?;
-    let robot = adapted.robot.map(|r| crate::model::PyDescription {
-        inner: std::sync::Arc::new(r),
-    });
+    let robot = adapted.robot.map(crate::model::PyDescription::urdf);
     Ok((to_py(py, &adapted.report)?, robot))
 }

@@ -16,8 +16,11 @@
 //!   simply the root. Otherwise a link `world` is added and every top-level body
 //!   hangs from it at its `pos`/`quat`. When every top-level body is free, the
 //!   one with the most bodies is the robot and the others are props (a ball)
-//!   left out with an `unmodeled-element` note each; a free joint beside a
-//!   welded or hinged top-level body is an error (one floating tree per file).
+//!   left out with an `unmodeled-element` note each. Beside a free robot, a welded
+//!   top-level body with no joint and no mass in its subtree (Apptronik Apollo's
+//!   `world_link`) is left out too, noted in [`Description::ignored`] (or in
+//!   `unmodeled` when it holds collision geoms); one with mass, or a free joint
+//!   beside a hinged top-level body, is an error (one floating tree per file).
 //! - A body's joints, in order: `hinge` becomes [`JointKind::Revolute`] when
 //!   limited (the `range`, converted from degrees unless `<compiler
 //!   angle="radian">`) and [`JointKind::Continuous`] otherwise; `slide` becomes
@@ -446,10 +449,10 @@ impl<'a, 'i> Reader<'a, 'i> {
         if top.is_empty() {
             return Err(error_at(root, "no <body> in <worldbody>"));
         }
-        let (robot_name, props) = self.props(&top)?;
+        let (robot_name, props, empties) = self.props(&top)?;
         let trees: Vec<Framed> = top
             .iter()
-            .filter(|t| !props.contains(&t.0))
+            .filter(|t| !props.contains(&t.0) && !empties.contains(&t.0))
             .cloned()
             .collect();
         let world = self.needs_world_link(&trees)?;
@@ -464,7 +467,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         // is read aside, for its mass and the note that it is left out.
         let mut aside: Vec<(Node, Description)> = Vec::new();
         for (node, frame, childclass, suffix) in top {
-            let prop = props.contains(&node);
+            let prop = props.contains(&node) || empties.contains(&node);
             let saved = prop.then(|| {
                 let places = Places {
                     robot: self.places.robot,
@@ -491,6 +494,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 self.places = places;
             }
         }
+        aside = self.drop_empty(aside, &empties, &robot_name)?;
         let prop_mass: f64 = aside.iter().map(|(_, d)| d.total_mass()).sum();
         let scale = match self.compiler.total_mass {
             Some(total) => self.set_total_mass(total, prop_mass),
@@ -599,13 +603,17 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// free tree is a prop (pybullet's striker and thrower with their objects);
     /// otherwise nothing is a prop and `needs_world_link` refuses the file.
     /// MuJoCo couples separate trees only through contact, so the robot's mass
-    /// matrix and bias forces do not depend on the props. Returns the robot's
-    /// name for the notes and the props' bodies.
+    /// matrix and bias forces do not depend on the props. Beside free trees, the
+    /// welded top-level bodies without a joint in their subtree are candidates for
+    /// empty static bodies (Apptronik Apollo's `world_link`), read aside and left
+    /// out if they weigh nothing ([`Self::drop_empty`]). Returns the robot's name
+    /// for the notes, the props' bodies and the empty candidates.
+    #[allow(clippy::type_complexity)]
     fn props(
         &self,
         top: &[Framed<'a, 'i>],
-    ) -> Result<(String, Vec<Node<'a, 'i>>), DescriptionError> {
-        let none = Ok((String::new(), Vec::new()));
+    ) -> Result<(String, Vec<Node<'a, 'i>>, Vec<Node<'a, 'i>>), DescriptionError> {
+        let none = Ok((String::new(), Vec::new(), Vec::new()));
         if top.len() < 2 {
             return none;
         }
@@ -629,15 +637,75 @@ impl<'a, 'i> Reader<'a, 'i> {
         else {
             return none;
         };
-        if fixed.is_empty() {
+        let jointless = |b: &Node| {
+            !b.descendants()
+                .any(|d| d.has_tag_name("joint") || d.has_tag_name("freejoint"))
+        };
+        if !fixed.is_empty() && fixed.iter().map(size).sum::<usize>() > size(&largest) {
+            let robot = "the robot (the bodies held by the world)".to_string();
+            return Ok((robot, free, Vec::new()));
+        }
+        if fixed.iter().all(jointless) {
             let name = largest.attribute("name").unwrap_or("body").to_string();
             let props = free.into_iter().filter(|b| *b != largest).collect();
-            return Ok((format!("the robot \"{name}\""), props));
-        }
-        if fixed.iter().map(size).sum::<usize>() > size(&largest) {
-            return Ok(("the robot (the bodies held by the world)".to_string(), free));
+            return Ok((format!("the robot \"{name}\""), props, fixed));
         }
         none
+    }
+
+    /// The empty static bodies among the trees read aside (`empties`, see
+    /// [`Self::props`]): each is left out with a note if it weighs nothing (MuJoCo
+    /// welds it to the world, where it moves nothing); one with mass is a second
+    /// body tree beside the floating robot, which twinloop refuses. Returns the rest.
+    fn drop_empty(
+        &mut self,
+        aside: Vec<(Node<'a, 'i>, Description)>,
+        empties: &[Node<'a, 'i>],
+        robot: &str,
+    ) -> Result<Vec<(Node<'a, 'i>, Description)>, DescriptionError> {
+        let mut rest = Vec::with_capacity(aside.len());
+        for (node, d) in aside {
+            if !empties.contains(&node) {
+                rest.push((node, d));
+                continue;
+            }
+            let name = d.links.first().map_or("", |l| l.name.as_str());
+            if d.total_mass() > 0.0 {
+                return Err(error_at(
+                    node,
+                    format!(
+                        "a second top-level body beside {robot}: \"{name}\" weighs {:.6} kg; \
+                         twinloop models one floating body tree per file (a body beside it is \
+                         left out only when it has no mass and no joint)",
+                        d.total_mass()
+                    ),
+                ));
+            }
+            let geoms = d.links.iter().map(|l| l.collisions.len()).sum::<usize>();
+            let (line, _) = crate::xml::position(node.document(), node.range().start);
+            let mut what = format!(
+                "empty static body \"{name}\" ({} bod{}, no mass, no joint) beside {robot}: \
+                 MuJoCo welds it to the world, where it changes nothing; twinloop leaves it out",
+                d.links.len(),
+                if d.links.len() == 1 { "y" } else { "ies" }
+            );
+            let note = FileNote {
+                element: crate::xml::element_path(node),
+                line,
+                what: String::new(),
+            };
+            if geoms > 0 {
+                // Massless collision geoms fixed in the world are scenery the robot
+                // could touch: that is physics left out.
+                what.push_str(&format!(
+                    ", with its {geoms} collision geom(s): contacts with them are not simulated"
+                ));
+                self.robot.unmodeled.push(FileNote { what, ..note });
+            } else {
+                self.robot.ignored.push(FileNote { what, ..note });
+            }
+        }
+        Ok(rest)
     }
 
     /// The `unmodeled-element` note for a prop left out (see [`Self::props`]):

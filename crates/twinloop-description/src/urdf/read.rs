@@ -2,6 +2,7 @@
 
 use crate::description::*;
 use crate::error::DescriptionError;
+use crate::urdf::UNKNOWN_LIMIT;
 use crate::xml::{
     Places, error_at, error_at_attr, opt_array, opt_number, parse_array, parse_number,
     qualified_name, read_text, required, source_text, validate_placed,
@@ -306,8 +307,9 @@ fn read_joint(node: Node) -> Result<Joint, DescriptionError> {
                 joint.limit = Some(Limit {
                     lower: opt_number(c, "lower")?,
                     upper: opt_number(c, "upper")?,
-                    effort: opt_number(c, "effort")?,
-                    velocity: opt_number(c, "velocity")?,
+                    // The writer's "not given" (see `to_string`) reads back as such.
+                    effort: opt_number(c, "effort")?.filter(|&e| e != UNKNOWN_LIMIT),
+                    velocity: opt_number(c, "velocity")?.filter(|&v| v != UNKNOWN_LIMIT),
                 });
             }
             "dynamics" if first => {
