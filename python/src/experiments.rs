@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use serde::Serialize;
 use twinloop_description::Description;
-use twinloop_dynamics::BaseKind;
+use twinloop_dynamics::{BaseKind, JointOrder};
 use twinloop_ident::ann_data::{self, Change, DataOptions};
 use twinloop_ident::plate::{PlateOptions, generate_static_poses};
 use twinloop_ident::static_ident::StaticOptions;
@@ -315,7 +315,11 @@ pub fn static_poses<'py>(
         }
     }
     let (d, order) = description_arg_ordered(robot)?;
-    let model = PyModel::build(d.clone(), order, true)?;
+    // The poses are drawn joint by joint in the CLI's (file) order, so that one seed
+    // gives the CLI's poses, then put in the package's order.
+    let model = PyModel::build(d.clone(), JointOrder::File, true)?;
+    let ours = PyModel::build(d.clone(), order, true)?;
+    let perm = crate::model::q_permutation(&model.inner, &ours.inner);
     let options = PlateOptions {
         count,
         cop_noise,
@@ -328,7 +332,10 @@ pub fn static_poses<'py>(
         .map_err(ident_error)?;
     let nq = model.inner.nq;
     let poses: Vec<&StaticPose> = generated.poses.iter().map(|g| &g.pose).collect();
-    let q: Vec<f64> = poses.iter().flat_map(|p| p.q.iter().copied()).collect();
+    let q: Vec<f64> = poses
+        .iter()
+        .flat_map(|p| perm.iter().map(|&k| p.q[k]))
+        .collect();
     let cop: Vec<f64> = poses.iter().flat_map(|p| p.cop).collect();
     let out = PyDict::new(py);
     out.set_item("q", new_array(py, q, &[poses.len(), nq])?)?;

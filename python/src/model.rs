@@ -55,6 +55,19 @@ pub fn load_ordered(spec: &str) -> PyResult<(Description, JointOrder)> {
         .map_err(description_error)
 }
 
+/// The columns of `from`'s q that make `to`'s q, for two models of one description
+/// in two joint orders: `to_q[k] = from_q[perm[k]]`.
+pub fn q_permutation(from: &Model, to: &Model) -> Vec<usize> {
+    let mut perm: Vec<usize> = (0..to.q_offset).collect();
+    for (b, name) in to.joint_names.iter().enumerate() {
+        let f = from
+            .joint_index(name)
+            .expect("one description, the same joints");
+        perm.extend((0..to.joint_types[b].nq()).map(|k| from.idx_q[f] + k));
+    }
+    perm
+}
+
 /// What a robot file says: links with their masses, joints with their limits, and
 /// what `twinloop model check` finds wrong with it.
 #[pyclass(name = "Description", module = "twinloop._native", frozen)]

@@ -108,11 +108,7 @@ pub fn build(robot: &Description, s: &Settings) -> Result<Simulator, String> {
             .collect();
         sim.place_on_ground(&q0).map_err(|e| e.to_string())?;
         if s.ground && sim.contact_points().is_empty() {
-            return Err(format!(
-                "the robot has no collision primitives to stand on (mesh-only links: {}); \
-                 add <collision> boxes to the feet",
-                sim.mesh_only_links.join(", ")
-            ));
+            return Err(twinloop_sim::standing::nothing_to_stand_on(&sim));
         }
     }
     Ok(sim)

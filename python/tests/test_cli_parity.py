@@ -161,9 +161,13 @@ def test_identify_static_json_matches_the_cli(tmp_path):
                    timeout=300)
     theirs = json.loads(out.read_text())
     poses = tl.static_poses(truth, count=60, seed=2, cop_noise=0.0005)
-    # The CLI's poses file is the package's poses, number for number.
+    # The CLI's poses file is the package's poses, number for number, its q columns
+    # taken by name (the file is in file order, the package in Pinocchio's).
     table = np.loadtxt(poses_file, delimiter=",", skiprows=1)
-    np.testing.assert_array_equal(table[:, 1:-2], poses["q"])
+    header = poses_file.read_text().splitlines()[0].split(",")
+    names = ["base." + k for k in ("x", "y", "z", "qx", "qy", "qz", "qw")]
+    names += tl.Model.from_description(truth).joint_names
+    np.testing.assert_array_equal(table[:, [header.index("q:" + n) for n in names]], poses["q"])
     np.testing.assert_array_equal(table[:, -2:], poses["cop"])
     ours = tl.identify_static(prior, poses["q"], poses["cop"], truth.total_mass, category=poses["category"])
     # What only the command has: its input files' names, the fit's timing and the poses it

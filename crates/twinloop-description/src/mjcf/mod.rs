@@ -33,10 +33,14 @@
 //!   MJCF's, or `<body>_joint` (`<body>_joint2`, ...) for unnamed ones. "Limited"
 //!   follows MuJoCo: `limited="true"`, or `"auto"`/absent with a `range` when
 //!   `autolimits` is on (its default). `actuatorfrcrange` gives the limit's
-//!   effort (the larger magnitude), `damping` and `frictionloss` the
+//!   effort (the larger magnitude; a `<motor>` on the joint lowers it to its
+//!   `forcerange`, or its `ctrlrange` times its gear, when those are limited),
+//!   `damping` and `frictionloss` the
 //!   [`JointDynamics`], `armature` [`Joint::armature`]. The axis is normalised.
 //!   `ref` goes into the joint's origin (a turn or shift of `-ref` along the
-//!   axis), so that q is MuJoCo's qpos; `springref` is ignored.
+//!   axis), so that q is MuJoCo's qpos; `stiffness` and `springref` give
+//!   [`Joint::stiffness`] and [`Joint::springref`] (a ball's spring is not kept:
+//!   noted in [`Description::unmodeled`]).
 //! - A hinge `pos` (a point on the axis, in the body frame) is handled by putting
 //!   the joint's link frame at that point, axes unchanged: everything placed in
 //!   the body (inertial, geoms, sites, child bodies) is shifted by minus the last
@@ -57,7 +61,9 @@
 //!   in MuJoCo). `plane`, `hfield`, `ellipsoid` and `sdf` geoms are not shapes. A
 //!   geom is a visual if its `group` is 0, 1 or 2 (the groups MuJoCo's viewer
 //!   shows by default) and a collision shape if its `contype` or `conaffinity` is
-//!   not 0, so Menagerie's `visual`/`collision` classes land where expected. A
+//!   not 0 or a `<contact><pair>` names it (twinloop collides shapes with its
+//!   ground only: a pair's sole touches that ground; Apollo's soles collide only
+//!   through pairs), so Menagerie's `visual`/`collision` classes land where expected. A
 //!   visual's material is the geom's `material` asset (name and rgba) or, failing
 //!   that, its `rgba`.
 //! - `<site>` becomes a [`Frame`] on the body's link (unnamed: `<body>_site<N>`).
@@ -293,6 +299,9 @@ struct Reader<'a, 'i> {
     /// The replica suffix of the body being read: appended to the names given in
     /// the file (bodies, joints, sites, geoms), as MuJoCo's `<replicate>` does.
     suffix: String,
+    /// Geoms named by a `<contact><pair>`: they collide whatever their `contype`
+    /// and `conaffinity` (Apptronik Apollo's soles touch the floor only so).
+    paired: std::collections::HashSet<&'a str>,
 }
 
 /// Where an attribute's value came from: the element itself or a default class.
@@ -400,6 +409,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             },
             unnamed_bodies: 0,
             suffix: String::new(),
+            paired: Default::default(),
         }
     }
 
@@ -415,6 +425,12 @@ impl<'a, 'i> Reader<'a, 'i> {
             match s.tag_name().name() {
                 "compiler" => self.compiler(s)?,
                 "option" => self.option(s)?,
+                "contact" => self.paired.extend(
+                    s.children()
+                        .filter(|p| p.has_tag_name("pair"))
+                        .flat_map(|p| [p.attribute("geom1"), p.attribute("geom2")])
+                        .flatten(),
+                ),
                 _ => {}
             }
         }
@@ -505,6 +521,9 @@ impl<'a, 'i> Reader<'a, 'i> {
         }
         for &s in sections {
             self.unmodeled(s);
+            if s.tag_name().name() == "actuator" {
+                self.actuator_limits(s)?;
+            }
             if !SECTIONS.contains(&s.tag_name().name()) {
                 self.unknown(s);
             }
@@ -772,6 +791,56 @@ impl<'a, 'i> Reader<'a, 'i> {
             }
         }
         Ok(true)
+    }
+
+    /// The force limits of the `<motor>`s on joints, as MuJoCo clamps them: the
+    /// actuator's `forcerange` when force-limited, and its `ctrlrange` times its gear
+    /// when control-limited ("limited" as for joints: `"auto"` or absent means given
+    /// and `autolimits`). The smallest, with the joint's `actuatorfrcrange`, is the
+    /// joint's effort limit, so the simulator knows where a motor saturates.
+    fn actuator_limits(&mut self, section: Node<'a, 'i>) -> Result<(), DescriptionError> {
+        for e in section.children().filter(|e| e.has_tag_name("motor")) {
+            let Some(joint) = e.attribute("joint") else {
+                continue;
+            };
+            let class = self.class_of(e, None)?;
+            let get = |attr: &str| {
+                self.get(e, "motor", &class, attr)
+                    .or_else(|| self.get(e, "general", &class, attr))
+            };
+            let limit = |range: &str, limited: &str| -> Result<Option<f64>, DescriptionError> {
+                let r = match get(range) {
+                    Some((n, v)) => parse_array::<2>(n, range, v)?,
+                    None => return Ok(None),
+                };
+                let on = match get(limited) {
+                    Some((_, "auto")) | None => self.compiler.autolimits,
+                    Some((n, v)) => bool_attr(n, limited, v)?,
+                };
+                Ok(on.then(|| r[0].abs().max(r[1].abs())))
+            };
+            let gear = match get("gear") {
+                Some((n, v)) => v
+                    .split_whitespace()
+                    .next()
+                    .map(|g| g.parse::<f64>())
+                    .transpose()
+                    .map_err(|_| error_at_attr(n, "gear", "not a number"))?
+                    .unwrap_or(1.0),
+                None => 1.0,
+            };
+            let force = limit("forcerange", "forcelimited")?;
+            let ctrl = limit("ctrlrange", "ctrllimited")?.map(|c| c * gear.abs());
+            let Some(effort) = [force, ctrl].into_iter().flatten().reduce(f64::min) else {
+                continue;
+            };
+            let name = format!("{joint}{}", self.suffix);
+            if let Some(j) = self.robot.joints.iter_mut().find(|j| j.name == name) {
+                let lim = j.limit.get_or_insert_with(Limit::default);
+                lim.effort = Some(lim.effort.map_or(effort, |x| x.min(effort)));
+            }
+        }
+        Ok(())
     }
 
     /// Elements of a section that act on the physics beyond the rigid-body tree:
@@ -1276,8 +1345,24 @@ impl<'a, 'i> Reader<'a, 'i> {
         let cc = childclass.as_deref();
         let pos = opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]);
         let (pos, rot) = compose(&frame, pos, self.orientation(node, "body", None)?);
-        let joints = self.body_joints(node, &name, parent.is_some(), cc)?;
+        let mut joints = self.body_joints(node, &name, parent.is_some(), cc)?;
         let offset = joints.last().map_or([0.0; 3], |j| j.anchor);
+        for j in joints.iter_mut() {
+            if j.joint.kind == JointKind::Spherical && j.joint.stiffness != 0.0 {
+                // MuJoCo's ball spring acts on the rotation from springref's quaternion.
+                let (line, _) = crate::xml::position(j.node.document(), j.node.range().start);
+                self.robot.unmodeled.push(FileNote {
+                    element: crate::xml::element_path(j.node),
+                    line,
+                    what: format!(
+                        "ball joint stiffness {}: twinloop does not model a ball joint's \
+                         spring (its hinge and slide springs it does)",
+                        j.joint.stiffness
+                    ),
+                });
+                j.joint.stiffness = 0.0;
+            }
+        }
 
         let (link, frames) = self.link_contents(node, &name, cc, offset)?;
         // Joints to the parent, in order, each with its child link.
@@ -1585,6 +1670,18 @@ impl<'a, 'i> Reader<'a, 'i> {
         joint.armature = self
             .number(self.get(j, "joint", class, "armature"), "armature")?
             .unwrap_or(0.0);
+        joint.stiffness = self
+            .number(self.get(j, "joint", class, "stiffness"), "stiffness")?
+            .unwrap_or(0.0);
+        // springref is a qpos value: an angle in the compiler's unit for a hinge.
+        let springref = self
+            .number(self.get(j, "joint", class, "springref"), "springref")?
+            .unwrap_or(0.0);
+        joint.springref = if hinge {
+            self.angle(springref)
+        } else {
+            springref
+        };
         Ok(joint)
     }
 
@@ -1948,7 +2045,8 @@ impl<'a, 'i> Reader<'a, 'i> {
                 material,
             });
         }
-        if contype != 0 || conaffinity != 0 {
+        let paired = name.as_deref().is_some_and(|n| self.paired.contains(n));
+        if contype != 0 || conaffinity != 0 || paired {
             link.collisions.push(Shape {
                 name,
                 origin,

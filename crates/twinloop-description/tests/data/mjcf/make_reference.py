@@ -202,7 +202,18 @@ def reference(m):
         "nv": int(m.nv),
         "bodies": bodies,
         "states": [state(m, s, free, left_out) for s in SEEDS],
-    }
+    } | saturation(m)
+
+
+def saturation(m):
+    """With actuators: the joint forces of every control at a huge value, which MuJoCo
+    clamps to ctrlrange (times the gear) and forcerange when those are limited."""
+    if m.nu == 0:
+        return {}
+    d = mujoco.MjData(m)
+    d.ctrl[:] = 1e6
+    mujoco.mj_forward(m, d)
+    return {"saturated_actuator_force": d.qfrc_actuator.tolist()}
 
 
 def fmt(v):
