@@ -304,13 +304,16 @@ fn read_joint(node: Node) -> Result<Joint, DescriptionError> {
                 joint.axis = Some(opt_array::<3>(c, "xyz")?.unwrap_or([1.0, 0.0, 0.0]));
             }
             "limit" if first => {
+                // A limit that says nothing but the writer's "not given" is no limit
+                // (how a revolute joint without one is written).
                 joint.limit = Some(Limit {
                     lower: opt_number(c, "lower")?,
                     upper: opt_number(c, "upper")?,
                     // The writer's "not given" (see `to_string`) reads back as such.
                     effort: opt_number(c, "effort")?.filter(|&e| e != UNKNOWN_LIMIT),
                     velocity: opt_number(c, "velocity")?.filter(|&v| v != UNKNOWN_LIMIT),
-                });
+                })
+                .filter(|l| *l != Limit::default());
             }
             "dynamics" if first => {
                 joint.dynamics = Some(JointDynamics {
