@@ -252,7 +252,7 @@ mod tests {
         let model = Model::from_description(&robot).unwrap();
         let table =
             |x: f64| Table::parse(&format!("t,q:neck_yaw,q:neck_pitch\n0,{x},0.1\n")).unwrap();
-        for x in [7.0, -9.4, 2.0 * std::f64::consts::TAU] {
+        for x in [7.0, -9.4, 9.42] {
             assert!(check_angles(&table(x), &model).is_ok(), "{x} rad");
         }
         let e = check_angles(&table(540.0), &model).unwrap_err().to_string();
