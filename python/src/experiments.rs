@@ -79,7 +79,8 @@ fn change_arg(c: &Bound<'_, PyAny>, k: usize) -> PyResult<Change> {
 /// The simulated tip-over experiment of seeds 000 and 001 (`twinloop experiment
 /// tipover --robot ... --json`): four directions, tip angles (deg), the CoM by the
 /// seed's and the exact method (m) beside the model's. `add_mass`: point masses
-/// (kg, link, (x, y, z) m in the link frame) added first, like `--add-mass`.
+/// added first, like `--add-mass`: each `"KG@LINK:X,Y,Z"` (the CLI's form) or
+/// (kg, link, (x, y, z)), x, y, z m in the link frame; one or a list.
 ///
 /// With `port` (and `map`, the servo mapping: builtin:km20 or a mapping TOML), the
 /// experiment runs on a robot over its Dynamixel bus instead, as `twinloop experiment
@@ -110,7 +111,7 @@ pub fn tipover<'py>(
     slow_ramp: f64,
     compliance_slope: f64,
     encoders: bool,
-    add_mass: Option<Vec<(f64, String, [f64; 3])>>,
+    add_mass: Option<&Bound<'py, PyAny>>,
     port: Option<String>,
     map: Option<String>,
     directions: Option<Vec<String>>,
@@ -162,13 +163,41 @@ pub fn tipover<'py>(
         ));
     };
     let mut d: Description = (*description_arg(robot)?).clone();
-    for (kg, link, xyz) in add_mass.unwrap_or_default() {
+    for (kg, link, xyz) in added_masses(add_mass)? {
         twinloop_description::builtin::add_point_mass(&mut d, &link, kg, xyz)
             .map_err(|e| value_error(format!("add_mass \"{kg}@{link}\": {e}")))?;
     }
     let opts = study_options(ramp, slow_ramp, compliance_slope, encoders)?;
     let report = py.detach(|| run_study(&d, &opts)).map_err(ident_error)?;
     to_py(py, &report)
+}
+
+/// `add_mass`: one point mass or a list of them, each `"KG@LINK:X,Y,Z"` (the CLI's
+/// `--add-mass`, read by the same parser) or a tuple (kg, link, xyz).
+fn added_masses(add_mass: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<(f64, String, [f64; 3])>> {
+    let Some(a) = add_mass else {
+        return Ok(Vec::new());
+    };
+    let one = |x: &Bound<'_, PyAny>| -> PyResult<(f64, String, [f64; 3])> {
+        if let Ok(s) = x.extract::<String>() {
+            return twinloop_description::builtin::parse_point_mass(&s)
+                .map_err(|e| value_error(format!("add_mass {}", e.message)));
+        }
+        x.extract().map_err(|_| {
+            value_error(
+                "add_mass: expected \"KG@LINK:X,Y,Z\" or (kg, link, (x, y, z)), or a list of them",
+            )
+        })
+    };
+    if a.extract::<String>().is_ok() {
+        return Ok(vec![one(a)?]);
+    }
+    let items: Vec<Bound<'_, PyAny>> = a.extract().map_err(|_| {
+        value_error(
+            "add_mass: expected \"KG@LINK:X,Y,Z\" or (kg, link, (x, y, z)), or a list of them",
+        )
+    })?;
+    items.iter().map(one).collect()
 }
 
 /// Random hardware changes of a robot: `n` dicts {link, mass (kg), xyz (m)}, a point

@@ -55,6 +55,24 @@ def test_tipover_json_matches_the_cli(tmp_path):
     assert ours["com"]["true"][2] > 0.1  # a real result, not an empty one
 
 
+def test_add_mass_takes_the_clis_string_form(tmp_path):
+    """Issue 30 item 8: `add_mass` takes `--add-mass`'s "KG@LINK:X,Y,Z" (one, or in a list
+    beside tuples), read by the CLI's parser: the same robot as the tuple form and as
+    the command's `model export --add-mass`, and the same errors."""
+    exe = cli()
+    out = tmp_path / "km20.urdf"
+    subprocess.run([exe, "model", "export", "builtin:km20", "--add-mass", "0.2@torso:0.05,0,0", "--out", str(out)],
+                   check=True, capture_output=True, timeout=120)
+    cli_mass = tl.load(str(out)).total_mass
+    study = dict(ramp=5.0, slow_ramp=1.0)
+    one = tl.tipover("builtin:km20", add_mass="0.2@torso:0.05,0,0", **study)
+    assert one == tl.tipover("builtin:km20", add_mass=[(0.2, "torso", (0.05, 0.0, 0.0))], **study)
+    assert one["com"]["true"] == tl.tipover("builtin:km20", add_mass=["0.2@torso:0.05,0,0"], **study)["com"]["true"]
+    assert one["total_mass"] == pytest.approx(cli_mass, abs=1e-12)
+    with pytest.raises(ValueError, match=r"add_mass \"0.2@torso\": no ':' before the position"):
+        tl.tipover("builtin:km20", add_mass="0.2@torso")
+
+
 def test_adapt_json_matches_the_cli(tmp_path):
     exe = cli()
     prior = tl.load("builtin:km20")

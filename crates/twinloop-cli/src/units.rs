@@ -130,30 +130,12 @@ pub fn add_masses(robot: &mut Description, specs: &[String]) -> Result<(), CliEr
     Ok(())
 }
 
-/// `KG@LINK:X,Y,Z` (X,Y,Z in metres in the link frame) as its three parts.
+/// `KG@LINK:X,Y,Z` (X,Y,Z in metres in the link frame) as its three parts: the
+/// description crate's parser (shared with the Python package), errors naming the
+/// option.
 pub fn parse_added_mass(s: &str) -> Result<(f64, String, [f64; 3]), CliError> {
-    let bad = |why: &str| {
-        CliError::new(format!(
-            "--add-mass \"{s}\": {why} (expected KG@LINK:X,Y,Z)"
-        ))
-    };
-    let (kg, rest) = s.split_once('@').ok_or_else(|| bad("no '@'"))?;
-    let (link, xyz) = rest
-        .rsplit_once(':')
-        .ok_or_else(|| bad("no ':' before the position"))?;
-    let kg: f64 = kg
-        .trim()
-        .parse()
-        .map_err(|_| bad("the mass is not a number"))?;
-    let v: Vec<f64> = xyz
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad("the position is not three numbers"))?;
-    if v.len() != 3 {
-        return Err(bad("the position needs three numbers"));
-    }
-    Ok((kg, link.to_string(), [v[0], v[1], v[2]]))
+    twinloop_description::builtin::parse_point_mass(s)
+        .map_err(|e| CliError::new(format!("--add-mass {}", e.message)))
 }
 
 /// How far, rad, beyond its limits a hinge's angle may be before the column is taken

@@ -798,8 +798,12 @@ fn free_props_beside_a_free_robot_are_left_out() {
         "<body name=\"table\"/>",
     ));
     assert!(robot.link("table").is_none());
-    assert!(robot.ignored.iter().any(|n| n.element == "<body name=\"table\">"
-        && n.what.contains("empty static body")));
+    assert!(
+        robot
+            .ignored
+            .iter()
+            .any(|n| n.element == "<body name=\"table\">" && n.what.contains("empty static body"))
+    );
     for other in [
         "<body name=\"table\"><geom size=\"0.1\"/></body>",
         "<body name=\"table\"><joint/></body>",

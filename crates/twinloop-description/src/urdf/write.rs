@@ -22,7 +22,7 @@
 //!   no limit, which is what Pinocchio assumes for a joint without `<limit>`; the
 //!   reader reads that number back as not given;
 //! - a revolute or prismatic joint always has a `<limit>` (urdfdom refuses one
-//!   without);
+//!   without), and a `<material>` always a `name` (empty when it has none);
 //! - a ball joint ([`JointKind::Spherical`], from MJCF; URDF has none) becomes three
 //!   revolute joints `<ball>_x`, `<ball>_y`, `<ball>_z` about the x, y and z axes of
 //!   the ball's frame, through two massless links `<ball>_x_link` and
@@ -251,11 +251,8 @@ impl Writer {
     }
 
     fn material(&mut self, level: usize, m: &Material) {
-        let open = if m.name.is_empty() {
-            "<material".to_string()
-        } else {
-            format!("<material name=\"{}\"", escape(&m.name))
-        };
+        // urdfdom and urdf_parser_py require the name, even an empty one.
+        let open = format!("<material name=\"{}\"", escape(&m.name));
         if m.rgba.is_none() && m.texture.is_none() {
             self.line(level, &format!("{open}/>"));
             return;
