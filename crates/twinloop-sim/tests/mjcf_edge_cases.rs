@@ -99,3 +99,45 @@ fn pair_only_soles_stand_and_without_pairs_the_refusal_says_why() {
     assert!(!e.contains("mesh-only links: )"), "{e}");
     assert!(e.contains("<contact><pair>"), "{e}");
 }
+
+/// Item 3 on a Menagerie humanoid: Unitree H1's `<motor ctrlrange>`s (gear 1) give every
+/// joint the effort limit where MuJoCo saturates it (its `qfrc_actuator` with every
+/// control at 1e6, MuJoCo 4.0.1, the mesh geoms removed: they carry no actuator),
+/// where "actuator saturation is unknown" was said before.
+#[test]
+fn h1_motors_give_mujocos_saturation_as_effort_limits() {
+    let mujoco: [(&str, f64); 19] = [
+        ("left_hip_yaw", 200.0),
+        ("left_hip_roll", 200.0),
+        ("left_hip_pitch", 200.0),
+        ("left_knee", 300.0),
+        ("left_ankle", 40.0),
+        ("right_hip_yaw", 200.0),
+        ("right_hip_roll", 200.0),
+        ("right_hip_pitch", 200.0),
+        ("right_knee", 300.0),
+        ("right_ankle", 40.0),
+        ("torso", 200.0),
+        ("left_shoulder_pitch", 40.0),
+        ("left_shoulder_roll", 40.0),
+        ("left_shoulder_yaw", 18.0),
+        ("left_elbow", 18.0),
+        ("right_shoulder_pitch", 40.0),
+        ("right_shoulder_roll", 40.0),
+        ("right_shoulder_yaw", 18.0),
+        ("right_elbow", 18.0),
+    ];
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models/unitree_h1/mjcf/h1_menagerie.xml");
+    let robot = twinloop_description::load(path).unwrap();
+    let model = Model::from_description(&robot).unwrap();
+    for (name, effort) in mujoco {
+        let i = model.joint_index(name).unwrap();
+        assert_eq!(model.effort_limits[i], effort, "{name}");
+    }
+    let lint = twinloop_description::lint::lint(&robot);
+    assert!(
+        !format!("{lint:?}").contains("saturation is unknown"),
+        "{lint:?}"
+    );
+}
