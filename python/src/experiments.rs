@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use serde::Serialize;
 use twinloop_description::Description;
-use twinloop_dynamics::{BaseKind, JointOrder};
+use twinloop_dynamics::JointOrder;
 use twinloop_ident::ann_data::{self, Change, DataOptions};
 use twinloop_ident::plate::{PlateOptions, generate_static_poses};
 use twinloop_ident::static_ident::StaticOptions;
@@ -398,8 +398,11 @@ pub fn identify_static<'py>(
     category: Option<Vec<Option<String>>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (d, order) = description_arg_ordered(robot)?;
-    let model = twinloop_dynamics::Model::from_description_ordered(&d, BaseKind::Floating, order)
-        .map_err(crate::errors::description_error)?;
+    // q comes in the package's joint order; the fit runs in the CLI's (file) order, so
+    // that the same poses give the command's numbers (a rank decision included).
+    let model = PyModel::build(d.clone(), JointOrder::File, true)?.inner;
+    let ours = PyModel::build(d.clone(), order, true)?.inner;
+    let perm = crate::model::q_permutation(&ours, &model);
     let qa = Arg::new(q, "q", &[Dim::Free("P"), Dim::Is(model.nq, "nq")])?;
     let n = qa.rows();
     let ca = Arg::new(cop, "cop", &[Dim::Is(n, "P (rows of q)"), Dim::Is(2, "")])?;
@@ -424,8 +427,9 @@ pub fn identify_static<'py>(
                     value_error(format!("category[{i}]: unknown category \"{s}\""))
                 })?),
             };
+            let row = &qa.slice()[i * model.nq..(i + 1) * model.nq];
             Ok(StaticPose {
-                q: qa.slice()[i * model.nq..(i + 1) * model.nq].to_vec(),
+                q: perm.iter().map(|&k| row[k]).collect(),
                 cop: [ca.slice()[2 * i], ca.slice()[2 * i + 1]],
                 category: cat,
             })
