@@ -5,12 +5,12 @@ use crate::arrays::{Arg, Dim, new_array};
 use crate::batch::thread_count;
 use crate::errors::value_error;
 use crate::model::PyModel;
-use crate::sim::description_arg;
+use crate::sim::{description_arg, description_arg_ordered};
 use crate::values::{study_arg, to_py};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use twinloop_description::Description;
-use twinloop_dynamics::BaseKind;
+use twinloop_dynamics::JointOrder;
 use twinloop_ident::ann_data::{self, Change, DataOptions};
 use twinloop_ident::plate::{PlateOptions, generate_static_poses};
 use twinloop_ident::static_ident::StaticOptions;
@@ -70,7 +70,8 @@ fn change_arg(c: &Bound<'_, PyAny>, k: usize) -> PyResult<Change> {
 /// The simulated tip-over experiment of seeds 000 and 001 (`twinloop experiment
 /// tipover --robot ... --json`): four directions, tip angles (deg), the CoM by the
 /// seed's and the exact method (m) beside the model's. `add_mass`: point masses
-/// (kg, link, (x, y, z) m in the link frame) added first, like `--add-mass`.
+/// added first, like `--add-mass`: each `"KG@LINK:X,Y,Z"` (the CLI's form) or
+/// (kg, link, (x, y, z)), x, y, z m in the link frame; one or a list.
 ///
 /// With `port` (and `map`, the servo mapping: builtin:km20 or a mapping TOML), the
 /// experiment runs on a robot over its Dynamixel bus instead, as `twinloop experiment
@@ -101,7 +102,7 @@ pub fn tipover<'py>(
     slow_ramp: f64,
     compliance_slope: f64,
     encoders: bool,
-    add_mass: Option<Vec<(f64, String, [f64; 3])>>,
+    add_mass: Option<&Bound<'py, PyAny>>,
     port: Option<String>,
     map: Option<String>,
     directions: Option<Vec<String>>,
@@ -153,13 +154,41 @@ pub fn tipover<'py>(
         ));
     };
     let mut d: Description = (*description_arg(robot)?).clone();
-    for (kg, link, xyz) in add_mass.unwrap_or_default() {
+    for (kg, link, xyz) in added_masses(add_mass)? {
         twinloop_description::builtin::add_point_mass(&mut d, &link, kg, xyz)
             .map_err(|e| value_error(format!("add_mass \"{kg}@{link}\": {e}")))?;
     }
     let opts = study_options(ramp, slow_ramp, compliance_slope, encoders)?;
     let report = py.detach(|| run_study(&d, &opts)).map_err(ident_error)?;
     to_py(py, &report)
+}
+
+/// `add_mass`: one point mass or a list of them, each `"KG@LINK:X,Y,Z"` (the CLI's
+/// `--add-mass`, read by the same parser) or a tuple (kg, link, xyz).
+fn added_masses(add_mass: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<(f64, String, [f64; 3])>> {
+    let Some(a) = add_mass else {
+        return Ok(Vec::new());
+    };
+    let one = |x: &Bound<'_, PyAny>| -> PyResult<(f64, String, [f64; 3])> {
+        if let Ok(s) = x.extract::<String>() {
+            return twinloop_description::builtin::parse_point_mass(&s)
+                .map_err(|e| value_error(format!("add_mass {}", e.message)));
+        }
+        x.extract().map_err(|_| {
+            value_error(
+                "add_mass: expected \"KG@LINK:X,Y,Z\" or (kg, link, (x, y, z)), or a list of them",
+            )
+        })
+    };
+    if a.extract::<String>().is_ok() {
+        return Ok(vec![one(a)?]);
+    }
+    let items: Vec<Bound<'_, PyAny>> = a.extract().map_err(|_| {
+        value_error(
+            "add_mass: expected \"KG@LINK:X,Y,Z\" or (kg, link, (x, y, z)), or a list of them",
+        )
+    })?;
+    items.iter().map(one).collect()
 }
 
 /// Random hardware changes of a robot: `n` dicts {link, mass (kg), xyz (m)}, a point
@@ -305,8 +334,12 @@ pub fn static_poses<'py>(
             return Err(value_error(format!("{name}: must be >= 0, got {x}")));
         }
     }
-    let d = description_arg(robot)?;
-    let model = PyModel::build(d.clone(), true)?;
+    let (d, order) = description_arg_ordered(robot)?;
+    // The poses are drawn joint by joint in the CLI's (file) order, so that one seed
+    // gives the CLI's poses, then put in the package's order.
+    let model = PyModel::build(d.clone(), JointOrder::File, true)?;
+    let ours = PyModel::build(d.clone(), order, true)?;
+    let perm = crate::model::q_permutation(&model.inner, &ours.inner);
     let options = PlateOptions {
         count,
         cop_noise,
@@ -319,7 +352,10 @@ pub fn static_poses<'py>(
         .map_err(ident_error)?;
     let nq = model.inner.nq;
     let poses: Vec<&StaticPose> = generated.poses.iter().map(|g| &g.pose).collect();
-    let q: Vec<f64> = poses.iter().flat_map(|p| p.q.iter().copied()).collect();
+    let q: Vec<f64> = poses
+        .iter()
+        .flat_map(|p| perm.iter().map(|&k| p.q[k]))
+        .collect();
     let cop: Vec<f64> = poses.iter().flat_map(|p| p.cop).collect();
     let out = PyDict::new(py);
     out.set_item("q", new_array(py, q, &[poses.len(), nq])?)?;
@@ -352,9 +388,12 @@ pub fn identify_static<'py>(
     com_margin: f64,
     category: Option<Vec<Option<String>>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let d = description_arg(robot)?;
-    let model = twinloop_dynamics::Model::from_description_with_base(&d, BaseKind::Floating)
-        .map_err(crate::errors::description_error)?;
+    let (d, order) = description_arg_ordered(robot)?;
+    // q comes in the package's joint order; the fit runs in the CLI's (file) order, so
+    // that the same poses give the command's numbers (a rank decision included).
+    let model = PyModel::build(d.clone(), JointOrder::File, true)?.inner;
+    let ours = PyModel::build(d.clone(), order, true)?.inner;
+    let perm = crate::model::q_permutation(&ours, &model);
     let qa = Arg::new(q, "q", &[Dim::Free("P"), Dim::Is(model.nq, "nq")])?;
     let n = qa.rows();
     let ca = Arg::new(cop, "cop", &[Dim::Is(n, "P (rows of q)"), Dim::Is(2, "")])?;
@@ -379,8 +418,9 @@ pub fn identify_static<'py>(
                     value_error(format!("category[{i}]: unknown category \"{s}\""))
                 })?),
             };
+            let row = &qa.slice()[i * model.nq..(i + 1) * model.nq];
             Ok(StaticPose {
-                q: qa.slice()[i * model.nq..(i + 1) * model.nq].to_vec(),
+                q: perm.iter().map(|&k| row[k]).collect(),
                 cop: [ca.slice()[2 * i], ca.slice()[2 * i + 1]],
                 category: cat,
             })
@@ -480,8 +520,6 @@ pub fn adapt<'py>(
             Ok::<_, IdentError>(a)
         })
         .map_err(ident_error)?;
-    let robot = adapted.robot.map(|r| crate::model::PyDescription {
-        inner: std::sync::Arc::new(r),
-    });
+    let robot = adapted.robot.map(crate::model::PyDescription::urdf);
     Ok((to_py(py, &adapted.report)?, robot))
 }

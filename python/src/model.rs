@@ -10,14 +10,27 @@ use pyo3::types::{PyDict, PyInt, PyList, PyTuple};
 use std::path::Path;
 use std::sync::Arc;
 use twinloop_description::{Description, DescriptionError, lint, urdf};
-use twinloop_dynamics::{BaseKind, Data, Model};
+use twinloop_dynamics::{BaseKind, Data, JointOrder, Model};
 use twinloop_spatial::Se3;
 
-/// Load `builtin:NAME` or a URDF/MJCF file, as `twinloop --robot` does. A reader bug
-/// on a strange file becomes an error naming the file, never a panic.
-pub fn load_description(spec: &str) -> PyResult<Description> {
+/// The joint order Pinocchio gives the file: a URDF's (and a builtin robot's, which
+/// Pinocchio reads through its URDF) by joint name, as its URDF parser numbers joints;
+/// an MJCF's in file order, as its MJCF parser walks the body tree.
+fn pinocchio_order(format: twinloop_description::Format) -> JointOrder {
+    match format {
+        twinloop_description::Format::Urdf => JointOrder::UrdfByName,
+        twinloop_description::Format::Mjcf => JointOrder::File,
+    }
+}
+
+/// Load `builtin:NAME` or a URDF/MJCF file, as `twinloop --robot` does, with the joint
+/// order the Python package numbers the description's joints in (the order Pinocchio
+/// gives the same file). A reader bug on a strange file becomes an error naming the
+/// file, never a panic.
+pub fn load_ordered(spec: &str) -> PyResult<(Description, JointOrder)> {
     if spec.starts_with("builtin:") {
         return twinloop_description::builtin::resolve(spec)
+            .map(|d| (d, JointOrder::UrdfByName))
             .map_err(|e| ModelError::new_err(e.to_string()));
     }
     let path = Path::new(spec);
@@ -26,14 +39,29 @@ pub fn load_description(spec: &str) -> PyResult<Description> {
             "{spec}: cannot read the file: {e}"
         )));
     }
-    let loaded = std::panic::catch_unwind(|| twinloop_description::load(path));
+    let loaded = std::panic::catch_unwind(|| twinloop_description::load_with_format(path));
     let result = loaded.unwrap_or_else(|_| {
         Err(
             DescriptionError::new("the reader failed unexpectedly; please report this file")
                 .in_file(path),
         )
     });
-    result.map_err(description_error)
+    result
+        .map(|(d, f)| (d, pinocchio_order(f)))
+        .map_err(description_error)
+}
+
+/// The columns of `from`'s q that make `to`'s q, for two models of one description
+/// in two joint orders: `to_q[k] = from_q[perm[k]]`.
+pub fn q_permutation(from: &Model, to: &Model) -> Vec<usize> {
+    let mut perm: Vec<usize> = (0..to.q_offset).collect();
+    for (b, name) in to.joint_names.iter().enumerate() {
+        let f = from
+            .joint_index(name)
+            .expect("one description, the same joints");
+        perm.extend((0..to.joint_types[b].nq()).map(|k| from.idx_q[f] + k));
+    }
+    perm
 }
 
 /// What a robot file says: links with their masses, joints with their limits, and
@@ -41,26 +69,40 @@ pub fn load_description(spec: &str) -> PyResult<Description> {
 #[pyclass(name = "Description", module = "twinloop._native", frozen)]
 pub struct PyDescription {
     pub inner: Arc<Description>,
+    /// The order its models number the joints in: Pinocchio's for the same file.
+    pub order: JointOrder,
 }
 
-/// The lossless parts of a description for pickling: URDF text (the lossless writer),
-/// plus what URDF cannot say (an MJCF's gravity and joint armature, by joint name).
-type DescriptionState = (String, Option<[f64; 3]>, Vec<(String, f64)>);
+impl PyDescription {
+    /// A description read from (or made from) a URDF: Pinocchio's URDF order.
+    pub fn urdf(d: Description) -> PyDescription {
+        PyDescription {
+            inner: Arc::new(d),
+            order: JointOrder::UrdfByName,
+        }
+    }
+}
 
-fn description_state(d: &Description) -> DescriptionState {
+/// The lossless parts of a description for pickling: URDF text (the exact writer),
+/// plus what URDF cannot say (an MJCF's gravity and joint armature, by joint name),
+/// and whether its joints are numbered by name (Pinocchio's URDF order).
+type DescriptionState = (String, Option<[f64; 3]>, Vec<(String, f64)>, bool);
+
+fn description_state(d: &Description, order: JointOrder) -> DescriptionState {
     (
-        urdf::to_string(d),
+        urdf::to_string_exact(d),
         d.gravity,
         d.joints
             .iter()
             .filter(|j| j.armature != 0.0)
             .map(|j| (j.name.clone(), j.armature))
             .collect(),
+        order == JointOrder::UrdfByName,
     )
 }
 
-fn description_from_state(state: DescriptionState) -> PyResult<Description> {
-    let (text, gravity, armature) = state;
+fn description_from_state(state: DescriptionState) -> PyResult<(Description, JointOrder)> {
+    let (text, gravity, armature, by_name) = state;
     let mut d = urdf::from_str(&text).map_err(description_error)?;
     d.gravity = gravity;
     for (name, a) in armature {
@@ -75,22 +117,28 @@ fn description_from_state(state: DescriptionState) -> PyResult<Description> {
             })?;
         joint.armature = a;
     }
-    Ok(d)
+    let order = match by_name {
+        true => JointOrder::UrdfByName,
+        false => JointOrder::File,
+    };
+    Ok((d, order))
 }
 
 /// Rebuild a pickled description (used by pickle).
 #[pyfunction]
 pub fn _description_from_state(state: DescriptionState) -> PyResult<PyDescription> {
+    let (d, order) = description_from_state(state)?;
     Ok(PyDescription {
-        inner: Arc::new(description_from_state(state)?),
+        inner: Arc::new(d),
+        order,
     })
 }
 
 /// Rebuild a pickled model (used by pickle).
 #[pyfunction]
 pub fn _model_from_state(state: DescriptionState, floating: bool) -> PyResult<PyModel> {
-    let d = Arc::new(description_from_state(state)?);
-    PyModel::build(d, floating)
+    let (d, order) = description_from_state(state)?;
+    PyModel::build(Arc::new(d), order, floating)
 }
 
 /// Load a robot: `"builtin:km20"`, `"builtin:lab17"`, or a URDF or MJCF file.
@@ -107,8 +155,10 @@ pub fn load(path_or_builtin: &Bound<'_, PyAny>) -> PyResult<PyDescription> {
             .and_then(|p| p.extract())
             .map_err(|_| value_error("path_or_builtin: expected a str or os.PathLike"))?
     };
+    let (d, order) = load_ordered(&spec)?;
     Ok(PyDescription {
-        inner: Arc::new(load_description(&spec)?),
+        inner: Arc::new(d),
+        order,
     })
 }
 
@@ -124,9 +174,9 @@ impl PyDescription {
     /// Read a description from URDF text.
     #[staticmethod]
     fn from_urdf(text: &str) -> PyResult<PyDescription> {
-        Ok(PyDescription {
-            inner: Arc::new(urdf::from_str(text).map_err(description_error)?),
-        })
+        Ok(PyDescription::urdf(
+            urdf::from_str(text).map_err(description_error)?,
+        ))
     }
 
     /// The robot's name.
@@ -222,10 +272,14 @@ impl PyDescription {
         let mut d = (*self.inner).clone();
         twinloop_description::builtin::add_point_mass(&mut d, link, mass, xyz)
             .map_err(|e| value_error(format!("link: {e}")))?;
-        Ok(PyDescription { inner: Arc::new(d) })
+        Ok(PyDescription {
+            inner: Arc::new(d),
+            order: self.order,
+        })
     }
 
-    /// The description as URDF text (twinloop's lossless writer).
+    /// The description as URDF text, as `twinloop model export` writes it (a file
+    /// Pinocchio and urdfdom load: ball joints as three revolute joints).
     fn to_urdf(&self) -> String {
         urdf::to_string(&self.inner)
     }
@@ -234,7 +288,7 @@ impl PyDescription {
         let f = py
             .import("twinloop._native")?
             .getattr("_description_from_state")?;
-        let state = description_state(&self.inner).into_pyobject(py)?;
+        let state = description_state(&self.inner, self.order).into_pyobject(py)?;
         PyTuple::new(py, [f, PyTuple::new(py, [state])?.into_any()])
     }
 
@@ -254,21 +308,27 @@ impl PyDescription {
 pub struct PyModel {
     pub inner: Arc<Model>,
     pub description: Arc<Description>,
+    pub order: JointOrder,
     pub floating: bool,
 }
 
 impl PyModel {
-    pub fn build(description: Arc<Description>, floating: bool) -> PyResult<PyModel> {
+    pub fn build(
+        description: Arc<Description>,
+        order: JointOrder,
+        floating: bool,
+    ) -> PyResult<PyModel> {
         let base = if floating {
             BaseKind::Floating
         } else {
             BaseKind::Fixed
         };
-        let model =
-            Model::from_description_with_base(&description, base).map_err(description_error)?;
+        let model = Model::from_description_ordered(&description, base, order)
+            .map_err(description_error)?;
         Ok(PyModel {
             inner: Arc::new(model),
             description,
+            order,
             floating,
         })
     }
@@ -310,7 +370,8 @@ impl PyModel {
         description: &Bound<'_, PyDescription>,
         floating: bool,
     ) -> PyResult<PyModel> {
-        PyModel::build(description.get().inner.clone(), floating)
+        let d = description.get();
+        PyModel::build(d.inner.clone(), d.order, floating)
     }
 
     #[getter]
@@ -372,6 +433,7 @@ impl PyModel {
     fn description(&self) -> PyDescription {
         PyDescription {
             inner: self.description.clone(),
+            order: self.order,
         }
     }
     /// Index of a joint by name (None if absent).
@@ -394,7 +456,7 @@ impl PyModel {
         let f = py
             .import("twinloop._native")?
             .getattr("_model_from_state")?;
-        let state = description_state(&self.description)
+        let state = description_state(&self.description, self.order)
             .into_pyobject(py)?
             .into_any();
         let floating = self.floating.into_pyobject(py)?.to_owned().into_any();

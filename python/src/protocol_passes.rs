@@ -3,7 +3,7 @@
 //! keywords mapped onto `twinloop_loop::protocol_bias`, which runs the passes.
 
 use crate::errors::value_error;
-use crate::sim::description_arg;
+use crate::sim::description_arg_ordered;
 use crate::tipover_bus::loop_error;
 use crate::values::{study_arg, to_py};
 use pyo3::prelude::*;
@@ -40,7 +40,7 @@ pub fn adapt_to_protocol<'py>(
     Option<crate::model::PyDescription>,
     Bound<'py, PyAny>,
 )> {
-    let d = description_arg(prior)?;
+    let (d, order) = description_arg_ordered(prior)?;
     let model_spec = prior.extract::<String>().unwrap_or_else(|_| d.name.clone());
     let tip = study_arg(py, tipover)?;
     let given = [
@@ -79,6 +79,7 @@ pub fn adapt_to_protocol<'py>(
         .map_err(loop_error)?;
     let robot = adapted.robot.map(|r| crate::model::PyDescription {
         inner: std::sync::Arc::new(r),
+        order,
     });
     Ok((to_py(py, &adapted.report)?, robot, to_py(py, &calibration)?))
 }

@@ -5,12 +5,13 @@
 use crate::arrays::{Arg, Dim, new_array, read_only_vector};
 use crate::batch::thread_count;
 use crate::errors::value_error;
-use crate::model::{PyDescription, load_description};
+use crate::model::{PyDescription, load_ordered};
 use numpy::{PyArray1, PyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::sync::Arc;
 use twinloop_description::Description;
+use twinloop_dynamics::{BaseKind, JointOrder, Model};
 use twinloop_robot::RobotState;
 use twinloop_sim::{Actuator, DynamixelServo, SimConfig, Simulator};
 
@@ -30,6 +31,8 @@ pub struct Settings {
     pub ground: bool,
     /// Start standing on the ground at the neutral pose (clamped into the limits).
     pub stand: bool,
+    /// The joint order of q, v and the goals: the description's (Pinocchio's).
+    pub order: JointOrder,
 }
 
 impl Settings {
@@ -39,6 +42,7 @@ impl Settings {
             servo: "auto".into(),
             ground: true,
             stand: true,
+            order: JointOrder::File,
         };
         let Some(c) = config else { return Ok(s) };
         for (k, v) in c.iter() {
@@ -91,7 +95,9 @@ pub fn build(robot: &Description, s: &Settings) -> Result<Simulator, String> {
         ground: s.ground,
         ..Default::default()
     };
-    let mut sim = Simulator::new(robot, cfg).map_err(|e| e.to_string())?;
+    let model = Model::from_description_ordered(robot, BaseKind::Floating, s.order)
+        .map_err(|e| e.to_string())?;
+    let mut sim = Simulator::from_model(robot, model, cfg).map_err(|e| e.to_string())?;
     for i in 0..sim.model.nbodies {
         sim.actuators[i] = actuator(&s.servo, &robot.name, &sim.model, i);
     }
@@ -121,14 +127,22 @@ fn reset(sim: &mut Simulator, q: &[f64], v: &[f64]) -> Result<(), String> {
 
 /// A robot description from a Description or a path / builtin name.
 pub fn description_arg(robot: &Bound<'_, PyAny>) -> PyResult<Arc<Description>> {
+    description_arg_ordered(robot).map(|(d, _)| d)
+}
+
+/// As [`description_arg`], with the joint order its models use (Pinocchio's).
+pub fn description_arg_ordered(
+    robot: &Bound<'_, PyAny>,
+) -> PyResult<(Arc<Description>, JointOrder)> {
     if let Ok(d) = robot.cast::<PyDescription>() {
-        return Ok(d.get().inner.clone());
+        return Ok((d.get().inner.clone(), d.get().order));
     }
     let spec: String = robot
         .extract()
         .or_else(|_| robot.call_method0("__fspath__").and_then(|p| p.extract()))
         .map_err(|_| value_error("robot: expected a Description, a path or \"builtin:NAME\""))?;
-    Ok(Arc::new(load_description(&spec)?))
+    let (d, order) = load_ordered(&spec)?;
+    Ok((Arc::new(d), order))
 }
 
 /// The simulator: a floating-base robot on the ground, its joints on servos.
@@ -148,8 +162,11 @@ impl PySimulator {
     #[new]
     #[pyo3(signature = (robot, config = None))]
     fn new(robot: &Bound<'_, PyAny>, config: Option<&Bound<'_, PyDict>>) -> PyResult<PySimulator> {
-        let description = description_arg(robot)?;
-        let settings = Settings::from_dict(config)?;
+        let (description, order) = description_arg_ordered(robot)?;
+        let settings = Settings {
+            order,
+            ..Settings::from_dict(config)?
+        };
         let sim = build(&description, &settings).map_err(value_error)?;
         Ok(PySimulator {
             description,

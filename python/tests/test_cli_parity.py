@@ -55,6 +55,25 @@ def test_tipover_json_matches_the_cli(tmp_path):
     assert ours["com"]["true"][2] > 0.1  # a real result, not an empty one
 
 
+def test_add_mass_takes_the_clis_string_form(tmp_path):
+    """Issue 30 item 8: `add_mass` takes `--add-mass`'s "KG@LINK:X,Y,Z" (one, or in a list
+    beside tuples), read by the CLI's parser: the same robot as the tuple form and as
+    the command's `model export --add-mass`, and the same errors."""
+    exe = cli()
+    out = tmp_path / "km20.urdf"
+    subprocess.run([exe, "model", "export", "builtin:km20", "--add-mass", "0.2@torso:0.05,0,0", "--out", str(out)],
+                   check=True, capture_output=True, timeout=120)
+    cli_mass = tl.load(str(out)).total_mass
+    study = dict(ramp=5.0, slow_ramp=1.0)
+    one = tl.tipover("builtin:km20", add_mass="0.2@torso:0.05,0,0", **study)
+    assert one == tl.tipover("builtin:km20", add_mass=[(0.2, "torso", (0.05, 0.0, 0.0))], **study)
+    assert one["com"]["true"] == tl.tipover("builtin:km20", add_mass=["0.2@torso:0.05,0,0"], **study)["com"]["true"]
+    # The command read the same 0.2 kg (its robot weighs the builtin's plus 0.2).
+    assert cli_mass == pytest.approx(tl.load("builtin:km20").total_mass + 0.2, abs=1e-12)
+    with pytest.raises(ValueError, match=r"add_mass \"0.2@torso\": no ':' before the position"):
+        tl.tipover("builtin:km20", add_mass="0.2@torso")
+
+
 def test_adapt_json_matches_the_cli(tmp_path):
     exe = cli()
     prior = tl.load("builtin:km20")
@@ -161,9 +180,13 @@ def test_identify_static_json_matches_the_cli(tmp_path):
                    timeout=300)
     theirs = json.loads(out.read_text())
     poses = tl.static_poses(truth, count=60, seed=2, cop_noise=0.0005)
-    # The CLI's poses file is the package's poses, number for number.
+    # The CLI's poses file is the package's poses, number for number, its q columns
+    # taken by name (the file is in file order, the package in Pinocchio's).
     table = np.loadtxt(poses_file, delimiter=",", skiprows=1)
-    np.testing.assert_array_equal(table[:, 1:-2], poses["q"])
+    header = poses_file.read_text().splitlines()[0].split(",")
+    names = ["base." + k for k in ("x", "y", "z", "qx", "qy", "qz", "qw")]
+    names += tl.Model.from_description(truth).joint_names
+    np.testing.assert_array_equal(table[:, [header.index("q:" + n) for n in names]], poses["q"])
     np.testing.assert_array_equal(table[:, -2:], poses["cop"])
     ours = tl.identify_static(prior, poses["q"], poses["cop"], truth.total_mass, category=poses["category"])
     # What only the command has: its input files' names, the fit's timing and the poses it

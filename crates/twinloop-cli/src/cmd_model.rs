@@ -207,6 +207,8 @@ struct Info {
     mimic_joints: Vec<String>,
     total_mass: f64,
     heaviest_links: Vec<LinkMass>,
+    /// Elements the reader left out or read past (`model lint` lists each).
+    ignored_elements: usize,
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     joint_order: Option<JointOrder>,
 }
@@ -223,7 +225,8 @@ struct JointRow {
 }
 
 /// What `--joints` adds: the joints in the order of every `q:`, `v:` and `tau:`
-/// column, and the headers that name them.
+/// column, and the headers that name them: the trajectory's has the joints that take
+/// a goal (hinges and slides; a ball joint has none), the state's every coordinate.
 #[derive(Serialize)]
 struct JointOrder {
     joint_list: Vec<JointRow>,
@@ -260,9 +263,14 @@ fn joint_order(robot: &Description, spec: &str) -> Result<JointOrder, crate::err
             .collect::<Vec<_>>()
             .join(",")
     };
+    // `simulate --trajectory` takes one goal per hinge or slide: a ball has none.
+    let goals = (0..model.nbodies)
+        .filter(|&i| model.joint_types[i] != JointType::Spherical)
+        .map(|i| model.joint_names[i].clone())
+        .collect();
     Ok(JointOrder {
         joint_list,
-        trajectory_header: header(model.joint_names.clone()),
+        trajectory_header: header(goals),
         state_header: header(model.q_names()),
     })
 }
@@ -285,7 +293,8 @@ fn joint_order_text(j: &JointOrder) -> String {
         ));
     }
     out.push_str(&format!(
-        "\ntrajectory header (simulate --trajectory; any subset of the q: columns):\n{}\n\
+        "\ntrajectory header (simulate --trajectory; any subset of the q: columns; \
+         ball joints take no goal):\n{}\n\
          \nstate header (dynamics, floating base; add v:, a:, tau: alike):\n{}\n",
         j.trajectory_header, j.state_header
     ));
@@ -351,6 +360,7 @@ fn summarise(robot: &Description, args: &DescriptionArgs, format: common::Format
             .collect(),
         total_mass: robot.total_mass(),
         heaviest_links: heaviest,
+        ignored_elements: robot.unmodeled.len() + robot.ignored.len(),
         joint_order: None,
     }
 }
@@ -403,6 +413,7 @@ fn info_text(info: &Info) -> String {
         ("fixed", k.fixed),
         ("floating", k.floating),
         ("planar", k.planar),
+        ("ball", k.spherical),
     ]
     .iter()
     .filter(|(_, n)| *n > 0)
@@ -467,6 +478,17 @@ fn info_text(info: &Info) -> String {
             "none (no link has an inertial)".into()
         } else {
             heaviest.join(", ")
+        },
+    );
+    row(
+        "ignored",
+        match info.ignored_elements {
+            0 => "none".to_string(),
+            n => format!(
+                "{} left out or read past: `twinloop model lint {}` lists them",
+                plural(n, "element"),
+                info.file
+            ),
         },
     );
     out

@@ -130,41 +130,25 @@ pub fn add_masses(robot: &mut Description, specs: &[String]) -> Result<(), CliEr
     Ok(())
 }
 
-/// `KG@LINK:X,Y,Z` (X,Y,Z in metres in the link frame) as its three parts.
+/// `KG@LINK:X,Y,Z` (X,Y,Z in metres in the link frame) as its three parts: the
+/// description crate's parser (shared with the Python package), errors naming the
+/// option.
 pub fn parse_added_mass(s: &str) -> Result<(f64, String, [f64; 3]), CliError> {
-    let bad = |why: &str| {
-        CliError::new(format!(
-            "--add-mass \"{s}\": {why} (expected KG@LINK:X,Y,Z)"
-        ))
-    };
-    let (kg, rest) = s.split_once('@').ok_or_else(|| bad("no '@'"))?;
-    let (link, xyz) = rest
-        .rsplit_once(':')
-        .ok_or_else(|| bad("no ':' before the position"))?;
-    let kg: f64 = kg
-        .trim()
-        .parse()
-        .map_err(|_| bad("the mass is not a number"))?;
-    let v: Vec<f64> = xyz
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad("the position is not three numbers"))?;
-    if v.len() != 3 {
-        return Err(bad("the position needs three numbers"));
-    }
-    Ok((kg, link.to_string(), [v[0], v[1], v[2]]))
+    twinloop_description::builtin::parse_point_mass(s)
+        .map_err(|e| CliError::new(format!("--add-mass {}", e.message)))
 }
 
 /// How far, rad, beyond its limits a hinge's angle may be before the column is taken
 /// for degrees (when its values in degrees fit the limits).
 pub const DEGREES_BEYOND_LIMIT_RAD: f64 = 1.0;
 
-/// The `q:` columns of `table` against the model's joint limits: an angle of a hinge
-/// with limits beyond a full turn, or more than [`DEGREES_BEYOND_LIMIT_RAD`] beyond
-/// its limits while the whole column read as degrees fits them, is an error naming
-/// the file, line, column and the unit it looks like. Hinges without limits
-/// (continuous joints: wheels, a turntable) may turn any number of times.
+/// The `q:` columns of `table` against the model's joint limits: an angle beyond
+/// its hinge's limits and beyond a full turn (or beyond the limits themselves, when
+/// they are wider: ANYmal C's +-3 pi), or more than [`DEGREES_BEYOND_LIMIT_RAD`]
+/// beyond its limits while the whole column read as degrees fits them, is an error
+/// naming the file, line, column and the unit it looks like. An angle within its
+/// joint's limits is never one. Hinges without limits (continuous joints: wheels, a
+/// turntable) may turn any number of times.
 pub fn check_angles(table: &Table, model: &Model) -> Result<(), IoError> {
     for i in 0..model.nbodies {
         if !model.joint_types[i].is_revolute() {
@@ -183,11 +167,13 @@ pub fn check_angles(table: &Table, model: &Model) -> Result<(), IoError> {
             .filter(|x| x.is_finite())
             .all(|x| (lo - 0.1..=hi + 0.1).contains(&x.to_radians()));
         let beyond = |x: f64| (lo - x).max(x - hi);
+        // The joint's own range may be wider than a turn (a neck rod, ANYmal's +-3 pi).
+        let turn = std::f64::consts::TAU.max(lo.abs()).max(hi.abs());
         let bad = table.rows.iter().position(|r| {
             let x = r[c];
             x.is_finite()
-                && (x.abs() > std::f64::consts::TAU
-                    || (fits_as_degrees && beyond(x) > DEGREES_BEYOND_LIMIT_RAD))
+                && beyond(x) > 0.0
+                && (x.abs() > turn || (fits_as_degrees && beyond(x) > DEGREES_BEYOND_LIMIT_RAD))
         });
         let Some(r) = bad else { continue };
         let x = table.rows[r][c];
@@ -234,6 +220,34 @@ pub fn read_trajectory(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 30 item 2: ANYmal C's +-3 pi hinge (the MJCF edge case
+    /// wide_range_hinge.xml, neck_yaw in [-9.42478, 9.42478]): 7 rad is inside the
+    /// joint's limits, so it is no sign of degrees; 540 (degrees) still is.
+    #[test]
+    fn wide_range_hinge_angles_within_limits_are_not_degrees() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../twinloop-description/tests/data/mjcf/edges/wide_range_hinge.xml"
+        );
+        let robot = twinloop_description::load(path).unwrap();
+        let model = Model::from_description(&robot).unwrap();
+        let table =
+            |x: f64| Table::parse(&format!("t,q:neck_yaw,q:neck_pitch\n0,{x},0.1\n")).unwrap();
+        for x in [7.0, -9.4, 9.42] {
+            assert!(check_angles(&table(x), &model).is_ok(), "{x} rad");
+        }
+        let e = check_angles(&table(540.0), &model).unwrap_err().to_string();
+        assert!(
+            e.contains("looks like degrees") && e.contains("beyond"),
+            "{e}"
+        );
+        // Beyond the limits and beyond any turn the joint makes: not degrees either.
+        let e = check_angles(&table(2000.0), &model)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no hinge with limits turns that far"), "{e}");
+    }
 
     #[test]
     fn steps_in_seconds_pass_and_in_milliseconds_are_named() {

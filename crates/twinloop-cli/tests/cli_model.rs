@@ -405,3 +405,60 @@ fn a_misspelt_urdf_element_is_warned_and_strict_fails() {
     assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
     assert!(!stdout(&o).contains("unmodeled"), "{}", stdout(&o));
 }
+
+/// An MJCF edge case of issue 30 (crates/twinloop-description/tests/data/mjcf/edges).
+fn edge_case(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../twinloop-description/tests/data/mjcf/edges")
+        .join(name)
+}
+
+/// Issue 30 item 6: `model info` counts ball joints (MuJoCo compiles 3 in the file),
+/// its `--joints` trajectory header is one `simulate --trajectory` accepts (the
+/// hinges; a ball takes no goal), and it says how many elements were left out,
+/// pointing to `model lint` (which then names them).
+#[test]
+fn info_counts_ball_joints_and_its_trajectory_header_simulates() {
+    let balls = edge_case("ball_joints.xml");
+    let o = run_on(&["model", "info", "--joints", "--json", "-"], &balls);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = json(&o);
+    assert_eq!(v["joints_by_kind"]["spherical"], 3);
+    let header = v["trajectory_header"].as_str().unwrap();
+    assert_eq!(header, "t,q:left_knee,q:right_knee");
+    let text = stdout(&run_on(&["model", "info"], &balls));
+    assert!(text.contains("2 revolute, 3 ball"), "{text}");
+    let cells = header.split(',').count();
+    let row = |t: f64| {
+        std::iter::once(t.to_string())
+            .chain(std::iter::repeat_n("0.2".to_string(), cells - 1))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let trajectory = scratch(
+        "ball_goals.csv",
+        &format!("{header}\n{}\n{}\n", row(0.0), row(0.02)),
+    );
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("ball_sim.csv");
+    let o = twinloop(&[
+        "simulate",
+        "--robot",
+        balls.to_str().unwrap(),
+        "--trajectory",
+        trajectory.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+
+    let empty = edge_case("empty_static_body.xml");
+    let v = json(&run_on(&["model", "info", "--json", "-"], &empty));
+    assert_eq!(v["ignored_elements"], 1);
+    let text = stdout(&run_on(&["model", "info"], &empty));
+    assert!(
+        text.contains("ignored       1 element left out or read past: `twinloop model lint"),
+        "{text}"
+    );
+    let lint = stdout(&run_on(&["model", "lint"], &empty));
+    assert!(lint.contains("world_link"), "{lint}");
+}

@@ -419,6 +419,11 @@ pub struct Joint {
     /// Rotor inertia reflected to the joint (MJCF `armature`), added to the
     /// mass matrix diagonal; 0 when the file gives none (URDF has no such field).
     pub armature: f64,
+    /// Joint spring (MJCF `stiffness`, N m/rad or N/m): a passive torque
+    /// `-stiffness (q - springref)`; 0 when the file gives none (URDF has none).
+    pub stiffness: f64,
+    /// The spring's rest position (MJCF `springref`, in q's units: rad or m).
+    pub springref: f64,
 }
 
 impl Joint {
@@ -442,6 +447,8 @@ impl Joint {
             calibration: None,
             extra: Vec::new(),
             armature: 0.0,
+            stiffness: 0.0,
+            springref: 0.0,
         }
     }
 

@@ -21,7 +21,7 @@ mod xml_origin;
 pub use builder::{DescriptionBuilder, JointBuilder, LinkBuilder};
 pub use description::*;
 pub use error::{DescriptionError, Location};
-pub use load::load;
+pub use load::{Format, load, load_with_format};
 
 /// Standard gravity, m/s^2: the 9.81 of every seed paper. World z is up, so the
 /// gravity vector is (0, 0, -GRAVITY) unless a description says otherwise.

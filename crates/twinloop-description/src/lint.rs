@@ -595,8 +595,13 @@ fn check_effort_velocity_present(j: &Joint, out: &mut Vec<Finding>) {
             Severity::Info,
             codes::MISSING_EFFORT_VELOCITY,
             format!(
-                "{kind} joint without {} limit: actuator saturation is unknown",
-                missing.join(" and ")
+                "{kind} joint without {} limit: {}",
+                missing.join(" and "),
+                if limit.effort.is_none() {
+                    "actuator saturation is unknown"
+                } else {
+                    "the actuator's top speed is unknown (its torque limit is known)"
+                }
             ),
         ));
     }

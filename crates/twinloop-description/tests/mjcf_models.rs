@@ -344,9 +344,11 @@ fn mjcf_models_write_as_urdf() {
             assert_eq!(b.visuals.len(), l.visuals.len());
         }
         for j in &m.joints {
-            // URDF has no armature.
+            // URDF has no armature or spring.
             let urdf_joint = Joint {
                 armature: 0.0,
+                stiffness: 0.0,
+                springref: 0.0,
                 ..j.clone()
             };
             let mut bj = back.joint(&j.name).unwrap().clone();

@@ -41,7 +41,7 @@ pub use kinematics::{
     ReferenceFrame, compute_joint_jacobians, forward_kinematics, frame_jacobian,
     frames_forward_kinematics, update_frame_placements,
 };
-pub use model::{BASE, BaseKind, FrameInfo, JointType, LinkInfo, Model};
+pub use model::{BASE, BaseKind, FrameInfo, JointOrder, JointType, LinkInfo, Model};
 pub use regressor::{
     body_parameters, joint_torque_regressor, link_parameters, link_static_parameters,
     link_to_body_parameter_map, parameter_block_of_link, static_com_regressor,

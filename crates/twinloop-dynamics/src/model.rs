@@ -3,8 +3,10 @@
 //! Bodies are the rigid groups between movable joints: links joined by fixed
 //! joints are merged into one body (their inertias summed in the body frame), as
 //! Pinocchio does, while every link keeps a frame so results can be reported and
-//! written back per link. Bodies are numbered depth-first with children in file
-//! order, so a parent always precedes its children.
+//! written back per link. Bodies are numbered depth-first, so a parent always
+//! precedes its children; the children of a link come in file order
+//! ([`JointOrder::File`], what the CLI uses) or, as Pinocchio's URDF parser numbers
+//! them, by joint name ([`JointOrder::UrdfByName`], what the Python package uses).
 
 use nalgebra::{Matrix3, Vector3};
 use twinloop_description::{Description, DescriptionError, JointKind};
@@ -73,6 +75,21 @@ pub struct LinkInfo {
     pub placement: Se3,
     /// The link's own inertia in the link frame (zero without `<inertial>`).
     pub inertia: Inertia,
+}
+
+/// In which order the depth-first walk visits the joints below a link, which fixes
+/// the order of the joints in q, v and tau.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum JointOrder {
+    /// File order (the description's joint order): what the CLI, its CSV columns
+    /// and Pinocchio's MJCF parser (which walks the body tree as written) use.
+    #[default]
+    File,
+    /// Byte order of the joint names, as Pinocchio's URDF parser numbers the joints
+    /// (urdfdom keeps a link's child joints in a `std::map` keyed by name;
+    /// tools/oracle/README.md, "Joint order"; checked on every URDF of
+    /// example-robot-data by python/tests/test_joint_order.py).
+    UrdfByName,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -165,14 +182,24 @@ fn link_inertia(link: &twinloop_description::Link) -> Inertia {
 /// is still to be made).
 type Pending = (usize, usize, Se3, Option<usize>);
 
-/// The joints below each link, in file order, each with its child link: from one
-/// index of the links by name (a search per joint is quadratic in the robot's size).
-fn child_joints(robot: &Description) -> Vec<Vec<(usize, usize)>> {
+/// The joints below each link, each with its child link, in `order`: from one index
+/// of the links by name (a search per joint is quadratic in the robot's size).
+fn child_joints(robot: &Description, order: JointOrder) -> Vec<Vec<(usize, usize)>> {
     let index = robot.links_by_name();
     let ix = |name: &str| *index.get(name).expect("validated");
     let mut children: Vec<Vec<(usize, usize)>> = vec![Vec::new(); robot.links.len()];
     for (j, joint) in robot.joints.iter().enumerate() {
         children[ix(&joint.parent)].push((j, ix(&joint.child)));
+    }
+    if order == JointOrder::UrdfByName {
+        for c in &mut children {
+            c.sort_by(|&(a, _), &(b, _)| {
+                robot.joints[a]
+                    .name
+                    .as_bytes()
+                    .cmp(robot.joints[b].name.as_bytes())
+            });
+        }
     }
     children
 }
@@ -226,7 +253,7 @@ fn joint_type(kind: JointKind, axis: &Vector3<f64>) -> JointType {
 
 /// Queue the links below `link` (placed at `placement` in `body`): a fixed joint keeps
 /// its child in the same body, a moving joint starts a new one. Pushed in reverse so
-/// children are visited in file order.
+/// children are visited in the order given.
 fn push_child_links(
     robot: &Description,
     children: &[(usize, usize)],
@@ -275,8 +302,17 @@ impl Model {
         robot: &Description,
         base: BaseKind,
     ) -> Result<Model, DescriptionError> {
+        Model::from_description_ordered(robot, base, JointOrder::File)
+    }
+
+    /// As [`Model::from_description_with_base`], the joints numbered in `order`.
+    pub fn from_description_ordered(
+        robot: &Description,
+        base: BaseKind,
+        order: JointOrder,
+    ) -> Result<Model, DescriptionError> {
         robot.validate()?;
-        let children = child_joints(robot);
+        let children = child_joints(robot, order);
         let (base_link, dropped_root) = find_base_link(robot, &children)?;
         let mut m = Model::without_bodies(robot, base, base_link);
         let mut link_info: Vec<Option<LinkInfo>> = vec![None; robot.links.len()];
@@ -345,7 +381,7 @@ impl Model {
     /// Walk the tree from the base link depth-first, making a body at every moving
     /// joint and adding each link's inertia to its body; `link_info` gets where each
     /// link is. A body is numbered when its link is reached, not when its parent is, so
-    /// that bodies come in depth-first pre-order with children in file order, and every
+    /// that bodies come in depth-first pre-order with children in the chosen order, and every
     /// subtree is a contiguous range.
     fn add_bodies(
         &mut self,

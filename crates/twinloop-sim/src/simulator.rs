@@ -217,6 +217,9 @@ pub struct Simulator {
     /// Viscous damping and Coulomb friction per joint from the description.
     pub joint_damping: Vec<f64>,
     pub joint_friction: Vec<f64>,
+    /// The description's joint springs (MJCF `stiffness` about `springref`), per joint.
+    pub joint_stiffness: Vec<f64>,
+    pub joint_springref: Vec<f64>,
     friction_anchor: Vec<f64>,
     /// Per joint: the motor side of a servo with a backlash.
     pub gears: Vec<crate::backlash::Gear>,
@@ -309,11 +312,15 @@ impl Simulator {
         let max_chain = chains.iter().map(Vec::len).max().unwrap_or(0);
         let mut joint_damping = vec![0.0; nb];
         let mut joint_friction = vec![0.0; nb];
+        let (mut joint_stiffness, mut joint_springref) = (vec![0.0; nb], vec![0.0; nb]);
         for (i, name) in model.joint_names.iter().enumerate() {
-            if let Some(dy) = robot.joint(name).and_then(|j| j.dynamics) {
+            let Some(j) = robot.joint(name) else { continue };
+            if let Some(dy) = j.dynamics {
                 joint_damping[i] = dy.damping.unwrap_or(0.0).max(0.0);
                 joint_friction[i] = dy.friction.unwrap_or(0.0).max(0.0);
             }
+            joint_stiffness[i] = j.stiffness.max(0.0);
+            joint_springref[i] = j.springref;
         }
         let weight = model.total_mass * config.gravity.norm();
         let limit_k = config
@@ -335,6 +342,8 @@ impl Simulator {
             goals: vec![0.0; nb],
             joint_damping,
             joint_friction,
+            joint_stiffness,
+            joint_springref,
             friction_anchor: vec![0.0; nb],
             gears: vec![Default::default(); nb],
             servo_states: vec![Default::default(); nb],
@@ -477,8 +486,9 @@ impl Simulator {
         // slips), like the contacts' tangential model: a joint under a load below its
         // friction holds still instead of creeping, which velocity-smoothed Coulomb
         // friction cannot do.
-        d.tau -= self.joint_damping[i] * v;
+        d.tau += self.passive_torque(i, q, v);
         d.d += self.joint_damping[i];
+        d.k += self.joint_stiffness[i];
         let fr = self.joint_friction[i] + self.engaged_gear(i).1 + self.full_servo_friction(i, v);
         if fr > 0.0 {
             // Full friction torque at 0.1 mrad of deflection; damping for a crisp stick.
@@ -510,6 +520,14 @@ impl Simulator {
             d.d += self.joint_limit_damping;
         }
         d
+    }
+
+    /// The description's spring and viscous damping on 1-DoF joint `i` at position `q`
+    /// and velocity `v`: `-stiffness (q - springref) - damping v`, MuJoCo's
+    /// `qfrc_passive` for a hinge or slide (its dry `frictionloss` is a constraint there,
+    /// the stick spring of `joint_drive` here).
+    pub fn passive_torque(&self, i: usize, q: f64, v: f64) -> f64 {
+        -self.joint_stiffness[i] * (q - self.joint_springref[i]) - self.joint_damping[i] * v
     }
 
     /// The inertia and Coulomb friction of joint `i`'s motor side where it moves with

@@ -65,10 +65,12 @@ impl Simulator {
 
 /// Why `sim` cannot stand: the links whose only collision shapes are meshes, or, with
 /// none, that no collision shape takes part in contact at all.
-fn nothing_to_stand_on(sim: &Simulator) -> String {
+pub fn nothing_to_stand_on(sim: &Simulator) -> String {
     if sim.mesh_only_links.is_empty() {
         "the robot has no collision primitives that touch the floor (no <collision> box, \
-         sphere, cylinder or capsule takes part in contact); add <collision> boxes to the feet"
+         sphere, cylinder or capsule takes part in contact; in MJCF, a geom with contype and \
+         conaffinity 0 that no <contact><pair> names does not collide); add <collision> \
+         boxes to the feet"
             .into()
     } else {
         format!(

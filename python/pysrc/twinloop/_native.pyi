@@ -244,14 +244,15 @@ class Simulator:
         """q0 [nq] or [N, nq], goals [N, T, joints] -> states [N, T, nq + nv]."""
 
 def tipover(robot: Optional[RobotSpec] = None, ramp: float = 0.5, slow_ramp: float = 0.05, compliance_slope: float = 2.0,
-            encoders: bool = False, add_mass: Optional[Sequence[tuple[float, str, Sequence[float]]]] = None, *,
+            encoders: bool = False,
+            add_mass: Union[None, str, Sequence[Union[str, tuple[float, str, Sequence[float]]]]] = None, *,
             port: Optional[str] = None, map: Optional[str] = None, directions: Optional[Sequence[str]] = None,
             record: Optional[Union[str, PathLike[str]]] = None, yes: bool = False, realtime_factor: float = 1.0,
             ankle_slope: float = 32.0, creeps: int = 2, dither: bool = True, baud: int = 1_000_000, timeout_ms: float = 10.0, retries: int = 2,
             soft_servos: bool = False) -> dict[str, Any]:
     """`twinloop experiment tipover --json`'s fields: on the simulator, or with `port` and `map` on a robot over its bus
     (`experiment tipover --port --map`; fewer than four `directions` give robot, port and each direction's angles).
-    Ramps in deg/s; add_mass: (kg, link, xyz m in the link frame); dither: sigma-delta goal counts over a bus (False:
+    Ramps in deg/s; add_mass: "KG@LINK:X,Y,Z" (as --add-mass) or (kg, link, xyz m in the link frame), one or a list; dither: sigma-delta goal counts over a bus (False:
     whole counts); soft_servos: leave the servos as they are (not stiffened; the result says so). A serial port needs yes=True; a silent or faulty
     servo raises OSError, the servos left holding."""
 def random_changes(robot: RobotSpec, n: int, seed: int = 1, mass_range: tuple[float, float] = (0.05, 0.5)) -> list[dict[str, Any]]:

@@ -171,6 +171,31 @@ pub fn foot_geometry(robot_name: &str) -> Option<FootGeometry> {
 /// ([`add_point_mass`] with a negative mass): a part heavier than that was not on it.
 pub const MIN_REMAINING_FRACTION: f64 = 0.1;
 
+/// A point mass as the CLI's `--add-mass` and the Python package's `add_mass` write
+/// it: `KG@LINK:X,Y,Z` (kg; X,Y,Z in metres in the link frame; a negative mass is a
+/// part taken off), as its three parts. The link name may hold ':' (the position
+/// follows the last one). Errors quote the text and say which part is wrong.
+pub fn parse_point_mass(s: &str) -> Result<(f64, String, [f64; 3]), DescriptionError> {
+    let bad = |why: &str| DescriptionError::new(format!("\"{s}\": {why} (expected KG@LINK:X,Y,Z)"));
+    let (kg, rest) = s.split_once('@').ok_or_else(|| bad("no '@'"))?;
+    let (link, xyz) = rest
+        .rsplit_once(':')
+        .ok_or_else(|| bad("no ':' before the position"))?;
+    let kg: f64 = kg
+        .trim()
+        .parse()
+        .map_err(|_| bad("the mass is not a number"))?;
+    let v: Vec<f64> = xyz
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad("the position is not three numbers"))?;
+    if v.len() != 3 {
+        return Err(bad("the position needs three numbers"));
+    }
+    Ok((kg, link.to_string(), [v[0], v[1], v[2]]))
+}
+
 /// Add a point mass of `mass` kg at `xyz` (m, link frame) to `link`: its inertial
 /// becomes the rigid sum of what it had and the point (parallel-axis theorem), written
 /// in the link's axes. A negative `mass` takes a part off (a battery removed, seed

@@ -16,8 +16,11 @@
 //!   simply the root. Otherwise a link `world` is added and every top-level body
 //!   hangs from it at its `pos`/`quat`. When every top-level body is free, the
 //!   one with the most bodies is the robot and the others are props (a ball)
-//!   left out with an `unmodeled-element` note each; a free joint beside a
-//!   welded or hinged top-level body is an error (one floating tree per file).
+//!   left out with an `unmodeled-element` note each. Beside a free robot, a welded
+//!   top-level body with no joint and no mass in its subtree (Apptronik Apollo's
+//!   `world_link`) is left out too, noted in [`Description::ignored`] (or in
+//!   `unmodeled` when it holds collision geoms); one with mass, or a free joint
+//!   beside a hinged top-level body, is an error (one floating tree per file).
 //! - A body's joints, in order: `hinge` becomes [`JointKind::Revolute`] when
 //!   limited (the `range`, converted from degrees unless `<compiler
 //!   angle="radian">`) and [`JointKind::Continuous`] otherwise; `slide` becomes
@@ -30,10 +33,14 @@
 //!   MJCF's, or `<body>_joint` (`<body>_joint2`, ...) for unnamed ones. "Limited"
 //!   follows MuJoCo: `limited="true"`, or `"auto"`/absent with a `range` when
 //!   `autolimits` is on (its default). `actuatorfrcrange` gives the limit's
-//!   effort (the larger magnitude), `damping` and `frictionloss` the
+//!   effort (the larger magnitude; a `<motor>` on the joint lowers it to its
+//!   `forcerange`, or its `ctrlrange` times its gear, when those are limited),
+//!   `damping` and `frictionloss` the
 //!   [`JointDynamics`], `armature` [`Joint::armature`]. The axis is normalised.
 //!   `ref` goes into the joint's origin (a turn or shift of `-ref` along the
-//!   axis), so that q is MuJoCo's qpos; `springref` is ignored.
+//!   axis), so that q is MuJoCo's qpos; `stiffness` and `springref` give
+//!   [`Joint::stiffness`] and [`Joint::springref`] (a ball's spring is not kept:
+//!   noted in [`Description::unmodeled`]).
 //! - A hinge `pos` (a point on the axis, in the body frame) is handled by putting
 //!   the joint's link frame at that point, axes unchanged: everything placed in
 //!   the body (inertial, geoms, sites, child bodies) is shifted by minus the last
@@ -54,7 +61,9 @@
 //!   in MuJoCo). `plane`, `hfield`, `ellipsoid` and `sdf` geoms are not shapes. A
 //!   geom is a visual if its `group` is 0, 1 or 2 (the groups MuJoCo's viewer
 //!   shows by default) and a collision shape if its `contype` or `conaffinity` is
-//!   not 0, so Menagerie's `visual`/`collision` classes land where expected. A
+//!   not 0 or a `<contact><pair>` names it (twinloop collides shapes with its
+//!   ground only: a pair's sole touches that ground; Apollo's soles collide only
+//!   through pairs), so Menagerie's `visual`/`collision` classes land where expected. A
 //!   visual's material is the geom's `material` asset (name and rgba) or, failing
 //!   that, its `rgba`.
 //! - `<site>` becomes a [`Frame`] on the body's link (unnamed: `<body>_site<N>`).
@@ -290,6 +299,9 @@ struct Reader<'a, 'i> {
     /// The replica suffix of the body being read: appended to the names given in
     /// the file (bodies, joints, sites, geoms), as MuJoCo's `<replicate>` does.
     suffix: String,
+    /// Geoms named by a `<contact><pair>`: they collide whatever their `contype`
+    /// and `conaffinity` (Apptronik Apollo's soles touch the floor only so).
+    paired: std::collections::HashSet<&'a str>,
 }
 
 /// Where an attribute's value came from: the element itself or a default class.
@@ -397,6 +409,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             },
             unnamed_bodies: 0,
             suffix: String::new(),
+            paired: Default::default(),
         }
     }
 
@@ -412,6 +425,12 @@ impl<'a, 'i> Reader<'a, 'i> {
             match s.tag_name().name() {
                 "compiler" => self.compiler(s)?,
                 "option" => self.option(s)?,
+                "contact" => self.paired.extend(
+                    s.children()
+                        .filter(|p| p.has_tag_name("pair"))
+                        .flat_map(|p| [p.attribute("geom1"), p.attribute("geom2")])
+                        .flatten(),
+                ),
                 _ => {}
             }
         }
@@ -446,10 +465,10 @@ impl<'a, 'i> Reader<'a, 'i> {
         if top.is_empty() {
             return Err(error_at(root, "no <body> in <worldbody>"));
         }
-        let (robot_name, props) = self.props(&top)?;
+        let (robot_name, props, empties) = self.props(&top)?;
         let trees: Vec<Framed> = top
             .iter()
-            .filter(|t| !props.contains(&t.0))
+            .filter(|t| !props.contains(&t.0) && !empties.contains(&t.0))
             .cloned()
             .collect();
         let world = self.needs_world_link(&trees)?;
@@ -464,7 +483,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         // is read aside, for its mass and the note that it is left out.
         let mut aside: Vec<(Node, Description)> = Vec::new();
         for (node, frame, childclass, suffix) in top {
-            let prop = props.contains(&node);
+            let prop = props.contains(&node) || empties.contains(&node);
             let saved = prop.then(|| {
                 let places = Places {
                     robot: self.places.robot,
@@ -491,6 +510,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 self.places = places;
             }
         }
+        aside = self.drop_empty(aside, &empties, &robot_name)?;
         let prop_mass: f64 = aside.iter().map(|(_, d)| d.total_mass()).sum();
         let scale = match self.compiler.total_mass {
             Some(total) => self.set_total_mass(total, prop_mass),
@@ -501,6 +521,9 @@ impl<'a, 'i> Reader<'a, 'i> {
         }
         for &s in sections {
             self.unmodeled(s);
+            if s.tag_name().name() == "actuator" {
+                self.actuator_limits(s)?;
+            }
             if !SECTIONS.contains(&s.tag_name().name()) {
                 self.unknown(s);
             }
@@ -599,13 +622,17 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// free tree is a prop (pybullet's striker and thrower with their objects);
     /// otherwise nothing is a prop and `needs_world_link` refuses the file.
     /// MuJoCo couples separate trees only through contact, so the robot's mass
-    /// matrix and bias forces do not depend on the props. Returns the robot's
-    /// name for the notes and the props' bodies.
+    /// matrix and bias forces do not depend on the props. Beside free trees, the
+    /// welded top-level bodies without a joint in their subtree are candidates for
+    /// empty static bodies (Apptronik Apollo's `world_link`), read aside and left
+    /// out if they weigh nothing ([`Self::drop_empty`]). Returns the robot's name
+    /// for the notes, the props' bodies and the empty candidates.
+    #[allow(clippy::type_complexity)]
     fn props(
         &self,
         top: &[Framed<'a, 'i>],
-    ) -> Result<(String, Vec<Node<'a, 'i>>), DescriptionError> {
-        let none = Ok((String::new(), Vec::new()));
+    ) -> Result<(String, Vec<Node<'a, 'i>>, Vec<Node<'a, 'i>>), DescriptionError> {
+        let none = Ok((String::new(), Vec::new(), Vec::new()));
         if top.len() < 2 {
             return none;
         }
@@ -629,15 +656,75 @@ impl<'a, 'i> Reader<'a, 'i> {
         else {
             return none;
         };
-        if fixed.is_empty() {
+        let jointless = |b: &Node| {
+            !b.descendants()
+                .any(|d| d.has_tag_name("joint") || d.has_tag_name("freejoint"))
+        };
+        if !fixed.is_empty() && fixed.iter().map(size).sum::<usize>() > size(&largest) {
+            let robot = "the robot (the bodies held by the world)".to_string();
+            return Ok((robot, free, Vec::new()));
+        }
+        if fixed.iter().all(jointless) {
             let name = largest.attribute("name").unwrap_or("body").to_string();
             let props = free.into_iter().filter(|b| *b != largest).collect();
-            return Ok((format!("the robot \"{name}\""), props));
-        }
-        if fixed.iter().map(size).sum::<usize>() > size(&largest) {
-            return Ok(("the robot (the bodies held by the world)".to_string(), free));
+            return Ok((format!("the robot \"{name}\""), props, fixed));
         }
         none
+    }
+
+    /// The empty static bodies among the trees read aside (`empties`, see
+    /// [`Self::props`]): each is left out with a note if it weighs nothing (MuJoCo
+    /// welds it to the world, where it moves nothing); one with mass is a second
+    /// body tree beside the floating robot, which twinloop refuses. Returns the rest.
+    fn drop_empty(
+        &mut self,
+        aside: Vec<(Node<'a, 'i>, Description)>,
+        empties: &[Node<'a, 'i>],
+        robot: &str,
+    ) -> Result<Vec<(Node<'a, 'i>, Description)>, DescriptionError> {
+        let mut rest = Vec::with_capacity(aside.len());
+        for (node, d) in aside {
+            if !empties.contains(&node) {
+                rest.push((node, d));
+                continue;
+            }
+            let name = d.links.first().map_or("", |l| l.name.as_str());
+            if d.total_mass() > 0.0 {
+                return Err(error_at(
+                    node,
+                    format!(
+                        "a second top-level body beside {robot}: \"{name}\" weighs {:.6} kg; \
+                         twinloop models one floating body tree per file (a body beside it is \
+                         left out only when it has no mass and no joint)",
+                        d.total_mass()
+                    ),
+                ));
+            }
+            let geoms = d.links.iter().map(|l| l.collisions.len()).sum::<usize>();
+            let (line, _) = crate::xml::position(node.document(), node.range().start);
+            let mut what = format!(
+                "empty static body \"{name}\" ({} bod{}, no mass, no joint) beside {robot}: \
+                 MuJoCo welds it to the world, where it changes nothing; twinloop leaves it out",
+                d.links.len(),
+                if d.links.len() == 1 { "y" } else { "ies" }
+            );
+            let note = FileNote {
+                element: crate::xml::element_path(node),
+                line,
+                what: String::new(),
+            };
+            if geoms > 0 {
+                // Massless collision geoms fixed in the world are scenery the robot
+                // could touch: that is physics left out.
+                what.push_str(&format!(
+                    ", with its {geoms} collision geom(s): contacts with them are not simulated"
+                ));
+                self.robot.unmodeled.push(FileNote { what, ..note });
+            } else {
+                self.robot.ignored.push(FileNote { what, ..note });
+            }
+        }
+        Ok(rest)
     }
 
     /// The `unmodeled-element` note for a prop left out (see [`Self::props`]):
@@ -704,6 +791,56 @@ impl<'a, 'i> Reader<'a, 'i> {
             }
         }
         Ok(true)
+    }
+
+    /// The force limits of the `<motor>`s on joints, as MuJoCo clamps them: the
+    /// actuator's `forcerange` when force-limited, and its `ctrlrange` times its gear
+    /// when control-limited ("limited" as for joints: `"auto"` or absent means given
+    /// and `autolimits`). The smallest, with the joint's `actuatorfrcrange`, is the
+    /// joint's effort limit, so the simulator knows where a motor saturates.
+    fn actuator_limits(&mut self, section: Node<'a, 'i>) -> Result<(), DescriptionError> {
+        for e in section.children().filter(|e| e.has_tag_name("motor")) {
+            let Some(joint) = e.attribute("joint") else {
+                continue;
+            };
+            let class = self.class_of(e, None)?;
+            let get = |attr: &str| {
+                self.get(e, "motor", &class, attr)
+                    .or_else(|| self.get(e, "general", &class, attr))
+            };
+            let limit = |range: &str, limited: &str| -> Result<Option<f64>, DescriptionError> {
+                let r = match get(range) {
+                    Some((n, v)) => parse_array::<2>(n, range, v)?,
+                    None => return Ok(None),
+                };
+                let on = match get(limited) {
+                    Some((_, "auto")) | None => self.compiler.autolimits,
+                    Some((n, v)) => bool_attr(n, limited, v)?,
+                };
+                Ok(on.then(|| r[0].abs().max(r[1].abs())))
+            };
+            let gear = match get("gear") {
+                Some((n, v)) => v
+                    .split_whitespace()
+                    .next()
+                    .map(|g| g.parse::<f64>())
+                    .transpose()
+                    .map_err(|_| error_at_attr(n, "gear", "not a number"))?
+                    .unwrap_or(1.0),
+                None => 1.0,
+            };
+            let force = limit("forcerange", "forcelimited")?;
+            let ctrl = limit("ctrlrange", "ctrllimited")?.map(|c| c * gear.abs());
+            let Some(effort) = [force, ctrl].into_iter().flatten().reduce(f64::min) else {
+                continue;
+            };
+            let name = format!("{joint}{}", self.suffix);
+            if let Some(j) = self.robot.joints.iter_mut().find(|j| j.name == name) {
+                let lim = j.limit.get_or_insert_with(Limit::default);
+                lim.effort = Some(lim.effort.map_or(effort, |x| x.min(effort)));
+            }
+        }
+        Ok(())
     }
 
     /// Elements of a section that act on the physics beyond the rigid-body tree:
@@ -1208,8 +1345,24 @@ impl<'a, 'i> Reader<'a, 'i> {
         let cc = childclass.as_deref();
         let pos = opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]);
         let (pos, rot) = compose(&frame, pos, self.orientation(node, "body", None)?);
-        let joints = self.body_joints(node, &name, parent.is_some(), cc)?;
+        let mut joints = self.body_joints(node, &name, parent.is_some(), cc)?;
         let offset = joints.last().map_or([0.0; 3], |j| j.anchor);
+        for j in joints.iter_mut() {
+            if j.joint.kind == JointKind::Spherical && j.joint.stiffness != 0.0 {
+                // MuJoCo's ball spring acts on the rotation from springref's quaternion.
+                let (line, _) = crate::xml::position(j.node.document(), j.node.range().start);
+                self.robot.unmodeled.push(FileNote {
+                    element: crate::xml::element_path(j.node),
+                    line,
+                    what: format!(
+                        "ball joint stiffness {}: twinloop does not model a ball joint's \
+                         spring (its hinge and slide springs it does)",
+                        j.joint.stiffness
+                    ),
+                });
+                j.joint.stiffness = 0.0;
+            }
+        }
 
         let (link, frames) = self.link_contents(node, &name, cc, offset)?;
         // Joints to the parent, in order, each with its child link.
@@ -1517,6 +1670,18 @@ impl<'a, 'i> Reader<'a, 'i> {
         joint.armature = self
             .number(self.get(j, "joint", class, "armature"), "armature")?
             .unwrap_or(0.0);
+        joint.stiffness = self
+            .number(self.get(j, "joint", class, "stiffness"), "stiffness")?
+            .unwrap_or(0.0);
+        // springref is a qpos value: an angle in the compiler's unit for a hinge.
+        let springref = self
+            .number(self.get(j, "joint", class, "springref"), "springref")?
+            .unwrap_or(0.0);
+        joint.springref = if hinge {
+            self.angle(springref)
+        } else {
+            springref
+        };
         Ok(joint)
     }
 
@@ -1880,7 +2045,8 @@ impl<'a, 'i> Reader<'a, 'i> {
                 material,
             });
         }
-        if contype != 0 || conaffinity != 0 {
+        let paired = name.as_deref().is_some_and(|n| self.paired.contains(n));
+        if contype != 0 || conaffinity != 0 || paired {
             link.collisions.push(Shape {
                 name,
                 origin,

@@ -12,7 +12,9 @@
 //! Writing also covers what only code or MJCF produce: a
 //! [`Frame`](crate::Frame) is written as a massless `<link>` plus a fixed
 //! `<joint name="<frame>_frame_joint">` (so it reads back as a link), and a
-//! capsule as a cylinder with a comment (see [`to_string`]).
+//! capsule as a cylinder with a comment; a ball joint as three revolute joints, and
+//! every `<limit>` with the `effort` and `velocity` other tools require (see
+//! [`to_string`]).
 //!
 //! What is not kept: XML comments, the interleaving of `<visual>` and
 //! `<collision>` inside a link (visuals are written first), unknown attributes
@@ -39,4 +41,4 @@ mod write;
 
 pub(crate) use read::from_document;
 pub use read::{from_str, read_file};
-pub use write::{to_string, write_file};
+pub use write::{UNKNOWN_LIMIT, to_string, to_string_exact, write_file};

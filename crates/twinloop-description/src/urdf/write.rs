@@ -13,6 +13,24 @@
 //! - a [`Geometry::Capsule`] (from MJCF) becomes a `<cylinder>` of the same
 //!   radius and length, preceded by an XML comment saying so.
 //!
+//! What other tools require is always written, so that every URDF twinloop writes
+//! loads in Pinocchio and urdfdom (`check_urdf`), urdf_parser_py and yourdfpy:
+//!
+//! - every `<limit>` has `effort` and `velocity` (the URDF specification makes both
+//!   required; urdfdom, and so Pinocchio, refuse a limit without them). One the
+//!   description does not give is written as [`UNKNOWN_LIMIT`], the largest double:
+//!   no limit, which is what Pinocchio assumes for a joint without `<limit>`; the
+//!   reader reads that number back as not given;
+//! - a revolute or prismatic joint always has a `<limit>` (urdfdom refuses one
+//!   without), and a `<material>` always a `name` (empty when it has none);
+//! - a ball joint ([`JointKind::Spherical`], from MJCF; URDF has none) becomes three
+//!   revolute joints `<ball>_x`, `<ball>_y`, `<ball>_z` about the x, y and z axes of
+//!   the ball's frame, through two massless links `<ball>_x_link` and
+//!   `<ball>_y_link`, each limited to [-pi, pi] (the Euler angles x-y-z, singular at
+//!   a y angle of +-pi/2): the same masses, inertias and, at zero angles, the same
+//!   mass matrix; it reads back as those three joints. [`to_string_exact`] keeps the
+//!   ball as `type="spherical"`, for twinloop's own round trips only.
+//!
 //! Non-finite numbers (only possible in a description built in code) are
 //! written as `NaN`/`inf`, which the reader rejects.
 
@@ -21,9 +39,27 @@ use crate::error::DescriptionError;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The URDF text of a robot: `<?xml version="1.0"?>` header, 2-space indent.
+/// What `<limit>` says for an effort or velocity the description does not give: the
+/// largest double, i.e. no limit; read back as not given.
+pub const UNKNOWN_LIMIT: f64 = f64::MAX;
+
+/// The URDF text of a robot: `<?xml version="1.0"?>` header, 2-space indent; a file
+/// other tools load (ball joints as three revolute joints, see the module).
 pub fn to_string(robot: &Description) -> String {
-    let mut w = Writer { out: String::new() };
+    write(robot, true)
+}
+
+/// The URDF text with ball joints kept as `type="spherical"`, which only twinloop's
+/// reader takes: an exact round trip (Python's pickling), not a file for other tools.
+pub fn to_string_exact(robot: &Description) -> String {
+    write(robot, false)
+}
+
+fn write(robot: &Description, standard: bool) -> String {
+    let mut w = Writer {
+        out: String::new(),
+        standard,
+    };
     w.out.push_str("<?xml version=\"1.0\"?>\n");
     let _ = write!(w.out, "<robot name=\"{}\"", escape(&robot.name));
     for (k, v) in &robot.robot_attributes {
@@ -86,6 +122,8 @@ fn escape(s: &str) -> String {
 
 struct Writer {
     out: String,
+    /// Ball joints as three revolute joints (else `type="spherical"`).
+    standard: bool,
 }
 
 impl Writer {
@@ -214,11 +252,8 @@ impl Writer {
     }
 
     fn material(&mut self, level: usize, m: &Material) {
-        let open = if m.name.is_empty() {
-            "<material".to_string()
-        } else {
-            format!("<material name=\"{}\"", escape(&m.name))
-        };
+        // urdfdom and urdf_parser_py require the name, even an empty one.
+        let open = format!("<material name=\"{}\"", escape(&m.name));
         if m.rgba.is_none() && m.texture.is_none() {
             self.line(level, &format!("{open}/>"));
             return;
@@ -234,6 +269,9 @@ impl Writer {
     }
 
     fn joint(&mut self, j: &Joint) {
+        if j.kind == JointKind::Spherical && self.standard {
+            return self.ball_as_revolutes(j);
+        }
         self.line(
             1,
             &format!(
@@ -248,12 +286,13 @@ impl Writer {
         if let Some(a) = &j.axis {
             self.line(2, &format!("<axis xyz=\"{}\"/>", nums(a)));
         }
-        if let Some(l) = &j.limit {
+        let needs_limit = matches!(j.kind, JointKind::Revolute | JointKind::Prismatic);
+        if let Some(l) = j.limit.or(needs_limit.then(Limit::default)) {
             let attrs = opt_attrs(&[
                 ("lower", l.lower),
                 ("upper", l.upper),
-                ("effort", l.effort),
-                ("velocity", l.velocity),
+                ("effort", Some(l.effort.unwrap_or(UNKNOWN_LIMIT))),
+                ("velocity", Some(l.velocity.unwrap_or(UNKNOWN_LIMIT))),
             ]);
             self.line(2, &format!("<limit{attrs}/>"));
         }
@@ -289,6 +328,49 @@ impl Writer {
             self.raw(2, x);
         }
         self.line(1, "</joint>");
+    }
+
+    /// A ball joint as three revolute joints about x, y, z through two massless links
+    /// (see the module); each keeps the ball's effort limit, dynamics and extras.
+    fn ball_as_revolutes(&mut self, j: &Joint) {
+        self.line(
+            1,
+            &format!(
+                "<!-- ball joint \"{}\": URDF has none, written as three revolute joints (x, y, z) -->",
+                escape(&j.name).replace("--", "- -")
+            ),
+        );
+        let pi = std::f64::consts::PI;
+        let effort = j.limit.and_then(|l| l.effort);
+        let links = [format!("{}_x_link", j.name), format!("{}_y_link", j.name)];
+        let parents = [j.parent.as_str(), &links[0], &links[1]];
+        let children = [links[0].as_str(), &links[1], j.child.as_str()];
+        for (k, axis) in ["x", "y", "z"].into_iter().enumerate() {
+            if k < 2 {
+                self.line(1, &format!("<link name=\"{}\"/>", escape(&links[k])));
+            }
+            let mut r = Joint::new(
+                format!("{}_{axis}", j.name),
+                JointKind::Revolute,
+                parents[k],
+                children[k],
+            );
+            let mut a = [0.0; 3];
+            a[k] = 1.0;
+            r.axis = Some(a);
+            r.limit = Some(Limit {
+                lower: Some(-pi),
+                upper: Some(pi),
+                effort,
+                velocity: None,
+            });
+            r.dynamics = j.dynamics;
+            if k == 0 {
+                r.origin = j.origin;
+                r.extra = j.extra.clone();
+            }
+            self.joint(&r);
+        }
     }
 
     /// A frame as a massless link plus a fixed joint `<frame>_frame_joint`.

@@ -80,6 +80,12 @@ def is_free(m, b):
     return m.body_jntnum[b] == 1 and int(m.jnt_type[m.body_jntadr[b]]) == int(mujoco.mjtJoint.mjJNT_FREE)
 
 
+def is_empty(m, b):
+    """No mass and no joint anywhere in the subtree of body b: nothing to the dynamics."""
+    sub = [c for c in range(1, m.nbody) if m.body_rootid[c] == b]
+    return all(m.body_mass[c] == 0 and m.body_jntnum[c] == 0 for c in sub)
+
+
 def props(m):
     """Top-level trees twinloop leaves out (the reader's rule): when every top-level
     body is free, all but the robot (the one with the most bodies, the first on a
@@ -88,9 +94,12 @@ def props(m):
     (whole subtrees)."""
     top = [b for b in range(1, m.nbody) if m.body_parentid[b] == 0]
     free = [b for b in top if is_free(m, b)]
-    fixed = [b for b in top if not is_free(m, b)]
+    # An empty static body beside a free robot (Apollo's world_link): left out.
+    empty = {b for b in top if not is_free(m, b) and is_empty(m, b)} if free else set()
+    fixed = [b for b in top if not is_free(m, b) and b not in empty]
+    top = [b for b in top if b not in empty]
     if len(top) < 2 or not free:
-        return set()
+        return empty
     size = {b: sum(1 for c in range(1, m.nbody) if m.body_rootid[c] == b) for b in top}
     largest = free[0]
     for b in free:
@@ -101,8 +110,8 @@ def props(m):
     elif sum(size[b] for b in fixed) > size[largest]:
         robot = set(fixed)
     else:
-        return set()
-    return {c for c in range(1, m.nbody) if m.body_rootid[c] not in robot}
+        return empty
+    return {c for c in range(1, m.nbody) if m.body_rootid[c] not in robot} | empty
 
 
 def root_free_dofs(m, left_out):
@@ -161,6 +170,8 @@ def state(m, seed, free, left_out):
         "qvel": d.qvel[keep_v].tolist(),
         "mass_matrix": full[np.ix_(keep_v, keep_v)].tolist(),
         "bias": d.qfrc_bias[keep_v].tolist(),
+        # Springs about springref and damping (frictionloss is a constraint, not here).
+        "passive": d.qfrc_passive[keep_v].tolist(),
         "xpos": d.xpos[1:].tolist(),
         "xquat": d.xquat[1:].tolist(),
     }
@@ -179,7 +190,10 @@ def reference(m):
             "iquat": m.body_iquat[b].tolist(),
         } | ({"left_out": True} if b in left_out else {}))
     tops = [b for b in sorted(left_out) if m.body_parentid[b] == 0]
-    named = {"props": [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) for b in tops]} if tops else {}
+    name = lambda b: mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b)  # noqa: E731
+    empty = [name(b) for b in tops if not is_free(m, b) and is_empty(m, b)]
+    props_ = [name(b) for b in tops if name(b) not in empty]
+    named = ({"props": props_} if props_ else {}) | ({"empty_static": empty} if empty else {})
     return named | {
         "mujoco": mujoco.__version__,
         "root_free": free is not None,
@@ -188,7 +202,18 @@ def reference(m):
         "nv": int(m.nv),
         "bodies": bodies,
         "states": [state(m, s, free, left_out) for s in SEEDS],
-    }
+    } | saturation(m)
+
+
+def saturation(m):
+    """With actuators: the joint forces of every control at a huge value, which MuJoCo
+    clamps to ctrlrange (times the gear) and forcerange when those are limited."""
+    if m.nu == 0:
+        return {}
+    d = mujoco.MjData(m)
+    d.ctrl[:] = 1e6
+    mujoco.mj_forward(m, d)
+    return {"saturated_actuator_force": d.qfrc_actuator.tolist()}
 
 
 def fmt(v):
@@ -511,8 +536,14 @@ def main():
 
     # --generated-only: rewrite the generated trees and their references alone
     # (no dm_control or gymnasium needed; the copied corpus is left as it is).
-    packages = [] if "--generated-only" in sys.argv[1:] else list(sources())
-    for package, src_dir, path in packages + list(write_generated()):
+    # --edges-only: the hand-written edge cases of issue 30 (edges/*.xml) alone.
+    if "--edges-only" in sys.argv[1:]:
+        edges = os.path.join(HERE, "edges")
+        todo = [("edges", edges, f) for f in sorted(glob.glob(os.path.join(edges, "*.xml")))]
+    else:
+        packages = [] if "--generated-only" in sys.argv[1:] else list(sources())
+        todo = packages + list(write_generated())
+    for package, src_dir, path in todo:
         name = os.path.basename(path)
         try:
             m = mujoco.MjModel.from_xml_path(path)
@@ -524,7 +555,7 @@ def main():
             import dm_control
             refd["installed"] = os.path.relpath(path, os.path.dirname(dm_control.__file__))
             refd["dm_control"] = dm_control_version()
-        elif package != "generated":
+        elif package not in ("generated", "edges"):
             copy_tree(package, src_dir, path)
         out = os.path.join(HERE, "reference", package)
         os.makedirs(out, exist_ok=True)
