@@ -1,0 +1,187 @@
+//! Topics recorded at their own times put on one time base.
+use crate::error::{LogError, format_ns};
+use crate::read::Series;
+use twinloop_io::Table;
+
+/// At most this many resampled rows (a `dt` typo should not fill the memory).
+const MAX_ROWS: f64 = 1e8;
+
+/// One table from `series`: rows at the first series' times (`explicit`: the user
+/// chose the order) or the longest series', or on a fixed `dt` grid; each other
+/// series interpolated linearly at those times, quaternions normalised after.
+pub(crate) fn merge(
+    series: Vec<Series>,
+    dt: Option<f64>,
+    explicit: bool,
+) -> Result<Table, LogError> {
+    let mut columns = vec!["t".to_string()];
+    let mut owner: Vec<&str> = vec![""];
+    for s in &series {
+        if s.times.is_empty() {
+            return Err(LogError::new("no message on this topic").on_topic(&s.topic));
+        }
+        for c in &s.columns {
+            if let Some(k) = columns.iter().position(|x| x == c) {
+                return Err(LogError::new(format!(
+                    "topics {} and {} both give column {c}: pick one with --topic",
+                    owner[k], s.topic
+                )));
+            }
+            columns.push(c.clone());
+            owner.push(&s.topic);
+        }
+    }
+    let start = series.iter().map(|s| s.times[0]).max().expect("a series");
+    let end = series
+        .iter()
+        .map(|s| *s.times.last().expect("a row"))
+        .min()
+        .expect("a series");
+    if start > end {
+        return Err(LogError::new(format!(
+            "the topics do not overlap in time (the latest first message is at {} s, the earliest last one at {} s)",
+            format_ns(start),
+            format_ns(end)
+        )));
+    }
+    let times: Vec<i64> = match dt {
+        Some(dt) => grid(start, end, dt)?,
+        None => {
+            let base = if explicit {
+                0
+            } else {
+                (0..series.len())
+                    .max_by_key(|&i| (series[i].times.len(), usize::MAX - i))
+                    .expect("a series")
+            };
+            series[base]
+                .times
+                .iter()
+                .copied()
+                .filter(|&t| t >= start && t <= end)
+                .collect()
+        }
+    };
+    let t0 = times[0];
+    let mut rows: Vec<Vec<f64>> = times
+        .iter()
+        .map(|&t| {
+            let mut r = Vec::with_capacity(columns.len());
+            r.push((t - t0) as f64 / 1e9);
+            r
+        })
+        .collect();
+    for s in &series {
+        interpolate_into(s, &times, &mut rows);
+    }
+    let mut table = Table::new(columns);
+    table.rows = rows;
+    Ok(table)
+}
+
+/// `start, start + dt, ..` up to `end`, in ns (each point rounded to the ns).
+fn grid(start: i64, end: i64, dt: f64) -> Result<Vec<i64>, LogError> {
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(LogError::new(format!(
+            "--dt {dt}: a positive step is needed"
+        )));
+    }
+    let n = ((end - start) as f64 / 1e9 / dt).floor();
+    if n > MAX_ROWS {
+        return Err(LogError::new(format!(
+            "--dt {dt} over {} s would make {n:e} rows",
+            format_ns(end - start)
+        )));
+    }
+    Ok((0..=n as i64)
+        .map(|k| start + (k as f64 * dt * 1e9).round() as i64)
+        .filter(|&t| t <= end)
+        .collect())
+}
+
+/// Append `s`'s columns to every row, interpolated linearly at `times` (all inside
+/// its span). A row at one of its own times gets its values unchanged, bit for bit.
+fn interpolate_into(s: &Series, times: &[i64], rows: &mut [Vec<f64>]) {
+    let w = s.columns.len();
+    let mut j = 0;
+    for (&t, row) in times.iter().zip(rows.iter_mut()) {
+        while j + 1 < s.times.len() && s.times[j + 1] <= t {
+            j += 1;
+        }
+        let a = &s.values[j * w..(j + 1) * w];
+        if s.times[j] == t || j + 1 == s.times.len() {
+            row.extend_from_slice(a);
+            continue;
+        }
+        let b = &s.values[(j + 1) * w..(j + 2) * w];
+        let f = (t - s.times[j]) as f64 / (s.times[j + 1] - s.times[j]) as f64;
+        let from = row.len();
+        row.extend(a.iter().zip(b).map(|(&x, &y)| x + f * (y - x)));
+        if let Some(q) = s.quaternion {
+            nlerp_fix(
+                &mut row[from + q..from + q + 4],
+                &a[q..q + 4],
+                &b[q..q + 4],
+                f,
+            );
+        }
+    }
+}
+
+/// Quaternions: interpolate along the shorter arc (q and -q are one rotation) and
+/// renormalise (nlerp), since a componentwise blend is not of unit norm.
+fn nlerp_fix(out: &mut [f64], a: &[f64], b: &[f64], f: f64) {
+    let dot: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+    let sign = if dot < 0.0 { -1.0 } else { 1.0 };
+    for k in 0..4 {
+        out[k] = a[k] + f * (sign * b[k] - a[k]);
+    }
+    let n = out.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if n > 0.0 {
+        out.iter_mut().for_each(|x| *x /= n);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn series(topic: &str, col: &str, times: &[i64], values: &[f64]) -> Series {
+        Series {
+            topic: topic.into(),
+            columns: vec![col.into()],
+            times: times.to_vec(),
+            values: values.to_vec(),
+            quaternion: None,
+            stamped: Some(true),
+        }
+    }
+
+    #[test]
+    fn a_second_topic_is_interpolated_at_the_first_topics_times_inside_its_span() {
+        let a = series("/a", "x", &[0, 10, 20, 30], &[1.0, 2.0, 3.0, 4.0]);
+        let b = series("/b", "y", &[5, 25], &[0.0, 20.0]);
+        let t = merge(vec![a, b], None, true).unwrap();
+        assert_eq!(t.columns, ["t", "x", "y"]);
+        assert_eq!(t.rows, vec![vec![0.0, 2.0, 5.0], vec![10e-9, 3.0, 15.0]]);
+    }
+
+    #[test]
+    fn a_fixed_step_resamples_every_topic() {
+        let a = series("/a", "x", &[0, 1_000_000_000], &[0.0, 1.0]);
+        let t = merge(vec![a], Some(0.25), true).unwrap();
+        let x: Vec<f64> = t.rows.iter().map(|r| r[1]).collect();
+        assert_eq!(x, [0.0, 0.25, 0.5, 0.75, 1.0]);
+    }
+
+    #[test]
+    fn two_topics_giving_one_column_is_an_error_naming_both() {
+        let a = series("/a", "q:j", &[0], &[0.0]);
+        let b = series("/b", "q:j", &[0], &[0.0]);
+        let e = merge(vec![a, b], None, true).unwrap_err();
+        assert!(
+            e.to_string().contains("/a and /b both give column q:j"),
+            "{e}"
+        );
+    }
+}
