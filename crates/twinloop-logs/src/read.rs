@@ -1,8 +1,9 @@
 //! A log's messages as a twinloop table: one column group per message type, named as
 //! every CSV twinloop reads names them (docs/architecture.md, "Data files").
-use crate::error::{LogError, format_ns};
+use crate::error::LogError;
 use crate::msgs::{self, JointState, Kind, Transform};
 use crate::source::{self, Channel};
+use crate::timebase::Series;
 use std::collections::HashMap;
 use std::path::Path;
 use std::str::FromStr;
@@ -54,52 +55,6 @@ pub struct ReadOptions {
     pub topics: Vec<TopicSpec>,
     /// Resample every column onto `t = 0, dt, 2 dt, ..` by linear interpolation.
     pub dt: Option<f64>,
-}
-
-/// One stream of rows with its own times: a topic, or one child frame of a TF topic.
-#[derive(Debug, Default)]
-pub(crate) struct Series {
-    pub topic: String,
-    pub columns: Vec<String>,
-    pub times: Vec<i64>,
-    /// Row-major, `columns.len()` values a row.
-    pub values: Vec<f64>,
-    /// Index of the first of four quaternion columns (x, y, z, w), if any.
-    pub quaternion: Option<usize>,
-    /// Time from the header stamp (else from the log time: stamps all zero).
-    pub stamped: Option<bool>,
-}
-
-impl Series {
-    fn new(topic: &str) -> Self {
-        Series {
-            topic: topic.to_string(),
-            ..Series::default()
-        }
-    }
-
-    /// Append one row at `stamp` (or `log_time` when this topic's stamps are unset).
-    fn push(
-        &mut self,
-        stamp: i64,
-        log_time: i64,
-        row: impl IntoIterator<Item = f64>,
-    ) -> Result<(), LogError> {
-        let stamped = *self.stamped.get_or_insert(stamp != 0);
-        let t = if stamped { stamp } else { log_time };
-        if let Some(&prev) = self.times.last()
-            && t < prev
-        {
-            return Err(LogError::new(format!(
-                "time goes backwards (the previous message was at {} s)",
-                format_ns(prev)
-            ))
-            .at(&self.topic, t));
-        }
-        self.times.push(t);
-        self.values.extend(row);
-        Ok(())
-    }
 }
 
 /// The decoding state of one topic.

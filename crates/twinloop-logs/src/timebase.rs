@@ -1,7 +1,52 @@
 //! Topics recorded at their own times put on one time base.
 use crate::error::{LogError, format_ns};
-use crate::read::Series;
 use twinloop_io::Table;
+
+/// One stream of rows with its own times: a topic, or one child frame of a TF topic.
+#[derive(Debug, Default)]
+pub(crate) struct Series {
+    pub topic: String,
+    pub columns: Vec<String>,
+    pub times: Vec<i64>,
+    /// Row-major, `columns.len()` values a row.
+    pub values: Vec<f64>,
+    /// Index of the first of four quaternion columns (x, y, z, w), if any.
+    pub quaternion: Option<usize>,
+    /// Time from the header stamp (else from the log time: stamps all zero).
+    pub stamped: Option<bool>,
+}
+
+impl Series {
+    pub(crate) fn new(topic: &str) -> Self {
+        Series {
+            topic: topic.to_string(),
+            ..Series::default()
+        }
+    }
+
+    /// Append one row at `stamp` (or `log_time` when this topic's stamps are unset).
+    pub(crate) fn push(
+        &mut self,
+        stamp: i64,
+        log_time: i64,
+        row: impl IntoIterator<Item = f64>,
+    ) -> Result<(), LogError> {
+        let stamped = *self.stamped.get_or_insert(stamp != 0);
+        let t = if stamped { stamp } else { log_time };
+        if let Some(&prev) = self.times.last()
+            && t < prev
+        {
+            return Err(LogError::new(format!(
+                "time goes backwards (the previous message was at {} s)",
+                format_ns(prev)
+            ))
+            .at(&self.topic, t));
+        }
+        self.times.push(t);
+        self.values.extend(row);
+        Ok(())
+    }
+}
 
 /// At most this many resampled rows (a `dt` typo should not fill the memory).
 const MAX_ROWS: f64 = 1e8;
