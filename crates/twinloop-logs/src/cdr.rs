@@ -75,10 +75,16 @@ impl<'a> CdrReader<'a> {
 
     /// A string without its NUL.
     pub fn string(&mut self) -> Result<&'a str, LogError> {
+        let bytes = self.string_bytes()?;
+        std::str::from_utf8(bytes).map_err(|_| LogError::new("a string is not UTF-8"))
+    }
+
+    /// A string's bytes without its NUL, not checked as UTF-8 (for comparing with a
+    /// string already checked: a JointState's names repeat in every message).
+    pub fn string_bytes(&mut self) -> Result<&'a [u8], LogError> {
         let n = self.u32()? as usize;
         let bytes = self.take(n, 1)?;
-        let bytes = bytes.strip_suffix(&[0]).unwrap_or(bytes);
-        std::str::from_utf8(bytes).map_err(|_| LogError::new("a string is not UTF-8"))
+        Ok(bytes.strip_suffix(&[0]).unwrap_or(bytes))
     }
 
     /// A sequence's element count, checked against the bytes left (each element is at

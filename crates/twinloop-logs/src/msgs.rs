@@ -154,9 +154,13 @@ impl JointState {
         self.names_changed = n != self.names.len();
         self.names.truncate(n);
         for i in 0..n {
-            let s = r.string()?;
+            let bytes = r.string_bytes()?;
+            if self.names.get(i).is_some_and(|old| old.as_bytes() == bytes) {
+                continue;
+            }
+            let s = std::str::from_utf8(bytes)
+                .map_err(|_| LogError::new("a joint name is not UTF-8"))?;
             match self.names.get_mut(i) {
-                Some(old) if old == s => {}
                 Some(old) => {
                     old.clear();
                     old.push_str(s);
