@@ -333,17 +333,22 @@ pub(crate) fn read_series(path: &Path, options: &ReadOptions) -> Result<Vec<Seri
     let mut order: Vec<String> = Vec::new();
     let mut seen: Vec<(String, String)> = Vec::new();
     source::for_each_message(path, |ch, log_time, data| {
-        if !decoders.contains_key(&ch.topic) {
-            seen.push((ch.topic.clone(), ch.schema.clone()));
-            let spec = options.topics.iter().find(|s| s.topic == ch.topic);
-            let d = if options.topics.is_empty() || spec.is_some() {
-                Decoder::new(ch, spec)?
-            } else {
-                None
+        // One hash a message: the topic's decoder, or its first message.
+        if let Some(d) = decoders.get_mut(&ch.topic) {
+            return match d {
+                Some(d) => d.decode(log_time, data),
+                None => Ok(()),
             };
-            decoders.insert(ch.topic.clone(), d);
-            order.push(ch.topic.clone());
         }
+        seen.push((ch.topic.clone(), ch.schema.clone()));
+        let spec = options.topics.iter().find(|s| s.topic == ch.topic);
+        let d = if options.topics.is_empty() || spec.is_some() {
+            Decoder::new(ch, spec)?
+        } else {
+            None
+        };
+        decoders.insert(ch.topic.clone(), d);
+        order.push(ch.topic.clone());
         match decoders.get_mut(&ch.topic) {
             Some(Some(d)) => d.decode(log_time, data),
             _ => Ok(()),

@@ -8,8 +8,9 @@ pub(crate) struct Series {
     pub topic: String,
     pub columns: Vec<String>,
     pub times: Vec<i64>,
-    /// Row-major, `columns.len()` values a row.
-    pub values: Vec<f64>,
+    /// One row a message: a slot for `t` (0 until merged), then `columns.len()`
+    /// values; the time base's rows become the table's without a copy.
+    pub rows: Vec<Vec<f64>>,
     /// Index of the first of four quaternion columns (x, y, z, w), if any.
     pub quaternion: Option<usize>,
     /// Time from the header stamp (else from the log time: stamps all zero).
@@ -43,7 +44,10 @@ impl Series {
             .at(&self.topic, t));
         }
         self.times.push(t);
-        self.values.extend(row);
+        let mut r = Vec::with_capacity(1 + self.columns.len());
+        r.push(0.0);
+        r.extend(row);
+        self.rows.push(r);
         Ok(())
     }
 }
@@ -55,10 +59,18 @@ const MAX_ROWS: f64 = 1e8;
 /// chose the order) or the longest series', or on a fixed `dt` grid; each other
 /// series interpolated linearly at those times, quaternions normalised after.
 pub(crate) fn merge(
-    series: Vec<Series>,
+    mut series: Vec<Series>,
     dt: Option<f64>,
     explicit: bool,
 ) -> Result<Table, LogError> {
+    if !explicit
+        && let Some(base) =
+            (0..series.len()).max_by_key(|&i| (series[i].times.len(), usize::MAX - i))
+    {
+        // The longest series gives the rows: it goes first.
+        let b = series.remove(base);
+        series.insert(0, b);
+    }
     let mut columns = vec!["t".to_string()];
     let mut owner: Vec<&str> = vec![""];
     for s in &series {
@@ -89,34 +101,42 @@ pub(crate) fn merge(
             format_ns(end)
         )));
     }
-    let times: Vec<i64> = match dt {
-        Some(dt) => grid(start, end, dt)?,
-        None => {
-            let base = if explicit {
-                0
-            } else {
-                (0..series.len())
-                    .max_by_key(|&i| (series[i].times.len(), usize::MAX - i))
-                    .expect("a series")
-            };
-            series[base]
-                .times
+    let (times, mut rows, rest) = match dt {
+        Some(dt) => {
+            let times = grid(start, end, dt)?;
+            let rows = times
                 .iter()
-                .copied()
-                .filter(|&t| t >= start && t <= end)
-                .collect()
+                .map(|_| Vec::with_capacity(columns.len()))
+                .collect();
+            (times, rows, &series[..])
+        }
+        None => {
+            // The first series' own rows, inside every series' span, are the table's.
+            let base = &mut series[0];
+            let (times, rows): (Vec<i64>, Vec<Vec<f64>>) = std::mem::take(&mut base.times)
+                .into_iter()
+                .zip(std::mem::take(&mut base.rows))
+                .filter(|(t, _)| *t >= start && *t <= end)
+                .unzip();
+            (times, rows, &series[1..])
         }
     };
-    let t0 = times[0];
-    let mut rows: Vec<Vec<f64>> = times
-        .iter()
-        .map(|&t| {
-            let mut r = Vec::with_capacity(columns.len());
-            r.push((t - t0) as f64 / 1e9);
-            r
-        })
-        .collect();
-    for s in &series {
+    let Some(&t0) = times.first() else {
+        return Err(LogError::new(format!(
+            "no message falls inside the other topics' span ({} s to {} s)",
+            format_ns(start),
+            format_ns(end)
+        ))
+        .on_topic(&series[0].topic));
+    };
+    for (r, &t) in rows.iter_mut().zip(&times) {
+        let t = (t - t0) as f64 / 1e9;
+        match r.first_mut() {
+            Some(slot) => *slot = t,
+            None => r.push(t),
+        }
+    }
+    for s in rest {
         interpolate_into(s, &times, &mut rows);
     }
     let mut table = Table::new(columns);
@@ -147,18 +167,17 @@ fn grid(start: i64, end: i64, dt: f64) -> Result<Vec<i64>, LogError> {
 /// Append `s`'s columns to every row, interpolated linearly at `times` (all inside
 /// its span). A row at one of its own times gets its values unchanged, bit for bit.
 fn interpolate_into(s: &Series, times: &[i64], rows: &mut [Vec<f64>]) {
-    let w = s.columns.len();
     let mut j = 0;
     for (&t, row) in times.iter().zip(rows.iter_mut()) {
         while j + 1 < s.times.len() && s.times[j + 1] <= t {
             j += 1;
         }
-        let a = &s.values[j * w..(j + 1) * w];
+        let a = &s.rows[j][1..];
         if s.times[j] == t || j + 1 == s.times.len() {
             row.extend_from_slice(a);
             continue;
         }
-        let b = &s.values[(j + 1) * w..(j + 2) * w];
+        let b = &s.rows[j + 1][1..];
         let f = (t - s.times[j]) as f64 / (s.times[j + 1] - s.times[j]) as f64;
         let from = row.len();
         row.extend(a.iter().zip(b).map(|(&x, &y)| x + f * (y - x)));
@@ -196,7 +215,7 @@ mod tests {
             topic: topic.into(),
             columns: vec![col.into()],
             times: times.to_vec(),
-            values: values.to_vec(),
+            rows: values.iter().map(|&x| vec![0.0, x]).collect(),
             quaternion: None,
             stamped: Some(true),
         }
