@@ -81,6 +81,7 @@ pub(crate) enum Decoder {
         required: bool,
     },
     Tf {
+        topic: String,
         buf: Vec<Transform>,
         children: HashMap<String, Series>,
     },
@@ -128,6 +129,7 @@ impl Decoder {
                 }
             }
             Some(Kind::Tf) => Decoder::Tf {
+                topic: ch.topic.clone(),
                 buf: Vec::new(),
                 children: HashMap::new(),
             },
@@ -236,13 +238,17 @@ impl Decoder {
                 }
                 series.push(0, log_time, buf.iter().copied())
             }
-            Decoder::Tf { buf, children } => {
+            Decoder::Tf {
+                topic,
+                buf,
+                children,
+            } => {
                 msgs::decode_tf(data, buf)?;
                 for tr in buf.iter() {
                     let s = match children.get_mut(&tr.child) {
                         Some(s) => s,
                         None => {
-                            let mut s = Series::new(&format!("{} ({})", "tf", tr.child));
+                            let mut s = Series::new(&format!("{topic} ({})", tr.child));
                             s.columns = pose_columns(&tr.parent, &tr.child);
                             s.quaternion = Some(3);
                             children.entry(tr.child.clone()).or_insert(s)
