@@ -223,3 +223,38 @@ fn a_topic_the_log_lacks_is_a_one_line_error_with_exit_2() {
         s(&tmp("y.csv")),
     ]);
 }
+
+#[test]
+fn a_logged_joint_the_robot_lacks_is_listed_and_refused() {
+    // The reference log's joints: l_hip_pitch, l_knee (km20 has both) and
+    // r_ankle_roll (km20's is r_ank_roll).
+    let log = root().join("crates/twinloop-logs/tests/data/joints_zstd.mcap");
+    let o = twinloop(&["log", "info", s(&log), "--robot", "builtin:km20"]);
+    assert_eq!(o.status.code(), Some(1));
+    let out = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(
+        out.contains("joints the robot lacks: r_ankle_roll\n"),
+        "{out}"
+    );
+    // A log of our own within km20's limits, with the same misnamed joint.
+    let mut t = Table::new(vec!["t".into(), "q:l_knee".into(), "q:r_ankle_roll".into()]);
+    t.rows = (0..5).map(|k| vec![k as f64 * 1e-3, 0.1, 0.0]).collect();
+    let mine = tmp("misnamed.mcap");
+    write_mcap(&mine, &t, None, "base").unwrap();
+    let o = twinloop(&[
+        "simulate",
+        "--robot",
+        "builtin:km20",
+        "--trajectory",
+        s(&mine),
+        "--out",
+        s(&tmp("k.csv")),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(
+        e.contains("misnamed.mcap") && e.contains("q:r_ankle_roll") && e.contains("q:r_ank_roll"),
+        "{e}"
+    );
+    assert_eq!(e.lines().count(), 1, "{e}");
+}
