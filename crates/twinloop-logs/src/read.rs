@@ -151,31 +151,7 @@ impl Decoder {
                 series,
                 v,
                 tau,
-            } => {
-                msg.decode(data)?;
-                if series.times.is_empty() {
-                    *v = !msg.velocity.is_empty();
-                    *tau = !msg.effort.is_empty();
-                    series.columns = joint_columns(&msg.names, *v, *tau);
-                } else if msg.names_changed
-                    || *v == msg.velocity.is_empty()
-                    || *tau == msg.effort.is_empty()
-                {
-                    return Err(LogError::new(format!(
-                        "the joints or fields changed from the first message's (now {} joints: {}): twinloop reads one fixed set a topic",
-                        msg.names.len(),
-                        msg.names.join(", ")
-                    ))
-                    .at(&series.topic, msg.stamp_ns));
-                }
-                let row = msg
-                    .position
-                    .iter()
-                    .chain(&msg.velocity)
-                    .chain(&msg.effort)
-                    .copied();
-                series.push(msg.stamp_ns, log_time, row)
-            }
+            } => decode_joints(msg, series, (v, tau), log_time, data),
             Decoder::Imu { msg, series } => {
                 msg.decode(data)?;
                 if series.times.is_empty() {
@@ -283,6 +259,38 @@ impl Decoder {
             }
         }
     }
+}
+
+/// One JointState into its series; the first message fixes the joints and whether
+/// velocities (`vt.0`) and efforts (`vt.1`) are there.
+fn decode_joints(
+    msg: &mut JointState,
+    series: &mut Series,
+    vt: (&mut bool, &mut bool),
+    log_time: i64,
+    data: &[u8],
+) -> Result<(), LogError> {
+    let (v, tau) = vt;
+    msg.decode(data)?;
+    if series.times.is_empty() {
+        *v = !msg.velocity.is_empty();
+        *tau = !msg.effort.is_empty();
+        series.columns = joint_columns(&msg.names, *v, *tau);
+    } else if msg.names_changed || *v == msg.velocity.is_empty() || *tau == msg.effort.is_empty() {
+        return Err(LogError::new(format!(
+            "the joints or fields changed from the first message's (now {} joints: {}): twinloop reads one fixed set a topic",
+            msg.names.len(),
+            msg.names.join(", ")
+        ))
+        .at(&series.topic, msg.stamp_ns));
+    }
+    let row = msg
+        .position
+        .iter()
+        .chain(&msg.velocity)
+        .chain(&msg.effort)
+        .copied();
+    series.push(msg.stamp_ns, log_time, row)
 }
 
 /// `q:<j>` for every joint, then `v:<j>` and `tau:<j>` when the messages carry them.
