@@ -318,8 +318,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
         check(&mut adapted, &StudyOptions::default()).map_err(where_flag)?;
     }
     if let Some(path) = &a.lean {
-        let table =
-            twinloop_io::Table::read(path).map_err(|e| CliError::from(e).context("--lean"))?;
+        let table = crate::common::read_table(path).map_err(|e| e.context("--lean"))?;
         twinloop_ident::adapt::lean_check(&mut adapted, &prior, &table)
             .map_err(|e| CliError::from(e).context(format!("--lean {}", path.display())))?;
     }

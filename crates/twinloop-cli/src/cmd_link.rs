@@ -11,7 +11,6 @@ use serde::Serialize;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-use twinloop_io::CsvWriter;
 use twinloop_link::ModelTable;
 use twinloop_link::control_cycle::ReadMethod;
 use twinloop_link::transport::Transport;
@@ -154,8 +153,8 @@ pub struct RecordArgs {
     /// Seconds to record
     #[arg(long, value_parser = crate::common::positive)]
     pub duration: f64,
-    /// Output CSV file
-    #[arg(long, value_name = "FILE.csv")]
+    /// Output file: CSV, or MCAP (ROS 2 /joint_states) when it ends in .mcap
+    #[arg(long, value_name = "FILE.csv|FILE.mcap")]
     pub out: PathBuf,
     /// Reads per second (0: as fast as the bus allows)
     #[arg(long, default_value_t = 100.0, value_parser = crate::common::non_negative)]
@@ -490,9 +489,9 @@ fn record(a: &RecordArgs) -> CliResult {
     for prefix in ["q", "v", "tau"] {
         columns.extend(names.iter().map(|n| format!("{prefix}:{n}")));
     }
-    // Every row reaches the file as soon as it is read: nothing is lost on Ctrl-C
-    // or when the adapter is unplugged.
-    let mut writer = CsvWriter::recording(&a.out, &columns)?;
+    // Every row reaches a CSV as soon as it is read: nothing is lost on Ctrl-C or
+    // when the adapter is unplugged. An .mcap is closed (summary written) on both.
+    let mut writer = crate::common::RowWriter::create(&a.out, &columns, None, true)?;
     let stop = interrupt_flag();
     let rec = record_rows(&mut robot, &mut writer, a, &stop, live.as_mut());
     if let Some(live) = &live {
@@ -610,7 +609,7 @@ struct Recording {
 /// `stop`, or the link failed.
 fn record_rows<T: Transport>(
     robot: &mut DynamixelRobot<T>,
-    writer: &mut CsvWriter,
+    writer: &mut crate::common::RowWriter,
     a: &RecordArgs,
     stop: &AtomicBool,
     mut live: Option<&mut twinloop_view::LivePublisher>,

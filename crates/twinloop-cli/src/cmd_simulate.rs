@@ -8,7 +8,7 @@ use crate::sim_args::{ServoChoice, record_columns, standing_simulator, state_row
 use crate::units::read_trajectory;
 use clap::Args;
 use std::path::{Path, PathBuf};
-use twinloop_io::{CsvWriter, Quantity, StateColumns, Table};
+use twinloop_io::{Quantity, StateColumns, Table};
 use twinloop_robot::{Robot, RobotState};
 use twinloop_sim::Simulator;
 
@@ -30,8 +30,9 @@ pub struct SimulateArgs {
     /// them).
     #[arg(long, value_name = "FILE")]
     pub trajectory: Option<PathBuf>,
-    /// Output CSV.
-    #[arg(long, value_name = "FILE.csv")]
+    /// Output CSV; an .mcap is written as ROS 2 messages (/joint_states, /tf, /imu,
+    /// /robot_description; docs/logs.md).
+    #[arg(long, value_name = "FILE.csv|FILE.mcap")]
     pub out: PathBuf,
     /// Time step, s.
     #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::units::time_step)]
@@ -165,7 +166,11 @@ pub fn run(a: SimulateArgs) -> CliResult {
     crate::bounds::steps(duration, a.dt, &what)?;
     let cols = record_columns(&sim);
     let mut live = live_view(&a, &robot, &sim)?;
-    record(&a, duration, &mut sim, goals.as_ref(), &cols, live.as_mut())?;
+    let out = Output {
+        robot: &robot,
+        cols: &cols,
+    };
+    record(&a, duration, &mut sim, goals.as_ref(), out, live.as_mut())?;
     if let Some(live) = &live {
         eprintln!("{}", live.summary());
     }
@@ -189,16 +194,23 @@ fn live_view(
 }
 
 /// Step the simulator for --duration, following the goals, writing every --every'th row.
+/// What `record` writes: the columns, and the robot whose URDF an .mcap carries.
+struct Output<'a> {
+    robot: &'a twinloop_description::Description,
+    cols: &'a [String],
+}
+
 fn record(
     a: &SimulateArgs,
     duration: f64,
     sim: &mut Simulator,
     goals: Option<&Goals>,
-    cols: &[String],
+    out: Output,
     mut live: Option<&mut twinloop_view::LivePublisher>,
 ) -> Result<(), CliError> {
+    let (robot, cols) = (out.robot, out.cols);
     let hold: Vec<f64> = sim.goals.clone();
-    let mut w = CsvWriter::create(&a.out, cols)?;
+    let mut w = crate::common::RowWriter::create(&a.out, cols, Some(robot), false)?;
     let steps = (duration / a.dt).round() as usize;
     let bar = progress::rows(if steps > 20_000 { steps } else { 0 });
     let mut st = RobotState::default();
@@ -224,5 +236,5 @@ fn record(
         bar.inc(1);
     }
     bar.finish_and_clear();
-    Ok(w.finish()?)
+    w.finish()
 }

@@ -46,7 +46,7 @@ pub fn run(args: ViewArgs) -> CliResult {
     let scene = Scene::new(&robot, source, &args.package_dirs);
     let mut recordings = Vec::with_capacity(args.recordings.len());
     for path in &args.recordings {
-        let rec = Recording::read(path, &scene.info)?;
+        let rec = Recording::from_table(&common::read_table(path)?, path, &scene.info)?;
         if let Some(w) = rec.warning() {
             eprintln!("warning: {w}");
         }

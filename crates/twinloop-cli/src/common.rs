@@ -186,8 +186,95 @@ pub fn count(s: &str) -> Result<usize, String> {
 }
 
 /// Read a CSV table; the error names the file (and line).
+///
+/// An `.mcap` file, a `.db3` or a rosbag2 folder is read as a log (twinloop-logs):
+/// the topics of `--topic` (else every topic twinloop can use), resampled onto
+/// `--resample` seconds when given.
 pub fn read_table(path: &Path) -> Result<twinloop_io::Table, CliError> {
+    if twinloop_logs::is_log(path) {
+        let options = LOG_OPTIONS.get().cloned().unwrap_or_default();
+        return Ok(twinloop_logs::read_log(path, &options)?);
+    }
     Ok(twinloop_io::Table::read(path)?)
+}
+
+/// The global `--topic` and `--resample`, set once by `main` from the command line:
+/// they apply to every log any command reads, so no command threads them through.
+static LOG_OPTIONS: std::sync::OnceLock<twinloop_logs::ReadOptions> = std::sync::OnceLock::new();
+
+/// Set the log options of [`read_table`] (once, at start-up).
+pub fn set_log_options(topics: &[String], resample: Option<f64>) -> Result<(), CliError> {
+    let topics = topics
+        .iter()
+        .map(|t| t.parse())
+        .collect::<Result<Vec<twinloop_logs::TopicSpec>, _>>()
+        .map_err(CliError::from)?;
+    let _ = LOG_OPTIONS.set(twinloop_logs::ReadOptions {
+        topics,
+        dt: resample,
+    });
+    Ok(())
+}
+
+/// Rows written to a CSV, or to an MCAP of ROS 2 messages when the path ends in
+/// `.mcap` (with the robot's URDF on `/robot_description`): what `simulate --out`
+/// and `link record --out` write through.
+pub enum RowWriter {
+    Csv(twinloop_io::CsvWriter),
+    Mcap(Box<twinloop_logs::McapLog>),
+}
+
+impl RowWriter {
+    /// `recording`: a CSV kept row by row even if the run fails
+    /// ([`twinloop_io::CsvWriter::recording`]); an MCAP is whole once finished.
+    pub fn create(
+        path: &Path,
+        columns: &[String],
+        robot: Option<&twinloop_description::Description>,
+        recording: bool,
+    ) -> Result<RowWriter, CliError> {
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+        {
+            let urdf = robot.map(twinloop_description::urdf::to_string);
+            let root = robot
+                .and_then(|r| r.root_links().first().map(|s| s.to_string()))
+                .unwrap_or_else(|| "base_link".into());
+            let mut log = twinloop_logs::McapLog::create(path, columns, urdf.as_deref(), &root)?;
+            if recording {
+                log = log.recording();
+            }
+            return Ok(RowWriter::Mcap(Box::new(log)));
+        }
+        Ok(RowWriter::Csv(if recording {
+            twinloop_io::CsvWriter::recording(path, columns)?
+        } else {
+            twinloop_io::CsvWriter::create(path, columns)?
+        }))
+    }
+
+    pub fn write_row(&mut self, row: &[f64]) -> Result<(), CliError> {
+        match self {
+            RowWriter::Csv(w) => Ok(w.write_row(row)?),
+            RowWriter::Mcap(w) => Ok(w.write_row(row)?),
+        }
+    }
+
+    pub fn finish(self) -> Result<(), CliError> {
+        match self {
+            RowWriter::Csv(w) => Ok(w.finish()?),
+            RowWriter::Mcap(w) => Ok(w.finish()?),
+        }
+    }
+
+    /// Give up the file: nothing is written, an older file of the name stays.
+    pub fn discard(self) {
+        match self {
+            RowWriter::Csv(w) => w.discard(),
+            RowWriter::Mcap(w) => w.discard(),
+        }
+    }
 }
 
 /// A number for people: 6 significant digits, no float noise (3.1474699999999998 -> 3.14747).

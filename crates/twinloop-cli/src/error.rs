@@ -126,6 +126,7 @@ macro_rules! from_library_error {
 from_library_error!(
     twinloop_description::DescriptionError,
     twinloop_io::IoError,
+    twinloop_logs::LogError,
     twinloop_sysid::SysidError,
     twinloop_gait::GaitError,
     twinloop_reduced::ReducedError,

@@ -18,6 +18,7 @@ mod cmd_gait;
 mod cmd_identify;
 mod cmd_ik;
 mod cmd_link;
+mod cmd_log;
 mod cmd_model;
 mod cmd_serve;
 mod cmd_simulate;
@@ -64,6 +65,14 @@ unless --no-detrend.",
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Recorded logs (.mcap, rosbag2 folder): a topic to read, repeatable; the first
+    /// gives the rows. TOPIC=NAME,NAME,.. names a Float64MultiArray's values. Default:
+    /// every JointState, Imu, WrenchStamped and TFMessage topic (`twinloop log info`)
+    #[arg(long, global = true, value_name = "TOPIC")]
+    topic: Vec<String>,
+    /// Recorded logs: resample every topic onto this fixed step (s) by linear interpolation
+    #[arg(long, global = true, value_name = "SECONDS", value_parser = common::positive)]
+    resample: Option<f64>,
 }
 
 #[derive(Subcommand)]
@@ -159,6 +168,13 @@ enum Command {
     /// `twinloop serve`, or TCP. Run `twinloop link <command> --help` for each.
     #[command(subcommand)]
     Link(cmd_link::LinkCommand),
+    /// Recorded logs (MCAP files, ROS 2 bags): what a log holds and what twinloop reads from it
+    ///
+    /// Every command that reads recorded data (--trajectory, --data, --poses,
+    /// --robot-run, view recordings) takes an .mcap file or a rosbag2 folder (MCAP or
+    /// SQLite storage) as well as a CSV; --topic picks topics, --resample a fixed step.
+    #[command(subcommand)]
+    Log(cmd_log::LogCommand),
     /// Put a virtual robot on a pseudo-terminal (or TCP) that any Dynamixel program can drive
     ///
     /// Each servo of the robot answers with its own control table in its own protocol
@@ -244,6 +260,7 @@ fn run(command: Command) -> CliResult {
         Command::Gait(cmd) => cmd_gait::run(cmd),
         Command::Compliant(cmd) => cmd_compliant::run(cmd),
         Command::Link(cmd) => cmd_link::run(cmd),
+        Command::Log(cmd) => cmd_log::run(cmd),
         Command::Serve(args) => cmd_serve::run(args),
         Command::Demo(args) => cmd_demo::run(args),
         Command::Bench(cmd) => cmd_bench::run(cmd),
@@ -253,7 +270,8 @@ fn run(command: Command) -> CliResult {
 
 fn main() -> ExitCode {
     let cli: Cli = common::parse_args();
-    match run(cli.command) {
+    let result = common::set_log_options(&cli.topic, cli.resample).and_then(|()| run(cli.command));
+    match result {
         Ok(outcome) => outcome.exit_code(),
         Err(e) => {
             eprintln!("error: {e}");

@@ -192,28 +192,77 @@ impl AtomicFile<File> {
     }
 
     fn open(out: &Output, on_drop: OnDrop) -> Result<Self, IoError> {
-        let partial = in_progress(&out.target);
-        // A partial file left by a killed run is replaced; anything else there is not.
-        if let Ok(m) = std::fs::symlink_metadata(&partial) {
-            if !m.file_type().is_file() {
-                return Err(refused(
-                    "",
-                    &partial,
-                    "is in the way of the file being written (not a regular file)",
-                ));
-            }
-            let _ = std::fs::remove_file(&partial);
-        }
-        let file = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&partial)
-            .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(&out.path))?;
-        // The file keeps its permissions when it is replaced.
-        if let Ok(m) = std::fs::metadata(&out.target) {
-            let _ = file.set_permissions(m.permissions());
-        }
+        let (partial, file) = create_partial(out)?;
         Ok(AtomicFile::with_writer(out, partial, file, on_drop))
+    }
+}
+
+/// `FILE.partial` created for `out`: a partial file left by a killed run is replaced,
+/// anything else in the way is refused; the file gets the old one's permissions.
+fn create_partial(out: &Output) -> Result<(PathBuf, File), IoError> {
+    let partial = in_progress(&out.target);
+    if let Ok(m) = std::fs::symlink_metadata(&partial) {
+        if !m.file_type().is_file() {
+            return Err(refused(
+                "",
+                &partial,
+                "is in the way of the file being written (not a regular file)",
+            ));
+        }
+        let _ = std::fs::remove_file(&partial);
+    }
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create_new(true)
+        .open(&partial)
+        .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(&out.path))?;
+    if let Ok(m) = std::fs::metadata(&out.target) {
+        let _ = file.set_permissions(m.permissions());
+    }
+    Ok((partial, file))
+}
+
+/// A file written under its in-progress name by a writer that seeks back (an MCAP
+/// writes its summary last), under the same rules as [`AtomicFile`]: the caller
+/// writes the [`File`] it is given and hands it back to [`PartialFile::commit`];
+/// dropped uncommitted, the partial file is removed and the old file stays.
+pub struct PartialFile {
+    target: PathBuf,
+    shown: PathBuf,
+    partial: PathBuf,
+    committed: bool,
+}
+
+impl PartialFile {
+    /// The place for `out` and the file to write.
+    pub fn open(out: &Output) -> Result<(PartialFile, File), IoError> {
+        let (partial, file) = create_partial(out)?;
+        let place = PartialFile {
+            target: out.target.clone(),
+            shown: out.path.clone(),
+            partial,
+            committed: false,
+        };
+        Ok((place, file))
+    }
+
+    /// Fsync `file` (what [`PartialFile::open`] gave) and rename it over the target.
+    pub fn commit(mut self, file: File) -> Result<(), IoError> {
+        let err =
+            |e: std::io::Error| IoError::new(format!("cannot write: {e}")).in_file(&self.shown);
+        file.sync_all().map_err(err)?;
+        std::fs::rename(&self.partial, &self.target).map_err(err)?;
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for PartialFile {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_file(&self.partial);
+        }
     }
 }
 

@@ -1,0 +1,344 @@
+//! A twinloop table written as an MCAP file of ROS 2 messages that Foxglove and
+//! Rerun open without twinloop: `/joint_states` (sensor_msgs/JointState), the
+//! floating base on `/tf` (tf2_msgs/TFMessage, `world` -> the root link), each IMU on
+//! `/imu` (sensor_msgs/Imu; `/imu/<link>` when there are several), every other
+//! column on `/twinloop/columns` (std_msgs/Float64MultiArray whose one dimension's
+//! label lists the column names), and the description once at the start on
+//! `/robot_description` (std_msgs/String, the topic ROS 2's robot_state_publisher
+//! publishes it on, with transient-local durability).
+use crate::cdr::CdrWriter;
+use crate::error::LogError;
+use crate::msgs::{self, JointState, Kind, Transform};
+use mcap::records::MessageHeader;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use twinloop_io::output::{Output, PartialFile};
+
+/// The QoS rosbag2 records for a transient-local topic (its `offered_qos_profiles`
+/// channel metadata, YAML as rosbag2 Humble and later write it), so a ROS 2 player
+/// re-publishes the description as latched.
+const LATCHED_QOS: &str = "- history: 1\n  depth: 1\n  reliability: 1\n  durability: 1\n  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n  avoid_ros_namespace_conventions: false";
+
+/// Which column feeds which message field, found once from the header.
+#[derive(Debug, Default)]
+struct Layout {
+    t: usize,
+    joints: Vec<String>,
+    q: Vec<usize>,
+    v: Option<Vec<usize>>,
+    tau: Option<Vec<usize>>,
+    base: Option<[usize; 7]>,
+    /// Link name and the six gx..az columns of each IMU.
+    imus: Vec<(String, [usize; 6])>,
+    extra: Vec<usize>,
+}
+
+fn layout(columns: &[String]) -> Result<Layout, LogError> {
+    let find = |n: &str| columns.iter().position(|c| c == n);
+    let mut l = Layout {
+        t: find("t").ok_or_else(|| LogError::new("the table has no t column"))?,
+        ..Layout::default()
+    };
+    let base_cols = ["x", "y", "z", "qx", "qy", "qz", "qw"].map(|s| find(&format!("q:base.{s}")));
+    if base_cols.iter().all(Option::is_some) {
+        l.base = Some(base_cols.map(|c| c.expect("checked")));
+    }
+    for (i, c) in columns.iter().enumerate() {
+        if let Some(j) = c.strip_prefix("q:")
+            && !j.starts_with("base.")
+        {
+            l.joints.push(j.to_string());
+            l.q.push(i);
+        }
+        if let Some(link) = c.strip_prefix("imu:").and_then(|s| s.strip_suffix(".gx")) {
+            let cols =
+                ["gx", "gy", "gz", "ax", "ay", "az"].map(|s| find(&format!("imu:{link}.{s}")));
+            if cols.iter().all(Option::is_some) {
+                l.imus
+                    .push((link.to_string(), cols.map(|c| c.expect("checked"))));
+            }
+        }
+    }
+    let all = |p: &str| -> Option<Vec<usize>> {
+        l.joints.iter().map(|j| find(&format!("{p}{j}"))).collect()
+    };
+    l.v = all("v:").filter(|_| !l.joints.is_empty());
+    l.tau = all("tau:").filter(|_| !l.joints.is_empty());
+    let mut used = vec![l.t];
+    used.extend(&l.q);
+    used.extend(l.v.iter().flatten());
+    used.extend(l.tau.iter().flatten());
+    used.extend(l.base.iter().flatten());
+    used.extend(l.imus.iter().flat_map(|(_, c)| c));
+    l.extra = (0..columns.len()).filter(|i| !used.contains(i)).collect();
+    Ok(l)
+}
+
+/// An MCAP file being written row by row.
+pub struct McapLog {
+    path: PathBuf,
+    /// Open until finished; `None` once closed.
+    out: Option<mcap::Writer<BufWriter<File>>>,
+    /// Where it goes once complete (written as `FILE.partial` until then).
+    place: Option<PartialFile>,
+    /// Kept (closed and named) when dropped unfinished with a row in it.
+    recording: bool,
+    rows: u64,
+    layout: Layout,
+    columns: Vec<String>,
+    cdr: CdrWriter,
+    joints: JointState,
+    tf: Vec<Transform>,
+    imu: msgs::Imu,
+    extra: Vec<f64>,
+    /// Channel ids: joints, tf, each IMU, extra, description.
+    ch_joints: u16,
+    ch_tf: u16,
+    ch_imus: Vec<u16>,
+    ch_extra: u16,
+    ch_description: Option<u16>,
+    sequence: u32,
+    wrote_description: bool,
+    description: Option<String>,
+}
+
+impl McapLog {
+    /// Create `path` for rows of `columns` (a `t` column and twinloop's names);
+    /// `description` (URDF text) goes on `/robot_description`, `root` names the
+    /// floating base's frame on `/tf`.
+    pub fn create(
+        path: &Path,
+        columns: &[String],
+        description: Option<&str>,
+        root: &str,
+    ) -> Result<McapLog, LogError> {
+        let err = |e: LogError| e.in_file(path);
+        let layout = layout(columns).map_err(err)?;
+        let (place, file) = PartialFile::open(&Output::resolve("", path)?)?;
+        let mut out = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .profile("ros2")
+            .library(concat!("twinloop ", env!("CARGO_PKG_VERSION")))
+            .create(BufWriter::new(file))
+            .map_err(|e| err(e.into()))?;
+        let mut channel =
+            |kind: Kind, topic: &str, meta: &BTreeMap<String, String>| -> Result<u16, LogError> {
+                let s =
+                    out.add_schema(kind.schema_name(), "ros2msg", kind.schema_text().as_bytes())?;
+                Ok(out.add_channel(s, topic, "cdr", meta)?)
+            };
+        let none = BTreeMap::new();
+        let ch_joints = if layout.joints.is_empty() {
+            0
+        } else {
+            channel(Kind::JointState, "/joint_states", &none).map_err(err)?
+        };
+        let ch_tf = if layout.base.is_some() {
+            channel(Kind::Tf, "/tf", &none).map_err(err)?
+        } else {
+            0
+        };
+        let mut ch_imus = Vec::new();
+        for (link, _) in &layout.imus {
+            let topic = if layout.imus.len() == 1 {
+                "/imu".to_string()
+            } else {
+                format!("/imu/{link}")
+            };
+            ch_imus.push(channel(Kind::Imu, &topic, &none).map_err(err)?);
+        }
+        let ch_extra = if layout.extra.is_empty() {
+            0
+        } else {
+            channel(Kind::MultiArray, "/twinloop/columns", &none).map_err(err)?
+        };
+        let latched =
+            BTreeMap::from([("offered_qos_profiles".to_string(), LATCHED_QOS.to_string())]);
+        let ch_description = match description {
+            Some(_) => Some(channel(Kind::String, "/robot_description", &latched).map_err(err)?),
+            None => None,
+        };
+        let joints = JointState {
+            names: layout.joints.clone(),
+            ..JointState::default()
+        };
+        Ok(McapLog {
+            path: path.to_path_buf(),
+            out: Some(out),
+            place: Some(place),
+            recording: false,
+            rows: 0,
+            columns: columns.to_vec(),
+            cdr: CdrWriter::new(),
+            joints,
+            tf: vec![Transform {
+                parent: "world".into(),
+                child: root.to_string(),
+                ..Transform::default()
+            }],
+            imu: msgs::Imu::default(),
+            extra: Vec::new(),
+            layout,
+            ch_joints,
+            ch_tf,
+            ch_imus,
+            ch_extra,
+            ch_description,
+            sequence: 0,
+            wrote_description: false,
+            description: description.map(str::to_string),
+        })
+    }
+
+    fn emit(&mut self, channel: u16, time: i64) -> Result<(), LogError> {
+        self.sequence += 1;
+        let header = MessageHeader {
+            channel_id: channel,
+            sequence: self.sequence,
+            log_time: time as u64,
+            publish_time: time as u64,
+        };
+        let out = self.out.as_mut().expect("open until finished");
+        out.write_to_known_channel(&header, self.cdr.bytes())
+            .map_err(|e| LogError::from(e).in_file(&self.path))
+    }
+
+    /// Write one row (as many values as columns; `t` in seconds is the stamp).
+    pub fn write_row(&mut self, row: &[f64]) -> Result<(), LogError> {
+        if row.len() != self.columns.len() {
+            return Err(LogError::new(format!(
+                "a row of {} values for {} columns",
+                row.len(),
+                self.columns.len()
+            ))
+            .in_file(&self.path));
+        }
+        let t = row[self.layout.t];
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(LogError::new(format!(
+                "t = {t}: a log's time is a finite, non-negative number of seconds"
+            ))
+            .in_file(&self.path));
+        }
+        let time = (t * 1e9).round() as i64;
+        if let (false, Some(ch), Some(d)) = (
+            self.wrote_description,
+            self.ch_description,
+            &self.description,
+        ) {
+            self.cdr.reset();
+            msgs::encode_string(&mut self.cdr, d);
+            self.emit(ch, time)?;
+            self.wrote_description = true;
+        }
+        if !self.layout.joints.is_empty() {
+            let l = &self.layout;
+            let j = &mut self.joints;
+            j.stamp_ns = time;
+            j.position.clear();
+            j.position.extend(l.q.iter().map(|&i| row[i]));
+            j.velocity.clear();
+            j.velocity.extend(l.v.iter().flatten().map(|&i| row[i]));
+            j.effort.clear();
+            j.effort.extend(l.tau.iter().flatten().map(|&i| row[i]));
+            self.cdr.reset();
+            j.encode(&mut self.cdr, "");
+            self.emit(self.ch_joints, time)?;
+        }
+        if let Some(b) = self.layout.base {
+            let tr = &mut self.tf[0];
+            tr.stamp_ns = time;
+            tr.translation = [row[b[0]], row[b[1]], row[b[2]]];
+            tr.rotation = [row[b[3]], row[b[4]], row[b[5]], row[b[6]]];
+            self.cdr.reset();
+            msgs::encode_tf(&mut self.cdr, &self.tf);
+            self.emit(self.ch_tf, time)?;
+        }
+        for k in 0..self.layout.imus.len() {
+            let (link, c) = &self.layout.imus[k];
+            if self.imu.frame != *link {
+                self.imu.frame = link.clone();
+            }
+            self.imu.stamp_ns = time;
+            self.imu.orientation = [0.0, 0.0, 0.0, 1.0];
+            self.imu.angular_velocity = [row[c[0]], row[c[1]], row[c[2]]];
+            self.imu.linear_acceleration = [row[c[3]], row[c[4]], row[c[5]]];
+            self.cdr.reset();
+            self.imu.encode(&mut self.cdr, false);
+            self.emit(self.ch_imus[k], time)?;
+        }
+        if !self.layout.extra.is_empty() {
+            self.extra.clear();
+            self.extra.extend(self.layout.extra.iter().map(|&i| row[i]));
+            self.cdr.reset();
+            let names: Vec<&str> = self
+                .layout
+                .extra
+                .iter()
+                .map(|&i| self.columns[i].as_str())
+                .collect();
+            msgs::encode_multi_array(&mut self.cdr, &names.join(","), &self.extra);
+            self.emit(self.ch_extra, time)?;
+        }
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// A recording: dropped unfinished (an error, Ctrl-C) with a row in it, the file is
+    /// closed and given its name all the same: nothing recorded is lost.
+    pub fn recording(mut self) -> McapLog {
+        self.recording = true;
+        self
+    }
+
+    /// Write the summary, make the file durable and give it its name.
+    pub fn finish(mut self) -> Result<(), LogError> {
+        self.close()
+    }
+
+    /// Give up: nothing is written, an older file of the name stays.
+    pub fn discard(mut self) {
+        self.recording = false;
+    }
+
+    fn close(&mut self) -> Result<(), LogError> {
+        let (Some(mut out), Some(place)) = (self.out.take(), self.place.take()) else {
+            return Ok(());
+        };
+        let in_file = |e: LogError| e.in_file(&self.path);
+        out.finish().map_err(|e| in_file(e.into()))?;
+        let file = out
+            .into_inner()
+            .into_inner()
+            .map_err(|e| in_file(LogError::new(format!("cannot write: {}", e.error()))))?;
+        place.commit(file)?;
+        Ok(())
+    }
+}
+
+impl Drop for McapLog {
+    fn drop(&mut self) {
+        if self.recording && self.rows > 0 {
+            let _ = self.close();
+        }
+        // Otherwise the partial file goes with `place`.
+    }
+}
+
+/// Write `table` to `path` as MCAP (see the module doc for the topics).
+pub fn write_mcap(
+    path: &Path,
+    table: &Table,
+    description: Option<&str>,
+    root: &str,
+) -> Result<(), LogError> {
+    let mut log = McapLog::create(path, &table.columns, description, root)?;
+    for row in &table.rows {
+        log.write_row(row)?;
+    }
+    log.finish()
+}
+
+use twinloop_io::Table;

@@ -1,0 +1,77 @@
+//! Bad logs give one-line errors naming the file, the topic and the message's time.
+use std::path::PathBuf;
+use twinloop_io::Table;
+use twinloop_logs::{ReadOptions, read_log, write_mcap};
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("twinloop-logs-err-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join("log.mcap")
+}
+
+fn joints(times: &[f64]) -> Table {
+    let mut t = Table::new(vec!["t".into(), "q:knee".into()]);
+    t.rows = times.iter().map(|&x| vec![x, 0.5]).collect();
+    t
+}
+
+#[test]
+fn time_going_backwards_names_the_topic_and_both_times() {
+    let p = scratch("back");
+    write_mcap(&p, &joints(&[0.0, 0.002, 0.001]), None, "base").unwrap();
+    let e = read_log(&p, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: topic /joint_states at t=0.001000000 s: time goes backwards (the previous message was at 0.002000000 s)",
+            p.display()
+        )
+    );
+}
+
+#[test]
+fn a_truncated_chunk_names_the_last_message_read() {
+    let p = scratch("cut");
+    let t = joints(&(0..20_000).map(|k| k as f64 * 1e-3).collect::<Vec<_>>());
+    write_mcap(&p, &t, None, "base").unwrap();
+    let bytes = std::fs::read(&p).unwrap();
+    std::fs::write(&p, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    let e = read_log(&p, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(&format!("{}: topic /joint_states at t=", p.display())),
+        "{e}"
+    );
+    assert!(e.contains("truncated"), "{e}");
+    assert!(!e.contains('\n'), "{e}");
+}
+
+#[test]
+fn a_resampled_log_is_on_the_fixed_step_and_interpolated_linearly() {
+    let p = scratch("dt");
+    let mut t = joints(&[0.0, 0.003, 0.010]);
+    t.rows[1][1] = 0.8;
+    t.rows[2][1] = 1.5;
+    write_mcap(&p, &t, None, "base").unwrap();
+    let o = ReadOptions {
+        dt: Some(0.002),
+        ..ReadOptions::default()
+    };
+    let r = read_log(&p, &o).unwrap();
+    let got: Vec<(f64, f64)> = r.rows.iter().map(|r| (r[0], r[1])).collect();
+    let want = [
+        (0.0, 0.5),
+        (0.002, 0.7),
+        (0.004, 0.9),
+        (0.006, 1.1),
+        (0.008, 1.3),
+        (0.010, 1.5),
+    ];
+    assert_eq!(got.len(), want.len());
+    for ((t, x), (tw, xw)) in got.iter().zip(want) {
+        assert!((t - tw).abs() < 1e-12 && (x - xw).abs() < 1e-12, "{got:?}");
+    }
+}
