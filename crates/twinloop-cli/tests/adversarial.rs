@@ -209,6 +209,8 @@ const CASES: &[Case] = &[
     case("bench sim", "--robot {csv_as_urdf}", "csv_as.urdf"),
     case("bench sim", "--robot {km20} --dt 1", "--dt"),
     case("bench link", "--port {gone}", "gone"),
+    case("log info", "{missing}", "missing.urdf"),
+    case("log info", "{km20}", "km20&&not an MCAP"),
     case("view", "{trunc_urdf} --export {out}", "trunc.urdf"),
     // A recording may hold NaN (a servo that did not answer): the viewer shows the gap.
     case("view", "{km20} {empty} --export {out}", "empty.urdf"),
@@ -237,7 +239,12 @@ fn cli_commands() -> Vec<String> {
         let help = Command::new(bin()).args(&args).output().unwrap();
         let text = String::from_utf8(help.stdout).unwrap();
         let usage = text.lines().find(|l| l.starts_with("Usage:")).unwrap_or("");
-        if !path.is_empty() && !usage.trim_end().ends_with(&format!("{path} <COMMAND>")) {
+        // A group's usage ends in `<COMMAND>` (after the global `[OPTIONS]`, if any).
+        let group = usage.trim_end().ends_with(&format!("{path} <COMMAND>"))
+            || usage
+                .trim_end()
+                .ends_with(&format!("{path} [OPTIONS] <COMMAND>"));
+        if !path.is_empty() && !group {
             out.push(path.clone());
         }
         let mut in_commands = false;

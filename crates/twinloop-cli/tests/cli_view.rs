@@ -220,7 +220,9 @@ fn demo_writes_the_tipover_replay_and_its_report_links_to_it() {
     for d in 0..4 {
         let n = direction_of.iter().filter(|&&x| x == d).count();
         assert!(
-            (3..=4).contains(&n),
+            // A first ramp, two or three creeps, and up to three creeps repeated
+            // when spoiled (twinloop_ident::tipover_bus::MAX_SPOILED_CREEPS).
+            (3..=7).contains(&n),
             "direction {d}: {n} leans ({direction_of:?})"
         );
     }

@@ -461,21 +461,44 @@ impl<T: Transport> Client<T> {
             }
         }
         let retries = std::mem::replace(&mut self.config.retries, 0);
+        let late = |s: &ClientStats| s.discarded + s.stale_bytes + s.corrupt + s.wrong_replies;
+        let before = late(&self.stats);
         let mut found = Vec::new();
-        let mut result = Ok(());
-        for id in ids {
-            progress(id);
-            match self.ping(protocol, id) {
-                Ok(s) => found.push(s),
-                Err(LinkError::Io(e)) => {
-                    result = Err(LinkError::Io(e));
-                    break;
-                }
-                Err(_) => {}
-            }
+        let mut result = self.ping_each(protocol, &ids, &mut found, &mut progress);
+        // A reply that came too late (a busy bus or a loaded served robot) is dropped
+        // as stale and its servo looks absent: when the pass saw any, the ids that did
+        // not answer are asked once more. A quiet bus with absent ids costs nothing.
+        if result.is_ok() && late(&self.stats) > before {
+            let missing: Vec<u8> = ids
+                .iter()
+                .copied()
+                .filter(|id| !found.iter().any(|s| s.id == *id))
+                .collect();
+            result = self.ping_each(protocol, &missing, &mut found, &mut progress);
+            found.sort_by_key(|s| s.id);
         }
         self.config.retries = retries;
         result.map(|_| found)
+    }
+
+    /// Ping each of `ids` once, adding who answers to `found`; only a failing port
+    /// stops the pass.
+    fn ping_each(
+        &mut self,
+        protocol: Protocol,
+        ids: &[u8],
+        found: &mut Vec<FoundServo>,
+        progress: &mut impl FnMut(u8),
+    ) -> Result<(), LinkError> {
+        for &id in ids {
+            progress(id);
+            match self.ping(protocol, id) {
+                Ok(s) => found.push(s),
+                Err(LinkError::Io(e)) => return Err(LinkError::Io(e)),
+                Err(_) => {}
+            }
+        }
+        Ok(())
     }
 
     /// READ `out.len()` bytes from `address`.

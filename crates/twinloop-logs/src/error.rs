@@ -75,6 +75,13 @@ impl std::error::Error for LogError {}
 
 impl From<mcap::McapError> for LogError {
     fn from(e: mcap::McapError) -> Self {
+        if matches!(e, mcap::McapError::BadMagic) {
+            // The likeliest cause: a CSV or another file given where a log was meant.
+            return LogError::new(
+                "not an MCAP file (it does not start with MCAP's magic bytes); \
+                 a log is an .mcap file or a rosbag2 folder",
+            );
+        }
         LogError::new(format!("MCAP: {e}"))
     }
 }
