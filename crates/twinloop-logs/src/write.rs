@@ -200,7 +200,9 @@ impl McapLog {
             log_time: time as u64,
             publish_time: time as u64,
         };
-        let out = self.out.as_mut().expect("open until finished");
+        let Some(out) = self.out.as_mut() else {
+            return Err(LogError::new("the log is already closed").in_file(&self.path));
+        };
         out.write_to_known_channel(&header, self.cdr.bytes())
             .map_err(|e| LogError::from(e).in_file(&self.path))
     }
