@@ -469,6 +469,11 @@ fn assess(
     let mut combinations = motor_combinations(params, fitted, &stats.covariance);
     // kt/R carries the voltage's error whatever the servo senses (the drive is kt V/R).
     combinations[0].2 = combinations[0].2.hypot(volt * combinations[0].1);
+    for c in &mut combinations {
+        if !(c.2 > 0.0) {
+            c.2 = f64::INFINITY;
+        }
+    }
     if !senses_current {
         undetermined.extend(["kt", "resistance", "friction_viscous"]);
         intervals.extend(motor_intervals(&combinations));
@@ -478,11 +483,20 @@ fn assess(
         let (p, s) = (params.values[i], params.values[i] * stats.sd_log[k]);
         sd[i] = s;
         let at_bound = p < AT_BOUND * start.values[i];
-        if (stats.sd_log[k] > UNDETERMINED_RELATIVE_SD || at_bound || s.is_nan())
+        // A zero or NaN deviation is a degenerate Jacobian, not certainty.
+        let degenerate = !(s > 0.0);
+        if (stats.sd_log[k] > UNDETERMINED_RELATIVE_SD || at_bound || degenerate)
             && !undetermined.contains(&PARAM_NAMES[i])
         {
             undetermined.push(PARAM_NAMES[i]);
-            intervals.push(absolute_interval(PARAM_NAMES[i], p, s));
+            // At the bound the linearised deviation is about 0 too (the residuals
+            // barely move there): nothing bounds it above that the fit measured.
+            let interval = if at_bound || degenerate {
+                (PARAM_NAMES[i], 0.0, f64::INFINITY)
+            } else {
+                absolute_interval(PARAM_NAMES[i], p, s)
+            };
+            intervals.push(interval);
         }
     }
     for &(i, s) in nonsmooth {
