@@ -470,7 +470,7 @@ fn assess(
     // kt/R carries the voltage's error whatever the servo senses (the drive is kt V/R).
     combinations[0].2 = combinations[0].2.hypot(volt * combinations[0].1);
     for c in &mut combinations {
-        if !(c.2 > 0.0) {
+        if c.2.is_nan() || c.2 <= 0.0 {
             c.2 = f64::INFINITY;
         }
     }
@@ -484,7 +484,7 @@ fn assess(
         sd[i] = s;
         let at_bound = p < AT_BOUND * start.values[i];
         // A zero or NaN deviation is a degenerate Jacobian, not certainty.
-        let degenerate = !(s > 0.0);
+        let degenerate = s.is_nan() || s <= 0.0;
         if (stats.sd_log[k] > UNDETERMINED_RELATIVE_SD || at_bound || degenerate)
             && !undetermined.contains(&PARAM_NAMES[i])
         {
