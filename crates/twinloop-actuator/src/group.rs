@@ -92,7 +92,7 @@ pub const BLOCK_SECONDS: f64 = 1.0;
 /// Jacobian's own `s^2 A^-1` takes the residuals as independent; on these logs it
 /// is several times too small (quantisation and timing errors persist over a
 /// step), which the test of "do the servos differ" cannot afford.
-fn robust_covariance(
+pub(crate) fn robust_covariance(
     j: &nalgebra::DMatrix<f64>,
     r: &nalgebra::DVector<f64>,
     block: &[usize],

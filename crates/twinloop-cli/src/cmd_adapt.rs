@@ -194,8 +194,15 @@ pub struct TrainArgs {
 fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
     let text = twinloop_io::input::read_to_string(path)
         .map_err(|e| CliError::io(path, e).context("--tipover"))?;
-    serde_json::from_str(&text)
-        .map_err(|e| CliError::new(format!("{}: {e}", path.display())).context("--tipover"))
+    serde_json::from_str(&text).map_err(|e| {
+        CliError::new(twinloop_io::input::wrong_kind(
+            &path.display().to_string(),
+            &text,
+            "a tip-over JSON (what `twinloop experiment tipover --json FILE` writes)",
+            &e.to_string(),
+        ))
+        .context("--tipover")
+    })
 }
 
 /// Refuse a tip-over measured on another robot: its angles say nothing of this
@@ -398,7 +405,7 @@ fn summary_text(r: &twinloop_ident::adapt::AdaptReport, out: Option<&Path>) -> S
         }
     }
     if let Some(c) = r.check_deg {
-        t += &format!("adapted model's fall angles {c:?} deg\n");
+        t += &crate::adapt_text::check_angles_text(&c, &r.measured_deg);
     }
     for l in &r.lean {
         t += &format!(

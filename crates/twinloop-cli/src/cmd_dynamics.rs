@@ -196,7 +196,18 @@ fn kinematics(args: &KinematicsArgs) -> Result<(), CliError> {
         bar.inc(1);
     }
     bar.finish_and_clear();
-    Ok(w.finish()?)
+    w.finish()?;
+    eprintln!(
+        "wrote {}: {} rows of the centre of mass{}",
+        a.out.display(),
+        table.rows.len(),
+        if frames.is_empty() {
+            String::new()
+        } else {
+            format!(" and {} frame pose(s)", frames.len())
+        }
+    );
+    Ok(())
 }
 
 /// Read q, v and one more quantity from each row, write what `f` computes from them.
@@ -246,5 +257,13 @@ fn per_row(
         bar.inc(1);
     }
     bar.finish_and_clear();
-    Ok(w.finish()?)
+    w.finish()?;
+    eprintln!(
+        "wrote {}: {} rows of {} {} column(s)",
+        a.out.display(),
+        table.rows.len(),
+        cols.len() - usize::from(tcol.is_some()),
+        output.prefix()
+    );
+    Ok(())
 }

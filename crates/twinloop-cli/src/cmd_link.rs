@@ -12,6 +12,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use twinloop_link::ModelTable;
+use twinloop_link::board_type::BoardType;
 use twinloop_link::control_cycle::ReadMethod;
 use twinloop_link::transport::Transport;
 use twinloop_link::{DynamixelRobot, FoundServo, Protocol, RobotMapping, ServoModel, plan_cycle};
@@ -242,9 +243,40 @@ pub fn run(cmd: LinkCommand) -> CliResult {
 struct ServoJson {
     protocol: u8,
     id: u8,
+    /// `servo`, or `board` for an IMU sub-controller (CM-730, OpenCR).
+    kind: &'static str,
     model: Option<&'static str>,
     model_number: u16,
     firmware: u8,
+}
+
+/// The built-in IMU board a scanned device is (same protocol and model number), if
+/// it is one: a sub-controller answers PING as a servo does, but is not one.
+fn board_of(s: &FoundServo) -> Option<&'static str> {
+    BoardType::BUILTIN
+        .iter()
+        .filter_map(|n| BoardType::builtin(n))
+        .find(|b| b.protocol == s.protocol && b.model_number == s.model_number)
+        .map(|b| b.name.as_str())
+}
+
+/// `20 servo(s) found`, and the IMU boards apart: `20 servo(s) and 1 IMU board
+/// (OpenCR, id 200) found`.
+fn found_line(found: &[FoundServo]) -> String {
+    let boards: Vec<String> = found
+        .iter()
+        .filter_map(|s| board_of(s).map(|b| format!("{b}, id {}", s.id)))
+        .collect();
+    let servos = found.len() - boards.len();
+    if boards.is_empty() {
+        return format!("{servos} servo(s) found\n");
+    }
+    format!(
+        "{servos} servo(s) and {} IMU board{} ({}) found\n",
+        boards.len(),
+        if boards.len() == 1 { "" } else { "s" },
+        boards.join("; ")
+    )
 }
 
 fn scan(a: &ScanArgs) -> CliResult {
@@ -284,7 +316,12 @@ fn scan(a: &ScanArgs) -> CliResult {
         .map(|s| ServoJson {
             protocol: s.protocol.number(),
             id: s.id,
-            model: s.model.map(|m| m.name()),
+            kind: if board_of(s).is_some() {
+                "board"
+            } else {
+                "servo"
+            },
+            model: board_of(s).or(s.model.map(|m| m.name())),
             model_number: s.model_number,
             firmware: s.firmware,
         })
@@ -295,12 +332,14 @@ fn scan(a: &ScanArgs) -> CliResult {
             "{:<8} {:>4}  {:<12} {:>6}  {:>8}\n",
             format!("{}.0", s.protocol.number()),
             s.id,
-            s.model.map(|m| m.name()).unwrap_or("unknown"),
+            board_of(s)
+                .or(s.model.map(|m| m.name()))
+                .unwrap_or("unknown"),
             s.model_number,
             s.firmware
         );
     }
-    out += &format!("{} servo(s) found\n", found.len());
+    out += &found_line(&found);
     if found.is_empty() {
         // Nothing answered: a check that found a problem (exit 1), said plainly.
         emit(&out, a.json.as_ref(), &v)?;

@@ -216,10 +216,12 @@ fn record(
     let mut st = RobotState::default();
     let mut g = vec![0.0; sim.model.joint_names.len()];
     let mut row = Vec::with_capacity(cols.len());
+    let mut rows = 0usize;
     for k in 0..=steps {
         if k % a.every.max(1) == 0 || k == steps {
             state_row(sim, &mut st, sim.time, &mut row)?;
             w.write_row(&row)?;
+            rows += 1;
         }
         if let Some(live) = live.as_deref_mut() {
             live.offer(sim.time, &sim.q);
@@ -236,5 +238,14 @@ fn record(
         bar.inc(1);
     }
     bar.finish_and_clear();
-    w.finish()
+    w.finish()?;
+    // A run that succeeds says what it wrote (issue 30 item 10: it was silent).
+    eprintln!(
+        "wrote {}: {rows} rows of {} columns, t = 0 to {} s at --dt {} s",
+        a.out.display(),
+        cols.len(),
+        twinloop_io::clean_time(sim.time),
+        a.dt
+    );
+    Ok(())
 }

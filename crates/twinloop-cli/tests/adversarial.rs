@@ -1101,7 +1101,10 @@ fn the_bus_is_checked_not_trusted() {
     for k in 0..10 {
         let (code, listed) = scan("1-20,200");
         assert_eq!(code, Some(0), "scan {k}: {listed}");
-        assert!(listed.contains("21 servo(s) found"), "scan {k}: {listed}");
+        assert!(
+            listed.contains("20 servo(s) and 1 IMU board (CM-730, id 200) found"),
+            "scan {k}: {listed}"
+        );
     }
     let (code, listed) = scan("30-40");
     assert_eq!(code, Some(1), "nothing at 30-40: {listed}");

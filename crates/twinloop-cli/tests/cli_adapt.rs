@@ -365,3 +365,38 @@ fn a_part_taken_off_is_found_and_an_impossible_scale_reading_writes_no_model() {
         .collect();
     assert!(failed.contains(&"part-mass-plausible"), "{failed:?}");
 }
+
+/// A file of another kind given as the tip-over says what it looks like, not the
+/// JSON parser's "expected ident at line 1 column 2" (issue 30 item 10).
+#[test]
+fn a_csv_given_as_the_tipover_is_named_a_csv_table() {
+    let csv = tmp("stand.csv");
+    std::fs::write(&csv, "t,q:l_ank_roll,q:r_ank_roll\n0.0,0.1,0.1\n").unwrap();
+    fails_naming(
+        &[
+            "adapt",
+            "--robot",
+            "builtin:km20",
+            "--tipover",
+            csv.to_str().unwrap(),
+            "--where",
+            "torso",
+        ],
+        "looks like a CSV table",
+    );
+    let o = twinloop(&[
+        "adapt",
+        "--robot",
+        "builtin:km20",
+        "--tipover",
+        csv.to_str().unwrap(),
+        "--where",
+        "torso",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("expected ident"), "{err}");
+    assert!(
+        err.contains("stand.csv") && err.contains("tip-over"),
+        "{err}"
+    );
+}

@@ -53,6 +53,38 @@ fn signal(child: &Child, sig: &str) {
 }
 
 #[test]
+fn link_scan_counts_the_imu_board_apart_from_the_servos() {
+    // OP3: 20 XM430-W350 and the OpenCR at id 200 (issue 30 item 10: "21 servo(s)").
+    let (mut server, pty) = serve(
+        &["--map", "builtin:op3", "--servo-model", "ideal"],
+        &["--no-timing"],
+    );
+    let o = twinloop(&[
+        "link",
+        "scan",
+        "--port",
+        &pty,
+        "--protocol",
+        "2",
+        "--ids",
+        "1-20,200",
+    ]);
+    let _ = server.kill();
+    let _ = server.wait();
+    let out = text(&o.stdout);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        out.contains("20 servo(s) and 1 IMU board (OpenCR, id 200) found"),
+        "{out}"
+    );
+    let board = out
+        .lines()
+        .find(|l| l.contains(" 200 "))
+        .expect("id 200 listed");
+    assert!(board.contains("OpenCR"), "{board}");
+}
+
+#[test]
 fn plan_prints_the_wiretime_budget() {
     let o = twinloop(&[
         "link",

@@ -152,3 +152,61 @@ fn simulate_writes_ball_joint_columns_with_unit_quaternions() {
         assert!((n - 1.0).abs() < 1e-12, "|q:hip_l| = {n}");
     }
 }
+
+/// A run that succeeds says in one stderr line what it wrote, and its CSV's times
+/// are the instants they stand for (issue 30 item 10: silent runs, and
+/// `1.9999999999998905` for 2.0 from a time summed step by step).
+#[test]
+fn simulate_says_what_it_wrote_and_writes_clean_times() {
+    let out = tmp("clean.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args([
+            "simulate",
+            "--robot",
+            "builtin:km20",
+            "--duration",
+            "0.3",
+            "--hold",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let said: Vec<&str> = err.lines().filter(|l| l.starts_with("wrote ")).collect();
+    assert_eq!(said.len(), 1, "{err}");
+    assert!(
+        said[0].contains("clean.csv") && said[0].contains("301 rows") && said[0].contains("0.3 s"),
+        "{err}"
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    for (k, line) in text.lines().skip(1).enumerate() {
+        let t = line.split(',').next().unwrap();
+        // Every time is k ms written as the shortest decimal of k/1000.
+        assert_eq!(t, format!("{:?}", k as f64 / 1000.0), "row {k}");
+    }
+    // dynamics kinematics on that file says what it wrote too.
+    let kin = tmp("clean-kin.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args([
+            "dynamics",
+            "kinematics",
+            "--robot",
+            "builtin:km20",
+            "--trajectory",
+        ])
+        .arg(&out)
+        .arg("--out")
+        .arg(&kin)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.lines().any(|l| l.starts_with("wrote ")
+            && l.contains("clean-kin.csv")
+            && l.contains("301 rows")),
+        "{err}"
+    );
+}

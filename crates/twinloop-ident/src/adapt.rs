@@ -280,7 +280,7 @@ impl Frame {
                 hi = hi.sup(&w);
             };
             take(Vector3::zeros());
-            if let Some((a, b)) = part_box(link) {
+            if let Some((a, b)) = collision_box(link) {
                 for corner in 0..8 {
                     take(Vector3::from_fn(|i, _| {
                         if corner >> i & 1 == 1 { b[i] } else { a[i] }
@@ -492,6 +492,14 @@ pub fn adapt(
                     "with only the host link given, the mass and the distance along the ray trade off: the mass is as uncertain as |c_meas - c0|".into(),
                 );
             }
+            if let Some(host) = &opts.host
+                && has_no_collision_outline(prior, host)
+            {
+                report.notes.push(format!(
+                    "{host} has no primitive collision shape: the part was kept within {:.0} mm of its skeleton (its origin, CoM and child joints), not within its outline",
+                    SKELETON_MARGIN * 1e3
+                ));
+            }
             let af = standing(&d)?;
             report.adapted_com = Some(v3(af.com(&d)?));
             report.adapted_reduced = Some(reduced(&af, &d, &m.foot)?);
@@ -623,7 +631,7 @@ fn place_by_com(
         // with the point times m_a / M, comes nearer the truth's too).
         if opts.total_mass.is_some()
             && opts.host.is_some()
-            && let Some((lo, hi)) = prior.link(&host).and_then(part_box)
+            && let Some((lo, hi)) = part_box(prior, &host)
         {
             let inside = local.sup(&lo).inf(&hi);
             moved_into_outline = Some((inside - local).norm());
@@ -700,7 +708,7 @@ fn refine_by_fall_angles(
     let start = Vector3::from(added.position_host);
     let reach = Vector3::repeat(FIT_REACH);
     let named = opts.host.is_some();
-    let bounds = match prior.link(&host).filter(|_| named).and_then(part_box) {
+    let bounds = match part_box(prior, &host).filter(|_| named) {
         Some(b) => b,
         None => (start - reach, start + reach),
     };
@@ -927,10 +935,52 @@ pub const FIT_REACH: f64 = 0.03;
 /// thickness outside.
 pub const OUTLINE_MARGIN: f64 = 0.01;
 
-/// Where a part bolted onto `link` can be: the box (link frame: lowest and highest
-/// corner) around its primitive collision shapes, grown by [`OUTLINE_MARGIN`];
-/// `None` without one.
-fn part_box(link: &Link) -> Option<(Vector3<f64>, Vector3<f64>)> {
+/// How far a part may lie from the skeleton of a link that has no primitive
+/// collision shape (its origin, its CoM and its child joints), m: about a limb's
+/// half-thickness (km20's and OP3's limbs are 4-7 cm across).
+pub const SKELETON_MARGIN: f64 = 0.03;
+
+/// Where a part bolted onto the link `name` of `robot` can be (link frame: lowest
+/// and highest corner): the box of [`collision_box`]; for a link without a
+/// primitive collision shape (meshes only, or none), the box around its origin, its
+/// CoM and its child joints' origins grown by [`SKELETON_MARGIN`] (issue 30 item 10:
+/// `--where` on such a link did not constrain the part at all). `None` for no link.
+fn part_box(robot: &Description, name: &str) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    let link = robot.link(name)?;
+    collision_box(link).or_else(|| Some(skeleton_box(robot, link)))
+}
+
+/// Whether [`part_box`] of `name` falls back on the link's skeleton.
+pub fn has_no_collision_outline(robot: &Description, name: &str) -> bool {
+    robot.link(name).is_some_and(|l| collision_box(l).is_none())
+}
+
+/// The box around `link`'s origin, CoM and child joints, grown by [`SKELETON_MARGIN`].
+fn skeleton_box(robot: &Description, link: &Link) -> (Vector3<f64>, Vector3<f64>) {
+    let mut lo = Vector3::zeros();
+    let mut hi = Vector3::zeros();
+    let points = link
+        .inertial
+        .iter()
+        .map(|i| Vector3::from(i.origin.xyz))
+        .chain(
+            robot
+                .joints
+                .iter()
+                .filter(|j| j.parent == link.name)
+                .map(|j| Vector3::from(j.origin.xyz)),
+        );
+    for p in points {
+        lo = lo.inf(&p);
+        hi = hi.sup(&p);
+    }
+    let margin = Vector3::repeat(SKELETON_MARGIN);
+    (lo - margin, hi + margin)
+}
+
+/// The box (link frame: lowest and highest corner) around `link`'s primitive
+/// collision shapes, grown by [`OUTLINE_MARGIN`]; `None` without one.
+fn collision_box(link: &Link) -> Option<(Vector3<f64>, Vector3<f64>)> {
     let mut lo = Vector3::repeat(f64::INFINITY);
     let mut hi = Vector3::repeat(f64::NEG_INFINITY);
     for shape in &link.collisions {
@@ -1152,7 +1202,10 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
         ("Front view (y-z)", 1, "y, m"),
     ] {
         let (ox, oz): (Vec<f64>, Vec<f64>) = r.outline.iter().map(|o| (o[i], o[2])).unzip();
+        // To scale: a robot stretched sideways misleads about where a part can be.
         let mut p = Plot::new(title, label, "z, m")
+            .equal_aspect()
+            .height(480.0)
             .series("robot (link origins)", &ox, &oz, SeriesStyle::Points)
             .series(
                 "prior CoM",

@@ -229,3 +229,53 @@ fn mass_and_link_known_place_the_part_within_2_cm() {
         );
     }
 }
+
+/// `--where LINK` on a link without a primitive collision shape still keeps the part
+/// on that link (issue 30 item 10: it silently did not): within 3 cm of the box
+/// around its origin, CoM and child joints, and the report says so.
+#[test]
+fn where_on_a_link_without_collision_shapes_still_constrains_and_says_so() {
+    let (_, study) = truth();
+    let mut bare = prior();
+    let torso = bare.links.iter_mut().find(|l| l.name == HOST).unwrap();
+    torso.collisions.clear();
+    let com = torso.inertial.as_ref().map(|i| i.origin.xyz);
+    let opts = AdaptOptions {
+        host: Some(HOST.into()),
+        total_mass: Some(bare.total_mass() + MASS),
+        ..Default::default()
+    };
+    let a = adapt(&bare, study, &opts).unwrap();
+    let added = a.report.added.as_ref().unwrap();
+    // The skeleton, from the description itself.
+    let mut pts = vec![[0.0; 3]];
+    pts.extend(com);
+    pts.extend(
+        bare.joints
+            .iter()
+            .filter(|j| j.parent == HOST)
+            .map(|j| j.origin.xyz),
+    );
+    for i in 0..3 {
+        let lo = pts.iter().map(|p| p[i]).fold(f64::INFINITY, f64::min) - 0.03;
+        let hi = pts.iter().map(|p| p[i]).fold(f64::NEG_INFINITY, f64::max) + 0.03;
+        let x = added.position_host[i];
+        assert!(
+            lo - 1e-9 <= x && x <= hi + 1e-9,
+            "axis {i}: {x} outside [{lo}, {hi}]"
+        );
+    }
+    assert!(
+        a.report
+            .notes
+            .iter()
+            .any(|n| n.contains("no primitive collision shape")),
+        "{:?}",
+        a.report.notes
+    );
+    eprintln!(
+        "part at {:?} (truth {XYZ:?}), error {:.1} mm",
+        added.position_host,
+        dist(added.position_host, XYZ) * 1e3
+    );
+}

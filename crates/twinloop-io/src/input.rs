@@ -92,3 +92,88 @@ mod tests {
         let _ = std::fs::remove_file(&f);
     }
 }
+
+/// What kind of text file `text` looks like, for an error that names a wrong kind
+/// of file instead of a parser's complaint ("expected ident at line 1 column 2" for a
+/// CSV given as JSON): `JSON`, `XML (URDF, MJCF)`, `a CSV table`, `TOML`, or `None`.
+/// A guess from the first line that is neither blank nor a `#` comment.
+pub fn looks_like(text: &str) -> Option<&'static str> {
+    let first = text
+        .trim_start_matches('\u{feff}')
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))?;
+    if first.starts_with('{') || first.starts_with('[') && !first.ends_with(']') {
+        Some("JSON")
+    } else if first.starts_with('<') {
+        Some("XML (URDF, MJCF)")
+    } else if first.starts_with('[') || first.contains(" = ") || first.contains("= \"") {
+        Some("TOML")
+    } else if first.contains(',') {
+        Some("a CSV table")
+    } else {
+        None
+    }
+}
+
+/// The error for `file`, expected to be `expected`, whose parser said `err`: where
+/// the text looks like another kind of file, says that kind and its first line;
+/// else `err` as it is.
+pub fn wrong_kind(file: &str, text: &str, expected: &str, err: &str) -> String {
+    let kind = looks_like(text);
+    let expected_kind = looks_like_name(expected);
+    match kind {
+        Some(k) if Some(k) != expected_kind => {
+            let first: String = text
+                .trim_start_matches('\u{feff}')
+                .lines()
+                .map(str::trim)
+                .find(|l| !l.is_empty() && !l.starts_with('#'))
+                .unwrap_or("")
+                .chars()
+                .take(60)
+                .collect();
+            format!("{file}: this is not {expected}: it looks like {k} (its first line: {first:?})")
+        }
+        _ => format!("{file}: not a valid {expected}: {err}"),
+    }
+}
+
+/// The kind [`looks_like`] returns for a file described as `expected`.
+fn looks_like_name(expected: &str) -> Option<&'static str> {
+    let e = expected.to_ascii_lowercase();
+    if e.contains("json") {
+        Some("JSON")
+    } else if e.contains("toml") {
+        Some("TOML")
+    } else if e.contains("csv") {
+        Some("a CSV table")
+    } else if e.contains("urdf") || e.contains("mjcf") || e.contains("xml") {
+        Some("XML (URDF, MJCF)")
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod kind_tests {
+    use super::*;
+
+    #[test]
+    fn a_csv_given_as_json_is_named_a_csv_table() {
+        let m = wrong_kind(
+            "stand.csv",
+            "t,q:l_ank_roll\n0,0.1\n",
+            "tip-over JSON",
+            "expected ident at line 1 column 2",
+        );
+        assert!(m.contains("looks like a CSV table"), "{m}");
+        assert!(!m.contains("expected ident"), "{m}");
+        assert_eq!(looks_like("{\"a\": 1}"), Some("JSON"));
+        assert_eq!(looks_like("<robot name=\"x\">"), Some("XML (URDF, MJCF)"));
+        assert_eq!(looks_like("# c\n[servo]\nmodel = \"RX-28\""), Some("TOML"));
+        // A JSON file with a real JSON error keeps the parser's place.
+        let m = wrong_kind("a.json", "{\"a\": }", "tip-over JSON", "line 1 column 7");
+        assert!(m.contains("line 1 column 7"), "{m}");
+    }
+}

@@ -6,7 +6,8 @@
 //! tau:base.tz`. [`StateColumns`] maps a table's columns onto a model's vectors
 //! (given the model's coordinate names, so this crate needs no dynamics).
 //! Numbers are written with Rust's shortest round-trip formatting, so a value read
-//! back is bit-for-bit the value computed.
+//! back is bit-for-bit the value computed; but the time `t`, which is written to the
+//! nanosecond (`2.0`, not a step sum's `1.9999999999998905`).
 //!
 //! Every file a command writes goes through [`output`] (checked before any work,
 //! written beside its place and renamed when complete), and input files are read
@@ -18,4 +19,4 @@ pub mod output;
 mod table;
 
 pub use columns::{Quantity, StateColumns, nearest};
-pub use table::{CsvWriter, IoError, Table, format_f64};
+pub use table::{CsvWriter, IoError, Table, clean_time, format_f64};

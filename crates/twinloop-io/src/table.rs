@@ -229,6 +229,17 @@ pub struct CsvWriter {
     out: AtomicFile,
     ncols: usize,
     line: String,
+    /// The `t` column, written to the nanosecond ([`clean_time`]).
+    time: Option<usize>,
+}
+
+/// A time in s as written: rounded to the nanosecond, so a time summed step by step
+/// or made as `i * dt` is written as the instant it stands for (`2.0`, not
+/// `1.9999999999998905`; `0.3`, not `0.30000000000000004`). No step of a simulation
+/// or recording here is under a microsecond.
+pub fn clean_time(t: f64) -> f64 {
+    let ns = (t * 1e9).round() / 1e9;
+    if ns.is_finite() { ns } else { t }
 }
 
 impl CsvWriter {
@@ -249,6 +260,7 @@ impl CsvWriter {
             out,
             ncols: columns.len(),
             line: String::new(),
+            time: columns.iter().position(|c| c == "t"),
         };
         let header = columns.join(",");
         w.write_line(&header)?;
@@ -278,6 +290,11 @@ impl CsvWriter {
                 line.push(',');
             }
             use std::fmt::Write as _;
+            let x = if Some(k) == self.time {
+                clean_time(*x)
+            } else {
+                *x
+            };
             let _ = write!(line, "{x:?}");
         }
         let r = self.write_line(&line);

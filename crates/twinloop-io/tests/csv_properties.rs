@@ -10,6 +10,8 @@ use twinloop_io::{CsvWriter, Table};
 /// Distinct column names like the ones twinloop writes (`q:l_knee`, `com.x`).
 fn columns() -> impl Strategy<Value = Vec<String>> {
     proptest::collection::btree_set("[a-z]{1,4}(:[a-z_]{1,6})?(\\.[xyz])?", 1..6)
+        // `t` is the time, written to the nanosecond (`clean_time`), not bit for bit.
+        .prop_filter("no time column", |s| !s.contains("t"))
         .prop_map(|s| s.into_iter().collect())
 }
 

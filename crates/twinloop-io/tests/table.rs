@@ -106,3 +106,25 @@ fn find_refuses_an_extra_column_the_model_does_not_have() {
     let e = StateColumns::find(&t, Quantity::Q, &floating).unwrap_err();
     assert_eq!(e.column.as_deref(), Some("q:base.qw"), "{e}");
 }
+
+#[test]
+fn csv_times_are_written_clean_to_the_nanosecond() {
+    // Issue 30 item 10: a time summed step by step was written 1.9999999999998905.
+    let mut summed = 0.0;
+    for _ in 0..2000 {
+        summed += 0.001;
+    }
+    assert_ne!(summed, 2.0);
+    let mut t = Table::new(vec!["t".into(), "q:a".into()]);
+    t.rows.push(vec![summed, summed]);
+    t.rows.push(vec![3.0 * 0.1, 3.0 * 0.1]);
+    let dir = std::env::temp_dir().join(format!("twinloop-io-time-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("t.csv");
+    t.write(&p).unwrap();
+    let text = std::fs::read_to_string(&p).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    // The time is clean; other columns keep every bit.
+    assert_eq!(lines[1], format!("2.0,{summed:?}"));
+    assert_eq!(lines[2], "0.3,0.30000000000000004");
+}

@@ -37,6 +37,8 @@ pub struct Plot {
     pub hlines: Vec<(f64, String)>,
     pub width: f64,
     pub height: f64,
+    /// A metre as long across as up (a view of a robot, not a graph).
+    pub equal_aspect: bool,
 }
 
 impl Plot {
@@ -55,7 +57,22 @@ impl Plot {
             hlines: Vec::new(),
             width: 900.0,
             height: 320.0,
+            equal_aspect: false,
         }
+    }
+
+    /// Draw to scale: one unit as many pixels on x as on y, the narrower range widened
+    /// about its middle (linear axes only). For views of a robot, whose shape the
+    /// default stretch would distort.
+    pub fn equal_aspect(mut self) -> Self {
+        self.equal_aspect = true;
+        self
+    }
+
+    /// The plot's height in pixels.
+    pub fn height(mut self, height: f64) -> Self {
+        self.height = height;
+        self
     }
 
     pub fn series(
@@ -180,6 +197,14 @@ impl Plot {
         let widest = widest_label(y0, y1, self.log_y);
         let (ml, mr, mt, mb) = ((widest + 34.0).max(60.0), 160.0, 30.0, 45.0);
         let (pw, ph) = (w - ml - mr, h - mt - mb);
+        let (mut x0, mut x1, mut y0, mut y1) = (x0, x1, y0, y1);
+        if self.equal_aspect && !self.log_x && !self.log_y {
+            // Units per pixel: the larger of the two for both axes.
+            let per = ((x1 - x0) / pw).max((y1 - y0) / ph);
+            let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+            (x0, x1) = (cx - 0.5 * per * pw, cx + 0.5 * per * pw);
+            (y0, y1) = (cy - 0.5 * per * ph, cy + 0.5 * per * ph);
+        }
         Frame {
             w,
             h,

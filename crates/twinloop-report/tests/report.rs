@@ -67,3 +67,44 @@ fn a_link_is_an_anchor_with_its_text_and_target_escaped() {
         "{html}"
     );
 }
+
+/// A view drawn to scale (issue 30 item 10: the adaptation report's side view was
+/// stretched): a unit step on x and on y are as many pixels apart.
+#[test]
+fn an_equal_aspect_plot_draws_x_and_y_to_the_same_scale() {
+    let svg = Plot::new("side view", "x, m", "z, m")
+        .equal_aspect()
+        .height(480.0)
+        .series(
+            "points",
+            &[0.0, 0.1, 0.0],
+            &[0.0, 0.0, 0.1],
+            SeriesStyle::Points,
+        )
+        .to_svg();
+    let centres: Vec<(f64, f64)> = svg
+        .split("<circle cx=\"")
+        .skip(1)
+        .map(|c| {
+            let cx: f64 = c.split('"').next().unwrap().parse().unwrap();
+            let cy: f64 = c
+                .split("cy=\"")
+                .nth(1)
+                .unwrap()
+                .split('"')
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap();
+            (cx, cy)
+        })
+        .collect();
+    assert!(centres.len() >= 3, "{svg}");
+    let across = (centres[1].0 - centres[0].0).abs();
+    let up = (centres[2].1 - centres[0].1).abs();
+    assert!(across > 10.0, "{centres:?}");
+    assert!(
+        (across - up).abs() <= 0.2,
+        "x step {across} px, y step {up} px"
+    );
+}

@@ -211,7 +211,7 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
             logs.iter().map(ServoLog::len).sum::<usize>(),
             logs.len(),
             id.heldout_rms_mrad
-        );
+        ) + &not_determined_note(&id.intervals);
         twinloop_io::output::write_atomic(out, id.params.to_toml(&comment))?;
     }
     emit(&text(&id, seconds), a.json.as_ref(), &to_json(&id, seconds))?;
@@ -633,6 +633,11 @@ fn limb_load<'a>(
         .ok_or_else(|| CliError::new("identify servo needs --data LOG.csv"))
 }
 
+/// Held-out RMS error, in encoder counts, above which the fit is said not to
+/// reproduce the logs: good logs come back within one count (0.3-0.5 of the count
+/// for RX, MX and X over ptys, docs/servo-models.md).
+const HELDOUT_COUNTS: f64 = 2.0;
+
 fn text(id: &Identification, seconds: f64) -> String {
     let p = &id.params;
     let sd = p
@@ -646,10 +651,20 @@ fn text(id: &Identification, seconds: f64) -> String {
         id.iterations
     );
     for &i in id.fitted.iter().chain(&id.nonsmooth) {
+        if id.undetermined.contains(&PARAM_NAMES[i]) {
+            continue;
+        }
         let _ = writeln!(
             s,
             "  {:18} {:>12.6} +- {:.2e}",
             PARAM_NAMES[i], p.values[i], sd[i]
+        );
+    }
+    for (name, lo, hi) in &id.intervals {
+        let _ = writeln!(
+            s,
+            "  {name:18} not determined: the data allow {lo:.4} to {hi:.4} (file: {:.6}, one choice)",
+            p.values[PARAM_NAMES.iter().position(|n| n == name).unwrap_or(0)]
         );
     }
     for (name, v, sd) in &id.combinations {
@@ -660,6 +675,16 @@ fn text(id: &Identification, seconds: f64) -> String {
         "position error: fitted {:.3} mrad RMS; held out {:.3} mrad RMS, {:.3} mrad mean absolute ({} rows)",
         id.fit_rms_mrad, id.heldout_rms_mrad, id.heldout_mae_mrad, id.heldout_rows
     );
+    // A model that does not reproduce the held-out log: its deviations describe the
+    // fit to these logs, not the servo (pty logs on an overloaded machine: 14-44 mrad).
+    let count_mrad = 1e3 * p.servo.resolution();
+    if id.heldout_rms_mrad > HELDOUT_COUNTS * count_mrad {
+        let _ = writeln!(
+            s,
+            "warning: the held-out error is {:.1} encoder counts ({count_mrad:.2} mrad each): the model does not reproduce these logs (late samples? the wrong load?), so no number above is trustworthy, whatever its deviation",
+            id.heldout_rms_mrad / count_mrad
+        );
+    }
     let _ = writeln!(
         s,
         "condition number {:.3e}; not determined by these logs: {}",
@@ -671,6 +696,22 @@ fn text(id: &Identification, seconds: f64) -> String {
         }
     );
     s
+}
+
+/// The file's comment on what the logs did not determine: each parameter's interval,
+/// and why its `[uncertainty]` is `inf`.
+fn not_determined_note(intervals: &[(&str, f64, f64)]) -> String {
+    if intervals.is_empty() {
+        return String::new();
+    }
+    let list: Vec<String> = intervals
+        .iter()
+        .map(|(n, lo, hi)| format!("{n} in [{lo:.4}, {hi:.4}]"))
+        .collect();
+    format!(
+        "\nnot determined by these logs (the value below is one choice; [uncertainty] inf): {}\n[uncertainty] holds one standard deviation: the larger of the Jacobian's and the block-robust one, with the 0.1 V voltage register's rounding",
+        list.join(", ")
+    )
 }
 
 fn to_json(id: &Identification, seconds: f64) -> serde_json::Value {
@@ -704,6 +745,7 @@ fn to_json(id: &Identification, seconds: f64) -> serde_json::Value {
         "singular_values": id.singular_values,
         "condition": id.condition,
         "undetermined": id.undetermined,
+        "intervals": id.intervals.iter().map(|(n, lo, hi)| json!({"name": n, "low": lo, "high": hi})).collect::<Vec<_>>(),
         "weakest_direction": id.weakest_direction.iter().map(|(n, w)| json!({"name": n, "weight": w})).collect::<Vec<_>>(),
         "iterations": id.iterations,
         "evaluations": id.evaluations,
