@@ -566,6 +566,7 @@ fn make_wrong_fixtures(dir: &Path, io: &str, goals: &str, state: &str, plant: &s
         "tip_typo.json",
         &tip.replace("\"l_knee\"", "\"l_kne\""),
     );
+    write(dir, "tip.json", &tip);
     write(dir, "comma.urdf", &urdf.replace("\"torso\"", "\"tor,so\""));
     write(
         dir,
@@ -574,8 +575,9 @@ fn make_wrong_fixtures(dir: &Path, io: &str, goals: &str, state: &str, plant: &s
     );
     write(
         dir,
-        "axis_zero.urdf",
-        &urdf.replacen("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"0 0 0\"/>", 1),
+        // A planar joint: the reader takes it, the dynamics do not.
+        "planar.urdf",
+        &urdf.replacen("type=\"revolute\"", "type=\"planar\"", 1),
     );
     // A ball joint (the neck) under a floating torso, and goals for its quaternion.
     write(
@@ -1315,7 +1317,7 @@ const WRONG: &[Case] = &[
     case("dynamics kinematics", "--robot {file:comma.urdf} --trajectory {state} --out {out}", "comma.urdf&&tor,so"),
     case("model export", "{file:comma.urdf} --out {out}", "comma.urdf&&tor,so"),
     // A total mass equal to the prior's: no part to find (it was a 4e-16 kg part 4e12 m away).
-    case("adapt", "--robot {km20} --tipover {json_bad} --total-mass 3.336", "--total-mass&&prior"),
+    case("adapt", "--robot {km20} --tipover {file:tip.json} --total-mass 3.336", "--total-mass&&prior"),
 ];
 
 /// Class 3, where a check finds problems: `model lint` reports, with exit 1, what every
@@ -1324,7 +1326,7 @@ const WRONG: &[Case] = &[
 const WRONG_FOUND: &[Case] = &[
     case("model lint", "{file:comma.urdf}", "unsafe-name&&tor,so"),
     case("model lint", "{file:axis_huge.urdf}", "bad-axis"),
-    case("model lint", "{file:axis_zero.urdf}", "dynamics-refuses&&axis"),
+    case("model lint", "{file:planar.urdf}", "dynamics-refuses&&planar"),
     case("model lint", "{km20_mm}", "unit-scale"),
 ];
 
@@ -1390,6 +1392,8 @@ fn the_same_data_in_order_in_step_and_in_metres_is_taken() {
             &file("state.csv"),
             "--plate",
             &d("plate.csv"),
+            "--cutoff",
+            "5",
             "--out",
             out,
         ],
