@@ -210,6 +210,7 @@ const CASES: &[Case] = &[
     case("bench sim", "--robot {km20} --dt 1", "--dt"),
     case("bench link", "--port {gone}", "gone"),
     case("view", "{trunc_urdf} --export {out}", "trunc.urdf"),
+    case("log info", "{missing}", "missing.urdf"),
     // A recording may hold NaN (a servo that did not answer): the viewer shows the gap.
     case("view", "{km20} {empty} --export {out}", "empty.urdf"),
 ];
@@ -237,7 +238,10 @@ fn cli_commands() -> Vec<String> {
         let help = Command::new(bin()).args(&args).output().unwrap();
         let text = String::from_utf8(help.stdout).unwrap();
         let usage = text.lines().find(|l| l.starts_with("Usage:")).unwrap_or("");
-        if !path.is_empty() && !usage.trim_end().ends_with(&format!("{path} <COMMAND>")) {
+        // A group's usage is `twinloop PATH [OPTIONS] <COMMAND>` (options shared by its
+        // commands, e.g. `log --topic`) or `twinloop PATH <COMMAND>`.
+        let group = usage.contains(&format!("{path} ")) && usage.trim_end().ends_with("<COMMAND>");
+        if !path.is_empty() && !group {
             out.push(path.clone());
         }
         let mut in_commands = false;
