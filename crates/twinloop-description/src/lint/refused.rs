@@ -118,7 +118,7 @@ mod tests {
         );
         for (link, axis, code, name) in [
             ("tor,so", "0 0 1", codes::UNSAFE_NAME, "tor,so"),
-            ("say \"a\"", "0 0 1", codes::UNSAFE_NAME, "say \"a\""),
+            ("say&quot;a", "0 0 1", codes::UNSAFE_NAME, "say\"a"),
             (" a", "0 0 1", codes::UNSAFE_NAME, " a"),
             ("a", "1e200 0 0", codes::BAD_AXIS, "j"),
             ("a", "1e-200 0 0", codes::BAD_AXIS, "j"),
