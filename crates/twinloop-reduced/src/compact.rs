@@ -289,7 +289,7 @@ impl CompactModel {
         z: &[f64],
     ) -> Result<(), ReducedError> {
         let away = |i: usize| (x[i] - x0).hypot(z[i] - z0);
-        let Some(i) = (0..x.len()).find(|&i| !(away(i) <= 1e3)) else {
+        let Some(i) = (0..x.len()).find(|&i| away(i).is_nan() || away(i) > 1e3) else {
             return Ok(());
         };
         let p = &self.plant;
