@@ -284,6 +284,8 @@ pub fn run(a: AdaptArgs) -> CliResult {
         (None, Some(path)) => {
             let tip = read_tip(path)?;
             same_robot(&tip, &prior.name, robot, path)?;
+            tip.check_onset_joints(&prior)
+                .map_err(|e| CliError::from(e.in_file(path)).context("--tipover"))?;
             tip
         }
         (None, None) => return Err(CliError::new("adapt needs --tipover or --port")),

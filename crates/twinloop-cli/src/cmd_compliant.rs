@@ -329,7 +329,9 @@ fn simulate(args: &SimulateArgs) -> CliResult {
     };
     let (mut x, mut z) = (Vec::new(), Vec::new());
     let started = std::time::Instant::now();
-    model.rollout(&reference, x0, z0, &mut x, &mut z)?;
+    model
+        .rollout(&reference, x0, z0, &mut x, &mut z)
+        .map_err(|e| CliError::from(e).context(format!("--plant {}", args.plant.display())))?;
     let elapsed = started.elapsed();
     if args.noise > 0.0 {
         // The first row stays exact: the fit starts the model there at rest.

@@ -528,8 +528,19 @@ fn lint_command(args: &DescriptionArgs, strict: bool) -> CliResult {
 /// joint's link.
 fn with_singular_mass_matrix(robot: &Description, report: LintReport) -> LintReport {
     use twinloop_description::lint::{Finding, Subject, codes};
-    let Ok(model) = Model::from_description_with_base(robot, BaseKind::Fixed) else {
-        return report;
+    let model = match Model::from_description_with_base(robot, BaseKind::Fixed) {
+        Ok(m) => m,
+        // What every command that computes with the file says: an error here too, not
+        // an ok for a file nothing else takes (issue 29, class 3).
+        Err(e) => {
+            return report.with_finding(Finding {
+                severity: Severity::Error,
+                code: codes::DYNAMICS_REFUSES,
+                subject: Subject::Robot,
+                name: robot.name.clone(),
+                message: format!("the dynamics refuse the file: {e}"),
+            });
+        }
     };
     let mut data = twinloop_dynamics::Data::new(&model);
     // A second, bent configuration: a singularity of the zero pose only (aligned

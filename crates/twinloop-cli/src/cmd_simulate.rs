@@ -70,15 +70,21 @@ impl Goals {
         let tc = table
             .column_index("t")
             .ok_or_else(|| CliError::new(format!("{}: a `t` column is needed", path.display())))?;
-        table.check_finite(&[tc])?;
+        // Finite and increasing: checked as the table was read.
         let t: Vec<f64> = table.rows.iter().map(|r| r[tc]).collect();
-        if let Some(k) = t.windows(2).position(|w| w[1] <= w[0]) {
+        if t[0] < 0.0 {
+            // The run starts at 0: goals before it would be passed over unseen.
+            let line = table
+                .line_of_row(0)
+                .map_or(String::new(), |l| format!(":{l}"));
             return Err(CliError::new(format!(
-                "{}: data row {}: time does not increase",
+                "{}{line}: column \"t\": the first goal is at {} s: the simulation starts at \
+                 0 s, so goals at negative times would never be reached (shift the times)",
                 path.display(),
-                k + 2
+                t[0]
             )));
         }
+        multi_dof_goals(&table, model, path)?;
         let cols: Vec<Option<usize>> = joints
             .iter()
             .map(|j| table.column_index(&format!("q:{j}")))
@@ -115,6 +121,32 @@ impl Goals {
             };
         }
     }
+}
+
+/// Goals drive a joint's servo, one angle each: a ball joint's quaternion columns
+/// (`q:j.qx` ..) have no servo to go to and would be ignored, so they are refused.
+/// A floating base's columns are the trajectory's own record, not goals (ignored as
+/// documented).
+fn multi_dof_goals(
+    table: &Table,
+    model: &twinloop_dynamics::Model,
+    path: &Path,
+) -> Result<(), CliError> {
+    use twinloop_dynamics::JointType;
+    for (name, ty) in model.joint_names.iter().zip(&model.joint_types) {
+        if *ty != JointType::Spherical {
+            continue;
+        }
+        let prefix = format!("q:{name}.");
+        if let Some(c) = table.columns.iter().find(|c| c.starts_with(&prefix)) {
+            return Err(CliError::new(format!(
+                "{}: column \"{c}\": {name} is a ball joint, which has no servo to take a \
+                 goal (goals are for hinges and sliders); remove its columns",
+                path.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 pub fn run(a: SimulateArgs) -> CliResult {

@@ -14,7 +14,8 @@ use twinloop_experiments::lean_validation::{LeanComparison, align_and_compare, r
 use twinloop_ident::IdentError;
 use twinloop_ident::html::residual_sections;
 use twinloop_ident::validate::{
-    Motion, ResidualSeries, ResidualSummary, Smoothing, parse_motion, read_plate, residual_wrench,
+    Motion, ResidualSeries, ResidualSummary, Smoothing, check_paired_times, parse_motion,
+    read_plate, residual_wrench,
 };
 use twinloop_io::CsvWriter;
 use twinloop_report::{Plot, Report, SeriesStyle};
@@ -321,6 +322,7 @@ fn read_motion_and_plate(a: &ResidualArgs, model: &Model) -> Result<Motion, CliE
     })?;
     if let Some(p) = &a.plate {
         let table = read_table(p)?;
+        check_paired_times(&motion.t, &table).map_err(|e| e.in_file(p).option("--plate"))?;
         motion.plate = read_plate(&table).map_err(|e| e.in_file(p))?;
         if motion.plate.is_none() {
             return Err(IdentError::new(

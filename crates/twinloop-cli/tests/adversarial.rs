@@ -478,6 +478,129 @@ fn make_fixtures(dir: &Path) {
         "bad.json",
         "{\"schema\": \"something else\", \"list\": [1, 2",
     );
+    make_wrong_fixtures(dir, &io, &goals, &state, &plant, &urdf);
+}
+
+/// The data lines of a CSV (after the header) through `f`, the header kept.
+fn map_rows(csv: &str, f: impl Fn(&str) -> String) -> String {
+    let (head, body) = csv.split_once('\n').unwrap();
+    let rows: String = body.lines().map(|l| f(l) + "\n").collect();
+    format!("{head}\n{rows}")
+}
+
+/// A CSV line with its first cell (`t`) moved by `dt`.
+fn shifted(line: &str, dt: f64) -> String {
+    let (t, rest) = line.split_once(',').unwrap();
+    format!("{},{rest}", t.parse::<f64>().unwrap() + dt)
+}
+
+/// The fixtures of class 3 (see [`WRONG`]).
+fn make_wrong_fixtures(dir: &Path, io: &str, goals: &str, state: &str, plant: &str, urdf: &str) {
+    let mut lines: Vec<&str> = io.lines().collect();
+    lines.swap(101, 102);
+    write(dir, "io_swapped.csv", &(lines.join("\n") + "\n"));
+    write(dir, "io_header.csv", "t,u:a,y:b\n");
+    write(
+        dir,
+        "goals_header.csv",
+        &format!("{}\n", goals.lines().next().unwrap()),
+    );
+    write(
+        dir,
+        "goals_negative.csv",
+        &map_rows(goals, |l| shifted(l, -0.5)),
+    );
+    // A force plate whose clock is 0.5 s out of step with the motion's, row for row.
+    let plate: String = state
+        .lines()
+        .skip(1)
+        .map(|l| {
+            format!(
+                "{},0,0,32.7,0,0,0\n",
+                shifted(l, 0.5).split(',').next().unwrap()
+            )
+        })
+        .collect();
+    let head = "t,grf.fx,grf.fy,grf.fz,cop.x,cop.y,grf.tz";
+    write(dir, "plate_late.csv", &format!("{head}\n{plate}"));
+    // A lean simulated over 3 s and the robot's cut after 0.6 s.
+    let lean = |step: f64, end: f64| {
+        let rows: String = (0..=(end / step).round() as usize)
+            .map(|k| {
+                let t = k as f64 * step;
+                format!("{t},{},{}\n", 0.1 * t, (2.0 * t).sin())
+            })
+            .collect();
+        format!("t,q:l_knee,tau:l_knee\n{rows}")
+    };
+    write(dir, "lean_sim.csv", &lean(0.005, 3.0));
+    write(dir, "lean_robot_cut.csv", &lean(0.02, 0.6));
+    // Three markers on the torso, and frames that give them in millimetres.
+    let markers: String = [
+        ("m0", "0.05, 0, 0"),
+        ("m1", "0, 0.05, 0"),
+        ("m2", "0, 0, 0.05"),
+    ]
+    .iter()
+    .map(|(n, p)| format!("[[marker]]\nname = \"{n}\"\nlink = \"torso\"\nposition = [{p}]\n"))
+    .collect();
+    write(dir, "markers.toml", &markers);
+    let frame = |t: f64| format!("{t},50,0,300,0,50,300,0,0,350\n");
+    let head = "t,marker:m0.x,marker:m0.y,marker:m0.z,marker:m1.x,marker:m1.y,marker:m1.z,\
+                marker:m2.x,marker:m2.y,marker:m2.z";
+    write(
+        dir,
+        "frames_mm.csv",
+        &format!("{head}\n{}{}", frame(0.0), frame(0.01)),
+    );
+    let stiff: String = plant
+        .lines()
+        .map(|l| {
+            if l.starts_with("Kzz") {
+                "Kzz = 6e12\n".into()
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    write(dir, "plant_stiff.toml", &stiff);
+    let tip = std::fs::read_to_string(
+        repo().join("crates/twinloop-cli/tests/data/bus_tipover_seed1.json"),
+    )
+    .unwrap();
+    write(
+        dir,
+        "tip_typo.json",
+        &tip.replace("\"l_knee\"", "\"l_kne\""),
+    );
+    write(dir, "tip.json", &tip);
+    write(dir, "comma.urdf", &urdf.replace("\"torso\"", "\"tor,so\""));
+    write(
+        dir,
+        "axis_huge.urdf",
+        &urdf.replacen("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"1e200 0 0\"/>", 1),
+    );
+    write(
+        dir,
+        // A planar joint: the reader takes it, the dynamics do not.
+        "planar.urdf",
+        &urdf.replacen("type=\"revolute\"", "type=\"planar\"", 1),
+    );
+    // A ball joint (the neck) under a floating torso, and goals for its quaternion.
+    write(
+        dir,
+        "ball.xml",
+        "<mujoco model=\"ball\"><worldbody><body name=\"torso\" pos=\"0 0 0.3\"><freejoint/>\
+         <geom type=\"box\" size=\"0.05 0.05 0.05\" mass=\"1\"/><body name=\"head\" pos=\"0 0 0.1\">\
+         <joint name=\"neck\" type=\"ball\"/><geom size=\"0.03\" mass=\"0.2\"/></body>\
+         <body name=\"arm\" pos=\"0.08 0 0\"><joint name=\"sho\" axis=\"0 1 0\" range=\"-1 1\"/>\
+         <geom size=\"0.02\" mass=\"0.1\"/></body></body></worldbody></mujoco>\n",
+    );
+    write(
+        dir,
+        "goals_ball.csv",
+        "t,q:sho,q:neck.qx,q:neck.qy,q:neck.qz,q:neck.qw\n0,0,0,0,0,1\n0.05,0.2,0.3826834,0,0,0.9238795\n",
+    );
 }
 
 /// The arguments of a case with its placeholders filled in.
@@ -507,6 +630,7 @@ fn fill(case: &Case, out: &Path) -> Vec<String> {
                 .to_str()
                 .unwrap()
                 .to_string(),
+            s if s.starts_with("{file:") && s.ends_with('}') => file(&s[6..s.len() - 1]),
             s if s.starts_with('{') && s.ends_with('}') => {
                 file(&format!("{}.csv", &s[1..s.len() - 1]))
             }
@@ -1176,4 +1300,162 @@ fn messages_name_the_chain_the_bound_and_take_a_bom() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// Issue 29, class 3: no silently wrong answers. Units, time order, pairing and
+/// finiteness are checked where data enters (twinloop-io's table reading, the
+/// loaders) and again before a result leaves; each case is refused at once: exit 2,
+/// one line naming the file (row, column) or option. Fixtures: [`make_wrong_fixtures`].
+#[rustfmt::skip]
+const WRONG: &[Case] = &[
+    // Time order: rows out of order or a table of no rows, whatever reads it.
+    case("identify arx", "--data {io_swapped} --inputs u:a --outputs y:b", "io_swapped.csv:103&&column \"t\"&&time order"),
+    case("identify ss", "--data {io_header} --inputs u:a --outputs y:b --order 2", "io_header.csv:1&&no data rows"),
+    case("simulate", "--robot {km20} --trajectory {goals_header} --out {out}", "goals_header.csv&&no data rows"),
+    case("simulate", "--robot {km20} --trajectory {goals_negative} --out {out}", "goals_negative.csv&&column \"t\"&&negative"),
+    // Pairing by time: a plate out of step, a run cut short.
+    case("validate residual", "--robot {km20} --motion {state} --plate {plate_late} --out {out}", "plate_late.csv&&--plate&&out of step"),
+    case("validate lean", "--robot-run {lean_robot_cut} --sim-run {lean_sim}", "lean_robot_cut.csv&&cut short"),
+    // Units: marker frames in millimetres (the base would stand 847 m up).
+    case("ik", "--robot {km20} --markers {file:markers.toml} --frames {frames_mm} --out {out}", "frames_mm.csv&&millimetres"),
+    // Finiteness of the result: a plant too stiff for the step diverges into NaN.
+    case("compliant simulate", "--reference {cwalk} --plant {file:plant_stiff.toml} --out {out}", "plant_stiff.toml&&too stiff"),
+    // Inputs a command would ignore or misread.
+    case("simulate", "--robot {file:ball.xml} --trajectory {goals_ball} --out {out}", "goals_ball.csv&&q:neck.qx&&ball joint"),
+    case("adapt", "--robot {km20} --tipover {file:tip_typo.json} --total-mass 3.6", "tip_typo.json&&l_kne&&did you mean l_knee"),
+    case("model info", "{file:axis_huge.urdf}", "axis_huge.urdf&&no direction"),
+    case("dynamics kinematics", "--robot {file:comma.urdf} --trajectory {state} --out {out}", "comma.urdf&&tor,so"),
+    case("model export", "{file:comma.urdf} --out {out}", "comma.urdf&&tor,so"),
+    // A total mass equal to the prior's: no part to find (it was a 4e-16 kg part 4e12 m away).
+    case("adapt", "--robot {km20} --tipover {file:tip.json} --total-mass 3.336", "--total-mass&&prior"),
+];
+
+/// Class 3, where a check finds problems: `model lint` reports, with exit 1, what every
+/// other command refuses (it said ok for files the dynamics refuse).
+#[rustfmt::skip]
+const WRONG_FOUND: &[Case] = &[
+    case("model lint", "{file:comma.urdf}", "unsafe-name&&tor,so"),
+    case("model lint", "{file:axis_huge.urdf}", "bad-axis"),
+    case("model lint", "{file:planar.urdf}", "dynamics-refuses&&planar"),
+    case("model lint", "{km20_mm}", "unit-scale"),
+];
+
+#[test]
+fn answers_that_would_be_silently_wrong_are_refused() {
+    // Milliseconds each on an idle machine; the limit leaves room for CI's load.
+    let limit = Duration::from_secs(10);
+    let mut failures: Vec<String> = WRONG
+        .iter()
+        .enumerate()
+        .filter_map(|(k, c)| check_within(c, &format!("wrong-{k}"), limit))
+        .collect();
+    for c in WRONG_FOUND {
+        let mut args: Vec<String> = c.cmd.split_whitespace().map(String::from).collect();
+        args.extend(fill(c, Path::new("/nonexistent")));
+        let o = Command::new(bin()).args(&args).output().unwrap();
+        let out = String::from_utf8_lossy(&o.stdout);
+        if o.status.code() != Some(1) || !c.names.split("&&").all(|n| out.contains(n)) {
+            failures.push(format!(
+                "`twinloop {}`: exit {:?}, not 1 naming `{}`: {out}{}",
+                args.join(" "),
+                o.status.code(),
+                c.names,
+                String::from_utf8_lossy(&o.stderr)
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The class-3 checks refuse nothing right: the same goals, plate, runs and frames in
+/// order, in step, whole and in metres are taken.
+#[test]
+fn the_same_data_in_order_in_step_and_in_metres_is_taken() {
+    let f = fixtures();
+    let dir = scratch("wrong_legit");
+    let file = |n: &str| f.dir.join(n).to_str().unwrap().to_string();
+    let state = std::fs::read_to_string(f.dir.join("state.csv")).unwrap();
+    let plate = std::fs::read_to_string(f.dir.join("plate_late.csv")).unwrap();
+    let in_step = map_rows(&plate, |l| shifted(l, -0.5));
+    std::fs::write(dir.join("plate.csv"), in_step).unwrap();
+    let frames = std::fs::read_to_string(f.dir.join("frames_mm.csv")).unwrap();
+    let metres = map_rows(&frames, |l| {
+        let mut cells = l.split(',');
+        let t = cells.next().unwrap().to_string();
+        std::iter::once(t)
+            .chain(cells.map(|c| (c.parse::<f64>().unwrap() / 1000.0).to_string()))
+            .collect::<Vec<_>>()
+            .join(",")
+    });
+    std::fs::write(dir.join("frames.csv"), metres).unwrap();
+    assert!(state.lines().count() > 3);
+    let out = dir.join("out.csv");
+    let out = out.to_str().unwrap();
+    let d = |n: &str| dir.join(n).to_str().unwrap().to_string();
+    let runs: Vec<Vec<String>> = [
+        vec![
+            "validate",
+            "residual",
+            "--robot",
+            &file("km20.urdf"),
+            "--motion",
+            &file("state.csv"),
+            "--plate",
+            &d("plate.csv"),
+            "--cutoff",
+            "5",
+            "--out",
+            out,
+        ],
+        vec![
+            "validate",
+            "lean",
+            "--robot-run",
+            &file("lean_sim.csv"),
+            "--sim-run",
+            &file("lean_sim.csv"),
+        ],
+        vec![
+            "ik",
+            "--robot",
+            &file("km20.urdf"),
+            "--markers",
+            &file("markers.toml"),
+            "--frames",
+            &d("frames.csv"),
+            "--out",
+            out,
+        ],
+        vec![
+            "compliant",
+            "simulate",
+            "--reference",
+            &file("cwalk.csv"),
+            "--plant",
+            &file("plant.toml"),
+            "--out",
+            out,
+        ],
+        vec![
+            "identify",
+            "arx",
+            "--data",
+            &file("io.csv"),
+            "--inputs",
+            "u:a",
+            "--outputs",
+            "y:b",
+        ],
+    ]
+    .iter()
+    .map(|a| a.iter().map(|s| s.to_string()).collect())
+    .collect();
+    for args in runs {
+        let o = Command::new(bin()).args(&args).output().unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
 }

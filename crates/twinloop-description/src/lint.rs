@@ -37,11 +37,15 @@
 //! | `ignored-detail` | warning | a visual-only detail the reader read past: a URDF `<texture/>` without a file, a mesh `scale` with a fourth number |
 //! | `total-mass` | info | the robot's total mass, as a scale would weigh it |
 //! | `unit-scale` | error | lengths in millimetres (the robot spans more than 20 m) or masses in grams (over 100 kg and denser than water over its size cubed): see [`unit_scale`] |
+//! | `unsafe-name` | error | a link, joint or frame name with a comma, a quote, a control character or spaces at an end: it cannot be a CSV column (see [`refused`]) |
+//! | `bad-axis` | error | a moving joint's axis whose length is beyond 1e-100 .. 1e100: no direction the arithmetic can normalise |
+//! | `dynamics-refuses` | error | added by `twinloop model lint`: the dynamics cannot compile the file (the message says why) |
 //!
 //! Axes of fixed and floating joints are not checked: URDF ignores them (many
 //! files write `0 0 0` there).
 
 mod floating_base;
+pub mod refused;
 pub mod unit_scale;
 
 use crate::description::{Description, Inertia, Joint, JointKind};
@@ -83,9 +87,12 @@ pub mod codes {
     pub const IGNORED_DETAIL: &str = "ignored-detail";
     pub const TOTAL_MASS: &str = "total-mass";
     pub const UNIT_SCALE: &str = "unit-scale";
+    pub const UNSAFE_NAME: &str = "unsafe-name";
+    pub const BAD_AXIS: &str = "bad-axis";
+    pub const DYNAMICS_REFUSES: &str = "dynamics-refuses";
 
     /// Every code, in the order of the table in the module documentation.
-    pub const ALL: [&str; 19] = [
+    pub const ALL: [&str; 22] = [
         NEGATIVE_MASS,
         INERTIA_NOT_POSITIVE_DEFINITE,
         TRIANGLE_INEQUALITY,
@@ -105,6 +112,9 @@ pub mod codes {
         IGNORED_DETAIL,
         TOTAL_MASS,
         UNIT_SCALE,
+        UNSAFE_NAME,
+        BAD_AXIS,
+        DYNAMICS_REFUSES,
     ];
 }
 
@@ -269,6 +279,7 @@ pub fn lint(robot: &Description) -> LintReport {
     check_moving_masses(robot, &mut out);
     floating_base::check(robot, &mut out);
     unit_scale::check(robot, &mut out);
+    refused::check(robot, &mut out);
     for joint in &robot.joints {
         check_joint(joint, &mut out);
         check_mimic_target(robot, joint, &mut out);

@@ -429,9 +429,10 @@ impl Model {
         let a = joint.axis_or_default();
         let axis = Vector3::new(a[0], a[1], a[2]);
         let n = axis.norm();
-        if !spherical && (n.is_nan() || n <= 1e-12) {
+        let direction = n > 1e-12 && n.is_finite();
+        if !spherical && !direction {
             return Err(
-                DescriptionError::new("a moving joint needs a non-zero axis")
+                DescriptionError::new("a moving joint needs a non-zero, finite axis")
                     .at_element(format!("<joint name=\"{}\">", joint.name)),
             );
         }

@@ -336,7 +336,36 @@ pub fn align_and_compare(
     shifted.t.iter_mut().for_each(|t| *t += shift);
     let mut c = compare_leans(robot, &shifted, robot_name, sim_name)?;
     c.shift_s = shift;
+    check_coverage(&c, &[(robot, robot_name, 0.0), (sim, sim_name, shift)])?;
     Ok(c)
+}
+
+/// The least part of each run's span the comparison must cover.
+pub const MIN_COVERAGE: f64 = 0.8;
+
+/// A run cut short (a copy interrupted, a recording stopped early) overlaps the other
+/// only where it has data, and would compare as a match over that part alone: the
+/// compared span must cover [`MIN_COVERAGE`] of each run (issue 29, class 3).
+fn check_coverage(c: &LeanComparison, runs: &[(&LeanRecord, &str, f64)]) -> Result<(), IoError> {
+    let covered = c.t_end - c.t_start;
+    for (r, name, shift) in runs {
+        let (a, b) = (r.t[0] + shift, r.t[r.t.len() - 1] + shift);
+        if covered < MIN_COVERAGE * (b - a) {
+            let spans: Vec<String> = runs
+                .iter()
+                .map(|(r, n, _)| format!("{n}: {} to {} s", r.t[0], r.t[r.t.len() - 1]))
+                .collect();
+            return Err(IoError::new(format!(
+                "the runs overlap over {covered:.3} s, {:.0} % of {name}'s {:.3} s ({}): \
+                 one run is cut short; compare runs of the whole lean",
+                100.0 * covered / (b - a),
+                b - a,
+                spans.join(", ")
+            ))
+            .in_file(name.to_string()));
+        }
+    }
+    Ok(())
 }
 
 fn rms(x: &[f64]) -> f64 {

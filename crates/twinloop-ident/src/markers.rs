@@ -203,7 +203,57 @@ pub fn read_frames(path: &Path, markers: &[Marker]) -> Result<MarkerFrames, Iden
     if f.t.is_empty() {
         return Err(at(IdentError::new("no frames")));
     }
+    check_frame_units(&f, markers).map_err(at)?;
     Ok(f)
+}
+
+/// Frames in the marker set's unit, metres: two markers on one link are as far apart
+/// in every frame as the set places them (a rigid link). Frames in millimetres make
+/// those distances 1000 times the set's, and the fit would put the base hundreds of
+/// metres up (issue 29, class 3); the median ratio over every such pair (1 cm apart
+/// or more in the set) and every frame that sees both must be within 2x of 1.
+pub fn check_frame_units(frames: &MarkerFrames, markers: &[Marker]) -> Result<(), IdentError> {
+    let mut ratios = Vec::new();
+    let mut named = None;
+    for (i, a) in markers.iter().enumerate() {
+        for (j, b) in markers.iter().enumerate().skip(i + 1) {
+            let set = (a.position - b.position).norm();
+            if a.link != b.link || set < 0.01 {
+                continue;
+            }
+            named.get_or_insert(j);
+            for p in &frames.positions {
+                if let (Some(pa), Some(pb)) = (p[i], p[j]) {
+                    ratios.push((pa - pb).norm() / set);
+                }
+            }
+        }
+    }
+    if ratios.is_empty() {
+        return Ok(());
+    }
+    ratios.sort_by(f64::total_cmp);
+    let r = ratios[ratios.len() / 2];
+    if (0.5..=2.0).contains(&r) {
+        return Ok(());
+    }
+    let unit = [
+        (1000.0, "millimetres"),
+        (100.0, "centimetres"),
+        (39.37, "inches"),
+    ]
+    .iter()
+    .find(|(k, _)| (r / k - 1.0).abs() < 0.25)
+    .map_or(String::new(), |(_, u)| {
+        format!(": the frames look like {u}, the set is in metres")
+    });
+    let name = &markers[named.unwrap_or(0)].name;
+    Err(IdentError::new(format!(
+        "markers on one link are {r:.4} times as far apart as the marker set places them \
+         (the median of {} distances){unit}; give the frames in metres",
+        ratios.len()
+    ))
+    .field(format!("marker:{name}.x")))
 }
 
 /// Rigid transform (rotation, translation) that best maps points `a` onto `b` in the
@@ -462,5 +512,61 @@ impl<'a> MarkerIk<'a> {
                 iterations: rep.iterations,
             },
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three markers 5 cm apart on one link (and one on another, not compared).
+    fn set() -> Vec<Marker> {
+        let m = |name: &str, link, p: [f64; 3]| Marker {
+            name: name.into(),
+            link,
+            position: Vector3::from(p),
+        };
+        vec![
+            m("a", 1, [0.05, 0.0, 0.0]),
+            m("b", 1, [0.0, 0.05, 0.0]),
+            m("c", 1, [0.0, 0.0, 0.05]),
+            m("d", 2, [0.0, 0.0, 0.0]),
+        ]
+    }
+
+    fn frames(scale: f64) -> MarkerFrames {
+        // The set turned a quarter turn about z and moved: distances kept.
+        let p = |x: f64, y: f64, z: f64| Some(Vector3::new(0.3 - y, 0.1 + x, 0.5 + z) * scale);
+        MarkerFrames {
+            t: vec![0.0],
+            positions: vec![vec![
+                p(0.05, 0.0, 0.0),
+                p(0.0, 0.05, 0.0),
+                p(0.0, 0.0, 0.05),
+                None,
+            ]],
+        }
+    }
+
+    /// Issue 29, class 3: frames in millimetres (the base would be fitted hundreds of
+    /// metres up) are refused naming the unit; in metres, or with a marker unseen, taken.
+    #[test]
+    fn frames_in_another_unit_than_the_set_are_refused() {
+        assert!(check_frame_units(&frames(1.0), &set()).is_ok());
+        let e = check_frame_units(&frames(1000.0), &set())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("millimetres") && e.contains("marker:b.x"), "{e}");
+        let e = check_frame_units(&frames(100.0), &set())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("centimetres"), "{e}");
+        let mut one_seen = frames(1000.0);
+        one_seen.positions[0][1] = None;
+        one_seen.positions[0][2] = None;
+        assert!(
+            check_frame_units(&one_seen, &set()).is_ok(),
+            "nothing to compare"
+        );
     }
 }

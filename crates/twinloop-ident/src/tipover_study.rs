@@ -915,6 +915,7 @@ pub fn static_angles_at_onsets(
     robot: &Description,
     report: &StudyReport,
 ) -> Result<[f64; 4], IdentError> {
+    report.check_onset_joints(robot)?;
     let mut p = prepare(robot, &StudyOptions::default())?;
     let mut runs = Vec::with_capacity(4);
     for d in Direction::ALL {
@@ -951,6 +952,33 @@ pub fn static_angles_at_onsets(
 }
 
 impl StudyReport {
+    /// Every joint an onset posture names must be a joint of `robot`: the posture is
+    /// where the robot stood when it tipped, and a joint left out (a misspelt or
+    /// another robot's name) would be taken at its standing angle, giving angles that
+    /// match nothing (issue 29, class 3). The error names the direction, the joint and
+    /// the nearest of the robot's joints.
+    pub fn check_onset_joints(&self, robot: &Description) -> Result<(), IdentError> {
+        let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+        for d in Direction::ALL {
+            let r = self.direction(d);
+            for (name, v) in &r.onset_positions {
+                let field = format!("{}.onset_positions.{name}", d.name());
+                if robot.joint(name).is_none() {
+                    return Err(IdentError::new(format!(
+                        "\"{name}\" is not a joint of \"{}\"; did you mean {}?",
+                        robot.name,
+                        twinloop_io::nearest(name, &names, 3).join(", ")
+                    ))
+                    .field(field));
+                }
+                if !v.is_finite() {
+                    return Err(IdentError::new(format!("{v} is not an angle")).field(field));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// One direction's outcome.
     pub fn direction(&self, d: Direction) -> &DirectionReport {
         match d {
@@ -1098,4 +1126,30 @@ pub fn tipover_config(
     cfg.hip_left_sign = signs.hip_left;
     cfg.ramp_deg_per_s = ramp_deg_per_s;
     Ok(cfg)
+}
+
+#[cfg(test)]
+mod onset_tests {
+    use super::*;
+
+    /// Issue 29, class 3: an onset posture naming a joint the robot lacks is refused
+    /// with the direction, the name and the joint meant.
+    #[test]
+    fn an_onset_posture_naming_an_unknown_joint_is_refused() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../twinloop-cli/tests/data/bus_tipover_seed1.json"
+        );
+        let text = std::fs::read_to_string(path).unwrap();
+        let km20 = twinloop_description::builtin::resolve("builtin:km20").unwrap();
+        let tip: StudyReport = serde_json::from_str(&text).unwrap();
+        tip.check_onset_joints(&km20).unwrap();
+        let typo: StudyReport =
+            serde_json::from_str(&text.replace("\"l_knee\"", "\"l_kne\"")).unwrap();
+        let e = typo.check_onset_joints(&km20).unwrap_err().to_string();
+        assert!(
+            e.contains("forward.onset_positions.l_kne") && e.contains("did you mean l_knee"),
+            "{e}"
+        );
+    }
 }

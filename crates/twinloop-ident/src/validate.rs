@@ -108,6 +108,42 @@ pub fn read_plate(table: &Table) -> Result<Option<Vec<PlateSample>>, IdentError>
     Ok(Some(out))
 }
 
+/// Plate readings from their own file are paired with the motion frame by frame: when
+/// the file has a `t` column, its times must be the motion's (to a thousandth of a
+/// step), so a plate out of step with the motion (its clock started 0.5 s late) is an
+/// error naming the row, never a residual computed on mismatched frames. A file
+/// without `t` pairs by row (the row counts are checked by [`residual_wrench`]).
+pub fn check_paired_times(motion_t: &[f64], table: &Table) -> Result<(), IdentError> {
+    let Some(tc) = table.column_index("t") else {
+        return Ok(());
+    };
+    if table.rows.len() != motion_t.len() {
+        return Err(IdentError::new(format!(
+            "{} plate rows for {} motion frames: the plate is read frame by frame",
+            table.rows.len(),
+            motion_t.len()
+        )));
+    }
+    let step = match motion_t {
+        [a, .., b] => (b - a) / (motion_t.len() - 1) as f64,
+        _ => 1.0,
+    };
+    for (r, (row, &tm)) in table.rows.iter().zip(motion_t).enumerate() {
+        let tp = row[tc];
+        if (tp - tm).abs() > 1e-3 * step {
+            return Err(IdentError::new(format!(
+                "time {tp} s, but the motion's frame {} is at {tm} s ({:+} s out of step): \
+                 the plate's rows must be the motion's frames",
+                r + 1,
+                tp - tm
+            ))
+            .at_row(r)
+            .field("t"));
+        }
+    }
+    Ok(())
+}
+
 /// Read a motion: `t` and the `q:` columns (and the plate columns if present).
 /// Errors name the file, row and column: a missing `t`, time not increasing, a
 /// non-finite cell, a base quaternion that is not unit.
@@ -805,4 +841,36 @@ pub fn write_motion(path: &Path, model: &Model, motion: &Motion) -> Result<(), I
     }
     w.finish()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod paired_tests {
+    use super::*;
+
+    /// Issue 29, class 3: a plate file is paired with the motion by its `t`, not by
+    /// its row: in step it is taken, 0.5 s late or a row short it is refused.
+    #[test]
+    fn a_plate_out_of_step_with_the_motion_is_refused() {
+        let motion = [0.0, 0.01, 0.02, 0.03];
+        let plate = |dt: f64, n: usize| {
+            let rows: String = motion[..n]
+                .iter()
+                .map(|t| format!("{},1\n", t + dt))
+                .collect();
+            Table::parse(&format!("t,grf.fz\n{rows}")).unwrap()
+        };
+        assert!(check_paired_times(&motion, &plate(0.0, 4)).is_ok());
+        assert!(check_paired_times(&motion, &plate(1e-7, 4)).is_ok());
+        let e = check_paired_times(&motion, &plate(0.5, 4))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("data row 1") && e.contains("out of step"), "{e}");
+        let e = check_paired_times(&motion, &plate(0.0, 3))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("3 plate rows for 4"), "{e}");
+        // Without `t` the rows pair by index (the counts are checked later).
+        let no_t = Table::parse("grf.fz\n1\n2\n").unwrap();
+        assert!(check_paired_times(&motion, &no_t).is_ok());
+    }
 }

@@ -145,12 +145,51 @@ impl Table {
             rows.push(row);
             row_lines.push(ln + 1);
         }
-        Ok(Table {
+        if rows.is_empty() {
+            return Err(IoError {
+                line: Some(hl + 1),
+                ..IoError::new("no data rows, only the header: there is nothing to read")
+            });
+        }
+        let table = Table {
             path: None,
             columns,
             rows,
             lines: row_lines,
-        })
+        };
+        table.check_time()?;
+        Ok(table)
+    }
+
+    /// A `t` column is time in seconds: every cell finite and each row after the one
+    /// before it. Rows out of order (a sort or a merge gone wrong) or a repeated time
+    /// would otherwise be taken in file order (an ARX fit on swapped samples, a goal
+    /// interpolated backwards): issue 29, class 3.
+    pub fn check_time(&self) -> Result<(), IoError> {
+        let Some(tc) = self.column_index("t") else {
+            return Ok(());
+        };
+        self.check_finite(&[tc])?;
+        for r in 1..self.rows.len() {
+            let (prev, t) = (self.rows[r - 1][tc], self.rows[r][tc]);
+            if t <= prev {
+                let before = match self.line_of_row(r - 1) {
+                    Some(l) => format!("line {l}"),
+                    None => format!("data row {r}"),
+                };
+                return Err(IoError {
+                    file: self.path.clone(),
+                    line: self.line_of_row(r),
+                    column: Some("t".into()),
+                    message: format!(
+                        "data row {}: time {t} s is not after {prev} s ({before}): rows must \
+                         be in time order, each time once",
+                        r + 1
+                    ),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// The file line of data row `row` (0-based), if the table was read from text.
@@ -256,6 +295,20 @@ impl CsvWriter {
     }
 
     fn open(out: AtomicFile, columns: &[String]) -> Result<CsvWriter, IoError> {
+        // A column name that a comma, a quote or a line break splits would shift every
+        // column after it when the file is read back (issue 29, class 3).
+        if let Some(c) = columns
+            .iter()
+            .find(|c| c.is_empty() || c.trim() != *c || c.contains([',', '"', '\n', '\r']))
+        {
+            let mut e = IoError::new(
+                "a column name may not be empty, hold a comma, a quote or a line break, or \
+                 start or end with a space: the file would not read back (rename what it names)",
+            )
+            .in_file(out.path());
+            e.column = Some(c.clone());
+            return Err(e);
+        }
         let mut w = CsvWriter {
             out,
             ncols: columns.len(),

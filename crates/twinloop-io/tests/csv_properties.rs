@@ -7,7 +7,8 @@
 use proptest::prelude::*;
 use twinloop_io::{CsvWriter, Table};
 
-/// Distinct column names like the ones twinloop writes (`q:l_knee`, `com.x`).
+/// Distinct column names like the ones twinloop writes (`q:l_knee`, `com.x`); not `t`,
+/// whose cells must increase (`tests/table.rs` has its cases).
 fn columns() -> impl Strategy<Value = Vec<String>> {
     proptest::collection::btree_set("[a-z]{1,4}(:[a-z_]{1,6})?(\\.[xyz])?", 1..6)
         // `t` is the time, written to the nanosecond (`clean_time`), not bit for bit.
@@ -20,10 +21,11 @@ fn finite() -> impl Strategy<Value = f64> {
     any::<f64>().prop_filter("finite", |x| x.is_finite())
 }
 
+/// A table of one row or more (a header alone is refused as no data).
 fn table() -> impl Strategy<Value = Table> {
     columns().prop_flat_map(|cols| {
         let n = cols.len();
-        proptest::collection::vec(proptest::collection::vec(finite(), n), 0..20).prop_map(
+        proptest::collection::vec(proptest::collection::vec(finite(), n), 1..20).prop_map(
             move |rows| Table {
                 rows,
                 ..Table::new(cols.clone())

@@ -46,6 +46,35 @@ fn errors_name_line_and_column() {
     assert!(e.to_string().contains("twice"));
 }
 
+/// Issue 29, class 3: a table is read in time order or not at all. A header without
+/// rows, time running backwards, a time repeated or not finite: errors naming the
+/// line and the column, never rows taken in file order.
+#[test]
+fn time_out_of_order_and_tables_without_rows_are_refused() {
+    let e = Table::parse("# a comment\nt,u:a\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("line 2: ") && e.contains("no data rows"),
+        "{e}"
+    );
+    for (text, line) in [
+        ("t,u:a\n0,1\n0.02,2\n0.01,3\n", 4),
+        ("t,u:a\n0,1\n0,2\n", 3),
+        ("t,u:a\n0,1\nnan,2\n", 3),
+        ("t,u:a\n-inf,1\n0,2\n", 2),
+    ] {
+        let e = Table::parse(text).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!("line {line}: column \"t\"")),
+            "{text:?}: {e}"
+        );
+    }
+    // Other columns may go down, and a table without `t` is in no particular order.
+    assert!(Table::parse("t,u:a\n-1,3\n0,2\n1e-9,1\n").is_ok());
+    assert!(Table::parse("pose,u:a\n2,1\n1,2\n").is_ok());
+}
+
 #[test]
 fn a_non_finite_cell_in_a_used_column_names_file_line_and_column() {
     use twinloop_io::{Quantity, StateColumns};

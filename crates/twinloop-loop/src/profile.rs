@@ -115,7 +115,8 @@ pub fn attach_roles(robot: &mut Description, mapping: &RobotMapping) -> Result<(
 /// here, for every command, naming the joint or link and the unit it looks like.
 pub fn load_description(spec: &str) -> Result<(Description, Format), LoopError> {
     let (robot, format) = read_description(spec)?;
-    if let Some(f) = twinloop_description::lint::unit_scale::find(&robot) {
+    // What `model lint` reports as errors of the file itself, every command refuses.
+    if let Some(f) = twinloop_description::lint::refused::find(&robot) {
         return Err(LoopError::new(format!(
             "{spec}: {} \"{}\" {}",
             f.subject.as_str(),

@@ -273,7 +273,43 @@ impl CompactModel {
             return err("initial CoM position is not finite");
         }
         self.rollout_unchecked(reference, x0, z0, x, z);
-        Ok(())
+        self.check_bounded(reference, x0, z0, x, z)
+    }
+
+    /// A rollout that left its bounds: a plant too stiff for the reference's step (RK4
+    /// is unstable once the step times the plant's fastest rate passes about 2.8) grows
+    /// without end into infinities and NaN. That is an error naming the time and the
+    /// rate, never a file of NaN (issue 29, class 3). The bound: 1 km from the start.
+    fn check_bounded(
+        &self,
+        r: &SagittalReference,
+        x0: f64,
+        z0: f64,
+        x: &[f64],
+        z: &[f64],
+    ) -> Result<(), ReducedError> {
+        let away = |i: usize| (x[i] - x0).hypot(z[i] - z0);
+        let Some(i) = (0..x.len()).find(|&i| away(i).is_nan() || away(i) > 1e3) else {
+            return Ok(());
+        };
+        let p = &self.plant;
+        // The fastest rate of the stiffness and damping per unit mass (a bound on the
+        // eigenvalues: the largest absolute row sum).
+        let k = (p.Kxx.abs() + p.Kxz.abs()).max(p.Kzx.abs() + p.Kzz.abs()) / p.m;
+        let d = (p.Dxx.abs() + p.Dxz.abs()).max(p.Dzx.abs() + p.Dzz.abs()) / p.m;
+        let rate = k.sqrt().max(d);
+        let h = r.t[i.max(1)] - r.t[i.max(1) - 1];
+        err(format!(
+            "the CoM left the reference at t = {} s (sample {}: x {}, z {} m): the plant's \
+             stiffness and damping (rate up to {rate:.3e} 1/s) are too stiff for the \
+             reference's {h} s step (step x rate = {:.3e}; RK4 needs it below about 2.8): \
+             check the plant's units or sample the reference finer",
+            r.t[i],
+            i + 1,
+            x[i],
+            z[i],
+            h * rate
+        ))
     }
 
     /// [`Self::rollout`] without the checks, for optimisers that call it many times.
@@ -436,6 +472,23 @@ mod tests {
             }
             assert!(worst < 1e-9, "double support {ds}: {worst:e}");
         }
+    }
+
+    /// Issue 29, class 3: a plant 1e8 times too stiff for a 1 ms step (RK4's limit is
+    /// step x rate near 2.8; here sqrt(6e12 / 32) x 1e-3 = 433) diverges: an error
+    /// naming the time and the step, not a rollout of NaN.
+    #[test]
+    fn a_plant_too_stiff_for_the_step_is_an_error_not_nan() {
+        let mut m = model();
+        m.plant.Kzz = 6e12;
+        let (mut x, mut z) = (Vec::new(), Vec::new());
+        let r = ramp(1001, 1e-3, 0.05, -0.01, false);
+        let e = m.rollout(&r, 0.0, 0.49, &mut x, &mut z).unwrap_err();
+        let e = e.to_string();
+        assert!(e.contains("too stiff") && e.contains("0.001 s step"), "{e}");
+        // The model as it is stays well inside the bound.
+        m.plant.Kzz = 60061.0;
+        m.rollout(&r, 0.0, 0.49, &mut x, &mut z).unwrap();
     }
 
     #[test]

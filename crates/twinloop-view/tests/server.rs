@@ -189,13 +189,18 @@ fn a_recording_says_which_joint_columns_it_lacks() {
     let no_t = twinloop_io::Table::parse("q:l_knee\n0\n").unwrap();
     let e = Recording::from_table(&no_t, Path::new("x.csv"), &scene.info).unwrap_err();
     assert!(e.to_string().contains("x.csv") && e.to_string().contains("\"t\""));
-    let back = twinloop_io::Table::parse("t,q:l_knee\n0,0\n1,0\n0.5,0\n").unwrap();
+    // (Built in memory: a file like it is refused as it is read, by twinloop-io.)
+    let in_memory = |rows: Vec<Vec<f64>>| twinloop_io::Table {
+        rows,
+        ..twinloop_io::Table::new(vec!["t".into(), "q:l_knee".into()])
+    };
+    let back = in_memory(vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![0.5, 0.0]]);
     let e = Recording::from_table(&back, Path::new("x.csv"), &scene.info).unwrap_err();
     assert_eq!(
         e.to_string(),
         "x.csv: column \"t\": data row 3: time decreases (the rows must be in time order)"
     );
-    let nan = twinloop_io::Table::parse("t,q:l_knee\n0,0\nNaN,0\n").unwrap();
+    let nan = in_memory(vec![vec![0.0, 0.0], vec![f64::NAN, 0.0]]);
     let e = Recording::from_table(&nan, Path::new("x.csv"), &scene.info).unwrap_err();
     assert!(e.to_string().contains("not a finite number"), "{e}");
 }
