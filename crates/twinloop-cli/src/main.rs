@@ -33,6 +33,7 @@ mod outputs;
 mod progress;
 mod replay3d;
 mod residual_text;
+mod result_mcap;
 mod sim_args;
 mod units;
 
