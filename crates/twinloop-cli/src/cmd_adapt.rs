@@ -41,8 +41,9 @@ pub struct AdaptArgs {
     /// IMU [[board]]).
     #[arg(long, value_name = "MAP", requires = "port")]
     pub map: Option<String>,
-    /// With --port: every cycle read, as a CSV written row by row.
-    #[arg(long, value_name = "FILE.csv", requires = "port")]
+    /// With --port: every cycle read, as a CSV written row by row (an .mcap: ROS 2
+    /// messages, as `experiment tipover --record`).
+    #[arg(long, value_name = "FILE.csv|FILE.mcap", requires = "port")]
     pub record: Option<PathBuf>,
     /// With --port on a serial device: do not ask before the first lean.
     #[arg(long, requires = "port")]

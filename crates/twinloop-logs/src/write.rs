@@ -433,3 +433,25 @@ pub fn write_mcap(
 }
 
 use twinloop_io::Table;
+
+impl twinloop_io::RowSink for McapLog {
+    fn write_row(&mut self, row: &[f64]) -> Result<(), twinloop_io::IoError> {
+        Ok(McapLog::write_row(self, row)?)
+    }
+    fn finish(self: Box<Self>) -> Result<(), twinloop_io::IoError> {
+        Ok(McapLog::finish(*self)?)
+    }
+}
+
+/// A recording as MCAP ([`twinloop_io::sink::RecordingOpener`]: what a program
+/// registers for `.mcap` with [`twinloop_io::sink::register_recording_format`]):
+/// kept, closed properly, if the run fails after a row; the floating base, if
+/// any, under `base_link`.
+pub fn open_mcap_recording(
+    path: &Path,
+    columns: &[String],
+) -> Result<Box<dyn twinloop_io::RowSink>, twinloop_io::IoError> {
+    Ok(Box::new(
+        McapLog::create(path, columns, None, "base_link")?.recording(),
+    ))
+}
