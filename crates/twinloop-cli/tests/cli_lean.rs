@@ -263,7 +263,8 @@ fn the_lean_over_the_bus_matches_the_simulated_lean() {
     let raw = twinloop_logs::read_log(&raw, &Default::default()).unwrap();
     let mut want = twinloop_experiments::guarded::record_columns(&km20_joints());
     let mut got = raw.columns.clone();
-    (want.sort(), got.sort());
+    want.sort();
+    got.sort();
     assert_eq!(got, want);
     let raw_rows = raw.rows.len();
     assert!(

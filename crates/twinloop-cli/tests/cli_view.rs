@@ -845,7 +845,8 @@ fn view_opens_an_mcap_recording_as_it_opens_the_csv_of_the_same_run() {
     let (a, b) = (info(0), info(1));
     let (ca, cb) = (columns(&a), columns(&b));
     let (mut sa, mut sb) = (ca.clone(), cb.clone());
-    (sa.sort(), sb.sort());
+    sa.sort();
+    sb.sort();
     assert_eq!(sa, sb);
     for key in ["rows", "missing", "has_base"] {
         assert_eq!(a[key], b[key], "{key}");
