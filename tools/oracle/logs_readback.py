@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Read an MCAP file twinloop wrote with the reference libraries and print what they
 see as JSON: per topic its schema name and encoding, message encoding, message
-count, and every decoded value that twinloop's tests compare (f64 bits as hex).
+count, and every decoded value that twinloop's tests compare (f64 bits as hex); and
+the file's attachments (name, media type, text) and metadata records (name: pairs).
 
 Decoding goes through `mcap_ros2`'s dynamic decoder, which parses the schema text
 the file carries, so a wrong schema or a misaligned CDR field fails here.
@@ -54,6 +55,9 @@ def main(path):
                 t["rows"].append([d.label for d in msg.layout.dim] + [bits(x) for x in msg.data])
             elif schema.name == "std_msgs/msg/String":
                 t["rows"].append([message.log_time, msg.data])
+        out["attachments"] = [{"name": a.name, "media_type": a.media_type,
+                               "text": a.data.decode("utf-8")} for a in reader.iter_attachments()]
+        out["metadata"] = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
     json.dump(out, sys.stdout)
 
 

@@ -41,8 +41,9 @@ pub struct AdaptArgs {
     /// IMU [[board]]).
     #[arg(long, value_name = "MAP", requires = "port")]
     pub map: Option<String>,
-    /// With --port: every cycle read, as a CSV written row by row.
-    #[arg(long, value_name = "FILE.csv", requires = "port")]
+    /// With --port: every cycle read, as a CSV written row by row (an .mcap: ROS 2
+    /// messages, as `experiment tipover --record`).
+    #[arg(long, value_name = "FILE.csv|FILE.mcap", requires = "port")]
     pub record: Option<PathBuf>,
     /// With --port on a serial device: do not ask before the first lean.
     #[arg(long, requires = "port")]
@@ -84,6 +85,12 @@ pub struct AdaptArgs {
     /// HTML report to write.
     #[arg(long, value_name = "FILE.html")]
     pub report: Option<PathBuf>,
+    /// One MCAP of the result (not written when a check fails, as --out): per direction (forward, backward,
+    /// left, right; one a second) the measured fall angle (fall_deg) and the prior's
+    /// and the adapted model's static fall angles (prior.fall_deg, adapted.fall_deg),
+    /// the adapted URDF attached, the command line, version and inputs' SHA-256.
+    #[arg(long, value_name = "RESULT.mcap")]
+    pub mcap: Option<PathBuf>,
     /// Run the simulated tip-over study on the adapted model and compare its angles.
     #[arg(long)]
     pub check: bool,
@@ -293,7 +300,10 @@ pub fn run(a: AdaptArgs) -> CliResult {
     if a.method == Method::Ann {
         return run_ann(&a, &prior, &tip);
     }
-    if a.total_mass.is_none() && a.host.is_none() && (a.out.is_some() || a.check) {
+    if a.total_mass.is_none()
+        && a.host.is_none()
+        && (a.out.is_some() || a.mcap.is_some() || a.check)
+    {
         return Err(CliError::new(
             "the tip-over angles fix only m_a (p - c_meas) = M0 (c_meas - c0): give --total-mass KG or --where LINK to place the mass",
         ));
@@ -337,6 +347,10 @@ pub fn run(a: AdaptArgs) -> CliResult {
             .map_err(|e| CliError::new(format!("{}: {e}", out.display())).context("--out"))?;
         adapted.report.files.push(out.display().to_string());
     }
+    if let (Some(path), Some(robot), false) = (&a.mcap, &adapted.robot, failed) {
+        write_result_mcap(path, &a, &prior, robot, &tip)?;
+        adapted.report.files.push(path.display().to_string());
+    }
     if let Some(p) = &a.report {
         let replay = replay_3d(&a, p, adapted.robot.is_some(), &mut adapted.report.files);
         adapted.report.files.push(p.display().to_string());
@@ -355,6 +369,49 @@ pub fn run(a: AdaptArgs) -> CliResult {
     } else {
         Outcome::Ok
     })
+}
+
+/// `--mcap`: the measured fall angles (less no bias: as the tip-over file gives them)
+/// beside each model's static fall angles, one direction a second.
+fn write_result_mcap(
+    path: &Path,
+    a: &AdaptArgs,
+    prior: &twinloop_description::Description,
+    adapted: &twinloop_description::Description,
+    tip: &StudyReport,
+) -> Result<(), CliError> {
+    let before = twinloop_ident::adapt::static_fall_angles(prior, tip)?;
+    let after = twinloop_ident::adapt::static_fall_angles(adapted, tip)?;
+    let cols = ["fall_deg", "prior.fall_deg", "adapted.fall_deg"].map(str::to_string);
+    let mut table = twinloop_io::Table::new(
+        std::iter::once("t".to_string())
+            .chain(cols.iter().cloned())
+            .collect(),
+    );
+    for (k, d) in twinloop_experiments::tipover::Direction::ALL
+        .into_iter()
+        .enumerate()
+    {
+        table.rows.push(vec![
+            k as f64,
+            tip.direction(d).measured_deg,
+            before[k],
+            after[k],
+        ]);
+    }
+    let mut inputs = vec![a.robot.clone().unwrap_or_default()];
+    inputs.extend(a.tipover.iter().map(|p| p.display().to_string()));
+    inputs.extend(a.lean.iter().map(|p| p.display().to_string()));
+    let [m, p, d] = cols;
+    let result = crate::result_mcap::ResultLog {
+        table,
+        measured: vec![m],
+        prior: vec![p],
+        adapted: vec![d],
+        robot: Some(adapted),
+        inputs,
+    };
+    crate::result_mcap::write(path, "adapt", &result)
 }
 
 /// What the terminal says of an adaptation: the angles, the CoMs, the part, the

@@ -41,6 +41,19 @@ pub struct ViewArgs {
 }
 
 pub fn run(args: ViewArgs) -> CliResult {
+    if let Some(live) = &args.live
+        && twinloop_logs::is_log(live)
+    {
+        // An MCAP is written as FILE.partial, its messages in zstd chunks of
+        // hundreds of kB and its index at the end: nothing of it can be followed
+        // row by row while its run goes on.
+        return Err(CliError::new(format!(
+            "--live {}: a log is complete only when its run ends (an .mcap is written as \
+             .partial, in compressed chunks); record to a CSV to follow it live, give the \
+             recording command --view, or open the finished log as a recording",
+            live.display()
+        )));
+    }
     let (robot, format) = common::load_description(&args.robot)?;
     let source = (format != common::Format::Builtin).then(|| Path::new(&args.robot));
     let scene = Scene::new(&robot, source, &args.package_dirs);

@@ -33,6 +33,7 @@ mod outputs;
 mod progress;
 mod replay3d;
 mod residual_text;
+mod result_mcap;
 mod sim_args;
 mod units;
 
@@ -270,6 +271,9 @@ fn run(command: Command) -> CliResult {
 
 fn main() -> ExitCode {
     let cli: Cli = common::parse_args();
+    // Every recording a library opens (a guarded robot's --record, the bus
+    // tip-over's) is MCAP when its path ends in .mcap.
+    twinloop_io::sink::register_recording_format("mcap", twinloop_logs::open_mcap_recording);
     let result = common::set_log_options(&cli.topic, cli.resample).and_then(|()| run(cli.command));
     match result {
         Ok(outcome) => outcome.exit_code(),

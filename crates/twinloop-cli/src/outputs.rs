@@ -21,6 +21,7 @@ pub const OUTPUT_OPTIONS: &[&str] = &[
     "frames-out",
     "record",
     "suggest-out",
+    "mcap",
 ];
 
 /// Outputs that only some commands have, or that are outputs only sometimes:

@@ -1,6 +1,9 @@
 //! `twinloop adapt` through the binary: the tip-over JSON of a km20 with a hidden
 //! 0.3 kg on its torso, the unchanged km20 adapted from it; bad input named, exit 2.
 
+#[path = "../../twinloop-logs/tests/support/python.rs"]
+mod python;
+
 use std::process::Command;
 
 fn tmp(name: &str) -> std::path::PathBuf {
@@ -42,6 +45,7 @@ fn adapt_finds_the_hidden_mass_and_names_bad_input() {
     let out = tmp("a.urdf");
     let out_s = out.to_str().unwrap();
     let html = tmp("a.html");
+    let mcap = tmp("a.mcap");
     let o = twinloop(&[
         "adapt",
         "--robot",
@@ -57,6 +61,8 @@ fn adapt_finds_the_hidden_mass_and_names_bad_input() {
         "--json",
         "-",
         "--check",
+        "--mcap",
+        mcap.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -73,7 +79,7 @@ fn adapt_finds_the_hidden_mass_and_names_bad_input() {
     let err = ((p[0] - 0.04).powi(2) + (p[1] - 0.02).powi(2) + (p[2] - 0.05).powi(2)).sqrt();
     assert!(err < 0.02, "{p:?}");
     assert!(j["adapted_reduced"]["three_masses"].is_array());
-    assert_eq!(j["files"].as_array().unwrap().len(), 2);
+    assert_eq!(j["files"].as_array().unwrap().len(), 3);
     let measured = j["measured_deg"].as_array().unwrap();
     let check = j["check_deg"].as_array().unwrap();
     for k in 0..4 {
@@ -87,6 +93,7 @@ fn adapt_finds_the_hidden_mass_and_names_bad_input() {
     // The adapted URDF reads back.
     let o = twinloop(&["model", "info", out_s]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    result_mcap_reads_back(&mcap, &j, &urdf);
 
     let base = ["adapt", "--robot", "builtin:km20", "--tipover"];
     let with = |rest: &[&str], tip: &str| -> Vec<String> {
@@ -399,4 +406,53 @@ fn a_csv_given_as_the_tipover_is_named_a_csv_table() {
         err.contains("stand.csv") && err.contains("tip-over"),
         "{err}"
     );
+}
+
+/// `adapt --mcap` read by the reference MCAP library (tools/oracle/logs_readback.py):
+/// the measured and the prior's angles as the JSON gives them, to the bit; the
+/// adapted model's static angles nearer the measured ones than the prior's, and
+/// forward and backward within 0.3 deg of its simulated tip-over (`--check`); the
+/// adapted URDF attached as --out wrote it; the provenance.
+fn result_mcap_reads_back(mcap: &std::path::Path, j: &serde_json::Value, urdf: &str) {
+    let Some(py) = python::python_with("mcap, mcap_ros2", "adapt_finds_the_hidden_mass (--mcap)")
+    else {
+        return;
+    };
+    let o = Command::new(&py)
+        .arg(python::repo().join("tools/oracle/logs_readback.py"))
+        .arg(mcap)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let value = |topic: &str, k: usize| {
+        let hex = v["topics"][topic]["rows"][k][1].as_str().unwrap();
+        f64::from_bits(u64::from_str_radix(hex, 16).unwrap())
+    };
+    for k in 0..4 {
+        assert_eq!(
+            value("/measured", k),
+            j["measured_deg"][k].as_f64().unwrap()
+        );
+        assert_eq!(
+            value("/prior", k),
+            j["prior_model_deg"][k].as_f64().unwrap()
+        );
+        let (a, c) = (value("/adapted", k), j["check_deg"][k].as_f64().unwrap());
+        let (m, p) = (value("/measured", k), value("/prior", k));
+        assert!(
+            (a - m).abs() < (p - m).abs(),
+            "direction {k}: {a} vs {p}, measured {m}"
+        );
+        // Forward and backward the feet stay flat as the static angles assume;
+        // sideways they roll onto their edge first (the simulated angles read less).
+        if k < 2 {
+            assert!((a - c).abs() < 0.3, "direction {k}: {a} vs {c}");
+        }
+    }
+    assert_eq!(v["topics"]["/adapted"]["rows"][0][0], "adapted.fall_deg");
+    assert_eq!(v["attachments"][0]["name"], "adapted.urdf");
+    assert_eq!(v["attachments"][0]["text"], urdf);
+    assert_eq!(v["metadata"]["twinloop"]["command"], "adapt");
+    assert!(v["metadata"]["twinloop.inputs"]["builtin:km20"].is_string());
 }

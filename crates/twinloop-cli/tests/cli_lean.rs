@@ -215,12 +215,20 @@ fn bad_tables_are_named_by_file_line_and_column_and_exit_2() {
     assert!(text(&o.stderr).contains("/nonexistent.csv"));
 }
 
+/// km20's joints in its mapping's order (the raw record's `q:` columns).
+fn km20_joints() -> Vec<String> {
+    twinloop_link::RobotMapping::resolve("builtin:km20")
+        .unwrap()
+        .joint_names()
+}
+
 #[test]
 fn the_lean_over_the_bus_matches_the_simulated_lean() {
     let link = scratch("km20-lean-link");
     let _ = std::fs::remove_file(&link);
     let (mut server, _pty) = serve(&["--robot", "builtin:km20", "--link", link.to_str().unwrap()]);
-    let (robot_run, raw) = (scratch("lean-robot.csv"), scratch("lean-raw.csv"));
+    // The raw record as MCAP (`--record` takes either; the CSV is the other tests').
+    let (robot_run, raw) = (scratch("lean-robot.csv"), scratch("lean-raw.mcap"));
     let o = Command::new(bin())
         .args(["experiment", "lean", "--port", link.to_str().unwrap()])
         .args(["--map", "builtin:km20", "--json", "-"])
@@ -252,7 +260,13 @@ fn the_lean_over_the_bus_matches_the_simulated_lean() {
             assert!((n - n.round()).abs() < 1e-6, "{col}: {} N m", r[c]);
         }
     }
-    let raw_rows = twinloop_io::Table::read(&raw).unwrap().rows.len();
+    let raw = twinloop_logs::read_log(&raw, &Default::default()).unwrap();
+    let mut want = twinloop_experiments::guarded::record_columns(&km20_joints());
+    let mut got = raw.columns.clone();
+    want.sort();
+    got.sort();
+    assert_eq!(got, want);
+    let raw_rows = raw.rows.len();
     assert!(
         raw_rows >= t.rows.len(),
         "{raw_rows} raw rows, {} lean rows",

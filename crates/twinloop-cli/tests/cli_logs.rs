@@ -6,6 +6,9 @@
 #[path = "support/served.rs"]
 mod served;
 
+#[path = "../../twinloop-logs/tests/support/python.rs"]
+mod python;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use twinloop_io::Table;
@@ -171,10 +174,22 @@ fn link_record_out_mcap_holds_what_the_csv_recording_holds() {
     let b = read_log(&mcap, &ReadOptions::default()).unwrap();
     assert_eq!(a.columns, b.columns);
     assert_eq!((a.rows.len(), b.rows.len()), (counts[0], counts[1]));
-    // Two recordings of one robot standing still: the same pose, to the encoder step.
-    let q = a.column_index("q:l_knee").unwrap();
-    let (x, y) = (a.rows.last().unwrap()[q], b.rows.last().unwrap()[q]);
-    assert!((x - y).abs() < 0.02, "{x} vs {y}");
+    // Two recordings of one robot standing still: in every row of both, every joint
+    // where the CSV first read it, to a few encoder steps (RX-28: 0.005 rad); a read
+    // a loaded machine missed is NaN in either format, as the recording says.
+    for (i, c) in a.columns.iter().enumerate() {
+        if !c.starts_with("q:") {
+            continue;
+        }
+        let Some(pose) = a.rows.iter().map(|r| r[i]).find(|v| !v.is_nan()) else {
+            continue;
+        };
+        let j = b.column_index(c).unwrap();
+        let near = |v: f64| v.is_nan() || (v - pose).abs() < 0.02;
+        for (x, y) in a.rows.iter().map(|r| r[i]).zip(b.rows.iter().map(|r| r[j])) {
+            assert!(near(x) && near(y), "{c}: {x} {y} vs {pose}");
+        }
+    }
 }
 
 #[test]
@@ -257,4 +272,121 @@ fn a_logged_joint_the_robot_lacks_is_listed_and_refused() {
         "{e}"
     );
     assert_eq!(e.lines().count(), 1, "{e}");
+}
+
+/// The SHA-256 of a file as Python's hashlib computes it.
+fn python_sha256(py: &str, path: &Path) -> String {
+    let o = Command::new(py)
+        .args([
+            "-c",
+            "import hashlib,sys; print(hashlib.sha256(open(sys.argv[1],'rb').read()).hexdigest())",
+        ])
+        .arg(path)
+        .output()
+        .unwrap();
+    String::from_utf8(o.stdout).unwrap().trim().to_string()
+}
+
+/// f64 bits as the readback script prints them.
+fn hex_bits(x: f64) -> String {
+    format!("{:016x}", x.to_bits())
+}
+
+fn from_hex(v: &serde_json::Value) -> f64 {
+    f64::from_bits(u64::from_str_radix(v.as_str().unwrap(), 16).unwrap())
+}
+
+#[test]
+fn identify_static_mcap_holds_the_measurement_both_models_predictions_and_the_adapted_urdf() {
+    let test =
+        "identify_static_mcap_holds_the_measurement_both_models_predictions_and_the_adapted_urdf";
+    let Some(py) = python::python_with("mcap, mcap_ros2", test) else {
+        return;
+    };
+    let poses = root().join("crates/twinloop-ident/tests/data/h1_poses.csv");
+    let robot = root().join("models/unitree_h1/variants/h1_2025-06_a3b70ca.urdf");
+    let (mcap, urdf, json) = (tmp("static.mcap"), tmp("static.urdf"), tmp("static.json"));
+    let args = [
+        "identify",
+        "static",
+        "--robot",
+        s(&robot),
+        "--poses",
+        s(&poses),
+        "--total-mass",
+        "59.338",
+        "--out",
+        s(&urdf),
+        "--json",
+        s(&json),
+        "--mcap",
+        s(&mcap),
+    ];
+    ok(&args);
+    let out = Command::new(&py)
+        .arg(root().join("tools/oracle/logs_readback.py"))
+        .arg(&mcap)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let table = Table::read(&poses).unwrap();
+    let n = table.rows.len();
+    let topics = &v["topics"];
+    for topic in ["/joint_states", "/tf", "/measured", "/prior", "/adapted"] {
+        assert_eq!(topics[topic]["count"], n, "{topic}");
+    }
+    assert_eq!(topics["/robot_description"]["count"], 1);
+    // The measured CoP as the poses file gives it, to the bit; each model's CoM over
+    // the ground as far from it as the identification's own distances say.
+    let result: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let (cx, cy) = (
+        table.column_index("cop.x").unwrap(),
+        table.column_index("cop.y").unwrap(),
+    );
+    for (k, row) in table.rows.iter().enumerate() {
+        let m = &topics["/measured"]["rows"][k];
+        assert_eq!(
+            m,
+            &serde_json::json!(["cop.x,cop.y", hex_bits(row[cx]), hex_bits(row[cy])])
+        );
+        for (topic, key) in [
+            ("/prior", "gcom_distance_before"),
+            ("/adapted", "gcom_distance_after"),
+        ] {
+            let p = &topics[topic]["rows"][k];
+            let d = (from_hex(&p[1]) - row[cx]).hypot(from_hex(&p[2]) - row[cy]);
+            let want = result["result"][key][k].as_f64().unwrap();
+            assert!((d - want).abs() < 1e-12, "{topic} pose {k}: {d} vs {want}");
+        }
+    }
+    assert_eq!(topics["/prior"]["rows"][0][0], "prior.cop.x,prior.cop.y");
+    // The adapted URDF attached is the one --out wrote; the provenance.
+    let written = std::fs::read_to_string(&urdf).unwrap();
+    assert_eq!(
+        v["attachments"],
+        serde_json::json!([{"name": "adapted.urdf", "media_type": "application/xml", "text": written}])
+    );
+    let meta = &v["metadata"];
+    assert_eq!(meta["twinloop"]["command"], "identify static");
+    assert_eq!(
+        meta["twinloop"]["twinloop_version"],
+        env!("CARGO_PKG_VERSION")
+    );
+    let line: Vec<String> =
+        serde_json::from_str(meta["twinloop"]["command_line"].as_str().unwrap()).unwrap();
+    assert_eq!(line[1..], args.map(str::to_string));
+    for input in [&robot, &poses] {
+        assert_eq!(
+            meta["twinloop.inputs"][s(input)],
+            python_sha256(&py, input),
+            "{}",
+            input.display()
+        );
+    }
 }

@@ -792,20 +792,105 @@ impl View {
 
 /// GET `path` from `addr`: (status code, body).
 fn http_get(addr: &str, path: &str) -> (u16, String) {
+    let (code, body) = http_get_bytes(addr, path);
+    (code, String::from_utf8(body).unwrap())
+}
+
+/// GET `path` from `addr`: (status code, body's bytes).
+fn http_get_bytes(addr: &str, path: &str) -> (u16, Vec<u8>) {
     let mut s = TcpStream::connect(addr).unwrap();
     write!(
         s,
         "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
     )
     .unwrap();
-    let mut text = String::new();
-    s.read_to_string(&mut text).unwrap();
-    let code = text[9..12].parse().unwrap();
-    let body = text
-        .split_once("\r\n\r\n")
-        .map_or("", |(_, b)| b)
-        .to_string();
-    (code, body)
+    let mut bytes = Vec::new();
+    s.read_to_end(&mut bytes).unwrap();
+    let code = std::str::from_utf8(&bytes[9..12]).unwrap().parse().unwrap();
+    let head = bytes
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .map_or(bytes.len(), |i| i + 4);
+    (code, bytes[head..].to_vec())
+}
+
+#[test]
+fn view_opens_an_mcap_recording_as_it_opens_the_csv_of_the_same_run() {
+    let (csv, mcap) = (tmp("view-run.csv"), tmp("view-run.mcap"));
+    for out in [&csv, &mcap] {
+        twinloop_ok(&[
+            "simulate",
+            "--robot",
+            "builtin:km20",
+            "--duration",
+            "0.1",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+    }
+    let v = View::start(&[
+        "builtin:km20",
+        csv.to_str().unwrap(),
+        mcap.to_str().unwrap(),
+    ]);
+    // The same columns and the same samples sent to the page (column-major f32; the
+    // MCAP's columns in the order of its topics, `t` rebuilt from nanoseconds).
+    let info = |k: usize| -> serde_json::Value {
+        let mut j: serde_json::Value =
+            serde_json::from_str(&http_get(v.addr(), &format!("/recording/{k}.json")).1).unwrap();
+        j.as_object_mut().unwrap().remove("name");
+        j
+    };
+    let columns = |j: &serde_json::Value| -> Vec<String> {
+        serde_json::from_value(j["columns"].clone()).unwrap()
+    };
+    let (a, b) = (info(0), info(1));
+    let (ca, cb) = (columns(&a), columns(&b));
+    let (mut sa, mut sb) = (ca.clone(), cb.clone());
+    sa.sort();
+    sb.sort();
+    assert_eq!(sa, sb);
+    for key in ["rows", "missing", "has_base"] {
+        assert_eq!(a[key], b[key], "{key}");
+    }
+    for key in ["t0", "t1"] {
+        let (x, y) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap());
+        assert!((x - y).abs() <= 0.5e-9, "{key}: {x} vs {y}");
+    }
+    let rows = a["rows"].as_u64().unwrap() as usize;
+    let (da, db) = (
+        http_get_bytes(v.addr(), "/recording/0.bin").1,
+        http_get_bytes(v.addr(), "/recording/1.bin").1,
+    );
+    assert_eq!(
+        (da.len(), db.len()),
+        (ca.len() * rows * 4, ca.len() * rows * 4)
+    );
+    for (i, c) in ca.iter().enumerate() {
+        let j = cb.iter().position(|x| x == c).unwrap();
+        let (x, y) = (
+            &da[i * rows * 4..][..rows * 4],
+            &db[j * rows * 4..][..rows * 4],
+        );
+        if c == "t" {
+            for (p, q) in x.chunks(4).zip(y.chunks(4)) {
+                let f = |b: &[u8]| f32::from_le_bytes(b.try_into().unwrap());
+                assert!((f(p) - f(q)).abs() <= 1e-6, "t: {} vs {}", f(p), f(q));
+            }
+        } else {
+            assert_eq!(x, y, "column {c}");
+        }
+    }
+    v.stop();
+    // A log being written cannot be followed: said in one line, exit 2.
+    let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
+        .args(["view", "builtin:km20", "--live", mcap.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("record to a CSV to follow it live"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
 }
 
 #[test]

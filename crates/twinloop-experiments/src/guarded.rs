@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-use twinloop_io::CsvWriter;
+use twinloop_io::RowSink;
 use twinloop_link::transport::Transport;
 use twinloop_link::{ClientStats, DynamixelRobot};
 use twinloop_robot::{Robot, RobotError, RobotState};
@@ -106,7 +106,8 @@ pub struct Guarded<'a> {
     reads: u64,
     reads_missed: u64,
     longest_silence: Duration,
-    pub writer: Option<CsvWriter>,
+    /// The record (a CSV, or another format the program registered: MCAP).
+    pub writer: Option<Box<dyn RowSink>>,
     goals: Vec<f64>,
     row: Vec<f64>,
     stop: Arc<AtomicBool>,
@@ -129,7 +130,7 @@ impl Guarded<'_> {
     /// once `stop` is set (the CLI sets it on Ctrl-C); the goals start at `standing`.
     pub fn new<'a>(
         robot: &'a mut BusRobot,
-        writer: Option<CsvWriter>,
+        writer: Option<Box<dyn RowSink>>,
         standing: &[f64],
         stop: Arc<AtomicBool>,
     ) -> Guarded<'a> {

@@ -1046,6 +1046,17 @@ fn nearest_link(
         })
 }
 
+/// A model's static fall angles, deg, `[forward, backward, left, right]`: the exact
+/// method's forward problem ([`crate::tipover::tip_angles`] of its CoM, feet and
+/// frontal lever, standing with its feet flat) on the feet `tip` measured with (a
+/// built-in robot's own): [`AdaptReport::prior_model_deg`] for the prior, and what
+/// `adapt --mcap` writes as each model's prediction of the measured angles.
+pub fn static_fall_angles(robot: &Description, tip: &StudyReport) -> Result<[f64; 4], IdentError> {
+    let f = standing(robot)?;
+    let c = f.com(robot)?;
+    Ok(prior_model_angles(&f, robot, c, &foot_of(robot, tip))?)
+}
+
 /// The prior's static fall angles, deg: [`crate::tipover::tip_angles`] of its CoM, feet
 /// and frontal lever.
 fn prior_model_angles(

@@ -16,7 +16,9 @@
 mod columns;
 pub mod input;
 pub mod output;
+pub mod sink;
 mod table;
 
 pub use columns::{Quantity, StateColumns, nearest};
+pub use sink::{RowSink, open_recording};
 pub use table::{CsvWriter, IoError, Table, clean_time, format_f64};

@@ -22,4 +22,4 @@ pub use error::{LogError, format_ns};
 pub use info::{TopicInfo, log_info};
 pub use read::{ReadOptions, TopicSpec, read_log};
 pub use source::is_log;
-pub use write::{McapLog, write_mcap};
+pub use write::{ArrayTopic, McapLog, open_mcap_recording, write_mcap};

@@ -3,9 +3,11 @@
 //! floating base on `/tf` (tf2_msgs/TFMessage, `world` -> the root link), each IMU on
 //! `/imu` (sensor_msgs/Imu; `/imu/<link>` when there are several), every other
 //! column on `/twinloop/columns` (std_msgs/Float64MultiArray whose one dimension's
-//! label lists the column names), and the description once at the start on
+//! label lists the column names; [`McapLog::create_grouped`] puts named groups of
+//! columns on topics of their own), and the description once at the start on
 //! `/robot_description` (std_msgs/String, the topic ROS 2's robot_state_publisher
-//! publishes it on, with transient-local durability).
+//! publishes it on, with transient-local durability). A result file adds
+//! attachments (the adapted URDF) and metadata records (its provenance).
 use crate::cdr::CdrWriter;
 use crate::error::LogError;
 use crate::msgs::{self, JointState, Kind, Transform};
@@ -32,10 +34,30 @@ struct Layout {
     base: Option<[usize; 7]>,
     /// Link name and the six gx..az columns of each IMU.
     imus: Vec<(String, [usize; 6])>,
-    extra: Vec<usize>,
+    /// Every other column, on Float64MultiArray topics.
+    arrays: Vec<Array>,
 }
 
-fn layout(columns: &[String]) -> Result<Layout, LogError> {
+/// Columns written as one `std_msgs/Float64MultiArray` a row.
+#[derive(Debug, Default)]
+struct Array {
+    topic: String,
+    columns: Vec<usize>,
+    /// The column names, comma-separated: the array's label (made once, not a row).
+    label: String,
+    channel: u16,
+}
+
+/// A group of columns written on a Float64MultiArray topic of its own (a result's
+/// `/measured`, `/prior`, `/adapted`), its label naming them so that a reader needs
+/// no `--topic TOPIC=NAMES`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ArrayTopic {
+    pub topic: String,
+    pub columns: Vec<String>,
+}
+
+fn layout(columns: &[String], groups: &[ArrayTopic]) -> Result<Layout, LogError> {
     let find = |n: &str| columns.iter().position(|c| c == n);
     let mut l = Layout {
         t: find("t").ok_or_else(|| LogError::new("the table has no t column"))?,
@@ -72,7 +94,38 @@ fn layout(columns: &[String]) -> Result<Layout, LogError> {
     used.extend(l.tau.iter().flatten());
     used.extend(l.base.iter().flatten());
     used.extend(l.imus.iter().flat_map(|(_, c)| c));
-    l.extra = (0..columns.len()).filter(|i| !used.contains(i)).collect();
+    for g in groups {
+        let mut array = Array {
+            topic: g.topic.clone(),
+            ..Array::default()
+        };
+        for name in &g.columns {
+            let i = find(name).ok_or_else(|| {
+                LogError::new(format!("topic {}: the table has no column {name}", g.topic))
+            })?;
+            if used.contains(&i) {
+                return Err(LogError::new(format!(
+                    "topic {}: column {name} is written on another topic already",
+                    g.topic
+                )));
+            }
+            used.push(i);
+            array.columns.push(i);
+        }
+        l.arrays.push(array);
+    }
+    let rest: Vec<usize> = (0..columns.len()).filter(|i| !used.contains(i)).collect();
+    if !rest.is_empty() {
+        l.arrays.push(Array {
+            topic: "/twinloop/columns".into(),
+            columns: rest,
+            ..Array::default()
+        });
+    }
+    for a in &mut l.arrays {
+        let names: Vec<&str> = a.columns.iter().map(|&i| columns[i].as_str()).collect();
+        a.label = names.join(",");
+    }
     Ok(l)
 }
 
@@ -93,11 +146,10 @@ pub struct McapLog {
     tf: Vec<Transform>,
     imu: msgs::Imu,
     extra: Vec<f64>,
-    /// Channel ids: joints, tf, each IMU, extra, description.
+    /// Channel ids: joints, tf, each IMU, description (the arrays' are in `layout`).
     ch_joints: u16,
     ch_tf: u16,
     ch_imus: Vec<u16>,
-    ch_extra: u16,
     ch_description: Option<u16>,
     sequence: u32,
     wrote_description: bool,
@@ -114,8 +166,20 @@ impl McapLog {
         description: Option<&str>,
         root: &str,
     ) -> Result<McapLog, LogError> {
+        McapLog::create_grouped(path, columns, description, root, &[])
+    }
+
+    /// [`McapLog::create`], with `groups` of columns on Float64MultiArray topics of
+    /// their own (the other columns no ROS type takes stay on `/twinloop/columns`).
+    pub fn create_grouped(
+        path: &Path,
+        columns: &[String],
+        description: Option<&str>,
+        root: &str,
+        groups: &[ArrayTopic],
+    ) -> Result<McapLog, LogError> {
         let err = |e: LogError| e.in_file(path);
-        let layout = layout(columns).map_err(err)?;
+        let mut layout = layout(columns, groups).map_err(err)?;
         let (place, file) = PartialFile::open(&Output::resolve("", path)?)?;
         let mut out = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
@@ -149,11 +213,9 @@ impl McapLog {
             };
             ch_imus.push(channel(Kind::Imu, &topic, &none).map_err(err)?);
         }
-        let ch_extra = if layout.extra.is_empty() {
-            0
-        } else {
-            channel(Kind::MultiArray, "/twinloop/columns", &none).map_err(err)?
-        };
+        for a in &mut layout.arrays {
+            a.channel = channel(Kind::MultiArray, &a.topic, &none).map_err(err)?;
+        }
         let latched =
             BTreeMap::from([("offered_qos_profiles".to_string(), LATCHED_QOS.to_string())]);
         let ch_description = match description {
@@ -184,7 +246,6 @@ impl McapLog {
             ch_joints,
             ch_tf,
             ch_imus,
-            ch_extra,
             ch_description,
             sequence: 0,
             wrote_description: false,
@@ -271,21 +332,51 @@ impl McapLog {
             self.imu.encode(&mut self.cdr, false);
             self.emit(self.ch_imus[k], time)?;
         }
-        if !self.layout.extra.is_empty() {
+        for k in 0..self.layout.arrays.len() {
+            let a = &self.layout.arrays[k];
             self.extra.clear();
-            self.extra.extend(self.layout.extra.iter().map(|&i| row[i]));
+            self.extra.extend(a.columns.iter().map(|&i| row[i]));
             self.cdr.reset();
-            let names: Vec<&str> = self
-                .layout
-                .extra
-                .iter()
-                .map(|&i| self.columns[i].as_str())
-                .collect();
-            msgs::encode_multi_array(&mut self.cdr, &names.join(","), &self.extra);
-            self.emit(self.ch_extra, time)?;
+            msgs::encode_multi_array(&mut self.cdr, &a.label, &self.extra);
+            let ch = a.channel;
+            self.emit(ch, time)?;
         }
         self.rows += 1;
         Ok(())
+    }
+
+    /// Attach a file (`name`, its media type, its bytes): a result's adapted URDF. A
+    /// reader lists attachments apart from the messages (`mcap` Python:
+    /// `reader.iter_attachments()`; Foxglove: the file's attachments).
+    pub fn attach(&mut self, name: &str, media_type: &str, data: &[u8]) -> Result<(), LogError> {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        let attachment = mcap::Attachment {
+            log_time: now,
+            create_time: now,
+            name: name.to_string(),
+            media_type: media_type.to_string(),
+            data: std::borrow::Cow::Borrowed(data),
+        };
+        let out = self.out.as_mut().expect("open until finished");
+        out.attach(&attachment)
+            .map_err(|e| LogError::from(e).in_file(&self.path))
+    }
+
+    /// Write a metadata record (`name` and its string pairs): a result's provenance.
+    pub fn metadata(
+        &mut self,
+        name: &str,
+        pairs: BTreeMap<String, String>,
+    ) -> Result<(), LogError> {
+        let record = mcap::records::Metadata {
+            name: name.to_string(),
+            metadata: pairs,
+        };
+        let out = self.out.as_mut().expect("open until finished");
+        out.write_metadata(&record)
+            .map_err(|e| LogError::from(e).in_file(&self.path))
     }
 
     /// A recording: dropped unfinished (an error, Ctrl-C) with a row in it, the file is
@@ -344,3 +435,25 @@ pub fn write_mcap(
 }
 
 use twinloop_io::Table;
+
+impl twinloop_io::RowSink for McapLog {
+    fn write_row(&mut self, row: &[f64]) -> Result<(), twinloop_io::IoError> {
+        Ok(McapLog::write_row(self, row)?)
+    }
+    fn finish(self: Box<Self>) -> Result<(), twinloop_io::IoError> {
+        Ok(McapLog::finish(*self)?)
+    }
+}
+
+/// A recording as MCAP ([`twinloop_io::sink::RecordingOpener`]: what a program
+/// registers for `.mcap` with [`twinloop_io::sink::register_recording_format`]):
+/// kept, closed properly, if the run fails after a row; the floating base, if
+/// any, under `base_link`.
+pub fn open_mcap_recording(
+    path: &Path,
+    columns: &[String],
+) -> Result<Box<dyn twinloop_io::RowSink>, twinloop_io::IoError> {
+    Ok(Box::new(
+        McapLog::create(path, columns, None, "base_link")?.recording(),
+    ))
+}

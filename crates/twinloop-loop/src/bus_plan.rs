@@ -17,7 +17,8 @@ pub struct BusPlan {
     /// The servo mapping: builtin:NAME or a profile TOML (its IMU `[[board]]`).
     pub map: String,
     pub port: BusPort,
-    /// Every cycle read, as a CSV written row by row.
+    /// Every cycle read, written row by row (`twinloop_io::open_recording`: CSV, or a
+    /// format the program registered for the extension, the CLI's MCAP).
     pub record: Option<PathBuf>,
     /// Do not ask before moving a robot on a serial port.
     pub yes: bool,

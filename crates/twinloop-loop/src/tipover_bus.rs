@@ -16,7 +16,6 @@ use twinloop_experiments::tipover::{Direction, TipoverResult};
 pub use twinloop_ident::tipover_bus::{ANKLE_SLOPE, BusOutcome, BusReport, ONSET_AVERAGE_S};
 use twinloop_ident::tipover_bus::{BusTipoverOptions, bus_outcome, run_directions};
 use twinloop_ident::tipover_study::{TiltModel, tipover_config};
-use twinloop_io::CsvWriter;
 use twinloop_link::{DynamixelRobot, ReadMethod, RobotMapping};
 
 /// The outcome, the runs behind it (the mapping's joint order), and the port.
@@ -198,7 +197,7 @@ fn guarded_run(
 ) -> Result<Guard, LoopError> {
     let writer = match &plan.record {
         Some(path) => Some(
-            CsvWriter::recording(path, &record_columns(&p.names))
+            twinloop_io::open_recording(path, &record_columns(&p.names))
                 .map_err(|e| LoopError::io(e.to_string()).at("record"))?,
         ),
         None => None,

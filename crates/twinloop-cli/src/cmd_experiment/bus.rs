@@ -9,12 +9,13 @@ use crate::error::CliError;
 use std::path::Path;
 use twinloop_experiments::guarded::record_columns;
 pub(super) use twinloop_experiments::guarded::{Guarded, hold_standing, is_serial};
-use twinloop_io::CsvWriter;
+use twinloop_io::RowSink;
 use twinloop_link::RobotMapping;
 
-/// The raw record of `--record` (columns [`record_columns`]), flushed row by row.
-pub(super) fn record_writer(path: &Path, names: &[String]) -> Result<CsvWriter, CliError> {
-    Ok(CsvWriter::recording(path, &record_columns(names))?)
+/// The raw record of `--record` (columns [`record_columns`]), flushed row by row: a
+/// CSV, or an MCAP when the path ends in .mcap (main registers the format).
+pub(super) fn record_writer(path: &Path, names: &[String]) -> Result<Box<dyn RowSink>, CliError> {
+    Ok(twinloop_io::open_recording(path, &record_columns(names))?)
 }
 
 /// The robot on the bus: its mapping (`--map`), the port (`--port`, else the

@@ -37,8 +37,9 @@ pub struct LeanArgs {
     /// The lean, one row per control period, written (and flushed) as it comes.
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
-    /// Over the bus: every cycle read, all joints and the IMU (as `experiment tipover`).
-    #[arg(long, value_name = "FILE.csv")]
+    /// Over the bus: every cycle read, all joints and the IMU (as `experiment
+    /// tipover`; an .mcap as ROS 2 messages).
+    #[arg(long, value_name = "FILE.csv|FILE.mcap")]
     pub record: Option<PathBuf>,
     /// Over a serial port: do not ask for confirmation before the lean.
     #[arg(long)]

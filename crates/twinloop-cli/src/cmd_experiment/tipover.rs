@@ -70,8 +70,10 @@ pub struct TipoverArgs {
     #[arg(long, value_name = "MAP")]
     pub map: Option<String>,
     /// Over the bus: every cycle read as a CSV row (t, q:<joint>, goal:<joint>,
-    /// imu:gyro_x..imu:accel_z, tilt:pitch, tilt:roll), flushed row by row.
-    #[arg(long, value_name = "FILE.csv")]
+    /// imu:gyro_x..imu:accel_z, tilt:pitch, tilt:roll), flushed row by row; an .mcap
+    /// is written as ROS 2 messages (/joint_states, the rest on /twinloop/columns),
+    /// complete when the run ends (a failed run's is closed and kept).
+    #[arg(long, value_name = "FILE.csv|FILE.mcap")]
     pub record: Option<PathBuf>,
     /// Over the bus, when the robot is a simulation served faster than real time
     /// (`twinloop serve --realtime-factor F`): F, so the protocol's ramps, waits and

@@ -10,7 +10,7 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use twinloop_description::Description;
-use twinloop_dynamics::{BaseKind, Model};
+use twinloop_dynamics::{BaseKind, Data, Model, ground_projected_com};
 use twinloop_ident::html::{residual_sections, static_sections};
 use twinloop_ident::static_ident::{
     StaticProblem, StaticWorkspace, Suggestion, assemble, candidate_poses, solve, suggest_poses,
@@ -49,6 +49,11 @@ pub struct IdentifyStaticArgs {
     pub out: Option<PathBuf>,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
+    /// One MCAP of the result: per pose (one a second) the configuration, the
+    /// measured CoP (cop.x cop.y) and the prior's and adapted model's CoM over the
+    /// ground (prior.cop.*, adapted.cop.*), the adapted URDF attached, the provenance.
+    #[arg(long, value_name = "RESULT.mcap")]
+    pub mcap: Option<PathBuf>,
     /// HTML report to write.
     #[arg(long, value_name = "OUT.html")]
     pub report: Option<PathBuf>,
@@ -111,6 +116,9 @@ pub fn run(a: &IdentifyStaticArgs) -> CliResult {
     if let Some(p) = &a.out {
         twinloop_description::urdf::write_file(&adapted, p)?;
     }
+    if let Some(p) = &a.mcap {
+        write_result_mcap(p, a, &model, &adapted, &poses)?;
+    }
     let suggestions = suggestions(a, &robot, &model, &problem, &poses)?;
     if let Some(p) = &a.suggest_out {
         write_suggestions(p, &model, &suggestions)?;
@@ -152,6 +160,49 @@ pub fn run(a: &IdentifyStaticArgs) -> CliResult {
     let text = summary(&model, &result, &suggestions, validation.as_ref(), timing);
     emit(&text, a.json.as_ref(), &json)?;
     Ok(Outcome::Ok)
+}
+
+/// `--mcap`: each pose a second, its configuration (on `/joint_states` and `/tf`),
+/// the measured CoP and where the prior and the adapted model put the CoM over the
+/// ground in it: the CoP a plate sees under a robot standing still (seed 004, eq 8).
+fn write_result_mcap(
+    path: &Path,
+    a: &IdentifyStaticArgs,
+    prior: &Model,
+    adapted: &Description,
+    poses: &[StaticPose],
+) -> Result<(), CliError> {
+    let adapted_model = Model::from_description_with_base(adapted, BaseKind::Floating)?;
+    let q_columns = Quantity::Q.column_names(&prior.q_names());
+    let names = |p: &str| vec![format!("{p}cop.x"), format!("{p}cop.y")];
+    let (measured, prior_cols, adapted_cols) = (names(""), names("prior."), names("adapted."));
+    let columns = [
+        vec!["t".to_string()],
+        q_columns,
+        measured.clone(),
+        prior_cols.clone(),
+        adapted_cols.clone(),
+    ]
+    .concat();
+    let mut table = twinloop_io::Table::new(columns);
+    let (mut d0, mut d1) = (Data::new(prior), Data::new(&adapted_model));
+    for (k, pose) in poses.iter().enumerate() {
+        let c0 = ground_projected_com(prior, &mut d0, &pose.q);
+        let c1 = ground_projected_com(&adapted_model, &mut d1, &pose.q);
+        let mut row = vec![k as f64];
+        row.extend_from_slice(&pose.q);
+        row.extend([pose.cop[0], pose.cop[1], c0.x, c0.y, c1.x, c1.y]);
+        table.rows.push(row);
+    }
+    let result = crate::result_mcap::ResultLog {
+        table,
+        measured,
+        prior: prior_cols,
+        adapted: adapted_cols,
+        robot: Some(adapted),
+        inputs: vec![a.robot.clone(), a.poses.display().to_string()],
+    };
+    crate::result_mcap::write(path, "identify static", &result)
 }
 
 /// The poses in 3D beside the report (`OUT_3d.html`), one a second in the file's

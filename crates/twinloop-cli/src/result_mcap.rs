@@ -1,0 +1,145 @@
+//! `--mcap FILE` of the identification and adaptation commands: the result as one
+//! MCAP that Foxglove or Rerun opens beside the measurement. The measured signals,
+//! the prior's and the adapted model's predictions of them are Float64MultiArray
+//! topics (`/measured`, `/prior`, `/adapted`, each labelled with its column names),
+//! the configuration (when the data have one) is `/joint_states` (and `/tf`) with the
+//! adapted URDF on `/robot_description`; the adapted URDF is also an attachment
+//! (`adapted.urdf`), and two metadata records say how the file was made:
+//! `twinloop` (`command`, `command_line` as a JSON array, `twinloop_version`) and
+//! `twinloop.inputs` (each input as given -> the SHA-256 of its bytes, hex).
+
+use crate::error::CliError;
+use sha2::{Digest, Sha256};
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::Path;
+use twinloop_description::Description;
+use twinloop_io::Table;
+use twinloop_logs::{ArrayTopic, McapLog};
+
+/// A result to write: `table` has `t`, optionally `q:` columns (shown on the robot),
+/// and the columns `measured`, `prior` and `adapted` name.
+pub struct ResultLog<'a> {
+    pub table: Table,
+    pub measured: Vec<String>,
+    pub prior: Vec<String>,
+    pub adapted: Vec<String>,
+    /// The adapted description: `/robot_description` and the `adapted.urdf` attachment.
+    pub robot: Option<&'a Description>,
+    /// The inputs as the command line gave them (files, folders, `builtin:NAME`).
+    pub inputs: Vec<String>,
+}
+
+/// Write `result` to `path` for the command `command` (`identify static`).
+pub fn write(path: &Path, command: &str, result: &ResultLog<'_>) -> Result<(), CliError> {
+    let topic = |name: &str, columns: &[String]| ArrayTopic {
+        topic: format!("/{name}"),
+        columns: columns.to_vec(),
+    };
+    let groups: Vec<ArrayTopic> = [
+        topic("measured", &result.measured),
+        topic("prior", &result.prior),
+        topic("adapted", &result.adapted),
+    ]
+    .into_iter()
+    .filter(|g| !g.columns.is_empty())
+    .collect();
+    let urdf = result.robot.map(twinloop_description::urdf::to_string);
+    let root = result
+        .robot
+        .and_then(|r| r.root_links().first().map(|s| s.to_string()))
+        .unwrap_or_else(|| "base_link".into());
+    let context = |e: twinloop_logs::LogError| CliError::from(e).context("--mcap");
+    let mut log =
+        McapLog::create_grouped(path, &result.table.columns, urdf.as_deref(), &root, &groups)
+            .map_err(context)?;
+    for row in &result.table.rows {
+        log.write_row(row).map_err(context)?;
+    }
+    if let Some(u) = &urdf {
+        log.attach("adapted.urdf", "application/xml", u.as_bytes())
+            .map_err(context)?;
+    }
+    log.metadata("twinloop", provenance(command)?)
+        .map_err(context)?;
+    log.metadata("twinloop.inputs", input_hashes(&result.inputs)?)
+        .map_err(context)?;
+    log.finish().map_err(context)
+}
+
+/// The command, its command line and twinloop's version.
+fn provenance(command: &str) -> Result<BTreeMap<String, String>, CliError> {
+    let args: Vec<String> = std::env::args().collect();
+    Ok(BTreeMap::from([
+        ("command".to_string(), command.to_string()),
+        ("command_line".to_string(), serde_json::to_string(&args)?),
+        (
+            "twinloop_version".to_string(),
+            env!("CARGO_PKG_VERSION").to_string(),
+        ),
+    ]))
+}
+
+/// Each input -> the SHA-256 of its bytes: a file's; a folder's (a rosbag2 bag)
+/// each file's, as `FOLDER/NAME`; a `builtin:NAME` robot's, of the URDF twinloop
+/// writes for it (what this version of twinloop took as the robot).
+fn input_hashes(inputs: &[String]) -> Result<BTreeMap<String, String>, CliError> {
+    let mut out = BTreeMap::new();
+    for spec in inputs {
+        if spec.starts_with("builtin:") {
+            let (robot, _) = crate::common::load_description(spec)?;
+            let urdf = twinloop_description::urdf::to_string(&robot);
+            out.insert(spec.clone(), hex(&Sha256::digest(urdf.as_bytes())));
+            continue;
+        }
+        let path = Path::new(spec);
+        if path.is_dir() {
+            let mut files: Vec<_> = std::fs::read_dir(path)
+                .map_err(|e| CliError::new(format!("{spec}: {e}")))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_file())
+                .collect();
+            files.sort();
+            for f in files {
+                out.insert(f.display().to_string(), file_sha256(&f)?);
+            }
+        } else {
+            out.insert(spec.clone(), file_sha256(path)?);
+        }
+    }
+    Ok(out)
+}
+
+/// The SHA-256 of a file's bytes, read 64 KiB at a time.
+fn file_sha256(path: &Path) -> Result<String, CliError> {
+    let fail = |e: std::io::Error| CliError::new(format!("{}: {e}", path.display()));
+    let mut f = std::fs::File::open(path).map_err(fail)?;
+    let mut hasher = Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = f.read(&mut buf).map_err(fail)?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buf[..n]);
+    }
+    Ok(hex(&hasher.finalize()))
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// FIPS 180-2's example "abc" (appendix B.1).
+    #[test]
+    fn sha256_of_abc_is_the_standard_s() {
+        assert_eq!(
+            hex(&Sha256::digest(b"abc")),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+    }
+}

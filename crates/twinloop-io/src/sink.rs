@@ -1,0 +1,98 @@
+//! Recordings written row by row whatever their format: a [`RowSink`] is a CSV
+//! ([`CsvWriter`]) or a format a crate above this one writes (twinloop-logs' MCAP),
+//! so the code that records (a guarded robot on its bus, the bus tip-over) needs no
+//! knowledge of formats. [`open_recording`] picks the format by the file's extension:
+//! a program that writes more than CSV registers the others once at start-up
+//! ([`register_recording_format`]; the `twinloop` command registers `.mcap`).
+
+use crate::table::{CsvWriter, IoError};
+use std::path::Path;
+use std::sync::Mutex;
+
+/// Where a recording's rows go, one at a time.
+pub trait RowSink: Send {
+    /// One row, as many values as columns.
+    fn write_row(&mut self, row: &[f64]) -> Result<(), IoError>;
+    /// Make the file complete and durable and give it its name.
+    fn finish(self: Box<Self>) -> Result<(), IoError>;
+}
+
+impl RowSink for CsvWriter {
+    fn write_row(&mut self, row: &[f64]) -> Result<(), IoError> {
+        CsvWriter::write_row(self, row)
+    }
+    fn finish(self: Box<Self>) -> Result<(), IoError> {
+        CsvWriter::finish(*self)
+    }
+}
+
+/// Opens a recording (kept, with what it holds, if the run fails) at a path, for
+/// columns.
+pub type RecordingOpener = fn(&Path, &[String]) -> Result<Box<dyn RowSink>, IoError>;
+
+/// The formats registered besides CSV: (extension, lower case; opener).
+static FORMATS: Mutex<Vec<(&str, RecordingOpener)>> = Mutex::new(Vec::new());
+
+/// Write recordings whose path ends in `.EXTENSION` (any case) with `open`.
+pub fn register_recording_format(extension: &'static str, open: RecordingOpener) {
+    let mut formats = FORMATS.lock().unwrap_or_else(|e| e.into_inner());
+    formats.retain(|(e, _)| *e != extension);
+    formats.push((extension, open));
+}
+
+/// A recording at `path`: in the format registered for its extension, else CSV
+/// ([`CsvWriter::recording`]: every row on disk at once, kept if the run fails).
+pub fn open_recording(path: &Path, columns: &[String]) -> Result<Box<dyn RowSink>, IoError> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let opener = {
+        let formats = FORMATS.lock().unwrap_or_else(|e| e.into_inner());
+        formats
+            .iter()
+            .find(|(e, _)| Some(*e) == ext.as_deref())
+            .map(|(_, o)| *o)
+    };
+    match opener {
+        Some(open) => open(path, columns),
+        None => Ok(Box::new(CsvWriter::recording(path, columns)?)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A format that writes nothing but counts the rows it is given, as a CSV of
+    /// them: enough to see the extension pick it.
+    fn counting(path: &Path, columns: &[String]) -> Result<Box<dyn RowSink>, IoError> {
+        let csv = path.with_extension("counted.csv");
+        Ok(Box::new(CsvWriter::recording(&csv, &columns[..1])?))
+    }
+
+    #[test]
+    fn the_extension_picks_the_registered_format_and_csv_is_the_rest() {
+        let dir = std::env::temp_dir().join(format!("twinloop-io-sink-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        register_recording_format("cnt", counting);
+        let cols = vec!["t".to_string(), "q:a".to_string()];
+        let mut w = open_recording(&dir.join("x.CNT"), &cols).unwrap();
+        assert!(
+            w.write_row(&[0.0, 1.0]).is_err(),
+            "the counting format takes one column"
+        );
+        w.write_row(&[0.5]).unwrap();
+        w.finish().unwrap();
+        assert_eq!(
+            std::fs::read_to_string(dir.join("x.counted.csv")).unwrap(),
+            "t\n0.5\n"
+        );
+        let mut w = open_recording(&dir.join("y.csv"), &cols).unwrap();
+        w.write_row(&[0.0, 1.0]).unwrap();
+        w.finish().unwrap();
+        assert_eq!(
+            std::fs::read_to_string(dir.join("y.csv")).unwrap(),
+            "t,q:a\n0.0,1.0\n"
+        );
+    }
+}
