@@ -16,7 +16,7 @@ the floating root is written as "base". Columns, in this order:
     tau:base.fx tau:base.fy tau:base.fz tau:base.tx tau:base.ty tau:base.tz, tau:<joint> ...
 
 Values: base position uniform in [-1, 1]^3, base orientation a random unit quaternion (4 normals,
-normalised; x, y, z, w), joint positions uniform in [-1.5, 1.5] (limits ignored), v, a, tau
+normalised; x, y, z, w), joint positions uniform in [-1.5, 1.5] within the joint limits, v, a, tau
 standard normal; drawn per state in that order from numpy.random.default_rng(seed). Continuous
 joints are written as an angle (the bench maps it to Pinocchio's cos/sin pair). Floats are
 written with repr (shortest string that round-trips), t = state index * 0.001.
@@ -73,6 +73,11 @@ def main(argv=None) -> int:
             sys.exit(f"make_states: joint {model.names[j]} ({jm.shortname()}) is not 1-DoF")
         joints.append(model.names[j])
     names = [n for n in joints]
+    # Joint positions stay within the model's limits (twinloop refuses states beyond
+    # them since issue 29): uniform over [-1.5, 1.5] intersected with the limits.
+    idx = [model.joints[model.getJointId(n)].idx_q for n in names]
+    lo = np.maximum(-1.5, np.array([model.lowerPositionLimit[i] for i in idx]))
+    hi = np.minimum(1.5, np.array([model.upperPositionLimit[i] for i in idx]))
 
     header = ["t"]
     header += [f"q:base.{c}" for c in ("x", "y", "z", "qx", "qy", "qz", "qw")]
@@ -92,7 +97,7 @@ def main(argv=None) -> int:
             pos = rng.uniform(-1.0, 1.0, 3)
             quat = rng.standard_normal(4)
             quat /= np.linalg.norm(quat)
-            qj = rng.uniform(-1.5, 1.5, nj)
+            qj = rng.uniform(lo, hi, nj)
             v = rng.standard_normal(nv)
             a = rng.standard_normal(nv)
             tau = rng.standard_normal(nv)

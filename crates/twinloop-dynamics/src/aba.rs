@@ -2,7 +2,7 @@
 //! 7.1), in base coordinates: articulated inertias then add up without transforms.
 
 use crate::data::Data;
-use crate::joint::{joint_placement, subspace_column, subspace_in};
+use crate::joint::{compose, joint_placement, subspace_column, subspace_in};
 use crate::kinematics::{base_placement, check_q, check_v};
 use crate::model::JointType;
 use crate::model::{BASE, Model};
@@ -95,7 +95,7 @@ fn velocity_pass(
         let (b, vp) = if p == BASE {
             (li, v0)
         } else {
-            (data.b_m_i[p] * li, data.v[p])
+            (compose(model, i, &data.b_m_i[p], &li), data.v[p])
         };
         data.b_m_i[i] = b;
         let sv = if one_dof {

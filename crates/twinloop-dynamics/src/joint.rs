@@ -4,7 +4,7 @@
 
 use crate::model::{JointType, Model};
 use nalgebra::{Matrix3, Vector3};
-use twinloop_spatial::{Force, Motion, Se3, axis_angle_sc, quaternion_xyzw_to_matrix};
+use twinloop_spatial::{Force, Motion, Se3, axis_angle_sc, quaternion_xyzw_to_matrix, sin_cos};
 
 /// `liMi = jointPlacement * M_joint(q)`; `q` is the whole configuration vector.
 #[inline(always)]
@@ -14,7 +14,12 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
     let iq = model.idx_q[i];
     match model.joint_types[i] {
         JointType::RevoluteX => {
-            let (s, c) = q[iq].sin_cos();
+            let (s, c) = sin_cos(q[iq]);
+            if model.keeps_axis[i] {
+                // No placement rotation: the plane rotation itself.
+                let r = Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c);
+                return Se3::new(r, p.translation);
+            }
             let c1 = r.column(1);
             let c2 = r.column(2);
             Se3::new(
@@ -23,7 +28,11 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
             )
         }
         JointType::RevoluteY => {
-            let (s, c) = q[iq].sin_cos();
+            let (s, c) = sin_cos(q[iq]);
+            if model.keeps_axis[i] {
+                let r = Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c);
+                return Se3::new(r, p.translation);
+            }
             let c0 = r.column(0);
             let c2 = r.column(2);
             Se3::new(
@@ -32,7 +41,11 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
             )
         }
         JointType::RevoluteZ => {
-            let (s, c) = q[iq].sin_cos();
+            let (s, c) = sin_cos(q[iq]);
+            if model.keeps_axis[i] {
+                let r = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+                return Se3::new(r, p.translation);
+            }
             let c0 = r.column(0);
             let c1 = r.column(1);
             Se3::new(
@@ -41,7 +54,7 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
             )
         }
         JointType::Revolute => {
-            let (s, c) = q[iq].sin_cos();
+            let (s, c) = sin_cos(q[iq]);
             Se3::new(r * axis_angle_sc(&model.axes[i], s, c), p.translation)
         }
         JointType::Prismatic => Se3::new(*r, p.translation + r * (model.axes[i] * q[iq])),
@@ -50,6 +63,32 @@ pub(crate) fn joint_placement(model: &Model, i: usize, q: &[f64]) -> Se3 {
             p.translation,
         ),
     }
+}
+
+/// `parent * li` with `li` body i's `liMi`. When the joint keeps an axis of its frame
+/// (`Model::keeps_axis`), `li`'s rotation is a plane rotation: the product turns two of
+/// the parent's columns (12 multiplications instead of 27) and leaves the third, with
+/// the same sums as the full product (the skipped terms are exact zeros and ones).
+#[inline(always)]
+pub(crate) fn compose(model: &Model, i: usize, parent: &Se3, li: &Se3) -> Se3 {
+    let p = &parent.rotation;
+    let l = &li.rotation;
+    let translation = p * li.translation + parent.translation;
+    if !model.keeps_axis[i] {
+        return Se3::new(p * l, translation);
+    }
+    // Column k of the product from the parent's columns a and b.
+    let turn = |a: usize, b: usize, k: usize| -> Vector3<f64> {
+        p.column(a) * l[(a, k)] + p.column(b) * l[(b, k)]
+    };
+    let kept = |a: usize| -> Vector3<f64> { p.column(a).into() };
+    let rotation = match model.joint_types[i] {
+        JointType::RevoluteX => Matrix3::from_columns(&[kept(0), turn(1, 2, 1), turn(1, 2, 2)]),
+        JointType::RevoluteY => Matrix3::from_columns(&[turn(0, 2, 0), kept(1), turn(0, 2, 2)]),
+        JointType::RevoluteZ => Matrix3::from_columns(&[turn(0, 1, 0), turn(0, 1, 1), kept(2)]),
+        _ => p * l,
+    };
+    Se3::new(rotation, translation)
 }
 
 /// The joint velocity `S x` in the joint's own frame; `x` starts at the joint's

@@ -1,7 +1,7 @@
 //! Forward kinematics: body and frame placements, joint and frame Jacobians.
 
 use crate::data::Data;
-use crate::joint::{joint_placement, subspace_column, subspace_in};
+use crate::joint::{compose, joint_placement, subspace_column, subspace_in};
 use crate::model::{BASE, Model};
 use nalgebra::{DMatrix, Vector3};
 use twinloop_spatial::{Motion, Se3, quaternion_xyzw_to_matrix};
@@ -50,11 +50,8 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) {
         let li = joint_placement(model, i, q);
         data.li_m_i[i] = li;
         let p = model.parents[i];
-        data.o_m_i[i] = if p == BASE {
-            base * li
-        } else {
-            data.o_m_i[p] * li
-        };
+        let parent = if p == BASE { &base } else { &data.o_m_i[p] };
+        data.o_m_i[i] = compose(model, i, parent, &li);
     }
 }
 
@@ -70,7 +67,11 @@ pub(crate) fn base_frame_pass(model: &Model, data: &mut Data, q: &[f64]) {
             let li = joint_placement(model, i, q);
             data.li_m_i[i] = li;
             let p = model.parents[i];
-            let b = if p == BASE { li } else { data.b_m_i[p] * li };
+            let b = if p == BASE {
+                li
+            } else {
+                compose(model, i, &data.b_m_i[p], &li)
+            };
             data.b_m_i[i] = b;
             data.s[i] = subspace_column(model, i, 0, &b);
         }
@@ -80,7 +81,11 @@ pub(crate) fn base_frame_pass(model: &Model, data: &mut Data, q: &[f64]) {
         let li = joint_placement(model, i, q);
         data.li_m_i[i] = li;
         let p = model.parents[i];
-        let b = if p == BASE { li } else { data.b_m_i[p] * li };
+        let b = if p == BASE {
+            li
+        } else {
+            compose(model, i, &data.b_m_i[p], &li)
+        };
         data.b_m_i[i] = b;
         let d = model.idx_v[i] - model.v_offset;
         subspace_in(model, i, &b, &mut data.s[d..]);

@@ -150,6 +150,10 @@ pub struct Model {
     pub links: Vec<LinkInfo>,
     /// Sum of body masses (the base included for a floating base).
     pub total_mass: f64,
+    /// Per body: the joint turns about an axis of its own frame (`RevoluteX/Y/Z`) and
+    /// its placement has no rotation, so `liMi` keeps that axis and composing with it
+    /// turns two columns (`joint::compose`). Set with `joint_placements`.
+    pub(crate) keeps_axis: Vec<bool>,
 }
 
 /// A description pose (xyz, rpy) as a rigid placement.
@@ -375,6 +379,7 @@ impl Model {
             frames: Vec::new(),
             links: Vec::new(),
             total_mass: 0.0,
+            keeps_axis: Vec::new(),
         }
     }
 
@@ -445,9 +450,16 @@ impl Model {
         let lim = joint.limit.unwrap_or_default();
         let new_body = self.parents.len();
         self.parents.push(parent_body);
-        self.joint_types.push(joint_type(joint.kind, &axis));
+        let jt = joint_type(joint.kind, &axis);
+        self.joint_types.push(jt);
         self.axes.push(axis);
         // `placement` is the joint frame in the parent body.
+        self.keeps_axis.push(
+            matches!(
+                jt,
+                JointType::RevoluteX | JointType::RevoluteY | JointType::RevoluteZ
+            ) && placement.rotation == Matrix3::identity(),
+        );
         self.joint_placements.push(placement);
         self.inertias.push(Inertia::ZERO);
         self.joint_names.push(joint.name.clone());

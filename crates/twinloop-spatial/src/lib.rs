@@ -17,6 +17,7 @@ mod linear_inertia;
 mod motion;
 mod se3;
 mod symmetric6;
+mod trig;
 
 pub use force::Force;
 pub use inertia::Inertia;
@@ -25,6 +26,7 @@ pub use motion::Motion;
 pub use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 pub use se3::Se3;
 pub use symmetric6::Symmetric6;
+pub use trig::sin_cos;
 
 /// The skew-symmetric matrix `[v]x` with `[v]x u = v x u`.
 #[inline(always)]

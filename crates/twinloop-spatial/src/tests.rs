@@ -124,3 +124,31 @@ fn linear_inertia_agrees_with_inertia() {
         assert!((sum.mul_motion(&m).to_vector6() - expect).norm() < 1e-11);
     }
 }
+
+#[test]
+fn sin_cos_matches_the_library() {
+    // Joint angles (dense near zero and out to many turns), the quadrant edges,
+    // and the hand-over to the library at 1e5.
+    let mut seed = 3u64;
+    let mut worst: f64 = 0.0;
+    let mut check = |x: f64| {
+        let (s, c) = sin_cos(x);
+        let (s0, c0) = x.sin_cos();
+        worst = worst.max((s - s0).abs()).max((c - c0).abs());
+    };
+    for k in 0..200_000 {
+        let scale = [1.0, 4.0, 40.0, 1e4][k % 4];
+        check(scale * lcg(&mut seed));
+    }
+    for k in -400..=400 {
+        let edge = f64::from(k) * std::f64::consts::FRAC_PI_4;
+        for d in [-1e-12, -1e-16, 0.0, 1e-16, 1e-12] {
+            check(edge + d);
+        }
+    }
+    for x in [0.0, -0.0, 1e-300, 99_999.9, 1e5, 1e6, -1e7] {
+        check(x);
+    }
+    assert!(worst <= 2.3e-16, "worst difference {worst:e}");
+    assert!(sin_cos(f64::NAN).0.is_nan() && sin_cos(f64::INFINITY).1.is_nan());
+}
