@@ -229,3 +229,34 @@ fn mass_and_link_known_place_the_part_within_2_cm() {
         );
     }
 }
+
+/// The links a part may hide on below each ankle (the places `adapt` tries besides the
+/// CoM inversion's, `twinloop_loop::other_places`): each ankle pitch joint's child and
+/// what hangs under it, as the shipped descriptions chain them (OP3: Menagerie's
+/// `op3.xml`, ankle pitch then roll; Darwin-OP: ROBOTIS's MP_ANKLE1/MP_ANKLE2).
+#[test]
+fn the_links_below_the_ankles_are_the_ankle_crosses_and_feet() {
+    use twinloop_ident::tipover_study::links_below_ankles;
+    for (robot, left, right) in [
+        (
+            "builtin:op3",
+            ["l_ank_pitch_link", "l_ank_roll_link"],
+            ["r_ank_pitch_link", "r_ank_roll_link"],
+        ),
+        (
+            "builtin:darwin_op",
+            ["MP_ANKLE1_L", "MP_ANKLE2_L"],
+            ["MP_ANKLE1_R", "MP_ANKLE2_R"],
+        ),
+    ] {
+        let [l, r] = links_below_ankles(&resolve(robot).unwrap()).unwrap();
+        assert_eq!(&l[..2], &left[..], "{robot} left: {l:?}");
+        assert_eq!(&r[..2], &right[..], "{robot} right: {r:?}");
+        // Nothing above the ankles (a thigh, the trunk) is among them.
+        assert!(
+            l.iter()
+                .chain(&r)
+                .all(|n| !n.contains("THIGH") && !n.contains("knee"))
+        );
+    }
+}
