@@ -13,7 +13,12 @@ builtin:R --add-mass ...` (the simulator's study reports the model's CoM in the 
 standing frame). The table in docs/adaptation.md comes from it.
 
     python3 tools/adaptation/served_sweep.py --robot op3 --seeds 1-10 \
-        [--twinloop target/ci/twinloop] [--keep DIR] [--out sweep.json] [--jobs 2]
+        [--twinloop target/ci/twinloop] [--keep DIR] [--out sweep.json] [--jobs 2] \
+        [--stage all|tipover|adapt]
+
+`--stage tipover` measures only (each run's `row.json` in --keep's folder);
+`--stage adapt` adapts the kept measurements again (a changed `adapt` on the same
+robot's tips, without serving it again).
 """
 import argparse, json, os, random, statistics, subprocess, sys, tempfile, time
 import xml.etree.ElementTree as ET
