@@ -70,16 +70,23 @@ pub fn fit_floor(
     })?;
     let fit = FloorFit {
         measured_sideways_deg: measured_deg,
-        sink_m: tries[best].0,
+        sink_m: tries[best].sink_m,
         tries: tries
             .iter()
-            .map(|(sink, _, read)| FloorTry {
-                sink_m: *sink,
-                sideways_deg: sideways_mean(read),
+            .map(|t| FloorTry {
+                sink_m: t.sink_m,
+                sideways_deg: sideways_mean(&t.read),
             })
             .collect(),
     };
-    Ok((fit, tries[best].2))
+    Ok((fit, tries[best].read))
+}
+
+/// One try of [`search`]: the sink (m), the replay's error and what it read.
+pub struct SinkTry<T> {
+    pub sink_m: f64,
+    pub error: f64,
+    pub read: T,
 }
 
 /// The floor on which `replay(sink)`'s error is nearest zero, by the same search as
@@ -89,9 +96,9 @@ pub fn fit_floor(
 pub fn search<T>(
     start_m: f64,
     replay: &mut dyn FnMut(f64) -> Result<(f64, T), LoopError>,
-) -> Result<(usize, Vec<(f64, f64, T)>), LoopError> {
+) -> Result<(usize, Vec<SinkTry<T>>), LoopError> {
     let (lo, hi) = (SINK_RANGE_M.0.log10(), SINK_RANGE_M.1.log10());
-    let mut tries: Vec<(f64, f64, T)> = Vec::with_capacity(MAX_TRIES);
+    let mut tries: Vec<SinkTry<T>> = Vec::with_capacity(MAX_TRIES);
     // The bracket: a firmer floor where the replay tips later (error > 0), a softer
     // one where it tips earlier, each (log10 sink, error as weighted).
     let mut firm: Option<(f64, f64)> = None;
@@ -100,7 +107,11 @@ pub fn search<T>(
     let mut x = start_m.log10().clamp(lo, hi);
     loop {
         let (e, read) = replay(10f64.powf(x))?;
-        tries.push((10f64.powf(x), e, read));
+        tries.push(SinkTry {
+            sink_m: 10f64.powf(x),
+            error: e,
+            read,
+        });
         if e.abs() < TOLERANCE_DEG || tries.len() == MAX_TRIES {
             break;
         }
@@ -126,7 +137,7 @@ pub fn search<T>(
                 let reach = match tries.len() {
                     1 => FIRST_STEP_DECADES,
                     n => {
-                        let (x0, e0) = (tries[n - 2].0.log10(), tries[n - 2].1);
+                        let (x0, e0) = (tries[n - 2].sink_m.log10(), tries[n - 2].error);
                         (e * (x - x0) / (e0 - e)).abs().clamp(0.25, 0.5)
                     }
                 };
@@ -141,7 +152,7 @@ pub fn search<T>(
         x = next;
     }
     let best = (0..tries.len())
-        .min_by(|&a, &b| tries[a].1.abs().total_cmp(&tries[b].1.abs()))
+        .min_by(|&a, &b| tries[a].error.abs().total_cmp(&tries[b].error.abs()))
         .unwrap_or(0);
     Ok((best, tries))
 }

@@ -255,7 +255,7 @@ fn floor_by_roll(
         // Above zero: the replay rolls the feet less than the robot, the floor gives more.
         Ok((median(std::array::from_fn(|k| robot[k] - r.roll[k])), ()))
     })?;
-    Ok(tries[best].0)
+    Ok(tries[best].sink_m)
 }
 
 /// The place kept (see the module documentation), with the places tried in its notes
