@@ -69,6 +69,7 @@ pub fn adapt_to_protocol<'py>(
         passes,
         options: &options,
         fit_floor: ground_sink.is_none(),
+        other_places: true,
     };
     let (adapted, calibration) = py
         .detach(|| {

@@ -13,7 +13,12 @@ builtin:R --add-mass ...` (the simulator's study reports the model's CoM in the 
 standing frame). The table in docs/adaptation.md comes from it.
 
     python3 tools/adaptation/served_sweep.py --robot op3 --seeds 1-10 \
-        [--twinloop target/ci/twinloop] [--keep DIR] [--out sweep.json] [--jobs 2]
+        [--twinloop target/ci/twinloop] [--keep DIR] [--out sweep.json] [--jobs 2] \
+        [--stage all|tipover|adapt]
+
+`--stage tipover` measures only (each run's `row.json` in --keep's folder);
+`--stage adapt` adapts the kept measurements again (a changed `adapt` on the same
+robot's tips, without serving it again).
 """
 import argparse, json, os, random, statistics, subprocess, sys, tempfile, time
 import xml.etree.ElementTree as ET
@@ -120,20 +125,25 @@ def draw(rng, shapes_by_link):
     return link, round(rng.uniform(0.1, 0.5), 3), [round(v, 4) for v in p]
 
 
-def run(tw, robot, seed, shapes, prior_mass, keep):
+def run(tw, robot, seed, shapes, prior_mass, keep, stage="all"):
     rng = random.Random(seed * 7919 + sum(map(ord, robot)))
     link, mass, xyz = draw(rng, shapes)
     add = f"{mass}@{link}:{xyz[0]},{xyz[1]},{xyz[2]}"
     d = os.path.join(keep, f"{robot}-{seed}") if keep else tempfile.mkdtemp()
     os.makedirs(d, exist_ok=True)
     row = {"robot": robot, "seed": seed, "add_mass": add, "load": os.getloadavg()[0]}
+    if stage == "adapt":
+        # Adapt a kept measurement again (a changed `adapt`, the same robot's tips).
+        row.update(json.load(open(f"{d}/row.json")))
+        if "failed" in row:
+            return row
+        return adapt(tw, d, row, prior_mass + mass)
     truth = subprocess.run([tw, "experiment", "tipover", "--robot", f"builtin:{robot}",
                             f"--add-mass={add}", "--json", f"{d}/truth.json"],
                            capture_output=True, text=True)
     if truth.returncode != 0:
         row["failed"] = "truth: " + truth.stderr.strip()[-300:]
         return row
-    true_com = json.load(open(f"{d}/truth.json"))["com"]["true"]
     pty = f"{d}/pty"
     if os.path.lexists(pty):
         os.remove(pty)
@@ -155,15 +165,28 @@ def run(tw, robot, seed, shapes, prior_mass, keep):
     open(f"{d}/tip.out", "w").write(tip.stdout + tip.stderr)
     if tip.returncode != 0:
         row["failed"] = f"tipover exit {tip.returncode}: " + tip.stderr.strip()[-300:]
+    json.dump(row, open(f"{d}/row.json", "w"))
+    if "failed" in row or stage == "tipover":
         return row
-    total = prior_mass + mass
+    return adapt(tw, d, row, prior_mass + mass)
+
+
+def adapt(tw, d, row, total):
+    true_com = json.load(open(f"{d}/truth.json"))["com"]["true"]
+    row["load_adapt"] = os.getloadavg()[0]
+    for f in ("adapt.json", "adapted.urdf"):
+        if os.path.exists(f"{d}/{f}"):
+            os.remove(f"{d}/{f}")
     t0 = time.time()
-    ad = subprocess.run([tw, "adapt", "--robot", f"builtin:{robot}", "--tipover", f"{d}/tip.json",
+    ad = subprocess.run([tw, "adapt", "--robot", f"builtin:{row['robot']}", "--tipover", f"{d}/tip.json",
                          "--total-mass", f"{total:.6f}", "--out", f"{d}/adapted.urdf",
                          "--json", f"{d}/adapt.json"], capture_output=True, text=True)
     row["adapt_s"] = time.time() - t0
     row["adapt_exit"] = ad.returncode
     open(f"{d}/adapt.out", "w").write(ad.stdout + ad.stderr)
+    if not os.path.exists(f"{d}/adapt.json"):
+        row["failed"] = f"adapt exit {ad.returncode}: " + ad.stderr.strip()[-300:]
+        return row
     a = json.load(open(f"{d}/adapt.json"))
     com = a.get("adapted_com") or a.get("measured_com")
     row["com_error_mm"] = 1e3 * sum((com[i] - true_com[i]) ** 2 for i in range(3)) ** 0.5
@@ -181,6 +204,8 @@ def main():
     ap.add_argument("--keep", default=None)
     ap.add_argument("--out", default=None)
     ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--stage", choices=["all", "tipover", "adapt"], default="all",
+                    help="tipover: measure only (keeps row.json); adapt: adapt --keep's measurements again")
     a = ap.parse_args()
     tw = os.path.abspath(a.twinloop)
     with tempfile.TemporaryDirectory() as tmp:
@@ -193,16 +218,20 @@ def main():
     prior_mass = info["total_mass"]
     rows = []
     with ThreadPoolExecutor(a.jobs) as pool:
-        for row in pool.map(lambda s: run(tw, a.robot, s, shapes, prior_mass, a.keep), seeds(a.seeds)):
+        for row in pool.map(lambda s: run(tw, a.robot, s, shapes, prior_mass, a.keep, a.stage), seeds(a.seeds)):
             rows.append(row)
             if "failed" in row:
                 print(f"{a.robot} seed {row['seed']} {row['add_mass']}: FAILED {row['failed']}", flush=True)
+                continue
+            if "com_error_mm" not in row:
+                print(f"{a.robot} seed {row['seed']:>2} {row['add_mass']:<40} tipover "
+                      f"{row['tipover_s']:.0f} s load {row['load']:.1f}", flush=True)
                 continue
             print(f"{a.robot} seed {row['seed']:>2} {row['add_mass']:<40} CoM {row['com_error_mm']:5.2f} mm "
                   f"adapt exit {row['adapt_exit']} {','.join(row['failed_checks'])} "
                   f"tipover {row['tipover_s']:.0f} s adapt {row['adapt_s']:.0f} s load {row['load']:.1f}",
                   flush=True)
-    ok = [r for r in rows if "failed" not in r]
+    ok = [r for r in rows if "com_error_mm" in r]
     ce = [r["com_error_mm"] for r in ok]
     if ce:
         print(f"{a.robot}: {len(ok)} of {len(rows)} tip-overs completed; CoM error median "

@@ -324,6 +324,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
         passes: a.protocol_passes as usize,
         options: &replay_options,
         fit_floor: a.ground_sink.is_none(),
+        other_places: true,
     };
     let (mut adapted, _) = adapt_to_protocol(
         &prior,

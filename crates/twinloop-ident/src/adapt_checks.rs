@@ -8,6 +8,7 @@
 //! | `part-within-reach` | the part sits inside the robot: the box around every link's collision outline and origin, standing, grown by [`REACH_MARGIN`] |
 //! | `tips-near-model` | every measured tip (less the protocol's bias) is within [`MAX_TIP_SHIFT_DEG`] of the prior model's static angle |
 //! | `one-part-explains` | the fall-angle fit leaves every angle within [`one_part_bound_deg`] of the measured one (less the protocol's bias) |
+//! | `one-place-explains` | (over a bus, with the total mass and no host named; made by `twinloop_loop::other_places`) the places below the ankles that also pass their checks land the CoM within 2 mm of the kept one, or roll the feet clearly less like the robot did |
 //!
 //! A check that cannot be made (no part placed, no fall-angle fit) is left out, and
 //! the notes say so.
@@ -34,7 +35,7 @@ pub const MAX_TIP_SHIFT_DEG: f64 = 16.0;
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct AdaptCheck {
     /// Stable name: `part-mass-plausible`, `part-within-reach`, `tips-near-model`,
-    /// `one-part-explains`.
+    /// `one-part-explains`, `one-place-explains`.
     pub name: String,
     pub passed: bool,
     /// What was measured against what bound, in words.

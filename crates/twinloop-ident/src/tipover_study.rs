@@ -238,6 +238,40 @@ pub(crate) fn ankle_names(robot: &Description) -> Result<[String; 6], String> {
     Ok([lp, rp, lr, rr, lf, rf])
 }
 
+/// The links below each ankle pitch joint (left, right; the joint's child and every
+/// link under it, in the description's order): a part on one of them stays on the
+/// ground with its foot in the fore-aft lean, and the ankle cross (between the pitch
+/// and roll joints) turns with the sideways lean only, so the CoM inversion, which
+/// treats the robot above the ankles as one body, cannot place it (`adapt`'s other
+/// places, `twinloop_loop::protocol_bias`).
+pub fn links_below_ankles(robot: &Description) -> Result<[Vec<String>; 2], IdentError> {
+    let n = ankle_names(robot).map_err(IdentError::new)?;
+    let below = |pitch: &str| -> Vec<String> {
+        let mut under: Vec<&str> = robot
+            .joint(pitch)
+            .map(|j| vec![j.child.as_str()])
+            .unwrap_or_default();
+        // The tree is small (tens of links): grow the set until no joint adds a child.
+        let mut grew = true;
+        while grew {
+            grew = false;
+            for j in &robot.joints {
+                if under.contains(&j.parent.as_str()) && !under.contains(&j.child.as_str()) {
+                    under.push(&j.child);
+                    grew = true;
+                }
+            }
+        }
+        robot
+            .links
+            .iter()
+            .filter(|l| under.contains(&l.name.as_str()))
+            .map(|l| l.name.clone())
+            .collect()
+    };
+    Ok([below(&n[0]), below(&n[1])])
+}
+
 /// The one joint of `robot` whose lower-cased name holds every word of `words` and
 /// starts with the side's letter (or holds "left"/"right"); else an error naming
 /// the candidates and how to name the joint in a profile.

@@ -279,3 +279,46 @@ fn where_on_a_link_without_collision_shapes_still_constrains_and_says_so() {
         dist(added.position_host, XYZ) * 1e3
     );
 }
+
+/// The links a part may hide on below each ankle (the places `adapt` tries besides the
+/// CoM inversion's, `twinloop_loop::other_places`): each ankle pitch joint's child and
+/// what hangs under it, as the shipped descriptions chain them (OP3: Menagerie's
+/// `op3.xml`, ankle pitch then roll; Darwin-OP: ROBOTIS's MP_ANKLE1/MP_ANKLE2, its
+/// ankle roles as the built-in profile `mappings/darwin_op.toml` names them).
+#[test]
+fn the_links_below_the_ankles_are_the_ankle_crosses_and_feet() {
+    use twinloop_ident::tipover_study::links_below_ankles;
+    let op3 = resolve("builtin:op3").unwrap();
+    let mut darwin = resolve("builtin:darwin_op").unwrap();
+    for (role, joint) in [
+        ("left_ankle_pitch", "j_ankle1_l"),
+        ("right_ankle_pitch", "j_ankle1_r"),
+        ("left_ankle_roll", "j_ankle2_l"),
+        ("right_ankle_roll", "j_ankle2_r"),
+    ] {
+        assert!(darwin.roles.set(role, joint));
+    }
+    for (robot, left, right) in [
+        (
+            &op3,
+            ["l_ank_pitch_link", "l_ank_roll_link"],
+            ["r_ank_pitch_link", "r_ank_roll_link"],
+        ),
+        (
+            &darwin,
+            ["MP_ANKLE1_L", "MP_ANKLE2_L"],
+            ["MP_ANKLE1_R", "MP_ANKLE2_R"],
+        ),
+    ] {
+        let [l, r] = links_below_ankles(robot).unwrap();
+        assert_eq!(&l[..2], &left[..], "{} left: {l:?}", robot.name);
+        assert_eq!(&r[..2], &right[..], "{} right: {r:?}", robot.name);
+        // Nothing above the ankles (a thigh, a shin, the trunk) is among them.
+        let above = ["THIGH", "TIBIA", "knee", "body"];
+        assert!(
+            l.iter()
+                .chain(&r)
+                .all(|n| above.iter().all(|a| !n.contains(a)))
+        );
+    }
+}

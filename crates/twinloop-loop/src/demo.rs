@@ -406,6 +406,8 @@ pub fn adapt_measured(
         options: &replay_options,
         // The adapting side does not know the floor the robot stands on.
         fit_floor: true,
+        // The demo keeps to the place the CoM inversion gives (its 90 s budget).
+        other_places: false,
     };
     let (adapted, calibration) = adapt_to_protocol(
         &m.prior,

@@ -64,9 +64,41 @@ pub fn fit_floor(
     start_m: f64,
     replay: &mut dyn FnMut(f64) -> Result<[f64; 4], LoopError>,
 ) -> Result<(FloorFit, [f64; 4]), LoopError> {
+    let (best, tries) = search(start_m, &mut |sink| {
+        let read = replay(sink)?;
+        Ok((sideways_mean(&read) - measured_deg, read))
+    })?;
+    let fit = FloorFit {
+        measured_sideways_deg: measured_deg,
+        sink_m: tries[best].sink_m,
+        tries: tries
+            .iter()
+            .map(|t| FloorTry {
+                sink_m: t.sink_m,
+                sideways_deg: sideways_mean(&t.read),
+            })
+            .collect(),
+    };
+    Ok((fit, tries[best].read))
+}
+
+/// One try of [`search`]: the sink (m), the replay's error and what it read.
+pub struct SinkTry<T> {
+    pub sink_m: f64,
+    pub error: f64,
+    pub read: T,
+}
+
+/// The floor on which `replay(sink)`'s error is nearest zero, by the same search as
+/// [`fit_floor`]: an error above zero means the floor must give more (the replay tips
+/// later, or rolls its feet less, than the robot). Each try: (sink m, error, what the
+/// replay read); the index of the one kept.
+pub fn search<T>(
+    start_m: f64,
+    replay: &mut dyn FnMut(f64) -> Result<(f64, T), LoopError>,
+) -> Result<(usize, Vec<SinkTry<T>>), LoopError> {
     let (lo, hi) = (SINK_RANGE_M.0.log10(), SINK_RANGE_M.1.log10());
-    let mut tries: Vec<(f64, [f64; 4])> = Vec::with_capacity(MAX_TRIES);
-    let err = |a: &[f64; 4]| sideways_mean(a) - measured_deg;
+    let mut tries: Vec<SinkTry<T>> = Vec::with_capacity(MAX_TRIES);
     // The bracket: a firmer floor where the replay tips later (error > 0), a softer
     // one where it tips earlier, each (log10 sink, error as weighted).
     let mut firm: Option<(f64, f64)> = None;
@@ -74,9 +106,12 @@ pub fn fit_floor(
     let mut kept_side = 0i8;
     let mut x = start_m.log10().clamp(lo, hi);
     loop {
-        let read = replay(10f64.powf(x))?;
-        let e = err(&read);
-        tries.push((x, read));
+        let (e, read) = replay(10f64.powf(x))?;
+        tries.push(SinkTry {
+            sink_m: 10f64.powf(x),
+            error: e,
+            read,
+        });
         if e.abs() < TOLERANCE_DEG || tries.len() == MAX_TRIES {
             break;
         }
@@ -102,7 +137,7 @@ pub fn fit_floor(
                 let reach = match tries.len() {
                     1 => FIRST_STEP_DECADES,
                     n => {
-                        let (x0, e0) = (tries[n - 2].0, err(&tries[n - 2].1));
+                        let (x0, e0) = (tries[n - 2].sink_m.log10(), tries[n - 2].error);
                         (e * (x - x0) / (e0 - e)).abs().clamp(0.25, 0.5)
                     }
                 };
@@ -117,20 +152,9 @@ pub fn fit_floor(
         x = next;
     }
     let best = (0..tries.len())
-        .min_by(|&a, &b| err(&tries[a].1).abs().total_cmp(&err(&tries[b].1).abs()))
+        .min_by(|&a, &b| tries[a].error.abs().total_cmp(&tries[b].error.abs()))
         .unwrap_or(0);
-    let fit = FloorFit {
-        measured_sideways_deg: measured_deg,
-        sink_m: 10f64.powf(tries[best].0),
-        tries: tries
-            .iter()
-            .map(|(x, read)| FloorTry {
-                sink_m: 10f64.powf(*x),
-                sideways_deg: sideways_mean(read),
-            })
-            .collect(),
-    };
-    Ok((fit, tries[best].1))
+    Ok((best, tries))
 }
 
 #[cfg(test)]

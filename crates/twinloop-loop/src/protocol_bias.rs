@@ -44,6 +44,10 @@ pub struct CalibrationPass {
     pub static_deg: [f64; 4],
     /// What the protocol, simulated on the adapted model, read.
     pub protocol_deg: [f64; 4],
+    /// The feet's roll at those onsets in the simulation, deg (the robot's is its
+    /// tip-over's `excess_deg`): how [`crate::other_places`] tells apart two places
+    /// that explain the angles on two floors.
+    pub protocol_roll_deg: [f64; 4],
     /// That pass's adapted CoM in the standing frame, m.
     pub adapted_com: Option<[f64; 3]>,
 }
@@ -101,6 +105,18 @@ pub struct Replay<'a> {
     /// Find the floor the robot stood on from its sideways tips (`floor_fit`), rather
     /// than replay on `options`' floor.
     pub fit_floor: bool,
+    /// With the total mass and no host named, also try the part on each link below
+    /// the ankles on its side ([`crate::other_places`]); never a confident wrong
+    /// answer where the angles fit two places.
+    pub other_places: bool,
+}
+
+/// The protocol's reading of a model: the four fall angles and the feet's roll at
+/// each onset, deg (forward, backward, left, right).
+#[derive(Debug, Clone, Copy)]
+pub struct Reading {
+    pub angles: [f64; 4],
+    pub roll: [f64; 4],
 }
 
 /// What the protocol `study` was measured by (`study.protocol`, creeping from the
@@ -114,6 +130,17 @@ pub fn protocol_reading(
     model: &Description,
     options: &VirtualRobotOptions,
 ) -> Result<[f64; 4], LoopError> {
+    Ok(protocol_reading_with_roll(study, model_spec, host, model, options)?.angles)
+}
+
+/// [`protocol_reading`] with the feet's roll at each onset.
+pub fn protocol_reading_with_roll(
+    study: &StudyReport,
+    model_spec: &str,
+    host: &Description,
+    model: &Description,
+    options: &VirtualRobotOptions,
+) -> Result<Reading, LoopError> {
     let protocol = study.protocol.as_ref().ok_or_else(|| {
         LoopError::new("the tip-over was not measured over a bus (no `protocol`)")
     })?;
@@ -121,16 +148,37 @@ pub fn protocol_reading(
     let plan = BusPlan::replaying(protocol, model_spec, commanded);
     let run = tipover_in_lockstep_with(&plan, host.clone(), model, options, protocol.cycle_s)?;
     match run.outcome {
-        BusOutcome::Study(sim) => Ok(angles_of(&sim, |d| d.measured_deg)),
+        BusOutcome::Study(sim) => Ok(Reading {
+            angles: angles_of(&sim, |d| d.measured_deg),
+            roll: angles_of(&sim, |d| d.excess_deg),
+        }),
         BusOutcome::Partial(_) => Err(LoopError::new("not all four directions ran")),
     }
 }
 
 /// Adapt `prior` to `study` in `replay.passes` passes (see the module
 /// documentation); with no passes, no model placed, or a tip-over not measured over
-/// a bus, the plain adaptation. `map_err` words the adaptation's errors for the
-/// caller's flags.
+/// a bus, the plain adaptation. With `replay.other_places`, the part is also tried on
+/// the links below the ankles ([`crate::other_places`]). `map_err` words the
+/// adaptation's errors for the caller's flags.
 pub fn adapt_to_protocol(
+    prior: &Description,
+    study: &StudyReport,
+    opts: &AdaptOptions,
+    replay: &Replay<'_>,
+    log: &mut dyn FnMut(&str),
+    map_err: &dyn Fn(IdentError) -> LoopError,
+) -> Result<(Adapted, Option<Calibration>), LoopError> {
+    let first = adapt_on_one_place(prior, study, opts, replay, log, map_err)?;
+    if !replay.other_places || opts.host.is_some() || opts.total_mass.is_none() {
+        return Ok(first);
+    }
+    crate::other_places::try_other_places(prior, study, opts, replay, first, log, map_err)
+}
+
+/// [`adapt_to_protocol`] with the part on the link the CoM inversion (or `opts.host`)
+/// gives.
+pub(crate) fn adapt_on_one_place(
     prior: &Description,
     study: &StudyReport,
     opts: &AdaptOptions,
@@ -160,10 +208,11 @@ pub fn adapt_to_protocol(
         };
         let read = if replay.fit_floor && floor.is_none() {
             let (fit, read) = replay_on_robots_floor(study, replay, model, &options)?;
+            let angles = read.angles;
             log(&format!(
                 "the floor: the replay tips sideways at {:.2} deg (the robot at {:.2}) on a \
                  floor sinking {:.3} mm ({} replays)",
-                sideways_mean(&read),
+                sideways_mean(&angles),
                 fit.measured_sideways_deg,
                 fit.sink_m * 1e3,
                 fit.tries.len()
@@ -172,9 +221,10 @@ pub fn adapt_to_protocol(
             floor = Some(fit);
             read
         } else {
-            protocol_reading(study, replay.model_spec, replay.host, model, &options)
+            protocol_reading_with_roll(study, replay.model_spec, replay.host, model, &options)
                 .map_err(|e| e.context("simulating the protocol on the adapted model"))?
         };
+        let (roll, read) = (read.roll, read.angles);
         // The model's own static angles at the robot's onsets: the fit may not reach
         // its targets (four angles, three coordinates, a bounded box).
         let statics = static_angles_at_onsets(model, study)?;
@@ -188,6 +238,7 @@ pub fn adapt_to_protocol(
             bias_deg: bias,
             static_deg: statics,
             protocol_deg: read,
+            protocol_roll_deg: roll,
             adapted_com: adapted.report.adapted_com,
         });
         last = Some(adapted);
@@ -237,23 +288,31 @@ pub fn adapt_to_protocol(
     ))
 }
 
-/// The protocol on `model` on the floor its feet roll as the robot's did
-/// ([`fit_floor`], from `options`' floor): the fit and that replay's angles.
+/// The protocol on `model` on the floor on which it tips sideways as the robot did
+/// ([`fit_floor`], from `options`' floor): the fit and that replay's reading.
 fn replay_on_robots_floor(
     study: &StudyReport,
     replay: &Replay<'_>,
     model: &Description,
     options: &VirtualRobotOptions,
-) -> Result<(FloorFit, [f64; 4]), LoopError> {
+) -> Result<(FloorFit, Reading), LoopError> {
     let measured = sideways_mean(&angles_of(study, |d| d.measured_deg));
     let start = options.ground_sink.unwrap_or(REPLAY_GROUND_SINK);
-    let (fit, read) = fit_floor(measured, start, &mut |sink| {
+    let mut readings: Vec<(f64, Reading)> = Vec::new();
+    let (fit, angles) = fit_floor(measured, start, &mut |sink| {
         let on = VirtualRobotOptions {
             ground_sink: Some(sink),
             ..options.clone()
         };
-        protocol_reading(study, replay.model_spec, replay.host, model, &on)
-            .map_err(|e| e.context("simulating the protocol on the adapted model"))
+        let r = protocol_reading_with_roll(study, replay.model_spec, replay.host, model, &on)
+            .map_err(|e| e.context("simulating the protocol on the adapted model"))?;
+        readings.push((sink, r));
+        Ok(r.angles)
     })?;
-    Ok((fit, read))
+    // The try kept is the one whose angles came back; its roll with it.
+    let roll = readings
+        .iter()
+        .find(|(_, r)| r.angles == angles)
+        .map_or([f64::NAN; 4], |(_, r)| r.roll);
+    Ok((fit, Reading { angles, roll }))
 }

@@ -1,0 +1,393 @@
+//! A part below the ankles, and never a confident wrong answer (`adapt` with the total
+//! mass and no `--where`). The CoM inversion treats the robot above the ankle pitch
+//! joints as one body, so a part on a foot (which stays on the ground in the fore-aft
+//! lean) or on an ankle cross (which turns with the sideways lean only) lands on the
+//! link nearest a point that is centimetres off, usually a thigh or a shin. Over a bus
+//! the floor is unknown too, and the four angles then fit both: a Darwin-OP with
+//! 0.334 kg on its right foot, served on a floor sinking 1 mm, fitted a part on the
+//! right thigh on a floor of 0.65 mm to 0.02 deg, its CoM 10.5 mm high; named on the
+//! foot, the same angles fitted it on a floor of 1.00 mm to 0.02 deg, its CoM 0.24 mm
+//! from the truth. The angles cannot tell the two apart; how far the feet roll at the
+//! onsets (the tip-over's `excess_deg`: a softer floor lets them roll more) can.
+//!
+//! So when the first place's replay does not roll the feet as the robot did (the median
+//! of the four onsets' differences above [`ROLL_AGREE_DEG`]), the floor is found again,
+//! as the one on which that replay's roll matches the robot's; the CoM inversion's
+//! place and each link below the ankle pitch joint on the part's side (both sides
+//! when it sits within [`MIDDLE_M`] of the middle) are then adapted with their protocol
+//! passes on that floor. (A served OP3 with 0.277 kg low on its left thigh: the angles'
+//! floor 0.50 mm, the roll 0.69 deg off, the CoM 7.1 mm off; on serve's true 1 mm floor
+//! the roll agreed to 0.06 deg and the CoM to 0.2 mm.) Of the places whose checks
+//! pass, the one chosen is the first when every other lands the CoM within [`AGREE_M`]
+//! of it; else the one whose replay rolls the feet as the robot did, when it does so
+//! clearly better ([`ROLL_MARGIN_DEG`]); else none: the `one-place-explains` check
+//! fails, naming the places, and `adapt` writes no model (exit 1).
+
+use crate::LoopError;
+use crate::protocol_bias::{
+    Calibration, REPLAY_GROUND_SINK, Replay, adapt_on_one_place, angles_of,
+    protocol_reading_with_roll,
+};
+use twinloop_description::Description;
+use twinloop_ident::IdentError;
+use twinloop_ident::adapt::{AdaptOptions, Adapted};
+use twinloop_ident::adapt_checks::AdaptCheck;
+use twinloop_ident::tipover_study::{StudyReport, links_below_ankles};
+use twinloop_virtual::VirtualRobotOptions;
+
+/// Two places whose adapted CoMs lie this close are one answer, m: below the 3 mm
+/// issue 27 asks of the adapted CoM.
+pub const AGREE_M: f64 = 0.002;
+/// How much better (root mean square over the four onsets, deg) one place's replay
+/// must roll the feet as the robot did than every place that disagrees with it.
+pub const ROLL_MARGIN_DEG: f64 = 0.1;
+/// The first place stands without trying others when its replay rolls the feet within
+/// this of the robot (median over the four onsets), deg: the foot-case place that
+/// was right agreed to 0.04 deg, the wrong ones 0.39-0.47 off.
+pub const ROLL_AGREE_DEG: f64 = 0.1;
+/// A part this near the middle (standing frame, |y|, m) may be on either foot.
+pub const MIDDLE_M: f64 = 0.01;
+/// Links lighter than this are frames, not places a part is bolted to, kg.
+const MIN_LINK_KG: f64 = 1e-3;
+
+/// One place tried: the adaptation with the part there, and how it compares.
+struct Place {
+    adapted: Adapted,
+    calibration: Option<Calibration>,
+    /// The adapted CoM, standing frame, m.
+    com: [f64; 3],
+    /// The replay's feet roll less the robot's per direction, and the median of their
+    /// sizes, deg (the median: the direction that tips over the part's own foot edge
+    /// rolls the point-mass replay's foot up to 1.2 deg off where the other three
+    /// agree to 0.04, on the Darwin-OP's foot case).
+    roll_off_deg: [f64; 4],
+    roll_median_deg: f64,
+    floor_m: Option<f64>,
+    passed: bool,
+}
+
+impl Place {
+    fn new(found: (Adapted, Option<Calibration>), study: &StudyReport) -> Option<Place> {
+        let (adapted, calibration) = found;
+        let com = adapted.report.adapted_com?;
+        let robot_roll = angles_of(study, |d| d.excess_deg);
+        let roll_off_deg = calibration
+            .as_ref()
+            .and_then(|c| c.passes.get(c.kept))
+            .map_or([f64::NAN; 4], |p| {
+                std::array::from_fn(|k| p.protocol_roll_deg[k] - robot_roll[k])
+            });
+        let roll_median_deg = median_abs(roll_off_deg);
+        let floor_m = calibration
+            .as_ref()
+            .and_then(|c| c.floor.as_ref())
+            .map(|f| f.sink_m);
+        let passed = adapted.report.failed_checks().next().is_none();
+        Some(Place {
+            adapted,
+            calibration,
+            com,
+            roll_off_deg,
+            roll_median_deg,
+            floor_m,
+            passed,
+        })
+    }
+
+    fn host(&self) -> &str {
+        self.adapted
+            .report
+            .added
+            .as_ref()
+            .map_or("?", |a| a.host.as_str())
+    }
+
+    fn describe(&self) -> String {
+        let c = self.com.map(|v| v * 1e3);
+        let fit = self
+            .adapted
+            .report
+            .fall_angle_fit
+            .as_ref()
+            .map_or(f64::NAN, |f| {
+                f.residual_deg.iter().fold(0.0_f64, |w, r| w.max(r.abs()))
+            });
+        format!(
+            "{}: CoM [{:.1}, {:.1}, {:.1}] mm, floor {}, angles within {fit:.2} deg, feet roll \
+             {:.2} deg off the robot's (median; per direction {}){}",
+            self.host(),
+            c[0],
+            c[1],
+            c[2],
+            self.floor_m
+                .map_or("not fitted".into(), |f| format!("{:.3} mm", f * 1e3)),
+            self.roll_median_deg,
+            crate::protocol_bias::join(self.roll_off_deg).trim(),
+            if self.passed { "" } else { ", a check failed" }
+        )
+    }
+}
+
+/// The links below the ankles on the side of `position` (standing frame), less
+/// `host` and frames without mass.
+fn candidate_hosts(
+    prior: &Description,
+    host: &str,
+    position: [f64; 3],
+) -> Result<Vec<String>, IdentError> {
+    let [left, right] = links_below_ankles(prior)?;
+    let mut sides = Vec::new();
+    if position[1] > -MIDDLE_M {
+        sides.extend(left);
+    }
+    if position[1] < MIDDLE_M {
+        sides.extend(right);
+    }
+    Ok(sides
+        .into_iter()
+        .filter(|l| l != host)
+        .filter(|l| prior.link(l).is_some_and(|l| l.mass() >= MIN_LINK_KG))
+        .collect())
+}
+
+/// Try the part on the links below the ankles beside `first` (the adaptation on the
+/// link the CoM inversion gave) and keep what the module documentation says.
+pub(crate) fn try_other_places(
+    prior: &Description,
+    study: &StudyReport,
+    opts: &AdaptOptions,
+    replay: &Replay<'_>,
+    first: (Adapted, Option<Calibration>),
+    log: &mut dyn FnMut(&str),
+    map_err: &dyn Fn(IdentError) -> LoopError,
+) -> Result<(Adapted, Option<Calibration>), LoopError> {
+    let Some(added) = first.0.report.added.clone() else {
+        return Ok(first);
+    };
+    if first.1.is_none() || first.0.report.adapted_com.is_none() {
+        return Ok(first);
+    }
+    let first =
+        Place::new(first, study).ok_or_else(|| LoopError::new("the adapted model has no CoM"))?;
+    if first.passed && first.roll_median_deg <= ROLL_AGREE_DEG {
+        // The replay rolls the feet as the robot did, on the floor it found: the angles
+        // and the roll agree on this place, and another would have to agree as well.
+        let line = format!(
+            "the place stands: {} (the feet's roll within {ROLL_AGREE_DEG} deg of the \
+             robot's, so the places below the ankles were not tried)",
+            first.describe()
+        );
+        log(&line);
+        let mut kept = (first.adapted, first.calibration);
+        kept.0.report.notes.push(line);
+        return Ok(kept);
+    }
+    let hosts = candidate_hosts(prior, &added.host, added.position)?;
+    log(&format!("place 1, {}", first.describe()));
+    // The floor on which the first place's replay rolls the feet as the robot did:
+    // the floor and the CoM's height trade against each other in the angles, not in
+    // the roll. Every other place (the CoM inversion's again among them) replays on it.
+    let floor_m = match (replay.fit_floor, &first.adapted.robot) {
+        (true, Some(model)) => {
+            let start = first.floor_m.unwrap_or(REPLAY_GROUND_SINK);
+            let f = floor_by_roll(study, replay, model, start)?;
+            log(&format!(
+                "the floor by the feet's roll: {:.3} mm (the angles' floor {:.3} mm)",
+                f * 1e3,
+                start * 1e3
+            ));
+            Some(f)
+        }
+        _ => replay.options.ground_sink,
+    };
+    let options = VirtualRobotOptions {
+        ground_sink: floor_m,
+        ..replay.options.clone()
+    };
+    let on = Replay {
+        model_spec: replay.model_spec,
+        host: replay.host,
+        passes: replay.passes,
+        options: &options,
+        fit_floor: false,
+        other_places: false,
+    };
+    let mut places = vec![first];
+    let hosts = std::iter::once(None).chain(hosts.into_iter().map(Some));
+    for host in hosts {
+        let o = AdaptOptions {
+            host: host.clone(),
+            ..opts.clone()
+        };
+        let name = host.as_deref().unwrap_or("the CoM inversion's link");
+        let mut quiet = |_: &str| {};
+        match adapt_on_one_place(prior, study, &o, &on, &mut quiet, map_err) {
+            Ok(found) => {
+                if let Some(mut p) = Place::new(found, study) {
+                    p.floor_m = p.floor_m.or(floor_m);
+                    log(&format!("place {}, {}", places.len() + 1, p.describe()));
+                    places.push(p);
+                }
+            }
+            Err(e) => log(&format!("{name}: not a place for the part: {e}")),
+        }
+    }
+    Ok(choose(places))
+}
+
+/// The floor (sink, m) on which `model`'s replay rolls the feet as the robot did: the
+/// median of the four onsets' roll differences brought within the floor search's
+/// tolerance ([`crate::floor_fit::search`]), from `start_m`.
+fn floor_by_roll(
+    study: &StudyReport,
+    replay: &Replay<'_>,
+    model: &Description,
+    start_m: f64,
+) -> Result<f64, LoopError> {
+    let robot = angles_of(study, |d| d.excess_deg);
+    let (best, tries) = crate::floor_fit::search(start_m, &mut |sink| {
+        let on = VirtualRobotOptions {
+            ground_sink: Some(sink),
+            ..replay.options.clone()
+        };
+        let r = protocol_reading_with_roll(study, replay.model_spec, replay.host, model, &on)
+            .map_err(|e| e.context("simulating the protocol on the adapted model"))?;
+        // Above zero: the replay rolls the feet less than the robot, the floor gives more.
+        Ok((median(std::array::from_fn(|k| robot[k] - r.roll[k])), ()))
+    })?;
+    Ok(tries[best].sink_m)
+}
+
+/// The place kept (see the module documentation), with the places tried in its notes
+/// and the `one-place-explains` check.
+fn choose(places: Vec<Place>) -> (Adapted, Option<Calibration>) {
+    let tried: Vec<String> = places.iter().map(Place::describe).collect();
+    let summary: Vec<(bool, [f64; 3], f64)> = places
+        .iter()
+        .map(|p| (p.passed, p.com, p.roll_median_deg))
+        .collect();
+    let (kept, check) = decide(&summary);
+    let mut places = places;
+    let mut place = places.swap_remove(kept);
+    let report = &mut place.adapted.report;
+    report.notes.push(format!(
+        "the part was tried on the links below the ankles as well (a part there does not turn \
+         with the fore-aft lean, and the floor is found anew for each): {}; kept {}",
+        tried.join("; "),
+        report.added.as_ref().map_or("none", |a| a.host.as_str())
+    ));
+    if let Some(passed) = check {
+        report.checks.push(AdaptCheck {
+            name: "one-place-explains".into(),
+            passed,
+            detail: if passed {
+                format!(
+                    "the places whose checks pass put the CoM within {:.0} mm of this one's, \
+                     or roll the feet at least {ROLL_MARGIN_DEG} deg (median) less like the robot's",
+                    AGREE_M * 1e3
+                )
+            } else {
+                format!(
+                    "the four angles fit the part in more than one place, with CoMs more than \
+                     {:.0} mm apart, and the feet's roll does not tell them apart by \
+                     {ROLL_MARGIN_DEG} deg: {}; name the link (--where) or the floor \
+                     (--ground-sink)",
+                    AGREE_M * 1e3,
+                    tried.join("; ")
+                )
+            },
+        });
+    }
+    (place.adapted, place.calibration)
+}
+
+/// Which place to keep of `(checks passed, adapted CoM, feet roll's median error)`, the first the
+/// CoM inversion's, and how the `one-place-explains` check comes out (`None`: no place
+/// passes its checks, the first is kept with its own failures).
+fn decide(places: &[(bool, [f64; 3], f64)]) -> (usize, Option<bool>) {
+    let viable: Vec<usize> = (0..places.len()).filter(|&i| places[i].0).collect();
+    let agree = |a: usize, b: usize| distance(places[a].1, places[b].1) <= AGREE_M;
+    let by_roll = viable
+        .iter()
+        .copied()
+        .min_by(|&a, &b| places[a].2.total_cmp(&places[b].2));
+    let Some(best) = by_roll else {
+        return (0, None);
+    };
+    let first = viable[0];
+    if viable.iter().all(|&i| agree(first, i)) {
+        (first, Some(true))
+    } else if viable
+        .iter()
+        .all(|&i| agree(best, i) || places[best].2 + ROLL_MARGIN_DEG <= places[i].2)
+    {
+        (best, Some(true))
+    } else {
+        (first, Some(false))
+    }
+}
+
+fn median_abs(v: [f64; 4]) -> f64 {
+    median(v.map(f64::abs))
+}
+
+fn median(v: [f64; 4]) -> f64 {
+    let mut a = v;
+    a.sort_by(f64::total_cmp);
+    0.5 * (a[1] + a[2])
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const THIGH: [f64; 3] = [-0.0028, -0.0156, 0.1929];
+    const FOOT: [f64; 3] = [-0.0028, -0.0158, 0.1823];
+
+    /// Places that agree on the CoM: the first (the CoM inversion's) is kept.
+    #[test]
+    fn places_that_agree_keep_the_first() {
+        let near = [FOOT[0], FOOT[1], FOOT[2] + 0.001];
+        assert_eq!(
+            decide(&[(true, FOOT, 0.5), (true, near, 0.1)]),
+            (0, Some(true))
+        );
+    }
+
+    /// The Darwin-OP's foot case: two places 10.6 mm apart, the foot's replay rolling
+    /// the feet as the robot did and the thigh's not: the foot is kept.
+    #[test]
+    fn the_feet_roll_tells_two_places_apart() {
+        assert_eq!(
+            decide(&[(true, THIGH, 0.45), (true, FOOT, 0.12), (false, THIGH, 0.0)]),
+            (1, Some(true))
+        );
+    }
+
+    /// Two places the roll does not tell apart: the check fails (no model written).
+    #[test]
+    fn two_places_the_roll_cannot_tell_apart_fail_the_check() {
+        assert_eq!(
+            decide(&[(true, THIGH, 0.15), (true, FOOT, 0.12)]),
+            (0, Some(false))
+        );
+    }
+
+    /// Only a later place passes its checks: it is kept; none passes: the first, no
+    /// verdict of this check (its own checks failed).
+    #[test]
+    fn a_place_that_fails_its_checks_is_not_kept() {
+        assert_eq!(
+            decide(&[(false, THIGH, 0.0), (true, FOOT, 0.3)]),
+            (1, Some(true))
+        );
+        assert_eq!(
+            decide(&[(false, THIGH, 0.0), (false, FOOT, 0.3)]),
+            (0, None)
+        );
+    }
+}
