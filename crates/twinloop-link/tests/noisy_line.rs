@@ -210,7 +210,7 @@ fn recording_over_a_noisy_line_keeps_every_row_it_read() {
     }
     // Read the file back before closing the writer: a recording is on disk as
     // FILE.partial while it runs, and the flushed rows are all there.
-    let table = twinloop_io::Table::read(&twinloop_io::output::in_progress(&path)).unwrap();
+    let table = twinloop_io::Table::read(twinloop_io::output::in_progress(&path)).unwrap();
     w.finish().unwrap();
     let _ = std::fs::remove_file(&path);
     assert_eq!(table.rows.len(), written.len());
