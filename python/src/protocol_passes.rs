@@ -9,9 +9,8 @@ use crate::values::{study_arg, to_py};
 use pyo3::prelude::*;
 use twinloop_ident::adapt::AdaptOptions;
 use twinloop_loop::LoopError;
-use twinloop_loop::protocol_bias::{
-    REPLAY_GROUND_SINK, Replay, adapt_to_protocol as passes_on, replay_options,
-};
+use twinloop_loop::adapt_to_protocol as passes_on;
+use twinloop_loop::protocol_bias::{REPLAY_GROUND_SINK, Replay, replay_options};
 
 /// Adapt `prior` to `tipover` (a tip-over measured over a bus: its `protocol`) in
 /// `passes` passes, as `twinloop adapt --tipover FILE --protocol-passes N --json`:

@@ -387,7 +387,7 @@ pub const INTERVAL_SIGMAS: f64 = 3.0;
 pub const AT_BOUND: f64 = 1e-3;
 
 /// The time block of each residual row of `segments` (in their order, a current
-/// row in its position row's block), blocks of [`crate::group::BLOCK_SECONDS`].
+/// row in its position row's block), blocks of [`crate::robust_covariance::BLOCK_SECONDS`].
 fn residual_blocks(logs: &[ServoLog], segments: &[Segment]) -> Vec<usize> {
     let mut block: Vec<usize> = Vec::new();
     for seg in segments {
@@ -397,7 +397,7 @@ fn residual_blocks(logs: &[ServoLog], segments: &[Segment]) -> Vec<usize> {
         let ids: Vec<usize> = seg
             .rows
             .clone()
-            .map(|r| first + ((l.t[r] - t0) / crate::group::BLOCK_SECONDS) as usize)
+            .map(|r| first + ((l.t[r] - t0) / crate::robust_covariance::BLOCK_SECONDS) as usize)
             .collect();
         block.extend(&ids);
         if seg.current {
@@ -435,7 +435,8 @@ fn assess(
     nonsmooth: &[(usize, f64)],
 ) -> Report {
     let mut stats = uncertainty(&result.jacobian, &result.residuals, &result.x, fitted.len());
-    let robust = crate::group::robust_covariance(&result.jacobian, &result.residuals, block);
+    let robust =
+        crate::robust_covariance::robust_covariance(&result.jacobian, &result.residuals, block);
     let n = fitted.len();
     let mut cov = robust.clone();
     for a in 0..n {

@@ -37,6 +37,7 @@ pub mod params_file;
 pub mod params_set;
 pub mod profile;
 pub mod replay;
+pub mod robust_covariance;
 pub mod servo_type;
 pub mod sweep;
 pub mod synthetic;

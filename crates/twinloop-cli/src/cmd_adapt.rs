@@ -315,7 +315,8 @@ pub fn run(a: AdaptArgs) -> CliResult {
         angle_resolution_deg: Some(a.resolution),
         protocol_bias_deg: None,
     };
-    use twinloop_loop::protocol_bias::{REPLAY_GROUND_SINK, Replay, adapt_to_protocol};
+    use twinloop_loop::adapt_to_protocol;
+    use twinloop_loop::protocol_bias::{REPLAY_GROUND_SINK, Replay};
     let replay_options =
         twinloop_loop::protocol_bias::replay_options(a.ground_sink.unwrap_or(REPLAY_GROUND_SINK));
     let replay = Replay {

@@ -8,10 +8,11 @@
 //! beside what was found. The CLI maps its flags to [`DemoSettings`] and prints.
 
 use crate::LoopError;
+use crate::adaptation::adapt_to_protocol;
 use crate::bus_plan::BusPlan;
 use crate::port::BusPort;
 use crate::protocol_bias::{
-    Calibration, Replay, adapt_to_protocol, angles_of as angles, protocol_reading, replay_options,
+    Calibration, Replay, angles_of as angles, protocol_reading, replay_options,
 };
 use crate::tipover_bus::{BusOutcome, BusRun, Operator, tipover_on_bus};
 use serde::Serialize;

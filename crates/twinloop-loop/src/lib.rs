@@ -13,6 +13,7 @@
 //! | the demo's scenario: a hidden change served on a pty, measured, adapted, checked | [`demo`] |
 //! | the crate's error | [`error`] |
 
+pub mod adaptation;
 pub mod bus_plan;
 pub mod demo;
 pub mod draft_profile;
@@ -24,6 +25,7 @@ pub mod profile;
 pub mod protocol_bias;
 pub mod tipover_bus;
 
+pub use adaptation::adapt_to_protocol;
 pub use bus_plan::BusPlan;
 pub use error::{ErrorKind, LoopError};
 pub use port::BusPort;

@@ -156,27 +156,7 @@ pub fn protocol_reading_with_roll(
     }
 }
 
-/// Adapt `prior` to `study` in `replay.passes` passes (see the module
-/// documentation); with no passes, no model placed, or a tip-over not measured over
-/// a bus, the plain adaptation. With `replay.other_places`, the part is also tried on
-/// the links below the ankles ([`crate::other_places`]). `map_err` words the
-/// adaptation's errors for the caller's flags.
-pub fn adapt_to_protocol(
-    prior: &Description,
-    study: &StudyReport,
-    opts: &AdaptOptions,
-    replay: &Replay<'_>,
-    log: &mut dyn FnMut(&str),
-    map_err: &dyn Fn(IdentError) -> LoopError,
-) -> Result<(Adapted, Option<Calibration>), LoopError> {
-    let first = adapt_on_one_place(prior, study, opts, replay, log, map_err)?;
-    if !replay.other_places || opts.host.is_some() || opts.total_mass.is_none() {
-        return Ok(first);
-    }
-    crate::other_places::try_other_places(prior, study, opts, replay, first, log, map_err)
-}
-
-/// [`adapt_to_protocol`] with the part on the link the CoM inversion (or `opts.host`)
+/// [`crate::adaptation::adapt_to_protocol`] with the part on the link the CoM inversion (or `opts.host`)
 /// gives.
 pub(crate) fn adapt_on_one_place(
     prior: &Description,
