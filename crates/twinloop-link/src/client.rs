@@ -467,15 +467,25 @@ impl<T: Transport> Client<T> {
         let mut result = self.ping_each(protocol, &ids, &mut found, &mut progress);
         // A reply that came too late (a busy bus or a loaded served robot) is dropped
         // as stale and its servo looks absent: when the pass saw any, the ids that did
-        // not answer are asked once more. A quiet bus with absent ids costs nothing.
-        if result.is_ok() && late(&self.stats) > before {
+        // not answer are asked once more. Without that sign, only a lone gap between
+        // two ids that answered is (a humanoid numbers its servos in a row, and a
+        // reply lost whole leaves no stale bytes). A quiet bus with absent ids costs
+        // nothing.
+        if result.is_ok() {
+            let any_late = late(&self.stats) > before;
+            let answered = |id: u8| found.iter().any(|s| s.id == id);
             let missing: Vec<u8> = ids
                 .iter()
                 .copied()
-                .filter(|id| !found.iter().any(|s| s.id == *id))
+                .filter(|&id| !answered(id))
+                .filter(|&id| {
+                    any_late || (id > 0 && answered(id - 1) && id < u8::MAX && answered(id + 1))
+                })
                 .collect();
-            result = self.ping_each(protocol, &missing, &mut found, &mut progress);
-            found.sort_by_key(|s| s.id);
+            if !missing.is_empty() {
+                result = self.ping_each(protocol, &missing, &mut found, &mut progress);
+                found.sort_by_key(|s| s.id);
+            }
         }
         self.config.retries = retries;
         result.map(|_| found)
