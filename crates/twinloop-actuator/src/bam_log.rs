@@ -96,34 +96,7 @@ struct Entry {
 }
 
 pub fn parse(text: &str, file: &str, servo: Option<ServoType>) -> Result<BamLog, ActuatorError> {
-    let first = text.lines().next().unwrap_or("");
-    let whole_json = match serde_json::from_str::<Value>(text) {
-        Ok(v) => Some(v),
-        Err(_) if first.trim_start().starts_with('{') && text.lines().nth(1).is_some() => None,
-        Err(e) => {
-            return Err(ActuatorError::new(
-                file,
-                format!("line {}", e.line()),
-                format!("not a BAM log: {e}"),
-            ));
-        }
-    };
-    let (header, entries) = match whole_json {
-        Some(Value::Object(mut o)) => {
-            let entries = match o.remove("entries") {
-                Some(Value::Array(a)) => parse_json_entries(&a, file)?,
-                _ => return Err(ActuatorError::new(file, "entries", "missing or not a list")),
-            };
-            (o, entries)
-        }
-        Some(_) => return Err(ActuatorError::new(file, "", "not a JSON object")),
-        None => {
-            let header: Map<String, Value> = serde_json::from_str(first).map_err(|e| {
-                ActuatorError::new(file, "line 1", format!("not a JSON object: {e}"))
-            })?;
-            (header, parse_columns(text, file)?)
-        }
-    };
+    let (header, entries) = header_and_entries(text, file)?;
     let number = |key: &str| -> Result<f64, ActuatorError> {
         header
             .get(key)
@@ -163,6 +136,62 @@ pub fn parse(text: &str, file: &str, servo: Option<ServoType>) -> Result<BamLog,
             ));
         }
     };
+    check_entries(&entries, file)?;
+    let log = servo_log(&entries, file, servo, kp, vin)?;
+    Ok(BamLog {
+        log,
+        load: Pendulum {
+            mass,
+            length,
+            arm_inertia: 0.0,
+        },
+        kp,
+        trajectory: header
+            .get("trajectory")
+            .and_then(Value::as_str)
+            .unwrap_or("")
+            .to_string(),
+    })
+}
+
+/// The header object and the entries of a BAM log: one JSON object with `entries`,
+/// or a JSON header line followed by columns.
+fn header_and_entries(
+    text: &str,
+    file: &str,
+) -> Result<(Map<String, Value>, Vec<Entry>), ActuatorError> {
+    let first = text.lines().next().unwrap_or("");
+    let whole_json = match serde_json::from_str::<Value>(text) {
+        Ok(v) => Some(v),
+        Err(_) if first.trim_start().starts_with('{') && text.lines().nth(1).is_some() => None,
+        Err(e) => {
+            return Err(ActuatorError::new(
+                file,
+                format!("line {}", e.line()),
+                format!("not a BAM log: {e}"),
+            ));
+        }
+    };
+    Ok(match whole_json {
+        Some(Value::Object(mut o)) => {
+            let entries = match o.remove("entries") {
+                Some(Value::Array(a)) => parse_json_entries(&a, file)?,
+                _ => return Err(ActuatorError::new(file, "entries", "missing or not a list")),
+            };
+            (o, entries)
+        }
+        Some(_) => return Err(ActuatorError::new(file, "", "not a JSON object")),
+        None => {
+            let header: Map<String, Value> = serde_json::from_str(first).map_err(|e| {
+                ActuatorError::new(file, "line 1", format!("not a JSON object: {e}"))
+            })?;
+            (header, parse_columns(text, file)?)
+        }
+    })
+}
+
+/// Enough entries, in time order.
+fn check_entries(entries: &[Entry], file: &str) -> Result<(), ActuatorError> {
     if entries.len() < 10 {
         return Err(ActuatorError::new(
             file,
@@ -182,7 +211,20 @@ pub fn parse(text: &str, file: &str, servo: Option<ServoType>) -> Result<BamLog,
             ));
         }
     }
-    let transaction = transaction_time(&entries);
+    Ok(())
+}
+
+/// The entries as a servo log: times moved back by the bus's transactions (the
+/// position read 2.5 transactions before the stamp, the goal written one sleep and
+/// a transaction before the read).
+fn servo_log(
+    entries: &[Entry],
+    file: &str,
+    servo: ServoType,
+    kp: f64,
+    vin: Option<f64>,
+) -> Result<ServoLog, ActuatorError> {
+    let transaction = transaction_time(entries);
     let mut log = ServoLog {
         file: file.to_string(),
         servo: Some(servo),
@@ -214,20 +256,7 @@ pub fn parse(text: &str, file: &str, servo: Option<ServoType>) -> Result<BamLog,
             torque.push(e.torque);
         }
     }
-    Ok(BamLog {
-        log,
-        load: Pendulum {
-            mass,
-            length,
-            arm_inertia: 0.0,
-        },
-        kp,
-        trajectory: header
-            .get("trajectory")
-            .and_then(Value::as_str)
-            .unwrap_or("")
-            .to_string(),
-    })
+    Ok(log)
 }
 
 /// One bus transaction, s: from the median period of cycles with the torque on (a

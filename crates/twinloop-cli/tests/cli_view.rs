@@ -114,7 +114,9 @@ fn the_live_page_draws_what_simulate_view_streams() {
     let col = |n: &str| header.iter().position(|h| h == n).unwrap();
     let row = rows
         .iter()
-        .find(|r| r[0] == t)
+        // The CSV's time is written to the nanosecond (`clean_time`); the page's
+        // is the stream's, unrounded.
+        .find(|r| (r[0] - t).abs() < 1e-9)
         .unwrap_or_else(|| panic!("no row at t = {t}"));
     let seen = status["com"].as_array().unwrap();
     for (k, c) in ["com.x", "com.y", "com.z"].iter().enumerate() {

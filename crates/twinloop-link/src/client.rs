@@ -7,7 +7,7 @@
 //! slices the caller owns: no exchange allocates once the client is warm.
 
 use crate::crc16::crc16_update;
-use crate::decoder::{Accept, Decoder};
+use crate::decoder::{Accept, Decoder, Frame};
 use crate::instruction::Instruction;
 use crate::link_error::{LinkError, Outcome};
 use crate::packet::PacketWriter;
@@ -211,72 +211,36 @@ impl<T: Transport> Client<T> {
                     // Our own request echoed by the adapter.
                     continue;
                 }
-                if f.protocol != protocol || f.id != id {
-                    // Another protocol's traffic or another servo's late reply.
-                    self.stats.discarded += 1;
-                    self.dirty = true;
-                    continue;
-                }
-                let (error, data): (u8, &[u8]) = match protocol {
-                    Protocol::V1 => (f.instruction, f.params),
-                    Protocol::V2 => {
-                        if f.instruction != Instruction::Status.code() || f.params.is_empty() {
-                            self.stats.discarded += 1;
+                match judge(&f, protocol, expect, id) {
+                    Verdict::Foreign => {
+                        self.stats.discarded += 1;
+                        self.dirty = true;
+                        continue;
+                    }
+                    Verdict::Wrong(e) => {
+                        self.stats.discarded += 1;
+                        wrong = Some(e);
+                        continue;
+                    }
+                    Verdict::Rejected(status) => {
+                        // A refusal carries no data, whatever length was asked.
+                        return Err(LinkError::Rejected {
+                            id,
+                            error: status,
+                            register: self.register,
+                        });
+                    }
+                    Verdict::Accept(status, bytes) => {
+                        self.rx.clear();
+                        self.rx.extend_from_slice(bytes);
+                        if wrong.is_some() {
+                            // Something that did not belong came first: drop the rest
+                            // before the next request.
                             self.dirty = true;
-                            continue;
                         }
-                        (f.params[0], &f.params[1..])
-                    }
-                };
-                if protocol == Protocol::V1 && error & 0x80 != 0 {
-                    // Bit 7 is always 0 in a real 1.0 status (EM-P1).
-                    wrong = Some(LinkError::Corrupt { id });
-                    self.stats.discarded += 1;
-                    continue;
-                }
-                let status = StatusError::new(protocol, error);
-                if status.rejected_instruction() && matches!(expect, Expect::Status { .. }) {
-                    // A refusal carries no data, whatever length was asked.
-                    return Err(LinkError::Rejected {
-                        id,
-                        error: status,
-                        register: self.register,
-                    });
-                }
-                match expect {
-                    Expect::Status { len, .. } => {
-                        if data.len() != len {
-                            self.stats.discarded += 1;
-                            wrong = Some(LinkError::WrongReply {
-                                id,
-                                expected_len: len,
-                                got_len: data.len(),
-                            });
-                            continue;
-                        }
-                        self.rx.clear();
-                        self.rx.extend_from_slice(data);
-                    }
-                    Expect::Fast { total } => {
-                        if f.raw.len() != total {
-                            self.stats.discarded += 1;
-                            wrong = Some(LinkError::WrongReply {
-                                id,
-                                expected_len: total,
-                                got_len: f.raw.len(),
-                            });
-                            continue;
-                        }
-                        self.rx.clear();
-                        self.rx.extend_from_slice(f.raw);
+                        return Ok(status);
                     }
                 }
-                if wrong.is_some() {
-                    // Something that did not belong came first: drop the rest before
-                    // the next request.
-                    self.dirty = true;
-                }
-                return Ok(status);
             }
             if flushing {
                 let err = wrong.unwrap_or(if self.damage_seen() != damage_before {
@@ -795,4 +759,53 @@ impl<T: Transport> Client<T> {
         }
         Ok(())
     }
+}
+
+/// What a frame that is not our own echo is to the request waiting for `id`.
+enum Verdict<'a> {
+    /// Another protocol's traffic, another servo's late reply, or not a status.
+    Foreign,
+    /// The right servo, but not the reply asked for.
+    Wrong(LinkError),
+    /// The servo refused the instruction.
+    Rejected(StatusError),
+    /// The reply: its status and the bytes kept (the data, or the whole packet for
+    /// a FAST_SYNC_READ).
+    Accept(StatusError, &'a [u8]),
+}
+
+/// Judge a received frame against what was asked.
+fn judge<'a>(f: &Frame<'a>, protocol: Protocol, expect: Expect, id: u8) -> Verdict<'a> {
+    if f.protocol != protocol || f.id != id {
+        return Verdict::Foreign;
+    }
+    let (error, data): (u8, &[u8]) = match protocol {
+        Protocol::V1 => (f.instruction, f.params),
+        Protocol::V2 => {
+            if f.instruction != Instruction::Status.code() || f.params.is_empty() {
+                return Verdict::Foreign;
+            }
+            (f.params[0], &f.params[1..])
+        }
+    };
+    if protocol == Protocol::V1 && error & 0x80 != 0 {
+        // Bit 7 is always 0 in a real 1.0 status (EM-P1).
+        return Verdict::Wrong(LinkError::Corrupt { id });
+    }
+    let status = StatusError::new(protocol, error);
+    if status.rejected_instruction() && matches!(expect, Expect::Status { .. }) {
+        return Verdict::Rejected(status);
+    }
+    let (kept, expected_len) = match expect {
+        Expect::Status { len, .. } => (data, len),
+        Expect::Fast { total } => (f.raw, total),
+    };
+    if kept.len() != expected_len {
+        return Verdict::Wrong(LinkError::WrongReply {
+            id,
+            expected_len,
+            got_len: kept.len(),
+        });
+    }
+    Verdict::Accept(status, kept)
 }

@@ -275,19 +275,8 @@ type JointError<'a> = dyn Fn(std::ops::Range<usize>, &str, String) -> MappingErr
 
 /// One `[[joint]]` entry (starting on line `line`), checked against itself and the
 /// joints before it (`earlier`): names and (id, protocol) pairs are unique.
-fn parse_joint(
-    j: RawJoint,
-    line: usize,
-    earlier: &[JointMapping],
-    err_at: &dyn Fn(usize, String) -> MappingError,
-) -> Result<JointMapping, MappingError> {
-    let name = j.name.get_ref().trim().to_string();
-    let at = |s: std::ops::Range<usize>, field: &str, msg: String| {
-        err_at(s.start, format!("joint {name:?}: {field}: {msg}"))
-    };
-    if name.is_empty() {
-        return Err(at(j.name.span(), "name", "empty".into()));
-    }
+/// A joint's servo model: one we know, and a servo rather than a board.
+fn joint_servo_model(j: &RawJoint, at: &JointError) -> Result<ServoModel, MappingError> {
     let model = ServoModel::parse(j.model.get_ref()).ok_or_else(|| {
         at(
             j.model.span(),
@@ -306,6 +295,86 @@ fn parse_joint(
             format!("{model} is a sub-controller, not a servo: declare it as a [[board]]"),
         ));
     }
+    Ok(model)
+}
+
+/// A joint's zero offset, a servo angle the servo can take (one it cannot, 10 rad
+/// on a 300-degree RX, would put every joint angle off by the difference).
+fn joint_zero(
+    j: &RawJoint,
+    model: ServoModel,
+    id: u8,
+    at: &JointError,
+) -> Result<f64, MappingError> {
+    let Some(z) = j.zero.as_ref() else {
+        return Ok(0.0);
+    };
+    let zero = *z.get_ref();
+    if !zero.is_finite() {
+        return Err(at(z.span(), "zero", "not a finite number".into()));
+    }
+    // The joint's zero is a servo angle: one the servo cannot take (10 rad on a
+    // 300-degree RX) would put every joint angle off by the difference.
+    let (smin, smax) = JointMapping::servo_range(model);
+    if zero < smin - 1e-9 || zero > smax + 1e-9 {
+        return Err(at(
+            z.span(),
+            "zero",
+            format!(
+                "{zero} rad ({:.1} deg) is outside servo id {id}'s range ({model}): {smin:.4}..{smax:.4} rad",
+                zero.to_degrees()
+            ),
+        ));
+    }
+    Ok(zero)
+}
+
+/// A joint named once, its servo driving no other joint.
+fn check_unique(
+    j: &RawJoint,
+    name: &str,
+    id: u8,
+    protocol: Protocol,
+    earlier: &[JointMapping],
+    at: &JointError,
+) -> Result<(), MappingError> {
+    if let Some(other) = earlier.iter().find(|o| o.name == name) {
+        return Err(at(
+            j.name.span(),
+            "name",
+            format!("joint listed twice (first on line {})", other.line),
+        ));
+    }
+    if let Some(other) = earlier
+        .iter()
+        .find(|o| o.id == id && o.protocol == protocol)
+    {
+        return Err(at(
+            j.id.span(),
+            "id",
+            format!(
+                "servo id {id} ({protocol}) already drives joint {:?} (line {})",
+                other.name, other.line
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn parse_joint(
+    j: RawJoint,
+    line: usize,
+    earlier: &[JointMapping],
+    err_at: &dyn Fn(usize, String) -> MappingError,
+) -> Result<JointMapping, MappingError> {
+    let name = j.name.get_ref().trim().to_string();
+    let at = |s: std::ops::Range<usize>, field: &str, msg: String| {
+        err_at(s.start, format!("joint {name:?}: {field}: {msg}"))
+    };
+    if name.is_empty() {
+        return Err(at(j.name.span(), "name", "empty".into()));
+    }
+    let model = joint_servo_model(&j, &at)?;
     let protocol = explicit_protocol(j.protocol.as_ref(), model, &at)?;
     let id = *j.id.get_ref();
     // The protocol's ids, within what the model's ID register holds (an X servo on
@@ -331,48 +400,9 @@ fn parse_joint(
             v => return Err(at(d.span(), "direction", format!("{v} is not 1 or -1"))),
         },
     };
-    let zero = j.zero.as_ref().map(|z| *z.get_ref()).unwrap_or(0.0);
-    if !zero.is_finite() {
-        return Err(at(
-            j.zero.as_ref().unwrap().span(),
-            "zero",
-            "not a finite number".into(),
-        ));
-    }
-    // The joint's zero is a servo angle: one the servo cannot take (10 rad on a
-    // 300-degree RX) would put every joint angle off by the difference.
-    let (smin, smax) = JointMapping::servo_range(model);
-    if zero < smin - 1e-9 || zero > smax + 1e-9 {
-        return Err(at(
-            j.zero.as_ref().unwrap().span(),
-            "zero",
-            format!(
-                "{zero} rad ({:.1} deg) is outside servo id {id}'s range ({model}): {smin:.4}..{smax:.4} rad",
-                zero.to_degrees()
-            ),
-        ));
-    }
+    let zero = joint_zero(&j, model, id, &at)?;
     let (lo, hi) = joint_limits(&j, model, id, zero, direction, &at)?;
-    if let Some(other) = earlier.iter().find(|o| o.name == name) {
-        return Err(at(
-            j.name.span(),
-            "name",
-            format!("joint listed twice (first on line {})", other.line),
-        ));
-    }
-    if let Some(other) = earlier
-        .iter()
-        .find(|o| o.id == id && o.protocol == protocol)
-    {
-        return Err(at(
-            j.id.span(),
-            "id",
-            format!(
-                "servo id {id} ({protocol}) already drives joint {:?} (line {})",
-                other.name, other.line
-            ),
-        ));
-    }
+    check_unique(&j, &name, id, protocol, earlier, &at)?;
     Ok(JointMapping {
         name,
         id,

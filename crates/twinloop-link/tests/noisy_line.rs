@@ -202,7 +202,8 @@ fn recording_over_a_noisy_line_keeps_every_row_it_read() {
         if robot.read(&mut state).is_err() {
             joint_failures += 1;
         }
-        let mut row = vec![k as f64 * 0.01];
+        // Times are written to the nanosecond (`clean_time`).
+        let mut row = vec![twinloop_io::clean_time(k as f64 * 0.01)];
         row.extend_from_slice(&state.positions);
         w.write_row(&row).unwrap();
         written.push(row);

@@ -15,7 +15,7 @@ use twinloop_actuator::log::LogWriter;
 use twinloop_actuator::{Excitation, LoopFamily, Pendulum, ServoType};
 use twinloop_link::ModelTable;
 use twinloop_link::transport::Transport;
-use twinloop_link::{Client, Item, Protocol, Register, RobotMapping, ServoModel};
+use twinloop_link::{Client, Item, JointMapping, Protocol, Register, RobotMapping, ServoModel};
 
 #[derive(Args, Debug)]
 pub struct ServoArgs {
@@ -261,20 +261,9 @@ fn bench_target(a: &ServoArgs, id: u8) -> Result<(BusClient, String, Target), Cl
     Ok((client, port, target))
 }
 
-/// The limb of a held robot: --joint's servo from --map, its load the subtree beyond
-/// the joint at the pose the other servos hold (read now), the sequence centred
-/// where the joint is and scaled to stay inside its limits.
-fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target), CliError> {
-    let (mapping, port, spec) = resolve(
-        a.map.as_deref(),
-        &a.bus,
-        a.robot.as_deref(),
-        "the limb's load",
-    )?;
-    let spec = recorded_spec(&spec, &mapping);
-    let (robot, _) = crate::common::load_description(&spec)?;
-    crate::common::hinges_only(&robot, &spec, "a limb load")?;
-    let jm = mapping
+/// The mapping's entry for `--joint`.
+fn mapped_joint<'m>(mapping: &'m RobotMapping, joint: &str) -> Result<&'m JointMapping, CliError> {
+    mapping
         .joints
         .iter()
         .find(|j| j.name == joint)
@@ -289,30 +278,18 @@ fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target)
                     .collect::<Vec<_>>()
                     .join(", ")
             ))
-        })?;
-    let model = twinloop_dynamics::Model::from_description_with_base(
-        &robot,
-        twinloop_dynamics::BaseKind::Fixed,
-    )
-    .map_err(|e| CliError::new(format!("{spec}: {e}")))?;
-    let k = model
-        .joint_index(joint)
-        .ok_or_else(|| CliError::new(format!("--joint {joint:?}: not a joint of {spec}")))?;
-    let bus = PortArgs {
-        port: Some(port.clone()),
-        ..a.bus.clone()
-    };
-    let mut client = open_client(&bus, None)?;
-    let found = find(&mut client, jm.id)?;
-    if found != jm.model {
-        return Err(CliError::new(format!(
-            "servo id {} ({joint}): answers as {found}, {} says {}",
-            jm.id, mapping.source, jm.model
-        )));
-    }
-    let servo = servo_type(found, jm.id)?;
-    // The held pose: every mapped servo's position now; joints without a servo at
-    // 0 (within their limits), as the virtual robot holds them.
+        })
+}
+
+/// The held pose: every mapped servo's position now; joints without a servo at 0
+/// (within their limits), as the virtual robot holds them. With `joint`'s servo
+/// angle.
+fn held_pose(
+    client: &mut BusClient,
+    mapping: &RobotMapping,
+    model: &twinloop_dynamics::Model,
+    joint: &str,
+) -> Result<(Vec<(String, f64)>, f64), CliError> {
     let mut pose: Vec<(String, f64)> = model
         .joint_names
         .iter()
@@ -329,34 +306,19 @@ fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target)
         let Some(i) = model.joint_index(&j.name) else {
             continue;
         };
-        let s = read_position(&mut client, j.model, j.id)?;
+        let s = read_position(client, j.model, j.id)?;
         pose[i].1 = j.joint_angle(s);
         if j.name == joint {
             here = s;
         }
     }
-    let (gravity, trunk) = match mapping.boards.first() {
-        Some(b) => (
-            trunk_gravity(&mut client, b, &model, &pose)?,
-            format!("from board \"{}\" (id {})", b.name, b.id),
-        ),
-        None => (
-            crate::limb::UPRIGHT,
-            "trunk assumed upright: no IMU board in the mapping".to_string(),
-        ),
-    };
-    let limb = Limb {
-        robot: spec.clone(),
-        joint: joint.to_string(),
-        zero: jm.zero,
-        direction: jm.direction,
-        pose,
-        gravity,
-        trunk,
-    };
-    let (load, _) = limb.load(&robot)?;
+    Ok((pose, here))
+}
+
+/// Refuse a limb too heavy for the servo; warn when it is too light to determine
+/// friction and armature (docs/servo-models.md, "Which load").
+fn check_load(joint: &str, servo: ServoType, gravity: f64) -> Result<(), CliError> {
     let stall = servo.rating().stall_torque;
-    let gravity = load.max_gravity_torque();
     let rule = twinloop_actuator::load_rule::MAX_RATIO;
     if gravity > rule * stall {
         return Err(CliError::new(format!(
@@ -377,8 +339,20 @@ fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target)
             100.0 * min
         );
     }
-    // The joint's range: the description's limits within the mapping's, as servo
-    // angles, narrowed by the margin.
+    Ok(())
+}
+
+/// The joint's range as servo angles (the description's limits within the
+/// mapping's, narrowed by the margin), the side with more room and the amplitude
+/// that keeps the sequence inside it.
+fn sequence_range(
+    a: &ServoArgs,
+    jm: &JointMapping,
+    model: &twinloop_dynamics::Model,
+    k: usize,
+    here: f64,
+    joint: &str,
+) -> Result<(f64, f64, f64, f64), CliError> {
     let (jlo, jhi) = (
         model.lower_limits[k].max(jm.min),
         model.upper_limits[k].min(jm.max),
@@ -400,6 +374,67 @@ fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target)
             "--joint {joint}: at {here:.3} rad (servo angle) it is too near its limits ({lo:.3} to {hi:.3} rad) for the sequence: move it towards the middle of its range first"
         )));
     }
+    Ok((lo, hi, sign, amplitude))
+}
+
+/// The limb of a held robot: --joint's servo from --map, its load the subtree beyond
+/// the joint at the pose the other servos hold (read now), the sequence centred
+/// where the joint is and scaled to stay inside its limits.
+fn limb_target(a: &ServoArgs, joint: &str) -> Result<(BusClient, String, Target), CliError> {
+    let (mapping, port, spec) = resolve(
+        a.map.as_deref(),
+        &a.bus,
+        a.robot.as_deref(),
+        "the limb's load",
+    )?;
+    let spec = recorded_spec(&spec, &mapping);
+    let (robot, _) = crate::common::load_description(&spec)?;
+    crate::common::hinges_only(&robot, &spec, "a limb load")?;
+    let jm = mapped_joint(&mapping, joint)?;
+    let model = twinloop_dynamics::Model::from_description_with_base(
+        &robot,
+        twinloop_dynamics::BaseKind::Fixed,
+    )
+    .map_err(|e| CliError::new(format!("{spec}: {e}")))?;
+    let k = model
+        .joint_index(joint)
+        .ok_or_else(|| CliError::new(format!("--joint {joint:?}: not a joint of {spec}")))?;
+    let bus = PortArgs {
+        port: Some(port.clone()),
+        ..a.bus.clone()
+    };
+    let mut client = open_client(&bus, None)?;
+    let found = find(&mut client, jm.id)?;
+    if found != jm.model {
+        return Err(CliError::new(format!(
+            "servo id {} ({joint}): answers as {found}, {} says {}",
+            jm.id, mapping.source, jm.model
+        )));
+    }
+    let servo = servo_type(found, jm.id)?;
+    let (pose, here) = held_pose(&mut client, &mapping, &model, joint)?;
+    let (gravity, trunk) = match mapping.boards.first() {
+        Some(b) => (
+            trunk_gravity(&mut client, b, &model, &pose)?,
+            format!("from board \"{}\" (id {})", b.name, b.id),
+        ),
+        None => (
+            crate::limb::UPRIGHT,
+            "trunk assumed upright: no IMU board in the mapping".to_string(),
+        ),
+    };
+    let limb = Limb {
+        robot: spec.clone(),
+        joint: joint.to_string(),
+        zero: jm.zero,
+        direction: jm.direction,
+        pose,
+        gravity,
+        trunk,
+    };
+    let (load, _) = limb.load(&robot)?;
+    check_load(joint, servo, load.max_gravity_torque())?;
+    let (lo, hi, sign, amplitude) = sequence_range(a, jm, &model, k, here, joint)?;
     let what = format!(
         "move {joint} (servo id {}, {servo}) of the held robot (trunk fixed, every other servo holding) by up to {:.2} rad from {here:.3} rad (range {lo:.3} to {hi:.3})",
         jm.id,
@@ -565,6 +600,36 @@ fn servo_type(model: ServoModel, id: u8) -> Result<ServoType, CliError> {
     })
 }
 
+/// The first sign of trouble in a cycle: a hardware fault, heat, the servo past
+/// its range, or Ctrl-C.
+fn trouble(
+    id: u8,
+    status: twinloop_link::StatusError,
+    m: &[f64; 7],
+    (lo, hi): (f64, f64),
+    stop: &std::sync::atomic::AtomicBool,
+) -> Option<String> {
+    if status.hardware_fault() {
+        return Some(format!("servo id {id}: {status}"));
+    }
+    if m[5] >= MAX_TEMPERATURE_C {
+        return Some(format!(
+            "servo id {id}: {} C, stopping before its 80 C limit",
+            m[5]
+        ));
+    }
+    if m[0] < lo - LIMIT_MARGIN || m[0] > hi + LIMIT_MARGIN {
+        return Some(format!(
+            "servo id {id}: at {:.3} rad, past the joint's range {lo:.3} to {hi:.3} rad",
+            m[0]
+        ));
+    }
+    if stop.load(Ordering::Relaxed) {
+        return Some("interrupted (Ctrl-C)".into());
+    }
+    None
+}
+
 /// The run: the sequence written goal by goal, every read logged as it comes.
 fn drive(
     a: &ServoArgs,
@@ -608,7 +673,8 @@ fn drive(
     let mut buf = vec![0u8; block.len];
     // Time 0: the first goal was just written.
     let t0 = Instant::now();
-    let mut abort = None;
+    // Every way out of the loop says why (None: the sequence ended).
+    let mut abort: Option<String>;
     let mut last_q = target.centre;
     // The goal the servo reports and when it was sent; the last write's time.
     let mut row_goal = f64::NAN;
@@ -639,26 +705,8 @@ fn drive(
         let row = [t, m[6], t_goal, m[0], m[1], m[2], m[3], m[4], m[5]];
         log.write(&row, &regs)
             .map_err(|e| CliError::new(format!("{}: {e}", a.out.display())))?;
-        if status.hardware_fault() {
-            abort = Some(format!("servo id {id}: {status}"));
-            break;
-        }
-        if m[5] >= MAX_TEMPERATURE_C {
-            abort = Some(format!(
-                "servo id {id}: {} C, stopping before its 80 C limit",
-                m[5]
-            ));
-            break;
-        }
-        if m[0] < lo - LIMIT_MARGIN || m[0] > hi + LIMIT_MARGIN {
-            abort = Some(format!(
-                "servo id {id}: at {:.3} rad, past the joint's range {lo:.3} to {hi:.3} rad",
-                m[0]
-            ));
-            break;
-        }
-        if stop.load(Ordering::Relaxed) {
-            abort = Some("interrupted (Ctrl-C)".into());
+        abort = trouble(id, status, &m, target.bounds, &stop);
+        if abort.is_some() {
             break;
         }
         let Some((g, r)) = goal_at(t) else { break };
