@@ -47,7 +47,9 @@ fn write_text(name: &str, text: &str) -> PathBuf {
 /// The sample poses as CSV text, with `edit` applied to the data row `row` (0-based)
 /// and column `col`.
 fn edited(model: &Model, row: usize, col: &str, value: &str) -> String {
-    let p = tmp("base.csv");
+    // A file per edit: tests run at once, and each output is written beside its
+    // target and renamed.
+    let p = tmp(&format!("base-{row}-{}.csv", col.replace(':', "_")));
     write_static_poses(&p, model, &sample(model)).unwrap();
     let text = std::fs::read_to_string(&p).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
