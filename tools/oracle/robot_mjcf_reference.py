@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""MuJoCo's compiled numbers for the robot MJCFs under models/ (OP3, TALOS, G1, H1).
+"""MuJoCo's compiled numbers for the robot MJCFs under models/ (the Menagerie humanoids
+the repository ships, and G1 and H1 as Unitree ship them).
 
 For each robot MJCF in models/*/mjcf/ (scene files only include them), this
 writes crates/twinloop-dynamics/tests/data/mujoco_models/<name>.json in the
@@ -27,13 +28,23 @@ written (masses, inertias, mass matrices, bias forces) to be identical:
   h1_description/meshes/ when that folder exists (file names matched without
   regard to case: the Menagerie file writes `pelvis.stl`, Unitree ships
   `pelvis.STL`);
+- the Menagerie humanoids (Cassie, Apollo, Berkeley Humanoid, T1, N1, Adam Lite):
+  their `assets/` folders in a Menagerie checkout given as `--menagerie DIR`
+  (DIR/<robot>/assets, the folder names under models/ being Menagerie's), when
+  every mesh file the model names is there;
 - OP3 and TALOS: no mesh files are available (see their SOURCE.md).
+
+Texture files are not in the repository either: they are dropped with the meshes
+(a texture has no mass), and from the file compiled with meshes.
+
+A body with no `<inertial>` is accepted only when it has no geom and no joint
+(Apollo's `world_link`): MuJoCo compiles it massless, and the script checks that.
 
 Which mesh sets were compiled and found equal is recorded in each JSON
 (`meshes`). Run from anywhere:
 
     pip install mujoco==4.0.0 numpy
-    python3 tools/oracle/robot_mjcf_reference.py [--shared /work/shared/models]
+    python3 tools/oracle/robot_mjcf_reference.py [--shared /work/shared/models] [--menagerie DIR]
 """
 import argparse
 import glob
@@ -61,6 +72,10 @@ MESH_SETS = {
     "unitree_h1": [("Unitree's meshes, shared/models/unitree_h1/meshes/h1_description/meshes", "shared",
                     "unitree_h1/meshes/h1_description/meshes")],
 }
+MENAGERIE = ["agility_cassie", "apptronik_apollo", "berkeley_humanoid", "booster_t1", "fourier_n1",
+             "pndbotics_adam_lite"]
+for _robot in MENAGERIE:
+    MESH_SETS[_robot] = [(f"Menagerie's meshes, {_robot}/assets", "menagerie", f"{_robot}/assets")]
 
 
 def robot_files():
@@ -73,9 +88,21 @@ def name_of(path):
     return f"{robot}_{os.path.splitext(os.path.basename(path))[0]}"
 
 
+def strip_textures(root):
+    """Drop texture files (not in the repository; a texture weighs nothing)."""
+    for asset in root.iter("asset"):
+        for tex in list(asset.findall("texture")):
+            if "file" in tex.attrib:
+                asset.remove(tex)
+                for mat in asset.findall("material"):
+                    if mat.get("texture") == tex.get("name"):
+                        del mat.attrib["texture"]
+
+
 def strip_meshes(text):
-    """The MJCF without its mesh assets and without the geoms that use them."""
+    """The MJCF without its mesh assets, the geoms that use them, and texture files."""
     root = ET.fromstring(text)
+    strip_textures(root)
     for asset in root.iter("asset"):
         for mesh in list(asset.findall("mesh")):
             asset.remove(mesh)
@@ -105,9 +132,14 @@ def check_explicit_inertials(path, text, m):
     for b in bodies:
         name = b.get("name")
         inertial = b.find("inertial")
-        assert inertial is not None, f"{path}: body {name} has no <inertial>"
         i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name)
         assert i > 0, f"{path}: body {name}"
+        if inertial is None:
+            # Only an empty static body may go without: nothing to weigh.
+            assert b.find("geom") is None and b.find("joint") is None and b.find("freejoint") is None, \
+                f"{path}: body {name} has no <inertial>"
+            assert m.body_mass[i] == 0.0, f"{path}: {name} mass {m.body_mass[i]}"
+            continue
         mass = float(inertial.get("mass"))
         assert m.body_mass[i] == mass, f"{path}: {name} mass {m.body_mass[i]} vs {mass}"
         pos = np.array([float(x) for x in inertial.get("pos").split()])
@@ -120,7 +152,7 @@ def mesh_dir(source, names):
     case), or None when one is missing."""
     present = {f.lower(): os.path.join(source, f) for f in os.listdir(source)}
     tmp = tempfile.mkdtemp(prefix="twinloop_meshes_")
-    for f in names:
+    for f in sorted(set(names)):  # Cassie's left and right meshes share files
         src = present.get(os.path.basename(f).lower())
         if src is None:
             shutil.rmtree(tmp)
@@ -132,7 +164,9 @@ def mesh_dir(source, names):
 
 def with_meshes(text, meshes):
     """Compile the original file with its meshdir pointed at `meshes`."""
-    spec = mujoco.MjSpec.from_string(text)
+    root = ET.fromstring(text)
+    strip_textures(root)
+    spec = mujoco.MjSpec.from_string(ET.tostring(root, encoding="unicode"))
     spec.meshdir = meshes
     return spec.compile()
 
@@ -141,6 +175,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--shared", default=os.path.join(os.path.dirname(REPO), "shared", "models"),
                     help="the shared model collection (for the full Unitree meshes), if present")
+    ap.add_argument("--menagerie", default=None,
+                    help="a MuJoCo Menagerie checkout, for the humanoids' own meshes")
     args = ap.parse_args()
     os.makedirs(OUT, exist_ok=True)
     for path in robot_files():
@@ -154,7 +190,8 @@ def main():
         mesh_files = [el.get("file") for el in ET.fromstring(text).iter("mesh") if el.get("file")]
         compiled = []
         for what, where, rel in MESH_SETS.get(robot, []):
-            source = os.path.join(REPO if where == "repo" else args.shared, rel)
+            base = {"repo": REPO, "shared": args.shared, "menagerie": args.menagerie}[where]
+            source = os.path.join(base, rel) if base else ""
             if not os.path.isdir(source):
                 print(f"{name}: {what}: not here, skipped")
                 continue
