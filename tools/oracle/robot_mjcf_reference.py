@@ -8,7 +8,7 @@ format of crates/twinloop-description/tests/data/mjcf/make_reference.py (whose
 `reference()` it calls): per body MuJoCo's `body_mass`, `body_ipos`,
 `body_inertia`, `body_iquat`; at three seeded states with the free root held at
 the identity, `mj_fullM` and `qfrc_bias` (also with the root free) and every
-body's world pose.
+body's world pose; each joint's actuator force limit (`force_limits`).
 
 The mesh files these MJCFs name are not in the repository (the Menagerie and
 Unitree asset folders are 17-22 MB each), and MuJoCo refuses a model whose mesh
@@ -47,6 +47,7 @@ Which mesh sets were compiled and found equal is recorded in each JSON
     python3 tools/oracle/robot_mjcf_reference.py [--shared /work/shared/models] [--menagerie DIR]
 """
 import argparse
+import copy
 import glob
 import json
 import os
@@ -171,6 +172,52 @@ def with_meshes(text, meshes):
     return spec.compile()
 
 
+def force_limits(m):
+    """Each joint's actuator force limit as MuJoCo applies it: `qfrc_actuator` with every
+    control at 1e6, where a position or velocity actuator (an affine bias) has its bias
+    and its control range taken away, so that what is left is the clamp of its
+    `forcerange` and the joint's `actuatorfrcrange` (kp times a control within its
+    range at one pose would be a pose's force, not a limit). A motor keeps its
+    control range: gear times the largest control is its limit."""
+    m = copy.deepcopy(m)
+    for a in range(m.nu):
+        if m.actuator_biastype[a] != mujoco.mjtBias.mjBIAS_NONE:
+            m.actuator_biasprm[a, :] = 0.0
+            m.actuator_ctrllimited[a] = 0
+    d = mujoco.MjData(m)
+    d.ctrl[:] = 1e6
+    mujoco.mj_forward(m, d)
+    return d.qfrc_actuator.tolist()
+
+
+def summary(path, m):
+    """The summary.json entry of a Menagerie folder added in issue 30, from MuJoCo's
+    compiled model (the fields crates/twinloop-description/tests/mjcf_models.rs reads,
+    as the shared collection's summaries have them): bodies (the world left out),
+    joints by type, the inertials' total mass, hinges MuJoCo limits (with `range`
+    given in the file or its default classes, `autolimits`), and the empty static
+    bodies (no joint, no geom, no mass) MuJoCo welds to the world."""
+    kinds = {0: "free", 1: "ball", 2: "slide", 3: "hinge"}
+    by_type = {}
+    for t in m.jnt_type:
+        by_type[kinds[int(t)]] = by_type.get(kinds[int(t)], 0) + 1
+    hinge = m.jnt_type == mujoco.mjtJoint.mjJNT_HINGE
+    names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, i) for i in range(m.nbody)]
+    empty = [names[i] for i in range(1, m.nbody)
+             if m.body_jntnum[i] == 0 and m.body_geomnum[i] == 0 and m.body_mass[i] == 0
+             and m.body_parentid[i] == 0]
+    return {
+        "format": "MJCF",
+        "model": os.path.basename(path),
+        "source": "tools/oracle/robot_mjcf_reference.py (MuJoCo %s, mesh geoms removed)" % mujoco.__version__,
+        "n_bodies": int(m.nbody - 1),
+        "joints_by_type": by_type,
+        "total_mass_kg_from_inertial": float(m.body_mass.sum()),
+        "joints_with_range_attr": int((m.jnt_limited.astype(bool) & hinge).sum()),
+        "empty_static_bodies": empty,
+    }
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--shared", default=os.path.join(os.path.dirname(REPO), "shared", "models"),
@@ -208,6 +255,7 @@ def main():
             theirs = reference(full)
             assert theirs == ref, f"{name}: the numbers with {what} differ from the stripped model's"
             compiled.append(what)
+        ref["actuator_force_limit"] = force_limits(m)
         ref["source_file"] = os.path.relpath(path, REPO)
         ref["meshes"] = {
             "mesh_assets_in_file": len(mesh_files),
@@ -215,6 +263,14 @@ def main():
             "every_body_has_inertial": True,
             "compiled_with_meshes_and_identical": compiled,
         }
+        if robot in MENAGERIE:
+            summary_path = os.path.join(REPO, "models", robot, "summary.json")
+            key = os.path.relpath(path, os.path.join(REPO, "models", robot))
+            entries = json.load(open(summary_path)) if os.path.exists(summary_path) else {}
+            entries[key] = summary(path, m)
+            with open(summary_path, "w") as f:
+                json.dump(entries, f, indent=1, sort_keys=True)
+                f.write("\n")
         with open(os.path.join(OUT, f"{name}.json"), "w") as f:
             json.dump(ref, f, separators=(",", ":"))
             f.write("\n")
