@@ -404,3 +404,19 @@ fn mjcf_models_write_as_urdf() {
         assert_eq!(text.matches("URDF has no capsule").count(), capsules);
     }
 }
+
+/// Issue 30 item 1: Apptronik Apollo's empty static `world_link` beside its free
+/// robot (no mass, no joint, no geom: MuJoCo welds it to the world) is left out with
+/// a note naming it, not refused.
+#[test]
+fn an_empty_static_body_beside_the_robot_is_left_out_with_a_note() {
+    let apollo = read(&models_dir().join("apptronik_apollo/mjcf/apptronik_apollo.xml"));
+    assert!(apollo.link("world_link").is_none());
+    assert_eq!(apollo.root_link(), Some("base_link"));
+    let note = apollo
+        .ignored
+        .iter()
+        .find(|n| n.element == "<body name=\"world_link\">")
+        .expect("a note for world_link");
+    assert!(note.what.contains("no mass, no joint"), "{}", note.what);
+}
