@@ -185,6 +185,103 @@ const MJCFS: &[&str] = &[
     "unitree_h1/mjcf/h1_unitree.xml",
 ];
 
+/// The other humanoids of MuJoCo Menagerie in models/ (issue 30), each with the
+/// warnings it must give, by name: what twinloop leaves out of its dynamics
+/// (Cassie's four `<connect>` closures, sensors at sites) and Apollo's empty
+/// static `world_link`. Everything else (Cassie's springs, every motor's force
+/// range) is modelled and gives no warning.
+const MENAGERIE: &[(&str, &[&str])] = &[
+    (
+        "agility_cassie/mjcf/cassie.xml",
+        &[
+            "<connect> in <equality>",
+            "<connect> in <equality>",
+            "<connect> in <equality>",
+            "<connect> in <equality>",
+            "<gyro name=\"pelvis-angular-velocity\">",
+            "<accelerometer name=\"pelvis-linear-acceleration\">",
+            "<magnetometer name=\"pelvis-magnetometer\">",
+        ],
+    ),
+    (
+        "apptronik_apollo/mjcf/apptronik_apollo.xml",
+        &[
+            "<gyro name=\"IMU-angular-velocity\">",
+            "<accelerometer name=\"IMU-linear-acceleration\">",
+            "<magnetometer name=\"IMU-magnetometer\">",
+            "<body name=\"world_link\">",
+        ],
+    ),
+    (
+        "berkeley_humanoid/mjcf/berkeley_humanoid.xml",
+        &[
+            "<gyro name=\"local_rpyrate\">",
+            "<velocimeter name=\"local_linvel\">",
+            "<accelerometer name=\"accelerometer\">",
+            "<force name=\"left_foot_force\">",
+            "<force name=\"right_foot_force\">",
+        ],
+    ),
+    (
+        "booster_t1/mjcf/t1.xml",
+        &[
+            "<gyro name=\"angular-velocity\">",
+            "<accelerometer name=\"linear-acceleration\">",
+        ],
+    ),
+    (
+        "fourier_n1/mjcf/n1.xml",
+        &[
+            "<gyro name=\"angular-velocity\">",
+            "<accelerometer name=\"linear-acceleration\">",
+        ],
+    ),
+    ("pndbotics_adam_lite/mjcf/adam_lite.xml", &[]),
+];
+
+#[test]
+fn menagerie_humanoids_warn_by_name_for_what_is_left_out() {
+    for (rel, expected) in MENAGERIE {
+        let r = lint_file(rel);
+        let mut warned: Vec<&str> = r
+            .findings
+            .iter()
+            .filter(|f| f.severity == Severity::Warning)
+            .map(|f| f.name.trim_start_matches("element "))
+            .collect();
+        warned.sort();
+        let mut want = expected.to_vec();
+        want.sort();
+        assert_eq!(warned, want, "{rel}: {:#?}", r.findings);
+        assert_eq!(r.errors, 0, "{rel}: {:#?}", r.findings);
+    }
+}
+
+#[test]
+fn the_mjcf_lists_cover_every_bundled_mjcf() {
+    let mut found = Vec::new();
+    for robot in std::fs::read_dir(models_dir()).unwrap() {
+        let dir = robot.unwrap().path().join("mjcf");
+        for e in std::fs::read_dir(&dir).into_iter().flatten() {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_str().unwrap();
+            if name.ends_with(".xml") && name != "scene.xml" {
+                let rel = p.strip_prefix(models_dir()).unwrap().to_str().unwrap();
+                found.push(rel.replace('\\', "/"));
+            }
+        }
+    }
+    found.sort();
+    let mut listed: Vec<String> = MJCFS
+        .iter()
+        .copied()
+        .chain(MENAGERIE.iter().map(|(rel, _)| *rel))
+        .map(String::from)
+        .collect();
+    listed.sort();
+    assert_eq!(found, listed);
+}
+
 #[test]
 fn the_lists_cover_every_bundled_model() {
     let mut found = Vec::new();
@@ -474,7 +571,8 @@ fn op3_mjcf_and_urdf_weigh_the_same() {
 #[test]
 fn bundled_robots_pass_the_unit_scale_bounds_and_their_1000x_copies_do_not() {
     use twinloop_description::lint::unit_scale::{MAX_BULK_DENSITY, MAX_EXTENT_M, extent};
-    for rel in URDFS.iter().chain(MJCFS) {
+    let menagerie = MENAGERIE.iter().map(|(rel, _)| rel);
+    for rel in URDFS.iter().chain(MJCFS).chain(menagerie) {
         let robot = twinloop_description::load(models_dir().join(rel)).unwrap();
         let size = extent(&robot);
         let density = robot.total_mass() / size.powi(3);

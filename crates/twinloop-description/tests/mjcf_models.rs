@@ -22,7 +22,9 @@ fn robot_mjcfs() -> Vec<std::path::PathBuf> {
         })
         .filter(|p| p.file_name().is_some_and(|n| n != "scene.xml"))
         .collect();
-    assert_eq!(files.len(), 6, "{files:?}");
+    // OP3, TALOS, G1 and H1 (G1 and H1 also as Unitree ship them), and the other
+    // Menagerie humanoids of issue 30.
+    assert_eq!(files.len(), 12, "{files:?}");
     files
 }
 
@@ -41,10 +43,22 @@ fn every_mjcf_matches_its_summary() {
             .count();
         assert_eq!(moving, hinges, "{here}: hinges");
         assert_eq!(by_type.get("free").map(Json::num), Some(1.0), "{here}");
-        // One link per body; the free-floating top body is the root, no world link.
+        let balls = by_type.get("ball").map_or(0.0, Json::num) as usize;
+        let spherical = robot
+            .joints
+            .iter()
+            .filter(|j| j.kind == JointKind::Spherical)
+            .count();
+        assert_eq!(spherical, balls, "{here}: balls");
+        // One link per body but the empty static ones MuJoCo welds to the world
+        // (Apollo's world_link); the free-floating top body is the root, no world link.
+        let empty = match s.get("empty_static_bodies") {
+            Some(Json::Arr(names)) => names.len(),
+            _ => 0,
+        };
         assert_eq!(
             robot.links.len(),
-            s.get("n_bodies").unwrap().num() as usize,
+            s.get("n_bodies").unwrap().num() as usize - empty,
             "{here}: bodies"
         );
         assert!(robot.link("world").is_none(), "{here}");
@@ -55,7 +69,7 @@ fn every_mjcf_matches_its_summary() {
             .filter(|j| j.kind == JointKind::Fixed)
             .count();
         assert_eq!(
-            fixed + hinges + 1,
+            fixed + hinges + balls + 1,
             robot.links.len(),
             "{here}: a fixed joint per jointless body"
         );
@@ -325,14 +339,23 @@ fn mjcf_models_write_as_urdf() {
         let m = read(&path);
         let text = urdf::to_string(&m);
         let back = urdf::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        // Frames come back as links with fixed joints, capsules as cylinders.
+        // Frames come back as links with fixed joints, capsules as cylinders, a ball
+        // joint (Cassie's) as three revolute joints through two massless links.
+        let balls = m
+            .joints
+            .iter()
+            .filter(|j| j.kind == JointKind::Spherical)
+            .count();
         assert_eq!(
             back.links.len(),
-            m.links.len() + m.frames.len(),
+            m.links.len() + m.frames.len() + 2 * balls,
             "{}",
             path.display()
         );
-        assert_eq!(back.joints.len(), m.joints.len() + m.frames.len());
+        assert_eq!(
+            back.joints.len(),
+            m.joints.len() + m.frames.len() + 2 * balls
+        );
         assert!((back.total_mass() - m.total_mass()).abs() < 1e-12);
         for l in &m.links {
             let b = back.link(&l.name).unwrap();
@@ -344,6 +367,18 @@ fn mjcf_models_write_as_urdf() {
             assert_eq!(b.visuals.len(), l.visuals.len());
         }
         for j in &m.joints {
+            if j.kind == JointKind::Spherical {
+                for axis in ["x", "y", "z"] {
+                    let r = back.joint(&format!("{}_{axis}", j.name)).unwrap();
+                    assert!(
+                        matches!(r.kind, JointKind::Revolute | JointKind::Continuous),
+                        "{}_{axis}: {:?}",
+                        j.name,
+                        r.kind
+                    );
+                }
+                continue;
+            }
             // URDF has no armature or spring.
             let urdf_joint = Joint {
                 armature: 0.0,
@@ -368,4 +403,20 @@ fn mjcf_models_write_as_urdf() {
             .count();
         assert_eq!(text.matches("URDF has no capsule").count(), capsules);
     }
+}
+
+/// Issue 30 item 1: Apptronik Apollo's empty static `world_link` beside its free
+/// robot (no mass, no joint, no geom: MuJoCo welds it to the world) is left out with
+/// a note naming it, not refused.
+#[test]
+fn an_empty_static_body_beside_the_robot_is_left_out_with_a_note() {
+    let apollo = read(&models_dir().join("apptronik_apollo/mjcf/apptronik_apollo.xml"));
+    assert!(apollo.link("world_link").is_none());
+    assert_eq!(apollo.root_link(), Some("base_link"));
+    let note = apollo
+        .ignored
+        .iter()
+        .find(|n| n.element == "<body name=\"world_link\">")
+        .expect("a note for world_link");
+    assert!(note.what.contains("no mass, no joint"), "{}", note.what);
 }

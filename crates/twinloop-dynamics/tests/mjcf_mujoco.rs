@@ -519,6 +519,21 @@ fn generated_corpus_agrees_with_mujoco() {
 
 /// The hand-written edge cases of issue 30 (tests/data/mjcf/edges, each file says
 /// what it exercises): all load and agree with MuJoCo to 1e-9, fixed and floating.
+/// The empty static bodies MuJoCo compiles massless (Apollo's `world_link`
+/// beside its free robot) are left out, each said in an `ignored` note.
+fn check_empty_static(name: &str, robot: &Description, refd: &Value) {
+    for empty in refd["empty_static"].as_array().into_iter().flatten() {
+        let empty = empty.as_str().unwrap();
+        assert!(robot.link(empty).is_none(), "{name}: {empty} left out");
+        let note = robot
+            .ignored
+            .iter()
+            .find(|n| n.element == format!("<body name=\"{empty}\">"))
+            .unwrap_or_else(|| panic!("{name}: no note for {empty}"));
+        assert!(note.what.contains("no mass, no joint"), "{}", note.what);
+    }
+}
+
 /// The empty static body beside the free robot (Apollo's `world_link`) is left
 /// out, said in an `ignored` note, where MuJoCo compiles it as a massless body.
 #[test]
@@ -531,16 +546,7 @@ fn mjcf_edge_cases_agree_with_mujoco() {
         if refd["root_free"] == true {
             check_floating(&name, &robot, &refd, TOL);
         }
-        for empty in refd["empty_static"].as_array().into_iter().flatten() {
-            let empty = empty.as_str().unwrap();
-            assert!(robot.link(empty).is_none(), "{name}: {empty} left out");
-            let note = robot
-                .ignored
-                .iter()
-                .find(|n| n.element == format!("<body name=\"{empty}\">"))
-                .unwrap_or_else(|| panic!("{name}: no note for {empty}"));
-            assert!(note.what.contains("no mass, no joint"), "{}", note.what);
-        }
+        check_empty_static(&name, &robot, &refd);
     }
     println!(
         "edge cases: largest relative error {:.1e}",
@@ -572,14 +578,18 @@ fn mesh_bodies_agree_with_mujoco() {
     );
 }
 
-/// The robot MJCFs under models/ (OP3, TALOS, G1 and H1, each as the Menagerie
-/// or Unitree ships it), loaded from the files as committed, against MuJoCo
+/// The robot MJCFs under models/: every humanoid of MuJoCo Menagerie that the
+/// repository ships (Cassie, Apollo, Berkeley Humanoid, T1, N1, OP3, Adam Lite,
+/// TALOS, G1, H1; issue 30), and G1 and H1 as Unitree ship them, loaded from the
+/// files as committed, against MuJoCo
 /// compiling them (tests/data/mujoco_models, written by
 /// tools/oracle/robot_mjcf_reference.py). MuJoCo compiled each with its mesh
 /// geoms removed, as the mesh files are not in the repository; the script
 /// checks that this cannot change the result (every body has an explicit
-/// `<inertial>`, whose mass and CoM MuJoCo's compiled model keeps) and, for G1
-/// and H1, that compiling with the robots' own meshes gives identical numbers.
+/// `<inertial>`, whose mass and CoM MuJoCo's compiled model keeps, or is an
+/// empty static body MuJoCo compiles massless) and, where the robots' own
+/// meshes were available (G1, Cassie, T1), that compiling with them gives
+/// identical numbers.
 #[test]
 fn robot_models_agree_with_mujoco() {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -606,12 +616,19 @@ fn robot_models_agree_with_mujoco() {
         close(&format!("{name} total mass"), robot.total_mass(), mass, 1.0);
         check_model(&name, &robot, &refd, TOL);
         check_floating(&name, &robot, &refd, TOL);
+        check_empty_static(&name, &robot, &refd);
         names.push(name);
     }
     assert_eq!(
         names,
         [
+            "agility_cassie_cassie",
+            "apptronik_apollo_apptronik_apollo",
+            "berkeley_humanoid_berkeley_humanoid",
+            "booster_t1_t1",
+            "fourier_n1_n1",
             "op3_op3",
+            "pndbotics_adam_lite_adam_lite",
             "talos_talos",
             "unitree_g1_g1_29dof_rev_1_0_unitree",
             "unitree_g1_g1_menagerie",

@@ -141,3 +141,129 @@ fn h1_motors_give_mujocos_saturation_as_effort_limits() {
         "{lint:?}"
     );
 }
+
+/// The Menagerie humanoids' reference numbers (MuJoCo 4.0.1, written by
+/// tools/oracle/robot_mjcf_reference.py), by the file's name.
+fn menagerie(name: &str) -> (twinloop_description::Description, Value) {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let json = dir.join(format!(
+        "../twinloop-dynamics/tests/data/mujoco_models/{name}.json"
+    ));
+    let refd: Value = serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    let xml = dir
+        .join("../..")
+        .join(refd["source_file"].as_str().unwrap());
+    (twinloop_description::load(xml).unwrap(), refd)
+}
+
+/// Items 3 on the real files: Cassie's leaf springs (`stiffness` 1500 and 1250 N m/rad),
+/// every hinge's damping and its ball joints' damping are MuJoCo's `qfrc_passive` at
+/// its three seeded states (root held), to 1e-12.
+#[test]
+fn cassie_springs_and_dampers_are_mujocos_passive_forces() {
+    let (robot, refd) = menagerie("agility_cassie_cassie");
+    let model = Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap();
+    let config = SimConfig {
+        ground: false,
+        ..SimConfig::default()
+    };
+    let sim = Simulator::from_model(&robot, model, config).unwrap();
+    let (mut springs, mut balls) = (0, 0);
+    for state in refd["states"].as_array().unwrap() {
+        let (q, v, passive) = (
+            numbers(&state["qpos"]),
+            numbers(&state["qvel"]),
+            numbers(&state["passive"]),
+        );
+        assert_eq!(passive.len(), sim.model.nv, "fixed-root state");
+        for (i, name) in sim.model.joint_names.iter().enumerate() {
+            let (iq, iv) = (sim.model.idx_q[i], sim.model.idx_v[i]);
+            let (ours, theirs): (Vec<f64>, &[f64]) = if sim.model.joint_types[i].nv() == 3 {
+                balls += 1;
+                let c = sim.joint_damping[i];
+                (
+                    (iv..iv + 3).map(|k| -c * v[k]).collect(),
+                    &passive[iv..iv + 3],
+                )
+            } else {
+                springs += usize::from(sim.joint_stiffness[i] > 0.0);
+                (
+                    vec![sim.passive_torque(i, q[iq], v[iv])],
+                    &passive[iv..iv + 1],
+                )
+            };
+            for (a, b) in ours.iter().zip(theirs) {
+                assert!(
+                    (a - b).abs() <= 1e-12 * b.abs().max(1.0),
+                    "{name}: {a} vs MuJoCo's {b}"
+                );
+            }
+        }
+    }
+    assert_eq!((springs, balls), (3 * 4, 3 * 2));
+}
+
+/// Item 3 on the real files: every Menagerie humanoid's actuators (Cassie's geared
+/// motors, Apollo's position actuators with `forcerange`, T1's joints'
+/// `actuatorfrcrange`, ...) give each joint the effort limit MuJoCo clamps its
+/// actuator force to (`actuator_force_limit` of robot_mjcf_reference.py); a joint
+/// no actuator drives has none (MuJoCo's 0, twinloop's infinity).
+#[test]
+fn menagerie_actuators_saturate_where_mujoco_does() {
+    for name in [
+        "agility_cassie_cassie",
+        "apptronik_apollo_apptronik_apollo",
+        "berkeley_humanoid_berkeley_humanoid",
+        "booster_t1_t1",
+        "fourier_n1_n1",
+        "pndbotics_adam_lite_adam_lite",
+    ] {
+        let (robot, refd) = menagerie(name);
+        let model = Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap();
+        let saturated = numbers(&refd["actuator_force_limit"]);
+        let mut driven = 0;
+        for (i, joint) in model.joint_names.iter().enumerate() {
+            if model.joint_types[i].nv() != 1 {
+                continue;
+            }
+            let theirs = saturated[6 + model.idx_v[i]];
+            let ours = model.effort_limits[i];
+            if theirs == 0.0 {
+                assert!(ours.is_infinite(), "{name} {joint}: {ours}");
+            } else {
+                driven += 1;
+                assert!(
+                    (ours - theirs).abs() <= 1e-12 * theirs,
+                    "{name} {joint}: {ours} vs {theirs}"
+                );
+            }
+        }
+        assert!(driven >= 10, "{name}: {driven}");
+        println!("{name}: {driven} driven joints");
+    }
+}
+
+/// Item 4 on the real file: Apollo's scene, whose soles touch the floor only through
+/// `<contact><pair>` (every geom of the robot has contype 0), can stand: placed on the
+/// ground at its neutral pose, it touches it with its two sole boxes and nothing else.
+#[test]
+fn apollo_scene_stands_on_its_pair_only_soles() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models/apptronik_apollo/mjcf/scene.xml");
+    let robot = twinloop_description::load(path).unwrap();
+    let mut sim = Simulator::new(&robot, SimConfig::default()).unwrap();
+    sim.check_can_stand().unwrap();
+    let zeros = vec![0.0; sim.model.nbodies];
+    sim.place_on_ground(&zeros).unwrap();
+    let links: std::collections::BTreeSet<&str> = sim
+        .contact_points()
+        .iter()
+        .map(|p| robot.links[p.link].name.as_str())
+        .collect();
+    // Its four robot-robot pairs (arms against the pelvis, thigh against thigh,
+    // shin against shin) are self-collisions: they must not touch the ground.
+    assert_eq!(
+        links.into_iter().collect::<Vec<_>>(),
+        ["l_foot_link", "r_foot_link"]
+    );
+}

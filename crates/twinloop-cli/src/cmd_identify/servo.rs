@@ -633,11 +633,6 @@ fn limb_load<'a>(
         .ok_or_else(|| CliError::new("identify servo needs --data LOG.csv"))
 }
 
-/// Held-out RMS error, in encoder counts, above which the fit is said not to
-/// reproduce the logs: good logs come back within one count (0.3-0.5 of the count
-/// for RX, MX and X over ptys, docs/servo-models.md).
-const HELDOUT_COUNTS: f64 = 2.0;
-
 fn text(id: &Identification, seconds: f64) -> String {
     let p = &id.params;
     let sd = p
@@ -676,13 +671,15 @@ fn text(id: &Identification, seconds: f64) -> String {
         id.fit_rms_mrad, id.heldout_rms_mrad, id.heldout_mae_mrad, id.heldout_rows
     );
     // A model that does not reproduce the held-out log: its deviations describe the
-    // fit to these logs, not the servo (pty logs on an overloaded machine: 14-44 mrad).
-    let count_mrad = 1e3 * p.servo.resolution();
-    if id.heldout_rms_mrad > HELDOUT_COUNTS * count_mrad {
+    // fit to these logs, not the servo (pty logs on an overloaded machine: 14-44 mrad),
+    // so the library reported every parameter as not determined.
+    if id.heldout_counts > twinloop_actuator::identify::HELDOUT_COUNTS {
         let _ = writeln!(
             s,
-            "warning: the held-out error is {:.1} encoder counts ({count_mrad:.2} mrad each): the model does not reproduce these logs (late samples? the wrong load?), so no number above is trustworthy, whatever its deviation",
-            id.heldout_rms_mrad / count_mrad
+            "warning: the held-out error is {:.1} encoder counts ({:.2} mrad each): the model does not reproduce these logs (late samples? the wrong load?), so every parameter is not determined and its interval and the combinations' deviations are {:.1} times wider",
+            id.heldout_counts,
+            1e3 * p.servo.resolution(),
+            id.heldout_counts
         );
     }
     let _ = writeln!(
@@ -742,6 +739,7 @@ fn to_json(id: &Identification, seconds: f64) -> serde_json::Value {
         "heldout_rms_mrad": id.heldout_rms_mrad,
         "heldout_mae_mrad": id.heldout_mae_mrad,
         "heldout_rows": id.heldout_rows,
+        "heldout_counts": id.heldout_counts,
         "singular_values": id.singular_values,
         "condition": id.condition,
         "undetermined": id.undetermined,

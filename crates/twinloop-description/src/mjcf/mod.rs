@@ -61,9 +61,10 @@
 //!   in MuJoCo). `plane`, `hfield`, `ellipsoid` and `sdf` geoms are not shapes. A
 //!   geom is a visual if its `group` is 0, 1 or 2 (the groups MuJoCo's viewer
 //!   shows by default) and a collision shape if its `contype` or `conaffinity` is
-//!   not 0 or a `<contact><pair>` names it (twinloop collides shapes with its
-//!   ground only: a pair's sole touches that ground; Apollo's soles collide only
-//!   through pairs), so Menagerie's `visual`/`collision` classes land where expected. A
+//!   not 0 or a `<contact><pair>` puts it against a world geom such as a scene's
+//!   floor (twinloop collides shapes with its ground only: such a pair's sole
+//!   touches that ground, Apollo's soles collide only through pairs; a pair of two
+//!   robot geoms is a self-collision, left out), so Menagerie's `visual`/`collision` classes land where expected. A
 //!   visual's material is the geom's `material` asset (name and rgba) or, failing
 //!   that, its `rgba`.
 //! - `<site>` becomes a [`Frame`] on the body's link (unnamed: `<body>_site<N>`).
@@ -299,8 +300,9 @@ struct Reader<'a, 'i> {
     /// The replica suffix of the body being read: appended to the names given in
     /// the file (bodies, joints, sites, geoms), as MuJoCo's `<replicate>` does.
     suffix: String,
-    /// Geoms named by a `<contact><pair>`: they collide whatever their `contype`
-    /// and `conaffinity` (Apptronik Apollo's soles touch the floor only so).
+    /// Geoms a `<contact><pair>` puts against a world geom (the floor): they collide
+    /// with twinloop's ground whatever their `contype` and `conaffinity` (Apptronik
+    /// Apollo's soles touch the floor only so).
     paired: std::collections::HashSet<&'a str>,
 }
 
@@ -425,12 +427,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             match s.tag_name().name() {
                 "compiler" => self.compiler(s)?,
                 "option" => self.option(s)?,
-                "contact" => self.paired.extend(
-                    s.children()
-                        .filter(|p| p.has_tag_name("pair"))
-                        .flat_map(|p| [p.attribute("geom1"), p.attribute("geom2")])
-                        .flatten(),
-                ),
+                "contact" => self.paired.extend(ground_pairs(s, sections)),
                 _ => {}
             }
         }
@@ -2238,4 +2235,29 @@ fn file_stem(path: &str) -> &str {
         Some(i) if i > 0 => &base[..i],
         _ => base,
     }
+}
+
+/// The robot geoms that a `<pair>` of `contact` puts against a geom of the world
+/// body (a direct child of `<worldbody>`, where a scene's floor is). A pair of two
+/// robot geoms (Apollo's arm against its pelvis) is a self-collision, which
+/// twinloop does not model: it must not make those geoms touch the ground.
+fn ground_pairs<'a>(contact: Node<'a, '_>, sections: &[Node<'a, '_>]) -> Vec<&'a str> {
+    let world: std::collections::HashSet<&str> = sections
+        .iter()
+        .filter(|s| s.has_tag_name("worldbody"))
+        .flat_map(|w| w.children().filter(|g| g.has_tag_name("geom")))
+        .filter_map(|g| g.attribute("name"))
+        .collect();
+    let mut out = Vec::new();
+    for p in contact.children().filter(|p| p.has_tag_name("pair")) {
+        if let (Some(a), Some(b)) = (p.attribute("geom1"), p.attribute("geom2")) {
+            if world.contains(b) {
+                out.push(a);
+            }
+            if world.contains(a) {
+                out.push(b);
+            }
+        }
+    }
+    out
 }
