@@ -5,7 +5,46 @@
 
 use crate::IoError;
 use std::io::Read;
-use std::path::Path;
+use std::os::unix::fs::MetadataExt;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The files this process read as input, by (device, inode), with the path read:
+/// an output is never renamed over one of them ([`crate::output`]), whichever way it
+/// was reached (an option, a profile's description, an MJCF `<include>`, a servo
+/// parameter file named inside another file). Files this process wrote itself are
+/// not counted when read back (a demo reads the tip-over it wrote).
+static READ: Mutex<Vec<(u64, u64, PathBuf)>> = Mutex::new(Vec::new());
+static WRITTEN: Mutex<Vec<(u64, u64)>> = Mutex::new(Vec::new());
+
+/// Note that `path` (with metadata `meta`) is read as an input of this process.
+pub fn note_read(path: &Path, meta: &std::fs::Metadata) {
+    let key = (meta.dev(), meta.ino());
+    if WRITTEN.lock().is_ok_and(|w| w.contains(&key)) {
+        return;
+    }
+    if let Ok(mut read) = READ.lock()
+        && !read.iter().any(|(d, i, _)| (*d, *i) == key)
+    {
+        read.push((key.0, key.1, path.to_path_buf()));
+    }
+}
+
+/// The input path this process read that is the same file as `meta`, if any.
+pub fn read_as_input(meta: &std::fs::Metadata) -> Option<PathBuf> {
+    let read = READ.lock().ok()?;
+    read.iter()
+        .find(|(d, i, _)| (*d, *i) == (meta.dev(), meta.ino()))
+        .map(|(_, _, p)| p.clone())
+}
+
+/// Note that this process wrote the file with metadata `meta` (reading it back is
+/// no input of the user's).
+pub(crate) fn note_written(meta: &std::fs::Metadata) {
+    if let Ok(mut w) = WRITTEN.lock() {
+        w.push((meta.dev(), meta.ino()));
+    }
+}
 
 /// The largest input file read, bytes: 1 GiB, some 30 times the largest real data
 /// a command here reads (an hour of a 20-servo recording at 100 Hz is 35 MB; the
@@ -26,6 +65,7 @@ pub fn read_limited(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
         };
         return Err(invalid(format!("is {kind}, not a regular file")));
     }
+    note_read(path, &meta);
     if meta.len() > max {
         return Err(invalid(format!(
             "is {} bytes, more than the {max} bytes an input may have",
@@ -135,7 +175,14 @@ pub fn wrong_kind(file: &str, text: &str, expected: &str, err: &str) -> String {
                 .collect();
             format!("{file}: this is not {expected}: it looks like {k} (its first line: {first:?})")
         }
-        _ => format!("{file}: not a valid {expected}: {err}"),
+        _ => {
+            // `expected` may come with its article ("a tip-over JSON").
+            let bare = ["a ", "an "]
+                .iter()
+                .find_map(|a| expected.strip_prefix(a))
+                .unwrap_or(expected);
+            format!("{file}: not a valid {bare}: {err}")
+        }
     }
 }
 

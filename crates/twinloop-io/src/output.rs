@@ -200,6 +200,7 @@ impl AtomicFile<File> {
 /// `FILE.partial` created for `out`: a partial file left by a killed run is replaced,
 /// anything else in the way is refused; the file gets the old one's permissions.
 fn create_partial(out: &Output) -> Result<(PathBuf, File), IoError> {
+    not_an_input(&out.target, &out.path)?;
     let partial = in_progress(&out.target);
     if let Ok(m) = std::fs::symlink_metadata(&partial) {
         if !m.file_type().is_file() {
@@ -221,6 +222,38 @@ fn create_partial(out: &Output) -> Result<(PathBuf, File), IoError> {
         let _ = file.set_permissions(m.permissions());
     }
     Ok((partial, file))
+}
+
+/// Refuse to replace `target` when this process read it as an input (however it was
+/// named: an option, a file named inside another, an include); `shown` is the path
+/// the user gave.
+fn not_an_input(target: &Path, shown: &Path) -> Result<(), IoError> {
+    if let Some(input) = std::fs::metadata(target)
+        .ok()
+        .and_then(|m| crate::input::read_as_input(&m))
+    {
+        return Err(refused(
+            "",
+            shown,
+            format!(
+                "is also an input this command read ({}); write the result to another file",
+                input.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// `partial` renamed over `target`, unless `target` was read as an input; the new
+/// file is noted as this process's own (reading it back is no input).
+fn rename_over(partial: &Path, target: &Path, shown: &Path) -> Result<(), IoError> {
+    not_an_input(target, shown)?;
+    std::fs::rename(partial, target)
+        .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(shown))?;
+    if let Ok(m) = std::fs::metadata(target) {
+        crate::input::note_written(&m);
+    }
+    Ok(())
 }
 
 /// A file written under its in-progress name by a writer that seeks back (an MCAP
@@ -252,7 +285,7 @@ impl PartialFile {
         let err =
             |e: std::io::Error| IoError::new(format!("cannot write: {e}")).in_file(&self.shown);
         file.sync_all().map_err(err)?;
-        std::fs::rename(&self.partial, &self.target).map_err(err)?;
+        rename_over(&self.partial, &self.target, &self.shown)?;
         self.committed = true;
         Ok(())
     }
@@ -319,9 +352,11 @@ impl<W: Write + Durable> AtomicFile<W> {
             let _ = std::fs::remove_file(&self.partial);
             return Err(self.error(e));
         }
-        std::fs::rename(&self.partial, &self.target).map_err(|e| {
-            let _ = std::fs::remove_file(&self.partial);
-            self.error(e)
+        rename_over(&self.partial, &self.target, &self.shown).inspect_err(|_| {
+            // A recording stays under its partial name: nothing recorded is lost.
+            if self.on_drop == OnDrop::Remove {
+                let _ = std::fs::remove_file(&self.partial);
+            }
         })
     }
 }
@@ -476,6 +511,24 @@ mod tests {
         // The same file by another name is the same file.
         let other = input.parent().unwrap().join(".").join("goals.csv");
         assert!(Output::check("--out", &other, &inputs).is_err());
+    }
+
+    #[test]
+    fn a_file_read_as_an_input_is_not_written_over_but_one_written_and_read_back_is() {
+        // Read however it was named (here: the include of an include), refused as output.
+        let part = scratch("part.xml");
+        std::fs::write(&part, "<mujoco/>").unwrap();
+        crate::input::read_text(&part).unwrap();
+        let e = write_atomic(&part, "<robot/>").unwrap_err().to_string();
+        assert!(e.contains("part.xml") && e.contains("input"), "{e}");
+        assert_eq!(std::fs::read_to_string(&part).unwrap(), "<mujoco/>");
+        assert!(!in_progress(&part).exists());
+        // A file this process wrote, read back and written again is its own.
+        let tip = scratch("tipover.json");
+        write_atomic(&tip, "{}").unwrap();
+        crate::input::read_text(&tip).unwrap();
+        write_atomic(&tip, "{\"a\": 1}").unwrap();
+        assert_eq!(std::fs::read_to_string(&tip).unwrap(), "{\"a\": 1}");
     }
 
     #[test]
