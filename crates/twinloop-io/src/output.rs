@@ -166,6 +166,9 @@ pub struct AtomicFile<W: Write + Durable = File> {
     header: u64,
     /// Flush at every newline, so a viewer following the partial file sees each row.
     flush_lines: bool,
+    /// A write failed (a full disk): a recording then stays under its partial name,
+    /// rows kept, and the old file stays as it was.
+    failed: bool,
 }
 
 /// A writer that can make its bytes durable (fsync); a test writer says it did.
@@ -310,6 +313,7 @@ impl<W: Write + Durable> AtomicFile<W> {
             lines: 0,
             header: 1,
             flush_lines: on_drop == OnDrop::KeepRecorded,
+            failed: false,
         }
     }
 
@@ -348,8 +352,15 @@ impl<W: Write + Durable> AtomicFile<W> {
             .into_inner()
             .map_err(|e| e.into_error())
             .and_then(|mut w| w.sync());
+        let synced = match synced {
+            Ok(()) if self.failed => Err(std::io::Error::other("an earlier write failed")),
+            r => r,
+        };
         if let Err(e) = synced {
-            let _ = std::fs::remove_file(&self.partial);
+            let e = self.failed_with(e);
+            if self.on_drop == OnDrop::Remove {
+                let _ = std::fs::remove_file(&self.partial);
+            }
             return Err(self.error(e));
         }
         rename_over(&self.partial, &self.target, &self.shown).inspect_err(|_| {
@@ -367,17 +378,42 @@ impl<W: Write + Durable> Write for AtomicFile<W> {
             .out
             .as_mut()
             .ok_or_else(|| std::io::Error::other("the file is already closed"))?;
-        let n = out.write(buf)?;
+        let n = match out.write(buf) {
+            Ok(n) => n,
+            Err(e) => return Err(self.failed_with(e)),
+        };
         let newlines = buf[..n].iter().filter(|&&b| b == b'\n').count() as u64;
         self.lines += newlines;
-        if self.flush_lines && newlines > 0 {
-            out.flush()?;
+        if self.flush_lines
+            && newlines > 0
+            && let Err(e) = out.flush()
+        {
+            return Err(self.failed_with(e));
         }
         Ok(n)
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
-        self.out.as_mut().map_or(Ok(()), |o| o.flush())
+        let r = self.out.as_mut().map_or(Ok(()), |o| o.flush());
+        r.map_err(|e| self.failed_with(e))
+    }
+}
+
+impl<W: Write + Durable> AtomicFile<W> {
+    /// A write error noted; a recording's says where its rows are kept.
+    fn failed_with(&mut self, e: std::io::Error) -> std::io::Error {
+        self.failed = true;
+        if self.on_drop == OnDrop::KeepRecorded {
+            std::io::Error::new(
+                e.kind(),
+                format!(
+                    "{e}; the rows written before it are in {}, the old file is as it was",
+                    self.partial.display()
+                ),
+            )
+        } else {
+            e
+        }
     }
 }
 
@@ -386,7 +422,10 @@ impl<W: Write + Durable> Drop for AtomicFile<W> {
         if self.out.is_none() {
             return;
         }
-        if self.on_drop == OnDrop::KeepRecorded && self.lines > self.header {
+        if self.on_drop == OnDrop::KeepRecorded && self.failed {
+            // A write failed: the rows stay under the partial name, the old file whole.
+            self.out = None;
+        } else if self.on_drop == OnDrop::KeepRecorded && self.lines > self.header {
             // What was recorded is kept: nothing a user recorded is ever lost.
             let _ = self.finish();
         } else {
@@ -466,6 +505,30 @@ mod tests {
             "<robot name=\"old\"/>\n"
         );
         assert!(!partial.exists());
+    }
+
+    #[test]
+    fn a_recording_on_a_full_disk_keeps_its_rows_aside_and_the_old_file_whole() {
+        let path = scratch("old-rec.csv");
+        std::fs::write(&path, "t\n1\n").unwrap();
+        let out = Output::resolve("", &path).unwrap();
+        let partial = in_progress(&path);
+        std::fs::write(&partial, "").unwrap();
+        let mut r = AtomicFile::with_writer(
+            &out,
+            partial.clone(),
+            FullDisk { room: 12 },
+            OnDrop::KeepRecorded,
+        );
+        r.write_all(b"t,q\n0,1\n").unwrap();
+        let e = r
+            .write_all(b"0.001,2\n")
+            .map_err(|e| r.error(e))
+            .unwrap_err();
+        drop(r);
+        assert!(e.to_string().contains("old-rec.csv.partial"), "{e}");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "t\n1\n");
+        assert!(partial.exists());
     }
 
     #[test]
