@@ -1453,8 +1453,9 @@ fn the_bus_is_checked_not_trusted() {
 }
 
 /// Class 5 of issue 29: messages that help. An include cycle is named as its chain,
-/// a replicate count past the bound says the bound, a CSV written with a UTF-8 byte
-/// order mark is read as without one.
+/// a replicate count past the bound says the bound, numbers are written as people write
+/// them (never 300 digits) and a bad tip angle names its file and field, a CSV or JSON
+/// written with a UTF-8 byte order mark is read as without one.
 #[test]
 fn messages_name_the_chain_the_bound_and_take_a_bom() {
     let dir = scratch("messages_help");
@@ -1549,6 +1550,24 @@ fn messages_name_the_chain_the_bound_and_take_a_bom() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // A JSON (or TOML) with the mark is read too, whatever reads it: the tip-over is
+    // read, and the run stops at once at the mass check that follows the reading.
+    let tip = std::fs::read_to_string(fixtures().dir.join("tip.json")).unwrap();
+    write(d, "bom.json", &format!("\u{feff}{tip}"));
+    let (code, err) = exit_and_stderr(&[
+        "adapt",
+        "--robot",
+        "builtin:km20",
+        "--total-mass",
+        "3.336",
+        "--tipover",
+        d.join("bom.json").to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("--total-mass") && err.contains("prior"),
+        "{err}"
+    );
 }
 
 /// Issue 29, class 3: no silently wrong answers. Units, time order, pairing and
