@@ -12,6 +12,73 @@ pub const MAX_STEPS: f64 = 1e7;
 /// Any count an option gives (samples, poses, cycles, epochs): one million.
 pub const MAX_COUNT: usize = 1_000_000;
 
+/// The longest wall time an option may ask a command to spend or wait, s: an hour
+/// (a benchmark's time per case, a silence window, a reply's allowance).
+pub const MAX_WALL_S: f64 = 3600.0;
+
+/// The most extra attempts after a lost reply: 100 (a dead servo with
+/// `--retries 4000000000` would be asked for years).
+pub const MAX_RETRIES: u32 = 100;
+
+/// The slowest a simulated robot may run against the wall clock: a thousandth
+/// (`--realtime-factor 1e-12` would make a 90 s tip-over last 3000 years).
+pub const MIN_REALTIME_FACTOR: f64 = 1e-3;
+
+/// A wall time in seconds, as a clap value parser: positive, at most [`MAX_WALL_S`].
+pub fn wall_seconds(s: &str) -> Result<f64, String> {
+    let x = crate::common::positive(s)?;
+    wall(x, x, "s")
+}
+
+/// A wall time in milliseconds (`--timeout-ms`), as a clap value parser.
+pub fn wall_millis(s: &str) -> Result<f64, String> {
+    let x = crate::common::positive(s)?;
+    wall(x * 1e-3, x, "ms")
+}
+
+fn wall(seconds: f64, x: f64, unit: &str) -> Result<f64, String> {
+    if seconds <= MAX_WALL_S {
+        Ok(x)
+    } else {
+        Err(format!(
+            "{} {unit} is more than the hour of wall time ({MAX_WALL_S} s) one option may \
+             ask a command to spend or wait",
+            crate::common::num(x)
+        ))
+    }
+}
+
+/// `--retries`, as a clap value parser: at most [`MAX_RETRIES`].
+pub fn retries(s: &str) -> Result<u32, String> {
+    let n: u32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a whole number"))?;
+    if n <= MAX_RETRIES {
+        Ok(n)
+    } else {
+        Err(format!(
+            "{n} is more than the {MAX_RETRIES} extra attempts a lost reply is given"
+        ))
+    }
+}
+
+/// `--realtime-factor`, as a clap value parser: positive, at least
+/// [`MIN_REALTIME_FACTOR`].
+pub fn realtime_factor(s: &str) -> Result<f64, String> {
+    let x = crate::common::positive(s)?;
+    if x >= MIN_REALTIME_FACTOR {
+        Ok(x)
+    } else {
+        Err(format!(
+            "{} is slower than the {MIN_REALTIME_FACTOR} of the wall clock a simulated \
+             robot may run at (a 90 s tip-over would take {} h)",
+            crate::common::num(x),
+            crate::common::num(90.0 / x / 3600.0)
+        ))
+    }
+}
+
 /// The steps of `duration` seconds at `dt`: refused (naming `what`, e.g. "--duration
 /// 1e12 s at --dt 0.001 s") when more than [`MAX_STEPS`].
 pub fn steps(duration: f64, dt: f64, what: &str) -> Result<usize, CliError> {

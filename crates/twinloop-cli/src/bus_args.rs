@@ -22,10 +22,10 @@ pub struct PortArgs {
     #[arg(long, default_value_t = 1_000_000, value_parser = crate::common::baud)]
     pub baud: u32,
     /// Allowance per reply on top of its wire time, ms (USB latency, return delay)
-    #[arg(long, default_value_t = 10.0, value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 10.0, value_parser = crate::bounds::wall_millis)]
     pub timeout_ms: f64,
     /// Extra attempts after a lost or damaged reply
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = crate::bounds::retries)]
     pub retries: u32,
     /// Set the USB adapter's latency timer to 1 ms (FTDI, via sysfs)
     #[arg(long)]
@@ -38,7 +38,7 @@ pub struct PortArgs {
     /// a read it misses is recorded (NaN) and taken again until it answers or this
     /// window has passed. Experiments then stop naming it (servos left holding);
     /// `link record` stops when every servo has been silent this long
-    #[arg(long, default_value_t = twinloop_experiments::guarded::SILENCE_WINDOW_S, value_name = "S", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = twinloop_experiments::guarded::SILENCE_WINDOW_S, value_name = "S", value_parser = crate::bounds::wall_seconds)]
     pub silence_window: f64,
 }
 

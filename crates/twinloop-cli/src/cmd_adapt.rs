@@ -55,7 +55,7 @@ pub struct AdaptArgs {
     #[arg(long, requires = "port")]
     pub soft_servos: bool,
     /// With --port, a simulated robot served faster than real time: its factor.
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::bounds::realtime_factor)]
     pub realtime_factor: f64,
     /// exact: the exact inversion (an added point mass, the adapted URDF); ann: the
     /// three-mass LIPM from the network of `twinloop adapt train` (--net; needs --where).
@@ -201,7 +201,7 @@ pub struct TrainArgs {
 fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
     let text = twinloop_io::input::read_to_string(path)
         .map_err(|e| CliError::io(path, e).context("--tipover"))?;
-    serde_json::from_str(&text).map_err(|e| {
+    let tip: StudyReport = serde_json::from_str(&text).map_err(|e| {
         CliError::new(twinloop_io::input::wrong_kind(
             &path.display().to_string(),
             &text,
@@ -209,7 +209,10 @@ fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
             &e.to_string(),
         ))
         .context("--tipover")
-    })
+    })?;
+    tip.check_measured()
+        .map_err(|e| CliError::from(e.in_file(path)).context("--tipover"))?;
+    Ok(tip)
 }
 
 /// Refuse a tip-over measured on another robot: its angles say nothing of this

@@ -244,7 +244,7 @@ pub struct SimulateArgs {
     pub table1: bool,
     /// White Gaussian noise added to x and z after the first row, m (synthetic data for
     /// `identify compliant`).
-    #[arg(long, default_value_t = 0.0, value_parser = crate::common::non_negative)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::units::noise)]
     pub noise: f64,
     /// Seed of the noise.
     #[arg(long, default_value_t = 1)]
@@ -341,18 +341,29 @@ fn simulate(args: &SimulateArgs) -> CliResult {
             z[i] += args.noise * rng.normal();
         }
     }
-    write_rollout(&args.out, &reference, &x, &z)?;
-    let n = reference.t.len();
     let rms = |a: &[f64], b: &[f64]| {
         (a.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>() / a.len() as f64).sqrt()
     };
+    let (rms_x, rms_z) = (rms(&x, &reference.xr), rms(&z, &reference.zr));
+    if !(rms_x.is_finite() && rms_z.is_finite()) {
+        // Checked again before the result leaves (issue 29, class 3).
+        return Err(CliError::new(format!(
+            "--plant {}: the rollout's deviation from the reference is not finite (x {} \
+             m, z {} m): no file written",
+            args.plant.display(),
+            num(rms_x),
+            num(rms_z)
+        )));
+    }
+    write_rollout(&args.out, &reference, &x, &z)?;
+    let n = reference.t.len();
     print(&format!(
         "{n} samples in {} ms ({} us per 1000 samples) -> {}\nrms deviation from the reference: x {} m, z {} m\n",
         num(elapsed.as_secs_f64() * 1e3),
         num(elapsed.as_secs_f64() * 1e6 * 1000.0 / n as f64),
         args.out.display(),
-        num(rms(&x, &reference.xr)),
-        num(rms(&z, &reference.zr)),
+        num(rms_x),
+        num(rms_z),
     ));
     Ok(Outcome::Ok)
 }

@@ -38,7 +38,7 @@ pub struct DemoArgs {
     pub scenario: Option<String>,
     /// Simulated seconds per wall-clock second of the robot behind the bus (and the
     /// host's clock rate)
-    #[arg(long, default_value_t = 4.0, value_name = "FACTOR", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 4.0, value_name = "FACTOR", value_parser = crate::bounds::realtime_factor)]
     pub realtime_factor: f64,
     /// How far the simulated robot's weight sinks into its floor, m (the floor's
     /// stiffness, as `serve --ground-sink`)

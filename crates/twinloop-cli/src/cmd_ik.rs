@@ -2,12 +2,12 @@
 
 use crate::common::hinges_only;
 use crate::common::load_model;
-use crate::error::{CliResult, Outcome};
+use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use clap::Args;
 use std::path::PathBuf;
 use twinloop_dynamics::BaseKind;
-use twinloop_ident::markers::{MarkerIk, read_frames, read_markers};
+use twinloop_ident::markers::{MarkerIk, POOR_FIT_RMS_M, read_frames, read_markers};
 use twinloop_io::{CsvWriter, Quantity};
 
 #[derive(Args, Debug)]
@@ -67,5 +67,27 @@ pub fn run(a: &IkArgs) -> CliResult {
         worst.0 * 1e3,
         worst.1 + 1
     ));
-    Ok(Outcome::Ok)
+    poor_fit(&rms, &a.frames)
+}
+
+/// An error with exit 1 when frames fit worse than [`POOR_FIT_RMS_M`]: their angles are written (the
+/// `ik.rms` column says which), but are not the robot's (issue 29: never exit 0 with
+/// a wrong result).
+fn poor_fit(rms: &[f64], frames: &std::path::Path) -> CliResult {
+    let poor: Vec<usize> = (0..rms.len())
+        .filter(|&k| rms[k] > POOR_FIT_RMS_M)
+        .collect();
+    let Some(&first) = poor.first() else {
+        return Ok(Outcome::Ok);
+    };
+    Err(CliError::problems(format!(
+        "{}: {} of {} frames fit worse than {} mm RMS (first: data row {}, {:.1} mm): the \
+         marker set does not match the robot or the frames (mislabelled or swapped markers?)",
+        frames.display(),
+        poor.len(),
+        rms.len(),
+        POOR_FIT_RMS_M * 1e3,
+        first + 1,
+        rms[first] * 1e3
+    )))
 }

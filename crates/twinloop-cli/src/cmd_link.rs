@@ -422,6 +422,26 @@ fn read(a: &ReadArgs) -> CliResult {
             a.protocol
         )));
     }
+    if a.servo_model.is_some() {
+        // Checked, not trusted (issue 29, class 4): the Model Number register (address
+        // 0 on every Dynamixel) says what answers; another model's table reads
+        // registers that are not there ("range error") or mean something else.
+        let found = c.ping(a.protocol, a.id)?;
+        if found.model_number != model.model_number() {
+            let answered = found.model.map_or_else(
+                || "a model twinloop does not know".into(),
+                |m| m.to_string(),
+            );
+            return Err(CliError::from(format!(
+                "servo id {}: --servo-model {model} (model number {}), but the servo answers \
+                 as {answered} (model number {}): give --servo-model {answered}, or leave it \
+                 out and the servo's own is read",
+                a.id,
+                model.model_number(),
+                found.model_number
+            )));
+        }
+    }
     let table = model.table();
     let mut selected = Vec::new();
     if a.registers.is_empty() {
@@ -498,7 +518,11 @@ fn record(a: &RecordArgs) -> CliResult {
     crate::bounds::steps(
         a.duration,
         1.0 / rate,
-        &format!("--duration {} s at {rate} rows/s", a.duration),
+        &format!(
+            "--duration {} s at {} rows/s",
+            crate::common::num(a.duration),
+            crate::common::num(rate)
+        ),
     )?;
     let mapping = a.map.as_deref().map(RobotMapping::resolve).transpose()?;
     let default_port = mapping.as_ref().and_then(|m| m.port.clone());

@@ -209,6 +209,10 @@ struct Info {
     heaviest_links: Vec<LinkMass>,
     /// Elements the reader left out or read past (`model lint` lists each).
     ignored_elements: usize,
+    /// Why the dynamics (every command that computes with the file) refuse it, if
+    /// they do: `model info` then exits 1, as `model lint` reports `dynamics-refuses`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dynamics_refuses: Option<String>,
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     joint_order: Option<JointOrder>,
 }
@@ -361,6 +365,11 @@ fn summarise(robot: &Description, args: &DescriptionArgs, format: common::Format
         total_mass: robot.total_mass(),
         heaviest_links: heaviest,
         ignored_elements: robot.unmodeled.len() + robot.ignored.len(),
+        // What the file is for: a description nothing can compute with is no ok
+        // (issue 29, class 3).
+        dynamics_refuses: Model::from_description_with_base(robot, BaseKind::Fixed)
+            .err()
+            .map(|e| e.to_string()),
         joint_order: None,
     }
 }
@@ -401,7 +410,14 @@ fn info(args: &InfoArgs) -> CliResult {
         info.joint_order = Some(j);
     }
     emit(&text, d.json.as_ref(), &info)?;
-    Ok(Outcome::Ok)
+    match &info.dynamics_refuses {
+        Some(why) => Err(CliError::problems(format!(
+            "{}: the dynamics refuse the file, so every command that computes with it \
+             will: {why}",
+            info.file
+        ))),
+        None => Ok(Outcome::Ok),
+    }
 }
 
 fn info_text(info: &Info) -> String {
@@ -491,6 +507,9 @@ fn info_text(info: &Info) -> String {
             ),
         },
     );
+    if let Some(why) = &info.dynamics_refuses {
+        row("dynamics", format!("refused: {why}"));
+    }
     out
 }
 

@@ -50,7 +50,7 @@ a file needs --map. Without --robot, the description is the mapping's `urdf` (if
     #[arg(long)]
     pub torque_off: bool,
     /// Simulated robot: simulated seconds per wall-clock second
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::bounds::realtime_factor)]
     pub realtime_factor: f64,
     /// Simulated robot: an operator catches the robot when its trunk tilts past 30
     /// deg and stands it up in the pose its servos are commanded to, as a person does

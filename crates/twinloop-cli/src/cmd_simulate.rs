@@ -154,9 +154,21 @@ pub fn run(a: SimulateArgs) -> CliResult {
         return Err(CliError::new("--hold and --trajectory exclude each other"));
     }
     // Bounded before any work: a second of simulation at --dt, and --duration.
-    crate::bounds::steps(1.0, a.dt, &format!("one second at --dt {} s", a.dt))?;
+    crate::bounds::steps(
+        1.0,
+        a.dt,
+        &format!("one second at --dt {} s", crate::common::num(a.dt)),
+    )?;
     if let Some(d) = a.duration {
-        crate::bounds::steps(d, a.dt, &format!("--duration {d} s at --dt {} s", a.dt))?;
+        crate::bounds::steps(
+            d,
+            a.dt,
+            &format!(
+                "--duration {} s at --dt {} s",
+                crate::common::num(d),
+                crate::common::num(a.dt)
+            ),
+        )?;
     }
     let (mut robot, _) = load_description(&a.robot)?;
     a.added.apply(&mut robot)?;
@@ -184,16 +196,23 @@ pub fn run(a: SimulateArgs) -> CliResult {
                 a.trajectory
                     .as_ref()
                     .map_or(String::new(), |p| p.display().to_string()),
-                g.end(),
-                a.dt,
+                crate::common::num(g.end()),
+                crate::common::num(a.dt),
                 if first > 1e6 {
-                    format!(" (its times start at {first} s: Unix times? they count from 0)")
+                    format!(
+                        " (its times start at {} s: Unix times? they count from 0)",
+                        crate::common::num(first)
+                    )
                 } else {
                     String::new()
                 }
             )
         }
-        _ => format!("--duration {duration} s at --dt {} s", a.dt),
+        _ => format!(
+            "--duration {} s at --dt {} s",
+            crate::common::num(duration),
+            crate::common::num(a.dt)
+        ),
     };
     crate::bounds::steps(duration, a.dt, &what)?;
     let cols = record_columns(&sim);

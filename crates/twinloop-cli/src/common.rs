@@ -127,7 +127,7 @@ fn parse_number(s: &str, ok: impl Fn(f64) -> bool, range: &str) -> Result<f64, S
     if x.is_finite() && ok(x) {
         Ok(x)
     } else {
-        Err(format!("{x} is out of range: {range}"))
+        Err(format!("{} is out of range: {range}", num(x)))
     }
 }
 
@@ -179,7 +179,8 @@ pub fn count(s: &str) -> Result<usize, String> {
         Err(format!("{n} is out of range: a count >= 1 is needed"))
     } else {
         Err(format!(
-            "{n} is more than the {} one command does (crate::bounds)",
+            "{n} is more than the {} of anything one command counts (a bound on its \
+             work and memory; split the run)",
             crate::bounds::MAX_COUNT
         ))
     }

@@ -146,11 +146,11 @@ from_library_error!(
 impl From<twinloop_ident::IdentError> for CliError {
     fn from(mut e: twinloop_ident::IdentError) -> CliError {
         match e.option.take() {
-            Some(option) if e.field.is_none() => {
-                e.field = Some(format!("--{}", option.replace('_', "-")));
-                CliError::new(e.to_string())
-            }
-            Some(option) => CliError::new(format!("--{}: {e}", option.replace('_', "-"))),
+            // Either spelling reaches here: `total_mass` or `--plate`.
+            Some(option) => CliError::new(format!(
+                "--{}: {e}",
+                option.trim_start_matches("--").replace('_', "-")
+            )),
             None => CliError::new(e.to_string()),
         }
     }

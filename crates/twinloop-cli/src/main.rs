@@ -270,6 +270,14 @@ fn run(command: Command) -> CliResult {
 }
 
 fn main() -> ExitCode {
+    // A file over the size limit (`ulimit -f`, a quota) makes write(2) raise SIGXFSZ,
+    // whose default kills the process before the write can fail with EFBIG: with a
+    // handler the write fails, and the output's error path keeps the old file and
+    // removes the partial one (issue 29, class 1), as it does on a full disk.
+    let _ = signal_hook::flag::register(
+        signal_hook::consts::SIGXFSZ,
+        std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false)),
+    );
     let cli: Cli = common::parse_args();
     // Every recording a library opens (a guarded robot's --record, the bus
     // tip-over's) is MCAP when its path ends in .mcap.

@@ -22,6 +22,7 @@ pub const OUTPUT_OPTIONS: &[&str] = &[
     "record",
     "suggest-out",
     "mcap",
+    "mjcf-actuators",
 ];
 
 /// Outputs that only some commands have, or that are outputs only sometimes:
@@ -31,8 +32,12 @@ const OUTPUTS_OF: &[(&str, &str, &str)] = &[
     ("adapt", "tipover", "port"),
 ];
 
-/// Options named like outputs that are folders (checked by their command).
-const FOLDER_OUTPUTS: &[(&str, &str)] = &[("identify servo", "out"), ("demo", "out")];
+/// Options named like outputs that may be folders: (command, option, whether a file
+/// is also taken). A folder that exists is written into; anything else is checked as
+/// a file output (a device, a FIFO, an input, a missing parent folder refused), and
+/// where only a folder is taken, a file there is refused.
+const FOLDER_OUTPUTS: &[(&str, &str, bool)] =
+    &[("identify servo", "out", true), ("demo", "out", false)];
 
 /// Refuse the command line's outputs that break a rule (exit 2, naming the option).
 pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> {
@@ -46,7 +51,7 @@ pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> 
     }
     let path = path.join(" ");
     let given = |id: &str| m.try_contains_id(id).unwrap_or(false);
-    let (mut outputs, mut inputs) = (Vec::new(), Vec::new());
+    let (mut outputs, mut inputs, mut folder_outputs) = (Vec::new(), Vec::new(), Vec::new());
     for arg in cmd.get_arguments() {
         let id = arg.get_id().as_str();
         let Ok(Some(values)) = m.try_get_raw(id) else {
@@ -61,12 +66,14 @@ pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> 
             || OUTPUTS_OF
                 .iter()
                 .any(|(c, o, when)| *c == path && *o == long && (when.is_empty() || given(when)));
-        if FOLDER_OUTPUTS.contains(&(path.as_str(), long)) {
-            continue;
-        }
+        let folder = FOLDER_OUTPUTS
+            .iter()
+            .find(|(c, o, _)| *c == path && *o == long);
         for v in values {
             let p = PathBuf::from(v);
-            if is_output {
+            if let Some(&(_, _, file_too)) = folder {
+                folder_outputs.push((flag.clone(), p, file_too));
+            } else if is_output {
                 outputs.push((flag.clone(), p));
             } else if path_names_a_file(&p) {
                 inputs.push((flag.clone(), p));
@@ -78,6 +85,9 @@ pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> 
             Output::check(flag, p, &inputs)?;
         }
     }
+    for (flag, p, file_too) in &folder_outputs {
+        check_folder_output(flag, p, *file_too, &inputs)?;
+    }
     if path == "serve"
         && let Some(link) = m
             .try_get_raw("link")
@@ -86,6 +96,29 @@ pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> 
             .and_then(|mut v| v.next())
     {
         check_pty_link(Path::new(link))?;
+    }
+    Ok(())
+}
+
+/// A folder output (`demo --out DIR`, `identify servo --out FILE.toml|DIR`): an
+/// existing folder is written into (its files are checked as they are written);
+/// anything else is what a file output may be, and a file only where one is taken.
+fn check_folder_output(
+    flag: &str,
+    p: &Path,
+    file_too: bool,
+    inputs: &[(String, PathBuf)],
+) -> Result<(), CliError> {
+    if p.is_dir() {
+        return Ok(());
+    }
+    Output::check(flag, p, inputs)?;
+    if !file_too && std::fs::symlink_metadata(p).is_ok() {
+        return Err(CliError::new(format!(
+            "{flag} {}: is a file, and {flag} is the folder the files are written into; \
+             give a folder (it is created when missing)",
+            p.display()
+        )));
     }
     Ok(())
 }

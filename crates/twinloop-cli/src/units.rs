@@ -18,17 +18,51 @@ use twinloop_io::{IoError, Table};
 /// control loop; a contact simulation diverges well before. `--dt 1` meant 1 ms.
 pub const MAX_STEP_S: f64 = 0.1;
 
-/// A time step or sample period, s: a finite number in (0, [`MAX_STEP_S`]]. As a clap
-/// value parser: `#[arg(long, value_parser = crate::units::time_step)]`.
+/// The shortest time step or sample period, s: 1 us, a million steps per second of
+/// robot time; the simulators step at 1 ms and the fastest bus here reads at 1 kHz, so
+/// a shorter step is a typo (`--dt 1e-300`), and every second would be more steps than
+/// a command computes (`crate::bounds::MAX_STEPS`).
+pub const MIN_STEP_S: f64 = 1e-6;
+
+/// A time step or sample period, s: a finite number in [[`MIN_STEP_S`],
+/// [`MAX_STEP_S`]]. As a clap value parser: `#[arg(long, value_parser =
+/// crate::units::time_step)]`.
 pub fn time_step(s: &str) -> Result<f64, String> {
     let x = crate::common::positive(s)?;
-    if x <= MAX_STEP_S {
+    if x < MIN_STEP_S {
+        Err(format!(
+            "{} s is shorter than the {MIN_STEP_S} s a time step may be (a million steps \
+             per second of robot time; the simulators step at 0.001 s)",
+            crate::common::num(x)
+        ))
+    } else if x <= MAX_STEP_S {
         Ok(x)
     } else {
         Err(format!(
             "{x} s is too long for a time step (at most {MAX_STEP_S} s); the step is in \
              seconds: for {x} ms write {}",
             x / 1000.0
+        ))
+    }
+}
+
+/// The largest noise a synthetic measurement may be given, m or rad: 1, as large as
+/// a humanoid here is tall or a joint's half range. A larger standard deviation
+/// drowns the signal (a CoM 0.5 m up) and was meant in millimetres; `1e300` fills
+/// the output with infinities.
+pub const MAX_NOISE: f64 = 1.0;
+
+/// A noise's standard deviation (m or rad), as a clap value parser: in [0, [`MAX_NOISE`]].
+pub fn noise(s: &str) -> Result<f64, String> {
+    let x = crate::common::non_negative(s)?;
+    if x <= MAX_NOISE {
+        Ok(x)
+    } else {
+        Err(format!(
+            "{} is more noise than signal: a standard deviation of at most {MAX_NOISE} (m \
+             or rad) is taken; for millimetres write {}",
+            crate::common::num(x),
+            crate::common::num(x / 1000.0)
         ))
     }
 }

@@ -355,14 +355,20 @@ fn check_coverage(c: &LeanComparison, runs: &[(&LeanRecord, &str, f64)]) -> Resu
                 .iter()
                 .map(|(r, n, _)| format!("{n}: {} to {} s", r.t[0], r.t[r.t.len() - 1]))
                 .collect();
+            // The place at fault is the run that ends early: the shortest.
+            let span = |r: &LeanRecord| r.t[r.t.len() - 1] - r.t[0];
+            let short = runs
+                .iter()
+                .min_by(|x, y| span(x.0).total_cmp(&span(y.0)))
+                .map_or(*name, |x| x.1);
             return Err(IoError::new(format!(
-                "the runs overlap over {covered:.3} s, {:.0} % of {name}'s {:.3} s ({}): \
-                 one run is cut short; compare runs of the whole lean",
+                "cut short: the runs overlap over {covered:.3} s, {:.0} % of {name}'s {:.3} s \
+                 ({}); compare runs of the whole lean",
                 100.0 * covered / (b - a),
                 b - a,
                 spans.join(", ")
             ))
-            .in_file(name.to_string()));
+            .in_file(short.to_string()));
         }
     }
     Ok(())

@@ -41,6 +41,10 @@
 use crate::error::{GaitError, err};
 use twinloop_reduced::lipm::{self, LipmPhase};
 
+/// The most samples one plan is sampled at: 10 million, 2.8 h at 1 ms (the CLI's bound
+/// on any command's rows, issue 29), some 1 GB of samples.
+pub const MAX_SAMPLES: usize = 10_000_000;
+
 /// Which foot bears the robot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Foot {
@@ -377,18 +381,23 @@ impl ZmpReference {
         }
     }
 
-    /// Samples every `dt` from 0 to the end of the plan.
+    /// Samples every `dt` from 0 to the end of the plan, at most [`MAX_SAMPLES`].
     pub fn sample(&self, dt: f64) -> Result<Vec<ZmpSample>, GaitError> {
         if !(dt.is_finite() && dt > 0.0) {
             return err(format!(
                 "sample time dt must be positive and finite, got {dt}"
             ));
         }
-        let n = (self.duration() / dt + 1e-9).floor() as usize + 1;
-        if n > 100_000_000 {
-            return err(format!("{n} samples: dt {dt} is too small for this plan"));
+        // Counted in f64 first: a huge count must not wrap to 0 samples when cast.
+        let n = (self.duration() / dt + 1e-9).floor() + 1.0;
+        if !n.is_finite() || n > MAX_SAMPLES as f64 {
+            return err(format!(
+                "the plan lasts {:.4e} s (settle, steps and their phases): {n:.3e} samples at \
+                 dt {dt:e} s, more than the {MAX_SAMPLES:e} one plan is sampled at",
+                self.duration()
+            ));
         }
-        Ok((0..n).map(|i| self.at(i as f64 * dt)).collect())
+        Ok((0..n as usize).map(|i| self.at(i as f64 * dt)).collect())
     }
 
     /// Signed distance (m) of the ZMP reference from the edge of the support polygon at

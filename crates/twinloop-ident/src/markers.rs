@@ -283,6 +283,13 @@ pub fn kabsch(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> Option<(Matrix3<f64>, V
     Some((r, cb - r * ca))
 }
 
+/// The marker distance, m, past which a frame's fit is poor: 20 mm RMS. Optical
+/// motion capture places a marker within a millimetre or two and a marker set on a
+/// rigid robot link is known to a few; a fit 20 mm off means the marker set does not
+/// match the robot or the frames (swapped or mislabelled markers, another robot), and
+/// the joint angles it gives are not the robot's.
+pub const POOR_FIT_RMS_M: f64 = 0.02;
+
 /// The fit of one frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrameFit {

@@ -1013,6 +1013,24 @@ impl StudyReport {
         Ok(())
     }
 
+    /// Refuse a report whose measured tip angles cannot be tip angles: each is in
+    /// (0, 90) degrees (a robot standing on its feet tips before lying flat). Checked
+    /// where a file is read, so the error names its field (`forward.measured_deg`),
+    /// in degrees as the file gives it; the caller adds the file.
+    pub fn check_measured(&self) -> Result<(), IdentError> {
+        for d in Direction::ALL {
+            let v = self.direction(d).measured_deg;
+            if !(v.is_finite() && v > 0.0 && v < 90.0) {
+                return Err(IdentError::new(format!(
+                    "{} deg is not a tip angle: a robot tips between 0 and 90 deg",
+                    twinloop_report::number(v)
+                ))
+                .field(format!("{}.measured_deg", d.name())));
+            }
+        }
+        Ok(())
+    }
+
     /// One direction's outcome.
     pub fn direction(&self, d: Direction) -> &DirectionReport {
         match d {

@@ -5,7 +5,46 @@
 
 use crate::IoError;
 use std::io::Read;
-use std::path::Path;
+use std::os::unix::fs::MetadataExt;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The files this process read as input, by (device, inode), with the path read:
+/// an output is never renamed over one of them ([`crate::output`]), whichever way it
+/// was reached (an option, a profile's description, an MJCF `<include>`, a servo
+/// parameter file named inside another file). Files this process wrote itself are
+/// not counted when read back (a demo reads the tip-over it wrote).
+static READ: Mutex<Vec<(u64, u64, PathBuf)>> = Mutex::new(Vec::new());
+static WRITTEN: Mutex<Vec<(u64, u64)>> = Mutex::new(Vec::new());
+
+/// Note that `path` (with metadata `meta`) is read as an input of this process.
+pub fn note_read(path: &Path, meta: &std::fs::Metadata) {
+    let key = (meta.dev(), meta.ino());
+    if WRITTEN.lock().is_ok_and(|w| w.contains(&key)) {
+        return;
+    }
+    if let Ok(mut read) = READ.lock()
+        && !read.iter().any(|(d, i, _)| (*d, *i) == key)
+    {
+        read.push((key.0, key.1, path.to_path_buf()));
+    }
+}
+
+/// The input path this process read that is the same file as `meta`, if any.
+pub fn read_as_input(meta: &std::fs::Metadata) -> Option<PathBuf> {
+    let read = READ.lock().ok()?;
+    read.iter()
+        .find(|(d, i, _)| (*d, *i) == (meta.dev(), meta.ino()))
+        .map(|(_, _, p)| p.clone())
+}
+
+/// Note that this process wrote the file with metadata `meta` (reading it back is
+/// no input of the user's).
+pub(crate) fn note_written(meta: &std::fs::Metadata) {
+    if let Ok(mut w) = WRITTEN.lock() {
+        w.push((meta.dev(), meta.ino()));
+    }
+}
 
 /// The largest input file read, bytes: 1 GiB, some 30 times the largest real data
 /// a command here reads (an hour of a 20-servo recording at 100 Hz is 35 MB; the
@@ -26,6 +65,7 @@ pub fn read_limited(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
         };
         return Err(invalid(format!("is {kind}, not a regular file")));
     }
+    note_read(path, &meta);
     if meta.len() > max {
         return Err(invalid(format!(
             "is {} bytes, more than the {max} bytes an input may have",
@@ -46,14 +86,20 @@ pub fn read_limited(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
 
 /// `std::fs::read_to_string` for input files: regular files of at most
 /// [`MAX_INPUT_BYTES`] (a drop-in for it, with the same error type).
+/// A UTF-8 byte order mark (what some Windows editors put first) is dropped, so a
+/// JSON, TOML or CSV file saved with one reads as without (issue 29, class 5).
 pub fn read_to_string(path: &Path) -> std::io::Result<String> {
     let bytes = read_limited(path, MAX_INPUT_BYTES)?;
-    String::from_utf8(bytes).map_err(|e| {
+    let mut text = String::from_utf8(bytes).map_err(|e| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidData,
             format!("is not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
         )
-    })
+    })?;
+    if text.starts_with('\u{feff}') {
+        text.drain(..'\u{feff}'.len_utf8());
+    }
+    Ok(text)
 }
 
 /// [`read_limited`] with errors naming the file.
@@ -135,7 +181,14 @@ pub fn wrong_kind(file: &str, text: &str, expected: &str, err: &str) -> String {
                 .collect();
             format!("{file}: this is not {expected}: it looks like {k} (its first line: {first:?})")
         }
-        _ => format!("{file}: not a valid {expected}: {err}"),
+        _ => {
+            // `expected` may come with its article ("a tip-over JSON").
+            let bare = ["a ", "an "]
+                .iter()
+                .find_map(|a| expected.strip_prefix(a))
+                .unwrap_or(expected);
+            format!("{file}: not a valid {bare}: {err}")
+        }
     }
 }
 

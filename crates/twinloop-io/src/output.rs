@@ -166,6 +166,9 @@ pub struct AtomicFile<W: Write + Durable = File> {
     header: u64,
     /// Flush at every newline, so a viewer following the partial file sees each row.
     flush_lines: bool,
+    /// A write failed (a full disk): a recording then stays under its partial name,
+    /// rows kept, and the old file stays as it was.
+    failed: bool,
 }
 
 /// A writer that can make its bytes durable (fsync); a test writer says it did.
@@ -200,6 +203,7 @@ impl AtomicFile<File> {
 /// `FILE.partial` created for `out`: a partial file left by a killed run is replaced,
 /// anything else in the way is refused; the file gets the old one's permissions.
 fn create_partial(out: &Output) -> Result<(PathBuf, File), IoError> {
+    not_an_input(&out.target, &out.path)?;
     let partial = in_progress(&out.target);
     if let Ok(m) = std::fs::symlink_metadata(&partial) {
         if !m.file_type().is_file() {
@@ -221,6 +225,38 @@ fn create_partial(out: &Output) -> Result<(PathBuf, File), IoError> {
         let _ = file.set_permissions(m.permissions());
     }
     Ok((partial, file))
+}
+
+/// Refuse to replace `target` when this process read it as an input (however it was
+/// named: an option, a file named inside another, an include); `shown` is the path
+/// the user gave.
+fn not_an_input(target: &Path, shown: &Path) -> Result<(), IoError> {
+    if let Some(input) = std::fs::metadata(target)
+        .ok()
+        .and_then(|m| crate::input::read_as_input(&m))
+    {
+        return Err(refused(
+            "",
+            shown,
+            format!(
+                "is also an input this command read ({}); write the result to another file",
+                input.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// `partial` renamed over `target`, unless `target` was read as an input; the new
+/// file is noted as this process's own (reading it back is no input).
+fn rename_over(partial: &Path, target: &Path, shown: &Path) -> Result<(), IoError> {
+    not_an_input(target, shown)?;
+    std::fs::rename(partial, target)
+        .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(shown))?;
+    if let Ok(m) = std::fs::metadata(target) {
+        crate::input::note_written(&m);
+    }
+    Ok(())
 }
 
 /// A file written under its in-progress name by a writer that seeks back (an MCAP
@@ -252,7 +288,7 @@ impl PartialFile {
         let err =
             |e: std::io::Error| IoError::new(format!("cannot write: {e}")).in_file(&self.shown);
         file.sync_all().map_err(err)?;
-        std::fs::rename(&self.partial, &self.target).map_err(err)?;
+        rename_over(&self.partial, &self.target, &self.shown)?;
         self.committed = true;
         Ok(())
     }
@@ -277,6 +313,7 @@ impl<W: Write + Durable> AtomicFile<W> {
             lines: 0,
             header: 1,
             flush_lines: on_drop == OnDrop::KeepRecorded,
+            failed: false,
         }
     }
 
@@ -315,13 +352,22 @@ impl<W: Write + Durable> AtomicFile<W> {
             .into_inner()
             .map_err(|e| e.into_error())
             .and_then(|mut w| w.sync());
+        let synced = match synced {
+            Ok(()) if self.failed => Err(std::io::Error::other("an earlier write failed")),
+            r => r,
+        };
         if let Err(e) = synced {
-            let _ = std::fs::remove_file(&self.partial);
+            let e = self.failed_with(e);
+            if self.on_drop == OnDrop::Remove {
+                let _ = std::fs::remove_file(&self.partial);
+            }
             return Err(self.error(e));
         }
-        std::fs::rename(&self.partial, &self.target).map_err(|e| {
-            let _ = std::fs::remove_file(&self.partial);
-            self.error(e)
+        rename_over(&self.partial, &self.target, &self.shown).inspect_err(|_| {
+            // A recording stays under its partial name: nothing recorded is lost.
+            if self.on_drop == OnDrop::Remove {
+                let _ = std::fs::remove_file(&self.partial);
+            }
         })
     }
 }
@@ -332,17 +378,42 @@ impl<W: Write + Durable> Write for AtomicFile<W> {
             .out
             .as_mut()
             .ok_or_else(|| std::io::Error::other("the file is already closed"))?;
-        let n = out.write(buf)?;
+        let n = match out.write(buf) {
+            Ok(n) => n,
+            Err(e) => return Err(self.failed_with(e)),
+        };
         let newlines = buf[..n].iter().filter(|&&b| b == b'\n').count() as u64;
         self.lines += newlines;
-        if self.flush_lines && newlines > 0 {
-            out.flush()?;
+        if self.flush_lines
+            && newlines > 0
+            && let Err(e) = out.flush()
+        {
+            return Err(self.failed_with(e));
         }
         Ok(n)
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
-        self.out.as_mut().map_or(Ok(()), |o| o.flush())
+        let r = self.out.as_mut().map_or(Ok(()), |o| o.flush());
+        r.map_err(|e| self.failed_with(e))
+    }
+}
+
+impl<W: Write + Durable> AtomicFile<W> {
+    /// A write error noted; a recording's says where its rows are kept.
+    fn failed_with(&mut self, e: std::io::Error) -> std::io::Error {
+        self.failed = true;
+        if self.on_drop == OnDrop::KeepRecorded {
+            std::io::Error::new(
+                e.kind(),
+                format!(
+                    "{e}; the rows written before it are in {}, the old file is as it was",
+                    self.partial.display()
+                ),
+            )
+        } else {
+            e
+        }
     }
 }
 
@@ -351,7 +422,10 @@ impl<W: Write + Durable> Drop for AtomicFile<W> {
         if self.out.is_none() {
             return;
         }
-        if self.on_drop == OnDrop::KeepRecorded && self.lines > self.header {
+        if self.on_drop == OnDrop::KeepRecorded && self.failed {
+            // A write failed: the rows stay under the partial name, the old file whole.
+            self.out = None;
+        } else if self.on_drop == OnDrop::KeepRecorded && self.lines > self.header {
             // What was recorded is kept: nothing a user recorded is ever lost.
             let _ = self.finish();
         } else {
@@ -434,6 +508,30 @@ mod tests {
     }
 
     #[test]
+    fn a_recording_on_a_full_disk_keeps_its_rows_aside_and_the_old_file_whole() {
+        let path = scratch("old-rec.csv");
+        std::fs::write(&path, "t\n1\n").unwrap();
+        let out = Output::resolve("", &path).unwrap();
+        let partial = in_progress(&path);
+        std::fs::write(&partial, "").unwrap();
+        let mut r = AtomicFile::with_writer(
+            &out,
+            partial.clone(),
+            FullDisk { room: 12 },
+            OnDrop::KeepRecorded,
+        );
+        r.write_all(b"t,q\n0,1\n").unwrap();
+        let e = r
+            .write_all(b"0.001,2\n")
+            .map_err(|e| r.error(e))
+            .unwrap_err();
+        drop(r);
+        assert!(e.to_string().contains("old-rec.csv.partial"), "{e}");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "t\n1\n");
+        assert!(partial.exists());
+    }
+
+    #[test]
     fn a_complete_write_replaces_the_file_and_a_symlink_stays_a_link() {
         let target = scratch("run-42.csv");
         let link = scratch("latest.csv");
@@ -476,6 +574,24 @@ mod tests {
         // The same file by another name is the same file.
         let other = input.parent().unwrap().join(".").join("goals.csv");
         assert!(Output::check("--out", &other, &inputs).is_err());
+    }
+
+    #[test]
+    fn a_file_read_as_an_input_is_not_written_over_but_one_written_and_read_back_is() {
+        // Read however it was named (here: the include of an include), refused as output.
+        let part = scratch("part.xml");
+        std::fs::write(&part, "<mujoco/>").unwrap();
+        crate::input::read_text(&part).unwrap();
+        let e = write_atomic(&part, "<robot/>").unwrap_err().to_string();
+        assert!(e.contains("part.xml") && e.contains("input"), "{e}");
+        assert_eq!(std::fs::read_to_string(&part).unwrap(), "<mujoco/>");
+        assert!(!in_progress(&part).exists());
+        // A file this process wrote, read back and written again is its own.
+        let tip = scratch("tipover.json");
+        write_atomic(&tip, "{}").unwrap();
+        crate::input::read_text(&tip).unwrap();
+        write_atomic(&tip, "{\"a\": 1}").unwrap();
+        assert_eq!(std::fs::read_to_string(&tip).unwrap(), "{\"a\": 1}");
     }
 
     #[test]

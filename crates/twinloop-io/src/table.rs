@@ -182,9 +182,11 @@ impl Table {
                     line: self.line_of_row(r),
                     column: Some("t".into()),
                     message: format!(
-                        "data row {}: time {t} s is not after {prev} s ({before}): rows must \
+                        "data row {}: time {} s is not after {} s ({before}): rows must \
                          be in time order, each time once",
-                        r + 1
+                        r + 1,
+                        clean_time(t),
+                        clean_time(prev)
                     ),
                 });
             }

@@ -64,7 +64,7 @@ pub fn for_each_message(
 /// Only those keys are read, so no YAML library is needed.
 fn bag_files(dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     let meta = dir.join("metadata.yaml");
-    let text = std::fs::read_to_string(&meta)
+    let text = twinloop_io::input::read_to_string(&meta)
         .map_err(|e| LogError::new(format!("cannot read: {e}")).in_file(&meta))?;
     let mut files = Vec::new();
     let mut in_paths = false;
@@ -136,6 +136,10 @@ fn mcap_messages(
 ) -> Result<(), LogError> {
     let mut file =
         std::fs::File::open(path).map_err(|e| LogError::new(format!("cannot read: {e}")))?;
+    if let Ok(meta) = file.metadata() {
+        // An output is never written over a log this command read.
+        twinloop_io::input::note_read(path, &meta);
+    }
     let mut reader = LinearReader::new();
     let mut schemas: HashMap<u16, String> = HashMap::new();
     let mut channels: HashMap<u16, Channel> = HashMap::new();

@@ -23,7 +23,7 @@ pub struct LinkBenchArgs {
     #[arg(long, default_value_t = 20)]
     pub servos: u8,
     /// Seconds per case
-    #[arg(long, default_value_t = 1.0, value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::bounds::wall_seconds)]
     pub seconds: f64,
     /// With --port: busy-check the pty for up to this many microseconds before
     /// sleeping for a reply (0: sleep at once)

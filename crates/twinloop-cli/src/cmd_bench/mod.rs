@@ -89,7 +89,7 @@ pub struct DynamicsBenchArgs {
     #[arg(long, default_value_t = 0x7417_1009)]
     pub seed: u64,
     /// Minimum time spent on each algorithm, in seconds.
-    #[arg(long, default_value_t = 0.3, value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 0.3, value_parser = crate::bounds::wall_seconds)]
     pub seconds: f64,
     /// Write JSON {"model", "nv", "states", "ns_per_call": {"fk", ...}} to FILE (-: to
     /// stdout, in place of the text).

@@ -62,7 +62,12 @@ pub fn run(args: &CompliantWalkArgs) -> CliResult {
     crate::bounds::steps(
         (args.duration + args.settle) * args.substeps as f64,
         1e-3,
-        &format!("--duration {} s at 1 kHz", args.duration),
+        &format!(
+            "--duration {} s and --settle {} s at 1 kHz, {} substeps each",
+            crate::common::num(args.duration),
+            crate::common::num(args.settle),
+            args.substeps
+        ),
     )?;
     let (robot, _) = load_description(&args.robot)?;
     hinges_only(&robot, &args.robot, "the compliant walk")?;

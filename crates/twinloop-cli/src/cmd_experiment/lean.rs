@@ -5,7 +5,7 @@
 use super::bus::{Guarded, confirm, hold_standing, is_serial, record_writer, resolve};
 use crate::bus_args::{PortArgs, open_client};
 use crate::common::hinges_only;
-use crate::common::{JSON_HELP, emit, load_description};
+use crate::common::{JSON_HELP, emit, load_description, num};
 use crate::error::{CliError, CliResult, Outcome};
 use clap::Args;
 use serde::Serialize;
@@ -148,11 +148,6 @@ pub fn run(a: &LeanArgs) -> CliResult {
     let tips = sagittal_tip_angles(&mut sim, &standing, &names)?;
     let order = sim.model.joint_names.clone();
     let cfg = configure(a, &sim.model, &order, &names, tips)?;
-    crate::bounds::steps(
-        cfg.duration_s(),
-        a.dt,
-        &format!("the lean of {:.0} s at --dt {} s", cfg.duration_s(), a.dt),
-    )?;
     let mut writer = lean_writer(a, &cfg)?;
     let mut buf = Vec::new();
     eprintln!(
@@ -190,6 +185,17 @@ fn configure(
     cfg.settle_s = a.settle;
     cfg.period_s = a.dt;
     cfg.max_tilt_deg = Some(tip);
+    // The settle is simulated (or waited on the bus) too: bound the whole run.
+    crate::bounds::steps(
+        cfg.settle_s + cfg.duration_s(),
+        a.dt,
+        &format!(
+            "--settle {} s and the lean of {} s at --dt {} s",
+            num(cfg.settle_s),
+            num(cfg.duration_s()),
+            num(a.dt)
+        ),
+    )?;
     Ok(cfg)
 }
 

@@ -43,7 +43,7 @@ pub struct ServoArgs {
     #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::common::positive)]
     pub amplitude: f64,
     /// Servo seconds per host second: F for a bench served with `serve --realtime-factor F`
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::bounds::realtime_factor)]
     pub realtime_factor: f64,
     /// Over a serial port: do not ask before moving the servo
     #[arg(long)]

@@ -47,7 +47,7 @@ pub struct SquatArgs {
     #[arg(long, value_name = "FRAMES.csv", requires = "markers")]
     pub frames_out: Option<PathBuf>,
     /// Marker noise, standard deviation per axis, m.
-    #[arg(long, default_value_t = 0.0, value_name = "M", value_parser = crate::common::non_negative)]
+    #[arg(long, default_value_t = 0.0, value_name = "M", value_parser = crate::units::noise)]
     pub marker_noise: f64,
     /// Random seed of the marker noise.
     #[arg(long, default_value_t = 1)]
@@ -61,7 +61,9 @@ pub fn run(a: &SquatArgs) -> CliResult {
         1.0 / a.rate,
         &format!(
             "--duration {} s and --rest {} s at --rate {} Hz",
-            a.duration, a.rest, a.rate
+            crate::common::num(a.duration),
+            crate::common::num(a.rest),
+            crate::common::num(a.rate)
         ),
     )?;
     let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;

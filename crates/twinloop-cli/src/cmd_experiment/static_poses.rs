@@ -17,7 +17,7 @@ pub struct StaticPosesArgs {
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     /// Number of poses, spread evenly over the categories.
-    #[arg(long, default_value_t = 172, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 172, value_parser = pose_count)]
     pub count: usize,
     /// Categories, comma-separated: arm, left, right, torso, crouch, wide.
     #[arg(
@@ -27,19 +27,19 @@ pub struct StaticPosesArgs {
     )]
     pub categories: Vec<String>,
     /// CoP noise, standard deviation per axis, metres.
-    #[arg(long, default_value_t = 0.0, value_name = "M", value_parser = crate::common::non_negative)]
+    #[arg(long, default_value_t = 0.0, value_name = "M", value_parser = crate::units::noise)]
     pub cop_noise: f64,
     /// Joint-angle noise added to the written configuration, standard deviation, rad.
-    #[arg(long, default_value_t = 0.0, value_name = "RAD", value_parser = crate::common::non_negative)]
+    #[arg(long, default_value_t = 0.0, value_name = "RAD", value_parser = crate::units::noise)]
     pub joint_noise: f64,
     /// Random seed (same seed, same poses).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Gap between the soles for the double-support categories, metres.
-    #[arg(long, default_value_t = 0.02, value_name = "M", value_parser = crate::common::non_negative)]
+    #[arg(long, default_value_t = 0.02, value_name = "M", value_parser = crate::units::noise)]
     pub gap: f64,
     /// Gap between the soles for the wide stance, metres.
-    #[arg(long, default_value_t = 0.20, value_name = "M", value_parser = crate::common::non_negative)]
+    #[arg(long, default_value_t = 0.20, value_name = "M", value_parser = crate::units::noise)]
     pub wide_gap: f64,
     /// Joints held at their neutral value in every pose, comma-separated.
     #[arg(long, value_delimiter = ',', value_name = "JOINTS")]
@@ -142,4 +142,22 @@ pub fn run(a: &StaticPosesArgs) -> CliResult {
     }
     crate::common::print(&text);
     Ok(Outcome::Ok)
+}
+
+/// The most poses one run makes: 20 000. Each pose is a balance solve (some 2.5 ms on a
+/// loaded machine), so the bound is under a minute of work; the seed's data set has
+/// 172 poses, and a count of a million was an hour.
+const MAX_POSES: usize = 20_000;
+
+/// `--count`: a count (crate::common::count) of at most [`MAX_POSES`].
+fn pose_count(s: &str) -> Result<usize, String> {
+    let n = crate::common::count(s)?;
+    if n <= MAX_POSES {
+        Ok(n)
+    } else {
+        Err(format!(
+            "{n} poses is more than the {MAX_POSES} one run makes (each is a balance solve: \
+             under a minute in all); split the run with other --seed values"
+        ))
+    }
 }

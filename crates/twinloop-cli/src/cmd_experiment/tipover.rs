@@ -25,12 +25,13 @@ fn first_ramp(s: &str) -> Result<f64, String> {
     let x = crate::common::positive(s)?;
     if x < MIN_RAMP {
         return Err(format!(
-            "{x} deg/s is below {MIN_RAMP}: a ramp to the 45 deg limit would take {:.0} s \
-             ({:.1} h) of robot time per run; the first ramp only finds where the \
+            "{} deg/s is below {MIN_RAMP}: a ramp to the 45 deg limit would take {} s \
+             ({} h) of robot time per run; the first ramp only finds where the \
              robot tips and --slow-ramp (default 0.05) creeps up to it, so use --ramp {MIN_RAMP} \
              or more (default 0.5)",
-            45.0 / x,
-            45.0 / x / 3600.0
+            crate::common::num(x),
+            crate::common::num(45.0 / x),
+            crate::common::num(45.0 / x / 3600.0)
         ));
     }
     Ok(x)
@@ -41,11 +42,12 @@ fn creep_ramp(s: &str) -> Result<f64, String> {
     let x = crate::common::positive(s)?;
     if x < MIN_SLOW_RAMP {
         return Err(format!(
-            "{x} deg/s is below {MIN_SLOW_RAMP}: the creep over the last half degree would \
-             take {:.0} s of robot time per direction, and a slower creep no longer shortens \
+            "{} deg/s is below {MIN_SLOW_RAMP}: the creep over the last half degree would \
+             take {} s of robot time per direction, and a slower creep no longer shortens \
              the lag of a tip's detection (about 0.2 s of fall: 0.001 deg at 0.005 deg/s); use \
              --slow-ramp {MIN_SLOW_RAMP} or more (default 0.05)",
-            0.5 / x
+            crate::common::num(x),
+            crate::common::num(0.5 / x)
         ));
     }
     Ok(x)
@@ -78,7 +80,7 @@ pub struct TipoverArgs {
     /// Over the bus, when the robot is a simulation served faster than real time
     /// (`twinloop serve --realtime-factor F`): F, so the protocol's ramps, waits and
     /// tilt filter count the robot's seconds. 1 for a real robot.
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = crate::bounds::realtime_factor)]
     pub realtime_factor: f64,
     /// Over a serial port: do not ask for confirmation before the first ramp.
     #[arg(long)]

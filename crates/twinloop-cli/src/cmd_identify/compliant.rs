@@ -61,7 +61,7 @@ pub struct CompliantFitArgs {
     pub seed: u64,
     /// Noise standard deviation (m) for the Cramer-Rao bounds; default: estimated from
     /// the residuals.
-    #[arg(long, value_name = "M", value_parser = crate::common::non_negative)]
+    #[arg(long, value_name = "M", value_parser = crate::units::noise)]
     pub noise_std: Option<f64>,
     /// Validation data of other gaits (repeatable): MSE before and after on each.
     #[arg(long = "val", value_name = "FILE.csv")]

@@ -585,18 +585,28 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// `sep` and `i` padded to the digits of `count`.
     fn replicas(&self, r: Node<'a, 'i>, xf: &Xf) -> Result<Vec<(Xf, String)>, DescriptionError> {
         let count = required(r, "count")?;
-        let n: usize = count
-            .trim()
-            .parse()
-            .ok()
-            .filter(|&n| (1..=MAX_REPLICAS).contains(&n))
-            .ok_or_else(|| {
-                error_at_attr(
+        let n: usize = match count.trim().parse::<u64>() {
+            Ok(n) if (1..=MAX_REPLICAS as u64).contains(&n) => n as usize,
+            Ok(n) if n > MAX_REPLICAS as u64 => {
+                return Err(error_at_attr(
                     r,
                     "count",
-                    format!("\"{count}\" is not a replica count: a whole number from 1 to {MAX_REPLICAS}"),
-                )
-            })?;
+                    format!(
+                        "{n} replicas are more than the {MAX_REPLICAS} a description may make \
+                         (a bound on the loader's work and memory)"
+                    ),
+                ));
+            }
+            _ => {
+                return Err(error_at_attr(
+                    r,
+                    "count",
+                    format!(
+                        "\"{count}\" is not a replica count: a whole number from 1 to {MAX_REPLICAS}"
+                    ),
+                ));
+            }
+        };
         let offset = opt_array::<3>(r, "offset")?.unwrap_or([0.0; 3]);
         let rot = self.orientation(r, "frame", None)?;
         let sep = r.attribute("sep").unwrap_or("");
