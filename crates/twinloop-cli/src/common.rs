@@ -309,10 +309,16 @@ impl RowWriter {
         match self {
             RowWriter::Csv(w) => Ok(w.finish()?),
             RowWriter::Mcap(w) => Ok(w.finish()?),
-            RowWriter::Many(ws) => ws
-                .into_iter()
-                .map(RowWriter::finish)
-                .fold(Ok(()), |first, r| first.and(r)),
+            RowWriter::Many(ws) => {
+                let mut first = Ok(());
+                for w in ws {
+                    let r = w.finish();
+                    if first.is_ok() {
+                        first = r;
+                    }
+                }
+                first
+            }
         }
     }
 
