@@ -15,6 +15,9 @@ pub trait RowSink: Send {
     fn write_row(&mut self, row: &[f64]) -> Result<(), IoError>;
     /// Make the file complete and durable and give it its name.
     fn finish(self: Box<Self>) -> Result<(), IoError>;
+    /// Give the file up: nothing is written, an older file of the name stays (a run
+    /// that measured nothing).
+    fn discard(self: Box<Self>);
     /// Keep a note (`name`, its text) with the rows: what a CSV log keeps in its
     /// leading `#` lines (a servo log's servo and load). A format with no place for
     /// notes refuses rather than lose it.
@@ -31,6 +34,9 @@ impl RowSink for CsvWriter {
     }
     fn finish(self: Box<Self>) -> Result<(), IoError> {
         CsvWriter::finish(*self)
+    }
+    fn discard(self: Box<Self>) {
+        CsvWriter::discard(*self)
     }
 }
 
