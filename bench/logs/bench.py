@@ -4,9 +4,10 @@
 reader (read_python.py), on the same file.
 
     pip install mcap==1.6.0 mcap-ros2-support==0.6.0
-    python3 bench/logs/bench.py [--seconds 3600] [--file /tmp/joint_states_1h.mcap]
+    python3 bench/logs/bench.py [--seconds 3600] [--file /tmp/joint_states_1h.mcap] [--profile ci]
 
-Builds crates/twinloop-logs/examples/logs_bench.rs (release profile, as shipped),
+Builds crates/twinloop-logs/examples/logs_bench.rs (release profile, as shipped; `ci`:
+the same optimisation without fat LTO, quicker to build beside the tests),
 writes the file with it unless it exists, reads it with twinloop three times (median
 of the wall time of `read_log`, which includes building the table) and once with
 Python, and prints the table row of BENCHMARKS.md.
@@ -19,7 +20,6 @@ import subprocess
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-EXE = ROOT / "target/release/examples/logs_bench"
 
 
 def run(cmd):
@@ -32,15 +32,17 @@ def main():
     ap.add_argument("--seconds", type=float, default=3600.0)
     ap.add_argument("--file", default="/tmp/joint_states_1h.mcap")
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--profile", default="release")
     a = ap.parse_args()
-    subprocess.run(["cargo", "build", "--release", "-p", "twinloop-logs", "--example", "logs_bench"],
+    subprocess.run(["cargo", "build", "--profile", a.profile, "-p", "twinloop-logs", "--example", "logs_bench"],
                    cwd=ROOT, check=True)
+    exe = ROOT / "target" / a.profile / "examples/logs_bench"
     if not os.path.exists(a.file):
-        subprocess.run([str(EXE), "write", str(a.seconds), a.file], check=True)
+        subprocess.run([str(exe), "write", str(a.seconds), a.file], check=True)
     size = os.path.getsize(a.file) / 1e6
     times = []
     for _ in range(a.rounds):
-        rows, cols, s = run([str(EXE), "read", a.file])
+        rows, cols, s = run([str(exe), "read", a.file])
         times.append(float(s))
         print(f"twinloop: {rows} rows x {cols} columns in {s} s", file=sys.stderr)
     n, py = run([sys.executable, str(ROOT / "bench/logs/read_python.py"), a.file])

@@ -10,7 +10,6 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use serde::Serialize;
 use std::time::{Duration, Instant};
-use twinloop_io::CsvWriter;
 use twinloop_link::ModelTable;
 use twinloop_link::transport::{self, SerialOptions, Transport};
 use twinloop_link::{
@@ -276,9 +275,11 @@ impl PyBus {
         for prefix in ["q", "v", "tau"] {
             columns.extend(names.iter().map(|n| format!("{prefix}:{n}")));
         }
+        // A CSV, or an MCAP of ROS 2 messages when `out` ends in .mcap (registered
+        // at import, as the CLI registers it).
         let mut writer = match &out {
             Some(path) => Some(
-                CsvWriter::recording(path, &columns)
+                twinloop_io::sink::open_recording(path, &columns)
                     .map_err(|e| PyOSError::new_err(e.to_string()))?,
             ),
             None => None,
@@ -298,7 +299,7 @@ impl PyBus {
                 w.discard();
                 Ok(None)
             }
-            w => w.map(CsvWriter::finish).transpose(),
+            w => w.map(|w| w.finish()).transpose(),
         };
         let n = names.len();
         let rows = rec.data.len() / (1 + 3 * n);
@@ -353,7 +354,7 @@ struct Recording {
 fn record_rows(
     py: Python<'_>,
     robot: &mut DynamixelRobot<Box<dyn Transport>>,
-    mut writer: Option<&mut CsvWriter>,
+    mut writer: Option<&mut Box<dyn twinloop_io::RowSink>>,
     duration: f64,
     rate: f64,
 ) -> Recording {

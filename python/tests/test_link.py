@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import twinloop as tl
+from conftest import oracle
 
 
 @pytest.fixture(scope="module")
@@ -118,3 +119,24 @@ def test_record_bad_input(server, tmp_path):
     with pytest.raises(OSError):
         bus.record(1.0, protocol=1, ids=[100, 101], out=out)
     assert not out.exists()
+
+
+def test_record_to_mcap_holds_the_rows_it_returns(server, tmp_path):
+    # The reference reader (mcap + mcap-ros2-support) decodes what twinloop wrote.
+    reader, decoder = oracle("mcap.reader"), oracle("mcap_ros2.decoder")
+    bus = bus_of(server)
+    out = tmp_path / "rec.mcap"
+    rec = bus.record(0.3, map="builtin:km20", rate=50.0, out=out)
+    names = [c[2:] for c in rec["columns"] if c.startswith("q:")]
+    with open(out, "rb") as f:
+        r = reader.make_reader(f, decoder_factories=[decoder.DecoderFactory()])
+        msgs = [m for _, _, _, m in r.iter_decoded_messages(topics=["/joint_states"])]
+    assert len(msgs) == rec["rows"]
+    for msg, row in zip(msgs, rec["data"]):
+        assert list(msg.name) == names
+        n = len(names)
+        np.testing.assert_array_equal(np.array(msg.position), row[1:1 + n])
+        np.testing.assert_array_equal(np.array(msg.velocity), row[1 + n:1 + 2 * n])
+        np.testing.assert_array_equal(np.array(msg.effort), row[1 + 2 * n:])
+        stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        assert abs(stamp - row[0]) < 1e-9

@@ -22,6 +22,10 @@ use twinloop_io::Table;
 /// The comment the first line of a log starts with.
 pub const LOG_PREFIX: &str = "# twinloop experiment servo:";
 
+/// The note (MCAP metadata record) in which a log that is not a CSV keeps the
+/// comment lines a CSV log starts with (its `text`).
+pub const SERVO_LOG_NOTE: &str = "twinloop.servo_log";
+
 /// The columns before the firmware registers.
 pub const LOG_COLUMNS: [&str; 9] = [
     "t",
@@ -71,23 +75,35 @@ impl ServoLog {
         let file = path.display().to_string();
         let text = twinloop_io::input::read_to_string(path)
             .map_err(|e| ActuatorError::new(&file, "", format!("cannot read: {e}")))?;
-        let named = text
+        let table =
+            Table::parse(&text).map_err(|e| ActuatorError::new(&file, "", e.to_string()))?;
+        ServoLog::from_table(&file, &text, &table, servo)
+    }
+
+    /// A log from its table and its leading comment lines (`header`, whose first
+    /// line names the servo: a CSV's text, or the note an MCAP log keeps them in,
+    /// [`SERVO_LOG_NOTE`]); `file` names it in errors.
+    pub fn from_table(
+        file: &str,
+        header: &str,
+        table: &Table,
+        servo: Option<ServoType>,
+    ) -> Result<ServoLog, ActuatorError> {
+        let file = file.to_string();
+        let first = header
             .lines()
             .next()
-            .and_then(|l| l.strip_prefix(LOG_PREFIX))
+            .and_then(|l| l.strip_prefix(LOG_PREFIX));
+        let named = first
             .and_then(|rest| rest.split_whitespace().next())
             .and_then(ServoType::parse);
-        let id = text
-            .lines()
-            .next()
-            .and_then(|l| l.strip_prefix(LOG_PREFIX))
-            .and_then(|rest| {
-                let words: Vec<&str> = rest.split_whitespace().collect();
-                words
-                    .windows(2)
-                    .find(|w| w[0] == "id")
-                    .and_then(|w| w[1].parse::<u8>().ok())
-            });
+        let id = first.and_then(|rest| {
+            let words: Vec<&str> = rest.split_whitespace().collect();
+            words
+                .windows(2)
+                .find(|w| w[0] == "id")
+                .and_then(|w| w[1].parse::<u8>().ok())
+        });
         let servo = servo.or(named).ok_or_else(|| {
             ActuatorError::new(
                 &file,
@@ -95,8 +111,6 @@ impl ServoLog {
                 format!("no servo named (expected \"{LOG_PREFIX} MODEL ...\"); give --servo MODEL"),
             )
         })?;
-        let table =
-            Table::parse(&text).map_err(|e| ActuatorError::new(&file, "", e.to_string()))?;
         let col = |name: &str| -> Result<usize, ActuatorError> {
             table
                 .column_index(name)
@@ -168,11 +182,20 @@ impl ServoLog {
 /// Writes a log row by row, flushed as it goes, as a recording of
 /// `twinloop_io::output` (written beside the file and given its name however the
 /// run ends, when it holds a row: a run cut short keeps its rows, a run that
-/// recorded nothing leaves an older log in place).
+/// recorded nothing leaves an older log in place). A path whose extension a program
+/// registered another format for (`twinloop`: `.mcap`) is written in it, the comment
+/// lines kept as its [`SERVO_LOG_NOTE`].
 pub struct LogWriter {
-    out: twinloop_io::output::AtomicFile,
-    line: String,
+    out: LogOut,
     pub rows: usize,
+}
+
+enum LogOut {
+    Csv {
+        out: twinloop_io::output::AtomicFile,
+        line: String,
+    },
+    Other(Box<dyn twinloop_io::RowSink>),
 }
 
 impl LogWriter {
@@ -189,13 +212,28 @@ impl LogWriter {
         what: &str,
         comments: &str,
     ) -> std::io::Result<LogWriter> {
+        let header = format!("{LOG_PREFIX} {} {what}\n{comments}", servo.name());
+        let fw = servo.firmware_columns();
+        if twinloop_io::sink::registered(path) {
+            let columns: Vec<String> = LOG_COLUMNS
+                .iter()
+                .chain(&fw)
+                .map(|c| c.to_string())
+                .collect();
+            let mut sink =
+                twinloop_io::sink::open_recording(path, &columns).map_err(std::io::Error::other)?;
+            sink.note(SERVO_LOG_NOTE, &header)
+                .map_err(std::io::Error::other)?;
+            return Ok(LogWriter {
+                out: LogOut::Other(sink),
+                rows: 0,
+            });
+        }
         let place =
             twinloop_io::output::Output::resolve("", path).map_err(std::io::Error::other)?;
         let mut out =
             twinloop_io::output::AtomicFile::recording(&place).map_err(std::io::Error::other)?;
-        writeln!(out, "{LOG_PREFIX} {} {what}", servo.name())?;
-        out.write_all(comments.as_bytes())?;
-        let fw = servo.firmware_columns();
+        out.write_all(header.as_bytes())?;
         writeln!(
             out,
             "{},{},{},{}",
@@ -206,29 +244,44 @@ impl LogWriter {
         )?;
         out.header_written();
         Ok(LogWriter {
-            out,
-            line: String::with_capacity(256),
+            out: LogOut::Csv {
+                out,
+                line: String::with_capacity(256),
+            },
             rows: 0,
         })
     }
 
     /// One row: the [`LOG_COLUMNS`] values then the three firmware registers.
     pub fn write(&mut self, values: &[f64; 9], firmware: &[f64; 3]) -> std::io::Result<()> {
-        self.line.clear();
-        for (k, x) in values.iter().chain(firmware).enumerate() {
-            if k > 0 {
-                self.line.push(',');
+        match &mut self.out {
+            LogOut::Csv { out, line } => {
+                line.clear();
+                for (k, x) in values.iter().chain(firmware).enumerate() {
+                    if k > 0 {
+                        line.push(',');
+                    }
+                    // f64's Display is the shortest text that reads back to the same number.
+                    let _ = write!(line, "{x}");
+                }
+                line.push('\n');
+                out.write_all(line.as_bytes())?;
             }
-            // f64's Display is the shortest text that reads back to the same number.
-            let _ = write!(self.line, "{x}");
+            LogOut::Other(sink) => {
+                let mut row = [0.0; 12];
+                row[..9].copy_from_slice(values);
+                row[9..].copy_from_slice(firmware);
+                sink.write_row(&row).map_err(std::io::Error::other)?;
+            }
         }
-        self.line.push('\n');
-        self.out.write_all(self.line.as_bytes())?;
         self.rows += 1;
         Ok(())
     }
 
     pub fn finish(self) -> std::io::Result<()> {
-        self.out.commit().map_err(std::io::Error::other)
+        match self.out {
+            LogOut::Csv { out, .. } => out.commit().map_err(std::io::Error::other),
+            LogOut::Other(sink) => sink.finish().map_err(std::io::Error::other),
+        }
     }
 }

@@ -154,9 +154,11 @@ pub struct RecordArgs {
     /// Seconds to record
     #[arg(long, value_parser = crate::common::positive)]
     pub duration: f64,
-    /// Output file: CSV, or MCAP (ROS 2 /joint_states) when it ends in .mcap
-    #[arg(long, value_name = "FILE.csv|FILE.mcap")]
-    pub out: PathBuf,
+    /// Output file: CSV, or MCAP (ROS 2 /joint_states, and the mapping's robot on
+    /// /robot_description) when it ends in .mcap. Repeatable: one recording written
+    /// to each (a CSV kept row by row and an MCAP for Foxglove or Rerun)
+    #[arg(long, value_name = "FILE.csv|FILE.mcap", required = true)]
+    pub out: Vec<PathBuf>,
     /// Reads per second (0: as fast as the bus allows)
     #[arg(long, default_value_t = 100.0, value_parser = crate::common::non_negative)]
     pub rate: f64,
@@ -513,6 +515,7 @@ fn read(a: &ReadArgs) -> CliResult {
 }
 
 fn record(a: &RecordArgs) -> CliResult {
+    crate::common::RowWriter::distinct_paths(&a.out)?;
     // The rows it will write: --rate a second (--rate 0: taken as 1 kHz).
     let rate = if a.rate > 0.0 { a.rate } else { 1000.0 };
     crate::bounds::steps(
@@ -546,6 +549,7 @@ fn record(a: &RecordArgs) -> CliResult {
         .map(|j| format!("{} (protocol {}.0)", j.id, j.protocol.number()))
         .collect();
     let mut live = crate::live_view::start_live_for_mapping(&a.view, &mapping)?;
+    let mapping_urdf = mapping.urdf.as_ref().map(|u| u.display().to_string());
     let mut robot = DynamixelRobot::new(c, mapping, a.method)?;
     robot.cycle_mut().verify_v1 = a.verified_reads;
     let mut columns = vec!["t".to_string()];
@@ -554,7 +558,16 @@ fn record(a: &RecordArgs) -> CliResult {
     }
     // Every row reaches a CSV as soon as it is read: nothing is lost on Ctrl-C or
     // when the adapter is unplugged. An .mcap is closed (summary written) on both.
-    let mut writer = crate::common::RowWriter::create(&a.out, &columns, None, true)?;
+    // The robot the mapping names goes on an MCAP's /robot_description, so a viewer
+    // shows it moving with no twinloop installed.
+    let description = match &mapping_urdf {
+        Some(spec) if a.out.iter().any(|p| crate::common::is_mcap(p)) => {
+            Some(crate::common::load_description(spec)?.0)
+        }
+        _ => None,
+    };
+    let mut writer =
+        crate::common::RowWriter::create_each(&a.out, &columns, description.as_ref(), true)?;
     let stop = interrupt_flag();
     let rec = record_rows(&mut robot, &mut writer, a, &stop, live.as_mut());
     if let Some(live) = &live {
@@ -581,7 +594,7 @@ fn record(a: &RecordArgs) -> CliResult {
         rec.rows,
         rec.seconds,
         rec.rows as f64 / rec.seconds.max(1e-9),
-        a.out.display()
+        outs(&a.out)
     );
     if stop.load(Ordering::Relaxed) {
         summary += " (interrupted)";
@@ -611,7 +624,7 @@ fn record(a: &RecordArgs) -> CliResult {
         eprintln!(
             "error: recording stopped: {why}; the {} rows read before are in {}",
             rec.rows,
-            a.out.display()
+            outs(&a.out)
         );
         return Ok(Outcome::Problems);
     }
@@ -622,6 +635,12 @@ fn record(a: &RecordArgs) -> CliResult {
         ))),
         None => Ok(Outcome::Ok),
     }
+}
+
+/// The files a recording went to, for its summary line.
+fn outs(paths: &[PathBuf]) -> String {
+    let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    names.join(" and ")
 }
 
 /// Why a recording ran slower than asked, and what raises its rate: each read is one

@@ -217,12 +217,21 @@ pub fn set_log_options(topics: &[String], resample: Option<f64>) -> Result<(), C
     Ok(())
 }
 
+/// Whether an output is written as MCAP (its name ends in `.mcap`, any case).
+pub fn is_mcap(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+}
+
 /// Rows written to a CSV, or to an MCAP of ROS 2 messages when the path ends in
 /// `.mcap` (with the robot's URDF on `/robot_description`): what `simulate --out`
 /// and `link record --out` write through.
 pub enum RowWriter {
     Csv(twinloop_io::CsvWriter),
     Mcap(Box<twinloop_logs::McapLog>),
+    /// One recording written to several files (`link record --out X.csv --out
+    /// X.mcap`): every row goes to each, so they hold the same rows.
+    Many(Vec<RowWriter>),
 }
 
 impl RowWriter {
@@ -234,10 +243,7 @@ impl RowWriter {
         robot: Option<&twinloop_description::Description>,
         recording: bool,
     ) -> Result<RowWriter, CliError> {
-        if path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
-        {
+        if is_mcap(path) {
             let urdf = robot.map(twinloop_description::urdf::to_string);
             let root = robot
                 .and_then(|r| r.root_links().first().map(|s| s.to_string()))
@@ -255,17 +261,65 @@ impl RowWriter {
         }))
     }
 
+    /// Refuse a path given twice: two writers would race for one file.
+    pub fn distinct_paths(paths: &[PathBuf]) -> Result<(), CliError> {
+        match paths
+            .iter()
+            .enumerate()
+            .find(|(k, p)| paths[..*k].contains(p))
+        {
+            Some((k, p)) => Err(CliError::new(format!(
+                "--out {}: given twice (output {} repeats an earlier one)",
+                p.display(),
+                k + 1
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// [`RowWriter::create`] for each of `paths` (one: that file's writer).
+    pub fn create_each(
+        paths: &[PathBuf],
+        columns: &[String],
+        robot: Option<&twinloop_description::Description>,
+        recording: bool,
+    ) -> Result<RowWriter, CliError> {
+        Self::distinct_paths(paths)?;
+        let mut writers = paths
+            .iter()
+            .map(|p| RowWriter::create(p, columns, robot, recording))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(if writers.len() == 1 {
+            writers.remove(0)
+        } else {
+            RowWriter::Many(writers)
+        })
+    }
+
     pub fn write_row(&mut self, row: &[f64]) -> Result<(), CliError> {
         match self {
             RowWriter::Csv(w) => Ok(w.write_row(row)?),
             RowWriter::Mcap(w) => Ok(w.write_row(row)?),
+            RowWriter::Many(ws) => ws.iter_mut().try_for_each(|w| w.write_row(row)),
         }
     }
 
+    /// Close every file; the first error, after all have been tried (one failed
+    /// output does not lose the others).
     pub fn finish(self) -> Result<(), CliError> {
         match self {
             RowWriter::Csv(w) => Ok(w.finish()?),
             RowWriter::Mcap(w) => Ok(w.finish()?),
+            RowWriter::Many(ws) => {
+                let mut first = Ok(());
+                for w in ws {
+                    let r = w.finish();
+                    if first.is_ok() {
+                        first = r;
+                    }
+                }
+                first
+            }
         }
     }
 
@@ -274,6 +328,7 @@ impl RowWriter {
         match self {
             RowWriter::Csv(w) => w.discard(),
             RowWriter::Mcap(w) => w.discard(),
+            RowWriter::Many(ws) => ws.into_iter().for_each(RowWriter::discard),
         }
     }
 }

@@ -43,7 +43,8 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// Every column of `a` is in `b` with the same values, bit for bit (`t` to the ns).
+/// Every column of `a` is in `b` with the same values, bit for bit (`t` to the ns;
+/// a read the recording missed is NaN in both).
 fn same_rows(a: &Table, b: &Table) {
     assert_eq!(a.rows.len(), b.rows.len());
     for (i, c) in a.columns.iter().enumerate() {
@@ -51,7 +52,7 @@ fn same_rows(a: &Table, b: &Table) {
         for (ra, rb) in a.rows.iter().zip(&b.rows) {
             if c == "t" {
                 assert!((ra[i] - rb[j]).abs() <= 0.5e-9, "t {} vs {}", ra[i], rb[j]);
-            } else {
+            } else if !(ra[i].is_nan() && rb[j].is_nan()) {
                 assert_eq!(
                     ra[i].to_bits(),
                     rb[j].to_bits(),
@@ -136,60 +137,61 @@ fn identify_static_answers_the_same_from_an_mcap_as_from_its_csv() {
 }
 
 #[test]
-fn link_record_out_mcap_holds_what_the_csv_recording_holds() {
+fn link_record_on_the_served_km20_as_mcap_and_csv_holds_the_same_rows() {
     let (mut server, pty) = served::serve(&["--robot", "builtin:km20", "--no-timing"]);
     let (csv, mcap) = (tmp("rec.csv"), tmp("rec.mcap"));
-    let mut counts = Vec::new();
-    for out in [&csv, &mcap] {
-        let o = twinloop(&[
-            "link",
-            "record",
-            "--port",
-            &pty,
-            "--map",
-            "builtin:km20",
-            "--duration",
-            "0.3",
-            "--rate",
-            "50",
-            "--out",
-            s(out),
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr).to_string();
-        assert!(o.status.success(), "{err}");
-        counts.push(
-            err.split(" rows")
-                .next()
-                .unwrap()
-                .rsplit(' ')
-                .next()
-                .unwrap()
-                .parse::<usize>()
-                .unwrap(),
-        );
-    }
+    // One recording written to both: every row read goes to each file.
+    let o = twinloop(&[
+        "link",
+        "record",
+        "--port",
+        &pty,
+        "--map",
+        "builtin:km20",
+        "--duration",
+        "0.3",
+        "--rate",
+        "50",
+        "--out",
+        s(&csv),
+        "--out",
+        s(&mcap),
+    ]);
     server.kill().unwrap();
     server.wait().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{err}");
+    let rows: usize = err.split(" rows").next().unwrap().parse().unwrap();
+    assert!(rows >= 3, "{err}");
     let a = Table::read(&csv).unwrap();
     let b = read_log(&mcap, &ReadOptions::default()).unwrap();
     assert_eq!(a.columns, b.columns);
-    assert_eq!((a.rows.len(), b.rows.len()), (counts[0], counts[1]));
-    // Two recordings of one robot standing still: in every row of both, every joint
-    // where the CSV first read it, to a few encoder steps (RX-28: 0.005 rad); a read
-    // a loaded machine missed is NaN in either format, as the recording says.
-    for (i, c) in a.columns.iter().enumerate() {
-        if !c.starts_with("q:") {
-            continue;
-        }
-        let Some(pose) = a.rows.iter().map(|r| r[i]).find(|v| !v.is_nan()) else {
-            continue;
-        };
-        let j = b.column_index(c).unwrap();
-        let near = |v: f64| v.is_nan() || (v - pose).abs() < 0.02;
-        for (x, y) in a.rows.iter().map(|r| r[i]).zip(b.rows.iter().map(|r| r[j])) {
-            assert!(near(x) && near(y), "{c}: {x} {y} vs {pose}");
-        }
-    }
+    assert_eq!((a.rows.len(), b.rows.len()), (rows, rows));
+    same_rows(&a, &b);
+    // The mapping's robot rides along for the viewers.
+    let info = ok(&["log", "info", s(&mcap), "--robot", "builtin:km20"]);
+    assert!(
+        info.contains("/robot_description  std_msgs/msg/String  1 messages"),
+        "{info}"
+    );
+    // The same path twice is refused before the bus is touched.
+    let o = twinloop(&[
+        "link",
+        "record",
+        "--port",
+        "/nonexistent",
+        "--map",
+        "builtin:km20",
+        "--duration",
+        "0.1",
+        "--out",
+        s(&csv),
+        "--out",
+        s(&csv),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(e.contains("given twice"), "{e}");
 }
 
 #[test]
@@ -389,4 +391,238 @@ fn identify_static_mcap_holds_the_measurement_both_models_predictions_and_the_ad
             input.display()
         );
     }
+}
+
+/// The MCAP of a CSV table (`t` to the ns, every other value bit for bit): the same
+/// data as a log, as a team's recorder would hand it over.
+fn as_mcap(csv: &Path) -> PathBuf {
+    let table = Table::read(csv).unwrap();
+    let mcap = csv.with_extension("mcap");
+    write_mcap(&mcap, &table, None, "pelvis").unwrap();
+    mcap
+}
+
+/// `args` (with `{in}`/`{in2}` for the inputs and `{json}` for the answer) run on
+/// the CSVs and on their MCAPs: the JSON answers are the same, but for the inputs'
+/// names and the run times.
+fn same_answer(args: &[&str], inputs: &[PathBuf]) {
+    let logs: Vec<PathBuf> = inputs.iter().map(|p| as_mcap(p)).collect();
+    let mut answers = Vec::new();
+    for (k, files) in [inputs, &logs[..]].into_iter().enumerate() {
+        let json = tmp(&format!("answer-{}-{k}.json", args[1]));
+        let args: Vec<String> = args
+            .iter()
+            .map(|a| match *a {
+                "{in}" => s(&files[0]).to_string(),
+                "{in2}" => s(&files[1]).to_string(),
+                "{json}" => s(&json).to_string(),
+                a => a.to_string(),
+            })
+            .collect();
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        ok(&args);
+        let mut text = std::fs::read_to_string(&json).unwrap();
+        for f in files {
+            text = text.replace(s(f), "INPUT");
+        }
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        strip_times(&mut v);
+        answers.push(v);
+    }
+    assert_eq!(answers[0], answers[1], "{args:?}");
+}
+
+/// Drop the run times (`*seconds*` keys) anywhere in a JSON answer.
+fn strip_times(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|k, _| !k.contains("seconds"));
+            m.values_mut().for_each(strip_times);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(strip_times),
+        _ => {}
+    }
+}
+
+#[test]
+fn identify_arx_and_ss_answer_the_same_from_an_mcap_as_from_its_csv() {
+    // The synthetic records of tools/oracle/sysid_reference.py, `t` at 10 ms.
+    let csv = tmp("sysid_est.csv");
+    std::fs::copy(
+        root().join("crates/twinloop-sysid/tests/data/synthetic_est.csv"),
+        &csv,
+    )
+    .unwrap();
+    let csv = vec![csv];
+    let common = ["--data", "{in}", "--inputs", "u*", "--outputs", "y1,y2,y3"];
+    same_answer(
+        &[
+            &["identify", "arx"][..],
+            &common,
+            &["--na", "2", "--nb", "2", "--nk", "1", "--json", "{json}"],
+        ]
+        .concat(),
+        &csv,
+    );
+    same_answer(
+        &[
+            &["identify", "ss"][..],
+            &common,
+            &["--order", "4", "--method", "n4sid", "--json", "{json}"],
+        ]
+        .concat(),
+        &csv,
+    );
+}
+
+#[test]
+fn validate_lean_answers_the_same_from_mcaps_as_from_their_csvs() {
+    // Two simulated leans of km20, the second with soft servos: the robot's run and
+    // the simulation's.
+    let runs = [tmp("lean-a.csv"), tmp("lean-b.csv")];
+    for (run, soft) in runs.iter().zip([&[][..], &["--soft-servos"]]) {
+        let mut args = vec![
+            "experiment",
+            "lean",
+            "--robot",
+            "builtin:km20",
+            "--amplitude",
+            "3",
+            "--ramp",
+            "2",
+            "--hold",
+            "0.5",
+            "--settle",
+            "0.5",
+            "--out",
+            s(run),
+        ];
+        args.extend_from_slice(soft);
+        ok(&args);
+    }
+    same_answer(
+        &[
+            "validate",
+            "lean",
+            "--robot-run",
+            "{in}",
+            "--sim-run",
+            "{in2}",
+            "--json",
+            "{json}",
+        ],
+        &runs,
+    );
+}
+
+#[test]
+fn validate_residual_answers_the_same_from_mcaps_as_from_their_csvs() {
+    // h1's squat on the force plate: its configuration is the motion, its plate
+    // columns the wrench.
+    let squat = tmp("squat.csv");
+    let h1 = root().join("models/unitree_h1/h1.urdf");
+    let prior = root().join("models/unitree_h1/variants/h1_2025-06_a3b70ca.urdf");
+    ok(&[
+        "experiment",
+        "squat",
+        "--robot",
+        s(&h1),
+        "--out",
+        s(&squat),
+        "--duration",
+        "1",
+        "--rest",
+        "0.2",
+        "--rate",
+        "100",
+    ]);
+    same_answer(
+        &[
+            "validate",
+            "residual",
+            "--robot",
+            s(&prior),
+            "--compare",
+            s(&h1),
+            "--motion",
+            "{in}",
+            "--plate",
+            "{in}",
+            "--out",
+            s(&tmp("res.csv")),
+            "--json",
+            "{json}",
+        ],
+        &[squat],
+    );
+}
+
+#[test]
+fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
+    use twinloop_actuator::log::LogWriter;
+    use twinloop_actuator::synthetic::synthetic_log;
+    use twinloop_actuator::{Excitation, Load, ModelLevel, Pendulum, ServoType, datasheet};
+    // An RX-28 on a pendulum through the standard excitation, sampled every 2 ms
+    // +- 0.4 ms; times on whole ns, which is what an MCAP stamp holds.
+    let pendulum = Pendulum {
+        mass: 0.5,
+        length: 0.15,
+        arm_inertia: 0.002,
+    };
+    let load = tmp("servo-load.toml");
+    std::fs::write(&load, "mass = 0.5\nlength = 0.15\narm_inertia = 0.002\n").unwrap();
+    let truth = datasheet::defaults(ServoType::Rx28, ModelLevel::M1);
+    let mut log = synthetic_log(
+        &truth,
+        &Load::from(pendulum),
+        &Excitation::standard(ServoType::Rx28, 0.5),
+        2e-3,
+        4e-4,
+        7,
+    );
+    let ns = |t: f64| (t * 1e9).round() / 1e9;
+    log.t.iter_mut().for_each(|t| *t = ns(*t));
+    log.t_goal.iter_mut().for_each(|t| *t = ns(*t));
+    // Written as `experiment servo --out` writes each: the CSV with its comment
+    // lines, the MCAP (the format `twinloop` registers) keeping them as its note.
+    twinloop_io::sink::register_recording_format("mcap", twinloop_logs::open_mcap_recording);
+    let (csv, mcap) = (tmp("servo.csv"), tmp("servo.mcap"));
+    for path in [&csv, &mcap] {
+        let mut w = LogWriter::create(path, ServoType::Rx28, "id 3 on test").unwrap();
+        for r in 0..log.len() {
+            let values = [
+                log.t[r],
+                log.goal[r],
+                log.t_goal[r],
+                log.q[r],
+                log.v[r],
+                f64::NAN,
+                f64::NAN,
+                log.voltage[r],
+                40.0,
+            ];
+            w.write(&values, &log.firmware[r]).unwrap();
+        }
+        w.finish().unwrap();
+    }
+    let mut answers = Vec::new();
+    for path in [&csv, &mcap] {
+        let out = ok(&[
+            "identify",
+            "servo",
+            "--data",
+            s(path),
+            "--load",
+            s(&load),
+            "--json",
+            "-",
+        ]);
+        let mut v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        strip_times(&mut v);
+        let text = v.to_string().replace(s(path), "LOG");
+        answers.push(text);
+    }
+    assert_eq!(answers[0], answers[1]);
+    // The servo and its id came from the MCAP's note.
+    assert!(answers[1].contains("RX-28"), "{}", answers[1]);
 }

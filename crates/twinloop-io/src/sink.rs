@@ -15,6 +15,17 @@ pub trait RowSink: Send {
     fn write_row(&mut self, row: &[f64]) -> Result<(), IoError>;
     /// Make the file complete and durable and give it its name.
     fn finish(self: Box<Self>) -> Result<(), IoError>;
+    /// Give the file up: nothing is written, an older file of the name stays (a run
+    /// that measured nothing).
+    fn discard(self: Box<Self>);
+    /// Keep a note (`name`, its text) with the rows: what a CSV log keeps in its
+    /// leading `#` lines (a servo log's servo and load). A format with no place for
+    /// notes refuses rather than lose it.
+    fn note(&mut self, name: &str, _text: &str) -> Result<(), IoError> {
+        Err(IoError::new(format!(
+            "this format keeps no notes (\"{name}\"): write a CSV"
+        )))
+    }
 }
 
 impl RowSink for CsvWriter {
@@ -23,6 +34,9 @@ impl RowSink for CsvWriter {
     }
     fn finish(self: Box<Self>) -> Result<(), IoError> {
         CsvWriter::finish(*self)
+    }
+    fn discard(self: Box<Self>) {
+        CsvWriter::discard(*self)
     }
 }
 
@@ -40,20 +54,23 @@ pub fn register_recording_format(extension: &'static str, open: RecordingOpener)
     formats.push((extension, open));
 }
 
+/// Is a format other than CSV registered for `path`'s extension?
+pub fn registered(path: &Path) -> bool {
+    opener(path).is_some()
+}
+
+fn opener(path: &Path) -> Option<RecordingOpener> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())?;
+    let formats = FORMATS.lock().unwrap_or_else(|e| e.into_inner());
+    formats.iter().find(|(e, _)| *e == ext).map(|(_, o)| *o)
+}
+
 /// A recording at `path`: in the format registered for its extension, else CSV
 /// ([`CsvWriter::recording`]: every row on disk at once, kept if the run fails).
 pub fn open_recording(path: &Path, columns: &[String]) -> Result<Box<dyn RowSink>, IoError> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    let opener = {
-        let formats = FORMATS.lock().unwrap_or_else(|e| e.into_inner());
-        formats
-            .iter()
-            .find(|(e, _)| Some(*e) == ext.as_deref())
-            .map(|(_, o)| *o)
-    };
-    match opener {
+    match opener(path) {
         Some(open) => open(path, columns),
         None => Ok(Box::new(CsvWriter::recording(path, columns)?)),
     }

@@ -21,5 +21,5 @@ pub mod write;
 pub use error::{LogError, format_ns};
 pub use info::{TopicInfo, log_info};
 pub use read::{ReadOptions, TopicSpec, read_log};
-pub use source::is_log;
+pub use source::{is_log, metadata};
 pub use write::{ArrayTopic, McapLog, open_mcap_recording, write_mcap};

@@ -53,7 +53,7 @@ pub struct ReadOptions {
     /// The topics; empty = every topic of a type twinloop maps onto columns without
     /// being told names (JointState, Imu, WrenchStamped, TFMessage).
     pub topics: Vec<TopicSpec>,
-    /// Resample every column onto `t = 0, dt, 2 dt, ..` by linear interpolation.
+    /// Resample every column onto a fixed step by linear interpolation.
     pub dt: Option<f64>,
 }
 
@@ -334,19 +334,24 @@ fn frame_or_topic(frame: &str, topic: &str) -> String {
 /// out (nothing is extrapolated). With `options.dt`, every column is resampled onto a
 /// fixed step instead. A topic read alone with no `dt` gives its values unchanged.
 pub fn read_log(path: &Path, options: &ReadOptions) -> Result<Table, LogError> {
-    let series = read_series(path, options).map_err(|e| e.in_file(path))?;
-    let mut table = crate::timebase::merge(series, options.dt, !options.topics.is_empty())
-        .map_err(|e| e.in_file(path))?;
+    let (series, ours) = read_series(path, options).map_err(|e| e.in_file(path))?;
+    let explicit = !options.topics.is_empty();
+    let mut table =
+        crate::timebase::merge(series, options.dt, explicit, ours).map_err(|e| e.in_file(path))?;
     table.path = Some(path.to_path_buf());
     Ok(table)
 }
 
-/// Every selected topic's rows, each on its own times, in selection order.
-pub(crate) fn read_series(path: &Path, options: &ReadOptions) -> Result<Vec<Series>, LogError> {
+/// Every selected topic's rows, each on its own times, in selection order; whether
+/// twinloop wrote the log (its stamps are its `t`).
+pub(crate) fn read_series(
+    path: &Path,
+    options: &ReadOptions,
+) -> Result<(Vec<Series>, bool), LogError> {
     let mut decoders: HashMap<String, Option<Decoder>> = HashMap::new();
     let mut order: Vec<String> = Vec::new();
     let mut seen: Vec<(String, String)> = Vec::new();
-    source::for_each_message(path, |ch, log_time, data| {
+    let ours = source::for_each_message(path, |ch, log_time, data| {
         // One hash a message: the topic's decoder, or its first message.
         if let Some(d) = decoders.get_mut(&ch.topic) {
             return match d {
@@ -401,5 +406,5 @@ pub(crate) fn read_series(path: &Path, options: &ReadOptions) -> Result<Vec<Seri
             }
         )));
     }
-    Ok(series)
+    Ok((series, ours))
 }

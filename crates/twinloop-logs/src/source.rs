@@ -11,10 +11,11 @@
 //! schema).
 use crate::error::LogError;
 use mcap::records::op;
-use mcap::sans_io::{LinearReadEvent, LinearReader};
-use std::collections::HashMap;
+use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use std::collections::{BTreeMap, HashMap};
 use std::io::Read;
 use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, Sender, SyncSender};
 
 /// A topic as the container declares it.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -38,25 +39,31 @@ pub fn is_log(path: &Path) -> bool {
     )
 }
 
+/// The MCAP Header's `library` of the files twinloop writes (`twinloop VERSION`).
+pub const WRITER: &str = "twinloop ";
+
 /// Call `f(channel, log_time_ns, cdr_bytes)` for every message of the log at `path`,
 /// in file order (a bag folder's files in the order its metadata lists them).
+/// Returns whether twinloop wrote every file: then each stamp is its table's `t`
+/// (write.rs), which a reader keeps rather than counting from the first row.
 pub fn for_each_message(
     path: &Path,
     mut f: impl FnMut(&Channel, i64, &[u8]) -> Result<(), LogError>,
-) -> Result<(), LogError> {
+) -> Result<bool, LogError> {
     let files = if path.is_dir() {
         bag_files(path)?
     } else {
         vec![path.to_path_buf()]
     };
+    let mut ours = true;
     for file in &files {
         let r = match file.extension().and_then(|e| e.to_str()) {
-            Some("db3") => sqlite_messages(file, &mut f),
+            Some("db3") => sqlite_messages(file, &mut f).map(|()| false),
             _ => mcap_messages(file, &mut f),
         };
-        r.map_err(|e| e.in_file(file))?;
+        ours &= r.map_err(|e| e.in_file(file))?;
     }
-    Ok(())
+    Ok(ours)
 }
 
 /// The storage files of a rosbag2 folder, from its `metadata.yaml`
@@ -130,32 +137,102 @@ impl Last {
     }
 }
 
+/// Bytes of records the reading thread hands over at a time: large enough that the
+/// hand-over costs nothing per message, small enough to stay in cache.
+const BATCH_BYTES: usize = 1 << 20;
+
+/// Batches in flight between the two threads (so at most a few MB held).
+const BATCHES_IN_FLIGHT: usize = 4;
+
+/// The messages of an MCAP file on two threads: one reads the file and inflates its
+/// chunks (the `mcap` crate, CRCs checked), the other decodes what it hands over, so
+/// on two cores the decompression's ~40 % of the work overlaps the decoding's ~60 %
+/// (BENCHMARKS.md, "Reading logs"). The records cross as in the file, `opcode (u8),
+/// length (u64 LE), body`, in reused buffers.
 fn mcap_messages(
     path: &Path,
     f: &mut impl FnMut(&Channel, i64, &[u8]) -> Result<(), LogError>,
-) -> Result<(), LogError> {
-    let mut file =
-        std::fs::File::open(path).map_err(|e| LogError::new(format!("cannot read: {e}")))?;
+) -> Result<bool, LogError> {
+    let file = std::fs::File::open(path).map_err(|e| LogError::new(format!("cannot read: {e}")))?;
     if let Ok(meta) = file.metadata() {
         // An output is never written over a log this command read.
         twinloop_io::input::note_read(path, &meta);
     }
+    let (to_decoder, batches) = std::sync::mpsc::sync_channel(BATCHES_IN_FLIGHT);
+    let (to_reader, spare) = std::sync::mpsc::channel();
+    std::thread::scope(|scope| {
+        scope.spawn(move || inflate(file, &to_decoder, &spare));
+        // `batches` is dropped on return, so a failed decode stops the reader too.
+        decode_batches(batches, &to_reader, f)
+    })
+}
+
+/// The reading thread: every schema, channel and message record, in file order, in
+/// batches; an error ends the stream (after the records read before it).
+fn inflate(
+    mut file: std::fs::File,
+    out: &SyncSender<Result<Vec<u8>, LogError>>,
+    spare: &Receiver<Vec<u8>>,
+) {
     let mut reader = LinearReader::new();
+    let mut batch = Vec::with_capacity(BATCH_BYTES);
+    while let Some(event) = reader.next_event() {
+        let error = match event {
+            Ok(LinearReadEvent::ReadRequest(n)) => match file.read(reader.insert(n)) {
+                Ok(got) => {
+                    reader.notify_read(got);
+                    continue;
+                }
+                Err(e) => LogError::new(format!("cannot read: {e}")),
+            },
+            Ok(LinearReadEvent::Record { data, opcode }) => {
+                if matches!(opcode, op::MESSAGE | op::SCHEMA | op::CHANNEL | op::HEADER) {
+                    batch.push(opcode);
+                    batch.extend_from_slice(&(data.len() as u64).to_le_bytes());
+                    batch.extend_from_slice(data);
+                }
+                if batch.len() >= BATCH_BYTES {
+                    let next = spare
+                        .try_recv()
+                        .unwrap_or_else(|_| Vec::with_capacity(BATCH_BYTES));
+                    if out.send(Ok(std::mem::replace(&mut batch, next))).is_err() {
+                        return;
+                    }
+                }
+                continue;
+            }
+            Err(e) => truncation(e),
+        };
+        let _ = out.send(Ok(batch));
+        let _ = out.send(Err(error));
+        return;
+    }
+    let _ = out.send(Ok(batch));
+}
+
+/// The decoding thread's side: each record of each batch to `f`; the reader's error
+/// names the last message decoded before it. Whether twinloop wrote the file (its
+/// Header record's `library`).
+fn decode_batches(
+    batches: Receiver<Result<Vec<u8>, LogError>>,
+    spare: &Sender<Vec<u8>>,
+    f: &mut impl FnMut(&Channel, i64, &[u8]) -> Result<(), LogError>,
+) -> Result<bool, LogError> {
+    let mut ours = false;
     let mut schemas: HashMap<u16, String> = HashMap::new();
     let mut channels: HashMap<u16, Channel> = HashMap::new();
     let mut last = Last {
         topic: None,
         time: 0,
     };
-    while let Some(event) = reader.next_event() {
-        match event.map_err(|e| last.blame(truncation(e)))? {
-            LinearReadEvent::ReadRequest(n) => {
-                let got = file
-                    .read(reader.insert(n))
-                    .map_err(|e| last.blame(LogError::new(format!("cannot read: {e}"))))?;
-                reader.notify_read(got);
-            }
-            LinearReadEvent::Record { data, opcode } => match opcode {
+    for batch in batches {
+        let mut batch = batch.map_err(|e| last.blame(e))?;
+        let mut rest = &batch[..];
+        while let [opcode, tail @ ..] = rest {
+            let len = u64::from_le_bytes(tail[..8].try_into().expect("8 bytes")) as usize;
+            let (data, after) = tail[8..].split_at(len);
+            rest = after;
+            match *opcode {
                 op::MESSAGE => {
                     let (id, log_time, payload) = message_record(data)?;
                     let ch = channels.get(&id).ok_or_else(|| {
@@ -169,30 +246,94 @@ fn mcap_messages(
                     }
                     last.time = log_time;
                 }
-                op::SCHEMA | op::CHANNEL => {
-                    match mcap::parse_record(opcode, data).map_err(|e| last.blame(e.into()))? {
-                        mcap::records::Record::Schema { header, .. } => {
-                            schemas.insert(header.id, header.name);
-                        }
-                        mcap::records::Record::Channel(c) => {
-                            let schema = schemas.get(&c.schema_id).cloned().unwrap_or_default();
-                            channels.insert(
-                                c.id,
-                                Channel {
-                                    topic: c.topic,
-                                    schema,
-                                    encoding: c.message_encoding,
-                                },
-                            );
-                        }
-                        _ => {}
-                    }
+                opcode => {
+                    ours |= declare(opcode, data, &mut schemas, &mut channels)
+                        .map_err(|e| last.blame(e))?;
                 }
-                _ => {}
-            },
+            }
+        }
+        batch.clear();
+        let _ = spare.send(batch);
+    }
+    Ok(ours)
+}
+
+/// A schema or channel record into the tables the messages are decoded by; a
+/// header record: whether twinloop wrote the file.
+fn declare(
+    opcode: u8,
+    data: &[u8],
+    schemas: &mut HashMap<u16, String>,
+    channels: &mut HashMap<u16, Channel>,
+) -> Result<bool, LogError> {
+    match mcap::parse_record(opcode, data)? {
+        mcap::records::Record::Header(h) => return Ok(h.library.starts_with(WRITER)),
+        mcap::records::Record::Schema { header, .. } => {
+            schemas.insert(header.id, header.name);
+        }
+        mcap::records::Record::Channel(c) => {
+            let schema = schemas.get(&c.schema_id).cloned().unwrap_or_default();
+            channels.insert(
+                c.id,
+                Channel {
+                    topic: c.topic,
+                    schema,
+                    encoding: c.message_encoding,
+                },
+            );
+        }
+        _ => {}
+    }
+    Ok(false)
+}
+
+/// The first metadata record called `name` in the log at `path` (its string pairs),
+/// or `None`: twinloop's own notes on a log, such as a servo log's first lines. The
+/// chunks are passed over, not inflated; SQLite bags hold no metadata records.
+pub fn metadata(path: &Path, name: &str) -> Result<Option<BTreeMap<String, String>>, LogError> {
+    let files = if path.is_dir() {
+        bag_files(path)?
+    } else {
+        vec![path.to_path_buf()]
+    };
+    for file in files
+        .iter()
+        .filter(|f| f.extension().is_some_and(|e| e != "db3"))
+    {
+        if let Some(m) = mcap_metadata(file, name).map_err(|e| e.in_file(file))? {
+            return Ok(Some(m));
         }
     }
-    Ok(())
+    Ok(None)
+}
+
+fn mcap_metadata(path: &Path, name: &str) -> Result<Option<BTreeMap<String, String>>, LogError> {
+    let mut file =
+        std::fs::File::open(path).map_err(|e| LogError::new(format!("cannot read: {e}")))?;
+    let mut reader =
+        LinearReader::new_with_options(LinearReaderOptions::default().with_emit_chunks(true));
+    while let Some(event) = reader.next_event() {
+        match event.map_err(truncation)? {
+            LinearReadEvent::ReadRequest(n) => {
+                let got = file
+                    .read(reader.insert(n))
+                    .map_err(|e| LogError::new(format!("cannot read: {e}")))?;
+                reader.notify_read(got);
+            }
+            LinearReadEvent::Record {
+                data,
+                opcode: op::METADATA,
+            } => {
+                if let mcap::records::Record::Metadata(m) = mcap::parse_record(op::METADATA, data)?
+                    && m.name == name
+                {
+                    return Ok(Some(m.metadata));
+                }
+            }
+            LinearReadEvent::Record { .. } => {}
+        }
+    }
+    Ok(None)
 }
 
 /// An MCAP error, worded for the most common cause when it is an early end.

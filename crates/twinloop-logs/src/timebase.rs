@@ -58,10 +58,12 @@ const MAX_ROWS: f64 = 1e8;
 /// One table from `series`: rows at the first series' times (`explicit`: the user
 /// chose the order) or the longest series', or on a fixed `dt` grid; each other
 /// series interpolated linearly at those times, quaternions normalised after.
+/// `absolute`: `t` is the stamp (else the time since the first row).
 pub(crate) fn merge(
     mut series: Vec<Series>,
     dt: Option<f64>,
     explicit: bool,
+    absolute: bool,
 ) -> Result<Table, LogError> {
     if !explicit
         && let Some(base) =
@@ -129,6 +131,7 @@ pub(crate) fn merge(
         ))
         .on_topic(&series[0].topic));
     };
+    let t0 = if absolute { 0 } else { t0 };
     for (r, &t) in rows.iter_mut().zip(&times) {
         let t = (t - t0) as f64 / 1e9;
         match r.first_mut() {
@@ -225,7 +228,7 @@ mod tests {
     fn a_second_topic_is_interpolated_at_the_first_topics_times_inside_its_span() {
         let a = series("/a", "x", &[0, 10, 20, 30], &[1.0, 2.0, 3.0, 4.0]);
         let b = series("/b", "y", &[5, 25], &[0.0, 20.0]);
-        let t = merge(vec![a, b], None, true).unwrap();
+        let t = merge(vec![a, b], None, true, false).unwrap();
         assert_eq!(t.columns, ["t", "x", "y"]);
         assert_eq!(t.rows, vec![vec![0.0, 2.0, 5.0], vec![10e-9, 3.0, 15.0]]);
     }
@@ -233,7 +236,7 @@ mod tests {
     #[test]
     fn a_fixed_step_resamples_every_topic() {
         let a = series("/a", "x", &[0, 1_000_000_000], &[0.0, 1.0]);
-        let t = merge(vec![a], Some(0.25), true).unwrap();
+        let t = merge(vec![a], Some(0.25), true, false).unwrap();
         let x: Vec<f64> = t.rows.iter().map(|r| r[1]).collect();
         assert_eq!(x, [0.0, 0.25, 0.5, 0.75, 1.0]);
     }
@@ -242,7 +245,7 @@ mod tests {
     fn two_topics_giving_one_column_is_an_error_naming_both() {
         let a = series("/a", "q:j", &[0], &[0.0]);
         let b = series("/b", "q:j", &[0], &[0.0]);
-        let e = merge(vec![a, b], None, true).unwrap_err();
+        let e = merge(vec![a, b], None, true, false).unwrap_err();
         assert!(
             e.to_string().contains("/a and /b both give column q:j"),
             "{e}"

@@ -443,6 +443,14 @@ impl twinloop_io::RowSink for McapLog {
     fn finish(self: Box<Self>) -> Result<(), twinloop_io::IoError> {
         Ok(McapLog::finish(*self)?)
     }
+    fn discard(self: Box<Self>) {
+        McapLog::discard(*self)
+    }
+    /// A metadata record `name` whose one pair is `text`.
+    fn note(&mut self, name: &str, text: &str) -> Result<(), twinloop_io::IoError> {
+        let pairs = BTreeMap::from([("text".to_string(), text.to_string())]);
+        Ok(self.metadata(name, pairs)?)
+    }
 }
 
 /// A recording as MCAP ([`twinloop_io::sink::RecordingOpener`]: what a program

@@ -11,7 +11,7 @@ use twinloop_actuator::group::{
     DIFFER_P, GroupFit, GroupIdentification, MIN_SPREAD, ServoData, identify_servos,
 };
 use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
-use twinloop_actuator::log::ServoLog;
+use twinloop_actuator::log::{SERVO_LOG_NOTE, ServoLog};
 use twinloop_actuator::params::{N_PARAMS, NONSMOOTH, PARAM_NAMES};
 use twinloop_actuator::{Load, ModelLevel, Pendulum, ServoParams, ServoType, bam_log, datasheet};
 
@@ -130,6 +130,8 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
                     let b = bam_log::read(path, servo)?;
                     bam_loads.push((path.display().to_string(), b.load));
                     b.log
+                } else if twinloop_logs::is_log(path) {
+                    read_recorded_log(path, servo)?
                 } else {
                     ServoLog::read(path, servo).map_err(CliError::from)?
                 };
@@ -597,6 +599,27 @@ fn group_json(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> serd
     })
 }
 
+/// A servo log given as an MCAP or bag (`experiment servo --out X.mcap`): the
+/// comment lines a CSV log starts with come from its note. (Its rows keep the run's
+/// clock, on which `t_goal` is too: twinloop's logs read back with their own `t`.)
+/// A log without the note (another recorder's) needs `--servo`.
+fn read_recorded_log(path: &Path, servo: Option<ServoType>) -> Result<ServoLog, CliError> {
+    let header = log_note(path)?;
+    let table = crate::common::read_table(path)?;
+    let file = path.display().to_string();
+    Ok(ServoLog::from_table(
+        &file,
+        header.as_deref().unwrap_or(""),
+        &table,
+        servo,
+    )?)
+}
+
+/// The comment lines an MCAP servo log keeps in its note, if it has one.
+fn log_note(path: &Path) -> Result<Option<String>, CliError> {
+    Ok(twinloop_logs::metadata(path, SERVO_LOG_NOTE)?.and_then(|mut m| m.remove("text")))
+}
+
 /// The load of limb logs: each rebuilt from the robot (or `robot`), joint and held
 /// pose it records; all must be the same load (within 1e-6 relative).
 fn limb_load<'a>(
@@ -606,7 +629,11 @@ fn limb_load<'a>(
     let mut load: Option<(Load, String)> = None;
     for p in paths {
         let file = p.display().to_string();
-        let text = twinloop_io::input::read_to_string(p).map_err(|e| CliError::io(p, e))?;
+        let text = if twinloop_logs::is_log(p) {
+            log_note(p)?.unwrap_or_default()
+        } else {
+            twinloop_io::input::read_to_string(p).map_err(|e| CliError::io(p, e))?
+        };
         let limb = crate::limb::Limb::from_log(&text, &file)?.ok_or_else(|| {
             CliError::new(format!(
                 "{file}: a bench log (no \"# limb:\" lines): give --load LOAD.toml"
