@@ -6,8 +6,7 @@
 //! what the data cannot determine (the Jacobian's weak directions).
 
 use crate::error::ActuatorError;
-use crate::lm::LmResult;
-use crate::lm::{LmOptions, levenberg_marquardt};
+use crate::lm::{LmOptions, LmResult, levenberg_marquardt_parallel};
 use crate::load::Load;
 use crate::log::ServoLog;
 use crate::params::{
@@ -16,6 +15,7 @@ use crate::params::{
 use crate::replay::replay;
 use nalgebra::DMatrix;
 use std::ops::Range;
+use twinloop_optim::parallel::Scratch;
 use twinloop_optim::{CmaOptions, StepTolerance};
 
 /// Weight of a current residual: one standard deviation, A. Timing (when the servo
@@ -245,8 +245,13 @@ pub fn identify_with(
         .map(ServoLog::len)
         .max()
         .unwrap_or(0);
-    let (mut qb, mut cb) = (vec![0.0; longest], vec![0.0; longest]);
-    let mut out = vec![0.0; m];
+    // One set of simulation buffers per worker of the pool (the fit runs its
+    // simulations in parallel: twinloop_optim::parallel).
+    let bufs = Scratch::new(move || Buffers {
+        q: vec![0.0; longest],
+        c: vec![0.0; longest],
+        out: vec![0.0; m],
+    });
     let mut fit = Fit {
         logs,
         load,
@@ -255,7 +260,7 @@ pub fn identify_with(
         iterations: 0,
         evaluations: 0,
     };
-    let mut result = fit.lm(&mut params, &fitted, &mut qb, &mut cb);
+    let mut result = fit.lm(&mut params, &fitted, &bufs);
     let mut nonsmooth_evaluations = 0;
     let mut nonsmooth_sd = vec![0.0; nonsmooth.len()];
     if !nonsmooth.is_empty() {
@@ -276,13 +281,13 @@ pub fn identify_with(
                 .map(|(&i, s)| nonsmooth_bound(i) / s)
                 .collect();
             let lower = vec![0.0; x0.len()];
-            let mut trial = params.clone();
-            let r = twinloop_optim::minimize(
-                &mut |x| {
+            let r = twinloop_optim::minimize_parallel(
+                &|x| {
+                    let mut trial = params.clone();
                     for (k, &i) in nonsmooth.iter().enumerate() {
                         trial.values[i] = x[k] * scale[k];
                     }
-                    fit.cost(&trial, &mut qb, &mut cb, &mut out)
+                    fit.cost(&trial, &bufs)
                 },
                 &x0,
                 Some((&lower, &upper)),
@@ -299,20 +304,20 @@ pub fn identify_with(
             for (k, &i) in nonsmooth.iter().enumerate() {
                 params.values[i] = r.x[k] * scale[k];
             }
-            result = fit.lm(&mut params, &fitted, &mut qb, &mut cb);
+            result = fit.lm(&mut params, &fitted, &bufs);
         }
         // One standard deviation from the cost's curvature along each (the Gauss-Newton
         // J^T J of a smooth model is the curvature of half the squared residuals).
         let s2 = result.residuals.norm_squared() / m.saturating_sub(fitted.len()).max(1) as f64;
-        let c0 = fit.cost(&params, &mut qb, &mut cb, &mut out);
+        let c0 = fit.cost(&params, &bufs);
         for (k, &i) in nonsmooth.iter().enumerate() {
             let h = (0.1 * params.values[i]).max(0.02 * nonsmooth_scale(i));
             let mut t = params.clone();
             t.values[i] = params.values[i] + h;
-            let up = fit.cost(&t, &mut qb, &mut cb, &mut out);
+            let up = fit.cost(&t, &bufs);
             t.values[i] = (params.values[i] - h).max(0.0);
             let hd = params.values[i] - t.values[i];
-            let down = fit.cost(&t, &mut qb, &mut cb, &mut out);
+            let down = fit.cost(&t, &bufs);
             // Second difference on a possibly uneven stencil.
             let curvature = 2.0 * ((up - c0) / h + (down - c0) / hd.max(1e-300)) / (h + hd);
             nonsmooth_sd[k] = if curvature > 0.0 && hd > 0.0 {
@@ -337,7 +342,7 @@ pub fn identify_with(
     }
     let fit_rms_mrad = 1e3 * (sq / count.max(1) as f64).sqrt();
     let (heldout_rms_mrad, heldout_mae_mrad, heldout_rows) =
-        heldout_error(&params, load, &held, &mut qb, &mut cb);
+        bufs.with(|b| heldout_error(&params, load, &held, &mut b.q, &mut b.c));
     let block = residual_blocks(logs, &fit_segments);
     let nonsmooth_pairs: Vec<(usize, f64)> = nonsmooth.iter().copied().zip(nonsmooth_sd).collect();
     let report = assess(
@@ -642,6 +647,14 @@ fn correlation(cov: &DMatrix<f64>, sd: &[f64]) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// One simulation's buffers: positions and currents of the longest log, and the
+/// residuals.
+pub(crate) struct Buffers {
+    q: Vec<f64>,
+    c: Vec<f64>,
+    out: Vec<f64>,
+}
+
 /// The fit's data: what the residuals compare.
 pub(crate) struct Fit<'a> {
     pub(crate) logs: &'a [ServoLog],
@@ -694,18 +707,20 @@ impl Fit<'_> {
     }
 
     /// Half the sum of squared residuals.
-    fn cost(&self, trial: &ServoParams, qb: &mut [f64], cb: &mut [f64], out: &mut [f64]) -> f64 {
-        self.residuals(trial, qb, cb, out);
-        0.5 * out.iter().map(|r| r * r).sum::<f64>()
+    fn cost(&self, trial: &ServoParams, bufs: &Scratch<Buffers>) -> f64 {
+        bufs.with(|b| {
+            self.residuals(trial, &mut b.q, &mut b.c, &mut b.out);
+            0.5 * b.out.iter().map(|r| r * r).sum::<f64>()
+        })
     }
 
-    /// LM over the logarithms of `fitted` from `params`' values, which it updates.
+    /// LM over the logarithms of `fitted` from `params`' values, which it updates;
+    /// the Jacobian's simulations on the current rayon pool.
     fn lm(
         &mut self,
         params: &mut ServoParams,
         fitted: &[usize],
-        qb: &mut [f64],
-        cb: &mut [f64],
+        bufs: &Scratch<Buffers>,
     ) -> LmResult {
         let m: usize = self
             .segments
@@ -716,15 +731,16 @@ impl Fit<'_> {
             .iter()
             .map(|&i| params.values[i].max(1e-6).ln())
             .collect();
-        let mut trial = params.clone();
-        let result = levenberg_marquardt(
+        let this = &*self;
+        let result = levenberg_marquardt_parallel(
             &x0,
             m,
-            |x, out| {
+            &|x, out| {
+                let mut trial = params.clone();
                 for (k, &i) in fitted.iter().enumerate() {
                     trial.values[i] = x[k].exp();
                 }
-                self.residuals(&trial, qb, cb, out);
+                bufs.with(|b| this.residuals(&trial, &mut b.q, &mut b.c, out));
             },
             &LmOptions::default(),
         );

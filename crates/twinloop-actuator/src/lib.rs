@@ -26,7 +26,7 @@ pub mod firmware;
 pub mod friction;
 pub mod group;
 pub mod identify;
-pub mod lm;
+pub use twinloop_optim::lm;
 pub mod load;
 pub mod load_rule;
 pub mod log;

@@ -140,6 +140,70 @@ fn richer_rungs_are_needed_when_the_servo_has_their_friction() {
     assert!(heldout[0] > 2.0 * heldout[3], "{heldout:?}");
 }
 
+/// The fit's simulations run on rayon's pool (the Jacobian's columns, the CMA-ES
+/// population; issue 32 item 4): on one worker and on three it finds the same
+/// parameters, deviations and simulation counts, bit for bit. A 100 Hz log and a
+/// short CMA-ES keep it to about a second.
+#[test]
+fn the_fit_does_not_depend_on_the_thread_count() {
+    let load = Load::from(Pendulum {
+        mass: 0.5,
+        length: 0.15,
+        arm_inertia: 0.002,
+    });
+    let servo = ServoType::Xm430W350;
+    let mut truth = truth(servo, ModelLevel::M1, 41);
+    truth.values[BACKLASH] = 0.6f64.to_radians();
+    truth.values[SENSING_DELAY] = 1e-3;
+    let log = synthetic_log(
+        &truth,
+        &load,
+        &Excitation::standard(servo, 1.0),
+        1e-2,
+        2e-3,
+        12,
+    );
+    let options = IdentifyOptions {
+        nonsmooth: vec![BACKLASH, SENSING_DELAY],
+        rounds: 1,
+        cma_evaluations: 25,
+    };
+    let start = defaults(servo, ModelLevel::M1);
+    let fit = |threads| {
+        twinloop_optim::parallel::on_threads(threads, || {
+            identify_with(
+                std::slice::from_ref(&log),
+                &[],
+                &load,
+                &start,
+                0.25,
+                &options,
+            )
+            .unwrap()
+        })
+    };
+    let one = fit(1);
+    let three = fit(3);
+    assert!(
+        one.evaluations > 50 && one.nonsmooth_evaluations > 10,
+        "{one:?}"
+    );
+    assert_eq!(one.params.values, three.params.values);
+    assert_eq!(one.params.uncertainty, three.params.uncertainty);
+    assert_eq!(
+        (one.evaluations, one.nonsmooth_evaluations, one.iterations),
+        (
+            three.evaluations,
+            three.nonsmooth_evaluations,
+            three.iterations
+        )
+    );
+    assert_eq!(
+        one.heldout_rms_mrad.to_bits(),
+        three.heldout_rms_mrad.to_bits()
+    );
+}
+
 /// Backlash (non-smooth: CMA-ES, alternating with LM) and the two delays (LM, with
 /// the m1 parameters) come back from the excitation's slow back-and-forth through
 /// zero load and its steps, on an XM430 (position and current). On an RX-28

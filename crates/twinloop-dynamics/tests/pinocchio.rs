@@ -31,8 +31,20 @@ fn mat(v: &Value) -> DMatrix<f64> {
     DMatrix::from_fn(r, c, |i, j| rows[i][j])
 }
 
+thread_local! {
+    /// The largest error of this test's model relative to max(1, |Pinocchio|), and
+    /// where (each test runs on a thread of its own): how far inside TOL it is.
+    static LARGEST: std::cell::RefCell<(f64, String)> = const { std::cell::RefCell::new((0.0, String::new())) };
+}
+
 fn close(what: &str, ours: f64, theirs: f64) {
     let err = (ours - theirs).abs();
+    LARGEST.with(|l| {
+        let rel = err / theirs.abs().max(1.0);
+        if rel > l.borrow().0 {
+            *l.borrow_mut() = (rel, what.to_string());
+        }
+    });
     assert!(
         err <= TOL * theirs.abs().max(1.0),
         "{what}: twinloop {ours:e} vs Pinocchio {theirs:e} (error {err:e})"
@@ -280,6 +292,10 @@ fn check_model(name: &str, file: &str) {
             }
         }
     }
+    LARGEST.with(|l| {
+        let (rel, what) = &*l.borrow();
+        eprintln!("{name}: largest error {rel:.2e} of max(1, |Pinocchio|), at {what}");
+    });
 }
 
 #[test]

@@ -25,6 +25,7 @@ use crate::adapt::{ReducedSummary, leg_roots, reduced, standing};
 use crate::error::IdentError;
 use crate::tipover::{FeetMass, TipAngles, feet_mass, frontal_lever, tip_angles};
 use crate::tipover_study::{StudyOptions, ankle_names, hip_roll_names, run_study};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use twinloop_description::builtin::FootGeometry;
@@ -311,52 +312,31 @@ fn sample(
 
 /// The number of worker threads: `threads`, or all cores when 0.
 pub fn worker_threads(threads: usize) -> usize {
-    if threads > 0 {
-        threads
-    } else {
-        std::thread::available_parallelism().map_or(1, |n| n.get())
-    }
+    twinloop_optim::parallel::worker_threads(threads)
 }
 
-/// `f(i)` for `i` in `0..n` on `threads` scoped threads (contiguous blocks), results in
-/// index order; `progress` is called with the number done so far after each.
+/// `f(i)` for `i` in `0..n` on rayon's pool with `threads` workers
+/// ([`twinloop_optim::parallel::on_threads`]), results in index order; `progress` is
+/// called with the number done so far after each. Every index runs; the error
+/// returned is the lowest failing index's, whatever the thread count.
 pub(crate) fn parallel_map<T: Send>(
     n: usize,
     threads: usize,
     progress: &(dyn Fn(usize) + Sync),
     f: &(dyn Fn(usize) -> Result<T, IdentError> + Sync),
 ) -> Result<Vec<T>, IdentError> {
-    let threads = worker_threads(threads).min(n.max(1));
     let done = AtomicUsize::new(0);
-    let block = n.div_ceil(threads);
-    let parts: Vec<Result<Vec<T>, IdentError>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads)
-            .map(|t| {
-                let (done, lo, hi) = (&done, t * block, ((t + 1) * block).min(n));
-                s.spawn(move || {
-                    (lo..hi)
-                        .map(|i| {
-                            let r = f(i);
-                            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-                            r
-                        })
-                        .collect::<Result<Vec<T>, IdentError>>()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| {
-                h.join()
-                    .unwrap_or_else(|_| Err(IdentError::new("a worker thread panicked")))
+    let results: Vec<Result<T, IdentError>> = twinloop_optim::parallel::on_threads(threads, || {
+        (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let r = f(i);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                r
             })
             .collect()
     });
-    let mut out = Vec::with_capacity(n);
-    for p in parts {
-        out.extend(p?);
-    }
-    Ok(out)
+    results.into_iter().collect()
 }
 
 /// `opts.samples` random changes of `prior` and their static tip-overs, on all cores;

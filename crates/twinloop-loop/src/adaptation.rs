@@ -21,7 +21,7 @@ pub fn adapt_to_protocol(
     opts: &AdaptOptions,
     replay: &Replay<'_>,
     log: &mut dyn FnMut(&str),
-    map_err: &dyn Fn(IdentError) -> LoopError,
+    map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
 ) -> Result<(Adapted, Option<Calibration>), LoopError> {
     let first = adapt_on_one_place(prior, study, opts, replay, log, map_err)?;
     if !replay.other_places || opts.host.is_some() || opts.total_mass.is_none() {

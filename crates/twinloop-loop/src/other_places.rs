@@ -28,6 +28,7 @@ use crate::protocol_bias::{
     Calibration, REPLAY_GROUND_SINK, Replay, adapt_on_one_place, angles_of,
     protocol_reading_with_roll,
 };
+use rayon::prelude::*;
 use twinloop_description::Description;
 use twinloop_ident::IdentError;
 use twinloop_ident::adapt::{AdaptOptions, Adapted};
@@ -159,7 +160,7 @@ pub(crate) fn try_other_places(
     replay: &Replay<'_>,
     first: (Adapted, Option<Calibration>),
     log: &mut dyn FnMut(&str),
-    map_err: &dyn Fn(IdentError) -> LoopError,
+    map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
 ) -> Result<(Adapted, Option<Calibration>), LoopError> {
     let Some(added) = first.0.report.added.clone() else {
         return Ok(first);
@@ -213,15 +214,25 @@ pub(crate) fn try_other_places(
         other_places: false,
     };
     let mut places = vec![first];
-    let hosts = std::iter::once(None).chain(hosts.into_iter().map(Some));
-    for host in hosts {
-        let o = AdaptOptions {
-            host: host.clone(),
-            ..opts.clone()
-        };
+    let hosts: Vec<Option<String>> = std::iter::once(None)
+        .chain(hosts.into_iter().map(Some))
+        .collect();
+    // Each place is an adaptation and its protocol passes of its own: all at once on
+    // rayon's pool, taken in the hosts' order below whatever finished first.
+    let found: Vec<_> = hosts
+        .par_iter()
+        .with_max_len(1)
+        .map(|host| {
+            let o = AdaptOptions {
+                host: host.clone(),
+                ..opts.clone()
+            };
+            adapt_on_one_place(prior, study, &o, &on, &mut |_| {}, map_err)
+        })
+        .collect();
+    for (host, found) in hosts.iter().zip(found) {
         let name = host.as_deref().unwrap_or("the CoM inversion's link");
-        let mut quiet = |_: &str| {};
-        match adapt_on_one_place(prior, study, &o, &on, &mut quiet, map_err) {
+        match found {
             Ok(found) => {
                 if let Some(mut p) = Place::new(found, study) {
                     p.floor_m = p.floor_m.or(floor_m);

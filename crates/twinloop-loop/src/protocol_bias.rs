@@ -164,7 +164,7 @@ pub(crate) fn adapt_on_one_place(
     opts: &AdaptOptions,
     replay: &Replay<'_>,
     log: &mut dyn FnMut(&str),
-    map_err: &dyn Fn(IdentError) -> LoopError,
+    map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
 ) -> Result<(Adapted, Option<Calibration>), LoopError> {
     let passes = replay.passes;
     let Some(protocol) = study.protocol.as_ref().filter(|_| passes > 0) else {

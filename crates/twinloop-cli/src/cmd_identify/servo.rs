@@ -44,7 +44,8 @@ pub struct ServoIdArgs {
     /// parameters tested)
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     pub shared: Vec<String>,
-    /// Several servos: threads simulating servos at once (0: every core)
+    /// Threads: servos simulated at once, or one servo's fit's simulations (the
+    /// Jacobian's columns, the CMA-ES population) (0: every core)
     #[arg(long, default_value_t = 0, value_name = "N")]
     pub threads: usize,
     /// The model ladder's rung: m1 (Coulomb + viscous), m2 (+ Stribeck), m3 (+ load-dependent), m4 (both)
@@ -205,7 +206,9 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     let logs: Vec<ServoLog> = logs.into_iter().map(|(_, l)| l).collect();
     let holdout: Vec<ServoLog> = holdout.into_iter().map(|(_, l)| l).collect();
     let t0 = Instant::now();
-    let id = identify_with(&logs, &holdout, &load, &start, a.holdout_fraction, &options)?;
+    let id = twinloop_optim::parallel::on_threads(a.threads, || {
+        identify_with(&logs, &holdout, &load, &start, a.holdout_fraction, &options)
+    })?;
     let seconds = t0.elapsed().as_secs_f64();
     if let Some(out) = &a.out {
         let comment = format!(
