@@ -28,7 +28,8 @@ written (masses, inertias, mass matrices, bias forces) to be identical:
   h1_description/meshes/ when that folder exists (file names matched without
   regard to case: the Menagerie file writes `pelvis.stl`, Unitree ships
   `pelvis.STL`);
-- the Menagerie humanoids (Cassie, Apollo, Berkeley Humanoid, T1, N1, Adam Lite):
+- the Menagerie humanoids (Cassie, Apollo, Berkeley Humanoid, T1, N1, Adam Lite,
+  ToddlerBot 2xc and 2xm):
   their `assets/` folders in a Menagerie checkout given as `--menagerie DIR`
   (DIR/<robot>/assets, the folder names under models/ being Menagerie's), when
   every mesh file the model names is there;
@@ -74,7 +75,7 @@ MESH_SETS = {
                     "unitree_h1/meshes/h1_description/meshes")],
 }
 MENAGERIE = ["agility_cassie", "apptronik_apollo", "berkeley_humanoid", "booster_t1", "fourier_n1",
-             "pndbotics_adam_lite"]
+             "pndbotics_adam_lite", "toddlerbot_2xc", "toddlerbot_2xm"]
 for _robot in MENAGERIE:
     MESH_SETS[_robot] = [(f"Menagerie's meshes, {_robot}/assets", "menagerie", f"{_robot}/assets")]
 
@@ -101,18 +102,27 @@ def strip_textures(root):
 
 
 def strip_meshes(text):
-    """The MJCF without its mesh assets, the geoms that use them, and texture files."""
+    """The MJCF without its mesh assets, the geoms that use them (and the contact pairs
+    that name those geoms), and texture files."""
     root = ET.fromstring(text)
     strip_textures(root)
     for asset in root.iter("asset"):
         for mesh in list(asset.findall("mesh")):
             asset.remove(mesh)
     removed = 0
+    names = set()
     for parent in root.find("worldbody").iter():
         for geom in list(parent.findall("geom")):
             if "mesh" in geom.attrib or geom.get("type") == "mesh":
                 parent.remove(geom)
                 removed += 1
+                names.add(geom.get("name"))
+    # A contact <pair> naming a removed geom (ToddlerBot's mesh soles) would not
+    # compile; a pair has no mass, so it goes with its geom.
+    for contact in root.iter("contact"):
+        for pair in list(contact.findall("pair")):
+            if pair.get("geom1") in names or pair.get("geom2") in names:
+                contact.remove(pair)
     # A default `<geom type="mesh">` would make a primitive geom without a type a
     # mesh geom; no geom is left that relies on it, but drop it all the same.
     for default in root.iter("default"):

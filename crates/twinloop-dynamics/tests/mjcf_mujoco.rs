@@ -580,7 +580,7 @@ fn mesh_bodies_agree_with_mujoco() {
 
 /// The robot MJCFs under models/: every humanoid of MuJoCo Menagerie that the
 /// repository ships (Cassie, Apollo, Berkeley Humanoid, T1, N1, OP3, Adam Lite,
-/// TALOS, G1, H1; issue 30), and G1 and H1 as Unitree ship them, loaded from the
+/// TALOS, ToddlerBot 2xc and 2xm, G1, H1; issue 30), and G1 and H1 as Unitree ship them, loaded from the
 /// files as committed, against MuJoCo
 /// compiling them (tests/data/mujoco_models, written by
 /// tools/oracle/robot_mjcf_reference.py). MuJoCo compiled each with its mesh
@@ -630,6 +630,8 @@ fn robot_models_agree_with_mujoco() {
             "op3_op3",
             "pndbotics_adam_lite_adam_lite",
             "talos_talos",
+            "toddlerbot_2xc_toddlerbot_2xc",
+            "toddlerbot_2xm_toddlerbot_2xm",
             "unitree_g1_g1_29dof_rev_1_0_unitree",
             "unitree_g1_g1_menagerie",
             "unitree_h1_h1_menagerie",
