@@ -150,7 +150,10 @@ def run(tw, robot, seed, shapes, prior_mass, keep, stage="all"):
     serve = subprocess.Popen([tw, "serve", "--robot", f"builtin:{robot}", "--map", f"builtin:{robot}",
                               "--link", pty, f"--add-mass={add}", "--catch-falls",
                               "--realtime-factor", "4"],
-                             stdout=open(f"{d}/serve.log", "w"), stderr=subprocess.STDOUT)
+                             stdout=open(f"{d}/serve.log", "w"), stderr=subprocess.STDOUT,
+                             # Its own session, as in a terminal of its own: the kernel
+                             # shares the processor between sessions first.
+                             start_new_session=True)
     for _ in range(100):
         if os.path.exists(pty):
             break

@@ -405,6 +405,16 @@ fn serve_maybe_noisy<T: Transport, B: twinloop_link::VirtualServoBackend>(
     options: &ServeOptions,
     stop: &std::sync::atomic::AtomicBool,
 ) -> std::io::Result<()> {
+    // This thread answers the host; every other thread (the simulation, the view)
+    // was started before, at normal priority.
+    if let twinloop_link::servo::ReplyPriority::Normal(why) =
+        twinloop_link::servo::favour_reply_thread()
+    {
+        eprintln!(
+            "note: the replies run at normal priority ({why}): on a busy machine they may \
+             come later than the host waits"
+        );
+    }
     if t.rate > 0.0 {
         serve_bus(bus, t, options, stop)
     } else {

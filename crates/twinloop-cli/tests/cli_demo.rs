@@ -101,9 +101,10 @@ fn the_demo_finds_a_hidden_mass_over_the_bus() {
 /// Protocol 2.0, the OpenCR), checked against the truth the demo reveals. Measured
 /// with seed 2 (0.206 kg on l_ank_roll_link) on two cores: adapted CoM 1.8 mm from
 /// the truth in 76 s at load 6-7, 2.7 mm in 73 s beside the km20 test; all four
-/// checks passed both times (docs/adaptation.md). The
-/// bound (10 mm) catches a robot measured with another's model or protocol, not the
-/// issue's goal.
+/// checks passed both times; with the other places tried (the part is on a foot) the
+/// floor search stopped at its bound and `one-place-explains` failed, the CoM 12.4 mm
+/// off (docs/adaptation.md). Within the 3 mm, or a check failed: never a
+/// confident wrong answer.
 #[test]
 fn the_demo_finds_a_hidden_mass_on_the_op3() {
     let _one = ONE_DEMO.lock().unwrap_or_else(|e| e.into_inner());
@@ -156,7 +157,7 @@ fn the_demo_finds_a_hidden_mass_on_the_op3() {
         .iter()
         .any(|c| c["passed"] == false);
     assert!(
-        com_error < 0.010 || failed,
+        com_error < 0.003 || failed,
         "adapted CoM off by {com_error} m with every check passed: {}",
         r["checks"]
     );

@@ -316,13 +316,7 @@ pub fn run_direction<R: Robot + ?Sized>(
     cfg: &TipoverConfig,
     mut predict: Option<TiltPredictor<'_>>,
 ) -> Result<TipoverResult, RobotError> {
-    if standing.len() != robot.joint_names().len() {
-        return Err(RobotError::new(format!(
-            "the standing pose has {} joints, the robot {}",
-            standing.len(),
-            robot.joint_names().len()
-        )));
-    }
+    check_pose(standing, robot.joint_names().len())?;
     let mut st = RobotState::default();
     let mut goals = standing.to_vec();
     robot.command_positions(&goals)?;
@@ -400,10 +394,7 @@ pub fn run_direction<R: Robot + ?Sized>(
         let ankle = ankle_now(&st) - a0;
         // A robot found lying down fell between two readings: the history so far
         // holds the onset; this reading's lean-direction tilt means nothing.
-        let fallen = st
-            .imu
-            .and_then(|i| i.orientation)
-            .is_some_and(|q| tilt_from_vertical(q) > FALLEN_TILT_DEG.to_radians());
+        let fallen = lying_down(&st);
         let mut excess = f64::INFINITY;
         if !fallen {
             // Tilt beyond what the joints explain, in the lean direction.
@@ -414,41 +405,72 @@ pub fn run_direction<R: Robot + ?Sized>(
             positions.extend_from_slice(&st.positions[..n]);
         }
         if excess > cfg.fall_deg.to_radians() {
-            if history.is_empty() {
-                return Err(RobotError::new(format!(
-                    "{} run: the robot was lying down (trunk over {FALLEN_TILT_DEG} deg from \
-                     the vertical) at its first reading",
-                    direction.name()
-                )));
-            }
-            let onset = find_onset(&history, cfg);
-            let (c, _, t, _, _) = history[onset];
-            let from = reading_window_start(&history, onset, cfg);
-            let (m, e, lean) = mean_reading(&history[from..=onset]);
-            let measured_deg = m.abs().to_degrees();
-            // The command never exceeds max_deg: an ankle reading far beyond it is a
-            // robot (or a simulation) gone unstable, not a tip angle to estimate from.
-            if measured_deg.is_nan() || measured_deg > cfg.max_deg {
-                return Err(RobotError::new(format!(
-                    "{} run: the ankles read {measured_deg:.1} deg at the onset of the fall, \
-                     beyond the {} deg the ramp may command: the robot (or the simulation) \
-                     went unstable",
-                    direction.name(),
-                    cfg.max_deg
-                )));
-            }
-            return Ok(TipoverResult {
-                direction,
-                commanded_deg: c.to_degrees(),
-                measured_deg,
-                time_s: t,
-                excess_deg: e.to_degrees(),
-                lean_deg: lean.to_degrees(),
-                fall_confirmed_s: robot.time() - t_start,
-                positions_at_onset: mean_posture(&positions[from * n..(onset + 1) * n], n),
-            });
+            let fall_confirmed_s = robot.time() - t_start;
+            return result_at_onset(&history, &positions, n, direction, cfg, fall_confirmed_s);
         }
     }
+}
+
+fn check_pose(standing: &[f64], joints: usize) -> Result<(), RobotError> {
+    if standing.len() != joints {
+        return Err(RobotError::new(format!(
+            "the standing pose has {} joints, the robot {joints}",
+            standing.len(),
+        )));
+    }
+    Ok(())
+}
+
+/// The trunk more than [`FALLEN_TILT_DEG`] from the vertical.
+fn lying_down(st: &RobotState) -> bool {
+    st.imu
+        .and_then(|i| i.orientation)
+        .is_some_and(|q| tilt_from_vertical(q) > FALLEN_TILT_DEG.to_radians())
+}
+
+/// The run's result once the fall is confirmed: the onset found in `history`, the
+/// readings averaged over the window before it (`positions`: `n` joints per sample).
+fn result_at_onset(
+    history: &[Sample],
+    positions: &[f64],
+    n: usize,
+    direction: Direction,
+    cfg: &TipoverConfig,
+    fall_confirmed_s: f64,
+) -> Result<TipoverResult, RobotError> {
+    if history.is_empty() {
+        return Err(RobotError::new(format!(
+            "{} run: the robot was lying down (trunk over {FALLEN_TILT_DEG} deg from \
+             the vertical) at its first reading",
+            direction.name()
+        )));
+    }
+    let onset = find_onset(history, cfg);
+    let (c, _, t, _, _) = history[onset];
+    let from = reading_window_start(history, onset, cfg);
+    let (m, e, lean) = mean_reading(&history[from..=onset]);
+    let measured_deg = m.abs().to_degrees();
+    // The command never exceeds max_deg: an ankle reading far beyond it is a
+    // robot (or a simulation) gone unstable, not a tip angle to estimate from.
+    if measured_deg.is_nan() || measured_deg > cfg.max_deg {
+        return Err(RobotError::new(format!(
+            "{} run: the ankles read {measured_deg:.1} deg at the onset of the fall, \
+             beyond the {} deg the ramp may command: the robot (or the simulation) \
+             went unstable",
+            direction.name(),
+            cfg.max_deg
+        )));
+    }
+    Ok(TipoverResult {
+        direction,
+        commanded_deg: c.to_degrees(),
+        measured_deg,
+        time_s: t,
+        excess_deg: e.to_degrees(),
+        lean_deg: lean.to_degrees(),
+        fall_confirmed_s,
+        positions_at_onset: mean_posture(&positions[from * n..(onset + 1) * n], n),
+    })
 }
 
 /// Run the four directions; `reset` puts the robot back standing in `standing` before

@@ -9,7 +9,7 @@
 //! | the plan of the tip-over over a robot's bus | [`bus_plan`] |
 //! | the plan run: on a port, or in lockstep with a simulated model | [`tipover_bus`] |
 //! | the protocol passes: the adaptation made again less the protocol's bias | [`protocol_bias`] |
-//! | a part below the ankles: the other places tried, and the one kept or none | [`other_places`] |
+//! | a part on the legs: the other places tried, and the one kept or none | [`other_places`] |
 //! | the demo's scenario: a hidden change served on a pty, measured, adapted, checked | [`demo`] |
 //! | the crate's error | [`error`] |
 

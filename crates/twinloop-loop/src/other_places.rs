@@ -1,4 +1,4 @@
-//! A part below the ankles, and never a confident wrong answer (`adapt` with the total
+//! A part on the legs, and never a confident wrong answer (`adapt` with the total
 //! mass and no `--where`). The CoM inversion treats the robot above the ankle pitch
 //! joints as one body, so a part on a foot (which stays on the ground in the fore-aft
 //! lean) or on an ankle cross (which turns with the sideways lean only) lands on the
@@ -13,8 +13,10 @@
 //! So when the first place's replay does not roll the feet as the robot did (the median
 //! of the four onsets' differences above [`ROLL_AGREE_DEG`]), the floor is found again,
 //! as the one on which that replay's roll matches the robot's; the CoM inversion's
-//! place and each link below the ankle pitch joint on the part's side (both sides
-//! when it sits within [`MIDDLE_M`] of the middle) are then adapted with their protocol
+//! place and each link below the hip roll joint on the part's side (the legs, which
+//! lean as a parallelogram sideways while the pelvis stays level, so a part on a thigh
+//! or a shin does not move as the CoM inversion's one body does; the feet among them;
+//! both sides when it sits within [`MIDDLE_M`] of the middle) are then adapted with their protocol
 //! passes on that floor. (A served OP3 with 0.277 kg low on its left thigh: the angles'
 //! floor 0.50 mm, the roll 0.69 deg off, the CoM 7.1 mm off; on serve's true 1 mm floor
 //! the roll agreed to 0.06 deg and the CoM to 0.2 mm.) Of the places whose checks
@@ -33,7 +35,7 @@ use twinloop_description::Description;
 use twinloop_ident::IdentError;
 use twinloop_ident::adapt::{AdaptOptions, Adapted};
 use twinloop_ident::adapt_checks::AdaptCheck;
-use twinloop_ident::tipover_study::{StudyReport, links_below_ankles};
+use twinloop_ident::tipover_study::{StudyReport, links_below_hips};
 use twinloop_virtual::VirtualRobotOptions;
 
 /// Two places whose adapted CoMs lie this close are one answer, m: below the 3 mm
@@ -129,14 +131,14 @@ impl Place {
     }
 }
 
-/// The links below the ankles on the side of `position` (standing frame), less
-/// `host` and frames without mass.
+/// The links of the leg on the side of `position` (standing frame; below the hip roll,
+/// the feet among them), less `host` and frames without mass.
 fn candidate_hosts(
     prior: &Description,
     host: &str,
     position: [f64; 3],
 ) -> Result<Vec<String>, IdentError> {
-    let [left, right] = links_below_ankles(prior)?;
+    let [left, right] = links_below_hips(prior)?;
     let mut sides = Vec::new();
     if position[1] > -MIDDLE_M {
         sides.extend(left);
@@ -151,7 +153,7 @@ fn candidate_hosts(
         .collect())
 }
 
-/// Try the part on the links below the ankles beside `first` (the adaptation on the
+/// Try the part on the links of the legs beside `first` (the adaptation on the
 /// link the CoM inversion gave) and keep what the module documentation says.
 pub(crate) fn try_other_places(
     prior: &Description,
@@ -175,7 +177,7 @@ pub(crate) fn try_other_places(
         // and the roll agree on this place, and another would have to agree as well.
         let line = format!(
             "the place stands: {} (the feet's roll within {ROLL_AGREE_DEG} deg of the \
-             robot's, so the places below the ankles were not tried)",
+             robot's, so the places on the legs were not tried)",
             first.describe()
         );
         log(&line);
@@ -282,8 +284,9 @@ fn choose(places: Vec<Place>) -> (Adapted, Option<Calibration>) {
     let mut place = places.swap_remove(kept);
     let report = &mut place.adapted.report;
     report.notes.push(format!(
-        "the part was tried on the links below the ankles as well (a part there does not turn \
-         with the fore-aft lean, and the floor is found anew for each): {}; kept {}",
+        "the part was tried on the links of the legs as well (a part there does not move as \
+         the body above the ankles does, and the floor was found anew by the feet's roll): \
+         {}; kept {}",
         tried.join("; "),
         report.added.as_ref().map_or("none", |a| a.host.as_str())
     ));

@@ -39,6 +39,8 @@ impl PtyServer {
         let thread = std::thread::Builder::new()
             .name("twinloop-pty-server".into())
             .spawn(move || {
+                // The host waits for these replies; the simulation may slow down.
+                let _ = twinloop_link::servo::favour_reply_thread();
                 let options = ServeOptions {
                     emulate_baud,
                     stop_on_eof: false,

@@ -5,10 +5,12 @@
 
 mod backend;
 mod bus;
+mod priority;
 mod serve;
 mod virtual_servo;
 
 pub use backend::{ServoMeasurement, TrackingServoModel, VirtualServoBackend};
 pub use bus::{BusBoard, BusClock, BusServo, BusStats, ReplyMark, VIRTUAL_FIRMWARE, VirtualBus};
+pub use priority::{ReplyPriority, favour_reply_thread};
 pub use serve::{ServeOptions, serve};
 pub use virtual_servo::{Fault, VirtualServo, WriteEffects};
