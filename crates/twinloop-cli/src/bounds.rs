@@ -108,3 +108,23 @@ mod tests {
         assert!(steps(2.0, 1e-300, "--dt").is_err());
     }
 }
+
+/// A count of 1 or more (cycles, steps, rounds, samples): 0 would do nothing and
+/// say nothing.
+pub fn count(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a whole number"))?;
+    if (1..=MAX_COUNT).contains(&n) {
+        Ok(n)
+    } else if n == 0 {
+        Err(format!("{n} is out of range: a count >= 1 is needed"))
+    } else {
+        Err(format!(
+            "{n} is more than the {} of anything one command counts (a bound on its \
+             work and memory; split the run)",
+            MAX_COUNT
+        ))
+    }
+}

@@ -151,7 +151,7 @@ pub struct TrainArgs {
     #[arg(long, value_name = "ROBOT", help = ROBOT_HELP)]
     pub robot: String,
     /// Random changes to draw.
-    #[arg(long, default_value_t = 10_000, value_name = "N", value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 10_000, value_name = "N", value_parser = crate::bounds::count)]
     pub samples: usize,
     /// Seed of every random draw (changes, noise, weights, batch order).
     #[arg(long, default_value_t = 1)]
@@ -169,7 +169,7 @@ pub struct TrainArgs {
     #[arg(long)]
     pub seed_inputs: bool,
     /// Most training epochs.
-    #[arg(long, default_value_t = 1000, value_name = "N", value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 1000, value_name = "N", value_parser = crate::bounds::count)]
     pub epochs: usize,
     /// Worker threads (0: all cores).
     #[arg(long, default_value_t = 0, value_name = "N")]
@@ -189,7 +189,7 @@ pub struct TrainArgs {
     #[arg(long, value_name = "ADDRESS")]
     pub ray: Option<String>,
     /// With --ray local: the CPUs of the local Ray (default: all).
-    #[arg(long, value_name = "N", requires = "ray", value_parser = crate::common::count)]
+    #[arg(long, value_name = "N", requires = "ray", value_parser = crate::bounds::count)]
     pub ray_cpus: Option<usize>,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,

@@ -170,7 +170,13 @@ pub fn run(a: DemoArgs) -> CliResult {
     report.wall_s = t0.elapsed().as_secs_f64();
     let t = terminal_text(&a, &report, &adapted.report, &m.record);
     emit(&t, a.json.as_ref(), &report)?;
-    Ok(Outcome::Ok)
+    // A check that failed is a doubt about the answer: exit 1, as `adapt` does
+    // (issue 27: never a confident wrong answer), the files all written.
+    Ok(if report.checks.iter().any(|c| !c.passed) {
+        Outcome::Problems
+    } else {
+        Outcome::Ok
+    })
 }
 
 fn mm(v: [f64; 3]) -> String {

@@ -55,7 +55,7 @@ pub struct SequenceArgs {
     #[command(flatten)]
     pub timing: TimingArgs,
     /// Number of step cycles.
-    #[arg(long, default_value_t = 1, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 1, value_parser = crate::bounds::count)]
     pub cycles: usize,
     /// Output CSV.
     #[arg(long, value_name = "FILE.csv")]
@@ -67,7 +67,7 @@ pub struct ZmpArgs {
     #[command(flatten)]
     pub steps: StepTiming,
     /// Number of footsteps (swings).
-    #[arg(long, default_value_t = 10, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 10, value_parser = crate::bounds::count)]
     pub footsteps: usize,
     /// CoM height Zc, m.
     #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]

@@ -38,7 +38,7 @@ pub struct SimulateArgs {
     #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::units::time_step)]
     pub dt: f64,
     /// Write one row every N steps.
-    #[arg(long, default_value_t = 1, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 1, value_parser = crate::bounds::count)]
     pub every: usize,
     #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
     pub servo: ServoChoice,

@@ -111,7 +111,7 @@ pub struct ResidualArgs {
     #[arg(long, default_value_t = 10.0, value_name = "HZ", value_parser = crate::common::positive)]
     pub cutoff: f64,
     /// Butterworth order (applied forwards and backwards).
-    #[arg(long, default_value_t = 4, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 4, value_parser = crate::bounds::count)]
     pub filter_order: usize,
     /// Differentiate without smoothing (exact, noise-free data).
     #[arg(long)]

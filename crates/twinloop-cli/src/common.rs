@@ -166,26 +166,6 @@ pub fn baud(s: &str) -> Result<u32, String> {
     }
 }
 
-/// A count of 1 or more (cycles, steps, rounds, samples): 0 would do nothing and
-/// say nothing.
-pub fn count(s: &str) -> Result<usize, String> {
-    let n: usize = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("\"{s}\" is not a whole number"))?;
-    if (1..=crate::bounds::MAX_COUNT).contains(&n) {
-        Ok(n)
-    } else if n == 0 {
-        Err(format!("{n} is out of range: a count >= 1 is needed"))
-    } else {
-        Err(format!(
-            "{n} is more than the {} of anything one command counts (a bound on its \
-             work and memory; split the run)",
-            crate::bounds::MAX_COUNT
-        ))
-    }
-}
-
 /// Read a CSV table; the error names the file (and line).
 ///
 /// An `.mcap` file, a `.db3` or a rosbag2 folder is read as a log (twinloop-logs):

@@ -338,8 +338,13 @@ fn op3_urdf_and_mjcf_load_with_their_meshes_or_stand_ins() {
         } else {
             // One grouped warning for the whole missing folder, not one per mesh.
             assert_eq!(warnings.len(), 1, "{file}: {warnings:?}");
+            // A file beside the description is not found; a `package://` one names
+            // the package to give.
+            let head = format!("{n_meshes} meshes: ");
             assert!(
-                warnings[0].starts_with(&format!("{n_meshes} meshes: file not found in ")),
+                warnings[0].starts_with(&format!("{head}file not found in "))
+                    || (warnings[0].starts_with(&head)
+                        && warnings[0].contains("is unknown (give --package-dir")),
                 "{file}: {warnings:?}"
             );
             for w in &warnings {

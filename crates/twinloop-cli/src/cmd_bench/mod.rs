@@ -83,7 +83,7 @@ pub struct DynamicsBenchArgs {
     #[arg(long, value_name = "CSV")]
     pub states: Option<PathBuf>,
     /// Number of random states when --states is not given.
-    #[arg(long, default_value_t = 1000, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 1000, value_parser = crate::bounds::count)]
     pub count: usize,
     /// Seed of the random states.
     #[arg(long, default_value_t = 0x7417_1009)]

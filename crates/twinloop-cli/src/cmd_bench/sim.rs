@@ -16,10 +16,10 @@ pub struct SimBenchArgs {
     #[arg(long, default_value_t = 1e-3, value_name = "S", value_parser = crate::units::time_step)]
     pub dt: f64,
     /// Steps per timed round.
-    #[arg(long, default_value_t = 2000, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 2000, value_parser = crate::bounds::count)]
     pub steps: usize,
     /// Timed rounds (the median is reported).
-    #[arg(long, default_value_t = 11, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 11, value_parser = crate::bounds::count)]
     pub rounds: usize,
     #[arg(long, value_enum, default_value_t = ServoChoice::Auto)]
     pub servo: ServoChoice,

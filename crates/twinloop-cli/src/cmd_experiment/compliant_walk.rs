@@ -33,7 +33,7 @@ pub struct CompliantWalkArgs {
     #[arg(long, default_value_t = WalkingConfig::default().settle, value_parser = crate::common::non_negative)]
     pub settle: f64,
     /// Simulator steps per 1 ms sample.
-    #[arg(long, default_value_t = 1, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 1, value_parser = crate::bounds::count)]
     pub substeps: usize,
     /// Output CSV: t, xr, zr, x, z, phase.
     #[arg(long, value_name = "OUT.csv")]

@@ -149,9 +149,9 @@ pub fn run(a: &StaticPosesArgs) -> CliResult {
 /// 172 poses, and a count of a million was an hour.
 const MAX_POSES: usize = 20_000;
 
-/// `--count`: a count (crate::common::count) of at most [`MAX_POSES`].
+/// `--count`: a count (crate::bounds::count) of at most [`MAX_POSES`].
 fn pose_count(s: &str) -> Result<usize, String> {
-    let n = crate::common::count(s)?;
+    let n = crate::bounds::count(s)?;
     if n <= MAX_POSES {
         Ok(n)
     } else {

@@ -14,7 +14,7 @@ pub struct WalkArgs {
     #[command(flatten)]
     pub timing: TimingArgs,
     /// Samples to record (seed 003: 1000).
-    #[arg(long, default_value_t = SEED_SAMPLES, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = SEED_SAMPLES, value_parser = crate::bounds::count)]
     pub samples: usize,
     /// Seed of the gyro noise.
     #[arg(long, default_value_t = 1)]

@@ -51,7 +51,7 @@ pub struct CompliantFitArgs {
     #[arg(long, value_name = "P1,..,P10")]
     pub start: Option<String>,
     /// Budget of cost evaluations (default: lm 500, cmaes 25000, power 4000).
-    #[arg(long, value_parser = crate::common::count)]
+    #[arg(long, value_parser = crate::bounds::count)]
     pub max_evaluations: Option<usize>,
     /// Initial step size (CMA-ES sigma, PoWER exploration std).
     #[arg(long, default_value_t = 0.05, value_parser = crate::common::positive)]

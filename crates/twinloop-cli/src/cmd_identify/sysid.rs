@@ -75,10 +75,10 @@ pub struct DataArgs {
     #[arg(long)]
     pub no_detrend: bool,
     /// Horizon of the `prediction` FIT (1 = one step ahead).
-    #[arg(long, value_name = "K", default_value_t = 1, value_parser = crate::common::count)]
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = crate::bounds::count)]
     pub kstep: usize,
     /// Largest lag of the residual tests.
-    #[arg(long, value_name = "M", default_value_t = 25, value_parser = crate::common::count)]
+    #[arg(long, value_name = "M", default_value_t = 25, value_parser = crate::bounds::count)]
     pub lags: usize,
     /// Write the model and its evaluation as JSON to FILE (-: to stdout, in place of
     /// the text).
@@ -101,7 +101,7 @@ pub struct ArxArgs {
     #[arg(long, default_value_t = 2)]
     pub na: usize,
     /// Input lags (each B_j is ny x nu).
-    #[arg(long, default_value_t = 2, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 2, value_parser = crate::bounds::count)]
     pub nb: usize,
     /// Input delay in samples.
     #[arg(long, default_value_t = 1)]
@@ -131,7 +131,7 @@ pub struct SsArgs {
     #[command(flatten)]
     pub data: DataArgs,
     /// Number of states.
-    #[arg(long, value_parser = crate::common::count)]
+    #[arg(long, value_parser = crate::bounds::count)]
     pub order: usize,
     /// How to estimate the model.
     #[arg(long, value_enum, default_value = "pem")]
@@ -140,7 +140,7 @@ pub struct SsArgs {
     #[arg(long, default_value_t = 10)]
     pub na: usize,
     /// ARX input lags for arx-reduce-pem.
-    #[arg(long, default_value_t = 10, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 10, value_parser = crate::bounds::count)]
     pub nb: usize,
     /// ARX input delay for arx-reduce-pem.
     #[arg(long, default_value_t = 1)]
@@ -152,13 +152,13 @@ pub struct SsArgs {
     #[arg(long)]
     pub estimate_x0: bool,
     /// Iteration limit of the prediction-error search.
-    #[arg(long, default_value_t = 100, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 100, value_parser = crate::bounds::count)]
     pub max_iter: usize,
     /// Output weighting of the prediction-error cost.
     #[arg(long, value_enum, default_value = "identity")]
     pub weight: WeightArg,
     /// Block rows of the subspace method (default: max(10, order/ny + 2), within what the data allow).
-    #[arg(long, value_name = "I", value_parser = crate::common::count)]
+    #[arg(long, value_name = "I", value_parser = crate::bounds::count)]
     pub n4sid_horizon: Option<usize>,
     /// What the prediction-error search minimises: `prediction` (one-step errors, K
     /// estimated: the innovations form) or `simulation` (output error, K = 0, A kept

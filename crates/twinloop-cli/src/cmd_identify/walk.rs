@@ -41,13 +41,13 @@ pub struct WalkIdArgs {
     #[arg(long, default_value_t = 24)]
     pub na: usize,
     /// ARX input lags (12: the largest full-rank order on the periodic walk inputs).
-    #[arg(long, default_value_t = 12, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 12, value_parser = crate::bounds::count)]
     pub nb: usize,
     /// ARX input delay in samples.
     #[arg(long, default_value_t = 1)]
     pub nk: usize,
     /// States of the final model (default: from the ARX's Hankel singular values).
-    #[arg(long, value_parser = crate::common::count)]
+    #[arg(long, value_parser = crate::bounds::count)]
     pub order: Option<usize>,
     /// Share of the Hankel-singular-value sum the default order keeps.
     #[arg(long, default_value_t = 0.9, value_parser = crate::common::positive)]
@@ -66,7 +66,7 @@ pub struct WalkIdArgs {
     #[arg(long)]
     pub no_detrend: bool,
     /// Iteration limit of the prediction-error search.
-    #[arg(long, default_value_t = 100, value_parser = crate::common::count)]
+    #[arg(long, default_value_t = 100, value_parser = crate::bounds::count)]
     pub max_iter: usize,
     /// Largest pole radius the search may give A: a damping margin (0.999 at 40 ms: a 40 s
     /// time constant, longer than the record).
