@@ -415,6 +415,7 @@ fn write_result_mcap(
         adapted: vec![d],
         robot: Some(adapted),
         inputs,
+        files: Vec::new(),
     };
     crate::result_mcap::write(path, "adapt", &result)
 }

@@ -28,6 +28,8 @@ pub struct ResultLog<'a> {
     pub robot: Option<&'a Description>,
     /// The inputs as the command line gave them (files, folders, `builtin:NAME`).
     pub inputs: Vec<String>,
+    /// Further attachments: (name, media type, bytes), such as a fitted parameter file.
+    pub files: Vec<(String, &'static str, Vec<u8>)>,
 }
 
 /// Write `result` to `path` for the command `command` (`identify static`).
@@ -59,6 +61,9 @@ pub fn write(path: &Path, command: &str, result: &ResultLog<'_>) -> Result<(), C
     if let Some(u) = &urdf {
         log.attach("adapted.urdf", "application/xml", u.as_bytes())
             .map_err(context)?;
+    }
+    for (name, media_type, data) in &result.files {
+        log.attach(name, media_type, data).map_err(context)?;
     }
     log.metadata("twinloop", provenance(command)?)
         .map_err(context)?;

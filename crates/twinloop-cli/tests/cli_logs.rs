@@ -557,13 +557,18 @@ fn validate_residual_answers_the_same_from_mcaps_as_from_their_csvs() {
     );
 }
 
-#[test]
-fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
+/// An RX-28 with parameters `truth` on a pendulum through the standard excitation,
+/// sampled every 2 ms +- 0.4 ms, times on whole ns (what an MCAP stamp holds),
+/// written as `experiment servo --out` writes it, as `NAME.csv` (its comment lines)
+/// and `NAME.mcap` (the format `twinloop` registers; the lines its note). Returns
+/// the two logs, the load file and the log.
+fn servo_logs(
+    truth: &twinloop_actuator::ServoParams,
+    name: &str,
+) -> (PathBuf, PathBuf, PathBuf, twinloop_actuator::log::ServoLog) {
     use twinloop_actuator::log::LogWriter;
     use twinloop_actuator::synthetic::synthetic_log;
-    use twinloop_actuator::{Excitation, Load, ModelLevel, Pendulum, ServoType, datasheet};
-    // An RX-28 on a pendulum through the standard excitation, sampled every 2 ms
-    // +- 0.4 ms; times on whole ns, which is what an MCAP stamp holds.
+    use twinloop_actuator::{Excitation, Load, Pendulum, ServoType};
     let pendulum = Pendulum {
         mass: 0.5,
         length: 0.15,
@@ -571,9 +576,8 @@ fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
     };
     let load = tmp("servo-load.toml");
     std::fs::write(&load, "mass = 0.5\nlength = 0.15\narm_inertia = 0.002\n").unwrap();
-    let truth = datasheet::defaults(ServoType::Rx28, ModelLevel::M1);
     let mut log = synthetic_log(
-        &truth,
+        truth,
         &Load::from(pendulum),
         &Excitation::standard(ServoType::Rx28, 0.5),
         2e-3,
@@ -583,10 +587,8 @@ fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
     let ns = |t: f64| (t * 1e9).round() / 1e9;
     log.t.iter_mut().for_each(|t| *t = ns(*t));
     log.t_goal.iter_mut().for_each(|t| *t = ns(*t));
-    // Written as `experiment servo --out` writes each: the CSV with its comment
-    // lines, the MCAP (the format `twinloop` registers) keeping them as its note.
     twinloop_io::sink::register_recording_format("mcap", twinloop_logs::open_mcap_recording);
-    let (csv, mcap) = (tmp("servo.csv"), tmp("servo.mcap"));
+    let (csv, mcap) = (tmp(&format!("{name}.csv")), tmp(&format!("{name}.mcap")));
     for path in [&csv, &mcap] {
         let mut w = LogWriter::create(path, ServoType::Rx28, "id 3 on test").unwrap();
         for r in 0..log.len() {
@@ -605,6 +607,14 @@ fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
         }
         w.finish().unwrap();
     }
+    (csv, mcap, load, log)
+}
+
+#[test]
+fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
+    use twinloop_actuator::{ModelLevel, ServoType, datasheet};
+    let truth = datasheet::defaults(ServoType::Rx28, ModelLevel::M1);
+    let (csv, mcap, load, _) = servo_logs(&truth, "servo");
     let mut answers = Vec::new();
     for path in [&csv, &mcap] {
         let out = ok(&[
@@ -625,4 +635,120 @@ fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
     assert_eq!(answers[0], answers[1]);
     // The servo and its id came from the MCAP's note.
     assert!(answers[1].contains("RX-28"), "{}", answers[1]);
+}
+
+/// RMS of `a - b`.
+fn rms(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / n).sqrt()
+}
+
+#[test]
+fn identify_servo_mcap_holds_the_log_the_start_s_and_the_fit_s_replays_and_the_fitted_file() {
+    use twinloop_actuator::params::{FRICTION_BASE, RESISTANCE};
+    use twinloop_actuator::{ModelLevel, ServoType, datasheet};
+    let test =
+        "identify_servo_mcap_holds_the_log_the_start_s_and_the_fit_s_replays_and_the_fitted_file";
+    let Some(py) = python::python_with("mcap, mcap_ros2", test) else {
+        return;
+    };
+    // A servo unlike its datasheet (the fit's start): more friction, a hotter coil.
+    let mut truth = datasheet::defaults(ServoType::Rx28, ModelLevel::M1);
+    truth.values[FRICTION_BASE] *= 1.6;
+    truth.values[RESISTANCE] *= 1.3;
+    let (csv, _, load, log) = servo_logs(&truth, "servo-fit");
+    let (mcap, toml) = (tmp("servo-result.mcap"), tmp("servo-fitted.toml"));
+    let args = [
+        "identify",
+        "servo",
+        "--data",
+        s(&csv),
+        "--load",
+        s(&load),
+        "--out",
+        s(&toml),
+        "--mcap",
+        s(&mcap),
+    ];
+    ok(&args);
+    let out = Command::new(&py)
+        .arg(root().join("tools/oracle/logs_readback.py"))
+        .arg(&mcap)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let topics = &v["topics"];
+    let n = log.len();
+    for topic in ["/measured", "/prior", "/adapted"] {
+        assert_eq!(topics[topic]["count"], n, "{topic}");
+    }
+    // The measured signals are the log's, to the bit.
+    for i in 0..n {
+        assert_eq!(
+            topics["/measured"]["rows"][i],
+            serde_json::json!([
+                "goal,q,v",
+                hex_bits(log.goal[i]),
+                hex_bits(log.q[i]),
+                hex_bits(log.v[i])
+            ]),
+            "row {i}"
+        );
+    }
+    // The fitted parameters' replay is nearer the log than the datasheet's.
+    let column = |topic: &str| -> Vec<f64> {
+        (0..n)
+            .map(|i| from_hex(&topics[topic]["rows"][i][1]))
+            .collect()
+    };
+    let (prior, fitted) = (
+        rms(&column("/prior"), &log.q),
+        rms(&column("/adapted"), &log.q),
+    );
+    assert!(
+        fitted < 0.5 * prior,
+        "fitted {fitted} rad RMS, start {prior}"
+    );
+    assert_eq!(topics["/adapted"]["rows"][0][0], "adapted.q");
+    // The fitted file attached is the one --out wrote; the provenance.
+    let written = std::fs::read_to_string(&toml).unwrap();
+    assert_eq!(
+        v["attachments"],
+        serde_json::json!([{"name": "fitted.toml", "media_type": "application/toml", "text": written}])
+    );
+    let meta = &v["metadata"];
+    assert_eq!(meta["twinloop"]["command"], "identify servo");
+    let line: Vec<String> =
+        serde_json::from_str(meta["twinloop"]["command_line"].as_str().unwrap()).unwrap();
+    assert_eq!(line[1..], args.map(str::to_string));
+    for input in [&csv, &load] {
+        assert_eq!(meta["twinloop.inputs"][s(input)], python_sha256(&py, input));
+    }
+    // twinloop's own reader gives the same table: the log's times and values.
+    let topics: Vec<twinloop_logs::TopicSpec> = ["/measured", "/prior", "/adapted"]
+        .iter()
+        .map(|t| t.parse().unwrap())
+        .collect();
+    let table = read_log(&mcap, &ReadOptions { topics, dt: None }).unwrap();
+    assert_eq!(table.rows.len(), n);
+    let (q, q1) = (
+        table.column_index("q").unwrap(),
+        table.column_index("adapted.q").unwrap(),
+    );
+    for (i, row) in table.rows.iter().enumerate() {
+        assert!(
+            (row[0] - log.t[i]).abs() <= 0.5e-9,
+            "t {} vs {}",
+            row[0],
+            log.t[i]
+        );
+        assert_eq!(row[q].to_bits(), log.q[i].to_bits(), "q row {i}");
+    }
+    let adapted: Vec<f64> = table.rows.iter().map(|r| r[q1]).collect();
+    assert_eq!(rms(&adapted, &log.q), fitted);
 }

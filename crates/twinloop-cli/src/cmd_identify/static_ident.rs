@@ -201,6 +201,7 @@ fn write_result_mcap(
         adapted: adapted_cols,
         robot: Some(adapted),
         inputs: vec![a.robot.clone(), a.poses.display().to_string()],
+        files: Vec::new(),
     };
     crate::result_mcap::write(path, "identify static", &result)
 }
