@@ -14,8 +14,8 @@ use twinloop_experiments::lean_validation::{LeanComparison, align_and_compare, r
 use twinloop_ident::IdentError;
 use twinloop_ident::html::residual_sections;
 use twinloop_ident::validate::{
-    Motion, ResidualSeries, ResidualSummary, Smoothing, check_paired_times, parse_motion,
-    read_plate, residual_wrench,
+    Motion, PLATE_COLUMNS, PlateSample, ResidualSeries, ResidualSummary, Smoothing,
+    check_paired_times, parse_motion, read_plate, residual_wrench,
 };
 use twinloop_io::CsvWriter;
 use twinloop_report::{Plot, Report, SeriesStyle};
@@ -121,6 +121,10 @@ pub struct ResidualArgs {
     /// HTML report (the seed's Fig. 6) to write, and beside it OUT_3d.html: the motion in 3D.
     #[arg(long, value_name = "OUT.html")]
     pub report: Option<PathBuf>,
+    /// Also write the result as one MCAP (docs/logs.md): the motion, the plate's
+    /// readings and what each model says the plate should read.
+    #[arg(long, value_name = "RESULT.mcap")]
+    pub mcap: Option<PathBuf>,
 }
 
 pub fn run(cmd: ValidateCommand) -> CliResult {
@@ -262,6 +266,9 @@ fn residual(a: &ResidualArgs) -> CliResult {
         None => None,
     };
     write_residuals(&a.out, &res, cmp.as_ref())?;
+    if let Some(p) = &a.mcap {
+        write_residual_mcap(p, a, &robot, &model, &motion, &res, cmp.as_ref())?;
+    }
     let label0 = label(&a.robot);
     let label1 = a.compare.as_deref().map(label).unwrap_or_default();
     let mut runs = vec![(label0.as_str(), &res)];
@@ -333,6 +340,89 @@ fn read_motion_and_plate(a: &ResidualArgs, model: &Model) -> Result<Motion, CliE
         }
     }
     Ok(motion)
+}
+
+/// `--mcap`: per frame the configuration (`/joint_states`, `/tf`), the plate's
+/// readings as measured and as each model predicts them: its inverse dynamics'
+/// base wrench, the ground reaction the motion needs (`/model`, `/compare`).
+fn write_residual_mcap(
+    path: &Path,
+    a: &ResidualArgs,
+    robot: &twinloop_description::Description,
+    model: &Model,
+    motion: &Motion,
+    res: &ResidualSeries,
+    cmp: Option<&ResidualSeries>,
+) -> Result<(), CliError> {
+    let plate = motion.plate.as_deref().unwrap_or_default();
+    let named = |p: &str| {
+        PLATE_COLUMNS
+            .iter()
+            .map(|c| format!("{p}{c}"))
+            .collect::<Vec<_>>()
+    };
+    let q_columns = twinloop_io::Quantity::Q.column_names(&model.q_names());
+    let (measured, by_model, by_compare) = (named(""), named("model."), named("compare."));
+    let mut columns = [
+        vec!["t".to_string()],
+        q_columns,
+        measured.clone(),
+        by_model.clone(),
+    ]
+    .concat();
+    if cmp.is_some() {
+        columns.extend(by_compare.iter().cloned());
+    }
+    let readings = |p: &PlateSample| {
+        [
+            p.force[0],
+            p.force[1],
+            p.force[2],
+            p.cop[0],
+            p.cop[1],
+            p.free_moment,
+        ]
+    };
+    let mut table = twinloop_io::Table::new(columns);
+    // residual_wrench checked one plate reading per frame.
+    for (k, reading) in plate.iter().enumerate() {
+        let mut row = vec![motion.t[k]];
+        row.extend_from_slice(&motion.q[k]);
+        row.extend(readings(reading));
+        row.extend(readings(&res.predicted[k]));
+        if let Some(c) = cmp {
+            row.extend(readings(&c.predicted[k]));
+        }
+        table.rows.push(row);
+    }
+    let topic = |t: &str, columns: Vec<String>| twinloop_logs::ArrayTopic {
+        topic: t.into(),
+        columns,
+    };
+    let mut predicted = vec![topic("/model", by_model)];
+    if cmp.is_some() {
+        predicted.push(topic("/compare", by_compare));
+    }
+    let inputs = [Some(a.robot.clone()), a.compare.clone()]
+        .into_iter()
+        .flatten()
+        .chain(
+            [&Some(a.motion.clone()), &a.plate]
+                .into_iter()
+                .flatten()
+                .map(|p| p.display().to_string()),
+        )
+        .collect();
+    let result = crate::result_mcap::ResultLog {
+        table,
+        measured,
+        predicted,
+        robot: Some(robot),
+        robot_file: "model.urdf",
+        inputs,
+        files: Vec::new(),
+    };
+    crate::result_mcap::write(path, "validate residual", &result)
 }
 
 /// `t`, `res.*` and, with a second model, `cmp.*` per frame.

@@ -18,18 +18,35 @@ use twinloop_io::Table;
 use twinloop_logs::{ArrayTopic, McapLog};
 
 /// A result to write: `table` has `t`, optionally `q:` columns (shown on the robot),
-/// and the columns `measured`, `prior` and `adapted` name.
+/// and the columns `measured` and each prediction's topic name.
 pub struct ResultLog<'a> {
     pub table: Table,
     pub measured: Vec<String>,
-    pub prior: Vec<String>,
-    pub adapted: Vec<String>,
-    /// The adapted description: `/robot_description` and the `adapted.urdf` attachment.
+    /// The models' predictions: `/prior` and `/adapted` (`validate`: `/model` and
+    /// `/compare`), each of its own columns.
+    pub predicted: Vec<ArrayTopic>,
+    /// The adapted description: `/robot_description` and the attachment `robot_file`.
     pub robot: Option<&'a Description>,
+    /// The robot's attachment's name: `adapted.urdf` (`validate`: `model.urdf`).
+    pub robot_file: &'static str,
     /// The inputs as the command line gave them (files, folders, `builtin:NAME`).
     pub inputs: Vec<String>,
     /// Further attachments: (name, media type, bytes), such as a fitted parameter file.
     pub files: Vec<(String, &'static str, Vec<u8>)>,
+}
+
+/// The prior's and the adapted model's predictions, on `/prior` and `/adapted`.
+pub fn prior_and_adapted(prior: Vec<String>, adapted: Vec<String>) -> Vec<ArrayTopic> {
+    vec![
+        ArrayTopic {
+            topic: "/prior".into(),
+            columns: prior,
+        },
+        ArrayTopic {
+            topic: "/adapted".into(),
+            columns: adapted,
+        },
+    ]
 }
 
 /// Write `result` to `path` for the command `command` (`identify static`).
@@ -38,14 +55,10 @@ pub fn write(path: &Path, command: &str, result: &ResultLog<'_>) -> Result<(), C
         topic: format!("/{name}"),
         columns: columns.to_vec(),
     };
-    let groups: Vec<ArrayTopic> = [
-        topic("measured", &result.measured),
-        topic("prior", &result.prior),
-        topic("adapted", &result.adapted),
-    ]
-    .into_iter()
-    .filter(|g| !g.columns.is_empty())
-    .collect();
+    let groups: Vec<ArrayTopic> = std::iter::once(topic("measured", &result.measured))
+        .chain(result.predicted.iter().cloned())
+        .filter(|g| !g.columns.is_empty())
+        .collect();
     let urdf = result.robot.map(twinloop_description::urdf::to_string);
     let root = result
         .robot
@@ -59,7 +72,7 @@ pub fn write(path: &Path, command: &str, result: &ResultLog<'_>) -> Result<(), C
         log.write_row(row).map_err(context)?;
     }
     if let Some(u) = &urdf {
-        log.attach("adapted.urdf", "application/xml", u.as_bytes())
+        log.attach(result.robot_file, "application/xml", u.as_bytes())
             .map_err(context)?;
     }
     for (name, media_type, data) in &result.files {

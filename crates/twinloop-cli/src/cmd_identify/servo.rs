@@ -685,9 +685,9 @@ fn write_result_mcap(
     let result = crate::result_mcap::ResultLog {
         table,
         measured,
-        prior,
-        adapted,
+        predicted: crate::result_mcap::prior_and_adapted(prior, adapted),
         robot: None,
+        robot_file: "adapted.urdf",
         inputs,
         files: vec![(
             "fitted.toml".into(),
