@@ -10,7 +10,9 @@ use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use twinloop_dynamics::{BaseKind, Model};
 use twinloop_experiments::lean::LeanRecord;
-use twinloop_experiments::lean_validation::{LeanComparison, align_and_compare, read_lean_record};
+use twinloop_experiments::lean_validation::{
+    LeanComparison, align_and_compare, read_lean_record, resample_at,
+};
 use twinloop_ident::IdentError;
 use twinloop_ident::html::residual_sections;
 use twinloop_ident::validate::{
@@ -85,6 +87,10 @@ pub struct LeanArgs {
     /// simulation as a ghost).
     #[arg(long, value_name = "ROBOT", requires = "report")]
     pub robot: Option<String>,
+    /// Also write the result as one MCAP (docs/logs.md): the robot's torques and
+    /// angles at its samples and the simulation's at the same times.
+    #[arg(long, value_name = "RESULT.mcap")]
+    pub mcap: Option<PathBuf>,
     /// Largest clock offset between the runs to look for, s (0: align on `t` as it is).
     #[arg(long, default_value_t = 0.5, value_name = "S", value_parser = crate::common::non_negative)]
     pub max_shift: f64,
@@ -162,6 +168,9 @@ fn lean(a: &LeanArgs) -> CliResult {
                 .unwrap_or_else(|| "-".into())
         ));
     }
+    if let Some(p) = &a.mcap {
+        write_lean_mcap(p, a, &robot, &sim, c.shift_s)?;
+    }
     if let Some(p) = &a.report {
         let mut page = lean_report(&c, &robot, &sim, &rn, &sn);
         if let Some(spec) = &a.robot {
@@ -180,6 +189,58 @@ fn lean(a: &LeanArgs) -> CliResult {
     }
     emit(&text, a.json.as_ref(), &c)?;
     Ok(Outcome::Ok)
+}
+
+/// `--mcap`: at each of the robot's samples the simulation covers, the robot's
+/// torques and angles (`tau.<joint>`, `q.<joint>`: `/measured`) and the
+/// simulation's, shifted and interpolated as the comparison does (`model.` + the
+/// names: `/model`).
+fn write_lean_mcap(
+    path: &Path,
+    a: &LeanArgs,
+    robot: &LeanRecord,
+    sim: &LeanRecord,
+    shift: f64,
+) -> Result<(), CliError> {
+    let (rows, at) = resample_at(sim, shift, &robot.t);
+    // Joint k of the robot is joint ks of the simulation (checked the same set).
+    let ks: Vec<usize> = robot
+        .joints
+        .iter()
+        .map(|j| sim.joints.iter().position(|s| s == j).unwrap_or(0))
+        .collect();
+    let angles: Vec<usize> = (0..robot.joints.len())
+        .filter(|&k| !robot.q[k].is_empty() && !at.q[ks[k]].is_empty())
+        .collect();
+    let mut measured: Vec<String> = robot.joints.iter().map(|j| format!("tau.{j}")).collect();
+    measured.extend(angles.iter().map(|&k| format!("q.{}", robot.joints[k])));
+    let model: Vec<String> = measured.iter().map(|c| format!("model.{c}")).collect();
+    let columns = [vec!["t".to_string()], measured.clone(), model.clone()].concat();
+    let mut table = twinloop_io::Table::new(columns);
+    for (r, i) in rows.enumerate() {
+        let mut row = vec![robot.t[i]];
+        row.extend(robot.tau.iter().map(|y| y[i]));
+        row.extend(angles.iter().map(|&k| robot.q[k][i]));
+        row.extend(ks.iter().map(|&k| at.tau[k][r]));
+        row.extend(angles.iter().map(|&k| at.q[ks[k]][r]));
+        table.rows.push(row);
+    }
+    let result = crate::result_mcap::ResultLog {
+        table,
+        measured,
+        predicted: vec![twinloop_logs::ArrayTopic {
+            topic: "/model".into(),
+            columns: model,
+        }],
+        robot: None,
+        robot_file: "model.urdf",
+        inputs: vec![
+            a.robot_run.display().to_string(),
+            a.sim_run.display().to_string(),
+        ],
+        files: Vec::new(),
+    };
+    crate::result_mcap::write(path, "validate lean", &result)
 }
 
 /// The report: the table, then per joint both runs' torque over time and the angles.

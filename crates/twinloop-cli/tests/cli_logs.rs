@@ -475,12 +475,12 @@ fn identify_arx_and_ss_answer_the_same_from_an_mcap_as_from_its_csv() {
     );
 }
 
-#[test]
-fn validate_lean_answers_the_same_from_mcaps_as_from_their_csvs() {
-    // Two simulated leans of km20, the second with soft servos: the robot's run and
-    // the simulation's.
-    let runs = [tmp("lean-a.csv"), tmp("lean-b.csv")];
-    for (run, soft) in runs.iter().zip([&[][..], &["--soft-servos"]]) {
+/// Two simulated leans of km20: the robot's run (`robot` added: 200 g on the torso
+/// for a robot unlike its model) and the simulation's (`NAME-a.csv`, `NAME-b.csv`:
+/// a file per test, the tests run at once).
+fn two_leans(name: &str, robot: &[&str]) -> [PathBuf; 2] {
+    let runs = [tmp(&format!("{name}-a.csv")), tmp(&format!("{name}-b.csv"))];
+    for (run, extra) in runs.iter().zip([robot, &[]]) {
         let mut args = vec![
             "experiment",
             "lean",
@@ -497,9 +497,15 @@ fn validate_lean_answers_the_same_from_mcaps_as_from_their_csvs() {
             "--out",
             s(run),
         ];
-        args.extend_from_slice(soft);
+        args.extend_from_slice(extra);
         ok(&args);
     }
+    runs
+}
+
+#[test]
+fn validate_lean_answers_the_same_from_mcaps_as_from_their_csvs() {
+    let runs = two_leans("lean", &[]);
     same_answer(
         &[
             "validate",
@@ -866,4 +872,92 @@ fn validate_residual_mcap_holds_the_plate_and_each_model_s_prediction_of_it() {
     let file: Vec<f64> = table.rows.iter().map(|r| r[i]).collect();
     assert_eq!(rms(&model, &file), prior_fz);
     eprintln!("grf.fz RMS from the plate: prior {prior_fz} N, h1 {h1_fz} N; all {errors:?}");
+}
+
+#[test]
+fn validate_lean_mcap_holds_the_robot_s_torques_and_the_simulation_s_at_its_samples() {
+    let test = "validate_lean_mcap_holds_the_robot_s_torques_and_the_simulation_s_at_its_samples";
+    let Some(py) = python::python_with("mcap, mcap_ros2", test) else {
+        return;
+    };
+    let [robot, sim] = two_leans("lean-mcap", &["--add-mass", "0.2@torso:0,0,0.03"]);
+    let (mcap, json) = (tmp("lean-result.mcap"), tmp("lean-result.json"));
+    let args = [
+        "validate",
+        "lean",
+        "--robot-run",
+        s(&robot),
+        "--sim-run",
+        s(&sim),
+        "--json",
+        s(&json),
+        "--mcap",
+        s(&mcap),
+    ];
+    ok(&args);
+    let out = Command::new(&py)
+        .arg(root().join("tools/oracle/logs_readback.py"))
+        .arg(&mcap)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let c: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let table = Table::read(&robot).unwrap();
+    let n = v["topics"]["/measured"]["count"].as_u64().unwrap() as usize;
+    assert_eq!(n, c["samples"].as_u64().unwrap() as usize);
+    assert_eq!(v["topics"]["/model"]["count"], n);
+    let label = v["topics"]["/measured"]["rows"][0][0]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let names: Vec<&str> = label.split(',').collect();
+    // The robot's torques are its run's, to the bit, from its first row the
+    // shifted simulation covers; the simulation's differ from them by the
+    // comparison's own RMS.
+    let t_start = c["t_start"].as_f64().unwrap();
+    let first = table.rows.iter().position(|r| r[0] >= t_start).unwrap();
+    let rows = &table.rows[first..first + n];
+    for joint in c["joints"].as_array().unwrap() {
+        let name = joint["joint"].as_str().unwrap();
+        let j = names
+            .iter()
+            .position(|c| *c == format!("tau.{name}"))
+            .unwrap();
+        let i = table.column_index(&format!("tau:{name}")).unwrap();
+        let file: Vec<f64> = rows.iter().map(|r| r[i]).collect();
+        let measured = array_column(&v, "/measured", j);
+        for k in 0..n {
+            assert_eq!(measured[k].to_bits(), file[k].to_bits(), "{name} row {k}");
+        }
+        let d = rms(&array_column(&v, "/model", j), &file);
+        let want = joint["torque_rms"].as_f64().unwrap();
+        assert!(
+            (d - want).abs() <= 1e-12 * want.max(1.0),
+            "{name}: {d} vs {want}"
+        );
+    }
+    let meta = &v["metadata"];
+    assert_eq!(meta["twinloop"]["command"], "validate lean");
+    for input in [&robot, &sim] {
+        assert_eq!(meta["twinloop.inputs"][s(input)], python_sha256(&py, input));
+    }
+    // twinloop's own reader: the same torques at the run's times.
+    let topics = ["/measured", "/model"].map(|t| t.parse().unwrap()).to_vec();
+    let back = read_log(&mcap, &ReadOptions { topics, dt: None }).unwrap();
+    assert_eq!(back.rows.len(), n);
+    let name = c["joints"][0]["joint"].as_str().unwrap();
+    let (i, j) = (
+        table.column_index(&format!("tau:{name}")).unwrap(),
+        back.column_index(&format!("tau.{name}")).unwrap(),
+    );
+    for (a, b) in rows.iter().zip(&back.rows) {
+        assert!((a[0] - b[0]).abs() <= 0.5e-9, "t {} vs {}", a[0], b[0]);
+        assert_eq!(a[i].to_bits(), b[j].to_bits());
+    }
 }
