@@ -1,10 +1,12 @@
-//! `--mcap FILE` of the identification and adaptation commands: the result as one
-//! MCAP that Foxglove or Rerun opens beside the measurement. The measured signals,
-//! the prior's and the adapted model's predictions of them are Float64MultiArray
-//! topics (`/measured`, `/prior`, `/adapted`, each labelled with its column names),
-//! the configuration (when the data have one) is `/joint_states` (and `/tf`) with the
-//! adapted URDF on `/robot_description`; the adapted URDF is also an attachment
-//! (`adapted.urdf`), and two metadata records say how the file was made:
+//! `--mcap FILE` of the identification, adaptation and validation commands: the
+//! result as one MCAP that Foxglove or Rerun opens beside the measurement. The
+//! measured signals, the prior's and the adapted model's predictions of them are
+//! Float64MultiArray topics (`/measured`, `/prior`, `/adapted`; `validate`: `/model`,
+//! `/compare`; each labelled with its column names), the configuration (when the
+//! data have one) is `/joint_states` (and `/tf`) with the robot's URDF on
+//! `/robot_description`; that URDF is also an attachment (`adapted.urdf`;
+//! `validate`: `model.urdf`), as is any other file the result has (`identify
+//! servo`'s `fitted.toml`), and two metadata records say how the file was made:
 //! `twinloop` (`command`, `command_line` as a JSON array, `twinloop_version`) and
 //! `twinloop.inputs` (each input as given -> the SHA-256 of its bytes, hex).
 
