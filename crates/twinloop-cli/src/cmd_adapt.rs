@@ -411,10 +411,11 @@ fn write_result_mcap(
     let result = crate::result_mcap::ResultLog {
         table,
         measured: vec![m],
-        prior: vec![p],
-        adapted: vec![d],
+        predicted: crate::result_mcap::prior_and_adapted(vec![p], vec![d]),
         robot: Some(adapted),
+        robot_file: "adapted.urdf",
         inputs,
+        files: Vec::new(),
     };
     crate::result_mcap::write(path, "adapt", &result)
 }

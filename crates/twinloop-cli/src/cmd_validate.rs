@@ -10,12 +10,14 @@ use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use twinloop_dynamics::{BaseKind, Model};
 use twinloop_experiments::lean::LeanRecord;
-use twinloop_experiments::lean_validation::{LeanComparison, align_and_compare, read_lean_record};
+use twinloop_experiments::lean_validation::{
+    LeanComparison, align_and_compare, read_lean_record, resample_at,
+};
 use twinloop_ident::IdentError;
 use twinloop_ident::html::residual_sections;
 use twinloop_ident::validate::{
-    Motion, ResidualSeries, ResidualSummary, Smoothing, check_paired_times, parse_motion,
-    read_plate, residual_wrench,
+    Motion, PLATE_COLUMNS, PlateSample, ResidualSeries, ResidualSummary, Smoothing,
+    check_paired_times, parse_motion, read_plate, residual_wrench,
 };
 use twinloop_io::CsvWriter;
 use twinloop_report::{Plot, Report, SeriesStyle};
@@ -85,6 +87,10 @@ pub struct LeanArgs {
     /// simulation as a ghost).
     #[arg(long, value_name = "ROBOT", requires = "report")]
     pub robot: Option<String>,
+    /// Also write the result as one MCAP (docs/logs.md): the robot's torques and
+    /// angles at its samples and the simulation's at the same times.
+    #[arg(long, value_name = "RESULT.mcap")]
+    pub mcap: Option<PathBuf>,
     /// Largest clock offset between the runs to look for, s (0: align on `t` as it is).
     #[arg(long, default_value_t = 0.5, value_name = "S", value_parser = crate::common::non_negative)]
     pub max_shift: f64,
@@ -121,6 +127,10 @@ pub struct ResidualArgs {
     /// HTML report (the seed's Fig. 6) to write, and beside it OUT_3d.html: the motion in 3D.
     #[arg(long, value_name = "OUT.html")]
     pub report: Option<PathBuf>,
+    /// Also write the result as one MCAP (docs/logs.md): the motion, the plate's
+    /// readings and what each model says the plate should read.
+    #[arg(long, value_name = "RESULT.mcap")]
+    pub mcap: Option<PathBuf>,
 }
 
 pub fn run(cmd: ValidateCommand) -> CliResult {
@@ -158,6 +168,9 @@ fn lean(a: &LeanArgs) -> CliResult {
                 .unwrap_or_else(|| "-".into())
         ));
     }
+    if let Some(p) = &a.mcap {
+        write_lean_mcap(p, a, &robot, &sim, c.shift_s)?;
+    }
     if let Some(p) = &a.report {
         let mut page = lean_report(&c, &robot, &sim, &rn, &sn);
         if let Some(spec) = &a.robot {
@@ -176,6 +189,58 @@ fn lean(a: &LeanArgs) -> CliResult {
     }
     emit(&text, a.json.as_ref(), &c)?;
     Ok(Outcome::Ok)
+}
+
+/// `--mcap`: at each of the robot's samples the simulation covers, the robot's
+/// torques and angles (`tau.<joint>`, `q.<joint>`: `/measured`) and the
+/// simulation's, shifted and interpolated as the comparison does (`model.` + the
+/// names: `/model`).
+fn write_lean_mcap(
+    path: &Path,
+    a: &LeanArgs,
+    robot: &LeanRecord,
+    sim: &LeanRecord,
+    shift: f64,
+) -> Result<(), CliError> {
+    let (rows, at) = resample_at(sim, shift, &robot.t);
+    // Joint k of the robot is joint ks of the simulation (checked the same set).
+    let ks: Vec<usize> = robot
+        .joints
+        .iter()
+        .map(|j| sim.joints.iter().position(|s| s == j).unwrap_or(0))
+        .collect();
+    let angles: Vec<usize> = (0..robot.joints.len())
+        .filter(|&k| !robot.q[k].is_empty() && !at.q[ks[k]].is_empty())
+        .collect();
+    let mut measured: Vec<String> = robot.joints.iter().map(|j| format!("tau.{j}")).collect();
+    measured.extend(angles.iter().map(|&k| format!("q.{}", robot.joints[k])));
+    let model: Vec<String> = measured.iter().map(|c| format!("model.{c}")).collect();
+    let columns = [vec!["t".to_string()], measured.clone(), model.clone()].concat();
+    let mut table = twinloop_io::Table::new(columns);
+    for (r, i) in rows.enumerate() {
+        let mut row = vec![robot.t[i]];
+        row.extend(robot.tau.iter().map(|y| y[i]));
+        row.extend(angles.iter().map(|&k| robot.q[k][i]));
+        row.extend(ks.iter().map(|&k| at.tau[k][r]));
+        row.extend(angles.iter().map(|&k| at.q[ks[k]][r]));
+        table.rows.push(row);
+    }
+    let result = crate::result_mcap::ResultLog {
+        table,
+        measured,
+        predicted: vec![twinloop_logs::ArrayTopic {
+            topic: "/model".into(),
+            columns: model,
+        }],
+        robot: None,
+        robot_file: "model.urdf",
+        inputs: vec![
+            a.robot_run.display().to_string(),
+            a.sim_run.display().to_string(),
+        ],
+        files: Vec::new(),
+    };
+    crate::result_mcap::write(path, "validate lean", &result)
 }
 
 /// The report: the table, then per joint both runs' torque over time and the angles.
@@ -262,6 +327,9 @@ fn residual(a: &ResidualArgs) -> CliResult {
         None => None,
     };
     write_residuals(&a.out, &res, cmp.as_ref())?;
+    if let Some(p) = &a.mcap {
+        write_residual_mcap(p, a, &robot, &model, &motion, &res, cmp.as_ref())?;
+    }
     let label0 = label(&a.robot);
     let label1 = a.compare.as_deref().map(label).unwrap_or_default();
     let mut runs = vec![(label0.as_str(), &res)];
@@ -333,6 +401,89 @@ fn read_motion_and_plate(a: &ResidualArgs, model: &Model) -> Result<Motion, CliE
         }
     }
     Ok(motion)
+}
+
+/// `--mcap`: per frame the configuration (`/joint_states`, `/tf`), the plate's
+/// readings as measured and as each model predicts them: its inverse dynamics'
+/// base wrench, the ground reaction the motion needs (`/model`, `/compare`).
+fn write_residual_mcap(
+    path: &Path,
+    a: &ResidualArgs,
+    robot: &twinloop_description::Description,
+    model: &Model,
+    motion: &Motion,
+    res: &ResidualSeries,
+    cmp: Option<&ResidualSeries>,
+) -> Result<(), CliError> {
+    let plate = motion.plate.as_deref().unwrap_or_default();
+    let named = |p: &str| {
+        PLATE_COLUMNS
+            .iter()
+            .map(|c| format!("{p}{c}"))
+            .collect::<Vec<_>>()
+    };
+    let q_columns = twinloop_io::Quantity::Q.column_names(&model.q_names());
+    let (measured, by_model, by_compare) = (named(""), named("model."), named("compare."));
+    let mut columns = [
+        vec!["t".to_string()],
+        q_columns,
+        measured.clone(),
+        by_model.clone(),
+    ]
+    .concat();
+    if cmp.is_some() {
+        columns.extend(by_compare.iter().cloned());
+    }
+    let readings = |p: &PlateSample| {
+        [
+            p.force[0],
+            p.force[1],
+            p.force[2],
+            p.cop[0],
+            p.cop[1],
+            p.free_moment,
+        ]
+    };
+    let mut table = twinloop_io::Table::new(columns);
+    // residual_wrench checked one plate reading per frame.
+    for (k, reading) in plate.iter().enumerate() {
+        let mut row = vec![motion.t[k]];
+        row.extend_from_slice(&motion.q[k]);
+        row.extend(readings(reading));
+        row.extend(readings(&res.predicted[k]));
+        if let Some(c) = cmp {
+            row.extend(readings(&c.predicted[k]));
+        }
+        table.rows.push(row);
+    }
+    let topic = |t: &str, columns: Vec<String>| twinloop_logs::ArrayTopic {
+        topic: t.into(),
+        columns,
+    };
+    let mut predicted = vec![topic("/model", by_model)];
+    if cmp.is_some() {
+        predicted.push(topic("/compare", by_compare));
+    }
+    let inputs = [Some(a.robot.clone()), a.compare.clone()]
+        .into_iter()
+        .flatten()
+        .chain(
+            [&Some(a.motion.clone()), &a.plate]
+                .into_iter()
+                .flatten()
+                .map(|p| p.display().to_string()),
+        )
+        .collect();
+    let result = crate::result_mcap::ResultLog {
+        table,
+        measured,
+        predicted,
+        robot: Some(robot),
+        robot_file: "model.urdf",
+        inputs,
+        files: Vec::new(),
+    };
+    crate::result_mcap::write(path, "validate residual", &result)
 }
 
 /// `t`, `res.*` and, with a second model, `cmp.*` per frame.

@@ -1,10 +1,12 @@
-//! `--mcap FILE` of the identification and adaptation commands: the result as one
-//! MCAP that Foxglove or Rerun opens beside the measurement. The measured signals,
-//! the prior's and the adapted model's predictions of them are Float64MultiArray
-//! topics (`/measured`, `/prior`, `/adapted`, each labelled with its column names),
-//! the configuration (when the data have one) is `/joint_states` (and `/tf`) with the
-//! adapted URDF on `/robot_description`; the adapted URDF is also an attachment
-//! (`adapted.urdf`), and two metadata records say how the file was made:
+//! `--mcap FILE` of the identification, adaptation and validation commands: the
+//! result as one MCAP that Foxglove or Rerun opens beside the measurement. The
+//! measured signals, the prior's and the adapted model's predictions of them are
+//! Float64MultiArray topics (`/measured`, `/prior`, `/adapted`; `validate`: `/model`,
+//! `/compare`; each labelled with its column names), the configuration (when the
+//! data have one) is `/joint_states` (and `/tf`) with the robot's URDF on
+//! `/robot_description`; that URDF is also an attachment (`adapted.urdf`;
+//! `validate`: `model.urdf`), as is any other file the result has (`identify
+//! servo`'s `fitted.toml`), and two metadata records say how the file was made:
 //! `twinloop` (`command`, `command_line` as a JSON array, `twinloop_version`) and
 //! `twinloop.inputs` (each input as given -> the SHA-256 of its bytes, hex).
 
@@ -18,16 +20,35 @@ use twinloop_io::Table;
 use twinloop_logs::{ArrayTopic, McapLog};
 
 /// A result to write: `table` has `t`, optionally `q:` columns (shown on the robot),
-/// and the columns `measured`, `prior` and `adapted` name.
+/// and the columns `measured` and each prediction's topic name.
 pub struct ResultLog<'a> {
     pub table: Table,
     pub measured: Vec<String>,
-    pub prior: Vec<String>,
-    pub adapted: Vec<String>,
-    /// The adapted description: `/robot_description` and the `adapted.urdf` attachment.
+    /// The models' predictions: `/prior` and `/adapted` (`validate`: `/model` and
+    /// `/compare`), each of its own columns.
+    pub predicted: Vec<ArrayTopic>,
+    /// The adapted description: `/robot_description` and the attachment `robot_file`.
     pub robot: Option<&'a Description>,
+    /// The robot's attachment's name: `adapted.urdf` (`validate`: `model.urdf`).
+    pub robot_file: &'static str,
     /// The inputs as the command line gave them (files, folders, `builtin:NAME`).
     pub inputs: Vec<String>,
+    /// Further attachments: (name, media type, bytes), such as a fitted parameter file.
+    pub files: Vec<(String, &'static str, Vec<u8>)>,
+}
+
+/// The prior's and the adapted model's predictions, on `/prior` and `/adapted`.
+pub fn prior_and_adapted(prior: Vec<String>, adapted: Vec<String>) -> Vec<ArrayTopic> {
+    vec![
+        ArrayTopic {
+            topic: "/prior".into(),
+            columns: prior,
+        },
+        ArrayTopic {
+            topic: "/adapted".into(),
+            columns: adapted,
+        },
+    ]
 }
 
 /// Write `result` to `path` for the command `command` (`identify static`).
@@ -36,14 +57,10 @@ pub fn write(path: &Path, command: &str, result: &ResultLog<'_>) -> Result<(), C
         topic: format!("/{name}"),
         columns: columns.to_vec(),
     };
-    let groups: Vec<ArrayTopic> = [
-        topic("measured", &result.measured),
-        topic("prior", &result.prior),
-        topic("adapted", &result.adapted),
-    ]
-    .into_iter()
-    .filter(|g| !g.columns.is_empty())
-    .collect();
+    let groups: Vec<ArrayTopic> = std::iter::once(topic("measured", &result.measured))
+        .chain(result.predicted.iter().cloned())
+        .filter(|g| !g.columns.is_empty())
+        .collect();
     let urdf = result.robot.map(twinloop_description::urdf::to_string);
     let root = result
         .robot
@@ -57,8 +74,11 @@ pub fn write(path: &Path, command: &str, result: &ResultLog<'_>) -> Result<(), C
         log.write_row(row).map_err(context)?;
     }
     if let Some(u) = &urdf {
-        log.attach("adapted.urdf", "application/xml", u.as_bytes())
+        log.attach(result.robot_file, "application/xml", u.as_bytes())
             .map_err(context)?;
+    }
+    for (name, media_type, data) in &result.files {
+        log.attach(name, media_type, data).map_err(context)?;
     }
     log.metadata("twinloop", provenance(command)?)
         .map_err(context)?;

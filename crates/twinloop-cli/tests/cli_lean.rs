@@ -260,6 +260,10 @@ fn the_lean_over_the_bus_matches_the_simulated_lean() {
             assert!((n - n.round()).abs() < 1e-6, "{col}: {} N m", r[c]);
         }
     }
+    // The robot on /robot_description, as `link record` writes it.
+    let info = twinloop_logs::log_info(&raw).unwrap();
+    let description = info.iter().find(|t| t.topic == "/robot_description");
+    assert_eq!(description.map(|t| t.messages), Some(1), "{info:?}");
     let raw = twinloop_logs::read_log(&raw, &Default::default()).unwrap();
     let mut want = twinloop_experiments::guarded::record_columns(&km20_joints());
     let mut got = raw.columns.clone();

@@ -475,12 +475,12 @@ fn identify_arx_and_ss_answer_the_same_from_an_mcap_as_from_its_csv() {
     );
 }
 
-#[test]
-fn validate_lean_answers_the_same_from_mcaps_as_from_their_csvs() {
-    // Two simulated leans of km20, the second with soft servos: the robot's run and
-    // the simulation's.
-    let runs = [tmp("lean-a.csv"), tmp("lean-b.csv")];
-    for (run, soft) in runs.iter().zip([&[][..], &["--soft-servos"]]) {
+/// Two simulated leans of km20: the robot's run (`robot` added: 200 g on the torso
+/// for a robot unlike its model) and the simulation's (`NAME-a.csv`, `NAME-b.csv`:
+/// a file per test, the tests run at once).
+fn two_leans(name: &str, robot: &[&str]) -> [PathBuf; 2] {
+    let runs = [tmp(&format!("{name}-a.csv")), tmp(&format!("{name}-b.csv"))];
+    for (run, extra) in runs.iter().zip([robot, &[]]) {
         let mut args = vec![
             "experiment",
             "lean",
@@ -497,9 +497,15 @@ fn validate_lean_answers_the_same_from_mcaps_as_from_their_csvs() {
             "--out",
             s(run),
         ];
-        args.extend_from_slice(soft);
+        args.extend_from_slice(extra);
         ok(&args);
     }
+    runs
+}
+
+#[test]
+fn validate_lean_answers_the_same_from_mcaps_as_from_their_csvs() {
+    let runs = two_leans("lean", &[]);
     same_answer(
         &[
             "validate",
@@ -557,13 +563,18 @@ fn validate_residual_answers_the_same_from_mcaps_as_from_their_csvs() {
     );
 }
 
-#[test]
-fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
+/// An RX-28 with parameters `truth` on a pendulum through the standard excitation,
+/// sampled every 2 ms +- 0.4 ms, times on whole ns (what an MCAP stamp holds),
+/// written as `experiment servo --out` writes it, as `NAME.csv` (its comment lines)
+/// and `NAME.mcap` (the format `twinloop` registers; the lines its note). Returns
+/// the two logs, the load file and the log.
+fn servo_logs(
+    truth: &twinloop_actuator::ServoParams,
+    name: &str,
+) -> (PathBuf, PathBuf, PathBuf, twinloop_actuator::log::ServoLog) {
     use twinloop_actuator::log::LogWriter;
     use twinloop_actuator::synthetic::synthetic_log;
-    use twinloop_actuator::{Excitation, Load, ModelLevel, Pendulum, ServoType, datasheet};
-    // An RX-28 on a pendulum through the standard excitation, sampled every 2 ms
-    // +- 0.4 ms; times on whole ns, which is what an MCAP stamp holds.
+    use twinloop_actuator::{Excitation, Load, Pendulum, ServoType};
     let pendulum = Pendulum {
         mass: 0.5,
         length: 0.15,
@@ -571,9 +582,8 @@ fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
     };
     let load = tmp("servo-load.toml");
     std::fs::write(&load, "mass = 0.5\nlength = 0.15\narm_inertia = 0.002\n").unwrap();
-    let truth = datasheet::defaults(ServoType::Rx28, ModelLevel::M1);
     let mut log = synthetic_log(
-        &truth,
+        truth,
         &Load::from(pendulum),
         &Excitation::standard(ServoType::Rx28, 0.5),
         2e-3,
@@ -583,10 +593,8 @@ fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
     let ns = |t: f64| (t * 1e9).round() / 1e9;
     log.t.iter_mut().for_each(|t| *t = ns(*t));
     log.t_goal.iter_mut().for_each(|t| *t = ns(*t));
-    // Written as `experiment servo --out` writes each: the CSV with its comment
-    // lines, the MCAP (the format `twinloop` registers) keeping them as its note.
     twinloop_io::sink::register_recording_format("mcap", twinloop_logs::open_mcap_recording);
-    let (csv, mcap) = (tmp("servo.csv"), tmp("servo.mcap"));
+    let (csv, mcap) = (tmp(&format!("{name}.csv")), tmp(&format!("{name}.mcap")));
     for path in [&csv, &mcap] {
         let mut w = LogWriter::create(path, ServoType::Rx28, "id 3 on test").unwrap();
         for r in 0..log.len() {
@@ -605,6 +613,14 @@ fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
         }
         w.finish().unwrap();
     }
+    (csv, mcap, load, log)
+}
+
+#[test]
+fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
+    use twinloop_actuator::{ModelLevel, ServoType, datasheet};
+    let truth = datasheet::defaults(ServoType::Rx28, ModelLevel::M1);
+    let (csv, mcap, load, _) = servo_logs(&truth, "servo");
     let mut answers = Vec::new();
     for path in [&csv, &mcap] {
         let out = ok(&[
@@ -625,4 +641,323 @@ fn identify_servo_answers_the_same_from_an_mcap_log_as_from_its_csv() {
     assert_eq!(answers[0], answers[1]);
     // The servo and its id came from the MCAP's note.
     assert!(answers[1].contains("RX-28"), "{}", answers[1]);
+}
+
+/// RMS of `a - b`.
+fn rms(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / n).sqrt()
+}
+
+#[test]
+fn identify_servo_mcap_holds_the_log_the_start_s_and_the_fit_s_replays_and_the_fitted_file() {
+    use twinloop_actuator::params::{FRICTION_BASE, RESISTANCE};
+    use twinloop_actuator::{ModelLevel, ServoType, datasheet};
+    let test =
+        "identify_servo_mcap_holds_the_log_the_start_s_and_the_fit_s_replays_and_the_fitted_file";
+    let Some(py) = python::python_with("mcap, mcap_ros2", test) else {
+        return;
+    };
+    // A servo unlike its datasheet (the fit's start): more friction, a hotter coil.
+    let mut truth = datasheet::defaults(ServoType::Rx28, ModelLevel::M1);
+    truth.values[FRICTION_BASE] *= 1.6;
+    truth.values[RESISTANCE] *= 1.3;
+    let (csv, _, load, log) = servo_logs(&truth, "servo-fit");
+    let (mcap, toml) = (tmp("servo-result.mcap"), tmp("servo-fitted.toml"));
+    let args = [
+        "identify",
+        "servo",
+        "--data",
+        s(&csv),
+        "--load",
+        s(&load),
+        "--out",
+        s(&toml),
+        "--mcap",
+        s(&mcap),
+    ];
+    ok(&args);
+    let out = Command::new(&py)
+        .arg(root().join("tools/oracle/logs_readback.py"))
+        .arg(&mcap)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let topics = &v["topics"];
+    let n = log.len();
+    for topic in ["/measured", "/prior", "/adapted"] {
+        assert_eq!(topics[topic]["count"], n, "{topic}");
+    }
+    // The measured signals are the log's, to the bit.
+    for i in 0..n {
+        assert_eq!(
+            topics["/measured"]["rows"][i],
+            serde_json::json!([
+                "goal,q,v",
+                hex_bits(log.goal[i]),
+                hex_bits(log.q[i]),
+                hex_bits(log.v[i])
+            ]),
+            "row {i}"
+        );
+    }
+    // The fitted parameters' replay is nearer the log than the datasheet's.
+    let column = |topic: &str| -> Vec<f64> {
+        (0..n)
+            .map(|i| from_hex(&topics[topic]["rows"][i][1]))
+            .collect()
+    };
+    let (prior, fitted) = (
+        rms(&column("/prior"), &log.q),
+        rms(&column("/adapted"), &log.q),
+    );
+    assert!(
+        fitted < 0.5 * prior,
+        "fitted {fitted} rad RMS, start {prior}"
+    );
+    assert_eq!(topics["/adapted"]["rows"][0][0], "adapted.q");
+    // The fitted file attached is the one --out wrote; the provenance.
+    let written = std::fs::read_to_string(&toml).unwrap();
+    assert_eq!(
+        v["attachments"],
+        serde_json::json!([{"name": "fitted.toml", "media_type": "application/toml", "text": written}])
+    );
+    let meta = &v["metadata"];
+    assert_eq!(meta["twinloop"]["command"], "identify servo");
+    let line: Vec<String> =
+        serde_json::from_str(meta["twinloop"]["command_line"].as_str().unwrap()).unwrap();
+    assert_eq!(line[1..], args.map(str::to_string));
+    for input in [&csv, &load] {
+        assert_eq!(meta["twinloop.inputs"][s(input)], python_sha256(&py, input));
+    }
+    // twinloop's own reader gives the same table: the log's times and values.
+    let topics: Vec<twinloop_logs::TopicSpec> = ["/measured", "/prior", "/adapted"]
+        .iter()
+        .map(|t| t.parse().unwrap())
+        .collect();
+    let table = read_log(&mcap, &ReadOptions { topics, dt: None }).unwrap();
+    assert_eq!(table.rows.len(), n);
+    let (q, q1) = (
+        table.column_index("q").unwrap(),
+        table.column_index("adapted.q").unwrap(),
+    );
+    for (i, row) in table.rows.iter().enumerate() {
+        assert!(
+            (row[0] - log.t[i]).abs() <= 0.5e-9,
+            "t {} vs {}",
+            row[0],
+            log.t[i]
+        );
+        assert_eq!(row[q].to_bits(), log.q[i].to_bits(), "q row {i}");
+    }
+    let adapted: Vec<f64> = table.rows.iter().map(|r| r[q1]).collect();
+    assert_eq!(rms(&adapted, &log.q), fitted);
+}
+
+/// The readback script's Float64MultiArray rows of `topic`: value `j` of each row.
+fn array_column(v: &serde_json::Value, topic: &str, j: usize) -> Vec<f64> {
+    v["topics"][topic]["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| from_hex(&r[1 + j]))
+        .collect()
+}
+
+#[test]
+fn validate_residual_mcap_holds_the_plate_and_each_model_s_prediction_of_it() {
+    let test = "validate_residual_mcap_holds_the_plate_and_each_model_s_prediction_of_it";
+    let Some(py) = python::python_with("mcap, mcap_ros2", test) else {
+        return;
+    };
+    // h1's squat on the force plate, generated by h1 itself; the prior variant is
+    // the model under test, h1 the one compared with.
+    let squat = tmp("squat-mcap.csv");
+    let h1 = root().join("models/unitree_h1/h1.urdf");
+    let prior = root().join("models/unitree_h1/variants/h1_2025-06_a3b70ca.urdf");
+    ok(&[
+        "experiment",
+        "squat",
+        "--robot",
+        s(&h1),
+        "--out",
+        s(&squat),
+        "--duration",
+        "1",
+        "--rest",
+        "0.2",
+        "--rate",
+        "100",
+    ]);
+    let (mcap, res) = (tmp("residual.mcap"), tmp("res-mcap.csv"));
+    let args = [
+        "validate",
+        "residual",
+        "--robot",
+        s(&prior),
+        "--compare",
+        s(&h1),
+        "--motion",
+        s(&squat),
+        "--out",
+        s(&res),
+        "--mcap",
+        s(&mcap),
+    ];
+    ok(&args);
+    let out = Command::new(&py)
+        .arg(root().join("tools/oracle/logs_readback.py"))
+        .arg(&mcap)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let table = Table::read(&squat).unwrap();
+    let n = table.rows.len();
+    for topic in ["/joint_states", "/measured", "/model", "/compare"] {
+        assert_eq!(v["topics"][topic]["count"], n, "{topic}");
+    }
+    assert_eq!(v["topics"]["/robot_description"]["count"], 1);
+    let plate = ["grf.fx", "grf.fy", "grf.fz", "cop.x", "cop.y", "grf.tz"];
+    assert_eq!(v["topics"]["/measured"]["rows"][0][0], plate.join(","));
+    // The plate's readings are the squat file's, to the bit; the model the squat was
+    // made with predicts the vertical force nearer them than the prior does.
+    let mut errors = Vec::new();
+    for (j, c) in plate.iter().enumerate() {
+        let i = table.column_index(c).unwrap();
+        let file: Vec<f64> = table.rows.iter().map(|r| r[i]).collect();
+        let measured = array_column(&v, "/measured", j);
+        for k in 0..n {
+            assert_eq!(measured[k].to_bits(), file[k].to_bits(), "{c} row {k}");
+        }
+        errors.push([
+            rms(&array_column(&v, "/model", j), &file),
+            rms(&array_column(&v, "/compare", j), &file),
+        ]);
+    }
+    let [prior_fz, h1_fz] = errors[2];
+    assert!(
+        h1_fz < 0.1 * prior_fz,
+        "grf.fz: h1 {h1_fz} N, prior {prior_fz} N"
+    );
+    let meta = &v["metadata"];
+    assert_eq!(meta["twinloop"]["command"], "validate residual");
+    for input in [&prior, &h1, &squat] {
+        assert_eq!(meta["twinloop.inputs"][s(input)], python_sha256(&py, input));
+    }
+    assert_eq!(v["attachments"][0]["name"], "model.urdf");
+    // twinloop's own reader: the same plate readings at the file's times.
+    let topics = ["/measured", "/model"].map(|t| t.parse().unwrap()).to_vec();
+    let back = read_log(&mcap, &ReadOptions { topics, dt: None }).unwrap();
+    assert_eq!(back.rows.len(), n);
+    let (fz, fz_model) = (
+        back.column_index("grf.fz").unwrap(),
+        back.column_index("model.grf.fz").unwrap(),
+    );
+    let i = table.column_index("grf.fz").unwrap();
+    for (a, b) in table.rows.iter().zip(&back.rows) {
+        assert!((a[0] - b[0]).abs() <= 0.5e-9, "t {} vs {}", a[0], b[0]);
+        assert_eq!(a[i].to_bits(), b[fz].to_bits());
+    }
+    let model: Vec<f64> = back.rows.iter().map(|r| r[fz_model]).collect();
+    let file: Vec<f64> = table.rows.iter().map(|r| r[i]).collect();
+    assert_eq!(rms(&model, &file), prior_fz);
+    eprintln!("grf.fz RMS from the plate: prior {prior_fz} N, h1 {h1_fz} N; all {errors:?}");
+}
+
+#[test]
+fn validate_lean_mcap_holds_the_robot_s_torques_and_the_simulation_s_at_its_samples() {
+    let test = "validate_lean_mcap_holds_the_robot_s_torques_and_the_simulation_s_at_its_samples";
+    let Some(py) = python::python_with("mcap, mcap_ros2", test) else {
+        return;
+    };
+    let [robot, sim] = two_leans("lean-mcap", &["--add-mass", "0.2@torso:0,0,0.03"]);
+    let (mcap, json) = (tmp("lean-result.mcap"), tmp("lean-result.json"));
+    let args = [
+        "validate",
+        "lean",
+        "--robot-run",
+        s(&robot),
+        "--sim-run",
+        s(&sim),
+        "--json",
+        s(&json),
+        "--mcap",
+        s(&mcap),
+    ];
+    ok(&args);
+    let out = Command::new(&py)
+        .arg(root().join("tools/oracle/logs_readback.py"))
+        .arg(&mcap)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let c: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let table = Table::read(&robot).unwrap();
+    let n = v["topics"]["/measured"]["count"].as_u64().unwrap() as usize;
+    assert_eq!(n, c["samples"].as_u64().unwrap() as usize);
+    assert_eq!(v["topics"]["/model"]["count"], n);
+    let label = v["topics"]["/measured"]["rows"][0][0]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let names: Vec<&str> = label.split(',').collect();
+    // The robot's torques are its run's, to the bit, from its first row the
+    // shifted simulation covers; the simulation's differ from them by the
+    // comparison's own RMS.
+    let t_start = c["t_start"].as_f64().unwrap();
+    let first = table.rows.iter().position(|r| r[0] >= t_start).unwrap();
+    let rows = &table.rows[first..first + n];
+    for joint in c["joints"].as_array().unwrap() {
+        let name = joint["joint"].as_str().unwrap();
+        let j = names
+            .iter()
+            .position(|c| *c == format!("tau.{name}"))
+            .unwrap();
+        let i = table.column_index(&format!("tau:{name}")).unwrap();
+        let file: Vec<f64> = rows.iter().map(|r| r[i]).collect();
+        let measured = array_column(&v, "/measured", j);
+        for k in 0..n {
+            assert_eq!(measured[k].to_bits(), file[k].to_bits(), "{name} row {k}");
+        }
+        let d = rms(&array_column(&v, "/model", j), &file);
+        let want = joint["torque_rms"].as_f64().unwrap();
+        assert!(
+            (d - want).abs() <= 1e-12 * want.max(1.0),
+            "{name}: {d} vs {want}"
+        );
+    }
+    let meta = &v["metadata"];
+    assert_eq!(meta["twinloop"]["command"], "validate lean");
+    for input in [&robot, &sim] {
+        assert_eq!(meta["twinloop.inputs"][s(input)], python_sha256(&py, input));
+    }
+    // twinloop's own reader: the same torques at the run's times.
+    let topics = ["/measured", "/model"].map(|t| t.parse().unwrap()).to_vec();
+    let back = read_log(&mcap, &ReadOptions { topics, dt: None }).unwrap();
+    assert_eq!(back.rows.len(), n);
+    let name = c["joints"][0]["joint"].as_str().unwrap();
+    let (i, j) = (
+        table.column_index(&format!("tau:{name}")).unwrap(),
+        back.column_index(&format!("tau.{name}")).unwrap(),
+    );
+    for (a, b) in rows.iter().zip(&back.rows) {
+        assert!((a[0] - b[0]).abs() <= 0.5e-9, "t {} vs {}", a[0], b[0]);
+        assert_eq!(a[i].to_bits(), b[j].to_bits());
+    }
 }

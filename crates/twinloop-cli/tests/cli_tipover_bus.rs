@@ -67,7 +67,8 @@ fn tipover_over_the_bus_of_a_served_km20_tips_forward_where_the_simulator_does()
         "--realtime-factor",
         "4",
     ]);
-    let record = scratch("tipover-forward.csv");
+    // The raw record as MCAP (the other tests record CSV).
+    let record = scratch("tipover-forward.mcap");
     let t0 = Instant::now();
     let o = Command::new(bin())
         .args(["experiment", "tipover", "--port", link.to_str().unwrap()])
@@ -104,8 +105,12 @@ fn tipover_over_the_bus_of_a_served_km20_tips_forward_where_the_simulator_does()
         (bus - sim).abs() < 1.5,
         "bus {bus} deg, simulator {sim} deg"
     );
-    // The record: a row per cycle read, every column named.
-    let table = twinloop_io::Table::read(&record).unwrap();
+    // The record: a row per cycle read, every column named; the robot on
+    // /robot_description, as `link record` writes it.
+    let table = twinloop_logs::read_log(&record, &Default::default()).unwrap();
+    let info = twinloop_logs::log_info(&record).unwrap();
+    let description = info.iter().find(|t| t.topic == "/robot_description");
+    assert_eq!(description.map(|t| t.messages), Some(1), "{info:?}");
     assert!(table.rows.len() > 20, "{} rows", table.rows.len());
     for c in [
         "t",

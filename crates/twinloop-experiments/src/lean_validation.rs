@@ -18,6 +18,7 @@
 use crate::error::ExperimentError;
 use crate::lean::{LeanConfig, LeanRecord, lean_simulator, replay_lean};
 use serde::Serialize;
+use std::ops::Range;
 use twinloop_description::Description;
 use twinloop_io::{IoError, Table};
 
@@ -166,6 +167,38 @@ fn interpolate(t: &[f64], y: &[f64], x: f64, at: &mut usize) -> f64 {
     let (i, w) = bracket(t, x, at);
     // This form gives the samples themselves exactly at w = 0 and 1.
     (1.0 - w) * y[i] + w * y[i + 1]
+}
+
+/// `run` with its clock moved by `shift` s (the simulation, shifted as
+/// [`align_and_compare`] found), interpolated linearly at each of `times`
+/// (increasing) that falls within its span, as the comparison interpolates it: the
+/// samples themselves where the times coincide. Returns the range of `times` kept
+/// and the record at them (`goal`, `q`, `tilt` empty where `run`'s are).
+pub fn resample_at(run: &LeanRecord, shift: f64, times: &[f64]) -> (Range<usize>, LeanRecord) {
+    let t: Vec<f64> = run.t.iter().map(|t| t + shift).collect();
+    let mut out = LeanRecord::new(run.joints.clone());
+    let (lo, hi) = match (t.first(), t.last()) {
+        (Some(&lo), Some(&hi)) if t.len() >= 2 => (lo, hi),
+        _ => return (0..0, out),
+    };
+    let start = times.partition_point(|&x| x < lo);
+    let end = times.partition_point(|&x| x <= hi).max(start);
+    let kept = &times[start..end];
+    let at = |y: &[f64]| -> Vec<f64> {
+        let mut cursor = 0;
+        if y.is_empty() {
+            return Vec::new();
+        }
+        kept.iter()
+            .map(|&x| interpolate(&t, y, x, &mut cursor))
+            .collect()
+    };
+    out.t = kept.to_vec();
+    out.tilt = at(&run.tilt);
+    out.goal = run.goal.iter().map(|y| at(y)).collect();
+    out.q = run.q.iter().map(|y| at(y)).collect();
+    out.tau = run.tau.iter().map(|y| at(y)).collect();
+    (start..end, out)
 }
 
 /// Compare a robot's lean with a simulated one (seed 001, Figs 10-11): align on `t`,

@@ -338,6 +338,10 @@ pub struct ResidualSeries {
     pub t: Vec<f64>,
     /// Fx Fy Fz Tx Ty Tz per frame: world-aligned axes, about the base origin.
     pub wrench: Vec<[f64; 6]>,
+    /// What the plate would read were the model right: inverse dynamics' base
+    /// wrench (the ground reaction the motion needs) as plate readings.
+    #[serde(skip)]
+    pub predicted: Vec<PlateSample>,
     pub summary: ResidualSummary,
 }
 
@@ -384,10 +388,13 @@ pub fn residual_wrench(
     let (qs, v, a) = smooth_differentiate(model, &motion.t, &motion.q, smoothing)?;
     let mut data = Data::new(model);
     let mut wrench = Vec::with_capacity(qs.len());
+    let mut predicted = Vec::with_capacity(qs.len());
     for k in 0..qs.len() {
         let tau = rnea(model, &mut data, &qs[k], &v[k], &a[k]);
         let need = Force::from_slice(&tau.as_slice()[0..6]);
         let base = data.base_placement;
+        let world = base.act_force(&need);
+        predicted.push(PlateSample::from_wrench(&world.f, &world.n));
         let ground = base.act_inv_force(&plate[k].wrench());
         let res = need - ground;
         let f = base.rotation * res.f;
@@ -398,6 +405,7 @@ pub fn residual_wrench(
         t: motion.t.clone(),
         summary: summarize(&wrench),
         wrench,
+        predicted,
     })
 }
 

@@ -26,6 +26,12 @@ pub trait RowSink: Send {
             "this format keeps no notes (\"{name}\"): write a CSV"
         )))
     }
+    /// The robot the rows are of (URDF text), before the first row: a format with a
+    /// place for it keeps it (MCAP: `/robot_description`, for the viewers); a CSV
+    /// keeps its rows only (a robot is named where the run's report names it).
+    fn describe(&mut self, _urdf: &str) -> Result<(), IoError> {
+        Ok(())
+    }
 }
 
 impl RowSink for CsvWriter {

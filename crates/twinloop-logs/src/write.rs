@@ -379,6 +379,34 @@ impl McapLog {
             .map_err(|e| LogError::from(e).in_file(&self.path))
     }
 
+    /// Put `urdf` on `/robot_description` (once, at the first row's time), as
+    /// `description` does at [`McapLog::create`]: for a recording opened where the
+    /// robot is not known yet ([`open_mcap_recording`]). Before the first row only.
+    pub fn describe(&mut self, urdf: &str) -> Result<(), LogError> {
+        if self.rows > 0 || self.wrote_description {
+            return Err(
+                LogError::new("the robot description goes before the first row")
+                    .in_file(&self.path),
+            );
+        }
+        if self.ch_description.is_none() {
+            let Some(out) = self.out.as_mut() else {
+                return Err(LogError::new("the log is already closed").in_file(&self.path));
+            };
+            let latched =
+                BTreeMap::from([("offered_qos_profiles".to_string(), LATCHED_QOS.to_string())]);
+            let kind = Kind::String;
+            let add = |out: &mut mcap::Writer<BufWriter<File>>| -> Result<u16, LogError> {
+                let s =
+                    out.add_schema(kind.schema_name(), "ros2msg", kind.schema_text().as_bytes())?;
+                Ok(out.add_channel(s, "/robot_description", "cdr", &latched)?)
+            };
+            self.ch_description = Some(add(out).map_err(|e| e.in_file(&self.path))?);
+        }
+        self.description = Some(urdf.to_string());
+        Ok(())
+    }
+
     /// A recording: dropped unfinished (an error, Ctrl-C) with a row in it, the file is
     /// closed and given its name all the same: nothing recorded is lost.
     pub fn recording(mut self) -> McapLog {
@@ -450,6 +478,9 @@ impl twinloop_io::RowSink for McapLog {
     fn note(&mut self, name: &str, text: &str) -> Result<(), twinloop_io::IoError> {
         let pairs = BTreeMap::from([("text".to_string(), text.to_string())]);
         Ok(self.metadata(name, pairs)?)
+    }
+    fn describe(&mut self, urdf: &str) -> Result<(), twinloop_io::IoError> {
+        Ok(McapLog::describe(self, urdf)?)
     }
 }
 

@@ -75,3 +75,31 @@ fn a_resampled_log_is_on_the_fixed_step_and_interpolated_linearly() {
         assert!((t - tw).abs() < 1e-12 && (x - xw).abs() < 1e-12, "{got:?}");
     }
 }
+
+#[test]
+fn a_recording_described_before_its_first_row_carries_the_robot_and_after_it_is_refused() {
+    let path = scratch("described.mcap");
+    let t = joints(&[0.0, 0.01, 0.02]);
+    let mut log = twinloop_logs::open_mcap_recording(&path, &t.columns).unwrap();
+    log.describe("<robot name=\"r\"/>").unwrap();
+    for row in &t.rows {
+        log.write_row(row).unwrap();
+    }
+    let e = log.describe("<robot name=\"r\"/>").unwrap_err().to_string();
+    assert!(
+        e.contains("before the first row") && e.contains("described.mcap"),
+        "{e}"
+    );
+    log.finish().unwrap();
+    let info = twinloop_logs::log_info(&path).unwrap();
+    let d = info
+        .iter()
+        .find(|t| t.topic == "/robot_description")
+        .unwrap();
+    assert_eq!((d.messages, d.first_ns), (1, 0));
+    // The rows read back as written.
+    assert_eq!(
+        read_log(&path, &ReadOptions::default()).unwrap().rows,
+        t.rows
+    );
+}

@@ -196,10 +196,15 @@ fn guarded_run(
     operator: &mut Operator<'_>,
 ) -> Result<Guard, LoopError> {
     let writer = match &plan.record {
-        Some(path) => Some(
-            twinloop_io::open_recording(path, &record_columns(&p.names))
-                .map_err(|e| LoopError::io(e.to_string()).at("record"))?,
-        ),
+        Some(path) => {
+            let fail = |e: twinloop_io::IoError| LoopError::io(e.to_string()).at("record");
+            let mut w =
+                twinloop_io::open_recording(path, &record_columns(&p.names)).map_err(fail)?;
+            // The robot on an MCAP's /robot_description, as `link record` writes it.
+            w.describe(&twinloop_description::urdf::to_string(&p.model))
+                .map_err(fail)?;
+            Some(w)
+        }
         None => None,
     };
     let standing = vec![0.0; p.names.len()];

@@ -13,9 +13,16 @@ use twinloop_io::RowSink;
 use twinloop_link::RobotMapping;
 
 /// The raw record of `--record` (columns [`record_columns`]), flushed row by row: a
-/// CSV, or an MCAP when the path ends in .mcap (main registers the format).
-pub(super) fn record_writer(path: &Path, names: &[String]) -> Result<Box<dyn RowSink>, CliError> {
-    Ok(twinloop_io::open_recording(path, &record_columns(names))?)
+/// CSV, or an MCAP when the path ends in .mcap (main registers the format) with
+/// `robot` on `/robot_description`, as `link record` writes.
+pub(super) fn record_writer(
+    path: &Path,
+    names: &[String],
+    robot: &twinloop_description::Description,
+) -> Result<Box<dyn RowSink>, CliError> {
+    let mut w = twinloop_io::open_recording(path, &record_columns(names))?;
+    w.describe(&twinloop_description::urdf::to_string(robot))?;
+    Ok(w)
 }
 
 /// The robot on the bus: its mapping (`--map`), the port (`--port`, else the

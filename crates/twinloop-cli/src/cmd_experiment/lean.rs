@@ -300,7 +300,7 @@ fn over_bus(a: &LeanArgs, names: &LeanJointNames) -> CliResult {
         );
     }
     let raw = match &a.record {
-        Some(path) => Some(record_writer(path, &joints)?),
+        Some(path) => Some(record_writer(path, &joints, &model)?),
         None => None,
     };
     let mut writer = lean_writer(a, &cfg)?;

@@ -13,6 +13,7 @@ use twinloop_actuator::group::{
 use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
 use twinloop_actuator::log::{SERVO_LOG_NOTE, ServoLog};
 use twinloop_actuator::params::{N_PARAMS, NONSMOOTH, PARAM_NAMES};
+use twinloop_actuator::replay::replay;
 use twinloop_actuator::{Load, ModelLevel, Pendulum, ServoParams, ServoType, bam_log, datasheet};
 
 #[derive(Args, Debug)]
@@ -72,6 +73,11 @@ pub struct ServoIdArgs {
     /// a directory, one `id-N.toml` per servo (`--servo-params N=DIR/id-N.toml`)
     #[arg(long, value_name = "FILE.toml|DIR")]
     pub out: Option<PathBuf>,
+    /// Also write the result as one MCAP (docs/logs.md): each log's measured
+    /// signals, the start's and the fitted parameters' replay of them, the fitted
+    /// parameter file attached. One servo's logs
+    #[arg(long, value_name = "RESULT.mcap")]
+    pub mcap: Option<PathBuf>,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
     pub json: Option<PathBuf>,
 }
@@ -210,14 +216,19 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         identify_with(&logs, &holdout, &load, &start, a.holdout_fraction, &options)
     })?;
     let seconds = t0.elapsed().as_secs_f64();
+    let comment = format!(
+        "fitted by twinloop identify servo ({} rows in {} logs); held-out error {:.3} mrad RMS",
+        logs.iter().map(ServoLog::len).sum::<usize>(),
+        logs.len(),
+        id.heldout_rms_mrad
+    ) + &not_determined_note(&id.intervals);
+    let fitted = id.params.to_toml(&comment);
     if let Some(out) = &a.out {
-        let comment = format!(
-            "fitted by twinloop identify servo ({} rows in {} logs); held-out error {:.3} mrad RMS",
-            logs.iter().map(ServoLog::len).sum::<usize>(),
-            logs.len(),
-            id.heldout_rms_mrad
-        ) + &not_determined_note(&id.intervals);
-        twinloop_io::output::write_atomic(out, id.params.to_toml(&comment))?;
+        twinloop_io::output::write_atomic(out, &fitted)?;
+    }
+    if let Some(path) = &a.mcap {
+        let all: Vec<&ServoLog> = logs.iter().chain(&holdout).collect();
+        write_result_mcap(path, a, &all, &load, &start, &id.params, &fitted)?;
     }
     emit(&text(&id, seconds), a.json.as_ref(), &to_json(&id, seconds))?;
     Ok(Outcome::Ok)
@@ -258,6 +269,11 @@ fn run_group(
             "{}: line 1: names no servo id, and the other logs are of several servos: give ID={}",
             l.file, l.file
         )));
+    }
+    if a.mcap.is_some() {
+        return Err(CliError::new(
+            "--mcap: the logs are of several servos; write the result of one servo's logs",
+        ));
     }
     if !a.fit.is_empty() {
         return Err(CliError::new(
@@ -600,6 +616,86 @@ fn group_json(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> serd
         "files": files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         "seconds": seconds,
     })
+}
+
+/// `--mcap`: the logs' rows one after another (`--data`, then `--holdout`; each log
+/// after the first shifted to start a second after the previous one ends, since
+/// each log has its own clock): the measured `goal q v` (and `current` where the
+/// servo senses it), and the start's and the fitted parameters' replay of `q` (and
+/// `current`) from each log's first row ([`replay`]: the model the fit scores).
+fn write_result_mcap(
+    path: &Path,
+    a: &ServoIdArgs,
+    logs: &[&ServoLog],
+    load: &Load,
+    start: &ServoParams,
+    fitted: &ServoParams,
+    fitted_toml: &str,
+) -> Result<(), CliError> {
+    let current = logs.iter().all(|l| l.current.is_some());
+    let signals: &[&str] = if current { &["q", "current"] } else { &["q"] };
+    let measured: Vec<String> = ["goal", "q", "v"]
+        .iter()
+        .chain(if current { &["current"][..] } else { &[] })
+        .map(|c| c.to_string())
+        .collect();
+    let named = |p: &str| {
+        signals
+            .iter()
+            .map(|c| format!("{p}{c}"))
+            .collect::<Vec<_>>()
+    };
+    let (prior, adapted) = (named("prior."), named("adapted."));
+    let columns = [
+        vec!["t".to_string()],
+        measured.clone(),
+        prior.clone(),
+        adapted.clone(),
+    ];
+    let mut table = twinloop_io::Table::new(columns.concat());
+    let mut offset = 0.0;
+    for (k, log) in logs.iter().enumerate() {
+        if k > 0 && !log.is_empty() {
+            offset = table.rows.last().map_or(0.0, |r| r[0]) + 1.0 - log.t[0];
+        }
+        let n = log.len();
+        let (mut q0, mut c0, mut q1, mut c1) =
+            (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        replay(start, load, log, 0..n, &mut q0, &mut c0);
+        replay(fitted, load, log, 0..n, &mut q1, &mut c1);
+        for i in 0..n {
+            let mut row = vec![log.t[i] + offset, log.goal[i], log.q[i], log.v[i]];
+            let measured_current = log.current.as_ref().map(|c| c[i]);
+            row.extend(measured_current);
+            row.push(q0[i]);
+            row.extend(measured_current.map(|_| c0[i]));
+            row.push(q1[i]);
+            row.extend(measured_current.map(|_| c1[i]));
+            table.rows.push(row);
+        }
+    }
+    let mut inputs: Vec<String> = a
+        .data
+        .iter()
+        .chain(&a.holdout)
+        .map(|d| keyed(d, "--data").map(|(_, p)| p.to_string()))
+        .collect::<Result<_, _>>()?;
+    inputs.extend(a.load.iter().cloned());
+    inputs.extend(a.start.iter().map(|p| p.display().to_string()));
+    let result = crate::result_mcap::ResultLog {
+        table,
+        measured,
+        predicted: crate::result_mcap::prior_and_adapted(prior, adapted),
+        robot: None,
+        robot_file: "adapted.urdf",
+        inputs,
+        files: vec![(
+            "fitted.toml".into(),
+            "application/toml",
+            fitted_toml.as_bytes().to_vec(),
+        )],
+    };
+    crate::result_mcap::write(path, "identify servo", &result)
 }
 
 /// A servo log given as an MCAP or bag (`experiment servo --out X.mcap`): the

@@ -197,10 +197,11 @@ fn write_result_mcap(
     let result = crate::result_mcap::ResultLog {
         table,
         measured,
-        prior: prior_cols,
-        adapted: adapted_cols,
+        predicted: crate::result_mcap::prior_and_adapted(prior_cols, adapted_cols),
         robot: Some(adapted),
+        robot_file: "adapted.urdf",
         inputs: vec![a.robot.clone(), a.poses.display().to_string()],
+        files: Vec::new(),
     };
     crate::result_mcap::write(path, "identify static", &result)
 }
