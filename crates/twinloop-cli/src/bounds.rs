@@ -93,22 +93,6 @@ pub fn steps(duration: f64, dt: f64, what: &str) -> Result<usize, CliError> {
     )))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_long_run_is_refused_by_its_steps_and_a_normal_one_is_taken() {
-        assert_eq!(steps(2.0, 0.001, "x").unwrap(), 2000);
-        let e = steps(1e12, 0.001, "--duration 1e12 s at --dt 0.001 s").unwrap_err();
-        assert!(
-            e.message.starts_with("--duration 1e12 s") && e.message.contains("1e7"),
-            "{e}"
-        );
-        assert!(steps(2.0, 1e-300, "--dt").is_err());
-    }
-}
-
 /// A count of 1 or more (cycles, steps, rounds, samples): 0 would do nothing and
 /// say nothing.
 pub fn count(s: &str) -> Result<usize, String> {
@@ -126,5 +110,21 @@ pub fn count(s: &str) -> Result<usize, String> {
              work and memory; split the run)",
             MAX_COUNT
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_run_is_refused_by_its_steps_and_a_normal_one_is_taken() {
+        assert_eq!(steps(2.0, 0.001, "x").unwrap(), 2000);
+        let e = steps(1e12, 0.001, "--duration 1e12 s at --dt 0.001 s").unwrap_err();
+        assert!(
+            e.message.starts_with("--duration 1e12 s") && e.message.contains("1e7"),
+            "{e}"
+        );
+        assert!(steps(2.0, 1e-300, "--dt").is_err());
     }
 }

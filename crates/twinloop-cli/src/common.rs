@@ -341,6 +341,7 @@ pub fn state_columns(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bounds::count;
 
     #[test]
     fn numeric_options_are_range_checked() {
