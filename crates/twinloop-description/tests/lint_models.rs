@@ -239,6 +239,8 @@ const MENAGERIE: &[(&str, &[&str])] = &[
         ],
     ),
     ("pndbotics_adam_lite/mjcf/adam_lite.xml", &[]),
+    // Atlas (Drake's model): no sensors, equalities or tendons; unclamped motors.
+    ("atlas/mjcf/atlas.xml", &[]),
     ("toddlerbot_2xc/mjcf/toddlerbot_2xc.xml", TODDLERBOT),
     ("toddlerbot_2xm/mjcf/toddlerbot_2xm.xml", TODDLERBOT),
 ];
@@ -272,6 +274,7 @@ const TODDLERBOT: &[&str] = &[
 /// `forcerange` reaches them): each of their hinges (as many as summary.json's
 /// MuJoCo count) warns `missing-effort-velocity`, and no other joint does.
 const UNCLAMPED: &[&str] = &[
+    "atlas/mjcf/atlas.xml",
     "toddlerbot_2xc/mjcf/toddlerbot_2xc.xml",
     "toddlerbot_2xm/mjcf/toddlerbot_2xm.xml",
 ];

@@ -579,7 +579,7 @@ fn mesh_bodies_agree_with_mujoco() {
 }
 
 /// The robot MJCFs under models/: every humanoid of MuJoCo Menagerie that the
-/// repository ships (Cassie, Apollo, Berkeley Humanoid, T1, N1, OP3, Adam Lite,
+/// repository ships (Cassie, Apollo, Atlas, Berkeley Humanoid, T1, N1, OP3, Adam Lite,
 /// TALOS, ToddlerBot 2xc and 2xm, G1, H1; issue 30), and G1 and H1 as Unitree ship them, loaded from the
 /// files as committed, against MuJoCo
 /// compiling them (tests/data/mujoco_models, written by
@@ -624,6 +624,7 @@ fn robot_models_agree_with_mujoco() {
         [
             "agility_cassie_cassie",
             "apptronik_apollo_apptronik_apollo",
+            "atlas_atlas",
             "berkeley_humanoid_berkeley_humanoid",
             "booster_t1_t1",
             "fourier_n1_n1",
