@@ -229,8 +229,16 @@ fn decode_batches(
         let mut batch = batch.map_err(|e| last.blame(e))?;
         let mut rest = &batch[..];
         while let [opcode, tail @ ..] = rest {
-            let len = u64::from_le_bytes(tail[..8].try_into().expect("8 bytes")) as usize;
-            let (data, after) = tail[8..].split_at(len);
+            // Our own batch encoding (opcode, length, record): a short batch would
+            // be a bug here, still an error rather than a panic.
+            let Some((len, tail)) = tail.split_first_chunk::<8>() else {
+                return Err(LogError::new("a record batch cut short"));
+            };
+            let len = u64::from_le_bytes(*len) as usize;
+            if len > tail.len() {
+                return Err(LogError::new("a record batch cut short"));
+            }
+            let (data, after) = tail.split_at(len);
             rest = after;
             match *opcode {
                 op::MESSAGE => {
@@ -356,7 +364,9 @@ fn message_record(data: &[u8]) -> Result<(u16, i64, &[u8]), LogError> {
         ));
     }
     let id = u16::from_le_bytes([data[0], data[1]]);
-    let log_time = u64::from_le_bytes(data[6..14].try_into().expect("8 bytes"));
+    let log_time = u64::from_le_bytes([
+        data[6], data[7], data[8], data[9], data[10], data[11], data[12], data[13],
+    ]);
     Ok((id, log_time as i64, &data[22..]))
 }
 

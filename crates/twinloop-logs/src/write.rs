@@ -157,6 +157,16 @@ pub struct McapLog {
 }
 
 impl McapLog {
+    /// The writer while the log is open; a write after it was finished or
+    /// discarded is an error naming the file, not a panic.
+    fn open_writer<'a>(
+        out: &'a mut Option<mcap::Writer<BufWriter<File>>>,
+        path: &Path,
+    ) -> Result<&'a mut mcap::Writer<BufWriter<File>>, LogError> {
+        out.as_mut()
+            .ok_or_else(|| LogError::new("the log is already closed").in_file(path))
+    }
+
     /// Create `path` for rows of `columns` (a `t` column and twinloop's names);
     /// `description` (URDF text) goes on `/robot_description`, `root` names the
     /// floating base's frame on `/tf`.
@@ -261,9 +271,7 @@ impl McapLog {
             log_time: time as u64,
             publish_time: time as u64,
         };
-        let Some(out) = self.out.as_mut() else {
-            return Err(LogError::new("the log is already closed").in_file(&self.path));
-        };
+        let out = Self::open_writer(&mut self.out, &self.path)?;
         out.write_to_known_channel(&header, self.cdr.bytes())
             .map_err(|e| LogError::from(e).in_file(&self.path))
     }
@@ -359,7 +367,7 @@ impl McapLog {
             media_type: media_type.to_string(),
             data: std::borrow::Cow::Borrowed(data),
         };
-        let out = self.out.as_mut().expect("open until finished");
+        let out = Self::open_writer(&mut self.out, &self.path)?;
         out.attach(&attachment)
             .map_err(|e| LogError::from(e).in_file(&self.path))
     }
@@ -374,7 +382,7 @@ impl McapLog {
             name: name.to_string(),
             metadata: pairs,
         };
-        let out = self.out.as_mut().expect("open until finished");
+        let out = Self::open_writer(&mut self.out, &self.path)?;
         out.write_metadata(&record)
             .map_err(|e| LogError::from(e).in_file(&self.path))
     }
@@ -390,9 +398,7 @@ impl McapLog {
             );
         }
         if self.ch_description.is_none() {
-            let Some(out) = self.out.as_mut() else {
-                return Err(LogError::new("the log is already closed").in_file(&self.path));
-            };
+            let out = Self::open_writer(&mut self.out, &self.path)?;
             let latched =
                 BTreeMap::from([("offered_qos_profiles".to_string(), LATCHED_QOS.to_string())]);
             let kind = Kind::String;

@@ -191,7 +191,7 @@ pub(crate) fn adapt_on_one_place(
         if converged {
             break;
         }
-        let p = run.done.last().expect("a pass was just made");
+        let Some(p) = run.done.last() else { break };
         bias = std::array::from_fn(|k| p.protocol_deg[k] - p.static_deg[k]);
     }
     // The last pass is kept: its bias comes from the model nearest the fixed point.

@@ -630,6 +630,20 @@ fn trouble(
     None
 }
 
+/// The first goal and the firmware's registers written, then the torque on.
+fn start(
+    client: &mut Client<Box<dyn Transport>>,
+    target: &Target,
+    regs: [f64; 3],
+    goal_raw: i32,
+) -> Result<(), CliError> {
+    let (id, model, servo) = (target.id, target.model, target.servo);
+    write_firmware(client, model, servo, id, regs)?;
+    write_item(client, model, id, Item::GoalPosition, goal_raw)?;
+    write_item(client, model, id, Item::TorqueEnable, 1)?;
+    Ok(())
+}
+
 /// The run: the sequence written goal by goal, every read logged as it comes.
 fn drive(
     a: &ServoArgs,
@@ -660,15 +674,7 @@ fn drive(
     let stop = interrupt_flag();
     let protocol = model.protocol();
     let (goal, mut regs) = goal_at(0.0).ok_or("the excitation is empty")?;
-    write_firmware(client, model, servo, id, regs)?;
-    write_item(
-        client,
-        model,
-        id,
-        Item::GoalPosition,
-        goal_reg.from_si(goal),
-    )?;
-    write_item(client, model, id, Item::TorqueEnable, 1)?;
+    start(client, target, regs, goal_reg.from_si(goal))?;
     let mut t_goal = 0.0;
     let mut buf = vec![0u8; block.len];
     // Time 0: the first goal was just written.
