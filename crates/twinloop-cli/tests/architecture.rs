@@ -347,3 +347,20 @@ fn no_cli_command_module_imports_another() {
         graph["cmd_demo"]
     );
 }
+
+/// The fuzz crate has its own lock file, built `--locked` in CI: a new path dependency of
+/// a fuzzed crate must be written into it here, not discovered 25 minutes into CI.
+#[test]
+fn the_fuzz_lock_file_holds_every_dependency() {
+    let out = std::process::Command::new(env!("CARGO"))
+        .args(["metadata", "--locked", "--offline", "--format-version", "1"])
+        .arg("--manifest-path")
+        .arg(repo().join("fuzz/Cargo.toml"))
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "fuzz/Cargo.lock is out of date (run `cargo metadata --offline --manifest-path fuzz/Cargo.toml` and commit it): {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
