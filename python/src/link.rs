@@ -463,7 +463,7 @@ impl PyVirtualServer {
                     .ok_or_else(|| value_error("robot: no built-in km20"))?,
             ),
         };
-        let vr = VirtualRobot::new(&d, &map, &options).map_err(value_error)?;
+        let vr = VirtualRobot::new(&d, &map, &options).map_err(|e| value_error(e.to_string()))?;
         let devices = map.joints.len() + map.boards.len();
         let server = PtyServer::start(vr, Some(1_000_000), |bus| {
             for k in 0..devices {

@@ -138,6 +138,7 @@ from_library_error!(
     twinloop_link::control_cycle::CycleError,
     serde_json::Error,
     twinloop_actuator::ActuatorError,
+    twinloop_virtual::VirtualError,
 );
 
 /// The identification library names an option by its field in the options struct

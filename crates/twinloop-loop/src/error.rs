@@ -115,4 +115,5 @@ from_library_error!(
     twinloop_link::LinkError,
     twinloop_link::MappingError,
     twinloop_actuator::ActuatorError,
+    twinloop_virtual::VirtualError,
 );

@@ -139,7 +139,7 @@ pub fn tipover_in_lockstep_with(
     let mapping = RobotMapping::resolve(&plan.map)?;
     let vr = twinloop_virtual::VirtualRobot::new(model, &mapping, options)
         .map_err(|e| LoopError::new(format!("the simulated {}: {e}", model.name)))?;
-    let (clock, client) = twinloop_virtual::Lockstep::new(vr, cycle_s).map_err(LoopError::new)?;
+    let (clock, client) = twinloop_virtual::Lockstep::new(vr, cycle_s)?;
     let mut robot = DynamixelRobot::new(client, mapping, ReadMethod::Auto)?;
     robot.set_clock(Box::new(clock));
     let plan = BusPlan {

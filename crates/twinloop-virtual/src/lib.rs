@@ -26,6 +26,7 @@
 mod backend;
 mod bench_backend;
 mod drive;
+mod error;
 mod lockstep;
 mod pty_server;
 mod runner;
@@ -35,6 +36,7 @@ mod virtual_robot;
 pub use backend::SimServoBackend;
 pub use bench_backend::{BenchBackend, link_model, servo_type};
 pub use drive::{DriveRegisters, servo_with_registers};
+pub use error::VirtualError;
 pub use lockstep::Lockstep;
 pub use pty_server::PtyServer;
 pub use runner::{CATCH_DEG, SimStatus};

@@ -7,6 +7,7 @@
 
 use crate::VirtualRobot;
 use crate::backend::SimServoBackend;
+use crate::error::VirtualError;
 use twinloop_link::VirtualBus;
 use twinloop_link::transport::{LoopbackTransport, Transport};
 use twinloop_link::{Client, ClientConfig, HostClock};
@@ -26,11 +27,11 @@ impl Lockstep {
     pub fn new(
         robot: VirtualRobot,
         cycle_s: f64,
-    ) -> Result<(Lockstep, Client<Box<dyn Transport>>), String> {
+    ) -> Result<(Lockstep, Client<Box<dyn Transport>>), VirtualError> {
         if !(cycle_s.is_finite() && cycle_s > 0.0) {
-            return Err(format!(
+            return Err(VirtualError::new(format!(
                 "lockstep cycle {cycle_s} s: must be positive and finite"
-            ));
+            )));
         }
         let bus: VirtualBus<SimServoBackend> = robot.bus();
         let t: Box<dyn Transport> = Box::new(LoopbackTransport::new(bus));

@@ -4,6 +4,7 @@
 
 use crate::backend::SimServoBackend;
 use crate::drive::DriveRegisters;
+use crate::error::VirtualError;
 use crate::runner::{Runner, ServoJoint, SimStatus};
 use crate::shared::{Shared, Snapshot};
 use std::sync::Arc;
@@ -89,100 +90,20 @@ impl VirtualRobot {
         robot: &twinloop_description::Description,
         mapping: &RobotMapping,
         options: &VirtualRobotOptions,
-    ) -> Result<VirtualRobot, String> {
-        // Four corners per sole, two soles: the weight shares eight points.
-        let contact = options
-            .ground_sink
-            .map(|sink| twinloop_sim::ContactParams::for_robot(robot.total_mass(), 8, sink));
-        let config = SimConfig {
-            dt: options.dt,
-            contact,
-            ground: !options.held,
-            ..SimConfig::default()
-        };
-        let mut sim = if options.held {
-            // The trunk welded upright where the description puts it (base frame =
-            // world frame); with no ground nothing else touches the robot.
-            let model = twinloop_dynamics::Model::from_description_with_base(
-                robot,
-                twinloop_dynamics::BaseKind::Fixed,
-            )
-            .map_err(|e| e.to_string())?;
-            Simulator::from_model(robot, model, config)
-        } else {
-            Simulator::new(robot, config)
-        }
-        .map_err(|e| e.to_string())?;
+    ) -> Result<VirtualRobot, VirtualError> {
+        let mut sim = simulator(robot, options)?;
         let nb = sim.model.nbodies;
-        for i in 0..nb {
-            let s = twinloop_sim::servo_for_joint(&robot.name, &sim.model, i);
-            sim.actuators[i] = Actuator::Dynamixel(s);
-        }
-        let mut servos = Vec::with_capacity(mapping.joints.len());
-        let mut on_bus = vec![false; nb];
-        let mut slots = Vec::with_capacity(mapping.joints.len());
-        for j in &mapping.joints {
-            let at = if j.line > 0 {
-                format!("{}:{}", mapping.source, j.line)
-            } else {
-                mapping.source.clone()
-            };
-            let Some(i) = sim.joint_index(&j.name) else {
-                return Err(format!(
-                    "{at}: joint \"{}\" (id {}) is not a joint of robot \"{}\" (its joints: {})",
-                    j.name,
-                    j.id,
-                    robot.name,
-                    sim.model.joint_names.join(", ")
-                ));
-            };
-            if on_bus[i] {
-                return Err(format!(
-                    "{at}: joint \"{}\" is mapped to two servos",
-                    j.name
-                ));
-            }
-            on_bus[i] = true;
-            let slot = twinloop_actuator::params_set::ServoSlot {
-                id: Some(j.id),
-                joint: &j.name,
-                servo: twinloop_actuator::ServoType::parse(j.model.name()),
-            };
-            if let Some(p) = options
-                .servo_params
-                .for_servo(slot, "--servo-params")
-                .map_err(|e| e.to_string())?
-            {
-                sim.set_servo_params(i, p);
-            }
-            slots.push(slot);
-            let Actuator::Dynamixel(base) = sim.actuators[i] else {
-                unreachable!("every joint was given a servo above")
-            };
-            let spec = j.model.spec();
-            servos.push(ServoJoint {
-                joint: i,
-                zero: j.zero,
-                direction: j.direction,
-                base,
-                torque_scale: spec.stall_torque / base.stall_torque,
-                voltage: spec.voltage,
-            });
-        }
-        options
-            .servo_params
-            .check_used(&slots, "--servo-params")
-            .map_err(|e| e.to_string())?;
+        let (servos, on_bus) = bus_servos(&mut sim, robot, mapping, options)?;
         let boards = place_boards(&mut sim, robot, mapping)?;
         if !options.held {
             // A robot served "standing" on nothing would answer with zero load: refused
             // with the words `simulate` uses.
-            sim.check_can_stand().map_err(|e| e.to_string())?;
+            sim.check_can_stand()?;
         }
         let standing = twinloop_sim::standing_pose(&sim.model);
-        sim.place_on_ground(&standing).map_err(|e| e.to_string())?;
+        sim.place_on_ground(&standing)?;
         sim.run(options.settle_s.max(0.0))
-            .map_err(|e| format!("the robot does not stand: {e}"))?;
+            .map_err(|e| VirtualError::from(e).context("the robot does not stand"))?;
         let unmapped = (0..nb)
             .filter(|&i| !on_bus[i])
             .map(|i| sim.model.joint_names[i].clone())
@@ -252,12 +173,12 @@ impl VirtualRobot {
     /// Advance `seconds` of simulated time on the caller's thread, with the
     /// registers as the bus left them (tests; [`VirtualRobot::spawn`] runs it in
     /// real time).
-    pub fn step_for(&mut self, seconds: f64) -> Result<(), String> {
+    pub fn step_for(&mut self, seconds: f64) -> Result<(), VirtualError> {
         self.runner.take_registers();
         let n = (seconds / self.runner.sim.dt()).round() as u64;
         for _ in 0..n {
-            self.runner.step().map_err(|e| e.to_string())?;
-            self.runner.operator().map_err(|e| e.to_string())?;
+            self.runner.step()?;
+            self.runner.operator()?;
         }
         self.runner.publish();
         Ok(())
@@ -296,13 +217,112 @@ impl VirtualRobot {
     }
 }
 
+/// The simulator `robot` is served from: standing on the ground (the contact's
+/// sink from the options) or held, each joint driven by its servo.
+fn simulator(
+    robot: &twinloop_description::Description,
+    options: &VirtualRobotOptions,
+) -> Result<Simulator, VirtualError> {
+    // Four corners per sole, two soles: the weight shares eight points.
+    let contact = options
+        .ground_sink
+        .map(|sink| twinloop_sim::ContactParams::for_robot(robot.total_mass(), 8, sink));
+    let config = SimConfig {
+        dt: options.dt,
+        contact,
+        ground: !options.held,
+        ..SimConfig::default()
+    };
+    let mut sim = if options.held {
+        // The trunk welded upright where the description puts it (base frame =
+        // world frame); with no ground nothing else touches the robot.
+        let model = twinloop_dynamics::Model::from_description_with_base(
+            robot,
+            twinloop_dynamics::BaseKind::Fixed,
+        )?;
+        Simulator::from_model(robot, model, config)
+    } else {
+        Simulator::new(robot, config)
+    }?;
+    for i in 0..sim.model.nbodies {
+        let s = twinloop_sim::servo_for_joint(&robot.name, &sim.model, i);
+        sim.actuators[i] = Actuator::Dynamixel(s);
+    }
+    Ok(sim)
+}
+
+/// The bus's servos, in the mapping's joint order, tied to `sim`'s joints by name
+/// (with their parameters from the options' `--servo-params`), and which joints
+/// are on the bus.
+fn bus_servos(
+    sim: &mut Simulator,
+    robot: &twinloop_description::Description,
+    mapping: &RobotMapping,
+    options: &VirtualRobotOptions,
+) -> Result<(Vec<ServoJoint>, Vec<bool>), VirtualError> {
+    let nb = sim.model.nbodies;
+    let mut servos = Vec::with_capacity(mapping.joints.len());
+    let mut on_bus = vec![false; nb];
+    let mut slots = Vec::with_capacity(mapping.joints.len());
+    for j in &mapping.joints {
+        let at = if j.line > 0 {
+            format!("{}:{}", mapping.source, j.line)
+        } else {
+            mapping.source.clone()
+        };
+        let Some(i) = sim.joint_index(&j.name) else {
+            return Err(VirtualError::new(format!(
+                "{at}: joint \"{}\" (id {}) is not a joint of robot \"{}\" (its joints: {})",
+                j.name,
+                j.id,
+                robot.name,
+                sim.model.joint_names.join(", ")
+            )));
+        };
+        if on_bus[i] {
+            return Err(VirtualError::new(format!(
+                "{at}: joint \"{}\" is mapped to two servos",
+                j.name
+            )));
+        }
+        on_bus[i] = true;
+        let slot = twinloop_actuator::params_set::ServoSlot {
+            id: Some(j.id),
+            joint: &j.name,
+            servo: twinloop_actuator::ServoType::parse(j.model.name()),
+        };
+        if let Some(p) = options.servo_params.for_servo(slot, "--servo-params")? {
+            sim.set_servo_params(i, p);
+        }
+        slots.push(slot);
+        let Actuator::Dynamixel(base) = sim.actuators[i] else {
+            // `simulator` gives every joint a servo; a caller's own simulator may not.
+            return Err(VirtualError::new(format!(
+                "{at}: joint \"{}\" has no servo in the simulation",
+                j.name
+            )));
+        };
+        let spec = j.model.spec();
+        servos.push(ServoJoint {
+            joint: i,
+            zero: j.zero,
+            direction: j.direction,
+            base,
+            torque_scale: spec.stall_torque / base.stall_torque,
+            voltage: spec.voltage,
+        });
+    }
+    options.servo_params.check_used(&slots, "--servo-params")?;
+    Ok((servos, on_bus))
+}
+
 /// Put the simulator's IMU on the link of the mapping's boards (one IMU: every
 /// board must be on the same link) and return the boards with their axes.
 fn place_boards(
     sim: &mut Simulator,
     robot: &twinloop_description::Description,
     mapping: &RobotMapping,
-) -> Result<Vec<(BusBoard, BoardAxes)>, String> {
+) -> Result<Vec<(BusBoard, BoardAxes)>, VirtualError> {
     let mut imu_link: Option<(usize, &str)> = None;
     let mut out = Vec::with_capacity(mapping.boards.len());
     for b in &mapping.boards {
@@ -313,21 +333,21 @@ fn place_boards(
         };
         let Some(link) = sim.model.links.iter().position(|l| l.name == b.link) else {
             let names: Vec<&str> = sim.model.links.iter().map(|l| l.name.as_str()).collect();
-            return Err(format!(
+            return Err(VirtualError::new(format!(
                 "{at}: board \"{}\": link \"{}\" is not a link of robot \"{}\" (its links: {})",
                 b.name,
                 b.link,
                 robot.name,
                 names.join(", ")
-            ));
+            )));
         };
         if let Some((other, name)) = imu_link
             && other != link
         {
-            return Err(format!(
+            return Err(VirtualError::new(format!(
                 "{at}: board \"{}\" is on link \"{}\", board \"{name}\" on another: the simulated robot has one IMU",
                 b.name, b.link
-            ));
+            )));
         }
         imu_link = Some((link, &b.name));
         sim.sensors_mut().imu_link = link;

@@ -127,7 +127,8 @@ fn a_board_on_a_link_the_robot_lacks_is_named_with_its_line() {
         .err()
         .unwrap();
     assert!(
-        e.starts_with("m.toml:6: board \"imu\": link \"chest\" is not a link of robot \"km20\""),
+        e.to_string()
+            .starts_with("m.toml:6: board \"imu\": link \"chest\" is not a link of robot \"km20\""),
         "{e}"
     );
 }

@@ -126,7 +126,7 @@ fn a_mapping_naming_other_joints_is_refused_with_the_joint_and_line() {
     let robot = twinloop_description::builtin::resolve("builtin:km20").unwrap();
     let op3 = RobotMapping::builtin("op3").unwrap();
     let e = match VirtualRobot::new(&robot, &op3, &VirtualRobotOptions::default()) {
-        Err(e) => e,
+        Err(e) => e.to_string(),
         Ok(_) => panic!("op3's joint names are not km20's"),
     };
     assert!(e.contains("builtin:op3"), "{e}");

@@ -77,7 +77,8 @@ fn the_files_drive_the_joints_they_name() {
         },
     )
     .err()
-    .unwrap();
+    .unwrap()
+    .to_string();
     assert!(
         e.contains(&format!("parameters of RX-28, but servo id {}", rx64.id))
             && e.contains("RX-64"),
@@ -97,7 +98,8 @@ fn the_files_drive_the_joints_they_name() {
         },
     )
     .err()
-    .unwrap();
+    .unwrap()
+    .to_string();
     assert!(
         e.contains("the robot has no such servo (its servos: RX-28, RX-64)"),
         "{e}"
