@@ -11,13 +11,16 @@
 use crate::bench::Pendulum;
 use crate::error::ActuatorError;
 use crate::identify::{
-    Fit, Segment, UNDETERMINED_RELATIVE_SD, heldout_error, motor_combinations, uncertainty,
+    Fit, UNDETERMINED_RELATIVE_SD, heldout_error, motor_combinations, uncertainty,
 };
 use crate::lm::{LmOptions, levenberg_marquardt};
 use crate::load::Load;
 use crate::log::ServoLog;
-use crate::params::{FRICTION_VISCOUS, N_PARAMS, PARAM_NAMES, ServoParams};
-use crate::robust_covariance::{BLOCK_SECONDS, robust_covariance};
+use crate::params::{FRICTION_VISCOUS, ModelLevel, N_PARAMS, PARAM_NAMES, ServoParams};
+use crate::robust_covariance::robust_covariance;
+use crate::segments::{Segment, mean_voltage, position_sum_squares, residual_blocks, split_logs};
+use crate::servo_type::ServoType;
+use nalgebra::DMatrix;
 use std::ops::Range;
 use twinloop_sysid::stats::chi2_sf;
 
@@ -195,14 +198,105 @@ pub fn identify_group(
     holdout_fraction: f64,
     threads: usize,
 ) -> Result<GroupFit, ActuatorError> {
+    let (servo_type, level) = check_group(servos, starts)?;
+    let mut fitted = level.parameters();
+    let senses_current = servos
+        .iter()
+        .all(|d| d.logs.iter().all(|l| l.current.is_some()));
+    if !senses_current {
+        fitted.retain(|&i| i != FRICTION_VISCOUS);
+    }
+    let (shared_f, per_f): (Vec<usize>, Vec<usize>) =
+        fitted.iter().partition(|i| shared.contains(i));
+    let layout = Layout::of(servos, starts, holdout_fraction, senses_current);
+    let x0 = start_vector(&layout.base, &shared_f, &per_f);
+    let mut group = Group {
+        servos,
+        base: layout.base,
+        segments: layout.segments,
+        offsets: layout.offsets,
+        shared: shared_f.clone(),
+        per: per_f.clone(),
+        sd_q: servo_type.resolution() / 12f64.sqrt(),
+        cache: (0..servos.len()).map(|_| Vec::new()).collect(),
+        clock: 0,
+        buffers: (0..threads.max(1))
+            .map(|_| (vec![0.0; layout.longest], vec![0.0; layout.longest]))
+            .collect(),
+        simulations: 0,
+    };
+    let result = levenberg_marquardt(
+        &x0,
+        layout.rows,
+        |x, out| group.residuals(x, out),
+        &LmOptions::default(),
+    );
+    let n = x0.len();
+    let stats = uncertainty(&result.jacobian, &result.residuals, &result.x, n);
+    let robust = robust_covariance(&result.jacobian, &result.residuals, &layout.block);
+    let mut undetermined: Vec<&'static str> = Vec::new();
+    if !senses_current {
+        undetermined.extend(["kt", "resistance", "friction_viscous"]);
+    }
+    let fitted_s: Vec<usize> = shared_f.iter().chain(&per_f).copied().collect();
+    let mut qb = vec![0.0; layout.longest];
+    let mut cb = vec![0.0; layout.longest];
+    let fits = (0..servos.len())
+        .map(|s| {
+            let p = group.params_of(&result.x, s);
+            // This servo's columns of the parameter vector, in `fitted_s`'s order.
+            let (ns, np) = (shared_f.len(), per_f.len());
+            let cols: Vec<usize> = (0..ns).chain(ns + s * np..ns + (s + 1) * np).collect();
+            let covariance = Covariance {
+                robust: &robust,
+                independent_sd_log: &stats.sd_log,
+                cols: &cols,
+                fitted: &fitted_s,
+            };
+            let residuals = &result.residuals.as_slice()[group.offsets[s].clone()];
+            let fit_rms = 1e3 * group.sd_q * rms(residuals, &group.segments[s]);
+            let held = held_of(&servos[s], &layout.held[s]);
+            let (fit, names) = servo_fit(
+                &servos[s],
+                p,
+                &covariance,
+                residuals,
+                fit_rms,
+                &held,
+                (&mut qb, &mut cb),
+            );
+            for name in names {
+                if !undetermined.contains(&name) {
+                    undetermined.push(name);
+                }
+            }
+            fit
+        })
+        .collect();
+    Ok(GroupFit {
+        servos: fits,
+        shared: shared_f,
+        per_servo: per_f,
+        undetermined,
+        n_params: n,
+        iterations: result.iterations,
+        simulations: group.simulations,
+    })
+}
+
+/// The servo type and rung every servo of a group fit shares; refuses a group with
+/// no servo, a servo with no log, or mixed types, rungs or logs.
+fn check_group(
+    servos: &[ServoData],
+    starts: &[ServoParams],
+) -> Result<(ServoType, ModelLevel), ActuatorError> {
     let Some(first) = starts.first() else {
         return Err(ActuatorError::new("", "--data", "no servo to fit"));
     };
     if starts.len() != servos.len() {
         return Err(ActuatorError::new("", "", "one start per servo"));
     }
-    let servo_type = first.servo;
-    let level = first.level;
+    let (servo_type, level) = (first.servo, first.level);
     for (d, st) in servos.iter().zip(starts) {
         if d.logs.is_empty() {
             return Err(ActuatorError::new(&d.name, "--data", "no log to fit"));
@@ -227,190 +321,150 @@ pub fn identify_group(
             }
         }
     }
-    let mut fitted = level.parameters();
-    let senses_current = servos
-        .iter()
-        .all(|d| d.logs.iter().all(|l| l.current.is_some()));
-    if !senses_current {
-        fitted.retain(|&i| i != FRICTION_VISCOUS);
-    }
-    let shared_f: Vec<usize> = fitted
-        .iter()
-        .copied()
-        .filter(|i| shared.contains(i))
-        .collect();
-    let per_f: Vec<usize> = fitted
-        .iter()
-        .copied()
-        .filter(|i| !shared.contains(i))
-        .collect();
-    let (ns, np) = (shared_f.len(), per_f.len());
-    let mut base = Vec::new();
-    let mut segments = Vec::new();
-    let mut held = Vec::new();
-    let mut offsets = Vec::new();
-    let mut m = 0;
-    let mut longest = 0;
-    // The time block of each residual row, for the robust covariance.
-    let mut block: Vec<usize> = Vec::new();
-    for (d, st) in servos.iter().zip(starts) {
-        let mut p = st.clone();
-        p.uncertainty = None;
-        let n_volt: usize = d.logs.iter().map(|l| l.voltage.len()).sum();
-        p.voltage = d.logs.iter().flat_map(|l| &l.voltage).sum::<f64>() / n_volt as f64;
-        if !senses_current {
-            p.values[FRICTION_VISCOUS] = 0.0;
-        }
-        base.push(p);
-        let mut segs = Vec::new();
-        let mut h = Vec::new();
-        for (k, l) in d.logs.iter().enumerate() {
-            let split = if d.holdout.is_empty() {
-                ((l.len() as f64) * (1.0 - holdout_fraction)).round() as usize
-            } else {
-                l.len()
-            };
-            let split = split.clamp(2, l.len());
-            segs.push(Segment {
-                log: k,
-                rows: 0..split,
-                current: senses_current,
+    Ok((servo_type, level))
+}
+
+/// Where each servo's rows sit in the group's residual vector.
+struct Layout {
+    /// Each servo's start with its logs' mean voltage.
+    base: Vec<ServoParams>,
+    segments: Vec<Vec<Segment>>,
+    /// Each servo's held-out rows: (log, rows).
+    held: Vec<Vec<(usize, Range<usize>)>>,
+    offsets: Vec<Range<usize>>,
+    /// Residual rows in all.
+    rows: usize,
+    /// The longest log of any servo, rows.
+    longest: usize,
+    /// The time block of each residual row, for the robust covariance.
+    block: Vec<usize>,
+}
+
+impl Layout {
+    fn of(
+        servos: &[ServoData],
+        starts: &[ServoParams],
+        holdout_fraction: f64,
+        senses_current: bool,
+    ) -> Layout {
+        let mut layout = Layout {
+            base: Vec::new(),
+            segments: Vec::new(),
+            held: Vec::new(),
+            offsets: Vec::new(),
+            rows: 0,
+            longest: 0,
+            block: Vec::new(),
+        };
+        for (d, st) in servos.iter().zip(starts) {
+            let mut p = st.clone();
+            p.uncertainty = None;
+            p.voltage = mean_voltage(&d.logs);
+            if !senses_current {
+                p.values[FRICTION_VISCOUS] = 0.0;
+            }
+            layout.base.push(p);
+            let (segs, held) = split_logs(&d.logs, !d.holdout.is_empty(), holdout_fraction, |_| {
+                senses_current
             });
-            if split + 2 < l.len() {
-                h.push((k, split - 1..l.len()));
-            }
+            residual_blocks(&d.logs, &segs, &mut layout.block);
+            let rows: usize = segs.iter().map(Segment::residual_rows).sum();
+            layout.offsets.push(layout.rows..layout.rows + rows);
+            layout.rows += rows;
+            let longest = d.logs.iter().chain(&d.holdout).map(ServoLog::len).max();
+            layout.longest = layout.longest.max(longest.unwrap_or(0));
+            layout.segments.push(segs);
+            layout.held.push(held);
         }
-        for seg in &segs {
-            let l = &d.logs[seg.log];
-            let t0 = l.t[seg.rows.start];
-            let first = block.last().map_or(0, |b| b + 1);
-            let ids: Vec<usize> = seg
-                .rows
-                .clone()
-                .map(|r| first + ((l.t[r] - t0) / BLOCK_SECONDS) as usize)
-                .collect();
-            block.extend(&ids);
-            if seg.current {
-                block.extend(&ids);
-            }
-        }
-        let ms: usize = segs
-            .iter()
-            .map(|s| s.rows.len() * if s.current { 2 } else { 1 })
-            .sum();
-        offsets.push(m..m + ms);
-        m += ms;
-        longest = d
-            .logs
-            .iter()
-            .chain(&d.holdout)
-            .map(ServoLog::len)
-            .max()
-            .unwrap_or(0)
-            .max(longest);
-        segments.push(segs);
-        held.push(h);
+        layout
     }
-    let threads = threads.max(1);
-    let mut x0 = Vec::with_capacity(ns + servos.len() * np);
-    for &i in &shared_f {
+}
+
+/// The LM start: each shared parameter's log at the servos' geometric mean, then
+/// each servo's own parameters' logs.
+fn start_vector(base: &[ServoParams], shared: &[usize], per: &[usize]) -> Vec<f64> {
+    let mut x0 = Vec::with_capacity(shared.len() + base.len() * per.len());
+    for &i in shared {
         let mean_ln =
             base.iter().map(|p| p.values[i].max(1e-6).ln()).sum::<f64>() / base.len() as f64;
         x0.push(mean_ln);
     }
-    for p in &base {
-        for &i in &per_f {
+    for p in base {
+        for &i in per {
             x0.push(p.values[i].max(1e-6).ln());
         }
     }
-    let mut group = Group {
-        servos,
-        base,
-        segments,
-        offsets,
-        shared: shared_f.clone(),
-        per: per_f.clone(),
-        sd_q: servo_type.resolution() / 12f64.sqrt(),
-        cache: (0..servos.len()).map(|_| Vec::new()).collect(),
-        clock: 0,
-        buffers: (0..threads)
-            .map(|_| (vec![0.0; longest], vec![0.0; longest]))
-            .collect(),
-        simulations: 0,
+    x0
+}
+
+/// The RMS of the position residuals among a servo's `residuals`, in their units.
+fn rms(residuals: &[f64], segments: &[Segment]) -> f64 {
+    let (sq, count) = position_sum_squares(residuals, segments);
+    (sq / count.max(1) as f64).sqrt()
+}
+
+/// A servo's held-out rows as (log, rows): its fit logs' tails and its held-out logs.
+fn held_of<'a>(
+    d: &'a ServoData,
+    held: &[(usize, Range<usize>)],
+) -> Vec<(&'a ServoLog, Range<usize>)> {
+    held.iter()
+        .map(|(k, rows)| (&d.logs[*k], rows.clone()))
+        .chain(d.holdout.iter().map(|l| (l, 0..l.len())))
+        .collect()
+}
+
+/// One servo's view of the group fit's covariance of the log-parameters.
+struct Covariance<'a> {
+    robust: &'a DMatrix<f64>,
+    independent_sd_log: &'a [f64],
+    /// The servo's columns of the parameter vector, in `fitted`'s order.
+    cols: &'a [usize],
+    fitted: &'a [usize],
+}
+
+/// One servo's [`ServoFit`]: its deviations from the covariance, its motor
+/// combinations and held-out error; and the names of its parameters not determined.
+fn servo_fit(
+    d: &ServoData,
+    mut p: ServoParams,
+    cov: &Covariance,
+    residuals: &[f64],
+    fit_rms_mrad: f64,
+    held: &[(&ServoLog, Range<usize>)],
+    (qb, cb): (&mut [f64], &mut [f64]),
+) -> (ServoFit, Vec<&'static str>) {
+    let mut undetermined = Vec::new();
+    let mut sd = [0.0; N_PARAMS];
+    let mut sd_independent = [0.0; N_PARAMS];
+    for (&c, &i) in cov.cols.iter().zip(cov.fitted) {
+        let sd_log = cov.robust[(c, c)].max(0.0).sqrt();
+        sd[i] = p.values[i] * sd_log;
+        sd_independent[i] = p.values[i] * cov.independent_sd_log[c];
+        // NaN (a flat direction) counts as not determined.
+        let determined = sd_log <= UNDETERMINED_RELATIVE_SD;
+        if !determined && !undetermined.contains(&PARAM_NAMES[i]) {
+            undetermined.push(PARAM_NAMES[i]);
+        }
+    }
+    p.uncertainty = Some(sd);
+    let servo_cov = cov.robust.select_rows(cov.cols).select_columns(cov.cols);
+    let combinations = motor_combinations(&p, cov.fitted, &servo_cov);
+    let (heldout_rms_mrad, heldout_mae_mrad, heldout_rows) =
+        heldout_error(&p, &Load::from(d.load), held, qb, cb);
+    let fit = ServoFit {
+        name: d.name.clone(),
+        params: p,
+        combinations,
+        fit_rms_mrad,
+        heldout_rms_mrad,
+        heldout_mae_mrad,
+        heldout_rows,
+        residuals: residuals.len(),
+        sum_squares: residuals.iter().map(|e| e * e).sum(),
+        sd_independent,
     };
-    let result = levenberg_marquardt(
-        &x0,
-        m,
-        |x, out| group.residuals(x, out),
-        &LmOptions::default(),
-    );
-    let n = x0.len();
-    let stats = uncertainty(&result.jacobian, &result.residuals, &result.x, n);
-    let robust = robust_covariance(&result.jacobian, &result.residuals, &block);
-    let mut undetermined: Vec<&'static str> = Vec::new();
-    if !senses_current {
-        undetermined.extend(["kt", "resistance", "friction_viscous"]);
-    }
-    let mut fits = Vec::new();
-    let (mut qb, mut cb) = (vec![0.0; longest], vec![0.0; longest]);
-    for (s, d) in servos.iter().enumerate() {
-        let mut p = group.params_of(&result.x, s);
-        // This servo's columns of the parameter vector, in `fitted_s`'s order.
-        let cols: Vec<usize> = (0..ns).chain(ns + s * np..ns + (s + 1) * np).collect();
-        let fitted_s: Vec<usize> = shared_f.iter().chain(&per_f).copied().collect();
-        let mut sd = [0.0; N_PARAMS];
-        let mut sd_independent = [0.0; N_PARAMS];
-        for (&c, &i) in cols.iter().zip(&fitted_s) {
-            let sd_log = robust[(c, c)].max(0.0).sqrt();
-            sd[i] = p.values[i] * sd_log;
-            sd_independent[i] = p.values[i] * stats.sd_log[c];
-            // NaN (a flat direction) counts as not determined.
-            let determined = sd_log <= UNDETERMINED_RELATIVE_SD;
-            if !determined && !undetermined.contains(&PARAM_NAMES[i]) {
-                undetermined.push(PARAM_NAMES[i]);
-            }
-        }
-        p.uncertainty = Some(sd);
-        let cov = robust.select_rows(&cols).select_columns(&cols);
-        let combinations = motor_combinations(&p, &fitted_s, &cov);
-        // Position residuals of this servo, segment by segment.
-        let r = &result.residuals.as_slice()[group.offsets[s].clone()];
-        let (mut sq, mut count, mut o) = (0.0, 0usize, 0usize);
-        for seg in &group.segments[s] {
-            let q = &r[o..o + seg.rows.len()];
-            sq += q.iter().map(|e| e * e).sum::<f64>();
-            count += q.len();
-            o += seg.rows.len() * if seg.current { 2 } else { 1 };
-        }
-        let held_s: Vec<(&ServoLog, Range<usize>)> = held[s]
-            .iter()
-            .map(|(k, rows)| (&d.logs[*k], rows.clone()))
-            .chain(d.holdout.iter().map(|l| (l, 0..l.len())))
-            .collect();
-        let (heldout_rms_mrad, heldout_mae_mrad, heldout_rows) =
-            heldout_error(&p, &Load::from(d.load), &held_s, &mut qb, &mut cb);
-        fits.push(ServoFit {
-            name: d.name.clone(),
-            params: p,
-            combinations,
-            fit_rms_mrad: 1e3 * group.sd_q * (sq / count.max(1) as f64).sqrt(),
-            heldout_rms_mrad,
-            heldout_mae_mrad,
-            heldout_rows,
-            residuals: r.len(),
-            sum_squares: r.iter().map(|e| e * e).sum(),
-            sd_independent,
-        });
-    }
-    Ok(GroupFit {
-        servos: fits,
-        shared: shared_f,
-        per_servo: per_f,
-        undetermined,
-        n_params: n,
-        iterations: result.iterations,
-        simulations: group.simulations,
-    })
+    (fit, undetermined)
 }
 
 /// Each servo fitted alone (every parameter its own), `threads` servos at once;

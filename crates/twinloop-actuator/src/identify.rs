@@ -13,6 +13,7 @@ use crate::params::{
     BACKLASH, FRICTION_VISCOUS, KT, NONSMOOTH, PARAM_NAMES, RESISTANCE, ServoParams,
 };
 use crate::replay::replay;
+use crate::segments::{Segment, mean_voltage, position_sum_squares, residual_blocks, split_logs};
 use nalgebra::DMatrix;
 use std::ops::Range;
 use twinloop_optim::parallel::Scratch;
@@ -120,15 +121,6 @@ fn nonsmooth_bound(i: usize) -> f64 {
     }
 }
 
-/// Which rows of which log.
-#[derive(Debug, Clone)]
-pub(crate) struct Segment {
-    pub(crate) log: usize,
-    pub(crate) rows: Range<usize>,
-    /// Whether current residuals are used.
-    pub(crate) current: bool,
-}
-
 /// Fit `start`'s rung to the first `1 - holdout_fraction` of each of `logs` (all of
 /// them if `holdout` is not empty), held-out error on the rest and on `holdout`.
 /// Backlash and delays keep the start's values.
@@ -160,85 +152,19 @@ pub fn identify_with(
     holdout_fraction: f64,
     options: &IdentifyOptions,
 ) -> Result<Identification, ActuatorError> {
-    if let Some(&i) = options.nonsmooth.iter().find(|i| !NONSMOOTH.contains(i)) {
-        return Err(ActuatorError::new(
-            "",
-            PARAM_NAMES.get(i).copied().unwrap_or("?"),
-            "not a non-smooth parameter (backlash, sensing_delay, bus_delay)",
-        ));
-    }
-    if logs.is_empty() {
-        return Err(ActuatorError::new("", "--data", "no log to fit"));
-    }
-    for l in logs.iter().chain(holdout) {
-        if l.servo != Some(start.servo) {
-            return Err(ActuatorError::new(
-                &l.file,
-                "line 1",
-                format!(
-                    "a log of {:?}, but the model is of {}",
-                    l.servo.map(|s| s.name()),
-                    start.servo
-                ),
-            ));
-        }
-    }
-    let mut fit_segments = Vec::new();
-    let mut held = Vec::new();
-    for (k, l) in logs.iter().enumerate() {
-        let split = if holdout.is_empty() {
-            ((l.len() as f64) * (1.0 - holdout_fraction)).round() as usize
-        } else {
-            l.len()
-        };
-        let split = split.clamp(2, l.len());
-        let current = l.current.is_some();
-        fit_segments.push(Segment {
-            log: k,
-            rows: 0..split,
-            current,
-        });
-        if split + 2 < l.len() {
-            held.push((l, split - 1..l.len()));
-        }
-    }
-    for l in holdout {
-        held.push((l, 0..l.len()));
-    }
-    let mut params = start.clone();
-    params.uncertainty = None;
-    let n_volt: usize = logs.iter().map(|l| l.voltage.len()).sum();
-    params.voltage = logs.iter().flat_map(|l| &l.voltage).sum::<f64>() / n_volt as f64;
-    let mut fitted = params.level.parameters();
-    let senses_current = logs.iter().all(|l| l.current.is_some());
-    if !senses_current {
-        // Viscous friction and back-EMF damping are one term to the position: the
-        // back-EMF (kt^2/R) takes it all, which any damping >= 0 allows.
-        fitted.retain(|&i| i != FRICTION_VISCOUS);
-        params.values[FRICTION_VISCOUS] = 0.0;
-    }
-    // The delays move the response continuously (the sensed angle is interpolated, a
-    // goal comes into force inside a step): LM fits them, from 1 ms where the start
-    // has none. The backlash's dead band and impacts are not smooth: CMA-ES.
-    let nonsmooth: Vec<usize> = options
-        .nonsmooth
-        .iter()
-        .copied()
-        .filter(|&i| i == BACKLASH)
+    check_request(logs, holdout, start, options)?;
+    let (fit_segments, held_rows) = split_logs(logs, !holdout.is_empty(), holdout_fraction, |l| {
+        l.current.is_some()
+    });
+    let held: Vec<(&ServoLog, Range<usize>)> = held_rows
+        .into_iter()
+        .map(|(k, rows)| (&logs[k], rows))
+        .chain(holdout.iter().map(|l| (l, 0..l.len())))
         .collect();
-    for &i in &options.nonsmooth {
-        if i != BACKLASH {
-            fitted.push(i);
-            if params.values[i] <= 0.0 {
-                params.values[i] = 1e-3;
-            }
-        }
-    }
+    let senses_current = logs.iter().all(|l| l.current.is_some());
+    let (mut params, fitted, nonsmooth) = starting_point(logs, start, options, senses_current);
     let sd_q = start.servo.resolution() / 12f64.sqrt();
-    let m: usize = fit_segments
-        .iter()
-        .map(|s| s.rows.len() * if s.current { 2 } else { 1 })
-        .sum();
+    let m: usize = fit_segments.iter().map(Segment::residual_rows).sum();
     let longest = logs
         .iter()
         .chain(holdout)
@@ -264,86 +190,23 @@ pub fn identify_with(
     let mut nonsmooth_evaluations = 0;
     let mut nonsmooth_sd = vec![0.0; nonsmooth.len()];
     if !nonsmooth.is_empty() {
-        // Alternate: CMA-ES on the non-smooth parameters with the smooth ones held,
-        // then LM on the smooth ones with the non-smooth held.
-        for round in 0..options.rounds.max(1) {
-            let scale: Vec<f64> = nonsmooth.iter().map(|&i| nonsmooth_scale(i)).collect();
-            let x0: Vec<f64> = options
-                .nonsmooth
-                .iter()
-                .zip(&scale)
-                .map(|(&i, s)| params.values[i] / s)
-                .collect();
-            let upper: Vec<f64> = options
-                .nonsmooth
-                .iter()
-                .zip(&scale)
-                .map(|(&i, s)| nonsmooth_bound(i) / s)
-                .collect();
-            let lower = vec![0.0; x0.len()];
-            let r = twinloop_optim::minimize_parallel(
-                &|x| {
-                    let mut trial = params.clone();
-                    for (k, &i) in nonsmooth.iter().enumerate() {
-                        trial.values[i] = x[k] * scale[k];
-                    }
-                    fit.cost(&trial, &bufs)
-                },
-                &x0,
-                Some((&lower, &upper)),
-                &CmaOptions {
-                    sigma: 0.3,
-                    max_evaluations: options.cma_evaluations,
-                    tolerance: StepTolerance::Absolute(1e-3),
-                    target: f64::NEG_INFINITY,
-                    seed: 1 + round as u64,
-                },
-                &mut |_, _, _| {},
-            );
-            nonsmooth_evaluations += r.evaluations;
-            for (k, &i) in nonsmooth.iter().enumerate() {
-                params.values[i] = r.x[k] * scale[k];
-            }
-            result = fit.lm(&mut params, &fitted, &bufs);
-        }
-        // One standard deviation from the cost's curvature along each (the Gauss-Newton
-        // J^T J of a smooth model is the curvature of half the squared residuals).
-        let s2 = result.residuals.norm_squared() / m.saturating_sub(fitted.len()).max(1) as f64;
-        let c0 = fit.cost(&params, &bufs);
-        for (k, &i) in nonsmooth.iter().enumerate() {
-            let h = (0.1 * params.values[i]).max(0.02 * nonsmooth_scale(i));
-            let mut t = params.clone();
-            t.values[i] = params.values[i] + h;
-            let up = fit.cost(&t, &bufs);
-            t.values[i] = (params.values[i] - h).max(0.0);
-            let hd = params.values[i] - t.values[i];
-            let down = fit.cost(&t, &bufs);
-            // Second difference on a possibly uneven stencil.
-            let curvature = 2.0 * ((up - c0) / h + (down - c0) / hd.max(1e-300)) / (h + hd);
-            nonsmooth_sd[k] = if curvature > 0.0 && hd > 0.0 {
-                (s2 / curvature).sqrt()
-            } else {
-                f64::INFINITY
-            };
-        }
+        nonsmooth_evaluations = alternate(
+            &mut fit,
+            &mut params,
+            &fitted,
+            &nonsmooth,
+            options,
+            &bufs,
+            &mut result,
+        );
+        nonsmooth_sd =
+            nonsmooth_deviations(&fit, &params, &nonsmooth, &result, fitted.len(), &bufs);
     }
-    // Position residual RMS, mrad.
-    let (mut sq, mut count, mut o) = (0.0, 0usize, 0usize);
-    for s in &fit_segments {
-        for _ in s.rows.clone() {
-            let e = result.residuals[o] * sd_q;
-            sq += e * e;
-            count += 1;
-            o += 1;
-        }
-        if s.current {
-            o += s.rows.len();
-        }
-    }
-    let fit_rms_mrad = 1e3 * (sq / count.max(1) as f64).sqrt();
-    let (heldout_rms_mrad, heldout_mae_mrad, heldout_rows) =
-        bufs.with(|b| heldout_error(&params, load, &held, &mut b.q, &mut b.c));
-    let block = residual_blocks(logs, &fit_segments);
+    let (sq, count) = position_sum_squares(result.residuals.as_slice(), &fit_segments);
+    let fit_rms_mrad = 1e3 * sd_q * (sq / count.max(1) as f64).sqrt();
+    let heldout = bufs.with(|b| heldout_error(&params, load, &held, &mut b.q, &mut b.c));
+    let mut block = Vec::new();
+    residual_blocks(logs, &fit_segments, &mut block);
     let nonsmooth_pairs: Vec<(usize, f64)> = nonsmooth.iter().copied().zip(nonsmooth_sd).collect();
     let report = assess(
         &mut params,
@@ -354,6 +217,201 @@ pub fn identify_with(
         senses_current,
         &nonsmooth_pairs,
     );
+    let outcome = Outcome {
+        fit_rms_mrad,
+        heldout,
+        iterations: fit.iterations,
+        evaluations: fit.evaluations,
+        nonsmooth_evaluations,
+    };
+    Ok(conclude(params, start, fitted, nonsmooth, report, outcome))
+}
+
+/// Refuses what [`identify_with`] cannot fit: an unknown non-smooth parameter, no
+/// log, a log of another servo type.
+fn check_request(
+    logs: &[ServoLog],
+    holdout: &[ServoLog],
+    start: &ServoParams,
+    options: &IdentifyOptions,
+) -> Result<(), ActuatorError> {
+    if let Some(&i) = options.nonsmooth.iter().find(|i| !NONSMOOTH.contains(i)) {
+        return Err(ActuatorError::new(
+            "",
+            PARAM_NAMES.get(i).copied().unwrap_or("?"),
+            "not a non-smooth parameter (backlash, sensing_delay, bus_delay)",
+        ));
+    }
+    if logs.is_empty() {
+        return Err(ActuatorError::new("", "--data", "no log to fit"));
+    }
+    for l in logs.iter().chain(holdout) {
+        if l.servo != Some(start.servo) {
+            return Err(ActuatorError::new(
+                &l.file,
+                "line 1",
+                format!(
+                    "a log of {:?}, but the model is of {}",
+                    l.servo.map(|s| s.name()),
+                    start.servo
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The fit's start (the logs' mean voltage as the supply), the smooth parameters LM
+/// fits and the non-smooth ones CMA-ES fits.
+fn starting_point(
+    logs: &[ServoLog],
+    start: &ServoParams,
+    options: &IdentifyOptions,
+    senses_current: bool,
+) -> (ServoParams, Vec<usize>, Vec<usize>) {
+    let mut params = start.clone();
+    params.uncertainty = None;
+    params.voltage = mean_voltage(logs);
+    let mut fitted = params.level.parameters();
+    if !senses_current {
+        // Viscous friction and back-EMF damping are one term to the position: the
+        // back-EMF (kt^2/R) takes it all, which any damping >= 0 allows.
+        fitted.retain(|&i| i != FRICTION_VISCOUS);
+        params.values[FRICTION_VISCOUS] = 0.0;
+    }
+    // The delays move the response continuously (the sensed angle is interpolated, a
+    // goal comes into force inside a step): LM fits them, from 1 ms where the start
+    // has none. The backlash's dead band and impacts are not smooth: CMA-ES.
+    let nonsmooth: Vec<usize> = options
+        .nonsmooth
+        .iter()
+        .copied()
+        .filter(|&i| i == BACKLASH)
+        .collect();
+    for &i in &options.nonsmooth {
+        if i != BACKLASH {
+            fitted.push(i);
+            if params.values[i] <= 0.0 {
+                params.values[i] = 1e-3;
+            }
+        }
+    }
+    (params, fitted, nonsmooth)
+}
+
+/// Alternates CMA-ES on the non-smooth parameters (the smooth ones held) with LM on
+/// the smooth ones (the non-smooth held), `result` becoming the last LM's; CMA-ES's
+/// simulations.
+fn alternate(
+    fit: &mut Fit,
+    params: &mut ServoParams,
+    fitted: &[usize],
+    nonsmooth: &[usize],
+    options: &IdentifyOptions,
+    bufs: &Scratch<Buffers>,
+    result: &mut LmResult,
+) -> usize {
+    let scale: Vec<f64> = nonsmooth.iter().map(|&i| nonsmooth_scale(i)).collect();
+    let upper: Vec<f64> = nonsmooth
+        .iter()
+        .zip(&scale)
+        .map(|(&i, s)| nonsmooth_bound(i) / s)
+        .collect();
+    let lower = vec![0.0; nonsmooth.len()];
+    let mut evaluations = 0;
+    for round in 0..options.rounds.max(1) {
+        let x0: Vec<f64> = nonsmooth
+            .iter()
+            .zip(&scale)
+            .map(|(&i, s)| params.values[i] / s)
+            .collect();
+        let held = &*params;
+        let fit_ref = &*fit;
+        let r = twinloop_optim::minimize_parallel(
+            &|x| {
+                let mut trial = held.clone();
+                for (k, &i) in nonsmooth.iter().enumerate() {
+                    trial.values[i] = x[k] * scale[k];
+                }
+                fit_ref.cost(&trial, bufs)
+            },
+            &x0,
+            Some((&lower, &upper)),
+            &CmaOptions {
+                sigma: 0.3,
+                max_evaluations: options.cma_evaluations,
+                tolerance: StepTolerance::Absolute(1e-3),
+                target: f64::NEG_INFINITY,
+                seed: 1 + round as u64,
+            },
+            &mut |_, _, _| {},
+        );
+        evaluations += r.evaluations;
+        for (k, &i) in nonsmooth.iter().enumerate() {
+            params.values[i] = r.x[k] * scale[k];
+        }
+        *result = fit.lm(params, fitted, bufs);
+    }
+    evaluations
+}
+
+/// One standard deviation of each non-smooth parameter from the cost's curvature
+/// along it (the Gauss-Newton J^T J of a smooth model is the curvature of half the
+/// squared residuals); infinite where the cost is flat or the parameter sits at 0.
+fn nonsmooth_deviations(
+    fit: &Fit,
+    params: &ServoParams,
+    nonsmooth: &[usize],
+    result: &LmResult,
+    n_fitted: usize,
+    bufs: &Scratch<Buffers>,
+) -> Vec<f64> {
+    let m = result.residuals.len();
+    let s2 = result.residuals.norm_squared() / m.saturating_sub(n_fitted).max(1) as f64;
+    let c0 = fit.cost(params, bufs);
+    nonsmooth
+        .iter()
+        .map(|&i| {
+            let h = (0.1 * params.values[i]).max(0.02 * nonsmooth_scale(i));
+            let mut t = params.clone();
+            t.values[i] = params.values[i] + h;
+            let up = fit.cost(&t, bufs);
+            t.values[i] = (params.values[i] - h).max(0.0);
+            let hd = params.values[i] - t.values[i];
+            let down = fit.cost(&t, bufs);
+            // Second difference on a possibly uneven stencil.
+            let curvature = 2.0 * ((up - c0) / h + (down - c0) / hd.max(1e-300)) / (h + hd);
+            if curvature > 0.0 && hd > 0.0 {
+                (s2 / curvature).sqrt()
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect()
+}
+
+/// The fit's errors and counts of work, as [`Identification`] reports them.
+struct Outcome {
+    /// RMS of the fitted position residuals, mrad.
+    fit_rms_mrad: f64,
+    /// Held-out RMS and MAE, mrad, and the rows compared.
+    heldout: (f64, f64, usize),
+    iterations: usize,
+    evaluations: usize,
+    nonsmooth_evaluations: usize,
+}
+
+/// The [`Identification`] from the fitted `params` and `report`: every parameter
+/// distrusted when the held-out error is over [`HELDOUT_COUNTS`].
+fn conclude(
+    mut params: ServoParams,
+    start: &ServoParams,
+    fitted: Vec<usize>,
+    nonsmooth: Vec<usize>,
+    report: Report,
+    outcome: Outcome,
+) -> Identification {
+    let (heldout_rms_mrad, heldout_mae_mrad, heldout_rows) = outcome.heldout;
     let stats = report.stats;
     let (mut undetermined, mut intervals, mut combinations) =
         (report.undetermined, report.intervals, report.combinations);
@@ -375,32 +433,27 @@ pub fn identify_with(
         .filter(|(_, w)| w.abs() > 0.1)
         .map(|(&i, &w)| (PARAM_NAMES[i], w))
         .collect();
-    Ok(Identification {
+    let smallest = stats.singular_values.last().copied().unwrap_or(0.0);
+    Identification {
         combinations,
         intervals,
         params,
         fitted,
         correlation: stats.correlation,
-        fit_rms_mrad,
+        fit_rms_mrad: outcome.fit_rms_mrad,
         heldout_rms_mrad,
         heldout_mae_mrad,
         heldout_rows,
         heldout_counts,
-        condition: stats.singular_values[0]
-            / stats
-                .singular_values
-                .last()
-                .copied()
-                .unwrap_or(0.0)
-                .max(1e-300),
+        condition: stats.singular_values[0] / smallest.max(1e-300),
         singular_values: stats.singular_values,
         undetermined,
         weakest_direction,
-        iterations: fit.iterations,
-        evaluations: fit.evaluations,
-        nonsmooth_evaluations,
+        iterations: outcome.iterations,
+        evaluations: outcome.evaluations,
+        nonsmooth_evaluations: outcome.nonsmooth_evaluations,
         nonsmooth,
-    })
+    }
 }
 
 /// Half a step of Present Voltage (0.1 V, EM-RX28 / EM-XM430 control tables): the
@@ -413,27 +466,6 @@ pub const INTERVAL_SIGMAS: f64 = 3.0;
 /// A fitted parameter that fell below this fraction of its start ran to its bound
 /// (0): it is not determined (the data do not need it), however small its deviation.
 pub const AT_BOUND: f64 = 1e-3;
-
-/// The time block of each residual row of `segments` (in their order, a current
-/// row in its position row's block), blocks of [`crate::robust_covariance::BLOCK_SECONDS`].
-fn residual_blocks(logs: &[ServoLog], segments: &[Segment]) -> Vec<usize> {
-    let mut block: Vec<usize> = Vec::new();
-    for seg in segments {
-        let l = &logs[seg.log];
-        let t0 = l.t[seg.rows.start];
-        let first = block.last().map_or(0, |b| b + 1);
-        let ids: Vec<usize> = seg
-            .rows
-            .clone()
-            .map(|r| first + ((l.t[r] - t0) / crate::robust_covariance::BLOCK_SECONDS) as usize)
-            .collect();
-        block.extend(&ids);
-        if seg.current {
-            block.extend(&ids);
-        }
-    }
-    block
-}
 
 /// What [`assess`] reports.
 struct Report {

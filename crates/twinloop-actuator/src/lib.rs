@@ -38,6 +38,7 @@ pub mod params_set;
 pub mod profile;
 pub mod replay;
 pub mod robust_covariance;
+mod segments;
 pub mod servo_type;
 pub mod sweep;
 pub mod synthetic;
