@@ -364,7 +364,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
             crate::replay3d::link_replay(&mut page, replay);
         }
         page.write(p)
-            .map_err(|e| CliError::new(e).context("--report"))?;
+            .map_err(|e| CliError::new(e.to_string()).context("--report"))?;
     }
     let r = &adapted.report;
     let t = summary_text(r, a.out.as_deref());
@@ -609,7 +609,7 @@ fn run_train(a: TrainArgs) -> CliResult {
         report.files.push(p.display().to_string());
         twinloop_ident::ann_report::train_html_report(&report)
             .write(p)
-            .map_err(|e| CliError::new(e).context("--report"))?;
+            .map_err(|e| CliError::new(e.to_string()).context("--report"))?;
     }
     emit(&train_text(&report), a.json.as_ref(), &report)?;
     Ok(Outcome::Ok)

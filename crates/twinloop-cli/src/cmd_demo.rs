@@ -161,8 +161,7 @@ pub fn run(a: DemoArgs) -> CliResult {
     if let Some(replay) = &replay {
         crate::replay3d::link_replay(&mut page, replay);
     }
-    page.write(&html)
-        .map_err(|e| CliError::new(format!("{}: {e}", html.display())))?;
+    page.write(&html)?;
     report.files.push(html.display().to_string());
     let adapt_json = a.out.join("adapt.json");
     write_json(&adapt_json, &adapted.report)?;

@@ -34,6 +34,19 @@
 use crate::register::{DEGREE, Item};
 use crate::servo_model::ServoModel;
 
+/// Why a board's description is refused; the mapping places it at its file, line
+/// and field.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BoardError(pub String);
+
+impl std::fmt::Display for BoardError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BoardError {}
+
 /// The id a CM-730 answers at (`CM730::ID_CM`).
 pub const CM730_ID: u8 = 200;
 /// Model Number of the CM-730, 0x7300 (see the module's sources).
@@ -80,12 +93,12 @@ impl Default for BoardAxes {
 
 impl BoardAxes {
     /// Parse three axis names (`x`, `-y`, `+z`, ...). `Err` says what is wrong.
-    pub fn parse(names: &[String]) -> Result<BoardAxes, String> {
+    pub fn parse(names: &[String]) -> Result<BoardAxes, BoardError> {
         if names.len() != 3 {
-            return Err(format!(
+            return Err(BoardError(format!(
                 "{} axes given; name the link axis of board X, Y and Z, e.g. [\"x\", \"y\", \"z\"]",
                 names.len()
-            ));
+            )));
         }
         let mut axes = [(0usize, 1.0f64); 3];
         for (k, n) in names.iter().enumerate() {
@@ -98,7 +111,11 @@ impl BoardAxes {
                 "x" => 0,
                 "y" => 1,
                 "z" => 2,
-                _ => return Err(format!("{n:?} is not an axis (x, y, z, -x, -y, -z)")),
+                _ => {
+                    return Err(BoardError(format!(
+                        "{n:?} is not an axis (x, y, z, -x, -y, -z)"
+                    )));
+                }
             };
             axes[k] = (axis, sign);
         }
@@ -106,14 +123,16 @@ impl BoardAxes {
         let mut used = [false; 3];
         for &(a, _) in &axes {
             if used[a] {
-                return Err(format!("{names:?}: two board axes along one link axis"));
+                return Err(BoardError(format!(
+                    "{names:?}: two board axes along one link axis"
+                )));
             }
             used[a] = true;
         }
         if b.determinant() < 0.0 {
-            return Err(format!(
+            return Err(BoardError(format!(
                 "{names:?} is a mirror image, not a rotation (the board's axes are right-handed)"
-            ));
+            )));
         }
         Ok(b)
     }

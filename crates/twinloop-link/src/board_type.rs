@@ -16,7 +16,7 @@
 //! source of each fact, a name in [`BoardType::builtin`], a test against the source's
 //! numbers (docs/architecture.md, "A new IMU board").
 
-use crate::board::{ImuSample, STANDARD_GRAVITY, accel_items, gyro_items};
+use crate::board::{BoardError, ImuSample, STANDARD_GRAVITY, accel_items, gyro_items};
 use crate::control_table::ModelTable;
 use crate::protocol::Protocol;
 use crate::register::{Access, Area, DEGREE, Encoding, Item, Register, Unit};
@@ -327,16 +327,19 @@ impl BoardType {
     }
 
     /// A profile's own board. `Err` says which field is wrong.
-    pub fn custom(c: &CustomBoard) -> Result<&'static BoardType, String> {
+    pub fn custom(c: &CustomBoard) -> Result<&'static BoardType, BoardError> {
         if ![1, 2, 4].contains(&c.size) {
-            return Err(format!("size: {} bytes; a register has 1, 2 or 4", c.size));
+            return Err(BoardError(format!(
+                "size: {} bytes; a register has 1, 2 or 4",
+                c.size
+            )));
         }
         for (what, v) in [
             ("gyro_deg_s_per_count", c.gyro_deg_s_per_count),
             ("accel_g_per_count", c.accel_g_per_count),
         ] {
             if !(v.is_finite() && v != 0.0) {
-                return Err(format!("{what}: {v} is not a non-zero number"));
+                return Err(BoardError(format!("{what}: {v} is not a non-zero number")));
             }
         }
         let mut registers = identity(0, 1);
@@ -354,10 +357,10 @@ impl BoardType {
                         .map(|b| format!("the axis at {b}"))
                 });
             if let Some(other) = clash {
-                return Err(format!(
+                return Err(BoardError(format!(
                     "the axis at address {a} ({} bytes) overlaps {other}",
                     c.size
-                ));
+                )));
             }
         }
         let gyro = Unit::Gyro {
@@ -478,7 +481,7 @@ mod tests {
             center: 0,
         };
         let e = BoardType::custom(&c).unwrap_err();
-        assert!(e.contains("overlaps"), "{e}");
+        assert!(e.0.contains("overlaps"), "{e}");
         let ok = CustomBoard {
             accel: [46, 48, 50],
             ..c

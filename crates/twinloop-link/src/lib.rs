@@ -28,7 +28,7 @@ pub mod status_error;
 pub mod transport;
 pub mod wire_time;
 
-pub use board::{BoardAxes, ImuSample, TiltFilter};
+pub use board::{BoardAxes, BoardError, ImuSample, TiltFilter};
 pub use board_type::{BoardType, CustomBoard};
 pub use client::{BulkRead, Client, ClientConfig, ClientStats, FoundServo};
 pub use control_cycle::{ControlCycle, CycleServo, CycleSummary, ReadMethod, ServoReading};

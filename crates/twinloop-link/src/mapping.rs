@@ -545,7 +545,7 @@ fn parse_board(
     }
     let axes = match &b.axes {
         None => BoardAxes::default(),
-        Some(a) => BoardAxes::parse(a.get_ref()).map_err(|m| at(a.span(), "axes", m))?,
+        Some(a) => BoardAxes::parse(a.get_ref()).map_err(|m| at(a.span(), "axes", m.0))?,
     };
     if let Some(other) = earlier.iter().find(|o| o.name == name) {
         return Err(at(
@@ -679,7 +679,7 @@ fn board_kind(
         accel_g_per_count: scale("accel_g_per_count", &b.accel_g_per_count)?,
         center: i32::try_from(center).unwrap_or(i32::MAX),
     };
-    BoardType::custom(&custom).map_err(|m| at(b.model.span(), "model", m))
+    BoardType::custom(&custom).map_err(|m| at(b.model.span(), "model", m.0))
 }
 
 /// The `[roles]` table: each key one of [`RobotMapping::ROLES`], each value one of
@@ -991,15 +991,21 @@ impl RobotMapping {
         c: &mut crate::Client<T>,
         protocol: Protocol,
         ids: &[u8],
-    ) -> Result<RobotMapping, String> {
+    ) -> Result<RobotMapping, MappingError> {
+        let error = |message: String| MappingError {
+            file: "--ids".into(),
+            line: 0,
+            column: 0,
+            message,
+        };
         let mut joints = Vec::new();
         for &id in ids {
-            let s = c.ping(protocol, id).map_err(|e| e.to_string())?;
+            let s = c.ping(protocol, id).map_err(|e| error(e.to_string()))?;
             let model = s.model.ok_or_else(|| {
-                format!(
+                error(format!(
                     "servo id {id}: model number {} has no control table in twinloop",
                     s.model_number
-                )
+                ))
             })?;
             let (min, max) = JointMapping::servo_range(model);
             joints.push(JointMapping {

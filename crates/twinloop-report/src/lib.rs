@@ -158,9 +158,9 @@ impl Report {
         h
     }
 
-    pub fn write(&self, path: &Path) -> Result<(), String> {
-        // Beside the file, renamed when complete (docs/architecture.md, "Outputs").
+    /// Writes the page to `path` (beside it first, renamed when complete:
+    /// docs/architecture.md, "Outputs"); the error names the file.
+    pub fn write(&self, path: &Path) -> Result<(), twinloop_io::IoError> {
         twinloop_io::output::write_atomic(path, self.to_html())
-            .map_err(|e| format!("cannot write the report: {e}"))
     }
 }

@@ -26,5 +26,5 @@ pub use export::export_html;
 pub use live::{Decimator, LiveFeed, follow_csv};
 pub use publisher::{LivePublisher, PublisherStats};
 pub use recording::{Recording, RecordingInfo};
-pub use scene::{PackageDir, Scene, SceneInfo};
+pub use scene::{PackageDir, Scene, SceneError, SceneInfo};
 pub use server::{Content, Server};

@@ -22,9 +22,21 @@ pub struct PackageDir {
     pub dir: PathBuf,
 }
 
+/// Why a scene's input is refused (a `--package-dir`) or a mesh cannot be shown.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SceneError(pub String);
+
+impl std::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SceneError {}
+
 impl PackageDir {
     /// Parse `NAME=DIR`.
-    pub fn parse(text: &str) -> Result<PackageDir, String> {
+    pub fn parse(text: &str) -> Result<PackageDir, SceneError> {
         match text.split_once('=') {
             Some((name, dir)) if !name.is_empty() && !dir.is_empty() => {
                 // `NAME=~/dir`: a shell leaves the tilde after `=` alone in some modes.
@@ -37,9 +49,9 @@ impl PackageDir {
                     dir,
                 })
             }
-            _ => Err(format!(
+            _ => Err(SceneError(format!(
                 "\"{text}\" is not NAME=DIR (e.g. op3_description=~/op3)"
-            )),
+            ))),
         }
     }
 }
@@ -296,7 +308,7 @@ fn resolve_mesh(uri: &str, index: usize, base_dir: &Path, packages: &[PackageDir
     let path = match mesh_path(uri, base_dir, packages) {
         Ok(p) => p,
         Err(e) => {
-            mesh.problem = Some(e);
+            mesh.problem = Some(e.0);
             return mesh;
         }
     };
@@ -310,7 +322,7 @@ fn resolve_mesh(uri: &str, index: usize, base_dir: &Path, packages: &[PackageDir
 }
 
 /// The path a mesh reference points to.
-fn mesh_path(uri: &str, base_dir: &Path, packages: &[PackageDir]) -> Result<PathBuf, String> {
+fn mesh_path(uri: &str, base_dir: &Path, packages: &[PackageDir]) -> Result<PathBuf, SceneError> {
     if let Some(rest) = uri.strip_prefix("package://") {
         let (name, rel) = rest.split_once('/').unwrap_or((rest, ""));
         if let Some(p) = packages.iter().find(|p| p.name == name) {
@@ -322,15 +334,17 @@ fn mesh_path(uri: &str, base_dir: &Path, packages: &[PackageDir]) -> Result<Path
                 return Ok(dir.join(rel));
             }
         }
-        return Err(format!(
+        return Err(SceneError(format!(
             "package \"{name}\" is unknown (give --package-dir {name}=DIR)"
-        ));
+        )));
     }
     if let Some(rest) = uri.strip_prefix("file://") {
         return Ok(PathBuf::from(rest));
     }
     if uri.contains("://") {
-        return Err("only package://, file:// and file paths are read".into());
+        return Err(SceneError(
+            "only package://, file:// and file paths are read".into(),
+        ));
     }
     Ok(base_dir.join(uri))
 }
@@ -344,7 +358,12 @@ mod tests {
         let p = PackageDir::parse("op3_description=/x/y").unwrap();
         assert_eq!(p.name, "op3_description");
         assert_eq!(p.dir, PathBuf::from("/x/y"));
-        assert!(PackageDir::parse("nodir").unwrap_err().contains("NAME=DIR"));
+        assert!(
+            PackageDir::parse("nodir")
+                .unwrap_err()
+                .0
+                .contains("NAME=DIR")
+        );
         assert!(PackageDir::parse("=x").is_err());
     }
 
@@ -374,7 +393,7 @@ mod tests {
         assert!(
             mesh_path("package://other/a.stl", base, &[])
                 .unwrap_err()
-                .contains("--package-dir other=DIR")
+                .0.contains("--package-dir other=DIR")
         );
         assert!(mesh_path("http://x/a.stl", base, &[]).is_err());
     }
