@@ -12,7 +12,10 @@
 //! - A recording ([`AtomicFile::recording`]) is streamed into `FILE.partial` and
 //!   renamed at the end whatever ends it (an error, Ctrl-C, a dropped writer), as long
 //!   as one data line reached it; with none, the old file stays untouched. A process
-//!   killed outright leaves its rows under `FILE.partial`.
+//!   killed outright leaves its rows under `FILE.partial`; the next run writing that
+//!   output keeps them as `FILE.partial.1` (then `.2`, ...) before it starts.
+//! - The partial file is locked while written (`flock`): a second run writing the
+//!   same output at the same time is refused, naming it, instead of mixing the two.
 
 use crate::IoError;
 use std::fs::File;
@@ -200,8 +203,12 @@ impl AtomicFile<File> {
     }
 }
 
-/// `FILE.partial` created for `out`: a partial file left by a killed run is replaced,
-/// anything else in the way is refused; the file gets the old one's permissions.
+/// `FILE.partial` created for `out` and locked (an advisory `flock`, held while the
+/// file is open) so that a second run writing the same output at the same time is
+/// refused rather than mixed into it. A partial file nobody holds was left by a killed
+/// run: its rows are kept under the first free `FILE.partial.N` (a recording's rows
+/// are a user's data) and a new one is started; anything else in the way is refused.
+/// The file gets the old one's permissions.
 fn create_partial(out: &Output) -> Result<(PathBuf, File), IoError> {
     not_an_input(&out.target, &out.path)?;
     let partial = in_progress(&out.target);
@@ -213,7 +220,7 @@ fn create_partial(out: &Output) -> Result<(PathBuf, File), IoError> {
                 "is in the way of the file being written (not a regular file)",
             ));
         }
-        let _ = std::fs::remove_file(&partial);
+        set_aside(&partial, m.len(), &out.path)?;
     }
     let file = std::fs::OpenOptions::new()
         .read(true)
@@ -221,10 +228,50 @@ fn create_partial(out: &Output) -> Result<(PathBuf, File), IoError> {
         .create_new(true)
         .open(&partial)
         .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(&out.path))?;
+    // A file system without locks (some network mounts) writes unguarded, as before.
+    let _ = file.try_lock();
     if let Ok(m) = std::fs::metadata(&out.target) {
         let _ = file.set_permissions(m.permissions());
     }
     Ok((partial, file))
+}
+
+/// Moves a partial file out of the way of a new run: refused while another run holds
+/// it; a killed run's rows (`len` bytes) kept under `FILE.partial.N`, an empty one removed.
+fn set_aside(partial: &Path, len: u64, shown: &Path) -> Result<(), IoError> {
+    if let Ok(f) = File::open(partial)
+        && let Err(std::fs::TryLockError::WouldBlock) = f.try_lock()
+    {
+        return Err(refused(
+            "",
+            shown,
+            format!(
+                "another run is writing it now ({} is held); wait for it to finish or write elsewhere",
+                partial.display()
+            ),
+        ));
+    }
+    if len > 0 {
+        let kept = (1..=99).map(|n| {
+            let mut p = partial.as_os_str().to_owned();
+            p.push(format!(".{n}"));
+            PathBuf::from(p)
+        });
+        if let Some(free) = kept
+            .into_iter()
+            .find(|p| std::fs::symlink_metadata(p).is_err())
+        {
+            return std::fs::rename(partial, &free).map_err(|e| {
+                IoError::new(format!(
+                    "cannot keep a killed run's {}: {e}",
+                    partial.display()
+                ))
+                .in_file(shown)
+            });
+        }
+    }
+    let _ = std::fs::remove_file(partial);
+    Ok(())
 }
 
 /// Refuse to replace `target` when this process read it as an input (however it was
@@ -615,5 +662,34 @@ mod tests {
         }
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "t,q\n0,1\n");
         assert!(!in_progress(&path).exists());
+    }
+
+    /// Two runs writing one output at once: the second is refused, naming the file,
+    /// and the first's rows are whole; a killed run's partial file is kept aside, not
+    /// replaced.
+    #[test]
+    fn a_second_writer_is_refused_and_a_killed_runs_rows_are_kept() {
+        let path = scratch("twice.csv");
+        let _ = std::fs::remove_file(&path);
+        let out = Output::resolve("--out", &path).unwrap();
+        let mut first = AtomicFile::recording(&out).unwrap();
+        first.write_all(b"t,q\n0,1\n").unwrap();
+        let e = AtomicFile::recording(&out).err().unwrap().to_string();
+        assert!(e.contains("another run is writing it now"), "{e}");
+        assert!(e.contains("twice.csv"), "{e}");
+        first.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "t,q\n0,1\n");
+
+        // A killed run: its partial file is left, held by nobody.
+        let partial = in_progress(&path);
+        std::fs::write(&partial, "t,q\n5,6\n").unwrap();
+        let mut next = AtomicFile::recording(&out).unwrap();
+        next.write_all(b"t,q\n7,8\n").unwrap();
+        next.commit().unwrap();
+        let mut kept = partial.as_os_str().to_owned();
+        kept.push(".1");
+        assert_eq!(std::fs::read_to_string(&kept).unwrap(), "t,q\n5,6\n");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "t,q\n7,8\n");
+        let _ = std::fs::remove_file(&kept);
     }
 }
