@@ -94,7 +94,10 @@ fn scan_and_a_whole_table_read_find_the_cm730_on_a_served_km20() {
             ..ClientConfig::default()
         },
     );
-    let found = c.scan(Protocol::V1, 0..=253).unwrap();
+    // The ids around the servos and the board, silent ones on both sides: each
+    // silent id costs a whole reply timeout (all 254 ids took 47 s of CI).
+    let mut found = c.scan(Protocol::V1, 0..=22).unwrap();
+    found.extend(c.scan(Protocol::V1, 198..=202).unwrap());
     let ids: Vec<u8> = found.iter().map(|s| s.id).collect();
     let mut expected: Vec<u8> = (1..=20).collect();
     expected.push(200);
