@@ -84,9 +84,10 @@ impl PyDescription {
 }
 
 /// The lossless parts of a description for pickling: URDF text (the exact writer),
-/// plus what URDF cannot say (an MJCF's gravity and joint armature, by joint name),
-/// and whether its joints are numbered by name (Pinocchio's URDF order).
-type DescriptionState = (String, Option<[f64; 3]>, Vec<(String, f64)>, bool);
+/// plus what URDF cannot say (an MJCF's gravity and joint armature, by joint name,
+/// and its free joint's armature and damping), and whether its joints are numbered
+/// by name (Pinocchio's URDF order).
+type DescriptionState = (String, Option<[f64; 3]>, Vec<(String, f64)>, [f64; 2], bool);
 
 fn description_state(d: &Description, order: JointOrder) -> DescriptionState {
     (
@@ -97,14 +98,16 @@ fn description_state(d: &Description, order: JointOrder) -> DescriptionState {
             .filter(|j| j.armature != 0.0)
             .map(|j| (j.name.clone(), j.armature))
             .collect(),
+        [d.base_armature, d.base_damping],
         order == JointOrder::UrdfByName,
     )
 }
 
 fn description_from_state(state: DescriptionState) -> PyResult<(Description, JointOrder)> {
-    let (text, gravity, armature, by_name) = state;
+    let (text, gravity, armature, [base_armature, base_damping], by_name) = state;
     let mut d = urdf::from_str(&text).map_err(description_error)?;
     d.gravity = gravity;
+    (d.base_armature, d.base_damping) = (base_armature, base_damping);
     for (name, a) in armature {
         let joint = d
             .joints
@@ -247,6 +250,14 @@ impl PyDescription {
             list.append(d)?;
         }
         Ok(list)
+    }
+
+    /// The floating base's armature (kg and kg m^2): an MJCF free joint's `armature`,
+    /// which MuJoCo adds to the six base diagonal entries of the mass matrix (and
+    /// twinloop's dynamics with it); 0 for a URDF, which cannot say it.
+    #[getter]
+    fn base_armature(&self) -> f64 {
+        self.inner.base_armature
     }
 
     /// What `twinloop model check --json` reports: a dict with the counts and the

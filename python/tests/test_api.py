@@ -245,6 +245,18 @@ def test_pickle_keeps_mjcf_gravity_and_armature():
     )
 
 
+def test_pickle_keeps_the_free_joint_armature():
+    # BXI Elf2: its default class gives the free joint armature 0.01, which MuJoCo puts on
+    # the six base diagonal entries of M (M[0][0] = total mass + 0.01); URDF cannot say it.
+    desc = tl.load(OP3.parents[1] / "bxi_elf2" / "mjcf" / "elf2_dof25.xml")
+    assert desc.base_armature == 0.01
+    m2 = pickle.loads(pickle.dumps(tl.Model.from_description(desc)))
+    assert m2.description.base_armature == 0.01
+    mass = tl.crba(m2, tl.Data(m2), m2.neutral())
+    assert abs(mass[0, 0] - (desc.total_mass + 0.01)) < 1e-12
+    assert tl.Description.from_urdf(desc.to_urdf()).base_armature == 0.0
+
+
 def test_aba_refuses_a_singular_mass_matrix_naming_the_joint(tmp_path):
     # A massless leaf on a hinge: M(q) has a zero row for that joint, and
     # Pinocchio's ABA would divide by zero. The Rust check names the joint.

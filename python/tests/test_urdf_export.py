@@ -120,6 +120,10 @@ def check_against_pinocchio(pin, spec, desc, path):
     for n in names:
         k = pm.joints[pm.getJointId(n)].idx_v
         theirs[k, k] += arm[n] if n in arm else arm[n[:-2]]  # a ball's x, y, z
+    # An MJCF free joint's armature (BXI Elf2's), which the URDF says only in a comment.
+    theirs[range(6), range(6)] += desc.base_armature
+    if desc.base_armature:
+        assert "<!-- the floating base's armature" in path.read_text(), spec
     close(f"{spec} mass matrix", ours[np.ix_(cols, cols)], theirs)
     return len(names)
 

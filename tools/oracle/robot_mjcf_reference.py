@@ -29,7 +29,7 @@ written (masses, inertias, mass matrices, bias forces) to be identical:
   regard to case: the Menagerie file writes `pelvis.stl`, Unitree ships
   `pelvis.STL`);
 - the Menagerie humanoids (Cassie, Apollo, Berkeley Humanoid, T1, N1, Adam Lite,
-  ToddlerBot 2xc and 2xm, Atlas):
+  ToddlerBot 2xc and 2xm, Atlas, BXI Elf2):
   their `assets/` folders in a Menagerie checkout given as `--menagerie DIR`
   (DIR/<robot>/assets, the folder names under models/ being Menagerie's), when
   every mesh file the model names is there;
@@ -75,7 +75,7 @@ MESH_SETS = {
                     "unitree_h1/meshes/h1_description/meshes")],
 }
 MENAGERIE = ["agility_cassie", "apptronik_apollo", "berkeley_humanoid", "booster_t1", "fourier_n1",
-             "pndbotics_adam_lite", "toddlerbot_2xc", "toddlerbot_2xm", "atlas"]
+             "pndbotics_adam_lite", "toddlerbot_2xc", "toddlerbot_2xm", "atlas", "bxi_elf2"]
 for _robot in MENAGERIE:
     MESH_SETS[_robot] = [(f"Menagerie's meshes, {_robot}/assets", "menagerie", f"{_robot}/assets")]
 

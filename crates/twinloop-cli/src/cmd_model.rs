@@ -736,6 +736,9 @@ fn export(args: &ExportArgs) -> CliResult {
         export_servos(&mut robot, path, args.mjcf_actuators.as_deref())?;
     }
     twinloop_description::urdf::write_file(&robot, &args.out)?;
+    for what in twinloop_description::urdf::unwritable(&robot) {
+        eprintln!("warning: {what}");
+    }
     common::print(&format!(
         "wrote {} ({} DoF, {} kg, {} links) to {}\n",
         robot.name,

@@ -100,6 +100,40 @@ fn export_refuses_an_unknown_robot() {
     );
 }
 
+/// BXI Elf2's free joint has an armature and damping (from its `<default>` class) that
+/// URDF cannot carry: the export says so on stderr, once each, and in the file.
+#[test]
+fn export_warns_that_urdf_cannot_carry_the_free_joint_armature() {
+    let src =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/bxi_elf2/mjcf/elf2_dof25.xml");
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("elf2_export.urdf");
+    let o = twinloop(&[
+        "model",
+        "export",
+        src.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert_eq!(e.lines().count(), 2, "{e}");
+    assert!(
+        e.contains(
+            "warning: the floating base's armature 0.01 (the MJCF free joint's) is not written"
+        ),
+        "{e}"
+    );
+    assert!(
+        e.contains("warning: the floating base's damping 0.1 "),
+        "{e}"
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.contains("<!-- the floating base's armature 0.01"),
+        "{text}"
+    );
+}
+
 #[test]
 fn help_teaches() {
     let o = twinloop(&["model", "export", "--help"]);

@@ -516,6 +516,14 @@ pub struct Description {
     /// Visual-only details the reader could not take and read past (a URDF
     /// `<texture/>` without a file, a mesh scale with a fourth number): `lint` warns.
     pub ignored: Vec<FileNote>,
+    /// The floating base's armature: an MJCF `<joint type="free" armature>` (or one a
+    /// `<default>` class gives it; `<freejoint>` takes no defaults and has none).
+    /// MuJoCo adds it to the six diagonal entries of the mass matrix that belong to
+    /// the free joint; 0 otherwise (URDF has no such field).
+    pub base_armature: f64,
+    /// The floating base's viscous damping (MJCF free joint `damping`): MuJoCo's
+    /// passive force `-damping qvel` on the six base velocities; 0 otherwise.
+    pub base_damping: f64,
     /// Gravity in the world frame when the file sets it (MJCF `<option gravity>`,
     /// zero with `<flag gravity="disable">`); `None` means (0, 0, -[`crate::GRAVITY`]).
     pub gravity: Option<[f64; 3]>,

@@ -241,6 +241,19 @@ const MENAGERIE: &[(&str, &[&str])] = &[
     ("pndbotics_adam_lite/mjcf/adam_lite.xml", &[]),
     // Atlas (Drake's model): no sensors, equalities or tendons; unclamped motors.
     ("atlas/mjcf/atlas.xml", &[]),
+    // BXI Elf2: its default class gives the free joint a frictionloss (a dry friction
+    // on the six base velocities, not modelled; its armature and damping are), and
+    // sensors at its `imu` and foot sites.
+    (
+        "bxi_elf2/mjcf/elf2_dof25.xml",
+        &[
+            "<joint name=\"world_joint\">",
+            "<gyro name=\"Body_Gyro\">",
+            "<accelerometer name=\"Body_Acc\">",
+            "<touch name=\"lf_touch\">",
+            "<touch name=\"rf_touch\">",
+        ],
+    ),
     ("toddlerbot_2xc/mjcf/toddlerbot_2xc.xml", TODDLERBOT),
     ("toddlerbot_2xm/mjcf/toddlerbot_2xm.xml", TODDLERBOT),
 ];

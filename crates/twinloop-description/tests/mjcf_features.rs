@@ -815,3 +815,54 @@ fn free_props_beside_a_free_robot_are_left_out() {
         assert!(e.to_string().contains("second top-level body"), "{e}");
     }
 }
+
+/// The free joint's own terms (issue 30, BXI Elf2): a `<joint type="free">` takes its
+/// default class, as MuJoCo compiles it (armature, damping, frictionloss on all six
+/// base DoFs), a `<freejoint>` takes none; armature and damping are kept, the dry
+/// friction and a spring are named as not modelled. URDF cannot say the base's terms:
+/// the written file says so in a comment, and reads back without them.
+#[test]
+fn free_joint_armature_and_damping_from_defaults_and_said_unwritable_in_urdf() {
+    let file = |joint: &str| {
+        format!(
+            r#"<mujoco>
+  <default><joint armature="0.01" damping="0.1" frictionloss="0.02" stiffness="3"/></default>
+  <worldbody><body name="base">{joint}<geom size="0.1"/>
+    <body name="arm"><joint name="j"/><geom size="0.05"/></body>
+  </body></worldbody>
+</mujoco>"#
+        )
+    };
+    let r =
+        twinloop_description::mjcf::from_str(&file(r#"<joint name="root" type="free"/>"#)).unwrap();
+    assert_eq!((r.base_armature, r.base_damping), (0.01, 0.1));
+    assert_eq!(r.joint("j").unwrap().armature, 0.01);
+    let notes: Vec<&str> = r
+        .unmodeled
+        .iter()
+        .filter(|n| n.element.contains("root"))
+        .map(|n| n.what.as_str())
+        .collect();
+    assert_eq!(notes.len(), 2, "{notes:?}");
+    assert!(
+        notes[0].starts_with("free joint frictionloss 0.02"),
+        "{notes:?}"
+    );
+    assert!(notes[1].starts_with("free joint stiffness 3"), "{notes:?}");
+    let text = twinloop_description::urdf::to_string(&r);
+    assert!(text.contains(
+        "<!-- the floating base's armature 0.01 (the MJCF free joint's) is not written: URDF \
+         has no joint for the floating base to carry it -->"
+    ));
+    assert!(
+        text.contains("<!-- the floating base's damping 0.1 "),
+        "{text}"
+    );
+    let back = twinloop_description::urdf::from_str(&text).unwrap();
+    assert_eq!((back.base_armature, back.base_damping), (0.0, 0.0));
+    assert!(twinloop_description::urdf::unwritable(&back).is_empty());
+    let r = twinloop_description::mjcf::from_str(&file("<freejoint/>")).unwrap();
+    assert_eq!((r.base_armature, r.base_damping), (0.0, 0.0));
+    assert!(r.unmodeled.is_empty(), "{:?}", r.unmodeled);
+    assert!(!twinloop_description::urdf::to_string(&r).contains("<!--"));
+}

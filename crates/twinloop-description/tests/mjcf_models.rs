@@ -23,8 +23,8 @@ fn robot_mjcfs() -> Vec<std::path::PathBuf> {
         .filter(|p| p.file_name().is_some_and(|n| n != "scene.xml"))
         .collect();
     // OP3, TALOS, G1 and H1 (G1 and H1 also as Unitree ship them), and the other
-    // Menagerie humanoids of issue 30 (ToddlerBot 2xc and 2xm, Atlas among them).
-    assert_eq!(files.len(), 15, "{files:?}");
+    // Menagerie humanoids of issue 30 (ToddlerBot 2xc and 2xm, Atlas, Elf2 among them).
+    assert_eq!(files.len(), 16, "{files:?}");
     files
 }
 

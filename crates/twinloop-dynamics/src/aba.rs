@@ -84,7 +84,18 @@ fn velocity_pass(
         if let Some((_, fb)) = fext {
             pa0 -= base.act_inv_force(&fb);
         }
-        (i0.to_symmetric6(), pa0)
+        let mut ia0 = i0.to_symmetric6();
+        // The base armature's `a (qdd0 + w x v)` with `qdd0 = a0 - up` (the third pass
+        // solves for `a0`, gravity in it as an upward acceleration, which the armature
+        // does not feel): `a` on the diagonal, `a (w x v - up)` in the bias.
+        let k = model.base_armature;
+        if k != 0.0 {
+            ia0.a += Matrix3::identity() * k;
+            ia0.c += Matrix3::identity() * k;
+            let up = base.rotation.tr_mul(&(-model.gravity));
+            pa0.f += (v0.w.cross(&v0.v) - up) * k;
+        }
+        (ia0, pa0)
     } else {
         (Symmetric6::ZERO, Force::ZERO)
     };

@@ -92,6 +92,8 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
             sub[(3, k)] = f.n.x;
             sub[(4, k)] = f.n.y;
             sub[(5, k)] = f.n.z;
+            // MuJoCo's free-joint armature (see `Model::base_armature`).
+            sub[(k, k)] += model.base_armature;
         }
     }
     &data.mass_matrix

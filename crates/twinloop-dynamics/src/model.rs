@@ -144,6 +144,14 @@ pub struct Model {
     /// Rotor inertia reflected to each joint (added to the mass-matrix diagonal): the
     /// description's (MJCF `armature`), zero for URDF.
     pub armature: Vec<f64>,
+    /// The floating base's armature (the description's, MJCF free joint `armature`;
+    /// 0 for a fixed base). MuJoCo adds it to the free joint's six diagonal entries
+    /// of M in its coordinates (linear velocity in the world frame, angular in the
+    /// body frame). Its kinetic energy `a (|v|^2 + |w|^2) / 2` is the same in the
+    /// base-frame coordinates here, so it is `a` on the base's six diagonal entries
+    /// of M and, as the base frame turns, `a (w x v)` on the base force in the bias
+    /// forces; gravity does not act on it.
+    pub base_armature: f64,
     /// The description's gravity (MJCF `<option gravity>`), else (0, 0, -9.81).
     pub gravity: Vector3<f64>,
     pub frames: Vec<FrameInfo>,
@@ -372,6 +380,11 @@ impl Model {
             effort_limits: Vec::new(),
             velocity_limits: Vec::new(),
             armature: Vec::new(),
+            base_armature: if base == BaseKind::Floating {
+                robot.base_armature
+            } else {
+                0.0
+            },
             gravity: robot.gravity.map_or(
                 Vector3::new(0.0, 0.0, -twinloop_description::GRAVITY),
                 Vector3::from,

@@ -78,6 +78,9 @@ pub(crate) fn rnea_impl(
     } else {
         Force::ZERO
     };
+    if floating {
+        f0 += base_armature_force(model, &v0, a.map_or(&[0.0; 6][..], |a| &a[0..6]));
+    }
     for i in 0..model.nbodies {
         let li = joint_placement(model, i, q);
         data.li_m_i[i] = li;
@@ -131,4 +134,19 @@ pub(crate) fn rnea_impl(
     if floating {
         f0.write_to(&mut data.tau.as_mut_slice()[0..6]);
     }
+}
+
+/// The force the floating base's armature (`Model::base_armature`, MuJoCo's free-joint
+/// armature) takes at base velocity `v0` and acceleration `a0` (base frame, without
+/// gravity): MuJoCo's `armature * qacc` on its free joint, whose linear coordinates are
+/// world-frame, is `a (a0.v + w x v)` in the base frame (the derivative of a base-frame
+/// velocity misses the frame's turn), and `a a0.w` on the angular ones.
+#[inline(always)]
+pub(crate) fn base_armature_force(model: &Model, v0: &Motion, a0: &[f64]) -> Force {
+    let k = model.base_armature;
+    if k == 0.0 {
+        return Force::ZERO;
+    }
+    let a0 = Motion::from_slice(a0);
+    Force::new((a0.v + v0.w.cross(&v0.v)) * k, a0.w * k)
 }

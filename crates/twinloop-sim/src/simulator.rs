@@ -220,6 +220,10 @@ pub struct Simulator {
     /// The description's joint springs (MJCF `stiffness` about `springref`), per joint.
     pub joint_stiffness: Vec<f64>,
     pub joint_springref: Vec<f64>,
+    /// The floating base's viscous damping (MJCF free joint `damping`): `-c v` on the
+    /// six base velocities, MuJoCo's `qfrc_passive` (the same in its world-linear
+    /// coordinates, the base frame being a rotation of them). 0 for a fixed base.
+    pub base_damping: f64,
     friction_anchor: Vec<f64>,
     /// Per joint: the motor side of a servo with a backlash.
     pub gears: Vec<crate::backlash::Gear>,
@@ -344,6 +348,11 @@ impl Simulator {
             joint_friction,
             joint_stiffness,
             joint_springref,
+            base_damping: if model.is_floating() {
+                robot.base_damping.max(0.0)
+            } else {
+                0.0
+            },
             friction_anchor: vec![0.0; nb],
             gears: vec![Default::default(); nb],
             servo_states: vec![Default::default(); nb],
@@ -701,6 +710,13 @@ impl Simulator {
             // The armature is already on the diagonal: crba adds it; an engaged
             // motor side behind a backlash joins it.
             self.h[(dof, dof)] += dt * d.d + dt * dt * d.k + self.engaged_gear(i).0;
+        }
+        // The base's damping, implicit like a joint's (the armature is in crba's M).
+        if self.model.is_floating() {
+            for dof in 0..6 {
+                self.rhs[dof] -= self.base_damping * self.v[dof];
+                self.h[(dof, dof)] += dt * self.base_damping;
+            }
         }
         if self.config.ground {
             self.add_contacts(dt);

@@ -46,6 +46,9 @@ class Description:
         """name, type, parent, child, axis, lower/upper (rad or m), effort (N m or N), velocity (rad/s or m/s),
         armature (kg m^2 or kg)."""
     @property
+    def base_armature(self) -> float:
+        """The floating base's armature (an MJCF free joint's, on the six base diagonal entries of M); 0 for URDF."""
+    @property
     def findings(self) -> list[dict[str, Any]]:
         """Lint findings: severity, code, subject, name, message."""
     def lint(self) -> dict[str, Any]:

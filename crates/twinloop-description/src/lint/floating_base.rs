@@ -60,6 +60,10 @@ fn whole_robot(robot: &Description) -> twinloop_spatial::Inertia {
 }
 
 pub(super) fn check(robot: &Description, out: &mut Vec<Finding>) {
+    if robot.base_armature > 0.0 {
+        // The free joint's armature is on every base diagonal entry: never singular.
+        return;
+    }
     let total = whole_robot(robot);
     // Negative mass or moments are already errors on the links at fault.
     let message = if total.mass < 0.0 {

@@ -1353,6 +1353,9 @@ impl<'a, 'i> Reader<'a, 'i> {
         let pos = opt_array::<3>(node, "pos")?.unwrap_or([0.0; 3]);
         let (pos, rot) = compose(&frame, pos, self.orientation(node, "body", None)?);
         let mut joints = self.body_joints(node, &name, parent.is_some(), cc)?;
+        if parent.is_none() {
+            self.base_joint_terms(node, cc)?;
+        }
         let offset = joints.last().map_or([0.0; 3], |j| j.anchor);
         for j in joints.iter_mut() {
             if j.joint.kind == JointKind::Spherical && j.joint.stiffness != 0.0 {
@@ -1609,6 +1612,55 @@ impl<'a, 'i> Reader<'a, 'i> {
             }
         }
         Ok(out)
+    }
+
+    /// The passive terms of the floating base's `<joint type="free">`, which MuJoCo
+    /// applies to its six velocities (its `<default>` class reaches it, as Elf2's
+    /// `armature="0.01"` does; a `<freejoint>` takes no defaults and has none):
+    /// `armature` and `damping` go into the description; a `frictionloss` (a dry
+    /// friction constraint per base velocity) or `stiffness` (a spring towards the
+    /// initial pose) is not modelled, so it is noted by name for `lint`.
+    fn base_joint_terms(
+        &mut self,
+        node: Node<'a, 'i>,
+        cc: Option<&str>,
+    ) -> Result<(), DescriptionError> {
+        let Some(j) = node.children().find(|c| {
+            c.has_tag_name("joint") && self.joint_type(*c, cc).is_ok_and(|t| t == "free")
+        }) else {
+            return Ok(());
+        };
+        let class = self.class_of(j, cc)?;
+        let value = |s: &Self, attr: &str| -> Result<f64, DescriptionError> {
+            Ok(s.number(s.get(j, "joint", &class, attr), attr)?
+                .unwrap_or(0.0))
+        };
+        self.robot.base_armature = value(self, "armature")?;
+        self.robot.base_damping = value(self, "damping")?;
+        for (attr, what) in [
+            (
+                "frictionloss",
+                "a dry friction MuJoCo applies to each of the six base velocities",
+            ),
+            (
+                "stiffness",
+                "a spring MuJoCo applies towards the base's initial pose",
+            ),
+        ] {
+            let v = value(self, attr)?;
+            if v != 0.0 {
+                let (line, _) = crate::xml::position(j.document(), j.range().start);
+                self.robot.unmodeled.push(FileNote {
+                    element: crate::xml::element_path(j),
+                    line,
+                    what: format!(
+                        "free joint {attr} {v}: {what}; twinloop's floating base has none \
+                         (its armature and damping it models)"
+                    ),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// A hinge or slide joint (name, parent, child and origin are set by the caller).

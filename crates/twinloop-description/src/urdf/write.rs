@@ -31,6 +31,10 @@
 //!   mass matrix; it reads back as those three joints. [`to_string_exact`] keeps the
 //!   ball as `type="spherical"`, for twinloop's own round trips only.
 //!
+//! What URDF cannot say at all is written as an XML comment after `<robot>` (see
+//! [`unwritable`]): an MJCF free joint's armature and damping, as URDF has no
+//! joint for the floating base to carry them.
+//!
 //! Non-finite numbers (only possible in a description built in code) are
 //! written as `NaN`/`inf`, which the reader rejects.
 
@@ -66,6 +70,10 @@ fn write(robot: &Description, standard: bool) -> String {
         let _ = write!(w.out, " {}=\"{}\"", k, escape(v));
     }
     w.out.push_str(">\n");
+    for what in unwritable(robot) {
+        // A comment: no entities to escape, and the sentence holds no "--".
+        w.line(1, &format!("<!-- {what} -->"));
+    }
     for item in robot.items_in_order() {
         match item {
             Item::Link(i) => w.link(&robot.links[i]),
@@ -77,6 +85,27 @@ fn write(robot: &Description, standard: bool) -> String {
     }
     w.out.push_str("</robot>\n");
     w.out
+}
+
+/// What the description holds that a URDF cannot say, one sentence each (written
+/// as comments in the file; `twinloop model export` also warns): the floating base's
+/// armature and damping (an MJCF free joint's), which URDF has no joint to carry.
+/// Read back, the file's base has neither, as Pinocchio's has.
+pub fn unwritable(robot: &Description) -> Vec<String> {
+    [
+        ("armature", robot.base_armature),
+        ("damping", robot.base_damping),
+    ]
+    .into_iter()
+    .filter(|(_, v)| *v != 0.0)
+    .map(|(what, v)| {
+        format!(
+            "the floating base's {what} {} (the MJCF free joint's) is not written: URDF has \
+             no joint for the floating base to carry it",
+            num(v)
+        )
+    })
+    .collect()
 }
 
 /// Write a robot as URDF to a file; an I/O error names the path.
