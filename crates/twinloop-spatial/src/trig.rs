@@ -59,3 +59,40 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     let cos = ((cb & !swap) | (sb & swap)) ^ (((quadrant + 1) & 2) << 62);
     (f64::from_bits(sin), f64::from_bits(cos))
 }
+
+/// [`sin_cos`] of `L` angles at once, bit for bit the same numbers: the same
+/// operations written lane by lane so the compiler can put the lanes of one
+/// operation in one vector instruction (the batched dynamics of
+/// twinloop-dynamics). A lane the fast reduction does not cover (NaN, |x| >= 1e5)
+/// takes the library's value as [`sin_cos`] does.
+#[inline(always)]
+pub fn sin_cos_lanes<const L: usize>(x: &[f64; L]) -> ([f64; L], [f64; L]) {
+    let (mut sin, mut cos) = ([0.0; L], [0.0; L]);
+    let mut slow = false;
+    for l in 0..L {
+        let x = x[l];
+        slow |= x.is_nan() | (x.abs() >= FAST_LIMIT);
+        let t = x * FRAC_2_PI + SHIFTER;
+        let k = t - SHIFTER;
+        let quadrant = t.to_bits() & 3;
+        let r = ((x - k * P1) - k * P2) - k * P3;
+        let z = r * r;
+        let ps = F3 - z * (F5 - z * (F7 - z * (F9 - z * (F11 - z * (F13 - z * (F15 - z * F17))))));
+        let s = r - r * z * ps;
+        let pc = F4 - z * (F6 - z * (F8 - z * (F10 - z * (F12 - z * (F14 - z * F16)))));
+        let c = 1.0 - (0.5 * z - z * z * pc);
+        let swap = 0u64.wrapping_sub(quadrant & 1);
+        let (sb, cb) = (s.to_bits(), c.to_bits());
+        sin[l] = f64::from_bits(((sb & !swap) | (cb & swap)) ^ ((quadrant & 2) << 62));
+        cos[l] = f64::from_bits(((cb & !swap) | (sb & swap)) ^ (((quadrant + 1) & 2) << 62));
+    }
+    if slow {
+        // Rare: redo the lanes the reduction cannot take (one branch per call).
+        for l in 0..L {
+            if x[l].is_nan() || x[l].abs() >= FAST_LIMIT {
+                (sin[l], cos[l]) = x[l].sin_cos();
+            }
+        }
+    }
+    (sin, cos)
+}
