@@ -21,14 +21,17 @@ fn median(mut x: Vec<f64>) -> f64 {
     x[x.len() / 2]
 }
 
-/// This thread's time on a CPU in ns (the kernel's schedstat): on a machine shared
+/// This thread's time on a CPU in ns (`CLOCK_THREAD_CPUTIME_ID`): on a machine shared
 /// by more runnable threads than cores the wall time mostly measures the others.
-/// Wall time where the file is missing.
-fn cpu_ns(t0: Instant) -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse().ok())
-        .unwrap_or_else(|| t0.elapsed().as_nanos() as f64)
+fn cpu_ns(_t0: Instant) -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: a valid clock id and a valid pointer to a timespec.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    assert_eq!(rc, 0, "clock_gettime");
+    ts.tv_sec as f64 * 1e9 + ts.tv_nsec as f64
 }
 
 /// ns per instance (on-CPU time) of `single` and `batched`, alternating, medians.

@@ -128,6 +128,35 @@ fn batched_g1_is_the_single_call() {
     check(&model, 0, 6);
 }
 
+/// Two links on a hinge and a slider (nv = 2 with a fixed base).
+fn every_one_dof_joint_fixed() -> twinloop_description::Description {
+    DescriptionBuilder::new("short")
+        .link("base")
+        .mass(
+            2.0,
+            [0.0, 0.0, 0.05],
+            Inertia::solid_box(2.0, [0.2, 0.3, 0.1]),
+        )
+        .done()
+        .link("arm")
+        .mass(
+            0.5,
+            [0.01, 0.02, -0.1],
+            Inertia::solid_cylinder(0.5, 0.03, 0.2),
+        )
+        .done()
+        .revolute("hinge", "base", "arm", [1.0, 0.0, 0.0])
+        .done()
+        .link("bead")
+        .mass(0.2, [0.0, 0.1, 0.0], Inertia::solid_sphere(0.2, 0.02))
+        .done()
+        .joint("slide", JointKind::Prismatic, "arm", "bead")
+        .axis([0.0, 1.0, 0.0])
+        .done()
+        .build()
+        .unwrap()
+}
+
 /// A chain with every 1-DoF joint kind the lanes take: axis-aligned revolutes with
 /// and without a rotated placement, a general axis, a negative axis, a prismatic joint.
 fn every_one_dof_joint() -> Model {
@@ -239,6 +268,21 @@ fn a_singular_row_is_refused_naming_the_row_and_the_joint() {
     let e = try_aba_batch(&model, &mut bd, &q, &v, &tau, &mut out).unwrap_err();
     let mut data = Data::new(&model);
     let single = try_aba(&model, &mut data, &q[0..2], &v[0..2], &tau[0..2]).unwrap_err();
+    // Fewer than six coordinates and a regular chain: the check passes (a fixed base
+    // has no base rows to test).
+    let regular =
+        Model::from_description_with_base(&every_one_dof_joint_fixed(), BaseKind::Fixed).unwrap();
+    let [q2, v2, _, t2] = states(&regular, 3, 10);
+    let mut out2 = vec![0.0; 3 * regular.nv];
+    try_aba_batch(
+        &regular,
+        &mut BatchData::new(&regular),
+        &q2,
+        &v2,
+        &t2,
+        &mut out2,
+    )
+    .unwrap();
     assert_eq!((e.row, &e.joint), (0, &single));
     assert!(
         e.to_string()

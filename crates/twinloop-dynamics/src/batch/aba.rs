@@ -274,9 +274,9 @@ fn acceleration_pass(model: &Model, bd: &mut BatchData, ia0: &S6, pa0: &Fo) -> [
         bd.out[model.idx_v[i]] = qdd;
         bd.acc[i] = ai.add(&bd.s[d].scale(qdd));
     }
-    for l in 0..LANES {
-        if ok[l] && !(0..6).all(|k| bd.out[k].0[l].is_finite()) && model.is_floating() {
-            ok[l] = false;
+    if model.is_floating() {
+        for l in 0..LANES {
+            ok[l] &= (0..6).all(|k| bd.out[k].0[l].is_finite());
         }
     }
     ok

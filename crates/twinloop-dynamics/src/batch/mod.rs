@@ -139,14 +139,16 @@ fn check_rows(name: &str, x: &[f64], width: usize, n: usize) {
 }
 
 /// Rows `row0 ..` of `src` (`width` a row) into lanes; missing lanes repeat row `row0`.
+/// Each lane group is built from the rows' entries in registers and stored once
+/// (lane-by-lane stores into memory would stall the vector loads that follow).
 #[inline(always)]
 fn gather(src: &[f64], width: usize, row0: usize, count: usize, dst: &mut [W]) {
-    for l in 0..LANES {
+    let rows: [&[f64]; LANES] = std::array::from_fn(|l| {
         let r = row0 + if l < count { l } else { 0 };
-        let row = &src[r * width..(r + 1) * width];
-        for (d, x) in dst.iter_mut().zip(row) {
-            d.0[l] = *x;
-        }
+        &src[r * width..(r + 1) * width]
+    });
+    for (k, d) in dst.iter_mut().enumerate().take(width) {
+        *d = W(std::array::from_fn(|l| rows[l][k]));
     }
 }
 
