@@ -143,12 +143,16 @@ fn check_rows(name: &str, x: &[f64], width: usize, n: usize) {
 /// (lane-by-lane stores into memory would stall the vector loads that follow).
 #[inline(always)]
 fn gather(src: &[f64], width: usize, row0: usize, count: usize, dst: &mut [W]) {
-    let rows: [&[f64]; LANES] = std::array::from_fn(|l| {
-        let r = row0 + if l < count { l } else { 0 };
-        &src[r * width..(r + 1) * width]
-    });
+    let mut rows: [&[f64]; LANES] = [&src[row0 * width..(row0 + 1) * width]; LANES];
+    for (l, r) in rows.iter_mut().enumerate().take(count).skip(1) {
+        *r = &src[(row0 + l) * width..(row0 + l + 1) * width];
+    }
     for (k, d) in dst.iter_mut().enumerate().take(width) {
-        *d = W(std::array::from_fn(|l| rows[l][k]));
+        let mut w = [0.0; LANES];
+        for l in 0..LANES {
+            w[l] = rows[l][k];
+        }
+        *d = W(w);
     }
 }
 
