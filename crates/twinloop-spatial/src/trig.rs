@@ -65,6 +65,8 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
 /// operation in one vector instruction (the batched dynamics of
 /// twinloop-dynamics). A lane the fast reduction
 /// does not cover (NaN, |x| >= 1e5) takes the library's value as [`sin_cos`] does.
+// Lane loops index several arrays by the lane number.
+#[allow(clippy::needless_range_loop)]
 #[inline(always)]
 pub fn sin_cos_lanes<const L: usize>(x: &[f64; L]) -> ([f64; L], [f64; L]) {
     let (mut t, mut r, mut z) = ([0.0; L], [0.0; L], [0.0; L]);
@@ -102,10 +104,10 @@ pub fn sin_cos_lanes<const L: usize>(x: &[f64; L]) -> ([f64; L], [f64; L]) {
         sin[l] = f64::from_bits(((s[l] & !swap) | (c[l] & swap)) ^ ((quadrant & 2) << 62));
         cos[l] = f64::from_bits(((c[l] & !swap) | (s[l] & swap)) ^ (((quadrant + 1) & 2) << 62));
     }
-    // NaN fails the comparison: `!(|x| < limit)` catches it with the large angles.
+    // NaN fails `|x| < limit`, so this catches it with the large angles.
     let mut slow = 0u64;
-    for l in 0..L {
-        slow |= u64::from(!(x[l].abs() < FAST_LIMIT));
+    for xl in x {
+        slow |= u64::from(xl.abs().partial_cmp(&FAST_LIMIT) != Some(std::cmp::Ordering::Less));
     }
     if slow != 0 {
         // Rare: redo the lanes the reduction cannot take (one branch per call).
