@@ -152,10 +152,12 @@ fn bench(name: &str, file: &str) {
         ("crba+out", crba_out_t),
         ("com", com_t),
     ];
-    for (algo, (s, b)) in results {
+    for (algo, ((s, s_min), (b, b_min))) in results {
         println!(
-            "{name:4} {algo:8} single {s:8.1} ns  batched {b:8.1} ns/instance  ratio {:.2}x",
-            s / b
+            "{name:4} {algo:8} median: single {s:7.1} ns, batched {b:7.1} ns/instance, {:.2}x; \
+             min: {s_min:7.1}, {b_min:7.1}, {:.2}x",
+            s / b,
+            s_min / b_min
         );
     }
 }
