@@ -1,6 +1,8 @@
 //! `<function>_batch`: one call over N rows of (N, nq) / (N, nv) arrays, looped in
 //! Rust with the GIL released, the rows split over `threads` threads (each with its
 //! own `Data` and a 6 x nv scratch matrix, so the loop allocates nothing per row).
+//! RNEA, ABA, CRBA and the CoM run the batched algorithms instead, a thread's rows in
+//! one call (`run_blocks`; docs/dynamics.md, Batched calls).
 
 use crate::arrays::{Arg, Dim, new_array};
 use crate::dynamics::reference_frame;
@@ -9,7 +11,7 @@ use crate::model::PyModel;
 use nalgebra::DMatrix;
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
-use twinloop_dynamics::{self as dy, Data, Model};
+use twinloop_dynamics::{self as dy, BatchData, Data, Model};
 
 /// Threads to use: the caller's number, else every core.
 pub fn thread_count(threads: Option<usize>) -> PyResult<usize> {
@@ -83,6 +85,65 @@ where
     }
 }
 
+/// What one thread computes on its block of rows: `Err((row in the block, message))`.
+pub type BlockResult = Result<(), (usize, String)>;
+
+/// [`run_rows`] for the batched algorithms (`twinloop_dynamics::batch`): each thread
+/// gets one block of consecutive rows (a multiple of the lane count, so only the last
+/// block has a partial lane group) and its own `BatchData`, and `block` computes them
+/// all in one call. Errors as `run_rows`: the lowest failing row, "row i: message".
+pub fn run_blocks<F>(
+    model: &Model,
+    inputs: &[&[f64]],
+    widths: &[usize],
+    n: usize,
+    out_width: usize,
+    threads: usize,
+    block: F,
+) -> Result<Vec<f64>, String>
+where
+    F: Fn(&Model, &mut BatchData, &[&[f64]], &mut [f64]) -> BlockResult + Sync,
+{
+    let mut out = vec![0.0; n * out_width];
+    if n == 0 || out_width == 0 {
+        return Ok(out);
+    }
+    let lanes = dy::batch::lanes::LANES;
+    let per_thread = n.div_ceil(threads.min(n)).next_multiple_of(lanes);
+    let failures: Vec<Option<(usize, String)>> = std::thread::scope(|s| {
+        let handles: Vec<_> = out
+            .chunks_mut(per_thread * out_width)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let block = &block;
+                s.spawn(move || {
+                    let mut bd = BatchData::new(model);
+                    let (r0, r1) = (c * per_thread, c * per_thread + chunk.len() / out_width);
+                    let args: Vec<&[f64]> = inputs
+                        .iter()
+                        .zip(widths)
+                        .map(|(x, w)| &x[r0 * w..r1 * w])
+                        .collect();
+                    block(model, &mut bd, &args, chunk)
+                        .err()
+                        .map(|(i, e)| (r0 + i, e))
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Some((0, "a batch thread failed unexpectedly".into())))
+            })
+            .collect()
+    });
+    match failures.into_iter().flatten().next() {
+        Some((i, e)) => Err(format!("row {i}: {e}")),
+        None => Ok(out),
+    }
+}
+
 /// Copy a column-major matrix into row-major `out`.
 fn write_matrix(m: &DMatrix<f64>, out: &mut [f64]) {
     let c = m.ncols();
@@ -140,6 +201,68 @@ where
     new_array(py, values, &shape)
 }
 
+/// [`batch`] for the batched algorithms: `block` computes a thread's rows at once.
+fn batch_blocks<'py, F>(
+    py: Python<'py>,
+    model: &PyModel,
+    q: &Bound<'py, PyAny>,
+    rest: &[(&Bound<'py, PyAny>, &'static str)],
+    out_shape: &[usize],
+    threads: Option<usize>,
+    block: F,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
+where
+    F: Fn(&Model, &mut BatchData, &[&[f64]], &mut [f64]) -> BlockResult + Sync + Send,
+{
+    let m = &*model.inner;
+    let threads = thread_count(threads)?;
+    let (n, args) = batch_args(m, q, rest)?;
+    let slices: Vec<&[f64]> = args.iter().map(|a| a.slice()).collect();
+    let mut widths = vec![m.nq];
+    widths.extend(std::iter::repeat_n(m.nv, rest.len()));
+    let out_width: usize = out_shape.iter().product();
+    let values = py
+        .detach(|| run_blocks(m, &slices, &widths, n, out_width, threads, block))
+        .map_err(value_error)?;
+    let mut shape = vec![n];
+    shape.extend_from_slice(out_shape);
+    new_array(py, values, &shape)
+}
+
+/// A batch function on the batched algorithms (4 states per vector instruction;
+/// `twinloop_dynamics::batch`): the same Python signature as [`batch_fn`]'s, the
+/// block's body given all of a thread's rows.
+macro_rules! block_fn {
+    (
+        $(#[$meta:meta])*
+        fn $name:ident($($arg:ident),*) -> |$sm:ident| $shape:expr,
+        |$m:ident, $bd:ident, $x:ident, $o:ident| $body:block
+    ) => {
+        $(#[$meta])*
+        #[pyfunction]
+        #[pyo3(signature = (model, Q, $($arg,)* threads = None))]
+        #[allow(non_snake_case)]
+        pub fn $name<'py>(
+            model: &Bound<'py, PyModel>,
+            Q: &Bound<'py, PyAny>,
+            $($arg: &Bound<'py, PyAny>,)*
+            threads: Option<usize>,
+        ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+            let $sm = &*model.get().inner;
+            let shape = $shape;
+            batch_blocks(
+                model.py(),
+                model.get(),
+                Q,
+                &[$(($arg, stringify!($arg))),*],
+                &shape,
+                threads,
+                |$m, $bd, $x, $o| $body,
+            )
+        }
+    };
+}
+
 /// A batch function of `(model, Q, <arrays of nv columns>..., threads=None)`: its
 /// Python signature, the output shape per row (from the model) and the row's body.
 macro_rules! batch_fn {
@@ -176,22 +299,22 @@ macro_rules! batch_fn {
     };
 }
 
-batch_fn! {
+block_fn! {
     /// rnea over rows: Q (N, nq), V (N, nv), A (N, nv) -> tau (N, nv).
     fn rnea_batch(V, A) -> |m| [m.nv],
-    |m, d, _, x, o| {
-        o.copy_from_slice(dy::rnea(m, d, x[0], x[1], x[2]).as_slice());
+    |m, bd, x, o| {
+        dy::rnea_batch(m, bd, x[0], x[1], x[2], o);
+        Ok(())
     }
 }
 
-batch_fn! {
+block_fn! {
     /// aba over rows: Q (N, nq), V (N, nv), TAU (N, nv) -> ddq (N, nv). A singular
     /// mass matrix raises ValueError naming the row and the joint, as `aba` does,
     /// never NaN accelerations.
     fn aba_batch(V, TAU) -> |m| [m.nv],
-    |m, d, _, x, o| {
-        let ddq = dy::try_aba(m, d, x[0], x[1], x[2]).map_err(|e| e.to_string())?;
-        o.copy_from_slice(ddq.as_slice());
+    |m, bd, x, o| {
+        dy::try_aba_batch(m, bd, x[0], x[1], x[2], o).map_err(|e| (e.row, e.joint.to_string()))
     }
 }
 
@@ -203,21 +326,21 @@ batch_fn! {
     }
 }
 
-batch_fn! {
+block_fn! {
     /// crba over rows: Q (N, nq) -> M (N, nv, nv), full.
     fn crba_batch() -> |m| [m.nv, m.nv],
-    |m, d, _, x, o| {
-        dy::crba(m, d, x[0]);
-        d.symmetrize_mass_matrix();
-        write_matrix(&d.mass_matrix, o);
+    |m, bd, x, o| {
+        dy::crba_batch(m, bd, x[0], o);
+        Ok(())
     }
 }
 
-batch_fn! {
+block_fn! {
     /// center_of_mass over rows: Q (N, nq) -> (N, 3).
     fn center_of_mass_batch() -> |_m| [3],
-    |m, d, _, x, o| {
-        o.copy_from_slice(dy::center_of_mass(m, d, x[0]).as_slice());
+    |m, bd, x, o| {
+        dy::center_of_mass_batch(m, bd, x[0], o);
+        Ok(())
     }
 }
 

@@ -22,6 +22,7 @@
 //! | regressors | [`joint_torque_regressor`], [`static_com_regressor`] |
 
 pub mod aba;
+pub mod batch;
 pub mod center_of_mass;
 pub mod configuration;
 pub mod crba;
@@ -34,6 +35,9 @@ pub mod rnea;
 pub mod singular;
 
 pub use aba::{aba, aba_with_forces};
+pub use batch::{
+    BatchData, aba_batch, center_of_mass_batch, crba_batch, rnea_batch, try_aba_batch,
+};
 pub use center_of_mass::{center_of_mass, ground_projected_com, jacobian_center_of_mass};
 pub use crba::crba;
 pub use data::Data;

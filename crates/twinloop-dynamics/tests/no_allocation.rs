@@ -114,6 +114,27 @@ fn algorithms_do_not_allocate() {
     let mut jac = nalgebra::DMatrix::zeros(6, model.nv);
     let (mut q_next, mut dq) = (vec![0.0; model.nq], vec![0.0; model.nv]);
     let foot = model.frame_index("l_foot").unwrap();
+    // The batched algorithms: this model (ball joints: row by row) and OP3 (lanes),
+    // 5 states each (a group of 4 and a padded one).
+    let op3_path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models/op3/robotis_op3.nomesh.urdf");
+    let op3 = Model::from_description(&twinloop_description::load(&op3_path).unwrap()).unwrap();
+    let mut batches: Vec<_> = [&model, &op3]
+        .into_iter()
+        .map(|m| {
+            let mut qs = Vec::new();
+            for _ in 0..5 {
+                qs.extend(random_configuration(m, &mut rng));
+            }
+            let vs: Vec<f64> = (0..5 * m.nv).map(|k| (k as f64 * 0.37).sin()).collect();
+            let outs = (
+                vec![0.0; 5 * m.nv],
+                vec![0.0; 5 * m.nv * m.nv],
+                vec![0.0; 15],
+            );
+            (m, BatchData::new(m), qs, vs, outs)
+        })
+        .collect();
 
     let mut run = |data: &mut Data, jac: &mut nalgebra::DMatrix<f64>| {
         configuration::integrate(&model, &q, &v, 1e-3, &mut q_next);
@@ -139,11 +160,22 @@ fn algorithms_do_not_allocate() {
         joint_torque_regressor(&model, data, &q, &v, &a);
         static_com_regressor(&model, data, &q);
     };
+    let mut run_batches = || {
+        for (m, bd, qs, vs, (out, mm, com)) in batches.iter_mut() {
+            rnea_batch(m, bd, qs, vs, vs, out);
+            aba_batch(m, bd, qs, vs, vs, out);
+            try_aba_batch(m, bd, qs, vs, vs, out).unwrap();
+            crba_batch(m, bd, qs, mm);
+            center_of_mass_batch(m, bd, qs, com);
+        }
+    };
     run(&mut data, &mut jac); // warm-up
+    run_batches();
     let before = ALLOCATIONS.load(Ordering::SeqCst);
     assert!(before > 0, "the counting allocator is installed");
     for _ in 0..10 {
         run(&mut data, &mut jac);
+        run_batches();
     }
     let after = ALLOCATIONS.load(Ordering::SeqCst);
     assert_eq!(

@@ -292,6 +292,7 @@ fn check_model(name: &str, file: &str) {
             }
         }
     }
+    check_batched(name, &model, &refd, &mp);
     LARGEST.with(|l| {
         let (rel, what) = &*l.borrow();
         eprintln!("{name}: largest error {rel:.2e} of max(1, |Pinocchio|), at {what}");
@@ -336,4 +337,55 @@ fn op3_mjcf() {
 #[test]
 fn talos_mjcf() {
     check_model("talos_mjcf", "models/talos/mjcf/talos.xml");
+}
+
+/// The batched algorithms (`twinloop_dynamics::batch`) on all of the model's states at
+/// once, against Pinocchio's numbers (tests/batch.rs: bit for bit the single calls).
+fn check_batched(name: &str, model: &Model, refd: &Value, mp: &Maps) {
+    let states = refd["states"].as_array().unwrap();
+    let (n, nv) = (states.len(), model.nv);
+    let to_ours = |x_pin: &[f64]| -> Vec<f64> { (0..nv).map(|i| x_pin[mp.v_pin[i]]).collect() };
+    let (mut q, mut v, mut a, mut tau) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for st in states {
+        q.extend(our_q(model, refd, &vecf(&st["q"])));
+        v.extend(to_ours(&vecf(&st["v"])));
+        a.extend(to_ours(&vecf(&st["a"])));
+        tau.extend(to_ours(&vecf(&st["tau"])));
+    }
+    let mut bd = BatchData::new(model);
+    let mut out = vec![0.0; n * nv];
+    let mut m = vec![0.0; n * nv * nv];
+    let mut com = vec![0.0; n * 3];
+    rnea_batch(model, &mut bd, &q, &v, &a, &mut out);
+    let rnea_out = out.clone();
+    try_aba_batch(model, &mut bd, &q, &v, &tau, &mut out).unwrap();
+    crba_batch(model, &mut bd, &q, &mut m);
+    center_of_mass_batch(model, &mut bd, &q, &mut com);
+    for (si, st) in states.iter().enumerate() {
+        let tag = format!("{name} batched state {si}");
+        let (prnea, paba) = (vecf(&st["rnea"]), vecf(&st["aba"]));
+        let pm = mat(&st["mass_matrix"]);
+        for i in 0..nv {
+            close(
+                &format!("{tag} rnea[{i}]"),
+                rnea_out[si * nv + i],
+                prnea[mp.v_pin[i]],
+            );
+            close(
+                &format!("{tag} aba[{i}]"),
+                out[si * nv + i],
+                paba[mp.v_pin[i]],
+            );
+            for k in 0..nv {
+                close(
+                    &format!("{tag} M[{i},{k}]"),
+                    m[(si * nv + i) * nv + k],
+                    pm[(mp.v_pin[i], mp.v_pin[k])],
+                );
+            }
+        }
+        for (d, c) in vecf(&st["com"]).iter().enumerate() {
+            close(&format!("{tag} com"), com[si * 3 + d], *c);
+        }
+    }
 }

@@ -26,7 +26,7 @@ pub use motion::Motion;
 pub use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 pub use se3::Se3;
 pub use symmetric6::Symmetric6;
-pub use trig::sin_cos;
+pub use trig::{sin_cos, sin_cos_lanes};
 
 /// The skew-symmetric matrix `[v]x` with `[v]x u = v x u`.
 #[inline(always)]

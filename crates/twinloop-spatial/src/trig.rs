@@ -59,3 +59,63 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     let cos = ((cb & !swap) | (sb & swap)) ^ (((quadrant + 1) & 2) << 62);
     (f64::from_bits(sin), f64::from_bits(cos))
 }
+
+/// [`sin_cos`] of `L` angles at once, bit for bit the same numbers: the same
+/// operations written lane by lane so the compiler can put the lanes of one
+/// operation in one vector instruction (the batched dynamics of
+/// twinloop-dynamics). A lane the fast reduction
+/// does not cover (NaN, |x| >= 1e5) takes the library's value as [`sin_cos`] does.
+// Lane loops index several arrays by the lane number.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub fn sin_cos_lanes<const L: usize>(x: &[f64; L]) -> ([f64; L], [f64; L]) {
+    let (mut t, mut r, mut z) = ([0.0; L], [0.0; L], [0.0; L]);
+    for l in 0..L {
+        t[l] = x[l] * FRAC_2_PI + SHIFTER;
+    }
+    for l in 0..L {
+        let k = t[l] - SHIFTER;
+        r[l] = ((x[l] - k * P1) - k * P2) - k * P3;
+        z[l] = r[l] * r[l];
+    }
+    std::hint::black_box((&mut t, &mut r, &mut z));
+    // LLVM's SLP vectoriser gives up on expression trees deeper than 12 operations,
+    // and the series are about 16 deep: the halves meet in memory (`black_box` keeps
+    // them there), so each half is a tree it takes. Only speed depends on this.
+    let (mut ps, mut pc) = ([0.0; L], [0.0; L]);
+    for l in 0..L {
+        let z = z[l];
+        ps[l] = F11 - z * (F13 - z * (F15 - z * F17));
+        pc[l] = F12 - z * (F14 - z * F16);
+    }
+    std::hint::black_box((&mut ps, &mut pc, &mut z, &mut r));
+    let (mut s, mut c) = ([0u64; L], [0u64; L]);
+    for l in 0..L {
+        let z = z[l];
+        let ps = F3 - z * (F5 - z * (F7 - z * (F9 - z * ps[l])));
+        s[l] = (r[l] - r[l] * z * ps).to_bits();
+        let pc = F4 - z * (F6 - z * (F8 - z * (F10 - z * pc[l])));
+        c[l] = (1.0 - (0.5 * z - z * z * pc)).to_bits();
+    }
+    let (mut sin, mut cos) = ([0.0; L], [0.0; L]);
+    for l in 0..L {
+        let quadrant = t[l].to_bits() & 3;
+        let swap = 0u64.wrapping_sub(quadrant & 1);
+        sin[l] = f64::from_bits(((s[l] & !swap) | (c[l] & swap)) ^ ((quadrant & 2) << 62));
+        cos[l] = f64::from_bits(((c[l] & !swap) | (s[l] & swap)) ^ (((quadrant + 1) & 2) << 62));
+    }
+    // NaN fails `|x| < limit`, so this catches it with the large angles.
+    let mut slow = 0u64;
+    for xl in x {
+        slow |= u64::from(xl.abs().partial_cmp(&FAST_LIMIT) != Some(std::cmp::Ordering::Less));
+    }
+    if slow != 0 {
+        // Rare: redo the lanes the reduction cannot take (one branch per call).
+        for l in 0..L {
+            if x[l].is_nan() || x[l].abs() >= FAST_LIMIT {
+                (sin[l], cos[l]) = x[l].sin_cos();
+            }
+        }
+    }
+    (sin, cos)
+}
