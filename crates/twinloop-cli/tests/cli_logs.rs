@@ -961,3 +961,202 @@ fn validate_lean_mcap_holds_the_robot_s_torques_and_the_simulation_s_at_its_samp
         assert_eq!(a[i].to_bits(), b[j].to_bits());
     }
 }
+
+/// `csv` written by the reference Python libraries as a team's recorder would
+/// (tools/oracle/logs_reference.py --from-csv): an MCAP (`mcap-ros2-support`) and a
+/// rosbag2 folder with MCAP storage (`rosbags`), beside it. None (skipped) without
+/// them, a failure under TWINLOOP_REQUIRE_ORACLES=1.
+fn reference_logs(csv: &Path, test: &str) -> Option<[PathBuf; 2]> {
+    let py = python::python_with("mcap_ros2, rosbags", test)?;
+    let stem = csv.file_stem().unwrap().to_str().unwrap();
+    let mcap = csv.with_file_name(format!("{stem}-ref.mcap"));
+    let bag = csv.with_file_name(format!("{stem}-bag"));
+    let out = Command::new(&py)
+        .arg(root().join("tools/oracle/logs_reference.py"))
+        .args(["--from-csv", s(csv), s(&mcap), s(&bag)])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    Some([mcap, bag])
+}
+
+/// Two JSON answers agree: the same keys and strings, numbers within `tol`
+/// (relative to their size, at least absolute).
+fn close_json(a: &serde_json::Value, b: &serde_json::Value, tol: f64, at: &str) {
+    use serde_json::Value;
+    match (a, b) {
+        (Value::Object(x), Value::Object(y)) => {
+            let keys = |m: &serde_json::Map<String, Value>| m.keys().cloned().collect::<Vec<_>>();
+            assert_eq!(keys(x), keys(y), "{at}");
+            for (k, v) in x {
+                close_json(v, &y[k], tol, &format!("{at}.{k}"));
+            }
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            assert_eq!(x.len(), y.len(), "{at}");
+            for (k, (u, v)) in x.iter().zip(y).enumerate() {
+                close_json(u, v, tol, &format!("{at}[{k}]"));
+            }
+        }
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            assert!((x - y).abs() <= tol * x.abs().max(1.0), "{at}: {x} vs {y}");
+        }
+        _ => assert_eq!(a, b, "{at}"),
+    }
+}
+
+/// `args` (`{in}` the input, `{json}` the answer) run on each of `inputs`: the
+/// answers of the later ones agree with the first's to `tol` (the inputs' names
+/// and run times aside). Returns the first answer.
+fn same_answers(args: &[&str], inputs: &[PathBuf], tol: f64) -> serde_json::Value {
+    let mut answers: Vec<serde_json::Value> = Vec::new();
+    for (k, input) in inputs.iter().enumerate() {
+        let json = tmp(&format!("answers-{}-{}-{k}.json", args[0], args[1]));
+        let args: Vec<String> = args
+            .iter()
+            .map(|a| a.replace("{in}", s(input)).replace("{json}", s(&json)))
+            .collect();
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        ok(&args);
+        let text = std::fs::read_to_string(&json)
+            .unwrap()
+            .replace(s(input), "INPUT");
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        strip_times(&mut v);
+        if let Some(first) = answers.first() {
+            close_json(first, &v, tol, &format!("{args:?}"));
+        }
+        answers.push(v);
+    }
+    answers.remove(0)
+}
+
+/// `adapt --lean` takes the robot's lean as a CSV, as its MCAP (twinloop's writer)
+/// and as a rosbag2 folder and an MCAP the reference Python libraries wrote: the
+/// same answer to 1e-12. Its `--mcap` holds the lean after the fall angles: the
+/// robot's torques to the bit on `/lean/measured`, each model's replay on
+/// `/lean/prior` and `/lean/adapted`, whose RMS from them is the check's own.
+#[test]
+fn adapt_lean_answers_the_same_from_logs_and_its_mcap_holds_the_lean_torques() {
+    let test = "adapt_lean_answers_the_same_from_logs_and_its_mcap_holds_the_lean_torques";
+    let mass = "0.3@torso:0.04,0.02,0.05";
+    let tip = tmp("adapt-lean-tip.json");
+    ok(&[
+        "experiment",
+        "tipover",
+        "--robot",
+        "builtin:km20",
+        "--add-mass",
+        mass,
+        "--json",
+        s(&tip),
+    ]);
+    let run = tmp("adapt-lean-run.csv");
+    ok(&[
+        "experiment",
+        "lean",
+        "--robot",
+        "builtin:km20",
+        "--add-mass",
+        mass,
+        "--amplitude",
+        "2",
+        "--ramp",
+        "2",
+        "--hold",
+        "0.5",
+        "--settle",
+        "0.5",
+        "--out",
+        s(&run),
+    ]);
+    // A log's own clock starts at its first message (docs/logs.md, Time); the
+    // lean's first row is at 5 ms, so the CSV is put on that clock too: the same data.
+    let mut table = Table::read(&run).unwrap();
+    let lean = tmp("adapt-lean-robot.csv");
+    let t0 = table.rows[0][0];
+    let mut w = twinloop_io::CsvWriter::create(&lean, &table.columns).unwrap();
+    for r in &mut table.rows {
+        r[0] = ((r[0] - t0) * 1e9).round() / 1e9;
+        w.write_row(r).unwrap();
+    }
+    w.finish().unwrap();
+    let mut inputs = vec![lean.clone(), as_mcap(&lean)];
+    inputs.extend(reference_logs(&lean, test).into_iter().flatten());
+    let total = format!("{}", 3.336 + 0.3);
+    let base = [
+        "adapt",
+        "--robot",
+        "builtin:km20",
+        "--tipover",
+        s(&tip),
+        "--total-mass",
+        &total,
+        "--lean",
+        "{in}",
+        "--json",
+        "{json}",
+    ];
+    let answer = same_answers(&base, &inputs, 1e-12);
+    // --mcap, from the rosbag2 folder when there is one.
+    let mcap = tmp("adapt-lean-result.mcap");
+    let args: Vec<&str> = base
+        .iter()
+        .map(|a| {
+            if *a == "{in}" {
+                s(inputs.last().unwrap())
+            } else {
+                a
+            }
+        })
+        .filter(|a| !matches!(*a, "--json" | "{json}"))
+        .chain(["--mcap", s(&mcap)])
+        .collect();
+    ok(&args);
+    let topics = ["/lean/measured", "/lean/prior", "/lean/adapted"]
+        .map(|t| t.parse().unwrap())
+        .to_vec();
+    let back = read_log(&mcap, &ReadOptions { topics, dt: None }).unwrap();
+    let table = Table::read(&lean).unwrap();
+    // The lean's clock starts a second after the fourth fall angle (t = 3 s): its
+    // first row the replays cover is `first`.
+    let first = table
+        .rows
+        .iter()
+        .position(|r| (r[0] - table.rows[0][0] + 4.0 - back.rows[0][0]).abs() < 1e-9)
+        .unwrap();
+    let lean_checks = answer["lean"].as_array().unwrap();
+    assert!(!lean_checks.is_empty());
+    for l in lean_checks {
+        let name = l["joint"].as_str().unwrap();
+        let i = table.column_index(&format!("tau:{name}")).unwrap();
+        let col = |c: String| back.column_index(&c).unwrap_or_else(|| panic!("no {c}"));
+        let m = col(format!("tau.{name}"));
+        let file: Vec<f64> = table.rows[first..first + back.rows.len()]
+            .iter()
+            .map(|r| r[i])
+            .collect();
+        let measured: Vec<f64> = back.rows.iter().map(|r| r[m]).collect();
+        assert!(
+            measured
+                .iter()
+                .zip(&file)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{name}"
+        );
+        for (model, key) in [("prior", "before_rms"), ("adapted", "after_rms")] {
+            let p = col(format!("{model}.tau.{name}"));
+            let replay: Vec<f64> = back.rows.iter().map(|r| r[p]).collect();
+            let (d, want) = (rms(&replay, &file), l[key].as_f64().unwrap());
+            assert!(
+                (d - want).abs() <= 1e-12 * want.max(1.0),
+                "{name} {model}: {d} vs {want}"
+            );
+        }
+    }
+}

@@ -694,6 +694,7 @@ fn write_result_mcap(
             "application/toml",
             fitted_toml.as_bytes().to_vec(),
         )],
+        parts: Vec::new(),
     };
     crate::result_mcap::write(path, "identify servo", &result)
 }
