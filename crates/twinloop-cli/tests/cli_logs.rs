@@ -1160,3 +1160,85 @@ fn adapt_lean_answers_the_same_from_logs_and_its_mcap_holds_the_lean_torques() {
         }
     }
 }
+
+/// Two RX-28s, one at its datasheet's values and one with 1.6 times its friction, a
+/// log each, given as CSVs and as MCAPs (`experiment servo --out X.mcap`'s writer)
+/// with their ids (`--data 1=LOG`): `identify servo` fits them as a group with the
+/// same answer from both. Its `--mcap` holds each servo on topics of its own: the
+/// log to the bit on `/id1/measured`, and the group fit's replay closer to it than
+/// the datasheet's for the servo that is not the datasheet's.
+#[test]
+fn identify_servo_of_several_servos_answers_the_same_from_mcaps_and_its_mcap_holds_each() {
+    use twinloop_actuator::params::FRICTION_BASE;
+    use twinloop_actuator::{ModelLevel, ServoType, datasheet};
+    let sheet = datasheet::defaults(ServoType::Rx28, ModelLevel::M1);
+    let mut rough = sheet.clone();
+    rough.values[FRICTION_BASE] *= 1.6;
+    let (csv1, mcap1, load, log1) = servo_logs(&sheet, "group-1");
+    let (csv2, mcap2, _, log2) = servo_logs(&rough, "group-2");
+    let mut answers = Vec::new();
+    for (k, [a, b]) in [[&csv1, &csv2], [&mcap1, &mcap2]].into_iter().enumerate() {
+        let result = tmp(&format!("group-result-{k}.mcap"));
+        let (d1, d2) = (format!("1={}", s(a)), format!("2={}", s(b)));
+        let out = ok(&[
+            "identify",
+            "servo",
+            "--data",
+            &d1,
+            "--data",
+            &d2,
+            "--load",
+            s(&load),
+            "--shared",
+            "none",
+            "--mcap",
+            s(&result),
+            "--json",
+            "-",
+        ]);
+        let text = out
+            .replace(s(a), "LOG1")
+            .replace(s(b), "LOG2")
+            .replace(s(&result), "RESULT");
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        strip_times(&mut v);
+        answers.push(v);
+        let mut tables = Vec::new();
+        for id in ["id1", "id2"] {
+            let topics = ["measured", "prior", "adapted"]
+                .map(|t| format!("/{id}/{t}").parse().unwrap())
+                .to_vec();
+            tables.push(read_log(&result, &ReadOptions { topics, dt: None }).unwrap());
+        }
+        for ((id, table), log) in ["id1", "id2"].iter().zip(&tables).zip([&log1, &log2]) {
+            let col = |c: &str| table.column_index(c).unwrap_or_else(|| panic!("no {c}"));
+            let q: Vec<f64> = table
+                .rows
+                .iter()
+                .map(|r| r[col(&format!("{id}.q"))])
+                .collect();
+            assert_eq!(q.len(), log.len());
+            assert!(
+                q.iter()
+                    .zip(&log.q)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{id}"
+            );
+            let replay = |m: &str| -> Vec<f64> {
+                table
+                    .rows
+                    .iter()
+                    .map(|r| r[col(&format!("{m}.{id}.q"))])
+                    .collect()
+            };
+            let (before, after) = (rms(&replay("prior"), &q), rms(&replay("adapted"), &q));
+            if *id == "id2" {
+                assert!(
+                    after < 0.5 * before,
+                    "{id}: fitted {after} vs datasheet {before}"
+                );
+            }
+        }
+    }
+    assert_eq!(answers[0], answers[1]);
+}
