@@ -1242,3 +1242,149 @@ fn identify_servo_of_several_servos_answers_the_same_from_mcaps_and_its_mcap_hol
     }
     assert_eq!(answers[0], answers[1]);
 }
+
+/// `ik --frames` and `identify compliant --data --val` read a log as every other
+/// command does (they parsed CSV text themselves before): marker frames of h1's
+/// squat and a compliant walk, written as the reference libraries write logs (an
+/// MCAP, a rosbag2 folder), give the CSV's answer: the same fitted angles to the
+/// bit, the same fit to 1e-12.
+#[test]
+fn ik_and_identify_compliant_answer_the_same_from_reference_logs_as_from_csv() {
+    let test = "ik_and_identify_compliant_answer_the_same_from_reference_logs_as_from_csv";
+    let h1 = root().join("models/unitree_h1/h1.urdf");
+    // Three markers on each of h1's moving links (a set like cli_ident.rs's).
+    let mut toml = String::new();
+    let links = [
+        "pelvis",
+        "torso_link",
+        "left_hip_yaw_link",
+        "left_hip_roll_link",
+        "left_hip_pitch_link",
+        "left_knee_link",
+        "left_ankle_link",
+        "right_hip_yaw_link",
+        "right_hip_roll_link",
+        "right_hip_pitch_link",
+        "right_knee_link",
+        "right_ankle_link",
+        "left_shoulder_pitch_link",
+        "left_shoulder_roll_link",
+        "left_shoulder_yaw_link",
+        "left_elbow_link",
+        "right_shoulder_pitch_link",
+        "right_shoulder_roll_link",
+        "right_shoulder_yaw_link",
+        "right_elbow_link",
+    ];
+    for link in links {
+        for (k, p) in [[0.05, 0.0, -0.1], [0.0, 0.05, -0.05], [-0.05, -0.02, 0.05]]
+            .iter()
+            .enumerate()
+        {
+            toml += &format!(
+                "[[marker]]\nname = \"{link}_{k}\"\nlink = \"{link}\"\nposition = [{}, {}, {}]\n\n",
+                p[0], p[1], p[2]
+            );
+        }
+    }
+    let (markers, squat, frames) = (
+        tmp("ik-markers.toml"),
+        tmp("ik-squat.csv"),
+        tmp("ik-frames.csv"),
+    );
+    std::fs::write(&markers, toml).unwrap();
+    ok(&[
+        "experiment",
+        "squat",
+        "--robot",
+        s(&h1),
+        "--out",
+        s(&squat),
+        "--duration",
+        "1",
+        "--rest",
+        "0.2",
+        "--rate",
+        "50",
+        "--markers",
+        s(&markers),
+        "--frames-out",
+        s(&frames),
+    ]);
+    let Some(logs) = reference_logs(&frames, test) else {
+        return;
+    };
+    let mut fitted = Vec::new();
+    for (k, input) in std::iter::once(&frames).chain(&logs).enumerate() {
+        let out = tmp(&format!("ik-out-{k}.csv"));
+        ok(&[
+            "ik",
+            "--robot",
+            s(&h1),
+            "--markers",
+            s(&markers),
+            "--frames",
+            s(input),
+            "--out",
+            s(&out),
+        ]);
+        fitted.push(Table::read(&out).unwrap());
+    }
+    for other in &fitted[1..] {
+        same_rows(&fitted[0], other);
+    }
+    // A compliant walk: the seed's plant along a short ZMP reference.
+    let (plant, reference, walk) = (tmp("c-plant.toml"), tmp("c-ref.csv"), tmp("c-walk.csv"));
+    std::fs::write(
+        &plant,
+        "m = 32.053860196\ng = 9.81\nKxx = 440.91346363174296\nKxz = -2173.515375145169\n\
+         Kzx = -2173.515375145169\nKzz = 60061.10789312922\nDxx = 14.527209046033501\n\
+         Dxz = -3.3326729999481515\nDzx = -3.3326729999481515\nDzz = 667.4461329201686\n",
+    )
+    .unwrap();
+    ok(&[
+        "gait",
+        "zmp",
+        "--footsteps",
+        "6",
+        "--step-length",
+        "0.03",
+        "--tss",
+        "0.5",
+        "--out",
+        s(&reference),
+    ]);
+    ok(&[
+        "compliant",
+        "simulate",
+        "--reference",
+        s(&reference),
+        "--plant",
+        s(&plant),
+        "--table1",
+        "--out",
+        s(&walk),
+    ]);
+    let Some(logs) = reference_logs(&walk, test) else {
+        return;
+    };
+    let inputs: Vec<PathBuf> = std::iter::once(walk.clone()).chain(logs).collect();
+    same_answers(
+        &[
+            "identify",
+            "compliant",
+            "--data",
+            "{in}",
+            "--val",
+            "{in}",
+            "--plant",
+            s(&plant),
+            "--method",
+            "lm",
+            "--json",
+            "{json}",
+        ],
+        &inputs,
+        1e-12,
+    );
+}
