@@ -16,7 +16,7 @@ export CARGO_TARGET_DIR="$target"
 "$py" -m pip install --quiet --disable-pip-version-check --root-user-action=ignore \
     "maturin==1.16.0" "pytest==9.2.0" "numpy==2.3.5" "pin==4.1.0" "ray==2.52.0" "tqdm==4.70.1" \
     "yourdfpy==0.0.60" "urdf-parser-py==0.0.4" "example-robot-data==6.0.0" \
-    "mcap==1.6.0" "mcap-ros2-support==0.6.0"
+    "mcap==1.6.0" "mcap-ros2-support==0.6.0" "rosbags==0.11.9"
 
 rm -f "$target"/wheels/twinloop-*.whl
 "$py" -m maturin build --profile ci --manifest-path "$here/Cargo.toml" --interpreter "$py" --out "$target/wheels"

@@ -27,6 +27,11 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     // `record=`/`out=` paths ending in .mcap are written as MCAP, as the CLI's are.
     twinloop_io::sink::register_recording_format("mcap", twinloop_logs::open_mcap_recording);
+    // `out="run/"`: a rosbag2 folder (the same MCAP, with the metadata ROS 2 reads).
+    twinloop_io::sink::register_recording_format(
+        twinloop_io::sink::FOLDER,
+        twinloop_logs::open_mcap_recording,
+    );
     m.add("ModelError", py.get_type::<errors::ModelError>())?;
     m.add_class::<model::PyDescription>()?;
     m.add_class::<model::PyModel>()?;

@@ -19,6 +19,16 @@ awkward on purpose: thirds, pi multiples, a subnormal, -0.0, huge and tiny numbe
 
     pip install mcap==1.6.0 mcap-ros2-support==0.6.0 rosbags==0.11.9
     python3 tools/oracle/logs_reference.py
+
+With `--from-csv TABLE.csv OUT.mcap OUT_BAG/` it writes a twinloop CSV table as a
+team's recorder would: an MCAP (`mcap-ros2-support`) and a rosbag2 folder with MCAP
+storage (`rosbags`), one message per topic per row, stamped at T0 + t (t to the
+ns): `q:<j>` (with `v:<j>`, `tau:<j>` when every joint has one) as a JointState on
+/joint_states, `q:base.*` as a TFMessage world -> base_link on /tf, `imu:<l>.gx..az`
+as an Imu on /imu/<l>, `wrench:<f>.fx..tz` as a WrenchStamped on /wrench/<f>, and
+every other column on /columns, a Float64MultiArray whose one dimension's label
+names them (so twinloop reads them with no --topic). The tests that give a command
+the same data as CSV and as a log (cli_logs.rs) use it.
 """
 import json
 import math
@@ -162,7 +172,97 @@ def expected():
     return {"joints": JOINTS, "log_offset_ns": 500_000, "rows": rows}
 
 
+def read_csv(path):
+    """A twinloop CSV table: its columns and rows (comment lines skipped)."""
+    import csv
+    with open(path) as f:
+        lines = [l for l in f if not l.startswith("#") and l.strip()]
+    rows = list(csv.reader(lines))
+    return rows[0], [[float(x) for x in r] for r in rows[1:]]
+
+
+def table_messages(columns, rows):
+    """(stamp ns, topic, type, message) for every row of a twinloop table."""
+    import numpy as np
+    T = TS.types
+    col = {c: i for i, c in enumerate(columns)}
+    v3, quat = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
+    joints = [c[2:] for c in columns if c.startswith("q:") and not c.startswith("q:base.")]
+    have = lambda p: joints and all(p + j in col for j in joints)
+    fields = [("q:", True), ("v:", have("v:")), ("tau:", have("tau:"))]
+    base = ["q:base." + s for s in ("x", "y", "z", "qx", "qy", "qz", "qw")]
+    base = base if all(b in col for b in base) else []
+    six = lambda pre, names: {c[len(pre):-len(names[0]) - 1] for c in columns
+                              if c.startswith(pre) and c.endswith("." + names[0])}
+    imus = sorted(six("imu:", ["gx"]))
+    wrenches = sorted(six("wrench:", ["fx"]))
+    gi, wi = ("gx", "gy", "gz", "ax", "ay", "az"), ("fx", "fy", "fz", "tx", "ty", "tz")
+    used = {"t"} | {p + j for p, on in fields if on for j in joints} | set(base)
+    used |= {"imu:%s.%s" % (l, s) for l in imus for s in gi}
+    used |= {"wrench:%s.%s" % (l, s) for l in wrenches for s in wi}
+    rest = [c for c in columns if c not in used]
+    label = ",".join(rest)
+    for r in rows:
+        ns = T0 + round(r[col["t"]] * 1e9)
+        stamp = T["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
+        header = lambda frame: T["std_msgs/msg/Header"](stamp=stamp, frame_id=frame)
+        arr = lambda p: np.array([r[col[p + j]] for j in joints]) if have(p) else np.array([])
+        if joints:
+            yield ns, "/joint_states", "sensor_msgs/msg/JointState", T["sensor_msgs/msg/JointState"](
+                header=header(""), name=joints, position=np.array([r[col["q:" + j]] for j in joints]),
+                velocity=arr("v:"), effort=arr("tau:"))
+        if base:
+            p = [r[col[b]] for b in base]
+            tr = T["geometry_msgs/msg/TransformStamped"](
+                header=header("world"), child_frame_id="base_link",
+                transform=T["geometry_msgs/msg/Transform"](
+                    translation=v3(x=p[0], y=p[1], z=p[2]), rotation=quat(x=p[3], y=p[4], z=p[5], w=p[6])))
+            yield ns, "/tf", "tf2_msgs/msg/TFMessage", T["tf2_msgs/msg/TFMessage"](transforms=[tr])
+        for l in imus:
+            g = [r[col["imu:%s.%s" % (l, s)]] for s in gi]
+            yield ns, "/imu/" + l, "sensor_msgs/msg/Imu", T["sensor_msgs/msg/Imu"](
+                header=header(l), orientation=quat(x=0.0, y=0.0, z=0.0, w=1.0),
+                orientation_covariance=np.zeros(9), angular_velocity=v3(x=g[0], y=g[1], z=g[2]),
+                angular_velocity_covariance=np.zeros(9),
+                linear_acceleration=v3(x=g[3], y=g[4], z=g[5]), linear_acceleration_covariance=np.zeros(9))
+        for f in wrenches:
+            w = [r[col["wrench:%s.%s" % (f, s)]] for s in wi]
+            yield ns, "/wrench/" + f, "geometry_msgs/msg/WrenchStamped", T["geometry_msgs/msg/WrenchStamped"](
+                header=header(f), wrench=T["geometry_msgs/msg/Wrench"](
+                    force=v3(x=w[0], y=w[1], z=w[2]), torque=v3(x=w[3], y=w[4], z=w[5])))
+        if rest:
+            dim = T["std_msgs/msg/MultiArrayDimension"](label=label, size=len(rest), stride=len(rest))
+            lay = T["std_msgs/msg/MultiArrayLayout"](dim=[dim], data_offset=0)
+            yield ns, "/columns", "std_msgs/msg/Float64MultiArray", T["std_msgs/msg/Float64MultiArray"](
+                layout=lay, data=np.array([r[col[c]] for c in rest]))
+
+
+def from_csv(csv_path, mcap_path, bag_path):
+    columns, rows = read_csv(csv_path)
+    msgs = list(table_messages(columns, rows))
+    with open(mcap_path, "wb") as f:
+        w = Ros2Writer(f)
+        schemas = {}
+        for k, (ns, topic, typ, msg) in enumerate(msgs):
+            if typ not in schemas:
+                schemas[typ] = w.register_msgdef(typ, msgdef(typ))
+            w.write_message(topic, schemas[typ], msg_to_dict(msg), log_time=ns, publish_time=ns, sequence=k)
+        w.finish()
+    bag = pathlib.Path(bag_path)
+    if bag.exists():
+        shutil.rmtree(bag)
+    with BagWriter(bag, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        conns = {}
+        for ns, topic, typ, msg in msgs:
+            if topic not in conns:
+                conns[topic] = w.add_connection(topic, typ, typestore=TS)
+            w.write(conns[topic], ns, TS.serialize_cdr(msg, typ))
+
+
 def main():
+    import sys
+    if len(sys.argv) == 5 and sys.argv[1] == "--from-csv":
+        return from_csv(*sys.argv[2:])
     OUT.mkdir(parents=True, exist_ok=True)
     write_mcap(OUT / "joints_zstd.mcap", CompressionType.ZSTD)
     write_mcap(OUT / "joints_lz4.mcap", CompressionType.LZ4)

@@ -341,11 +341,16 @@ pub fn run(a: AdaptArgs) -> CliResult {
     if a.check {
         check(&mut adapted, &StudyOptions::default()).map_err(where_flag)?;
     }
-    if let Some(path) = &a.lean {
-        let table = crate::common::read_table(path).map_err(|e| e.context("--lean"))?;
-        twinloop_ident::adapt::lean_check(&mut adapted, &prior, &table)
-            .map_err(|e| CliError::from(e).context(format!("--lean {}", path.display())))?;
-    }
+    let lean = match &a.lean {
+        Some(path) => {
+            let table = crate::common::read_table(path).map_err(|e| e.context("--lean"))?;
+            Some(
+                twinloop_ident::adapt::lean_check(&mut adapted, &prior, &table)
+                    .map_err(|e| CliError::from(e).context(format!("--lean {}", path.display())))?,
+            )
+        }
+        None => None,
+    };
     let failed = adapted.report.failed_checks().next().is_some();
     if let (Some(out), Some(robot), false) = (&a.out, &adapted.robot, failed) {
         twinloop_description::urdf::write_file(robot, out)
@@ -353,7 +358,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
         adapted.report.files.push(out.display().to_string());
     }
     if let (Some(path), Some(robot), false) = (&a.mcap, &adapted.robot, failed) {
-        write_result_mcap(path, &a, &prior, robot, &tip)?;
+        write_result_mcap(path, &a, (&prior, robot), &tip, lean.as_ref())?;
         adapted.report.files.push(path.display().to_string());
     }
     if let Some(p) = &a.report {
@@ -377,13 +382,17 @@ pub fn run(a: AdaptArgs) -> CliResult {
 }
 
 /// `--mcap`: the measured fall angles (less no bias: as the tip-over file gives them)
-/// beside each model's static fall angles, one direction a second.
+/// beside each model's static fall angles, one direction a second; with `--lean`,
+/// then the lean ([`lean_part`]).
 fn write_result_mcap(
     path: &Path,
     a: &AdaptArgs,
-    prior: &twinloop_description::Description,
-    adapted: &twinloop_description::Description,
+    (prior, adapted): (
+        &twinloop_description::Description,
+        &twinloop_description::Description,
+    ),
     tip: &StudyReport,
+    lean: Option<&twinloop_experiments::LeanAdaptationCheck>,
 ) -> Result<(), CliError> {
     let before = twinloop_ident::adapt::static_fall_angles(prior, tip)?;
     let after = twinloop_ident::adapt::static_fall_angles(adapted, tip)?;
@@ -416,8 +425,72 @@ fn write_result_mcap(
         robot_file: "adapted.urdf",
         inputs,
         files: Vec::new(),
+        parts: lean.map(lean_part).into_iter().collect(),
     };
     crate::result_mcap::write(path, "adapt", &result)
+}
+
+/// The lean in `adapt --mcap`, its clock moved so that its first row would be a
+/// second after the last fall angle (t = 4 s): at each of the robot's samples both
+/// replays cover, the robot's torques (and angles where the replays have them too)
+/// on `/lean/measured` (`tau.<joint>`, `q.<joint>`), and each model's replay,
+/// shifted and interpolated there as the comparison does, on `/lean/prior` and
+/// `/lean/adapted` (`prior.` and `adapted.` + the names): so each joint's RMS of a
+/// model's torques from the robot's is the lean check's `before_rms`/`after_rms`.
+fn lean_part(c: &twinloop_experiments::LeanAdaptationCheck) -> crate::result_mcap::ResultPart {
+    use twinloop_experiments::lean_validation::resample_at;
+    let robot = &c.robot;
+    let (range_b, before) = resample_at(&c.replays[0], c.before.shift_s, &robot.t);
+    let (range_a, after) = resample_at(&c.replays[1], c.after.shift_s, &robot.t);
+    let (start, end) = (
+        range_b.start.max(range_a.start),
+        range_b.end.min(range_a.end),
+    );
+    // Both replays record the robot's joints in its order (simulate_replay).
+    let n = robot.joints.len();
+    let angles: Vec<usize> = (0..n)
+        .filter(|&k| !robot.q[k].is_empty() && !before.q[k].is_empty() && !after.q[k].is_empty())
+        .collect();
+    let mut measured: Vec<String> = robot.joints.iter().map(|j| format!("tau.{j}")).collect();
+    measured.extend(angles.iter().map(|&k| format!("q.{}", robot.joints[k])));
+    let named = |p: &str| {
+        measured
+            .iter()
+            .map(|c| format!("{p}{c}"))
+            .collect::<Vec<_>>()
+    };
+    let (prior, adapted) = (named("prior."), named("adapted."));
+    let columns = [
+        vec!["t".to_string()],
+        measured.clone(),
+        prior.clone(),
+        adapted.clone(),
+    ];
+    let mut table = twinloop_io::Table::new(columns.concat());
+    let t0 = robot.t.first().copied().unwrap_or(0.0);
+    for i in start..end.max(start) {
+        let mut row = vec![4.0 + robot.t[i] - t0];
+        row.extend(robot.tau.iter().map(|y| y[i]));
+        row.extend(angles.iter().map(|&k| robot.q[k][i]));
+        for (sim, range) in [(&before, &range_b), (&after, &range_a)] {
+            let r = i - range.start;
+            row.extend(sim.tau.iter().map(|y| y[r]));
+            row.extend(angles.iter().map(|&k| sim.q[k][r]));
+        }
+        table.rows.push(row);
+    }
+    let topic = |t: &str, columns: Vec<String>| twinloop_logs::ArrayTopic {
+        topic: t.into(),
+        columns,
+    };
+    crate::result_mcap::ResultPart {
+        table,
+        topics: vec![
+            topic("/lean/measured", measured),
+            topic("/lean/prior", prior),
+            topic("/lean/adapted", adapted),
+        ],
+    }
 }
 
 /// What the terminal says of an adaptation: the angles, the CoMs, the part, the

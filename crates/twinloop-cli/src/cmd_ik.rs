@@ -31,7 +31,13 @@ pub fn run(a: &IkArgs) -> CliResult {
     let (robot, model) = load_model(&a.robot, BaseKind::Floating)?;
     hinges_only(&robot, &a.robot, "marker IK")?;
     let markers = read_markers(&a.markers, &model)?;
-    let frames = read_frames(&a.frames, &markers)?;
+    // A log (an MCAP, a rosbag2 folder) is read as the table a CSV would give.
+    let frames = if twinloop_logs::is_log(&a.frames) {
+        let table = crate::common::read_table(&a.frames)?;
+        twinloop_ident::markers::frames_from_table(&table, &markers)?
+    } else {
+        read_frames(&a.frames, &markers)?
+    };
     let mut fitter = MarkerIk::new(&model, markers)?;
     let mut cols = vec!["t".to_string()];
     cols.extend(Quantity::Q.column_names(&model.q_names()));

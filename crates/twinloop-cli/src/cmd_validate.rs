@@ -239,6 +239,7 @@ fn write_lean_mcap(
             a.sim_run.display().to_string(),
         ],
         files: Vec::new(),
+        parts: Vec::new(),
     };
     crate::result_mcap::write(path, "validate lean", &result)
 }
@@ -482,6 +483,7 @@ fn write_residual_mcap(
         robot_file: "model.urdf",
         inputs,
         files: Vec::new(),
+        parts: Vec::new(),
     };
     crate::result_mcap::write(path, "validate residual", &result)
 }

@@ -197,10 +197,12 @@ pub fn set_log_options(topics: &[String], resample: Option<f64>) -> Result<(), C
     Ok(())
 }
 
-/// Whether an output is written as MCAP (its name ends in `.mcap`, any case).
+/// Whether an output is written as MCAP: its name ends in `.mcap` (any case), or
+/// it is a folder (`run/`, or an existing folder): a rosbag2 bag of one MCAP file.
 pub fn is_mcap(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+        || twinloop_io::sink::is_folder_output(path)
 }
 
 /// Rows written to a CSV, or to an MCAP of ROS 2 messages when the path ends in

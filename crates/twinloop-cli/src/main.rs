@@ -282,6 +282,11 @@ fn main() -> ExitCode {
     // Every recording a library opens (a guarded robot's --record, the bus
     // tip-over's) is MCAP when its path ends in .mcap.
     twinloop_io::sink::register_recording_format("mcap", twinloop_logs::open_mcap_recording);
+    // `--out run/` (or an existing folder): a rosbag2 folder of the same MCAP.
+    twinloop_io::sink::register_recording_format(
+        twinloop_io::sink::FOLDER,
+        twinloop_logs::open_mcap_recording,
+    );
     let result = common::set_log_options(&cli.topic, cli.resample).and_then(|()| run(cli.command));
     match result {
         Ok(outcome) => outcome.exit_code(),

@@ -39,6 +39,20 @@ const OUTPUTS_OF: &[(&str, &str, &str)] = &[
 const FOLDER_OUTPUTS: &[(&str, &str, bool)] =
     &[("identify servo", "out", true), ("demo", "out", false)];
 
+/// Recordings (and results as MCAP) that may be rosbag2 folders: (command, option;
+/// "" for every command). A value ending in `/` or naming an existing folder is
+/// written as a bag there (docs/logs.md, Writing), so its file is what is checked.
+const BAG_OUTPUTS: &[(&str, &str)] = &[
+    ("simulate", "out"),
+    ("link record", "out"),
+    ("experiment servo", "out"),
+    ("experiment lean", "out"),
+    ("experiment lean", "record"),
+    ("experiment tipover", "record"),
+    ("adapt", "record"),
+    ("", "mcap"),
+];
+
 /// Refuse the command line's outputs that break a rule (exit 2, naming the option).
 pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> {
     let (mut cmd, mut m, mut path) = (cli, matches, Vec::new());
@@ -52,6 +66,7 @@ pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> 
     let path = path.join(" ");
     let given = |id: &str| m.try_contains_id(id).unwrap_or(false);
     let (mut outputs, mut inputs, mut folder_outputs) = (Vec::new(), Vec::new(), Vec::new());
+    let mut bag_outputs = Vec::new();
     for arg in cmd.get_arguments() {
         let id = arg.get_id().as_str();
         let Ok(Some(values)) = m.try_get_raw(id) else {
@@ -69,9 +84,14 @@ pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> 
         let folder = FOLDER_OUTPUTS
             .iter()
             .find(|(c, o, _)| *c == path && *o == long);
+        let bag = BAG_OUTPUTS
+            .iter()
+            .any(|(c, o)| (c.is_empty() || *c == path) && *o == long);
         for v in values {
             let p = PathBuf::from(v);
-            if let Some(&(_, _, file_too)) = folder {
+            if bag && twinloop_io::sink::is_folder_output(&p) {
+                bag_outputs.push((flag.clone(), p));
+            } else if let Some(&(_, _, file_too)) = folder {
                 folder_outputs.push((flag.clone(), p, file_too));
             } else if is_output {
                 outputs.push((flag.clone(), p));
@@ -87,6 +107,9 @@ pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> 
     }
     for (flag, p, file_too) in &folder_outputs {
         check_folder_output(flag, p, *file_too, &inputs)?;
+    }
+    for (flag, p) in &bag_outputs {
+        check_bag_output(flag, p, &inputs)?;
     }
     if path == "serve"
         && let Some(link) = m
@@ -119,6 +142,27 @@ fn check_folder_output(
              give a folder (it is created when missing)",
             p.display()
         )));
+    }
+    Ok(())
+}
+
+/// A rosbag2 folder output (`--out run/`): a new folder's parent must exist (as a
+/// file's must); in an existing one, its MCAP file (`run/run_0.mcap`) is checked as a
+/// file output (not an input of the command, not a device).
+fn check_bag_output(flag: &str, p: &Path, inputs: &[(String, PathBuf)]) -> Result<(), CliError> {
+    let Some(name) = p.file_name() else {
+        return Err(CliError::new(format!(
+            "{flag} {}: a rosbag2 folder needs a name (run/)",
+            p.display()
+        )));
+    };
+    if p.is_dir() {
+        let file = p.join(format!("{}_0.mcap", name.to_string_lossy()));
+        Output::check(flag, &file, inputs)?;
+    } else {
+        // The folder as a new file's name: its parent must be there.
+        let bare: PathBuf = p.components().collect();
+        Output::check(flag, &bare, inputs)?;
     }
     Ok(())
 }

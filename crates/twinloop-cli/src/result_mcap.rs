@@ -35,6 +35,16 @@ pub struct ResultLog<'a> {
     pub inputs: Vec<String>,
     /// Further attachments: (name, media type, bytes), such as a fitted parameter file.
     pub files: Vec<(String, &'static str, Vec<u8>)>,
+    /// Parts on times of their own, written after `table`'s rows, each on its own
+    /// Float64MultiArray topics (`adapt`: the lean's torques after the fall angles).
+    pub parts: Vec<ResultPart>,
+}
+
+/// A part of a result: `table` (`t` and its columns) on the topics `topics`, which
+/// name every one of its columns but `t`.
+pub struct ResultPart {
+    pub table: Table,
+    pub topics: Vec<ArrayTopic>,
 }
 
 /// The prior's and the adapted model's predictions, on `/prior` and `/adapted`.
@@ -67,11 +77,36 @@ pub fn write(path: &Path, command: &str, result: &ResultLog<'_>) -> Result<(), C
         .and_then(|r| r.root_links().first().map(|s| s.to_string()))
         .unwrap_or_else(|| "base_link".into());
     let context = |e: twinloop_logs::LogError| CliError::from(e).context("--mcap");
-    let mut log =
-        McapLog::create_grouped(path, &result.table.columns, urdf.as_deref(), &root, &groups)
-            .map_err(context)?;
-    for row in &result.table.rows {
-        log.write_row(row).map_err(context)?;
+    let (columns, groups) = with_parts(&result.table.columns, groups, &result.parts);
+    let mut log = McapLog::create_grouped(path, &columns, urdf.as_deref(), &root, &groups)
+        .map_err(context)?;
+    let in_parts = |topic: &str| {
+        result
+            .parts
+            .iter()
+            .any(|p| p.topics.iter().any(|g| g.topic == topic))
+    };
+    let mut row = vec![f64::NAN; columns.len()];
+    for r in &result.table.rows {
+        row[..r.len()].copy_from_slice(r);
+        log.write_row_on(&row, |t| !in_parts(t)).map_err(context)?;
+    }
+    for part in &result.parts {
+        // Where each of the part's columns is in the whole row.
+        let at: Vec<usize> = part
+            .table
+            .columns
+            .iter()
+            .map(|c| columns.iter().position(|x| x == c).unwrap_or(0))
+            .collect();
+        let ours = |t: &str| part.topics.iter().any(|g| g.topic == t);
+        for r in &part.table.rows {
+            row.fill(f64::NAN);
+            for (&i, &x) in at.iter().zip(r) {
+                row[i] = x;
+            }
+            log.write_row_on(&row, ours).map_err(context)?;
+        }
     }
     if let Some(u) = &urdf {
         log.attach(result.robot_file, "application/xml", u.as_bytes())
@@ -85,6 +120,20 @@ pub fn write(path: &Path, command: &str, result: &ResultLog<'_>) -> Result<(), C
     log.metadata("twinloop.inputs", input_hashes(&result.inputs)?)
         .map_err(context)?;
     log.finish().map_err(context)
+}
+
+/// Every column (the table's, then each part's but its `t`) and every topic.
+fn with_parts(
+    columns: &[String],
+    mut groups: Vec<ArrayTopic>,
+    parts: &[ResultPart],
+) -> (Vec<String>, Vec<ArrayTopic>) {
+    let mut all = columns.to_vec();
+    for p in parts {
+        all.extend(p.table.columns.iter().filter(|c| *c != "t").cloned());
+        groups.extend(p.topics.iter().cloned());
+    }
+    (all, groups)
 }
 
 /// The command, its command line and twinloop's version.

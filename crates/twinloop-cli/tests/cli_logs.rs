@@ -961,3 +961,430 @@ fn validate_lean_mcap_holds_the_robot_s_torques_and_the_simulation_s_at_its_samp
         assert_eq!(a[i].to_bits(), b[j].to_bits());
     }
 }
+
+/// `csv` written by the reference Python libraries as a team's recorder would
+/// (tools/oracle/logs_reference.py --from-csv): an MCAP (`mcap-ros2-support`) and a
+/// rosbag2 folder with MCAP storage (`rosbags`), beside it. None (skipped) without
+/// them, a failure under TWINLOOP_REQUIRE_ORACLES=1.
+fn reference_logs(csv: &Path, test: &str) -> Option<[PathBuf; 2]> {
+    let py = python::python_with("mcap_ros2, rosbags", test)?;
+    let stem = csv.file_stem().unwrap().to_str().unwrap();
+    let mcap = csv.with_file_name(format!("{stem}-ref.mcap"));
+    let bag = csv.with_file_name(format!("{stem}-bag"));
+    let out = Command::new(&py)
+        .arg(root().join("tools/oracle/logs_reference.py"))
+        .args(["--from-csv", s(csv), s(&mcap), s(&bag)])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    Some([mcap, bag])
+}
+
+/// Two JSON answers agree: the same keys and strings, numbers within `tol`
+/// (relative to their size, at least absolute).
+fn close_json(a: &serde_json::Value, b: &serde_json::Value, tol: f64, at: &str) {
+    use serde_json::Value;
+    match (a, b) {
+        (Value::Object(x), Value::Object(y)) => {
+            let keys = |m: &serde_json::Map<String, Value>| m.keys().cloned().collect::<Vec<_>>();
+            assert_eq!(keys(x), keys(y), "{at}");
+            for (k, v) in x {
+                close_json(v, &y[k], tol, &format!("{at}.{k}"));
+            }
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            assert_eq!(x.len(), y.len(), "{at}");
+            for (k, (u, v)) in x.iter().zip(y).enumerate() {
+                close_json(u, v, tol, &format!("{at}[{k}]"));
+            }
+        }
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            assert!((x - y).abs() <= tol * x.abs().max(1.0), "{at}: {x} vs {y}");
+        }
+        _ => assert_eq!(a, b, "{at}"),
+    }
+}
+
+/// `args` (`{in}` the input, `{json}` the answer) run on each of `inputs`: the
+/// answers of the later ones agree with the first's to `tol` (the inputs' names
+/// and run times aside). Returns the first answer.
+fn same_answers(args: &[&str], inputs: &[PathBuf], tol: f64) -> serde_json::Value {
+    let mut answers: Vec<serde_json::Value> = Vec::new();
+    for (k, input) in inputs.iter().enumerate() {
+        let json = tmp(&format!("answers-{}-{}-{k}.json", args[0], args[1]));
+        let args: Vec<String> = args
+            .iter()
+            .map(|a| a.replace("{in}", s(input)).replace("{json}", s(&json)))
+            .collect();
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        ok(&args);
+        let text = std::fs::read_to_string(&json)
+            .unwrap()
+            .replace(s(input), "INPUT");
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        strip_times(&mut v);
+        if let Some(first) = answers.first() {
+            close_json(first, &v, tol, &format!("{args:?}"));
+        }
+        answers.push(v);
+    }
+    answers.remove(0)
+}
+
+/// `adapt --lean` takes the robot's lean as a CSV, as its MCAP (twinloop's writer)
+/// and as a rosbag2 folder and an MCAP the reference Python libraries wrote: the
+/// same answer to 1e-12. Its `--mcap` holds the lean after the fall angles: the
+/// robot's torques to the bit on `/lean/measured`, each model's replay on
+/// `/lean/prior` and `/lean/adapted`, whose RMS from them is the check's own.
+#[test]
+fn adapt_lean_answers_the_same_from_logs_and_its_mcap_holds_the_lean_torques() {
+    let test = "adapt_lean_answers_the_same_from_logs_and_its_mcap_holds_the_lean_torques";
+    let mass = "0.3@torso:0.04,0.02,0.05";
+    let tip = tmp("adapt-lean-tip.json");
+    ok(&[
+        "experiment",
+        "tipover",
+        "--robot",
+        "builtin:km20",
+        "--add-mass",
+        mass,
+        "--json",
+        s(&tip),
+    ]);
+    let run = tmp("adapt-lean-run.csv");
+    ok(&[
+        "experiment",
+        "lean",
+        "--robot",
+        "builtin:km20",
+        "--add-mass",
+        mass,
+        "--amplitude",
+        "2",
+        "--ramp",
+        "2",
+        "--hold",
+        "0.5",
+        "--settle",
+        "0.5",
+        "--out",
+        s(&run),
+    ]);
+    // A log's own clock starts at its first message (docs/logs.md, Time); the
+    // lean's first row is at 5 ms, so the CSV is put on that clock too: the same data.
+    let mut table = Table::read(&run).unwrap();
+    let lean = tmp("adapt-lean-robot.csv");
+    let t0 = table.rows[0][0];
+    let mut w = twinloop_io::CsvWriter::create(&lean, &table.columns).unwrap();
+    for r in &mut table.rows {
+        r[0] = ((r[0] - t0) * 1e9).round() / 1e9;
+        w.write_row(r).unwrap();
+    }
+    w.finish().unwrap();
+    let mut inputs = vec![lean.clone(), as_mcap(&lean)];
+    inputs.extend(reference_logs(&lean, test).into_iter().flatten());
+    let total = format!("{}", 3.336 + 0.3);
+    let base = [
+        "adapt",
+        "--robot",
+        "builtin:km20",
+        "--tipover",
+        s(&tip),
+        "--total-mass",
+        &total,
+        "--lean",
+        "{in}",
+        "--json",
+        "{json}",
+    ];
+    let answer = same_answers(&base, &inputs, 1e-12);
+    // --mcap, from the rosbag2 folder when there is one.
+    let mcap = tmp("adapt-lean-result.mcap");
+    let args: Vec<&str> = base
+        .iter()
+        .map(|a| {
+            if *a == "{in}" {
+                s(inputs.last().unwrap())
+            } else {
+                a
+            }
+        })
+        .filter(|a| !matches!(*a, "--json" | "{json}"))
+        .chain(["--mcap", s(&mcap)])
+        .collect();
+    ok(&args);
+    let topics = ["/lean/measured", "/lean/prior", "/lean/adapted"]
+        .map(|t| t.parse().unwrap())
+        .to_vec();
+    let back = read_log(&mcap, &ReadOptions { topics, dt: None }).unwrap();
+    let table = Table::read(&lean).unwrap();
+    // The lean's clock starts a second after the fourth fall angle (t = 3 s): its
+    // first row the replays cover is `first`.
+    let first = table
+        .rows
+        .iter()
+        .position(|r| (r[0] - table.rows[0][0] + 4.0 - back.rows[0][0]).abs() < 1e-9)
+        .unwrap();
+    let lean_checks = answer["lean"].as_array().unwrap();
+    assert!(!lean_checks.is_empty());
+    for l in lean_checks {
+        let name = l["joint"].as_str().unwrap();
+        let i = table.column_index(&format!("tau:{name}")).unwrap();
+        let col = |c: String| back.column_index(&c).unwrap_or_else(|| panic!("no {c}"));
+        let m = col(format!("tau.{name}"));
+        let file: Vec<f64> = table.rows[first..first + back.rows.len()]
+            .iter()
+            .map(|r| r[i])
+            .collect();
+        let measured: Vec<f64> = back.rows.iter().map(|r| r[m]).collect();
+        assert!(
+            measured
+                .iter()
+                .zip(&file)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{name}"
+        );
+        for (model, key) in [("prior", "before_rms"), ("adapted", "after_rms")] {
+            let p = col(format!("{model}.tau.{name}"));
+            let replay: Vec<f64> = back.rows.iter().map(|r| r[p]).collect();
+            let (d, want) = (rms(&replay, &file), l[key].as_f64().unwrap());
+            assert!(
+                (d - want).abs() <= 1e-12 * want.max(1.0),
+                "{name} {model}: {d} vs {want}"
+            );
+        }
+    }
+}
+
+/// Two RX-28s, one at its datasheet's values and one with 1.6 times its friction, a
+/// log each, given as CSVs and as MCAPs (`experiment servo --out X.mcap`'s writer)
+/// with their ids (`--data 1=LOG`): `identify servo` fits them as a group with the
+/// same answer from both. Its `--mcap` holds each servo on topics of its own: the
+/// log to the bit on `/id1/measured`, and the group fit's replay closer to it than
+/// the datasheet's for the servo that is not the datasheet's.
+#[test]
+fn identify_servo_of_several_servos_answers_the_same_from_mcaps_and_its_mcap_holds_each() {
+    use twinloop_actuator::params::FRICTION_BASE;
+    use twinloop_actuator::{ModelLevel, ServoType, datasheet};
+    let sheet = datasheet::defaults(ServoType::Rx28, ModelLevel::M1);
+    let mut rough = sheet.clone();
+    rough.values[FRICTION_BASE] *= 1.6;
+    let (csv1, mcap1, load, log1) = servo_logs(&sheet, "group-1");
+    let (csv2, mcap2, _, log2) = servo_logs(&rough, "group-2");
+    let mut answers = Vec::new();
+    for (k, [a, b]) in [[&csv1, &csv2], [&mcap1, &mcap2]].into_iter().enumerate() {
+        let result = tmp(&format!("group-result-{k}.mcap"));
+        let (d1, d2) = (format!("1={}", s(a)), format!("2={}", s(b)));
+        let out = ok(&[
+            "identify",
+            "servo",
+            "--data",
+            &d1,
+            "--data",
+            &d2,
+            "--load",
+            s(&load),
+            "--shared",
+            "none",
+            "--mcap",
+            s(&result),
+            "--json",
+            "-",
+        ]);
+        let text = out
+            .replace(s(a), "LOG1")
+            .replace(s(b), "LOG2")
+            .replace(s(&result), "RESULT");
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        strip_times(&mut v);
+        answers.push(v);
+        let mut tables = Vec::new();
+        for id in ["id1", "id2"] {
+            let topics = ["measured", "prior", "adapted"]
+                .map(|t| format!("/{id}/{t}").parse().unwrap())
+                .to_vec();
+            tables.push(read_log(&result, &ReadOptions { topics, dt: None }).unwrap());
+        }
+        for ((id, table), log) in ["id1", "id2"].iter().zip(&tables).zip([&log1, &log2]) {
+            let col = |c: &str| table.column_index(c).unwrap_or_else(|| panic!("no {c}"));
+            let q: Vec<f64> = table
+                .rows
+                .iter()
+                .map(|r| r[col(&format!("{id}.q"))])
+                .collect();
+            assert_eq!(q.len(), log.len());
+            assert!(
+                q.iter()
+                    .zip(&log.q)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{id}"
+            );
+            let replay = |m: &str| -> Vec<f64> {
+                table
+                    .rows
+                    .iter()
+                    .map(|r| r[col(&format!("{m}.{id}.q"))])
+                    .collect()
+            };
+            let (before, after) = (rms(&replay("prior"), &q), rms(&replay("adapted"), &q));
+            if *id == "id2" {
+                assert!(
+                    after < 0.5 * before,
+                    "{id}: fitted {after} vs datasheet {before}"
+                );
+            }
+        }
+    }
+    assert_eq!(answers[0], answers[1]);
+}
+
+/// `ik --frames` and `identify compliant --data --val` read a log as every other
+/// command does (they parsed CSV text themselves before): marker frames of h1's
+/// squat and a compliant walk, written as the reference libraries write logs (an
+/// MCAP, a rosbag2 folder), give the CSV's answer: the same fitted angles to the
+/// bit, the same fit to 1e-12.
+#[test]
+fn ik_and_identify_compliant_answer_the_same_from_reference_logs_as_from_csv() {
+    let test = "ik_and_identify_compliant_answer_the_same_from_reference_logs_as_from_csv";
+    let h1 = root().join("models/unitree_h1/h1.urdf");
+    // Three markers on each of h1's moving links (a set like cli_ident.rs's).
+    let mut toml = String::new();
+    let links = [
+        "pelvis",
+        "torso_link",
+        "left_hip_yaw_link",
+        "left_hip_roll_link",
+        "left_hip_pitch_link",
+        "left_knee_link",
+        "left_ankle_link",
+        "right_hip_yaw_link",
+        "right_hip_roll_link",
+        "right_hip_pitch_link",
+        "right_knee_link",
+        "right_ankle_link",
+        "left_shoulder_pitch_link",
+        "left_shoulder_roll_link",
+        "left_shoulder_yaw_link",
+        "left_elbow_link",
+        "right_shoulder_pitch_link",
+        "right_shoulder_roll_link",
+        "right_shoulder_yaw_link",
+        "right_elbow_link",
+    ];
+    for link in links {
+        for (k, p) in [[0.05, 0.0, -0.1], [0.0, 0.05, -0.05], [-0.05, -0.02, 0.05]]
+            .iter()
+            .enumerate()
+        {
+            toml += &format!(
+                "[[marker]]\nname = \"{link}_{k}\"\nlink = \"{link}\"\nposition = [{}, {}, {}]\n\n",
+                p[0], p[1], p[2]
+            );
+        }
+    }
+    let (markers, squat, frames) = (
+        tmp("ik-markers.toml"),
+        tmp("ik-squat.csv"),
+        tmp("ik-frames.csv"),
+    );
+    std::fs::write(&markers, toml).unwrap();
+    ok(&[
+        "experiment",
+        "squat",
+        "--robot",
+        s(&h1),
+        "--out",
+        s(&squat),
+        "--duration",
+        "1",
+        "--rest",
+        "0.2",
+        "--rate",
+        "50",
+        "--markers",
+        s(&markers),
+        "--frames-out",
+        s(&frames),
+    ]);
+    let Some(logs) = reference_logs(&frames, test) else {
+        return;
+    };
+    let mut fitted = Vec::new();
+    for (k, input) in std::iter::once(&frames).chain(&logs).enumerate() {
+        let out = tmp(&format!("ik-out-{k}.csv"));
+        ok(&[
+            "ik",
+            "--robot",
+            s(&h1),
+            "--markers",
+            s(&markers),
+            "--frames",
+            s(input),
+            "--out",
+            s(&out),
+        ]);
+        fitted.push(Table::read(&out).unwrap());
+    }
+    for other in &fitted[1..] {
+        same_rows(&fitted[0], other);
+    }
+    // A compliant walk: the seed's plant along a short ZMP reference.
+    let (plant, reference, walk) = (tmp("c-plant.toml"), tmp("c-ref.csv"), tmp("c-walk.csv"));
+    std::fs::write(
+        &plant,
+        "m = 32.053860196\ng = 9.81\nKxx = 440.91346363174296\nKxz = -2173.515375145169\n\
+         Kzx = -2173.515375145169\nKzz = 60061.10789312922\nDxx = 14.527209046033501\n\
+         Dxz = -3.3326729999481515\nDzx = -3.3326729999481515\nDzz = 667.4461329201686\n",
+    )
+    .unwrap();
+    ok(&[
+        "gait",
+        "zmp",
+        "--footsteps",
+        "6",
+        "--step-length",
+        "0.03",
+        "--tss",
+        "0.5",
+        "--out",
+        s(&reference),
+    ]);
+    ok(&[
+        "compliant",
+        "simulate",
+        "--reference",
+        s(&reference),
+        "--plant",
+        s(&plant),
+        "--table1",
+        "--out",
+        s(&walk),
+    ]);
+    let Some(logs) = reference_logs(&walk, test) else {
+        return;
+    };
+    let inputs: Vec<PathBuf> = std::iter::once(walk.clone()).chain(logs).collect();
+    same_answers(
+        &[
+            "identify",
+            "compliant",
+            "--data",
+            "{in}",
+            "--val",
+            "{in}",
+            "--plant",
+            s(&plant),
+            "--method",
+            "lm",
+            "--json",
+            "{json}",
+        ],
+        &inputs,
+        1e-12,
+    );
+}

@@ -438,6 +438,13 @@ impl Default for LeanSimOptions {
 pub struct LeanAdaptationCheck {
     pub before: LeanComparison,
     pub after: LeanComparison,
+    /// What was compared: the robot's record and its replay on each model (before,
+    /// after), on their own clocks (each comparison's `shift_s` aligns them); for a
+    /// caller that shows the torques themselves (`adapt --mcap`).
+    #[serde(skip)]
+    pub robot: LeanRecord,
+    #[serde(skip)]
+    pub replays: [LeanRecord; 2],
 }
 
 /// Simulate the lean a robot did (`robot_run`: a table of `twinloop experiment lean`,
@@ -456,19 +463,24 @@ pub fn lean_comparison(
         .as_ref()
         .map(|p| p.display().to_string())
         .unwrap_or_else(|| "the robot's run".into());
-    let simulate = |d: &Description| -> Result<LeanComparison, ExperimentError> {
+    let simulate = |d: &Description| -> Result<(LeanComparison, LeanRecord), ExperimentError> {
         let sim_run = simulate_replay(d, &robot, options)?;
-        compare_leans(
+        let c = compare_leans(
             &robot,
             &sim_run,
             &run_name,
             &format!("model \"{}\"", d.name),
         )
-        .map_err(|e| ExperimentError(e.to_string()))
+        .map_err(|e| ExperimentError(e.to_string()))?;
+        Ok((c, sim_run))
     };
+    let (before, before_run) = simulate(model_before)?;
+    let (after, after_run) = simulate(model_after)?;
     Ok(LeanAdaptationCheck {
-        before: simulate(model_before)?,
-        after: simulate(model_after)?,
+        before,
+        after,
+        robot,
+        replays: [before_run, after_run],
     })
 }
 

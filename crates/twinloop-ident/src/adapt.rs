@@ -179,12 +179,12 @@ pub struct LeanJointCheck {
 
 /// Replay the lean the robot did (`robot_run`, a `twinloop experiment lean` record)
 /// on `prior` and on the adapted model (seed 001 section F) and put the torque
-/// differences in the report.
+/// differences in the report. Returns the comparison, with the replays compared.
 pub fn lean_check(
     adapted: &mut Adapted,
     prior: &Description,
     robot_run: &twinloop_io::Table,
-) -> Result<(), IdentError> {
+) -> Result<twinloop_experiments::LeanAdaptationCheck, IdentError> {
     let Some(after) = &adapted.robot else {
         return Err(IdentError::new(
             "the lean check needs the adapted model: give --total-mass or --where",
@@ -206,7 +206,7 @@ pub fn lean_check(
             robot_rms: b.torque_rms_robot,
         })
         .collect();
-    Ok(())
+    Ok(c)
 }
 
 /// The adapted description next to its report.

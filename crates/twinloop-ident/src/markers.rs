@@ -162,7 +162,16 @@ pub fn frame_columns(markers: &[Marker]) -> Vec<String> {
 /// Read marker frames; every marker of the set needs its three columns.
 pub fn read_frames(path: &Path, markers: &[Marker]) -> Result<MarkerFrames, IdentError> {
     let table = Table::read(path)?;
-    let at = |e: IdentError| e.in_file(path);
+    frames_from_table(&table, markers).map_err(|e| e.in_file(path))
+}
+
+/// [`read_frames`] of a table read already (a log through twinloop-logs: the
+/// `marker:` columns of a Float64MultiArray); errors name the table's file.
+pub fn frames_from_table(table: &Table, markers: &[Marker]) -> Result<MarkerFrames, IdentError> {
+    let at = |e: IdentError| match &table.path {
+        Some(p) => e.in_file(p),
+        None => e,
+    };
     let tc = table
         .column_index("t")
         .ok_or_else(|| at(IdentError::new("a time column is needed (seconds)").field("t")))?;

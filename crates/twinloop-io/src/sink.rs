@@ -3,7 +3,8 @@
 //! so the code that records (a guarded robot on its bus, the bus tip-over) needs no
 //! knowledge of formats. [`open_recording`] picks the format by the file's extension:
 //! a program that writes more than CSV registers the others once at start-up
-//! ([`register_recording_format`]; the `twinloop` command registers `.mcap`).
+//! ([`register_recording_format`]; the `twinloop` command registers `.mcap`, and
+//! [`FOLDER`] for a rosbag2 folder: a path that ends in `/` or names a folder).
 
 use crate::table::{CsvWriter, IoError};
 use std::path::Path;
@@ -53,7 +54,20 @@ pub type RecordingOpener = fn(&Path, &[String]) -> Result<Box<dyn RowSink>, IoEr
 /// The formats registered besides CSV: (extension, lower case; opener).
 static FORMATS: Mutex<Vec<(&str, RecordingOpener)>> = Mutex::new(Vec::new());
 
-/// Write recordings whose path ends in `.EXTENSION` (any case) with `open`.
+/// The "extension" of an output that is a folder ([`is_folder_output`]): a rosbag2
+/// bag, in the `twinloop` command.
+pub const FOLDER: &str = "/";
+
+/// Is `path` an output written as a folder: its name ends in `/` (`--out run/`: a
+/// folder, new or empty, that the recording fills), or it names an existing folder.
+/// (A plain file can be neither, so no CSV or MCAP name is taken.)
+pub fn is_folder_output(path: &Path) -> bool {
+    use std::os::unix::ffi::OsStrExt;
+    path.as_os_str().as_bytes().ends_with(b"/") || path.is_dir()
+}
+
+/// Write recordings whose path ends in `.EXTENSION` (any case) with `open`
+/// ([`FOLDER`]: the outputs that are folders).
 pub fn register_recording_format(extension: &'static str, open: RecordingOpener) {
     let mut formats = FORMATS.lock().unwrap_or_else(|e| e.into_inner());
     formats.retain(|(e, _)| *e != extension);
@@ -66,18 +80,26 @@ pub fn registered(path: &Path) -> bool {
 }
 
 fn opener(path: &Path) -> Option<RecordingOpener> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())?;
+    let ext = if is_folder_output(path) {
+        FOLDER.to_string()
+    } else {
+        path.extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())?
+    };
     let formats = FORMATS.lock().unwrap_or_else(|e| e.into_inner());
     formats.iter().find(|(e, _)| *e == ext).map(|(_, o)| *o)
 }
 
 /// A recording at `path`: in the format registered for its extension, else CSV
-/// ([`CsvWriter::recording`]: every row on disk at once, kept if the run fails).
+/// ([`CsvWriter::recording`]: every row on disk at once, kept if the run fails). A
+/// folder output with no format registered for it is refused.
 pub fn open_recording(path: &Path, columns: &[String]) -> Result<Box<dyn RowSink>, IoError> {
     match opener(path) {
         Some(open) => open(path, columns),
+        None if is_folder_output(path) => Err(IoError::new(
+            "is a folder: this program writes recordings to files (a CSV)",
+        )
+        .in_file(path)),
         None => Ok(Box::new(CsvWriter::recording(path, columns)?)),
     }
 }

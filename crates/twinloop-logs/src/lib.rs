@@ -9,6 +9,8 @@
 //!   and the time base (`timebase`).
 //! - [`write`]: a table to `/joint_states`, `/tf`, `/imu`, `/robot_description`.
 //! - [`info`]: what a log holds and what twinloop can read from it.
+//! - `bag`: a recording written as a rosbag2 folder (`--out NAME/`).
+mod bag;
 pub mod cdr;
 mod error;
 pub mod info;

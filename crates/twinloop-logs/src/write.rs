@@ -8,6 +8,7 @@
 //! `/robot_description` (std_msgs/String, the topic ROS 2's robot_state_publisher
 //! publishes it on, with transient-local durability). A result file adds
 //! attachments (the adapted URDF) and metadata records (its provenance).
+use crate::bag::Bag;
 use crate::cdr::CdrWriter;
 use crate::error::LogError;
 use crate::msgs::{self, JointState, Kind, Transform};
@@ -150,7 +151,10 @@ pub struct McapLog {
     ch_joints: u16,
     ch_tf: u16,
     ch_imus: Vec<u16>,
+    imu_topics: Vec<String>,
     ch_description: Option<u16>,
+    /// A rosbag2 folder's metadata, when the output is one.
+    bag: Option<Bag>,
     sequence: u32,
     wrote_description: bool,
     description: Option<String>,
@@ -190,18 +194,32 @@ impl McapLog {
     ) -> Result<McapLog, LogError> {
         let err = |e: LogError| e.in_file(path);
         let mut layout = layout(columns, groups).map_err(err)?;
-        let (place, file) = PartialFile::open(&Output::resolve("", path)?)?;
+        let (mut bag, file_path) = if twinloop_io::sink::is_folder_output(path) {
+            let (bag, file) = Bag::open(path)?;
+            (Some(bag), file)
+        } else {
+            (None, path.to_path_buf())
+        };
+        let (place, file) = PartialFile::open(&Output::resolve("", &file_path)?)?;
         let mut out = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
             .profile("ros2")
             .library(concat!("twinloop ", env!("CARGO_PKG_VERSION")))
             .create(BufWriter::new(file))
             .map_err(|e| err(e.into()))?;
+        // Each channel: id, topic, type, QoS (what a bag's metadata lists).
+        let mut declared: Vec<(u16, String, Kind, String)> = Vec::new();
         let mut channel =
             |kind: Kind, topic: &str, meta: &BTreeMap<String, String>| -> Result<u16, LogError> {
                 let s =
                     out.add_schema(kind.schema_name(), "ros2msg", kind.schema_text().as_bytes())?;
-                Ok(out.add_channel(s, topic, "cdr", meta)?)
+                let id = out.add_channel(s, topic, "cdr", meta)?;
+                let qos = meta
+                    .get("offered_qos_profiles")
+                    .cloned()
+                    .unwrap_or_default();
+                declared.push((id, topic.to_string(), kind, qos));
+                Ok(id)
             };
         let none = BTreeMap::new();
         let ch_joints = if layout.joints.is_empty() {
@@ -215,6 +233,7 @@ impl McapLog {
             0
         };
         let mut ch_imus = Vec::new();
+        let mut imu_topics = Vec::new();
         for (link, _) in &layout.imus {
             let topic = if layout.imus.len() == 1 {
                 "/imu".to_string()
@@ -222,6 +241,7 @@ impl McapLog {
                 format!("/imu/{link}")
             };
             ch_imus.push(channel(Kind::Imu, &topic, &none).map_err(err)?);
+            imu_topics.push(topic);
         }
         for a in &mut layout.arrays {
             a.channel = channel(Kind::MultiArray, &a.topic, &none).map_err(err)?;
@@ -232,6 +252,11 @@ impl McapLog {
             Some(_) => Some(channel(Kind::String, "/robot_description", &latched).map_err(err)?),
             None => None,
         };
+        if let Some(bag) = &mut bag {
+            for (id, topic, kind, qos) in &declared {
+                bag.channel(*id, topic, *kind, qos);
+            }
+        }
         let joints = JointState {
             names: layout.joints.clone(),
             ..JointState::default()
@@ -256,7 +281,9 @@ impl McapLog {
             ch_joints,
             ch_tf,
             ch_imus,
+            imu_topics,
             ch_description,
+            bag,
             sequence: 0,
             wrote_description: false,
             description: description.map(str::to_string),
@@ -265,6 +292,9 @@ impl McapLog {
 
     fn emit(&mut self, channel: u16, time: i64) -> Result<(), LogError> {
         self.sequence += 1;
+        if let Some(bag) = &mut self.bag {
+            bag.count(channel, time);
+        }
         let header = MessageHeader {
             channel_id: channel,
             sequence: self.sequence,
@@ -278,6 +308,18 @@ impl McapLog {
 
     /// Write one row (as many values as columns; `t` in seconds is the stamp).
     pub fn write_row(&mut self, row: &[f64]) -> Result<(), LogError> {
+        self.write_row_on(row, |_| true)
+    }
+
+    /// Write one row's messages on the topics `keep` takes only (`/joint_states`,
+    /// `/tf`, the IMUs' and the arrays' topics; the description goes at the first
+    /// row all the same): for a result whose parts have times of their own (`adapt`'s
+    /// four fall angles, then its lean), each row filling its part's topics.
+    pub fn write_row_on(
+        &mut self,
+        row: &[f64],
+        keep: impl Fn(&str) -> bool,
+    ) -> Result<(), LogError> {
         if row.len() != self.columns.len() {
             return Err(LogError::new(format!(
                 "a row of {} values for {} columns",
@@ -304,7 +346,7 @@ impl McapLog {
             self.emit(ch, time)?;
             self.wrote_description = true;
         }
-        if !self.layout.joints.is_empty() {
+        if !self.layout.joints.is_empty() && keep("/joint_states") {
             let l = &self.layout;
             let j = &mut self.joints;
             j.stamp_ns = time;
@@ -318,7 +360,7 @@ impl McapLog {
             j.encode(&mut self.cdr, "");
             self.emit(self.ch_joints, time)?;
         }
-        if let Some(b) = self.layout.base {
+        if let Some(b) = self.layout.base.filter(|_| keep("/tf")) {
             let tr = &mut self.tf[0];
             tr.stamp_ns = time;
             tr.translation = [row[b[0]], row[b[1]], row[b[2]]];
@@ -328,6 +370,9 @@ impl McapLog {
             self.emit(self.ch_tf, time)?;
         }
         for k in 0..self.layout.imus.len() {
+            if !keep(&self.imu_topics[k]) {
+                continue;
+            }
             let (link, c) = &self.layout.imus[k];
             if self.imu.frame != *link {
                 self.imu.frame = link.clone();
@@ -342,6 +387,9 @@ impl McapLog {
         }
         for k in 0..self.layout.arrays.len() {
             let a = &self.layout.arrays[k];
+            if !keep(&a.topic) {
+                continue;
+            }
             self.extra.clear();
             self.extra.extend(a.columns.iter().map(|&i| row[i]));
             self.cdr.reset();
@@ -407,7 +455,11 @@ impl McapLog {
                     out.add_schema(kind.schema_name(), "ros2msg", kind.schema_text().as_bytes())?;
                 Ok(out.add_channel(s, "/robot_description", "cdr", &latched)?)
             };
-            self.ch_description = Some(add(out).map_err(|e| e.in_file(&self.path))?);
+            let id = add(out).map_err(|e| e.in_file(&self.path))?;
+            if let Some(bag) = &mut self.bag {
+                bag.channel(id, "/robot_description", kind, LATCHED_QOS);
+            }
+            self.ch_description = Some(id);
         }
         self.description = Some(urdf.to_string());
         Ok(())
@@ -441,7 +493,10 @@ impl McapLog {
             .into_inner()
             .map_err(|e| in_file(LogError::new(format!("cannot write: {}", e.error()))))?;
         place.commit(file)?;
-        Ok(())
+        match self.bag.take() {
+            Some(bag) => bag.finish(),
+            None => Ok(()),
+        }
     }
 }
 

@@ -103,3 +103,54 @@ fn a_recording_described_before_its_first_row_carries_the_robot_and_after_it_is_
         t.rows
     );
 }
+
+/// An output that is a folder (`run/`) is a rosbag2 bag: `run/run_0.mcap` and its
+/// `metadata.yaml`, which twinloop reads back as the table it wrote; a folder that
+/// holds other files is refused, and a bag whose writing failed leaves no folder.
+#[test]
+fn a_folder_output_is_a_rosbag2_bag_and_a_folder_of_other_files_is_refused() {
+    let dir = scratch("bag").with_file_name("run");
+    let _ = std::fs::remove_dir_all(&dir);
+    let slash = PathBuf::from(format!("{}/", dir.display()));
+    let table = joints(&[0.0, 0.001, 0.002]);
+    write_mcap(&slash, &table, None, "base").unwrap();
+    assert!(dir.join("run_0.mcap").is_file());
+    let meta = std::fs::read_to_string(dir.join("metadata.yaml")).unwrap();
+    for line in [
+        "storage_identifier: mcap",
+        "message_count: 3",
+        "name: /joint_states",
+        "type: sensor_msgs/msg/JointState",
+        "- run_0.mcap",
+        "duration:\n    nanoseconds: 2000000",
+    ] {
+        assert!(meta.contains(line), "{line} not in\n{meta}");
+    }
+    let back = read_log(&dir, &ReadOptions::default()).unwrap();
+    assert_eq!(back.rows, table.rows);
+    // Written again into the existing bag: replaced.
+    write_mcap(&dir, &joints(&[0.0, 0.5]), None, "base").unwrap();
+    assert_eq!(
+        read_log(&dir, &ReadOptions::default()).unwrap().rows.len(),
+        2
+    );
+    let other = scratch("notabag").with_file_name("docs");
+    std::fs::create_dir_all(&other).unwrap();
+    std::fs::write(other.join("notes.txt"), "keep").unwrap();
+    let e = write_mcap(&other, &table, None, "base")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("notes.txt") && e.contains("not part of a bag"),
+        "{e}"
+    );
+    // A bad table: the new folder is not left behind.
+    let never = scratch("never").with_file_name("never");
+    let e = write_mcap(
+        &PathBuf::from(format!("{}/", never.display())),
+        &Table::new(vec!["q:a".into()]),
+        None,
+        "base",
+    );
+    assert!(e.is_err() && !never.exists());
+}

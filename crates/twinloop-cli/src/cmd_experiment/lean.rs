@@ -16,7 +16,6 @@ use twinloop_experiments::lean::{
     run_lean, sagittal_tip_angles, summarize,
 };
 use twinloop_experiments::stiffen;
-use twinloop_io::CsvWriter;
 use twinloop_link::{DynamixelRobot, ReadMethod};
 use twinloop_robot::RobotError;
 
@@ -35,6 +34,7 @@ pub struct LeanArgs {
     #[arg(long, value_name = "MAP")]
     pub map: Option<String>,
     /// The lean, one row per control period, written (and flushed) as it comes.
+    /// (`.mcap`: ROS 2 messages; `NAME/`: a rosbag2 folder, docs/logs.md.)
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
     /// Over the bus: every cycle read, all joints and the IMU (as `experiment
@@ -199,14 +199,20 @@ fn configure(
     Ok(cfg)
 }
 
-fn lean_writer(a: &LeanArgs, cfg: &LeanConfig) -> Result<CsvWriter, CliError> {
-    Ok(CsvWriter::recording(
+/// The lean's rows: a CSV, or an MCAP (`.mcap`) or rosbag2 folder (`run/`) of ROS 2
+/// messages, as every recording (`twinloop_io::open_recording`).
+fn lean_writer(a: &LeanArgs, cfg: &LeanConfig) -> Result<Box<dyn twinloop_io::RowSink>, CliError> {
+    Ok(twinloop_io::open_recording(
         &a.out,
         &LeanRecord::columns(&cfg.recorded_names),
     )?)
 }
 
-fn write_row(w: &mut CsvWriter, row: &LeanRow<'_>, buf: &mut Vec<f64>) -> Result<(), RobotError> {
+fn write_row(
+    w: &mut Box<dyn twinloop_io::RowSink>,
+    row: &LeanRow<'_>,
+    buf: &mut Vec<f64>,
+) -> Result<(), RobotError> {
     LeanRecord::row_values(row, buf);
     w.write_row(buf)
         .map_err(|e| RobotError::new(format!("--out: {e}")))

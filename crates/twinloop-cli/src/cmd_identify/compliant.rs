@@ -149,13 +149,23 @@ struct Inputs {
     start: Corrections,
 }
 
+/// A dataset from its CSV, or from a log (an MCAP, a rosbag2 folder) read as the
+/// table a CSV would give.
+fn read_dataset(path: &std::path::Path) -> Result<Dataset, CliError> {
+    if twinloop_logs::is_log(path) {
+        let table = crate::common::read_table(path)?;
+        return Ok(Dataset::from_table(&table, &path.display().to_string())?);
+    }
+    Ok(Dataset::read(path)?)
+}
+
 fn read_inputs(args: &CompliantFitArgs) -> Result<Inputs, CliError> {
     let plant = read_plant_any(&args.plant)?;
-    let data = Dataset::read(&args.data)?;
+    let data = read_dataset(&args.data)?;
     let val = args
         .val
         .iter()
-        .map(|p| Dataset::read(p))
+        .map(|p| read_dataset(p))
         .collect::<Result<Vec<_>, _>>()?;
     let free = match &args.params {
         Some(text) => {

@@ -75,7 +75,8 @@ pub struct ServoIdArgs {
     pub out: Option<PathBuf>,
     /// Also write the result as one MCAP (docs/logs.md): each log's measured
     /// signals, the start's and the fitted parameters' replay of them, the fitted
-    /// parameter file attached. One servo's logs
+    /// parameter file attached; several servos: each on topics of its own
+    /// (`/id3/measured` ..), each file attached
     #[arg(long, value_name = "RESULT.mcap")]
     pub mcap: Option<PathBuf>,
     #[arg(long, value_name = "FILE", help = JSON_HELP)]
@@ -228,7 +229,7 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     }
     if let Some(path) = &a.mcap {
         let all: Vec<&ServoLog> = logs.iter().chain(&holdout).collect();
-        write_result_mcap(path, a, &all, &load, &start, &id.params, &fitted)?;
+        write_result_mcap(path, a, &all, &load, (&start, &id.params), &fitted)?;
     }
     emit(&text(&id, seconds), a.json.as_ref(), &to_json(&id, seconds))?;
     Ok(Outcome::Ok)
@@ -269,11 +270,6 @@ fn run_group(
             "{}: line 1: names no servo id, and the other logs are of several servos: give ID={}",
             l.file, l.file
         )));
-    }
-    if a.mcap.is_some() {
-        return Err(CliError::new(
-            "--mcap: the logs are of several servos; write the result of one servo's logs",
-        ));
     }
     if !a.fit.is_empty() {
         return Err(CliError::new(
@@ -379,11 +375,11 @@ fn run_group(
         threads,
     )?;
     let seconds = t0.elapsed().as_secs_f64();
-    let mut files = Vec::new();
-    if let Some(dir) = &a.out {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
-        for (s, f) in servos.iter().zip(&id.chosen.servos) {
-            let path = dir.join(format!("{}.toml", f.name.replace(' ', "-")));
+    // Each servo's fitted file: its name, parameters and text.
+    let fits: Vec<(String, &ServoParams, String)> = servos
+        .iter()
+        .zip(&id.chosen.servos)
+        .map(|(s, f)| {
             let comment = format!(
                 "fitted by twinloop identify servo with {} servos of one type ({} rows in {} logs of this one); shared: {}; own: {}; held-out error {:.3} mrad RMS",
                 servos.len(),
@@ -393,9 +389,21 @@ fn run_group(
                 names(&id.chosen.per_servo),
                 f.heldout_rms_mrad
             );
-            twinloop_io::output::write_atomic(&path, f.params.to_toml(&comment))?;
+            (f.name.clone(), &f.params, f.params.to_toml(&comment))
+        })
+        .collect();
+    let mut files = Vec::new();
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+        for (name, _, toml) in &fits {
+            let path = dir.join(format!("{}.toml", name.replace(' ', "-")));
+            twinloop_io::output::write_atomic(&path, toml)?;
             files.push(path);
         }
+    }
+    if let Some(path) = &a.mcap {
+        write_group_mcap(path, a, &servos, start, &fits)?;
+        files.push(path.clone());
     }
     emit(
         &group_text(&id, &files, seconds),
@@ -628,21 +636,127 @@ fn write_result_mcap(
     a: &ServoIdArgs,
     logs: &[&ServoLog],
     load: &Load,
-    start: &ServoParams,
-    fitted: &ServoParams,
+    (start, fitted): (&ServoParams, &ServoParams),
     fitted_toml: &str,
 ) -> Result<(), CliError> {
+    let rows = servo_rows("", logs, load, start, fitted);
+    let result = crate::result_mcap::ResultLog {
+        table: rows.table,
+        measured: rows.measured,
+        predicted: crate::result_mcap::prior_and_adapted(rows.prior, rows.adapted),
+        robot: None,
+        robot_file: "adapted.urdf",
+        inputs: result_inputs(a)?,
+        files: vec![(
+            "fitted.toml".into(),
+            "application/toml",
+            fitted_toml.as_bytes().to_vec(),
+        )],
+        parts: Vec::new(),
+    };
+    crate::result_mcap::write(path, "identify servo", &result)
+}
+
+/// `--mcap` of several servos: each servo's rows as one servo's are written
+/// ([`servo_rows`], its columns prefixed `id3.`), on topics of its own
+/// (`/id3/measured`, `/id3/prior`, `/id3/adapted`), each servo on its logs' own
+/// clock; its fitted parameter file (what `--out DIR` writes) attached as
+/// `id-3.toml`.
+fn write_group_mcap(
+    path: &Path,
+    a: &ServoIdArgs,
+    servos: &[ServoData],
+    start: &ServoParams,
+    fits: &[(String, &ServoParams, String)],
+) -> Result<(), CliError> {
+    let mut parts = Vec::new();
+    let mut files = Vec::new();
+    for (s, (name, fitted, toml)) in servos.iter().zip(fits) {
+        let key = name.replace(' ', "");
+        let logs: Vec<&ServoLog> = s.logs.iter().chain(&s.holdout).collect();
+        let rows = servo_rows(
+            &format!("{key}."),
+            &logs,
+            &Load::from(s.load),
+            start,
+            fitted,
+        );
+        let topic = |t: &str, columns: Vec<String>| twinloop_logs::ArrayTopic {
+            topic: format!("/{key}/{t}"),
+            columns,
+        };
+        parts.push(crate::result_mcap::ResultPart {
+            table: rows.table,
+            topics: vec![
+                topic("measured", rows.measured),
+                topic("prior", rows.prior),
+                topic("adapted", rows.adapted),
+            ],
+        });
+        files.push((
+            format!("{}.toml", name.replace(' ', "-")),
+            "application/toml",
+            toml.as_bytes().to_vec(),
+        ));
+    }
+    let result = crate::result_mcap::ResultLog {
+        table: twinloop_io::Table::new(vec!["t".to_string()]),
+        measured: Vec::new(),
+        predicted: Vec::new(),
+        robot: None,
+        robot_file: "adapted.urdf",
+        inputs: result_inputs(a)?,
+        files,
+        parts,
+    };
+    crate::result_mcap::write(path, "identify servo", &result)
+}
+
+/// The inputs a result names (and hashes): the logs, the loads, the start.
+fn result_inputs(a: &ServoIdArgs) -> Result<Vec<String>, CliError> {
+    let mut inputs: Vec<String> = a
+        .data
+        .iter()
+        .chain(&a.holdout)
+        .map(|d| keyed(d, "--data").map(|(_, p)| p.to_string()))
+        .collect::<Result<_, _>>()?;
+    inputs.extend(
+        a.load
+            .iter()
+            .map(|l| keyed(l, "--load").map(|(_, p)| p.to_string()))
+            .collect::<Result<Vec<_>, _>>()?,
+    );
+    inputs.extend(a.start.iter().map(|p| p.display().to_string()));
+    Ok(inputs)
+}
+
+/// One servo's logs as a result's rows: the table (`t`, then the measured, the
+/// start's and the fit's columns, each name after `prefix`) and those three lists.
+struct ServoRows {
+    table: twinloop_io::Table,
+    measured: Vec<String>,
+    prior: Vec<String>,
+    adapted: Vec<String>,
+}
+
+fn servo_rows(
+    prefix: &str,
+    logs: &[&ServoLog],
+    load: &Load,
+    start: &ServoParams,
+    fitted: &ServoParams,
+) -> ServoRows {
     let current = logs.iter().all(|l| l.current.is_some());
     let signals: &[&str] = if current { &["q", "current"] } else { &["q"] };
     let measured: Vec<String> = ["goal", "q", "v"]
         .iter()
         .chain(if current { &["current"][..] } else { &[] })
-        .map(|c| c.to_string())
+        .map(|c| format!("{prefix}{c}"))
         .collect();
     let named = |p: &str| {
         signals
             .iter()
-            .map(|c| format!("{p}{c}"))
+            .map(|c| format!("{p}{prefix}{c}"))
             .collect::<Vec<_>>()
     };
     let (prior, adapted) = (named("prior."), named("adapted."));
@@ -674,28 +788,12 @@ fn write_result_mcap(
             table.rows.push(row);
         }
     }
-    let mut inputs: Vec<String> = a
-        .data
-        .iter()
-        .chain(&a.holdout)
-        .map(|d| keyed(d, "--data").map(|(_, p)| p.to_string()))
-        .collect::<Result<_, _>>()?;
-    inputs.extend(a.load.iter().cloned());
-    inputs.extend(a.start.iter().map(|p| p.display().to_string()));
-    let result = crate::result_mcap::ResultLog {
+    ServoRows {
         table,
         measured,
-        predicted: crate::result_mcap::prior_and_adapted(prior, adapted),
-        robot: None,
-        robot_file: "adapted.urdf",
-        inputs,
-        files: vec![(
-            "fitted.toml".into(),
-            "application/toml",
-            fitted_toml.as_bytes().to_vec(),
-        )],
-    };
-    crate::result_mcap::write(path, "identify servo", &result)
+        prior,
+        adapted,
+    }
 }
 
 /// A servo log given as an MCAP or bag (`experiment servo --out X.mcap`): the

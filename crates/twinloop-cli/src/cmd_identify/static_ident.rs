@@ -202,6 +202,7 @@ fn write_result_mcap(
         robot_file: "adapted.urdf",
         inputs: vec![a.robot.clone(), a.poses.display().to_string()],
         files: Vec::new(),
+        parts: Vec::new(),
     };
     crate::result_mcap::write(path, "identify static", &result)
 }

@@ -51,30 +51,33 @@ impl Dataset {
         let mut first_step = None;
         for (ln, line) in lines {
             let line_no = ln + 1;
-            let [t, xr, zr, xm, zm, phase] = parse_row(line, ncols, &index, source, line_no)?;
-            let double = double_support(phase, source, line_no)?;
-            if let Some(&prev) = reference.t.last() {
-                check_step(prev, t, &mut first_step, source, line_no)?;
+            let row = parse_row(line, ncols, &index, source, line_no)?;
+            let at = format!("{source}, line {line_no}");
+            push_row(row, &at, &mut first_step, &mut reference, (&mut x, &mut z))?;
+        }
+        finish(reference, x, z, source)
+    }
+
+    /// [`Dataset::parse`] of a table read already (an MCAP or a rosbag2 folder,
+    /// through twinloop-logs: `x`, `z` and the rest are columns of a
+    /// Float64MultiArray): the same columns and checks, a row named by its number.
+    pub fn from_table(table: &twinloop_io::Table, source: &str) -> Result<Dataset, IdentError> {
+        let (_, index) = column_index(&table.columns.join(","), source)?;
+        let mut reference = SagittalReference::default();
+        let (mut x, mut z) = (Vec::new(), Vec::new());
+        let mut first_step = None;
+        for (r, values) in table.rows.iter().enumerate() {
+            let at = format!("{source}, data row {}", r + 1);
+            let row = index.map(|i| values[i]);
+            if let Some(k) = row.iter().position(|v| !v.is_finite()) {
+                return err(format!(
+                    "{at}, column {}: {} (the data must be finite; drop or repair the sample)",
+                    COLUMNS[k], row[k]
+                ));
             }
-            reference.t.push(t);
-            reference.xr.push(xr);
-            reference.zr.push(zr);
-            reference.double_support.push(double);
-            x.push(xm);
-            z.push(zm);
+            push_row(row, &at, &mut first_step, &mut reference, (&mut x, &mut z))?;
         }
-        if reference.t.len() < 3 {
-            return err(format!(
-                "{source}: {} data rows; the fit needs at least 3",
-                reference.t.len()
-            ));
-        }
-        Ok(Dataset {
-            reference,
-            x,
-            z,
-            source: source.to_string(),
-        })
+        finish(reference, x, z, source)
     }
 
     pub fn len(&self) -> usize {
@@ -107,6 +110,48 @@ impl Dataset {
         }
         s
     }
+}
+
+/// One row's `t, xr, zr, x, z, phase` after the ones before it (`at` names it).
+fn push_row(
+    [t, xr, zr, xm, zm, phase]: [f64; 6],
+    at: &str,
+    first_step: &mut Option<f64>,
+    reference: &mut SagittalReference,
+    (x, z): (&mut Vec<f64>, &mut Vec<f64>),
+) -> Result<(), IdentError> {
+    let double = double_support(phase, at)?;
+    if let Some(&prev) = reference.t.last() {
+        check_step(prev, t, first_step, at)?;
+    }
+    reference.t.push(t);
+    reference.xr.push(xr);
+    reference.zr.push(zr);
+    reference.double_support.push(double);
+    x.push(xm);
+    z.push(zm);
+    Ok(())
+}
+
+/// The dataset, if it has rows enough to fit.
+fn finish(
+    reference: SagittalReference,
+    x: Vec<f64>,
+    z: Vec<f64>,
+    source: &str,
+) -> Result<Dataset, IdentError> {
+    if reference.t.len() < 3 {
+        return err(format!(
+            "{source}: {} data rows; the fit needs at least 3",
+            reference.t.len()
+        ));
+    }
+    Ok(Dataset {
+        reference,
+        x,
+        z,
+        source: source.to_string(),
+    })
 }
 
 /// The number of header cells and where each of [`COLUMNS`] is among them.
@@ -163,30 +208,24 @@ fn parse_row(
 }
 
 /// The phase cell as double support (1) or single (0); nothing else is a phase.
-fn double_support(phase: f64, source: &str, line_no: usize) -> Result<bool, IdentError> {
+fn double_support(phase: f64, at: &str) -> Result<bool, IdentError> {
     if phase == 0.0 {
         Ok(false)
     } else if phase == 1.0 {
         Ok(true)
     } else {
         err(format!(
-            "{source}, line {line_no}, column phase: {phase} (0 = single support, 1 = double)"
+            "{at}, column phase: {phase} (0 = single support, 1 = double)"
         ))
     }
 }
 
 /// Time must increase by the first step every row: a gap means lost samples.
-fn check_step(
-    prev: f64,
-    t: f64,
-    first_step: &mut Option<f64>,
-    source: &str,
-    line_no: usize,
-) -> Result<(), IdentError> {
+fn check_step(prev: f64, t: f64, first_step: &mut Option<f64>, at: &str) -> Result<(), IdentError> {
     let h: f64 = t - prev;
     if h <= 0.0 {
         return err(format!(
-            "{source}, line {line_no}, column t: time {t} does not increase (previous {prev})"
+            "{at}, column t: time {t} does not increase (previous {prev})"
         ));
     }
     match *first_step {
@@ -194,7 +233,7 @@ fn check_step(
         Some(h0) => {
             if (h - h0).abs() > 1e-6 * h0 {
                 return err(format!(
-                    "{source}, line {line_no}, column t: time step {h} after t = {prev}, \
+                    "{at}, column t: time step {h} after t = {prev}, \
                      but the sampling interval is {h0}: a gap or jitter (the fit needs uniform sampling)"
                 ));
             }
