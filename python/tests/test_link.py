@@ -140,3 +140,21 @@ def test_record_to_mcap_holds_the_rows_it_returns(server, tmp_path):
         np.testing.assert_array_equal(np.array(msg.effort), row[1 + 2 * n:])
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         assert abs(stamp - row[0]) < 1e-9
+
+
+def test_record_to_a_folder_writes_a_bag_rosbags_reads(server, tmp_path):
+    # `out="run/"`: a rosbag2 folder (metadata.yaml + run_0.mcap), as `--out run/` is.
+    rosbag2, typesys = oracle("rosbags.rosbag2"), oracle("rosbags.typesys")
+    store = typesys.get_typestore(typesys.Stores.ROS2_HUMBLE)
+    bus = bus_of(server)
+    bag = tmp_path / "run"
+    rec = bus.record(0.3, map="builtin:km20", rate=50.0, out=str(bag) + "/")
+    assert sorted(p.name for p in bag.iterdir()) == ["metadata.yaml", "run_0.mcap"]
+    names = [c[2:] for c in rec["columns"] if c.startswith("q:")]
+    with rosbag2.Reader(bag) as r:
+        conns = [c for c in r.connections if c.topic == "/joint_states"]
+        assert conns and conns[0].msgcount == rec["rows"]
+        msgs = [store.deserialize_cdr(raw, c.msgtype) for c, _, raw in r.messages(connections=conns)]
+    for msg, row in zip(msgs, rec["data"]):
+        assert list(msg.name) == names
+        np.testing.assert_array_equal(np.array(msg.position), row[1:1 + len(names)])
