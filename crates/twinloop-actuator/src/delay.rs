@@ -97,11 +97,14 @@ impl Samples {
     /// (time, value) not yet pushed; before the oldest sample (or at a NaN time), the
     /// oldest value. The times must not decrease.
     pub fn value_at(&self, at: f64, now: (f64, f64)) -> f64 {
+        use std::cmp::Ordering::{Equal, Less};
         if self.len == 0 {
             return now.1;
         }
+        // At or before `at`: not after it, nor unordered with it (a NaN time).
+        let at_or_before = |t: f64| matches!(t.partial_cmp(&at), Some(Less | Equal));
         let (mut t, mut x) = self.get(0);
-        if !(t <= at) {
+        if !at_or_before(t) {
             return x;
         }
         // The newest sample at or before `at`, searched from the oldest: a ring
@@ -110,7 +113,7 @@ impl Samples {
         let mut k = 0;
         while k + 1 < self.len {
             let next = self.get(k + 1);
-            if !(next.0 <= at) {
+            if !at_or_before(next.0) {
                 break;
             }
             (t, x) = next;

@@ -76,7 +76,7 @@ impl Firmware {
 #[inline]
 pub fn round(x: f64) -> f64 {
     // 2^52: from there on every f64 is a whole number (and NaN, infinities pass).
-    if !(x.abs() < 4_503_599_627_370_496.0) {
+    if x.is_nan() || x.abs() >= 4_503_599_627_370_496.0 {
         return x;
     }
     let whole = x as i64;

@@ -393,7 +393,8 @@ mod tests {
         assert!(
             mesh_path("package://other/a.stl", base, &[])
                 .unwrap_err()
-                .0.contains("--package-dir other=DIR")
+                .0
+                .contains("--package-dir other=DIR")
         );
         assert!(mesh_path("http://x/a.stl", base, &[]).is_err());
     }
