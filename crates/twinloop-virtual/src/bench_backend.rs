@@ -106,9 +106,10 @@ impl VirtualServoBackend for BenchBackend {
 
     /// Compliance (RX) or position gains (MX(2.0), X) and the torque limit.
     fn register_written(&mut self, _servo: usize, item: Item, raw: i32) {
+        let family = self.bench.params().servo.family();
         let f = &mut self.bench.firmware;
         let raw_f = raw as f64;
-        match (self.bench.params().servo.family(), item) {
+        match (family, item) {
             (LoopFamily::Compliance, Item::CwComplianceSlope | Item::CcwComplianceSlope) => {
                 f.registers[0] = raw_f
             }
