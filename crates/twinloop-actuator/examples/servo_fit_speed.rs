@@ -4,8 +4,10 @@
 //! excitation), timed on a given number of threads.
 //!
 //! `cargo run --release -p twinloop-actuator --example servo_fit_speed -- THREADS
-//! [PERIOD_S]`: prints the wall and CPU time, the simulations, and the fitted
-//! values with their bits (to compare runs on different thread counts).
+//! [PERIOD_S] [SIMS]`: prints the wall and CPU time, the simulations, and the fitted
+//! values with their bits (to compare runs on different thread counts). With SIMS,
+//! runs only that many replays of the whole log with the truth's parameters (the
+//! fit's unit of work, small enough for callgrind) and prints a checksum of them.
 
 use twinloop_actuator::datasheet::defaults;
 use twinloop_actuator::identify::{IdentifyOptions, identify_with};
@@ -29,6 +31,25 @@ fn cpu_seconds() -> f64 {
     };
     // utime and stime are fields 14 and 15 (11 and 12 after the name); 100 Hz ticks.
     (ticks(11) + ticks(12)) / 100.0
+}
+
+/// `sims` replays of all of `log` with `params`; prints a hash of their bits.
+fn replays(params: &ServoParams, load: &Load, log: &twinloop_actuator::log::ServoLog, sims: usize) {
+    let (mut q, mut c) = (vec![0.0; log.len()], vec![0.0; log.len()]);
+    let mut sum = 0xcbf2_9ce4_8422_2325u64;
+    let c0 = cpu_seconds();
+    for _ in 0..sims {
+        twinloop_actuator::replay::replay(params, load, log, 0..log.len(), &mut q, &mut c);
+        // FNV-1a over every value's bits: any changed bit shows.
+        for v in q.iter().chain(&c[1..]) {
+            sum = (sum ^ v.to_bits()).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+    println!(
+        "{sims} replays of {} rows: cpu {:.3} s, bits' hash {sum:016x}",
+        log.len(),
+        cpu_seconds() - c0,
+    );
 }
 
 fn main() {
@@ -58,6 +79,10 @@ fn main() {
         0.2 * period,
         11,
     );
+    if let Some(sims) = args.get(3).and_then(|a| a.parse::<usize>().ok()) {
+        replays(&truth, &load, &log, sims);
+        return;
+    }
     let start = defaults(servo, ModelLevel::M1);
     let options = IdentifyOptions {
         nonsmooth: NONSMOOTH.to_vec(),

@@ -115,8 +115,12 @@ impl From<&Pendulum> for Load {
 /// shaft), so the loop sees the load's angle.
 #[derive(Debug, Clone)]
 pub struct Bench {
-    pub params: ServoParams,
-    pub load: Load,
+    /// Fixed at [`Bench::new`] (the step keeps what it needs of them worked out).
+    params: ServoParams,
+    /// What every step needs of `params` and `load`, worked out once.
+    k: Constants,
+    /// Fixed at [`Bench::new`], like `params`.
+    load: Load,
     pub firmware: Firmware,
     /// Goal Position in force, rad (already a whole number of counts when it came over
     /// a bus).
@@ -141,12 +145,51 @@ pub struct Bench {
     pending: Samples,
 }
 
+/// The parameters' terms the step uses, by the step's own expressions (so the same
+/// bits as working them out in every step).
+#[derive(Debug, Clone, Copy)]
+struct Constants {
+    kt: f64,
+    resistance: f64,
+    voltage: f64,
+    armature: f64,
+    /// `kt / resistance`: the drive per volt of the winding.
+    drive: f64,
+    /// `kt^2 / resistance + friction_viscous`, and `friction_viscous` alone (torque
+    /// off: no back-EMF brake).
+    damping_on: f64,
+    damping_off: f64,
+    /// Half the backlash, rad.
+    half: f64,
+    /// Armature and load together (the gap closed).
+    engaged_inertia: f64,
+}
+
+impl Constants {
+    fn new(p: &ServoParams, load: &Load) -> Constants {
+        let (kt, res) = (p.kt(), p.resistance());
+        Constants {
+            kt,
+            resistance: res,
+            voltage: p.voltage,
+            armature: p.armature(),
+            drive: kt / res,
+            damping_on: kt * kt / res + p.values[FRICTION_VISCOUS],
+            damping_off: 0.0 + p.values[FRICTION_VISCOUS],
+            half: 0.5 * p.values[BACKLASH],
+            engaged_inertia: p.armature() + load.inertia,
+        }
+    }
+}
+
 impl Bench {
     pub fn new(params: ServoParams, load: impl Into<Load>) -> Bench {
+        let load = load.into();
         Bench {
             firmware: Firmware::new(params.servo),
+            k: Constants::new(&params, &load),
             params,
-            load: load.into(),
+            load,
             goal: 0.0,
             torque_on: false,
             q: 0.0,
@@ -160,6 +203,16 @@ impl Bench {
             history: Samples::with_capacity(256),
             pending: Samples::with_capacity(16),
         }
+    }
+
+    /// The servo's parameters (fixed for the bench's life).
+    pub fn params(&self) -> &ServoParams {
+        &self.params
+    }
+
+    /// What the servo turns (fixed for the bench's life).
+    pub fn load(&self) -> &Load {
+        &self.load
     }
 
     /// Put the output at `q`, `v` with the gap closed and no history (a log's first
@@ -233,7 +286,7 @@ impl Bench {
         } else {
             0.0
         };
-        let half = 0.5 * self.params.values[BACKLASH];
+        let half = self.k.half;
         let delta = self.qm - self.q;
         // Engaged: the gap is closed on one side (within a nanoradian).
         let side = if half <= 0.0 {
@@ -246,12 +299,13 @@ impl Bench {
             f64::NAN
         };
         let mut moved = false;
+        // Gravity at the step's start angle: both branches below use it.
+        let gravity = self.load.gravity_torque(self.q);
         if !side.is_nan() {
             let (v, vm) = (self.v, self.vm);
-            let inertia = self.params.armature() + self.load.inertia;
-            let v_new = self.motor_side_step(dt, inertia, self.load.gravity_torque(self.q));
+            let v_new = self.motor_side_step(dt, self.k.engaged_inertia, gravity);
             // The torque the motor side puts on the load must push it, not pull.
-            let push = self.load.inertia * (v_new - v) / dt - self.load.gravity_torque(self.q);
+            let push = self.load.inertia * (v_new - v) / dt - gravity;
             if side == 0.0 || push * side >= 0.0 {
                 self.v = v_new;
                 self.vm = v_new;
@@ -264,15 +318,15 @@ impl Bench {
         }
         if !moved {
             // Apart: the motor side alone on its armature, the load alone under gravity.
-            let vm_new = self.motor_side_step(dt, self.params.armature(), 0.0);
+            let vm_new = self.motor_side_step(dt, self.k.armature, 0.0);
             self.vm = vm_new;
-            self.v += dt * self.load.gravity_torque(self.q) / self.load.inertia;
+            self.v += dt * gravity / self.load.inertia;
             self.qm += dt * self.vm;
             self.q += dt * self.v;
             let delta = self.qm - self.q;
             if delta.abs() >= half {
                 // The gap closes: an inelastic impact.
-                let (jm, jl) = (self.params.armature(), self.load.inertia);
+                let (jm, jl) = (self.k.armature, self.load.inertia);
                 let common = (jm * self.vm + jl * self.v) / (jm + jl);
                 self.vm = common;
                 self.v = common;
@@ -280,8 +334,8 @@ impl Bench {
             }
         }
         let (tau, current) = if self.torque_on {
-            let p = &self.params;
-            motor_torque(p.kt(), p.resistance(), p.voltage, self.duty, self.vm)
+            let k = &self.k;
+            motor_torque(k.kt, k.resistance, k.voltage, self.duty, self.vm)
         } else {
             (0.0, 0.0)
         };
@@ -300,15 +354,14 @@ impl Bench {
     /// the back-EMF, the friction budget stopping what it can (BAM's formulation),
     /// implicit in the linear damping. Writes `self.vm`.
     fn motor_side_step(&mut self, dt: f64, inertia: f64, external: f64) -> f64 {
-        let p = &self.params;
-        let (kt, res, volts) = (p.kt(), p.resistance(), p.voltage);
+        let k = &self.k;
+        let (kt, res, volts) = (k.kt, k.resistance, k.voltage);
         // Torque off: the driver's bridge is open, no current flows, no back-EMF brake.
-        let (emf_damping, drive) = if self.torque_on {
-            (kt * kt / res, kt / res * self.duty * volts)
+        let (damping, drive) = if self.torque_on {
+            (k.damping_on, k.drive * self.duty * volts)
         } else {
-            (0.0, 0.0)
+            (k.damping_off, 0.0)
         };
-        let damping = emf_damping + p.values[FRICTION_VISCOUS];
         let h = inertia + dt * damping;
         let free = (inertia * self.vm + dt * (drive + external)) / h;
         let tau_m = if self.torque_on {
@@ -316,7 +369,7 @@ impl Bench {
         } else {
             0.0
         };
-        let limit = budget(&p.values, self.vm, tau_m);
+        let limit = budget(&self.params.values, self.vm, tau_m);
         let stop = free * h / dt;
         // max/min, not clamp: a diverging trial's NaN reaches the fit's cost, not a panic.
         let friction = stop.max(-limit).min(limit);

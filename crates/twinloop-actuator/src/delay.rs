@@ -48,9 +48,12 @@ impl Samples {
         self.len = 0;
     }
 
-    /// The `i`-th sample, oldest first.
+    /// The `i`-th sample, oldest first (`i` below the ring's room).
     pub fn get(&self, i: usize) -> (f64, f64) {
-        self.buf[(self.start + i) % self.buf.len()]
+        // A compare, not `%`: an integer division in every look-up of the bench's step.
+        let k = self.start + i;
+        let n = self.buf.len();
+        self.buf[if k >= n { k - n } else { k }]
     }
 
     pub fn front(&self) -> Option<(f64, f64)> {
@@ -59,7 +62,11 @@ impl Samples {
 
     pub fn pop_front(&mut self) -> Option<(f64, f64)> {
         let s = self.front()?;
-        self.start = (self.start + 1) % self.buf.len();
+        self.start = if self.start + 1 == self.buf.len() {
+            0
+        } else {
+            self.start + 1
+        };
         self.len -= 1;
         Some(s)
     }
@@ -73,8 +80,8 @@ impl Samples {
             self.buf = grown;
             self.start = 0;
         }
-        let n = self.buf.len();
-        self.buf[(self.start + self.len) % n] = (t, x);
+        let (k, n) = (self.start + self.len, self.buf.len());
+        self.buf[if k >= n { k - n } else { k }] = (t, x);
         self.len += 1;
     }
 
@@ -87,22 +94,42 @@ impl Samples {
     }
 
     /// The value at time `at`, linear between samples, `now` being the newest
-    /// (time, value) not yet pushed; before the oldest sample, the oldest value.
+    /// (time, value) not yet pushed; before the oldest sample (or at a NaN time), the
+    /// oldest value. The times must not decrease.
     pub fn value_at(&self, at: f64, now: (f64, f64)) -> f64 {
-        let mut later = now;
-        for k in (0..self.len).rev() {
-            let (t, x) = self.get(k);
-            if t <= at {
-                let w = if later.0 > t {
-                    (at - t) / (later.0 - t)
-                } else {
-                    0.0
-                };
-                return x + w * (later.1 - x);
-            }
-            later = (t, x);
+        use std::cmp::Ordering::{Equal, Less};
+        if self.len == 0 {
+            return now.1;
         }
-        later.1
+        // At or before `at`: not after it, nor unordered with it (a NaN time).
+        let at_or_before = |t: f64| matches!(t.partial_cmp(&at), Some(Less | Equal));
+        let (mut t, mut x) = self.get(0);
+        if !at_or_before(t) {
+            return x;
+        }
+        // The newest sample at or before `at`, searched from the oldest: a ring
+        // trimmed by `forget_before` holds `at` near its start (one or two steps
+        // instead of the delay's length).
+        let mut k = 0;
+        while k + 1 < self.len {
+            let next = self.get(k + 1);
+            if !at_or_before(next.0) {
+                break;
+            }
+            (t, x) = next;
+            k += 1;
+        }
+        let later = if k + 1 < self.len {
+            self.get(k + 1)
+        } else {
+            now
+        };
+        let w = if later.0 > t {
+            (at - t) / (later.0 - t)
+        } else {
+            0.0
+        };
+        x + w * (later.1 - x)
     }
 }
 

@@ -44,7 +44,7 @@ impl Firmware {
     pub fn cycle(&mut self, goal: f64, sensed: f64, dt: f64) -> f64 {
         let r = self.servo.resolution();
         let reference = self.profile.reference(goal, sensed, dt);
-        self.duty((reference / r).round() - (sensed / r).round())
+        self.duty(round(reference / r) - round(sensed / r))
     }
 
     /// The PWM duty in [-1, 1] for an error of `error` counts (goal - present), one
@@ -68,6 +68,27 @@ impl Firmware {
         };
         raw.clamp(-self.torque_limit, self.torque_limit)
     }
+}
+
+/// `x.round()` (half away from zero, the sign of a zero kept) to the bit, without
+/// the call into the library `round` that baseline x86-64 makes (no SSE4.1): the
+/// truncation is one instruction, and `x - trunc(x)` is exact below 2^52.
+#[inline]
+pub fn round(x: f64) -> f64 {
+    // 2^52: from there on every f64 is a whole number (and NaN, infinities pass).
+    if x.is_nan() || x.abs() >= 4_503_599_627_370_496.0 {
+        return x;
+    }
+    let whole = x as i64;
+    let fraction = x - whole as f64;
+    let r = if fraction >= 0.5 {
+        whole + 1
+    } else if fraction <= -0.5 {
+        whole - 1
+    } else {
+        whole
+    };
+    (r as f64).copysign(x)
 }
 
 /// RX compliance (EM-RX28 "Compliance"): no drive within `margin` counts of the goal,
@@ -104,5 +125,31 @@ mod tests {
         // P 800: K_P 6.25 PWM units per count, full PWM (885) at 141.6 counts.
         assert!((x.duty(100.0) - 625.0 / 885.0).abs() < 1e-12);
         assert_eq!(x.duty(200.0), 1.0);
+    }
+
+    /// [`round`] against the library's on the halves, their neighbours, signed
+    /// zeros, 2^52's neighbourhood and non-numbers.
+    #[test]
+    fn round_is_the_library_round() {
+        let mut xs = vec![0.0, -0.0, f64::INFINITY, f64::NEG_INFINITY, f64::NAN, 1e300];
+        for k in -40..40 {
+            let h = k as f64 + 0.5;
+            xs.extend([h, h.next_up(), h.next_down(), k as f64, 0.3 * k as f64]);
+        }
+        let big = 4_503_599_627_370_496.0f64;
+        xs.extend([
+            big,
+            big.next_down(),
+            -big.next_down(),
+            big - 0.5,
+            0.5f64.next_down(),
+        ]);
+        for x in xs {
+            let (a, b) = (round(x), x.round());
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "{x}: {a} {b}"
+            );
+        }
     }
 }

@@ -25,6 +25,11 @@ impl Load {
     /// Gravity's torque at output angle `q`, N m.
     #[inline]
     pub fn gravity_torque(&self, q: f64) -> f64 {
+        if self.gravity_cos.to_bits() == 0 && self.gravity_const.to_bits() == 0 {
+            // A pendulum: no cosine to take. `+ 0.0` gives the sum's bits (a zero
+            // sine term's sum is +0 whatever its sign).
+            return self.gravity_sin * q.sin() + 0.0;
+        }
         let (s, c) = q.sin_cos();
         self.gravity_sin * s + self.gravity_cos * c + self.gravity_const
     }

@@ -180,9 +180,12 @@ impl Mlp {
         for (k, l) in self.layers.iter().enumerate() {
             let (before, after) = work.acts.split_at_mut(k + 1);
             let (x, y) = (&before[k], &mut after[0]);
-            for (o, yo) in y.iter_mut().enumerate() {
-                let row = &l.weights[o * l.inputs..(o + 1) * l.inputs];
-                let s = l.biases[o] + row.iter().zip(x.iter()).map(|(w, v)| w * v).sum::<f64>();
+            for ((yo, row), b) in y
+                .iter_mut()
+                .zip(l.weights.chunks_exact(l.inputs))
+                .zip(&l.biases)
+            {
+                let s = b + row.iter().zip(x.iter()).map(|(w, v)| w * v).sum::<f64>();
                 *yo = if k == last { s } else { s.tanh() };
             }
         }
@@ -233,23 +236,31 @@ impl Mlp {
             let (gw, gb) = grad[offset..offset + l.weights.len() + l.biases.len()]
                 .split_at_mut(l.weights.len());
             let x = &work.acts[k];
-            for o in 0..l.outputs {
-                let d = work.deltas[k][o];
-                gb[o] += d;
-                for (g, v) in gw[o * l.inputs..(o + 1) * l.inputs].iter_mut().zip(x) {
+            // Rows of the weights as slices: no index arithmetic or bounds check in
+            // the inner loops (the order of every sum is the indexed loops' own).
+            for ((gw_row, g_b), &d) in gw
+                .chunks_exact_mut(l.inputs)
+                .zip(gb.iter_mut())
+                .zip(&work.deltas[k])
+            {
+                *g_b += d;
+                for (g, v) in gw_row.iter_mut().zip(x) {
                     *g += d * v;
                 }
             }
             if k > 0 {
-                // Delta of the layer below: W^T d times tanh' = 1 - a^2.
+                // Delta of the layer below: W^T d times tanh' = 1 - a^2, each sum over
+                // the outputs in their order from -0.0 (as `Iterator::sum` adds).
                 let (below, here) = work.deltas.split_at_mut(k);
                 let (dl, dh) = (&mut below[k - 1], &here[0]);
-                for (i, di) in dl.iter_mut().enumerate() {
-                    let s: f64 = (0..l.outputs)
-                        .map(|o| l.weights[o * l.inputs + i] * dh[o])
-                        .sum();
-                    let a = work.acts[k][i];
-                    *di = s * (1.0 - a * a);
+                dl.fill(-0.0);
+                for (row, &d) in l.weights.chunks_exact(l.inputs).zip(dh) {
+                    for (s, w) in dl.iter_mut().zip(row) {
+                        *s += w * d;
+                    }
+                }
+                for (di, a) in dl.iter_mut().zip(x) {
+                    *di *= 1.0 - a * a;
                 }
             }
         }

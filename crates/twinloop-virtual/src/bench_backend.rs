@@ -71,7 +71,7 @@ impl VirtualServoBackend for BenchBackend {
     fn measure(&self, _servo: usize) -> ServoMeasurement {
         let spec = self.model.spec();
         let torque = match (
-            self.bench.params.servo.current_unit(),
+            self.bench.params().servo.current_unit(),
             spec.torque_per_amp(),
         ) {
             (Some(_), Some(k)) => self.bench.current * k,
@@ -81,7 +81,7 @@ impl VirtualServoBackend for BenchBackend {
             position: self.bench.sensed_angle(),
             velocity: self.bench.v,
             torque,
-            voltage: self.bench.params.voltage,
+            voltage: self.bench.params().voltage,
             temperature: self.temperature,
         }
     }
@@ -106,9 +106,10 @@ impl VirtualServoBackend for BenchBackend {
 
     /// Compliance (RX) or position gains (MX(2.0), X) and the torque limit.
     fn register_written(&mut self, _servo: usize, item: Item, raw: i32) {
+        let family = self.bench.params().servo.family();
         let f = &mut self.bench.firmware;
         let raw_f = raw as f64;
-        match (self.bench.params.servo.family(), item) {
+        match (family, item) {
             (LoopFamily::Compliance, Item::CwComplianceSlope | Item::CcwComplianceSlope) => {
                 f.registers[0] = raw_f
             }
