@@ -27,7 +27,7 @@
 
 use crate::LoopError;
 use crate::protocol_bias::{
-    Calibration, REPLAY_GROUND_SINK, Replay, adapt_on_one_place, angles_of,
+    Calibration, REPLAY_GROUND_SINK, Reading, Replay, Start, adapt_from, angles_of,
     protocol_reading_with_roll,
 };
 use rayon::prelude::*;
@@ -35,7 +35,7 @@ use twinloop_description::Description;
 use twinloop_ident::IdentError;
 use twinloop_ident::adapt::{AdaptOptions, Adapted};
 use twinloop_ident::adapt_checks::AdaptCheck;
-use twinloop_ident::tipover_study::{StudyReport, links_below_hips};
+use twinloop_ident::tipover_study::{StudyReport, links_below_hips, static_angles_at_onsets};
 use twinloop_virtual::VirtualRobotOptions;
 
 /// Two places whose adapted CoMs lie this close are one answer, m: below the 3 mm
@@ -95,6 +95,16 @@ impl Place {
             floor_m,
             passed,
         })
+    }
+
+    /// The bias this place's passes would go on with (its last pass's; none run: 0).
+    fn next_bias(&self) -> [f64; 4] {
+        self.calibration
+            .as_ref()
+            .and_then(|c| c.passes.last())
+            .map_or([0.0; 4], |p| {
+                std::array::from_fn(|k| p.protocol_deg[k] - p.static_deg[k])
+            })
     }
 
     fn host(&self) -> &str {
@@ -189,19 +199,24 @@ pub(crate) fn try_other_places(
     log(&format!("place 1, {}", first.describe()));
     // The floor on which the first place's replay rolls the feet as the robot did:
     // the floor and the CoM's height trade against each other in the angles, not in
-    // the roll. Every other place (the CoM inversion's again among them) replays on it.
-    let floor_m = match (replay.fit_floor, &first.adapted.robot) {
+    // the roll. Every other place (the CoM inversion's again among them) replays on it,
+    // its passes starting from the first place's bias there.
+    let (floor_m, bias) = match (replay.fit_floor, &first.adapted.robot) {
         (true, Some(model)) => {
             let start = first.floor_m.unwrap_or(REPLAY_GROUND_SINK);
-            let f = floor_by_roll(study, replay, model, start)?;
+            let (f, read) = floor_by_roll(study, replay, model, start)?;
             log(&format!(
                 "the floor by the feet's roll: {:.3} mm (the angles' floor {:.3} mm)",
                 f * 1e3,
                 start * 1e3
             ));
-            Some(f)
+            let statics = static_angles_at_onsets(model, study)?;
+            (
+                Some(f),
+                std::array::from_fn(|k| read.angles[k] - statics[k]),
+            )
         }
-        _ => replay.options.ground_sink,
+        _ => (replay.options.ground_sink, first.next_bias()),
     };
     let options = VirtualRobotOptions {
         ground_sink: floor_m,
@@ -215,48 +230,153 @@ pub(crate) fn try_other_places(
         fit_floor: false,
         other_places: false,
     };
-    let mut places = vec![first];
     let hosts: Vec<Option<String>> = std::iter::once(None)
         .chain(hosts.into_iter().map(Some))
         .collect();
-    // Each place is an adaptation and its protocol passes of its own: all at once on
-    // rayon's pool, taken in the hosts' order below whatever finished first.
-    let found: Vec<_> = hosts
-        .par_iter()
-        .with_max_len(1)
-        .map(|host| {
-            let o = AdaptOptions {
-                host: host.clone(),
-                ..opts.clone()
-            };
-            adapt_on_one_place(prior, study, &o, &on, &mut |_| {}, map_err)
-        })
-        .collect();
-    for (host, found) in hosts.iter().zip(found) {
-        let name = host.as_deref().unwrap_or("the CoM inversion's link");
-        match found {
-            Ok(found) => {
-                if let Some(mut p) = Place::new(found, study) {
-                    p.floor_m = p.floor_m.or(floor_m);
-                    log(&format!("place {}, {}", places.len() + 1, p.describe()));
-                    places.push(p);
-                }
-            }
-            Err(e) => log(&format!("{name}: not a place for the part: {e}")),
-        }
+    let mut places = vec![first];
+    for p in screen_places(prior, study, opts, &on, &hosts, bias, log, map_err) {
+        let mut p = p;
+        p.floor_m = p.floor_m.or(floor_m);
+        log(&format!("place {}, {}", places.len() + 1, p.describe()));
+        places.push(p);
     }
     Ok(choose(places))
 }
 
+/// How many of the places screened with one pass go on with the rest of their passes:
+/// the best by the feet's roll (the choice is between the best and the rest).
+const FINALISTS: usize = 2;
+
+/// The places on `hosts` (`None`: the CoM inversion's link), in their order, adapted
+/// on `on`'s floor as cheaply as the choice allows: each first fitted statically with
+/// `bias` (another place's on this floor: the protocol's bias is the robot's and the
+/// protocol's more than the place's), and dropped without a replay when that fit fails
+/// its checks (the angles do not fit the part there); the rest get one pass each (a
+/// replay: their feet's roll), and the [`FINALISTS`] best by that roll the remaining
+/// passes. A place that fails here is logged and left out.
+#[allow(clippy::too_many_arguments)]
+fn screen_places(
+    prior: &Description,
+    study: &StudyReport,
+    opts: &AdaptOptions,
+    on: &Replay<'_>,
+    hosts: &[Option<String>],
+    bias: [f64; 4],
+    log: &mut dyn FnMut(&str),
+    map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
+) -> Vec<Place> {
+    let at = |host: &Option<String>| AdaptOptions {
+        host: host.clone(),
+        protocol_bias_deg: Some(bias),
+        ..opts.clone()
+    };
+    let name = |host: &Option<String>| {
+        host.clone()
+            .unwrap_or_else(|| "the CoM inversion's link".into())
+    };
+    let mut fits = Vec::new();
+    for host in hosts {
+        match twinloop_ident::adapt::adapt(prior, study, &at(host)).map_err(map_err) {
+            Ok(a) if a.report.failed_checks().next().is_none() => fits.push(host.clone()),
+            Ok(a) => {
+                let failed: Vec<&str> = a.report.failed_checks().map(|c| c.name.as_str()).collect();
+                log(&format!(
+                    "{}: not replayed: fitted with the bias carried over, it fails {}",
+                    name(host),
+                    failed.join(", ")
+                ));
+            }
+            Err(e) => log(&format!("{}: not a place for the part: {e}", name(host))),
+        }
+    }
+    let one = Replay {
+        passes: 1,
+        ..on.clone()
+    };
+    let start = Start {
+        bias,
+        done: Vec::new(),
+    };
+    let mut screened = passes_at(prior, study, opts, &one, &fits, |_| start.clone(), map_err);
+    // The finalists: the best by the roll of those whose checks pass.
+    let mut order: Vec<usize> = (0..screened.len())
+        .filter(|&i| screened[i].as_ref().is_ok_and(|p| p.passed))
+        .collect();
+    order.sort_by(|&a, &b| roll_of(&screened[a]).total_cmp(&roll_of(&screened[b])));
+    order.truncate(FINALISTS);
+    let more = Replay {
+        passes: on.passes.saturating_sub(1),
+        ..on.clone()
+    };
+    let go_on: Vec<(usize, Start)> = order
+        .iter()
+        .filter_map(|&i| {
+            let p = screened[i].as_ref().ok()?;
+            Some((i, Start::after(p.calibration.as_ref()?, study)?))
+        })
+        .collect();
+    let hosts_on: Vec<Option<String>> = go_on.iter().map(|(i, _)| fits[*i].clone()).collect();
+    let starts: Vec<Start> = go_on.iter().map(|(_, s)| s.clone()).collect();
+    let finals = passes_at(
+        prior,
+        study,
+        opts,
+        &more,
+        &hosts_on,
+        |k| starts[k].clone(),
+        map_err,
+    );
+    for ((i, _), f) in go_on.iter().zip(finals) {
+        screened[*i] = f;
+    }
+    let mut out = Vec::new();
+    for (host, p) in fits.iter().zip(screened) {
+        match p {
+            Ok(p) => out.push(p),
+            Err(e) => log(&format!("{}: not a place for the part: {e}", name(host))),
+        }
+    }
+    out
+}
+
+fn roll_of(p: &Result<Place, LoopError>) -> f64 {
+    p.as_ref().map_or(f64::INFINITY, |p| p.roll_median_deg)
+}
+
+/// Each of `hosts` adapted with `on`'s passes from `start(k)`, all at once on rayon's
+/// pool and returned in the hosts' order whatever finished first.
+fn passes_at(
+    prior: &Description,
+    study: &StudyReport,
+    opts: &AdaptOptions,
+    on: &Replay<'_>,
+    hosts: &[Option<String>],
+    start: impl Fn(usize) -> Start + Sync,
+    map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
+) -> Vec<Result<Place, LoopError>> {
+    (0..hosts.len())
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|k| {
+            let o = AdaptOptions {
+                host: hosts[k].clone(),
+                ..opts.clone()
+            };
+            let found = adapt_from(prior, study, &o, on, start(k), &mut |_| {}, map_err)?;
+            Place::new(found, study).ok_or_else(|| LoopError::new("the adapted model has no CoM"))
+        })
+        .collect()
+}
+
 /// The floor (sink, m) on which `model`'s replay rolls the feet as the robot did: the
 /// median of the four onsets' roll differences brought within the floor search's
-/// tolerance ([`crate::floor_fit::search`]), from `start_m`.
+/// tolerance ([`crate::floor_fit::search`]), from `start_m`; and that replay's reading.
 fn floor_by_roll(
     study: &StudyReport,
     replay: &Replay<'_>,
     model: &Description,
     start_m: f64,
-) -> Result<f64, LoopError> {
+) -> Result<(f64, Reading), LoopError> {
     let robot = angles_of(study, |d| d.excess_deg);
     let (best, tries) = crate::floor_fit::search(start_m, &mut |sink| {
         let on = VirtualRobotOptions {
@@ -266,9 +386,9 @@ fn floor_by_roll(
         let r = protocol_reading_with_roll(study, replay.model_spec, replay.host, model, &on)
             .map_err(|e| e.context("simulating the protocol on the adapted model"))?;
         // Above zero: the replay rolls the feet less than the robot, the floor gives more.
-        Ok((median(std::array::from_fn(|k| robot[k] - r.roll[k])), ()))
+        Ok((median(std::array::from_fn(|k| robot[k] - r.roll[k])), r))
     })?;
-    Ok(tries[best].sink_m)
+    Ok((tries[best].sink_m, tries[best].read))
 }
 
 /// The place kept (see the module documentation), with the places tried in its notes
