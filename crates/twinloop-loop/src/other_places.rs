@@ -234,11 +234,19 @@ pub(crate) fn try_other_places(
         .chain(hosts.into_iter().map(Some))
         .collect();
     let mut places = vec![first];
-    for p in screen_places(prior, study, opts, &on, &hosts, bias, log, map_err) {
-        let mut p = p;
-        p.floor_m = p.floor_m.or(floor_m);
-        log(&format!("place {}, {}", places.len() + 1, p.describe()));
-        places.push(p);
+    let screened = screen_places(prior, study, opts, &on, &hosts, bias, map_err);
+    for (host, p) in hosts.iter().zip(screened) {
+        match p {
+            Ok(mut p) => {
+                p.floor_m = p.floor_m.or(floor_m);
+                log(&format!("place {}, {}", places.len() + 1, p.describe()));
+                places.push(p);
+            }
+            Err(e) => log(&format!(
+                "{}: not a place for the part: {e}",
+                host.as_deref().unwrap_or("the CoM inversion's link")
+            )),
+        }
     }
     Ok(choose(places))
 }
@@ -248,13 +256,13 @@ pub(crate) fn try_other_places(
 const FINALISTS: usize = 2;
 
 /// The places on `hosts` (`None`: the CoM inversion's link), in their order, adapted
-/// on `on`'s floor as cheaply as the choice allows: each first fitted statically with
-/// `bias` (another place's on this floor: the protocol's bias is the robot's and the
-/// protocol's more than the place's), and dropped without a replay when that fit fails
-/// its checks (the angles do not fit the part there); the rest get one pass each (a
-/// replay: their feet's roll), and the [`FINALISTS`] best by that roll the remaining
-/// passes. A place that fails here is logged and left out.
-#[allow(clippy::too_many_arguments)]
+/// on `on`'s floor as cheaply as the choice allows: each with one pass first (its
+/// first fit with `bias`, another place's on this floor, and one replay: its feet's
+/// roll and its own bias); then refitted statically with its own bias, and the
+/// [`FINALISTS`] best by the roll of those whose refit passes its checks go on with
+/// the remaining passes. (Dropping places whose fit with the bias carried over failed,
+/// without a replay, dropped the right one: a part on an OP3's foot, whose bias is not
+/// a knee's.) Each place's adaptation, or why it is none.
 fn screen_places(
     prior: &Description,
     study: &StudyReport,
@@ -262,33 +270,8 @@ fn screen_places(
     on: &Replay<'_>,
     hosts: &[Option<String>],
     bias: [f64; 4],
-    log: &mut dyn FnMut(&str),
     map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
-) -> Vec<Place> {
-    let at = |host: &Option<String>| AdaptOptions {
-        host: host.clone(),
-        protocol_bias_deg: Some(bias),
-        ..opts.clone()
-    };
-    let name = |host: &Option<String>| {
-        host.clone()
-            .unwrap_or_else(|| "the CoM inversion's link".into())
-    };
-    let mut fits = Vec::new();
-    for host in hosts {
-        match twinloop_ident::adapt::adapt(prior, study, &at(host)).map_err(map_err) {
-            Ok(a) if a.report.failed_checks().next().is_none() => fits.push(host.clone()),
-            Ok(a) => {
-                let failed: Vec<&str> = a.report.failed_checks().map(|c| c.name.as_str()).collect();
-                log(&format!(
-                    "{}: not replayed: fitted with the bias carried over, it fails {}",
-                    name(host),
-                    failed.join(", ")
-                ));
-            }
-            Err(e) => log(&format!("{}: not a place for the part: {e}", name(host))),
-        }
-    }
+) -> Vec<Result<Place, LoopError>> {
     let one = Replay {
         passes: 1,
         ..on.clone()
@@ -297,46 +280,42 @@ fn screen_places(
         bias,
         done: Vec::new(),
     };
-    let mut screened = passes_at(prior, study, opts, &one, &fits, |_| start.clone(), map_err);
-    // The finalists: the best by the roll of those whose checks pass.
-    let mut order: Vec<usize> = (0..screened.len())
-        .filter(|&i| screened[i].as_ref().is_ok_and(|p| p.passed))
+    let mut screened = passes_at(prior, study, opts, &one, hosts, |_| start.clone(), map_err);
+    // Where each would go on, and whether its static refit there passes its checks.
+    let next: Vec<Option<Start>> = (0..hosts.len())
+        .map(|i| {
+            let p = screened[i].as_ref().ok()?;
+            let s = Start::after(p.calibration.as_ref()?, study)?;
+            let o = AdaptOptions {
+                host: hosts[i].clone(),
+                protocol_bias_deg: Some(s.bias),
+                ..opts.clone()
+            };
+            let refit = twinloop_ident::adapt::adapt(prior, study, &o).ok()?;
+            refit.report.failed_checks().next().is_none().then_some(s)
+        })
         .collect();
+    let mut order: Vec<usize> = (0..hosts.len()).filter(|&i| next[i].is_some()).collect();
     order.sort_by(|&a, &b| roll_of(&screened[a]).total_cmp(&roll_of(&screened[b])));
     order.truncate(FINALISTS);
     let more = Replay {
         passes: on.passes.saturating_sub(1),
         ..on.clone()
     };
-    let go_on: Vec<(usize, Start)> = order
-        .iter()
-        .filter_map(|&i| {
-            let p = screened[i].as_ref().ok()?;
-            Some((i, Start::after(p.calibration.as_ref()?, study)?))
-        })
-        .collect();
-    let hosts_on: Vec<Option<String>> = go_on.iter().map(|(i, _)| fits[*i].clone()).collect();
-    let starts: Vec<Start> = go_on.iter().map(|(_, s)| s.clone()).collect();
+    let finals_at: Vec<Option<String>> = order.iter().map(|&i| hosts[i].clone()).collect();
     let finals = passes_at(
         prior,
         study,
         opts,
         &more,
-        &hosts_on,
-        |k| starts[k].clone(),
+        &finals_at,
+        |k| next[order[k]].clone().unwrap_or_default(),
         map_err,
     );
-    for ((i, _), f) in go_on.iter().zip(finals) {
-        screened[*i] = f;
+    for (&i, f) in order.iter().zip(finals) {
+        screened[i] = f;
     }
-    let mut out = Vec::new();
-    for (host, p) in fits.iter().zip(screened) {
-        match p {
-            Ok(p) => out.push(p),
-            Err(e) => log(&format!("{}: not a place for the part: {e}", name(host))),
-        }
-    }
-    out
+    screened
 }
 
 fn roll_of(p: &Result<Place, LoopError>) -> f64 {
