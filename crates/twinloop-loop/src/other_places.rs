@@ -180,6 +180,19 @@ pub(crate) fn try_other_places(
     if first.1.is_none() || first.0.report.adapted_com.is_none() {
         return Ok(first);
     }
+    if first
+        .1
+        .as_ref()
+        .and_then(|c| c.floor.as_ref())
+        .is_some_and(|f| f.at_bound())
+    {
+        // No floor lets this place tip as the robot did (its `floor-found` check
+        // failed): every other place would replay on that floor too.
+        log(
+            "the floor search stopped at the end of its range: the places on the legs were not tried",
+        );
+        return Ok(first);
+    }
     let first =
         Place::new(first, study).ok_or_else(|| LoopError::new("the adapted model has no CoM"))?;
     if first.passed && first.roll_median_deg <= ROLL_AGREE_DEG {

@@ -333,6 +333,7 @@ impl Passes {
                 tries.join(", ")
             ));
             floor_takes_sideways(report);
+            report.checks.push(fit.check());
         }
         let calibration = Calibration {
             passes: self.done,
