@@ -9,6 +9,7 @@
 //! | `tips-near-model` | every measured tip (less the protocol's bias) is within [`MAX_TIP_SHIFT_DEG`] of the prior model's static angle |
 //! | `one-part-explains` | the fall-angle fit leaves every angle within [`one_part_bound_deg`] of the measured one (less the protocol's bias); on a floor fitted to the sideways tips, the rest within three resolutions beside the sideways pair's common error ([`one_part_explains`]) |
 //! | `one-place-explains` | (over a bus, with the total mass and no host named; made by `twinloop_loop::other_places`) the places below the ankles that also pass their checks land the CoM within 2 mm of the kept one, or roll the feet clearly less like the robot did |
+//! | `floor-found` | (over a bus, the floor fitted; made by `twinloop_loop::floor_fit`) the floor search found a floor on which the replay tips sideways as the robot did, not stopping at the end of its range short of it |
 //!
 //! A check that cannot be made (no part placed, no fall-angle fit) is left out, and
 //! the notes say so.
@@ -35,7 +36,7 @@ pub const MAX_TIP_SHIFT_DEG: f64 = 16.0;
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct AdaptCheck {
     /// Stable name: `part-mass-plausible`, `part-within-reach`, `tips-near-model`,
-    /// `one-part-explains`, `one-place-explains`.
+    /// `one-part-explains`, `one-place-explains`, `floor-found`.
     pub name: String,
     pub passed: bool,
     /// What was measured against what bound, in words.

@@ -50,6 +50,10 @@ pub struct BusPlan {
     pub verbose: bool,
 }
 
+/// Creeps per direction when the protocol is replayed on a model
+/// ([`BusPlan::replaying`]).
+pub const REPLAY_CREEPS: usize = 1;
+
 impl BusPlan {
     /// The protocol `adapt --port` and `demo` run: four directions, a first ramp of
     /// 2 deg/s and creeps of 0.15 deg/s, two creeps, the stiffest servos (ankles at
@@ -77,7 +81,7 @@ impl BusPlan {
         }
     }
 
-    /// The plan that runs `protocol` again, creeping from `first_tips` (commanded,
+    /// The plan that runs `protocol` again (one creep per direction, [`REPLAY_CREEPS`]), creeping from `first_tips` (commanded,
     /// deg, one per direction in `Direction::ALL`'s order), with `model_spec` as the
     /// host's model; no port, no record (for [`crate::tipover_bus::tipover_in_lockstep`]).
     pub fn replaying(protocol: &BusProtocol, model_spec: &str, first_tips: Vec<f64>) -> BusPlan {
@@ -93,7 +97,11 @@ impl BusPlan {
             compliance_slope: protocol.compliance_slope,
             ankle_slope: protocol.ankle_slope,
             soft_servos: protocol.soft_servos,
-            creeps: protocol.creeps,
+            // One creep: the replay is a simulation in lockstep, the same every time,
+            // and its second creep read within 0.04 deg of the first (one ankle count's
+            // half on MX and X) on served OP3, Darwin-OP and km20 measurements, at half
+            // the replay's time (docs/adaptation.md, "Adapting in a minute").
+            creeps: REPLAY_CREEPS,
             first_tips: Some(first_tips),
             dither: protocol.dither,
             onset_average_s: protocol.onset_average_s,

@@ -27,7 +27,7 @@
 
 use crate::LoopError;
 use crate::protocol_bias::{
-    Calibration, REPLAY_GROUND_SINK, Replay, adapt_on_one_place, angles_of,
+    Calibration, REPLAY_GROUND_SINK, Reading, Replay, Start, adapt_from, angles_of,
     protocol_reading_with_roll,
 };
 use rayon::prelude::*;
@@ -35,7 +35,7 @@ use twinloop_description::Description;
 use twinloop_ident::IdentError;
 use twinloop_ident::adapt::{AdaptOptions, Adapted};
 use twinloop_ident::adapt_checks::AdaptCheck;
-use twinloop_ident::tipover_study::{StudyReport, links_below_hips};
+use twinloop_ident::tipover_study::{StudyReport, links_below_hips, static_angles_at_onsets};
 use twinloop_virtual::VirtualRobotOptions;
 
 /// Two places whose adapted CoMs lie this close are one answer, m: below the 3 mm
@@ -95,6 +95,16 @@ impl Place {
             floor_m,
             passed,
         })
+    }
+
+    /// The bias this place's passes would go on with (its last pass's; none run: 0).
+    fn next_bias(&self) -> [f64; 4] {
+        self.calibration
+            .as_ref()
+            .and_then(|c| c.passes.last())
+            .map_or([0.0; 4], |p| {
+                std::array::from_fn(|k| p.protocol_deg[k] - p.static_deg[k])
+            })
     }
 
     fn host(&self) -> &str {
@@ -170,6 +180,19 @@ pub(crate) fn try_other_places(
     if first.1.is_none() || first.0.report.adapted_com.is_none() {
         return Ok(first);
     }
+    if first
+        .1
+        .as_ref()
+        .and_then(|c| c.floor.as_ref())
+        .is_some_and(|f| f.at_bound())
+    {
+        // No floor lets this place tip as the robot did (its `floor-found` check
+        // failed): every other place would replay on that floor too.
+        log(
+            "the floor search stopped at the end of its range: the places on the legs were not tried",
+        );
+        return Ok(first);
+    }
     let first =
         Place::new(first, study).ok_or_else(|| LoopError::new("the adapted model has no CoM"))?;
     if first.passed && first.roll_median_deg <= ROLL_AGREE_DEG {
@@ -189,19 +212,24 @@ pub(crate) fn try_other_places(
     log(&format!("place 1, {}", first.describe()));
     // The floor on which the first place's replay rolls the feet as the robot did:
     // the floor and the CoM's height trade against each other in the angles, not in
-    // the roll. Every other place (the CoM inversion's again among them) replays on it.
-    let floor_m = match (replay.fit_floor, &first.adapted.robot) {
+    // the roll. Every other place (the CoM inversion's again among them) replays on it,
+    // its passes starting from the first place's bias there.
+    let (floor_m, bias) = match (replay.fit_floor, &first.adapted.robot) {
         (true, Some(model)) => {
             let start = first.floor_m.unwrap_or(REPLAY_GROUND_SINK);
-            let f = floor_by_roll(study, replay, model, start)?;
+            let (f, read) = floor_by_roll(study, replay, model, start)?;
             log(&format!(
                 "the floor by the feet's roll: {:.3} mm (the angles' floor {:.3} mm)",
                 f * 1e3,
                 start * 1e3
             ));
-            Some(f)
+            let statics = static_angles_at_onsets(model, study)?;
+            (
+                Some(f),
+                std::array::from_fn(|k| read.angles[k] - statics[k]),
+            )
         }
-        _ => replay.options.ground_sink,
+        _ => (replay.options.ground_sink, first.next_bias()),
     };
     let options = VirtualRobotOptions {
         ground_sink: floor_m,
@@ -215,48 +243,123 @@ pub(crate) fn try_other_places(
         fit_floor: false,
         other_places: false,
     };
-    let mut places = vec![first];
     let hosts: Vec<Option<String>> = std::iter::once(None)
         .chain(hosts.into_iter().map(Some))
         .collect();
-    // Each place is an adaptation and its protocol passes of its own: all at once on
-    // rayon's pool, taken in the hosts' order below whatever finished first.
-    let found: Vec<_> = hosts
-        .par_iter()
-        .with_max_len(1)
-        .map(|host| {
-            let o = AdaptOptions {
-                host: host.clone(),
-                ..opts.clone()
-            };
-            adapt_on_one_place(prior, study, &o, &on, &mut |_| {}, map_err)
-        })
-        .collect();
-    for (host, found) in hosts.iter().zip(found) {
-        let name = host.as_deref().unwrap_or("the CoM inversion's link");
-        match found {
-            Ok(found) => {
-                if let Some(mut p) = Place::new(found, study) {
-                    p.floor_m = p.floor_m.or(floor_m);
-                    log(&format!("place {}, {}", places.len() + 1, p.describe()));
-                    places.push(p);
-                }
+    let mut places = vec![first];
+    let screened = screen_places(prior, study, opts, &on, &hosts, bias, map_err);
+    for (host, p) in hosts.iter().zip(screened) {
+        match p {
+            Ok(mut p) => {
+                p.floor_m = p.floor_m.or(floor_m);
+                log(&format!("place {}, {}", places.len() + 1, p.describe()));
+                places.push(p);
             }
-            Err(e) => log(&format!("{name}: not a place for the part: {e}")),
+            Err(e) => log(&format!(
+                "{}: not a place for the part: {e}",
+                host.as_deref().unwrap_or("the CoM inversion's link")
+            )),
         }
     }
     Ok(choose(places))
 }
 
+/// The places on `hosts` (`None`: the CoM inversion's link), in their order, adapted
+/// on `on`'s floor as cheaply as the choice allows: each with one pass first (its
+/// first fit with `bias`, another place's on this floor, and one replay: its feet's
+/// roll and its own bias); then refitted statically with its own bias, and those
+/// whose refit passes its checks go on with the remaining passes. (Dropping places
+/// whose fit with the bias carried over failed, without a replay, dropped the right
+/// one: a part on an OP3's foot, whose bias is not a knee's; going on with only the
+/// two best by the roll after one pass refused a Darwin-OP foot part that all passes
+/// on every place had kept, 2.07 mm from the truth.) Each place's adaptation, or why it is none.
+fn screen_places(
+    prior: &Description,
+    study: &StudyReport,
+    opts: &AdaptOptions,
+    on: &Replay<'_>,
+    hosts: &[Option<String>],
+    bias: [f64; 4],
+    map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
+) -> Vec<Result<Place, LoopError>> {
+    let one = Replay {
+        passes: 1,
+        ..on.clone()
+    };
+    let start = Start {
+        bias,
+        done: Vec::new(),
+    };
+    let mut screened = passes_at(prior, study, opts, &one, hosts, |_| start.clone(), map_err);
+    // Where each would go on, and whether its static refit there passes its checks.
+    let next: Vec<Option<Start>> = (0..hosts.len())
+        .map(|i| {
+            let p = screened[i].as_ref().ok()?;
+            let s = Start::after(p.calibration.as_ref()?, study)?;
+            let o = AdaptOptions {
+                host: hosts[i].clone(),
+                protocol_bias_deg: Some(s.bias),
+                ..opts.clone()
+            };
+            let refit = twinloop_ident::adapt::adapt(prior, study, &o).ok()?;
+            refit.report.failed_checks().next().is_none().then_some(s)
+        })
+        .collect();
+    let order: Vec<usize> = (0..hosts.len()).filter(|&i| next[i].is_some()).collect();
+    let more = Replay {
+        passes: on.passes.saturating_sub(1),
+        ..on.clone()
+    };
+    let finals_at: Vec<Option<String>> = order.iter().map(|&i| hosts[i].clone()).collect();
+    let finals = passes_at(
+        prior,
+        study,
+        opts,
+        &more,
+        &finals_at,
+        |k| next[order[k]].clone().unwrap_or_default(),
+        map_err,
+    );
+    for (&i, f) in order.iter().zip(finals) {
+        screened[i] = f;
+    }
+    screened
+}
+
+/// Each of `hosts` adapted with `on`'s passes from `start(k)`, all at once on rayon's
+/// pool and returned in the hosts' order whatever finished first.
+fn passes_at(
+    prior: &Description,
+    study: &StudyReport,
+    opts: &AdaptOptions,
+    on: &Replay<'_>,
+    hosts: &[Option<String>],
+    start: impl Fn(usize) -> Start + Sync,
+    map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
+) -> Vec<Result<Place, LoopError>> {
+    (0..hosts.len())
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|k| {
+            let o = AdaptOptions {
+                host: hosts[k].clone(),
+                ..opts.clone()
+            };
+            let found = adapt_from(prior, study, &o, on, start(k), &mut |_| {}, map_err)?;
+            Place::new(found, study).ok_or_else(|| LoopError::new("the adapted model has no CoM"))
+        })
+        .collect()
+}
+
 /// The floor (sink, m) on which `model`'s replay rolls the feet as the robot did: the
 /// median of the four onsets' roll differences brought within the floor search's
-/// tolerance ([`crate::floor_fit::search`]), from `start_m`.
+/// tolerance ([`crate::floor_fit::search`]), from `start_m`; and that replay's reading.
 fn floor_by_roll(
     study: &StudyReport,
     replay: &Replay<'_>,
     model: &Description,
     start_m: f64,
-) -> Result<f64, LoopError> {
+) -> Result<(f64, Reading), LoopError> {
     let robot = angles_of(study, |d| d.excess_deg);
     let (best, tries) = crate::floor_fit::search(start_m, &mut |sink| {
         let on = VirtualRobotOptions {
@@ -266,9 +369,9 @@ fn floor_by_roll(
         let r = protocol_reading_with_roll(study, replay.model_spec, replay.host, model, &on)
             .map_err(|e| e.context("simulating the protocol on the adapted model"))?;
         // Above zero: the replay rolls the feet less than the robot, the floor gives more.
-        Ok((median(std::array::from_fn(|k| robot[k] - r.roll[k])), ()))
+        Ok((median(std::array::from_fn(|k| robot[k] - r.roll[k])), r))
     })?;
-    Ok(tries[best].sink_m)
+    Ok((tries[best].sink_m, tries[best].read))
 }
 
 /// The place kept (see the module documentation), with the places tried in its notes

@@ -92,6 +92,7 @@ pub fn join(v: [f64; 4]) -> String {
 }
 
 /// How the protocol is simulated on the adapted models.
+#[derive(Clone)]
 pub struct Replay<'a> {
     /// The host's model of the robot (the prior's spec: the lean signs and the tilt
     /// reference, as on the robot's run).
@@ -166,16 +167,56 @@ pub(crate) fn adapt_on_one_place(
     log: &mut dyn FnMut(&str),
     map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
 ) -> Result<(Adapted, Option<Calibration>), LoopError> {
+    adapt_from(prior, study, opts, replay, Start::default(), log, map_err)
+}
+
+/// Where a place's passes start: the bias its first pass is fitted with, and the
+/// passes already run (another place's bias on the same floor, or this place's own
+/// earlier passes: [`crate::other_places`] screens places with one pass and goes on
+/// with the best).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Start {
+    pub bias: [f64; 4],
+    pub done: Vec<CalibrationPass>,
+}
+
+impl Start {
+    /// Where `calibration`'s passes would go on (its last pass's bias), or `None`
+    /// when that pass read the robot's angles to [`converged_deg`].
+    pub(crate) fn after(calibration: &Calibration, study: &StudyReport) -> Option<Start> {
+        let protocol = study.protocol.as_ref()?;
+        let p = calibration.passes.last()?;
+        let measured = angles_of(study, |d| d.measured_deg);
+        let worst = (0..4).fold(0.0_f64, |w, k| {
+            w.max((p.protocol_deg[k] - measured[k]).abs())
+        });
+        (worst >= converged_deg(protocol)).then(|| Start {
+            bias: std::array::from_fn(|k| p.protocol_deg[k] - p.static_deg[k]),
+            done: calibration.passes.clone(),
+        })
+    }
+}
+
+/// [`adapt_on_one_place`] from `start`: `replay.passes` more passes at most.
+pub(crate) fn adapt_from(
+    prior: &Description,
+    study: &StudyReport,
+    opts: &AdaptOptions,
+    replay: &Replay<'_>,
+    start: Start,
+    log: &mut dyn FnMut(&str),
+    map_err: &(dyn Fn(IdentError) -> LoopError + Sync),
+) -> Result<(Adapted, Option<Calibration>), LoopError> {
     let Some(protocol) = study.protocol.as_ref().filter(|_| replay.passes > 0) else {
         return Ok((adapt(prior, study, opts).map_err(map_err)?, None));
     };
     let mut run = Passes {
         options: replay.options.clone(),
         floor: None,
-        done: Vec::with_capacity(replay.passes),
+        done: start.done,
     };
     let mut last = None;
-    let mut bias = [0.0; 4];
+    let mut bias = start.bias;
     for _ in 0..replay.passes {
         let pass_opts = AdaptOptions {
             protocol_bias_deg: Some(bias),
@@ -292,6 +333,7 @@ impl Passes {
                 tries.join(", ")
             ));
             floor_takes_sideways(report);
+            report.checks.push(fit.check());
         }
         let calibration = Calibration {
             passes: self.done,
