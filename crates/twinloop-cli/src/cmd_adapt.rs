@@ -453,20 +453,7 @@ fn lean_part(c: &twinloop_experiments::LeanAdaptationCheck) -> crate::result_mca
         .collect();
     let mut measured: Vec<String> = robot.joints.iter().map(|j| format!("tau.{j}")).collect();
     measured.extend(angles.iter().map(|&k| format!("q.{}", robot.joints[k])));
-    let named = |p: &str| {
-        measured
-            .iter()
-            .map(|c| format!("{p}{c}"))
-            .collect::<Vec<_>>()
-    };
-    let (prior, adapted) = (named("prior."), named("adapted."));
-    let columns = [
-        vec!["t".to_string()],
-        measured.clone(),
-        prior.clone(),
-        adapted.clone(),
-    ];
-    let mut table = twinloop_io::Table::new(columns.concat());
+    let (prior, adapted, mut table) = crate::result_mcap::comparison_columns(&measured, &measured);
     let t0 = robot.t.first().copied().unwrap_or(0.0);
     for i in start..end.max(start) {
         let mut row = vec![4.0 + robot.t[i] - t0];

@@ -47,6 +47,18 @@ pub struct ResultPart {
     pub topics: Vec<ArrayTopic>,
 }
 
+/// The columns of a measured-against-predicted table: the `prior.` and `adapted.`
+/// names of each of `predicted`, and an empty table of `t`, `measured`, then those.
+pub fn comparison_columns(
+    measured: &[String],
+    predicted: &[String],
+) -> (Vec<String>, Vec<String>, Table) {
+    let named = |p: &str| -> Vec<String> { predicted.iter().map(|c| format!("{p}{c}")).collect() };
+    let (prior, adapted) = (named("prior."), named("adapted."));
+    let columns = [&["t".to_string()][..], measured, &prior[..], &adapted[..]].concat();
+    (prior, adapted, Table::new(columns))
+}
+
 /// The prior's and the adapted model's predictions, on `/prior` and `/adapted`.
 pub fn prior_and_adapted(prior: Vec<String>, adapted: Vec<String>) -> Vec<ArrayTopic> {
     vec![

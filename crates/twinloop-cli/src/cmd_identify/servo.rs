@@ -753,20 +753,8 @@ fn servo_rows(
         .chain(if current { &["current"][..] } else { &[] })
         .map(|c| format!("{prefix}{c}"))
         .collect();
-    let named = |p: &str| {
-        signals
-            .iter()
-            .map(|c| format!("{p}{prefix}{c}"))
-            .collect::<Vec<_>>()
-    };
-    let (prior, adapted) = (named("prior."), named("adapted."));
-    let columns = [
-        vec!["t".to_string()],
-        measured.clone(),
-        prior.clone(),
-        adapted.clone(),
-    ];
-    let mut table = twinloop_io::Table::new(columns.concat());
+    let predicted: Vec<String> = signals.iter().map(|c| format!("{prefix}{c}")).collect();
+    let (prior, adapted, mut table) = crate::result_mcap::comparison_columns(&measured, &predicted);
     let mut offset = 0.0;
     for (k, log) in logs.iter().enumerate() {
         if k > 0 && !log.is_empty() {
