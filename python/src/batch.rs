@@ -229,14 +229,14 @@ where
     new_array(py, values, &shape)
 }
 
-/// A batch function on the batched algorithms (4 states per vector instruction;
-/// `twinloop_dynamics::batch`): the same Python signature as [`batch_fn`]'s, the
-/// block's body given all of a thread's rows.
-macro_rules! block_fn {
+/// A `#[pyfunction]` of `(model, Q, <arrays of nv columns>..., threads=None)` whose
+/// rows `$driver` runs with `$work`: the one signature [`block_fn`] and [`batch_fn`]
+/// share.
+macro_rules! py_batch_fn {
     (
         $(#[$meta:meta])*
         fn $name:ident($($arg:ident),*) -> |$sm:ident| $shape:expr,
-        |$m:ident, $bd:ident, $x:ident, $o:ident| $body:block
+        $driver:ident, $work:expr
     ) => {
         $(#[$meta])*
         #[pyfunction]
@@ -250,15 +250,32 @@ macro_rules! block_fn {
         ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
             let $sm = &*model.get().inner;
             let shape = $shape;
-            batch_blocks(
+            $driver(
                 model.py(),
                 model.get(),
                 Q,
                 &[$(($arg, stringify!($arg))),*],
                 &shape,
                 threads,
-                |$m, $bd, $x, $o| $body,
+                $work,
             )
+        }
+    };
+}
+
+/// A batch function on the batched algorithms (4 states per vector instruction;
+/// `twinloop_dynamics::batch`): the same Python signature as [`batch_fn`]'s, the
+/// block's body given all of a thread's rows.
+macro_rules! block_fn {
+    (
+        $(#[$meta:meta])*
+        fn $name:ident($($arg:ident),*) -> |$sm:ident| $shape:expr,
+        |$m:ident, $bd:ident, $x:ident, $o:ident| $body:block
+    ) => {
+        py_batch_fn! {
+            $(#[$meta])*
+            fn $name($($arg),*) -> |$sm| $shape,
+            batch_blocks, |$m, $bd, $x, $o| $body
         }
     };
 }
@@ -271,30 +288,13 @@ macro_rules! batch_fn {
         fn $name:ident($($arg:ident),*) -> |$sm:ident| $shape:expr,
         |$m:ident, $d:ident, $scratch:pat_param, $x:ident, $o:ident| $row:block
     ) => {
-        $(#[$meta])*
-        #[pyfunction]
-        #[pyo3(signature = (model, Q, $($arg,)* threads = None))]
-        #[allow(non_snake_case)]
-        pub fn $name<'py>(
-            model: &Bound<'py, PyModel>,
-            Q: &Bound<'py, PyAny>,
-            $($arg: &Bound<'py, PyAny>,)*
-            threads: Option<usize>,
-        ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-            let $sm = &*model.get().inner;
-            let shape = $shape;
-            batch(
-                model.py(),
-                model.get(),
-                Q,
-                &[$(($arg, stringify!($arg))),*],
-                &shape,
-                threads,
-                |$m, $d, $scratch, $x, $o| {
-                    let () = $row;
-                    Ok(())
-                },
-            )
+        py_batch_fn! {
+            $(#[$meta])*
+            fn $name($($arg),*) -> |$sm| $shape,
+            batch, |$m, $d, $scratch, $x, $o| {
+                let () = $row;
+                Ok(())
+            }
         }
     };
 }
