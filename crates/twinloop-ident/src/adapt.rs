@@ -1102,7 +1102,6 @@ pub const SOFT_SERVOS_NOTE: &str = "servos soft: the tip-over ran with the servo
 /// The HTML report: fall angles robot vs model, the CoMs, side (x-z) and front (y-z)
 /// views with the prior CoM, the measured CoM and the added mass.
 pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
-    use twinloop_report::{Plot, SeriesStyle, number};
     let mut rep =
         twinloop_report::Report::new(format!("Adapting {} to the tip-over angles", r.robot));
     rep.paragraph(
@@ -1113,6 +1112,25 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
     if r.soft_servos {
         rep.paragraph(SOFT_SERVOS_NOTE);
     }
+    fall_angles_table(&mut rep, r);
+    lean_table(&mut rep, r);
+    com_table(&mut rep, r);
+    for (title, i, label) in [
+        ("Side view (x-z)", 0, "x, m"),
+        ("Front view (y-z)", 1, "y, m"),
+    ] {
+        rep.plot(&view_plot(r, title, i, label));
+    }
+    rep.heading("What is determined");
+    for n in &r.notes {
+        rep.paragraph(n.clone());
+    }
+    checks_table(&mut rep, r);
+    rep
+}
+
+/// The report's fall angles: the robot's, the prior's and the adapted model's.
+fn fall_angles_table(rep: &mut twinloop_report::Report, r: &AdaptReport) {
     rep.heading("Fall angles, deg");
     let dirs = ["forward", "backward", "left", "right"];
     let mut header = vec![
@@ -1149,6 +1167,10 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
         })
         .collect();
     rep.table(header, rows);
+}
+
+/// The report's lean (seed 001), when one was given: torque RMS per joint.
+fn lean_table(rep: &mut twinloop_report::Report, r: &AdaptReport) {
     if !r.lean.is_empty() {
         rep.heading("The lean (seed 001): robot minus model torque, RMS, N m");
         let rows = r
@@ -1173,6 +1195,11 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
             rows,
         );
     }
+}
+
+/// The report's CoMs and the added part, mm.
+fn com_table(rep: &mut twinloop_report::Report, r: &AdaptReport) {
+    use twinloop_report::number;
     rep.heading("CoM, mm");
     let mm = |v: [f64; 3]| {
         v.iter()
@@ -1208,72 +1235,10 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
         );
     }
     rep.table(vec!["".into(), "x".into(), "y".into(), "z".into()], rows);
-    for (title, i, label) in [
-        ("Side view (x-z)", 0, "x, m"),
-        ("Front view (y-z)", 1, "y, m"),
-    ] {
-        let (ox, oz): (Vec<f64>, Vec<f64>) = r.outline.iter().map(|o| (o[i], o[2])).unzip();
-        // To scale: a robot stretched sideways misleads about where a part can be.
-        let mut p = Plot::new(title, label, "z, m")
-            .equal_aspect()
-            .height(480.0)
-            .series("robot (link origins)", &ox, &oz, SeriesStyle::Points)
-            .series(
-                "prior CoM",
-                &[r.prior_com[i]],
-                &[r.prior_com[2]],
-                SeriesStyle::Points,
-            )
-            .series(
-                "measured CoM",
-                &[r.measured_com[i]],
-                &[r.measured_com[2]],
-                SeriesStyle::Points,
-            );
-        if let Some(a) = &r.added {
-            p = p.series(
-                "added mass",
-                &[a.position[i]],
-                &[a.position[2]],
-                SeriesStyle::Points,
-            );
-        }
-        // What the angles cannot tell apart, drawn rather than guessed: without the
-        // mass, every point of the ray from the measured CoM away from the prior's
-        // explains them (a lighter part further out); with it, the 1-sigma box.
-        let (line_x, line_z) = ambiguity_line(r, i);
-        if !line_x.is_empty() {
-            p = p.series(
-                "equally good (mass unknown: 0.05-2 kg along the ray)",
-                &line_x,
-                &line_z,
-                SeriesStyle::DashedLine,
-            );
-        }
-        if let (Some(a), "total-mass") = (&r.added, r.mode.as_str()) {
-            let (c, s) = (a.position, a.position_sigma);
-            let bx = [
-                c[i] - s[i],
-                c[i] + s[i],
-                c[i] + s[i],
-                c[i] - s[i],
-                c[i] - s[i],
-            ];
-            let bz = [
-                c[2] - s[2],
-                c[2] - s[2],
-                c[2] + s[2],
-                c[2] + s[2],
-                c[2] - s[2],
-            ];
-            p = p.series("added mass, 1 sigma", &bx, &bz, SeriesStyle::Line);
-        }
-        rep.plot(&p);
-    }
-    rep.heading("What is determined");
-    for n in &r.notes {
-        rep.paragraph(n.clone());
-    }
+}
+
+/// The report's checks, when any were made.
+fn checks_table(rep: &mut twinloop_report::Report, r: &AdaptReport) {
     if !r.checks.is_empty() {
         rep.heading("Checks before the model is written");
         if r.failed_checks().next().is_some() {
@@ -1292,5 +1257,67 @@ pub fn html_report(r: &AdaptReport) -> twinloop_report::Report {
             .collect();
         rep.table(vec!["check".into(), "result".into(), "detail".into()], rows);
     }
-    rep
+}
+
+/// One view of the robot (axis `i` against z, to scale) with the CoMs, the added part
+/// and what the angles cannot tell apart.
+fn view_plot(r: &AdaptReport, title: &str, i: usize, label: &str) -> twinloop_report::Plot {
+    use twinloop_report::{Plot, SeriesStyle};
+    let (ox, oz): (Vec<f64>, Vec<f64>) = r.outline.iter().map(|o| (o[i], o[2])).unzip();
+    // To scale: a robot stretched sideways misleads about where a part can be.
+    let mut p = Plot::new(title, label, "z, m")
+        .equal_aspect()
+        .height(480.0)
+        .series("robot (link origins)", &ox, &oz, SeriesStyle::Points)
+        .series(
+            "prior CoM",
+            &[r.prior_com[i]],
+            &[r.prior_com[2]],
+            SeriesStyle::Points,
+        )
+        .series(
+            "measured CoM",
+            &[r.measured_com[i]],
+            &[r.measured_com[2]],
+            SeriesStyle::Points,
+        );
+    if let Some(a) = &r.added {
+        p = p.series(
+            "added mass",
+            &[a.position[i]],
+            &[a.position[2]],
+            SeriesStyle::Points,
+        );
+    }
+    // What the angles cannot tell apart, drawn rather than guessed: without the
+    // mass, every point of the ray from the measured CoM away from the prior's
+    // explains them (a lighter part further out); with it, the 1-sigma box.
+    let (line_x, line_z) = ambiguity_line(r, i);
+    if !line_x.is_empty() {
+        p = p.series(
+            "equally good (mass unknown: 0.05-2 kg along the ray)",
+            &line_x,
+            &line_z,
+            SeriesStyle::DashedLine,
+        );
+    }
+    if let (Some(a), "total-mass") = (&r.added, r.mode.as_str()) {
+        let (c, s) = (a.position, a.position_sigma);
+        let bx = [
+            c[i] - s[i],
+            c[i] + s[i],
+            c[i] + s[i],
+            c[i] - s[i],
+            c[i] - s[i],
+        ];
+        let bz = [
+            c[2] - s[2],
+            c[2] - s[2],
+            c[2] + s[2],
+            c[2] + s[2],
+            c[2] - s[2],
+        ];
+        p = p.series("added mass, 1 sigma", &bx, &bz, SeriesStyle::Line);
+    }
+    p
 }
