@@ -29,7 +29,7 @@ written (masses, inertias, mass matrices, bias forces) to be identical:
   regard to case: the Menagerie file writes `pelvis.stl`, Unitree ships
   `pelvis.STL`);
 - the Menagerie humanoids (Cassie, Apollo, Berkeley Humanoid, T1, N1, Adam Lite,
-  ToddlerBot 2xc and 2xm, Atlas, BXI Elf2):
+  ToddlerBot 2xc and 2xm, Atlas, BXI Elf2, LimX Oli and Luna, Open Duck Mini v2):
   their `assets/` folders in a Menagerie checkout given as `--menagerie DIR`
   (DIR/<robot>/assets, the folder names under models/ being Menagerie's), when
   every mesh file the model names is there;
@@ -38,14 +38,17 @@ written (masses, inertias, mass matrices, bias forces) to be identical:
 Texture files are not in the repository either: they are dropped with the meshes
 (a texture has no mass), and from the file compiled with meshes.
 
-A body with no `<inertial>` is accepted only when it has no geom and no joint
-(Apollo's `world_link`): MuJoCo compiles it massless, and the script checks that.
+A body with no `<inertial>` is accepted only when it has no geom (Apollo's empty static
+`world_link`, Open Duck Mini v2's free root `base`): MuJoCo compiles it massless, and the
+script checks that.
 
 Which mesh sets were compiled and found equal is recorded in each JSON
 (`meshes`). Run from anywhere:
 
     pip install mujoco==4.0.0 numpy
-    python3 tools/oracle/robot_mjcf_reference.py [--shared /work/shared/models] [--menagerie DIR]
+    python3 tools/oracle/robot_mjcf_reference.py [--shared /work/shared/models] [--menagerie DIR] [ROBOT ...]
+
+ROBOT (a folder name under models/) limits the run to those robots.
 """
 import argparse
 import copy
@@ -75,7 +78,8 @@ MESH_SETS = {
                     "unitree_h1/meshes/h1_description/meshes")],
 }
 MENAGERIE = ["agility_cassie", "apptronik_apollo", "berkeley_humanoid", "booster_t1", "fourier_n1",
-             "pndbotics_adam_lite", "toddlerbot_2xc", "toddlerbot_2xm", "atlas", "bxi_elf2"]
+             "pndbotics_adam_lite", "toddlerbot_2xc", "toddlerbot_2xm", "atlas", "bxi_elf2",
+             "limx_oli", "limx_luna", "open_duck_mini_v2"]
 for _robot in MENAGERIE:
     MESH_SETS[_robot] = [(f"Menagerie's meshes, {_robot}/assets", "menagerie", f"{_robot}/assets")]
 
@@ -146,9 +150,9 @@ def check_explicit_inertials(path, text, m):
         i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name)
         assert i > 0, f"{path}: body {name}"
         if inertial is None:
-            # Only an empty static body may go without: nothing to weigh.
-            assert b.find("geom") is None and b.find("joint") is None and b.find("freejoint") is None, \
-                f"{path}: body {name} has no <inertial>"
+            # Only a body without geoms may go without: nothing to weigh (Apollo's empty
+            # static world_link, Open Duck Mini's free root holding only a joint and a site).
+            assert b.find("geom") is None, f"{path}: body {name} has no <inertial>"
             assert m.body_mass[i] == 0.0, f"{path}: {name} mass {m.body_mass[i]}"
             continue
         mass = float(inertial.get("mass"))
@@ -234,11 +238,14 @@ def main():
                     help="the shared model collection (for the full Unitree meshes), if present")
     ap.add_argument("--menagerie", default=None,
                     help="a MuJoCo Menagerie checkout, for the humanoids' own meshes")
+    ap.add_argument("robots", nargs="*", help="folder names under models/ (default: all)")
     args = ap.parse_args()
     os.makedirs(OUT, exist_ok=True)
     for path in robot_files():
         name = name_of(path)
         robot = os.path.basename(os.path.dirname(os.path.dirname(path)))
+        if args.robots and robot not in args.robots:
+            continue
         text = open(path).read()
         stripped, removed = strip_meshes(text)
         m = mujoco.MjModel.from_xml_string(stripped)
@@ -270,7 +277,8 @@ def main():
         ref["meshes"] = {
             "mesh_assets_in_file": len(mesh_files),
             "mesh_geoms_removed_to_compile": removed,
-            "every_body_has_inertial": True,
+            "every_body_has_inertial": all(b.find("inertial") is not None
+                                           for b in ET.fromstring(text).find("worldbody").iter("body")),
             "compiled_with_meshes_and_identical": compiled,
         }
         if robot in MENAGERIE:
