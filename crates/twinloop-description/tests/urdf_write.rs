@@ -144,6 +144,45 @@ fn frames_become_links_with_fixed_joints() {
     assert!(back.link("imu").unwrap().inertial.is_none());
 }
 
+/// MJCF names bodies and sites apart, URDF names every link in one namespace: a frame
+/// named like a link (Open Duck Mini v2's `left_foot` body and site), like another
+/// frame, or like a joint's `<frame>_frame_joint`, is written under a name of its own,
+/// and the file reads back (twinloop's reader, like urdfdom, refuses a repeated name).
+#[test]
+fn frames_named_like_links_are_written_under_names_of_their_own() {
+    let robot = DescriptionBuilder::new("r")
+        .link("base")
+        .done()
+        .link("foot")
+        .done()
+        .link("foot_frame")
+        .done()
+        .fixed("ankle", "base", "foot")
+        .done()
+        .fixed("foot_frame_joint", "foot", "foot_frame")
+        .done()
+        .frame("foot", "foot", Pose::from_xyz([0.0, 0.0, -0.1]))
+        .frame("foot", "base", Pose::from_xyz([0.0, 0.0, -0.2]))
+        .build()
+        .unwrap();
+    let text = urdf::to_string(&robot);
+    assert!(text.contains(
+        "  <!-- frame \"foot\" written as link \"foot_frame2\": a link has its name -->\n  <link name=\"foot_frame2\"/>\n  <joint name=\"foot_frame_joint2\" type=\"fixed\">\n"
+    ), "{text}");
+    assert!(
+        text.contains("<link name=\"foot_frame3\"/>\n  <joint name=\"foot_frame_joint3\""),
+        "{text}"
+    );
+    let back = urdf::from_str(&text).unwrap();
+    assert_eq!(back.links.len(), 5);
+    let j = back.joint("foot_frame_joint3").unwrap();
+    assert_eq!(
+        (j.parent.as_str(), j.child.as_str()),
+        ("base", "foot_frame3")
+    );
+    assert_eq!(j.origin, Pose::from_xyz([0.0, 0.0, -0.2]));
+}
+
 #[test]
 fn capsules_are_written_as_cylinders_with_a_note() {
     let mut robot = pendulum();

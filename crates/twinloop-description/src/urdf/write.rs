@@ -9,7 +9,12 @@
 //!
 //! - a [`Frame`] becomes a massless `<link>` of the frame's name and a fixed
 //!   `<joint name="<frame>_frame_joint">` from the frame's link to it, with the
-//!   frame's origin; reading the file back gives a link and a joint, not a frame;
+//!   frame's origin; reading the file back gives a link and a joint, not a frame.
+//!   URDF has one namespace for links where MJCF has one for bodies and one for
+//!   sites (Open Duck Mini v2 has a body and a site both named `left_foot`), so a
+//!   frame whose name a link (or a ball joint's helper link, or an earlier frame)
+//!   already has is written as `<frame>_frame` (then `<frame>_frame2`, ...), with
+//!   an XML comment naming the frame (its joint, if taken, `<frame>_frame_joint2`, ...);
 //! - a [`Geometry::Capsule`] (from MJCF) becomes a `<cylinder>` of the same
 //!   radius and length, preceded by an XML comment saying so.
 //!
@@ -40,6 +45,7 @@
 
 use crate::description::*;
 use crate::error::DescriptionError;
+use std::collections::HashSet;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -74,13 +80,14 @@ fn write(robot: &Description, standard: bool) -> String {
         // A comment: no entities to escape, and the sentence holds no "--".
         w.line(1, &format!("<!-- {what} -->"));
     }
+    let frame_names = frame_names(robot, standard);
     for item in robot.items_in_order() {
         match item {
             Item::Link(i) => w.link(&robot.links[i]),
             Item::Joint(i) => w.joint(&robot.joints[i]),
             Item::Material(i) => w.material(1, &robot.materials[i]),
             Item::Extension(i) => w.raw(1, &robot.extensions[i].xml),
-            Item::Frame(i) => w.frame(&robot.frames[i]),
+            Item::Frame(i) => w.frame(&robot.frames[i], &frame_names[i]),
         }
     }
     w.out.push_str("</robot>\n");
@@ -106,6 +113,47 @@ pub fn unwritable(robot: &Description) -> Vec<String> {
         )
     })
     .collect()
+}
+
+/// The link and joint names each frame is written with (indexed as `robot.frames`):
+/// its own name and `<frame>_frame_joint` unless a link or joint the file writes
+/// already has it (URDF link and joint names must be unique; urdfdom refuses a
+/// repeated one), else the first free of `<frame>_frame`, `<frame>_frame2`, ...
+/// (and `<frame>_frame_joint2`, ...).
+fn frame_names(robot: &Description, standard: bool) -> Vec<(String, String)> {
+    let mut links: HashSet<String> = robot.links.iter().map(|l| l.name.clone()).collect();
+    let mut joints: HashSet<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+    for j in robot.joints.iter() {
+        if j.kind == JointKind::Spherical && standard {
+            links.extend(["x", "y"].map(|a| format!("{}_{a}_link", j.name)));
+            joints.extend(["x", "y", "z"].map(|a| format!("{}_{a}", j.name)));
+        }
+    }
+    // The first of `name(1)`, `name(2)`, ... that is not taken.
+    let unique = |taken: &mut HashSet<String>, name: &dyn Fn(usize) -> String| {
+        let free = (1..)
+            .map(name)
+            .find(|n| !taken.contains(n))
+            .unwrap_or_default();
+        taken.insert(free.clone());
+        free
+    };
+    robot
+        .frames
+        .iter()
+        .map(|f| {
+            let link = unique(&mut links, &|n| match n {
+                1 => f.name.clone(),
+                2 => format!("{}_frame", f.name),
+                _ => format!("{}_frame{}", f.name, n - 1),
+            });
+            let joint = unique(&mut joints, &|n| match n {
+                1 => format!("{}_frame_joint", f.name),
+                _ => format!("{}_frame_joint{n}", f.name),
+            });
+            (link, joint)
+        })
+        .collect()
 }
 
 /// Write a robot as URDF to a file; an I/O error names the path.
@@ -402,19 +450,26 @@ impl Writer {
         }
     }
 
-    /// A frame as a massless link plus a fixed joint `<frame>_frame_joint`.
-    fn frame(&mut self, f: &Frame) {
-        self.line(1, &format!("<link name=\"{}\"/>", escape(&f.name)));
+    /// A frame as a massless link plus a fixed joint, named as [`frame_names`] says.
+    fn frame(&mut self, f: &Frame, (link, joint): &(String, String)) {
+        if *link != f.name {
+            self.line(
+                1,
+                &format!(
+                    "<!-- frame \"{}\" written as link \"{}\": a link has its name -->",
+                    escape(&f.name).replace("--", "- -"),
+                    escape(link).replace("--", "- -")
+                ),
+            );
+        }
+        self.line(1, &format!("<link name=\"{}\"/>", escape(link)));
         self.line(
             1,
-            &format!(
-                "<joint name=\"{}\" type=\"fixed\">",
-                escape(&format!("{}_frame_joint", f.name))
-            ),
+            &format!("<joint name=\"{}\" type=\"fixed\">", escape(joint)),
         );
         self.origin(2, &f.origin);
         self.line(2, &format!("<parent link=\"{}\"/>", escape(&f.link)));
-        self.line(2, &format!("<child link=\"{}\"/>", escape(&f.name)));
+        self.line(2, &format!("<child link=\"{}\"/>", escape(link)));
         self.line(1, "</joint>");
     }
 }
