@@ -254,6 +254,51 @@ const MENAGERIE: &[(&str, &[&str])] = &[
             "<touch name=\"rf_touch\">",
         ],
     ),
+    // LimX Oli and Luna: the six `<connect>` closures of the ankle and waist linkages
+    // (open-tree dynamics, as MuJoCo's M and bias), the free joint's 1e-9 spring, and
+    // sensors at the IMU site.
+    (
+        "limx_oli/mjcf/oli.xml",
+        &[
+            "<joint name=\"floating_base_joint\">",
+            "<connect name=\"A_achilles_connect_L\">",
+            "<connect name=\"B_achilles_connect_L\">",
+            "<connect name=\"A_achilles_connect_R\">",
+            "<connect name=\"B_achilles_connect_R\">",
+            "<connect name=\"waist_connect_A\">",
+            "<connect name=\"waist_connect_B\">",
+            "<gyro name=\"Body_Gyro\">",
+            "<accelerometer name=\"Body_Acc\">",
+        ],
+    ),
+    (
+        "limx_luna/mjcf/luna.xml",
+        &[
+            "<joint> in <body name=\"base_link\">",
+            "<connect name=\"left_A_connect_joint\">",
+            "<connect name=\"left_B_connect_joint\">",
+            "<connect name=\"right_A_connect_joint\">",
+            "<connect name=\"right_B_connect_joint\">",
+            "<connect name=\"waist_A_connect_joint\">",
+            "<connect name=\"waist_B_connect_joint\">",
+            "<gyro name=\"base_imu_gyro\">",
+            "<accelerometer name=\"base_imu_acc\">",
+        ],
+    ),
+    // Open Duck Mini v2: four 1e-9 kg dummy bodies with a zero inertia, and sensors
+    // at its IMU site.
+    (
+        "open_duck_mini_v2/mjcf/open_duck_mini_v2.xml",
+        &[
+            "trunk",
+            "left_foot",
+            "head",
+            "right_foot",
+            "<gyro name=\"gyro\">",
+            "<velocimeter name=\"local_linvel\">",
+            "<accelerometer name=\"accelerometer\">",
+        ],
+    ),
     ("toddlerbot_2xc/mjcf/toddlerbot_2xc.xml", TODDLERBOT),
     ("toddlerbot_2xm/mjcf/toddlerbot_2xm.xml", TODDLERBOT),
 ];

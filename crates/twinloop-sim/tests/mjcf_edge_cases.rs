@@ -205,7 +205,7 @@ fn cassie_springs_and_dampers_are_mujocos_passive_forces() {
 
 /// Item 3 on the real files: every Menagerie humanoid's actuators (Cassie's geared
 /// motors, Apollo's position actuators with `forcerange`, T1's joints'
-/// `actuatorfrcrange`, ...) give each joint the effort limit MuJoCo clamps its
+/// `actuatorfrcrange`, Open Duck Mini v2's default-class `<position forcerange>`, ...) give each joint the effort limit MuJoCo clamps its
 /// actuator force to (`actuator_force_limit` of robot_mjcf_reference.py); a joint
 /// no actuator drives has none (MuJoCo's 0, twinloop's infinity).
 #[test]
@@ -217,6 +217,10 @@ fn menagerie_actuators_saturate_where_mujoco_does() {
         "booster_t1_t1",
         "fourier_n1_n1",
         "pndbotics_adam_lite_adam_lite",
+        "limx_oli_oli",
+        "limx_luna_luna",
+        // Its servos' `forcerange` comes from `<default><position>`.
+        "open_duck_mini_v2_open_duck_mini_v2",
     ] {
         let (robot, refd) = menagerie(name);
         let model = Model::from_description_with_base(&robot, BaseKind::Fixed).unwrap();

@@ -33,8 +33,8 @@
 //!   MJCF's, or `<body>_joint` (`<body>_joint2`, ...) for unnamed ones. "Limited"
 //!   follows MuJoCo: `limited="true"`, or `"auto"`/absent with a `range` when
 //!   `autolimits` is on (its default). `actuatorfrcrange` gives the limit's
-//!   effort (the larger magnitude; a `<motor>` on the joint lowers it to its
-//!   `forcerange`, or its `ctrlrange` times its gear, when those are limited),
+//!   effort (the larger magnitude; an actuator on the joint lowers it to its
+//!   `forcerange`, or a `<motor>`'s `ctrlrange` times its gear, when those are limited),
 //!   `damping` and `frictionloss` the
 //!   [`JointDynamics`], `armature` [`Joint::armature`]. The axis is normalised.
 //!   `ref` goes into the joint's origin (a turn or shift of `-ref` along the
@@ -800,20 +800,39 @@ impl<'a, 'i> Reader<'a, 'i> {
         Ok(true)
     }
 
-    /// The force limits of the `<motor>`s on joints, as MuJoCo clamps them: the
-    /// actuator's `forcerange` when force-limited, and its `ctrlrange` times its gear
-    /// when control-limited ("limited" as for joints: `"auto"` or absent means given
-    /// and `autolimits`). The smallest, with the joint's `actuatorfrcrange`, is the
-    /// joint's effort limit, so the simulator knows where a motor saturates.
+    /// The force limits of the actuators on joints, as MuJoCo clamps them: the
+    /// actuator's `forcerange` when force-limited (any actuator: a `<position>`'s too,
+    /// as Open Duck Mini v2's `<default><position forcerange>` gives its servos), and
+    /// for a `<motor>` its `ctrlrange` times its gear when control-limited (a
+    /// position or velocity actuator's control is a target, not a force). "Limited"
+    /// as for joints: `"auto"` or absent means given and `autolimits`. The smallest,
+    /// with the joint's `actuatorfrcrange`, is the joint's effort limit, so the
+    /// simulator knows where a motor saturates. MuJoCo keeps one actuator default
+    /// per class, which every actuator element in `<default>` writes, so an
+    /// attribute comes from the element, else from the class's default of its own
+    /// kind, else of any actuator kind.
     fn actuator_limits(&mut self, section: Node<'a, 'i>) -> Result<(), DescriptionError> {
-        for e in section.children().filter(|e| e.has_tag_name("motor")) {
+        const KINDS: [&str; 6] = [
+            "motor",
+            "general",
+            "position",
+            "velocity",
+            "intvelocity",
+            "damper",
+        ];
+        for e in section
+            .children()
+            .filter(|e| KINDS.contains(&e.tag_name().name()))
+        {
             let Some(joint) = e.attribute("joint") else {
                 continue;
             };
+            let kind = e.tag_name().name();
             let class = self.class_of(e, None)?;
             let get = |attr: &str| {
-                self.get(e, "motor", &class, attr)
-                    .or_else(|| self.get(e, "general", &class, attr))
+                std::iter::once(kind)
+                    .chain(KINDS)
+                    .find_map(|k| self.get(e, k, &class, attr))
             };
             let limit = |range: &str, limited: &str| -> Result<Option<f64>, DescriptionError> {
                 let r = match get(range) {
@@ -837,7 +856,10 @@ impl<'a, 'i> Reader<'a, 'i> {
                 None => 1.0,
             };
             let force = limit("forcerange", "forcelimited")?;
-            let ctrl = limit("ctrlrange", "ctrllimited")?.map(|c| c * gear.abs());
+            let ctrl = match kind {
+                "motor" => limit("ctrlrange", "ctrllimited")?.map(|c| c * gear.abs()),
+                _ => None,
+            };
             let Some(effort) = [force, ctrl].into_iter().flatten().reduce(f64::min) else {
                 continue;
             };
