@@ -56,16 +56,16 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) {
 }
 
 /// Placements in base coordinates (`data.b_m_i`) and joint subspaces there (`data.s`):
-/// the common first pass of CRBA, ABA and the regressors. Working in the base frame
+/// CRBA's first pass. Working in the base frame
 /// rather than the world saves transforming the free-flyer's quantities.
 #[inline]
 pub(crate) fn base_frame_pass(model: &Model, data: &mut Data, q: &[f64]) {
     if !model.has_spherical_joints() {
         // One coordinate per joint: body i's subspace is column i (no index
         // lookups, no slice per body; this pass is a third of CRBA on OP3).
+        // `li_m_i` is not stored: CRBA, the pass's one caller, does not read it.
         for i in 0..model.nbodies {
             let li = joint_placement(model, i, q);
-            data.li_m_i[i] = li;
             let p = model.parents[i];
             let b = if p == BASE {
                 li
