@@ -73,7 +73,8 @@ fn flops(model: &Model) {
     let quat = if floating { 24 } else { 0 };
     let fk: usize = quat + (0..nb).map(|i| joint(i) + compose(i)).sum::<usize>();
     let com = fk + (nb + usize::from(floating)) * 24 + 3;
-    let jac = fk + (0..nb).map(column).sum::<usize>() + if floating { 6 * 42 } else { 0 };
+    // The base's six columns: three cross products (the unit twists' other products are zeros).
+    let jac = fk + (0..nb).map(column).sum::<usize>() + if floating { 27 } else { 0 };
     let pass: usize = (0..nb)
         .map(|i| {
             joint(i)
@@ -97,11 +98,27 @@ fn flops(model: &Model) {
     // S^T f and armature (2), f to the parent (42 + 6); the base's 138.
     let rnea =
         quat + if floating { 138 } else { 18 } + (0..nb).map(|i| joint(i) + 302).sum::<usize>();
+    // Regressor: the forward pass (the joint, compose, subspace column, two motions
+    // to the body 2 x 42, v x vj 30, sums 12), the 6 x 10 body regressor (190), its
+    // columns to the base frame (24 + 3 x 42 + 6 x 15), and per (body, row on its
+    // support, itself included) 4 full dot products and 6 angular ones (4 x 11 + 6 x 5).
+    let reg = quat
+        + if floating { 190 } else { 0 }
+        + (0..nb)
+            .map(|i| {
+                let up = if model.parents[i] == BASE {
+                    0
+                } else {
+                    compose(i)
+                };
+                joint(i) + up + column(i) + 126 + 190 + 240 + 74 * depth(i)
+            })
+            .sum::<usize>();
     let trig = (0..nb)
         .filter(|&i| model.joint_types[i].is_revolute())
         .count();
     println!(
-        "flops fk {fk} com {com} jacobians {jac} crba {crba} rnea {rnea} (+ {trig} sin/cos pairs; {} of {nb} joints keep an axis)",
+        "flops fk {fk} com {com} jacobians {jac} crba {crba} rnea {rnea} regressor {reg} (+ {trig} sin/cos pairs; {} of {nb} joints keep an axis)",
         (0..nb).filter(|&i| keeps(i)).count()
     );
 }

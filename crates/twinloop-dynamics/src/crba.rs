@@ -20,7 +20,7 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
     }
     let off = model.v_offset;
     let mut base = LinearInertia::from_inertia(&model.base_inertia);
-    let m = &mut data.mass_matrix;
+    let (m, nv) = (&mut data.mass_matrix, model.nv);
     let one_dof = !model.has_spherical_joints();
     for i in (0..nb).rev() {
         let yi = data.ycrb[i];
@@ -33,16 +33,18 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
         if one_dof {
             // Every joint one column (no spherical joint): body i is column off + i.
             // Kept apart from the general loop below, which costs 20 % more on OP3.
+            // The column as a slice: one bounds check a store.
             let col = off + i;
+            let mc = &mut m.as_mut_slice()[col * nv..(col + 1) * nv];
             let f = yi.mul_motion(&data.s[i]);
-            m[(col, col)] = data.s[i].dot(&f) + model.armature[i];
+            mc[col] = data.s[i].dot(&f) + model.armature[i];
             let mut j = p;
             while j != BASE {
-                m[(off + j, col)] = data.s[j].dot(&f);
+                mc[off + j] = data.s[j].dot(&f);
                 j = model.parents[j];
             }
             if off == 6 {
-                base_rows(m, col, &f);
+                f.write_to(&mut mc[0..6]);
             }
             continue;
         }

@@ -10,7 +10,8 @@ use twinloop_spatial::{Force, LinearInertia, Motion, Se3, Symmetric6};
 pub struct Data {
     /// World placement of the base (floating) or identity (fixed base).
     pub base_placement: Se3,
-    /// Placement of each body's joint frame in its parent body frame at the current q.
+    /// Placement of each body's joint frame in its parent body frame at the current q
+    /// (forward kinematics, RNEA, the Jacobians, the regressor; CRBA leaves it).
     pub li_m_i: Vec<Se3>,
     /// World placement of each body (forward kinematics).
     pub o_m_i: Vec<Se3>,

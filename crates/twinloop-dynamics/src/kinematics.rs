@@ -56,16 +56,16 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) {
 }
 
 /// Placements in base coordinates (`data.b_m_i`) and joint subspaces there (`data.s`):
-/// the common first pass of CRBA, ABA and the regressors. Working in the base frame
+/// CRBA's first pass. Working in the base frame
 /// rather than the world saves transforming the free-flyer's quantities.
 #[inline]
 pub(crate) fn base_frame_pass(model: &Model, data: &mut Data, q: &[f64]) {
     if !model.has_spherical_joints() {
         // One coordinate per joint: body i's subspace is column i (no index
         // lookups, no slice per body; this pass is a third of CRBA on OP3).
+        // `li_m_i` is not stored: CRBA, the pass's one caller, does not read it.
         for i in 0..model.nbodies {
             let li = joint_placement(model, i, q);
-            data.li_m_i[i] = li;
             let p = model.parents[i];
             let b = if p == BASE {
                 li
@@ -119,6 +119,14 @@ pub fn compute_joint_jacobians(model: &Model, data: &mut Data, q: &[f64]) {
     if model.is_floating() {
         write_base_columns(&data.base_placement, j);
     }
+    if !model.has_spherical_joints() {
+        // One column per body (as in `base_frame_pass`): no index lookups.
+        let off = model.v_offset;
+        for (i, o) in data.o_m_i.iter().enumerate() {
+            write_motion(j, off + i, &subspace_column(model, i, 0, o));
+        }
+        return;
+    }
     for i in 0..model.nbodies {
         for k in 0..model.joint_types[i].nv() {
             let s = subspace_column(model, i, k, &data.o_m_i[i]);
@@ -129,25 +137,21 @@ pub fn compute_joint_jacobians(model: &Model, data: &mut Data, q: &[f64]) {
 
 #[inline(always)]
 fn write_motion(j: &mut DMatrix<f64>, col: usize, m: &Motion) {
-    let mut c = j.column_mut(col);
-    c[0] = m.v.x;
-    c[1] = m.v.y;
-    c[2] = m.v.z;
-    c[3] = m.w.x;
-    c[4] = m.w.y;
-    c[5] = m.w.z;
+    // One bounds check for the six entries (a column view checks each).
+    let c: &mut [f64; 6] = (&mut j.as_mut_slice()[6 * col..6 * col + 6])
+        .try_into()
+        .unwrap();
+    *c = [m.v.x, m.v.y, m.v.z, m.w.x, m.w.y, m.w.z];
 }
 
-/// The free flyer's six world-frame columns: the base frame's unit twists mapped to the world.
+/// The free flyer's six world-frame columns: the base frame's unit twists mapped to
+/// the world, `(R e_k, 0)` for a linear one and `(t x R e_k, R e_k)` for an angular one
+/// (`act_motion` of a unit twist, whose other products are zeros).
 fn write_base_columns(base: &Se3, j: &mut DMatrix<f64>) {
-    for k in 0..6 {
-        let mut e = Motion::ZERO;
-        if k < 3 {
-            e.v[k] = 1.0;
-        } else {
-            e.w[k - 3] = 1.0;
-        }
-        write_motion(j, k, &base.act_motion(&e));
+    for k in 0..3 {
+        let w: Vector3<f64> = base.rotation.column(k).into();
+        write_motion(j, k, &Motion::new(w, Vector3::zeros()));
+        write_motion(j, k + 3, &Motion::new(base.translation.cross(&w), w));
     }
 }
 

@@ -2,9 +2,9 @@
 //! `tau = Y(q, v, a) phi` and the static CoM regressor.
 
 use crate::data::Data;
-use crate::kinematics::{base_frame_pass, check_q, check_v, forward_kinematics};
+use crate::joint::{compose, joint_placement, subspace_in, subspace_times};
+use crate::kinematics::{base_placement, check_q, check_v, forward_kinematics};
 use crate::model::{BASE, Model};
-use crate::rnea::rnea_impl;
 use nalgebra::{DMatrix, SMatrix, Vector3};
 use twinloop_spatial::{Force, Inertia, Motion, Se3, skew};
 
@@ -36,6 +36,83 @@ fn body_regressor(v: &Motion, a: &Motion) -> SMatrix<f64, 6, 10> {
     y
 }
 
+/// The base's velocity and acceleration (gravity included as an upward acceleration,
+/// RNEA's trick) in the base frame; sets `data.base_placement`.
+#[inline(always)]
+fn base_motion(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+) -> (Motion, Motion) {
+    let base = base_placement(model, q);
+    data.base_placement = base;
+    let up = base.rotation.tr_mul(&(-model.gravity));
+    if model.is_floating() {
+        let mut a0 = Motion::from_slice(&a[0..6]);
+        a0.v += up;
+        (Motion::from_slice(&v[0..6]), a0)
+    } else {
+        (Motion::ZERO, Motion::new(up, Vector3::zeros()))
+    }
+}
+
+/// RNEA's forward pass (body-frame velocities and accelerations, the same sums as
+/// `rnea_impl`, so the same bits) and the base-frame pass (`b_m_i`, `s`) in one sweep:
+/// each joint's placement and sin/cos computed once, and no forces.
+fn forward_pass(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    v0: &Motion,
+    a0: &Motion,
+) {
+    let off = model.v_offset;
+    for i in 0..model.nbodies {
+        let li = joint_placement(model, i, q);
+        data.li_m_i[i] = li;
+        let p = model.parents[i];
+        let (vp, ap, b) = if p == BASE {
+            (*v0, *a0, li)
+        } else {
+            (data.v[p], data.a[p], compose(model, i, &data.b_m_i[p], &li))
+        };
+        let iv = model.idx_v[i];
+        let vj = subspace_times(model, i, &v[iv..]);
+        let aj = subspace_times(model, i, &a[iv..]);
+        let mut ai = li.act_inv_motion(&ap) + aj;
+        let vi = li.act_inv_motion(&vp) + vj;
+        ai += vi.cross(&vj);
+        data.v[i] = vi;
+        data.a[i] = ai;
+        data.b_m_i[i] = b;
+        subspace_in(model, i, &b, &mut data.s[iv - off..]);
+    }
+}
+
+/// The ten columns of a body regressor `y` (body frame) as forces in base coordinates
+/// (`b` the body's placement there). The mass's column has no moment and the
+/// rotational inertia's six have no force part: their transforms skip those products.
+#[inline(always)]
+fn base_frame_columns(b: &Se3, y: &SMatrix<f64, 6, 10>) -> [Force; 10] {
+    let rot =
+        |k: usize, r0: usize| b.rotation * Vector3::new(y[(r0, k)], y[(r0 + 1, k)], y[(r0 + 2, k)]);
+    let mut out = [Force::ZERO; 10];
+    let f = rot(0, 0);
+    out[0] = Force::new(f, b.translation.cross(&f));
+    for (k, o) in out.iter_mut().enumerate().take(4).skip(1) {
+        let f = rot(k, 0);
+        *o = Force::new(f, rot(k, 3) + b.translation.cross(&f));
+    }
+    for (k, o) in out.iter_mut().enumerate().skip(4) {
+        *o = Force::new(Vector3::zeros(), rot(k, 3));
+    }
+    out
+}
+
 /// The joint-torque regressor (`data.regressor`, nv x 10 nb): `rnea(q, v, a) = Y phi`
 /// with `phi` stacking [`Inertia::dynamic_parameters`] of each body in its own frame:
 /// the floating base first (if any), then the bodies in model order (see
@@ -50,49 +127,40 @@ pub fn joint_torque_regressor<'a>(
     check_q(model, q);
     check_v(model, v, "v");
     check_v(model, a, "a");
-    // Body-frame velocities and accelerations (gravity included) from RNEA's forward pass.
-    rnea_impl(model, data, q, v, Some(a), true);
-    base_frame_pass(model, data, q);
     let floating = model.is_floating();
+    let (v0, a0) = base_motion(model, data, q, v, a);
+    forward_pass(model, data, q, v, a, &v0, &a0);
     let off = model.v_offset;
     let pb = usize::from(floating); // parameter block of body i is i + pb
     let r = &mut data.regressor;
     if floating {
         // The base body's own block: its local force is already in base coordinates.
-        let v0 = Motion::from_slice(&v[0..6]);
-        let up = data.base_placement.rotation.tr_mul(&(-model.gravity));
-        let mut a0 = Motion::from_slice(&a[0..6]);
-        a0.v += up;
         let y0 = body_regressor(&v0, &a0);
         r.fixed_view_mut::<6, 10>(0, 0).copy_from(&y0);
     }
     for i in 0..model.nbodies {
-        let yl = body_regressor(&data.v[i], &data.a[i]);
-        // Each parameter's force column, re-expressed in base coordinates.
-        let b = &data.b_m_i[i];
-        let mut yb = SMatrix::<f64, 6, 10>::zeros();
-        for k in 0..10 {
-            let c = yl.column(k);
-            let f = b.act_force(&Force::new(
-                Vector3::new(c[0], c[1], c[2]),
-                Vector3::new(c[3], c[4], c[5]),
-            ));
-            yb.fixed_view_mut::<3, 1>(0, k).copy_from(&f.f);
-            yb.fixed_view_mut::<3, 1>(3, k).copy_from(&f.n);
-        }
+        let yb = base_frame_columns(&data.b_m_i[i], &body_regressor(&data.v[i], &data.a[i]));
         let col0 = 10 * (i + pb);
         let mut j = i;
         while j != BASE {
             for k in 0..model.joint_types[j].nv() {
                 let row = model.idx_v[j] + k;
-                let s = data.s[row - off].to_vector6();
-                r.fixed_view_mut::<1, 10>(row, col0)
-                    .copy_from(&(s.transpose() * yb));
+                let s = &data.s[row - off];
+                // Columns 1-3 and the mass's have both parts; the rotational
+                // inertia's have no force part (s.v . 0 adds nothing).
+                for (c, f) in yb.iter().enumerate().take(4) {
+                    r[(row, col0 + c)] = s.dot(f);
+                }
+                for (c, f) in yb.iter().enumerate().skip(4) {
+                    r[(row, col0 + c)] = s.w.dot(&f.n);
+                }
             }
             j = model.parents[j];
         }
         if floating {
-            r.fixed_view_mut::<6, 10>(0, col0).copy_from(&yb);
+            for (c, f) in yb.iter().enumerate() {
+                f.write_to(&mut r.column_mut(col0 + c).as_mut_slice()[0..6]);
+            }
         }
     }
     &data.regressor
