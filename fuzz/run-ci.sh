@@ -2,7 +2,7 @@
 # Run every fuzz target for a fixed time (issue 17): a crash, a panic, a timeout or an
 # out-of-memory in any target fails this script, and with it CI.
 #
-#   bash fuzz/run-ci.sh            # 25 s per target
+#   bash fuzz/run-ci.sh            # 15 s per target
 #   FUZZ_SECONDS=300 bash fuzz/run-ci.sh decoder urdf
 #
 # Without cargo-fuzz: installing it costs CI 4.5 minutes on two cores, and all it adds
@@ -16,11 +16,11 @@
 # and halve the executions per second to find nothing a panic does not already show.
 # `--target` keeps the flags off build scripts and proc macros (serde_derive).
 # Measured: the cold build 198 CPU-seconds (about 2 min on two free cores) plus the
-# runs, 4 x 25 s: about 4 min; details in docs/architecture.md ("Layers", on fuzz/).
+# runs, 4 x 15 s: under 4 min; details in docs/architecture.md ("Layers", on fuzz/).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")"
 
-seconds=${FUZZ_SECONDS:-25}
+seconds=${FUZZ_SECONDS:-15}
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=(decoder urdf mjcf mapping)
 toolchain=()

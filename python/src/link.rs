@@ -223,47 +223,8 @@ impl PyBus {
         out: Option<std::path::PathBuf>,
         verified_reads: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
-        if !(duration > 0.0 && duration.is_finite()) {
-            return Err(value_error(format!(
-                "duration: must be positive, got {duration}"
-            )));
-        }
-        if !(rate >= 0.0 && rate.is_finite()) {
-            return Err(value_error(format!(
-                "rate: must be zero or positive, got {rate}"
-            )));
-        }
-        let method = ReadMethod::parse(method).ok_or_else(|| {
-            value_error(format!(
-                "method: {method:?} is not auto, read, bulk, sync or fast"
-            ))
-        })?;
-        let mapping = match (map, protocol, ids) {
-            (Some(m), None, None) => {
-                RobotMapping::resolve(m).map_err(|e| value_error(format!("map: {e}")))?
-            }
-            (None, Some(p), Some(ids)) if !ids.is_empty() => {
-                let p = protocol_arg(p)?;
-                RobotMapping::from_ids(self.client()?, p, &ids).map_err(link_error)?
-            }
-            _ => {
-                return Err(value_error(
-                    "give map=MAPPING, or protocol= and ids= (a non-empty list)",
-                ));
-            }
-        };
-        // Checked before the client is lent to the robot, so a refusal keeps the bus.
-        let servos: Vec<CycleServo> = mapping
-            .joints
-            .iter()
-            .map(|j| CycleServo {
-                id: j.id,
-                model: j.model,
-                protocol: j.protocol,
-            })
-            .collect();
-        ControlCycle::new(&servos, method)
-            .map_err(|e| value_error(format!("method: {}: {e}", mapping.source)))?;
+        let method = record_options(duration, rate, method)?;
+        let mapping = self.record_mapping(map, protocol, ids, method)?;
         let names = mapping.joint_names();
         let ids_text = mapping
             .joints
@@ -301,8 +262,7 @@ impl PyBus {
             }
             w => w.map(|w| w.finish()).transpose(),
         };
-        let n = names.len();
-        let rows = rec.data.len() / (1 + 3 * n);
+        let rows = rec.data.len() / (1 + 3 * names.len());
         if let Some(e) = rec.error {
             return Err(link_error(format!(
                 "recording stopped: {e}; the {rows} rows read before are {}",
@@ -318,19 +278,90 @@ impl PyBus {
                 ids_text
             )));
         }
-        let d = PyDict::new(py);
-        d.set_item("columns", &columns)?;
-        d.set_item("data", new_array(py, rec.data, &[rows, 1 + 3 * n])?)?;
-        d.set_item("rows", rows)?;
-        d.set_item("seconds", rec.seconds)?;
-        let failures = PyDict::new(py);
-        for (name, f) in names.iter().zip(&rec.failures) {
-            failures.set_item(name, f)?;
-        }
-        d.set_item("failures", failures)?;
-        d.set_item("interrupted", rec.interrupted)?;
-        Ok(d)
+        recording_dict(py, &columns, &names, rec)
     }
+}
+
+impl PyBus {
+    /// The robot `record` reads: `map`, or `protocol` and `ids` (models by PING); its
+    /// servos checked against `method` before the client is lent to the robot, so a
+    /// refusal keeps the bus.
+    fn record_mapping(
+        &mut self,
+        map: Option<&str>,
+        protocol: Option<u8>,
+        ids: Option<Vec<u8>>,
+        method: ReadMethod,
+    ) -> PyResult<RobotMapping> {
+        let mapping = match (map, protocol, ids) {
+            (Some(m), None, None) => {
+                RobotMapping::resolve(m).map_err(|e| value_error(format!("map: {e}")))?
+            }
+            (None, Some(p), Some(ids)) if !ids.is_empty() => {
+                let p = protocol_arg(p)?;
+                RobotMapping::from_ids(self.client()?, p, &ids).map_err(link_error)?
+            }
+            _ => {
+                return Err(value_error(
+                    "give map=MAPPING, or protocol= and ids= (a non-empty list)",
+                ));
+            }
+        };
+        let servos: Vec<CycleServo> = mapping
+            .joints
+            .iter()
+            .map(|j| CycleServo {
+                id: j.id,
+                model: j.model,
+                protocol: j.protocol,
+            })
+            .collect();
+        ControlCycle::new(&servos, method)
+            .map_err(|e| value_error(format!("method: {}: {e}", mapping.source)))?;
+        Ok(mapping)
+    }
+}
+
+/// `record`'s duration, rate and read method, checked.
+fn record_options(duration: f64, rate: f64, method: &str) -> PyResult<ReadMethod> {
+    if !(duration > 0.0 && duration.is_finite()) {
+        return Err(value_error(format!(
+            "duration: must be positive, got {duration}"
+        )));
+    }
+    if !(rate >= 0.0 && rate.is_finite()) {
+        return Err(value_error(format!(
+            "rate: must be zero or positive, got {rate}"
+        )));
+    }
+    ReadMethod::parse(method).ok_or_else(|| {
+        value_error(format!(
+            "method: {method:?} is not auto, read, bulk, sync or fast"
+        ))
+    })
+}
+
+/// `record`'s answer: columns, the rows as an array, counts and failures per joint.
+fn recording_dict<'py>(
+    py: Python<'py>,
+    columns: &[String],
+    names: &[String],
+    rec: Recording,
+) -> PyResult<Bound<'py, PyDict>> {
+    let n = names.len();
+    let rows = rec.data.len() / (1 + 3 * n);
+    let d = PyDict::new(py);
+    d.set_item("columns", columns)?;
+    d.set_item("data", new_array(py, rec.data, &[rows, 1 + 3 * n])?)?;
+    d.set_item("rows", rows)?;
+    d.set_item("seconds", rec.seconds)?;
+    let failures = PyDict::new(py);
+    for (name, f) in names.iter().zip(&rec.failures) {
+        failures.set_item(name, f)?;
+    }
+    d.set_item("failures", failures)?;
+    d.set_item("interrupted", rec.interrupted)?;
+    Ok(d)
 }
 
 /// After this many cycles, a recording in which no servo has answered stops.

@@ -393,6 +393,52 @@ fn unit_name(u: twinloop_link::Unit) -> &'static str {
 
 fn read(a: &ReadArgs) -> CliResult {
     let mut c = open_client(&a.port, None)?;
+    let model = read_model(a, &mut c)?;
+    let table = model.table();
+    let selected = selected_registers(table, model, &a.registers)?;
+    let mut memory = vec![0u8; table.len()];
+    c.read(a.protocol, a.id, 0, &mut memory)?;
+    let rows: Vec<RegisterJson> = selected
+        .iter()
+        .map(|r| {
+            let raw = r.decode(&memory[r.address as usize..r.end() as usize]);
+            RegisterJson {
+                address: r.address,
+                name: r.name,
+                size: r.size,
+                access: match r.access {
+                    twinloop_link::Access::Read => "R",
+                    twinloop_link::Access::ReadWrite => "RW",
+                },
+                raw,
+                value: r.to_si(raw),
+                unit: unit_name(r.unit),
+            }
+        })
+        .collect();
+    #[derive(Serialize)]
+    struct Out<'a> {
+        protocol: u8,
+        id: u8,
+        model: &'static str,
+        registers: &'a [RegisterJson],
+    }
+    let json = Out {
+        protocol: a.protocol.number(),
+        id: a.id,
+        model: model.name(),
+        registers: &rows,
+    };
+    emit(&register_text(a, model, &rows), a.json.as_ref(), &json)?;
+    Ok(Outcome::Ok)
+}
+
+/// The servo model `link read` decodes with: `--servo-model` (checked against the
+/// servo's Model Number) or the one the servo's PING names; it must speak the protocol.
+fn read_model(
+    a: &ReadArgs,
+    c: &mut twinloop_link::Client<Box<dyn Transport>>,
+) -> Result<ServoModel, CliError> {
     let model = match &a.servo_model {
         Some(name) => match ServoModel::parse(name) {
             Some(m) => m,
@@ -444,12 +490,20 @@ fn read(a: &ReadArgs) -> CliResult {
             )));
         }
     }
-    let table = model.table();
+    Ok(model)
+}
+
+/// The registers `--registers` names (all of the table when none), each checked.
+fn selected_registers<'t>(
+    table: &'t twinloop_link::ControlTable,
+    model: ServoModel,
+    registers: &[String],
+) -> Result<Vec<&'t twinloop_link::register::Register>, CliError> {
     let mut selected = Vec::new();
-    if a.registers.is_empty() {
+    if registers.is_empty() {
         selected.extend(table.registers.iter());
     } else {
-        for name in &a.registers {
+        for name in registers {
             match table.by_name(name) {
                 Some(r) => selected.push(r),
                 None => {
@@ -462,44 +516,16 @@ fn read(a: &ReadArgs) -> CliResult {
             }
         }
     }
-    let mut memory = vec![0u8; table.len()];
-    c.read(a.protocol, a.id, 0, &mut memory)?;
-    let rows: Vec<RegisterJson> = selected
-        .iter()
-        .map(|r| {
-            let raw = r.decode(&memory[r.address as usize..r.end() as usize]);
-            RegisterJson {
-                address: r.address,
-                name: r.name,
-                size: r.size,
-                access: match r.access {
-                    twinloop_link::Access::Read => "R",
-                    twinloop_link::Access::ReadWrite => "RW",
-                },
-                raw,
-                value: r.to_si(raw),
-                unit: unit_name(r.unit),
-            }
-        })
-        .collect();
-    #[derive(Serialize)]
-    struct Out<'a> {
-        protocol: u8,
-        id: u8,
-        model: &'static str,
-        registers: &'a [RegisterJson],
-    }
-    let json = Out {
-        protocol: a.protocol.number(),
-        id: a.id,
-        model: model.name(),
-        registers: &rows,
-    };
+    Ok(selected)
+}
+
+/// `link read`'s table: one line per register, its value in SI units where it has one.
+fn register_text(a: &ReadArgs, model: ServoModel, rows: &[RegisterJson]) -> String {
     let mut out = format!(
         "servo id {} ({model}, {})\nADDR SIZE ACCESS  NAME                       RAW        VALUE\n",
         a.id, a.protocol
     );
-    for r in &rows {
+    for r in rows {
         let value = if r.unit.is_empty() {
             String::new()
         } else {
@@ -510,8 +536,7 @@ fn read(a: &ReadArgs) -> CliResult {
             r.address, r.size, r.access, r.name, r.raw, value
         );
     }
-    emit(&out, a.json.as_ref(), &json)?;
-    Ok(Outcome::Ok)
+    out
 }
 
 fn record(a: &RecordArgs) -> CliResult {
@@ -527,21 +552,7 @@ fn record(a: &RecordArgs) -> CliResult {
             crate::common::num(rate)
         ),
     )?;
-    let mapping = a.map.as_deref().map(RobotMapping::resolve).transpose()?;
-    let default_port = mapping.as_ref().and_then(|m| m.port.clone());
-    let mut c = open_client(&a.port, default_port.as_deref())?;
-    let mapping = match mapping {
-        Some(m) => m,
-        None => {
-            let (Some(protocol), Some(ids)) = (a.protocol, a.ids.as_deref()) else {
-                return Err(CliError::from(
-                    "give --map MAPPING, or --protocol and --ids",
-                ));
-            };
-            let ids = parse_ids(ids)?;
-            RobotMapping::from_ids(&mut c, protocol, &ids)?
-        }
-    };
+    let (c, mapping) = record_bus(a)?;
     let names = mapping.joint_names();
     let ids: Vec<String> = mapping
         .joints
@@ -552,22 +563,7 @@ fn record(a: &RecordArgs) -> CliResult {
     let mapping_urdf = mapping.urdf.as_ref().map(|u| u.display().to_string());
     let mut robot = DynamixelRobot::new(c, mapping, a.method)?;
     robot.cycle_mut().verify_v1 = a.verified_reads;
-    let mut columns = vec!["t".to_string()];
-    for prefix in ["q", "v", "tau"] {
-        columns.extend(names.iter().map(|n| format!("{prefix}:{n}")));
-    }
-    // Every row reaches a CSV as soon as it is read: nothing is lost on Ctrl-C or
-    // when the adapter is unplugged. An .mcap is closed (summary written) on both.
-    // The robot the mapping names goes on an MCAP's /robot_description, so a viewer
-    // shows it moving with no twinloop installed.
-    let description = match &mapping_urdf {
-        Some(spec) if a.out.iter().any(|p| crate::common::is_mcap(p)) => {
-            Some(crate::common::load_description(spec)?.0)
-        }
-        _ => None,
-    };
-    let mut writer =
-        crate::common::RowWriter::create_each(&a.out, &columns, description.as_ref(), true)?;
+    let mut writer = record_writer(a, &names, mapping_urdf.as_deref())?;
     let stop = interrupt_flag();
     let rec = record_rows(&mut robot, &mut writer, a, &stop, live.as_mut());
     if let Some(live) = &live {
@@ -589,6 +585,87 @@ fn record(a: &RecordArgs) -> CliResult {
         )));
     }
     let finished = writer.finish();
+    record_summary(
+        a,
+        &rec,
+        &names,
+        stop.load(Ordering::Relaxed),
+        &robot.client.stats,
+    );
+    finished?;
+    if let Some(why) = rec.silent {
+        // The bus froze: the rows read before are a recording, but an incomplete one.
+        eprintln!(
+            "error: recording stopped: {why}; the {} rows read before are in {}",
+            rec.rows,
+            outs(&a.out)
+        );
+        return Ok(Outcome::Problems);
+    }
+    match rec.link_error {
+        Some(e) => Err(CliError::new(format!(
+            "recording stopped: {e}; the {} rows read before are in the file",
+            rec.rows
+        ))),
+        None => Ok(Outcome::Ok),
+    }
+}
+
+/// The bus `link record` reads and its mapping: `--map`'s (whose port is the default),
+/// or one built from `--protocol` and `--ids` by asking each servo its model.
+fn record_bus(
+    a: &RecordArgs,
+) -> Result<(twinloop_link::Client<Box<dyn Transport>>, RobotMapping), CliError> {
+    let mapping = a.map.as_deref().map(RobotMapping::resolve).transpose()?;
+    let default_port = mapping.as_ref().and_then(|m| m.port.clone());
+    let mut c = open_client(&a.port, default_port.as_deref())?;
+    let mapping = match mapping {
+        Some(m) => m,
+        None => {
+            let (Some(protocol), Some(ids)) = (a.protocol, a.ids.as_deref()) else {
+                return Err(CliError::from(
+                    "give --map MAPPING, or --protocol and --ids",
+                ));
+            };
+            let ids = parse_ids(ids)?;
+            RobotMapping::from_ids(&mut c, protocol, &ids)?
+        }
+    };
+    Ok((c, mapping))
+}
+
+/// The files `link record` writes: `t`, then each joint's q, v and tau.
+fn record_writer(
+    a: &RecordArgs,
+    names: &[String],
+    mapping_urdf: Option<&str>,
+) -> Result<crate::common::RowWriter, CliError> {
+    let mut columns = vec!["t".to_string()];
+    for prefix in ["q", "v", "tau"] {
+        columns.extend(names.iter().map(|n| format!("{prefix}:{n}")));
+    }
+    // Every row reaches a CSV as soon as it is read: nothing is lost on Ctrl-C or
+    // when the adapter is unplugged. An .mcap is closed (summary written) on both.
+    // The robot the mapping names goes on an MCAP's /robot_description, so a viewer
+    // shows it moving with no twinloop installed.
+    let description = match mapping_urdf {
+        Some(spec) if a.out.iter().any(|p| crate::common::is_mcap(p)) => {
+            Some(crate::common::load_description(spec)?.0)
+        }
+        _ => None,
+    };
+    crate::common::RowWriter::create_each(&a.out, &columns, description.as_ref(), true)
+}
+
+/// What a recording prints when it ends: rows, rate (and why it is low), each joint's
+/// failed reads, the bus's health.
+fn record_summary(
+    a: &RecordArgs,
+    rec: &Recording,
+    names: &[String],
+    interrupted: bool,
+    stats: &twinloop_link::ClientStats,
+) {
     let mut summary = format!(
         "{} rows in {:.3} s ({:.1} reads/s) written to {}",
         rec.rows,
@@ -596,7 +673,7 @@ fn record(a: &RecordArgs) -> CliResult {
         rec.rows as f64 / rec.seconds.max(1e-9),
         outs(&a.out)
     );
-    if stop.load(Ordering::Relaxed) {
+    if interrupted {
         summary += " (interrupted)";
     }
     eprintln!("{summary}");
@@ -616,25 +693,8 @@ fn record(a: &RecordArgs) -> CliResult {
         silence_window_s: a.port.silence_window,
         ..Default::default()
     }
-    .with_client(&robot.client.stats);
+    .with_client(stats);
     eprintln!("{}", health.line());
-    finished?;
-    if let Some(why) = rec.silent {
-        // The bus froze: the rows read before are a recording, but an incomplete one.
-        eprintln!(
-            "error: recording stopped: {why}; the {} rows read before are in {}",
-            rec.rows,
-            outs(&a.out)
-        );
-        return Ok(Outcome::Problems);
-    }
-    match rec.link_error {
-        Some(e) => Err(CliError::new(format!(
-            "recording stopped: {e}; the {} rows read before are in the file",
-            rec.rows
-        ))),
-        None => Ok(Outcome::Ok),
-    }
 }
 
 /// The files a recording went to, for its summary line.

@@ -418,13 +418,7 @@ fn result_mcap_reads_back(mcap: &std::path::Path, j: &serde_json::Value, urdf: &
     else {
         return;
     };
-    let o = Command::new(&py)
-        .arg(python::repo().join("tools/oracle/logs_readback.py"))
-        .arg(mcap)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = python::mcap_readback(&py, mcap);
     let value = |topic: &str, k: usize| {
         let hex = v["topics"][topic]["rows"][k][1].as_str().unwrap();
         f64::from_bits(u64::from_str_radix(hex, 16).unwrap())

@@ -325,17 +325,7 @@ fn identify_static_mcap_holds_the_measurement_both_models_predictions_and_the_ad
         s(&mcap),
     ];
     ok(&args);
-    let out = Command::new(&py)
-        .arg(root().join("tools/oracle/logs_readback.py"))
-        .arg(&mcap)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = python::mcap_readback(&py, &mcap);
     let table = Table::read(&poses).unwrap();
     let n = table.rows.len();
     let topics = &v["topics"];
@@ -677,17 +667,7 @@ fn identify_servo_mcap_holds_the_log_the_start_s_and_the_fit_s_replays_and_the_f
         s(&mcap),
     ];
     ok(&args);
-    let out = Command::new(&py)
-        .arg(root().join("tools/oracle/logs_readback.py"))
-        .arg(&mcap)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = python::mcap_readback(&py, &mcap);
     let topics = &v["topics"];
     let n = log.len();
     for topic in ["/measured", "/prior", "/adapted"] {
@@ -810,17 +790,7 @@ fn validate_residual_mcap_holds_the_plate_and_each_model_s_prediction_of_it() {
         s(&mcap),
     ];
     ok(&args);
-    let out = Command::new(&py)
-        .arg(root().join("tools/oracle/logs_readback.py"))
-        .arg(&mcap)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = python::mcap_readback(&py, &mcap);
     let table = Table::read(&squat).unwrap();
     let n = table.rows.len();
     for topic in ["/joint_states", "/measured", "/model", "/compare"] {
@@ -895,17 +865,7 @@ fn validate_lean_mcap_holds_the_robot_s_torques_and_the_simulation_s_at_its_samp
         s(&mcap),
     ];
     ok(&args);
-    let out = Command::new(&py)
-        .arg(root().join("tools/oracle/logs_readback.py"))
-        .arg(&mcap)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = python::mcap_readback(&py, &mcap);
     let c: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let table = Table::read(&robot).unwrap();

@@ -485,7 +485,11 @@ impl<'a> PlateGenerator<'a> {
 
     /// Try once to make a statically stable pose of `cat` following `plan`. The
     /// error says why the draw was rejected.
-    pub fn try_pose(&mut self, cat: PoseCategory, plan: Plan) -> Result<(Vec<f64>, f64), String> {
+    pub fn try_pose(
+        &mut self,
+        cat: PoseCategory,
+        plan: Plan,
+    ) -> Result<(Vec<f64>, f64), IdentError> {
         let model = self.model;
         let (reference, weight) = self.draw_posture(cat, plan);
         let mut q = model.neutral_configuration();
@@ -520,10 +524,10 @@ impl<'a> PlateGenerator<'a> {
             });
             let rep = self.double_hard.solve(model, &mut self.data, &mut q, &opts);
             if rep.max_residual > 1e-9 {
-                return Err(format!(
+                return Err(IdentError::new(format!(
                     "the feet cannot both be flat on the ground (residual {:.2e})",
                     rep.max_residual
-                ));
+                )));
             }
         } else {
             let s = usize::from(!stance_left);
@@ -568,10 +572,10 @@ impl<'a> PlateGenerator<'a> {
                     *weight = Vector3::new(1.0, 1.0, 0.0);
                 }
                 if rep.max_residual > 1e-9 {
-                    return Err(format!(
+                    return Err(IdentError::new(format!(
                         "the stance foot cannot be flat on the ground (residual {:.2e})",
                         rep.max_residual
-                    ));
+                    )));
                 }
             }
         }
@@ -580,12 +584,15 @@ impl<'a> PlateGenerator<'a> {
 
     /// Accept a solved pose: joints in range, GCOM inside the support polygon with a
     /// margin, nothing but the support soles on or below the ground. Returns the margin.
-    fn check(&mut self, q: &[f64], cat: PoseCategory) -> Result<f64, String> {
+    fn check(&mut self, q: &[f64], cat: PoseCategory) -> Result<f64, IdentError> {
         let model = self.model;
         for i in 0..model.nbodies {
             let x = q[model.q_offset + i];
             if x < model.lower_limits[i] - 1e-9 || x > model.upper_limits[i] + 1e-9 {
-                return Err(format!("joint {} out of its limits", model.joint_names[i]));
+                return Err(IdentError::new(format!(
+                    "joint {} out of its limits",
+                    model.joint_names[i]
+                )));
             }
         }
         let com = twinloop_dynamics::center_of_mass(model, &mut self.data, q);
@@ -606,7 +613,7 @@ impl<'a> PlateGenerator<'a> {
                     .iter()
                     .any(|p| polygon_margin(&soles[o], p) > -1e-4)
                 {
-                    return Err("the feet overlap".into());
+                    return Err(IdentError::new("the feet overlap"));
                 }
             }
             let yl = link_placement(model, &self.data, a.left_foot.link)
@@ -616,7 +623,7 @@ impl<'a> PlateGenerator<'a> {
                 .translation
                 .y;
             if yl <= yr {
-                return Err("the feet cross".into());
+                return Err(IdentError::new("the feet cross"));
             }
         }
         let poly = crate::anatomy::support_polygon(&soles);
@@ -628,11 +635,11 @@ impl<'a> PlateGenerator<'a> {
             .fold(f64::INFINITY, f64::min);
         let need = (0.25 * half_width).min(0.005);
         if margin < need {
-            return Err(format!(
+            return Err(IdentError::new(format!(
                 "the GCOM is {:.1} mm inside the support polygon (needs {:.1} mm)",
                 margin * 1e3,
                 need * 1e3
-            ));
+            )));
         }
         // Ground clearance of everything but the support soles.
         let support_bodies: Vec<usize> = supports.iter().map(|f| f.body).collect();
@@ -646,11 +653,11 @@ impl<'a> PlateGenerator<'a> {
                 .map(|p| x.act_point(p).z)
                 .fold(f64::INFINITY, f64::min);
             if low < 0.01 {
-                return Err(format!(
+                return Err(IdentError::new(format!(
                     "link {} reaches {:.1} mm above the ground (needs 10 mm)",
                     model.links[l].name,
                     low * 1e3
-                ));
+                )));
             }
         }
         Ok(margin)
@@ -669,7 +676,7 @@ impl<'a> PlateGenerator<'a> {
             let p = if k < attempts { plan } else { Plan::Random };
             match self.try_pose(cat, p) {
                 Ok((q, m)) => return Ok((q, p, m)),
-                Err(e) => last = e,
+                Err(e) => last = e.message,
             }
         }
         Err(IdentError::new(format!(

@@ -10,6 +10,7 @@
 //! solved through one Cholesky factor of `H` and a small Schur complement over the
 //! working set.
 
+use crate::IdentError;
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// The problem; `eq` and `ineq` have one constraint per row.
@@ -40,12 +41,13 @@ fn row_scale(row: nalgebra::DMatrixView<f64>) -> f64 {
 impl Qp<'_> {
     /// Solve from a feasible `z0` (the equalities and inequalities must hold there, to
     /// within `1e-9` relative).
-    pub fn solve(&self, z0: DVector<f64>) -> Result<QpSolution, String> {
+    pub fn solve(&self, z0: DVector<f64>) -> Result<QpSolution, IdentError> {
         let n = self.h.nrows();
         let me = self.eq.nrows();
         let mi = self.ineq.nrows();
-        let chol = Cholesky::new(self.h.clone())
-            .ok_or("the quadratic program's Hessian is not positive definite")?;
+        let chol = Cholesky::new(self.h.clone()).ok_or_else(|| {
+            IdentError::new("the quadratic program's Hessian is not positive definite")
+        })?;
         let l = chol.l();
         let mut z = z0;
         self.check_start(&z)?;
@@ -83,24 +85,28 @@ impl Qp<'_> {
                 active.push(i);
             }
         }
-        Err(format!(
+        Err(IdentError::new(format!(
             "the active-set method did not converge in {max_iter} iterations"
-        ))
+        )))
     }
 
     /// Errors unless `z` satisfies the equalities and inequalities (to `1e-9` relative).
-    fn check_start(&self, z: &DVector<f64>) -> Result<(), String> {
+    fn check_start(&self, z: &DVector<f64>) -> Result<(), IdentError> {
         for i in 0..self.eq.nrows() {
             let r = (self.eq.row(i) * z)[0] - self.eq_rhs[i];
             if r.abs() > 1e-9 * (1.0 + self.eq_rhs[i].abs()) {
-                return Err(format!("start point violates equality {i} by {r:e}"));
+                return Err(IdentError::new(format!(
+                    "start point violates equality {i} by {r:e}"
+                )));
             }
         }
         for i in 0..self.ineq.nrows() {
             let r = (self.ineq.row(i) * z)[0] - self.ineq_rhs[i];
             let tol = 1e-9 * (1.0 + self.ineq_rhs[i].abs()) * row_scale(self.ineq.row(i).as_view());
             if r > tol {
-                return Err(format!("start point violates inequality {i} by {r:e}"));
+                return Err(IdentError::new(format!(
+                    "start point violates inequality {i} by {r:e}"
+                )));
             }
         }
         Ok(())
@@ -115,7 +121,7 @@ impl Qp<'_> {
         l: &DMatrix<f64>,
         z: &DVector<f64>,
         active: &[usize],
-    ) -> Result<(DVector<f64>, DVector<f64>), String> {
+    ) -> Result<(DVector<f64>, DVector<f64>), IdentError> {
         let (n, me) = (self.h.nrows(), self.eq.nrows());
         let w = me + active.len();
         let mut aw = DMatrix::zeros(w, n);
@@ -128,19 +134,23 @@ impl Qp<'_> {
         let g = self.h * z - self.f;
         let u = l
             .solve_lower_triangular(&g)
-            .ok_or("singular Cholesky factor")?;
+            .ok_or_else(|| IdentError::new("singular Cholesky factor"))?;
         let y = l
             .solve_lower_triangular(&aw.transpose())
-            .ok_or("singular Cholesky factor")?;
+            .ok_or_else(|| IdentError::new("singular Cholesky factor"))?;
         let k = y.transpose() * &y;
         let rhs = -(y.transpose() * &u);
         let mu = if w > 0 {
             let lu = k.clone().lu();
-            let sol = lu.solve(&rhs).ok_or(
-                "the working set of constraints is linearly dependent (degenerate bounds)",
-            )?;
+            let sol = lu.solve(&rhs).ok_or_else(|| {
+                IdentError::new(
+                    "the working set of constraints is linearly dependent (degenerate bounds)",
+                )
+            })?;
             if !sol.iter().all(|x| x.is_finite()) {
-                return Err("the working set of constraints is linearly dependent".into());
+                return Err(IdentError::new(
+                    "the working set of constraints is linearly dependent",
+                ));
             }
             sol
         } else {
@@ -149,7 +159,7 @@ impl Qp<'_> {
         let t = &u + &y * &mu;
         let p = -l
             .tr_solve_lower_triangular(&t)
-            .ok_or("singular Cholesky factor")?;
+            .ok_or_else(|| IdentError::new("singular Cholesky factor"))?;
         Ok((p, mu))
     }
 

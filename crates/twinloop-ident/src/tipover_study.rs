@@ -22,7 +22,7 @@ use twinloop_description::Description;
 use twinloop_description::builtin::FootGeometry;
 use twinloop_dynamics::{BASE, Data};
 use twinloop_experiments::tipover::{Direction, TipoverConfig, TipoverResult, run_direction};
-use twinloop_robot::{Robot, RobotError};
+use twinloop_robot::Robot;
 use twinloop_sim::statics::{FlatFeet, hip_lean_signs, lean_signs};
 use twinloop_sim::{Actuator, ContactParams, SimConfig, Simulator};
 use twinloop_spatial::Se3;
@@ -191,8 +191,9 @@ pub struct FootReport {
     pub feet_com: [f64; 2],
 }
 
-fn err(e: impl std::fmt::Display) -> String {
-    e.to_string()
+/// A lower layer's error (simulator, dynamics, a tip-over run) as this crate's.
+fn err(e: impl std::fmt::Display) -> IdentError {
+    IdentError::new(e.to_string())
 }
 
 /// Ankle and foot names: a profile's `[roles]` (on the description,
@@ -458,7 +459,7 @@ type DirectionRun = (TipoverResult, f64, f64, [Option<String>; 2]);
 fn study_simulator(
     robot: &Description,
     opts: &StudyOptions,
-) -> Result<(Simulator, Vec<f64>), String> {
+) -> Result<(Simulator, Vec<f64>), IdentError> {
     let mass = twinloop_dynamics::Model::from_description(robot)
         .map_err(err)?
         .total_mass;
@@ -489,11 +490,11 @@ fn study_simulator(
 }
 
 /// The ankle, hip roll and foot names of `robot` resolved in the simulator's model.
-fn find_study_joints(robot: &Description, sim: &Simulator) -> Result<StudyJoints, String> {
+fn find_study_joints(robot: &Description, sim: &Simulator) -> Result<StudyJoints, IdentError> {
     let names = ankle_names(robot)?;
     let joint = |n: &str| {
         sim.joint_index(n)
-            .ok_or_else(|| format!("no joint \"{n}\" in \"{}\"", robot.name))
+            .ok_or_else(|| IdentError::new(format!("no joint \"{n}\" in \"{}\"", robot.name)))
     };
     let (lp, rp, lr, rr) = (
         joint(&names[0])?,
@@ -506,7 +507,7 @@ fn find_study_joints(robot: &Description, sim: &Simulator) -> Result<StudyJoints
             .links
             .iter()
             .position(|l| l.name == n)
-            .ok_or_else(|| format!("no foot link \"{n}\" in \"{}\"", robot.name))
+            .ok_or_else(|| IdentError::new(format!("no foot link \"{n}\" in \"{}\"", robot.name)))
     };
     let feet = [link(&names[4])?, link(&names[5])?];
     let hip_names = hip_roll_names(robot)?;
@@ -525,7 +526,7 @@ fn find_study_joints(robot: &Description, sim: &Simulator) -> Result<StudyJoints
 /// spheres, cylinders and capsules only, and a foot without one (a mesh sole, as in the
 /// ROBOTIS OP3 URDF) stands on whatever else touches the floor, so the robot never
 /// tips the way the protocol assumes.
-fn feet_can_touch(robot: &Description, sim: &Simulator, j: &StudyJoints) -> Result<(), String> {
+fn feet_can_touch(robot: &Description, sim: &Simulator, j: &StudyJoints) -> Result<(), IdentError> {
     for &foot in &j.feet {
         // By body: a sole on a link welded to the foot counts.
         let body = sim.model.links[foot].body;
@@ -538,12 +539,12 @@ fn feet_can_touch(robot: &Description, sim: &Simulator, j: &StudyJoints) -> Resu
         } else {
             "it has no <collision> at all"
         };
-        return Err(format!(
+        return Err(IdentError::new(format!(
             "foot link \"{name}\" of \"{}\" has no collision primitive: {why}; the tip-over \
              needs box (or sphere, cylinder, capsule) soles: add a <collision> box under each \
              foot, or use a description that has them (for the OP3: models/op3/mjcf/op3.xml)",
             robot.name
-        ));
+        )));
     }
     Ok(())
 }
@@ -657,11 +658,11 @@ struct StandingModel {
 }
 
 impl StandingModel {
-    fn new(sim: &mut Simulator, standing: &[f64], j: &StudyJoints) -> Result<Self, String> {
+    fn new(sim: &mut Simulator, standing: &[f64], j: &StudyJoints) -> Result<Self, IdentError> {
         sim.place_on_ground(standing).map_err(err)?;
         let mut place = |l: &str| {
             sim.link_placement(l)
-                .ok_or_else(|| format!("no link \"{l}\""))
+                .ok_or_else(|| IdentError::new(format!("no link \"{l}\"")))
         };
         let foot_world = [place(&j.names[4])?, place(&j.names[5])?];
         Ok(StandingModel {
@@ -705,7 +706,7 @@ fn tip_all_directions(
     q0: &[f64],
     opts: &StudyOptions,
     progress: &mut dyn FnMut(&str),
-) -> Result<Vec<TipoverResult>, String> {
+) -> Result<Vec<TipoverResult>, IdentError> {
     let sm = StandingModel::new(sim, standing, j)?;
     let model = &sm.model;
     let mut flat = sm.flat();
@@ -721,8 +722,7 @@ fn tip_all_directions(
         let mut run = |cfg: &TipoverConfig, sim: &mut Simulator| {
             sim.place_on_ground(standing).map_err(err)?;
             let mut predict = |jq: &[f64]| flat_tilt(&mut flat, &mut pdata, jq, imu_link, d);
-            run_direction(sim, standing, d, cfg, Some(&mut predict))
-                .map_err(|e: RobotError| e.to_string())
+            run_direction(sim, standing, d, cfg, Some(&mut predict)).map_err(err)
         };
         progress(&format!("{}: ramp", d.name()));
         let first = run(&cfg, sim)?;
@@ -749,7 +749,7 @@ fn with_static_references(
     j: &StudyJoints,
     q0: &[f64],
     runs: Vec<TipoverResult>,
-) -> Result<Vec<DirectionRun>, String> {
+) -> Result<Vec<DirectionRun>, IdentError> {
     let sm = StandingModel::new(sim, standing, j)?;
     let mut flat = sm.flat();
     let signs = lean_signs_of(&sm.model, j, q0);
@@ -781,7 +781,7 @@ fn estimate_com(
     j: &StudyJoints,
     foot: &FootGeometry,
     seed_constants: &SeedConstants,
-) -> Result<(ComReport, crate::tipover::FeetMass), String> {
+) -> Result<(ComReport, crate::tipover::FeetMass), IdentError> {
     let names = &j.names;
     let pick = |d: Direction, f: fn(&TipoverResult) -> f64| {
         results
@@ -882,7 +882,7 @@ struct Prepared {
     q0: Vec<f64>,
 }
 
-fn prepare(robot: &Description, opts: &StudyOptions) -> Result<Prepared, String> {
+fn prepare(robot: &Description, opts: &StudyOptions) -> Result<Prepared, IdentError> {
     let (mut sim, standing) = study_simulator(robot, opts)?;
     let j = find_study_joints(robot, &sim)?;
     let sim_feet: Vec<&str> = vec![j.names[4].as_str(), j.names[5].as_str()];
@@ -920,7 +920,7 @@ pub fn run_study_with_progress(
     let mut p = prepare(robot, opts)?;
     let runs = tip_all_directions(&mut p.sim, &p.standing, &p.j, &p.q0, opts, progress)?;
     let results = with_static_references(&mut p.sim, &p.standing, &p.j, &p.q0, runs)?;
-    Ok(assemble(robot, &p, &results)?)
+    assemble(robot, &p, &results)
 }
 
 /// The study's report for runs made outside the simulator (a robot over its bus, one
@@ -953,7 +953,7 @@ pub fn report_for_runs(
         ordered.push(r);
     }
     let results = with_static_references(&mut p.sim, &p.standing, &p.j, &p.q0, ordered)?;
-    Ok(assemble(robot, &p, &results)?)
+    assemble(robot, &p, &results)
 }
 
 /// `robot`'s static tipping angle in each direction (forward, backward, left, right;
@@ -1061,7 +1061,7 @@ fn assemble(
     robot: &Description,
     p: &Prepared,
     results: &[DirectionRun],
-) -> Result<StudyReport, String> {
+) -> Result<StudyReport, IdentError> {
     let (com, feet) = estimate_com(
         results,
         &p.sim.model,
@@ -1124,7 +1124,12 @@ impl TiltModel {
             .links
             .iter()
             .position(|l| l.name == imu_link)
-            .ok_or_else(|| format!("no link \"{imu_link}\" (the IMU's) in \"{}\"", robot.name))?;
+            .ok_or_else(|| {
+                IdentError::new(format!(
+                    "no link \"{imu_link}\" (the IMU's) in \"{}\"",
+                    robot.name
+                ))
+            })?;
         Ok(TiltModel {
             imu_link: imu,
             data: Data::new(&standing.model),
@@ -1178,13 +1183,14 @@ pub fn tipover_config(
     let p = prepare(robot, &StudyOptions::default())?;
     let model = &p.sim.model;
     let signs = lean_signs_of(model, &p.j, &p.q0);
-    let at = |pair: [usize; 2]| -> Result<[usize; 2], String> {
+    let at = |pair: [usize; 2]| -> Result<[usize; 2], IdentError> {
         let one = |i: usize| {
             let n = &model.joint_names[i];
-            joint_names
-                .iter()
-                .position(|x| x == n)
-                .ok_or_else(|| format!("no servo drives joint \"{n}\" (the tip-over turns it)"))
+            joint_names.iter().position(|x| x == n).ok_or_else(|| {
+                IdentError::new(format!(
+                    "no servo drives joint \"{n}\" (the tip-over turns it)"
+                ))
+            })
         };
         Ok([one(pair[0])?, one(pair[1])?])
     };

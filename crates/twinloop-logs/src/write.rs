@@ -130,6 +130,82 @@ fn layout(columns: &[String], groups: &[ArrayTopic]) -> Result<Layout, LogError>
     Ok(l)
 }
 
+/// The channels a log declares, in file order: joints, tf, each IMU, the arrays (their
+/// ids kept in the layout), the description.
+struct Channels {
+    joints: u16,
+    tf: u16,
+    imus: Vec<u16>,
+    imu_topics: Vec<String>,
+    description: Option<u16>,
+    /// Each channel: id, topic, type, QoS (what a bag's metadata lists).
+    declared: Vec<(u16, String, Kind, String)>,
+}
+
+impl Channels {
+    /// Declare the schema and channel of each topic `layout` has (and the description's,
+    /// latched, if `description`); 0 for a topic with no columns.
+    fn declare(
+        out: &mut mcap::Writer<BufWriter<File>>,
+        layout: &mut Layout,
+        description: bool,
+    ) -> Result<Channels, LogError> {
+        let mut declared: Vec<(u16, String, Kind, String)> = Vec::new();
+        let mut channel =
+            |kind: Kind, topic: &str, meta: &BTreeMap<String, String>| -> Result<u16, LogError> {
+                let s =
+                    out.add_schema(kind.schema_name(), "ros2msg", kind.schema_text().as_bytes())?;
+                let id = out.add_channel(s, topic, "cdr", meta)?;
+                let qos = meta
+                    .get("offered_qos_profiles")
+                    .cloned()
+                    .unwrap_or_default();
+                declared.push((id, topic.to_string(), kind, qos));
+                Ok(id)
+            };
+        let none = BTreeMap::new();
+        let joints = if layout.joints.is_empty() {
+            0
+        } else {
+            channel(Kind::JointState, "/joint_states", &none)?
+        };
+        let tf = if layout.base.is_some() {
+            channel(Kind::Tf, "/tf", &none)?
+        } else {
+            0
+        };
+        let mut imus = Vec::new();
+        let mut imu_topics = Vec::new();
+        for (link, _) in &layout.imus {
+            let topic = if layout.imus.len() == 1 {
+                "/imu".to_string()
+            } else {
+                format!("/imu/{link}")
+            };
+            imus.push(channel(Kind::Imu, &topic, &none)?);
+            imu_topics.push(topic);
+        }
+        for a in &mut layout.arrays {
+            a.channel = channel(Kind::MultiArray, &a.topic, &none)?;
+        }
+        let latched =
+            BTreeMap::from([("offered_qos_profiles".to_string(), LATCHED_QOS.to_string())]);
+        let description = if description {
+            Some(channel(Kind::String, "/robot_description", &latched)?)
+        } else {
+            None
+        };
+        Ok(Channels {
+            joints,
+            tf,
+            imus,
+            imu_topics,
+            description,
+            declared,
+        })
+    }
+}
+
 /// An MCAP file being written row by row.
 pub struct McapLog {
     path: PathBuf,
@@ -207,53 +283,9 @@ impl McapLog {
             .library(concat!("twinloop ", env!("CARGO_PKG_VERSION")))
             .create(BufWriter::new(file))
             .map_err(|e| err(e.into()))?;
-        // Each channel: id, topic, type, QoS (what a bag's metadata lists).
-        let mut declared: Vec<(u16, String, Kind, String)> = Vec::new();
-        let mut channel =
-            |kind: Kind, topic: &str, meta: &BTreeMap<String, String>| -> Result<u16, LogError> {
-                let s =
-                    out.add_schema(kind.schema_name(), "ros2msg", kind.schema_text().as_bytes())?;
-                let id = out.add_channel(s, topic, "cdr", meta)?;
-                let qos = meta
-                    .get("offered_qos_profiles")
-                    .cloned()
-                    .unwrap_or_default();
-                declared.push((id, topic.to_string(), kind, qos));
-                Ok(id)
-            };
-        let none = BTreeMap::new();
-        let ch_joints = if layout.joints.is_empty() {
-            0
-        } else {
-            channel(Kind::JointState, "/joint_states", &none).map_err(err)?
-        };
-        let ch_tf = if layout.base.is_some() {
-            channel(Kind::Tf, "/tf", &none).map_err(err)?
-        } else {
-            0
-        };
-        let mut ch_imus = Vec::new();
-        let mut imu_topics = Vec::new();
-        for (link, _) in &layout.imus {
-            let topic = if layout.imus.len() == 1 {
-                "/imu".to_string()
-            } else {
-                format!("/imu/{link}")
-            };
-            ch_imus.push(channel(Kind::Imu, &topic, &none).map_err(err)?);
-            imu_topics.push(topic);
-        }
-        for a in &mut layout.arrays {
-            a.channel = channel(Kind::MultiArray, &a.topic, &none).map_err(err)?;
-        }
-        let latched =
-            BTreeMap::from([("offered_qos_profiles".to_string(), LATCHED_QOS.to_string())]);
-        let ch_description = match description {
-            Some(_) => Some(channel(Kind::String, "/robot_description", &latched).map_err(err)?),
-            None => None,
-        };
+        let ch = Channels::declare(&mut out, &mut layout, description.is_some()).map_err(err)?;
         if let Some(bag) = &mut bag {
-            for (id, topic, kind, qos) in &declared {
+            for (id, topic, kind, qos) in &ch.declared {
                 bag.channel(*id, topic, *kind, qos);
             }
         }
@@ -278,11 +310,11 @@ impl McapLog {
             imu: msgs::Imu::default(),
             extra: Vec::new(),
             layout,
-            ch_joints,
-            ch_tf,
-            ch_imus,
-            imu_topics,
-            ch_description,
+            ch_joints: ch.joints,
+            ch_tf: ch.tf,
+            ch_imus: ch.imus,
+            imu_topics: ch.imu_topics,
+            ch_description: ch.description,
             bag,
             sequence: 0,
             wrote_description: false,

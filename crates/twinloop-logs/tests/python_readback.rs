@@ -9,7 +9,7 @@
 #[path = "support/python.rs"]
 mod python;
 
-use python::{python_with, repo};
+use python::{mcap_readback, python_with};
 use std::path::PathBuf;
 use std::process::Command;
 use twinloop_io::Table;
@@ -92,17 +92,7 @@ fn an_mcap_twinloop_writes_reads_back_in_the_reference_library_bit_for_bit() {
     let path = dir.join("run.mcap");
     let tab = table();
     write_mcap(&path, &tab, Some(URDF), "base_link").unwrap();
-    let out = Command::new(&py)
-        .arg(repo().join("tools/oracle/logs_readback.py"))
-        .arg(&path)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = mcap_readback(&py, &path);
     let topics = v["topics"].as_object().unwrap();
     let mut names: Vec<&str> = topics.keys().map(String::as_str).collect();
     names.sort();

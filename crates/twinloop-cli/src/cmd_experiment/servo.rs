@@ -670,7 +670,7 @@ fn drive(
         &format!("id {id} on {port}"),
         &target.comments,
     )
-    .map_err(|e| CliError::new(format!("{}: {e}", a.out.display())))?;
+    .map_err(|e| out_error(a, e))?;
     let stop = interrupt_flag();
     let protocol = model.protocol();
     let (goal, mut regs) = goal_at(0.0).ok_or("the excitation is empty")?;
@@ -686,7 +686,6 @@ fn drive(
     let mut row_goal = f64::NAN;
     let mut last_write = 0.0;
     let mut misses = 0;
-    let (lo, hi) = target.bounds;
     loop {
         let t = t0.elapsed().as_secs_f64() * a.realtime_factor;
         let status = match client.read(protocol, id, block.start, &mut buf) {
@@ -709,8 +708,7 @@ fn drive(
             t_goal = last_write;
         }
         let row = [t, m[6], t_goal, m[0], m[1], m[2], m[3], m[4], m[5]];
-        log.write(&row, &regs)
-            .map_err(|e| CliError::new(format!("{}: {e}", a.out.display())))?;
+        log.write(&row, &regs).map_err(|e| out_error(a, e))?;
         abort = trouble(id, status, &m, target.bounds, &stop);
         if abort.is_some() {
             break;
@@ -726,10 +724,39 @@ fn drive(
         let _ = write_item(client, model, id, Item::GoalPosition, raw);
     }
     let rows = log.rows;
-    log.finish()
-        .map_err(|e| CliError::new(format!("{}: {e}", a.out.display())))?;
+    log.finish().map_err(|e| out_error(a, e))?;
     let took = t0.elapsed().as_secs_f64();
-    if let Some(why) = abort {
+    end_run(
+        a,
+        client,
+        target,
+        goal_reg,
+        abort.map(|why| (why, last_q)),
+        rows,
+        took,
+    )
+}
+
+/// The log's file named in its error.
+fn out_error(a: &ServoArgs, e: impl std::fmt::Display) -> CliError {
+    CliError::new(format!("{}: {e}", a.out.display()))
+}
+
+/// The servo after the run: back to the centre and the rows reported, or, when the
+/// run was stopped (why, and the last position read), left safe: torque on, holding
+/// where it is.
+fn end_run(
+    a: &ServoArgs,
+    client: &mut Client<Box<dyn Transport>>,
+    target: &Target,
+    goal_reg: &Register,
+    abort: Option<(String, f64)>,
+    rows: usize,
+    took: f64,
+) -> CliResult {
+    let (id, model, servo) = (target.id, target.model, target.servo);
+    let (lo, hi) = target.bounds;
+    if let Some((why, last_q)) = abort {
         // Left safe: torque on, holding where it is.
         let hold = goal_reg.from_si(last_q.clamp(lo, hi));
         let _ = write_item(client, model, id, Item::GoalPosition, hold);

@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use twinloop_actuator::group::{
-    DIFFER_P, GroupFit, GroupIdentification, MIN_SPREAD, ServoData, identify_servos,
+    Comparison, DIFFER_P, GroupFit, GroupIdentification, MIN_SPREAD, ServoData, identify_servos,
 };
 use twinloop_actuator::identify::{Identification, IdentifyOptions, identify_with};
 use twinloop_actuator::log::{SERVO_LOG_NOTE, ServoLog};
@@ -102,18 +102,7 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         twinloop_io::output::write_atomic(out, text)?;
         return Ok(Outcome::Ok);
     }
-    let mut options = IdentifyOptions::default();
-    for name in &a.fit {
-        let i = NONSMOOTH
-            .into_iter()
-            .find(|&i| PARAM_NAMES[i] == name.trim())
-            .ok_or_else(|| {
-                CliError::new(format!(
-                    "--fit {name:?}: backlash, sensing_delay or bus_delay"
-                ))
-            })?;
-        options.nonsmooth.push(i);
-    }
+    let options = fit_options(a)?;
     if a.holdout_fraction >= 1.0 {
         return Err(CliError::new("--holdout-fraction must be below 1"));
     }
@@ -129,38 +118,9 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     // BAM's logs (JSON, or its column form) carry their pendulum; ours name it in
     // --load.
     let mut bam_loads: Vec<(String, Pendulum)> = Vec::new();
-    let mut read = |args: &[String]| -> Result<Vec<(Option<u8>, ServoLog)>, CliError> {
-        args.iter()
-            .map(|arg| {
-                let (key, path) = keyed(arg, "--data")?;
-                let path = Path::new(path);
-                let log = if bam_log::is_bam_log(path) {
-                    let b = bam_log::read(path, servo)?;
-                    bam_loads.push((path.display().to_string(), b.load));
-                    b.log
-                } else if twinloop_logs::is_log(path) {
-                    read_recorded_log(path, servo)?
-                } else {
-                    ServoLog::read(path, servo).map_err(CliError::from)?
-                };
-                Ok((key.or(log.id), log))
-            })
-            .collect()
-    };
-    let logs = read(&a.data)?;
-    let holdout = read(&a.holdout)?;
-    // The one pendulum BAM's logs name, when no --load is given.
-    let bam_load = match bam_loads.first() {
-        Some((first, load)) if a.load.is_empty() => {
-            if let Some((p, _)) = bam_loads.iter().find(|(_, l)| l != load) {
-                return Err(CliError::new(format!(
-                    "{p}: a pendulum other than {first}'s (one fit, one load); give --load LOAD.toml"
-                )));
-            }
-            Some(*load)
-        }
-        _ => None,
-    };
+    let logs = read_logs(&a.data, servo, &mut bam_loads)?;
+    let holdout = read_logs(&a.holdout, servo, &mut bam_loads)?;
+    let bam_load = one_bam_load(a, &bam_loads)?;
     // Limb logs (`experiment servo --map --joint`) rebuild their load.
     let limb = if a.load.is_empty() && bam_load.is_none() {
         let paths = a
@@ -212,9 +172,81 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
     };
     let logs: Vec<ServoLog> = logs.into_iter().map(|(_, l)| l).collect();
     let holdout: Vec<ServoLog> = holdout.into_iter().map(|(_, l)| l).collect();
+    run_one(a, &logs, &holdout, &load, &start, &options)
+}
+
+/// `--fit`: the non-smooth parameters fitted besides the rung's.
+fn fit_options(a: &ServoIdArgs) -> Result<IdentifyOptions, CliError> {
+    let mut options = IdentifyOptions::default();
+    for name in &a.fit {
+        let i = NONSMOOTH
+            .into_iter()
+            .find(|&i| PARAM_NAMES[i] == name.trim())
+            .ok_or_else(|| {
+                CliError::new(format!(
+                    "--fit {name:?}: backlash, sensing_delay or bus_delay"
+                ))
+            })?;
+        options.nonsmooth.push(i);
+    }
+    Ok(options)
+}
+
+/// The logs of `--data` or `--holdout` (`[ID=]PATH`), each with the servo id it is
+/// of; a BAM log's pendulum is added to `bam_loads`.
+fn read_logs(
+    args: &[String],
+    servo: Option<ServoType>,
+    bam_loads: &mut Vec<(String, Pendulum)>,
+) -> Result<Vec<(Option<u8>, ServoLog)>, CliError> {
+    args.iter()
+        .map(|arg| {
+            let (key, path) = keyed(arg, "--data")?;
+            let path = Path::new(path);
+            let log = if bam_log::is_bam_log(path) {
+                let b = bam_log::read(path, servo)?;
+                bam_loads.push((path.display().to_string(), b.load));
+                b.log
+            } else if twinloop_logs::is_log(path) {
+                read_recorded_log(path, servo)?
+            } else {
+                ServoLog::read(path, servo).map_err(CliError::from)?
+            };
+            Ok((key.or(log.id), log))
+        })
+        .collect()
+}
+
+/// The one pendulum BAM's logs name, when no --load is given.
+fn one_bam_load(
+    a: &ServoIdArgs,
+    bam_loads: &[(String, Pendulum)],
+) -> Result<Option<Pendulum>, CliError> {
+    match bam_loads.first() {
+        Some((first, load)) if a.load.is_empty() => {
+            if let Some((p, _)) = bam_loads.iter().find(|(_, l)| l != load) {
+                return Err(CliError::new(format!(
+                    "{p}: a pendulum other than {first}'s (one fit, one load); give --load LOAD.toml"
+                )));
+            }
+            Ok(Some(*load))
+        }
+        _ => Ok(None),
+    }
+}
+
+/// One servo's fit and what it writes: the parameter file, the MCAP, the summary.
+fn run_one(
+    a: &ServoIdArgs,
+    logs: &[ServoLog],
+    holdout: &[ServoLog],
+    load: &Load,
+    start: &ServoParams,
+    options: &IdentifyOptions,
+) -> CliResult {
     let t0 = Instant::now();
     let id = twinloop_optim::parallel::on_threads(a.threads, || {
-        identify_with(&logs, &holdout, &load, &start, a.holdout_fraction, &options)
+        identify_with(logs, holdout, load, start, a.holdout_fraction, options)
     })?;
     let seconds = t0.elapsed().as_secs_f64();
     let comment = format!(
@@ -228,8 +260,8 @@ pub fn run(a: &ServoIdArgs) -> CliResult {
         twinloop_io::output::write_atomic(out, &fitted)?;
     }
     if let Some(path) = &a.mcap {
-        let all: Vec<&ServoLog> = logs.iter().chain(&holdout).collect();
-        write_result_mcap(path, a, &all, &load, (&start, &id.params), &fitted)?;
+        let all: Vec<&ServoLog> = logs.iter().chain(holdout).collect();
+        write_result_mcap(path, a, &all, load, (start, &id.params), &fitted)?;
     }
     emit(&text(&id, seconds), a.json.as_ref(), &to_json(&id, seconds))?;
     Ok(Outcome::Ok)
@@ -265,6 +297,53 @@ fn run_group(
     level: ModelLevel,
     bam_load: Option<Pendulum>,
 ) -> CliResult {
+    check_group(a, ids, &logs, &holdout)?;
+    let loads = group_loads(a, ids, bam_load)?;
+    let shared = shared_list(a, level)?;
+    let servos = group_servos(ids, &logs, &holdout, &loads)?;
+    let threads = match a.threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    };
+    let t0 = Instant::now();
+    let id = identify_servos(
+        &servos,
+        start,
+        shared.as_deref(),
+        a.holdout_fraction,
+        threads,
+    )?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let fits = group_fits(&servos, &id);
+    let mut files = Vec::new();
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
+        for (name, _, toml) in &fits {
+            let path = dir.join(format!("{}.toml", name.replace(' ', "-")));
+            twinloop_io::output::write_atomic(&path, toml)?;
+            files.push(path);
+        }
+    }
+    if let Some(path) = &a.mcap {
+        write_group_mcap(path, a, &servos, start, &fits)?;
+        files.push(path.clone());
+    }
+    emit(
+        &group_text(&id, &files, seconds),
+        a.json.as_ref(),
+        &group_json(&id, &files, seconds),
+    )?;
+    Ok(Outcome::Ok)
+}
+
+/// What a group refuses before reading its loads: a log without a servo id, `--fit`,
+/// a held-out log of a servo with no `--data` log.
+fn check_group(
+    a: &ServoIdArgs,
+    ids: &[Option<u8>],
+    logs: &[(Option<u8>, ServoLog)],
+    holdout: &[(Option<u8>, ServoLog)],
+) -> Result<(), CliError> {
     if let Some((_, l)) = logs.iter().find(|(k, _)| k.is_none()) {
         return Err(CliError::new(format!(
             "{}: line 1: names no servo id, and the other logs are of several servos: give ID={}",
@@ -283,7 +362,21 @@ fn run_group(
             servo_name(*k)
         )));
     }
-    // Loads: ID=FILE for one servo, a plain FILE for the others.
+    Ok(())
+}
+
+/// A group's loads: the plain one (a `--load FILE`, else BAM's) and each servo's own
+/// (`--load ID=FILE`).
+struct GroupLoads {
+    plain: Option<Pendulum>,
+    own: Vec<(u8, Pendulum)>,
+}
+
+fn group_loads(
+    a: &ServoIdArgs,
+    ids: &[Option<u8>],
+    bam_load: Option<Pendulum>,
+) -> Result<GroupLoads, CliError> {
     let mut plain = bam_load;
     let mut own: Vec<(u8, Pendulum)> = Vec::new();
     for arg in &a.load {
@@ -306,42 +399,57 @@ fn run_group(
             }
         }
     }
-    let mut shared: Option<Vec<usize>> = None;
-    if !a.shared.is_empty() {
-        let mut list = Vec::new();
-        for name in &a.shared {
-            let name = name.trim();
-            if name == "none" {
-                continue;
-            }
-            let i = level
-                .parameters()
-                .into_iter()
-                .find(|&i| PARAM_NAMES[i] == name)
-                .ok_or_else(|| {
-                    CliError::new(format!(
-                        "--shared {name:?}: not a parameter of {} ({})",
-                        level.name(),
-                        level
-                            .parameters()
-                            .iter()
-                            .map(|&i| PARAM_NAMES[i])
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ))
-                })?;
-            list.push(i);
-        }
-        shared = Some(list);
+    Ok(GroupLoads { plain, own })
+}
+
+/// `--shared`: the parameter indices held in common (None: the test decides).
+fn shared_list(a: &ServoIdArgs, level: ModelLevel) -> Result<Option<Vec<usize>>, CliError> {
+    if a.shared.is_empty() {
+        return Ok(None);
     }
+    let mut list = Vec::new();
+    for name in &a.shared {
+        let name = name.trim();
+        if name == "none" {
+            continue;
+        }
+        let i = level
+            .parameters()
+            .into_iter()
+            .find(|&i| PARAM_NAMES[i] == name)
+            .ok_or_else(|| {
+                CliError::new(format!(
+                    "--shared {name:?}: not a parameter of {} ({})",
+                    level.name(),
+                    level
+                        .parameters()
+                        .iter()
+                        .map(|&i| PARAM_NAMES[i])
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })?;
+        list.push(i);
+    }
+    Ok(Some(list))
+}
+
+/// Each servo's logs, held-out logs and load, in the order of `ids`.
+fn group_servos(
+    ids: &[Option<u8>],
+    logs: &[(Option<u8>, ServoLog)],
+    holdout: &[(Option<u8>, ServoLog)],
+    loads: &GroupLoads,
+) -> Result<Vec<ServoData>, CliError> {
     let mut servos = Vec::new();
     for &id in ids {
         let id = id.expect("checked above");
-        let load = own
+        let load = loads
+            .own
             .iter()
             .find(|(k, _)| *k == id)
             .map(|(_, l)| *l)
-            .or(plain)
+            .or(loads.plain)
             .ok_or_else(|| {
                 CliError::new(format!(
                     "--load: no file for servo id {id} (ID=LOAD.toml or a plain LOAD.toml)"
@@ -362,21 +470,15 @@ fn run_group(
             load,
         });
     }
-    let threads = match a.threads {
-        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-        n => n,
-    };
-    let t0 = Instant::now();
-    let id = identify_servos(
-        &servos,
-        start,
-        shared.as_deref(),
-        a.holdout_fraction,
-        threads,
-    )?;
-    let seconds = t0.elapsed().as_secs_f64();
-    // Each servo's fitted file: its name, parameters and text.
-    let fits: Vec<(String, &ServoParams, String)> = servos
+    Ok(servos)
+}
+
+/// Each servo's fitted file: its name, parameters and text.
+fn group_fits<'a>(
+    servos: &[ServoData],
+    id: &'a GroupIdentification,
+) -> Vec<(String, &'a ServoParams, String)> {
+    servos
         .iter()
         .zip(&id.chosen.servos)
         .map(|(s, f)| {
@@ -391,26 +493,7 @@ fn run_group(
             );
             (f.name.clone(), &f.params, f.params.to_toml(&comment))
         })
-        .collect();
-    let mut files = Vec::new();
-    if let Some(dir) = &a.out {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::io(dir, e))?;
-        for (name, _, toml) in &fits {
-            let path = dir.join(format!("{}.toml", name.replace(' ', "-")));
-            twinloop_io::output::write_atomic(&path, toml)?;
-            files.push(path);
-        }
-    }
-    if let Some(path) = &a.mcap {
-        write_group_mcap(path, a, &servos, start, &fits)?;
-        files.push(path.clone());
-    }
-    emit(
-        &group_text(&id, &files, seconds),
-        a.json.as_ref(),
-        &group_json(&id, &files, seconds),
-    )?;
-    Ok(Outcome::Ok)
+        .collect()
 }
 
 fn names(list: &[usize]) -> String {
@@ -423,6 +506,8 @@ fn names(list: &[usize]) -> String {
         .join(", ")
 }
 
+/// The group's summary: the fit, the spread test, the answer, the held-out errors
+/// and values, what the logs leave open and the files written.
 fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> String {
     let c = &id.comparison;
     let chosen = &id.chosen;
@@ -440,6 +525,32 @@ fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> Stri
             .join(", "),
         c.each.simulations + c.all_shared.simulations + chosen.simulations
     );
+    spread_lines(&mut s, c);
+    answer_line(&mut s, c, chosen);
+    value_lines(&mut s, c, chosen);
+    let _ = writeln!(
+        s,
+        "not determined by these logs: {}",
+        if chosen.undetermined.is_empty() {
+            "nothing".to_string()
+        } else {
+            chosen.undetermined.join(", ")
+        }
+    );
+    for (f, path) in chosen.servos.iter().zip(files) {
+        let _ = writeln!(
+            s,
+            "wrote {} (--servo-params {}={})",
+            path.display(),
+            f.name.trim_start_matches("id "),
+            path.display()
+        );
+    }
+    s
+}
+
+/// "Do the servos differ?": the chi-square test of each parameter's spread.
+fn spread_lines(s: &mut String, c: &Comparison) {
     let tested = c.spreads.iter().filter(|p| p.tested).count();
     let _ = writeln!(
         s,
@@ -473,6 +584,11 @@ fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> Stri
             }
         );
     }
+}
+
+/// The answer: which parameters each servo needs its own of, and what sharing costs
+/// in held-out error against each servo's own fit.
+fn answer_line(s: &mut String, c: &Comparison, chosen: &GroupFit) {
     let differing = c.differing();
     let alike: Vec<usize> = c
         .spreads
@@ -504,6 +620,11 @@ fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> Stri
         worst(&c.all_shared),
         worst(chosen)
     );
+}
+
+/// Each servo's held-out error under the three fits, then the chosen fit's shared
+/// and per-servo values with their deviations.
+fn value_lines(s: &mut String, c: &Comparison, chosen: &GroupFit) {
     let _ = writeln!(
         s,
         "held-out position error, mrad RMS: each alone / all shared / chosen (shared: {}; per servo: {})",
@@ -523,6 +644,7 @@ fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> Stri
             f.name, e.heldout_rms_mrad, a.heldout_rms_mrad, f.heldout_rms_mrad
         );
     }
+    let first = &chosen.servos[0].params;
     let sd0 = first.uncertainty.unwrap_or([f64::NAN; N_PARAMS]);
     for &i in &chosen.shared {
         let _ = writeln!(
@@ -541,25 +663,6 @@ fn group_text(id: &GroupIdentification, files: &[PathBuf], seconds: f64) -> Stri
             );
         }
     }
-    let _ = writeln!(
-        s,
-        "not determined by these logs: {}",
-        if chosen.undetermined.is_empty() {
-            "nothing".to_string()
-        } else {
-            chosen.undetermined.join(", ")
-        }
-    );
-    for (f, path) in chosen.servos.iter().zip(files) {
-        let _ = writeln!(
-            s,
-            "wrote {} (--servo-params {}={})",
-            path.display(),
-            f.name.trim_start_matches("id "),
-            path.display()
-        );
-    }
-    s
 }
 
 fn group_fit_json(g: &GroupFit) -> serde_json::Value {

@@ -135,6 +135,57 @@ fn compose(f: &Xf, pos: Vec3, rot: Mat) -> Xf {
 /// An element seen through the `<frame>`s and `<replicate>`s around it: the
 /// element, their placement, the `childclass` in force and the name suffix of
 /// its replica (`""` outside any `<replicate>`).
+/// The joints from a body's parent to it, in order, each with its child link: one
+/// per MuJoCo joint (a link `NAME_JOINT` between two, the body's own after the last)
+/// or one fixed joint when the body has none. `parent` is the parent link and its
+/// offset, `(pos, rot)` the body's placement in the parent body's frame.
+fn joint_chain<'a, 'i>(
+    node: Node<'a, 'i>,
+    name: &str,
+    (parent_link, parent_offset): (String, Vec3),
+    (pos, rot): Xf,
+    joints: Vec<BodyJoint<'a, 'i>>,
+) -> Vec<(Joint, Node<'a, 'i>)> {
+    let mut chain = Vec::new();
+    // Placement of the next joint frame's base in the previous link frame.
+    let mut at = sub(&pos, &parent_offset);
+    let mut r = rot;
+    let mut prev = (parent_link, [0.0; 3]);
+    let n = joints.len();
+    for (k, bj) in joints.into_iter().enumerate() {
+        let child = if k + 1 == n {
+            name.to_string()
+        } else {
+            format!("{name}_{}", bj.joint.name)
+        };
+        let axis = bj.joint.axis_or_default();
+        let mut xyz = add(&at, &mat_vec(&r, &sub(&bj.anchor, &prev.1)));
+        if bj.hinge {
+            r = mat_mul(&r, &axis_angle(&axis, -bj.reference));
+        } else {
+            xyz = add(&xyz, &mat_vec(&r, &axis.map(|a| -bj.reference * a)));
+        }
+        let mut j = bj.joint;
+        j.parent = std::mem::take(&mut prev.0);
+        j.child = child.clone();
+        j.origin = pose(xyz, &r);
+        chain.push((j, bj.node));
+        prev = (child, bj.anchor);
+        (at, r) = ([0.0; 3], IDENTITY);
+    }
+    if n == 0 {
+        let mut j = Joint::new(
+            format!("{name}_fixed"),
+            JointKind::Fixed,
+            prev.0,
+            name.to_string(),
+        );
+        j.origin = pose(at, &r);
+        chain.push((j, node));
+    }
+    chain
+}
+
 type Framed<'a, 'i> = (Node<'a, 'i>, Xf, Option<String>, String);
 
 /// Most elements one body's or the world's `<replicate>`s may expand to.
@@ -423,6 +474,48 @@ impl<'a, 'i> Reader<'a, 'i> {
         root: Node<'a, 'i>,
         sections: &[Node<'a, 'i>],
     ) -> Result<(), DescriptionError> {
+        self.settings(sections)?;
+        let top = self.top_bodies(sections)?;
+        if top.is_empty() {
+            return Err(error_at(root, "no <body> in <worldbody>"));
+        }
+        let (robot_name, props, empties) = self.props(&top)?;
+        let trees: Vec<Framed> = top
+            .iter()
+            .filter(|t| !props.contains(&t.0) && !empties.contains(&t.0))
+            .cloned()
+            .collect();
+        let world = self.needs_world_link(&trees)?;
+        if world {
+            self.robot.order.push(Item::Link(self.robot.links.len()));
+            self.places.links.push(root.range().start);
+            self.robot.links.push(Link::new("world"));
+        }
+        let mut aside = self.trees(top, &props, &empties, world)?;
+        aside = self.drop_empty(aside, &empties, &robot_name)?;
+        let prop_mass: f64 = aside.iter().map(|(_, d)| d.total_mass()).sum();
+        let scale = match self.compiler.total_mass {
+            Some(total) => self.set_total_mass(total, prop_mass),
+            None => 1.0,
+        };
+        for (node, prop) in &aside {
+            self.note_prop(*node, prop, scale, &robot_name);
+        }
+        for &s in sections {
+            self.unmodeled(s);
+            if s.tag_name().name() == "actuator" {
+                self.actuator_limits(s)?;
+            }
+            if !SECTIONS.contains(&s.tag_name().name()) {
+                self.unknown(s);
+            }
+        }
+        validate_placed(doc, &self.robot, &self.places)
+    }
+
+    /// What the bodies depend on, in the order MuJoCo applies it: compiler, option
+    /// and contact pairs, then every default class, then the assets.
+    fn settings(&mut self, sections: &[Node<'a, 'i>]) -> Result<(), DescriptionError> {
         for &s in sections {
             match s.tag_name().name() {
                 "compiler" => self.compiler(s)?,
@@ -442,6 +535,15 @@ impl<'a, 'i> Reader<'a, 'i> {
                 self.assets(s)?;
             }
         }
+        Ok(())
+    }
+
+    /// The top-level bodies of every `<worldbody>`, frames opened; soft bodies and
+    /// unknown elements noted, `<attach>` and `<include>` refused.
+    fn top_bodies(
+        &mut self,
+        sections: &[Node<'a, 'i>],
+    ) -> Result<Vec<Framed<'a, 'i>>, DescriptionError> {
         let mut top: Vec<Framed> = Vec::new();
         for &s in sections {
             if s.tag_name().name() != "worldbody" {
@@ -459,21 +561,18 @@ impl<'a, 'i> Reader<'a, 'i> {
                 }
             }
         }
-        if top.is_empty() {
-            return Err(error_at(root, "no <body> in <worldbody>"));
-        }
-        let (robot_name, props, empties) = self.props(&top)?;
-        let trees: Vec<Framed> = top
-            .iter()
-            .filter(|t| !props.contains(&t.0) && !empties.contains(&t.0))
-            .cloned()
-            .collect();
-        let world = self.needs_world_link(&trees)?;
-        if world {
-            self.robot.order.push(Item::Link(self.robot.links.len()));
-            self.places.links.push(root.range().start);
-            self.robot.links.push(Link::new("world"));
-        }
+        Ok(top)
+    }
+
+    /// Read each top-level tree into the robot; a prop (or an empty body) is read
+    /// aside into a description of its own, returned with its node.
+    fn trees(
+        &mut self,
+        top: Vec<Framed<'a, 'i>>,
+        props: &[Node<'a, 'i>],
+        empties: &[Node<'a, 'i>],
+        world: bool,
+    ) -> Result<Vec<(Node<'a, 'i>, Description)>, DescriptionError> {
         // One top-level tree after the other in file order (unnamed bodies are
         // numbered in that order), each depth first, children in file order, with
         // an explicit stack: deep nesting must not become deep recursion. A prop
@@ -507,25 +606,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 self.places = places;
             }
         }
-        aside = self.drop_empty(aside, &empties, &robot_name)?;
-        let prop_mass: f64 = aside.iter().map(|(_, d)| d.total_mass()).sum();
-        let scale = match self.compiler.total_mass {
-            Some(total) => self.set_total_mass(total, prop_mass),
-            None => 1.0,
-        };
-        for (node, prop) in &aside {
-            self.note_prop(*node, prop, scale, &robot_name);
-        }
-        for &s in sections {
-            self.unmodeled(s);
-            if s.tag_name().name() == "actuator" {
-                self.actuator_limits(s)?;
-            }
-            if !SECTIONS.contains(&s.tag_name().name()) {
-                self.unknown(s);
-            }
-        }
-        validate_placed(doc, &self.robot, &self.places)
+        Ok(aside)
     }
 
     /// The element children of `node` with every `<frame>` and `<replicate>`
@@ -1379,64 +1460,14 @@ impl<'a, 'i> Reader<'a, 'i> {
             self.base_joint_terms(node, cc)?;
         }
         let offset = joints.last().map_or([0.0; 3], |j| j.anchor);
-        for j in joints.iter_mut() {
-            if j.joint.kind == JointKind::Spherical && j.joint.stiffness != 0.0 {
-                // MuJoCo's ball spring acts on the rotation from springref's quaternion.
-                let (line, _) = crate::xml::position(j.node.document(), j.node.range().start);
-                self.robot.unmodeled.push(FileNote {
-                    element: crate::xml::element_path(j.node),
-                    line,
-                    what: format!(
-                        "ball joint stiffness {}: twinloop does not model a ball joint's \
-                         spring (its hinge and slide springs it does)",
-                        j.joint.stiffness
-                    ),
-                });
-                j.joint.stiffness = 0.0;
-            }
-        }
+        self.drop_ball_springs(&mut joints);
 
         let (link, frames) = self.link_contents(node, &name, cc, offset)?;
         // Joints to the parent, in order, each with its child link.
-        let mut chain: Vec<(Joint, Node)> = Vec::new();
-        if let Some((parent_link, parent_offset)) = parent {
-            // Placement of the next joint frame's base in the previous link frame.
-            let mut at = sub(&pos, &parent_offset);
-            let mut r = rot;
-            let mut prev = (parent_link, [0.0; 3]);
-            let n = joints.len();
-            for (k, bj) in joints.into_iter().enumerate() {
-                let child = if k + 1 == n {
-                    name.clone()
-                } else {
-                    format!("{name}_{}", bj.joint.name)
-                };
-                let axis = bj.joint.axis_or_default();
-                let mut xyz = add(&at, &mat_vec(&r, &sub(&bj.anchor, &prev.1)));
-                if bj.hinge {
-                    r = mat_mul(&r, &axis_angle(&axis, -bj.reference));
-                } else {
-                    xyz = add(&xyz, &mat_vec(&r, &axis.map(|a| -bj.reference * a)));
-                }
-                let mut j = bj.joint;
-                j.parent = std::mem::take(&mut prev.0);
-                j.child = child.clone();
-                j.origin = pose(xyz, &r);
-                chain.push((j, bj.node));
-                prev = (child, bj.anchor);
-                (at, r) = ([0.0; 3], IDENTITY);
-            }
-            if n == 0 {
-                let mut j = Joint::new(
-                    format!("{name}_fixed"),
-                    JointKind::Fixed,
-                    prev.0,
-                    name.clone(),
-                );
-                j.origin = pose(at, &r);
-                chain.push((j, node));
-            }
-        }
+        let mut chain: Vec<(Joint, Node)> = match parent {
+            Some(parent) => joint_chain(node, &name, parent, (pos, rot), joints),
+            None => Vec::new(),
+        };
         // Massless links between joints, each before its joint; the body's link
         // before the joint that moves it.
         let last = chain.pop();
@@ -1457,6 +1488,27 @@ impl<'a, 'i> Reader<'a, 'i> {
             self.robot.frames.push(f);
         }
         self.queue_child_bodies(node, &name, offset, cc, pending)
+    }
+
+    /// A ball joint's spring set to zero, with a note: MuJoCo's ball spring acts on
+    /// the rotation from springref's quaternion, which twinloop does not model.
+    fn drop_ball_springs(&mut self, joints: &mut [BodyJoint<'a, 'i>]) {
+        for j in joints.iter_mut() {
+            if j.joint.kind == JointKind::Spherical && j.joint.stiffness != 0.0 {
+                // MuJoCo's ball spring acts on the rotation from springref's quaternion.
+                let (line, _) = crate::xml::position(j.node.document(), j.node.range().start);
+                self.robot.unmodeled.push(FileNote {
+                    element: crate::xml::element_path(j.node),
+                    line,
+                    what: format!(
+                        "ball joint stiffness {}: twinloop does not model a ball joint's \
+                         spring (its hinge and slide springs it does)",
+                        j.joint.stiffness
+                    ),
+                });
+                j.joint.stiffness = 0.0;
+            }
+        }
     }
 
     /// Queue a body's child bodies, `<frame>`s opened (in file order: pushed

@@ -1,8 +1,9 @@
-//! A Python that imports some modules, for the tests that check twinloop's files
-//! with the reference libraries (twinloop-logs' `python_readback`, the CLI's
-//! `cli_logs`): $TWINLOOP_PYTHON, else the repository's .venv, else python3. None
-//! (skip, with a note) when none imports them; with TWINLOOP_REQUIRE_ORACLES=1
-//! (set by .ci/run) that fails the test instead.
+//! For the tests that check twinloop's files with the reference libraries
+//! (twinloop-logs' `python_readback`, the CLI's `cli_logs` and `cli_adapt`, which
+//! include this file): a Python that imports some modules ($TWINLOOP_PYTHON, else
+//! the repository's .venv, else python3; None, skip with a note, when none imports
+//! them; with TWINLOOP_REQUIRE_ORACLES=1, set by .ci/run, that fails the test
+//! instead), and an MCAP read back by `mcap` + `mcap-ros2-support`.
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
@@ -41,4 +42,23 @@ pub fn python_with(modules: &str, test: &str) -> Option<String> {
     );
     eprintln!("SKIPPED {test}: {why}; pip install the versions .ci/run pins to run it");
     None
+}
+
+/// What the reference libraries read from the MCAP at `path`
+/// (tools/oracle/logs_readback.py: `mcap` + `mcap-ros2-support`): topics with their
+/// schemas, counts and decoded rows (f64 as their bits in hex), attachments and
+/// metadata. `py` is a Python that imports `mcap, mcap_ros2` ([`python_with`]).
+pub fn mcap_readback(py: &str, path: &Path) -> serde_json::Value {
+    let out = Command::new(py)
+        .arg(repo().join("tools/oracle/logs_readback.py"))
+        .arg(path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "logs_readback.py {}: {}",
+        path.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
 }
