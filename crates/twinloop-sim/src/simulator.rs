@@ -165,19 +165,20 @@ fn point_force(
     Some((Vector3::new(ft[0], ft[1], fn_), kt, dtan))
 }
 
-/// A point's share of its body's step terms: the force `f` less the part the
-/// implicit stiffness will add back, as a wrench about the world origin, and
+/// A point's share of its body's step terms, added to `acc`: the force `f` less the
+/// part the implicit stiffness will add back, as a wrench about the world origin, and
 /// `A_p^T W A_p` with `W` the implicit weights of its springs and dampers.
+/// `(kt, dtan)` are the tangential stiffness and damping `point_force` kept.
 #[inline]
-fn implicit_point_terms(
+fn add_implicit_point_terms(
+    acc: &mut ContactBody,
     cp: &ContactParams,
     dt: f64,
     x: &Vector3<f64>,
     vp: &Vector3<f64>,
     f: &Vector3<f64>,
-    kt: f64,
-    dtan: f64,
-) -> (nalgebra::Vector6<f64>, nalgebra::Matrix6<f64>) {
+    (kt, dtan): (f64, f64),
+) {
     let g = f - Vector3::new(dt * kt * vp.x, dt * kt * vp.y, dt * cp.stiffness * vp.z);
     let w = Vector3::new(
         dt * dtan + dt * dt * kt,
@@ -185,17 +186,38 @@ fn implicit_point_terms(
         dt * cp.damping + dt * dt * cp.stiffness,
     );
     let m = x.cross(&g);
-    let wrench = nalgebra::Vector6::new(g.x, g.y, g.z, m.x, m.y, m.z);
-    let wm = nalgebra::Matrix3::from_diagonal(&w);
+    acc.wrench += nalgebra::Vector6::new(g.x, g.y, g.z, m.x, m.y, m.z);
+    add_point_matrix(&mut acc.matrix, &w, x);
+}
+
+/// `mat += A^T diag(w) A` with `A = [I, -[x]x]`: the blocks `W`, `-W [x]x`, its
+/// transpose and `-[x]x W [x]x`, with only their non-zero products formed (the
+/// skew matrix's diagonal is zero; the sums keep the matrix products' order, so the
+/// values are those of the dense 3x3 products).
+#[inline]
+fn add_point_matrix(mat: &mut nalgebra::Matrix6<f64>, w: &Vector3<f64>, x: &Vector3<f64>) {
     let sx = twinloop_spatial::skew(x);
-    let wsx = wm * sx;
-    let mut blk = nalgebra::Matrix6::zeros();
-    blk.fixed_view_mut::<3, 3>(0, 0).copy_from(&wm);
-    blk.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-wsx));
-    blk.fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-wsx.transpose()));
-    blk.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-(sx * wsx)));
-    (wrench, blk)
+    for i in 0..3 {
+        mat[(i, i)] += w[i];
+        for j in 0..3 {
+            if i != j {
+                let wsx = w[i] * sx[(i, j)];
+                mat[(i, 3 + j)] += -wsx;
+                mat[(3 + j, i)] += -wsx;
+            }
+        }
+    }
+    for i in 0..3 {
+        for j in 0..3 {
+            let mut sum = 0.0;
+            for k in 0..3 {
+                if k != i && k != j {
+                    sum += sx[(i, k)] * (w[k] * sx[(k, j)]);
+                }
+            }
+            mat[(3 + i, 3 + j)] += -sum;
+        }
+    }
 }
 
 /// A robot simulated over the reduced-coordinate dynamics.
@@ -830,9 +852,7 @@ impl Simulator {
                 continue;
             };
             state.force = f;
-            let (wrench, matrix) = implicit_point_terms(&cp, dt, &x, &vp, &f, kt, dtan);
-            acc.wrench += wrench;
-            acc.matrix += matrix;
+            add_implicit_point_terms(acc, &cp, dt, &x, &vp, &f, (kt, dtan));
         }
     }
 
