@@ -81,6 +81,30 @@ def stand(model, data, settle_s):
         mujoco.mj_step(model, data)
 
 
+class Trajectory:
+    """Joint goals over time from a CSV (`t`, `q:<joint>` in rad; twinloop's
+    `--trajectory` format) as position-actuator controls, linearly interpolated as
+    twinloop interpolates them; joints without a column hold 0 (the standing goal)."""
+
+    def __init__(self, model, path):
+        with open(path) as f:
+            header = f.readline().strip().split(",")
+        table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        self.t = table[:, header.index("t")]
+        self.nu = model.nu
+        self.cols = []
+        for a in range(model.nu):
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, model.actuator_trnid[a, 0])
+            if f"q:{name}" in header:
+                self.cols.append((a, table[:, header.index(f"q:{name}")]))
+
+    def ctrl(self, times):
+        out = np.zeros((len(times), self.nu))
+        for a, q in self.cols:
+            out[:, a] = np.interp(times, self.t, q)
+        return out
+
+
 def pitch_of(xmat):
     """Forward pitch (rad) of a body's x axis from its world rotation matrix."""
     r = np.asarray(xmat).reshape(3, 3)
@@ -188,6 +212,7 @@ def main():
     ap.add_argument("--steps", type=int, default=2000)
     ap.add_argument("--rounds", type=int, default=11)
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--trajectory", help="joint goals CSV the timed steps follow (the walking case)")
     ap.add_argument("--tipover", action="store_true", help="also the forward tip-over (model's own timestep)")
     ap.add_argument("--slow-ramp", type=float, default=0.05, help="deg/s of the tip-over's final approach")
     args = ap.parse_args()
@@ -199,12 +224,19 @@ def main():
     state_size = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)
     state = np.empty(state_size)
     mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    goals = Trajectory(model, args.trajectory) if args.trajectory else None
     ctrl = np.zeros((1, args.steps, model.nu))
     samples = []
-    for _ in range(args.rounds):
+    for r in range(args.rounds):
+        if goals is not None:
+            # The walk's clock starts at the first timed step; each round goes on from
+            # the last one's state, as twinloop's rounds do.
+            ctrl[0] = goals.ctrl(np.arange(r * args.steps, (r + 1) * args.steps) * args.dt)
         t = time.perf_counter()
-        rollout.rollout(model, data, state[None, :], ctrl)
+        states, _ = rollout.rollout(model, data, state[None, :], ctrl)
         samples.append((time.perf_counter() - t) * 1e6 / args.steps)
+        if goals is not None:
+            state = states[0, -1].copy()
     us = statistics.median(samples)
     out = {"robot": os.path.relpath(args.model, ROOT), "dt": args.dt, "nv": int(model.nv),
            "ncon_at_rest": int(data.ncon), "us_per_step": us, "steps_per_second": 1e6 / us,

@@ -56,14 +56,14 @@ pub struct SimulateArgs {
 /// The servo for joint `i` under a choice (`Auto`: the built-in robot's own, or one
 /// derived from the description's limits).
 /// Goal trajectory: times and, per joint, goal positions (NaN: hold).
-struct Goals {
+pub(crate) struct Goals {
     t: Vec<f64>,
     cols: Vec<Option<usize>>,
     table: Table,
 }
 
 impl Goals {
-    fn load(path: &Path, model: &twinloop_dynamics::Model) -> Result<Goals, CliError> {
+    pub(crate) fn load(path: &Path, model: &twinloop_dynamics::Model) -> Result<Goals, CliError> {
         let joints = &model.joint_names;
         let table = read_trajectory(path, model)?;
         StateColumns::check_known(&table, Quantity::Q, &model.q_names())?;
@@ -104,7 +104,7 @@ impl Goals {
         self.t.last().copied().unwrap_or(0.0)
     }
 
-    fn at(&self, time: f64, hold: &[f64], out: &mut [f64]) {
+    pub(crate) fn at(&self, time: f64, hold: &[f64], out: &mut [f64]) {
         let k = self.t.partition_point(|&x| x <= time);
         let (i0, i1, w) = if k == 0 {
             (0, 0, 0.0)

@@ -4,6 +4,7 @@ use crate::actuator::{Actuator, Drive};
 use crate::contact::{ContactParams, ContactPoint, ContactState, contact_points};
 use crate::ltdl;
 use crate::sensors::{self, SensedState, SensorState};
+use ltdl::TreeMatrix;
 use nalgebra::{DMatrix, Vector3};
 use std::fmt;
 use twinloop_description::{Description, DescriptionError};
@@ -164,19 +165,20 @@ fn point_force(
     Some((Vector3::new(ft[0], ft[1], fn_), kt, dtan))
 }
 
-/// A point's share of its body's step terms: the force `f` less the part the
-/// implicit stiffness will add back, as a wrench about the world origin, and
+/// A point's share of its body's step terms, added to `acc`: the force `f` less the
+/// part the implicit stiffness will add back, as a wrench about the world origin, and
 /// `A_p^T W A_p` with `W` the implicit weights of its springs and dampers.
+/// `(kt, dtan)` are the tangential stiffness and damping `point_force` kept.
 #[inline]
-fn implicit_point_terms(
+fn add_implicit_point_terms(
+    acc: &mut ContactBody,
     cp: &ContactParams,
     dt: f64,
     x: &Vector3<f64>,
     vp: &Vector3<f64>,
     f: &Vector3<f64>,
-    kt: f64,
-    dtan: f64,
-) -> (nalgebra::Vector6<f64>, nalgebra::Matrix6<f64>) {
+    (kt, dtan): (f64, f64),
+) {
     let g = f - Vector3::new(dt * kt * vp.x, dt * kt * vp.y, dt * cp.stiffness * vp.z);
     let w = Vector3::new(
         dt * dtan + dt * dt * kt,
@@ -184,17 +186,38 @@ fn implicit_point_terms(
         dt * cp.damping + dt * dt * cp.stiffness,
     );
     let m = x.cross(&g);
-    let wrench = nalgebra::Vector6::new(g.x, g.y, g.z, m.x, m.y, m.z);
-    let wm = nalgebra::Matrix3::from_diagonal(&w);
+    acc.wrench += nalgebra::Vector6::new(g.x, g.y, g.z, m.x, m.y, m.z);
+    add_point_matrix(&mut acc.matrix, &w, x);
+}
+
+/// `mat += A^T diag(w) A` with `A = [I, -[x]x]`: the blocks `W`, `-W [x]x`, its
+/// transpose and `-[x]x W [x]x`, with only their non-zero products formed (the
+/// skew matrix's diagonal is zero; the sums keep the matrix products' order, so the
+/// values are those of the dense 3x3 products).
+#[inline]
+fn add_point_matrix(mat: &mut nalgebra::Matrix6<f64>, w: &Vector3<f64>, x: &Vector3<f64>) {
     let sx = twinloop_spatial::skew(x);
-    let wsx = wm * sx;
-    let mut blk = nalgebra::Matrix6::zeros();
-    blk.fixed_view_mut::<3, 3>(0, 0).copy_from(&wm);
-    blk.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-wsx));
-    blk.fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-wsx.transpose()));
-    blk.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-(sx * wsx)));
-    (wrench, blk)
+    for i in 0..3 {
+        mat[(i, i)] += w[i];
+        for j in 0..3 {
+            if i != j {
+                let wsx = w[i] * sx[(i, j)];
+                mat[(i, 3 + j)] += -wsx;
+                mat[(3 + j, i)] += -wsx;
+            }
+        }
+    }
+    for i in 0..3 {
+        for j in 0..3 {
+            let mut sum = 0.0;
+            for k in 0..3 {
+                if k != i && k != j {
+                    sum += sx[(i, k)] * (w[k] * sx[(k, j)]);
+                }
+            }
+            mat[(3 + i, 3 + j)] += -sum;
+        }
+    }
 }
 
 /// A robot simulated over the reduced-coordinate dynamics.
@@ -235,10 +258,10 @@ pub struct Simulator {
     pub(crate) contacts: Vec<ContactState>,
     /// Links with mesh collisions only (no contact points).
     pub mesh_only_links: Vec<String>,
-    dof_parent: Vec<usize>,
     /// Per body (index nbodies = the base): its DOFs and all ancestors', deepest first.
     chains: Vec<Vec<usize>>,
-    h: DMatrix<f64>,
+    /// The step matrix, then its factors (the tree's entries only).
+    h: TreeMatrix,
     rhs: Vec<f64>,
     q_next: Vec<f64>,
     contact_bodies: Vec<ContactBody>,
@@ -360,9 +383,8 @@ impl Simulator {
             contacts: vec![ContactState::default(); points.len()],
             points,
             mesh_only_links,
-            dof_parent,
             chains,
-            h: DMatrix::zeros(model.nv, model.nv),
+            h: TreeMatrix::new(&dof_parent),
             rhs: vec![0.0; model.nv],
             contact_bodies: vec![ContactBody::default(); nb + 1],
             js: vec![nalgebra::Vector6::zeros(); max_chain],
@@ -625,7 +647,7 @@ impl Simulator {
         let iv = self.model.idx_v[i];
         self.rhs.iter_mut().for_each(|x| *x = 0.0);
         self.rhs[iv] = 1.0;
-        ltdl::solve(&self.h, &self.dof_parent, &mut self.rhs);
+        self.h.solve(&mut self.rhs);
         let x = self.rhs[iv];
         let v = self.v[iv];
         if !(x > 0.0 && x.is_finite()) || jm <= 0.0 {
@@ -664,7 +686,7 @@ impl Simulator {
         self.applied[i] = 0.0;
         for dof in self.model.idx_v[i]..self.model.idx_v[i] + 3 {
             self.rhs[dof] -= c * self.v[dof];
-            self.h[(dof, dof)] += dt * c;
+            self.h.row_mut(dof)[0] += dt * c;
         }
     }
 
@@ -686,14 +708,8 @@ impl Simulator {
         compute_joint_jacobians(&self.model, &mut self.data, &self.q);
         self.sensors.observe(&self.model, &self.data, &self.v);
         crba(&self.model, &mut self.data, &self.q);
-        for i in 0..nv {
-            self.h[(i, i)] = self.data.mass_matrix[(i, i)];
-            let mut j = self.dof_parent[i];
-            while j != ltdl::NONE {
-                self.h[(i, j)] = self.data.mass_matrix[(j, i)];
-                j = self.dof_parent[j];
-            }
-        }
+        // Its upper triangle, as crba fills it.
+        self.h.set_from_upper(&self.data.mass_matrix);
         let nle = nonlinear_effects(&self.model, &mut self.data, &self.q, &self.v);
         for i in 0..nv {
             self.rhs[i] = -nle[i];
@@ -709,20 +725,20 @@ impl Simulator {
             self.rhs[dof] += d.tau - dt * d.k * self.v[dof];
             // The armature is already on the diagonal: crba adds it; an engaged
             // motor side behind a backlash joins it.
-            self.h[(dof, dof)] += dt * d.d + dt * dt * d.k + self.engaged_gear(i).0;
+            self.h.row_mut(dof)[0] += dt * d.d + dt * dt * d.k + self.engaged_gear(i).0;
         }
         // The base's damping, implicit like a joint's (the armature is in crba's M).
         if self.model.is_floating() {
             for dof in 0..6 {
                 self.rhs[dof] -= self.base_damping * self.v[dof];
-                self.h[(dof, dof)] += dt * self.base_damping;
+                self.h.row_mut(dof)[0] += dt * self.base_damping;
             }
         }
         if self.config.ground {
             self.add_contacts(dt);
         }
         // Solve for the velocity change.
-        if let Err(k) = ltdl::factor(&mut self.h, &self.dof_parent) {
+        if let Err(k) = self.h.factor() {
             return Err(SimError::Diverged {
                 time: self.time,
                 message: self.singular_step_message(k),
@@ -731,7 +747,7 @@ impl Simulator {
         for x in self.rhs.iter_mut() {
             *x *= dt;
         }
-        ltdl::solve(&self.h, &self.dof_parent, &mut self.rhs);
+        self.h.solve(&mut self.rhs);
         for i in 0..nv {
             self.v[i] += self.rhs[i];
         }
@@ -836,9 +852,7 @@ impl Simulator {
                 continue;
             };
             state.force = f;
-            let (wrench, matrix) = implicit_point_terms(&cp, dt, &x, &vp, &f, kt, dtan);
-            acc.wrench += wrench;
-            acc.matrix += matrix;
+            add_implicit_point_terms(acc, &cp, dt, &x, &vp, &f, (kt, dtan));
         }
     }
 
@@ -846,7 +860,6 @@ impl Simulator {
     /// `rhs[a] += j_a . wrench` over the DOFs of its chain.
     fn add_contact_terms(&mut self) {
         let nb = self.model.nbodies;
-        let n = self.h.nrows();
         for bi in 0..=nb {
             if !self.contact_bodies[bi].active {
                 continue;
@@ -861,12 +874,13 @@ impl Simulator {
                 self.su[c] = acc.matrix * j;
                 self.rhs[dof] += j.dot(&acc.wrench);
             }
-            let h = self.h.as_mut_slice();
             for (a, &da) in chain.iter().enumerate() {
                 let u = self.su[a];
-                for (b, &db) in chain.iter().enumerate().skip(a) {
-                    // db is an ancestor of da (or da): the lower triangle, column-major.
-                    h[db * n + da] += self.js[b].dot(&u);
+                // Row da's pattern is da and its ancestors: the rest of the chain.
+                debug_assert_eq!(self.h.pattern(da), &chain[a..]);
+                let row = self.h.row_mut(da);
+                for (x, j) in row.iter_mut().zip(&self.js[a..chain.len()]) {
+                    *x += j.dot(&u);
                 }
             }
         }

@@ -50,6 +50,9 @@ pub enum BenchCommand {
     ///
     /// Example:
     ///   twinloop bench sim --robot models/op3/mjcf/op3.xml --dt 0.002 --json -
+    ///   twinloop bench sim --robot models/op3/mjcf/op3.xml --trajectory op3_walk.csv
+    ///
+    /// With --trajectory the timed steps follow its goals from 0 s (the walking case).
     ///
     /// Output: us per step, steps per second, the robot's nv and contact points.
     #[command(verbatim_doc_comment)]
