@@ -821,7 +821,13 @@ pub fn com_resolution(per_angle: &[Vector3<f64>; 4]) -> ComResolution {
 }
 
 /// What is and is not well determined, in words.
-fn notes_of(res: f64, sigma: Vector3<f64>, fit: Option<&FallAngleFitSummary>) -> Vec<String> {
+fn notes_of(
+    res: f64,
+    sigma: Vector3<f64>,
+    bound: &ComResolution,
+    fit: Option<&FallAngleFitSummary>,
+) -> Vec<String> {
+    let b = bound.axes_m.map(|v| v * 1e3);
     let mut notes = vec![
         "x and z come from the forward/backward pair alone, y from the left/right pair".into(),
         format!(
@@ -829,6 +835,15 @@ fn notes_of(res: f64, sigma: Vector3<f64>, fit: Option<&FallAngleFitSummary>) ->
             sigma.x * 1e3,
             sigma.y * 1e3,
             sigma.z * 1e3
+        ),
+        format!(
+            "the CoM's resolution: with every angle anywhere within {res:.3} deg of its \
+             reading the CoM moves up to x {:.2} mm, y {:.2} mm, z {:.2} mm, {:.2} mm at \
+             worst; the angles cannot tell apart CoMs closer than that",
+            b[0],
+            b[1],
+            b[2],
+            bound.worst_m * 1e3
         ),
     ];
     let imax = if sigma.x >= sigma.y && sigma.x >= sigma.z {
@@ -894,6 +909,7 @@ fn report_of(
 ) -> Result<AdaptReport, IdentError> {
     let per_angle = com_per_angle(prior, m, placed)?;
     let sigma = com_sigma(&per_angle);
+    let resolution = com_resolution(&per_angle);
     let dirs = Direction::ALL.map(|d| tip.direction(d));
     Ok(AdaptReport {
         robot: prior.name.clone(),
@@ -905,7 +921,6 @@ fn report_of(
         measured_com: v3(placed.cm),
         measured_com_sigma: v3(sigma),
         angle_resolution_deg: m.res,
-        com_resolution: Some(com_resolution(&per_angle)),
         mode: m.mode.into(),
         family_moment: v3((placed.cm - m.c0) * m.m0),
         added: None,
@@ -919,7 +934,8 @@ fn report_of(
         protocol_bias_deg: opts.protocol_bias_deg,
         lean: Vec::new(),
         outline: m.pf.outline(),
-        notes: notes_of(m.res, sigma, placed.fit.as_ref()),
+        notes: notes_of(m.res, sigma, &resolution, placed.fit.as_ref()),
+        com_resolution: Some(resolution),
         checks: Vec::new(),
         files: vec![],
     })
