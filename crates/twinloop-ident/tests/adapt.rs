@@ -345,12 +345,11 @@ fn com_resolution_is_the_corners_of_the_angles_box() {
             d.measured_deg += if signs >> k & 1 == 1 { res } else { -res };
         }
         let c = adapt(&prior(), &s, &opts).unwrap().report.measured_com;
-        for k in 0..3 {
-            let moved = (c[k] - centre.measured_com[k]).abs();
+        for (k, (got, from)) in c.iter().zip(centre.measured_com).enumerate() {
+            let moved = (got - from).abs();
             assert!(
                 moved <= 1.05 * bound.axes_m[k],
-                "axis {k}: {moved} > {:?}",
-                bound
+                "axis {k}: {moved} > {bound:?}"
             );
         }
         worst = worst.max(dist(c, centre.measured_com));
