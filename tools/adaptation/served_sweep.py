@@ -194,6 +194,13 @@ def adapt(tw, d, row, total):
     com = a.get("adapted_com") or a.get("measured_com")
     row["com_error_mm"] = 1e3 * sum((com[i] - true_com[i]) ** 2 for i in range(3)) ** 0.5
     row["measured_deg"] = a["measured_deg"]
+    res = a.get("com_resolution")
+    if res:
+        # What the encoders cannot tell apart (every angle within its resolution).
+        row["com_resolution_mm"] = [1e3 * v for v in res["axes_m"]]
+        row["com_resolution_worst_mm"] = 1e3 * res["worst_m"]
+    row["angle_resolution_deg"] = a.get("angle_resolution_deg")
+    row["place"] = (a.get("added") or {}).get("host")
     row["failed_checks"] = [c["name"] for c in a.get("checks", []) if not c.get("passed", True)]
     row["floor"] = next((n for n in a.get("notes", []) if "floor sinking" in n), None)
     return row
@@ -231,6 +238,7 @@ def main():
                       f"{row['tipover_s']:.0f} s load {row['load']:.1f}", flush=True)
                 continue
             print(f"{a.robot} seed {row['seed']:>2} {row['add_mass']:<40} CoM {row['com_error_mm']:5.2f} mm "
+                  f"(resolution {row.get('com_resolution_worst_mm', float('nan')):.2f} mm) "
                   f"adapt exit {row['adapt_exit']} {','.join(row['failed_checks'])} "
                   f"tipover {row['tipover_s']:.0f} s adapt {row['adapt_s']:.0f} s load {row['load']:.1f}",
                   flush=True)

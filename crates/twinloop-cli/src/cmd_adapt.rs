@@ -74,9 +74,11 @@ pub struct AdaptArgs {
     /// Merge the mass into the host link's inertial instead of a fixed `added_mass` link.
     #[arg(long)]
     pub merge: bool,
-    /// Resolution of the measured angles, deg.
-    #[arg(long, default_value_t = 0.05, value_name = "DEG", value_parser = crate::common::positive)]
-    pub resolution: f64,
+    /// Resolution of the measured angles, deg (default: for a tip-over measured over a
+    /// bus, half a count of its mapping's ankle servo and the creep's step in one
+    /// host cycle, 0.15 deg on RX and 0.05 on MX and X; else 0.05).
+    #[arg(long, value_name = "DEG", value_parser = crate::common::positive)]
+    pub resolution: Option<f64>,
     /// The adapted URDF to write.
     #[arg(long, value_name = "ADAPTED.urdf")]
     pub out: Option<PathBuf>,
@@ -198,6 +200,17 @@ pub struct TrainArgs {
     pub report: Option<PathBuf>,
 }
 
+/// The measured angles' resolution, deg: `--resolution`; else, for a tip-over over
+/// a bus, its mapping's ([`twinloop_loop::bus_plan::protocol_resolution_deg`]); else
+/// 0.05.
+fn resolution_of(given: Option<f64>, tip: &StudyReport) -> Result<f64, CliError> {
+    match (given, &tip.protocol) {
+        (Some(r), _) => Ok(r),
+        (None, Some(p)) => Ok(twinloop_loop::bus_plan::protocol_resolution_deg(p)?),
+        (None, None) => Ok(0.05),
+    }
+}
+
 fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
     let text = twinloop_io::input::read_to_string(path)
         .map_err(|e| CliError::io(path, e).context("--tipover"))?;
@@ -315,7 +328,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
         total_mass: a.total_mass,
         host: a.host.clone(),
         merge: a.merge,
-        angle_resolution_deg: Some(a.resolution),
+        angle_resolution_deg: Some(resolution_of(a.resolution, &tip)?),
         protocol_bias_deg: None,
     };
     use twinloop_loop::adapt_to_protocol;
@@ -507,6 +520,15 @@ fn summary_text(r: &twinloop_ident::adapt::AdaptReport, out: Option<&Path>) -> S
         mm(r.measured_com),
         mm(r.measured_com_sigma)
     );
+    if let Some(c) = &r.com_resolution {
+        t += &format!(
+            "CoM resolution {} ({:.1} mm at worst): how far the CoM moves with every angle \
+             within {:.3} deg of its reading\n",
+            mm(c.axes_m),
+            c.worst_m * 1e3,
+            r.angle_resolution_deg
+        );
+    }
     match &r.added {
         Some(m) => {
             t += &format!(

@@ -72,6 +72,16 @@ pub struct AddedMass {
     pub moved_into_outline: Option<f64>,
 }
 
+/// The CoM's resolution: how far it can move with every measured angle within its
+/// reading's resolution ([`com_resolution`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ComResolution {
+    /// Per standing axis (x, y, z), m.
+    pub axes_m: [f64; 3],
+    /// The longest displacement (every angle at a corner of its range), m.
+    pub worst_m: f64,
+}
+
 /// The LIPM and three-mass LIPM of a model.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ReducedSummary {
@@ -108,6 +118,11 @@ pub struct AdaptReport {
     /// resolution by finite differences.
     pub measured_com_sigma: [f64; 3],
     pub angle_resolution_deg: f64,
+    /// How far the CoM can move while every angle stays within
+    /// `angle_resolution_deg` of its reading ([`com_resolution`]): what the encoders
+    /// cannot tell apart (absent in reports from before it was kept).
+    #[serde(default)]
+    pub com_resolution: Option<ComResolution>,
     /// "total-mass", "where" or "family".
     pub mode: String,
     /// The family `m_a (p - c_meas) = M0 (c_meas - c0)`: its right side, kg m.
@@ -743,17 +758,17 @@ fn refine_by_fall_angles(
     Ok(())
 }
 
-/// The measured CoM's one-sigma uncertainty per axis: each angle moved by the
-/// resolution, through the exact method.
-fn com_sigma(
+/// How far the measured CoM moves per angle moved by the resolution, through the
+/// exact method (forward, backward, left, right; central differences), m.
+fn com_per_angle(
     prior: &Description,
     m: &Measured,
     placed: &Placed,
-) -> Result<Vector3<f64>, IdentError> {
+) -> Result<[Vector3<f64>; 4], IdentError> {
     let (_, feet) = measured_com(&m.angles, &placed.frame_for_feet, prior, &m.foot)?;
     let r = m.res.to_radians();
-    let mut var = Vector3::zeros();
-    for k in 0..4 {
+    let mut out = [Vector3::zeros(); 4];
+    for (k, dc) in out.iter_mut().enumerate() {
         let mut a = m.angles;
         let mut b = m.angles;
         let (pa, pb) = match k {
@@ -766,14 +781,53 @@ fn com_sigma(
         *pb -= r;
         let ea = exact_method(&a, &feet, &m.foot).map_err(|e| e.to_string())?;
         let eb = exact_method(&b, &feet, &m.foot).map_err(|e| e.to_string())?;
-        let dc = (Vector3::from(ea.com) - Vector3::from(eb.com)) * 0.5;
-        var += dc.component_mul(&dc);
+        *dc = (Vector3::from(ea.com) - Vector3::from(eb.com)) * 0.5;
     }
-    Ok(var.map(f64::sqrt))
+    Ok(out)
+}
+
+/// The measured CoM's one-sigma uncertainty per axis: each angle moved by the
+/// resolution, independently.
+fn com_sigma(per_angle: &[Vector3<f64>; 4]) -> Vector3<f64> {
+    per_angle
+        .iter()
+        .fold(Vector3::zeros(), |v: Vector3<f64>, dc| {
+            v + dc.component_mul(dc)
+        })
+        .map(f64::sqrt)
+}
+
+/// How far the CoM can move while each of the four angles stays within its
+/// resolution (a reading's quantisation: half an ankle count, and the protocol's
+/// step), on the exact method's map linearised at the measured angles: per axis the
+/// sum of the four angles' shares (the worst corner of the angles' box, axis by
+/// axis), and the longest of the sixteen corners' displacements, m.
+pub fn com_resolution(per_angle: &[Vector3<f64>; 4]) -> ComResolution {
+    let axes = per_angle
+        .iter()
+        .fold(Vector3::zeros(), |v: Vector3<f64>, dc| v + dc.abs());
+    let worst = (0..16_u32)
+        .map(|signs| {
+            (0..4)
+                .map(|k| per_angle[k] * if signs >> k & 1 == 1 { 1.0 } else { -1.0 })
+                .sum::<Vector3<f64>>()
+                .norm()
+        })
+        .fold(0.0_f64, f64::max);
+    ComResolution {
+        axes_m: v3(axes),
+        worst_m: worst,
+    }
 }
 
 /// What is and is not well determined, in words.
-fn notes_of(res: f64, sigma: Vector3<f64>, fit: Option<&FallAngleFitSummary>) -> Vec<String> {
+fn notes_of(
+    res: f64,
+    sigma: Vector3<f64>,
+    bound: &ComResolution,
+    fit: Option<&FallAngleFitSummary>,
+) -> Vec<String> {
+    let b = bound.axes_m.map(|v| v * 1e3);
     let mut notes = vec![
         "x and z come from the forward/backward pair alone, y from the left/right pair".into(),
         format!(
@@ -781,6 +835,15 @@ fn notes_of(res: f64, sigma: Vector3<f64>, fit: Option<&FallAngleFitSummary>) ->
             sigma.x * 1e3,
             sigma.y * 1e3,
             sigma.z * 1e3
+        ),
+        format!(
+            "the CoM's resolution: with every angle anywhere within {res:.3} deg of its \
+             reading the CoM moves up to x {:.2} mm, y {:.2} mm, z {:.2} mm, {:.2} mm at \
+             worst; the angles cannot tell apart CoMs closer than that",
+            b[0],
+            b[1],
+            b[2],
+            bound.worst_m * 1e3
         ),
     ];
     let imax = if sigma.x >= sigma.y && sigma.x >= sigma.z {
@@ -844,7 +907,9 @@ fn report_of(
     opts: &AdaptOptions,
     placed: &Placed,
 ) -> Result<AdaptReport, IdentError> {
-    let sigma = com_sigma(prior, m, placed)?;
+    let per_angle = com_per_angle(prior, m, placed)?;
+    let sigma = com_sigma(&per_angle);
+    let resolution = com_resolution(&per_angle);
     let dirs = Direction::ALL.map(|d| tip.direction(d));
     Ok(AdaptReport {
         robot: prior.name.clone(),
@@ -869,7 +934,8 @@ fn report_of(
         protocol_bias_deg: opts.protocol_bias_deg,
         lean: Vec::new(),
         outline: m.pf.outline(),
-        notes: notes_of(m.res, sigma, placed.fit.as_ref()),
+        notes: notes_of(m.res, sigma, &resolution, placed.fit.as_ref()),
+        com_resolution: Some(resolution),
         checks: Vec::new(),
         files: vec![],
     })

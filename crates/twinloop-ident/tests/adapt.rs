@@ -322,3 +322,41 @@ fn the_links_below_the_ankles_are_the_ankle_crosses_and_feet() {
         );
     }
 }
+
+/// The CoM's resolution (`com_resolution`, the exact method linearised at the
+/// measured angles) against the exact method itself at the sixteen corners of the
+/// angles' box (each angle moved by +-the resolution): the longest displacement
+/// within 5 % of the linearised one, and none longer per axis than its bound by 5 %.
+#[test]
+fn com_resolution_is_the_corners_of_the_angles_box() {
+    let (_, study) = truth();
+    let res = 0.15; // RX's half count and the creep's step, deg
+    let opts = AdaptOptions {
+        angle_resolution_deg: Some(res),
+        ..Default::default()
+    };
+    let centre = adapt(&prior(), study, &opts).unwrap().report;
+    let bound = centre.com_resolution.unwrap();
+    let mut worst = 0.0_f64;
+    for signs in 0..16_u32 {
+        let mut s = study.clone();
+        let dirs = [&mut s.forward, &mut s.backward, &mut s.left, &mut s.right];
+        for (k, d) in dirs.into_iter().enumerate() {
+            d.measured_deg += if signs >> k & 1 == 1 { res } else { -res };
+        }
+        let c = adapt(&prior(), &s, &opts).unwrap().report.measured_com;
+        for (k, (got, from)) in c.iter().zip(centre.measured_com).enumerate() {
+            let moved = (got - from).abs();
+            assert!(
+                moved <= 1.05 * bound.axes_m[k],
+                "axis {k}: {moved} > {bound:?}"
+            );
+        }
+        worst = worst.max(dist(c, centre.measured_com));
+    }
+    assert!(
+        (worst - bound.worst_m).abs() <= 0.05 * bound.worst_m,
+        "corners {worst} m, linearised {} m",
+        bound.worst_m
+    );
+}

@@ -2,11 +2,13 @@
 //! tipover --port`, `adapt --port`, `demo`) and Python (`tipover(port=...)`) fill from
 //! their arguments, and the protocol passes replay; [`crate::tipover_bus`] runs it.
 
+use crate::LoopError;
 use crate::port::BusPort;
 use std::path::PathBuf;
 use twinloop_experiments::tipover::Direction;
 use twinloop_ident::tipover_bus::{ANKLE_SLOPE, ONSET_AVERAGE_S};
 use twinloop_ident::tipover_study::BusProtocol;
+use twinloop_link::RobotMapping;
 
 /// How the experiment runs over the bus.
 #[derive(Debug, Clone)]
@@ -126,4 +128,44 @@ impl BusPlan {
             soft_servos: self.soft_servos,
         }
     }
+}
+
+/// Half a count of the left ankle pitch's servo, deg (the tip is read on both ankles,
+/// averaged; every built-in's ankles are one model): RX 0.29 deg a count (EM-RX28
+/// Goal Position: 300 deg / 1024), MX and X 0.088 deg (EM-MX28, EM-XM430: 360 deg /
+/// 4096).
+pub fn ankle_half_count_deg(mapping: &RobotMapping) -> Result<f64, LoopError> {
+    let ankle = mapping
+        .role("left_ankle_pitch")
+        .and_then(|joint| mapping.joints.iter().find(|j| j.name == joint))
+        .ok_or_else(|| {
+            LoopError::new(format!(
+                "{}: no [[joint]] for roles.left_ankle_pitch",
+                mapping.source
+            ))
+        })?;
+    Ok(0.5 * ankle.model.resolution().to_degrees())
+}
+
+/// The measured fall angles' resolution over the bus, deg: the reading's
+/// quantisation (half an ankle count) and how far the protocol's creep moves the lean
+/// in one host cycle (the onset is known to a cycle; 0.004 deg at the served
+/// protocol's 0.05 deg/s and 80 ms of robot time).
+pub fn angle_resolution_deg(
+    mapping: &RobotMapping,
+    protocol: &BusProtocol,
+) -> Result<f64, LoopError> {
+    Ok(ankle_half_count_deg(mapping)? + protocol.slow_ramp_deg_per_s * protocol.cycle_s)
+}
+
+/// [`angle_resolution_deg`] for a tip-over measured by `protocol`, its mapping read
+/// from `protocol.map`.
+pub fn protocol_resolution_deg(protocol: &BusProtocol) -> Result<f64, LoopError> {
+    let mapping = RobotMapping::resolve(&protocol.map).map_err(|e| {
+        LoopError::new(format!(
+            "the tip-over's protocol.map {:?}: {e} (give --resolution DEG)",
+            protocol.map
+        ))
+    })?;
+    angle_resolution_deg(&mapping, protocol)
 }

@@ -234,23 +234,6 @@ pub fn spec(s: &DemoSettings) -> String {
     format!("builtin:{}", s.robot)
 }
 
-/// The measured fall angles' resolution, deg: half a count of the left ankle pitch's
-/// servo (the tip is read on both ankles, averaged; every built-in's ankles are one
-/// model): RX 0.29 deg (EM-RX28 Goal Position: 300 deg / 1024), MX and X 0.088 deg
-/// (EM-MX28, EM-XM430: 360 deg / 4096).
-fn ankle_resolution_deg(mapping: &RobotMapping) -> Result<f64, LoopError> {
-    let ankle = mapping
-        .role("left_ankle_pitch")
-        .and_then(|joint| mapping.joints.iter().find(|j| j.name == joint))
-        .ok_or_else(|| {
-            LoopError::new(format!(
-                "{}: no [[joint]] for roles.left_ankle_pitch",
-                mapping.source
-            ))
-        })?;
-    Ok(0.5 * ankle.model.resolution().to_degrees())
-}
-
 /// The bus as the demo's host opens it: a reply may wait 500 ms beyond its wire time
 /// (a real adapter needs 10; the simulated robot shares the machine with the host, and
 /// on a loaded two-core machine its threads wait their turn: at load 12, 50 ms lost
@@ -394,7 +377,10 @@ pub fn adapt_measured(
     let opts = AdaptOptions {
         total_mass: Some(m.scale),
         host: s.tell_where.then(|| m.truth_changes[0].link.clone()),
-        angle_resolution_deg: Some(ankle_resolution_deg(&m.mapping)?),
+        angle_resolution_deg: Some(match &m.study.protocol {
+            Some(p) => crate::bus_plan::angle_resolution_deg(&m.mapping, p)?,
+            None => crate::bus_plan::ankle_half_count_deg(&m.mapping)?,
+        }),
         ..Default::default()
     };
     // The check's floor and servos (datasheet): what the adapting side knows.

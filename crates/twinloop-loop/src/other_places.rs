@@ -41,9 +41,23 @@ use twinloop_virtual::VirtualRobotOptions;
 /// Two places whose adapted CoMs lie this close are one answer, m: below the 3 mm
 /// issue 27 asks of the adapted CoM.
 pub const AGREE_M: f64 = 0.002;
-/// How much better (root mean square over the four onsets, deg) one place's replay
-/// must roll the feet as the robot did than every place that disagrees with it.
+/// How much better (median over the four onsets, deg) one place's replay must roll
+/// the feet as the robot did than every place that disagrees with it, at least
+/// ([`roll_margin_deg`] scales it with the encoders).
 pub const ROLL_MARGIN_DEG: f64 = 0.1;
+
+/// The margin by which one place's roll must beat another's, deg: [`ROLL_MARGIN_DEG`],
+/// and at least twice the angles' resolution. The robot's roll is its IMU's tilt less
+/// the tilt its joints explain, read on the ankle servos' counts, so it is known to
+/// the angles' resolution `r` at best; and |a - x| - |b - x|, two places' distances
+/// from a reading x that lies between them, moves by 2 dx as x does: within 2 r the
+/// reading's quantisation alone may decide. km20's RX ankles (r 0.15 deg): 0.30 deg
+/// (a part on l_thigh was put on l_thigh rather than l_pelvis, 8 mm apart, by 0.25
+/// deg of roll and written 3.95 mm from the truth); XM430 and MX-28 (0.045-0.047
+/// deg): 0.1.
+pub fn roll_margin_deg(resolution_deg: f64) -> f64 {
+    ROLL_MARGIN_DEG.max(2.0 * resolution_deg)
+}
 /// The first place stands without trying others when its replay rolls the feet within
 /// this of the robot (median over the four onsets), deg: the foot-case place that
 /// was right agreed to 0.04 deg, the wrong ones 0.39-0.47 off.
@@ -382,7 +396,8 @@ fn choose(places: Vec<Place>) -> (Adapted, Option<Calibration>) {
         .iter()
         .map(|p| (p.passed, p.com, p.roll_median_deg))
         .collect();
-    let (kept, check) = decide(&summary);
+    let margin = roll_margin_deg(places[0].adapted.report.angle_resolution_deg);
+    let (kept, check) = decide(&summary, margin);
     let mut places = places;
     let mut place = places.swap_remove(kept);
     let report = &mut place.adapted.report;
@@ -400,14 +415,16 @@ fn choose(places: Vec<Place>) -> (Adapted, Option<Calibration>) {
             detail: if passed {
                 format!(
                     "the places whose checks pass put the CoM within {:.0} mm of this one's, \
-                     or roll the feet at least {ROLL_MARGIN_DEG} deg (median) less like the robot's",
+                     or roll the feet at least {margin:.2} deg (median) less like the robot's \
+                     (twice the angles' resolution, at least {ROLL_MARGIN_DEG})",
                     AGREE_M * 1e3
                 )
             } else {
                 format!(
                     "the four angles fit the part in more than one place, with CoMs more than \
                      {:.0} mm apart, and the feet's roll does not tell them apart by \
-                     {ROLL_MARGIN_DEG} deg: {}; name the link (--where) or the floor \
+                     {margin:.2} deg (twice the angles' resolution, at least \
+                     {ROLL_MARGIN_DEG}): {}; name the link (--where) or the floor \
                      (--ground-sink)",
                     AGREE_M * 1e3,
                     tried.join("; ")
@@ -420,8 +437,9 @@ fn choose(places: Vec<Place>) -> (Adapted, Option<Calibration>) {
 
 /// Which place to keep of `(checks passed, adapted CoM, feet roll's median error)`, the first the
 /// CoM inversion's, and how the `one-place-explains` check comes out (`None`: no place
-/// passes its checks, the first is kept with its own failures).
-fn decide(places: &[(bool, [f64; 3], f64)]) -> (usize, Option<bool>) {
+/// passes its checks, the first is kept with its own failures); a place beats another
+/// by the feet's roll when its median is `margin` deg better ([`roll_margin_deg`]).
+fn decide(places: &[(bool, [f64; 3], f64)], margin: f64) -> (usize, Option<bool>) {
     let viable: Vec<usize> = (0..places.len()).filter(|&i| places[i].0).collect();
     let agree = |a: usize, b: usize| distance(places[a].1, places[b].1) <= AGREE_M;
     let by_roll = viable
@@ -436,7 +454,7 @@ fn decide(places: &[(bool, [f64; 3], f64)]) -> (usize, Option<bool>) {
         (first, Some(true))
     } else if viable
         .iter()
-        .all(|&i| agree(best, i) || places[best].2 + ROLL_MARGIN_DEG <= places[i].2)
+        .all(|&i| agree(best, i) || places[best].2 + margin <= places[i].2)
     {
         (best, Some(true))
     } else {
@@ -470,7 +488,7 @@ mod tests {
     fn places_that_agree_keep_the_first() {
         let near = [FOOT[0], FOOT[1], FOOT[2] + 0.001];
         assert_eq!(
-            decide(&[(true, FOOT, 0.5), (true, near, 0.1)]),
+            decide(&[(true, FOOT, 0.5), (true, near, 0.1)], ROLL_MARGIN_DEG),
             (0, Some(true))
         );
     }
@@ -480,7 +498,10 @@ mod tests {
     #[test]
     fn the_feet_roll_tells_two_places_apart() {
         assert_eq!(
-            decide(&[(true, THIGH, 0.45), (true, FOOT, 0.12), (false, THIGH, 0.0)]),
+            decide(
+                &[(true, THIGH, 0.45), (true, FOOT, 0.12), (false, THIGH, 0.0)],
+                ROLL_MARGIN_DEG
+            ),
             (1, Some(true))
         );
     }
@@ -489,7 +510,7 @@ mod tests {
     #[test]
     fn two_places_the_roll_cannot_tell_apart_fail_the_check() {
         assert_eq!(
-            decide(&[(true, THIGH, 0.15), (true, FOOT, 0.12)]),
+            decide(&[(true, THIGH, 0.15), (true, FOOT, 0.12)], ROLL_MARGIN_DEG),
             (0, Some(false))
         );
     }
@@ -499,12 +520,28 @@ mod tests {
     #[test]
     fn a_place_that_fails_its_checks_is_not_kept() {
         assert_eq!(
-            decide(&[(false, THIGH, 0.0), (true, FOOT, 0.3)]),
+            decide(&[(false, THIGH, 0.0), (true, FOOT, 0.3)], ROLL_MARGIN_DEG),
             (1, Some(true))
         );
         assert_eq!(
-            decide(&[(false, THIGH, 0.0), (false, FOOT, 0.3)]),
+            decide(&[(false, THIGH, 0.0), (false, FOOT, 0.3)], ROLL_MARGIN_DEG),
             (0, None)
         );
+    }
+
+    /// km20 seed 3 of the served sweep (0.397 kg on l_thigh): l_pelvis and l_thigh
+    /// pass their checks 8 mm apart, their replays rolling the feet 0.33 and 0.08 deg
+    /// (median) off the robot. At XM430's resolution (0.045 deg) 0.25 deg tells them
+    /// apart; at RX's (0.15 deg: a margin of 0.30) it does not, and the check fails
+    /// (l_thigh was written 3.95 mm from the truth, l_pelvis is 4.1 mm off).
+    #[test]
+    fn the_roll_margin_grows_with_the_encoders_counts() {
+        const PELVIS: [f64; 3] = [-0.0029, 0.0059, 0.2316];
+        const THIGH3: [f64; 3] = [-0.0041, 0.0062, 0.2236];
+        let seed3 = [(true, PELVIS, 0.33), (true, THIGH3, 0.08)];
+        assert_eq!(roll_margin_deg(0.0451), ROLL_MARGIN_DEG);
+        assert_eq!(decide(&seed3, roll_margin_deg(0.0451)), (1, Some(true)));
+        assert!((roll_margin_deg(0.1505) - 0.301).abs() < 1e-12);
+        assert_eq!(decide(&seed3, roll_margin_deg(0.1505)), (0, Some(false)));
     }
 }
