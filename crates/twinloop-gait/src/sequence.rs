@@ -458,6 +458,15 @@ pub fn walking_sequence_samples(
     generate(o, samples)
 }
 
+/// A number as people write it: `1e12`, not `1000000000000`.
+fn short(x: f64) -> String {
+    if x.abs() >= 1e6 {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -474,14 +483,5 @@ mod tests {
         assert_eq!(step_state(0.0, 2.0), 0.0);
         assert!((step_state(0.02 * 100.0, 2.0)).abs() < 1e-6);
         assert!((step_state(0.02 * 150.0, 2.0) - 50.0).abs() < 1e-6);
-    }
-}
-
-/// A number as people write it: `1e12`, not `1000000000000`.
-fn short(x: f64) -> String {
-    if x.abs() >= 1e6 {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
     }
 }

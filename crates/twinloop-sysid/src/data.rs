@@ -323,10 +323,10 @@ impl IoData {
     }
 }
 
-/// Refuse a record whose time column jumps: a step over 1.5 times the record's median
+/// Refuse a record whose time column jumps: a step over 2.5 times the record's median
 /// step is rows missing (a gap, a pause of the logger), and the models here take row k-1
-/// as the sample before row k, so they would be fitted across it. Jitter of a few
-/// percent, as a bus recording has, is taken.
+/// as the sample before row k, so they would be fitted across it. A bus recording's
+/// jitter, and a read retried now and then (a step of about two), are taken.
 fn no_missing_rows(t: impl Iterator<Item = f64>) -> Result<()> {
     let t: Vec<f64> = t.collect();
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
@@ -337,12 +337,12 @@ fn no_missing_rows(t: impl Iterator<Item = f64>) -> Result<()> {
     let median = steps[steps.len() / 2];
     if let Some(k) = t
         .windows(2)
-        .position(|w| w[1] - w[0] > 1.5 * median && median > 0.0)
+        .position(|w| w[1] - w[0] > 2.5 * median && median > 0.0)
     {
         return Err(SysidError::data(format!(
             "column \"t\": {} s after {} s, where the rows are {} s apart: rows are missing, \
              and the identification takes the rows as equally spaced samples; \
-             identify each stretch on its own or resample (--resample)",
+             identify each stretch on its own, or resample the record onto one step",
             to_ns(t[k + 1]),
             to_ns(t[k]),
             to_ns(median)
