@@ -507,6 +507,14 @@ fn make_wrong_fixtures(dir: &Path, io: &str, goals: &str, state: &str, plant: &s
         .map(|(_, l)| l)
         .collect();
     write(dir, "io_gap.csv", &(gap.join("\n") + "\n"));
+    // A bus recording's jitter (every 37th step four times the others): no gap.
+    let (head, body) = io.split_once('\n').unwrap();
+    let mut jitter = format!("{head}\n");
+    for (k, l) in body.lines().enumerate() {
+        let t = k as f64 * 0.01 + (k / 37) as f64 * 0.03;
+        jitter += &format!("{t},{}\n", l.split_once(',').unwrap().1);
+    }
+    write(dir, "io_jitter.csv", &jitter);
     // MJCF files that include the next one twice, 30 deep: 2^30 copies of a body.
     write(
         dir,
@@ -1856,6 +1864,16 @@ fn the_same_data_in_order_in_step_and_in_metres_is_taken() {
             "arx",
             "--data",
             &file("io.csv"),
+            "--inputs",
+            "u:a",
+            "--outputs",
+            "y:b",
+        ],
+        vec![
+            "identify",
+            "arx",
+            "--data",
+            &file("io_jitter.csv"),
             "--inputs",
             "u:a",
             "--outputs",

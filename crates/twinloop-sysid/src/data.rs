@@ -323,10 +323,11 @@ impl IoData {
     }
 }
 
-/// Refuse a record whose time column jumps: a step over 2.5 times the record's median
+/// Refuse a record whose time column jumps: a step over 10 times the record's median
 /// step is rows missing (a gap, a pause of the logger), and the models here take row k-1
 /// as the sample before row k, so they would be fitted across it. A bus recording's
-/// jitter, and a read retried now and then (a step of about two), are taken.
+/// jitter is taken: on a loaded machine its steps reach 5 times the median (a
+/// `link record` of the served km20 here).
 fn no_missing_rows(t: impl Iterator<Item = f64>) -> Result<()> {
     let t: Vec<f64> = t.collect();
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
@@ -337,7 +338,7 @@ fn no_missing_rows(t: impl Iterator<Item = f64>) -> Result<()> {
     let median = steps[steps.len() / 2];
     if let Some(k) = t
         .windows(2)
-        .position(|w| w[1] - w[0] > 2.5 * median && median > 0.0)
+        .position(|w| w[1] - w[0] > 10.0 * median && median > 0.0)
     {
         return Err(SysidError::data(format!(
             "column \"t\": {} s after {} s, where the rows are {} s apart: rows are missing, \
