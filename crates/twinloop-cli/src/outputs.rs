@@ -139,8 +139,13 @@ fn one_file_each(outputs: &[(&String, &PathBuf)]) -> Result<(), CliError> {
             .iter()
             .find(|(_, q)| twinloop_io::output::same_place(p, q))
         {
+            let what = if first == flag {
+                "given twice".to_string()
+            } else {
+                format!("is also the {first} output of this command")
+            };
             return Err(CliError::new(format!(
-                "{flag} {}: is also the {first} output of this command; give each output its own file",
+                "{flag} {}: {what}; give each output its own file",
                 p.display()
             )));
         }
