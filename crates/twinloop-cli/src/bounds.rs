@@ -113,6 +113,64 @@ pub fn count(s: &str) -> Result<usize, String> {
     }
 }
 
+/// Whole-number options that are not counts of work: a seed, a bit rate, a servo
+/// id, a protocol or a time in microseconds, each checked by its own parser.
+const NOT_COUNTS: &[&str] = &[
+    "seed",
+    "compare-seed",
+    "baud",
+    "id",
+    "protocol",
+    "return-delay-us",
+    "spin-us",
+];
+
+/// Every whole-number option of the command line that counts something (rounds,
+/// restarts, samples to skip, validation runs) at most [`MAX_COUNT`], whichever
+/// command it belongs to and whether or not its own parser says so: one place, so
+/// that a new option cannot make a command allocate for a count of 4000000000.
+pub fn check_counts(cli: &clap::Command, matches: &clap::ArgMatches) -> Result<(), CliError> {
+    use std::any::TypeId;
+    let whole = [
+        TypeId::of::<usize>(),
+        TypeId::of::<u64>(),
+        TypeId::of::<u32>(),
+        TypeId::of::<i64>(),
+        TypeId::of::<i32>(),
+    ];
+    let (mut cmd, mut m) = (cli, matches);
+    while let Some((name, sub)) = m.subcommand() {
+        let Some(next) = cmd.find_subcommand(name) else {
+            return Ok(());
+        };
+        (cmd, m) = (next, sub);
+    }
+    for arg in cmd.get_arguments() {
+        let Some(long) = arg.get_long() else {
+            continue;
+        };
+        let kind = arg.get_value_parser().type_id();
+        if NOT_COUNTS.contains(&long) || !whole.iter().any(|t| kind == *t) {
+            continue;
+        }
+        let Ok(Some(values)) = m.try_get_raw(arg.get_id().as_str()) else {
+            continue;
+        };
+        for v in values {
+            let text = v.to_string_lossy();
+            if let Ok(n) = text.trim().parse::<u128>()
+                && n > MAX_COUNT as u128
+            {
+                return Err(CliError::new(format!(
+                    "--{long} {n}: more than the {MAX_COUNT} of anything one command counts \
+                     (a bound on its work and memory; split the run)"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -146,10 +146,11 @@ pub struct RecordArgs {
     #[arg(long, value_name = "MAPPING")]
     pub map: Option<String>,
     /// Without --map: the servos' protocol (models are found by PING)
-    #[arg(long, value_parser = parse_protocol)]
+    #[arg(long, value_parser = parse_protocol, conflicts_with = "map")]
     pub protocol: Option<Protocol>,
-    /// Without --map: the servo ids, e.g. 1-20; joints are named id<N>
-    #[arg(long, value_name = "LIST")]
+    /// Without --map: the servo ids, e.g. 1-20; joints are named id<N> (with --map,
+    /// the mapping's servos are read: the two are not given together)
+    #[arg(long, value_name = "LIST", conflicts_with = "map")]
     pub ids: Option<String>,
     /// Seconds to record
     #[arg(long, value_parser = crate::common::positive)]

@@ -107,7 +107,9 @@ pub fn parse_args<C: clap::Parser>() -> C {
     let cli = allow_negative(C::command());
     let matches = cli.clone().get_matches();
     // The outputs are checked before any work (crate::outputs): exit 2, one line.
-    if let Err(e) = crate::outputs::check(&cli, &matches) {
+    if let Err(e) = crate::outputs::check(&cli, &matches)
+        .and_then(|()| crate::bounds::check_counts(&cli, &matches))
+    {
         eprintln!("error: {e}");
         std::process::exit(2);
     }

@@ -87,16 +87,119 @@ impl CliError {
 
 impl fmt::Display for CliError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        // One line, whatever the message carries.
+        // One line, whatever the message carries; a TOML error's picture of the line
+        // (`2 | k = [1,2` and its caret line) is left out: the place is named before it.
         let one_line: String = self
             .message
             .lines()
             .map(str::trim)
-            .filter(|l| !l.is_empty())
+            .filter(|l| !l.is_empty() && !is_source_picture(l))
+            .map(|l| match l.split_once("TOML parse error at ") {
+                Some((before, at)) => format!("{before}{at}:"),
+                None => l.to_string(),
+            })
             .collect::<Vec<_>>()
             .join(" ");
-        f.write_str(&one_line)
+        f.write_str(&plain_words(&one_line))
     }
+}
+
+/// A line of a parser's picture of the source: `|`, `2 | text`, `  |    ^`.
+fn is_source_picture(line: &str) -> bool {
+    let rest = line
+        .trim_start_matches(|c: char| c.is_ascii_digit())
+        .trim_start();
+    rest.starts_with('|')
+}
+
+/// A message with the parsers' wording (serde's, Rust's I/O errors') put as people
+/// say it: `missing field `forward`` is `field "forward" is missing`, `invalid
+/// type: integer `5`, expected a string` is `5 (a number) where a string is
+/// expected`, ` (os error 13)` is left out.
+pub fn plain_words(text: &str) -> String {
+    let mut s = twinloop_io::without_os_error(text);
+    s = rewrite(&s, "missing field `", |name, rest| {
+        format!("field \"{name}\" is missing{rest}")
+    });
+    s = rewrite(&s, "unknown field `", |name, rest| {
+        let known = rest
+            .strip_prefix(", expected one of ")
+            .or_else(|| rest.strip_prefix(", expected "))
+            .map(|k| {
+                let end = k.find(" at line").unwrap_or(k.len());
+                (k[..end].replace('`', ""), &k[end..])
+            });
+        match known {
+            Some((k, tail)) => format!("unknown field \"{name}\" (known: {k}){tail}"),
+            None => format!("unknown field \"{name}\"{rest}"),
+        }
+    });
+    s = rewrite(&s, "unknown variant `", |name, rest| {
+        let known = rest
+            .strip_prefix(", expected one of ")
+            .or_else(|| rest.strip_prefix(", expected "))
+            .map(|k| {
+                let end = k.find(" at line").unwrap_or(k.len());
+                (k[..end].replace('`', ""), &k[end..])
+            });
+        match known {
+            Some((k, tail)) => format!("unknown value \"{name}\" (known: {k}){tail}"),
+            None => format!("unknown value \"{name}\"{rest}"),
+        }
+    });
+    if let Some(k) = s.find("invalid type: ") {
+        let body = &s[k + "invalid type: ".len()..];
+        if let Some((found, expected)) = body.split_once(", expected ") {
+            let found = found
+                .replace("integer `", "the number `")
+                .replace("floating point `", "the number `")
+                .replace("sequence", "a list")
+                .replace("map", "a table")
+                .replace('`', "");
+            let end = expected.find(" at line").unwrap_or(expected.len());
+            let (expected, at) = expected.split_at(end);
+            s = format!("{}{found} where {expected} is expected{at}", &s[..k]);
+        }
+    }
+    quote_tokens(&s)
+}
+
+/// A parser's backquoted token (`]`, `robot`) in double quotes, as the messages here
+/// quote names; a backquoted command (it has spaces) stays as it is.
+fn quote_tokens(text: &str) -> String {
+    let parts: Vec<&str> = text.split('`').collect();
+    if parts.len() < 3 {
+        return text.to_string();
+    }
+    let mut out = String::from(parts[0]);
+    let mut k = 1;
+    while k < parts.len() {
+        let inner = parts[k];
+        if k + 1 < parts.len() && !inner.is_empty() && !inner.contains(' ') {
+            out.push_str(&format!("\"{inner}\"{}", parts[k + 1]));
+            k += 2;
+        } else if k + 1 < parts.len() {
+            out.push_str(&format!("`{inner}`{}", parts[k + 1]));
+            k += 2;
+        } else {
+            out.push('`');
+            out.push_str(inner);
+            k += 1;
+        }
+    }
+    out
+}
+
+/// `text` with each `<start>NAME`REST` made `f(NAME, REST)` (REST: to the end).
+fn rewrite(text: &str, start: &str, f: impl Fn(&str, &str) -> String) -> String {
+    let Some(k) = text.find(start) else {
+        return text.to_string();
+    };
+    let after = &text[k + start.len()..];
+    let Some(end) = after.find('`') else {
+        return text.to_string();
+    };
+    format!("{}{}", &text[..k], f(&after[..end], &after[end + 1..]))
 }
 
 impl From<String> for CliError {
@@ -167,6 +270,37 @@ impl From<twinloop_loop::LoopError> for CliError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn parser_words_are_put_as_people_say_them() {
+        let e = |m: &str| CliError::new(m).to_string();
+        assert_eq!(
+            e("tip.json: missing field `forward` at line 1 column 31"),
+            "tip.json: field \"forward\" is missing at line 1 column 31"
+        );
+        assert_eq!(
+            e("tip.json: invalid type: integer `5`, expected a string at line 1 column 11"),
+            "tip.json: the number 5 where a string is expected at line 1 column 11"
+        );
+        assert_eq!(
+            e("m.toml:1:1: unknown field `foo`, expected one of `robot`, `roles`"),
+            "m.toml:1:1: unknown field \"foo\" (known: robot, roles)"
+        );
+        assert_eq!(
+            e(
+                "p.toml: TOML parse error at line 2, column 9\n  |\n2 | k = [1,2\n  |         ^\nunclosed array"
+            ),
+            "p.toml: line 2, column 9: unclosed array"
+        );
+        assert_eq!(
+            e("p.toml: unclosed array, expected `]`; see `twinloop model info`"),
+            "p.toml: unclosed array, expected \"]\"; see `twinloop model info`"
+        );
+        assert_eq!(
+            e("x.urdf: cannot create: Permission denied (os error 13)"),
+            "x.urdf: cannot create: Permission denied"
+        );
+    }
 
     #[test]
     fn messages_print_on_one_line() {

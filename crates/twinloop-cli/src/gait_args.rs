@@ -62,11 +62,10 @@ pub fn sequence_options(t: &TimingArgs, cycles: usize) -> SequenceOptions {
     }
 }
 
-/// A library error about one of its fields (`sample_time must be ...`), with the
-/// option that sets that field in front: `--dt: sample_time must be ...`.
+/// A library error about its fields (`sample_time must be ...`) with each field named
+/// by the option that sets it: `--dt must be ...`.
 pub fn option_names(e: impl std::fmt::Display) -> CliError {
-    let m = e.to_string();
-    for (field, opt) in [
+    let fields = [
         ("sample_time", "--dt"),
         ("cycle_period", "--cycle-period"),
         ("cycles", "--cycles"),
@@ -75,10 +74,10 @@ pub fn option_names(e: impl std::fmt::Display) -> CliError {
         ("gyro_noise", "--gyro-noise"),
         ("kp_position", "--kp-position"),
         ("skip_samples", "--skip-samples"),
-    ] {
-        if m.starts_with(field) {
-            return CliError::new(m).context(opt);
-        }
-    }
-    CliError::new(m)
+    ];
+    // Every field the message names, first or further on, is the option that sets it.
+    let worded = fields.iter().fold(format!(" {e}"), |m, (f, o)| {
+        m.replace(&format!(" {f} "), &format!(" {o} "))
+    });
+    CliError::new(worded.trim_start())
 }

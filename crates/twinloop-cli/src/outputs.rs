@@ -100,6 +100,14 @@ pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> 
             }
         }
     }
+    let all: Vec<(&String, &PathBuf)> = outputs
+        .iter()
+        .chain(&bag_outputs)
+        .map(|(f, p)| (f, p))
+        .chain(folder_outputs.iter().map(|(f, p, _)| (f, p)))
+        .filter(|(_, p)| p.as_os_str() != "-")
+        .collect();
+    one_file_each(&all)?;
     for (flag, p) in &outputs {
         if p.as_os_str() != "-" {
             Output::check(flag, p, &inputs)?;
@@ -119,6 +127,28 @@ pub fn check(cli: &clap::Command, matches: &ArgMatches) -> Result<(), CliError> 
             .and_then(|mut v| v.next())
     {
         check_pty_link(Path::new(link))?;
+    }
+    Ok(())
+}
+
+/// Two outputs naming one file (`--out run.csv --json run.csv`): the second written
+/// would replace the first, and the command would say it wrote both.
+fn one_file_each(outputs: &[(&String, &PathBuf)]) -> Result<(), CliError> {
+    for (k, (flag, p)) in outputs.iter().enumerate() {
+        if let Some((first, _)) = outputs[..k]
+            .iter()
+            .find(|(_, q)| twinloop_io::output::same_place(p, q))
+        {
+            let what = if first == flag {
+                "given twice".to_string()
+            } else {
+                format!("is also the {first} output of this command")
+            };
+            return Err(CliError::new(format!(
+                "{flag} {}: {what}; give each output its own file",
+                p.display()
+            )));
+        }
     }
     Ok(())
 }

@@ -120,7 +120,7 @@ const CASES: &[Case] = &[
     case("experiment squat", "--robot {km20} --duration -1 --out {out}", "--duration"),
     case(
         "experiment squat",
-        "--robot {km20} --markers {bad_toml} --frames-out {out} --out {out}",
+        "--robot {km20} --markers {bad_toml} --frames-out {file:squat_frames.csv} --out {out}",
         "bad.toml",
     ),
     case("experiment walk", "--dt 0 --out {out}", "--dt"),
@@ -499,6 +499,36 @@ fn make_wrong_fixtures(dir: &Path, io: &str, goals: &str, state: &str, plant: &s
     let mut lines: Vec<&str> = io.lines().collect();
     lines.swap(101, 102);
     write(dir, "io_swapped.csv", &(lines.join("\n") + "\n"));
+    // Rows 101-150 missing: a gap the models would be fitted across.
+    let gap: Vec<&str> = io
+        .lines()
+        .enumerate()
+        .filter(|(k, _)| !(101..=150).contains(k))
+        .map(|(_, l)| l)
+        .collect();
+    write(dir, "io_gap.csv", &(gap.join("\n") + "\n"));
+    // A bus recording's jitter (every 37th step four times the others): no gap.
+    let (head, body) = io.split_once('\n').unwrap();
+    let mut jitter = format!("{head}\n");
+    for (k, l) in body.lines().enumerate() {
+        let t = k as f64 * 0.01 + (k / 37) as f64 * 0.03;
+        jitter += &format!("{t},{}\n", l.split_once(',').unwrap().1);
+    }
+    write(dir, "io_jitter.csv", &jitter);
+    // MJCF files that include the next one twice, 30 deep: 2^30 copies of a body.
+    write(
+        dir,
+        "twice0.xml",
+        "<mujoco><worldbody><body name=\"x\"><geom size=\"0.01\" mass=\"0.001\"/></body></worldbody></mujoco>",
+    );
+    for k in 1..=30 {
+        let inc = format!("<include file=\"twice{}.xml\"/>", k - 1);
+        write(
+            dir,
+            &format!("twice{k}.xml"),
+            &format!("<mujoco>{inc}{inc}</mujoco>"),
+        );
+    }
     write(dir, "io_header.csv", "t,u:a,y:b\n");
     write(
         dir,
@@ -989,6 +1019,16 @@ const UNBOUNDED: &[Case] = &[
     case("bench dynamics", "--robot {km20} --seconds 1e12", "--seconds&&hour"),
     case("link record", "--port {gone} --map builtin:km20 --retries 4000000000 --out {out}", "--retries&&100"),
     case("experiment tipover", "--robot {km20} --realtime-factor 1e-12", "--realtime-factor&&0.001"),
+    // Every whole-number option that counts, whichever parser it has (it aborted on
+    // allocation or ran for ever), and counts that add up to hours of simulation.
+    case("adapt train", "--robot {km20} --restarts 4000000000 --out {out}", "--restarts&&1000000"),
+    case("adapt train", "--robot {km20} --check-sim 4000000000 --out {out}", "--check-sim&&1000000"),
+    case("experiment walk", "--skip-samples 4000000000 --out {out}", "--skip-samples&&1000000"),
+    case("experiment walk", "--samples 1000000 --out {out}", "--samples 1000000&&time steps"),
+    // MJCF files including each other twice over: 2^30 includes.
+    case("model info", "{file:twice30.xml}", "twice30.xml&&10000 <include>s"),
+    // A cycle period of hours: named by its option, its number as people write it.
+    case("gait sequence", "--cycle-period 1e12 --out {out}", "--cycle-period 1e12&&--dt 0.04"),
 ];
 
 #[test]
@@ -1084,6 +1124,12 @@ const DESTROYS: &[Case] = &[
     // An input reached through a symlink, and one named inside another file.
     case("dynamics inverse", "--robot {km20} --trajectory {victim:state.csv} --out {link:state.csv}", "--out&&--trajectory"),
     case("model export", "{victim:inc_main.xml} --out {victim:inc_part.xml}", "inc_part.xml&&input"),
+    // Two outputs naming one file: the second would replace the first (exit 0).
+    case("identify arx", "--data {io} --inputs u:a --outputs y:b --json {victim:goals.csv} --report {victim:goals.csv}", "--report&&--json"),
+    case("experiment lean", "--robot {km20} --out {victim:state.csv} --json {link:state.csv}", "--json&&--out"),
+    // A folder (a trailing /) or a file taken for a folder: named before any work.
+    case("gait zmp", "--out {nodir}/", "--out&&folder"),
+    case("gait sequence", "--out {victim:goals.csv}/x.csv", "--out&&goals.csv is a file"),
 ];
 
 /// A case's arguments with `{victim:NAME}`, `{fifo}` and `{nodir}` made in `dir`.
@@ -1091,14 +1137,16 @@ fn fill_victims(case: &Case, dir: &Path) -> (Case, Vec<(PathBuf, Vec<u8>)>) {
     let mut victims = Vec::new();
     let mut args = Vec::new();
     for a in case.args.split_whitespace() {
-        let word = if let Some(name) = a.strip_prefix("{victim:").and_then(|r| r.strip_suffix('}'))
+        // `{victim:NAME}REST`: the copy's path, then REST (`/x.csv`: inside it).
+        let word = if let Some((name, rest)) =
+            a.strip_prefix("{victim:").and_then(|r| r.split_once('}'))
         {
             let p = dir.join(name);
             if !p.exists() {
                 std::fs::copy(fixtures().dir.join(name), &p).unwrap();
                 victims.push((p.clone(), std::fs::read(&p).unwrap()));
             }
-            p.to_str().unwrap().to_string()
+            format!("{}{rest}", p.display())
         } else if let Some(name) = a.strip_prefix("{link:").and_then(|r| r.strip_suffix('}')) {
             // A symlink to the case's copy of NAME (copied first by an earlier word).
             let p = dir.join(format!("link-{name}"));
@@ -1370,6 +1418,38 @@ fn the_bus_is_checked_not_trusted() {
         err.contains("zero.toml:32") && err.contains("zero"),
         "{err}"
     );
+    // A joint the description does not have (a misspelt name): refused before the
+    // experiment moves anything, the line, the servo and the joint meant named.
+    let good = std::fs::read_to_string(repo().join("crates/twinloop-link/src/mappings/km20.toml"))
+        .unwrap();
+    let typo = dir.join("typo.toml");
+    std::fs::write(
+        &typo,
+        good.replacen("name = \"l_elbow\"", "name = \"l_elbw\"", 1),
+    )
+    .unwrap();
+    let (code, err) = exit_and_stderr(&[
+        "experiment",
+        "lean",
+        "--port",
+        port,
+        "--map",
+        typo.to_str().unwrap(),
+        "--yes",
+        "--out",
+        out,
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("typo.toml line")
+            && err.contains("servo id 6")
+            && err.contains("did you mean l_elbow"),
+        "{err}"
+    );
+    // --ids names the servos only without a mapping: with one it was ignored.
+    let (code, err) = record("builtin:km20", &["--duration", "0.5", "--ids", "1,77"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--ids") && err.contains("--map"), "{err}");
 
     let scan = |ids: &str| {
         let o = Command::new(bin())
@@ -1533,6 +1613,71 @@ fn messages_name_the_chain_the_bound_and_take_a_bom() {
             && err.contains("1e300 deg"),
         "{err}"
     );
+    // The parsers' words put plainly: no serde backticks, no TOML source picture, no
+    // `(os error N)`; still the file, the line and the field.
+    write(
+        d,
+        "tip_short.json",
+        "{\"robot\": \"km20\", \"angles\": [1, 2]}",
+    );
+    write(d, "plant_cut.toml", "[plant]\nk = [1, 2\n");
+    let plain = [
+        (
+            vec![
+                "adapt",
+                "--robot",
+                "builtin:km20",
+                "--total-mass",
+                "3.4",
+                "--tipover",
+                "tip_short.json",
+            ],
+            "tip_short.json&&field \"forward\" is missing&&line 1",
+        ),
+        (
+            vec![
+                "identify",
+                "compliant",
+                "--data",
+                "tip_short.json",
+                "--plant",
+                "plant_cut.toml",
+            ],
+            "plant_cut.toml: line 2, column&&unclosed array",
+        ),
+        (
+            vec![
+                "model",
+                "export",
+                "builtin:km20",
+                "--out",
+                "no_such_folder/",
+            ],
+            "--out no_such_folder/&&folder",
+        ),
+        (
+            vec!["model", "info", "no_such.urdf"],
+            "no_such.urdf&&No such file",
+        ),
+    ];
+    for (args, names) in plain {
+        let o = Command::new(bin())
+            .current_dir(d)
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            o.status.code() == Some(2)
+                && err.lines().count() == 1
+                && names.split("&&").all(|n| err.contains(n))
+                && !["missing field", "TOML parse error", "`]`", "os error"]
+                    .iter()
+                    .any(|w| err.contains(w))
+                && !err.contains(" | "),
+            "{args:?}: {err}"
+        );
+    }
     let state = fixtures().dir.join("state.csv");
     let text = std::fs::read_to_string(&state).unwrap();
     write(d, "bom.csv", &format!("\u{feff}{text}"));
@@ -1598,6 +1743,10 @@ const WRONG: &[Case] = &[
     case("adapt", "--robot {km20} --tipover {file:tip.json} --total-mass 3.336", "--total-mass&&prior"),
     // Noise that drowns the signal fills the output with infinities.
     case("compliant simulate", "--reference {cwalk} --plant {plant} --noise 1e300 --out {out}", "--noise&&1e300"),
+    // Rows missing in a record the models take as equally spaced; a --dt the t column contradicts.
+    case("identify arx", "--data {io_gap} --inputs u:a --outputs y:b", "io_gap.csv&&column \"t\"&&rows are missing"),
+    case("identify ss", "--data {io_gap} --inputs u:a --outputs y:b --order 2", "io_gap.csv&&rows are missing"),
+    case("identify arx", "--data {io} --inputs u:a --outputs y:b --dt 0.001", "--dt 0.001&&spaced 0.01"),
 ];
 
 /// Class 3, where a check finds problems: `model lint` reports, with exit 1, what every
@@ -1715,6 +1864,16 @@ fn the_same_data_in_order_in_step_and_in_metres_is_taken() {
             "arx",
             "--data",
             &file("io.csv"),
+            "--inputs",
+            "u:a",
+            "--outputs",
+            "y:b",
+        ],
+        vec![
+            "identify",
+            "arx",
+            "--data",
+            &file("io_jitter.csv"),
             "--inputs",
             "u:a",
             "--outputs",

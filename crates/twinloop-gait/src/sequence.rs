@@ -368,8 +368,11 @@ fn check_timing(o: &SequenceOptions) -> Result<(), GaitError> {
     }
     if o.cycle_period / o.sample_time > MAX_TICKS {
         return Err(GaitError(format!(
-            "sample_time {} s is more than {MAX_TICKS:.0e} ticks per cycle of {} s",
-            o.sample_time, o.cycle_period
+            "cycle_period {} s is {:.1e} ticks of sample_time {} s, more than the \
+             {MAX_TICKS:.0e} one cycle may hold",
+            short(o.cycle_period),
+            o.cycle_period / o.sample_time,
+            short(o.sample_time)
         )));
     }
     // Every window must hold at least one tick of every cycle, or its stage is skipped.
@@ -453,6 +456,15 @@ pub fn walking_sequence_samples(
         return Err(GaitError("samples must be at least 1".into()));
     }
     generate(o, samples)
+}
+
+/// A number as people write it: `1e12`, not `1000000000000`.
+fn short(x: f64) -> String {
+    if x.abs() >= 1e6 {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
 }
 
 #[cfg(test)]

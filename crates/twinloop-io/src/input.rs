@@ -115,7 +115,7 @@ pub fn read_text(path: &Path) -> Result<String, IoError> {
 fn read_error(path: &Path, e: std::io::Error) -> IoError {
     let m = match e.kind() {
         std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => e.to_string(),
-        _ => format!("cannot read: {e}"),
+        _ => format!("cannot read: {}", crate::io_words(&e)),
     };
     IoError::new(m).in_file(path)
 }

@@ -22,3 +22,39 @@ mod table;
 pub use columns::{Quantity, StateColumns, nearest};
 pub use sink::{RowSink, open_recording};
 pub use table::{CsvWriter, IoError, Table, clean_time, format_f64};
+
+/// An I/O error as people read it: the system's words without Rust's
+/// ` (os error N)` (`Permission denied`, `File too large`).
+pub fn io_words(e: &std::io::Error) -> String {
+    without_os_error(&e.to_string())
+}
+
+/// `text` with every ` (os error N)` that Rust's I/O errors append removed.
+pub fn without_os_error(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(k) = rest.find(" (os error ") {
+        let tail = &rest[k + " (os error ".len()..];
+        let digits = tail.bytes().take_while(u8::is_ascii_digit).count();
+        if digits > 0 && tail[digits..].starts_with(')') {
+            out.push_str(&rest[..k]);
+            rest = &tail[digits + 1..];
+        } else {
+            out.push_str(&rest[..k + 1]);
+            rest = &rest[k + 1..];
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn os_error_numbers_are_left_out() {
+        assert_eq!(
+            super::without_os_error("a: Permission denied (os error 13); b (os error x)"),
+            "a: Permission denied; b (os error x)"
+        );
+    }
+}

@@ -87,20 +87,39 @@ impl Output {
                 format!("is {kind}, not a regular file; twinloop writes only regular files"),
             ));
         }
+        if path.as_os_str().as_encoded_bytes().ends_with(b"/") {
+            return Err(refused(
+                flag,
+                path,
+                "names a folder (it ends in /); give the file to write",
+            ));
+        }
         let folder = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
         if !folder.is_dir() {
-            return Err(refused(
-                flag,
-                path,
+            let why = if folder.exists() {
+                format!("{} is a file, not a folder", folder.display())
+            } else {
                 format!(
                     "the folder {} does not exist; create it first",
                     folder.display()
-                ),
-            ));
+                )
+            };
+            return Err(refused(flag, path, why));
         }
+        writable(&folder).map_err(|e| {
+            refused(
+                flag,
+                path,
+                format!(
+                    "cannot write in the folder {}: {}",
+                    folder.display(),
+                    crate::io_words(&e)
+                ),
+            )
+        })?;
         Ok(Output {
             path: path.to_path_buf(),
             target,
@@ -142,6 +161,43 @@ impl Output {
     }
 }
 
+/// Whether files can be created in `folder` (permissions, a read-only mount): a
+/// probe file made and removed, so that a long run is refused before its work, not
+/// at its end when the result is written.
+fn writable(folder: &Path) -> std::io::Result<()> {
+    let probe = folder.join(format!(".twinloop-probe-{}", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .map(|_| {
+            let _ = std::fs::remove_file(&probe);
+        })
+        .or_else(|e| match e.kind() {
+            // Left by a killed run of this process id: the folder is writable.
+            std::io::ErrorKind::AlreadyExists => Ok(()),
+            _ => Err(e),
+        })
+}
+
+/// Whether two output paths name the same file: the same file (device and inode)
+/// when it exists, else the same name in the same folder (a symlink followed).
+pub fn same_place(a: &Path, b: &Path) -> bool {
+    if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+        return x.dev() == y.dev() && x.ino() == y.ino();
+    }
+    let place = |p: &Path| {
+        let p = std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+        let folder = match p.parent() {
+            Some(f) if !f.as_os_str().is_empty() => f.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let folder = std::fs::canonicalize(&folder).unwrap_or(folder);
+        (folder, p.file_name().map(|n| n.to_owned()))
+    };
+    place(a) == place(b)
+}
+
 /// [`Output::resolve`] then [`Output::write_atomic`]: the one way to write a whole file.
 pub fn write_atomic(path: &Path, bytes: impl AsRef<[u8]>) -> Result<(), IoError> {
     Output::resolve("", path)?.write_atomic(bytes.as_ref())
@@ -172,6 +228,10 @@ pub struct AtomicFile<W: Write + Durable = File> {
     /// A write failed (a full disk): a recording then stays under its partial name,
     /// rows kept, and the old file stays as it was.
     failed: bool,
+    /// Bytes the writer took, and of them the bytes up to the last row flushed whole:
+    /// a recording cut by a full disk is trimmed to its last whole row.
+    accepted: u64,
+    whole_rows: u64,
 }
 
 /// A writer that can make its bytes durable (fsync); a test writer says it did.
@@ -227,7 +287,9 @@ fn create_partial(out: &Output) -> Result<(PathBuf, File), IoError> {
         .write(true)
         .create_new(true)
         .open(&partial)
-        .map_err(|e| IoError::new(format!("cannot create: {e}")).in_file(&out.path))?;
+        .map_err(|e| {
+            IoError::new(format!("cannot create: {}", crate::io_words(&e))).in_file(&out.path)
+        })?;
     // A file system without locks (some network mounts) writes unguarded, as before.
     let _ = file.try_lock();
     if let Ok(m) = std::fs::metadata(&out.target) {
@@ -298,8 +360,9 @@ fn not_an_input(target: &Path, shown: &Path) -> Result<(), IoError> {
 /// file is noted as this process's own (reading it back is no input).
 fn rename_over(partial: &Path, target: &Path, shown: &Path) -> Result<(), IoError> {
     not_an_input(target, shown)?;
-    std::fs::rename(partial, target)
-        .map_err(|e| IoError::new(format!("cannot write: {e}")).in_file(shown))?;
+    std::fs::rename(partial, target).map_err(|e| {
+        IoError::new(format!("cannot write: {}", crate::io_words(&e))).in_file(shown)
+    })?;
     if let Ok(m) = std::fs::metadata(target) {
         crate::input::note_written(&m);
     }
@@ -332,8 +395,9 @@ impl PartialFile {
 
     /// Fsync `file` (what [`PartialFile::open`] gave) and rename it over the target.
     pub fn commit(mut self, file: File) -> Result<(), IoError> {
-        let err =
-            |e: std::io::Error| IoError::new(format!("cannot write: {e}")).in_file(&self.shown);
+        let err = |e: std::io::Error| {
+            IoError::new(format!("cannot write: {}", crate::io_words(&e))).in_file(&self.shown)
+        };
         file.sync_all().map_err(err)?;
         rename_over(&self.partial, &self.target, &self.shown)?;
         self.committed = true;
@@ -361,12 +425,14 @@ impl<W: Write + Durable> AtomicFile<W> {
             header: 1,
             flush_lines: on_drop == OnDrop::KeepRecorded,
             failed: false,
+            accepted: 0,
+            whole_rows: 0,
         }
     }
 
     /// An I/O error as an [`IoError`] naming the file.
     pub fn error(&self, e: std::io::Error) -> IoError {
-        IoError::new(format!("cannot write: {e}")).in_file(&self.shown)
+        IoError::new(format!("cannot write: {}", crate::io_words(&e))).in_file(&self.shown)
     }
 
     /// The lines written so far are the header: a recording with nothing after them
@@ -407,6 +473,8 @@ impl<W: Write + Durable> AtomicFile<W> {
             let e = self.failed_with(e);
             if self.on_drop == OnDrop::Remove {
                 let _ = std::fs::remove_file(&self.partial);
+            } else {
+                self.trim_to_whole_rows();
             }
             return Err(self.error(e));
         }
@@ -431,11 +499,15 @@ impl<W: Write + Durable> Write for AtomicFile<W> {
         };
         let newlines = buf[..n].iter().filter(|&&b| b == b'\n').count() as u64;
         self.lines += newlines;
-        if self.flush_lines
-            && newlines > 0
-            && let Err(e) = out.flush()
-        {
-            return Err(self.failed_with(e));
+        let before = self.accepted;
+        self.accepted += n as u64;
+        if self.flush_lines && newlines > 0 {
+            if let Err(e) = out.flush() {
+                return Err(self.failed_with(e));
+            }
+            if let Some(last) = buf[..n].iter().rposition(|&b| b == b'\n') {
+                self.whole_rows = before + last as u64 + 1;
+            }
         }
         Ok(n)
     }
@@ -447,6 +519,16 @@ impl<W: Write + Durable> Write for AtomicFile<W> {
 }
 
 impl<W: Write + Durable> AtomicFile<W> {
+    /// A recording whose write failed ends at its last whole row (a full disk may
+    /// have taken half of the next), so that every line of `FILE.partial` is a row.
+    fn trim_to_whole_rows(&self) {
+        if let Ok(f) = std::fs::OpenOptions::new().write(true).open(&self.partial)
+            && f.metadata().is_ok_and(|m| m.len() > self.whole_rows)
+        {
+            let _ = f.set_len(self.whole_rows);
+        }
+    }
+
     /// A write error noted; a recording's says where its rows are kept.
     fn failed_with(&mut self, e: std::io::Error) -> std::io::Error {
         self.failed = true;
@@ -454,7 +536,8 @@ impl<W: Write + Durable> AtomicFile<W> {
             std::io::Error::new(
                 e.kind(),
                 format!(
-                    "{e}; the rows written before it are in {}, the old file is as it was",
+                    "{}; the rows written before it are in {}, the old file is as it was",
+                    crate::io_words(&e),
                     self.partial.display()
                 ),
             )
@@ -472,6 +555,7 @@ impl<W: Write + Durable> Drop for AtomicFile<W> {
         if self.on_drop == OnDrop::KeepRecorded && self.failed {
             // A write failed: the rows stay under the partial name, the old file whole.
             self.out = None;
+            self.trim_to_whole_rows();
         } else if self.on_drop == OnDrop::KeepRecorded && self.lines > self.header {
             // What was recorded is kept: nothing a user recorded is ever lost.
             let _ = self.finish();

@@ -82,7 +82,14 @@ impl From<mcap::McapError> for LogError {
                  a log is an .mcap file or a rosbag2 folder",
             );
         }
-        LogError::new(format!("MCAP: {e}"))
+        match e {
+            // What the system said (`File too large`, `No space left on device`), not
+            // the MCAP crate's "I/O error from writing, or reading a compression stream".
+            mcap::McapError::Io(io) => {
+                LogError::new(format!("MCAP: {}", twinloop_io::io_words(&io)))
+            }
+            e => LogError::new(format!("MCAP: {e}")),
+        }
     }
 }
 

@@ -97,6 +97,23 @@ pub fn profile_description(
 /// Put a profile's `[roles]` on its description, each role's joint checked to be one
 /// of the description's.
 pub fn attach_roles(robot: &mut Description, mapping: &RobotMapping) -> Result<(), LoopError> {
+    // A servo mapped to a joint the description does not have would be read under a
+    // name nothing uses, and its joint left unmoved: a misspelt name is refused.
+    if let Some(j) = mapping
+        .joints
+        .iter()
+        .find(|j| robot.joint(&j.name).is_none())
+    {
+        let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+        let near = twinloop_io::nearest(&j.name, &names, 1);
+        let meant = near
+            .first()
+            .map_or(String::new(), |n| format!(" (did you mean {n}?)"));
+        return Err(LoopError::new(format!(
+            "{} line {}: joint \"{}\" (servo id {}) is not a joint of \"{}\"{meant}",
+            mapping.source, j.line, j.name, j.id, robot.name
+        )));
+    }
     for (role, joint) in &mapping.roles {
         if robot.joint(joint).is_none() {
             return Err(LoopError::new(format!(

@@ -36,6 +36,18 @@ pub struct WalkArgs {
 
 pub fn run(a: &WalkArgs) -> CliResult {
     let robot = lab17_only(&a.timing.robot)?;
+    // Every sample, skipped or recorded, is --dt of walking in 1 ms simulator steps.
+    let defaults = DatasetOptions::default();
+    crate::bounds::steps(
+        (a.samples + a.skip_samples) as f64 * a.timing.dt + defaults.settle,
+        defaults.dt,
+        &format!(
+            "--samples {} and --skip-samples {} at --dt {} s",
+            a.samples,
+            a.skip_samples,
+            crate::common::num(a.timing.dt)
+        ),
+    )?;
     let o = DatasetOptions {
         sequence: sequence_options(&a.timing, 1),
         samples: a.samples,

@@ -190,6 +190,18 @@ fn load(path: &Path, a: &DataArgs) -> Result<IoData, CliError> {
                 "--dt {dt}: the sample period must be a positive number of seconds"
             )));
         }
+        // A t column spaced otherwise: the frequencies would be off by their ratio.
+        if let Some(step) = d.sample_time
+            && (step - dt).abs() > 1e-3 * step
+        {
+            return Err(CliError::new(format!(
+                "--dt {} s: the t column of {} is spaced {} s; leave --dt out (it is read \
+                 from t) or give the step the rows have",
+                crate::common::num(dt),
+                path.display(),
+                crate::common::num(step)
+            )));
+        }
         d.sample_time = Some(dt);
     }
     Ok(d)

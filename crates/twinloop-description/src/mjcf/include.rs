@@ -10,6 +10,19 @@ use std::path::{Path, PathBuf};
 /// Deepest chain of files including files (a guard against runaway nesting).
 const MAX_DEPTH: usize = 32;
 
+/// Most `<include>`s one model may splice, counting a file each time it is
+/// included: 10 000, hundreds of times what real models use (MuJoCo Menagerie's
+/// largest use a handful), so that files including each other twice over, 30 deep
+/// (2^30 copies), are refused at once instead of read for ever.
+const MAX_INCLUDES: usize = 10_000;
+
+/// What the includes read so far add up to: files spliced, and their bytes.
+#[derive(Default)]
+struct Budget {
+    files: usize,
+    bytes: u64,
+}
+
 /// The text of every file that `root`'s top-level `<include>`s bring in, depth
 /// first in document order (the order [`splice`] consumes them).
 pub(crate) fn read_includes(
@@ -17,7 +30,7 @@ pub(crate) fn read_includes(
     dir: Option<&Path>,
 ) -> Result<Vec<(PathBuf, String)>, DescriptionError> {
     let mut out = Vec::new();
-    collect(root, dir, &mut Vec::new(), &mut out)?;
+    collect(root, dir, &mut Vec::new(), &mut out, &mut Budget::default())?;
     Ok(out)
 }
 
@@ -26,6 +39,7 @@ fn collect(
     dir: Option<&Path>,
     chain: &mut Vec<PathBuf>,
     out: &mut Vec<(PathBuf, String)>,
+    budget: &mut Budget,
 ) -> Result<(), DescriptionError> {
     for inc in root
         .children()
@@ -60,6 +74,17 @@ fn collect(
                 ),
             ));
         }
+        budget.files += 1;
+        if budget.files > MAX_INCLUDES {
+            return Err(error_at(
+                inc,
+                format!(
+                    "more than {MAX_INCLUDES} <include>s (counting a file each time it is \
+                     included, here {}): files that include each other over and over",
+                    path.display()
+                ),
+            ));
+        }
         let text = read_text(&path).map_err(|e| {
             let what = format!(
                 "cannot read the included file {}: {}",
@@ -69,8 +94,8 @@ fn collect(
             error_at(inc, what)
         })?;
         // A file included many times over is bounded as one file is.
-        let total: usize = text.len() + out.iter().map(|(_, t)| t.len()).sum::<usize>();
-        if total as u64 > crate::xml::MAX_DESCRIPTION_BYTES {
+        budget.bytes += text.len() as u64;
+        if budget.bytes > crate::xml::MAX_DESCRIPTION_BYTES {
             return Err(error_at(
                 inc,
                 format!(
@@ -91,7 +116,7 @@ fn collect(
                 );
             }
             chain.push(path);
-            collect(inner, Some(dir), chain, out)?;
+            collect(inner, Some(dir), chain, out, budget)?;
             chain.pop();
         }
         out[slot].1 = text;
