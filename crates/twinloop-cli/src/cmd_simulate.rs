@@ -4,8 +4,7 @@
 use crate::common::{ROBOT_HELP, load_description};
 use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
-use crate::sim_args::{ServoChoice, record_columns, standing_simulator, state_row};
-use crate::units::read_trajectory;
+use crate::sim_args::{Goals, ServoChoice, record_columns, standing_simulator, state_row};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use twinloop_io::{Quantity, StateColumns, Table};
@@ -51,102 +50,6 @@ pub struct SimulateArgs {
     /// With --view the run waits for the page to connect, then goes at real time.
     #[command(flatten)]
     pub view: crate::live_view::LiveViewArgs,
-}
-
-/// The servo for joint `i` under a choice (`Auto`: the built-in robot's own, or one
-/// derived from the description's limits).
-/// Goal trajectory: times and, per joint, goal positions (NaN: hold).
-pub(crate) struct Goals {
-    t: Vec<f64>,
-    cols: Vec<Option<usize>>,
-    table: Table,
-}
-
-impl Goals {
-    pub(crate) fn load(path: &Path, model: &twinloop_dynamics::Model) -> Result<Goals, CliError> {
-        let joints = &model.joint_names;
-        let table = read_trajectory(path, model)?;
-        StateColumns::check_known(&table, Quantity::Q, &model.q_names())?;
-        let tc = table
-            .column_index("t")
-            .ok_or_else(|| CliError::new(format!("{}: a `t` column is needed", path.display())))?;
-        // Finite and increasing: checked as the table was read.
-        let t: Vec<f64> = table.rows.iter().map(|r| r[tc]).collect();
-        if t[0] < 0.0 {
-            // The run starts at 0: goals before it would be passed over unseen.
-            let line = table
-                .line_of_row(0)
-                .map_or(String::new(), |l| format!(":{l}"));
-            return Err(CliError::new(format!(
-                "{}{line}: column \"t\": the first goal is at {} s: the simulation starts at \
-                 0 s, so goals at negative times would never be reached (shift the times)",
-                path.display(),
-                t[0]
-            )));
-        }
-        multi_dof_goals(&table, model, path)?;
-        let cols: Vec<Option<usize>> = joints
-            .iter()
-            .map(|j| table.column_index(&format!("q:{j}")))
-            .collect();
-        if cols.iter().all(Option::is_none) {
-            return Err(CliError::new(format!(
-                "{}: no q:<joint> column names a joint of the robot",
-                path.display()
-            )));
-        }
-        table.check_finite(&cols.iter().flatten().copied().collect::<Vec<_>>())?;
-        Ok(Goals { t, cols, table })
-    }
-
-    /// The last goal's time.
-    fn end(&self) -> f64 {
-        self.t.last().copied().unwrap_or(0.0)
-    }
-
-    pub(crate) fn at(&self, time: f64, hold: &[f64], out: &mut [f64]) {
-        let k = self.t.partition_point(|&x| x <= time);
-        let (i0, i1, w) = if k == 0 {
-            (0, 0, 0.0)
-        } else if k >= self.t.len() {
-            (self.t.len() - 1, self.t.len() - 1, 0.0)
-        } else {
-            let (a, b) = (self.t[k - 1], self.t[k]);
-            (k - 1, k, (time - a) / (b - a))
-        };
-        for (j, c) in self.cols.iter().enumerate() {
-            out[j] = match c {
-                Some(c) => self.table.rows[i0][*c] * (1.0 - w) + self.table.rows[i1][*c] * w,
-                None => hold[j],
-            };
-        }
-    }
-}
-
-/// Goals drive a joint's servo, one angle each: a ball joint's quaternion columns
-/// (`q:j.qx` ..) have no servo to go to and would be ignored, so they are refused.
-/// A floating base's columns are the trajectory's own record, not goals (ignored as
-/// documented).
-fn multi_dof_goals(
-    table: &Table,
-    model: &twinloop_dynamics::Model,
-    path: &Path,
-) -> Result<(), CliError> {
-    use twinloop_dynamics::JointType;
-    for (name, ty) in model.joint_names.iter().zip(&model.joint_types) {
-        if *ty != JointType::Spherical {
-            continue;
-        }
-        let prefix = format!("q:{name}.");
-        if let Some(c) = table.columns.iter().find(|c| c.starts_with(&prefix)) {
-            return Err(CliError::new(format!(
-                "{}: column \"{c}\": {name} is a ball joint, which has no servo to take a \
-                 goal (goals are for hinges and sliders); remove its columns",
-                path.display()
-            )));
-        }
-    }
-    Ok(())
 }
 
 pub fn run(a: SimulateArgs) -> CliResult {

@@ -96,26 +96,6 @@ pub fn emit<T: serde::Serialize + ?Sized>(
     Ok(())
 }
 
-/// Parse the command line. Every command takes a negative number as an option's value
-/// (`--dt -1`), so that the option's range check says what is wrong and names it,
-/// instead of clap reading "-1" as an unknown flag.
-pub fn parse_args<C: clap::Parser>() -> C {
-    fn allow_negative(c: clap::Command) -> clap::Command {
-        c.allow_negative_numbers(true)
-            .mut_subcommands(allow_negative)
-    }
-    let cli = allow_negative(C::command());
-    let matches = cli.clone().get_matches();
-    // The outputs are checked before any work (crate::outputs): exit 2, one line.
-    if let Err(e) = crate::outputs::check(&cli, &matches)
-        .and_then(|()| crate::bounds::check_counts(&cli, &matches))
-    {
-        eprintln!("error: {e}");
-        std::process::exit(2);
-    }
-    C::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
-}
-
 /// Range checks of numeric options, as clap value parsers (`#[arg(value_parser =
 /// crate::common::positive)]`): a value out of range is a usage error (exit 2)
 /// naming the option and the range, before any work starts, so no option can make

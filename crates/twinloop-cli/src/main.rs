@@ -6,6 +6,7 @@
 //! `error: ...` and picks the exit code (see `error.rs`).
 
 mod adapt_text;
+mod args;
 mod bounds;
 mod bus_args;
 mod cmd_adapt;
@@ -278,7 +279,7 @@ fn main() -> ExitCode {
         signal_hook::consts::SIGXFSZ,
         std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false)),
     );
-    let cli: Cli = common::parse_args();
+    let cli: Cli = args::parse_args();
     // Every recording a library opens (a guarded robot's --record, the bus
     // tip-over's) is MCAP when its path ends in .mcap.
     twinloop_io::sink::register_recording_format("mcap", twinloop_logs::open_mcap_recording);
