@@ -952,7 +952,7 @@ fn includes_inside_bodies_read_as_one_file() {
 
 /// A file that includes itself through another, from inside a body: the cycle
 /// is named, file by file; an error in a nested included file names that file
-/// and its line.
+/// and its line, also one found after reading (a duplicate name).
 #[test]
 fn nested_include_cycles_and_errors_name_the_files() {
     let robot = r#"<mujoco><worldbody><body name="torso"><geom size="0.1"/>
@@ -991,5 +991,15 @@ fn nested_include_cycles_and_errors_name_the_files() {
     assert_eq!(e.location.file.as_deref(), Some(shin_path.as_path()), "{e}");
     assert_eq!(e.location.line, Some(3), "{e}");
     assert!(e.to_string().contains("damping"), "{e}");
+    // Found after reading (a name given twice): placed in the included file too.
+    std::fs::write(
+        &shin_path,
+        "<mujoco>\n\n  <body name=\"thigh\"><joint/><geom size=\"0.1\"/></body></mujoco>\n",
+    )
+    .unwrap();
+    let e = twinloop_description::load(dir.join("robot.xml")).unwrap_err();
+    assert!(e.message.contains("duplicate link name"), "{e}");
+    assert_eq!(e.location.file.as_deref(), Some(shin_path.as_path()), "{e}");
+    assert_eq!(e.location.line, Some(3), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -346,7 +346,7 @@ struct Reader<'a, 'i> {
     meshes: HashMap<String, MeshAsset>,
     materials: HashMap<String, [f64; 4]>,
     robot: Description,
-    places: Places,
+    places: Places<'a, 'i>,
     unnamed_bodies: usize,
     /// The replica suffix of the body being read: appended to the names given in
     /// the file (bodies, joints, sites, geoms), as MuJoCo's `<replicate>` does.
@@ -431,12 +431,12 @@ pub(crate) fn from_document(
     let sections = includes.elements(root);
     let mut reader = Reader::new(root, includes);
     reader.dir = dir.map(Path::to_path_buf);
-    reader.read(doc, root, &sections)?;
+    reader.read(root, &sections)?;
     Ok(reader.robot)
 }
 
 impl<'a, 'i> Reader<'a, 'i> {
-    fn new(root: Node, includes: include::Includes<'a, 'i>) -> Self {
+    fn new(root: Node<'a, 'i>, includes: include::Includes<'a, 'i>) -> Self {
         Reader {
             includes,
             dir: None,
@@ -460,7 +460,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 ..Default::default()
             },
             places: Places {
-                robot: root.range().start,
+                robot: root,
                 links: Vec::new(),
                 joints: Vec::new(),
             },
@@ -474,7 +474,6 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// assets, then the bodies; last the compiler's `settotalmass`.
     fn read(
         &mut self,
-        doc: &Document,
         root: Node<'a, 'i>,
         sections: &[Node<'a, 'i>],
     ) -> Result<(), DescriptionError> {
@@ -492,7 +491,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         let world = self.needs_world_link(&trees)?;
         if world {
             self.robot.order.push(Item::Link(self.robot.links.len()));
-            self.places.links.push(root.range().start);
+            self.places.links.push(root);
             self.robot.links.push(Link::new("world"));
         }
         let mut aside = self.trees(top, &props, &empties, world)?;
@@ -514,7 +513,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 self.unknown(s);
             }
         }
-        validate_placed(doc, &self.robot, &self.places)
+        validate_placed(&self.robot, &self.places)
     }
 
     /// What the bodies depend on, in the order MuJoCo applies it: compiler, option
@@ -1555,15 +1554,15 @@ impl<'a, 'i> Reader<'a, 'i> {
         Ok(())
     }
 
-    fn push_link(&mut self, l: Link, node: Node) {
+    fn push_link(&mut self, l: Link, node: Node<'a, 'i>) {
         self.robot.order.push(Item::Link(self.robot.links.len()));
-        self.places.links.push(node.range().start);
+        self.places.links.push(node);
         self.robot.links.push(l);
     }
 
-    fn push_joint(&mut self, j: Joint, node: Node) {
+    fn push_joint(&mut self, j: Joint, node: Node<'a, 'i>) {
         self.robot.order.push(Item::Joint(self.robot.joints.len()));
-        self.places.joints.push(node.range().start);
+        self.places.joints.push(node);
         self.robot.joints.push(j);
     }
 

@@ -62,7 +62,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
 
     let mut notes = Vec::new();
     let mut places = Places {
-        robot: root.range().start,
+        robot: root,
         links: Vec::new(),
         joints: Vec::new(),
     };
@@ -75,12 +75,12 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
         match urdf_tag {
             "link" => {
                 robot.order.push(Item::Link(robot.links.len()));
-                places.links.push(node.range().start);
+                places.links.push(node);
                 robot.links.push(read_link(node, &mut notes)?);
             }
             "joint" => {
                 robot.order.push(Item::Joint(robot.joints.len()));
-                places.joints.push(node.range().start);
+                places.joints.push(node);
                 robot.joints.push(read_joint(node)?);
             }
             "material" => {
@@ -99,7 +99,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
     }
     robot.ignored = notes;
     robot.unmodeled = super::schema::check(root);
-    validate_placed(doc, &robot, &places)?;
+    validate_placed(&robot, &places)?;
     Ok(robot)
 }
 
