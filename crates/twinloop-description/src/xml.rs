@@ -282,19 +282,19 @@ pub(crate) fn opt_array<const N: usize>(
         .transpose()
 }
 
-/// Byte offsets of the elements a robot's links and joints were read from, to
-/// place the errors found after parsing by [`Description::validate`].
-pub(crate) struct Places {
+/// The elements a robot's links and joints were read from, to place the errors
+/// found after parsing by [`Description::validate`] (in the file each is in: an
+/// MJCF body may come from an `<include>`d file).
+pub(crate) struct Places<'a, 'i> {
     /// The document's root element (for errors about the whole robot).
-    pub robot: usize,
-    pub links: Vec<usize>,
-    pub joints: Vec<usize>,
+    pub robot: Node<'a, 'i>,
+    pub links: Vec<Node<'a, 'i>>,
+    pub joints: Vec<Node<'a, 'i>>,
 }
 
 /// [`Description::validate`], with the error given the line of the element it names
 /// (for a duplicate name: the second element that has it).
 pub(crate) fn validate_placed(
-    doc: &Document,
     robot: &Description,
     places: &Places,
 ) -> Result<(), DescriptionError> {
@@ -322,7 +322,7 @@ pub(crate) fn validate_placed(
             first
         }
     };
-    let byte = if let Some(name) = name_in("<joint name=\"") {
+    let node = if let Some(name) = name_in("<joint name=\"") {
         let names = robot.joints.iter().map(|j| j.name.as_str()).collect();
         pick(names, &name).and_then(|i| places.joints.get(i).copied())
     } else if let Some(name) = name_in("<link name=\"") {
@@ -336,12 +336,16 @@ pub(crate) fn validate_placed(
     } else {
         None
     };
-    let byte = byte.unwrap_or_else(|| {
+    let node = node.unwrap_or_else(|| {
         if e.location.element.is_none() {
-            e.location.element = Some(describe(doc.root_element()));
+            e.location.element = Some(describe(places.robot));
         }
         places.robot
     });
-    let (line, column) = position(doc, byte);
-    Err(e.at_line(line, column))
+    let (line, column) = position(node.document(), node.range().start);
+    let e = e.at_line(line, column);
+    match crate::xml_origin::file_of(node.document()) {
+        Some(file) => Err(e.in_file(file)),
+        None => Err(e),
+    }
 }

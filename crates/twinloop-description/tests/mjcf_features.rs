@@ -866,3 +866,140 @@ fn free_joint_armature_and_damping_from_defaults_and_said_unwritable_in_urdf() {
     assert!(r.unmodeled.is_empty(), "{:?}", r.unmodeled);
     assert!(!twinloop_description::urdf::to_string(&r).contains("<!--"));
 }
+
+/// A directory of its own under the temporary directory, with `files` written.
+fn write_model(tag: &str, files: &[(&str, &str)]) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("twinloop-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("parts")).unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    dir
+}
+
+/// The inside of `<body name="thigh">`, once spliced (MS-Human-700 writes its
+/// legs so, in `Body_Leg_Foot_r.xml` included from inside `pelvis`).
+const THIGH: &str = r#"<joint name="hip" axis="0 1 0"/>
+    <geom type="capsule" fromto="0 0 0 0 0 -0.4" size="0.05" mass="2"/>"#;
+const SHIN: &str = r#"<body name="shin" pos="0 0 -0.4" euler="0 0 30">
+      <joint name="knee" class="leg" range="-90 0"/>
+      <inertial pos="0 0 -0.2" mass="1" diaginertia="0.01 0.01 0.002"/>
+    </body>"#;
+
+/// `<include>` inside a body, a default and an included file's body: the model
+/// reads exactly as the same model written in one file (MuJoCo splices an
+/// include wherever it stands: XML reference, "include").
+#[test]
+fn includes_inside_bodies_read_as_one_file() {
+    let whole = format!(
+        r#"<mujoco><default><default class="leg"><joint axis="1 0 0" damping="2"/></default></default>
+  <worldbody><body name="torso" pos="0 0 1"><joint name="z" type="slide" axis="0 0 1" range="-1 1"/>
+    <geom type="box" size="0.1 0.1 0.2" mass="3"/>
+    <joint name="pitch" axis="0 1 0"/>
+    <body name="thigh" pos="0.1 0 -0.2">{THIGH}
+    {SHIN}</body>
+  </body></worldbody></mujoco>"#
+    );
+    let dir = write_model(
+        "mjcf-nested-include",
+        &[
+            ("whole.xml", whole.as_str()),
+            (
+                "robot.xml",
+                r#"<mujoco><default><include file="parts/classes.xml"/></default>
+  <worldbody><body name="torso" pos="0 0 1"><joint name="z" type="slide" axis="0 0 1" range="-1 1"/>
+    <geom type="box" size="0.1 0.1 0.2" mass="3"/>
+    <include file="parts/leg.xml"/>
+  </body></worldbody></mujoco>"#,
+            ),
+            (
+                "parts/classes.xml",
+                r#"<mujoco><default class="leg"><joint axis="1 0 0" damping="2"/></default></mujoco>"#,
+            ),
+            (
+                "parts/leg.xml",
+                &format!(
+                    "<mujoco>\n<joint name=\"pitch\" axis=\"0 1 0\"/>\n\
+                     <body name=\"thigh\" pos=\"0.1 0 -0.2\">{THIGH}\n\
+                     <include file=\"parts/shin.xml\"/></body>\n</mujoco>\n"
+                ),
+            ),
+            (
+                "parts/shin.xml",
+                &format!("<mujoco>\n    {SHIN}\n</mujoco>\n"),
+            ),
+        ],
+    );
+    let one = twinloop_description::load(dir.join("whole.xml")).unwrap();
+    let spliced = twinloop_description::load(dir.join("robot.xml")).unwrap();
+    assert_eq!(spliced.links, one.links);
+    assert_eq!(spliced.joints, one.joints);
+    let names: Vec<&str> = spliced.joints.iter().map(|j| j.name.as_str()).collect();
+    assert!(
+        ["z", "pitch", "hip", "knee"]
+            .iter()
+            .all(|n| names.contains(n)),
+        "{names:?}"
+    );
+    assert!((spliced.total_mass() - 6.0).abs() < 1e-12);
+    let knee = spliced.joint("knee").unwrap();
+    assert_eq!(knee.axis, Some([1.0, 0.0, 0.0]));
+    assert_eq!(knee.dynamics.as_ref().and_then(|d| d.damping), Some(2.0));
+    assert_eq!(knee.origin.xyz, [0.0, 0.0, -0.4]);
+    assert!((knee.origin.rpy()[2] - PI / 6.0).abs() < 1e-12);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A file that includes itself through another, from inside a body: the cycle
+/// is named, file by file; an error in a nested included file names that file
+/// and its line, also one found after reading (a duplicate name).
+#[test]
+fn nested_include_cycles_and_errors_name_the_files() {
+    let robot = r#"<mujoco><worldbody><body name="torso"><geom size="0.1"/>
+  <include file="parts/leg.xml"/></body></worldbody></mujoco>"#;
+    let leg = "<mujoco><body name=\"thigh\"><joint/><geom size=\"0.1\"/>\n\
+               <include file=\"parts/shin.xml\"/></body></mujoco>\n";
+    let dir = write_model(
+        "mjcf-include-cycle",
+        &[
+            ("robot.xml", robot),
+            ("parts/leg.xml", leg),
+            (
+                "parts/shin.xml",
+                "<mujoco><body name=\"shin\"><joint/><geom size=\"0.1\"/>\n\
+                 <include file=\"parts/leg.xml\"/></body></mujoco>\n",
+            ),
+        ],
+    );
+    let e = twinloop_description::load(dir.join("robot.xml")).unwrap_err();
+    let (leg_path, shin_path) = (dir.join("parts/leg.xml"), dir.join("parts/shin.xml"));
+    let cycle = format!(
+        "include cycle: {} -> {} -> {}",
+        leg_path.display(),
+        shin_path.display(),
+        leg_path.display()
+    );
+    assert!(e.message.contains(&cycle), "{e}");
+    assert_eq!(e.location.file.as_deref(), Some(shin_path.as_path()), "{e}");
+    assert_eq!(e.location.line, Some(2), "{e}");
+    std::fs::write(
+        &shin_path,
+        "<mujoco><body name=\"shin\"><geom size=\"0.1\"/>\n\n  <joint damping=\"x\"/></body></mujoco>\n",
+    )
+    .unwrap();
+    let e = twinloop_description::load(dir.join("robot.xml")).unwrap_err();
+    assert_eq!(e.location.file.as_deref(), Some(shin_path.as_path()), "{e}");
+    assert_eq!(e.location.line, Some(3), "{e}");
+    assert!(e.to_string().contains("damping"), "{e}");
+    // Found after reading (a name given twice): placed in the included file too.
+    std::fs::write(
+        &shin_path,
+        "<mujoco>\n\n  <body name=\"thigh\"><joint/><geom size=\"0.1\"/></body></mujoco>\n",
+    )
+    .unwrap();
+    let e = twinloop_description::load(dir.join("robot.xml")).unwrap_err();
+    assert!(e.message.contains("duplicate link name"), "{e}");
+    assert_eq!(e.location.file.as_deref(), Some(shin_path.as_path()), "{e}");
+    assert_eq!(e.location.line, Some(3), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -24,7 +24,7 @@ fn robot_mjcfs() -> Vec<std::path::PathBuf> {
         .collect();
     // OP3, TALOS, G1 and H1 (G1 and H1 also as Unitree ship them), and the other
     // Menagerie humanoids of issue 30 (ToddlerBot 2xc and 2xm, Atlas, Elf2 among them).
-    assert_eq!(files.len(), 16, "{files:?}");
+    assert_eq!(files.len(), 19, "{files:?}");
     files
 }
 

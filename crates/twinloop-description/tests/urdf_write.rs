@@ -260,3 +260,47 @@ fn all_optional_joint_parts_round_trip() {
     let back = urdf::from_str(&urdf::to_string(&r)).unwrap();
     assert_eq!(back, r);
 }
+
+/// An MJCF slide without `range` (MS-Human-700's pelvis translations) is written
+/// with `lower` and `upper` (URDF's default for both is 0, a pinned joint, and
+/// yourdfpy's strict check refuses them missing) spanning a finite width, and
+/// reads back as unlimited.
+#[test]
+fn unlimited_slides_are_written_with_a_wide_finite_range() {
+    let robot = mjcf::from_str(
+        r#"<mujoco><worldbody><body name="pelvis">
+  <joint name="tx" type="slide" axis="1 0 0" limited="false" range="-5 5"/>
+  <joint name="ty" type="slide" axis="0 1 0"/>
+  <geom type="sphere" size="0.1" mass="2"/>
+  <body name="leg"><joint name="knee" type="slide" range="-0.1 0.2"/><geom size="0.05"/></body>
+</body></worldbody></mujoco>"#,
+    )
+    .unwrap();
+    let text = urdf::to_string(&robot);
+    let limits: Vec<&str> = text.lines().filter(|l| l.contains("<limit")).collect();
+    assert_eq!(limits.len(), 3, "{text}");
+    let attr = |line: &str, name: &str| -> f64 {
+        let at = line.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+        line[at..].split('"').next().unwrap().parse().unwrap()
+    };
+    for line in &limits {
+        let (lo, hi) = (attr(line, "lower"), attr(line, "upper"));
+        assert!(lo < hi && (hi - lo).is_finite(), "{line}");
+        assert_eq!(attr(line, "effort"), urdf::UNKNOWN_LIMIT, "{line}");
+    }
+    let unlimited: Vec<_> = limits.iter().filter(|l| attr(l, "upper") > 1e300).collect();
+    assert_eq!(unlimited.len(), 2, "{text}");
+    assert!(
+        unlimited
+            .iter()
+            .all(|l| attr(l, "lower") == -urdf::UNLIMITED_SLIDE)
+    );
+    let back = urdf::from_str(&text).unwrap();
+    for name in ["tx", "ty"] {
+        let j = back.joint(name).unwrap();
+        assert_eq!(j.kind, JointKind::Prismatic);
+        assert_eq!(j.limit, None, "{name}");
+    }
+    let knee = back.joint("knee").unwrap().limit.unwrap();
+    assert_eq!((knee.lower, knee.upper), (Some(-0.1), Some(0.2)));
+}

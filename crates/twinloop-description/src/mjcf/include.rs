@@ -1,10 +1,14 @@
 //! `<include file="...">`: MuJoCo splices the children of the included file's
-//! `<mujoco>` element in place of the `<include>`. Paths are relative to the
-//! directory of the main model file; included files may include others.
+//! `<mujoco>` element in place of the `<include>`, wherever it stands (a section
+//! of `<mujoco>`, a `<body>`, a `<default>`, ...: MuJoCo's XML reference,
+//! "include"; MS-Human-700 includes its legs inside `<body name="pelvis">`).
+//! Paths are relative to the directory of the main model file; included files
+//! may include others.
 
 use crate::error::DescriptionError;
 use crate::xml::{error_at, parse_xml, read_text, required};
 use roxmltree::{Document, Node};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// Deepest chain of files including files (a guard against runaway nesting).
@@ -23,8 +27,9 @@ struct Budget {
     bytes: u64,
 }
 
-/// The text of every file that `root`'s top-level `<include>`s bring in, depth
-/// first in document order (the order [`splice`] consumes them).
+/// The text of every file that the `<include>`s under `root` bring in (at any
+/// depth, and those of the included files), depth first in document order (the
+/// order [`Includes::new`] numbers them in).
 pub(crate) fn read_includes(
     root: Node,
     dir: Option<&Path>,
@@ -41,10 +46,7 @@ fn collect(
     out: &mut Vec<(PathBuf, String)>,
     budget: &mut Budget,
 ) -> Result<(), DescriptionError> {
-    for inc in root
-        .children()
-        .filter(|c| c.is_element() && c.tag_name().name() == "include")
-    {
+    for inc in root.descendants().filter(is_include) {
         let file = required(inc, "file")?;
         let Some(dir) = dir else {
             return Err(error_at(
@@ -115,8 +117,10 @@ fn collect(
                         .in_file(&path),
                 );
             }
-            chain.push(path);
-            collect(inner, Some(dir), chain, out, budget)?;
+            chain.push(path.clone());
+            // An error at an element of this file (an <include> in it) names it;
+            // its documents are registered with xml_origin only once all are read.
+            collect(inner, Some(dir), chain, out, budget).map_err(|e| e.in_file(&path))?;
             chain.pop();
         }
         out[slot].1 = text;
@@ -124,21 +128,72 @@ fn collect(
     Ok(())
 }
 
-/// The children of `root` with every `<include>` replaced by the children of the
-/// file it names (`docs`, parsed from [`read_includes`]'s texts in its order).
-pub(crate) fn splice<'a, 'i>(
-    root: Node<'a, 'i>,
+fn is_include(n: &Node) -> bool {
+    n.is_element() && n.tag_name().name() == "include"
+}
+
+/// Which parsed file each `<include>` element brings in.
+pub(crate) struct Includes<'a, 'i> {
     docs: &'a [Document<'i>],
-    next: &mut usize,
-    out: &mut Vec<Node<'a, 'i>>,
-) {
-    for c in root.children().filter(Node::is_element) {
-        if c.tag_name().name() == "include" {
-            let doc = &docs[*next];
+    /// (address of the element's document, its node id) -> index into `docs`.
+    at: HashMap<(usize, usize), usize>,
+}
+
+fn key(n: Node) -> (usize, usize) {
+    (n.document() as *const Document as usize, n.id().get_usize())
+}
+
+impl<'a, 'i> Includes<'a, 'i> {
+    /// `docs` parsed from [`read_includes`]'s texts for `root`, in its order.
+    pub(crate) fn new(root: Node<'a, 'i>, docs: &'a [Document<'i>]) -> Self {
+        let mut me = Includes {
+            docs,
+            at: HashMap::new(),
+        };
+        let mut next = 0;
+        me.number(root, &mut next);
+        me
+    }
+
+    /// Number the includes under `root` as [`collect`] read them: each before
+    /// the includes of its own file.
+    fn number(&mut self, root: Node<'a, 'i>, next: &mut usize) {
+        for inc in root.descendants().filter(is_include) {
+            let Some(doc) = self.docs.get(*next) else {
+                return; // not read: read_includes failed before it
+            };
+            self.at.insert(key(inc), *next);
             *next += 1;
-            splice(doc.root_element(), docs, next, out);
-        } else {
-            out.push(c);
+            self.number(doc.root_element(), next);
         }
+    }
+
+    /// The element children of `node`, each `<include>` replaced by the
+    /// children of its file's `<mujoco>` (theirs in turn; read_includes bounds
+    /// the depth). Without includes: exactly `node`'s element children.
+    pub(crate) fn elements(&self, node: Node<'a, 'i>) -> Vec<Node<'a, 'i>> {
+        let mut out = Vec::new();
+        self.splice(node, &mut out);
+        out
+    }
+
+    fn splice(&self, node: Node<'a, 'i>, out: &mut Vec<Node<'a, 'i>>) {
+        for c in node.children().filter(Node::is_element) {
+            match self.at.get(&key(c)) {
+                Some(&d) if is_include(&c) => self.splice(self.docs[d].root_element(), out),
+                _ => out.push(c),
+            }
+        }
+    }
+
+    /// `node` and every element below it, includes spliced in, in document order.
+    pub(crate) fn descendants(&self, node: Node<'a, 'i>) -> Vec<Node<'a, 'i>> {
+        let mut out = Vec::new();
+        let mut stack = vec![node];
+        while let Some(n) = stack.pop() {
+            out.push(n);
+            stack.extend(self.elements(n).into_iter().rev());
+        }
+        out
     }
 }

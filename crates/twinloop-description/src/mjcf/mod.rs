@@ -346,7 +346,7 @@ struct Reader<'a, 'i> {
     meshes: HashMap<String, MeshAsset>,
     materials: HashMap<String, [f64; 4]>,
     robot: Description,
-    places: Places,
+    places: Places<'a, 'i>,
     unnamed_bodies: usize,
     /// The replica suffix of the body being read: appended to the names given in
     /// the file (bodies, joints, sites, geoms), as MuJoCo's `<replicate>` does.
@@ -355,6 +355,9 @@ struct Reader<'a, 'i> {
     /// with twinloop's ground whatever their `contype` and `conaffinity` (Apptronik
     /// Apollo's soles touch the floor only so).
     paired: std::collections::HashSet<&'a str>,
+    /// The files the `<include>`s bring in: every loop over an element's
+    /// children reads them through [`include::Includes::elements`].
+    includes: include::Includes<'a, 'i>,
 }
 
 /// Where an attribute's value came from: the element itself or a default class.
@@ -424,17 +427,18 @@ pub(crate) fn from_document(
         docs.push(crate::xml::parse_xml(text).map_err(|e| e.in_file(path))?);
     }
     let _files = crate::xml_origin::register(&docs, &texts);
-    let mut sections: Vec<Node> = Vec::new();
-    include::splice(root, &docs, &mut 0, &mut sections);
-    let mut reader = Reader::new(root);
+    let includes = include::Includes::new(root, &docs);
+    let sections = includes.elements(root);
+    let mut reader = Reader::new(root, includes);
     reader.dir = dir.map(Path::to_path_buf);
-    reader.read(doc, root, &sections)?;
+    reader.read(root, &sections)?;
     Ok(reader.robot)
 }
 
 impl<'a, 'i> Reader<'a, 'i> {
-    fn new(root: Node) -> Self {
+    fn new(root: Node<'a, 'i>, includes: include::Includes<'a, 'i>) -> Self {
         Reader {
+            includes,
             dir: None,
             compiler: Compiler {
                 degrees: true,
@@ -456,7 +460,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 ..Default::default()
             },
             places: Places {
-                robot: root.range().start,
+                robot: root,
                 links: Vec::new(),
                 joints: Vec::new(),
             },
@@ -470,7 +474,6 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// assets, then the bodies; last the compiler's `settotalmass`.
     fn read(
         &mut self,
-        doc: &Document,
         root: Node<'a, 'i>,
         sections: &[Node<'a, 'i>],
     ) -> Result<(), DescriptionError> {
@@ -488,7 +491,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         let world = self.needs_world_link(&trees)?;
         if world {
             self.robot.order.push(Item::Link(self.robot.links.len()));
-            self.places.links.push(root.range().start);
+            self.places.links.push(root);
             self.robot.links.push(Link::new("world"));
         }
         let mut aside = self.trees(top, &props, &empties, world)?;
@@ -510,7 +513,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 self.unknown(s);
             }
         }
-        validate_placed(doc, &self.robot, &self.places)
+        validate_placed(&self.robot, &self.places)
     }
 
     /// What the bodies depend on, in the order MuJoCo applies it: compiler, option
@@ -520,7 +523,10 @@ impl<'a, 'i> Reader<'a, 'i> {
             match s.tag_name().name() {
                 "compiler" => self.compiler(s)?,
                 "option" => self.option(s)?,
-                "contact" => self.paired.extend(ground_pairs(s, sections)),
+                "contact" => {
+                    let pairs = ground_pairs(&self.includes, s, sections);
+                    self.paired.extend(pairs);
+                }
                 _ => {}
             }
         }
@@ -553,9 +559,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 match c.tag_name().name() {
                     "body" => top.push((c, xf, cc, sfx)),
                     "composite" | "flexcomp" => self.soft_body(c),
-                    t @ ("attach" | "include") => {
-                        return Err(error_at(c, format!("<{t}> is not supported")));
-                    }
+                    "attach" => return Err(error_at(c, "<attach> is not supported")),
                     t if !BODY_CHILDREN.contains(&t) => self.unknown(c),
                     _ => {} // world geoms, sites, lights, cameras
                 }
@@ -621,9 +625,10 @@ impl<'a, 'i> Reader<'a, 'i> {
     ) -> Result<Vec<Framed<'a, 'i>>, DescriptionError> {
         let mut out = Vec::new();
         // (element, enclosing placement, childclass, suffix, depth), in file order.
-        let mut stack: Vec<(Node, Xf, Option<String>, String, usize)> = node
-            .children()
-            .filter(Node::is_element)
+        let mut stack: Vec<(Node, Xf, Option<String>, String, usize)> = self
+            .includes
+            .elements(node)
+            .into_iter()
             .map(|c| (c, NO_FRAME, cc.map(str::to_string), suffix.to_string(), 0))
             .collect();
         stack.reverse();
@@ -642,7 +647,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                     format!("<replicate>s expand to more than {MAX_REPLICAS} elements"),
                 ));
             }
-            let children: Vec<Node> = c.children().filter(Node::is_element).collect();
+            let children = self.includes.elements(c);
             if tag == "replicate" {
                 for (inner, name) in self.replicas(c, &xf)?.into_iter().rev() {
                     for &k in children.iter().rev() {
@@ -726,9 +731,11 @@ impl<'a, 'i> Reader<'a, 'i> {
         }
         let (mut free, mut fixed) = (Vec::new(), Vec::new());
         for (b, _, _, _) in top {
-            let js: Vec<Node> = b
-                .children()
-                .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
+            let js: Vec<Node> = self
+                .includes
+                .elements(*b)
+                .into_iter()
+                .filter(|c| matches!(c.tag_name().name(), "joint" | "freejoint"))
                 .collect();
             if js.len() == 1 && self.joint_type(js[0], None)? == "free" {
                 free.push(*b);
@@ -736,7 +743,10 @@ impl<'a, 'i> Reader<'a, 'i> {
                 fixed.push(*b);
             }
         }
-        let size = |b: &Node| b.descendants().filter(|d| d.has_tag_name("body")).count();
+        let size = |b: &Node<'a, 'i>| {
+            let all = self.includes.descendants(*b);
+            all.iter().filter(|d| d.has_tag_name("body")).count()
+        };
         let Some(largest) = free
             .iter()
             .copied()
@@ -744,8 +754,9 @@ impl<'a, 'i> Reader<'a, 'i> {
         else {
             return none;
         };
-        let jointless = |b: &Node| {
-            !b.descendants()
+        let jointless = |b: &Node<'a, 'i>| {
+            let all = self.includes.descendants(*b);
+            !all.iter()
                 .any(|d| d.has_tag_name("joint") || d.has_tag_name("freejoint"))
         };
         if !fixed.is_empty() && fixed.iter().map(size).sum::<usize>() > size(&largest) {
@@ -845,9 +856,9 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// otherwise yes, and then no top-level body may have a free joint.
     fn needs_world_link(&self, top: &[Framed<'a, 'i>]) -> Result<bool, DescriptionError> {
         let joints = |b: Node<'a, 'i>| -> Vec<Node<'a, 'i>> {
-            b.children()
-                .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
-                .collect()
+            let mut all = self.includes.elements(b);
+            all.retain(|c| matches!(c.tag_name().name(), "joint" | "freejoint"));
+            all
         };
         if let [(only, frame, _, _)] = top {
             let (only, framed) = (*only, *frame != NO_FRAME);
@@ -901,8 +912,10 @@ impl<'a, 'i> Reader<'a, 'i> {
             "intvelocity",
             "damper",
         ];
-        for e in section
-            .children()
+        for e in self
+            .includes
+            .elements(section)
+            .into_iter()
             .filter(|e| KINDS.contains(&e.tag_name().name()))
         {
             let Some(joint) = e.attribute("joint") else {
@@ -957,7 +970,7 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// tendons, equality constraints, actuators that do not drive a joint,
     /// sensors at sites, and deformable flexes and skins.
     fn unmodeled(&mut self, section: Node<'a, 'i>) {
-        for e in section.children().filter(Node::is_element) {
+        for e in self.includes.elements(section) {
             let what = match (section.tag_name().name(), e.tag_name().name()) {
                 ("tendon", t) => format!(
                     "{t} tendon: its length limits, stiffness, damping and any actuator on it \
@@ -1066,7 +1079,10 @@ impl<'a, 'i> Reader<'a, 'i> {
         if let Some(v) = node.attribute("gravity") {
             self.robot.gravity = Some(parse_array::<3>(node, "gravity", v)?);
         }
-        for f in node.children().filter(|c| c.has_tag_name("flag")) {
+        for f in self.includes.elements(node) {
+            if !f.has_tag_name("flag") {
+                continue;
+            }
             match f.attribute("gravity") {
                 Some("disable") => self.robot.gravity = Some([0.0; 3]),
                 Some("enable") | None => {}
@@ -1166,10 +1182,10 @@ impl<'a, 'i> Reader<'a, 'i> {
     ) -> Result<(), DescriptionError> {
         let mut pending: Vec<(Node<'a, 'i>, String, Option<String>)> = vec![(top, top_name, None)];
         while let Some((node, name, parent)) = pending.pop() {
-            let elements: Vec<Node> = node
-                .children()
-                .filter(|c| c.is_element() && c.tag_name().name() != "default")
-                .collect();
+            let all = self.includes.elements(node);
+            let (nested, elements): (Vec<Node>, Vec<Node>) = all
+                .into_iter()
+                .partition(|c| c.tag_name().name() == "default");
             match self.classes.get_mut(&name) {
                 // Two top-level <default> sections both define "main": merge them.
                 Some(c) if parent.is_none() && name == "main" => c.elements.extend(elements),
@@ -1184,10 +1200,6 @@ impl<'a, 'i> Reader<'a, 'i> {
                         .insert(name.clone(), Class { parent, elements });
                 }
             }
-            let nested: Vec<Node> = node
-                .children()
-                .filter(|c| c.is_element() && c.tag_name().name() == "default")
-                .collect();
             for c in nested.into_iter().rev() {
                 let child = required(c, "class")?.to_string();
                 pending.push((c, child, Some(name.clone())));
@@ -1354,7 +1366,7 @@ impl<'a, 'i> Reader<'a, 'i> {
     }
 
     fn assets(&mut self, node: Node<'a, 'i>) -> Result<(), DescriptionError> {
-        for a in node.children().filter(Node::is_element) {
+        for a in self.includes.elements(node) {
             match a.tag_name().name() {
                 "mesh" => {
                     let class = self.class_of(a, None)?;
@@ -1533,9 +1545,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                     suffix,
                 }),
                 "composite" | "flexcomp" => self.soft_body(c),
-                t @ ("attach" | "include") => {
-                    return Err(error_at(c, format!("<{t}> is not supported")));
-                }
+                "attach" => return Err(error_at(c, "<attach> is not supported")),
                 t if !BODY_CHILDREN.contains(&t) => self.unknown(c),
                 _ => {}
             }
@@ -1544,15 +1554,15 @@ impl<'a, 'i> Reader<'a, 'i> {
         Ok(())
     }
 
-    fn push_link(&mut self, l: Link, node: Node) {
+    fn push_link(&mut self, l: Link, node: Node<'a, 'i>) {
         self.robot.order.push(Item::Link(self.robot.links.len()));
-        self.places.links.push(node.range().start);
+        self.places.links.push(node);
         self.robot.links.push(l);
     }
 
-    fn push_joint(&mut self, j: Joint, node: Node) {
+    fn push_joint(&mut self, j: Joint, node: Node<'a, 'i>) {
         self.robot.order.push(Item::Joint(self.robot.joints.len()));
-        self.places.joints.push(node.range().start);
+        self.places.joints.push(node);
         self.robot.joints.push(j);
     }
 
@@ -1606,10 +1616,8 @@ impl<'a, 'i> Reader<'a, 'i> {
         has_parent: bool,
         cc: Option<&str>,
     ) -> Result<Vec<BodyJoint<'a, 'i>>, DescriptionError> {
-        let elements: Vec<Node> = node
-            .children()
-            .filter(|c| c.is_element() && matches!(c.tag_name().name(), "joint" | "freejoint"))
-            .collect();
+        let mut elements = self.includes.elements(node);
+        elements.retain(|c| matches!(c.tag_name().name(), "joint" | "freejoint"));
         let mut out = Vec::new();
         let mut anchor = [0.0; 3];
         for &j in &elements {
@@ -1699,7 +1707,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         node: Node<'a, 'i>,
         cc: Option<&str>,
     ) -> Result<(), DescriptionError> {
-        let Some(j) = node.children().find(|c| {
+        let Some(j) = self.includes.elements(node).into_iter().find(|c| {
             c.has_tag_name("joint") && self.joint_type(*c, cc).is_ok_and(|t| t == "free")
         }) else {
             return Ok(());
@@ -1848,7 +1856,11 @@ impl<'a, 'i> Reader<'a, 'i> {
         let from_geoms = match self.compiler.inertia_from_geom {
             FromGeom::True => true,
             FromGeom::False => false,
-            FromGeom::Auto => !node.children().any(|c| c.has_tag_name("inertial")),
+            FromGeom::Auto => !self
+                .includes
+                .elements(node)
+                .iter()
+                .any(|c| c.has_tag_name("inertial")),
         };
         let mut parts = Vec::new();
         // Sites and geoms in a body's own replicas: their suffixes (MuJoCo's
@@ -2377,15 +2389,23 @@ fn file_stem(path: &str) -> &str {
 /// body (a direct child of `<worldbody>`, where a scene's floor is). A pair of two
 /// robot geoms (Apollo's arm against its pelvis) is a self-collision, which
 /// twinloop does not model: it must not make those geoms touch the ground.
-fn ground_pairs<'a>(contact: Node<'a, '_>, sections: &[Node<'a, '_>]) -> Vec<&'a str> {
+fn ground_pairs<'a, 'i>(
+    includes: &include::Includes<'a, 'i>,
+    contact: Node<'a, 'i>,
+    sections: &[Node<'a, 'i>],
+) -> Vec<&'a str> {
     let world: std::collections::HashSet<&str> = sections
         .iter()
         .filter(|s| s.has_tag_name("worldbody"))
-        .flat_map(|w| w.children().filter(|g| g.has_tag_name("geom")))
+        .flat_map(|w| includes.elements(*w))
+        .filter(|g| g.has_tag_name("geom"))
         .filter_map(|g| g.attribute("name"))
         .collect();
     let mut out = Vec::new();
-    for p in contact.children().filter(|p| p.has_tag_name("pair")) {
+    for p in includes.elements(contact) {
+        if !p.has_tag_name("pair") {
+            continue;
+        }
         if let (Some(a), Some(b)) = (p.attribute("geom1"), p.attribute("geom2")) {
             if world.contains(b) {
                 out.push(a);

@@ -41,4 +41,6 @@ mod write;
 
 pub(crate) use read::from_document;
 pub use read::{from_str, read_file};
-pub use write::{UNKNOWN_LIMIT, to_string, to_string_exact, unwritable, write_file};
+pub use write::{
+    UNKNOWN_LIMIT, UNLIMITED_SLIDE, to_string, to_string_exact, unwritable, write_file,
+};

@@ -2,7 +2,7 @@
 
 use crate::description::*;
 use crate::error::DescriptionError;
-use crate::urdf::UNKNOWN_LIMIT;
+use crate::urdf::{UNKNOWN_LIMIT, UNLIMITED_SLIDE};
 use crate::xml::{
     Places, error_at, error_at_attr, opt_array, opt_number, parse_array, parse_number,
     qualified_name, read_text, required, source_text, validate_placed,
@@ -62,7 +62,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
 
     let mut notes = Vec::new();
     let mut places = Places {
-        robot: root.range().start,
+        robot: root,
         links: Vec::new(),
         joints: Vec::new(),
     };
@@ -75,12 +75,12 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
         match urdf_tag {
             "link" => {
                 robot.order.push(Item::Link(robot.links.len()));
-                places.links.push(node.range().start);
+                places.links.push(node);
                 robot.links.push(read_link(node, &mut notes)?);
             }
             "joint" => {
                 robot.order.push(Item::Joint(robot.joints.len()));
-                places.joints.push(node.range().start);
+                places.joints.push(node);
                 robot.joints.push(read_joint(node)?);
             }
             "material" => {
@@ -99,7 +99,7 @@ pub(crate) fn from_document(doc: &Document) -> Result<Description, DescriptionEr
     }
     robot.ignored = notes;
     robot.unmodeled = super::schema::check(root);
-    validate_placed(doc, &robot, &places)?;
+    validate_placed(&robot, &places)?;
     Ok(robot)
 }
 
@@ -307,8 +307,8 @@ fn read_joint(node: Node) -> Result<Joint, DescriptionError> {
                 // A limit that says nothing but the writer's "not given" is no limit
                 // (how a revolute joint without one is written).
                 joint.limit = Some(Limit {
-                    lower: opt_number(c, "lower")?,
-                    upper: opt_number(c, "upper")?,
+                    lower: opt_number(c, "lower")?.filter(|&x| x != -UNLIMITED_SLIDE),
+                    upper: opt_number(c, "upper")?.filter(|&x| x != UNLIMITED_SLIDE),
                     // The writer's "not given" (see `to_string`) reads back as such.
                     effort: opt_number(c, "effort")?.filter(|&e| e != UNKNOWN_LIMIT),
                     velocity: opt_number(c, "velocity")?.filter(|&v| v != UNKNOWN_LIMIT),

@@ -28,6 +28,8 @@
 //!   reader reads that number back as not given;
 //! - a revolute or prismatic joint always has a `<limit>` (urdfdom refuses one
 //!   without), and a `<material>` always a `name` (empty when it has none);
+//! - a prismatic joint's `<limit>` always has `lower` and `upper` (yourdfpy's strict
+//!   check requires them); one without position limits gets +-[`UNLIMITED_SLIDE`];
 //! - a ball joint ([`JointKind::Spherical`], from MJCF; URDF has none) becomes three
 //!   revolute joints `<ball>_x`, `<ball>_y`, `<ball>_z` about the x, y and z axes of
 //!   the ball's frame, through two massless links `<ball>_x_link` and
@@ -52,6 +54,17 @@ use std::path::Path;
 /// What `<limit>` says for an effort or velocity the description does not give: the
 /// largest double, i.e. no limit; read back as not given.
 pub const UNKNOWN_LIMIT: f64 = f64::MAX;
+
+/// The `upper` (and, negated, `lower`) written for a prismatic joint without
+/// position limits (an MJCF slide without `range`). URDF has no unlimited
+/// prismatic joint: `lower` and `upper` are optional but default to 0 (ROS wiki,
+/// urdf/XML/joint), which pins the joint, and yourdfpy's strict check refuses
+/// them missing. Half the largest double keeps `upper - lower` finite, so a tool
+/// that takes the range's middle (yourdfpy's `center_cfg`) gets 0, not NaN;
+/// Pinocchio reads it as its position limits (and its `randomConfiguration`
+/// still overflows to inf on any range past ~1e298: no bound near "unlimited"
+/// can serve it). The reader reads it back as not given.
+pub const UNLIMITED_SLIDE: f64 = f64::MAX / 2.0;
 
 /// The URDF text of a robot: `<?xml version="1.0"?>` header, 2-space indent; a file
 /// other tools load (ball joints as three revolute joints, see the module).
@@ -365,9 +378,11 @@ impl Writer {
         }
         let needs_limit = matches!(j.kind, JointKind::Revolute | JointKind::Prismatic);
         if let Some(l) = j.limit.or(needs_limit.then(Limit::default)) {
+            // A slide without range: see UNLIMITED_SLIDE.
+            let slide = j.kind == JointKind::Prismatic;
             let attrs = opt_attrs(&[
-                ("lower", l.lower),
-                ("upper", l.upper),
+                ("lower", l.lower.or(slide.then_some(-UNLIMITED_SLIDE))),
+                ("upper", l.upper.or(slide.then_some(UNLIMITED_SLIDE))),
                 ("effort", Some(l.effort.unwrap_or(UNKNOWN_LIMIT))),
                 ("velocity", Some(l.velocity.unwrap_or(UNKNOWN_LIMIT))),
             ]);
