@@ -6,8 +6,7 @@ use crate::error::{CliError, CliResult, Outcome};
 use crate::progress;
 use crate::sim_args::{Goals, ServoChoice, record_columns, standing_simulator, state_row};
 use clap::Args;
-use std::path::{Path, PathBuf};
-use twinloop_io::{Quantity, StateColumns, Table};
+use std::path::PathBuf;
 use twinloop_robot::{Robot, RobotState};
 use twinloop_sim::Simulator;
 
@@ -93,7 +92,7 @@ pub fn run(a: SimulateArgs) -> CliResult {
         .unwrap_or_else(|| goals.as_ref().map_or(2.0, Goals::end));
     let what = match (&a.duration, &goals) {
         (None, Some(g)) => {
-            let first = g.t.first().copied().unwrap_or(0.0);
+            let first = g.start();
             format!(
                 "{}: the last goal, t = {} s, at --dt {} s{}",
                 a.trajectory

@@ -4,9 +4,9 @@
 
 use crate::error::CliError;
 use crate::units::read_trajectory;
+use clap::ValueEnum;
 use std::path::Path;
 use twinloop_io::{Quantity, StateColumns, Table};
-use clap::ValueEnum;
 use twinloop_robot::{Robot, RobotState};
 use twinloop_sim::{DynamixelServo, SimConfig, Simulator};
 
@@ -142,6 +142,11 @@ impl Goals {
         }
         table.check_finite(&cols.iter().flatten().copied().collect::<Vec<_>>())?;
         Ok(Goals { t, cols, table })
+    }
+
+    /// The first goal's time.
+    pub(crate) fn start(&self) -> f64 {
+        self.t.first().copied().unwrap_or(0.0)
     }
 
     /// The last goal's time.

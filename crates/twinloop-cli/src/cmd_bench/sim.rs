@@ -2,9 +2,9 @@
 //! servos, or following a goal trajectory (the walking case of
 //! `bench/mujoco/compare_sim.py`).
 
-use crate::sim_args::Goals;
 use crate::common::{ROBOT_HELP, emit, load_description};
 use crate::error::{CliError, CliResult, Outcome};
+use crate::sim_args::Goals;
 use crate::sim_args::{ServoChoice, standing_simulator};
 use clap::Args;
 use serde::Serialize;
