@@ -120,7 +120,8 @@ fn a_profile_file_is_a_robot_from_any_folder() {
     let (ok, out, err) = run(&["model", "info", rel.to_str().unwrap()], &elsewhere);
     assert!(ok, "{err}");
     assert!(out.contains("robotis_op3"), "{out}");
-    // A role naming a joint the description lacks is refused, naming the profile.
+    // A role and a servo naming a joint the description lacks are refused, naming the
+    // profile's line (the servo's joint is checked first).
     std::fs::write(
         dir.join("bad.toml"),
         "[robot]\ndescription = \"sub/op3.urdf\"\n[roles]\nleft_knee = \"knee\"\n[[joint]]\nname = \"knee\"\nid = 14\nmodel = \"XM430-W350\"\n",
@@ -129,7 +130,9 @@ fn a_profile_file_is_a_robot_from_any_folder() {
     let (ok, _, err) = run(&["model", "info", "bad.toml"], &dir);
     assert!(!ok);
     assert!(
-        err.contains("bad.toml: roles.left_knee: \"knee\" is not a joint of \"robotis_op3\""),
+        err.contains(
+            "bad.toml line 5: joint \"knee\" (servo id 14) is not a joint of \"robotis_op3\""
+        ),
         "{err}"
     );
 }
