@@ -485,7 +485,7 @@ pub fn training_samples<'py>(
 /// mass; `check=True` reruns the tip-over on the adapted model. Returns (the report's
 /// fields, the adapted Description or None when the family is not fixed).
 #[pyfunction]
-#[pyo3(signature = (prior, tipover, total_mass = None, host = None, merge = false, resolution = 0.05, check = false))]
+#[pyo3(signature = (prior, tipover, total_mass = None, host = None, merge = false, resolution = None, check = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn adapt<'py>(
     py: Python<'py>,
@@ -494,16 +494,21 @@ pub fn adapt<'py>(
     total_mass: Option<f64>,
     host: Option<String>,
     merge: bool,
-    resolution: f64,
+    resolution: Option<f64>,
     check: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Option<crate::model::PyDescription>)> {
     let d = description_arg(prior)?;
     let tip = study_arg(py, tipover)?;
-    if !(resolution > 0.0 && resolution.is_finite()) {
+    if let Some(r) = resolution
+        && !(r > 0.0 && r.is_finite())
+    {
         return Err(value_error(format!(
-            "resolution: must be positive, got {resolution}"
+            "resolution: must be positive, got {r}"
         )));
     }
+    // The CLI's rule: over a bus, the mapping's ankle servo's half count.
+    let resolution = twinloop_loop::bus_plan::tipover_resolution_deg(resolution, &tip)
+        .map_err(crate::tipover_bus::loop_error)?;
     let opts = twinloop_ident::adapt::AdaptOptions {
         total_mass,
         host,

@@ -22,7 +22,7 @@ use twinloop_loop::protocol_bias::{REPLAY_GROUND_SINK, Replay, replay_options};
 /// pass is kept. Returns (the report's fields, the adapted Description or None, the
 /// passes as `demo --json`'s `calibration` or None when none ran).
 #[pyfunction]
-#[pyo3(signature = (prior, tipover, passes = 3, total_mass = None, host = None, merge = false, resolution = 0.05, ground_sink = None))]
+#[pyo3(signature = (prior, tipover, passes = 3, total_mass = None, host = None, merge = false, resolution = None, ground_sink = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn adapt_to_protocol<'py>(
     py: Python<'py>,
@@ -32,7 +32,7 @@ pub fn adapt_to_protocol<'py>(
     total_mass: Option<f64>,
     host: Option<String>,
     merge: bool,
-    resolution: f64,
+    resolution: Option<f64>,
     ground_sink: Option<f64>,
 ) -> PyResult<(
     Bound<'py, PyAny>,
@@ -42,10 +42,7 @@ pub fn adapt_to_protocol<'py>(
     let (d, order) = description_arg_ordered(prior)?;
     let model_spec = prior.extract::<String>().unwrap_or_else(|_| d.name.clone());
     let tip = study_arg(py, tipover)?;
-    let given = [
-        (Some(resolution), "resolution"),
-        (ground_sink, "ground_sink"),
-    ];
+    let given = [(resolution, "resolution"), (ground_sink, "ground_sink")];
     for (x, name) in given.iter().filter_map(|(x, n)| x.map(|x| (x, *n))) {
         if !(x > 0.0 && x.is_finite()) {
             return Err(value_error(format!("{name}: must be positive, got {x}")));
@@ -54,6 +51,9 @@ pub fn adapt_to_protocol<'py>(
     if passes > 5 {
         return Err(value_error(format!("passes: at most 5, got {passes}")));
     }
+    // The CLI's rule: over a bus, the mapping's ankle servo's half count.
+    let resolution =
+        twinloop_loop::bus_plan::tipover_resolution_deg(resolution, &tip).map_err(loop_error)?;
     let opts = AdaptOptions {
         total_mass,
         host,

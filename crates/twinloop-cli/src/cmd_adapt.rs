@@ -200,17 +200,6 @@ pub struct TrainArgs {
     pub report: Option<PathBuf>,
 }
 
-/// The measured angles' resolution, deg: `--resolution`; else, for a tip-over over
-/// a bus, its mapping's ([`twinloop_loop::bus_plan::protocol_resolution_deg`]); else
-/// 0.05.
-fn resolution_of(given: Option<f64>, tip: &StudyReport) -> Result<f64, CliError> {
-    match (given, &tip.protocol) {
-        (Some(r), _) => Ok(r),
-        (None, Some(p)) => Ok(twinloop_loop::bus_plan::protocol_resolution_deg(p)?),
-        (None, None) => Ok(0.05),
-    }
-}
-
 fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
     let text = twinloop_io::input::read_to_string(path)
         .map_err(|e| CliError::io(path, e).context("--tipover"))?;
@@ -328,7 +317,10 @@ pub fn run(a: AdaptArgs) -> CliResult {
         total_mass: a.total_mass,
         host: a.host.clone(),
         merge: a.merge,
-        angle_resolution_deg: Some(resolution_of(a.resolution, &tip)?),
+        angle_resolution_deg: Some(twinloop_loop::bus_plan::tipover_resolution_deg(
+            a.resolution,
+            &tip,
+        )?),
         protocol_bias_deg: None,
     };
     use twinloop_loop::adapt_to_protocol;

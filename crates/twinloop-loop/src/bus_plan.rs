@@ -169,3 +169,18 @@ pub fn protocol_resolution_deg(protocol: &BusProtocol) -> Result<f64, LoopError>
     })?;
     angle_resolution_deg(&mapping, protocol)
 }
+
+/// The measured angles' resolution `adapt` holds a tip-over to, deg: the one given;
+/// else, for a tip-over measured over a bus, its mapping's
+/// ([`protocol_resolution_deg`]); else 0.05 (a simulated study's readings). One rule
+/// for the CLI and Python, so both adapt a measurement alike.
+pub fn tipover_resolution_deg(
+    given: Option<f64>,
+    tip: &twinloop_ident::tipover_study::StudyReport,
+) -> Result<f64, LoopError> {
+    match (given, &tip.protocol) {
+        (Some(r), _) => Ok(r),
+        (None, Some(p)) => protocol_resolution_deg(p),
+        (None, None) => Ok(0.05),
+    }
+}

@@ -276,15 +276,15 @@ def training_samples(robot: RobotSpec, start: int, stop: int, seed: int = 1, mas
     """Samples start..stop of `twinloop adapt train`'s set (the same draws however split): change, part,
     static fall angles (deg, true and noisy), CoM (m), total_mass (kg), feet and the three-mass LIPM."""
 def adapt(prior: RobotSpec, tipover: dict[str, Any], total_mass: Optional[float] = None, host: Optional[str] = None,
-          merge: bool = False, resolution: float = 0.05, check: bool = False) -> tuple[dict[str, Any], Optional[Description]]:
+          merge: bool = False, resolution: Optional[float] = None, check: bool = False) -> tuple[dict[str, Any], Optional[Description]]:
     """`twinloop adapt --tipover FILE --json`'s report and the adapted description (None if not fixed);
     total_mass kg, resolution deg."""
 def adapt_to_protocol(prior: RobotSpec, tipover: dict[str, Any], passes: int = 3, total_mass: Optional[float] = None,
-                      host: Optional[str] = None, merge: bool = False, resolution: float = 0.05,
+                      host: Optional[str] = None, merge: bool = False, resolution: Optional[float] = None,
                       ground_sink: Optional[float] = None) -> tuple[dict[str, Any], Optional[Description], Optional[dict[str, Any]]]:
     """`twinloop adapt --tipover FILE --protocol-passes N --json`'s report, the adapted description (None if not
     fixed) and the passes (`demo --json`'s calibration: passes [{bias_deg, static_deg, protocol_deg, adapted_com}],
-    kept; None when none ran); total_mass kg, resolution deg, ground_sink m (None: found from the sideways tips, as the CLI); GIL released."""
+    kept; None when none ran); total_mass kg, resolution deg (None: as adapt), ground_sink m (None: found from the sideways tips, as the CLI); GIL released."""
 def fit_compliant(data: Union[str, PathLike[str]], plant: Union[str, PathLike[str]],
                   method: Literal["lm", "cmaes", "power"] = "lm", params: Optional[Union[str, Sequence[str]]] = None,
                   start: Optional[Sequence[float]] = None, max_evaluations: Optional[int] = None, sigma: float = 0.05,

@@ -331,7 +331,7 @@ def sysid_order_sweep(u: Any, y: Any, orders: Sequence, *, method: str = "arx", 
     )
 
 
-def _adapt_batch(prior, robots, threads=1, resolution=0.05, merge=False, check=False):
+def _adapt_batch(prior, robots, threads=1, resolution=None, merge=False, check=False):
     out = []
     for r in robots:
         report, adapted = _native.adapt(prior, r["tipover"], total_mass=r.get("total_mass"), host=r.get("host"),
@@ -359,7 +359,7 @@ class TeamAdaptation:
     adapted_com: np.ndarray
 
 
-def team_adaptation(prior: Any, robots: Sequence[dict], *, resolution: float = 0.05, merge: bool = False,
+def team_adaptation(prior: Any, robots: Sequence[dict], *, resolution: Optional[float] = None, merge: bool = False,
                     check: bool = False, **options) -> TeamAdaptation:
     """Adapt ``prior`` to each robot of a team on Ray: ``robots`` are dicts with
     ``tipover`` (that robot's tip-over report: ``twinloop.tipover()``'s dict or the
