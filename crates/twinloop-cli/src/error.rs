@@ -112,6 +112,22 @@ fn is_source_picture(line: &str) -> bool {
     rest.starts_with('|')
 }
 
+/// serde's "unknown field/variant `x`, expected one of `a`, `b`" as "unknown WHAT
+/// \"x\" (known: a, b)", the position (" at line ...") kept.
+fn unknown(what: &str, name: &str, rest: &str) -> String {
+    let known = rest
+        .strip_prefix(", expected one of ")
+        .or_else(|| rest.strip_prefix(", expected "))
+        .map(|k| {
+            let end = k.find(" at line").unwrap_or(k.len());
+            (k[..end].replace('`', ""), &k[end..])
+        });
+    match known {
+        Some((k, tail)) => format!("unknown {what} \"{name}\" (known: {k}){tail}"),
+        None => format!("unknown {what} \"{name}\"{rest}"),
+    }
+}
+
 /// A message with the parsers' wording (serde's, Rust's I/O errors') put as people
 /// say it: `missing field `forward`` is `field "forward" is missing`, `invalid
 /// type: integer `5`, expected a string` is `5 (a number) where a string is
@@ -122,30 +138,10 @@ pub fn plain_words(text: &str) -> String {
         format!("field \"{name}\" is missing{rest}")
     });
     s = rewrite(&s, "unknown field `", |name, rest| {
-        let known = rest
-            .strip_prefix(", expected one of ")
-            .or_else(|| rest.strip_prefix(", expected "))
-            .map(|k| {
-                let end = k.find(" at line").unwrap_or(k.len());
-                (k[..end].replace('`', ""), &k[end..])
-            });
-        match known {
-            Some((k, tail)) => format!("unknown field \"{name}\" (known: {k}){tail}"),
-            None => format!("unknown field \"{name}\"{rest}"),
-        }
+        unknown("field", name, rest)
     });
     s = rewrite(&s, "unknown variant `", |name, rest| {
-        let known = rest
-            .strip_prefix(", expected one of ")
-            .or_else(|| rest.strip_prefix(", expected "))
-            .map(|k| {
-                let end = k.find(" at line").unwrap_or(k.len());
-                (k[..end].replace('`', ""), &k[end..])
-            });
-        match known {
-            Some((k, tail)) => format!("unknown value \"{name}\" (known: {k}){tail}"),
-            None => format!("unknown value \"{name}\"{rest}"),
-        }
+        unknown("value", name, rest)
     });
     if let Some(k) = s.find("invalid type: ") {
         let body = &s[k + "invalid type: ".len()..];
