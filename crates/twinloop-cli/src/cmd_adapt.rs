@@ -291,17 +291,7 @@ pub fn run(a: AdaptArgs) -> CliResult {
     if let Some(kg) = a.total_mass {
         crate::units::total_mass("--total-mass", kg, &prior)?;
     }
-    let tip = match (&a.bus.port, &a.tipover) {
-        (Some(_), out) => tip_in_place(&a, robot, out.as_deref())?,
-        (None, Some(path)) => {
-            let tip = read_tip(path)?;
-            same_robot(&tip, &prior.name, robot, path)?;
-            tip.check_onset_joints(&prior)
-                .map_err(|e| CliError::from(e.in_file(path)).context("--tipover"))?;
-            tip
-        }
-        (None, None) => return Err(CliError::new("adapt needs --tipover or --port")),
-    };
+    let tip = the_tipover(&a, robot, &prior)?;
     if a.method == Method::Ann {
         return run_ann(&a, &prior, &tip);
     }
@@ -357,14 +347,8 @@ pub fn run(a: AdaptArgs) -> CliResult {
         None => None,
     };
     let failed = adapted.report.failed_checks().next().is_some();
-    if let (Some(out), Some(robot), false) = (&a.out, &adapted.robot, failed) {
-        twinloop_description::urdf::write_file(robot, out)
-            .map_err(|e| CliError::new(format!("{}: {e}", out.display())).context("--out"))?;
-        adapted.report.files.push(out.display().to_string());
-    }
-    if let (Some(path), Some(robot), false) = (&a.mcap, &adapted.robot, failed) {
-        write_result_mcap(path, &a, (&prior, robot), &tip, lean.as_ref())?;
-        adapted.report.files.push(path.display().to_string());
+    if !failed {
+        write_model_outputs(&a, &mut adapted, &prior, &tip, lean.as_ref())?;
     }
     if let Some(p) = &a.report {
         let replay = replay_3d(&a, p, adapted.robot.is_some(), &mut adapted.report.files);
@@ -384,6 +368,46 @@ pub fn run(a: AdaptArgs) -> CliResult {
     } else {
         Outcome::Ok
     })
+}
+
+/// The tip-over to adapt to: measured now over `--port`, or read from `--tipover`
+/// (checked to be this robot's, its onset joints the description's).
+fn the_tipover(
+    a: &AdaptArgs,
+    robot: &str,
+    prior: &twinloop_description::Description,
+) -> Result<StudyReport, CliError> {
+    match (&a.bus.port, &a.tipover) {
+        (Some(_), out) => tip_in_place(a, robot, out.as_deref()),
+        (None, Some(path)) => {
+            let tip = read_tip(path)?;
+            same_robot(&tip, &prior.name, robot, path)?;
+            tip.check_onset_joints(prior)
+                .map_err(|e| CliError::from(e.in_file(path)).context("--tipover"))?;
+            Ok(tip)
+        }
+        (None, None) => Err(CliError::new("adapt needs --tipover or --port")),
+    }
+}
+
+/// `--out` (the adapted URDF) and `--mcap`, written only when every check passed.
+fn write_model_outputs(
+    a: &AdaptArgs,
+    adapted: &mut twinloop_ident::adapt::Adapted,
+    prior: &twinloop_description::Description,
+    tip: &StudyReport,
+    lean: Option<&twinloop_experiments::LeanAdaptationCheck>,
+) -> Result<(), CliError> {
+    if let (Some(out), Some(robot)) = (&a.out, &adapted.robot) {
+        twinloop_description::urdf::write_file(robot, out)
+            .map_err(|e| CliError::new(format!("{}: {e}", out.display())).context("--out"))?;
+        adapted.report.files.push(out.display().to_string());
+    }
+    if let (Some(path), Some(robot)) = (&a.mcap, &adapted.robot) {
+        write_result_mcap(path, a, (prior, robot), tip, lean)?;
+        adapted.report.files.push(path.display().to_string());
+    }
+    Ok(())
 }
 
 /// `--mcap`: the measured fall angles (less no bias: as the tip-over file gives them)
