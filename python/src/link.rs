@@ -13,8 +13,8 @@ use std::time::{Duration, Instant};
 use twinloop_link::ModelTable;
 use twinloop_link::transport::{self, SerialOptions, Transport};
 use twinloop_link::{
-    Access, Client, ClientConfig, ControlCycle, CycleServo, DynamixelRobot, FoundServo, Item,
-    Protocol, ReadMethod, RobotMapping, ServoModel,
+    Access, Client, ClientConfig, ControlCycle, DynamixelRobot, FoundServo, Item, Protocol,
+    ReadMethod, RobotMapping, ServoModel,
 };
 use twinloop_robot::{Robot, RobotState};
 use twinloop_virtual::{PtyServer, VirtualRobot, VirtualRobotOptions};
@@ -307,15 +307,7 @@ impl PyBus {
                 ));
             }
         };
-        let servos: Vec<CycleServo> = mapping
-            .joints
-            .iter()
-            .map(|j| CycleServo {
-                id: j.id,
-                model: j.model,
-                protocol: j.protocol,
-            })
-            .collect();
+        let servos = mapping.cycle_servos();
         ControlCycle::new(&servos, method)
             .map_err(|e| value_error(format!("method: {}: {e}", mapping.source)))?;
         Ok(mapping)

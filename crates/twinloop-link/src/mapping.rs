@@ -767,6 +767,19 @@ const BUILTIN_OP3: &str = include_str!("mappings/op3.toml");
 const BUILTIN_DARWIN_OP: &str = include_str!("mappings/darwin_op.toml");
 
 impl RobotMapping {
+    /// The mapped servos as the control cycle reads them: each id, model and the
+    /// protocol the mapping gives it.
+    pub fn cycle_servos(&self) -> Vec<crate::control_cycle::CycleServo> {
+        self.joints
+            .iter()
+            .map(|j| crate::control_cycle::CycleServo {
+                id: j.id,
+                model: j.model,
+                protocol: j.protocol,
+            })
+            .collect()
+    }
+
     /// Names after `builtin:`.
     pub const BUILTINS: [&'static str; 3] = ["km20", "op3", "darwin_op"];
 

@@ -9,7 +9,7 @@
 
 use crate::board::TiltFilter;
 use crate::client::Client;
-use crate::control_cycle::{ControlCycle, CycleServo, ReadMethod, ServoReading};
+use crate::control_cycle::{ControlCycle, ReadMethod, ServoReading};
 use crate::control_table::ModelTable;
 use crate::link_error::{LinkError, Outcome};
 use crate::mapping::{BoardMapping, RobotMapping};
@@ -129,15 +129,7 @@ impl<T: Transport> DynamixelRobot<T> {
     ) -> Result<DynamixelRobot<T>, RobotError> {
         let mut client = client;
         check_models(&mut client, &mapping)?;
-        let servos: Vec<CycleServo> = mapping
-            .joints
-            .iter()
-            .map(|j| CycleServo {
-                id: j.id,
-                model: j.model,
-                protocol: j.protocol,
-            })
-            .collect();
+        let servos = mapping.cycle_servos();
         let cycle = ControlCycle::new(&servos, method)
             .map_err(|e| RobotError::new(format!("{}: {e}", mapping.source)))?;
         let effort_scale = mapping
