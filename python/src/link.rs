@@ -13,8 +13,8 @@ use std::time::{Duration, Instant};
 use twinloop_link::ModelTable;
 use twinloop_link::transport::{self, SerialOptions, Transport};
 use twinloop_link::{
-    Access, Client, ClientConfig, ControlCycle, DynamixelRobot, FoundServo, Item, Protocol,
-    ReadMethod, RobotMapping, ServoModel,
+    Client, ClientConfig, ControlCycle, DynamixelRobot, FoundServo, Item, Protocol, ReadMethod,
+    RobotMapping, ServoModel,
 };
 use twinloop_robot::{Robot, RobotState};
 use twinloop_virtual::{PtyServer, VirtualRobot, VirtualRobotOptions};
@@ -50,21 +50,11 @@ impl From<&FoundServo> for ServoJson {
 }
 
 #[derive(Serialize)]
-struct RegisterJson {
-    address: u16,
-    name: &'static str,
-    size: u8,
-    access: &'static str,
-    raw: i32,
-    value: f64,
-}
-
-#[derive(Serialize)]
 struct ReadJson {
     protocol: u8,
     id: u8,
     model: &'static str,
-    registers: Vec<RegisterJson>,
+    registers: Vec<twinloop_link::Reading>,
 }
 
 /// A Dynamixel bus: a serial device, a pty path or tcp:HOST:PORT. Errors of the
@@ -170,20 +160,7 @@ impl PyBus {
         self.client()?
             .read(p, id, 0, &mut memory)
             .map_err(link_error)?;
-        let rows = selected
-            .iter()
-            .map(|r| {
-                let raw = r.decode(&memory[r.address as usize..r.end() as usize]);
-                RegisterJson {
-                    address: r.address,
-                    name: r.name,
-                    size: r.size,
-                    access: if r.access == Access::Read { "R" } else { "RW" },
-                    raw,
-                    value: r.to_si(raw),
-                }
-            })
-            .collect();
+        let rows = selected.iter().map(|r| r.reading(&memory)).collect();
         to_py(
             py,
             &ReadJson {

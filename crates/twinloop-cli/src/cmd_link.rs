@@ -365,33 +365,6 @@ fn scan(a: &ScanArgs) -> CliResult {
     Ok(Outcome::Ok)
 }
 
-#[derive(Serialize)]
-struct RegisterJson {
-    address: u16,
-    name: &'static str,
-    size: u8,
-    access: &'static str,
-    raw: i32,
-    value: f64,
-    unit: &'static str,
-}
-
-fn unit_name(u: twinloop_link::Unit) -> &'static str {
-    use twinloop_link::Unit::*;
-    match u {
-        Raw => "",
-        Angle { .. } => "rad",
-        AngularVelocity { .. } => "rad/s",
-        LoadRatio { .. } => "of max torque",
-        Current { .. } => "A",
-        Voltage { .. } => "V",
-        Celsius => "degC",
-        Duration { .. } => "s",
-        Gyro { .. } => "rad/s",
-        Accel { .. } => "m/s^2",
-    }
-}
-
 fn read(a: &ReadArgs) -> CliResult {
     let mut c = open_client(&a.port, None)?;
     let model = read_model(a, &mut c)?;
@@ -399,30 +372,13 @@ fn read(a: &ReadArgs) -> CliResult {
     let selected = selected_registers(table, model, &a.registers)?;
     let mut memory = vec![0u8; table.len()];
     c.read(a.protocol, a.id, 0, &mut memory)?;
-    let rows: Vec<RegisterJson> = selected
-        .iter()
-        .map(|r| {
-            let raw = r.decode(&memory[r.address as usize..r.end() as usize]);
-            RegisterJson {
-                address: r.address,
-                name: r.name,
-                size: r.size,
-                access: match r.access {
-                    twinloop_link::Access::Read => "R",
-                    twinloop_link::Access::ReadWrite => "RW",
-                },
-                raw,
-                value: r.to_si(raw),
-                unit: unit_name(r.unit),
-            }
-        })
-        .collect();
+    let rows: Vec<twinloop_link::Reading> = selected.iter().map(|r| r.reading(&memory)).collect();
     #[derive(Serialize)]
     struct Out<'a> {
         protocol: u8,
         id: u8,
         model: &'static str,
-        registers: &'a [RegisterJson],
+        registers: &'a [twinloop_link::Reading],
     }
     let json = Out {
         protocol: a.protocol.number(),
@@ -521,7 +477,7 @@ fn selected_registers<'t>(
 }
 
 /// `link read`'s table: one line per register, its value in SI units where it has one.
-fn register_text(a: &ReadArgs, model: ServoModel, rows: &[RegisterJson]) -> String {
+fn register_text(a: &ReadArgs, model: ServoModel, rows: &[twinloop_link::Reading]) -> String {
     let mut out = format!(
         "servo id {} ({model}, {})\nADDR SIZE ACCESS  NAME                       RAW        VALUE\n",
         a.id, a.protocol

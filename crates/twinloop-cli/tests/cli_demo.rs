@@ -1,4 +1,4 @@
-//! `twinloop demo` as the README runs it: a km20 (and an op3) with a hidden change behind a pty,
+//! `twinloop demo` as the README runs it (its line read out of README.md): a km20 (and an op3) with a hidden change behind a pty,
 //! found over its bus. Checked against the truth the demo reveals (the change drawn
 //! from the seed, added to the model by the description crate): the mass found is the
 //! scale's excess, the adapted CoM is near the true one, the adapted model tips where
@@ -12,6 +12,19 @@ use std::process::Command;
 /// keeps a control cycle; two at once on two cores starve each other's bus.
 static ONE_DEMO: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
+/// The README's first command, as the README writes it (readme.rs leaves this line to
+/// the test below, so that CI runs the live demo once).
+fn readme_demo_args() -> Vec<String> {
+    let readme = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md");
+    let text = std::fs::read_to_string(readme).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.trim() == "cargo run --release -p twinloop-cli -- demo")
+        .expect("README.md's demo line `cargo run --release -p twinloop-cli -- demo`");
+    let (_, args) = line.split_once(" -- ").unwrap();
+    args.split_whitespace().map(str::to_string).collect()
+}
+
 #[test]
 fn the_demo_finds_a_hidden_mass_over_the_bus() {
     let _one = ONE_DEMO.lock().unwrap_or_else(|e| e.into_inner());
@@ -19,14 +32,8 @@ fn the_demo_finds_a_hidden_mass_over_the_bus() {
     let _ = std::fs::remove_dir_all(&dir);
     let json = dir.with_extension("json");
     let o = Command::new(env!("CARGO_BIN_EXE_twinloop"))
-        .args([
-            "demo",
-            "--seed",
-            "2",
-            "--check",
-            "--out",
-            dir.to_str().unwrap(),
-        ])
+        .args(readme_demo_args())
+        .args(["--seed", "2", "--check", "--out", dir.to_str().unwrap()])
         .args(["--json", json.to_str().unwrap()])
         .output()
         .unwrap();

@@ -41,7 +41,7 @@ pub use mapping::{JointMapping, MappingError, RobotMapping};
 pub use packet::{EncodeError, PacketWriter};
 pub use protocol::{BROADCAST_ID, Protocol};
 pub use real_robot::{DynamixelRobot, HostClock};
-pub use register::{Access, Area, Encoding, Item, Register, Unit};
+pub use register::{Access, Area, Encoding, Item, Reading, Register, Unit};
 pub use servo::{BusBoard, BusServo, TrackingServoModel, VirtualBus, VirtualServoBackend};
 pub use servo_model::{ServoModel, ServoSpec, baud_from_register, baud_to_register};
 pub use status_error::{ErrorBitV1, ErrorNumberV2, StatusError};

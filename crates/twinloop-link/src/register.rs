@@ -59,6 +59,37 @@ pub enum Unit {
     Accel { m_s2_per_unit: f64, center: i32 },
 }
 
+impl Unit {
+    /// How the value of [`Register::to_si`] is written ("" for a raw number).
+    pub const fn name(&self) -> &'static str {
+        match self {
+            Unit::Raw => "",
+            Unit::Angle { .. } => "rad",
+            Unit::AngularVelocity { .. } | Unit::Gyro { .. } => "rad/s",
+            Unit::LoadRatio { .. } => "of max torque",
+            Unit::Current { .. } => "A",
+            Unit::Voltage { .. } => "V",
+            Unit::Celsius => "degC",
+            Unit::Duration { .. } => "s",
+            Unit::Accel { .. } => "m/s^2",
+        }
+    }
+}
+
+/// One register's value as read: its place in the table, the raw number and the same
+/// in SI units (for scripts as JSON: serialised with these field names).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Reading {
+    pub address: u16,
+    pub name: &'static str,
+    pub size: u8,
+    /// "R" (read only) or "RW".
+    pub access: &'static str,
+    pub raw: i32,
+    pub value: f64,
+    pub unit: &'static str,
+}
+
 /// Revolutions per minute to rad/s.
 pub const RPM: f64 = 2.0 * PI / 60.0;
 /// One degree in radians.
@@ -240,6 +271,24 @@ impl Register {
                 m_s2_per_unit,
                 center,
             } => (value - center) as f64 * m_s2_per_unit,
+        }
+    }
+
+    /// This register read out of a servo's control table memory (`memory` from
+    /// address 0): what `link read` prints and returns, one row per register.
+    pub fn reading(&self, memory: &[u8]) -> Reading {
+        let raw = self.decode(&memory[self.address as usize..self.end() as usize]);
+        Reading {
+            address: self.address,
+            name: self.name,
+            size: self.size,
+            access: match self.access {
+                Access::Read => "R",
+                Access::ReadWrite => "RW",
+            },
+            raw,
+            value: self.to_si(raw),
+            unit: self.unit.name(),
         }
     }
 

@@ -297,58 +297,14 @@ impl Simulator {
             .contact
             .unwrap_or_else(|| ContactParams::for_robot(model.total_mass, 8, 1e-3));
         let nb = model.nbodies;
-        let off = model.v_offset;
-        let mut dof_parent = vec![ltdl::NONE; model.nv];
-        // The free flyer's six DOFs form a chain (its 6x6 block is dense).
-        for (k, p) in dof_parent.iter_mut().enumerate().take(off).skip(1) {
-            *p = k - 1;
-        }
-        // A body's DOFs chain from its parent's last one (a ball joint's three in order).
-        let last_dof = |i: usize| model.idx_v[i] + model.joint_types[i].nv() - 1;
-        for i in 0..nb {
-            let p = model.parents[i];
-            let first = model.idx_v[i];
-            dof_parent[first] = if p == BASE {
-                if off > 0 { off - 1 } else { ltdl::NONE }
-            } else {
-                last_dof(p)
-            };
-            for (d, p) in dof_parent
-                .iter_mut()
-                .enumerate()
-                .take(last_dof(i) + 1)
-                .skip(first + 1)
-            {
-                *p = d - 1;
-            }
-        }
-        let mut chains = Vec::with_capacity(nb + 1);
-        for i in 0..=nb {
-            let mut c = Vec::new();
-            let mut d = if i == nb {
-                if off > 0 { off - 1 } else { ltdl::NONE }
-            } else {
-                last_dof(i)
-            };
-            while d != ltdl::NONE {
-                c.push(d);
-                d = dof_parent[d];
-            }
-            chains.push(c);
-        }
+        let (dof_parent, chains) = dof_tree(&model);
         let max_chain = chains.iter().map(Vec::len).max().unwrap_or(0);
-        let mut joint_damping = vec![0.0; nb];
-        let mut joint_friction = vec![0.0; nb];
-        let (mut joint_stiffness, mut joint_springref) = (vec![0.0; nb], vec![0.0; nb]);
-        for (i, name) in model.joint_names.iter().enumerate() {
-            let Some(j) = robot.joint(name) else { continue };
-            if let Some(dy) = j.dynamics {
-                joint_damping[i] = dy.damping.unwrap_or(0.0).max(0.0);
-                joint_friction[i] = dy.friction.unwrap_or(0.0).max(0.0);
-            }
-            joint_stiffness[i] = j.stiffness.max(0.0);
-            joint_springref[i] = j.springref;
-        }
+        let [
+            joint_damping,
+            joint_friction,
+            joint_stiffness,
+            joint_springref,
+        ] = joint_passives(robot, &model);
         let weight = model.total_mass * config.gravity.norm();
         let limit_k = config
             .joint_limit_stiffness
@@ -994,4 +950,75 @@ impl Simulator {
             }
         }
     }
+}
+
+/// The step matrix's tree over the DOFs: each DOF's parent DOF (the free flyer's six
+/// chained, a body's first DOF after its parent body's last), and per body (index
+/// `nbodies` = the base) its DOFs and all its ancestors', deepest first.
+fn dof_tree(model: &Model) -> (Vec<usize>, Vec<Vec<usize>>) {
+    let nb = model.nbodies;
+    let off = model.v_offset;
+    let mut dof_parent = vec![ltdl::NONE; model.nv];
+    // The free flyer's six DOFs form a chain (its 6x6 block is dense).
+    for (k, p) in dof_parent.iter_mut().enumerate().take(off).skip(1) {
+        *p = k - 1;
+    }
+    // A body's DOFs chain from its parent's last one (a ball joint's three in order).
+    let last_dof = |i: usize| model.idx_v[i] + model.joint_types[i].nv() - 1;
+    for i in 0..nb {
+        let p = model.parents[i];
+        let first = model.idx_v[i];
+        dof_parent[first] = if p == BASE {
+            if off > 0 { off - 1 } else { ltdl::NONE }
+        } else {
+            last_dof(p)
+        };
+        for (d, p) in dof_parent
+            .iter_mut()
+            .enumerate()
+            .take(last_dof(i) + 1)
+            .skip(first + 1)
+        {
+            *p = d - 1;
+        }
+    }
+    let mut chains = Vec::with_capacity(nb + 1);
+    for i in 0..=nb {
+        let mut c = Vec::new();
+        let mut d = if i == nb {
+            if off > 0 { off - 1 } else { ltdl::NONE }
+        } else {
+            last_dof(i)
+        };
+        while d != ltdl::NONE {
+            c.push(d);
+            d = dof_parent[d];
+        }
+        chains.push(c);
+    }
+    (dof_parent, chains)
+}
+
+/// Per joint, from the description: damping, friction, spring stiffness and the
+/// spring's rest position (negative damping, friction and stiffness read as none).
+fn joint_passives(robot: &Description, model: &Model) -> [Vec<f64>; 4] {
+    let nb = model.nbodies;
+    let mut joint_damping = vec![0.0; nb];
+    let mut joint_friction = vec![0.0; nb];
+    let (mut joint_stiffness, mut joint_springref) = (vec![0.0; nb], vec![0.0; nb]);
+    for (i, name) in model.joint_names.iter().enumerate() {
+        let Some(j) = robot.joint(name) else { continue };
+        if let Some(dy) = j.dynamics {
+            joint_damping[i] = dy.damping.unwrap_or(0.0).max(0.0);
+            joint_friction[i] = dy.friction.unwrap_or(0.0).max(0.0);
+        }
+        joint_stiffness[i] = j.stiffness.max(0.0);
+        joint_springref[i] = j.springref;
+    }
+    [
+        joint_damping,
+        joint_friction,
+        joint_stiffness,
+        joint_springref,
+    ]
 }
