@@ -169,7 +169,7 @@ pub const ONSET_AVERAGE_S: f64 = 1.0;
 const STAND_UP_TIMEOUT_S: f64 = 120.0;
 
 /// Direction names (forward, backward, left, right); all four when `list` is empty.
-pub fn parse_directions(list: &[String]) -> Result<Vec<Direction>, String> {
+pub fn parse_directions(list: &[String]) -> Result<Vec<Direction>, IdentError> {
     if list.is_empty() {
         return Ok(Direction::ALL.to_vec());
     }
@@ -178,7 +178,9 @@ pub fn parse_directions(list: &[String]) -> Result<Vec<Direction>, String> {
             Direction::ALL
                 .into_iter()
                 .find(|d| d.name() == s.trim())
-                .ok_or_else(|| format!("\"{s}\" is not forward, backward, left or right"))
+                .ok_or_else(|| {
+                    IdentError::new(format!("\"{s}\" is not forward, backward, left or right"))
+                })
         })
         .collect()
 }
@@ -258,9 +260,9 @@ pub fn run_directions(
     opts: &BusTipoverOptions,
     cfg: &TipoverConfig,
     tilt_model: &mut TiltModel,
-    before: &mut dyn FnMut(Direction, usize) -> Result<(), String>,
+    before: &mut dyn FnMut(Direction, usize) -> Result<(), IdentError>,
     log: &mut dyn FnMut(&str),
-) -> Result<Vec<TipoverResult>, String> {
+) -> Result<Vec<TipoverResult>, IdentError> {
     if opts.soft_servos {
         log("servos soft: left at their present settings (--soft-servos)");
         return lean_each(g, opts, cfg, tilt_model, before, log);
@@ -271,15 +273,15 @@ pub fn run_directions(
     let restored = restore_loops(g.robot, &saved);
     match (out, restored) {
         (Ok(out), Ok(())) => Ok(out),
-        (Ok(_), Err(e)) => Err(format!(
+        (Ok(_), Err(e)) => Err(IdentError::new(format!(
             "restoring the servos' loop registers: {}",
             e.message
-        )),
+        ))),
         (Err(e), Ok(())) => Err(e),
-        (Err(e), Err(r)) => Err(format!(
+        (Err(e), Err(r)) => Err(IdentError::new(format!(
             "{e} (and restoring the servos' loop registers failed: {})",
             r.message
-        )),
+        ))),
     }
 }
 
@@ -289,9 +291,9 @@ fn lean_each(
     opts: &BusTipoverOptions,
     cfg: &TipoverConfig,
     tilt_model: &mut TiltModel,
-    before: &mut dyn FnMut(Direction, usize) -> Result<(), String>,
+    before: &mut dyn FnMut(Direction, usize) -> Result<(), IdentError>,
     log: &mut dyn FnMut(&str),
-) -> Result<Vec<TipoverResult>, String> {
+) -> Result<Vec<TipoverResult>, IdentError> {
     let standing = &vec![0.0; g.robot.mapping().joints.len()][..];
     // Upright is the trunk's tilt the model gives standing with the feet flat (the
     // robot's first readings may still rock from the stiffening).
@@ -367,7 +369,8 @@ fn lean_each(
                         "{}: {spoiled} creeps spoiled (feet rolled beyond {SPOILED_EXCESS_DEG} \
                          deg at the onset): the IMU or the bus is not giving usable readings",
                         d.name()
-                    ));
+                    )
+                    .into());
                 }
                 continue;
             }

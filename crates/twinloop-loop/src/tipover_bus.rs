@@ -218,7 +218,7 @@ fn guarded_run(
                 "stand the robot up again for the {} lean; continue?",
                 d.name()
             ))
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| twinloop_ident::IdentError::new(e.to_string()))?;
         }
         Ok(())
     };
@@ -255,7 +255,7 @@ fn guarded_run(
     let runs = runs.map_err(|e| {
         format!(
             "{}; stopped, the servos hold the standing pose",
-            abort.unwrap_or(e)
+            abort.unwrap_or_else(|| e.to_string())
         )
     });
     Ok(Guard {
