@@ -55,25 +55,24 @@ const URDF_KEYS: [&str; 9] = [
 /// `gravity` and the `sagittal` block's Kxx .. Dzz); errors name the file and the key.
 pub fn read_plant(path: &Path) -> Result<SagittalCompliance, IdentError> {
     if path.extension().is_some_and(|e| e == "json") {
-        read_plant_json(path).map_err(IdentError::new)
+        read_plant_json(path)
     } else {
         read_model_file(path)
     }
 }
 
-fn read_plant_json(path: &Path) -> Result<SagittalCompliance, String> {
-    let text =
-        twinloop_io::input::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+fn read_plant_json(path: &Path) -> Result<SagittalCompliance, IdentError> {
+    let at = |m: String| IdentError::new(m).in_file(path);
+    let text = twinloop_io::input::read_to_string(path).map_err(|e| at(e.to_string()))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| at(e.to_string()))?;
     let get = |key: &str, v: &serde_json::Value| {
         v.get(key)
             .and_then(|x| x.as_f64())
-            .ok_or_else(|| format!("{}: missing number `{key}`", path.display()))
+            .ok_or_else(|| at(format!("missing number `{key}`")))
     };
     let s = v
         .get("sagittal")
-        .ok_or_else(|| format!("{}: missing object `sagittal`", path.display()))?;
+        .ok_or_else(|| at("missing object `sagittal`".into()))?;
     Ok(SagittalCompliance {
         m: get("mass", &v)?,
         g: get("gravity", &v)?,
