@@ -14,6 +14,15 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
     check_q(model, q);
     data.base_placement = base_placement(model, q);
     base_frame_pass(model, data, q);
+    crba_from_kinematics(model, data)
+}
+
+/// [`crba`] at the configuration of the last [`kinematics_pass`], whose base-frame
+/// placements and subspaces (`data.b_m_i`, `data.s`) it takes as computed: the same
+/// operations on the same values, so the same bits.
+///
+/// [`kinematics_pass`]: crate::kinematics::kinematics_pass
+pub fn crba_from_kinematics<'a>(model: &Model, data: &'a mut Data) -> &'a DMatrix<f64> {
     let nb = model.nbodies;
     for i in 0..nb {
         data.ycrb[i] = LinearInertia::from_inertia(&model.inertias[i].transformed(&data.b_m_i[i]));
