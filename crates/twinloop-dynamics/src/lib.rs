@@ -17,7 +17,7 @@
 //! | joint and frame Jacobians | [`compute_joint_jacobians`], [`frame_jacobian`] |
 //! | inverse dynamics (RNEA) | [`rnea`], [`nonlinear_effects`], [`generalized_gravity`] |
 //! | mass matrix (CRBA) | [`crba`] |
-//! | one kinematics pass, then CRBA and the bias forces on it (a simulator step) | [`kinematics_pass`], [`crba_from_kinematics`], [`nonlinear_effects_from_kinematics`] |
+//! | one kinematics pass, then CRBA and the bias forces on it (a simulator step) | [`kinematics_pass`], [`crba_from_kinematics`], [`nonlinear_effects_from_kinematics`], [`crba_and_bias_from_kinematics`] (both at once, RNEA in base coordinates) |
 //! | forward dynamics (ABA) | [`aba`], [`try_aba`] (refuses a singular mass matrix naming the joint) |
 //! | invertible mass matrix | [`check_mass_matrix`] |
 //! | regressors | [`joint_torque_regressor`], [`static_com_regressor`] |
@@ -40,7 +40,7 @@ pub use batch::{
     BatchData, aba_batch, center_of_mass_batch, crba_batch, rnea_batch, try_aba_batch,
 };
 pub use center_of_mass::{center_of_mass, ground_projected_com, jacobian_center_of_mass};
-pub use crba::{crba, crba_from_kinematics};
+pub use crba::{crba, crba_and_bias_from_kinematics, crba_from_kinematics};
 pub use data::Data;
 pub use kinematics::{
     ReferenceFrame, compute_joint_jacobians, forward_kinematics, frame_jacobian,

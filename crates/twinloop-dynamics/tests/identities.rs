@@ -433,6 +433,16 @@ fn one_kinematics_pass_gives_the_same_bits() {
             );
             let nle2 = nonlinear_effects_from_kinematics(&model, &mut shared, &v);
             assert_eq!(nle2, &nle, "{}: bias forces", model.name);
+            // Both at once, RNEA in base coordinates: M to the bit, the bias forces to
+            // rounding.
+            let (m3, nle3) = crba_and_bias_from_kinematics(&model, &mut shared, &v);
+            assert_eq!(m3, &m, "{}: M beside the bias forces", model.name);
+            let err = rel_err(nle3, &nle);
+            assert!(
+                err < 1e-13,
+                "{}: base-frame bias forces off by {err:e}",
+                model.name
+            );
         }
     }
 }

@@ -10,8 +10,7 @@ use std::fmt;
 use twinloop_description::{Description, DescriptionError};
 use twinloop_dynamics::configuration::integrate;
 use twinloop_dynamics::{
-    BASE, Data, JointType, Model, crba, crba_from_kinematics, kinematics_pass,
-    nonlinear_effects_from_kinematics,
+    BASE, Data, JointType, Model, crba, crba_and_bias_from_kinematics, kinematics_pass,
 };
 use twinloop_robot::RobotState;
 use twinloop_spatial::Se3;
@@ -706,14 +705,13 @@ impl Simulator {
         let dt = self.config.dt;
         let nv = self.model.nv;
         // One kinematics pass (world placements and Jacobians for the contacts and
-        // the IMU, base-frame ones for CRBA, joint placements for RNEA), then the mass
-        // matrix and the bias forces on it.
+        // the IMU, base-frame ones for the dynamics), then the mass matrix and the
+        // bias forces on it in one sweep (RNEA in base coordinates on CRBA's inertias).
         kinematics_pass(&self.model, &mut self.data, &self.q);
         self.sensors.observe(&self.model, &self.data, &self.v);
-        crba_from_kinematics(&self.model, &mut self.data);
+        let (m, nle) = crba_and_bias_from_kinematics(&self.model, &mut self.data, &self.v);
         // Its upper triangle, as crba fills it.
-        self.h.set_from_upper(&self.data.mass_matrix);
-        let nle = nonlinear_effects_from_kinematics(&self.model, &mut self.data, &self.v);
+        self.h.set_from_upper(m);
         for i in 0..nv {
             self.rhs[i] = -nle[i];
         }
