@@ -17,6 +17,7 @@
 //! | joint and frame Jacobians | [`compute_joint_jacobians`], [`frame_jacobian`] |
 //! | inverse dynamics (RNEA) | [`rnea`], [`nonlinear_effects`], [`generalized_gravity`] |
 //! | mass matrix (CRBA) | [`crba`] |
+//! | one kinematics pass, then CRBA and the bias forces on it (a simulator step) | [`kinematics_pass`], [`crba_from_kinematics`], [`nonlinear_effects_from_kinematics`], [`crba_and_bias_from_kinematics`] (both at once, RNEA in base coordinates) |
 //! | forward dynamics (ABA) | [`aba`], [`try_aba`] (refuses a singular mass matrix naming the joint) |
 //! | invertible mass matrix | [`check_mass_matrix`] |
 //! | regressors | [`joint_torque_regressor`], [`static_com_regressor`] |
@@ -39,16 +40,16 @@ pub use batch::{
     BatchData, aba_batch, center_of_mass_batch, crba_batch, rnea_batch, try_aba_batch,
 };
 pub use center_of_mass::{center_of_mass, ground_projected_com, jacobian_center_of_mass};
-pub use crba::crba;
+pub use crba::{crba, crba_and_bias_from_kinematics, crba_from_kinematics};
 pub use data::Data;
 pub use kinematics::{
     ReferenceFrame, compute_joint_jacobians, forward_kinematics, frame_jacobian,
-    frames_forward_kinematics, update_frame_placements,
+    frames_forward_kinematics, kinematics_pass, update_frame_placements,
 };
 pub use model::{BASE, BaseKind, FrameInfo, JointOrder, JointType, LinkInfo, Model};
 pub use regressor::{
     body_parameters, joint_torque_regressor, link_parameters, link_static_parameters,
     link_to_body_parameter_map, parameter_block_of_link, static_com_regressor,
 };
-pub use rnea::{generalized_gravity, nonlinear_effects, rnea};
+pub use rnea::{generalized_gravity, nonlinear_effects, nonlinear_effects_from_kinematics, rnea};
 pub use singular::{SingularJoint, check_mass_matrix, try_aba};

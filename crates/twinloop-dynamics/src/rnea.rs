@@ -21,7 +21,7 @@ pub fn rnea<'a>(
     check_q(model, q);
     check_v(model, v, "v");
     check_v(model, a, "a");
-    rnea_impl(model, data, q, v, Some(a), true);
+    rnea_impl::<false>(model, data, q, v, Some(a), true);
     &data.tau
 }
 
@@ -34,20 +34,39 @@ pub fn nonlinear_effects<'a>(
 ) -> &'a DVector<f64> {
     check_q(model, q);
     check_v(model, v, "v");
-    rnea_impl(model, data, q, v, None, true);
+    rnea_impl::<false>(model, data, q, v, None, true);
+    &data.tau
+}
+
+/// [`nonlinear_effects`] at the configuration of the last [`kinematics_pass`]: its
+/// joint placements (`data.li_m_i`) and base placement are taken as computed, so a
+/// simulator step that needs the kinematics, the mass matrix and the bias forces
+/// computes each joint's placement once. The same operations as
+/// [`nonlinear_effects`] on the same placements: the same bits.
+///
+/// [`kinematics_pass`]: crate::kinematics::kinematics_pass
+pub fn nonlinear_effects_from_kinematics<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    v: &[f64],
+) -> &'a DVector<f64> {
+    check_v(model, v, "v");
+    rnea_impl::<true>(model, data, &[], v, None, true);
     &data.tau
 }
 
 /// `g(q)`: the generalised gravity forces.
 pub fn generalized_gravity<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DVector<f64> {
     check_q(model, q);
-    rnea_impl(model, data, q, &[], None, false);
+    rnea_impl::<false>(model, data, q, &[], None, false);
     &data.tau
 }
 
 /// The passes; `v` is ignored when `with_velocity` is false, `a` when it is `None`.
+/// `GIVEN`: the base and joint placements are `data`'s (a kinematics pass's), and `q`
+/// is not read.
 #[inline(always)]
-pub(crate) fn rnea_impl(
+pub(crate) fn rnea_impl<const GIVEN: bool>(
     model: &Model,
     data: &mut Data,
     q: &[f64],
@@ -56,8 +75,13 @@ pub(crate) fn rnea_impl(
     with_velocity: bool,
 ) {
     let floating = model.is_floating();
-    let base = base_placement(model, q);
-    data.base_placement = base;
+    let base = if GIVEN {
+        data.base_placement
+    } else {
+        let base = base_placement(model, q);
+        data.base_placement = base;
+        base
+    };
     // Gravity enters as an upward acceleration of the base (the usual trick).
     let up = base.rotation.tr_mul(&(-model.gravity));
     let (v0, a0) = if floating {
@@ -82,8 +106,13 @@ pub(crate) fn rnea_impl(
         f0 += base_armature_force(model, &v0, a.map_or(&[0.0; 6][..], |a| &a[0..6]));
     }
     for i in 0..model.nbodies {
-        let li = joint_placement(model, i, q);
-        data.li_m_i[i] = li;
+        let li = if GIVEN {
+            data.li_m_i[i]
+        } else {
+            let li = joint_placement(model, i, q);
+            data.li_m_i[i] = li;
+            li
+        };
         let p = model.parents[i];
         let (vp, ap) = if p == BASE {
             (v0, a0)

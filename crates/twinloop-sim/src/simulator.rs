@@ -10,7 +10,7 @@ use std::fmt;
 use twinloop_description::{Description, DescriptionError};
 use twinloop_dynamics::configuration::integrate;
 use twinloop_dynamics::{
-    BASE, Data, JointType, Model, compute_joint_jacobians, crba, nonlinear_effects,
+    BASE, Data, JointType, Model, crba, crba_and_bias_from_kinematics, kinematics_pass,
 };
 use twinloop_robot::RobotState;
 use twinloop_spatial::Se3;
@@ -660,13 +660,14 @@ impl Simulator {
     pub fn step(&mut self) -> Result<(), SimError> {
         let dt = self.config.dt;
         let nv = self.model.nv;
-        // Kinematics and world Jacobians, mass matrix, bias forces.
-        compute_joint_jacobians(&self.model, &mut self.data, &self.q);
+        // One kinematics pass (world placements and Jacobians for the contacts and
+        // the IMU, base-frame ones for the dynamics), then the mass matrix and the
+        // bias forces on it in one sweep (RNEA in base coordinates on CRBA's inertias).
+        kinematics_pass(&self.model, &mut self.data, &self.q);
         self.sensors.observe(&self.model, &self.data, &self.v);
-        crba(&self.model, &mut self.data, &self.q);
+        let (m, nle) = crba_and_bias_from_kinematics(&self.model, &mut self.data, &self.v);
         // Its upper triangle, as crba fills it.
-        self.h.set_from_upper(&self.data.mass_matrix);
-        let nle = nonlinear_effects(&self.model, &mut self.data, &self.q, &self.v);
+        self.h.set_from_upper(m);
         for i in 0..nv {
             self.rhs[i] = -nle[i];
         }
