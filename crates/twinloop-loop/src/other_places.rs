@@ -22,8 +22,10 @@
 //! the roll agreed to 0.06 deg and the CoM to 0.2 mm.) Of the places whose checks
 //! pass, the one chosen is the first when every other lands the CoM within [`AGREE_M`]
 //! of it; else the one whose replay rolls the feet as the robot did, when it does so
-//! clearly better ([`ROLL_MARGIN_DEG`]); else none: the `one-place-explains` check
-//! fails, naming the places, and `adapt` writes no model (exit 1).
+//! clearly better ([`ROLL_MARGIN_DEG`]); else a foot whose fit explains the angles
+//! beside a shin or an ankle cross that fits them only at the ankle axes
+//! (`a_foot_explains`); else none: the `one-place-explains` check fails, naming the
+//! places, and `adapt` writes no model (exit 1).
 
 use crate::LoopError;
 use crate::protocol_bias::{
