@@ -727,6 +727,11 @@ fn refine_by_fall_angles(
         Some(b) => b,
         None => (start - reach, start + reach),
     };
+    let bounds = if named {
+        still_part_bounds(prior, &m.pf, &host, bounds)
+    } else {
+        bounds
+    };
     let with_part = |p: Vector3<f64>| {
         with_added_mass(prior, &host, added.mass, v3(p), true).map_err(IdentError::new)
     };
@@ -756,6 +761,39 @@ fn refine_by_fall_angles(
     placed.frame_for_feet = frame;
     placed.adapted = Some(part);
     Ok(())
+}
+
+/// The bounds of the fall-angle fit for a part on a foot (`bounds`: the host's
+/// frame, its outline): its height pinned at the middle of the foot's outline. The
+/// foot stays on the ground in every lean, so the robot's angles do not see the
+/// part's height ([`crate::tipover_study::feet_links`]); the static model does, by a
+/// few hundredths of a degree over the foot's height, and the fit pushed its residual
+/// into it: the CoM inversion's point, clamped into the outline, or the fit, put the
+/// part on a face of the box grown by [`OUTLINE_MARGIN`] (10 mm above an OP3's sole
+/// plate, the CoM 1.4 mm high; 10 mm under a Darwin-OP's sole, 1.0 mm low). The
+/// middle is the nearest to every height the foot allows. Other links, or a foot not
+/// standing on an axis of its frame: `bounds`.
+fn still_part_bounds(
+    prior: &Description,
+    frame: &Frame,
+    host: &str,
+    bounds: (Vector3<f64>, Vector3<f64>),
+) -> (Vector3<f64>, Vector3<f64>) {
+    let on_a_foot = crate::tipover_study::feet_links(prior)
+        .is_ok_and(|[l, r]| l.iter().chain(&r).any(|f| f == host));
+    let Some(pose) = frame.link_pose(host).filter(|_| on_a_foot) else {
+        return bounds;
+    };
+    // The vertical, in the foot's frame.
+    let inv = pose.inverse();
+    let up = inv.act_point(&Vector3::z()) - inv.act_point(&Vector3::zeros());
+    let k = up.iamax();
+    let (mut lo, mut hi) = bounds;
+    if up[k].abs() > 0.99 {
+        let mid = 0.5 * (lo[k] + hi[k]);
+        (lo[k], hi[k]) = (mid, mid);
+    }
+    (lo, hi)
 }
 
 /// How far the measured CoM moves per angle moved by the resolution, through the

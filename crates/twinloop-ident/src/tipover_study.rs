@@ -250,6 +250,37 @@ pub fn links_below_ankles(robot: &Description) -> Result<[Vec<String>; 2], Ident
     Ok([links_below(robot, &n[0]), links_below(robot, &n[1])])
 }
 
+/// The feet (left, right): the links below both ankle joints of a side, in the
+/// description's order. A part there stays on the ground in every lean of the
+/// tip-over, so the angles see its horizontal place and not its height (the moment
+/// about a tipping edge of a point that does not move is its weight times its
+/// horizontal distance from the edge, at any height).
+pub fn feet_links(robot: &Description) -> Result<[Vec<String>; 2], IdentError> {
+    let n = ankle_names(robot).map_err(IdentError::new)?;
+    let both = |pitch: &str, roll: &str| {
+        let under_roll = links_below(robot, roll);
+        links_below(robot, pitch)
+            .into_iter()
+            .filter(|l| under_roll.contains(l))
+            .collect()
+    };
+    Ok([both(&n[0], &n[2]), both(&n[1], &n[3])])
+}
+
+/// The shins (left, right): each ankle pitch joint's parent link. With the ankle
+/// cross below it, the links a part can sit on at the ankle axes, where it barely
+/// moves in the lean (see [`feet_links`]).
+pub fn shin_links(robot: &Description) -> Result<[String; 2], IdentError> {
+    let n = ankle_names(robot).map_err(IdentError::new)?;
+    let parent = |j: &str| {
+        robot
+            .joint(j)
+            .map(|j| j.parent.clone())
+            .ok_or_else(|| IdentError::new(format!("no joint \"{j}\" in \"{}\"", robot.name)))
+    };
+    Ok([parent(&n[0])?, parent(&n[1])?])
+}
+
 /// The links below each hip roll joint (left, right; its child and every link under
 /// it, in the description's order): the legs. Sideways the tip-over turns the hip
 /// rolls with the ankle rolls, so the legs lean as a parallelogram while the pelvis

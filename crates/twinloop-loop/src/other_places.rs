@@ -22,8 +22,10 @@
 //! the roll agreed to 0.06 deg and the CoM to 0.2 mm.) Of the places whose checks
 //! pass, the one chosen is the first when every other lands the CoM within [`AGREE_M`]
 //! of it; else the one whose replay rolls the feet as the robot did, when it does so
-//! clearly better ([`ROLL_MARGIN_DEG`]); else none: the `one-place-explains` check
-//! fails, naming the places, and `adapt` writes no model (exit 1).
+//! clearly better ([`ROLL_MARGIN_DEG`]); else a foot whose fit explains the angles
+//! beside a shin or an ankle cross that fits them only at the ankle axes
+//! (`a_foot_explains`); else none: the `one-place-explains` check fails, naming the
+//! places, and `adapt` writes no model (exit 1).
 
 use crate::LoopError;
 use crate::protocol_bias::{
@@ -35,7 +37,10 @@ use twinloop_description::Description;
 use twinloop_ident::IdentError;
 use twinloop_ident::adapt::{AdaptOptions, Adapted};
 use twinloop_ident::adapt_checks::AdaptCheck;
-use twinloop_ident::tipover_study::{StudyReport, links_below_hips, static_angles_at_onsets};
+use twinloop_ident::tipover_study::{
+    StudyReport, feet_links, links_below_ankles, links_below_hips, shin_links,
+    static_angles_at_onsets,
+};
 use twinloop_virtual::VirtualRobotOptions;
 
 /// Two places whose adapted CoMs lie this close are one answer, m: below the 3 mm
@@ -275,7 +280,8 @@ pub(crate) fn try_other_places(
             )),
         }
     }
-    Ok(choose(places))
+    let low = ankle_kinds(prior, &places)?;
+    Ok(choose(places, &low))
 }
 
 /// The places on `hosts` (`None`: the CoM inversion's link), in their order, adapted
@@ -390,14 +396,20 @@ fn floor_by_roll(
 
 /// The place kept (see the module documentation), with the places tried in its notes
 /// and the `one-place-explains` check.
-fn choose(places: Vec<Place>) -> (Adapted, Option<Calibration>) {
+fn choose(places: Vec<Place>, low: &[Low]) -> (Adapted, Option<Calibration>) {
     let tried: Vec<String> = places.iter().map(Place::describe).collect();
     let summary: Vec<(bool, [f64; 3], f64)> = places
         .iter()
         .map(|p| (p.passed, p.com, p.roll_median_deg))
         .collect();
     let margin = roll_margin_deg(places[0].adapted.report.angle_resolution_deg);
-    let (kept, check) = decide(&summary, margin);
+    let (mut kept, mut check) = decide(&summary, margin);
+    let foot = (check == Some(false))
+        .then(|| a_foot_explains(&summary, low, margin))
+        .flatten();
+    if let Some(f) = foot {
+        (kept, check) = (f, Some(true));
+    }
     let mut places = places;
     let mut place = places.swap_remove(kept);
     let report = &mut place.adapted.report;
@@ -412,7 +424,9 @@ fn choose(places: Vec<Place>) -> (Adapted, Option<Calibration>) {
         report.checks.push(AdaptCheck {
             name: "one-place-explains".into(),
             passed,
-            detail: if passed {
+            detail: if foot.is_some() {
+                foot_detail(&tried, margin)
+            } else if passed {
                 format!(
                     "the places whose checks pass put the CoM within {:.0} mm of this one's, \
                      or roll the feet at least {margin:.2} deg (median) less like the robot's \
@@ -433,6 +447,78 @@ fn choose(places: Vec<Place>) -> (Adapted, Option<Calibration>) {
         });
     }
     (place.adapted, place.calibration)
+}
+
+/// Where a place's link sits below the knee, for [`a_foot_explains`].
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Low {
+    /// A foot: the part stays on the ground in every lean.
+    Foot,
+    /// The shin or the ankle cross: a part there at the ankle axes barely moves.
+    AtAnkle,
+    Other,
+}
+
+/// Each place's [`Low`], by its link and the description's ankles.
+fn ankle_kinds(prior: &Description, places: &[Place]) -> Result<Vec<Low>, LoopError> {
+    let [fl, fr] = feet_links(prior)?;
+    let [cl, cr] = links_below_ankles(prior)?;
+    let shins = shin_links(prior)?;
+    Ok(places
+        .iter()
+        .map(|p| {
+            let h = p.host().to_string();
+            if fl.contains(&h) || fr.contains(&h) {
+                Low::Foot
+            } else if cl.contains(&h) || cr.contains(&h) || shins.contains(&h) {
+                Low::AtAnkle
+            } else {
+                Low::Other
+            }
+        })
+        .collect())
+}
+
+/// When the places' CoMs disagree and the feet's roll does not choose: a foot place
+/// that passes its checks, when every place that disagrees with it is on a shin or an
+/// ankle cross or rolls the feet at least `margin` deg worse, and none rolls them
+/// `margin` better. Why: a part on a foot never moves, so the angles see two of its
+/// coordinates and its fit of the four angles (on the floor found by the roll) has
+/// two to spare; one on the shin or the cross has three seen and fits any such
+/// angles by sitting at the ankle axes, where it barely moves (cos 15 deg = 0.97),
+/// so only there, a sliver of its outline, does a shin part give angles a foot part
+/// fits. The served sweep's three foot parts fitted on the foot and on the shin and
+/// cross (0.01-0.17 deg, the roll within 0.05 deg across them), the shin's and
+/// cross's CoMs 2.5-4.3 mm from the truth, the part at the ankle axes' height; the
+/// foot's 0.8-1.4 mm, its height where the fit had started it
+/// (`adapt::still_part_start`).
+fn a_foot_explains(places: &[(bool, [f64; 3], f64)], low: &[Low], margin: f64) -> Option<usize> {
+    let viable: Vec<usize> = (0..places.len()).filter(|&i| places[i].0).collect();
+    let roll = |i: usize| places[i].2;
+    let f = viable
+        .iter()
+        .copied()
+        .filter(|&i| low.get(i) == Some(&Low::Foot))
+        .min_by(|&a, &b| roll(a).total_cmp(&roll(b)))?;
+    let clearly_better = viable.iter().any(|&i| roll(i) + margin <= roll(f));
+    let others_fit_as_still = viable.iter().all(|&i| {
+        distance(places[f].1, places[i].1) <= AGREE_M
+            || roll(f) + margin <= roll(i)
+            || low.get(i) == Some(&Low::AtAnkle)
+    });
+    (!clearly_better && others_fit_as_still).then_some(f)
+}
+
+/// The `one-place-explains` detail when a foot was kept by [`a_foot_explains`].
+fn foot_detail(tried: &[String], margin: f64) -> String {
+    format!(
+        "the four angles fit the part on a foot, which never moves in the lean (two \
+         coordinates seen, two angles to spare), and on the shin or the ankle cross only \
+         at the ankle axes, where it barely moves; no place rolls the feet {margin:.2} deg \
+         (median) more like the robot: the foot is kept, its height on the foot not \
+         seen by the tip-over (put at the middle of the foot's outline): {}",
+        tried.join("; ")
+    )
 }
 
 /// Which place to keep of `(checks passed, adapted CoM, feet roll's median error)`, the first the
@@ -543,5 +629,51 @@ mod tests {
         assert_eq!(decide(&seed3, roll_margin_deg(0.0451)), (1, Some(true)));
         assert!((roll_margin_deg(0.1505) - 0.301).abs() < 1e-12);
         assert_eq!(decide(&seed3, roll_margin_deg(0.1505)), (0, Some(false)));
+    }
+
+    /// The served Darwin-OP seed 7 (0.268 kg on MP_ANKLE2_R, the truth's CoM z 186.7
+    /// mm): the thigh, shin, ankle cross and foot, the last three passing their
+    /// checks with the roll 0.04, 0.05, 0.02 deg off (median) and CoMs 3.3 mm apart.
+    /// `decide` refuses; the foot explains (kept); with a thigh instead of the shin
+    /// among the disagreeing, or a place rolling the feet clearly better, it does not.
+    #[test]
+    fn a_foot_that_explains_the_angles_is_kept_over_the_shin_and_cross() {
+        const THIGH7: [f64; 3] = [0.0024, -0.0162, 0.1946];
+        const SHIN7: [f64; 3] = [0.0025, -0.0165, 0.1892];
+        const FOOT7: [f64; 3] = [0.0026, -0.0166, 0.1859];
+        let seed7 = [
+            (true, THIGH7, 0.52),
+            (true, SHIN7, 0.04),
+            (false, THIGH7, 0.18),
+            (true, SHIN7, 0.05),
+            (true, FOOT7, 0.02),
+        ];
+        let low = [
+            Low::Other,
+            Low::AtAnkle,
+            Low::Other,
+            Low::AtAnkle,
+            Low::Foot,
+        ];
+        assert_eq!(decide(&seed7, ROLL_MARGIN_DEG), (0, Some(false)));
+        assert_eq!(a_foot_explains(&seed7, &low, ROLL_MARGIN_DEG), Some(4));
+        // A thigh that fits and rolls the feet as well: not a shin at the ankles.
+        let thigh_fits = [(true, THIGH7, 0.03), (true, FOOT7, 0.02)];
+        assert_eq!(
+            a_foot_explains(&thigh_fits, &[Low::Other, Low::Foot], ROLL_MARGIN_DEG),
+            None
+        );
+        // The shin's replay rolls the feet clearly more like the robot's.
+        let shin_rolls = [(true, SHIN7, 0.01), (true, FOOT7, 0.15)];
+        assert_eq!(
+            a_foot_explains(&shin_rolls, &[Low::AtAnkle, Low::Foot], ROLL_MARGIN_DEG),
+            None
+        );
+        // A foot that fails its checks is never kept.
+        let foot_fails = [(true, SHIN7, 0.04), (false, FOOT7, 0.02)];
+        assert_eq!(
+            a_foot_explains(&foot_fails, &[Low::AtAnkle, Low::Foot], ROLL_MARGIN_DEG),
+            None
+        );
     }
 }
