@@ -136,6 +136,17 @@ fn bench(name: &str, file: &str) {
         },
         || crba_batch(&model, &mut bd, black_box(q), &mut m2),
     );
+    // The compact form: each matrix's packed lower triangle (half the bytes).
+    let mut mp = vec![0.0; N * batch::packed_len(nv)];
+    let crba_packed_t = time(
+        8,
+        || {
+            for r in 0..N {
+                black_box(crba(&model, &mut d, &q[row("q", r)]));
+            }
+        },
+        || batch::crba_batch_packed(&model, &mut bd, black_box(q), &mut mp),
+    );
     let com_t = time(
         16,
         || {
@@ -150,6 +161,7 @@ fn bench(name: &str, file: &str) {
         ("aba", aba_t),
         ("crba", crba_t),
         ("crba+out", crba_out_t),
+        ("crba pak", crba_packed_t),
         ("com", com_t),
     ];
     for (algo, ((s, s_min), (b, b_min))) in results {
