@@ -126,6 +126,15 @@ fn batched_op3_is_the_single_call() {
     check(&load("models/op3/mjcf/op3.xml", BaseKind::Floating), 5, 3);
 }
 
+/// The floating base's armature (an MJCF free joint's, `Model::base_armature`) in
+/// RNEA, ABA and CRBA: the lanes add it where the single calls do.
+#[test]
+fn batched_base_armature_is_the_single_call() {
+    let mut model = load("models/op3/robotis_op3.nomesh.urdf", BaseKind::Floating);
+    model.base_armature = 0.37;
+    check(&model, 9, 4);
+}
+
 #[test]
 fn batched_g1_is_the_single_call() {
     let model = load(

@@ -2,7 +2,7 @@
 //! floating base's 6 x 6 Cholesky solve written out as nalgebra does it.
 
 use super::joint::{base_placement, compose, joint_placement, subspace_column};
-use super::lanes::{Fo, In, LANES, Mo, S6, V3, W};
+use super::lanes::{Fo, In, LANES, M3, Mo, S6, V3, W};
 use super::{BatchData, SingularRow, check_rows, dispatch, gather, rows, scatter, uses_lanes};
 use crate::model::{BASE, Model};
 use crate::singular::SINGULAR_RELATIVE_TOLERANCE;
@@ -163,7 +163,9 @@ fn velocity_pass(model: &Model, bd: &mut BatchData) -> (S6, Fo) {
     let (v0, ia0, pa0) = if floating {
         let v0 = Mo::from_lanes(&bd.v[0..6]);
         let i0 = In::splat(&model.base_inertia);
-        (v0, i0.to_sym6(), v0.cross_force(&i0.mul_motion(&v0)))
+        let (mut ia0, mut pa0) = (i0.to_sym6(), v0.cross_force(&i0.mul_motion(&v0)));
+        base_armature(model, &bd.q, &v0, &mut ia0, &mut pa0);
+        (v0, ia0, pa0)
     } else {
         (Mo::ZERO, S6::ZERO, Fo::ZERO)
     };
@@ -187,6 +189,27 @@ fn velocity_pass(model: &Model, bd: &mut BatchData) -> (S6, Fo) {
         bd.pa[i] = vi.cross_force(&yb.mul_motion(&vi));
     }
     (ia0, pa0)
+}
+
+/// The floating base's armature `a` in the base's (IA, pA), as `aba::velocity_pass`:
+/// `a` on the diagonal of both 3 x 3 blocks, `a (w x v - up)` in the bias force.
+#[inline(always)]
+fn base_armature(model: &Model, q: &[W], v0: &Mo, ia0: &mut S6, pa0: &mut Fo) {
+    let k = model.base_armature;
+    if k == 0.0 {
+        return;
+    }
+    // `Matrix3::identity() * k`, entry by entry.
+    let (on, off) = (W::splat(1.0 * k), W::splat(0.0 * k));
+    let ik = M3 {
+        m: [[on, off, off], [off, on, off], [off, off, on]],
+    };
+    ia0.a = ia0.a.zip(&ik, |p, q| p + q);
+    ia0.c = ia0.c.zip(&ik, |p, q| p + q);
+    let up = base_placement(model, q)
+        .r
+        .tr_mul_v(&V3::splat(&(-model.gravity)));
+    pa0.f += (v0.w.cross(&v0.v) - up).scale(W::splat(k));
 }
 
 /// `aba::articulated_pass` (one-DoF joints), leaves to root; with `check`, records

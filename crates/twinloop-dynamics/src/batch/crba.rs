@@ -252,6 +252,8 @@ fn crba_lanes(model: &Model, bd: &mut BatchData) {
             e[k] = W::splat(1.0);
             let f = base.mul_motion(&Mo::from_lanes(&e));
             base_rows(ml, nv, k, k, &f);
+            // MuJoCo's free-joint armature (`Model::base_armature`), as the single call.
+            ml[k * nv + k] += W::splat(model.base_armature);
         }
     }
 }
