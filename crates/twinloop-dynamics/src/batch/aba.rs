@@ -220,29 +220,31 @@ fn articulated_pass(model: &Model, bd: &mut BatchData, ia0: &mut S6, pa0: &mut F
     for i in (0..model.nbodies).rev() {
         let d = i;
         let s = bd.s[d];
-        let ia = bd.ia[i];
+        // IA is reduced in place and added to the parent's from there (the parent
+        // comes first in the body order): a copy of its 27 lanes was a memcpy a body.
+        let (before, from_i) = bd.ia.split_at_mut(i);
+        let ia = &mut from_i[0];
         let ucol = ia.mul_motion(&s);
         let arm = W::splat(model.armature[i]);
         let pivot = s.dot(&ucol) + arm;
         if check {
-            record_singular(bd, &ia, pivot, model.armature[i], i);
+            record_singular(&mut bd.singular, ia, pivot, model.armature[i], i);
         }
         let d_inv = 1.0 / pivot;
         let u = bd.a[model.idx_v[i]] - s.dot(&bd.pa[i]);
         bd.u_col[d] = ucol;
         bd.d_inv[d] = d_inv;
         bd.u[d] = u;
-        let mut ia_a = ia;
-        ia_a.sub_rank1(&ucol, d_inv);
+        ia.sub_rank1(&ucol, d_inv);
         let pa_a = bd.pa[i]
-            .add(&ia_a.mul_motion(&bd.c[i]))
+            .add(&ia.mul_motion(&bd.c[i]))
             .add(&ucol.scale(d_inv * u));
         let p = model.parents[i];
         if p == BASE {
-            ia0.add_assign(&ia_a);
+            ia0.add_assign(ia);
             *pa0 = pa0.add(&pa_a);
         } else {
-            bd.ia[p].add_assign(&ia_a);
+            before[p].add_assign(ia);
             bd.pa[p] = bd.pa[p].add(&pa_a);
         }
     }
@@ -250,9 +252,15 @@ fn articulated_pass(model: &Model, bd: &mut BatchData, ia0: &mut S6, pa0: &mut F
 
 /// `singular::singular_pivot`'s test of one body, lane by lane.
 #[inline(always)]
-fn record_singular(bd: &mut BatchData, ia: &S6, pivot: W, armature: f64, i: usize) {
+fn record_singular(
+    singular: &mut [Option<(usize, f64)>; LANES],
+    ia: &S6,
+    pivot: W,
+    armature: f64,
+    i: usize,
+) {
     for l in 0..LANES {
-        if bd.singular[l].is_some() {
+        if singular[l].is_some() {
             continue;
         }
         let mut scale: f64 = 0.0;
@@ -265,7 +273,7 @@ fn record_singular(bd: &mut BatchData, ia: &S6, pivot: W, armature: f64, i: usiz
         }
         let p = pivot.0[l];
         if p.is_nan() || p <= SINGULAR_RELATIVE_TOLERANCE * (scale + armature) {
-            bd.singular[l] = Some((i, p));
+            singular[l] = Some((i, p));
         }
     }
 }
