@@ -16,6 +16,15 @@ use twinloop_random::SplitMix64;
 const N: usize = 256;
 const ROUNDS: usize = 21;
 
+/// Rounds to time: `ROUNDS`, or `BATCH_BENCH_ROUNDS` (1 under callgrind, whose
+/// instruction counts need no repetition).
+fn rounds() -> usize {
+    std::env::var("BATCH_BENCH_ROUNDS")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(ROUNDS)
+}
+
 /// Median and minimum: at the shared machine's load the minimum is the round the
 /// other processes disturbed least (caches, frequency).
 fn median(mut x: Vec<f64>) -> (f64, f64) {
@@ -39,12 +48,27 @@ fn cpu_ns(_t0: Instant) -> f64 {
 /// ns per instance (on-CPU time) of `single` and `batched`, alternating, medians.
 type Times = ((f64, f64), (f64, f64));
 
-fn time(reps: usize, mut single: impl FnMut(), mut batched: impl FnMut()) -> Times {
+/// Whether to time `algo`: all, or those named in `BATCH_BENCH_ALGOS` (comma-separated;
+/// valgrind 3.19 stops at an AVX2 instruction of the batched CRBA, so callgrind runs
+/// without it).
+fn wanted(algo: &str) -> bool {
+    std::env::var("BATCH_BENCH_ALGOS").map_or(true, |a| a.split(',').any(|x| x == algo))
+}
+
+fn time(
+    algo: &str,
+    reps: usize,
+    mut single: impl FnMut(),
+    mut batched: impl FnMut(),
+) -> Option<Times> {
+    if !wanted(algo) {
+        return None;
+    }
     let (mut s, mut b) = (Vec::new(), Vec::new());
     let t0 = Instant::now();
     single();
     batched();
-    for _ in 0..ROUNDS {
+    for _ in 0..rounds() {
         let t = cpu_ns(t0);
         for _ in 0..reps {
             single();
@@ -56,7 +80,7 @@ fn time(reps: usize, mut single: impl FnMut(), mut batched: impl FnMut()) -> Tim
         }
         b.push((cpu_ns(t0) - t) / (reps * N) as f64);
     }
-    (median(s), median(b))
+    Some((median(s), median(b)))
 }
 
 fn bench(name: &str, file: &str) {
@@ -85,6 +109,7 @@ fn bench(name: &str, file: &str) {
         r * w..(r + 1) * w
     };
     let rnea_t = time(
+        "rnea",
         8,
         || {
             for r in 0..N {
@@ -100,6 +125,7 @@ fn bench(name: &str, file: &str) {
         || rnea_batch(&model, &mut bd, black_box(q), v, a, &mut out),
     );
     let aba_t = time(
+        "aba",
         4,
         || {
             for r in 0..N {
@@ -115,6 +141,7 @@ fn bench(name: &str, file: &str) {
         || aba_batch(&model, &mut bd, black_box(q), v, a, &mut out),
     );
     let crba_t = time(
+        "crba",
         8,
         || {
             for r in 0..N {
@@ -126,6 +153,7 @@ fn bench(name: &str, file: &str) {
     // What a caller of the single call does to hand out N whole matrices, as the
     // batch does (the Python package's crba_batch before this change).
     let crba_out_t = time(
+        "crba+out",
         8,
         || {
             for r in 0..N {
@@ -136,7 +164,20 @@ fn bench(name: &str, file: &str) {
         },
         || crba_batch(&model, &mut bd, black_box(q), &mut m2),
     );
+    // The compact form: each matrix's packed lower triangle (half the bytes).
+    let mut mp = vec![0.0; N * batch::packed_len(nv)];
+    let crba_packed_t = time(
+        "crba pak",
+        8,
+        || {
+            for r in 0..N {
+                black_box(crba(&model, &mut d, &q[row("q", r)]));
+            }
+        },
+        || batch::crba_batch_packed(&model, &mut bd, black_box(q), &mut mp),
+    );
     let com_t = time(
+        "com",
         16,
         || {
             for r in 0..N {
@@ -150,9 +191,13 @@ fn bench(name: &str, file: &str) {
         ("aba", aba_t),
         ("crba", crba_t),
         ("crba+out", crba_out_t),
+        ("crba pak", crba_packed_t),
         ("com", com_t),
     ];
-    for (algo, ((s, s_min), (b, b_min))) in results {
+    for (algo, t) in results {
+        let Some(((s, s_min), (b, b_min))) = t else {
+            continue;
+        };
         println!(
             "{name:4} {algo:8} median: single {s:7.1} ns, batched {b:7.1} ns/instance, {:.2}x; \
              min: {s_min:7.1}, {b_min:7.1}, {:.2}x",

@@ -92,6 +92,17 @@ fn check(model: &Model, n: usize, seed: u64) {
         single.extend(data.mass_matrix.iter());
     }
     same(&format!("{} crba", model.name), &m, &single);
+    // The packed form: each matrix's lower triangle by rows, the same numbers.
+    let np = batch::packed_len(nv);
+    let mut mp = vec![f64::NAN; n * np];
+    batch::crba_batch_packed(model, &mut bd, &q, &mut mp);
+    let unpacked: Vec<f64> = (0..n * nv * nv)
+        .map(|k| {
+            let (r, rc) = (k / (nv * nv), k % (nv * nv));
+            mp[r * np + batch::packed_index(rc / nv, rc % nv)]
+        })
+        .collect();
+    same(&format!("{} crba packed", model.name), &unpacked, &single);
 
     single.clear();
     let mut com = vec![f64::NAN; n * 3];
@@ -113,6 +124,15 @@ fn batched_op3_is_the_single_call() {
         2,
     );
     check(&load("models/op3/mjcf/op3.xml", BaseKind::Floating), 5, 3);
+}
+
+/// The floating base's armature (an MJCF free joint's, `Model::base_armature`) in
+/// RNEA, ABA and CRBA: the lanes add it where the single calls do.
+#[test]
+fn batched_base_armature_is_the_single_call() {
+    let mut model = load("models/op3/robotis_op3.nomesh.urdf", BaseKind::Floating);
+    model.base_armature = 0.37;
+    check(&model, 9, 4);
 }
 
 #[test]

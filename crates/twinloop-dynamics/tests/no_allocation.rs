@@ -166,6 +166,8 @@ fn algorithms_do_not_allocate() {
             aba_batch(m, bd, qs, vs, vs, out);
             try_aba_batch(m, bd, qs, vs, vs, out).unwrap();
             crba_batch(m, bd, qs, mm);
+            let packed = 5 * twinloop_dynamics::batch::packed_len(m.nv);
+            twinloop_dynamics::batch::crba_batch_packed(m, bd, qs, &mut mm[..packed]);
             center_of_mass_batch(m, bd, qs, com);
         }
     };

@@ -2,7 +2,7 @@
 //! floating base's 6 x 6 Cholesky solve written out as nalgebra does it.
 
 use super::joint::{base_placement, compose, joint_placement, subspace_column};
-use super::lanes::{Fo, In, LANES, Mo, S6, V3, W};
+use super::lanes::{Fo, In, LANES, M3, Mo, S6, V3, W};
 use super::{BatchData, SingularRow, check_rows, dispatch, gather, rows, scatter, uses_lanes};
 use crate::model::{BASE, Model};
 use crate::singular::SINGULAR_RELATIVE_TOLERANCE;
@@ -163,7 +163,9 @@ fn velocity_pass(model: &Model, bd: &mut BatchData) -> (S6, Fo) {
     let (v0, ia0, pa0) = if floating {
         let v0 = Mo::from_lanes(&bd.v[0..6]);
         let i0 = In::splat(&model.base_inertia);
-        (v0, i0.to_sym6(), v0.cross_force(&i0.mul_motion(&v0)))
+        let (mut ia0, mut pa0) = (i0.to_sym6(), v0.cross_force(&i0.mul_motion(&v0)));
+        base_armature(model, &bd.q, &v0, &mut ia0, &mut pa0);
+        (v0, ia0, pa0)
     } else {
         (Mo::ZERO, S6::ZERO, Fo::ZERO)
     };
@@ -189,6 +191,27 @@ fn velocity_pass(model: &Model, bd: &mut BatchData) -> (S6, Fo) {
     (ia0, pa0)
 }
 
+/// The floating base's armature `a` in the base's (IA, pA), as `aba::velocity_pass`:
+/// `a` on the diagonal of both 3 x 3 blocks, `a (w x v - up)` in the bias force.
+#[inline(always)]
+fn base_armature(model: &Model, q: &[W], v0: &Mo, ia0: &mut S6, pa0: &mut Fo) {
+    let k = model.base_armature;
+    if k == 0.0 {
+        return;
+    }
+    // `Matrix3::identity() * k`, entry by entry.
+    let (on, off) = (W::splat(1.0 * k), W::splat(0.0 * k));
+    let ik = M3 {
+        m: [[on, off, off], [off, on, off], [off, off, on]],
+    };
+    ia0.a = ia0.a.zip(&ik, |p, q| p + q);
+    ia0.c = ia0.c.zip(&ik, |p, q| p + q);
+    let up = base_placement(model, q)
+        .r
+        .tr_mul_v(&V3::splat(&(-model.gravity)));
+    pa0.f += (v0.w.cross(&v0.v) - up).scale(W::splat(k));
+}
+
 /// `aba::articulated_pass` (one-DoF joints), leaves to root; with `check`, records
 /// in `bd.singular` each lane's first pivot at or below `singular.rs`'s floor.
 #[inline(always)]
@@ -197,29 +220,31 @@ fn articulated_pass(model: &Model, bd: &mut BatchData, ia0: &mut S6, pa0: &mut F
     for i in (0..model.nbodies).rev() {
         let d = i;
         let s = bd.s[d];
-        let ia = bd.ia[i];
+        // IA is reduced in place and added to the parent's from there (the parent
+        // comes first in the body order): a copy of its 27 lanes was a memcpy a body.
+        let (before, from_i) = bd.ia.split_at_mut(i);
+        let ia = &mut from_i[0];
         let ucol = ia.mul_motion(&s);
         let arm = W::splat(model.armature[i]);
         let pivot = s.dot(&ucol) + arm;
         if check {
-            record_singular(bd, &ia, pivot, model.armature[i], i);
+            record_singular(&mut bd.singular, ia, pivot, model.armature[i], i);
         }
         let d_inv = 1.0 / pivot;
         let u = bd.a[model.idx_v[i]] - s.dot(&bd.pa[i]);
         bd.u_col[d] = ucol;
         bd.d_inv[d] = d_inv;
         bd.u[d] = u;
-        let mut ia_a = ia;
-        ia_a.sub_rank1(&ucol, d_inv);
+        ia.sub_rank1(&ucol, d_inv);
         let pa_a = bd.pa[i]
-            .add(&ia_a.mul_motion(&bd.c[i]))
+            .add(&ia.mul_motion(&bd.c[i]))
             .add(&ucol.scale(d_inv * u));
         let p = model.parents[i];
         if p == BASE {
-            ia0.add_assign(&ia_a);
+            ia0.add_assign(ia);
             *pa0 = pa0.add(&pa_a);
         } else {
-            bd.ia[p].add_assign(&ia_a);
+            before[p].add_assign(ia);
             bd.pa[p] = bd.pa[p].add(&pa_a);
         }
     }
@@ -227,9 +252,15 @@ fn articulated_pass(model: &Model, bd: &mut BatchData, ia0: &mut S6, pa0: &mut F
 
 /// `singular::singular_pivot`'s test of one body, lane by lane.
 #[inline(always)]
-fn record_singular(bd: &mut BatchData, ia: &S6, pivot: W, armature: f64, i: usize) {
+fn record_singular(
+    singular: &mut [Option<(usize, f64)>; LANES],
+    ia: &S6,
+    pivot: W,
+    armature: f64,
+    i: usize,
+) {
     for l in 0..LANES {
-        if bd.singular[l].is_some() {
+        if singular[l].is_some() {
             continue;
         }
         let mut scale: f64 = 0.0;
@@ -242,7 +273,7 @@ fn record_singular(bd: &mut BatchData, ia: &S6, pivot: W, armature: f64, i: usiz
         }
         let p = pivot.0[l];
         if p.is_nan() || p <= SINGULAR_RELATIVE_TOLERANCE * (scale + armature) {
-            bd.singular[l] = Some((i, p));
+            singular[l] = Some((i, p));
         }
     }
 }

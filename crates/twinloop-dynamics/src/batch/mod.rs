@@ -35,7 +35,7 @@ use std::fmt;
 
 pub use aba::{aba_batch, try_aba_batch};
 pub use com::center_of_mass_batch;
-pub use crba::crba_batch;
+pub use crba::{crba_batch, crba_batch_packed, packed_index, packed_len};
 pub use rnea::rnea_batch;
 
 /// The workspace of the batched algorithms for one model (one per thread).
@@ -63,6 +63,8 @@ pub struct BatchData {
     d_inv: Vec<W>,
     u: Vec<W>,
     ycrb: Vec<Li>,
+    /// CRBA's lane group of mass matrices (nv x nv lanes, both triangles).
+    mlanes: Vec<W>,
     /// Per lane: the first body (leaves first) whose ABA pivot is singular.
     singular: [Option<(usize, f64)>; LANES],
     /// The single-call workspace: for models with spherical joints, and for naming a
@@ -92,6 +94,7 @@ impl BatchData {
             d_inv: vec![W::ZERO; nb],
             u: vec![W::ZERO; nb],
             ycrb: vec![Li::ZERO; nb],
+            mlanes: vec![W::ZERO; model.nv * model.nv],
             singular: [None; LANES],
             single: Data::new(model),
         }

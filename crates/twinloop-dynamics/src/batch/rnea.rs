@@ -86,7 +86,12 @@ fn rnea_lanes(model: &Model, bd: &mut BatchData) {
     };
     let mut f0 = if floating {
         let i0 = In::splat(&model.base_inertia);
-        i0.mul_motion(&a0).add(&v0.cross_force(&i0.mul_motion(&v0)))
+        let f0 = i0.mul_motion(&a0).add(&v0.cross_force(&i0.mul_motion(&v0)));
+        f0.add(&base_armature_force(
+            model,
+            &v0,
+            &Mo::from_lanes(&bd.a[0..6]),
+        ))
     } else {
         Fo::ZERO
     };
@@ -125,5 +130,20 @@ fn rnea_lanes(model: &Model, bd: &mut BatchData) {
     }
     if floating {
         bd.out[0..6].copy_from_slice(&f0.lanes());
+    }
+}
+
+/// `rnea::base_armature_force`: the floating base's armature `a (a0.v + w x v, a0.w)`
+/// (zero when it has none, which the single call adds too).
+#[inline(always)]
+fn base_armature_force(model: &Model, v0: &Mo, a0: &Mo) -> Fo {
+    let k = model.base_armature;
+    if k == 0.0 {
+        return Fo::ZERO;
+    }
+    let k = W::splat(k);
+    Fo {
+        f: (a0.v + v0.w.cross(&v0.v)).scale(k),
+        n: a0.w.scale(k),
     }
 }
