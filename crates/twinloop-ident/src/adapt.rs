@@ -73,13 +73,60 @@ pub struct AddedMass {
 }
 
 /// The CoM's resolution: how far it can move with every measured angle within its
-/// reading's resolution ([`com_resolution`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// reading's resolution ([`com_resolution`]), and over a bus with the floor the
+/// protocol passes fit from readings on the same counts ([`with_floor`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ComResolution {
-    /// Per standing axis (x, y, z), m.
+    /// Per standing axis (x, y, z), m: every share below added up.
     pub axes_m: [f64; 3],
-    /// The longest displacement (every angle at a corner of its range), m.
+    /// The longest displacement (every reading at a corner of its range), m.
     pub worst_m: f64,
+    /// The CoM's move per angle moved by its resolution (forward, backward, left,
+    /// right; the exact method linearised at the measured angles), m.
+    #[serde(default)]
+    pub per_angle_m: [[f64; 3]; 4],
+    /// The angles' share alone (the floor held), when a floor's is in the total.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angles: Option<ResolutionShare>,
+    /// The fitted floor's share, when the floor was fitted from the readings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor: Option<FloorShare>,
+}
+
+/// One share of [`ComResolution`]: per standing axis and at the worst corner, m.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ResolutionShare {
+    pub axes_m: [f64; 3],
+    pub worst_m: f64,
+}
+
+/// What the floor the protocol passes replay on was found from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FloorReading {
+    /// The left and right angles' mean: the same readings as the angles, so its share
+    /// moves with theirs.
+    Sideways,
+    /// The feet's roll at the onsets (median of four): the IMU's tilt less the tilt
+    /// the ankle readings explain, a reading of its own on the same counts.
+    Roll,
+}
+
+/// The floor's share of the CoM's resolution: the floor moves as far as its
+/// reading's resolution lets it, and the CoM with it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FloorShare {
+    pub reading: FloorReading,
+    /// The floor found: its sink under the robot's weight, m.
+    pub sink_m: f64,
+    /// The floor's move per degree of its reading, m/deg (its sign: which way).
+    pub sink_per_deg: f64,
+    /// How far the floor can move with its reading within the angles' resolution, m.
+    pub resolution_m: f64,
+    /// The CoM's move per metre of floor (standing axes), m/m.
+    pub com_per_sink: [f64; 3],
+    /// The CoM's move with the floor alone at its resolution (per axis, worst), m.
+    pub share: ResolutionShare,
 }
 
 /// The LIPM and three-mass LIPM of a model.
@@ -803,20 +850,82 @@ fn com_sigma(per_angle: &[Vector3<f64>; 4]) -> Vector3<f64> {
 /// sum of the four angles' shares (the worst corner of the angles' box, axis by
 /// axis), and the longest of the sixteen corners' displacements, m.
 pub fn com_resolution(per_angle: &[Vector3<f64>; 4]) -> ComResolution {
-    let axes = per_angle
+    let share = corners(per_angle);
+    ComResolution {
+        axes_m: share.axes_m,
+        worst_m: share.worst_m,
+        per_angle_m: per_angle.map(v3),
+        angles: None,
+        floor: None,
+    }
+}
+
+/// The box of independent readings each moving the CoM by `+-moves[k]`: per axis the
+/// sum of their sizes, and the longest of the corners' displacements, m.
+fn corners(moves: &[Vector3<f64>]) -> ResolutionShare {
+    let axes = moves
         .iter()
         .fold(Vector3::zeros(), |v: Vector3<f64>, dc| v + dc.abs());
-    let worst = (0..16_u32)
+    let worst = (0..1_u32 << moves.len())
         .map(|signs| {
-            (0..4)
-                .map(|k| per_angle[k] * if signs >> k & 1 == 1 { 1.0 } else { -1.0 })
+            (0..moves.len())
+                .map(|k| moves[k] * if signs >> k & 1 == 1 { 1.0 } else { -1.0 })
                 .sum::<Vector3<f64>>()
                 .norm()
         })
         .fold(0.0_f64, f64::max);
-    ComResolution {
+    ResolutionShare {
         axes_m: v3(axes),
         worst_m: worst,
+    }
+}
+
+/// `angles` (the angles' [`com_resolution`] at resolution `res` deg) with the floor's
+/// share added: the protocol passes replay on a floor found from a reading (its
+/// `reading`, `sink_m`), which moves `sink_per_deg` m per degree of that reading, and
+/// the CoM moves `com_per_sink` m per m of floor. The reading is known to `res` (the
+/// same counts). Found from the sideways mean, the floor moves with the left and right
+/// angles themselves (half of each: their box is the angles' own, each of the two
+/// moving the CoM directly and through the floor); found from the feet's roll, it is
+/// a fifth reading, with a box side of its own.
+pub fn with_floor(
+    angles: &ComResolution,
+    res: f64,
+    reading: FloorReading,
+    sink_m: f64,
+    sink_per_deg: f64,
+    com_per_sink: [f64; 3],
+) -> ComResolution {
+    let per_angle = angles.per_angle_m.map(Vector3::from);
+    let floor = Vector3::from(com_per_sink) * (sink_per_deg * res);
+    let total = match reading {
+        FloorReading::Sideways => {
+            let mut m = per_angle;
+            m[2] += 0.5 * floor;
+            m[3] += 0.5 * floor;
+            corners(&m)
+        }
+        FloorReading::Roll => corners(&[
+            per_angle[0],
+            per_angle[1],
+            per_angle[2],
+            per_angle[3],
+            floor,
+        ]),
+    };
+    ComResolution {
+        axes_m: total.axes_m,
+        worst_m: total.worst_m,
+        per_angle_m: angles.per_angle_m,
+        angles: Some(corners(&per_angle)),
+        floor: Some(FloorShare {
+            reading,
+            sink_m,
+            sink_per_deg,
+            resolution_m: (sink_per_deg * res).abs(),
+            com_per_sink,
+            share: corners(&[floor]),
+        }),
     }
 }
 

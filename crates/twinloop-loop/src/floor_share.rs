@@ -1,0 +1,166 @@
+//! The floor's share of the CoM's resolution. Over a bus the floor the protocol
+//! passes replay on is found from readings on the same counts as the tip angles (the
+//! left and right angles' mean, or the feet's roll), and the floor and the CoM's
+//! height trade against each other: on km20 about 22 mm of CoM per mm of floor (seed 1
+//! of the served sweep: one place on floors of 0.965 and 0.875 mm, 2.1 mm apart). So
+//! the CoM is known no better than the floor's reading lets the floor move, times how
+//! far the CoM moves with the floor: measured here by replaying the kept model on two
+//! floors either side of the one found, and added to the angles' share
+//! ([`twinloop_ident::adapt::with_floor`]).
+
+use crate::LoopError;
+use crate::protocol_bias::{Calibration, Reading, Replay, angles_of, protocol_reading_with_roll};
+use twinloop_ident::adapt::{Adapted, FloorReading, with_floor};
+use twinloop_ident::tipover_study::StudyReport;
+use twinloop_virtual::VirtualRobotOptions;
+
+/// The two replays lie this far either side of the floor found, decades of sink: wide
+/// enough that the replays' whole-count readings move by several counts (km20's
+/// sideways mean moves about 4 deg per decade near 1 mm), narrow enough to stay
+/// near linear (the effect grows faster than the logarithm).
+const STEP_DECADES: f64 = 0.1;
+
+/// Add the floor's share to `found`'s `com_resolution` (and a note saying it), when
+/// its passes replayed on a floor found from the readings: two replays of the kept
+/// model. A floor the user gave (`--ground-sink`), or no passes: nothing to add.
+pub(crate) fn add_floor_share(
+    study: &StudyReport,
+    replay: &Replay<'_>,
+    found: &mut (Adapted, Option<Calibration>),
+    log: &mut dyn FnMut(&str),
+) -> Result<(), LoopError> {
+    let (adapted, Some(calibration)) = found else {
+        return Ok(());
+    };
+    let (reading, sink) = match (&calibration.floor, calibration.floor_by_roll_m) {
+        (Some(f), _) => (FloorReading::Sideways, f.sink_m),
+        (None, Some(s)) => (FloorReading::Roll, s),
+        (None, None) => return Ok(()),
+    };
+    let (Some(model), Some(angles)) = (&adapted.robot, &adapted.report.com_resolution) else {
+        return Ok(());
+    };
+    let res = adapted.report.angle_resolution_deg;
+    let sinks = [-STEP_DECADES, STEP_DECADES].map(|d| sink * 10f64.powf(d));
+    let read = |s: f64| {
+        let on = VirtualRobotOptions {
+            ground_sink: Some(s),
+            ..replay.options.clone()
+        };
+        protocol_reading_with_roll(study, replay.model_spec, replay.host, model, &on)
+            .map_err(|e| e.context("replaying the protocol either side of the floor found"))
+    };
+    let (firm, soft) = rayon::join(|| read(sinks[0]), || read(sinks[1]));
+    let (firm, soft) = (firm?, soft?);
+    let robot_roll = angles_of(study, |d| d.excess_deg);
+    let slope = slopes(
+        &angles.per_angle_m,
+        res,
+        reading,
+        robot_roll,
+        [&firm, &soft],
+        sinks,
+    );
+    let bound = with_floor(
+        angles,
+        res,
+        reading,
+        sink,
+        slope.sink_per_deg,
+        slope.com_per_sink,
+    );
+    let line = describe(&bound, res);
+    log(&line);
+    adapted.report.notes.push(line);
+    adapted.report.com_resolution = Some(bound);
+    Ok(())
+}
+
+/// How the floor and the CoM move, from two replays `read` on `sinks` (m).
+struct Slopes {
+    /// The floor's move per degree of its reading, m/deg.
+    sink_per_deg: f64,
+    /// The CoM's move per metre of floor, m/m.
+    com_per_sink: [f64; 3],
+}
+
+/// The slopes from the two replays: the CoM moves with the protocol's bias, which
+/// moves with the floor (`d read / d sink`, the model's statics do not), by minus the
+/// exact method's move per angle (`per_angle`, per `res` deg of angle); the floor's
+/// reading (the replay's sideways mean, or the median of the robot's roll less the
+/// replay's) moves by its own slope. A reading the two replays do not tell apart is
+/// a floor the step does not resolve: its move is then taken as the whole step.
+fn slopes(
+    per_angle: &[[f64; 3]; 4],
+    res: f64,
+    reading: FloorReading,
+    robot_roll: [f64; 4],
+    read: [&Reading; 2],
+    sinks: [f64; 2],
+) -> Slopes {
+    let ds = sinks[1] - sinks[0];
+    let d_read: [f64; 4] = std::array::from_fn(|k| (read[1].angles[k] - read[0].angles[k]) / ds);
+    let com_per_sink: [f64; 3] = std::array::from_fn(|i| {
+        -(0..4)
+            .map(|k| per_angle[k][i] / res * d_read[k])
+            .sum::<f64>()
+    });
+    let of = |r: &Reading| match reading {
+        FloorReading::Sideways => 0.5 * (r.angles[2] + r.angles[3]),
+        FloorReading::Roll => median(std::array::from_fn(|k| robot_roll[k] - r.roll[k])),
+    };
+    let d_reading = of(read[1]) - of(read[0]);
+    let sink_per_deg = if d_reading.abs() > 1e-9 {
+        ds / d_reading
+    } else {
+        ds / res
+    };
+    Slopes {
+        sink_per_deg,
+        com_per_sink,
+    }
+}
+
+/// The resolution's line for the log, the report's notes and the terminal.
+pub fn describe(bound: &twinloop_ident::adapt::ComResolution, res: f64) -> String {
+    let mm = |v: [f64; 3]| {
+        format!(
+            "x {:.2}, y {:.2}, z {:.2} mm",
+            v[0] * 1e3,
+            v[1] * 1e3,
+            v[2] * 1e3
+        )
+    };
+    let (Some(a), Some(f)) = (&bound.angles, &bound.floor) else {
+        return format!(
+            "the CoM's resolution: {} ({:.2} mm at worst)",
+            mm(bound.axes_m),
+            bound.worst_m * 1e3
+        );
+    };
+    let per_mm = f.com_per_sink.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    format!(
+        "the CoM's resolution with the floor's share: {} ({:.2} mm at worst); the angles' \
+         share (each within {res:.3} deg) {} ({:.2} mm), the floor's {} ({:.2} mm): the floor \
+         found from the {} ({:.3} mm) is known to {:.3} mm, and the CoM moves up to {per_mm:.1} \
+         mm per mm of floor",
+        mm(bound.axes_m),
+        bound.worst_m * 1e3,
+        mm(a.axes_m),
+        a.worst_m * 1e3,
+        mm(f.share.axes_m),
+        f.share.worst_m * 1e3,
+        match f.reading {
+            FloorReading::Sideways => "left and right angles' mean",
+            FloorReading::Roll => "feet's roll",
+        },
+        f.sink_m * 1e3,
+        f.resolution_m * 1e3,
+    )
+}
+
+fn median(v: [f64; 4]) -> f64 {
+    let mut a = v;
+    a.sort_by(f64::total_cmp);
+    0.5 * (a[1] + a[2])
+}
