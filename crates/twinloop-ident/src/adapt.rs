@@ -112,19 +112,34 @@ pub enum FloorReading {
     Roll,
 }
 
-/// The floor's share of the CoM's resolution: the floor moves as far as its
-/// reading's resolution lets it, and the CoM with it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FloorShare {
+/// How the floor the protocol passes replayed on moves with the readings, and the
+/// CoM with the floor ([`with_floor`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FloorPath {
     pub reading: FloorReading,
     /// The floor found: its sink under the robot's weight, m.
     pub sink_m: f64,
-    /// The floor's move per degree of its reading, m/deg (its sign: which way).
+    /// The floor's move per degree of what its search matches, m/deg (its sign: which
+    /// way): the replay's sideways mean, or the median of its feet's roll.
     pub sink_per_deg: f64,
-    /// How far the floor can move with its reading within the angles' resolution, m.
-    pub resolution_m: f64,
+    /// How far what the search matches moves per degree of each tip angle (forward,
+    /// backward, left, right), deg/deg: the sideways floor matches the robot's
+    /// sideways mean less the model's, and the model's moves with every angle through
+    /// the fit (half of each sideways angle less the fit's response). Zeros for the
+    /// roll, whose own reading is [`FloorReading::Roll`]'s.
+    pub reading_per_angle: [f64; 4],
     /// The CoM's move per metre of floor (standing axes), m/m.
     pub com_per_sink: [f64; 3],
+}
+
+/// The floor's share of the CoM's resolution: the floor moves as far as its
+/// reading's resolution lets it, and the CoM with it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FloorShare {
+    #[serde(flatten)]
+    pub path: FloorPath,
+    /// How far the floor can move with every reading within the angles' resolution, m.
+    pub resolution_m: f64,
     /// The CoM's move with the floor alone at its resolution (per axis, worst), m.
     pub share: ResolutionShare,
 }
@@ -881,50 +896,40 @@ fn corners(moves: &[Vector3<f64>]) -> ResolutionShare {
 }
 
 /// `angles` (the angles' [`com_resolution`] at resolution `res` deg) with the floor's
-/// share added: the protocol passes replay on a floor found from a reading (its
-/// `reading`, `sink_m`), which moves `sink_per_deg` m per degree of that reading, and
-/// the CoM moves `com_per_sink` m per m of floor. The reading is known to `res` (the
-/// same counts). Found from the sideways mean, the floor moves with the left and right
-/// angles themselves (half of each: their box is the angles' own, each of the two
-/// moving the CoM directly and through the floor); found from the feet's roll, it is
-/// a fifth reading, with a box side of its own.
-pub fn with_floor(
-    angles: &ComResolution,
-    res: f64,
-    reading: FloorReading,
-    sink_m: f64,
-    sink_per_deg: f64,
-    com_per_sink: [f64; 3],
-) -> ComResolution {
+/// share added ([`FloorPath`]): each reading, known to `res` (the same counts), moves
+/// the floor, and the floor the CoM. Found from the sideways mean, the floor moves
+/// with the tip angles themselves (`reading_per_angle`): each angle's side of the box
+/// is its direct move plus its move through the floor. Found from the feet's roll, the
+/// roll is a fifth reading with a side of its own.
+pub fn with_floor(angles: &ComResolution, res: f64, path: FloorPath) -> ComResolution {
     let per_angle = angles.per_angle_m.map(Vector3::from);
-    let floor = Vector3::from(com_per_sink) * (sink_per_deg * res);
-    let total = match reading {
-        FloorReading::Sideways => {
-            let mut m = per_angle;
-            m[2] += 0.5 * floor;
-            m[3] += 0.5 * floor;
-            corners(&m)
-        }
-        FloorReading::Roll => corners(&[
-            per_angle[0],
-            per_angle[1],
-            per_angle[2],
-            per_angle[3],
-            floor,
-        ]),
+    let com_per_sink = Vector3::from(path.com_per_sink);
+    let through: [f64; 4] = match path.reading {
+        FloorReading::Sideways => path.reading_per_angle.map(|c| c * res * path.sink_per_deg),
+        FloorReading::Roll => [0.0; 4],
     };
+    let own = match path.reading {
+        FloorReading::Sideways => 0.0,
+        FloorReading::Roll => res * path.sink_per_deg,
+    };
+    let mut sides: Vec<Vector3<f64>> = (0..4)
+        .map(|k| per_angle[k] + com_per_sink * through[k])
+        .collect();
+    let mut floor_sides: Vec<Vector3<f64>> = through.iter().map(|t| com_per_sink * *t).collect();
+    if own != 0.0 {
+        sides.push(com_per_sink * own);
+        floor_sides.push(com_per_sink * own);
+    }
+    let total = corners(&sides);
     ComResolution {
         axes_m: total.axes_m,
         worst_m: total.worst_m,
         per_angle_m: angles.per_angle_m,
         angles: Some(corners(&per_angle)),
         floor: Some(FloorShare {
-            reading,
-            sink_m,
-            sink_per_deg,
-            resolution_m: (sink_per_deg * res).abs(),
-            com_per_sink,
-            share: corners(&[floor]),
+            path,
+            resolution_m: through.iter().map(|t| t.abs()).sum::<f64>() + own.abs(),
+            share: corners(&floor_sides),
         }),
     }
 }

@@ -31,6 +31,6 @@ pub fn adapt_to_protocol(
     } else {
         try_other_places(prior, study, opts, replay, first, log, map_err)?
     };
-    add_floor_share(study, replay, &mut kept, log)?;
+    add_floor_share(prior, study, opts, replay, &mut kept, log)?;
     Ok(kept)
 }

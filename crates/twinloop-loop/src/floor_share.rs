@@ -10,7 +10,9 @@
 
 use crate::LoopError;
 use crate::protocol_bias::{Calibration, Reading, Replay, angles_of, protocol_reading_with_roll};
-use twinloop_ident::adapt::{Adapted, FloorReading, with_floor};
+use rayon::prelude::*;
+use twinloop_description::Description;
+use twinloop_ident::adapt::{AdaptOptions, Adapted, FloorPath, FloorReading, adapt, with_floor};
 use twinloop_ident::tipover_study::StudyReport;
 use twinloop_virtual::VirtualRobotOptions;
 
@@ -24,7 +26,9 @@ const STEP_DECADES: f64 = 0.1;
 /// its passes replayed on a floor found from the readings: two replays of the kept
 /// model. A floor the user gave (`--ground-sink`), or no passes: nothing to add.
 pub(crate) fn add_floor_share(
+    prior: &Description,
     study: &StudyReport,
+    opts: &AdaptOptions,
     replay: &Replay<'_>,
     found: &mut (Adapted, Option<Calibration>),
     log: &mut dyn FnMut(&str),
@@ -61,19 +65,69 @@ pub(crate) fn add_floor_share(
         [&firm, &soft],
         sinks,
     );
-    let bound = with_floor(
-        angles,
-        res,
+    let reading_per_angle = match reading {
+        FloorReading::Sideways => sideways_floor_per_angle(prior, study, opts, &adapted.report)?,
+        FloorReading::Roll => [0.0; 4],
+    };
+    let path = FloorPath {
         reading,
-        sink,
-        slope.sink_per_deg,
-        slope.com_per_sink,
-    );
+        sink_m: sink,
+        sink_per_deg: slope.sink_per_deg,
+        reading_per_angle,
+        com_per_sink: slope.com_per_sink,
+    };
+    let bound = with_floor(angles, res, path);
     let line = describe(&bound, res);
     log(&line);
     adapted.report.notes.push(line);
     adapted.report.com_resolution = Some(bound);
     Ok(())
+}
+
+/// How far what the sideways floor search matches moves per degree of each tip angle,
+/// deg/deg. The search finds the floor on which the replay's sideways mean (the
+/// model's static mean plus the protocol's sideways bias) is the robot's: the bias it
+/// needs is the robot's mean less the model's, and the model's follows the angles
+/// through the fit (the part's height, set by the fore-aft pair, moves the sideways
+/// statics too). So: minus the change of the fit's sideways residual (static less
+/// measured, the mean of left and right) per degree of each angle, by central
+/// differences of the static fit at the kept place and bias, each angle moved by the
+/// resolution (eight static fits, at once).
+fn sideways_floor_per_angle(
+    prior: &Description,
+    study: &StudyReport,
+    opts: &AdaptOptions,
+    kept: &twinloop_ident::adapt::AdaptReport,
+) -> Result<[f64; 4], LoopError> {
+    let res = kept.angle_resolution_deg;
+    let o = AdaptOptions {
+        host: kept.added.as_ref().map(|a| a.host.clone()),
+        protocol_bias_deg: kept.protocol_bias_deg,
+        ..opts.clone()
+    };
+    let residual = |k: usize, step: f64| -> Result<f64, LoopError> {
+        let mut s = study.clone();
+        let d = [&mut s.forward, &mut s.backward, &mut s.left, &mut s.right];
+        if let Some(d) = d.into_iter().nth(k) {
+            d.measured_deg += step;
+        }
+        let r = adapt(prior, &s, &o)?;
+        let fit = r.report.fall_angle_fit.ok_or_else(|| {
+            LoopError::new("the static fit at the kept place has no fall-angle fit")
+        })?;
+        Ok(0.5 * (fit.residual_deg[2] + fit.residual_deg[3]))
+    };
+    let moved: Vec<Result<f64, LoopError>> = (0..8)
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|i| residual(i / 2, if i % 2 == 0 { res } else { -res }))
+        .collect();
+    let mut out = [0.0; 4];
+    for (k, o) in out.iter_mut().enumerate() {
+        let (up, down) = (moved[2 * k].clone()?, moved[2 * k + 1].clone()?);
+        *o = -(up - down) / (2.0 * res);
+    }
+    Ok(out)
 }
 
 /// How the floor and the CoM move, from two replays `read` on `sinks` (m).
@@ -138,7 +192,11 @@ pub fn describe(bound: &twinloop_ident::adapt::ComResolution, res: f64) -> Strin
             bound.worst_m * 1e3
         );
     };
-    let per_mm = f.com_per_sink.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let per_mm = f
+        .path
+        .com_per_sink
+        .iter()
+        .fold(0.0_f64, |m, v| m.max(v.abs()));
     format!(
         "the CoM's resolution with the floor's share: {} ({:.2} mm at worst); the angles' \
          share (each within {res:.3} deg) {} ({:.2} mm), the floor's {} ({:.2} mm): the floor \
@@ -150,11 +208,11 @@ pub fn describe(bound: &twinloop_ident::adapt::ComResolution, res: f64) -> Strin
         a.worst_m * 1e3,
         mm(f.share.axes_m),
         f.share.worst_m * 1e3,
-        match f.reading {
+        match f.path.reading {
             FloorReading::Sideways => "left and right angles' mean",
             FloorReading::Roll => "feet's roll",
         },
-        f.sink_m * 1e3,
+        f.path.sink_m * 1e3,
         f.resolution_m * 1e3,
     )
 }
