@@ -222,3 +222,153 @@ fn median(v: [f64; 4]) -> f64 {
     a.sort_by(f64::total_cmp);
     0.5 * (a[1] + a[2])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use twinloop_description::builtin::{add_point_mass, resolve};
+    use twinloop_ident::adapt::AdaptReport;
+    use twinloop_ident::tipover_study::{StudyOptions, run_study};
+
+    /// The protocol's bias per metre of floor (forward, backward, left, right), deg/m:
+    /// softer tips earlier, the sideways pair most (km20's sideways mean about 4 deg
+    /// per decade near 1 mm, 1.7 deg/mm), the fore-aft pair enough that the floor moves
+    /// the CoM's height by tens of millimetres per millimetre, as served km20 does.
+    const BIAS_PER_M: [f64; 4] = [-1500.0, -1200.0, -1800.0, -1600.0];
+    const FLOOR_M: f64 = 1e-3;
+    /// The replay's feet roll per metre of floor, deg/m (0.7 deg over OP3's 0.5 to 1
+    /// mm).
+    const ROLL_PER_M: f64 = 1700.0;
+    const RES: f64 = 0.15;
+
+    /// The full fit as the passes run it, on a floor whose bias is `BIAS_PER_M`: the
+    /// first (no bias) model's sideways statics and that bias find the floor on which
+    /// the replay's sideways mean is the robot's; the kept fit takes that floor's bias.
+    fn full_fit(prior: &Description, study: &StudyReport, o: &AdaptOptions) -> AdaptReport {
+        let first = adapt(prior, study, o).unwrap().report;
+        let r = first.fall_angle_fit.unwrap().residual_deg;
+        let s = FLOOR_M - 0.5 * (r[2] + r[3]) / (0.5 * (BIAS_PER_M[2] + BIAS_PER_M[3]));
+        let bias = BIAS_PER_M.map(|g| g * (s - FLOOR_M));
+        let o = AdaptOptions {
+            protocol_bias_deg: Some(bias),
+            ..o.clone()
+        };
+        adapt(prior, study, &o).unwrap().report
+    }
+
+    /// The corners of `sides` readings each moved by +-1 (resolutions), fitted again
+    /// by `fit`, against `bound`: the CoM's longest move within 10 % of the bound's
+    /// worst corner, none longer per axis than its bound by 10 %.
+    fn corners_within(
+        sides: usize,
+        centre: [f64; 3],
+        bound: &twinloop_ident::adapt::ComResolution,
+        fit: &(dyn Fn(&[f64]) -> [f64; 3] + Sync),
+    ) {
+        let moved: Vec<[f64; 3]> = (0..1_u32 << sides)
+            .into_par_iter()
+            .map(|signs| {
+                let u: Vec<f64> = (0..sides)
+                    .map(|k| if signs >> k & 1 == 1 { 1.0 } else { -1.0 })
+                    .collect();
+                let c = fit(&u);
+                std::array::from_fn(|k| c[k] - centre[k])
+            })
+            .collect();
+        let mut worst = 0.0_f64;
+        for m in &moved {
+            for k in 0..3 {
+                assert!(
+                    m[k].abs() <= 1.1 * bound.axes_m[k],
+                    "axis {k}: {m:?} > {bound:?}"
+                );
+            }
+            worst = worst.max(m.iter().map(|v| v * v).sum::<f64>().sqrt());
+        }
+        assert!(
+            (worst - bound.worst_m).abs() <= 0.1 * bound.worst_m,
+            "corners {worst} m, linearised {} m ({bound:?})",
+            bound.worst_m
+        );
+    }
+
+    fn moved(study: &StudyReport, u: &[f64]) -> StudyReport {
+        let mut s = study.clone();
+        let d = [&mut s.forward, &mut s.backward, &mut s.left, &mut s.right];
+        for (k, d) in d.into_iter().enumerate() {
+            d.measured_deg += u[k] * RES;
+        }
+        s
+    }
+
+    /// The floor's share against the full fit itself, on km20 with 0.3 kg on its
+    /// torso (the simulator's study): every corner of the readings' box (each moved
+    /// by +-RES) fitted again, floor and all ([`corners_within`]). The floor found
+    /// from the sideways mean: the fit places the part so that the model's sideways
+    /// mean follows the robot's, and the floor moves with neither (the share is nil:
+    /// the corners are the angles'). Found from the feet's roll, a fifth reading: its
+    /// share is at least half the angles' again (the floor 0.09 mm per 0.15 deg of
+    /// roll, 20 mm of CoM per mm of floor), and the corners, 32, take it.
+    #[test]
+    fn the_floors_share_is_the_full_fits_corners() {
+        let prior = resolve("builtin:km20").unwrap();
+        let mut robot = prior.clone();
+        add_point_mass(&mut robot, "torso", 0.3, [0.04, 0.02, 0.05]).unwrap();
+        let study = run_study(&robot, &StudyOptions::default()).unwrap();
+        let o = AdaptOptions {
+            angle_resolution_deg: Some(RES),
+            total_mass: Some(robot.total_mass()),
+            host: Some("torso".into()),
+            ..Default::default()
+        };
+        let kept = full_fit(&prior, &study, &o);
+        let angles = kept.com_resolution.clone().unwrap();
+        let sinks = [0.9e-3, 1.1e-3];
+        let read = sinks.map(|s| Reading {
+            angles: BIAS_PER_M.map(|g| g * s),
+            roll: [ROLL_PER_M * s; 4],
+        });
+        let path = |reading| {
+            let slope = slopes(
+                &angles.per_angle_m,
+                RES,
+                reading,
+                [0.0; 4],
+                [&read[0], &read[1]],
+                sinks,
+            );
+            FloorPath {
+                reading,
+                sink_m: FLOOR_M,
+                sink_per_deg: slope.sink_per_deg,
+                reading_per_angle: match reading {
+                    FloorReading::Sideways => {
+                        sideways_floor_per_angle(&prior, &study, &o, &kept).unwrap()
+                    }
+                    FloorReading::Roll => [0.0; 4],
+                },
+                com_per_sink: slope.com_per_sink,
+            }
+        };
+        let sideways = with_floor(&angles, RES, path(FloorReading::Sideways));
+        corners_within(4, kept.measured_com, &sideways, &|u| {
+            full_fit(&prior, &moved(&study, u), &o).measured_com
+        });
+        // The roll's floor: the one on which the replay's roll (ROLL_PER_M, more on a
+        // softer floor) is the robot's, moved by u[4] resolutions.
+        let roll = with_floor(&angles, RES, path(FloorReading::Roll));
+        corners_within(5, kept.measured_com, &roll, &|u| {
+            let s = FLOOR_M + u[4] * RES / ROLL_PER_M;
+            let bias = BIAS_PER_M.map(|g| g * (s - FLOOR_M));
+            let o = AdaptOptions {
+                protocol_bias_deg: Some(bias),
+                ..o.clone()
+            };
+            adapt(&prior, &moved(&study, u), &o)
+                .unwrap()
+                .report
+                .measured_com
+        });
+        assert!(roll.worst_m >= 1.5 * angles.worst_m, "{roll:?}");
+    }
+}
