@@ -13,7 +13,7 @@ use crate::protocol_bias::{Calibration, Reading, Replay, angles_of, protocol_rea
 use rayon::prelude::*;
 use twinloop_description::Description;
 use twinloop_ident::adapt::{AdaptOptions, Adapted, FloorPath, FloorReading, adapt, with_floor};
-use twinloop_ident::tipover_study::StudyReport;
+use twinloop_ident::tipover_study::{StudyReport, static_angles_at_onsets};
 use twinloop_virtual::VirtualRobotOptions;
 
 /// The two replays lie this far either side of the floor found, decades of sink: wide
@@ -85,14 +85,15 @@ pub(crate) fn add_floor_share(
 }
 
 /// How far what the sideways floor search matches moves per degree of each tip angle,
-/// deg/deg. The search finds the floor on which the replay's sideways mean (the
-/// model's static mean plus the protocol's sideways bias) is the robot's: the bias it
-/// needs is the robot's mean less the model's, and the model's follows the angles
-/// through the fit (the part's height, set by the fore-aft pair, moves the sideways
-/// statics too). So: minus the change of the fit's sideways residual (static less
-/// measured, the mean of left and right) per degree of each angle, by central
-/// differences of the static fit at the kept place and bias, each angle moved by the
-/// resolution (eight static fits, at once).
+/// deg/deg. The search finds the floor on which the replay's sideways mean (about the
+/// model's static mean at the robot's onsets, plus the protocol's sideways bias) is
+/// the robot's: half of each sideways angle, less how far the fitted model's
+/// sideways statics at the robot's onsets (`static_angles_at_onsets` against the
+/// tip-over as read: the replay starts from the commanded angles) move per degree of
+/// each angle, by central differences of the static fit at the kept bias, each angle
+/// moved by the resolution (eight fits, at once). On km20 the fit's place does not
+/// move with the angles (its residual, statics at the onsets less the angles, carries
+/// them both), so this is 0.5 for left and right, 0 fore and aft.
 fn sideways_floor_per_angle(
     prior: &Description,
     study: &StudyReport,
@@ -100,32 +101,35 @@ fn sideways_floor_per_angle(
     kept: &twinloop_ident::adapt::AdaptReport,
 ) -> Result<[f64; 4], LoopError> {
     let res = kept.angle_resolution_deg;
+    // As the place's own passes ran (a sideways floor is the first place's: the CoM
+    // inversion's link unless the user named one, its fit kept near the inversion's
+    // point rather than in the link's outline).
     let o = AdaptOptions {
-        host: kept.added.as_ref().map(|a| a.host.clone()),
         protocol_bias_deg: kept.protocol_bias_deg,
         ..opts.clone()
     };
-    let residual = |k: usize, step: f64| -> Result<f64, LoopError> {
+    let statics = |k: usize, step: f64| -> Result<f64, LoopError> {
         let mut s = study.clone();
         let d = [&mut s.forward, &mut s.backward, &mut s.left, &mut s.right];
         if let Some(d) = d.into_iter().nth(k) {
             d.measured_deg += step;
         }
-        let r = adapt(prior, &s, &o)?;
-        let fit = r.report.fall_angle_fit.ok_or_else(|| {
-            LoopError::new("the static fit at the kept place has no fall-angle fit")
-        })?;
-        Ok(0.5 * (fit.residual_deg[2] + fit.residual_deg[3]))
+        let model = adapt(prior, &s, &o)?
+            .robot
+            .ok_or_else(|| LoopError::new("the static fit at the kept place placed no part"))?;
+        let a = static_angles_at_onsets(&model, study)?;
+        Ok(0.5 * (a[2] + a[3]))
     };
     let moved: Vec<Result<f64, LoopError>> = (0..8)
         .into_par_iter()
         .with_max_len(1)
-        .map(|i| residual(i / 2, if i % 2 == 0 { res } else { -res }))
+        .map(|i| statics(i / 2, if i % 2 == 0 { res } else { -res }))
         .collect();
     let mut out = [0.0; 4];
     for (k, o) in out.iter_mut().enumerate() {
         let (up, down) = (moved[2 * k].clone()?, moved[2 * k + 1].clone()?);
-        *o = -(up - down) / (2.0 * res);
+        let own = if k >= 2 { 0.5 } else { 0.0 };
+        *o = own - (up - down) / (2.0 * res);
     }
     Ok(out)
 }
@@ -244,10 +248,19 @@ mod tests {
     /// The full fit as the passes run it, on a floor whose bias is `BIAS_PER_M`: the
     /// first (no bias) model's sideways statics and that bias find the floor on which
     /// the replay's sideways mean is the robot's; the kept fit takes that floor's bias.
-    fn full_fit(prior: &Description, study: &StudyReport, o: &AdaptOptions) -> AdaptReport {
-        let first = adapt(prior, study, o).unwrap().report;
-        let r = first.fall_angle_fit.unwrap().residual_deg;
-        let s = FLOOR_M - 0.5 * (r[2] + r[3]) / (0.5 * (BIAS_PER_M[2] + BIAS_PER_M[3]));
+    fn full_fit(
+        prior: &Description,
+        robot: &StudyReport,
+        study: &StudyReport,
+        o: &AdaptOptions,
+    ) -> AdaptReport {
+        let first = adapt(prior, study, o).unwrap().robot.unwrap();
+        // The replay's reading: the model's, from the commanded starts (`robot`'s
+        // onsets, not the angles moved within their resolution).
+        let statics = static_angles_at_onsets(&first, robot).unwrap();
+        let m = angles_of(study, |d| d.measured_deg);
+        let gap = 0.5 * (m[2] + m[3]) - 0.5 * (statics[2] + statics[3]);
+        let s = FLOOR_M + gap / (0.5 * (BIAS_PER_M[2] + BIAS_PER_M[3]));
         let bias = BIAS_PER_M.map(|g| g * (s - FLOOR_M));
         let o = AdaptOptions {
             protocol_bias_deg: Some(bias),
@@ -304,13 +317,15 @@ mod tests {
     /// The floor's share against the full fit itself, on km20 with 0.3 kg on its
     /// torso (the simulator's study): every corner of the readings' box (each moved
     /// by +-RES) fitted again, floor and all ([`corners_within`]). The floor found
-    /// from the sideways mean: the fit places the part so that the model's sideways
-    /// mean follows the robot's, and the floor moves with neither (the share is nil:
-    /// the corners are the angles'). Found from the feet's roll, a fifth reading: its
-    /// share is at least half the angles' again (the floor 0.09 mm per 0.15 deg of
-    /// roll, 20 mm of CoM per mm of floor), and the corners, 32, take it.
+    /// from the sideways mean moves with the sideways angles (0.09 mm per 0.15 deg of
+    /// their mean; the bound 4.0 mm against the angles' 2.2); found from the feet's
+    /// roll, a fifth reading, as far per 0.15 deg of roll; the CoM 20 mm per mm of
+    /// floor. The roll's bound at least 1.5 times the angles' alone, and the corners,
+    /// 16 and 32, take both.
     #[test]
     fn the_floors_share_is_the_full_fits_corners() {
+        // The CoM inversion's place, as a sideways floor's passes run it (a named torso
+        // holds the fit at its outline's corner, where this part sits).
         let prior = resolve("builtin:km20").unwrap();
         let mut robot = prior.clone();
         add_point_mass(&mut robot, "torso", 0.3, [0.04, 0.02, 0.05]).unwrap();
@@ -318,10 +333,9 @@ mod tests {
         let o = AdaptOptions {
             angle_resolution_deg: Some(RES),
             total_mass: Some(robot.total_mass()),
-            host: Some("torso".into()),
             ..Default::default()
         };
-        let kept = full_fit(&prior, &study, &o);
+        let kept = full_fit(&prior, &study, &study, &o);
         let angles = kept.com_resolution.clone().unwrap();
         let sinks = [0.9e-3, 1.1e-3];
         let read = sinks.map(|s| Reading {
@@ -352,7 +366,7 @@ mod tests {
         };
         let sideways = with_floor(&angles, RES, path(FloorReading::Sideways));
         corners_within(4, kept.measured_com, &sideways, &|u| {
-            full_fit(&prior, &moved(&study, u), &o).measured_com
+            full_fit(&prior, &study, &moved(&study, u), &o).measured_com
         });
         // The roll's floor: the one on which the replay's roll (ROLL_PER_M, more on a
         // softer floor) is the robot's, moved by u[4] resolutions.
@@ -369,6 +383,7 @@ mod tests {
                 .report
                 .measured_com
         });
+        assert!(sideways.worst_m >= 1.5 * angles.worst_m, "{sideways:?}");
         assert!(roll.worst_m >= 1.5 * angles.worst_m, "{roll:?}");
     }
 }
