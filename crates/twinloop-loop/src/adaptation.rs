@@ -31,6 +31,14 @@ pub fn adapt_to_protocol(
     } else {
         try_other_places(prior, study, opts, replay, first, log, map_err)?
     };
-    add_floor_share(prior, study, opts, replay, &mut kept, log)?;
+    if let Err(e) = add_floor_share(prior, study, opts, replay, &mut kept, log) {
+        // The model found stands; only its bound is short of the floor's share.
+        let line = format!(
+            "the floor's share of the CoM's resolution could not be measured ({e}): the \
+             resolution given is the angles' alone"
+        );
+        log(&line);
+        kept.0.report.notes.push(line);
+    }
     Ok(kept)
 }
