@@ -417,6 +417,18 @@ fn choose(places: Vec<Place>) -> (Adapted, Option<Calibration>) {
         tried.join("; "),
         report.added.as_ref().map_or("none", |a| a.host.as_str())
     ));
+    if check.is_some() {
+        // Kept against the others: its own roll is checked too (`roll_check`).
+        let host = report
+            .added
+            .as_ref()
+            .map_or("?", |a| a.host.as_str())
+            .to_string();
+        report.checks.push(crate::roll_check::roll_explains(
+            &host,
+            place.roll_median_deg,
+        ));
+    }
     if let Some(passed) = check {
         report.checks.push(AdaptCheck {
             name: "one-place-explains".into(),
