@@ -539,10 +539,20 @@ fn summary_text(r: &twinloop_ident::adapt::AdaptReport, out: Option<&Path>) -> S
     if let Some(c) = &r.com_resolution {
         t += &format!(
             "CoM resolution {} ({:.1} mm at worst): how far the CoM moves with every angle \
-             within {:.3} deg of its reading\n",
+             within {:.3} deg of its reading{}\n",
             mm(c.axes_m),
             c.worst_m * 1e3,
-            r.angle_resolution_deg
+            r.angle_resolution_deg,
+            match (&c.angles, &c.floor) {
+                (Some(a), Some(f)) => format!(
+                    " and the floor fitted from them with it (angles {:.1} mm, floor {:.1} mm: \
+                     the floor known to {:.3} mm)",
+                    a.worst_m * 1e3,
+                    f.share.worst_m * 1e3,
+                    f.resolution_m * 1e3
+                ),
+                _ => String::new(),
+            }
         );
     }
     match &r.added {

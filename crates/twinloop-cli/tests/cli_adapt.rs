@@ -301,6 +301,23 @@ fn a_tip_over_read_between_the_counts_adapts_within_a_millimetre() {
         plain * 1e3
     );
     assert!(j3["added"]["host"] == "l_pelvis", "{}", j3["added"]);
+    // The floor the passes fitted from the sideways tips is in the CoM's resolution,
+    // its share on the JSON and the terminal beside the angles'.
+    let res = &j3["com_resolution"];
+    let (total, angles) = (
+        res["worst_m"].as_f64().unwrap(),
+        res["angles"]["worst_m"].as_f64().unwrap(),
+    );
+    assert!(total >= angles && angles > 0.0, "{res}");
+    assert_eq!(res["floor"]["reading"], "sideways", "{res}");
+    assert!(
+        res["floor"]["resolution_m"].as_f64().unwrap() >= 0.0,
+        "{res}"
+    );
+    assert!(
+        log.contains("the CoM's resolution with the floor's share"),
+        "{log}"
+    );
 }
 
 /// A part taken off (`--add-mass` with a negative mass on the simulated robot; the

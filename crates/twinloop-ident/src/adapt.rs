@@ -73,13 +73,75 @@ pub struct AddedMass {
 }
 
 /// The CoM's resolution: how far it can move with every measured angle within its
-/// reading's resolution ([`com_resolution`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// reading's resolution ([`com_resolution`]), and over a bus with the floor the
+/// protocol passes fit from readings on the same counts ([`with_floor`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ComResolution {
-    /// Per standing axis (x, y, z), m.
+    /// Per standing axis (x, y, z), m: every share below added up.
     pub axes_m: [f64; 3],
-    /// The longest displacement (every angle at a corner of its range), m.
+    /// The longest displacement (every reading at a corner of its range), m.
     pub worst_m: f64,
+    /// The CoM's move per angle moved by its resolution (forward, backward, left,
+    /// right; the exact method linearised at the measured angles), m.
+    #[serde(default)]
+    pub per_angle_m: [[f64; 3]; 4],
+    /// The angles' share alone (the floor held), when a floor's is in the total.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angles: Option<ResolutionShare>,
+    /// The fitted floor's share, when the floor was fitted from the readings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor: Option<FloorShare>,
+}
+
+/// One share of [`ComResolution`]: per standing axis and at the worst corner, m.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ResolutionShare {
+    pub axes_m: [f64; 3],
+    pub worst_m: f64,
+}
+
+/// What the floor the protocol passes replay on was found from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FloorReading {
+    /// The left and right angles' mean: the same readings as the angles, so its share
+    /// moves with theirs.
+    Sideways,
+    /// The feet's roll at the onsets (median of four): the IMU's tilt less the tilt
+    /// the ankle readings explain, a reading of its own on the same counts.
+    Roll,
+}
+
+/// How the floor the protocol passes replayed on moves with the readings, and the
+/// CoM with the floor ([`with_floor`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FloorPath {
+    pub reading: FloorReading,
+    /// The floor found: its sink under the robot's weight, m.
+    pub sink_m: f64,
+    /// The floor's move per degree of what its search matches, m/deg (its sign: which
+    /// way): the replay's sideways mean, or the median of its feet's roll.
+    pub sink_per_deg: f64,
+    /// How far what the search matches moves per degree of each tip angle (forward,
+    /// backward, left, right), deg/deg: the sideways floor matches the robot's
+    /// sideways mean less the model's, and the model's moves with every angle through
+    /// the fit (half of each sideways angle less the fit's response). Zeros for the
+    /// roll, whose own reading is [`FloorReading::Roll`]'s.
+    pub reading_per_angle: [f64; 4],
+    /// The CoM's move per metre of floor (standing axes), m/m.
+    pub com_per_sink: [f64; 3],
+}
+
+/// The floor's share of the CoM's resolution: the floor moves as far as its
+/// reading's resolution lets it, and the CoM with it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FloorShare {
+    #[serde(flatten)]
+    pub path: FloorPath,
+    /// How far the floor can move with every reading within the angles' resolution, m.
+    pub resolution_m: f64,
+    /// The CoM's move with the floor alone at its resolution (per axis, worst), m.
+    pub share: ResolutionShare,
 }
 
 /// The LIPM and three-mass LIPM of a model.
@@ -841,20 +903,72 @@ fn com_sigma(per_angle: &[Vector3<f64>; 4]) -> Vector3<f64> {
 /// sum of the four angles' shares (the worst corner of the angles' box, axis by
 /// axis), and the longest of the sixteen corners' displacements, m.
 pub fn com_resolution(per_angle: &[Vector3<f64>; 4]) -> ComResolution {
-    let axes = per_angle
+    let share = corners(per_angle);
+    ComResolution {
+        axes_m: share.axes_m,
+        worst_m: share.worst_m,
+        per_angle_m: per_angle.map(v3),
+        angles: None,
+        floor: None,
+    }
+}
+
+/// The box of independent readings each moving the CoM by `+-moves[k]`: per axis the
+/// sum of their sizes, and the longest of the corners' displacements, m.
+fn corners(moves: &[Vector3<f64>]) -> ResolutionShare {
+    let axes = moves
         .iter()
         .fold(Vector3::zeros(), |v: Vector3<f64>, dc| v + dc.abs());
-    let worst = (0..16_u32)
+    let worst = (0..1_u32 << moves.len())
         .map(|signs| {
-            (0..4)
-                .map(|k| per_angle[k] * if signs >> k & 1 == 1 { 1.0 } else { -1.0 })
+            (0..moves.len())
+                .map(|k| moves[k] * if signs >> k & 1 == 1 { 1.0 } else { -1.0 })
                 .sum::<Vector3<f64>>()
                 .norm()
         })
         .fold(0.0_f64, f64::max);
-    ComResolution {
+    ResolutionShare {
         axes_m: v3(axes),
         worst_m: worst,
+    }
+}
+
+/// `angles` (the angles' [`com_resolution`] at resolution `res` deg) with the floor's
+/// share added ([`FloorPath`]): each reading, known to `res` (the same counts), moves
+/// the floor, and the floor the CoM. Found from the sideways mean, the floor moves
+/// with the tip angles themselves (`reading_per_angle`): each angle's side of the box
+/// is its direct move plus its move through the floor. Found from the feet's roll, the
+/// roll is a fifth reading with a side of its own.
+pub fn with_floor(angles: &ComResolution, res: f64, path: FloorPath) -> ComResolution {
+    let per_angle = angles.per_angle_m.map(Vector3::from);
+    let com_per_sink = Vector3::from(path.com_per_sink);
+    let through: [f64; 4] = match path.reading {
+        FloorReading::Sideways => path.reading_per_angle.map(|c| c * res * path.sink_per_deg),
+        FloorReading::Roll => [0.0; 4],
+    };
+    let own = match path.reading {
+        FloorReading::Sideways => 0.0,
+        FloorReading::Roll => res * path.sink_per_deg,
+    };
+    let mut sides: Vec<Vector3<f64>> = (0..4)
+        .map(|k| per_angle[k] + com_per_sink * through[k])
+        .collect();
+    let mut floor_sides: Vec<Vector3<f64>> = through.iter().map(|t| com_per_sink * *t).collect();
+    if own != 0.0 {
+        sides.push(com_per_sink * own);
+        floor_sides.push(com_per_sink * own);
+    }
+    let total = corners(&sides);
+    ComResolution {
+        axes_m: total.axes_m,
+        worst_m: total.worst_m,
+        per_angle_m: angles.per_angle_m,
+        angles: Some(corners(&per_angle)),
+        floor: Some(FloorShare {
+            path,
+            resolution_m: through.iter().map(|t| t.abs()).sum::<f64>() + own.abs(),
+            share: corners(&floor_sides),
+        }),
     }
 }
 

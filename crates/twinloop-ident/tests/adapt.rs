@@ -360,3 +360,37 @@ fn com_resolution_is_the_corners_of_the_angles_box() {
         bound.worst_m
     );
 }
+
+/// The arms (`links_of_arms`, the places `adapt` tries on an arm besides the legs):
+/// the branches hanging from the trunk off its middle, on their side, as the shipped
+/// descriptions chain them (km20: shoulder, upper and lower arm from the torso; OP3:
+/// Menagerie's `op3.xml`, shoulder pitch, roll and elbow links from `body_link`);
+/// never a leg, nor the head on the middle.
+#[test]
+fn the_arms_are_the_trunks_branches_off_its_middle() {
+    use twinloop_ident::tipover_study::links_of_arms;
+    let km20 = prior();
+    assert_eq!(
+        links_of_arms(&km20).unwrap(),
+        [
+            ["l_shoulder", "l_upper_arm", "l_forearm"]
+                .map(String::from)
+                .to_vec(),
+            ["r_shoulder", "r_upper_arm", "r_forearm"]
+                .map(String::from)
+                .to_vec()
+        ]
+    );
+    let op3 = resolve("builtin:op3").unwrap();
+    assert_eq!(
+        links_of_arms(&op3).unwrap(),
+        [
+            ["l_sho_pitch_link", "l_sho_roll_link", "l_el_link"]
+                .map(String::from)
+                .to_vec(),
+            ["r_sho_pitch_link", "r_sho_roll_link", "r_el_link"]
+                .map(String::from)
+                .to_vec()
+        ]
+    );
+}

@@ -227,7 +227,12 @@ pub(crate) fn try_other_places(
         kept.0.report.notes.push(line);
         return Ok(kept);
     }
-    let hosts = candidate_hosts(prior, &added.host, added.position)?;
+    let mut hosts = candidate_hosts(prior, &added.host, added.position)?;
+    hosts.extend(crate::arm_places::arm_hosts(
+        prior,
+        &added.host,
+        added.position,
+    )?);
     log(&format!("place 1, {}", first.describe()));
     // The floor on which the first place's replay rolls the feet as the robot did:
     // the floor and the CoM's height trade against each other in the angles, not in
@@ -271,6 +276,9 @@ pub(crate) fn try_other_places(
         match p {
             Ok(mut p) => {
                 p.floor_m = p.floor_m.or(floor_m);
+                if let Some(c) = p.calibration.as_mut().filter(|c| c.floor.is_none()) {
+                    c.floor_by_roll_m = floor_m.filter(|_| replay.fit_floor);
+                }
                 log(&format!("place {}, {}", places.len() + 1, p.describe()));
                 places.push(p);
             }
@@ -414,12 +422,25 @@ fn choose(places: Vec<Place>, low: &[Low]) -> (Adapted, Option<Calibration>) {
     let mut place = places.swap_remove(kept);
     let report = &mut place.adapted.report;
     report.notes.push(format!(
-        "the part was tried on the links of the legs as well (a part there does not move as \
-         the body above the ankles does, and the floor was found anew by the feet's roll): \
+        "the part was tried on the links of the legs and the arm as well (a part on a leg \
+         does not move as the body above the ankles does, one on an arm is held to its \
+         outline, and the floor was found anew by the feet's roll): \
          {}; kept {}",
         tried.join("; "),
         report.added.as_ref().map_or("none", |a| a.host.as_str())
     ));
+    if check.is_some() {
+        // Kept against the others: its own roll is checked too (`roll_check`).
+        let host = report
+            .added
+            .as_ref()
+            .map_or("?", |a| a.host.as_str())
+            .to_string();
+        report.checks.push(crate::roll_check::roll_explains(
+            &host,
+            place.roll_median_deg,
+        ));
+    }
     if let Some(passed) = check {
         report.checks.push(AdaptCheck {
             name: "one-place-explains".into(),

@@ -33,6 +33,10 @@ pub struct Calibration {
     /// The floor the passes replayed on, found from the robot's sideways tips.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub floor: Option<FloorFit>,
+    /// The floor the passes replayed on when it was found by the feet's roll
+    /// ([`crate::other_places`]) rather than by `floor`, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub floor_by_roll_m: Option<f64>,
 }
 
 /// One pass (forward, backward, left, right, deg).
@@ -339,6 +343,7 @@ impl Passes {
             passes: self.done,
             kept,
             floor: self.floor,
+            floor_by_roll_m: None,
         };
         (adapted, Some(calibration))
     }
