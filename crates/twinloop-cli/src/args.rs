@@ -26,7 +26,10 @@ pub fn parse_args<C: clap::Parser>() -> C {
 /// Every comma-separated option (`--frames a,b`, `--inputs u:a,u:b`) holds no empty
 /// item: `a,,b`, `a,` or `,b` is a typo (a name lost, or one left out), refused naming
 /// the option and the item, never read as a list one shorter or an item named "".
-fn check_lists(cli: &clap::Command, matches: &clap::ArgMatches) -> Result<(), crate::error::CliError> {
+fn check_lists(
+    cli: &clap::Command,
+    matches: &clap::ArgMatches,
+) -> Result<(), crate::error::CliError> {
     let (mut cmd, mut m) = (cli, matches);
     while let Some((name, sub)) = m.subcommand() {
         let Some(next) = cmd.find_subcommand(name) else {

@@ -645,14 +645,24 @@ fn run_ann(
     Ok(Outcome::Ok)
 }
 
-fn mass_range(s: &str) -> Result<(f64, f64), CliError> {
-    let bad = || {
-        CliError::new(format!("\"{s}\": expected LO,HI in kg, e.g. 0.05,0.5"))
-            .context("--mass-range")
-    };
-    let (lo, hi) = s.split_once(',').ok_or_else(bad)?;
-    let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
-    let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
+/// `--mass-range LO,HI` in kg: positive, rising, and not grams on `prior`.
+fn mass_range(s: &str, prior: &twinloop_description::Description) -> Result<(f64, f64), CliError> {
+    let bad = |why: &str| CliError::new(format!("--mass-range {s}: {why}"));
+    let expected = "expected LO,HI in kg, e.g. 0.05,0.5";
+    let (lo, hi) = s.split_once(',').ok_or_else(|| bad(expected))?;
+    let lo: f64 = lo.trim().parse().map_err(|_| bad(expected))?;
+    let hi: f64 = hi.trim().parse().map_err(|_| bad(expected))?;
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0) {
+        return Err(bad("the masses must be finite numbers > 0 kg"));
+    }
+    if lo > hi {
+        return Err(bad(&format!(
+            "LO is above HI; write {},{}",
+            crate::common::num(hi),
+            crate::common::num(lo)
+        )));
+    }
+    crate::units::added_mass(hi, prior.total_mass()).map_err(|why| bad(&why))?;
     Ok((lo, hi))
 }
 
@@ -664,7 +674,7 @@ fn run_train(a: TrainArgs) -> CliResult {
         data: DataOptions {
             samples: a.samples,
             seed: a.seed,
-            mass_range: mass_range(&a.mass_range)?,
+            mass_range: mass_range(&a.mass_range, &prior)?,
             noise_deg: a.noise,
             threads: a.threads,
         },

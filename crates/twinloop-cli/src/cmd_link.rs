@@ -218,13 +218,17 @@ fn parse_ids(s: &str) -> Result<Vec<u8>, String> {
             ));
         }
         let num = |t: &str| {
-            t.trim().parse::<u8>().ok().filter(|&id| id <= 253).ok_or_else(|| {
-                format!(
-                    "{}: \"{}\" is not a servo id (a whole number 0 to 253)",
-                    item(),
-                    t.trim()
-                )
-            })
+            t.trim()
+                .parse::<u8>()
+                .ok()
+                .filter(|&id| id <= 253)
+                .ok_or_else(|| {
+                    format!(
+                        "{}: \"{}\" is not a servo id (a whole number 0 to 253)",
+                        item(),
+                        t.trim()
+                    )
+                })
         };
         match part.split_once('-') {
             Some((a, b)) => {

@@ -165,7 +165,9 @@ pub fn plain_words(text: &str) -> String {
 /// people say it: a whole number, a number, a table, a list.
 fn rust_type_in_words(expected: &str) -> String {
     let t = expected.trim();
-    let whole = ["i8", "i16", "i32", "i64", "i128", "isize", "u8", "u16", "u32", "u64", "u128", "usize"];
+    let whole = [
+        "i8", "i16", "i32", "i64", "i128", "isize", "u8", "u16", "u32", "u64", "u128", "usize",
+    ];
     if whole.contains(&t) {
         "a whole number".into()
     } else if t == "f32" || t == "f64" {

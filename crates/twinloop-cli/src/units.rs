@@ -171,6 +171,23 @@ impl AddMassArgs {
     }
 }
 
+/// An added mass of `kg` on a robot of `own` kg, as every option that adds one
+/// takes it (`--add-mass`, `adapt train --mass-range`): [`MAX_ADDED_MASS_RATIO`]
+/// times the robot's or more is taken for grams, the reason returned.
+pub fn added_mass(kg: f64, own: f64) -> Result<(), String> {
+    if own > 0.0 && kg.abs() > MAX_ADDED_MASS_RATIO * own {
+        return Err(format!(
+            "{} kg is {}x the robot's {} kg; the mass is in kilograms: is it in grams? \
+             ({} kg)",
+            crate::common::num(kg),
+            (kg / own).round(),
+            crate::common::num(own),
+            crate::common::num(kg / 1000.0)
+        ));
+    }
+    Ok(())
+}
+
 /// Parse `KG@LINK:X,Y,Z` and add that point mass to `robot`, for each of `specs` (the
 /// values of `--add-mass`): a mass [`MAX_ADDED_MASS_RATIO`] times the robot's is taken
 /// for grams, an offset beyond [`MAX_OFFSET_EXTENTS`] of the robot's size for
@@ -181,16 +198,7 @@ pub fn add_masses(robot: &mut Description, specs: &[String]) -> Result<(), CliEr
     for s in specs {
         let (kg, link, xyz) = parse_added_mass(s)?;
         let bad = |why: String| CliError::new(format!("--add-mass \"{s}\": {why}"));
-        if own > 0.0 && kg.abs() > MAX_ADDED_MASS_RATIO * own {
-            return Err(bad(format!(
-                "{} kg is {}x the robot's {} kg; the mass is in kilograms: is it in grams? \
-                 ({} kg)",
-                crate::common::num(kg),
-                (kg / own).round(),
-                crate::common::num(own),
-                crate::common::num(kg / 1000.0)
-            )));
-        }
+        added_mass(kg, own).map_err(bad)?;
         let r = xyz.iter().map(|v| v * v).sum::<f64>().sqrt();
         if r > MAX_OFFSET_EXTENTS * size {
             return Err(bad(format!(

@@ -109,7 +109,11 @@ pub fn parse_markers(text: &str, model: &Model) -> Result<Vec<Marker>, IdentErro
                  millimetres? (that would be {} m)",
                 format!(
                     "[{}]",
-                    m.position.iter().map(|&x| twinloop_report::number(x)).collect::<Vec<_>>().join(", ")
+                    m.position
+                        .iter()
+                        .map(|&x| twinloop_report::number(x))
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
                 twinloop_report::number(far),
                 twinloop_report::number(far / 1000.0)
