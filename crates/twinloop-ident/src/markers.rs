@@ -103,18 +103,16 @@ pub fn parse_markers(text: &str, model: &Model) -> Result<Vec<Marker>, IdentErro
         }
         let far = m.position.iter().map(|x| x * x).sum::<f64>().sqrt();
         if far > MAX_MARKER_OFFSET_M {
+            let written: Vec<String> = m
+                .position
+                .iter()
+                .map(|&x| twinloop_report::number(x))
+                .collect();
             return Err(IdentError::new(format!(
-                "{} is {} m from its link's frame, further than any marker sits on a \
+                "[{}] is {} m from its link's frame, further than any marker sits on a \
                  robot ({MAX_MARKER_OFFSET_M} m); positions are metres: are they in \
                  millimetres? (that would be {} m)",
-                format!(
-                    "[{}]",
-                    m.position
-                        .iter()
-                        .map(|&x| twinloop_report::number(x))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
+                written.join(", "),
                 twinloop_report::number(far),
                 twinloop_report::number(far / 1000.0)
             ))
