@@ -696,6 +696,13 @@ fn make_round4_fixtures(dir: &Path, io: &str, goals: &str, state: &str, urdf: &s
         &format!("{head}\n{}{}", frame(0.0), frame(0.01)),
     );
     write(dir, "goals_semi.csv", &goals.replace(',', ";"));
+    write(
+        dir,
+        "range_inv.xml",
+        "<mujoco><worldbody><body name=\"b\" pos=\"0 0 0.3\"><freejoint/><geom size=\"0.1\" \
+         mass=\"1\"/><body name=\"c\" pos=\"0 0 0.1\"><joint name=\"j\" axis=\"0 1 0\" \
+         range=\"1 -1\"/><geom size=\"0.05\" mass=\"0.2\"/></body></body></worldbody></mujoco>\n",
+    );
     let map = std::fs::read_to_string(repo().join("crates/twinloop-link/src/mappings/km20.toml"))
         .unwrap();
     write(
@@ -1622,6 +1629,8 @@ const UNCLEAR: &[Case] = &[
     case("experiment servo", "--port {gone} --id 255 --load {plant} --out {out}", "--id&&0 to 253"),
     // A range written backwards: how to write it.
     case("adapt train", "--robot {km20} --mass-range 0.5,0.05 --samples 100 --out {out}", "--mass-range 0.5,0.05&&write 0.05,0.5"),
+    // An MJCF range backwards, in the degrees the file has (it was said in radians).
+    case("simulate", "--robot {file:range_inv.xml} --duration 0.05 --out {out}", "range_inv.xml:1:&&range=\"1 -1\"&&swap"),
     // A step in milliseconds, its numbers as the user wrote them.
     case("simulate", "--robot {km20} --dt 0.3 --out {out}", "--dt&&0.3 s&&write 0.0003"),
 ];
