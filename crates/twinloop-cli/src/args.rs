@@ -15,9 +15,43 @@ pub fn parse_args<C: clap::Parser>() -> C {
     // The outputs are checked before any work (crate::outputs): exit 2, one line.
     if let Err(e) = crate::outputs::check(&cli, &matches)
         .and_then(|()| crate::bounds::check_counts(&cli, &matches))
+        .and_then(|()| check_lists(&cli, &matches))
     {
         eprintln!("error: {e}");
         std::process::exit(2);
     }
     C::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
+/// Every comma-separated option (`--frames a,b`, `--inputs u:a,u:b`) holds no empty
+/// item: `a,,b`, `a,` or `,b` is a typo (a name lost, or one left out), refused naming
+/// the option and the item, never read as a list one shorter or an item named "".
+fn check_lists(
+    cli: &clap::Command,
+    matches: &clap::ArgMatches,
+) -> Result<(), crate::error::CliError> {
+    let (mut cmd, mut m) = (cli, matches);
+    while let Some((name, sub)) = m.subcommand() {
+        let Some(next) = cmd.find_subcommand(name) else {
+            return Ok(());
+        };
+        (cmd, m) = (next, sub);
+    }
+    for arg in cmd.get_arguments() {
+        let (Some(long), Some(sep)) = (arg.get_long(), arg.get_value_delimiter()) else {
+            continue;
+        };
+        let Ok(Some(values)) = m.try_get_raw(arg.get_id().as_str()) else {
+            continue;
+        };
+        let items: Vec<String> = values.map(|v| v.to_string_lossy().into_owned()).collect();
+        if let Some(k) = items.iter().position(|v| v.trim().is_empty()) {
+            return Err(crate::error::CliError::new(format!(
+                "--{long} {}: item {} is empty; write the items between '{sep}'s, none left out",
+                items.join(&sep.to_string()),
+                k + 1
+            )));
+        }
+    }
+    Ok(())
 }

@@ -48,6 +48,47 @@ fn wall(seconds: f64, x: f64, unit: &str) -> Result<f64, String> {
     }
 }
 
+/// `--max-time`, as a clap value parser: a positive number of seconds (any: the user
+/// who asks for a day of work says so).
+pub fn max_time(s: &str) -> Result<f64, String> {
+    crate::common::positive(s)
+}
+
+/// Work estimated at `estimate` seconds before it starts: said on stderr when it is
+/// long enough to wait for (over 10 s), refused when over `max_time` (the option
+/// `--max-time`), naming the estimate, what it is made of, the bound, and `advice`.
+pub fn within_time(
+    what: &str,
+    estimate: f64,
+    made_of: &str,
+    max_time: f64,
+    advice: &str,
+) -> Result<(), CliError> {
+    if estimate > max_time {
+        return Err(CliError::new(format!(
+            "{what} would take about {} here ({made_of}), more than --max-time {} s; \
+             {advice}, or raise --max-time",
+            duration(estimate),
+            crate::common::num(max_time)
+        )));
+    }
+    if estimate > 10.0 {
+        eprintln!("{what}: about {} here ({made_of})", duration(estimate));
+    }
+    Ok(())
+}
+
+/// Seconds as people say a duration: `40 s`, `12 min`, `3.4 h`.
+pub fn duration(s: f64) -> String {
+    if s < 120.0 {
+        format!("{} s", crate::common::num((s * 10.0).round() / 10.0))
+    } else if s < 7200.0 {
+        format!("{} min", crate::common::num((s / 6.0).round() / 10.0))
+    } else {
+        format!("{} h", crate::common::num((s / 360.0).round() / 10.0))
+    }
+}
+
 /// `--retries`, as a clap value parser: at most [`MAX_RETRIES`].
 pub fn retries(s: &str) -> Result<u32, String> {
     let n: u32 = s

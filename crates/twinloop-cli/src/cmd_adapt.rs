@@ -198,6 +198,11 @@ pub struct TrainArgs {
     /// HTML report to write.
     #[arg(long, value_name = "FILE.html")]
     pub report: Option<PathBuf>,
+    /// The longest the training may take, s: its time is estimated before it starts
+    /// (from a few changes tipped here) and said on stderr; more than this is refused.
+    #[arg(long, default_value_t = crate::bounds::MAX_WALL_S, value_name = "S",
+          value_parser = crate::bounds::max_time)]
+    pub max_time: f64,
 }
 
 fn read_tip(path: &Path) -> Result<StudyReport, CliError> {
@@ -650,14 +655,24 @@ fn run_ann(
     Ok(Outcome::Ok)
 }
 
-fn mass_range(s: &str) -> Result<(f64, f64), CliError> {
-    let bad = || {
-        CliError::new(format!("\"{s}\": expected LO,HI in kg, e.g. 0.05,0.5"))
-            .context("--mass-range")
-    };
-    let (lo, hi) = s.split_once(',').ok_or_else(bad)?;
-    let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
-    let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
+/// `--mass-range LO,HI` in kg: positive, rising, and not grams on `prior`.
+fn mass_range(s: &str, prior: &twinloop_description::Description) -> Result<(f64, f64), CliError> {
+    let bad = |why: &str| CliError::new(format!("--mass-range {s}: {why}"));
+    let expected = "expected LO,HI in kg, e.g. 0.05,0.5";
+    let (lo, hi) = s.split_once(',').ok_or_else(|| bad(expected))?;
+    let lo: f64 = lo.trim().parse().map_err(|_| bad(expected))?;
+    let hi: f64 = hi.trim().parse().map_err(|_| bad(expected))?;
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0) {
+        return Err(bad("the masses must be finite numbers > 0 kg"));
+    }
+    if lo > hi {
+        return Err(bad(&format!(
+            "LO is above HI; write {},{}",
+            crate::common::num(hi),
+            crate::common::num(lo)
+        )));
+    }
+    crate::units::added_mass(hi, prior.total_mass()).map_err(|why| bad(&why))?;
     Ok((lo, hi))
 }
 
@@ -669,7 +684,7 @@ fn run_train(a: TrainArgs) -> CliResult {
         data: DataOptions {
             samples: a.samples,
             seed: a.seed,
-            mass_range: mass_range(&a.mass_range)?,
+            mass_range: mass_range(&a.mass_range, &prior)?,
             noise_deg: a.noise,
             threads: a.threads,
         },
@@ -681,6 +696,9 @@ fn run_train(a: TrainArgs) -> CliResult {
         mass_input: !a.seed_inputs,
         restarts: a.restarts,
     };
+    if a.ray.is_none() {
+        train_time(&prior, &opts, a.check_sim, a.max_time)?;
+    }
     let (model, mut report) = match &a.ray {
         Some(address) => {
             let started = std::time::Instant::now();
@@ -721,6 +739,68 @@ fn run_train(a: TrainArgs) -> CliResult {
     }
     emit(&train_text(&report), a.json.as_ref(), &report)?;
     Ok(Outcome::Ok)
+}
+
+/// CPU time of one training epoch of one sample, in units of one change tipped by the
+/// static route: 7.6 us against 1.3 ms, measured on km20 (`adapt train --samples 1000`:
+/// data 0.66 s, training 5.66 s for 700 x 533 epochs x 4 restarts, on 2 threads).
+const EPOCH_PER_TIP: f64 = 0.0058;
+
+/// One simulated tip-over study (`--check-sim`) in changes tipped by the static route
+/// (about 2 s against 1.3 ms on km20).
+const STUDY_PER_TIP: f64 = 1500.0;
+
+/// `adapt train`'s time estimated before it starts, from a few changes tipped here
+/// (the machine's speed and load included), and refused past `max_time`: a million
+/// samples were hours of work with nothing said (issue 29). An upper bound: the
+/// training may stop early.
+fn train_time(
+    prior: &twinloop_description::Description,
+    opts: &AnnTrainOptions,
+    check_sim: usize,
+    max_time: f64,
+) -> Result<(), CliError> {
+    let threads = twinloop_ident::ann_data::worker_threads(opts.data.threads) as f64;
+    let probe = opts.data.samples.min(8 * threads as usize);
+    let started = std::time::Instant::now();
+    twinloop_ident::ann_data::generate_range(prior, &opts.data, 0..probe, &|_| {})
+        .map_err(train_flags)?;
+    // CPU seconds of one change tipped.
+    let tip = started.elapsed().as_secs_f64() * threads / probe as f64;
+    let n = opts.data.samples as f64;
+    let restarts = opts.restarts.max(1) as f64;
+    let data = tip * n * 1.3 / threads;
+    let training = tip * EPOCH_PER_TIP * 0.7 * n * opts.train.max_epochs as f64 * restarts
+        / restarts.min(threads);
+    let studies = tip * STUDY_PER_TIP * check_sim as f64 / threads;
+    let made_of = format!(
+        "{} changes at {} ms each on {} threads, up to {} epochs x {} restarts of training{}",
+        opts.data.samples,
+        crate::common::num((tip * 1e4).round() / 10.0),
+        threads,
+        opts.train.max_epochs,
+        opts.restarts.max(1),
+        if check_sim > 0 {
+            format!(", {check_sim} simulated tip-overs")
+        } else {
+            String::new()
+        }
+    );
+    let per_sample = (data + training) / n;
+    let fit = ((max_time - studies) / per_sample).max(0.0);
+    // Two significant digits, rounded down: a count to write, not a promise.
+    let unit = 10f64.powf(fit.log10().floor() - 1.0).max(1.0);
+    let fit = (fit / unit).floor() * unit;
+    crate::bounds::within_time(
+        "adapt train",
+        data + training + studies,
+        &made_of,
+        max_time,
+        &format!(
+            "lower --samples (about {} fit), --epochs or --restarts",
+            crate::common::num(fit)
+        ),
+    )
 }
 
 /// `--ray`: the training set made as Ray tasks by the Python package (its progress bar

@@ -70,10 +70,10 @@ pub struct ZmpArgs {
     #[arg(long, default_value_t = 10, value_parser = crate::bounds::count)]
     pub footsteps: usize,
     /// CoM height Zc, m.
-    #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 0.5, value_parser = crate::units::gait_length)]
     pub com_height: f64,
     /// Lateral distance between the foot centres, m.
-    #[arg(long, default_value_t = 0.14, value_parser = crate::common::positive)]
+    #[arg(long, default_value_t = 0.14, value_parser = crate::units::gait_length)]
     pub step_width: f64,
     /// Standing time before the first and after the last step, s.
     #[arg(long, default_value_t = 1.0, value_parser = crate::common::non_negative)]

@@ -126,11 +126,11 @@ pub struct ReadArgs {
     /// 1 or 2
     #[arg(long, value_parser = parse_protocol)]
     pub protocol: Protocol,
-    /// Servo id
-    #[arg(long)]
+    /// Servo id (0 to 253)
+    #[arg(long, value_parser = crate::common::servo_id)]
     pub id: u8,
     /// Servo model, e.g. XM430-W350 (found by PING when omitted)
-    #[arg(long)]
+    #[arg(long, value_parser = crate::common::servo_model_name)]
     pub servo_model: Option<String>,
     /// Registers to show (e-manual names, case and spaces ignored); all when omitted
     pub registers: Vec<String>,
@@ -203,30 +203,46 @@ fn parse_method(s: &str) -> Result<ReadMethod, String> {
         .ok_or_else(|| format!("method must be auto, read, bulk, sync or fast, not {s:?}"))
 }
 
-/// `1-20`, `1,3,5`, `1-4,9`.
+/// `1-20`, `1,3,5`, `1-4,9`. Every item is an id or a rising range: an empty item
+/// (`1,,2`, `1,`, `,2`), a range backwards (`2-1`) or an id past 253 is refused,
+/// naming the item, rather than read as something the user did not write.
 fn parse_ids(s: &str) -> Result<Vec<u8>, String> {
     let mut ids = Vec::new();
-    for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+    for (k, part) in s.split(',').map(str::trim).enumerate() {
+        let item = || format!("--ids {s}: item {} ({part})", k + 1);
+        if part.is_empty() {
+            return Err(format!(
+                "--ids {s}: item {} is empty; write ids or rising ranges between commas, \
+                 e.g. 1-4,9",
+                k + 1
+            ));
+        }
         let num = |t: &str| {
             t.trim()
                 .parse::<u8>()
                 .ok()
                 .filter(|&id| id <= 253)
-                .ok_or_else(|| format!("--ids: {t:?} is not an id (0..253)"))
+                .ok_or_else(|| {
+                    format!(
+                        "{}: \"{}\" is not a servo id (a whole number 0 to 253)",
+                        item(),
+                        t.trim()
+                    )
+                })
         };
         match part.split_once('-') {
             Some((a, b)) => {
                 let (a, b) = (num(a)?, num(b)?);
                 if a > b {
-                    return Err(format!("--ids: range {part} is empty"));
+                    return Err(format!(
+                        "{}: the range runs backwards; write {b}-{a}",
+                        item()
+                    ));
                 }
                 ids.extend(a..=b);
             }
             None => ids.push(num(part)?),
         }
-    }
-    if ids.is_empty() {
-        return Err("--ids: no ids".into());
     }
     ids.sort_unstable();
     ids.dedup();
@@ -573,18 +589,19 @@ fn record(a: &RecordArgs) -> CliResult {
 fn record_bus(
     a: &RecordArgs,
 ) -> Result<(twinloop_link::Client<Box<dyn Transport>>, RobotMapping), CliError> {
+    // The list is checked before the port is opened: a typo is named, not a dead port.
+    let ids = a.ids.as_deref().map(parse_ids).transpose()?;
     let mapping = a.map.as_deref().map(RobotMapping::resolve).transpose()?;
     let default_port = mapping.as_ref().and_then(|m| m.port.clone());
     let mut c = open_client(&a.port, default_port.as_deref())?;
     let mapping = match mapping {
         Some(m) => m,
         None => {
-            let (Some(protocol), Some(ids)) = (a.protocol, a.ids.as_deref()) else {
+            let (Some(protocol), Some(ids)) = (a.protocol, ids) else {
                 return Err(CliError::from(
                     "give --map MAPPING, or --protocol and --ids",
                 ));
             };
-            let ids = parse_ids(ids)?;
             RobotMapping::from_ids(&mut c, protocol, &ids)?
         }
     };

@@ -128,6 +128,33 @@ pub fn finite(s: &str) -> Result<f64, String> {
     parse_number(s, |_| true, "a finite number is needed (not NaN or inf)")
 }
 
+/// A servo id, as a clap value parser: 0 to 253 (e-manual, "ID": 254 is the broadcast
+/// id, which every servo obeys and none answers as its own; 255 is not an id).
+pub fn servo_id(s: &str) -> Result<u8, String> {
+    s.trim()
+        .parse::<u8>()
+        .ok()
+        .filter(|&id| id <= 253)
+        .ok_or_else(|| {
+            format!(
+                "\"{s}\" is not a servo id: a whole number 0 to 253 (254 is the broadcast \
+                 id, which no servo answers as its own)"
+            )
+        })
+}
+
+/// A servo model's name (`RX-28`, `XM430-W350`), as a clap value parser: the name
+/// given, once it is one twinloop knows; the error lists the known ones.
+pub fn servo_model_name(s: &str) -> Result<String, String> {
+    match twinloop_link::ServoModel::parse(s) {
+        Some(_) => Ok(s.to_string()),
+        None => Err(format!(
+            "\"{s}\" is not a servo model twinloop knows; known: {}",
+            twinloop_link::ServoModel::known_names()
+        )),
+    }
+}
+
 /// A bus bit rate a Dynamixel servo can run at ([`twinloop_link::servo_model::BAUD_RANGE`]):
 /// 0 would plan a cycle of infinite length or serve a bus that never answers.
 pub fn baud(s: &str) -> Result<u32, String> {

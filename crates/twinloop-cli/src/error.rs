@@ -154,10 +154,31 @@ pub fn plain_words(text: &str) -> String {
                 .replace('`', "");
             let end = expected.find(" at line").unwrap_or(expected.len());
             let (expected, at) = expected.split_at(end);
+            let expected = rust_type_in_words(expected);
             s = format!("{}{found} where {expected} is expected{at}", &s[..k]);
         }
     }
     quote_tokens(&s)
+}
+
+/// serde's name of what it expected (`i64`, `f64`, `struct Joint`, `a sequence`) as
+/// people say it: a whole number, a number, a table, a list.
+fn rust_type_in_words(expected: &str) -> String {
+    let t = expected.trim();
+    let whole = [
+        "i8", "i16", "i32", "i64", "i128", "isize", "u8", "u16", "u32", "u64", "u128", "usize",
+    ];
+    if whole.contains(&t) {
+        "a whole number".into()
+    } else if t == "f32" || t == "f64" {
+        "a number".into()
+    } else if t.starts_with("struct ") || t == "a map" {
+        "a table".into()
+    } else if t == "a sequence" {
+        "a list".into()
+    } else {
+        t.to_string()
+    }
 }
 
 /// A parser's backquoted token (`]`, `robot`) in double quotes, as the messages here

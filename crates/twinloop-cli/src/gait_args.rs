@@ -29,7 +29,7 @@ pub struct TimingArgs {
 #[derive(Args, Debug, Clone, Copy)]
 pub struct StepTiming {
     /// Step length sl, m.
-    #[arg(long, default_value_t = 0.03, value_parser = crate::common::finite)]
+    #[arg(long, default_value_t = 0.03, value_parser = crate::units::signed_gait_length)]
     pub step_length: f64,
     /// Single-support duration Tss, s.
     #[arg(long, default_value_t = 0.5, value_parser = crate::common::positive)]

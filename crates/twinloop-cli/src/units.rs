@@ -39,11 +39,55 @@ pub fn time_step(s: &str) -> Result<f64, String> {
         Ok(x)
     } else {
         Err(format!(
-            "{x} s is too long for a time step (at most {MAX_STEP_S} s); the step is in \
-             seconds: for {x} ms write {}",
-            x / 1000.0
+            "{} s is too long for a time step (at most {MAX_STEP_S} s); the step is in \
+             seconds: for {} ms write {}",
+            crate::common::num(x),
+            crate::common::num(x),
+            crate::common::num(x / 1000.0)
         ))
     }
+}
+
+/// The longest length, m, of a walking robot's gait (a CoM height, a step, a foot
+/// lift, the distance between the feet): 3 m, past the tallest robot here (TALOS,
+/// 1.75 m). `--com-height 500` meant millimetres and planned a 7 s pendulum.
+pub const MAX_GAIT_LENGTH_M: f64 = 3.0;
+
+/// A gait length in metres (`--com-height`, `--step-width`, `--swing-height`), as a
+/// clap value parser: finite, > 0, at most [`MAX_GAIT_LENGTH_M`].
+pub fn gait_length(s: &str) -> Result<f64, String> {
+    let x = crate::common::positive(s)?;
+    gait_bound(x)
+}
+
+/// A gait length that may be 0 (`--swing-height`: a shuffle), in metres.
+pub fn gait_lift(s: &str) -> Result<f64, String> {
+    let x = crate::common::non_negative(s)?;
+    gait_bound(x)
+}
+
+/// A signed gait length in metres (`--step-length`: negative walks backwards).
+pub fn signed_gait_length(s: &str) -> Result<f64, String> {
+    let x = crate::common::finite(s)?;
+    gait_bound(x)
+}
+
+fn gait_bound(x: f64) -> Result<f64, String> {
+    if x.abs() <= MAX_GAIT_LENGTH_M {
+        return Ok(x);
+    }
+    let (unit, factor) = if x.abs() >= 100.0 {
+        ("millimetres", 1000.0)
+    } else {
+        ("centimetres", 100.0)
+    };
+    Err(format!(
+        "{} m is longer than any length of a walking robot's gait (at most {} m); \
+         lengths are metres: in {unit}, write {}",
+        crate::common::num(x),
+        crate::common::num(MAX_GAIT_LENGTH_M),
+        crate::common::num(x / factor)
+    ))
 }
 
 /// The largest noise a synthetic measurement may be given, m or rad: 1, as large as
@@ -127,6 +171,23 @@ impl AddMassArgs {
     }
 }
 
+/// An added mass of `kg` on a robot of `own` kg, as every option that adds one
+/// takes it (`--add-mass`, `adapt train --mass-range`): [`MAX_ADDED_MASS_RATIO`]
+/// times the robot's or more is taken for grams, the reason returned.
+pub fn added_mass(kg: f64, own: f64) -> Result<(), String> {
+    if own > 0.0 && kg.abs() > MAX_ADDED_MASS_RATIO * own {
+        return Err(format!(
+            "{} kg is {}x the robot's {} kg; the mass is in kilograms: is it in grams? \
+             ({} kg)",
+            crate::common::num(kg),
+            (kg / own).round(),
+            crate::common::num(own),
+            crate::common::num(kg / 1000.0)
+        ));
+    }
+    Ok(())
+}
+
 /// Parse `KG@LINK:X,Y,Z` and add that point mass to `robot`, for each of `specs` (the
 /// values of `--add-mass`): a mass [`MAX_ADDED_MASS_RATIO`] times the robot's is taken
 /// for grams, an offset beyond [`MAX_OFFSET_EXTENTS`] of the robot's size for
@@ -137,16 +198,7 @@ pub fn add_masses(robot: &mut Description, specs: &[String]) -> Result<(), CliEr
     for s in specs {
         let (kg, link, xyz) = parse_added_mass(s)?;
         let bad = |why: String| CliError::new(format!("--add-mass \"{s}\": {why}"));
-        if own > 0.0 && kg.abs() > MAX_ADDED_MASS_RATIO * own {
-            return Err(bad(format!(
-                "{} kg is {}x the robot's {} kg; the mass is in kilograms: is it in grams? \
-                 ({} kg)",
-                crate::common::num(kg),
-                (kg / own).round(),
-                crate::common::num(own),
-                crate::common::num(kg / 1000.0)
-            )));
-        }
+        added_mass(kg, own).map_err(bad)?;
         let r = xyz.iter().map(|v| v * v).sum::<f64>().sqrt();
         if r > MAX_OFFSET_EXTENTS * size {
             return Err(bad(format!(

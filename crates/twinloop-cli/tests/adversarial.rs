@@ -632,6 +632,84 @@ fn make_wrong_fixtures(dir: &Path, io: &str, goals: &str, state: &str, plant: &s
         "t,q:sho,q:neck.qx,q:neck.qy,q:neck.qz,q:neck.qw\n0,0,0,0,0,1\n0.05,0.2,0.3826834,0,0,0.9238795\n",
     );
     make_more_wrong_fixtures(dir, &tip);
+    make_round4_fixtures(dir, io, goals, state, urdf);
+}
+
+/// A CSV with its `t` column in milliseconds (whole numbers), as a logger's `millis()`
+/// writes it.
+fn in_millis(csv: &str) -> String {
+    map_rows(csv, |l| {
+        let (t, rest) = l.split_once(',').unwrap();
+        format!("{},{rest}", (t.parse::<f64>().unwrap() * 1000.0).round())
+    })
+}
+
+/// The fourth round's fixtures: records in milliseconds (and one saying so in its
+/// header), a URDF with a joint's limits swapped, one whose torso weighs 1e-12 kg and
+/// one whose torso's moment is 1e9 kg m^2 (g mm^2), a marker set in millimetres with
+/// frames in metres, a CSV separated by semicolons, a mapping whose id is a string.
+fn make_round4_fixtures(dir: &Path, io: &str, goals: &str, state: &str, urdf: &str) {
+    write(dir, "io_ms.csv", &in_millis(io));
+    write(
+        dir,
+        "io_tms.csv",
+        &in_millis(io).replacen("t,", "t[ms],", 1),
+    );
+    write(dir, "goals_ms.csv", &in_millis(goals));
+    write(dir, "state_ms.csv", &in_millis(state));
+    let limit = "lower=\"-1.5707963267948966\" upper=\"1.5707963267948966\"";
+    assert!(urdf.contains(limit));
+    write(
+        dir,
+        "inverted.urdf",
+        &urdf.replacen(
+            limit,
+            "lower=\"1.5707963267948966\" upper=\"-1.5707963267948966\"",
+            1,
+        ),
+    );
+    let mass = urdf.find("<mass value=").unwrap();
+    let end = mass + urdf[mass..].find("/>").unwrap() + 2;
+    write(
+        dir,
+        "tiny_mass.urdf",
+        &format!("{}<mass value=\"1e-12\"/>{}", &urdf[..mass], &urdf[end..]),
+    );
+    let ixx = urdf.find("ixx=\"").unwrap();
+    let end = ixx + 5 + urdf[ixx + 5..].find('"').unwrap() + 1;
+    write(
+        dir,
+        "huge_inertia.urdf",
+        &format!("{}ixx=\"1e9\"{}", &urdf[..ixx], &urdf[end..]),
+    );
+    let set: String = [("m0", "50, 0, 0"), ("m1", "0, 50, 0"), ("m2", "0, 0, 50")]
+        .iter()
+        .map(|(n, p)| format!("[[marker]]\nname = \"{n}\"\nlink = \"torso\"\nposition = [{p}]\n"))
+        .collect();
+    write(dir, "markers_mm.toml", &set);
+    let head = "t,marker:m0.x,marker:m0.y,marker:m0.z,marker:m1.x,marker:m1.y,marker:m1.z,\
+                marker:m2.x,marker:m2.y,marker:m2.z";
+    let frame = |t: f64| format!("{t},0.05,0,0.3,0,0.05,0.3,0,0,0.35\n");
+    write(
+        dir,
+        "frames_m.csv",
+        &format!("{head}\n{}{}", frame(0.0), frame(0.01)),
+    );
+    write(dir, "goals_semi.csv", &goals.replace(',', ";"));
+    write(
+        dir,
+        "range_inv.xml",
+        "<mujoco><worldbody><body name=\"b\" pos=\"0 0 0.3\"><freejoint/><geom size=\"0.1\" \
+         mass=\"1\"/><body name=\"c\" pos=\"0 0 0.1\"><joint name=\"j\" axis=\"0 1 0\" \
+         range=\"1 -1\"/><geom size=\"0.05\" mass=\"0.2\"/></body></body></worldbody></mujoco>\n",
+    );
+    let map = std::fs::read_to_string(repo().join("crates/twinloop-link/src/mappings/km20.toml"))
+        .unwrap();
+    write(
+        dir,
+        "map_idstr.toml",
+        &map.replacen("id = 2\n", "id = \"2\"\n", 1),
+    );
 }
 
 /// Fixtures of the second look at classes 1-5: a poor marker fit (five markers on the
@@ -1030,6 +1108,10 @@ const UNBOUNDED: &[Case] = &[
     case("model info", "{file:twice30.xml}", "twice1.xml:&&10000 <include>s"),
     // A cycle period of hours: named by its option, its number as people write it.
     case("gait sequence", "--cycle-period 1e12 --out {out}", "--cycle-period 1e12&&--dt 0.04"),
+    // Inside the count bound, but an hour or more of training (hours on a loaded
+    // machine): its time is estimated first and refused past --max-time (600 s here,
+    // a tenth of any machine's estimate, so that a fast one cannot start the run).
+    case("adapt train", "--robot {km20} --samples 1000000 --max-time 600 --out {out}", "--max-time 600 s&&lower --samples"),
 ];
 
 #[test]
@@ -1533,6 +1615,26 @@ fn the_bus_is_checked_not_trusted() {
     );
 }
 
+/// Class 5, fourth round: each message says what is valid in the user's words (no
+/// Rust type names, no whole line quoted as a column name), on one line.
+#[rustfmt::skip]
+const UNCLEAR: &[Case] = &[
+    // A string where a number is wanted: "a whole number", not "i64".
+    case("link record", "--port {gone} --map {file:map_idstr.toml} --duration 1 --out {out}", "map_idstr.toml:&&\"2\" where a whole number is expected"),
+    // A spreadsheet's semicolons: said, not a 300-character column name.
+    case("simulate", "--robot {km20} --trajectory {goals_semi} --out {out}", "goals_semi.csv:1&&semicolons&&commas"),
+    // The broadcast id and an unknown model, refused before the port is opened, with the valid values.
+    case("link read", "--port {gone} --protocol 1 --id 254", "--id&&0 to 253&&broadcast"),
+    case("link read", "--port {gone} --protocol 1 --id 3 --servo-model RX-99", "RX-99&&known: RX-28"),
+    case("experiment servo", "--port {gone} --id 255 --load {plant} --out {out}", "--id&&0 to 253"),
+    // A range written backwards: how to write it.
+    case("adapt train", "--robot {km20} --mass-range 0.5,0.05 --samples 100 --out {out}", "--mass-range 0.5,0.05&&write 0.05,0.5"),
+    // An MJCF range backwards, in the degrees the file has (it was said in radians).
+    case("simulate", "--robot {file:range_inv.xml} --duration 0.05 --out {out}", "range_inv.xml:1:&&range=\"1 -1\"&&swap"),
+    // A step in milliseconds, its numbers as the user wrote them.
+    case("simulate", "--robot {km20} --dt 0.3 --out {out}", "--dt&&0.3 s&&write 0.0003"),
+];
+
 /// Class 5 of issue 29: messages that help. An include cycle is named as its chain,
 /// a replicate count past the bound says the bound, numbers are written as people write
 /// them (never 300 digits) and a bad tip angle names its file and field, a CSV or JSON
@@ -1679,6 +1781,20 @@ fn messages_name_the_chain_the_bound_and_take_a_bom() {
             "{args:?}: {err}"
         );
     }
+    let mut unclear = Vec::new();
+    for (k, c) in UNCLEAR.iter().enumerate() {
+        let k = format!("unclear-{k}");
+        unclear.extend(check_within(c, &k, Duration::from_secs(10)));
+        // No Rust type or range in the words (the bound of an id was "0..=255").
+        let err = std::fs::read_to_string(fixtures().dir.join(format!("stderr-{k}"))).unwrap();
+        if let Some(w) = ["i64", "u8", "..=", "f64", "struct "]
+            .iter()
+            .find(|w| err.contains(**w))
+        {
+            unclear.push(format!("`twinloop {} {}`: \"{w}\" in {err}", c.cmd, c.args));
+        }
+    }
+    assert!(unclear.is_empty(), "{}", unclear.join("\n"));
     let state = fixtures().dir.join("state.csv");
     let text = std::fs::read_to_string(&state).unwrap();
     write(d, "bom.csv", &format!("\u{feff}{text}"));
@@ -1748,6 +1864,28 @@ const WRONG: &[Case] = &[
     case("identify arx", "--data {io_gap} --inputs u:a --outputs y:b", "io_gap.csv&&column \"t\"&&rows are missing"),
     case("identify ss", "--data {io_gap} --inputs u:a --outputs y:b --order 2", "io_gap.csv&&rows are missing"),
     case("identify arx", "--data {io} --inputs u:a --outputs y:b --dt 0.001", "--dt 0.001&&spaced 0.01"),
+    // Fourth round. A list with an item left out (read as a shorter list), or a range backwards.
+    case("link record", "--port {gone} --protocol 1 --ids 1,,2 --duration 1 --out {out}", "--ids 1,,2&&item 2 is empty"),
+    case("link scan", "--port {gone} --ids 1,", "--ids 1,&&item 2 is empty"),
+    case("link scan", "--port {gone} --ids ,2", "--ids ,2&&item 1 is empty"),
+    case("link scan", "--port {gone} --ids 2-1", "--ids 2-1&&backwards&&1-2"),
+    case("dynamics kinematics", "--robot {km20} --trajectory {state} --frames torso,,l_knee --out {out}", "--frames&&item 2 is empty"),
+    // Times in milliseconds: a 10 ms step read as 10 s.
+    case("identify arx", "--data {io_ms} --inputs u:a --outputs y:b", "io_ms.csv&&column \"t\"&&milliseconds&&t[ms]"),
+    case("simulate", "--robot {km20} --trajectory {goals_ms} --out {out}", "goals_ms.csv&&milliseconds"),
+    case("validate residual", "--robot {km20} --motion {state_ms} --out {out}", "state_ms.csv&&milliseconds"),
+    case("bench dynamics", "--robot {km20} --states {state_ms}", "state_ms.csv&&milliseconds"),
+    // Descriptions every command took (lint said FAIL): limits swapped (a panic), a
+    // 1e-12 kg torso, moments in g mm^2.
+    case("simulate", "--robot {file:inverted.urdf} --duration 0.05 --out {out}", "inverted.urdf&&l_hip_yaw&&above upper limit"),
+    case("simulate", "--robot {file:tiny_mass.urdf} --duration 0.05 --out {out}", "tiny_mass.urdf&&torso&&1e-12 kg&&wrong unit"),
+    case("model info", "{file:huge_inertia.urdf}", "huge_inertia.urdf&&torso&&g mm^2"),
+    // Lengths and masses 1000x off on options and in a marker set.
+    case("gait zmp", "--com-height 500 --out {out}", "--com-height&&millimetres, write 0.5"),
+    case("gait zmp", "--step-length 30 --out {out}", "--step-length&&centimetres"),
+    case("experiment compliant-walk", "--robot {km20} --swing-height 30 --out {out}", "--swing-height&&metres"),
+    case("ik", "--robot {km20} --markers {file:markers_mm.toml} --frames {frames_m} --out {out}", "markers_mm.toml&&m0&&millimetres"),
+    case("adapt train", "--robot {km20} --mass-range 50,500 --samples 100 --out {out}", "--mass-range&&grams"),
 ];
 
 /// Class 3, where a check finds problems: `model lint` reports, with exit 1, what every
@@ -1865,6 +2003,17 @@ fn the_same_data_in_order_in_step_and_in_metres_is_taken() {
             "arx",
             "--data",
             &file("io.csv"),
+            "--inputs",
+            "u:a",
+            "--outputs",
+            "y:b",
+        ],
+        // Milliseconds that say so in the header are read as such.
+        vec![
+            "identify",
+            "arx",
+            "--data",
+            &file("io_tms.csv"),
             "--inputs",
             "u:a",
             "--outputs",

@@ -57,6 +57,10 @@ struct MarkerEntry {
     position: Vec<f64>,
 }
 
+/// The furthest, m, a marker may sit from its link's frame: 3 m, past the longest
+/// limb of the tallest robot here; a set written in millimetres is 1000x that.
+pub const MAX_MARKER_OFFSET_M: f64 = 3.0;
+
 /// Parse a marker set for `model` from TOML text. Errors name the marker and field.
 pub fn parse_markers(text: &str, model: &Model) -> Result<Vec<Marker>, IdentError> {
     let file: MarkerFile = toml::from_str(text).map_err(|e| {
@@ -94,6 +98,23 @@ pub fn parse_markers(text: &str, model: &Model) -> Result<Vec<Marker>, IdentErro
             return Err(IdentError::new(format!(
                 "{:?} is not a position: three finite numbers (x, y, z in the link frame, m)",
                 m.position
+            ))
+            .field(at("position")));
+        }
+        let far = m.position.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if far > MAX_MARKER_OFFSET_M {
+            let written: Vec<String> = m
+                .position
+                .iter()
+                .map(|&x| twinloop_report::number(x))
+                .collect();
+            return Err(IdentError::new(format!(
+                "[{}] is {} m from its link's frame, further than any marker sits on a \
+                 robot ({MAX_MARKER_OFFSET_M} m); positions are metres: are they in \
+                 millimetres? (that would be {} m)",
+                written.join(", "),
+                twinloop_report::number(far),
+                twinloop_report::number(far / 1000.0)
             ))
             .field(at("position")));
         }
@@ -253,13 +274,17 @@ pub fn check_frame_units(frames: &MarkerFrames, markers: &[Marker]) -> Result<()
     ]
     .iter()
     .find(|(k, _)| (r / k - 1.0).abs() < 0.25)
-    .map_or(String::new(), |(_, u)| {
-        format!(": the frames look like {u}, the set is in metres")
-    });
+    .map(|(_, u)| format!(": the frames look like {u}, the set is in metres"));
+    // Frames smaller than the set: the set is the one in another unit.
+    let set_unit = [(1000.0, "millimetres"), (100.0, "centimetres")]
+        .iter()
+        .find(|(k, _)| (r * k - 1.0).abs() < 0.25)
+        .map(|(_, u)| format!(": the marker set looks like {u}, the frames metres"));
+    let unit = unit.or(set_unit).unwrap_or_default();
     let name = &markers[named.unwrap_or(0)].name;
     Err(IdentError::new(format!(
         "markers on one link are {r:.4} times as far apart as the marker set places them \
-         (the median of {} distances){unit}; give the frames in metres",
+         (the median of {} distances){unit}; give both in metres",
         ratios.len()
     ))
     .field(format!("marker:{name}.x")))

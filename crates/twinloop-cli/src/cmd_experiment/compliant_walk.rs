@@ -27,7 +27,7 @@ pub struct CompliantWalkArgs {
     #[arg(long, default_value_t = 300.0, value_parser = crate::common::positive)]
     pub k_series: f64,
     /// Swing-foot lift, m.
-    #[arg(long, default_value_t = 0.03, value_parser = crate::common::non_negative)]
+    #[arg(long, default_value_t = 0.03, value_parser = crate::units::gait_lift)]
     pub swing_height: f64,
     /// Standing time before the recording starts, s (the robot settles; not recorded).
     #[arg(long, default_value_t = WalkingConfig::default().settle, value_parser = crate::common::non_negative)]

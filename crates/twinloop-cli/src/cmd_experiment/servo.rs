@@ -22,7 +22,7 @@ pub struct ServoArgs {
     #[command(flatten)]
     pub bus: PortArgs,
     /// Bench: the servo's id
-    #[arg(long, value_name = "N", required_unless_present = "joint", conflicts_with_all = ["map", "joint"], requires = "load")]
+    #[arg(long, value_name = "N", required_unless_present = "joint", conflicts_with_all = ["map", "joint"], requires = "load", value_parser = crate::common::servo_id)]
     pub id: Option<u8>,
     /// Bench: the pendulum, a TOML file with mass (kg), length (m), arm_inertia (kg m^2)
     #[arg(long, value_name = "LOAD.toml", requires = "id")]

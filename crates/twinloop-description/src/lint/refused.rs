@@ -10,6 +10,7 @@ use crate::description::Description;
 pub fn find(robot: &Description) -> Option<Finding> {
     let mut out = Vec::new();
     check(robot, &mut out);
+    inverted_limits(robot, &mut out);
     super::unit_scale::check(robot, &mut out);
     out.into_iter().next()
 }
@@ -69,6 +70,33 @@ pub(super) fn check(robot: &Description, out: &mut Vec<Finding>) {
                     num(a[1]),
                     num(a[2]),
                     num(norm)
+                ),
+            });
+        }
+    }
+}
+
+/// A joint whose lower limit is above its upper one has no position to take: the
+/// simulator's clamp of a goal into the range has no answer (it panicked there).
+pub(super) fn inverted_limits(robot: &Description, out: &mut Vec<Finding>) {
+    for j in &robot.joints {
+        if let Some(super::super::description::Limit {
+            lower: Some(lo),
+            upper: Some(hi),
+            ..
+        }) = j.limit
+            && lo > hi
+        {
+            out.push(Finding {
+                severity: Severity::Error,
+                code: codes::LIMITS_INVERTED,
+                subject: Subject::Joint,
+                name: j.name.clone(),
+                message: format!(
+                    "lower limit {} is above upper limit {}: no position is within them; \
+                     swap them",
+                    num(lo),
+                    num(hi)
                 ),
             });
         }

@@ -143,6 +143,7 @@ pub(super) fn check(robot: &Description, out: &mut Vec<Finding>) {
         });
         return;
     }
+    inertia_scale(robot, size, out);
     let mass = robot.total_mass();
     if size < MIN_EXTENT_FOR_DENSITY_M || !mass.is_finite() || mass < MIN_SUSPECT_MASS_KG {
         return;
@@ -176,6 +177,56 @@ pub(super) fn check(robot: &Description, out: &mut Vec<Finding>) {
             num(mass / 1000.0)
         ),
     });
+}
+
+/// How many times the robot's size (or [`MIN_GYRATION_BOUND_M`]) a link's radius of
+/// gyration may be: a body's sqrt(I/m) is at most its own extent, which is at most the
+/// robot's.
+pub const MAX_GYRATION_OVER_SIZE: f64 = 30.0;
+
+/// The smallest bound, m, on a radius of gyration: placeholder moments of 1 kg m^2
+/// on a link of 10 g or more (OP2's head, a test's hand) pass here, as lint's
+/// `inertia-not-positive-definite` reports them; moments in kg mm^2 (1e6x) put a
+/// 50 g link with a 2 cm radius of gyration 20 m out.
+pub const MIN_GYRATION_BOUND_M: f64 = 10.0;
+
+/// A link whose moment of inertia over its mass puts its mass further from its centre
+/// than the robot is large: sqrt(I/m) of a body is at most its extent, so the moments
+/// are in g mm^2 (1e9x) or kg mm^2 (1e6x), or the mass is far too small (1e-12 kg under
+/// a link's moments); the simulation of such a link is silently wrong. The bundled
+/// models' largest ratio of sqrt(I/m) to their size is 17 (OP2's placeholder head
+/// moments of 1 kg m^2, which lint reports); moments in kg mm^2 are 1000x theirs.
+fn inertia_scale(robot: &Description, size: f64, out: &mut Vec<Finding>) {
+    let bound = (size * MAX_GYRATION_OVER_SIZE).max(MIN_GYRATION_BOUND_M);
+    for link in &robot.links {
+        let Some(i) = &link.inertial else { continue };
+        let moment = i.inertia.ixx.max(i.inertia.iyy).max(i.inertia.izz);
+        if !(i.mass > 0.0 && moment > 0.0) {
+            continue;
+        }
+        let gyration = (moment / i.mass).sqrt();
+        if gyration.is_finite() && gyration <= bound {
+            continue;
+        }
+        out.push(Finding {
+            severity: Severity::Error,
+            code: codes::UNIT_SCALE,
+            subject: Subject::Link,
+            name: link.name.clone(),
+            message: format!(
+                "inertia {} kg m^2 on mass {} kg puts the mass {} m from its centre \
+                 (sqrt(I/m)), more than {} times the robot's {} m size: are the moments in \
+                 g mm^2 or kg mm^2, or the mass in the wrong unit? (moments are kg m^2, \
+                 masses kg)",
+                num(moment),
+                num(i.mass),
+                num(gyration),
+                num(MAX_GYRATION_OVER_SIZE),
+                num(size)
+            ),
+        });
+        return;
+    }
 }
 
 #[cfg(test)]

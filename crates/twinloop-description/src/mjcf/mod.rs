@@ -1763,6 +1763,19 @@ impl<'a, 'i> Reader<'a, 'i> {
         let range = match self.get(j, "joint", class, "range") {
             Some((n, v)) => {
                 let r = parse_array::<2>(n, "range", v)?;
+                // Named here, in the numbers and unit the file has (degrees by
+                // default), not later in radians.
+                if r[0] > r[1] {
+                    return Err(error_at_attr(
+                        n,
+                        "range",
+                        format!(
+                            "range=\"{}\": the lower end is above the upper one: no \
+                             position is within them; swap them",
+                            v.trim()
+                        ),
+                    ));
+                }
                 Some(if hinge {
                     [self.angle(r[0]), self.angle(r[1])]
                 } else {
