@@ -3,7 +3,7 @@
 //! | estimator | seed | module |
 //! |---|---|---|
 //! | CoM from the tip-over angles: the seed's geometric method and the exact rigid-body method | 000 eq 8-13 | [`tipover`]; the simulated study that runs the experiment and checks them: [`tipover_study`] |
-//! | an added (or removed) mass (mass, host link, position) from the tip-over angles and the prior model, and the checks it passes before a model is written | 000 III, V.B | [`adapt`], [`adapt_checks`] |
+//! | an added (or removed) mass (mass, host link, position) from the tip-over angles and the prior model, and the checks it passes before a model is written | 000 III, V.B | [`adapt`], [`adapt_checks`]; the arms as places: [`arms`] |
 //! | the three-mass LIPM from the fall angles by a 5-10-5 perceptron trained on simulated changes | 000 V.C | [`ann`] (the network), [`ann_data`] (the changes), [`ann_adapt`] (training and evaluation) |
 //! | static identification of link masses and CoMs (below) | 004 | [`static_ident`] |
 //! | the compliant compact model's 8 corrections (LM, CMA-ES, PoWER), identifiability | 002 section 4 | [`compliant_fit`] |
@@ -30,6 +30,7 @@ pub mod ann;
 pub mod ann_adapt;
 pub mod ann_data;
 pub mod ann_report;
+pub mod arms;
 pub mod compliant_fit;
 pub mod error;
 pub mod fall_angle_fit;

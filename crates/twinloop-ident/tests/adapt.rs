@@ -368,7 +368,7 @@ fn com_resolution_is_the_corners_of_the_angles_box() {
 /// never a leg, nor the head on the middle.
 #[test]
 fn the_arms_are_the_trunks_branches_off_its_middle() {
-    use twinloop_ident::tipover_study::links_of_arms;
+    use twinloop_ident::arms::links_of_arms;
     let km20 = prior();
     assert_eq!(
         links_of_arms(&km20).unwrap(),

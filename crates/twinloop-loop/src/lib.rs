@@ -10,14 +10,12 @@
 //! | the plan run: on a port, or in lockstep with a simulated model | [`tipover_bus`] |
 //! | the protocol passes: the adaptation made again less the protocol's bias | [`protocol_bias`] |
 //! | a part on the legs: the other places tried, and the one kept or none | [`other_places`] |
-//! | the arms as places for the part | [`arm_places`] |
 //! | the kept place's feet roll near the robot's | [`roll_check`] |
 //! | the fitted floor's share of the CoM's resolution | [`floor_share`] |
 //! | the demo's scenario: a hidden change served on a pty, measured, adapted, checked | [`demo`] |
 //! | the crate's error | [`error`] |
 
 pub mod adaptation;
-pub mod arm_places;
 pub mod bus_plan;
 pub mod demo;
 pub mod draft_profile;
