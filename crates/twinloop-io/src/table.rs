@@ -48,8 +48,10 @@ impl fmt::Display for IoError {
 
 impl std::error::Error for IoError {}
 
-/// The units a time column's header may name (`t[ms]`), with their size in seconds.
-const TIME_UNITS: [(&str, f64); 3] = [("s", 1.0), ("ms", 1e-3), ("us", 1e-6)];
+/// The units a time column's header may name (`t[ms]`), with how many make a second
+/// (a division by 1000 gives 3699 ms as the double nearest 3.699 s; a product with
+/// 1e-3 may not).
+const TIME_UNITS: [(&str, f64); 3] = [("s", 1.0), ("ms", 1e3), ("us", 1e6)];
 
 /// A numeric table with named columns.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -173,8 +175,8 @@ impl Table {
                     ))
                 });
             }
-            if let Some((k, scale)) = time_scale {
-                row[k] *= scale;
+            if let Some((k, per_second)) = time_scale {
+                row[k] /= per_second;
             }
             rows.push(row);
             row_lines.push(ln + 1);
@@ -203,8 +205,10 @@ impl Table {
     /// derivative and goal 1000x off without a word (issue 29, class 3). The evidence,
     /// over the median step between rows (robot records run at 1 Hz or faster):
     /// whole-number times a step of 10 or more apart; or, over 10 rows or more,
-    /// whole-number times 1 or more apart (1 kHz in ms), a step of 5 or more, or a
-    /// record spanning over an hour at steps under a second. Such a file is refused,
+    /// whole-number times 2 or more apart (500 Hz in ms), 1 apart over more than an
+    /// hour (1 kHz in ms; a shorter run 1 apart is as likely whole seconds: static
+    /// poses a second apart), a step of 5 or more, or a record spanning over an hour at
+    /// steps under a second. Such a file is refused,
     /// naming the column and the evidence; `t[ms]` or `t[s]` in the header says which.
     fn check_seconds(&self) -> Result<(), IoError> {
         let Some(tc) = self.column_index("t") else {
@@ -222,7 +226,7 @@ impl Table {
         let span = t[n - 1] - t[0];
         let evidence = if whole && step >= 10.0 {
             format!("every time a whole number, {} apart", clean_time(step))
-        } else if n >= 10 && whole && step >= 1.0 {
+        } else if n >= 10 && whole && (step >= 2.0 || (step >= 1.0 && span > 3600.0)) {
             format!(
                 "every time a whole number, {} apart over {n} rows",
                 clean_time(step)

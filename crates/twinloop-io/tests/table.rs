@@ -157,3 +157,29 @@ fn csv_times_are_written_clean_to_the_nanosecond() {
     assert_eq!(lines[1], format!("2.0,{summed:?}"));
     assert_eq!(lines[2], "0.3,0.30000000000000004");
 }
+
+/// Whole-number times 1 apart are seconds or milliseconds alike over a short run
+/// (static poses a second apart, or 1 kHz in ms): taken; over more than an hour they
+/// are a 1 kHz logger's ms (an hour of 1 Hz poses is not a robot record), and 2 apart
+/// (500 Hz in ms) at any length is refused, naming the column.
+#[test]
+fn whole_times_one_apart_are_ms_only_over_an_hour() {
+    let csv = |n: usize, step: usize| {
+        let mut s = String::from("t,x\n");
+        for k in 0..n {
+            s.push_str(&format!("{},{k}\n", k * step));
+        }
+        s
+    };
+    assert!(Table::parse(&csv(172, 1)).is_ok(), "poses a second apart");
+    for (n, step) in [(3700, 1), (20, 2)] {
+        let e = Table::parse(&csv(n, step)).unwrap_err().to_string();
+        assert!(
+            e.contains("\"t\"") && e.contains("milliseconds"),
+            "{n} x {step}: {e}"
+        );
+    }
+    let named = csv(3700, 1).replacen("t,", "t[ms],", 1);
+    let t = Table::parse(&named).unwrap();
+    assert_eq!(t.rows[3699][0], 3.699);
+}
