@@ -30,13 +30,9 @@ fn check_lists(
     cli: &clap::Command,
     matches: &clap::ArgMatches,
 ) -> Result<(), crate::error::CliError> {
-    let (mut cmd, mut m) = (cli, matches);
-    while let Some((name, sub)) = m.subcommand() {
-        let Some(next) = cmd.find_subcommand(name) else {
-            return Ok(());
-        };
-        (cmd, m) = (next, sub);
-    }
+    let Some((cmd, m)) = crate::bounds::leaf(cli, matches) else {
+        return Ok(());
+    };
     for arg in cmd.get_arguments() {
         let (Some(long), Some(sep)) = (arg.get_long(), arg.get_value_delimiter()) else {
             continue;

@@ -166,6 +166,19 @@ const NOT_COUNTS: &[&str] = &[
     "spin-us",
 ];
 
+/// The subcommand the user ran (the deepest one matched) with its matches: where the
+/// command line's options are checked.
+pub(crate) fn leaf<'a>(
+    cli: &'a clap::Command,
+    matches: &'a clap::ArgMatches,
+) -> Option<(&'a clap::Command, &'a clap::ArgMatches)> {
+    let (mut cmd, mut m) = (cli, matches);
+    while let Some((name, sub)) = m.subcommand() {
+        (cmd, m) = (cmd.find_subcommand(name)?, sub);
+    }
+    Some((cmd, m))
+}
+
 /// Every whole-number option of the command line that counts something (rounds,
 /// restarts, samples to skip, validation runs) at most [`MAX_COUNT`], whichever
 /// command it belongs to and whether or not its own parser says so: one place, so
@@ -179,13 +192,9 @@ pub fn check_counts(cli: &clap::Command, matches: &clap::ArgMatches) -> Result<(
         TypeId::of::<i64>(),
         TypeId::of::<i32>(),
     ];
-    let (mut cmd, mut m) = (cli, matches);
-    while let Some((name, sub)) = m.subcommand() {
-        let Some(next) = cmd.find_subcommand(name) else {
-            return Ok(());
-        };
-        (cmd, m) = (next, sub);
-    }
+    let Some((cmd, m)) = leaf(cli, matches) else {
+        return Ok(());
+    };
     for arg in cmd.get_arguments() {
         let Some(long) = arg.get_long() else {
             continue;

@@ -95,53 +95,7 @@ impl Table {
         let Some((hl, header)) = lines.next() else {
             return Err(IoError::new("the file is empty: a header row is needed"));
         };
-        let mut columns: Vec<String> = header
-            .split(',')
-            .map(|c| c.trim().trim_matches('"').to_string())
-            .collect();
-        // `t[ms]`, `t[us]`, `t[s]`: a time column whose header names its unit, read as
-        // seconds (the one unit of every table) under the name `t`.
-        let time_scale = columns.iter().enumerate().find_map(|(k, c)| {
-            TIME_UNITS
-                .iter()
-                .find(|(u, _)| c == &format!("t[{u}]"))
-                .map(|&(_, scale)| (k, scale))
-        });
-        if let Some((k, _)) = time_scale {
-            columns[k] = "t".into();
-        }
-        // A spreadsheet in a locale with decimal commas exports `;` (or tabs): the
-        // header is then one column named after the whole line.
-        if let [only] = columns.as_slice()
-            && let Some((sep, name)) = [(';', "semicolons"), ('\t', "tabs")]
-                .into_iter()
-                .find(|(c, _)| only.contains(*c))
-        {
-            return Err(IoError {
-                line: Some(hl + 1),
-                ..IoError::new(format!(
-                    "the header is separated by {name} ({} names joined by '{}'): the file \
-                     must be comma-separated with '.' decimals; export it as CSV with commas",
-                    only.split(sep).count(),
-                    sep.escape_default()
-                ))
-            });
-        }
-        for (i, c) in columns.iter().enumerate() {
-            if c.is_empty() {
-                return Err(IoError {
-                    line: Some(hl + 1),
-                    ..IoError::new(format!("header cell {} is empty", i + 1))
-                });
-            }
-            if columns[..i].contains(c) {
-                return Err(IoError {
-                    line: Some(hl + 1),
-                    column: Some(c.clone()),
-                    ..IoError::new("column name appears twice")
-                });
-            }
-        }
+        let (columns, time_scale) = read_header(header, hl)?;
         let mut rows = Vec::new();
         let mut row_lines = Vec::new();
         for (ln, line) in lines {
@@ -460,4 +414,60 @@ impl CsvWriter {
     pub fn discard(self) {
         self.out.discard()
     }
+}
+
+/// The `t` column's index and how many of its header's unit make a second.
+type TimeUnit = (usize, f64);
+
+/// A header line (line `hl`, 0-based): its column names, and the `t` column with how
+/// many of its header's unit make a second where the header names one (`t[ms]`).
+fn read_header(header: &str, hl: usize) -> Result<(Vec<String>, Option<TimeUnit>), IoError> {
+    let mut columns: Vec<String> = header
+        .split(',')
+        .map(|c| c.trim().trim_matches('"').to_string())
+        .collect();
+    // `t[ms]`, `t[us]`, `t[s]`: a time column whose header names its unit, read as
+    // seconds (the one unit of every table) under the name `t`.
+    let time_scale = columns.iter().enumerate().find_map(|(k, c)| {
+        TIME_UNITS
+            .iter()
+            .find(|(u, _)| c == &format!("t[{u}]"))
+            .map(|&(_, scale)| (k, scale))
+    });
+    if let Some((k, _)) = time_scale {
+        columns[k] = "t".into();
+    }
+    // A spreadsheet in a locale with decimal commas exports `;` (or tabs): the
+    // header is then one column named after the whole line.
+    if let [only] = columns.as_slice()
+        && let Some((sep, name)) = [(';', "semicolons"), ('\t', "tabs")]
+            .into_iter()
+            .find(|(c, _)| only.contains(*c))
+    {
+        return Err(IoError {
+            line: Some(hl + 1),
+            ..IoError::new(format!(
+                "the header is separated by {name} ({} names joined by '{}'): the file \
+                 must be comma-separated with '.' decimals; export it as CSV with commas",
+                only.split(sep).count(),
+                sep.escape_default()
+            ))
+        });
+    }
+    for (i, c) in columns.iter().enumerate() {
+        if c.is_empty() {
+            return Err(IoError {
+                line: Some(hl + 1),
+                ..IoError::new(format!("header cell {} is empty", i + 1))
+            });
+        }
+        if columns[..i].contains(c) {
+            return Err(IoError {
+                line: Some(hl + 1),
+                column: Some(c.clone()),
+                ..IoError::new("column name appears twice")
+            });
+        }
+    }
+    Ok((columns, time_scale))
 }
